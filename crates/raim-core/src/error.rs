@@ -1,0 +1,89 @@
+//! Typed errors. Every rejection carries the offending value and, where it
+//! applies, the field name and satellite index, so nothing is lost silently.
+
+use crate::measurement::System;
+
+/// Why an epoch (or a configuration, or a distribution query) was rejected.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum RaimError {
+    /// A NaN or infinite input value.
+    NotFinite {
+        field: &'static str,
+        index: usize,
+        value: f64,
+    },
+    /// The same satellite appears twice in one epoch.
+    DuplicateSatellite {
+        system: System,
+        prn: u8,
+        first: usize,
+        second: usize,
+    },
+    /// Fewer satellites than unknowns (+ the redundancy the operation needs).
+    TooFewSatellites { have: usize, need: usize },
+    /// The geometry matrix lost rank: column `column` has a Householder
+    /// pivot of `pivot` relative to its column norm.
+    RankDeficient { column: usize, pivot: f64 },
+    /// A sigma that is zero or negative.
+    NonPositiveSigma { index: usize, sigma_m: f64 },
+    /// More satellites than the capacity `N` of the engine.
+    CapacityExceeded { have: usize, capacity: usize },
+    /// A value outside its documented range.
+    OutOfRange {
+        field: &'static str,
+        value: f64,
+        min: f64,
+        max: f64,
+    },
+    /// Gauss-Newton did not converge.
+    NoConvergence { iterations: u32, step_m: f64 },
+    /// A chi-square degree of freedom outside 1..=max.
+    InvalidDof { dof: u32, max: u32 },
+}
+
+impl core::fmt::Display for RaimError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            RaimError::NotFinite { field, index, value } => {
+                write!(f, "non-finite {field} at index {index}: {value}")
+            }
+            RaimError::DuplicateSatellite {
+                system,
+                prn,
+                first,
+                second,
+            } => write!(
+                f,
+                "duplicate satellite {}{prn:02} at indices {first} and {second}",
+                system.letter()
+            ),
+            RaimError::TooFewSatellites { have, need } => {
+                write!(f, "too few satellites: have {have}, need {need}")
+            }
+            RaimError::RankDeficient { column, pivot } => {
+                write!(f, "rank-deficient geometry at column {column} (pivot {pivot:e})")
+            }
+            RaimError::NonPositiveSigma { index, sigma_m } => {
+                write!(f, "sigma at index {index} is not positive: {sigma_m} m")
+            }
+            RaimError::CapacityExceeded { have, capacity } => {
+                write!(f, "{have} satellites exceed capacity {capacity}")
+            }
+            RaimError::OutOfRange {
+                field,
+                value,
+                min,
+                max,
+            } => write!(f, "{field} = {value} outside [{min}, {max}]"),
+            RaimError::NoConvergence { iterations, step_m } => write!(
+                f,
+                "no convergence after {iterations} iterations (last step {step_m} m)"
+            ),
+            RaimError::InvalidDof { dof, max } => {
+                write!(f, "degrees of freedom {dof} outside 1..={max}")
+            }
+        }
+    }
+}

@@ -1,0 +1,114 @@
+//! WGS-84 frames: ECEF to geodetic and the local East-North-Up rotation used
+//! for protection levels (SPEC §6) and elevation-dependent sigmas (SPEC §1).
+
+/// WGS-84 semi-major axis, m.
+pub const WGS84_A_M: f64 = 6_378_137.0;
+/// WGS-84 flattening.
+pub const WGS84_F: f64 = 1.0 / 298.257_223_563;
+
+/// Geodetic latitude, longitude (rad) and ellipsoidal height (m).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Geodetic {
+    pub lat_rad: f64,
+    pub lon_rad: f64,
+    pub height_m: f64,
+}
+
+/// ECEF to geodetic by fixed-point iteration on latitude (converges to
+/// < 1e-12 rad in 6 iterations for any point near the Earth's surface;
+/// 10 are done). The Earth's centre maps to lat = lon = 0.
+pub fn ecef_to_geodetic(ecef_m: [f64; 3]) -> Geodetic {
+    let [x, y, z] = ecef_m;
+    let e2 = WGS84_F * (2.0 - WGS84_F);
+    let p = libm::sqrt(x * x + y * y);
+    let lon_rad = libm::atan2(y, x);
+    let mut lat_rad = libm::atan2(z, p * (1.0 - e2));
+    let mut height_m = 0.0;
+    for _ in 0..10 {
+        let s = libm::sin(lat_rad);
+        let n = WGS84_A_M / libm::sqrt(1.0 - e2 * s * s);
+        height_m = if libm::fabs(libm::cos(lat_rad)) > 1e-9 {
+            p / libm::cos(lat_rad) - n
+        } else {
+            libm::fabs(z) - n * (1.0 - e2)
+        };
+        lat_rad = libm::atan2(z, p * (1.0 - e2 * n / (n + height_m)));
+    }
+    Geodetic {
+        lat_rad,
+        lon_rad,
+        height_m,
+    }
+}
+
+/// Geodetic to ECEF.
+pub fn geodetic_to_ecef(g: Geodetic) -> [f64; 3] {
+    let e2 = WGS84_F * (2.0 - WGS84_F);
+    let (sl, cl) = (libm::sin(g.lat_rad), libm::cos(g.lat_rad));
+    let n = WGS84_A_M / libm::sqrt(1.0 - e2 * sl * sl);
+    [
+        (n + g.height_m) * cl * libm::cos(g.lon_rad),
+        (n + g.height_m) * cl * libm::sin(g.lon_rad),
+        (n * (1.0 - e2) + g.height_m) * sl,
+    ]
+}
+
+/// Rotation from ECEF to local ENU at a geodetic point: rows are the
+/// East, North and Up unit vectors expressed in ECEF.
+pub fn enu_rotation(g: &Geodetic) -> [[f64; 3]; 3] {
+    let (sl, cl) = (libm::sin(g.lat_rad), libm::cos(g.lat_rad));
+    let (so, co) = (libm::sin(g.lon_rad), libm::cos(g.lon_rad));
+    [[-so, co, 0.0], [-sl * co, -sl * so, cl], [cl * co, cl * so, sl]]
+}
+
+/// Rotate an ECEF vector into ENU.
+pub fn rotate(r: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    let dot = |row: &[f64; 3]| row[0] * v[0] + row[1] * v[1] + row[2] * v[2];
+    [dot(&r[0]), dot(&r[1]), dot(&r[2])]
+}
+
+/// Elevation (rad) of an ENU unit vector.
+pub fn elevation_rad(enu: [f64; 3]) -> f64 {
+    libm::atan2(enu[2], libm::sqrt(enu[0] * enu[0] + enu[1] * enu[1]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn geodetic_round_trip() {
+        // The 0759 station's header APPROX POSITION (shared/data, RINEX 2).
+        let ecef = [-3_962_108.673, 3_381_309.574, 3_668_678.638];
+        let g = ecef_to_geodetic(ecef);
+        let back = geodetic_to_ecef(g);
+        for i in 0..3 {
+            assert!((back[i] - ecef[i]).abs() < 1e-6, "{back:?}");
+        }
+        // Published WGS-84 example: lat 0, lon 0, h 0 -> (a, 0, 0).
+        let g0 = ecef_to_geodetic([WGS84_A_M, 0.0, 0.0]);
+        assert!(g0.lat_rad.abs() < 1e-14 && g0.height_m.abs() < 1e-6);
+        // North pole: z = b.
+        let b = WGS84_A_M * (1.0 - WGS84_F);
+        let gp = ecef_to_geodetic([0.0, 0.0, b]);
+        assert!((gp.lat_rad - core::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        assert!(gp.height_m.abs() < 1e-6, "{gp:?}");
+    }
+
+    #[test]
+    fn enu_is_orthonormal_and_up_points_out() {
+        let g = Geodetic { lat_rad: 0.6, lon_rad: 2.4, height_m: 0.0 };
+        let r = enu_rotation(&g);
+        for i in 0..3 {
+            for j in 0..3 {
+                let d: f64 = (0..3).map(|k| r[i][k] * r[j][k]).sum();
+                assert!((d - if i == j { 1.0 } else { 0.0 }).abs() < 1e-15);
+            }
+        }
+        let p = geodetic_to_ecef(g);
+        let up = rotate(&r, p);
+        assert!(up[2] > 6.3e6 && up[0].abs() < 1e-6);
+    }
+}

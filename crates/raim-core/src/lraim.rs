@@ -1,0 +1,138 @@
+//! Fault identification (SPEC §4): the MLE baseline (seed 000 eqs. 8-9) and
+//! the leveraged L-RAIM rule (SPEC §4.2), which integrates the likelihood of
+//! each fault mode over the unknown bias instead of plugging in its maximum.
+
+use crate::config::FiRule;
+use crate::parity::Parity;
+
+/// The per-satellite identification quantities, in sigma units.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Candidate {
+    /// Row in the model.
+    pub row: usize,
+    /// Normalised residual w_i = r_i / sqrt(S_ii) (the w-test).
+    pub w: f64,
+    /// Bias estimate b_i = r_i / S_ii, sigma units (seed 000 eq. 8).
+    pub bias_sigma: f64,
+    /// The rule's score (larger = more likely faulty).
+    pub score: f64,
+}
+
+/// The score of one satellite under a rule, from its whitened residual and
+/// S_ii. `None` when S_ii is below `min_s_ii` (unidentifiable).
+pub fn score(rule: FiRule, residual: f64, s_ii: f64, min_s_ii: f64) -> Option<Candidate> {
+    if !(s_ii >= min_s_ii) {
+        return None;
+    }
+    let w2 = residual * residual / s_ii;
+    let score = match rule {
+        FiRule::Mle => w2,
+        // 2 ln of the flat-prior marginal likelihood, up to a constant:
+        // w^2 - ln S_ii (SPEC §4.2).
+        FiRule::LraimFlat => w2 - libm::log(s_ii),
+        // Exact Gaussian prior b ~ N(0, kappa sigma^2):
+        // w^2 kS/(1+kS) - ln(1+kS).
+        FiRule::LraimGaussian { kappa } => {
+            let ks = kappa * s_ii;
+            w2 * ks / (1.0 + ks) - libm::log1p(ks)
+        }
+    };
+    Some(Candidate {
+        row: 0,
+        w: residual / libm::sqrt(s_ii),
+        bias_sigma: residual / s_ii,
+        score,
+    })
+}
+
+/// The best and the runner-up candidate of a parity solution under `rule`.
+/// `None` for the best means no satellite is identifiable.
+pub fn rank<const N: usize>(
+    parity: &Parity<N>,
+    rule: FiRule,
+    min_s_ii: f64,
+) -> (Option<Candidate>, Option<Candidate>) {
+    let mut best: Option<Candidate> = None;
+    let mut second: Option<Candidate> = None;
+    for (row, (&r, &s)) in parity.residuals().iter().zip(parity.s_ii().iter()).enumerate() {
+        let Some(mut c) = score(rule, r, s, min_s_ii) else {
+            continue;
+        };
+        c.row = row;
+        match best {
+            Some(b) if c.score <= b.score => {
+                if second.is_none_or(|s2| c.score > s2.score) {
+                    second = Some(c);
+                }
+            }
+            _ => {
+                second = best;
+                best = Some(c);
+            }
+        }
+    }
+    (best, second)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The flat-prior score is 2 ln of the marginal likelihood
+    /// integral exp(-J(b)/2) db of seed 000 eq. 7, up to a constant common
+    /// to all satellites. Check by numerical quadrature.
+    #[test]
+    fn flat_prior_score_is_twice_log_marginal_likelihood() {
+        // Two satellites with different S_ii and residuals; zSz common.
+        let cases = [(1.3, 0.4), (0.7, 0.05), (-2.1, 0.9)];
+        let zsz = 9.0;
+        let mut diffs = [0.0; 3];
+        for (k, (r, s)) in cases.iter().enumerate() {
+            // J(b) = S b^2 - 2 b r + zSz (r = S_i^T z).
+            let mut integral = 0.0;
+            let (lo, hi, steps) = (-400.0, 400.0, 400_000);
+            let db = (hi - lo) / steps as f64;
+            for j in 0..=steps {
+                let b = lo + j as f64 * db;
+                let wgt = if j == 0 || j == steps { 0.5 } else { 1.0 };
+                integral += wgt * (-(s * b * b - 2.0 * b * r + zsz) / 2.0).exp() * db;
+            }
+            let c = score(FiRule::LraimFlat, *r, *s, 1e-9).unwrap();
+            // 2 ln(integral) = score - zSz + ln(2 pi)
+            diffs[k] = 2.0 * integral.ln() - (c.score - zsz + (2.0 * core::f64::consts::PI).ln());
+        }
+        const QUADRATURE_TOL: f64 = 1e-9; // dimensionless, log-likelihood units
+        for d in diffs {
+            assert!(d.abs() < QUADRATURE_TOL, "{diffs:?}");
+        }
+    }
+
+    #[test]
+    fn gaussian_prior_tends_to_flat_and_matches_quadrature() {
+        let (r, s) = (1.7, 0.3);
+        let flat = score(FiRule::LraimFlat, r, s, 1e-9).unwrap().score;
+        let big = score(FiRule::LraimGaussian { kappa: 1e12 }, r, s, 1e-9).unwrap().score;
+        // kappa -> inf: w^2 kS/(1+kS) - ln(1+kS) -> w^2 - ln S - ln kappa.
+        assert!((big + 1e12f64.ln() - flat).abs() < 1e-6, "{big} {flat}");
+        // Quadrature of the Gaussian prior marginal: N(b; 0, kappa) prior.
+        let kappa = 4.0;
+        let mut integral = 0.0;
+        let steps = 200_000;
+        let db = 200.0 / steps as f64;
+        for j in 0..=steps {
+            let b = -100.0 + j as f64 * db;
+            let prior = (-b * b / (2.0 * kappa)).exp() / (2.0 * core::f64::consts::PI * kappa).sqrt();
+            integral += (-(s * b * b - 2.0 * b * r) / 2.0).exp() * prior * db;
+        }
+        let g = score(FiRule::LraimGaussian { kappa }, r, s, 1e-9).unwrap().score;
+        assert!((2.0 * integral.ln() - g).abs() < 1e-8, "{} vs {g}", 2.0 * integral.ln());
+    }
+
+    #[test]
+    fn unidentifiable_below_min_s_ii() {
+        assert!(score(FiRule::Mle, 1.0, 1e-6, 1e-4).is_none());
+        assert!(score(FiRule::Mle, 1.0, f64::NAN, 1e-4).is_none());
+    }
+}

@@ -1,0 +1,283 @@
+//! The measurement model's inputs (SPEC §1): satellites, their identities and
+//! the two input forms of an epoch (ranges + ECEF positions, or the
+//! linearised form the seeds print: line of sight + residual).
+
+use crate::error::RaimError;
+
+/// A GNSS constellation. Each constellation present adds one receiver clock
+/// unknown to the state (SPEC §1: m = 3 + number of constellations).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum System {
+    #[default]
+    Gps,
+    Galileo,
+    Beidou,
+    Glonass,
+    Qzss,
+}
+
+/// Number of constellations the model knows.
+pub const MAX_SYSTEMS: usize = 5;
+/// Largest number of unknowns: 3 position + one clock per constellation.
+pub const MAX_STATES: usize = 3 + MAX_SYSTEMS;
+
+impl System {
+    /// All systems, in clock-column order.
+    pub const ALL: [System; MAX_SYSTEMS] = [
+        System::Gps,
+        System::Galileo,
+        System::Beidou,
+        System::Glonass,
+        System::Qzss,
+    ];
+
+    /// RINEX system letter.
+    pub const fn letter(self) -> char {
+        match self {
+            System::Gps => 'G',
+            System::Galileo => 'E',
+            System::Beidou => 'C',
+            System::Glonass => 'R',
+            System::Qzss => 'J',
+        }
+    }
+
+    /// Parse a RINEX system letter.
+    pub const fn from_letter(c: char) -> Option<System> {
+        match c {
+            'G' => Some(System::Gps),
+            'E' => Some(System::Galileo),
+            'C' => Some(System::Beidou),
+            'R' => Some(System::Glonass),
+            'J' => Some(System::Qzss),
+            _ => None,
+        }
+    }
+
+    /// Position of this system in [`System::ALL`].
+    pub const fn index(self) -> usize {
+        match self {
+            System::Gps => 0,
+            System::Galileo => 1,
+            System::Beidou => 2,
+            System::Glonass => 3,
+            System::Qzss => 4,
+        }
+    }
+}
+
+/// A satellite's identity: constellation and PRN (slot number for GLONASS).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct SatId {
+    pub system: System,
+    pub prn: u8,
+}
+
+impl SatId {
+    pub const fn new(system: System, prn: u8) -> Self {
+        SatId { system, prn }
+    }
+}
+
+impl core::fmt::Display for SatId {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{}{:02}", self.system.letter(), self.prn)
+    }
+}
+
+/// One satellite's corrected pseudorange with its ECEF position.
+///
+/// `pseudorange_m` is corrected for the satellite clock, ionosphere and
+/// troposphere (and group delays); `position_m` is the satellite's ECEF
+/// position at transmit time, already rotated into the ECEF frame at the
+/// reception time (Earth-rotation / Sagnac correction applied by the caller).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct RangeObservation {
+    pub id: SatId,
+    pub pseudorange_m: f64,
+    pub position_m: [f64; 3],
+    /// One-sigma ranging error. `None` selects the configured elevation model.
+    pub sigma_m: Option<f64>,
+}
+
+/// The linearised form used by the seeds' tables: the unit line of sight from
+/// receiver to satellite in local ENU, and the measurement residual
+/// z_i = rho_i - rho_hat_i(x0) (SPEC §1).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct LinearObservation {
+    pub id: SatId,
+    /// Unit line-of-sight vector receiver -> satellite, East/North/Up.
+    pub los_enu: [f64; 3],
+    pub residual_m: f64,
+    /// One-sigma ranging error. `None` selects the configured elevation model.
+    pub sigma_m: Option<f64>,
+}
+
+impl LinearObservation {
+    /// Build from azimuth (clockwise from north) and elevation, in radians.
+    pub fn from_az_el(id: SatId, az_rad: f64, el_rad: f64, residual_m: f64) -> Self {
+        let (sa, ca) = (libm::sin(az_rad), libm::cos(az_rad));
+        let (se, ce) = (libm::sin(el_rad), libm::cos(el_rad));
+        LinearObservation {
+            id,
+            los_enu: [ce * sa, ce * ca, se],
+            residual_m,
+            sigma_m: None,
+        }
+    }
+
+    /// Elevation of the line of sight, radians.
+    pub fn elevation_rad(&self) -> f64 {
+        let [e, n, u] = self.los_enu;
+        libm::atan2(u, libm::sqrt(e * e + n * n))
+    }
+}
+
+/// The observations of one epoch, borrowed from the caller (no copy, no heap).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Observations<'a> {
+    /// Pseudoranges with ECEF satellite positions; the core solves the
+    /// position by Gauss-Newton from `apriori_m` (or the Earth's centre).
+    Ranges {
+        sats: &'a [RangeObservation],
+        apriori_m: Option<[f64; 3]>,
+    },
+    /// Already-linearised rows (the seeds' form).
+    Linear { sats: &'a [LinearObservation] },
+}
+
+/// One epoch of input: the time comes in as an argument (sans-IO).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Epoch<'a> {
+    /// Receiver time of the epoch, seconds (any consistent time scale).
+    pub time_s: f64,
+    pub observations: Observations<'a>,
+}
+
+impl<'a> Epoch<'a> {
+    pub fn ranges(time_s: f64, sats: &'a [RangeObservation], apriori_m: Option<[f64; 3]>) -> Self {
+        Epoch {
+            time_s,
+            observations: Observations::Ranges { sats, apriori_m },
+        }
+    }
+
+    pub fn linear(time_s: f64, sats: &'a [LinearObservation]) -> Self {
+        Epoch {
+            time_s,
+            observations: Observations::Linear { sats },
+        }
+    }
+
+    /// Number of satellites in the epoch.
+    pub fn len(&self) -> usize {
+        match self.observations {
+            Observations::Ranges { sats, .. } => sats.len(),
+            Observations::Linear { sats } => sats.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The satellite identities, in input order.
+    pub fn id(&self, index: usize) -> Option<SatId> {
+        match self.observations {
+            Observations::Ranges { sats, .. } => sats.get(index).map(|s| s.id),
+            Observations::Linear { sats } => sats.get(index).map(|s| s.id),
+        }
+    }
+}
+
+/// Reject a non-finite value with its field name and index.
+pub(crate) fn finite(field: &'static str, index: usize, value: f64) -> Result<f64, RaimError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(RaimError::NotFinite {
+            field,
+            index,
+            value,
+        })
+    }
+}
+
+/// Check an epoch's inputs: capacity, finiteness, sigma sign, duplicates.
+/// O(n^2) duplicate check; n <= N is small.
+pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimError> {
+    finite("time_s", 0, epoch.time_s)?;
+    let n = epoch.len();
+    if n > N {
+        return Err(RaimError::CapacityExceeded {
+            have: n,
+            capacity: N,
+        });
+    }
+    let check_sigma = |index: usize, sigma: Option<f64>| -> Result<(), RaimError> {
+        if let Some(s) = sigma {
+            finite("sigma_m", index, s)?;
+            if s <= 0.0 {
+                return Err(RaimError::NonPositiveSigma { index, sigma_m: s });
+            }
+        }
+        Ok(())
+    };
+    match epoch.observations {
+        Observations::Ranges { sats, apriori_m } => {
+            if let Some(a) = apriori_m {
+                for v in a {
+                    finite("apriori_m", 0, v)?;
+                }
+            }
+            for (i, s) in sats.iter().enumerate() {
+                finite("pseudorange_m", i, s.pseudorange_m)?;
+                for v in s.position_m {
+                    finite("position_m", i, v)?;
+                }
+                check_sigma(i, s.sigma_m)?;
+            }
+        }
+        Observations::Linear { sats } => {
+            for (i, s) in sats.iter().enumerate() {
+                finite("residual_m", i, s.residual_m)?;
+                for v in s.los_enu {
+                    finite("los_enu", i, v)?;
+                }
+                let norm2 = s.los_enu.iter().map(|v| v * v).sum::<f64>();
+                if !(0.5..=1.5).contains(&norm2) {
+                    return Err(RaimError::OutOfRange {
+                        field: "los_enu_norm",
+                        value: libm::sqrt(norm2),
+                        min: libm::sqrt(0.5),
+                        max: libm::sqrt(1.5),
+                    });
+                }
+                check_sigma(i, s.sigma_m)?;
+            }
+        }
+    }
+    for i in 0..n {
+        for j in (i + 1)..n {
+            if let (Some(a), Some(b)) = (epoch.id(i), epoch.id(j)) {
+                if a == b {
+                    return Err(RaimError::DuplicateSatellite {
+                        system: a.system,
+                        prn: a.prn,
+                        first: i,
+                        second: j,
+                    });
+                }
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,241 @@
+//! Householder QR on fixed stack buffers (SPEC §2).
+//!
+//! `H = U T = [U1 U2] [T1; 0]`, with `n` active rows out of a capacity of `N`
+//! and `m <= MAX_STATES` columns. The reflections are kept (LAPACK style, one
+//! unit vector per column) so that `U` is never formed: `U^T x` and `U x` are
+//! applied on demand. nalgebra's `QR` needs a heap for dynamic sizes and its
+//! `solve` panics on non-square systems, hence this small routine.
+
+use crate::error::RaimError;
+use crate::measurement::MAX_STATES;
+
+/// A column whose Householder pivot falls below this fraction of the
+/// column's own norm is treated as linearly dependent (rank deficiency).
+/// 1e-9 keeps condition numbers up to ~1e9 (GDOP in the hundreds of
+/// thousands), far beyond anything a protection level could use.
+pub const RANK_TOLERANCE: f64 = 1e-9;
+
+/// The factorisation of an `n x m` matrix, column-major.
+#[derive(Debug, Clone)]
+pub struct Householder<const N: usize> {
+    n: usize,
+    m: usize,
+    /// Column k holds the unit Householder vector v_k in rows k..n, and the
+    /// strictly upper part of T in rows 0..k of later columns.
+    a: [[f64; N]; MAX_STATES],
+    /// Diagonal of T.
+    diag: [f64; MAX_STATES],
+}
+
+impl<const N: usize> Householder<N> {
+    /// Factor the first `n` rows and `m` columns of the column-major `h`.
+    pub fn factor(h: &[[f64; N]; MAX_STATES], n: usize, m: usize) -> Result<Self, RaimError> {
+        if n > N {
+            return Err(RaimError::CapacityExceeded { have: n, capacity: N });
+        }
+        if m > MAX_STATES || m == 0 || n < m {
+            return Err(RaimError::TooFewSatellites { have: n, need: m.max(1) });
+        }
+        let mut a = *h;
+        let mut diag = [0.0; MAX_STATES];
+        for k in 0..m {
+            let (left, right) = a.split_at_mut(k + 1);
+            let Some(col) = left.last_mut() else {
+                return Err(RaimError::RankDeficient { column: k, pivot: 0.0 });
+            };
+            let full_norm = norm(col.iter().take(n));
+            let Some(tail) = col.get_mut(k..n) else {
+                return Err(RaimError::TooFewSatellites { have: n, need: m });
+            };
+            let (alpha, ok) = make_reflector(tail, full_norm);
+            if !ok {
+                return Err(RaimError::RankDeficient {
+                    column: k,
+                    pivot: if full_norm > 0.0 { alpha / full_norm } else { 0.0 },
+                });
+            }
+            if let Some(d) = diag.get_mut(k) {
+                *d = alpha;
+            }
+            for other in right.iter_mut().take(m - k - 1) {
+                reflect(col, other, k, n);
+            }
+        }
+        Ok(Householder { n, m, a, diag })
+    }
+
+    pub fn rows(&self) -> usize {
+        self.n
+    }
+
+    pub fn cols(&self) -> usize {
+        self.m
+    }
+
+    /// x <- U^T x (first n entries). Entries m..n are then the parity
+    /// vector U2^T x (SPEC §2).
+    pub fn apply_ut(&self, x: &mut [f64; N]) {
+        for col in self.a.iter().take(self.m).enumerate() {
+            reflect(col.1, x, col.0, self.n);
+        }
+    }
+
+    /// x <- U x (first n entries): the inverse of [`Self::apply_ut`].
+    pub fn apply_u(&self, x: &mut [f64; N]) {
+        for (k, col) in self.a.iter().take(self.m).enumerate().rev() {
+            reflect(col, x, k, self.n);
+        }
+    }
+
+    /// T1[i][j] for i <= j < m, zero below the diagonal.
+    pub fn t(&self, i: usize, j: usize) -> f64 {
+        if i > j || j >= self.m {
+            0.0
+        } else if i == j {
+            self.diag.get(i).copied().unwrap_or(0.0)
+        } else {
+            self.a.get(j).and_then(|c| c.get(i)).copied().unwrap_or(0.0)
+        }
+    }
+
+    /// Solve T1 x = y for the first m entries (back substitution).
+    pub fn solve_t(&self, y: &[f64; MAX_STATES]) -> [f64; MAX_STATES] {
+        let mut x = [0.0; MAX_STATES];
+        for i in (0..self.m).rev() {
+            let mut s = y.get(i).copied().unwrap_or(0.0);
+            for j in (i + 1)..self.m {
+                s -= self.t(i, j) * x.get(j).copied().unwrap_or(0.0);
+            }
+            if let Some(xi) = x.get_mut(i) {
+                // The diagonal was checked non-zero in `factor`.
+                *xi = s / self.t(i, i);
+            }
+        }
+        x
+    }
+
+    /// Solve T1^T x = y (forward substitution).
+    pub fn solve_tt(&self, y: &[f64; MAX_STATES]) -> [f64; MAX_STATES] {
+        let mut x = [0.0; MAX_STATES];
+        for i in 0..self.m {
+            let mut s = y.get(i).copied().unwrap_or(0.0);
+            for j in 0..i {
+                s -= self.t(j, i) * x.get(j).copied().unwrap_or(0.0);
+            }
+            if let Some(xi) = x.get_mut(i) {
+                *xi = s / self.t(i, i);
+            }
+        }
+        x
+    }
+}
+
+fn norm<'a>(it: impl Iterator<Item = &'a f64>) -> f64 {
+    // Scaled to avoid overflow on huge (ECEF-sized) entries.
+    let mut scale = 0.0f64;
+    let mut ssq = 1.0f64;
+    for &v in it {
+        let a = libm::fabs(v);
+        if a > 0.0 {
+            if scale < a {
+                ssq = 1.0 + ssq * (scale / a) * (scale / a);
+                scale = a;
+            } else {
+                ssq += (a / scale) * (a / scale);
+            }
+        }
+    }
+    scale * libm::sqrt(ssq)
+}
+
+/// Turn `x` (rows k..n of a column) into the unit Householder vector v with
+/// (I - 2 v v^T) x = alpha e1. Returns alpha and whether the pivot is usable.
+fn make_reflector(x: &mut [f64], full_norm: f64) -> (f64, bool) {
+    let sigma = norm(x.iter());
+    let Some(x0) = x.first_mut() else {
+        return (0.0, false);
+    };
+    let alpha = if *x0 >= 0.0 { -sigma } else { sigma };
+    if !(sigma > RANK_TOLERANCE * full_norm) || !sigma.is_finite() {
+        return (sigma, false);
+    }
+    // v = x - alpha e1, then normalise.
+    *x0 -= alpha;
+    let vnorm = norm(x.iter());
+    if !(vnorm > 0.0) {
+        return (sigma, false);
+    }
+    for v in x.iter_mut() {
+        *v /= vnorm;
+    }
+    (alpha, true)
+}
+
+/// y[k..n] <- (I - 2 v v^T) y[k..n] with v stored in col[k..n].
+fn reflect<const N: usize>(col: &[f64; N], y: &mut [f64; N], k: usize, n: usize) {
+    let dot: f64 = col
+        .iter()
+        .zip(y.iter())
+        .take(n)
+        .skip(k)
+        .map(|(v, w)| v * w)
+        .sum();
+    let f = 2.0 * dot;
+    for (v, w) in col.iter().zip(y.iter_mut()).take(n).skip(k) {
+        *w -= f * v;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reproduces_a_small_least_squares_solution() {
+        // Fit y = a + b t through (0,1),(1,3),(2,5),(3,7.5): normal equations
+        // give b = 2.15, a = 0.9 (computed by hand: sum t = 6, sum t^2 = 14,
+        // sum y = 16.5, sum t y = 35.5).
+        let mut h = [[0.0; 8]; MAX_STATES];
+        h[0][..4].copy_from_slice(&[1.0, 1.0, 1.0, 1.0]);
+        h[1][..4].copy_from_slice(&[0.0, 1.0, 2.0, 3.0]);
+        let qr = Householder::<8>::factor(&h, 4, 2).unwrap();
+        let mut y = [0.0; 8];
+        y[..4].copy_from_slice(&[1.0, 3.0, 5.0, 7.5]);
+        qr.apply_ut(&mut y);
+        let mut rhs = [0.0; MAX_STATES];
+        rhs[..2].copy_from_slice(&y[..2]);
+        let x = qr.solve_t(&rhs);
+        assert!((x[0] - 0.9).abs() < 1e-12, "{x:?}");
+        assert!((x[1] - 2.15).abs() < 1e-12, "{x:?}");
+        // Residual sum of squares = |y[2..4]|^2: residuals 0.1,-0.05,-0.2,0.15
+        let rss = y[2] * y[2] + y[3] * y[3];
+        assert!((rss - 0.075).abs() < 1e-12, "{rss}");
+        // U U^T x = x
+        let mut v = [0.0; 8];
+        v[..4].copy_from_slice(&[0.3, -1.0, 2.0, 4.0]);
+        let orig = v;
+        qr.apply_ut(&mut v);
+        qr.apply_u(&mut v);
+        for i in 0..4 {
+            assert!((v[i] - orig[i]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn rejects_rank_deficiency() {
+        let mut h = [[0.0; 8]; MAX_STATES];
+        h[0][..4].copy_from_slice(&[1.0, 1.0, 1.0, 1.0]);
+        h[1][..4].copy_from_slice(&[2.0, 2.0, 2.0, 2.0]);
+        let err = Householder::<8>::factor(&h, 4, 2).unwrap_err();
+        assert!(matches!(err, RaimError::RankDeficient { column: 1, .. }), "{err:?}");
+        let zero = [[0.0; 8]; MAX_STATES];
+        assert!(matches!(
+            Householder::<8>::factor(&zero, 4, 1),
+            Err(RaimError::RankDeficient { column: 0, .. })
+        ));
+        assert!(matches!(
+            Householder::<8>::factor(&h, 9, 2),
+            Err(RaimError::CapacityExceeded { have: 9, capacity: 8 })
+        ));
+    }
+}

@@ -1,0 +1,87 @@
+//! Elevation-dependent ranging sigma (SPEC §1), DO-229 style:
+//! sigma^2 = sigma_ura^2 + sigma_iono(el)^2 + sigma_tropo(el)^2 + sigma_user(el)^2.
+
+/// Parameters of the elevation model. Defaults are DO-229D's airborne
+/// accuracy designator A receiver, a 0.75 m URA (ARAIM ADD baseline), and a
+/// single-frequency Klobuchar residual of 2.5 m vertical (documented in
+/// docs/CORE.md; set to 0 for iono-free measurements).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct SigmaModel {
+    /// Signal-in-space (URA/URE) sigma, m.
+    pub ura_m: f64,
+    /// Residual ionosphere sigma at zenith, m (scaled by the obliquity factor).
+    pub iono_vertical_m: f64,
+    /// Receiver noise sigma, m (DO-229D AAD-A: 0.36 m; AAD-B: 0.15 m).
+    pub noise_m: f64,
+    /// Lowest elevation used in the model (guards the obliquity terms), rad.
+    pub min_elevation_rad: f64,
+}
+
+impl Default for SigmaModel {
+    fn default() -> Self {
+        SigmaModel {
+            ura_m: 0.75,
+            iono_vertical_m: 2.5,
+            noise_m: 0.36,
+            min_elevation_rad: 2.0 * core::f64::consts::PI / 180.0,
+        }
+    }
+}
+
+impl SigmaModel {
+    /// One-sigma ranging error at elevation `el_rad`, m.
+    pub fn sigma_m(&self, el_rad: f64) -> f64 {
+        let el = if el_rad > self.min_elevation_rad {
+            el_rad
+        } else {
+            self.min_elevation_rad
+        };
+        let s = libm::sin(el);
+        // DO-229D A.4.2.4: tropospheric residual, 0.12 m at zenith.
+        let tropo = 0.12 * 1.001 / libm::sqrt(0.002_001 + s * s);
+        // DO-229D J.2.4: airborne multipath 0.13 + 0.53 exp(-el_deg / 10).
+        let el_deg = el * 180.0 / core::f64::consts::PI;
+        let multipath = 0.13 + 0.53 * libm::exp(-el_deg / 10.0);
+        // Ionospheric obliquity factor, thin shell at 350 km (DO-229D A.4.4.10.4).
+        let re_ratio = 6378.1363 / (6378.1363 + 350.0);
+        let c = re_ratio * libm::cos(el);
+        let obliquity = 1.0 / libm::sqrt(1.0 - c * c);
+        let iono = self.iono_vertical_m * obliquity;
+        libm::sqrt(
+            self.ura_m * self.ura_m
+                + iono * iono
+                + tropo * tropo
+                + multipath * multipath
+                + self.noise_m * self.noise_m,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn matches_do229_terms_at_zenith_and_low_elevation() {
+        let m = SigmaModel {
+            ura_m: 0.0,
+            iono_vertical_m: 0.0,
+            noise_m: 0.0,
+            ..SigmaModel::default()
+        };
+        // Zenith: tropo 0.12*1.001/sqrt(1.002001) = 0.120000 m; multipath
+        // 0.13 + 0.53 e^-9 = 0.130066 m.
+        let z = m.sigma_m(core::f64::consts::FRAC_PI_2);
+        let expect = libm::sqrt(0.12f64.powi(2) + (0.13 + 0.53 * (-9.0f64).exp()).powi(2));
+        assert!((z - expect).abs() < 1e-4, "{z} vs {expect}");
+        // 5 deg: tropo 0.12*1.001/sqrt(0.002001+sin^2 5deg) = 1.2498 m,
+        // multipath 0.13+0.53e^-0.5 = 0.4515 m.
+        let low = m.sigma_m(5.0f64.to_radians());
+        let t = 0.12 * 1.001 / (0.002001 + 5.0f64.to_radians().sin().powi(2)).sqrt();
+        let mp = 0.13 + 0.53 * (-0.5f64).exp();
+        assert!((low - (t * t + mp * mp).sqrt()).abs() < 1e-12);
+        assert!(low > z);
+    }
+}
