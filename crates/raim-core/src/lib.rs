@@ -29,6 +29,8 @@ pub mod protection;
 pub mod qr;
 pub mod sigma;
 pub mod solve;
+#[cfg(test)]
+mod testutil;
 
 pub use config::{AlertLimits, Config, FiRule, Phase};
 pub use error::RaimError;

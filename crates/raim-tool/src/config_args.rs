@@ -1,0 +1,74 @@
+//! Command-line configuration shared by the subcommands.
+
+use clap::{Args, ValueEnum};
+use raim_core::{Config, FiRule, Phase};
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum RuleArg {
+    Mle,
+    LraimFlat,
+    Lraim,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum PhaseArg {
+    EnRoute,
+    Terminal,
+    Npa,
+}
+
+#[derive(Debug, Clone, Args)]
+pub struct ConfigArgs {
+    /// Probability of false alarm per sample.
+    #[arg(long, default_value_t = 3.3333e-7)]
+    pub pfa: f64,
+    /// Probability of missed detection (protection levels).
+    #[arg(long, default_value_t = 1e-3)]
+    pub pmd: f64,
+    /// Fault identification rule.
+    #[arg(long, value_enum, default_value_t = RuleArg::Lraim)]
+    pub rule: RuleArg,
+    /// kappa = tau^2/sigma^2 of the L-RAIM Gaussian bias prior.
+    #[arg(long, default_value_t = raim_core::config::DEFAULT_KAPPA)]
+    pub kappa: f64,
+    /// Flight phase preset for the alert limits.
+    #[arg(long, value_enum, default_value_t = PhaseArg::Npa)]
+    pub phase: PhaseArg,
+    /// Override the horizontal alert limit, m.
+    #[arg(long)]
+    pub hal_m: Option<f64>,
+    /// Vertical alert limit, m (not monitored unless given).
+    #[arg(long)]
+    pub val_m: Option<f64>,
+    /// Most exclusions per epoch.
+    #[arg(long, default_value_t = 2)]
+    pub max_exclusions: u8,
+    /// Allow an exclusion even when excluding the runner-up also passes.
+    #[arg(long)]
+    pub allow_ambiguous: bool,
+}
+
+impl ConfigArgs {
+    pub fn config(&self) -> Config {
+        let phase = match self.phase {
+            PhaseArg::EnRoute => Phase::EnRoute,
+            PhaseArg::Terminal => Phase::Terminal,
+            PhaseArg::Npa => Phase::Npa,
+        };
+        let mut c = Config::preset(phase);
+        c.pfa = self.pfa;
+        c.pmd = self.pmd;
+        c.rule = match self.rule {
+            RuleArg::Mle => FiRule::Mle,
+            RuleArg::LraimFlat => FiRule::LraimFlat,
+            RuleArg::Lraim => FiRule::LraimGaussian { kappa: self.kappa },
+        };
+        if let Some(h) = self.hal_m {
+            c.alert.hal_m = h;
+        }
+        c.alert.val_m = self.val_m;
+        c.max_exclusions = self.max_exclusions;
+        c.require_unique_exclusion = !self.allow_ambiguous;
+        c
+    }
+}

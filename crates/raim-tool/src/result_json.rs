@@ -1,0 +1,180 @@
+//! One JSON object per epoch result (docs/FORMATS.md), and a one-line text
+//! summary for terminals.
+
+use raim_core::fde::AlarmCause;
+use raim_core::{Decision, EpochResult, RaimError};
+use serde::Serialize;
+
+#[derive(Debug, Serialize)]
+pub struct SatOut {
+    pub sat: String,
+    pub used: bool,
+    pub el_deg: f64,
+    pub sigma_m: f64,
+    pub s_ii: f64,
+    pub h_ii: f64,
+    pub w: f64,
+    pub bias_m: f64,
+    pub score: Option<f64>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct ExclusionOut {
+    pub sat: String,
+    pub statistic_before: f64,
+    pub threshold_before: f64,
+    pub statistic_after: f64,
+    pub threshold_after: f64,
+    pub dof_after: u32,
+    pub bias_m: f64,
+}
+
+#[derive(Debug, Serialize)]
+pub struct ResultOut {
+    pub time_s: f64,
+    pub decision: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alarm_cause: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub position_ecef_m: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lat_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lon_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height_m: Option<f64>,
+    pub correction_enu_m: [f64; 3],
+    pub statistic: f64,
+    pub threshold: f64,
+    pub dof: u32,
+    pub initial_statistic: f64,
+    pub initial_threshold: f64,
+    pub initial_dof: u32,
+    pub identified: Option<String>,
+    pub excluded: Vec<ExclusionOut>,
+    pub hpl_m: f64,
+    pub vpl_m: f64,
+    pub sigma_enu_m: [f64; 3],
+    pub pl_available: bool,
+    pub detection_available: bool,
+    pub exclusion_available: bool,
+    pub sats: Vec<SatOut>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct ErrorOut {
+    pub time_s: f64,
+    pub error: String,
+    pub detail: String,
+}
+
+pub fn decision_name(d: Decision) -> &'static str {
+    match d {
+        Decision::Ok => "ok",
+        Decision::Alarm => "alarm",
+        Decision::Excluded => "excluded",
+        Decision::Unavailable => "unavailable",
+    }
+}
+
+fn cause_name(c: AlarmCause) -> String {
+    match c {
+        AlarmCause::NoRedundancy => "no_redundancy".into(),
+        AlarmCause::Unidentifiable => "unidentifiable".into(),
+        AlarmCause::Ambiguous { best, runner_up } => format!("ambiguous:{best}/{runner_up}"),
+        AlarmCause::MaxExclusions => "max_exclusions".into(),
+        AlarmCause::SubsetGeometry { excluded } => format!("subset_geometry:{excluded}"),
+    }
+}
+
+/// JSON numbers cannot be infinite: PLs that are unbounded print as 1e308.
+fn finite(v: f64) -> f64 {
+    if v.is_finite() {
+        v
+    } else if v > 0.0 {
+        f64::MAX
+    } else {
+        f64::NAN
+    }
+}
+
+pub fn result_out<const N: usize>(r: &EpochResult<N>) -> ResultOut {
+    ResultOut {
+        time_s: r.time_s,
+        decision: decision_name(r.decision),
+        alarm_cause: r.alarm_cause.map(cause_name),
+        position_ecef_m: r.position_ecef_m,
+        lat_deg: r.geodetic.map(|g| g.lat_rad.to_degrees()),
+        lon_deg: r.geodetic.map(|g| g.lon_rad.to_degrees()),
+        height_m: r.geodetic.map(|g| g.height_m),
+        correction_enu_m: r.correction_enu_m,
+        statistic: r.test.statistic,
+        threshold: r.test.threshold,
+        dof: r.test.dof,
+        initial_statistic: r.initial_test.statistic,
+        initial_threshold: r.initial_test.threshold,
+        initial_dof: r.initial_test.dof,
+        identified: r.identified.map(|s| s.to_string()),
+        excluded: r
+            .exclusions
+            .iter()
+            .map(|e| ExclusionOut {
+                sat: e.id.to_string(),
+                statistic_before: e.before.statistic,
+                threshold_before: e.before.threshold,
+                statistic_after: e.after.statistic,
+                threshold_after: e.after.threshold,
+                dof_after: e.after.dof,
+                bias_m: e.bias_m,
+            })
+            .collect(),
+        hpl_m: finite(r.protection.hpl_m),
+        vpl_m: finite(r.protection.vpl_m),
+        sigma_enu_m: r.sigma_enu_m,
+        pl_available: r.pl_available,
+        detection_available: r.detection_available,
+        exclusion_available: r.exclusion_available,
+        sats: r
+            .satellites
+            .iter()
+            .map(|s| SatOut {
+                sat: s.id.to_string(),
+                used: s.used,
+                el_deg: s.elevation_rad.to_degrees(),
+                sigma_m: s.sigma_m,
+                s_ii: s.s_ii,
+                h_ii: s.h_ii,
+                w: s.w,
+                bias_m: s.bias_m,
+                score: s.identifiable.then_some(s.score),
+            })
+            .collect(),
+    }
+}
+
+pub fn error_out(time_s: f64, e: &RaimError) -> ErrorOut {
+    let name = format!("{e:?}");
+    let variant = name.split([' ', '{', '(']).next().unwrap_or("").to_string();
+    ErrorOut {
+        time_s,
+        error: variant,
+        detail: e.to_string(),
+    }
+}
+
+/// One readable line per epoch.
+pub fn text_line<const N: usize>(r: &EpochResult<N>) -> String {
+    let excl: Vec<String> = r.exclusions.iter().map(|e| e.id.to_string()).collect();
+    format!(
+        "t={:>10.1}s {:<11} D2={:>9.2} T2={:>6.2} dof={} {}{} HPL={:>8.1}m VPL={:>8.1}m",
+        r.time_s,
+        decision_name(r.decision).to_uppercase(),
+        r.initial_test.statistic,
+        r.initial_test.threshold,
+        r.initial_test.dof,
+        if excl.is_empty() { String::new() } else { format!("excluded={} ", excl.join(",")) },
+        r.alarm_cause.map(|c| format!("cause={} ", cause_name(c))).unwrap_or_default(),
+        finite(r.protection.hpl_m),
+        finite(r.protection.vpl_m),
+    )
+}
