@@ -78,7 +78,9 @@ impl EpochJson {
 
 /// Path of a file under `host-tests/vectors/`.
 pub fn vector_path(name: &str) -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("vectors").join(name)
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("vectors")
+        .join(name)
 }
 
 /// Read a JSON-lines vector file.

@@ -23,12 +23,27 @@ fn example_vector_decisions_follow_the_injected_faults() {
     }
     // Epochs 0-2 and 6: no fault. 3, 4, 7: 50 m on G02. 5: G02 and G06.
     for i in [0, 1, 2, 6] {
-        assert_eq!(decisions[i].0, Decision::Ok, "epoch {i}: {:?}", decisions[i]);
+        assert_eq!(
+            decisions[i].0,
+            Decision::Ok,
+            "epoch {i}: {:?}",
+            decisions[i]
+        );
     }
     for i in [3, 4, 7] {
-        assert_eq!(decisions[i], (Decision::Excluded, vec!["G02".to_string()]), "epoch {i}");
+        assert_eq!(
+            decisions[i],
+            (Decision::Excluded, vec!["G02".to_string()]),
+            "epoch {i}"
+        );
     }
     let (d5, mut x5) = decisions[5].clone();
     x5.sort();
-    assert_eq!((d5, x5), (Decision::Excluded, vec!["G02".to_string(), "G06".to_string()]));
+    assert_eq!(
+        (d5, x5),
+        (
+            Decision::Excluded,
+            vec!["G02".to_string(), "G06".to_string()]
+        )
+    );
 }

@@ -16,7 +16,14 @@ fn sky(n: usize, fault_m: f64) -> Vec<LinearObservation> {
             let noise = ((i as f64 * 12.9898).sin() * 43758.5453).fract() - 0.5;
             let r = noise + if i == 2 { fault_m } else { 0.0 };
             let mut o = LinearObservation::from_az_el(
-                SatId::new(if i % 2 == 0 { System::Gps } else { System::Galileo }, i as u8 + 1),
+                SatId::new(
+                    if i % 2 == 0 {
+                        System::Gps
+                    } else {
+                        System::Galileo
+                    },
+                    i as u8 + 1,
+                ),
                 az.to_radians(),
                 el.to_radians(),
                 r,

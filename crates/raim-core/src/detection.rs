@@ -49,10 +49,17 @@ impl<const N: usize> Thresholds<N> {
     /// T^2 and lambda_md for `dof` (1..N), computing them on first use.
     pub fn get(&mut self, pfa: f64, pmd: f64, dof: usize) -> Result<(f64, f64), RaimError> {
         if pfa != self.pfa || pmd != self.pmd {
-            *self = Thresholds { pfa, pmd, ..Thresholds::default() };
+            *self = Thresholds {
+                pfa,
+                pmd,
+                ..Thresholds::default()
+            };
         }
         let dof_u32 = u32::try_from(dof).unwrap_or(u32::MAX);
-        let invalid = RaimError::InvalidDof { dof: dof_u32, max: N.saturating_sub(1) as u32 };
+        let invalid = RaimError::InvalidDof {
+            dof: dof_u32,
+            max: N.saturating_sub(1) as u32,
+        };
         let (Some(t2), Some(lambda)) = (self.t2.get_mut(dof), self.lambda.get_mut(dof)) else {
             return Err(invalid);
         };

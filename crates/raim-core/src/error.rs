@@ -46,7 +46,11 @@ pub enum RaimError {
 impl core::fmt::Display for RaimError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match *self {
-            RaimError::NotFinite { field, index, value } => {
+            RaimError::NotFinite {
+                field,
+                index,
+                value,
+            } => {
                 write!(f, "non-finite {field} at index {index}: {value}")
             }
             RaimError::DuplicateSatellite {
@@ -63,7 +67,10 @@ impl core::fmt::Display for RaimError {
                 write!(f, "too few satellites: have {have}, need {need}")
             }
             RaimError::RankDeficient { column, pivot } => {
-                write!(f, "rank-deficient geometry at column {column} (pivot {pivot:e})")
+                write!(
+                    f,
+                    "rank-deficient geometry at column {column} (pivot {pivot:e})"
+                )
             }
             RaimError::NonPositiveSigma { index, sigma_m } => {
                 write!(f, "sigma at index {index} is not positive: {sigma_m} m")

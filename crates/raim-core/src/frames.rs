@@ -60,7 +60,11 @@ pub fn geodetic_to_ecef(g: Geodetic) -> [f64; 3] {
 pub fn enu_rotation(g: &Geodetic) -> [[f64; 3]; 3] {
     let (sl, cl) = (libm::sin(g.lat_rad), libm::cos(g.lat_rad));
     let (so, co) = (libm::sin(g.lon_rad), libm::cos(g.lon_rad));
-    [[-so, co, 0.0], [-sl * co, -sl * so, cl], [cl * co, cl * so, sl]]
+    [
+        [-so, co, 0.0],
+        [-sl * co, -sl * so, cl],
+        [cl * co, cl * so, sl],
+    ]
 }
 
 /// Rotate an ECEF vector into ENU.
@@ -99,7 +103,11 @@ mod tests {
 
     #[test]
     fn enu_is_orthonormal_and_up_points_out() {
-        let g = Geodetic { lat_rad: 0.6, lon_rad: 2.4, height_m: 0.0 };
+        let g = Geodetic {
+            lat_rad: 0.6,
+            lon_rad: 2.4,
+            height_m: 0.0,
+        };
         let r = enu_rotation(&g);
         for i in 0..3 {
             for j in 0..3 {

@@ -56,7 +56,12 @@ pub fn rank<const N: usize>(
 ) -> (Option<Candidate>, Option<Candidate>) {
     let mut best: Option<Candidate> = None;
     let mut second: Option<Candidate> = None;
-    for (row, (&r, &s)) in parity.residuals().iter().zip(parity.s_ii().iter()).enumerate() {
+    for (row, (&r, &s)) in parity
+        .residuals()
+        .iter()
+        .zip(parity.s_ii().iter())
+        .enumerate()
+    {
         let Some(mut c) = score(rule, r, s, min_s_ii) else {
             continue;
         };
@@ -113,7 +118,9 @@ mod tests {
     fn gaussian_prior_tends_to_flat_and_matches_quadrature() {
         let (r, s) = (1.7, 0.3);
         let flat = score(FiRule::LraimFlat, r, s, 1e-9).unwrap().score;
-        let big = score(FiRule::LraimGaussian { kappa: 1e12 }, r, s, 1e-9).unwrap().score;
+        let big = score(FiRule::LraimGaussian { kappa: 1e12 }, r, s, 1e-9)
+            .unwrap()
+            .score;
         // kappa -> inf: w^2 kS/(1+kS) - ln(1+kS) -> w^2 - ln S - ln kappa.
         assert!((big + 1e12f64.ln() - flat).abs() < 1e-6, "{big} {flat}");
         // Quadrature of the Gaussian prior marginal: N(b; 0, kappa) prior.
@@ -123,11 +130,18 @@ mod tests {
         let db = 200.0 / steps as f64;
         for j in 0..=steps {
             let b = -100.0 + j as f64 * db;
-            let prior = (-b * b / (2.0 * kappa)).exp() / (2.0 * core::f64::consts::PI * kappa).sqrt();
+            let prior =
+                (-b * b / (2.0 * kappa)).exp() / (2.0 * core::f64::consts::PI * kappa).sqrt();
             integral += (-(s * b * b - 2.0 * b * r) / 2.0).exp() * prior * db;
         }
-        let g = score(FiRule::LraimGaussian { kappa }, r, s, 1e-9).unwrap().score;
-        assert!((2.0 * integral.ln() - g).abs() < 1e-8, "{} vs {g}", 2.0 * integral.ln());
+        let g = score(FiRule::LraimGaussian { kappa }, r, s, 1e-9)
+            .unwrap()
+            .score;
+        assert!(
+            (2.0 * integral.ln() - g).abs() < 1e-8,
+            "{} vs {g}",
+            2.0 * integral.ln()
+        );
     }
 
     #[test]

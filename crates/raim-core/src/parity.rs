@@ -30,9 +30,17 @@ pub struct Parity<const N: usize> {
 impl<const N: usize> Parity<N> {
     /// Factor the whitened column-major `h` (n x m) and project `z`.
     /// Needs n > m (at least one redundant measurement).
-    pub fn new(h: &[[f64; N]; MAX_STATES], z: &[f64; N], n: usize, m: usize) -> Result<Self, RaimError> {
+    pub fn new(
+        h: &[[f64; N]; MAX_STATES],
+        z: &[f64; N],
+        n: usize,
+        m: usize,
+    ) -> Result<Self, RaimError> {
         if n <= m {
-            return Err(RaimError::TooFewSatellites { have: n, need: m + 1 });
+            return Err(RaimError::TooFewSatellites {
+                have: n,
+                need: m + 1,
+            });
         }
         let qr = Householder::factor(h, n, m)?;
         let mut utz = *z;
@@ -114,7 +122,10 @@ impl<const N: usize> Parity<N> {
 
     /// Row `axis` (0 = E, 1 = N, 2 = U) of the position gain A.
     pub fn gain(&self, axis: usize) -> &[f64] {
-        self.gain.get(axis).and_then(|r| r.get(..self.n)).unwrap_or(&[])
+        self.gain
+            .get(axis)
+            .and_then(|r| r.get(..self.n))
+            .unwrap_or(&[])
     }
 
     /// Least-squares state correction dx (first m entries meaningful).
@@ -131,7 +142,12 @@ impl<const N: usize> Parity<N> {
     /// measurement space, indexed like the rows.
     pub fn lift(&self, y: &[f64]) -> [f64; N] {
         let mut x = [0.0; N];
-        for (dst, v) in x.iter_mut().skip(self.m).zip(y.iter()).take(self.n - self.m) {
+        for (dst, v) in x
+            .iter_mut()
+            .skip(self.m)
+            .zip(y.iter())
+            .take(self.n - self.m)
+        {
             *dst = *v;
         }
         self.qr.apply_u(&mut x);
@@ -147,7 +163,10 @@ impl<const N: usize> Parity<N> {
         }
         self.qr.apply_ut(&mut y);
         let mut k = 0;
-        for (dst, v) in out.iter_mut().zip(y.iter().skip(self.m).take(self.n - self.m)) {
+        for (dst, v) in out
+            .iter_mut()
+            .zip(y.iter().skip(self.m).take(self.n - self.m))
+        {
             *dst = *v;
             k += 1;
         }
@@ -304,7 +323,10 @@ mod tests {
             z[sat] = 30.0;
             let p = Parity::<N>::new(&h, &z, 7, 4).unwrap();
             for (i, (ours, theirs)) in p.residuals().iter().zip(printed_r.iter()).enumerate() {
-                assert!((ours - theirs).abs() < RESIDUAL_TOL_M, "sat {sat} row {i}: {ours} vs {theirs}");
+                assert!(
+                    (ours - theirs).abs() < RESIDUAL_TOL_M,
+                    "sat {sat} row {i}: {ours} vs {theirs}"
+                );
             }
             let stat = p.sse();
             assert!(

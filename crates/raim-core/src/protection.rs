@@ -21,7 +21,11 @@ pub struct ProtectionLevels {
 /// slope_H,i = sqrt(A_E,i^2 + A_N,i^2) / sqrt(S_ii), slope_V,i = |A_U,i| /
 /// sqrt(S_ii); PL = max slope * sqrt(lambda_md). A satellite with S_ii below
 /// `min_s_ii` has an unbounded slope, so its PLs are infinite.
-pub fn slope_levels<const N: usize>(parity: &Parity<N>, lambda_md: f64, min_s_ii: f64) -> ProtectionLevels {
+pub fn slope_levels<const N: usize>(
+    parity: &Parity<N>,
+    lambda_md: f64,
+    min_s_ii: f64,
+) -> ProtectionLevels {
     let pbias = libm::sqrt(lambda_md);
     let mut out = ProtectionLevels::default();
     let (mut max_h, mut max_v) = (0.0f64, 0.0f64);

@@ -31,17 +31,26 @@ impl<const N: usize> Householder<N> {
     /// Factor the first `n` rows and `m` columns of the column-major `h`.
     pub fn factor(h: &[[f64; N]; MAX_STATES], n: usize, m: usize) -> Result<Self, RaimError> {
         if n > N {
-            return Err(RaimError::CapacityExceeded { have: n, capacity: N });
+            return Err(RaimError::CapacityExceeded {
+                have: n,
+                capacity: N,
+            });
         }
         if m > MAX_STATES || m == 0 || n < m {
-            return Err(RaimError::TooFewSatellites { have: n, need: m.max(1) });
+            return Err(RaimError::TooFewSatellites {
+                have: n,
+                need: m.max(1),
+            });
         }
         let mut a = *h;
         let mut diag = [0.0; MAX_STATES];
         for k in 0..m {
             let (left, right) = a.split_at_mut(k + 1);
             let Some(col) = left.last_mut() else {
-                return Err(RaimError::RankDeficient { column: k, pivot: 0.0 });
+                return Err(RaimError::RankDeficient {
+                    column: k,
+                    pivot: 0.0,
+                });
             };
             let full_norm = norm(col.iter().take(n));
             let Some(tail) = col.get_mut(k..n) else {
@@ -51,7 +60,11 @@ impl<const N: usize> Householder<N> {
             if !ok {
                 return Err(RaimError::RankDeficient {
                     column: k,
-                    pivot: if full_norm > 0.0 { alpha / full_norm } else { 0.0 },
+                    pivot: if full_norm > 0.0 {
+                        alpha / full_norm
+                    } else {
+                        0.0
+                    },
                 });
             }
             if let Some(d) = diag.get_mut(k) {
@@ -227,7 +240,10 @@ mod tests {
         h[0][..4].copy_from_slice(&[1.0, 1.0, 1.0, 1.0]);
         h[1][..4].copy_from_slice(&[2.0, 2.0, 2.0, 2.0]);
         let err = Householder::<8>::factor(&h, 4, 2).unwrap_err();
-        assert!(matches!(err, RaimError::RankDeficient { column: 1, .. }), "{err:?}");
+        assert!(
+            matches!(err, RaimError::RankDeficient { column: 1, .. }),
+            "{err:?}"
+        );
         let zero = [[0.0; 8]; MAX_STATES];
         assert!(matches!(
             Householder::<8>::factor(&zero, 4, 1),
@@ -235,7 +251,10 @@ mod tests {
         ));
         assert!(matches!(
             Householder::<8>::factor(&h, 9, 2),
-            Err(RaimError::CapacityExceeded { have: 9, capacity: 8 })
+            Err(RaimError::CapacityExceeded {
+                have: 9,
+                capacity: 8
+            })
         ));
     }
 }

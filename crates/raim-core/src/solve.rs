@@ -45,7 +45,10 @@ impl<const N: usize> Solution<N> {
 
     /// Row of the epoch satellite `index`, if it is in this subset.
     pub fn row_of(&self, index: usize) -> Option<usize> {
-        self.source.iter().take(self.rows()).position(|&s| s == index)
+        self.source
+            .iter()
+            .take(self.rows())
+            .position(|&s| s == index)
     }
 }
 
@@ -73,13 +76,30 @@ fn clock_column(cols: &[Option<System>; MAX_SYSTEMS], sys: System) -> Option<usi
 }
 
 /// Solve the subset `mask` (indexed like the epoch's satellites).
-pub fn solve<const N: usize>(cfg: &Config, epoch: &Epoch<'_>, mask: &[bool; N]) -> Result<Solution<N>, RaimError> {
+pub fn solve<const N: usize>(
+    cfg: &Config,
+    epoch: &Epoch<'_>,
+    mask: &[bool; N],
+) -> Result<Solution<N>, RaimError> {
     match epoch.observations {
         Observations::Linear { sats } => {
-            let mut b = Builder::<N>::new(sats.iter().zip(mask.iter()).filter(|(_, m)| **m).map(|(s, _)| s.id.system));
-            for (i, s) in sats.iter().enumerate().filter(|(i, _)| mask.get(*i).copied().unwrap_or(false)) {
+            let mut b = Builder::<N>::new(
+                sats.iter()
+                    .zip(mask.iter())
+                    .filter(|(_, m)| **m)
+                    .map(|(s, _)| s.id.system),
+            );
+            for (i, s) in sats
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
+            {
                 let norm = libm::sqrt(s.los_enu.iter().map(|v| v * v).sum::<f64>());
-                let u = [s.los_enu[0] / norm, s.los_enu[1] / norm, s.los_enu[2] / norm];
+                let u = [
+                    s.los_enu[0] / norm,
+                    s.los_enu[1] / norm,
+                    s.los_enu[2] / norm,
+                ];
                 let el = crate::frames::elevation_rad(u);
                 let sigma = s.sigma_m.unwrap_or_else(|| cfg.sigma_model.sigma_m(el));
                 b.push(i, s.id, u, s.residual_m, sigma, el)?;
@@ -128,7 +148,11 @@ pub fn solve<const N: usize>(cfg: &Config, epoch: &Epoch<'_>, mask: &[bool; N]) 
                 let rot = enu_rotation(&g);
                 let mut b = Builder::<N>::new(selected().map(|(_, s)| s.id.system));
                 for (i, s) in selected() {
-                    let d = [s.position_m[0] - x[0], s.position_m[1] - x[1], s.position_m[2] - x[2]];
+                    let d = [
+                        s.position_m[0] - x[0],
+                        s.position_m[1] - x[1],
+                        s.position_m[2] - x[2],
+                    ];
                     let range = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
                     if !(range > MIN_RANGE_M) {
                         return Err(RaimError::OutOfRange {
@@ -142,8 +166,16 @@ pub fn solve<const N: usize>(cfg: &Config, epoch: &Epoch<'_>, mask: &[bool; N]) 
                     // On the surface, use ENU so the model is final; near the
                     // centre, ECEF axes are as good as any (position columns
                     // are rotated back below).
-                    let u = if on_surface { rotate(&rot, u_ecef) } else { u_ecef };
-                    let el = if on_surface { crate::frames::elevation_rad(u) } else { core::f64::consts::FRAC_PI_2 };
+                    let u = if on_surface {
+                        rotate(&rot, u_ecef)
+                    } else {
+                        u_ecef
+                    };
+                    let el = if on_surface {
+                        crate::frames::elevation_rad(u)
+                    } else {
+                        core::f64::consts::FRAC_PI_2
+                    };
                     let col = clock_column(&cols, s.id.system).unwrap_or(0);
                     let z = s.pseudorange_m - range - clock.get(col).copied().unwrap_or(0.0);
                     let sigma = match s.sigma_m {
@@ -160,9 +192,15 @@ pub fn solve<const N: usize>(cfg: &Config, epoch: &Epoch<'_>, mask: &[bool; N]) 
                 let step = if on_surface {
                     // ENU -> ECEF is the transpose of the rotation.
                     [
-                        rot[0][0] * step_local[0] + rot[1][0] * step_local[1] + rot[2][0] * step_local[2],
-                        rot[0][1] * step_local[0] + rot[1][1] * step_local[1] + rot[2][1] * step_local[2],
-                        rot[0][2] * step_local[0] + rot[1][2] * step_local[1] + rot[2][2] * step_local[2],
+                        rot[0][0] * step_local[0]
+                            + rot[1][0] * step_local[1]
+                            + rot[2][0] * step_local[2],
+                        rot[0][1] * step_local[0]
+                            + rot[1][1] * step_local[1]
+                            + rot[2][1] * step_local[2],
+                        rot[0][2] * step_local[0]
+                            + rot[1][2] * step_local[1]
+                            + rot[2][2] * step_local[2],
                     ]
                 } else {
                     step_local
@@ -183,7 +221,10 @@ pub fn solve<const N: usize>(cfg: &Config, epoch: &Epoch<'_>, mask: &[bool; N]) 
                 }
             }
             if !converged {
-                return Err(RaimError::NoConvergence { iterations, step_m: last_step_m });
+                return Err(RaimError::NoConvergence {
+                    iterations,
+                    step_m: last_step_m,
+                });
             }
             // Re-linearise once more at the converged point so the reported
             // model (residuals, parity) is exactly at x.
@@ -213,8 +254,16 @@ fn finish_ranges<const N: usize>(
             .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
             .map(|(_, s)| s.id.system),
     );
-    for (i, s) in sats.iter().enumerate().filter(|(i, _)| mask.get(*i).copied().unwrap_or(false)) {
-        let d = [s.position_m[0] - x[0], s.position_m[1] - x[1], s.position_m[2] - x[2]];
+    for (i, s) in sats
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
+    {
+        let d = [
+            s.position_m[0] - x[0],
+            s.position_m[1] - x[1],
+            s.position_m[2] - x[2],
+        ];
         let range = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         let u = rotate(&rot, [d[0] / range, d[1] / range, d[2] / range]);
         let el = crate::frames::elevation_rad(u);
@@ -227,7 +276,8 @@ fn finish_ranges<const N: usize>(
     let mut clock_m = [None; MAX_SYSTEMS];
     for (j, sys) in cols.iter().enumerate() {
         if let Some(sys) = sys {
-            let v = clock.get(j).copied().unwrap_or(0.0) + parity.dx().get(3 + j).copied().unwrap_or(0.0);
+            let v = clock.get(j).copied().unwrap_or(0.0)
+                + parity.dx().get(3 + j).copied().unwrap_or(0.0);
             if let Some(c) = clock_m.get_mut(sys.index()) {
                 *c = Some(v);
             }
@@ -280,13 +330,27 @@ impl<const N: usize> Builder<N> {
         }
     }
 
-    fn push(&mut self, index: usize, id: SatId, u: [f64; 3], z: f64, sigma: f64, el: f64) -> Result<(), RaimError> {
+    fn push(
+        &mut self,
+        index: usize,
+        id: SatId,
+        u: [f64; 3],
+        z: f64,
+        sigma: f64,
+        el: f64,
+    ) -> Result<(), RaimError> {
         let k = self.n;
         if k >= N {
-            return Err(RaimError::CapacityExceeded { have: k + 1, capacity: N });
+            return Err(RaimError::CapacityExceeded {
+                have: k + 1,
+                capacity: N,
+            });
         }
         if !(sigma > 0.0) || !sigma.is_finite() {
-            return Err(RaimError::NonPositiveSigma { index, sigma_m: sigma });
+            return Err(RaimError::NonPositiveSigma {
+                index,
+                sigma_m: sigma,
+            });
         }
         let w = 1.0 / sigma;
         let clock = clock_column(&self.cols, id.system).map(|c| 3 + c);

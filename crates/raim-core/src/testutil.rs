@@ -40,7 +40,12 @@ pub const SKY8: [(f64, f64); 8] = [
 
 /// Linear observations for az/el pairs (degrees), GPS PRNs 1.., unit sigma,
 /// noise from `rng` (times `sigma_m`) and the given faults (row, metres).
-pub fn linear_epoch(sky: &[(f64, f64)], sigma_m: f64, rng: &mut Rng, faults: &[(usize, f64)]) -> Vec<LinearObservation> {
+pub fn linear_epoch(
+    sky: &[(f64, f64)],
+    sigma_m: f64,
+    rng: &mut Rng,
+    faults: &[(usize, f64)],
+) -> Vec<LinearObservation> {
     sky.iter()
         .enumerate()
         .map(|(i, &(az, el))| {
@@ -82,7 +87,11 @@ pub fn range_epoch(
             ];
             // Range to a sphere of radius 26,560 km.
             let rs = 26_560_000.0f64;
-            let b = rx_ecef_m.iter().zip(d.iter()).map(|(p, q)| p * q).sum::<f64>();
+            let b = rx_ecef_m
+                .iter()
+                .zip(d.iter())
+                .map(|(p, q)| p * q)
+                .sum::<f64>();
             let c = rx_ecef_m.iter().map(|p| p * p).sum::<f64>() - rs * rs;
             let range = -b + (b * b - c).sqrt();
             let pos = [

@@ -52,7 +52,10 @@ fn sat_id(s: &SatJson) -> Result<SatId> {
 
 impl EpochJson {
     pub fn to_sats(&self) -> Result<Sats> {
-        let ranged = self.sats.iter().all(|s| s.pseudorange_m.is_some() && s.position_m.is_some());
+        let ranged = self
+            .sats
+            .iter()
+            .all(|s| s.pseudorange_m.is_some() && s.position_m.is_some());
         let linear = self
             .sats
             .iter()

@@ -172,8 +172,14 @@ pub fn text_line<const N: usize>(r: &EpochResult<N>) -> String {
         r.initial_test.statistic,
         r.initial_test.threshold,
         r.initial_test.dof,
-        if excl.is_empty() { String::new() } else { format!("excluded={} ", excl.join(",")) },
-        r.alarm_cause.map(|c| format!("cause={} ", cause_name(c))).unwrap_or_default(),
+        if excl.is_empty() {
+            String::new()
+        } else {
+            format!("excluded={} ", excl.join(","))
+        },
+        r.alarm_cause
+            .map(|c| format!("cause={} ", cause_name(c)))
+            .unwrap_or_default(),
         finite(r.protection.hpl_m),
         finite(r.protection.vpl_m),
     )
