@@ -1,0 +1,295 @@
+//! The typed errors a response can carry: framing errors, protocol errors
+//! (sequence gap, too many satellites) and every `raim_core::RaimError`,
+//! each with the offending values.
+
+use raim_core::{RaimError, SatId};
+use serde::{Deserialize, Serialize};
+
+use crate::frame::FrameError;
+
+/// A field name on the wire (the core's `&'static str` names, truncated to
+/// 24 bytes; the longest the core uses is 19).
+pub type FieldName = heapless::String<24>;
+
+fn field(name: &str) -> FieldName {
+    let mut s = FieldName::new();
+    for c in name.chars() {
+        if s.push(c).is_err() {
+            break;
+        }
+    }
+    s
+}
+
+/// Why a frame got no result.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum WireError {
+    /// The envelope's CRC does not match its payload.
+    BadCrc {
+        computed: u32,
+        received: u32,
+    },
+    /// A chunk that is not valid COBS or not an envelope (`len` bytes), or
+    /// whose payload is not a request (then the response carries the
+    /// sequence number if it could be read).
+    Undecodable {
+        len: u32,
+    },
+    /// A chunk longer than the receive buffer; skipped to the next delimiter.
+    Overflow {
+        capacity: u32,
+    },
+    /// The request's sequence number is not the one after the previous
+    /// request's. Sent as a notice before the answer to `received`.
+    SequenceGap {
+        expected: u32,
+        received: u32,
+    },
+    /// More satellites than the firmware's capacity.
+    TooManySatellites {
+        have: u32,
+        capacity: u32,
+    },
+    /// A NaN or infinite input (`field`, satellite `index`).
+    NonFinite {
+        field: FieldName,
+        index: u32,
+        value: f64,
+    },
+    /// The geometry lost rank (Householder pivot relative to its column).
+    DegenerateGeometry {
+        column: u32,
+        pivot: f64,
+    },
+    TooFewSatellites {
+        have: u32,
+        need: u32,
+    },
+    DuplicateSatellite {
+        id: SatId,
+        first: u32,
+        second: u32,
+    },
+    NonPositiveSigma {
+        index: u32,
+        sigma_m: f64,
+    },
+    /// A configuration or input value outside its documented range.
+    OutOfRange {
+        field: FieldName,
+        value: f64,
+        min: f64,
+        max: f64,
+    },
+    NoConvergence {
+        iterations: u32,
+        step_m: f64,
+    },
+    InvalidDof {
+        dof: u32,
+        max: u32,
+    },
+}
+
+fn u32_of(v: usize) -> u32 {
+    u32::try_from(v).unwrap_or(u32::MAX)
+}
+
+impl From<FrameError> for WireError {
+    fn from(e: FrameError) -> Self {
+        match e {
+            FrameError::Overflow { capacity } => WireError::Overflow { capacity },
+            FrameError::Undecodable { len } => WireError::Undecodable { len },
+            FrameError::BadCrc { computed, received } => WireError::BadCrc { computed, received },
+        }
+    }
+}
+
+impl From<RaimError> for WireError {
+    fn from(e: RaimError) -> Self {
+        match e {
+            RaimError::NotFinite {
+                field: f,
+                index,
+                value,
+            } => WireError::NonFinite {
+                field: field(f),
+                index: u32_of(index),
+                value,
+            },
+            RaimError::DuplicateSatellite {
+                system,
+                prn,
+                first,
+                second,
+            } => WireError::DuplicateSatellite {
+                id: SatId::new(system, prn),
+                first: u32_of(first),
+                second: u32_of(second),
+            },
+            RaimError::TooFewSatellites { have, need } => WireError::TooFewSatellites {
+                have: u32_of(have),
+                need: u32_of(need),
+            },
+            RaimError::RankDeficient { column, pivot } => WireError::DegenerateGeometry {
+                column: u32_of(column),
+                pivot,
+            },
+            RaimError::NonPositiveSigma { index, sigma_m } => WireError::NonPositiveSigma {
+                index: u32_of(index),
+                sigma_m,
+            },
+            RaimError::CapacityExceeded { have, capacity } => WireError::TooManySatellites {
+                have: u32_of(have),
+                capacity: u32_of(capacity),
+            },
+            RaimError::OutOfRange {
+                field: f,
+                value,
+                min,
+                max,
+            } => WireError::OutOfRange {
+                field: field(f),
+                value,
+                min,
+                max,
+            },
+            RaimError::NoConvergence { iterations, step_m } => {
+                WireError::NoConvergence { iterations, step_m }
+            }
+            RaimError::InvalidDof { dof, max } => WireError::InvalidDof { dof, max },
+        }
+    }
+}
+
+impl core::fmt::Display for WireError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            WireError::BadCrc { computed, received } => {
+                write!(
+                    f,
+                    "bad CRC: computed {computed:#010x}, frame says {received:#010x}"
+                )
+            }
+            WireError::Undecodable { len } => write!(f, "undecodable frame ({len} bytes)"),
+            WireError::Overflow { capacity } => {
+                write!(f, "frame longer than the {capacity}-byte receive buffer")
+            }
+            WireError::SequenceGap { expected, received } => {
+                write!(f, "sequence gap: expected {expected}, received {received}")
+            }
+            WireError::TooManySatellites { have, capacity } => {
+                write!(f, "{have} satellites exceed capacity {capacity}")
+            }
+            WireError::NonFinite {
+                field,
+                index,
+                value,
+            } => {
+                write!(f, "non-finite {field} at index {index}: {value}")
+            }
+            WireError::DegenerateGeometry { column, pivot } => {
+                write!(
+                    f,
+                    "degenerate geometry at column {column} (pivot {pivot:e})"
+                )
+            }
+            WireError::TooFewSatellites { have, need } => {
+                write!(f, "too few satellites: have {have}, need {need}")
+            }
+            WireError::DuplicateSatellite { id, first, second } => {
+                write!(
+                    f,
+                    "duplicate satellite {id} at indices {first} and {second}"
+                )
+            }
+            WireError::NonPositiveSigma { index, sigma_m } => {
+                write!(f, "sigma at index {index} is not positive: {sigma_m} m")
+            }
+            WireError::OutOfRange {
+                field,
+                value,
+                min,
+                max,
+            } => write!(f, "{field} = {value} outside [{min}, {max}]"),
+            WireError::NoConvergence { iterations, step_m } => {
+                write!(
+                    f,
+                    "no convergence after {iterations} iterations (last step {step_m} m)"
+                )
+            }
+            WireError::InvalidDof { dof, max } => {
+                write!(f, "degrees of freedom {dof} outside 1..={max}")
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use raim_core::System;
+
+    #[test]
+    fn core_errors_keep_their_values() {
+        let e: WireError = RaimError::NotFinite {
+            field: "pseudorange_m",
+            index: 3,
+            value: f64::INFINITY,
+        }
+        .into();
+        assert_eq!(
+            e,
+            WireError::NonFinite {
+                field: field("pseudorange_m"),
+                index: 3,
+                value: f64::INFINITY
+            }
+        );
+        let e: WireError = RaimError::CapacityExceeded {
+            have: 40,
+            capacity: 32,
+        }
+        .into();
+        assert_eq!(
+            e,
+            WireError::TooManySatellites {
+                have: 40,
+                capacity: 32
+            }
+        );
+        let e: WireError = RaimError::RankDeficient {
+            column: 2,
+            pivot: 1e-12,
+        }
+        .into();
+        assert_eq!(
+            e,
+            WireError::DegenerateGeometry {
+                column: 2,
+                pivot: 1e-12
+            }
+        );
+        let e: WireError = RaimError::DuplicateSatellite {
+            system: System::Glonass,
+            prn: 7,
+            first: 1,
+            second: 4,
+        }
+        .into();
+        assert_eq!(
+            e,
+            WireError::DuplicateSatellite {
+                id: SatId::new(System::Glonass, 7),
+                first: 1,
+                second: 4
+            }
+        );
+    }
+
+    #[test]
+    fn long_field_names_are_truncated_not_dropped() {
+        let f = field("a_field_name_much_longer_than_twenty_four");
+        assert_eq!(f.as_str(), "a_field_name_much_longer");
+    }
+}

@@ -1,0 +1,298 @@
+//! Framing: `COBS(postcard(Envelope { payload, crc32 }))` followed by the
+//! 0x00 delimiter.
+//!
+//! The payload is the postcard encoding of a message ([`crate::message`]);
+//! the CRC is CRC-32/ISO-HDLC (the Ethernet/zlib CRC) of the payload bytes.
+//! COBS and the accumulation of a byte stream into delimited chunks are
+//! postcard's (`to_slice_cobs`, `CobsAccumulator`); the CRC is the `crc`
+//! crate's. What this module adds is the policy: a chunk longer than the
+//! receive buffer is reported once and skipped up to the next delimiter, an
+//! empty chunk (a lone delimiter) is a sync byte and not a frame, and every
+//! other chunk yields either a verified payload or a typed [`FrameError`].
+
+use crc::{Crc, CRC_32_ISO_HDLC};
+use postcard::accumulator::{CobsAccumulator, FeedResult};
+use serde::{Deserialize, Serialize};
+
+/// CRC-32/ISO-HDLC (poly 0x04C11DB7 reflected, init and xorout 0xFFFFFFFF):
+/// check value 0xCBF43926 for "123456789".
+pub const CRC32: Crc<u32> = Crc::<u32>::new(&CRC_32_ISO_HDLC);
+
+/// What travels inside the COBS encoding.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Envelope<'a> {
+    /// postcard bytes of one message.
+    #[serde(borrow)]
+    pub payload: &'a [u8],
+    /// CRC-32/ISO-HDLC of `payload`.
+    pub crc32: u32,
+}
+
+/// A chunk between delimiters that is not a valid frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FrameError {
+    /// The chunk did not fit the receive buffer of `capacity` bytes; bytes
+    /// up to the next delimiter are discarded.
+    Overflow { capacity: u32 },
+    /// Not valid COBS, or not an envelope; `len` bytes including the delimiter.
+    Undecodable { len: u32 },
+    /// The envelope decoded but its CRC does not match its payload.
+    BadCrc { computed: u32, received: u32 },
+}
+
+/// Encode one message as a complete frame (delimiter included) into `out`,
+/// using `scratch` for the postcard payload.
+pub fn encode<'o, T: Serialize + ?Sized>(
+    msg: &T,
+    scratch: &mut [u8],
+    out: &'o mut [u8],
+) -> Result<&'o mut [u8], postcard::Error> {
+    let payload = postcard::to_slice(msg, scratch)?;
+    let env = Envelope {
+        crc32: CRC32.checksum(payload),
+        payload,
+    };
+    postcard::to_slice_cobs(&env, out)
+}
+
+/// Turns a byte stream into verified payloads. `B` is the receive buffer,
+/// the largest frame (delimiter included) that can be received.
+pub struct FrameReceiver<const B: usize> {
+    acc: CobsAccumulator<B>,
+    /// Bytes of the current chunk so far (delimiter excluded).
+    pending: usize,
+    /// After an overflow: drop bytes up to the next delimiter.
+    discarding: bool,
+}
+
+impl<const B: usize> Default for FrameReceiver<B> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const B: usize> FrameReceiver<B> {
+    pub const fn new() -> Self {
+        FrameReceiver {
+            acc: CobsAccumulator::new(),
+            pending: 0,
+            discarding: false,
+        }
+    }
+
+    /// Feed one byte. Returns `None` while a frame is incomplete (and for
+    /// empty chunks and the rest of an overflowed chunk), `Some(Ok(payload))`
+    /// for a frame whose CRC matches, and `Some(Err(_))` once per bad chunk.
+    pub fn push(&mut self, byte: u8) -> Option<Result<&[u8], FrameError>> {
+        if self.discarding {
+            if byte == 0 {
+                self.discarding = false;
+            }
+            return None;
+        }
+        if byte == 0 && self.pending == 0 {
+            return None;
+        }
+        let len = self.pending + 1;
+        self.pending = if byte == 0 { 0 } else { len };
+        match self.acc.feed_ref::<Envelope<'_>>(&[byte]) {
+            FeedResult::Consumed => None,
+            FeedResult::OverFull(_) => {
+                self.pending = 0;
+                self.discarding = byte != 0;
+                Some(Err(FrameError::Overflow { capacity: B as u32 }))
+            }
+            FeedResult::DeserError(_) => Some(Err(FrameError::Undecodable { len: len as u32 })),
+            FeedResult::Success { data, .. } => {
+                let computed = CRC32.checksum(data.payload);
+                if data.payload.is_empty() {
+                    // No message is empty, and the CRC of nothing is 0: a
+                    // chunk of noise can decode as (empty, 0).
+                    Some(Err(FrameError::Undecodable { len: len as u32 }))
+                } else if computed == data.crc32 {
+                    Some(Ok(data.payload))
+                } else {
+                    Some(Err(FrameError::BadCrc {
+                        computed,
+                        received: data.crc32,
+                    }))
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::message::{Command, Request, RequestRef};
+    use crate::{CAPACITY, MAX_REQUEST_FRAME};
+    use raim_core::{RangeObservation, SatId, System};
+    use std::vec::Vec;
+
+    type Rx = FrameReceiver<MAX_REQUEST_FRAME>;
+
+    fn frame_of(req: &RequestRef<'_>) -> Vec<u8> {
+        let mut scratch = [0u8; 4096];
+        let mut out = [0u8; 4096];
+        encode(req, &mut scratch, &mut out).unwrap().to_vec()
+    }
+
+    fn feed_all<const B: usize>(
+        rx: &mut FrameReceiver<B>,
+        bytes: &[u8],
+    ) -> Vec<Result<Vec<u8>, FrameError>> {
+        bytes
+            .iter()
+            .filter_map(|&b| rx.push(b).map(|r| r.map(|p| p.to_vec())))
+            .collect()
+    }
+
+    fn sats(n: usize) -> Vec<RangeObservation> {
+        (0..n)
+            .map(|i| RangeObservation {
+                id: SatId::new(System::Galileo, i as u8 + 1),
+                pseudorange_m: 2.1e7 + i as f64,
+                position_m: [-1.5e7, 2.2e7, 1.3e7 + i as f64],
+                sigma_m: Some(1.25),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn crc_is_the_standard_crc32() {
+        // The catalogue check value of CRC-32/ISO-HDLC.
+        assert_eq!(CRC32.checksum(b"123456789"), 0xCBF4_3926);
+    }
+
+    #[test]
+    fn round_trip_and_one_answer_per_frame() {
+        let s = sats(9);
+        let a = frame_of(&RequestRef::ranges(7, 12.5, Some([1.0, 2.0, 3.0]), &s));
+        let b = frame_of(&RequestRef {
+            seq: 8,
+            command: crate::message::CommandRef::Status,
+        });
+        assert_eq!(*a.last().unwrap(), 0);
+        assert!(
+            !a[..a.len() - 1].contains(&0),
+            "COBS leaves no zero inside a frame"
+        );
+        let mut rx = Rx::new();
+        let mut stream = std::vec![0u8, 0];
+        stream.extend(&a);
+        stream.extend(&b);
+        let got = feed_all(&mut rx, &stream);
+        assert_eq!(got.len(), 2);
+        let req: Request = postcard::from_bytes(got[0].as_ref().unwrap()).unwrap();
+        assert_eq!(req.seq, 7);
+        match req.command {
+            Command::Ranges(e) => {
+                assert_eq!(e.time_s, 12.5);
+                assert_eq!(e.apriori_m, Some([1.0, 2.0, 3.0]));
+                assert_eq!(e.sats.declared, 9);
+                assert_eq!(&e.sats.items[..], &s[..]);
+            }
+            other => panic!("{other:?}"),
+        }
+        let req: Request = postcard::from_bytes(got[1].as_ref().unwrap()).unwrap();
+        assert_eq!((req.seq, req.command), (8, Command::Status));
+    }
+
+    #[test]
+    fn largest_request_fits() {
+        let s = sats(CAPACITY);
+        let f = frame_of(&RequestRef::ranges(u32::MAX, 1e9, Some([1.0; 3]), &s));
+        assert!(f.len() <= MAX_REQUEST_FRAME, "{} bytes", f.len());
+        assert_eq!(f.len(), 1425, "documented size in lib.rs and PROTOCOL.md");
+        let got = feed_all(&mut Rx::new(), &f);
+        assert!(matches!(got.as_slice(), [Ok(_)]));
+    }
+
+    #[test]
+    fn every_single_byte_flip_is_caught() {
+        // CRC-32 detects every error burst of <= 32 bits, so no flip of one
+        // byte of the payload can pass; a flip elsewhere breaks COBS or the
+        // envelope. Each corrupted frame gives exactly one error, never Ok.
+        let s = sats(6);
+        let f = frame_of(&RequestRef::ranges(3, 1.0, None, &s));
+        for i in 0..f.len() - 1 {
+            for flip in [0x01u8, 0x80, 0xFF] {
+                let mut g = f.clone();
+                g[i] ^= flip;
+                let mut rx = Rx::new();
+                let mut got = feed_all(&mut rx, &g);
+                // A flip that makes a zero splits the frame in two chunks.
+                got.extend(feed_all(&mut rx, &[0]));
+                assert!(
+                    !got.is_empty() && got.iter().all(|r| r.is_err()),
+                    "byte {i} ^ {flip:#x}: {got:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn bad_crc_is_reported_with_both_values() {
+        let payload = [1u8, 2, 3];
+        let env = Envelope {
+            payload: &payload,
+            crc32: 0xDEAD_BEEF,
+        };
+        let mut out = [0u8; 64];
+        let f = postcard::to_slice_cobs(&env, &mut out).unwrap().to_vec();
+        let got = feed_all(&mut Rx::new(), &f);
+        assert_eq!(
+            got,
+            std::vec![Err(FrameError::BadCrc {
+                computed: CRC32.checksum(&payload),
+                received: 0xDEAD_BEEF
+            })]
+        );
+    }
+
+    #[test]
+    fn truncated_and_garbage_chunks_are_errors_and_the_next_frame_is_received() {
+        let s = sats(5);
+        let f = frame_of(&RequestRef::ranges(1, 0.0, None, &s));
+        let mut stream = f[..f.len() / 2].to_vec();
+        stream.push(0); // truncated frame
+        stream.extend([0x13, 0x37, 0x42, 0x00]); // garbage
+        stream.extend(&f);
+        let got = feed_all(&mut Rx::new(), &stream);
+        assert_eq!(got.len(), 3, "{got:?}");
+        assert!(got[0].is_err() && got[1].is_err());
+        assert!(got[2].is_ok());
+    }
+
+    #[test]
+    fn overflow_is_one_error_and_resynchronises_on_the_delimiter() {
+        let mut stream = std::vec![0x55u8; 3 * MAX_REQUEST_FRAME + 17];
+        stream.push(0);
+        let s = sats(4);
+        let f = frame_of(&RequestRef::ranges(2, 0.0, None, &s));
+        stream.extend(&f);
+        let got = feed_all(&mut Rx::new(), &stream);
+        assert_eq!(
+            got[0],
+            Err(FrameError::Overflow {
+                capacity: MAX_REQUEST_FRAME as u32
+            })
+        );
+        assert_eq!(got.len(), 2, "{got:?}");
+        assert!(got[1].is_ok());
+        // A chunk of exactly the buffer size (delimiter included) still fits.
+        let mut rx = FrameReceiver::<64>::new();
+        let env_payload = [7u8; 50];
+        let env = Envelope {
+            payload: &env_payload,
+            crc32: CRC32.checksum(&env_payload),
+        };
+        let mut out = [0u8; 64];
+        let g = postcard::to_slice_cobs(&env, &mut out).unwrap().to_vec();
+        assert!(g.len() <= 64);
+        assert!(matches!(feed_all(&mut rx, &g).as_slice(), [Ok(_)]));
+    }
+}

@@ -1,0 +1,75 @@
+//! raim-proto: the wire protocol between a host and the RAIM firmware, and
+//! the NMEA 0183 writer of the firmware's second UART (SPEC §11,
+//! `docs/PROTOCOL.md`).
+//!
+//! `#![no_std]`, no allocation: every buffer is sized from [`CAPACITY`], the
+//! same satellite capacity the firmware gives `raim_core::Raim`.
+//!
+//! - [`frame`]: `COBS(postcard(Envelope { payload, crc32 }))`, a receiver
+//!   that turns a byte stream into verified payloads or typed framing errors.
+//! - [`message`]: what the payloads carry (requests, responses).
+//! - [`result`]: the epoch result on the wire, converted from
+//!   `raim_core::EpochResult`.
+//! - [`error`]: the typed errors of a response.
+//! - [`nmea`]: RMC, GGA, GSA, GST and GBS sentences for a solved epoch.
+//! - [`server`]: the firmware's protocol loop, generic over `embedded_io`
+//!   UARTs, so that the host tests it without an emulator.
+#![no_std]
+#![forbid(unsafe_code)]
+#![deny(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+// `!(a < b)` is deliberate: it is true for NaN, so NaN never wins a
+// comparison it should lose.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+#![cfg_attr(
+    test,
+    allow(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing
+    )
+)]
+
+pub mod error;
+pub mod frame;
+pub mod message;
+pub mod nmea;
+pub mod result;
+pub mod server;
+
+pub use error::WireError;
+pub use frame::{encode, FrameError, FrameReceiver};
+pub use message::{
+    Command, LinearEpoch, RangeEpoch, Request, RequestRef, Response, ResponseBody, SatList, Status,
+};
+pub use result::{WireMcusum, WireResult};
+
+/// Satellites per epoch: the firmware's `Raim::<CAPACITY>` and every list on
+/// the wire. The core's documented default.
+pub const CAPACITY: usize = raim_core::DEFAULT_CAPACITY;
+
+/// Version of the frame layout and message types; reported by `Status`.
+/// Bump on any change of a serialized type (postcard is not self-describing).
+pub const PROTOCOL_VERSION: u16 = 1;
+
+/// Largest encoded request frame (delimiter included) the firmware accepts.
+/// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes
+/// (test `frame::tests::largest_request_fits`); the margin lets frames of up
+/// to 47 satellites decode, so that they are answered `TooManySatellites`
+/// with their count rather than `Overflow`.
+pub const MAX_REQUEST_FRAME: usize = 2048;
+
+/// Largest postcard payload of a response (before CRC and COBS).
+/// A result at [`CAPACITY`] satellites with every field present serializes
+/// to less than this (test `result::tests::largest_response_fits`).
+pub const MAX_RESPONSE_PAYLOAD: usize = 3072;
+
+/// Largest encoded response frame: payload + envelope (length varint and
+/// CRC varint, at most 8 bytes) + COBS overhead (one byte per 254) + the
+/// delimiter.
+pub const MAX_RESPONSE_FRAME: usize = MAX_RESPONSE_PAYLOAD + 8 + MAX_RESPONSE_PAYLOAD / 254 + 2;

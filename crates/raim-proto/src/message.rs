@@ -1,0 +1,336 @@
+//! The messages inside the frames (docs/PROTOCOL.md).
+//!
+//! Host to firmware: a [`Request`] = sequence number + [`Command`]
+//! (status, configure, a pseudorange epoch or a linearised epoch).
+//! Firmware to host: a [`Response`] = the sequence number it answers (none
+//! when the frame was unreadable) + a [`ResponseBody`].
+//!
+//! The observation and configuration types are raim-core's own (with its
+//! `serde` feature), so the wire carries exactly what the core consumes.
+//! postcard encodes fields in declaration order, enums as a varint variant
+//! index, integers as varints and f64 as 8 little-endian bytes.
+
+use core::marker::PhantomData;
+
+use raim_core::{Config, LinearObservation, RangeObservation};
+use serde::de::{Deserializer, SeqAccess, Visitor};
+use serde::ser::Serializer;
+use serde::{Deserialize, Serialize};
+
+use crate::error::WireError;
+use crate::result::WireResult;
+use crate::CAPACITY;
+
+/// Up to [`CAPACITY`] satellites, and how many the frame declared. A frame
+/// with more satellites than the capacity still decodes (the extra ones are
+/// read and dropped), so the firmware can answer `TooManySatellites` with
+/// the count instead of "undecodable".
+#[derive(Debug, Clone, PartialEq)]
+pub struct SatList<T> {
+    pub items: heapless::Vec<T, CAPACITY>,
+    /// Satellites in the frame; more than `items.len()` when it overflowed.
+    pub declared: u32,
+}
+
+impl<T> Default for SatList<T> {
+    fn default() -> Self {
+        SatList {
+            items: heapless::Vec::new(),
+            declared: 0,
+        }
+    }
+}
+
+impl<T> SatList<T> {
+    /// True when the frame carried more satellites than [`CAPACITY`].
+    pub fn overflowed(&self) -> bool {
+        self.declared as usize > self.items.len()
+    }
+}
+
+impl<T: Serialize> Serialize for SatList<T> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.items.iter())
+    }
+}
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for SatList<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<T>(PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> Visitor<'de> for V<T> {
+            type Value = SatList<T>;
+            fn expecting(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                f.write_str("a sequence of satellites")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+                let mut out = SatList::default();
+                while let Some(item) = seq.next_element::<T>()? {
+                    out.declared = out.declared.saturating_add(1);
+                    // Beyond the capacity the satellite is read and dropped.
+                    let _ = out.items.push(item);
+                }
+                Ok(out)
+            }
+        }
+        d.deserialize_seq(V(PhantomData))
+    }
+}
+
+/// One epoch of corrected pseudoranges with ECEF satellite positions.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RangeEpoch {
+    /// Epoch time, s. The NMEA writer reads it as UTC seconds since
+    /// 1970-01-01 (docs/PROTOCOL.md).
+    pub time_s: f64,
+    pub apriori_m: Option<[f64; 3]>,
+    pub sats: SatList<RangeObservation>,
+}
+
+/// One epoch in the seeds' linearised form (line of sight + residual).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LinearEpoch {
+    pub time_s: f64,
+    pub sats: SatList<LinearObservation>,
+}
+
+/// What the host asks.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Command {
+    /// Answered with [`ResponseBody::Status`].
+    Status,
+    /// Replace the configuration (Pfa, Pmd, alert limits, FI rule and
+    /// kappa, sigma model, ...). Answered with `Configured` or an error
+    /// (`OutOfRange`), in which case the previous configuration stays.
+    Configure(Config),
+    Ranges(RangeEpoch),
+    Linear(LinearEpoch),
+}
+
+/// A request frame's payload.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Request {
+    /// Increments by one per request; the firmware reports a jump as
+    /// `SequenceGap`. It is the first field so that the firmware can read it
+    /// even when the rest of the payload does not decode.
+    pub seq: u32,
+    pub command: Command,
+}
+
+/// The host's borrowed form of [`Command`]: identical bytes on the wire
+/// (test `borrowed_and_owned_requests_encode_alike`), without copying the
+/// satellites, and able to carry more than [`CAPACITY`] of them (to test the
+/// firmware's answer).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub enum CommandRef<'a> {
+    Status,
+    Configure(&'a Config),
+    Ranges {
+        time_s: f64,
+        apriori_m: Option<[f64; 3]>,
+        sats: &'a [RangeObservation],
+    },
+    Linear {
+        time_s: f64,
+        sats: &'a [LinearObservation],
+    },
+}
+
+/// The host's borrowed form of [`Request`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RequestRef<'a> {
+    pub seq: u32,
+    pub command: CommandRef<'a>,
+}
+
+impl<'a> RequestRef<'a> {
+    pub fn ranges(
+        seq: u32,
+        time_s: f64,
+        apriori_m: Option<[f64; 3]>,
+        sats: &'a [RangeObservation],
+    ) -> Self {
+        RequestRef {
+            seq,
+            command: CommandRef::Ranges {
+                time_s,
+                apriori_m,
+                sats,
+            },
+        }
+    }
+
+    pub fn linear(seq: u32, time_s: f64, sats: &'a [LinearObservation]) -> Self {
+        RequestRef {
+            seq,
+            command: CommandRef::Linear { time_s, sats },
+        }
+    }
+}
+
+/// The firmware's counters, for the host's accounting and the benchmarks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Status {
+    pub protocol_version: u16,
+    /// Satellite capacity of the engine.
+    pub capacity: u16,
+    /// Frames (delimited chunks) received since reset, good or bad.
+    pub frames: u32,
+    /// Responses that carried an error.
+    pub errors: u32,
+    /// Epochs processed (results and core errors).
+    pub epochs: u32,
+    /// Deepest stack use since reset, bytes, by stack painting; 0 when the
+    /// build does not paint the stack.
+    pub stack_high_water_bytes: u32,
+    /// Timer ticks of the last epoch's `Raim::process` (SysTick at the core
+    /// clock; under `qemu -icount shift=0` one tick is 40 guest instructions
+    /// on mps2-an386).
+    pub last_epoch_ticks: u32,
+}
+
+/// A response frame's payload.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Response {
+    /// The request answered; `None` when the frame could not be read.
+    pub seq: Option<u32>,
+    pub body: ResponseBody,
+}
+
+/// What the firmware answers. The result is by far the largest variant;
+/// without a heap it cannot be boxed, and only one response exists at a time.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum ResponseBody {
+    Result(WireResult),
+    Configured,
+    Status(Status),
+    Error(WireError),
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use raim_core::{FiRule, Phase, SatId, System};
+
+    fn obs(n: usize) -> std::vec::Vec<RangeObservation> {
+        (0..n)
+            .map(|i| RangeObservation {
+                id: SatId::new(System::Gps, i as u8 + 1),
+                pseudorange_m: 2.0e7 + i as f64 * 0.5,
+                position_m: [1.0, 2.0, f64::NAN],
+                sigma_m: if i % 2 == 0 { Some(2.0) } else { None },
+            })
+            .collect()
+    }
+
+    #[test]
+    fn borrowed_and_owned_requests_encode_alike() {
+        let s = obs(5);
+        let cfg = Config {
+            rule: FiRule::LraimGaussian { kappa: 42.0 },
+            ..Config::preset(Phase::Terminal)
+        };
+        let lin = [raim_core::LinearObservation::from_az_el(
+            SatId::new(System::Beidou, 9),
+            0.3,
+            0.7,
+            -1.5,
+        )];
+        let pairs = [
+            (
+                RequestRef {
+                    seq: 1,
+                    command: CommandRef::Status,
+                },
+                Request {
+                    seq: 1,
+                    command: Command::Status,
+                },
+            ),
+            (
+                RequestRef {
+                    seq: 2,
+                    command: CommandRef::Configure(&cfg),
+                },
+                Request {
+                    seq: 2,
+                    command: Command::Configure(cfg),
+                },
+            ),
+            (
+                RequestRef::ranges(300, 4.5, Some([7.0, 8.0, 9.0]), &s),
+                Request {
+                    seq: 300,
+                    command: Command::Ranges(RangeEpoch {
+                        time_s: 4.5,
+                        apriori_m: Some([7.0, 8.0, 9.0]),
+                        sats: SatList {
+                            items: s.iter().copied().collect(),
+                            declared: 5,
+                        },
+                    }),
+                },
+            ),
+            (
+                RequestRef::linear(u32::MAX, -1.0, &lin),
+                Request {
+                    seq: u32::MAX,
+                    command: Command::Linear(LinearEpoch {
+                        time_s: -1.0,
+                        sats: SatList {
+                            items: lin.iter().copied().collect(),
+                            declared: 1,
+                        },
+                    }),
+                },
+            ),
+        ];
+        for (borrowed, owned) in pairs {
+            let a = postcard::to_allocvec_shim(&borrowed);
+            let b = postcard::to_allocvec_shim(&owned);
+            assert_eq!(a, b, "{owned:?}");
+            let back: Request = postcard::from_bytes(&a).unwrap();
+            // NaN != NaN: compare the re-encoded bytes instead.
+            assert_eq!(postcard::to_allocvec_shim(&back), a);
+        }
+    }
+
+    #[test]
+    fn oversized_satellite_list_decodes_with_its_count() {
+        let s = obs(CAPACITY + 3);
+        let bytes = postcard::to_allocvec_shim(&RequestRef::ranges(9, 0.0, None, &s));
+        let req: Request = postcard::from_bytes(&bytes).unwrap();
+        let Command::Ranges(e) = req.command else {
+            panic!()
+        };
+        assert_eq!(e.sats.declared as usize, CAPACITY + 3);
+        assert_eq!(e.sats.items.len(), CAPACITY);
+        assert!(e.sats.overflowed());
+    }
+
+    #[test]
+    fn the_sequence_number_is_readable_from_a_damaged_payload() {
+        let bytes = postcard::to_allocvec_shim(&RequestRef {
+            seq: 123_456,
+            command: CommandRef::Status,
+        });
+        let mut damaged = bytes.clone();
+        damaged.truncate(bytes.len() - 1);
+        damaged.push(0x7F); // no such command
+        assert!(postcard::from_bytes::<Request>(&damaged).is_err());
+        let (seq, _) = postcard::take_from_bytes::<u32>(&damaged).unwrap();
+        assert_eq!(seq, 123_456);
+    }
+
+    /// postcard without `alloc`: serialize into a big stack buffer.
+    mod postcard {
+        extern crate std;
+        pub use ::postcard::*;
+        pub fn to_allocvec_shim<T: serde::Serialize>(t: &T) -> std::vec::Vec<u8> {
+            let mut buf = [0u8; 8192];
+            to_slice(t, &mut buf).unwrap().to_vec()
+        }
+    }
+}

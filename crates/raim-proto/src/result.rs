@@ -1,0 +1,233 @@
+//! The epoch result on the wire: every field of `raim_core::EpochResult`
+//! (SPEC §11: position, decision, statistics and thresholds, identified and
+//! excluded satellites, protection levels), plus room for the MCUSUM state.
+
+use raim_core::fde::{AlarmCause, Exclusion, MAX_EXCLUSIONS};
+use raim_core::frames::Geodetic;
+use raim_core::measurement::MAX_SYSTEMS;
+use raim_core::monitor::{Decision, EpochResult, SatelliteResult};
+use raim_core::{detection::TestStatistic, SatId};
+use serde::{Deserialize, Serialize};
+
+use crate::CAPACITY;
+
+/// The sequential (MCUSUM, SPEC §7) detector's state after the epoch.
+/// Reserved: the core does not report it yet, so the firmware sends `None`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct WireMcusum {
+    /// The cumulative statistic D_t.
+    pub statistic: f64,
+    /// Its alarm threshold h.
+    pub threshold: f64,
+    /// The reference value k.
+    pub k: f64,
+    pub alarm: bool,
+}
+
+/// One epoch's result. Field meanings are those of `raim_core::EpochResult`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WireResult {
+    pub time_s: f64,
+    pub decision: Decision,
+    pub alarm_cause: Option<AlarmCause>,
+    pub position_ecef_m: Option<[f64; 3]>,
+    pub geodetic: Option<Geodetic>,
+    pub correction_enu_m: [f64; 3],
+    pub clock_m: [Option<f64>; MAX_SYSTEMS],
+    pub initial_test: TestStatistic,
+    pub test: TestStatistic,
+    pub identified: Option<SatId>,
+    pub exclusions: heapless::Vec<Exclusion, MAX_EXCLUSIONS>,
+    pub hpl_m: f64,
+    pub vpl_m: f64,
+    pub worst_h: Option<SatId>,
+    pub worst_v: Option<SatId>,
+    pub sigma_enu_m: [f64; 3],
+    pub lambda_md: f64,
+    pub detection_available: bool,
+    pub exclusion_available: bool,
+    pub pl_available: bool,
+    pub iterations: u32,
+    pub satellites: heapless::Vec<SatelliteResult, CAPACITY>,
+    pub mcusum: Option<WireMcusum>,
+}
+
+impl WireResult {
+    /// The wire form of a result of an engine of capacity `N <= CAPACITY`
+    /// (satellites beyond `CAPACITY` cannot occur then; were `N` larger they
+    /// would be cut, which `from_result` documents rather than hides:
+    /// `satellites.len()` would be shorter than the epoch).
+    pub fn from_result<const N: usize>(r: &EpochResult<N>) -> Self {
+        let mut satellites = heapless::Vec::new();
+        for s in r.satellites.iter() {
+            let _ = satellites.push(*s);
+        }
+        WireResult {
+            time_s: r.time_s,
+            decision: r.decision,
+            alarm_cause: r.alarm_cause,
+            position_ecef_m: r.position_ecef_m,
+            geodetic: r.geodetic,
+            correction_enu_m: r.correction_enu_m,
+            clock_m: r.clock_m,
+            initial_test: r.initial_test,
+            test: r.test,
+            identified: r.identified,
+            exclusions: r.exclusions.clone(),
+            hpl_m: r.protection.hpl_m,
+            vpl_m: r.protection.vpl_m,
+            worst_h: r.worst_h,
+            worst_v: r.worst_v,
+            sigma_enu_m: r.sigma_enu_m,
+            lambda_md: r.lambda_md,
+            detection_available: r.detection_available,
+            exclusion_available: r.exclusion_available,
+            pl_available: r.pl_available,
+            iterations: r.iterations,
+            satellites,
+            mcusum: None,
+        }
+    }
+
+    /// The satellite most likely to be faulty: the identified one if the
+    /// test failed, else the best-scoring identifiable satellite under the
+    /// configured rule (SPEC §4). Used for NMEA GBS field 5.
+    pub fn most_likely_failed(&self) -> Option<&SatelliteResult> {
+        if let Some(id) = self.identified {
+            if let Some(s) = self.satellites.iter().find(|s| s.id == id) {
+                return Some(s);
+            }
+        }
+        self.satellites
+            .iter()
+            .filter(|s| s.identifiable && s.score.is_finite())
+            .fold(None, |best: Option<&SatelliteResult>, s| match best {
+                Some(b) if !(s.score > b.score) => Some(b),
+                _ => Some(s),
+            })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::message::{Response, ResponseBody};
+    use crate::{frame, MAX_RESPONSE_FRAME, MAX_RESPONSE_PAYLOAD};
+    use raim_core::fde::AlarmCause;
+    use raim_core::{Config, Epoch, LinearObservation, Raim, System};
+
+    /// The seeds' 8-satellite sky with a 50 m step on G02 (docs/CORE.md
+    /// example): decodes back to the same bytes, and carries the exclusion.
+    #[test]
+    fn a_core_result_round_trips() {
+        let sky = [
+            (0.0, 85.0),
+            (45.0, 30.0),
+            (100.0, 50.0),
+            (150.0, 20.0),
+            (200.0, 60.0),
+            (250.0, 25.0),
+            (300.0, 40.0),
+            (340.0, 15.0),
+        ];
+        let res = [0.57, 50.0 - 0.23, -0.80, 1.12, -0.05, 0.08, 0.40, 0.86];
+        let sats: std::vec::Vec<LinearObservation> = sky
+            .iter()
+            .zip(res)
+            .enumerate()
+            .map(|(i, (&(az, el), r)): (usize, (&(f64, f64), f64))| {
+                let mut o = LinearObservation::from_az_el(
+                    SatId::new(System::Gps, i as u8 + 1),
+                    az.to_radians(),
+                    el.to_radians(),
+                    r,
+                );
+                o.sigma_m = Some(1.0);
+                o
+            })
+            .collect();
+        let r = Raim::<CAPACITY>::new()
+            .process(&Config::default(), &Epoch::linear(3.0, &sats))
+            .unwrap();
+        let w = WireResult::from_result(&r);
+        assert_eq!(w.decision, Decision::Excluded);
+        assert_eq!(w.exclusions.len(), 1);
+        assert_eq!(w.exclusions[0].id, SatId::new(System::Gps, 2));
+        assert_eq!(
+            w.most_likely_failed().map(|s| s.id),
+            Some(SatId::new(System::Gps, 2))
+        );
+        let mut buf = [0u8; MAX_RESPONSE_PAYLOAD];
+        let bytes = postcard::to_slice(&w, &mut buf).unwrap().to_vec();
+        let back: WireResult = postcard::from_bytes(&bytes).unwrap();
+        let mut buf2 = [0u8; MAX_RESPONSE_PAYLOAD];
+        assert_eq!(postcard::to_slice(&back, &mut buf2).unwrap(), &bytes[..]);
+    }
+
+    #[test]
+    fn largest_response_fits() {
+        let sat = SatelliteResult {
+            id: SatId::new(System::Qzss, 255),
+            used: true,
+            sigma_m: 1.0,
+            elevation_rad: 1.0,
+            s_ii: 0.5,
+            h_ii: 0.5,
+            w: 1.0,
+            bias_m: 1.0,
+            score: 1.0,
+            identifiable: true,
+        };
+        let test = TestStatistic {
+            statistic: 1.0,
+            threshold: 2.0,
+            dof: u32::MAX,
+        };
+        let excl = Exclusion {
+            id: sat.id,
+            index: usize::MAX,
+            before: test,
+            after: test,
+            score: 1.0,
+            bias_m: 1.0,
+        };
+        let w = WireResult {
+            time_s: 1.0,
+            decision: Decision::Alarm,
+            alarm_cause: Some(AlarmCause::Ambiguous {
+                best: sat.id,
+                runner_up: sat.id,
+            }),
+            position_ecef_m: Some([1.0; 3]),
+            geodetic: Some(Geodetic::default()),
+            correction_enu_m: [1.0; 3],
+            clock_m: [Some(1.0); MAX_SYSTEMS],
+            initial_test: test,
+            test,
+            identified: Some(sat.id),
+            exclusions: core::iter::repeat_n(excl, MAX_EXCLUSIONS).collect(),
+            hpl_m: 1.0,
+            vpl_m: 1.0,
+            worst_h: Some(sat.id),
+            worst_v: Some(sat.id),
+            sigma_enu_m: [1.0; 3],
+            lambda_md: 1.0,
+            detection_available: true,
+            exclusion_available: true,
+            pl_available: true,
+            iterations: u32::MAX,
+            satellites: core::iter::repeat_n(sat, CAPACITY).collect(),
+            mcusum: Some(WireMcusum::default()),
+        };
+        let resp = Response {
+            seq: Some(u32::MAX),
+            body: ResponseBody::Result(w),
+        };
+        let mut scratch = [0u8; MAX_RESPONSE_PAYLOAD];
+        let mut out = [0u8; MAX_RESPONSE_FRAME];
+        let f = frame::encode(&resp, &mut scratch, &mut out).unwrap();
+        assert!(f.len() <= MAX_RESPONSE_FRAME);
+    }
+}

@@ -1,0 +1,450 @@
+//! The firmware's protocol loop, board-independent: bytes in from the link
+//! UART, one answer per frame out on the same UART, NMEA sentences for every
+//! solved epoch out on the second UART (SPEC §11, docs/PROTOCOL.md).
+//!
+//! It lives here rather than in `firmware/` so that the host can unit-test
+//! every answer (sequence gaps, errors, counters) without an emulator; the
+//! firmware only supplies the UARTs (`embedded_io::Write`) and a
+//! [`Platform`] (a tick counter and the stack high-water mark).
+
+use embedded_io::Write;
+use raim_core::{Config, Epoch, Raim};
+
+use crate::error::WireError;
+use crate::frame::{encode, FrameError, FrameReceiver};
+use crate::message::{Command, Request, Response, ResponseBody, Status};
+use crate::nmea;
+use crate::result::WireResult;
+use crate::{
+    CAPACITY, MAX_REQUEST_FRAME, MAX_RESPONSE_FRAME, MAX_RESPONSE_PAYLOAD, PROTOCOL_VERSION,
+};
+
+/// What the board provides besides the UARTs.
+pub trait Platform {
+    /// A free-running tick counter (any rate); wraps at `TICK_MASK + 1`.
+    fn now(&mut self) -> u32;
+    /// Mask of the counter's valid bits (SysTick: 24 bits).
+    const TICK_MASK: u32 = u32::MAX;
+    /// Deepest stack use so far, bytes (0 if not measured).
+    fn stack_high_water_bytes(&mut self) -> u32 {
+        0
+    }
+}
+
+/// A platform without a clock (host tests).
+pub struct NoPlatform;
+impl Platform for NoPlatform {
+    fn now(&mut self) -> u32 {
+        0
+    }
+}
+
+/// The protocol state: receive buffer, engine, configuration, counters and
+/// the transmit buffers. About 7 KiB; the firmware keeps it in a static.
+pub struct Server {
+    rx: FrameReceiver<MAX_REQUEST_FRAME>,
+    raim: Raim<CAPACITY>,
+    config: Config,
+    expected_seq: Option<u32>,
+    status: Status,
+    scratch: [u8; MAX_RESPONSE_PAYLOAD],
+    out: [u8; MAX_RESPONSE_FRAME],
+}
+
+impl Default for Server {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Either UART failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum IoError<L, M> {
+    Link(L),
+    Nmea(M),
+}
+
+impl Server {
+    pub fn new() -> Self {
+        Server {
+            rx: FrameReceiver::new(),
+            raim: Raim::new(),
+            config: Config::default(),
+            expected_seq: None,
+            status: Status {
+                protocol_version: PROTOCOL_VERSION,
+                capacity: CAPACITY as u16,
+                ..Status::default()
+            },
+            scratch: [0; MAX_RESPONSE_PAYLOAD],
+            out: [0; MAX_RESPONSE_FRAME],
+        }
+    }
+
+    pub fn status(&self) -> Status {
+        self.status
+    }
+
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// Feed one received byte; writes the answers (and NMEA) when it
+    /// completes a frame.
+    pub fn on_byte<L: Write, M: Write, P: Platform>(
+        &mut self,
+        byte: u8,
+        link: &mut L,
+        nmea_out: &mut M,
+        platform: &mut P,
+    ) -> Result<(), IoError<L::Error, M::Error>> {
+        let decoded: Result<Request, (Option<u32>, WireError)> = match self.rx.push(byte) {
+            None => return Ok(()),
+            Some(Err(e)) => Err((None, WireError::from(e))),
+            Some(Ok(payload)) => postcard::from_bytes::<Request>(payload).map_err(|_| {
+                let seq = postcard::take_from_bytes::<u32>(payload)
+                    .ok()
+                    .map(|(s, _)| s);
+                let len = u32::try_from(payload.len()).unwrap_or(u32::MAX);
+                (seq, WireError::from(FrameError::Undecodable { len }))
+            }),
+        };
+        self.status.frames = self.status.frames.wrapping_add(1);
+        let request = match decoded {
+            Ok(r) => r,
+            Err((seq, e)) => {
+                if let Some(s) = seq {
+                    self.check_sequence(s, link)?;
+                }
+                return self.send(link, seq, ResponseBody::Error(e));
+            }
+        };
+        let seq = request.seq;
+        self.check_sequence(seq, link)?;
+        let body = match request.command {
+            Command::Status => {
+                self.status.stack_high_water_bytes = platform.stack_high_water_bytes();
+                ResponseBody::Status(self.status)
+            }
+            Command::Configure(c) => match c.validate() {
+                Ok(()) => {
+                    self.config = c;
+                    ResponseBody::Configured
+                }
+                Err(e) => ResponseBody::Error(e.into()),
+            },
+            Command::Ranges(e) if e.sats.overflowed() => too_many(e.sats.declared),
+            Command::Linear(e) if e.sats.overflowed() => too_many(e.sats.declared),
+            Command::Ranges(e) => self.epoch(
+                &Epoch::ranges(e.time_s, &e.sats.items, e.apriori_m),
+                platform,
+            ),
+            Command::Linear(e) => self.epoch(&Epoch::linear(e.time_s, &e.sats.items), platform),
+        };
+        if let ResponseBody::Result(r) = &body {
+            // Sentences cannot exceed 82 characters with the formats used;
+            // if one ever did, the epoch's answer still goes out.
+            if let Ok(sentences) = nmea::epoch_sentences(r) {
+                for s in sentences.iter() {
+                    nmea_out.write_all(s.as_bytes()).map_err(IoError::Nmea)?;
+                }
+                nmea_out.flush().map_err(IoError::Nmea)?;
+            }
+        }
+        self.send(link, Some(seq), body)
+    }
+
+    fn epoch<P: Platform>(&mut self, epoch: &Epoch<'_>, platform: &mut P) -> ResponseBody {
+        self.status.epochs = self.status.epochs.wrapping_add(1);
+        let t0 = platform.now();
+        let r = self.raim.process(&self.config, epoch);
+        let t1 = platform.now();
+        self.status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
+        match r {
+            Ok(r) => ResponseBody::Result(WireResult::from_result(&r)),
+            Err(e) => ResponseBody::Error(e.into()),
+        }
+    }
+
+    /// A jump in the sequence numbers is reported as a notice before the
+    /// answer (which still follows).
+    fn check_sequence<L: Write, M>(
+        &mut self,
+        seq: u32,
+        link: &mut L,
+    ) -> Result<(), IoError<L::Error, M>> {
+        let expected = self.expected_seq.replace(seq.wrapping_add(1));
+        match expected {
+            Some(e) if e != seq => self.send(
+                link,
+                Some(seq),
+                ResponseBody::Error(WireError::SequenceGap {
+                    expected: e,
+                    received: seq,
+                }),
+            ),
+            _ => Ok(()),
+        }
+    }
+
+    fn send<L: Write, M>(
+        &mut self,
+        link: &mut L,
+        seq: Option<u32>,
+        body: ResponseBody,
+    ) -> Result<(), IoError<L::Error, M>> {
+        if matches!(body, ResponseBody::Error(_)) {
+            self.status.errors = self.status.errors.wrapping_add(1);
+        }
+        let resp = Response { seq, body };
+        // The buffers hold the largest response (test
+        // `result::tests::largest_response_fits`); should encoding ever
+        // fail, a minimal error answer still goes out.
+        let frame = match encode(&resp, &mut self.scratch, &mut self.out) {
+            Ok(f) => f,
+            Err(_) => {
+                let fallback = Response {
+                    seq,
+                    body: ResponseBody::Error(WireError::Overflow {
+                        capacity: MAX_RESPONSE_PAYLOAD as u32,
+                    }),
+                };
+                match encode(&fallback, &mut self.scratch, &mut self.out) {
+                    Ok(f) => f,
+                    Err(_) => return Ok(()),
+                }
+            }
+        };
+        link.write_all(frame).map_err(IoError::Link)?;
+        link.flush().map_err(IoError::Link)
+    }
+}
+
+fn too_many(declared: u32) -> ResponseBody {
+    ResponseBody::Error(WireError::TooManySatellites {
+        have: declared,
+        capacity: CAPACITY as u32,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::message::{CommandRef, RequestRef};
+    use raim_core::{FiRule, LinearObservation, RangeObservation, SatId, System};
+    use std::vec::Vec;
+
+    /// A byte sink for the tests.
+    #[derive(Default)]
+    struct Sink(Vec<u8>);
+    impl embedded_io::ErrorType for Sink {
+        type Error = core::convert::Infallible;
+    }
+    impl Write for Sink {
+        fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+            self.0.extend_from_slice(buf);
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> Result<(), Self::Error> {
+            Ok(())
+        }
+    }
+
+    fn frame(req: &RequestRef<'_>) -> Vec<u8> {
+        let mut scratch = [0u8; 4096];
+        let mut out = [0u8; 4096];
+        encode(req, &mut scratch, &mut out).unwrap().to_vec()
+    }
+
+    fn responses(bytes: &[u8]) -> Vec<Response> {
+        let mut rx = FrameReceiver::<MAX_RESPONSE_FRAME>::new();
+        bytes
+            .iter()
+            .filter_map(|&b| {
+                rx.push(b)
+                    .map(|p| postcard::from_bytes::<Response>(p.unwrap()).unwrap())
+            })
+            .collect()
+    }
+
+    fn run(server: &mut Server, bytes: &[u8]) -> (Vec<Response>, std::string::String) {
+        let (mut link, mut nmea) = (Sink::default(), Sink::default());
+        for &b in bytes {
+            server
+                .on_byte(b, &mut link, &mut nmea, &mut NoPlatform)
+                .unwrap();
+        }
+        (
+            responses(&link.0),
+            std::string::String::from_utf8(nmea.0).unwrap(),
+        )
+    }
+
+    fn sky(step_m: f64) -> Vec<LinearObservation> {
+        let sky = [
+            (0.0, 85.0),
+            (45.0, 30.0),
+            (100.0, 50.0),
+            (150.0, 20.0),
+            (200.0, 60.0),
+            (250.0, 25.0),
+            (300.0, 40.0),
+            (340.0, 15.0),
+        ];
+        sky.iter()
+            .enumerate()
+            .map(|(i, &(az, el)): (usize, &(f64, f64))| {
+                let r = if i == 1 { step_m } else { 0.1 * i as f64 - 0.3 };
+                let mut o = LinearObservation::from_az_el(
+                    SatId::new(System::Gps, i as u8 + 1),
+                    az.to_radians(),
+                    el.to_radians(),
+                    r,
+                );
+                o.sigma_m = Some(1.0);
+                o
+            })
+            .collect()
+    }
+
+    #[test]
+    fn every_frame_is_answered_in_order_with_its_sequence_number() {
+        let mut server = Server::new();
+        let s0 = sky(0.0);
+        let s1 = sky(50.0);
+        let mut bytes = frame(&RequestRef::linear(0, 0.0, &s0));
+        bytes.extend(frame(&RequestRef::linear(1, 1.0, &s1)));
+        bytes.extend(frame(&RequestRef {
+            seq: 2,
+            command: CommandRef::Status,
+        }));
+        let (resp, nmea) = run(&mut server, &bytes);
+        assert_eq!(resp.len(), 3);
+        assert_eq!(
+            resp.iter().map(|r| r.seq).collect::<Vec<_>>(),
+            [Some(0), Some(1), Some(2)]
+        );
+        let ResponseBody::Result(r1) = &resp[1].body else {
+            panic!("{:?}", resp[1])
+        };
+        assert_eq!(r1.exclusions[0].id, SatId::new(System::Gps, 2));
+        // The same result as the core on the host, bit for bit.
+        let direct = Raim::<CAPACITY>::new()
+            .process(&Config::default(), &Epoch::linear(1.0, &s1))
+            .unwrap();
+        assert_eq!(*r1, WireResult::from_result(&direct));
+        let ResponseBody::Status(st) = resp[2].body else {
+            panic!()
+        };
+        assert_eq!(
+            (st.frames, st.epochs, st.errors, st.capacity),
+            (3, 2, 0, 32)
+        );
+        // Five sentences per solved epoch, in order.
+        let kinds: Vec<&str> = nmea.lines().map(|l| &l[3..6]).collect();
+        assert_eq!(
+            kinds,
+            ["RMC", "GGA", "GSA", "GST", "GBS", "RMC", "GGA", "GSA", "GST", "GBS"]
+        );
+    }
+
+    #[test]
+    fn typed_errors_for_each_kind_of_bad_frame() {
+        let mut server = Server::new();
+        let good = sky(0.0);
+        let mut nan = sky(0.0);
+        nan[3].residual_m = f64::NAN;
+        let many: Vec<LinearObservation> = (0..40)
+            .map(|i| LinearObservation {
+                id: SatId::new(System::Gps, i),
+                ..good[0]
+            })
+            .collect();
+        let degenerate: Vec<RangeObservation> = (0..6)
+            .map(|i| RangeObservation {
+                id: SatId::new(System::Gps, i + 1),
+                pseudorange_m: 2.0e7,
+                position_m: [2.0e7, 0.0, 0.0],
+                sigma_m: Some(1.0),
+            })
+            .collect();
+        let bad_cfg = Config {
+            rule: FiRule::LraimGaussian { kappa: -1.0 },
+            ..Config::default()
+        };
+        // A frame whose CRC does not match its payload.
+        let mut payload = [0u8; 4096];
+        let payload = postcard::to_slice(&RequestRef::linear(3, 0.0, &good), &mut payload).unwrap();
+        let env = crate::frame::Envelope {
+            crc32: crate::frame::CRC32.checksum(payload) ^ 1,
+            payload,
+        };
+        let mut out = [0u8; 4096];
+        let corrupted = postcard::to_slice_cobs(&env, &mut out).unwrap().to_vec();
+        let mut bytes = Vec::new();
+        bytes.extend(frame(&RequestRef::linear(0, 0.0, &nan)));
+        bytes.extend(frame(&RequestRef::linear(1, 0.0, &many)));
+        bytes.extend(frame(&RequestRef::ranges(2, 0.0, None, &degenerate)));
+        bytes.extend(&corrupted);
+        bytes.extend([0x01, 0x01, 0x00]); // valid COBS, not an envelope
+        bytes.extend(frame(&RequestRef {
+            seq: 5,
+            command: CommandRef::Configure(&bad_cfg),
+        }));
+        bytes.extend(std::vec![0x11; MAX_REQUEST_FRAME + 5]);
+        bytes.push(0);
+        bytes.extend(frame(&RequestRef {
+            seq: 6,
+            command: CommandRef::Status,
+        }));
+        let (resp, nmea) = run(&mut server, &bytes);
+        assert!(nmea.is_empty());
+        let got: Vec<(Option<u32>, &str)> = resp
+            .iter()
+            .map(|r| {
+                let ResponseBody::Error(e) = &r.body else {
+                    return (r.seq, "ok");
+                };
+                let kind = match e {
+                    WireError::NonFinite { .. } => "nonfinite",
+                    WireError::TooManySatellites {
+                        have: 40,
+                        capacity: 32,
+                    } => "toomany",
+                    WireError::DegenerateGeometry { .. } => "degenerate",
+                    WireError::BadCrc { .. } => "crc",
+                    WireError::Undecodable { .. } => "undecodable",
+                    WireError::SequenceGap {
+                        expected: 3,
+                        received: 5,
+                    } => "gap",
+                    WireError::OutOfRange { field, .. } if field.as_str() == "kappa" => "range",
+                    WireError::Overflow { .. } => "overflow",
+                    other => panic!("{other:?}"),
+                };
+                (r.seq, kind)
+            })
+            .collect();
+        assert_eq!(
+            got,
+            [
+                (Some(0), "nonfinite"),
+                (Some(1), "toomany"),
+                (Some(2), "degenerate"),
+                (None, "crc"),
+                (None, "undecodable"),
+                (Some(5), "gap"),
+                (Some(5), "range"),
+                (None, "overflow"),
+                (Some(6), "ok"),
+            ]
+        );
+        // The bad configuration did not replace the good one.
+        assert_eq!(*server.config(), Config::default());
+        let ResponseBody::Status(st) = resp[8].body else {
+            panic!()
+        };
+        assert_eq!((st.frames, st.errors), (8, 8));
+    }
+}
