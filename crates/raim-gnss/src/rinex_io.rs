@@ -1,0 +1,256 @@
+//! Reading RINEX 2/3 observation and navigation files (plain or gzip)
+//! through the `rinex` crate, into the plain structures this crate uses:
+//! epochs of raw pseudoranges, and Keplerian broadcast ephemerides.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use raim_core::{SatId, System};
+use rinex::navigation::NavMessageType;
+use rinex::prelude::{Constellation, Observable, Rinex, TimeScale};
+
+use crate::ephemeris::Kepler;
+use crate::error::GnssError;
+use crate::iono::Klobuchar;
+
+/// Open a RINEX file: gzip by its `.gz` suffix. `Rinex::from_file` panics
+/// on a missing file, so existence is checked first.
+pub fn open(path: &Path) -> Result<Rinex, GnssError> {
+    if !path.is_file() {
+        return Err(GnssError::FileNotFound(path.to_path_buf()));
+    }
+    let gz = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
+    let r = if gz {
+        Rinex::from_gzip_file(path)
+    } else {
+        Rinex::from_file(path)
+    };
+    r.map_err(|e| GnssError::Parse {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    })
+}
+
+/// The system of a `rinex` constellation, for the systems we model.
+pub fn system_of(c: Constellation) -> Option<System> {
+    match c {
+        Constellation::GPS => Some(System::Gps),
+        Constellation::Galileo => Some(System::Galileo),
+        Constellation::BeiDou => Some(System::Beidou),
+        Constellation::QZSS => Some(System::Qzss),
+        Constellation::Glonass => Some(System::Glonass),
+        _ => None,
+    }
+}
+
+/// One pseudorange code of one satellite.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CodeObs {
+    /// RINEX observable name: "C1" (RINEX 2), "C1C", "C2I", ...
+    pub code: String,
+    pub value_m: f64,
+}
+
+/// One observation epoch: receiver time and every satellite's pseudoranges.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObsEpoch {
+    /// Receiver time tag, GPS seconds since 1980-01-06.
+    pub time_gps_s: f64,
+    pub sats: BTreeMap<SatId, Vec<CodeObs>>,
+}
+
+/// An observation file reduced to what single-point positioning needs.
+#[derive(Debug, Clone)]
+pub struct ObsData {
+    pub path: PathBuf,
+    /// APPROX POSITION XYZ from the header, if present and non-zero.
+    pub approx_position_m: Option<[f64; 3]>,
+    pub epochs: Vec<ObsEpoch>,
+}
+
+impl ObsData {
+    pub fn load(path: &Path) -> Result<Self, GnssError> {
+        let r = open(path)?;
+        if !r.is_observation_rinex() {
+            return Err(GnssError::WrongKind {
+                path: path.to_path_buf(),
+                expected: "observation",
+            });
+        }
+        let approx_position_m = r
+            .header
+            .rx_position
+            .map(|(x, y, z)| [x, y, z])
+            .filter(|p| p.iter().map(|v| v * v).sum::<f64>() > 1e12);
+        let mut epochs = Vec::new();
+        for (key, obs) in r.observations_iter() {
+            // Event records (power failure, antenna moved, ...) carry no ranges.
+            if !key.flag.is_ok() {
+                continue;
+            }
+            let t = key.epoch.to_time_scale(TimeScale::GPST).to_gpst_seconds();
+            let mut sats: BTreeMap<SatId, Vec<CodeObs>> = BTreeMap::new();
+            for s in &obs.signals {
+                let Observable::PseudoRange(code) = &s.observable else {
+                    continue;
+                };
+                let Some(system) = system_of(s.sv.constellation) else {
+                    continue;
+                };
+                if !(s.value.is_finite() && s.value > 1e6) {
+                    continue;
+                }
+                let id = SatId::new(system, s.sv.prn);
+                sats.entry(id).or_default().push(CodeObs {
+                    code: code.clone(),
+                    value_m: s.value,
+                });
+            }
+            epochs.push(ObsEpoch {
+                time_gps_s: t,
+                sats,
+            });
+        }
+        Ok(ObsData {
+            path: path.to_path_buf(),
+            approx_position_m,
+            epochs,
+        })
+    }
+}
+
+/// A navigation file: Keplerian ephemerides per satellite and the GPS
+/// Klobuchar coefficients of the header.
+#[derive(Debug, Clone, Default)]
+pub struct NavData {
+    pub ephemerides: BTreeMap<SatId, Vec<Kepler>>,
+    pub klobuchar: Option<Klobuchar>,
+}
+
+/// Largest |t - toe| at which a broadcast ephemeris is used, s (the
+/// classic single-point choices: GPS 2 h, Galileo 4 h, BeiDou 6 h).
+pub fn max_ephemeris_age_s(system: System) -> f64 {
+    match system {
+        System::Gps | System::Qzss => 7_200.0,
+        System::Galileo => 14_400.0,
+        System::Beidou => 21_600.0,
+        System::Glonass => 1_800.0,
+    }
+}
+
+impl NavData {
+    pub fn load(path: &Path) -> Result<Self, GnssError> {
+        let r = open(path)?;
+        if !r.is_navigation_rinex() {
+            return Err(GnssError::WrongKind {
+                path: path.to_path_buf(),
+                expected: "navigation",
+            });
+        }
+        let klobuchar = r
+            .header
+            .ionod_corrections
+            .get(&Constellation::GPS)
+            .and_then(|m| m.as_klobuchar())
+            .map(|kb| Klobuchar {
+                alpha: [kb.alpha.0, kb.alpha.1, kb.alpha.2, kb.alpha.3],
+                beta: [kb.beta.0, kb.beta.1, kb.beta.2, kb.beta.3],
+            })
+            .filter(|k| k.beta[0] > 0.0);
+        let mut ephemerides: BTreeMap<SatId, Vec<Kepler>> = BTreeMap::new();
+        for (key, eph) in r.nav_ephemeris_frames_iter() {
+            let Some(system) = system_of(key.sv.constellation) else {
+                continue;
+            };
+            if system == System::Glonass {
+                continue;
+            }
+            let get = |f: &str| eph.get_orbit_f64(f);
+            let group_delay_s = match (system, key.msgtype) {
+                (System::Galileo, NavMessageType::FNAV) => get("bgdE5aE1"),
+                (System::Galileo, _) => get("bgdE5bE1"),
+                (System::Beidou, _) => get("tgd1b1b3").or_else(|| get("tgdb1b3")),
+                _ => get("tgd"),
+            }
+            .unwrap_or(0.0);
+            let fields = (
+                get("toe"),
+                get("sqrta"),
+                get("e"),
+                get("i0"),
+                get("omega0"),
+                get("omega"),
+                get("m0"),
+            );
+            let (Some(toe), Some(sqrt_a), Some(e), Some(i0), Some(omega0), Some(omega), Some(m0)) =
+                fields
+            else {
+                continue;
+            };
+            let toc_gps_s = key.epoch.to_time_scale(TimeScale::GPST).to_gpst_seconds();
+            let k = Kepler {
+                system,
+                prn: key.sv.prn,
+                toc_gps_s,
+                toe_sow_s: toe,
+                af0_s: eph.clock_bias,
+                af1_s_s: eph.clock_drift,
+                af2_s_s2: eph.clock_drift_rate,
+                sqrt_a_m05: sqrt_a,
+                e,
+                i0_rad: i0,
+                omega0_rad: omega0,
+                omega_rad: omega,
+                m0_rad: m0,
+                delta_n_rad_s: get("deltaN").unwrap_or(0.0),
+                omega_dot_rad_s: get("omegaDot").unwrap_or(0.0),
+                idot_rad_s: get("idot").unwrap_or(0.0),
+                cuc_rad: get("cuc").unwrap_or(0.0),
+                cus_rad: get("cus").unwrap_or(0.0),
+                crc_m: get("crc").unwrap_or(0.0),
+                crs_m: get("crs").unwrap_or(0.0),
+                cic_rad: get("cic").unwrap_or(0.0),
+                cis_rad: get("cis").unwrap_or(0.0),
+                group_delay_s,
+                health: get("health").unwrap_or(1.0) as u32,
+                iod: ["iode", "iodnav", "aode"]
+                    .iter()
+                    .find_map(|f| get(f))
+                    .unwrap_or(0.0) as u32,
+            };
+            // Galileo: I/NAV only (E1-B, the message single-frequency E1
+            // users decode, with BGD(E1,E5b)); F/NAV records are skipped.
+            let is_fnav = system == System::Galileo && key.msgtype == NavMessageType::FNAV;
+            if is_fnav {
+                continue;
+            }
+            ephemerides
+                .entry(SatId::new(system, key.sv.prn))
+                .or_default()
+                .push(k);
+        }
+        for v in ephemerides.values_mut() {
+            v.sort_by(|a, b| a.toc_gps_s.total_cmp(&b.toc_gps_s));
+        }
+        Ok(NavData {
+            ephemerides,
+            klobuchar,
+        })
+    }
+
+    /// The healthy ephemeris of `id` whose toe is closest to `t_gps_s`,
+    /// within [`max_ephemeris_age_s`].
+    pub fn select(&self, id: SatId, t_gps_s: f64) -> Option<&Kepler> {
+        let max_age = max_ephemeris_age_s(id.system);
+        self.ephemerides
+            .get(&id)?
+            .iter()
+            .filter(|k| k.health == 0)
+            .map(|k| (k.tk_s(t_gps_s).abs(), k))
+            .filter(|(age, _)| *age <= max_age)
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, k)| k)
+    }
+}

@@ -1,0 +1,65 @@
+//! Times at the I/O edge: a time of day "HH:MM[:SS]" relative to the day of
+//! the first epoch, or seconds from the first epoch ("+600"), to GPS seconds.
+
+use crate::error::GnssError;
+
+/// Seconds in a day.
+pub const DAY_S: f64 = 86_400.0;
+
+/// Resolve `spec` against the first epoch's GPS time `first_gps_s`:
+/// "HH:MM:SS" or "HH:MM" is that time of day (GPS time) on the first
+/// epoch's day; "+S" is S seconds after the first epoch.
+pub fn resolve(spec: &str, first_gps_s: f64) -> Result<f64, GnssError> {
+    let bad = || GnssError::BadTime(spec.to_string());
+    let s = spec.trim();
+    if let Some(rel) = s.strip_prefix('+') {
+        let v: f64 = rel.parse().map_err(|_| bad())?;
+        return if v.is_finite() {
+            Ok(first_gps_s + v)
+        } else {
+            Err(bad())
+        };
+    }
+    let parts: Vec<&str> = s.split(':').collect();
+    if !(2..=3).contains(&parts.len()) {
+        return Err(bad());
+    }
+    let mut secs = 0.0;
+    for (p, scale) in parts.iter().zip([3600.0, 60.0, 1.0]) {
+        let v: f64 = p.parse().map_err(|_| bad())?;
+        if !(0.0..=60.0 * 24.0).contains(&v) {
+            return Err(bad());
+        }
+        secs += v * scale;
+    }
+    let day_start = (first_gps_s / DAY_S).floor() * DAY_S;
+    Ok(day_start + secs)
+}
+
+/// "HH:MM:SS" of a GPS time (time of day in GPS time).
+pub fn time_of_day(t_gps_s: f64) -> String {
+    let s = t_gps_s.rem_euclid(DAY_S).round() as u64;
+    format!("{:02}:{:02}:{:02}", s / 3600, (s / 60) % 60, s % 60)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resolves_time_of_day_and_offsets() {
+        let first = 1_000.0 * DAY_S + 30.0;
+        assert_eq!(
+            resolve("00:20:00", first).unwrap(),
+            1_000.0 * DAY_S + 1200.0
+        );
+        assert_eq!(resolve("01:00", first).unwrap(), 1_000.0 * DAY_S + 3600.0);
+        assert_eq!(resolve("+60", first).unwrap(), first + 60.0);
+        assert_eq!(time_of_day(1_000.0 * DAY_S + 2370.0), "00:39:30");
+        assert!(matches!(
+            resolve("1:2:3:4", first),
+            Err(GnssError::BadTime(_))
+        ));
+        assert!(matches!(resolve("ab", first), Err(GnssError::BadTime(_))));
+    }
+}

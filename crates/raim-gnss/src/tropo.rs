@@ -1,0 +1,59 @@
+//! Saastamoinen tropospheric delay (Saastamoinen 1972) with a standard
+//! atmosphere: pressure and temperature from the height (ICAO), relative
+//! humidity 70 %, mapped by 1/cos(zenith angle). This is the classic
+//! single-point-positioning model (the one the RTKLIB facts in the shared
+//! data README were measured with).
+
+/// Relative humidity assumed by the standard atmosphere.
+pub const RELATIVE_HUMIDITY: f64 = 0.7;
+
+/// Slant tropospheric delay, m, for a receiver at latitude `lat_rad` and
+/// ellipsoidal height `height_m`, satellite elevation `el_rad`. Returns 0
+/// outside the model's domain (below the horizon, height < -100 m or
+/// above 10 km), as the delay is then unmodelled rather than invented.
+pub fn saastamoinen_m(lat_rad: f64, height_m: f64, el_rad: f64) -> f64 {
+    if el_rad <= 0.0 || !(-100.0..=1e4).contains(&height_m) {
+        return 0.0;
+    }
+    let h = height_m.max(0.0);
+    let pressure_hpa = 1013.25 * (1.0 - 2.2557e-5 * h).powf(5.2568);
+    let temp_k = 15.0 - 6.5e-3 * h + 273.16;
+    let e_hpa = 6.108 * RELATIVE_HUMIDITY * ((17.15 * temp_k - 4684.0) / (temp_k - 38.45)).exp();
+    let cos_z = el_rad.sin(); // cos(pi/2 - el)
+    let hydro = 0.002_276_8 * pressure_hpa
+        / (1.0 - 0.002_66 * (2.0 * lat_rad).cos() - 0.000_28 * h / 1e3)
+        / cos_z;
+    let wet = 0.002_277 * (1255.0 / temp_k + 0.05) * e_hpa / cos_z;
+    hydro + wet
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Zenith hydrostatic delay at sea level, latitude 45 deg (cos 2 lat =
+    /// 0): 0.0022768 x 1013.25 hPa = 2.3070 m (Saastamoinen's closed form);
+    /// the wet part at 15 C, 70 % humidity (e = 12.0 hPa) is 0.12 m.
+    #[test]
+    fn zenith_sea_level_closed_form() {
+        let d = saastamoinen_m(45f64.to_radians(), 0.0, std::f64::consts::FRAC_PI_2);
+        let temp_k: f64 = 288.16;
+        let e = 6.108 * 0.7 * ((17.15 * temp_k - 4684.0) / (temp_k - 38.45)).exp();
+        let wet = 0.002277 * (1255.0 / temp_k + 0.05) * e;
+        assert!((d - (0.0022768 * 1013.25 + wet)).abs() < 1e-9);
+        assert!((2.40..2.50).contains(&d), "{d}");
+        assert!((e - 12.0).abs() < 0.05, "{e}");
+    }
+
+    /// 1/sin(el) mapping: at 30 deg the delay doubles; below the horizon 0.
+    #[test]
+    fn mapping_and_domain() {
+        let z = saastamoinen_m(0.6, 100.0, std::f64::consts::FRAC_PI_2);
+        let d30 = saastamoinen_m(0.6, 100.0, 30f64.to_radians());
+        assert!((d30 - 2.0 * z).abs() < 1e-12);
+        assert_eq!(saastamoinen_m(0.6, 100.0, -0.01), 0.0);
+        assert_eq!(saastamoinen_m(0.6, 20_000.0, 0.5), 0.0);
+        // Higher is drier: 1000 m loses ~12 % of the pressure.
+        assert!(saastamoinen_m(0.6, 1000.0, 1.0) < 0.9 * saastamoinen_m(0.6, 0.0, 1.0));
+    }
+}
