@@ -1,7 +1,10 @@
 //! Fault detection and exclusion (SPEC §5): detect, identify, exclude,
 //! re-solve and re-test the subset, while the test fails and redundancy
 //! remains. An exclusion is accepted only if its subset passes, and (by
-//! default) only if excluding the runner-up would not pass as well.
+//! default) only if excluding the runner-up would not pass as well: the
+//! runner-up's subset statistic is D^2 - w_j^2 (removing row j from a least
+//! squares fit lowers the weighted SSE by r_j^2 / S_jj), so that check costs
+//! no second solve.
 
 use crate::config::Config;
 use crate::detection::{TestStatistic, Thresholds};
@@ -139,15 +142,16 @@ pub fn run<const N: usize>(
         };
         let after = test(cfg, thresholds, &candidate)?;
         if !after.alarm() && cfg.require_unique_exclusion {
-            if let Some((s2, s2_id, s2_src)) =
-                second.and_then(|s| Some((s, id_of(s.row)?, src_of(s.row)?)))
-            {
-                let _ = s2;
-                let alt_ok = match solve::<N>(cfg, epoch, &without(&mask, s2_src)) {
-                    Ok(alt) => !test(cfg, thresholds, &alt)?.alarm(),
-                    Err(_) => false,
+            // Excluding one row lowers the weighted SSE by exactly w_j^2
+            // (r_j^2 / S_jj) when the state keeps its dimension, so the
+            // runner-up's subset statistic needs no second solve.
+            if let Some((s2, s2_id)) = second.and_then(|s| Some((s, id_of(s.row)?))) {
+                let alt = TestStatistic {
+                    statistic: test_now.statistic - s2.w * s2.w,
+                    threshold: thresholds.get(cfg.pfa, cfg.pmd, current.parity.dof() - 1)?.0,
+                    dof: test_now.dof - 1,
                 };
-                if alt_ok {
+                if !alt.alarm() {
                     out.cause = Some(AlarmCause::Ambiguous {
                         best: best_id,
                         runner_up: s2_id,
@@ -178,4 +182,34 @@ pub fn run<const N: usize>(
         out.cause = None;
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::{linear_epoch, Rng, SKY8};
+
+    /// The identity behind the uniqueness check: the statistic of the subset
+    /// without satellite j equals D^2 - w_j^2, checked against real subset
+    /// solves for every j (linear model, so it holds to rounding).
+    #[test]
+    fn subset_statistic_is_sse_minus_w_squared() {
+        let cfg = Config::default();
+        for seed in 0..20 {
+            let sats = linear_epoch(&SKY8, 1.5, &mut Rng::new(seed), &[(4, 12.0)]);
+            let epoch = Epoch::linear(0.0, &sats);
+            let all = [true; 8];
+            let full = solve::<8>(&cfg, &epoch, &all).unwrap();
+            for j in 0..8 {
+                let s = full.parity.s_ii()[j];
+                let w2 = full.parity.residuals()[j].powi(2) / s;
+                let sub = solve::<8>(&cfg, &epoch, &without(&all, j)).unwrap();
+                const SSE_TOL: f64 = 1e-9; // dimensionless (chi-square units)
+                assert!(
+                    (sub.parity.sse() - (full.parity.sse() - w2)).abs() < SSE_TOL,
+                    "seed {seed} sat {j}"
+                );
+            }
+        }
+    }
 }

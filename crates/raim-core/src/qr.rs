@@ -111,32 +111,40 @@ impl<const N: usize> Householder<N> {
         }
     }
 
-    /// Solve T1 x = y for the first m entries (back substitution).
+    /// Solve T1 x = y for the first m entries (column-oriented back
+    /// substitution: column j of T1 above the diagonal is stored in a[j][..j]).
     pub fn solve_t(&self, y: &[f64; MAX_STATES]) -> [f64; MAX_STATES] {
-        let mut x = [0.0; MAX_STATES];
-        for i in (0..self.m).rev() {
-            let mut s = y.get(i).copied().unwrap_or(0.0);
-            for j in (i + 1)..self.m {
-                s -= self.t(i, j) * x.get(j).copied().unwrap_or(0.0);
+        let mut x = *y;
+        for j in (0..self.m).rev() {
+            let (Some(col), Some(&d)) = (self.a.get(j), self.diag.get(j)) else {
+                continue;
+            };
+            let (head, tail) = x.split_at_mut(j);
+            let Some(xj) = tail.first_mut() else {
+                continue;
+            };
+            // The diagonal was checked non-zero in `factor`.
+            *xj /= d;
+            let v = *xj;
+            for (xi, t) in head.iter_mut().zip(col.iter()) {
+                *xi -= t * v;
             }
-            if let Some(xi) = x.get_mut(i) {
-                // The diagonal was checked non-zero in `factor`.
-                *xi = s / self.t(i, i);
-            }
+        }
+        for v in x.iter_mut().skip(self.m) {
+            *v = 0.0;
         }
         x
     }
 
-    /// Solve T1^T x = y (forward substitution).
+    /// Solve T1^T x = y (forward substitution: row i of T1^T is column i
+    /// of T1, stored in a[i][..i]).
     pub fn solve_tt(&self, y: &[f64; MAX_STATES]) -> [f64; MAX_STATES] {
         let mut x = [0.0; MAX_STATES];
-        for i in 0..self.m {
-            let mut s = y.get(i).copied().unwrap_or(0.0);
-            for j in 0..i {
-                s -= self.t(j, i) * x.get(j).copied().unwrap_or(0.0);
-            }
-            if let Some(xi) = x.get_mut(i) {
-                *xi = s / self.t(i, i);
+        for (i, (col, &d)) in self.a.iter().zip(self.diag.iter()).take(self.m).enumerate() {
+            let (head, tail) = x.split_at_mut(i);
+            let dot: f64 = head.iter().zip(col.iter()).map(|(a, b)| a * b).sum();
+            if let (Some(xi), Some(yi)) = (tail.first_mut(), y.get(i)) {
+                *xi = (yi - dot) / d;
             }
         }
         x
