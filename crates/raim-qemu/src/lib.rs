@@ -1,0 +1,366 @@
+//! Runs the RAIM firmware under `qemu-system-arm -machine mps2-an386` and
+//! talks to it: the link UART (UART0) and the NMEA UART (UART1) are Unix
+//! sockets QEMU serves; semihosting output (the firmware's defmt log, binary)
+//! goes to a log file.
+//!
+//! ```no_run
+//! # fn main() -> anyhow::Result<()> {
+//! use raim_qemu::{firmware_elf, QemuSession};
+//! let elf = firmware_elf()?; // builds firmware/ if needed
+//! let mut fw = QemuSession::start(&elf)?;
+//! fw.configure(&raim_core::Config::default())?;
+//! # let sats: Vec<raim_core::LinearObservation> = vec![];
+//! let answer = fw.process(&raim_core::Epoch::linear(0.0, &sats))?;
+//! println!("{:?} {:?}", answer.outcome, answer.nmea);
+//! # Ok(()) }
+//! ```
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::os::unix::net::UnixStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
+use std::time::{Duration, Instant};
+
+use anyhow::{anyhow, bail, Context, Result};
+use raim_core::{Config, Epoch, Observations};
+use raim_proto::frame::{encode, FrameError, FrameReceiver};
+use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody, Status};
+use raim_proto::{WireError, WireResult, MAX_REQUEST_FRAME, MAX_RESPONSE_FRAME};
+
+/// How long an answer may take (QEMU on a loaded 2-core machine; an epoch
+/// takes milliseconds).
+pub const ANSWER_TIMEOUT: Duration = Duration::from_secs(30);
+
+/// The repository root (this crate is `crates/raim-qemu`).
+pub fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// Path of the release firmware ELF (built by `build_firmware`).
+pub fn firmware_elf_path() -> PathBuf {
+    repo_root().join("firmware/target/thumbv7em-none-eabihf/release/raim-firmware")
+}
+
+/// `cd firmware && cargo build --release` (a no-op when up to date).
+pub fn build_firmware() -> Result<PathBuf> {
+    let dir = repo_root().join("firmware");
+    let mut cmd = Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()));
+    cmd.current_dir(&dir).args(["build", "--release", "--quiet"]);
+    // Settings of an outer cargo (e.g. under `cargo test`) must not leak
+    // into the firmware's own workspace.
+    for (k, _) in std::env::vars_os() {
+        let k = k.to_string_lossy().into_owned();
+        if k.starts_with("CARGO_BUILD_") || k == "CARGO_TARGET_DIR" || k == "RUSTFLAGS" || k == "CARGO_ENCODED_RUSTFLAGS" {
+            cmd.env_remove(k);
+        }
+    }
+    let st = cmd.status().with_context(|| format!("running cargo in {}", dir.display()))?;
+    if !st.success() {
+        bail!("firmware build failed ({st})");
+    }
+    Ok(firmware_elf_path())
+}
+
+/// The firmware ELF: `$RAIM_FIRMWARE_ELF` if set, else built from `firmware/`.
+pub fn firmware_elf() -> Result<PathBuf> {
+    match std::env::var_os("RAIM_FIRMWARE_ELF") {
+        Some(p) => Ok(PathBuf::from(p)),
+        None => build_firmware(),
+    }
+}
+
+/// Options of the emulator.
+#[derive(Debug, Clone, Default)]
+pub struct Options {
+    /// `-icount shift=0`: one guest instruction per virtual nanosecond, so
+    /// the firmware's SysTick (25 MHz) ticks once per 40 instructions.
+    pub icount: bool,
+    /// Where QEMU's semihosting output (the defmt log) goes; default: a file
+    /// in the session's temporary directory.
+    pub log: Option<PathBuf>,
+}
+
+/// One epoch's answer.
+#[derive(Debug, Clone)]
+pub struct Processed {
+    pub seq: u32,
+    pub outcome: Result<WireResult, WireError>,
+    /// Sequence-gap notices that came before the answer.
+    pub notices: Vec<WireError>,
+    /// The NMEA sentences of the epoch (`$...*hh`, without CRLF); empty
+    /// when the epoch was rejected.
+    pub nmea: Vec<String>,
+}
+
+/// A running firmware under QEMU.
+pub struct QemuSession {
+    child: Child,
+    link: UnixStream,
+    responses: Receiver<Result<Response, String>>,
+    nmea: Receiver<String>,
+    next_seq: u32,
+    dir: PathBuf,
+    log: PathBuf,
+}
+
+static SESSION_COUNTER: AtomicU32 = AtomicU32::new(0);
+
+fn connect(path: &Path, child: &mut Child, deadline: Instant) -> Result<UnixStream> {
+    loop {
+        match UnixStream::connect(path) {
+            Ok(s) => return Ok(s),
+            Err(e) => {
+                if let Some(st) = child.try_wait()? {
+                    bail!("qemu exited ({st}) before serving {}", path.display());
+                }
+                if Instant::now() > deadline {
+                    bail!("cannot connect to {}: {e}", path.display());
+                }
+                std::thread::sleep(Duration::from_millis(20));
+            }
+        }
+    }
+}
+
+impl QemuSession {
+    pub fn start(elf: &Path) -> Result<Self> {
+        Self::start_with(elf, &Options::default())
+    }
+
+    pub fn start_with(elf: &Path, opts: &Options) -> Result<Self> {
+        if !elf.exists() {
+            bail!("no firmware ELF at {}", elf.display());
+        }
+        let n = SESSION_COUNTER.fetch_add(1, Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("raim-qemu-{}-{n}", std::process::id()));
+        std::fs::create_dir_all(&dir)?;
+        let (s0, s1) = (dir.join("uart0.sock"), dir.join("uart1.sock"));
+        for s in [&s0, &s1] {
+            let _ = std::fs::remove_file(s);
+        }
+        let log = opts.log.clone().unwrap_or_else(|| dir.join("semihosting.log"));
+        let mut cmd = Command::new("qemu-system-arm");
+        cmd.args(["-machine", "mps2-an386", "-cpu", "cortex-m4", "-nographic", "-monitor", "none"])
+            .args(["-semihosting-config", "enable=on,target=native"])
+            .args(["-chardev", &format!("socket,id=u0,path={},server=on,wait=on", s0.display())])
+            .args(["-chardev", &format!("socket,id=u1,path={},server=on,wait=on", s1.display())])
+            .args(["-serial", "chardev:u0", "-serial", "chardev:u1"]);
+        if opts.icount {
+            cmd.args(["-icount", "shift=0"]);
+        }
+        cmd.arg("-kernel").arg(elf);
+        cmd.stdin(Stdio::null())
+            .stdout(std::fs::File::create(&log)?)
+            .stderr(std::fs::File::create(dir.join("qemu.stderr"))?);
+        let mut child = cmd.spawn().context("starting qemu-system-arm (apt-get install qemu-system-arm)")?;
+        let deadline = Instant::now() + Duration::from_secs(20);
+        let link = match connect(&s0, &mut child, deadline).and_then(|l| Ok((l, connect(&s1, &mut child, deadline)?))) {
+            Ok(v) => v,
+            Err(e) => {
+                let _ = child.kill();
+                let _ = child.wait();
+                let stderr = std::fs::read_to_string(dir.join("qemu.stderr")).unwrap_or_default();
+                return Err(e.context(stderr));
+            }
+        };
+        let (link, nmea_sock) = link;
+        let responses = spawn_link_reader(link.try_clone()?);
+        let nmea = spawn_nmea_reader(nmea_sock);
+        Ok(QemuSession {
+            child,
+            link,
+            responses,
+            nmea,
+            next_seq: 0,
+            dir,
+            log,
+        })
+    }
+
+    /// The semihosting log file (binary defmt frames; decode with
+    /// `defmt-print -e <elf>`).
+    pub fn log_path(&self) -> &Path {
+        &self.log
+    }
+
+    /// The next sequence number `send` will use.
+    pub fn next_seq(&self) -> u32 {
+        self.next_seq
+    }
+
+    /// Send raw bytes on the link (tests of corrupted streams).
+    pub fn send_raw(&mut self, bytes: &[u8]) -> Result<()> {
+        self.link.write_all(bytes).context("writing to the firmware's link UART")
+    }
+
+    /// Encode a request with the next sequence number; returns its frame.
+    pub fn frame(&mut self, command: CommandRef<'_>) -> Result<(u32, Vec<u8>)> {
+        let seq = self.next_seq;
+        self.next_seq = self.next_seq.wrapping_add(1);
+        Ok((seq, encode_request(&RequestRef { seq, command })?))
+    }
+
+    /// Send a request; returns its sequence number.
+    pub fn send(&mut self, command: CommandRef<'_>) -> Result<u32> {
+        let (seq, f) = self.frame(command)?;
+        self.send_raw(&f)?;
+        Ok(seq)
+    }
+
+    /// The next response frame.
+    pub fn recv(&mut self, timeout: Duration) -> Result<Response> {
+        match self.responses.recv_timeout(timeout) {
+            Ok(Ok(r)) => Ok(r),
+            Ok(Err(e)) => Err(anyhow!("bad response frame from the firmware: {e}")),
+            Err(RecvTimeoutError::Timeout) => Err(anyhow!("no answer from the firmware within {timeout:?}")),
+            Err(RecvTimeoutError::Disconnected) => {
+                let st = self.child.try_wait().ok().flatten();
+                Err(anyhow!("the firmware's link closed (qemu status {st:?}); log {}", self.log.display()))
+            }
+        }
+    }
+
+    /// Wait for the answer to `seq`, collecting gap notices before it.
+    fn answer(&mut self, seq: u32) -> Result<(ResponseBody, Vec<WireError>)> {
+        let mut notices = Vec::new();
+        loop {
+            let r = self.recv(ANSWER_TIMEOUT)?;
+            match (r.seq, r.body) {
+                (Some(s), ResponseBody::Error(e @ WireError::SequenceGap { .. })) if s == seq => notices.push(e),
+                (Some(s), body) if s == seq => return Ok((body, notices)),
+                (s, body) => bail!("expected the answer to {seq}, got {s:?}: {body:?}"),
+            }
+        }
+    }
+
+    pub fn status(&mut self) -> Result<Status> {
+        let seq = self.send(CommandRef::Status)?;
+        match self.answer(seq)?.0 {
+            ResponseBody::Status(s) => Ok(s),
+            other => bail!("status request answered with {other:?}"),
+        }
+    }
+
+    /// Set the firmware's configuration.
+    pub fn configure(&mut self, cfg: &Config) -> Result<()> {
+        let seq = self.send(CommandRef::Configure(cfg))?;
+        match self.answer(seq)?.0 {
+            ResponseBody::Configured => Ok(()),
+            ResponseBody::Error(e) => bail!("configuration rejected: {e}"),
+            other => bail!("configure answered with {other:?}"),
+        }
+    }
+
+    /// Process one epoch on the firmware: its result or typed error, and
+    /// the NMEA sentences it wrote.
+    pub fn process(&mut self, epoch: &Epoch<'_>) -> Result<Processed> {
+        let seq = self.send(epoch_command(epoch))?;
+        let (body, notices) = self.answer(seq)?;
+        let outcome = match body {
+            ResponseBody::Result(r) => Ok(r),
+            ResponseBody::Error(e) => Err(e),
+            other => bail!("epoch answered with {other:?}"),
+        };
+        let nmea = if outcome.is_ok() { self.take_nmea(5, ANSWER_TIMEOUT)? } else { Vec::new() };
+        Ok(Processed { seq, outcome, notices, nmea })
+    }
+
+    /// The next `count` NMEA sentences.
+    pub fn take_nmea(&mut self, count: usize, timeout: Duration) -> Result<Vec<String>> {
+        let deadline = Instant::now() + timeout;
+        let mut out = Vec::with_capacity(count);
+        while out.len() < count {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.nmea.recv_timeout(left) {
+                Ok(s) => out.push(s),
+                Err(_) => bail!("only {} of {count} NMEA sentences arrived", out.len()),
+            }
+        }
+        Ok(out)
+    }
+
+    /// NMEA sentences already received and not yet taken.
+    pub fn drain_nmea(&mut self) -> Vec<String> {
+        self.nmea.try_iter().collect()
+    }
+
+    /// True while QEMU runs.
+    pub fn is_running(&mut self) -> bool {
+        matches!(self.child.try_wait(), Ok(None))
+    }
+}
+
+impl Drop for QemuSession {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        let _ = std::fs::remove_file(self.dir.join("uart0.sock"));
+        let _ = std::fs::remove_file(self.dir.join("uart1.sock"));
+    }
+}
+
+/// The request command of an epoch.
+pub fn epoch_command<'a>(epoch: &Epoch<'a>) -> CommandRef<'a> {
+    match epoch.observations {
+        Observations::Ranges { sats, apriori_m } => CommandRef::Ranges {
+            time_s: epoch.time_s,
+            apriori_m,
+            sats,
+        },
+        Observations::Linear { sats } => CommandRef::Linear { time_s: epoch.time_s, sats },
+    }
+}
+
+/// A complete request frame.
+pub fn encode_request(req: &RequestRef<'_>) -> Result<Vec<u8>> {
+    // Oversized requests (to test the firmware's answers) may exceed the
+    // firmware's buffer; the host's buffers are larger.
+    let mut scratch = vec![0u8; 16 * MAX_REQUEST_FRAME];
+    let mut out = vec![0u8; 17 * MAX_REQUEST_FRAME];
+    let f = encode(req, &mut scratch, &mut out).map_err(|e| anyhow!("encoding a request: {e}"))?;
+    Ok(f.to_vec())
+}
+
+fn spawn_link_reader(mut link: UnixStream) -> Receiver<Result<Response, String>> {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let mut frames = Box::new(FrameReceiver::<MAX_RESPONSE_FRAME>::new());
+        let mut buf = [0u8; 4096];
+        loop {
+            let n = match link.read(&mut buf) {
+                Ok(0) | Err(_) => return,
+                Ok(n) => n,
+            };
+            for &b in &buf[..n] {
+                let item = match frames.push(b) {
+                    None => continue,
+                    Some(Ok(p)) => postcard::from_bytes::<Response>(p).map_err(|e| format!("{e}")),
+                    Some(Err(e)) => Err(frame_error_text(e)),
+                };
+                if tx.send(item).is_err() {
+                    return;
+                }
+            }
+        }
+    });
+    rx
+}
+
+fn frame_error_text(e: FrameError) -> String {
+    format!("{e:?}")
+}
+
+fn spawn_nmea_reader(sock: UnixStream) -> Receiver<String> {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(sock).lines() {
+            let Ok(line) = line else { return };
+            if tx.send(line.trim_end().to_string()).is_err() {
+                return;
+            }
+        }
+    });
+    rx
+}
