@@ -1,6 +1,8 @@
 //! WGS-84 frames: ECEF to geodetic and the local East-North-Up rotation used
 //! for protection levels (SPEC §6) and elevation-dependent sigmas (SPEC §1).
 
+use nalgebra::{Matrix3, Vector3};
+
 /// WGS-84 semi-major axis, m.
 pub const WGS84_A_M: f64 = 6_378_137.0;
 /// WGS-84 flattening.
@@ -57,20 +59,20 @@ pub fn geodetic_to_ecef(g: Geodetic) -> [f64; 3] {
 
 /// Rotation from ECEF to local ENU at a geodetic point: rows are the
 /// East, North and Up unit vectors expressed in ECEF.
-pub fn enu_rotation(g: &Geodetic) -> [[f64; 3]; 3] {
+pub fn enu_rotation(g: &Geodetic) -> Matrix3<f64> {
     let (sl, cl) = (libm::sin(g.lat_rad), libm::cos(g.lat_rad));
     let (so, co) = (libm::sin(g.lon_rad), libm::cos(g.lon_rad));
-    [
-        [-so, co, 0.0],
-        [-sl * co, -sl * so, cl],
-        [cl * co, cl * so, sl],
-    ]
+    Matrix3::new(-so, co, 0.0, -sl * co, -sl * so, cl, cl * co, cl * so, sl)
 }
 
 /// Rotate an ECEF vector into ENU.
-pub fn rotate(r: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
-    let dot = |row: &[f64; 3]| row[0] * v[0] + row[1] * v[1] + row[2] * v[2];
-    [dot(&r[0]), dot(&r[1]), dot(&r[2])]
+pub fn rotate(r: &Matrix3<f64>, v: [f64; 3]) -> [f64; 3] {
+    (r * Vector3::from(v)).into()
+}
+
+/// Rotate an ENU vector back into ECEF (the transpose of the rotation).
+pub fn unrotate(r: &Matrix3<f64>, v: [f64; 3]) -> [f64; 3] {
+    (r.transpose() * Vector3::from(v)).into()
 }
 
 /// Elevation (rad) of an ENU unit vector.
@@ -109,11 +111,11 @@ mod tests {
             height_m: 0.0,
         };
         let r = enu_rotation(&g);
-        for i in 0..3 {
-            for j in 0..3 {
-                let d: f64 = (0..3).map(|k| r[i][k] * r[j][k]).sum();
-                assert!((d - if i == j { 1.0 } else { 0.0 }).abs() < 1e-15);
-            }
+        assert!((r * r.transpose() - Matrix3::identity()).amax() < 1e-15);
+        let v = [1.0, -2.0, 3.0];
+        let back = unrotate(&r, rotate(&r, v));
+        for k in 0..3 {
+            assert!((back[k] - v[k]).abs() < 1e-15);
         }
         let p = geodetic_to_ecef(g);
         let up = rotate(&r, p);

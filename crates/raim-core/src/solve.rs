@@ -4,7 +4,7 @@
 
 use crate::config::Config;
 use crate::error::RaimError;
-use crate::frames::{ecef_to_geodetic, enu_rotation, rotate, Geodetic};
+use crate::frames::{ecef_to_geodetic, enu_rotation, rotate, unrotate, Geodetic};
 use crate::measurement::{Epoch, Observations, SatId, System, MAX_STATES, MAX_SYSTEMS};
 use crate::parity::Parity;
 
@@ -190,18 +190,7 @@ pub fn solve<const N: usize>(
                 let dx = *parity.dx();
                 let step_local = [dx[0], dx[1], dx[2]];
                 let step = if on_surface {
-                    // ENU -> ECEF is the transpose of the rotation.
-                    [
-                        rot[0][0] * step_local[0]
-                            + rot[1][0] * step_local[1]
-                            + rot[2][0] * step_local[2],
-                        rot[0][1] * step_local[0]
-                            + rot[1][1] * step_local[1]
-                            + rot[2][1] * step_local[2],
-                        rot[0][2] * step_local[0]
-                            + rot[1][2] * step_local[1]
-                            + rot[2][2] * step_local[2],
-                    ]
+                    unrotate(&rot, step_local)
                 } else {
                     step_local
                 };

@@ -79,12 +79,7 @@ pub fn range_epoch(
         .map(|(i, &(sys, prn, az, el))| {
             let (az, el) = (az.to_radians(), el.to_radians());
             let enu = [el.cos() * az.sin(), el.cos() * az.cos(), el.sin()];
-            // ENU -> ECEF direction (transpose of r).
-            let d = [
-                r[0][0] * enu[0] + r[1][0] * enu[1] + r[2][0] * enu[2],
-                r[0][1] * enu[0] + r[1][1] * enu[1] + r[2][1] * enu[2],
-                r[0][2] * enu[0] + r[1][2] * enu[1] + r[2][2] * enu[2],
-            ];
+            let d = crate::frames::unrotate(&r, enu);
             // Range to a sphere of radius 26,560 km.
             let rs = 26_560_000.0f64;
             let b = rx_ecef_m
