@@ -16,6 +16,68 @@ pub const DEFAULT_KAPPA: f64 = 100.0;
 /// the measurement and the normalised residual is not meaningful.
 pub const DEFAULT_MIN_S_II: f64 = 1e-4;
 
+/// How the MCUSUM state crosses a change of the satellite set (SPEC §7.3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Carry {
+    /// Carry the state through measurement space, indexed by satellite:
+    /// v = U2_old S_old, mapped to the new list (0 for newcomers), then
+    /// S_new = U2_new^T v.
+    #[default]
+    Transport,
+    /// Restart the state at 0 whenever the satellite set changes (kept for
+    /// comparison; while the set is unchanged the state is transported,
+    /// since the parity basis rotates as the satellites move).
+    Reset,
+}
+
+/// Default MCUSUM reference value k, in sigma units: half the parity-space
+/// shift the test is tuned to, here 2 sigma (seed 001 Table 2 uses k = 1).
+pub const DEFAULT_MCUSUM_K: f64 = 1.0;
+
+/// Default share of the per-epoch false-alarm budget given to the snapshot
+/// test when the MCUSUM runs beside it (SPEC §7.4): an even split.
+pub const DEFAULT_SNAPSHOT_SHARE: f64 = 0.5;
+
+/// Default time an MCUSUM exclusion is held, s (10 minutes): long enough for
+/// a persistent fault not to be re-admitted at once, short enough that a
+/// satellite that recovered comes back. A satellite that leaves view is
+/// released at once.
+pub const DEFAULT_MCUSUM_HOLD_S: f64 = 600.0;
+
+/// Sequential detection settings (SPEC §7, docs/CORE.md "MCUSUM").
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct McusumConfig {
+    /// Run the MCUSUM beside the snapshot test. Off by default: with it
+    /// off, every result is exactly the snapshot monitor's.
+    pub enabled: bool,
+    /// Reference value k (sigma units); one of `mcusum::K_VALUES`.
+    pub k: f64,
+    /// In-control average run length of the MCUSUM alone, epochs. The
+    /// threshold h comes from the device table for the current dimension.
+    pub arl0: f64,
+    pub carry: Carry,
+    /// How long a satellite excluded after an MCUSUM alarm stays excluded, s.
+    pub hold_s: f64,
+}
+
+impl Default for McusumConfig {
+    fn default() -> Self {
+        // Disabled; the ARL0 is the MCUSUM half of the default budget
+        // (Pfa 3.3333e-7 per epoch split evenly: 1 / 1.66667e-7 = 6e6).
+        McusumConfig {
+            enabled: false,
+            k: DEFAULT_MCUSUM_K,
+            arl0: 6.0e6,
+            carry: Carry::Transport,
+            hold_s: DEFAULT_MCUSUM_HOLD_S,
+        }
+    }
+}
+
 /// The fault identification rule (SPEC §4).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -31,7 +93,9 @@ pub enum FiRule {
 
 impl Default for FiRule {
     fn default() -> Self {
-        FiRule::LraimGaussian { kappa: DEFAULT_KAPPA }
+        FiRule::LraimGaussian {
+            kappa: DEFAULT_KAPPA,
+        }
     }
 }
 
@@ -60,9 +124,18 @@ pub enum Phase {
 impl Phase {
     pub const fn alert_limits(self) -> AlertLimits {
         match self {
-            Phase::EnRoute => AlertLimits { hal_m: 3704.0, val_m: None },
-            Phase::Terminal => AlertLimits { hal_m: 1852.0, val_m: None },
-            Phase::Npa => AlertLimits { hal_m: 556.0, val_m: None },
+            Phase::EnRoute => AlertLimits {
+                hal_m: 3704.0,
+                val_m: None,
+            },
+            Phase::Terminal => AlertLimits {
+                hal_m: 1852.0,
+                val_m: None,
+            },
+            Phase::Npa => AlertLimits {
+                hal_m: 556.0,
+                val_m: None,
+            },
         }
     }
 
@@ -99,6 +172,8 @@ pub struct Config {
     pub convergence_m: f64,
     /// Gauss-Newton iteration cap.
     pub max_iterations: u32,
+    /// Sequential detection (MCUSUM, SPEC §7); disabled by default.
+    pub mcusum: McusumConfig,
 }
 
 impl Default for Config {
@@ -122,7 +197,20 @@ impl Config {
             require_unique_exclusion: true,
             convergence_m: 1e-4,
             max_iterations: 20,
+            mcusum: McusumConfig::default(),
         }
+    }
+
+    /// Enable the MCUSUM and split the false-alarm budget (SPEC §7.4): the
+    /// current `pfa` is taken as the total per-epoch budget 1 / ARL0; the
+    /// snapshot test gets `snapshot_share` of it and the MCUSUM the rest,
+    /// so 1 / ARL0_combined ~ pfa_snapshot + 1 / ARL0_mcusum = the total.
+    pub fn split_false_alarm_budget(mut self, snapshot_share: f64) -> Self {
+        let total = self.pfa;
+        self.pfa = total * snapshot_share;
+        self.mcusum.enabled = true;
+        self.mcusum.arl0 = 1.0 / (total * (1.0 - snapshot_share));
+        self
     }
 
     /// Check every field's range; returns the first offending one.
@@ -131,7 +219,12 @@ impl Config {
             if v > 0.0 && v < 0.5 {
                 Ok(())
             } else {
-                Err(RaimError::OutOfRange { field, value: v, min: 0.0, max: 0.5 })
+                Err(RaimError::OutOfRange {
+                    field,
+                    value: v,
+                    min: 0.0,
+                    max: 0.5,
+                })
             }
         };
         prob("pfa", self.pfa)?;
@@ -140,7 +233,12 @@ impl Config {
             if v > 0.0 && v <= max {
                 Ok(())
             } else {
-                Err(RaimError::OutOfRange { field, value: v, min: 0.0, max })
+                Err(RaimError::OutOfRange {
+                    field,
+                    value: v,
+                    min: 0.0,
+                    max,
+                })
             }
         };
         if let FiRule::LraimGaussian { kappa } = self.rule {
@@ -157,13 +255,22 @@ impl Config {
             if (0.0..=1e4).contains(&v) {
                 Ok(())
             } else {
-                Err(RaimError::OutOfRange { field, value: v, min: 0.0, max: 1e4 })
+                Err(RaimError::OutOfRange {
+                    field,
+                    value: v,
+                    min: 0.0,
+                    max: 1e4,
+                })
             }
         };
         non_negative("ura_m", s.ura_m)?;
         non_negative("iono_vertical_m", s.iono_vertical_m)?;
         non_negative("noise_m", s.noise_m)?;
         non_negative("min_elevation_rad", s.min_elevation_rad)?;
+        if self.mcusum.enabled {
+            crate::mcusum::check_settings(self.mcusum.k, self.mcusum.arl0)?;
+            non_negative("hold_s", self.mcusum.hold_s)?;
+        }
         if self.max_iterations == 0 || self.max_iterations > 100 {
             return Err(RaimError::OutOfRange {
                 field: "max_iterations",

@@ -22,6 +22,9 @@ pub mod error;
 pub mod fde;
 pub mod frames;
 pub mod lraim;
+pub mod mcusum;
+#[rustfmt::skip]
+pub mod mcusum_table;
 pub mod measurement;
 pub mod monitor;
 pub mod parity;
