@@ -2,7 +2,7 @@
 //! azimuth/elevation in the local frame (WGS-84, via raim-core's frames).
 
 use crate::ephemeris::OMEGA_E_GPS_RAD_S;
-use raim_core::frames::{ecef_to_geodetic, enu_rotation, Geodetic};
+use raim_core::frames::{ecef_to_geodetic, enu_rotation, rotate, Geodetic};
 
 /// Rotate a satellite position computed in the ECEF frame of the transmit
 /// instant into the ECEF frame of the reception instant, `transit_s` later:
@@ -23,14 +23,13 @@ pub fn distance_m(a: [f64; 3], b: [f64; 3]) -> f64 {
 /// `rx_m`, radians, with the receiver's geodetic coordinates.
 pub fn az_el(rx_m: [f64; 3], sat_m: [f64; 3]) -> (f64, f64, Geodetic) {
     let g = ecef_to_geodetic(rx_m);
-    let r = enu_rotation(&g);
-    let d = [sat_m[0] - rx_m[0], sat_m[1] - rx_m[1], sat_m[2] - rx_m[2]];
     let n = distance_m(sat_m, rx_m);
-    let enu: Vec<f64> = r
-        .iter()
-        .map(|row| (row[0] * d[0] + row[1] * d[1] + row[2] * d[2]) / n)
-        .collect();
-    let (e, nn, u) = (enu[0], enu[1], enu[2]);
+    let d = [
+        (sat_m[0] - rx_m[0]) / n,
+        (sat_m[1] - rx_m[1]) / n,
+        (sat_m[2] - rx_m[2]) / n,
+    ];
+    let [e, nn, u] = rotate(&enu_rotation(&g), d);
     (
         e.atan2(nn).rem_euclid(2.0 * std::f64::consts::PI),
         u.asin(),

@@ -42,6 +42,15 @@ pub fn time_of_day(t_gps_s: f64) -> String {
     format!("{:02}:{:02}:{:02}", s / 3600, (s / 60) % 60, s % 60)
 }
 
+/// UTC time of day "hhmmss.ss" of a GPS time (leap seconds from hifitime),
+/// for NMEA sentences.
+pub fn utc_hhmmss(t_gps_s: f64) -> String {
+    use rinex::prelude::{Epoch, TimeScale};
+    let e = Epoch::from_gpst_seconds(t_gps_s).to_time_scale(TimeScale::UTC);
+    let (_, _, _, h, m, s, ns) = e.to_gregorian_utc();
+    format!("{h:02}{m:02}{:05.2}", s as f64 + ns as f64 * 1e-9)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -61,5 +70,7 @@ mod tests {
             Err(GnssError::BadTime(_))
         ));
         assert!(matches!(resolve("ab", first), Err(GnssError::BadTime(_))));
+        // 2005-04-02 00:00:00 GPST is 2005-04-01 23:59:47 UTC (13 leap seconds).
+        assert_eq!(utc_hhmmss(796_435_200.0), "235947.00");
     }
 }

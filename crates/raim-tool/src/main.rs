@@ -2,6 +2,7 @@
 
 mod config_args;
 mod epoch_json;
+mod replay;
 mod result_json;
 
 use std::io::{BufRead, Write};
@@ -36,6 +37,8 @@ enum Command {
         #[arg(long)]
         input: Option<std::path::PathBuf>,
     },
+    /// Replay RINEX data through the monitor with seeded faults (docs/REPLAY.md).
+    Replay(Box<replay::ReplayArgs>),
     /// The chi-square detection threshold; with --pmd, lambda and pbias too.
     Threshold {
         #[arg(long)]
@@ -53,6 +56,7 @@ fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Snapshot { config, json, input } => snapshot(&config, json, input),
         Command::Threshold { pfa, dof, pmd, json } => threshold(pfa, dof, pmd, json),
+        Command::Replay(args) => replay::run(&args),
     }
 }
 

@@ -1,0 +1,388 @@
+//! `raim replay`: recorded RINEX data through the integrity monitor, with
+//! deterministic, seeded faults added on purpose (docs/REPLAY.md).
+//!
+//! Pipeline: RINEX obs + nav -> raim-gnss (orbits, clocks, corrections,
+//! mask) -> a clean run (the reference position is its mean) -> the faulted
+//! run -> per-epoch text / JSON lines / NMEA, a summary table and a plot.
+
+mod nmea;
+mod plot;
+pub mod record;
+pub mod summary;
+
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use raim_core::fde::AlarmCause;
+use raim_core::{Config, Epoch, Raim, System};
+use raim_gnss::faults::{FaultPlan, Scenario};
+use raim_gnss::ranging::{default_codes, prepare_epoch, PreparedEpoch, RangingOptions};
+use raim_gnss::{parse_system, NavData, ObsData};
+
+use crate::config_args::ConfigArgs;
+use record::EpochRecord;
+use summary::Summary;
+
+/// Satellite capacity of the host engine for replays (ESBC G+E+C+J can
+/// exceed the core's default 32).
+pub const REPLAY_CAPACITY: usize = 48;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Target {
+    /// The core on the host.
+    Host,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Reference {
+    /// Mean position of the clean run's usable epochs.
+    CleanMean,
+    /// APPROX POSITION XYZ of the observation header.
+    Header,
+}
+
+#[derive(Debug, Clone, Args)]
+pub struct ReplayArgs {
+    /// RINEX observation file (2 or 3, optionally .gz).
+    #[arg(long)]
+    pub obs: PathBuf,
+    /// RINEX navigation file (broadcast ephemerides; optionally .gz).
+    #[arg(long)]
+    pub nav: PathBuf,
+    /// Systems to use, as RINEX letters (G, E, C, J).
+    #[arg(long, default_value = "GEC")]
+    pub systems: String,
+    /// Pseudorange code for a system, e.g. `--code C=C2I` (repeatable;
+    /// defaults: G C1C/C1, E C1C/C1X/C1B, C C2I/C1I).
+    #[arg(long = "code", value_name = "SYS=CODE")]
+    pub codes: Vec<String>,
+    /// Elevation mask, degrees.
+    #[arg(long, default_value_t = 10.0)]
+    pub mask_deg: f64,
+    /// Skip the Klobuchar ionospheric correction.
+    #[arg(long)]
+    pub no_iono: bool,
+    /// Skip the Saastamoinen tropospheric correction.
+    #[arg(long)]
+    pub no_tropo: bool,
+    /// Skip the broadcast group delays (TGD/BGD).
+    #[arg(long)]
+    pub no_group_delay: bool,
+    /// First epoch: HH:MM[:SS] (GPS time of day) or +SECONDS from the first.
+    #[arg(long)]
+    pub start: Option<String>,
+    /// Last epoch (inclusive), same forms.
+    #[arg(long)]
+    pub end: Option<String>,
+    /// A fault (repeatable): step:G24:50@00:20:00, ramp:G24:0.1@00:20:00,
+    /// step:G15+G28:50@01:00:00, step:E:20@01:00 (whole constellation),
+    /// clock:300@00:30:00, noise:all:t3:1.0 (Student-t 3 dof, or laplace);
+    /// an optional ..END after the start time.
+    #[arg(long = "fault", value_name = "SPEC")]
+    pub faults: Vec<String>,
+    /// A TOML scenario file with [[fault]] tables (see raim_gnss::faults).
+    #[arg(long)]
+    pub scenario: Option<PathBuf>,
+    /// Seed of the injected noise (overrides the scenario's).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Where the position error is measured from.
+    #[arg(long, value_enum, default_value_t = Reference::CleanMean)]
+    pub reference: Reference,
+    #[command(flatten)]
+    pub config: ConfigArgs,
+    /// Sigma model: signal-in-space (URA) sigma, m.
+    #[arg(long)]
+    pub ura_m: Option<f64>,
+    /// Sigma model: vertical residual ionosphere sigma, m.
+    #[arg(long)]
+    pub iono_vertical_m: Option<f64>,
+    /// Sigma model: receiver noise sigma, m.
+    #[arg(long)]
+    pub noise_m: Option<f64>,
+    /// One JSON object per epoch, then a final {"summary": ...} line.
+    #[arg(long)]
+    pub json: bool,
+    /// NMEA 0183 GGA + GBS per epoch instead of text.
+    #[arg(long)]
+    pub nmea: bool,
+    /// Print only the summary table.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Draw the statistic, exclusions, errors and PLs, and a Stanford
+    /// diagram, into this PNG.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// TrueType font for the plot (default: DejaVu Sans where installed).
+    #[arg(long)]
+    pub font: Option<PathBuf>,
+    /// Where the monitor runs.
+    #[arg(long, value_enum, default_value_t = Target::Host)]
+    pub target: Target,
+}
+
+/// Everything a replay produces.
+pub struct ReplayOutput {
+    pub records: Vec<EpochRecord>,
+    pub summary: Summary,
+    pub reference_m: Option<[f64; 3]>,
+}
+
+impl ReplayArgs {
+    fn ranging(&self) -> Result<RangingOptions> {
+        let systems = self
+            .systems
+            .chars()
+            .map(parse_system)
+            .collect::<Result<Vec<_>, _>>()?;
+        if systems.contains(&System::Glonass) {
+            bail!("GLONASS broadcast orbits are not modelled; use G, E, C, J");
+        }
+        let mut codes = default_codes();
+        for c in &self.codes {
+            let (sys, code) = c
+                .split_once('=')
+                .with_context(|| format!("--code {c}: expected SYS=CODE"))?;
+            let sys = parse_system(sys.chars().next().unwrap_or(' '))?;
+            codes.insert(sys, vec![code.to_string()]);
+        }
+        if !(-90.0..=90.0).contains(&self.mask_deg) {
+            bail!("--mask-deg {} is outside [-90, 90]", self.mask_deg);
+        }
+        Ok(RangingOptions {
+            systems,
+            codes,
+            elevation_mask_rad: self.mask_deg.to_radians(),
+            iono: !self.no_iono,
+            tropo: !self.no_tropo,
+            group_delay: !self.no_group_delay,
+        })
+    }
+
+    pub fn core_config(&self) -> Config {
+        let mut c = self.config.config();
+        if let Some(v) = self.ura_m {
+            c.sigma_model.ura_m = v;
+        }
+        if let Some(v) = self.iono_vertical_m {
+            c.sigma_model.iono_vertical_m = v;
+        }
+        if let Some(v) = self.noise_m {
+            c.sigma_model.noise_m = v;
+        }
+        c
+    }
+}
+
+/// Load, prepare and select the epochs.
+fn prepare(args: &ReplayArgs) -> Result<(Vec<PreparedEpoch>, Option<[f64; 3]>, f64)> {
+    let obs = ObsData::load(&args.obs)?;
+    let nav = NavData::load(&args.nav)?;
+    let first = obs
+        .epochs
+        .first()
+        .map(|e| e.time_gps_s)
+        .context("no epochs in the observation file")?;
+    let start = args
+        .start
+        .as_deref()
+        .map(|s| raim_gnss::time::resolve(s, first))
+        .transpose()?;
+    let end = args
+        .end
+        .as_deref()
+        .map(|s| raim_gnss::time::resolve(s, first))
+        .transpose()?;
+    let opts = args.ranging()?;
+    let epochs = obs
+        .epochs
+        .iter()
+        .filter(|e| start.is_none_or(|s| e.time_gps_s >= s - 1e-3))
+        .filter(|e| end.is_none_or(|s| e.time_gps_s <= s + 1e-3))
+        .map(|e| prepare_epoch(&nav, e, &opts, obs.approx_position_m))
+        .collect();
+    Ok((epochs, obs.approx_position_m, first))
+}
+
+fn fault_plan(args: &ReplayArgs, first: f64) -> Result<FaultPlan> {
+    let mut plan = match &args.scenario {
+        Some(p) => Scenario::load(p)?.plan(first)?,
+        None => FaultPlan::default(),
+    };
+    for f in &args.faults {
+        plan.faults.push(FaultPlan::parse_cli(f, first)?);
+    }
+    if let Some(s) = args.seed {
+        plan.seed = s;
+    }
+    Ok(plan)
+}
+
+/// Run the monitor over the epochs with `plan`'s faults.
+fn run_core(
+    cfg: &Config,
+    epochs: &[PreparedEpoch],
+    plan: &FaultPlan,
+    reference: Option<[f64; 3]>,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Vec<EpochRecord> {
+    let mut raim = Raim::<REPLAY_CAPACITY>::new();
+    let mut out = Vec::with_capacity(epochs.len());
+    for e in epochs {
+        let mut sats = e.observations();
+        let injected = plan.apply(e.time_gps_s, &mut sats);
+        let epoch = Epoch::ranges(e.time_gps_s, &sats, e.reference_m);
+        let rec = match raim.process(cfg, &epoch) {
+            Ok(r) => {
+                let mut rec = EpochRecord::from_result(
+                    &r,
+                    e.time_gps_s,
+                    sats.len(),
+                    &injected.faulted,
+                    reference,
+                );
+                if let Some(AlarmCause::Ambiguous { best, runner_up }) = r.alarm_cause {
+                    rec.ambiguity = [best, runner_up]
+                        .iter()
+                        .filter_map(|&id| {
+                            let subset: Vec<_> =
+                                sats.iter().copied().filter(|s| s.id != id).collect();
+                            let sub = raim
+                                .process(cfg, &Epoch::ranges(e.time_gps_s, &subset, e.reference_m))
+                                .ok()?;
+                            let t = sub.initial_test;
+                            Some((id.to_string(), t.statistic, t.threshold, t.dof))
+                        })
+                        .collect();
+                }
+                rec
+            }
+            Err(err) => EpochRecord::from_error(e.time_gps_s, sats.len(), &injected.faulted, &err),
+        };
+        out.push(rec);
+        if let Some(p) = progress {
+            p.inc(1);
+        }
+    }
+    out
+}
+
+/// Mean ECEF position of the usable epochs.
+fn mean_position(records: &[EpochRecord]) -> Option<[f64; 3]> {
+    let ps: Vec<[f64; 3]> = records
+        .iter()
+        .filter(|r| r.usable())
+        .filter_map(|r| r.position_ecef_m)
+        .collect();
+    if ps.is_empty() {
+        return None;
+    }
+    let n = ps.len() as f64;
+    Some([0, 1, 2].map(|k| ps.iter().map(|p| p[k]).sum::<f64>() / n))
+}
+
+/// The whole replay, without printing (used by the tests too).
+pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
+    let cfg = args.core_config();
+    cfg.validate()
+        .map_err(|e| anyhow::anyhow!("configuration: {e}"))?;
+    let (epochs, header, first) = prepare(args)?;
+    let plan = fault_plan(args, first)?;
+    let show = std::io::stderr().is_terminal();
+    let total = if plan.is_empty() {
+        epochs.len()
+    } else {
+        2 * epochs.len()
+    } as u64;
+    let bar = show.then(|| {
+        let b = indicatif::ProgressBar::new(total);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} epochs {elapsed}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    });
+    let clean = run_core(&cfg, &epochs, &FaultPlan::default(), None, bar.as_ref());
+    let reference = match args.reference {
+        Reference::CleanMean => mean_position(&clean),
+        Reference::Header => header,
+    };
+    let mut records = if plan.is_empty() {
+        clean
+    } else {
+        run_core(&cfg, &epochs, &plan, reference, bar.as_ref())
+    };
+    if plan.is_empty() {
+        // Recompute the errors of the clean run against the reference.
+        for r in records.iter_mut() {
+            if let (Some(p), Some(rf)) = (r.position_ecef_m, reference) {
+                let e = record::error_enu(p, rf);
+                r.error_enu_m = Some(e);
+                r.error_h_m = Some(e[0].hypot(e[1]));
+                r.error_v_m = Some(e[2].abs());
+            }
+        }
+    }
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let fault_start = plan
+        .faults
+        .iter()
+        .filter(|f| f.is_satellite_fault())
+        .map(|f| f.start_gps_s)
+        .fold(None, |a: Option<f64>, s| Some(a.map_or(s, |a| a.min(s))));
+    let summary = summary::summarise(&records, fault_start);
+    Ok(ReplayOutput {
+        records,
+        summary,
+        reference_m: reference,
+    })
+}
+
+/// `raim replay`. A closed pipe (`| head`) ends the output quietly.
+pub fn run(args: &ReplayArgs) -> Result<()> {
+    match write_outputs(args) {
+        Err(e)
+            if e.downcast_ref::<std::io::Error>()
+                .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) =>
+        {
+            Ok(())
+        }
+        r => r,
+    }
+}
+
+fn write_outputs(args: &ReplayArgs) -> Result<()> {
+    let out = replay(args)?;
+    let stdout = std::io::stdout();
+    let mut w = stdout.lock();
+    if !args.quiet {
+        for r in &out.records {
+            if args.json {
+                writeln!(w, "{}", serde_json::to_string(r)?)?;
+            } else if args.nmea {
+                for s in nmea::sentences(r, &raim_gnss::time::utc_hhmmss(r.time_gps_s)) {
+                    writeln!(w, "{s}")?;
+                }
+            } else {
+                writeln!(w, "{}", r.text_line())?;
+            }
+        }
+    }
+    if args.json {
+        writeln!(
+            w,
+            "{}",
+            serde_json::json!({ "summary": out.summary, "reference_ecef_m": out.reference_m })
+        )?;
+    } else if !args.nmea {
+        writeln!(w, "{}", out.summary.table())?;
+    }
+    if let Some(p) = &args.plot {
+        plot::draw(&out, &args.core_config(), p, args.font.as_deref())?;
+    }
+    Ok(())
+}

@@ -1,0 +1,193 @@
+//! The end-of-run table: epochs solved, alarms, correct and wrong
+//! exclusions, missed detections, detection delay, and the position error
+//! (median and max) of the epochs a user would have used.
+
+use serde::Serialize;
+
+use super::record::EpochRecord;
+
+#[derive(Debug, Clone, Default, Serialize, PartialEq)]
+pub struct Summary {
+    pub epochs: usize,
+    /// Epochs with a usable position (ok, excluded, unavailable).
+    pub solved: usize,
+    pub ok: usize,
+    pub excluded: usize,
+    pub unavailable: usize,
+    pub alarms: usize,
+    /// Epochs the core refused (typed error, e.g. too few satellites).
+    pub errors: usize,
+    /// Epochs carrying an injected step/ramp.
+    pub faulted_epochs: usize,
+    /// Faulted epochs where exactly the faulted satellites were excluded.
+    pub correct_exclusions: usize,
+    /// Faulted epochs where some, not all, faulted satellites were excluded
+    /// and nothing else.
+    pub partial_exclusions: usize,
+    /// Epochs where a satellite without an injected fault was excluded
+    /// (on clean epochs too).
+    pub wrong_exclusions: usize,
+    /// Faulted epochs with neither an alarm nor an exclusion.
+    pub missed_detections: usize,
+    /// Alarms on epochs without an injected fault.
+    pub false_alarms: usize,
+    /// Exclusions on epochs without an injected fault.
+    pub false_exclusions: usize,
+    /// First alarm or exclusion of a faulted satellite after the fault
+    /// started, s, and the injected bias then, m.
+    pub detection_delay_s: Option<f64>,
+    pub bias_at_detection_m: Option<f64>,
+    /// Horizontal / vertical error of the usable epochs, m.
+    pub error_h_median_m: f64,
+    pub error_h_max_m: f64,
+    pub error_v_median_m: f64,
+    pub error_v_max_m: f64,
+    /// Usable epochs whose error exceeds its protection level (H or V).
+    pub misleading: usize,
+    /// Mean of D^2/dof over the solved epochs without an injected fault:
+    /// 1 if the sigma model matches the real residuals (SPEC §3).
+    pub clean_d2_per_dof_mean: f64,
+    /// Largest D^2/T^2 over those epochs (an alarm is >= 1).
+    pub clean_d2_over_t2_max: f64,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Summarise `records`; `fault_start_gps_s` is the earliest start of a
+/// satellite fault (for the detection delay).
+pub fn summarise(records: &[EpochRecord], fault_start_gps_s: Option<f64>) -> Summary {
+    let mut s = Summary {
+        epochs: records.len(),
+        ..Default::default()
+    };
+    let mut eh = Vec::new();
+    let mut ev = Vec::new();
+    let mut ratio = Vec::new();
+    let mut worst = f64::NAN;
+    for r in records {
+        if r.faulted_ids.is_empty() && r.dof > 0 && r.statistic.is_finite() {
+            ratio.push(r.statistic / f64::from(r.dof));
+            worst = worst.max(r.statistic / r.threshold);
+        }
+        match r.decision.as_str() {
+            "ok" => s.ok += 1,
+            "excluded" => s.excluded += 1,
+            "unavailable" => s.unavailable += 1,
+            "alarm" => s.alarms += 1,
+            _ => s.errors += 1,
+        }
+        if r.usable() {
+            s.solved += 1;
+            if let (Some(h), Some(v)) = (r.error_h_m, r.error_v_m) {
+                eh.push(h);
+                ev.push(v);
+                if h > r.hpl_m || v > r.vpl_m {
+                    s.misleading += 1;
+                }
+            }
+        }
+        let excluded = &r.excluded_ids;
+        let wrong = excluded.iter().any(|id| !r.faulted_ids.contains(id));
+        if wrong {
+            s.wrong_exclusions += 1;
+        }
+        if r.faulted_ids.is_empty() {
+            s.false_alarms += usize::from(r.decision == "alarm");
+            s.false_exclusions += usize::from(!excluded.is_empty());
+            continue;
+        }
+        s.faulted_epochs += 1;
+        if !wrong && !excluded.is_empty() {
+            if r.faulted_ids.iter().all(|id| excluded.contains(id)) {
+                s.correct_exclusions += 1;
+            } else {
+                s.partial_exclusions += 1;
+            }
+        }
+        if excluded.is_empty() && r.usable() {
+            s.missed_detections += 1;
+        }
+    }
+    if let Some(start) = fault_start_gps_s {
+        let first = records
+            .iter()
+            .filter(|r| r.time_gps_s >= start && !r.faulted_ids.is_empty())
+            .find(|r| {
+                r.decision == "alarm" || r.excluded_ids.iter().any(|id| r.faulted_ids.contains(id))
+            });
+        if let Some(r) = first {
+            s.detection_delay_s = Some(r.time_gps_s - start);
+            s.bias_at_detection_m = r.faulted.first().map(|(_, b)| *b);
+        }
+    }
+    s.clean_d2_per_dof_mean = ratio.iter().sum::<f64>() / ratio.len().max(1) as f64;
+    s.clean_d2_over_t2_max = worst;
+    s.error_h_median_m = median(eh.clone());
+    s.error_h_max_m = eh.iter().copied().fold(f64::NAN, f64::max);
+    s.error_v_median_m = median(ev.clone());
+    s.error_v_max_m = ev.iter().copied().fold(f64::NAN, f64::max);
+    s
+}
+
+impl Summary {
+    /// A readable table.
+    pub fn table(&self) -> String {
+        let opt =
+            |v: Option<f64>, unit: &str| v.map_or("-".to_string(), |v| format!("{v:.1} {unit}"));
+        let rows = [
+            ("epochs", self.epochs.to_string()),
+            ("solved (usable position)", self.solved.to_string()),
+            (
+                "  ok / excluded / unavailable",
+                format!("{} / {} / {}", self.ok, self.excluded, self.unavailable),
+            ),
+            ("alarms", self.alarms.to_string()),
+            ("core errors (no solution)", self.errors.to_string()),
+            ("faulted epochs", self.faulted_epochs.to_string()),
+            ("correct exclusions", self.correct_exclusions.to_string()),
+            ("partial exclusions", self.partial_exclusions.to_string()),
+            ("wrong exclusions", self.wrong_exclusions.to_string()),
+            ("missed detections", self.missed_detections.to_string()),
+            ("false alarms (clean epochs)", self.false_alarms.to_string()),
+            (
+                "false exclusions (clean epochs)",
+                self.false_exclusions.to_string(),
+            ),
+            ("detection delay", opt(self.detection_delay_s, "s")),
+            ("bias at detection", opt(self.bias_at_detection_m, "m")),
+            (
+                "horizontal error median / max",
+                format!("{:.2} / {:.2} m", self.error_h_median_m, self.error_h_max_m),
+            ),
+            (
+                "vertical error median / max",
+                format!("{:.2} / {:.2} m", self.error_v_median_m, self.error_v_max_m),
+            ),
+            ("error > PL while usable", self.misleading.to_string()),
+            (
+                "fault-free D2/dof mean (1 = sigma fits)",
+                format!("{:.3}", self.clean_d2_per_dof_mean),
+            ),
+            (
+                "fault-free max D2/T2",
+                format!("{:.3}", self.clean_d2_over_t2_max),
+            ),
+        ];
+        let mut out = String::new();
+        for (k, v) in rows {
+            out.push_str(&format!("{k:<34} {v}\n"));
+        }
+        out
+    }
+}
