@@ -190,7 +190,8 @@ impl FaultPlan {
                     }
                 }
             }
-            if sat_fault {
+            // A ramp at its first epoch adds nothing: not (yet) a fault.
+            if sat_fault && bias != 0.0 {
                 s.pseudorange_m += bias;
                 out.faulted.push((s.id, bias));
             }

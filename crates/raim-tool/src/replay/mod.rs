@@ -199,8 +199,8 @@ fn prepare(args: &ReplayArgs) -> Result<(Vec<PreparedEpoch>, Option<[f64; 3]>, f
     let epochs = obs
         .epochs
         .iter()
-        .filter(|e| start.is_none_or(|s| e.time_gps_s >= s - 1e-3))
-        .filter(|e| end.is_none_or(|s| e.time_gps_s <= s + 1e-3))
+        .filter(|e| start.is_none_or(|s| e.time_gps_s >= s - 0.5))
+        .filter(|e| end.is_none_or(|s| e.time_gps_s <= s + 0.5))
         .map(|e| prepare_epoch(&nav, e, &opts, obs.approx_position_m))
         .collect();
     Ok((epochs, obs.approx_position_m, first))

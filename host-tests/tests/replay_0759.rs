@@ -1,0 +1,121 @@
+//! GSI 0759 (GPS only, 6-8 satellites above 15 deg): the small, hard case.
+//! The shared data README's facts for a classic smallest-RMS RAIM: a 50 m
+//! step on G24 from 00:20:00 is excluded at every epoch, except 00:39:30
+//! and 00:40:00 where G11 is excluded instead (213-217 m error).
+
+mod replay_common;
+
+use raim_core::fde::AlarmCause;
+use raim_core::{Decision, SatId, System};
+use raim_gnss::ranging::RangingOptions;
+use replay_common::{geodetic_config, replay};
+
+const OBS: &str = "07590920.05o";
+const NAV: &str = "07590920.05n";
+
+fn opts() -> RangingOptions {
+    RangingOptions {
+        systems: vec![System::Gps],
+        elevation_mask_rad: 15f64.to_radians(),
+        ..Default::default()
+    }
+}
+
+#[test]
+fn clean_window_has_no_alarm_and_no_exclusion() {
+    let rows = replay(
+        OBS,
+        NAV,
+        &opts(),
+        &geodetic_config(),
+        &[],
+        "00:15:00",
+        "00:45:00",
+    );
+    assert_eq!(rows.len(), 61);
+    for r in &rows {
+        assert_eq!(r.decision, Some(Decision::Ok), "{r:?}");
+    }
+}
+
+/// Ours never excludes the wrong satellite: G24 is excluded, or, where the
+/// geometry cannot tell G24 from G11 (both single exclusions pass,
+/// 00:39:00-00:40:30, including the README's 00:39:30 and 00:40:00), the
+/// epoch is an ambiguity alarm instead of RTKLIB's wrong exclusion.
+#[test]
+fn step_50_m_on_g24_is_excluded_or_alarmed_never_misattributed() {
+    let g24 = SatId::new(System::Gps, 24);
+    let g11 = SatId::new(System::Gps, 11);
+    let rows = replay(
+        OBS,
+        NAV,
+        &opts(),
+        &geodetic_config(),
+        &["step:G24:50@00:20:00"],
+        "00:19:30",
+        "00:45:00",
+    );
+    let mut excluded = 0;
+    let mut alarms = Vec::new();
+    for r in &rows {
+        if r.faulted.is_empty() {
+            assert_eq!(r.decision, Some(Decision::Ok), "{r:?}");
+            continue;
+        }
+        match r.decision {
+            Some(Decision::Excluded) => {
+                assert_eq!(r.excluded, vec![g24], "{r:?}");
+                excluded += 1;
+            }
+            Some(Decision::Alarm) => {
+                assert_eq!(
+                    r.cause,
+                    Some(AlarmCause::Ambiguous {
+                        best: g24,
+                        runner_up: g11
+                    }),
+                    "{r:?}"
+                );
+                alarms.push(r.tod.clone());
+            }
+            other => panic!("{}: {other:?}", r.tod),
+        }
+    }
+    // The ambiguous stretch is 00:39:00-00:40:30 (4 epochs); the other 47
+    // faulted epochs of 00:20:00-00:45:00 exclude G24.
+    let expect: Vec<String> = ["00:39:00", "00:39:30", "00:40:00", "00:40:30"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    assert_eq!(alarms, expect);
+    assert_eq!(excluded, 47);
+}
+
+/// 0.1 m/s ramp on G24 from 00:20:00: RTKLIB first excludes it at 00:23:00
+/// (18 m). Ours alarms at 00:21:00 (6 m) and excludes G24 from 00:21:30 (9 m).
+#[test]
+fn ramp_on_g24_is_caught_earlier_than_the_classic_algorithm() {
+    let g24 = SatId::new(System::Gps, 24);
+    let rows = replay(
+        OBS,
+        NAV,
+        &opts(),
+        &geodetic_config(),
+        &["ramp:G24:0.1@00:20:00"],
+        "00:20:00",
+        "00:30:00",
+    );
+    let first_alarm = rows
+        .iter()
+        .find(|r| r.decision != Some(Decision::Ok))
+        .unwrap();
+    assert!(first_alarm.tod.as_str() <= "00:21:00", "{first_alarm:?}");
+    let first_excl = rows
+        .iter()
+        .find(|r| r.decision == Some(Decision::Excluded))
+        .unwrap();
+    assert!(first_excl.tod.as_str() < "00:23:00", "{first_excl:?}");
+    assert!(rows
+        .iter()
+        .all(|r| r.excluded.is_empty() || r.excluded == vec![g24]));
+}
