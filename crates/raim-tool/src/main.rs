@@ -1,5 +1,6 @@
 //! `raim`: host tools for the raim-core integrity monitor.
 
+mod arl;
 mod config_args;
 mod epoch_json;
 mod replay;
@@ -39,6 +40,8 @@ enum Command {
     },
     /// Replay RINEX data through the monitor with seeded faults (docs/REPLAY.md).
     Replay(Box<replay::ReplayArgs>),
+    /// MCUSUM average run lengths (SPEC §7.2): ARL0(h) / h(ARL0) by the integral equation, ARL1 by simulation, the device table.
+    Arl(arl::ArlArgs),
     /// The chi-square detection threshold; with --pmd, lambda and pbias too.
     Threshold {
         #[arg(long)]
@@ -56,6 +59,7 @@ fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Snapshot { config, json, input } => snapshot(&config, json, input),
         Command::Threshold { pfa, dof, pmd, json } => threshold(pfa, dof, pmd, json),
+        Command::Arl(args) => arl::run(&args),
         Command::Replay(args) => replay::run(&args),
     }
 }
