@@ -168,6 +168,11 @@ pub struct Config {
     /// also give a consistent subset: the fault cannot be told apart, and an
     /// avionics monitor alarms rather than guess (docs/CORE.md).
     pub require_unique_exclusion: bool,
+    /// Probability of wrong exclusion that the uniqueness check allows: an
+    /// exclusion stands only if every other single-satellite explanation is
+    /// rejected, i.e. its subset statistic D^2 - w_j^2 reaches the
+    /// chi-square quantile at 1 - pwe with dof - 1 (docs/CORE.md). Default 1e-3.
+    pub pwe: f64,
     /// Gauss-Newton stops when the position step is below this, m.
     pub convergence_m: f64,
     /// Gauss-Newton iteration cap.
@@ -195,6 +200,7 @@ impl Config {
             max_exclusions: 2,
             min_s_ii: DEFAULT_MIN_S_II,
             require_unique_exclusion: true,
+            pwe: 1e-3,
             convergence_m: 1e-4,
             max_iterations: 20,
             mcusum: McusumConfig::default(),
@@ -229,6 +235,7 @@ impl Config {
         };
         prob("pfa", self.pfa)?;
         prob("pmd", self.pmd)?;
+        prob("pwe", self.pwe)?;
         let positive = |field: &'static str, v: f64, max: f64| {
             if v > 0.0 && v <= max {
                 Ok(())

@@ -1,13 +1,14 @@
 //! Fault detection and exclusion (SPEC §5): detect, identify, exclude,
 //! re-solve and re-test the subset, while the test fails and redundancy
 //! remains. An exclusion is accepted only if its subset passes, and (by
-//! default) only if excluding the runner-up would not pass as well: the
-//! runner-up's subset statistic is D^2 - w_j^2 (removing row j from a least
-//! squares fit lowers the weighted SSE by r_j^2 / S_jj), so that check costs
-//! no second solve.
+//! default) only if no other single satellite explains the data: every
+//! alternative's subset statistic D^2 - w_j^2 (removing row j from a least
+//! squares fit lowers the weighted SSE by r_j^2 / S_jj) must reach the
+//! chi-square quantile at 1 - pwe. That check costs no second solve.
 
 use crate::config::Config;
 use crate::detection::{TestStatistic, Thresholds};
+use crate::dist;
 use crate::error::RaimError;
 use crate::lraim::rank;
 use crate::measurement::{Epoch, SatId};
@@ -87,6 +88,26 @@ fn without<const N: usize>(mask: &[bool; N], index: usize) -> [bool; N] {
     m
 }
 
+/// The row other than `best` with the largest w_j^2 = r_j^2 / S_jj among
+/// identifiable rows, and that w_j^2.
+fn strongest_alternative<const N: usize>(
+    parity: &crate::parity::Parity<N>,
+    best: usize,
+    min_s_ii: f64,
+) -> Option<(usize, f64)> {
+    parity
+        .residuals()
+        .iter()
+        .zip(parity.s_ii())
+        .enumerate()
+        .filter(|(row, (_, s))| *row != best && **s >= min_s_ii)
+        .map(|(row, (r, s))| (row, r * r / s))
+        .fold(None, |acc: Option<(usize, f64)>, c| match acc {
+            Some(a) if a.1 >= c.1 => Some(a),
+            _ => Some(c),
+        })
+}
+
 /// FDE starting from the all-in-view solution `first` of `epoch`.
 pub fn run<const N: usize>(
     cfg: &Config,
@@ -109,7 +130,7 @@ pub fn run<const N: usize>(
     let max_excl = usize::from(cfg.max_exclusions).min(MAX_EXCLUSIONS);
     while test_now.alarm() {
         let current = &out.solution;
-        let (best, second) = rank(&current.parity, cfg.rule, cfg.min_s_ii);
+        let (best, _) = rank(&current.parity, cfg.rule, cfg.min_s_ii);
         let id_of = |row: usize| current.ids.get(row).copied();
         let src_of = |row: usize| current.source.get(row).copied();
         if out.identified.is_none() {
@@ -142,19 +163,19 @@ pub fn run<const N: usize>(
         };
         let after = test(cfg, thresholds, &candidate)?;
         if !after.alarm() && cfg.require_unique_exclusion {
-            // Excluding one row lowers the weighted SSE by exactly w_j^2
-            // (r_j^2 / S_jj) when the state keeps its dimension, so the
-            // runner-up's subset statistic needs no second solve.
-            if let Some((s2, s2_id)) = second.and_then(|s| Some((s, id_of(s.row)?))) {
-                let alt = TestStatistic {
-                    statistic: test_now.statistic - s2.w * s2.w,
-                    threshold: thresholds.get(cfg.pfa, cfg.pmd, current.parity.dof() - 1)?.0,
-                    dof: test_now.dof - 1,
-                };
-                if !alt.alarm() {
+            // Excluding row j lowers the weighted SSE by exactly w_j^2
+            // (r_j^2 / S_jj) when the state keeps its dimension, so every
+            // alternative's subset statistic is known without a solve. The
+            // most consistent alternative is the other satellite of largest
+            // w_j^2; if its subset is consistent at level pwe, the fault
+            // cannot be attributed safely.
+            if let Some(alt) = strongest_alternative(&current.parity, best.row, cfg.min_s_ii) {
+                let dof_alt = current.parity.dof() - 1;
+                let threshold = dist::chi2_quantile_upper(cfg.pwe, dof_alt as u32)?;
+                if test_now.statistic - alt.1 < threshold {
                     out.cause = Some(AlarmCause::Ambiguous {
                         best: best_id,
-                        runner_up: s2_id,
+                        runner_up: id_of(alt.0).unwrap_or(best_id),
                     });
                     break;
                 }
@@ -210,6 +231,78 @@ mod tests {
                     "seed {seed} sat {j}"
                 );
             }
+        }
+    }
+
+    /// Two satellites whose parity directions are nearly parallel cannot be
+    /// told apart: a fault on one leaves both subsets consistent, so FDE
+    /// alarms with `Ambiguous` instead of excluding (docs/CORE.md, FDE step
+    /// 3). Without the check it would exclude one of them, possibly the
+    /// wrong one. The geometry is found by a deterministic grid search for
+    /// a sixth satellite that makes |R_01| = |S_01| / sqrt(S_00 S_11) > 0.999
+    /// (dof 2, the 0759 situation at 00:40:00).
+    #[test]
+    fn near_parallel_parity_directions_alarm_as_ambiguous() {
+        let base = [
+            (30.0, 20.0),
+            (200.0, 35.0),
+            (110.0, 60.0),
+            (290.0, 30.0),
+            (0.0, 80.0),
+        ];
+        let cfg = Config::default();
+        let mut found = None;
+        'grid: for az in (0..360).step_by(2) {
+            for el in (5..90).step_by(2) {
+                let mut sky = base.to_vec();
+                sky.push((az as f64, el as f64));
+                let sats = linear_epoch(&sky, 1.0, &mut Rng::new(0), &[]);
+                let mut mask = [false; 8];
+                mask[..6].fill(true);
+                let Ok(sol) = solve::<8>(&cfg, &Epoch::linear(0.0, &sats), &mask) else {
+                    continue;
+                };
+                let e0 = sol.parity.lift(&[1.0, 0.0]);
+                let e1 = sol.parity.lift(&[0.0, 1.0]);
+                // S_jk = sum over the parity basis of U2_j U2_k.
+                let s = |j: usize, k: usize| e0[j] * e0[k] + e1[j] * e1[k];
+                let r01 = s(0, 1) / (s(0, 0) * s(1, 1)).sqrt();
+                if r01.abs() > 0.999 && s(0, 0) > 0.05 && s(1, 1) > 0.05 {
+                    found = Some(sky);
+                    break 'grid;
+                }
+            }
+        }
+        let sky = found.expect("the grid holds a near-parallel geometry");
+        let mut thresholds = Thresholds::<8>::default();
+        for seed in 0..20 {
+            let sats = linear_epoch(&sky, 1.0, &mut Rng::new(seed), &[(0, 40.0)]);
+            let epoch = Epoch::linear(0.0, &sats);
+            let mut mask = [false; 8];
+            mask[..6].fill(true);
+            let first = solve::<8>(&cfg, &epoch, &mask).unwrap();
+            let out = run(&cfg, &mut thresholds, &epoch, first.clone()).unwrap();
+            assert!(out.test.alarm(), "seed {seed}: {:?}", out.exclusions);
+            match out.cause {
+                // The faulty satellite is one of the two that cannot be
+                // told apart (the other is satellite 2 or, when noise makes
+                // it the closer fit, another one).
+                Some(AlarmCause::Ambiguous { best, runner_up }) => {
+                    assert!(best.prn == 1 || runner_up.prn == 1, "seed {seed}");
+                    assert_ne!(best, runner_up);
+                }
+                other => panic!("seed {seed}: {other:?}"),
+            }
+            let lax = Config {
+                require_unique_exclusion: false,
+                ..cfg
+            };
+            let out = run(&lax, &mut thresholds, &epoch, first).unwrap();
+            assert!(
+                !out.test.alarm() && out.exclusions.len() == 1,
+                "seed {seed}"
+            );
+            assert!(out.exclusions[0].id.prn <= 2);
         }
     }
 }
