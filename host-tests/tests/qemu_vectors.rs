@@ -25,9 +25,16 @@ fn qemu_vectors_match_the_host_core_bit_for_bit() {
     fw.configure(&cfg).unwrap();
     let mut files = 0;
     let mut compared = 0;
-    let mut dir: Vec<_> = std::fs::read_dir(host_tests::vector_path("")).unwrap().flatten().map(|e| e.path()).collect();
+    let mut dir: Vec<_> = std::fs::read_dir(host_tests::vector_path(""))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .collect();
     dir.sort();
-    for path in dir.iter().filter(|p| p.extension().is_some_and(|e| e == "jsonl")) {
+    for path in dir
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "jsonl"))
+    {
         files += 1;
         let name = path.file_name().unwrap().to_str().unwrap();
         for (i, e) in host_tests::read_vector(name).iter().enumerate() {
@@ -43,21 +50,36 @@ fn qemu_vectors_match_the_host_core_bit_for_bit() {
             compared += 1;
         }
     }
-    assert!(files >= 1 && compared >= 8, "{files} files, {compared} epochs");
+    assert!(
+        files >= 1 && compared >= 8,
+        "{files} files, {compared} epochs"
+    );
 }
 
 #[test]
 fn qemu_pseudorange_epochs_and_every_rule_match_the_host_core() {
     let mut fw = session();
-    let rules = [FiRule::Mle, FiRule::LraimFlat, FiRule::LraimGaussian { kappa: 30.0 }];
+    let rules = [
+        FiRule::Mle,
+        FiRule::LraimFlat,
+        FiRule::LraimGaussian { kappa: 30.0 },
+    ];
     for (k, rule) in rules.into_iter().enumerate() {
-        let cfg = Config { rule, ..Config::preset(Phase::Terminal) };
+        let cfg = Config {
+            rule,
+            ..Config::preset(Phase::Terminal)
+        };
         fw.configure(&cfg).unwrap();
         for (i, (time_s, sats, apriori)) in range_vectors(k as u64).iter().enumerate() {
             let epoch = Epoch::ranges(*time_s, sats, *apriori);
-            let p = compare(&mut fw, &cfg, &epoch, &format!("rule {rule:?} range epoch {i}"));
+            let p = compare(
+                &mut fw,
+                &cfg,
+                &epoch,
+                &format!("rule {rule:?} range epoch {i}"),
+            );
             // The decisions follow the injected faults (range_vectors).
-            let got = p.outcome.as_ref().map(|r| {
+            let got = p.outcome.clone().map(|r| {
                 let mut x: Vec<String> = r.exclusions.iter().map(|e| e.id.to_string()).collect();
                 x.sort();
                 (r.decision, x)
@@ -73,19 +95,34 @@ fn qemu_pseudorange_epochs_and_every_rule_match_the_host_core() {
             // A solved pseudorange epoch has a position: GGA carries it.
             if let Ok(r) = &p.outcome {
                 assert!(r.geodetic.is_some());
-                assert!(p.nmea[1].contains(",N,") || p.nmea[1].contains(",S,"), "{:?}", p.nmea);
+                assert!(
+                    p.nmea[1].contains(",N,") || p.nmea[1].contains(",S,"),
+                    "{:?}",
+                    p.nmea
+                );
             }
         }
     }
 }
 
 /// One epoch on both sides; the answers must be identical.
-fn compare(fw: &mut raim_qemu::QemuSession, cfg: &Config, epoch: &Epoch<'_>, what: &str) -> raim_qemu::Processed {
-    let p = fw.process(epoch).unwrap_or_else(|e| panic!("{what}: {e:#}"));
+fn compare(
+    fw: &mut raim_qemu::QemuSession,
+    cfg: &Config,
+    epoch: &Epoch<'_>,
+    what: &str,
+) -> raim_qemu::Processed {
+    let p = fw
+        .process(epoch)
+        .unwrap_or_else(|e| panic!("{what}: {e:#}"));
     assert!(p.notices.is_empty(), "{what}: {:?}", p.notices);
     match (&p.outcome, host_result(cfg, epoch)) {
         (Ok(fw_r), Ok(host_r)) => {
-            assert_eq!(wire_bytes(fw_r), wire_bytes(&host_r), "{what}: firmware {fw_r:?}\nhost {host_r:?}");
+            assert_eq!(
+                wire_bytes(fw_r),
+                wire_bytes(&host_r),
+                "{what}: firmware {fw_r:?}\nhost {host_r:?}"
+            );
             let host_nmea: Vec<String> = raim_proto::nmea::epoch_sentences(&host_r)
                 .unwrap()
                 .iter()

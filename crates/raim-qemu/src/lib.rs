@@ -47,16 +47,23 @@ pub fn firmware_elf_path() -> PathBuf {
 pub fn build_firmware() -> Result<PathBuf> {
     let dir = repo_root().join("firmware");
     let mut cmd = Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()));
-    cmd.current_dir(&dir).args(["build", "--release", "--quiet"]);
+    cmd.current_dir(&dir)
+        .args(["build", "--release", "--quiet"]);
     // Settings of an outer cargo (e.g. under `cargo test`) must not leak
     // into the firmware's own workspace.
     for (k, _) in std::env::vars_os() {
         let k = k.to_string_lossy().into_owned();
-        if k.starts_with("CARGO_BUILD_") || k == "CARGO_TARGET_DIR" || k == "RUSTFLAGS" || k == "CARGO_ENCODED_RUSTFLAGS" {
+        if k.starts_with("CARGO_BUILD_")
+            || k == "CARGO_TARGET_DIR"
+            || k == "RUSTFLAGS"
+            || k == "CARGO_ENCODED_RUSTFLAGS"
+        {
             cmd.env_remove(k);
         }
     }
-    let st = cmd.status().with_context(|| format!("running cargo in {}", dir.display()))?;
+    let st = cmd
+        .status()
+        .with_context(|| format!("running cargo in {}", dir.display()))?;
     if !st.success() {
         bail!("firmware build failed ({st})");
     }
@@ -140,13 +147,30 @@ impl QemuSession {
         for s in [&s0, &s1] {
             let _ = std::fs::remove_file(s);
         }
-        let log = opts.log.clone().unwrap_or_else(|| dir.join("semihosting.log"));
+        let log = opts
+            .log
+            .clone()
+            .unwrap_or_else(|| dir.join("semihosting.log"));
         let mut cmd = Command::new("qemu-system-arm");
-        cmd.args(["-machine", "mps2-an386", "-cpu", "cortex-m4", "-nographic", "-monitor", "none"])
-            .args(["-semihosting-config", "enable=on,target=native"])
-            .args(["-chardev", &format!("socket,id=u0,path={},server=on,wait=on", s0.display())])
-            .args(["-chardev", &format!("socket,id=u1,path={},server=on,wait=on", s1.display())])
-            .args(["-serial", "chardev:u0", "-serial", "chardev:u1"]);
+        cmd.args([
+            "-machine",
+            "mps2-an386",
+            "-cpu",
+            "cortex-m4",
+            "-nographic",
+            "-monitor",
+            "none",
+        ])
+        .args(["-semihosting-config", "enable=on,target=native"])
+        .args([
+            "-chardev",
+            &format!("socket,id=u0,path={},server=on,wait=on", s0.display()),
+        ])
+        .args([
+            "-chardev",
+            &format!("socket,id=u1,path={},server=on,wait=on", s1.display()),
+        ])
+        .args(["-serial", "chardev:u0", "-serial", "chardev:u1"]);
         if opts.icount {
             cmd.args(["-icount", "shift=0"]);
         }
@@ -154,9 +178,13 @@ impl QemuSession {
         cmd.stdin(Stdio::null())
             .stdout(std::fs::File::create(&log)?)
             .stderr(std::fs::File::create(dir.join("qemu.stderr"))?);
-        let mut child = cmd.spawn().context("starting qemu-system-arm (apt-get install qemu-system-arm)")?;
+        let mut child = cmd
+            .spawn()
+            .context("starting qemu-system-arm (apt-get install qemu-system-arm)")?;
         let deadline = Instant::now() + Duration::from_secs(20);
-        let link = match connect(&s0, &mut child, deadline).and_then(|l| Ok((l, connect(&s1, &mut child, deadline)?))) {
+        let link = match connect(&s0, &mut child, deadline)
+            .and_then(|l| Ok((l, connect(&s1, &mut child, deadline)?)))
+        {
             Ok(v) => v,
             Err(e) => {
                 let _ = child.kill();
@@ -192,7 +220,9 @@ impl QemuSession {
 
     /// Send raw bytes on the link (tests of corrupted streams).
     pub fn send_raw(&mut self, bytes: &[u8]) -> Result<()> {
-        self.link.write_all(bytes).context("writing to the firmware's link UART")
+        self.link
+            .write_all(bytes)
+            .context("writing to the firmware's link UART")
     }
 
     /// Encode a request with the next sequence number; returns its frame.
@@ -214,10 +244,15 @@ impl QemuSession {
         match self.responses.recv_timeout(timeout) {
             Ok(Ok(r)) => Ok(r),
             Ok(Err(e)) => Err(anyhow!("bad response frame from the firmware: {e}")),
-            Err(RecvTimeoutError::Timeout) => Err(anyhow!("no answer from the firmware within {timeout:?}")),
+            Err(RecvTimeoutError::Timeout) => {
+                Err(anyhow!("no answer from the firmware within {timeout:?}"))
+            }
             Err(RecvTimeoutError::Disconnected) => {
                 let st = self.child.try_wait().ok().flatten();
-                Err(anyhow!("the firmware's link closed (qemu status {st:?}); log {}", self.log.display()))
+                Err(anyhow!(
+                    "the firmware's link closed (qemu status {st:?}); log {}",
+                    self.log.display()
+                ))
             }
         }
     }
@@ -228,7 +263,9 @@ impl QemuSession {
         loop {
             let r = self.recv(ANSWER_TIMEOUT)?;
             match (r.seq, r.body) {
-                (Some(s), ResponseBody::Error(e @ WireError::SequenceGap { .. })) if s == seq => notices.push(e),
+                (Some(s), ResponseBody::Error(e @ WireError::SequenceGap { .. })) if s == seq => {
+                    notices.push(e)
+                }
                 (Some(s), body) if s == seq => return Ok((body, notices)),
                 (s, body) => bail!("expected the answer to {seq}, got {s:?}: {body:?}"),
             }
@@ -263,8 +300,17 @@ impl QemuSession {
             ResponseBody::Error(e) => Err(e),
             other => bail!("epoch answered with {other:?}"),
         };
-        let nmea = if outcome.is_ok() { self.take_nmea(5, ANSWER_TIMEOUT)? } else { Vec::new() };
-        Ok(Processed { seq, outcome, notices, nmea })
+        let nmea = if outcome.is_ok() {
+            self.take_nmea(5, ANSWER_TIMEOUT)?
+        } else {
+            Vec::new()
+        };
+        Ok(Processed {
+            seq,
+            outcome,
+            notices,
+            nmea,
+        })
     }
 
     /// The next `count` NMEA sentences.
@@ -309,7 +355,10 @@ pub fn epoch_command<'a>(epoch: &Epoch<'a>) -> CommandRef<'a> {
             apriori_m,
             sats,
         },
-        Observations::Linear { sats } => CommandRef::Linear { time_s: epoch.time_s, sats },
+        Observations::Linear { sats } => CommandRef::Linear {
+            time_s: epoch.time_s,
+            sats,
+        },
     }
 }
 

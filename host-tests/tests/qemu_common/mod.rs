@@ -2,7 +2,7 @@
 //! in wire form, and synthetic pseudorange epochs.
 #![allow(dead_code)]
 
-use raim_core::frames::{enu_rotation, geodetic_to_ecef, Geodetic};
+use raim_core::frames::{geodetic_to_ecef, Geodetic};
 use raim_core::{Config, Epoch, Raim, RaimError, RangeObservation, SatId, System};
 use raim_proto::{WireResult, CAPACITY};
 use raim_qemu::QemuSession;
@@ -16,7 +16,9 @@ pub fn session() -> QemuSession {
 
 /// The host core's result for an epoch, in wire form.
 pub fn host_result(cfg: &Config, epoch: &Epoch<'_>) -> Result<WireResult, RaimError> {
-    Raim::<CAPACITY>::new().process(cfg, epoch).map(|r| WireResult::from_result(&r))
+    Raim::<CAPACITY>::new()
+        .process(cfg, epoch)
+        .map(|r| WireResult::from_result(&r))
 }
 
 /// postcard bytes: a bit-exact comparison that also covers NaN fields.
@@ -51,11 +53,27 @@ pub const RECEIVER_ECEF_M: [f64; 3] = [-3_962_108.673, 3_381_309.574, 3_668_678.
 /// Satellites at GPS orbit radius at the given azimuths/elevations (deg)
 /// seen from the receiver, with pseudoranges = range + clock (1234.5 m) +
 /// noise (sigma 1 m) + the given faults (index, m).
-pub fn range_epoch(sky_deg: &[(f64, f64)], systems: &[System], rng: &mut Rng, faults: &[(usize, f64)]) -> Vec<RangeObservation> {
+pub fn range_epoch(
+    sky_deg: &[(f64, f64)],
+    systems: &[System],
+    rng: &mut Rng,
+    faults: &[(usize, f64)],
+) -> Vec<RangeObservation> {
     const ORBIT_RADIUS_M: f64 = 26_560_000.0;
     let rx = RECEIVER_ECEF_M;
     let g = raim_core::frames::ecef_to_geodetic(rx);
-    let r = enu_rotation(&g);
+    let (sl, cl, so, co) = (
+        g.lat_rad.sin(),
+        g.lat_rad.cos(),
+        g.lon_rad.sin(),
+        g.lon_rad.cos(),
+    );
+    // Rows: east, north, up in ECEF.
+    let r = [
+        [-so, co, 0.0],
+        [-sl * co, -sl * so, cl],
+        [cl * co, cl * so, sl],
+    ];
     let rx_norm = rx.iter().map(|v| v * v).sum::<f64>().sqrt();
     sky_deg
         .iter()
@@ -64,7 +82,9 @@ pub fn range_epoch(sky_deg: &[(f64, f64)], systems: &[System], rng: &mut Rng, fa
             let (az, el) = (az.to_radians(), el.to_radians());
             let enu = [el.cos() * az.sin(), el.cos() * az.cos(), el.sin()];
             // ECEF unit line of sight = R^T enu.
-            let los: Vec<f64> = (0..3).map(|k| r[0][k] * enu[0] + r[1][k] * enu[1] + r[2][k] * enu[2]).collect();
+            let los: Vec<f64> = (0..3)
+                .map(|k| r[0][k] * enu[0] + r[1][k] * enu[1] + r[2][k] * enu[2])
+                .collect();
             // Range d with |rx + d los| = orbit radius.
             let b = (0..3).map(|k| rx[k] * los[k]).sum::<f64>();
             let d = -b + (b * b - rx_norm * rx_norm + ORBIT_RADIUS_M * ORBIT_RADIUS_M).sqrt();
@@ -84,16 +104,51 @@ pub fn range_epoch(sky_deg: &[(f64, f64)], systems: &[System], rng: &mut Rng, fa
 /// Pseudorange epochs: clean, one 60 m fault, two faults, GPS+Galileo,
 /// with and without a-priori position, and an epoch at 2024-02-29 12:00 UTC.
 pub fn range_vectors(seed: u64) -> Vec<(f64, Vec<RangeObservation>, Option<[f64; 3]>)> {
-    let sky: Vec<(f64, f64)> = (0..12).map(|i| (i as f64 * 31.0, 12.0 + (i as f64 * 23.0) % 70.0)).collect();
+    let sky: Vec<(f64, f64)> = (0..12)
+        .map(|i| (i as f64 * 31.0, 12.0 + (i as f64 * 23.0) % 70.0))
+        .collect();
     let mut rng = Rng::new(seed);
-    let apriori = Some(geodetic_to_ecef(Geodetic { lat_rad: 0.62, lon_rad: 2.43, height_m: 0.0 }));
+    let apriori = Some(geodetic_to_ecef(Geodetic {
+        lat_rad: 0.62,
+        lon_rad: 2.43,
+        height_m: 0.0,
+    }));
     let t0 = 1_709_208_000.0;
     vec![
-        (t0, range_epoch(&sky[..8], &[System::Gps], &mut rng, &[]), None),
-        (t0 + 1.0, range_epoch(&sky[..9], &[System::Gps], &mut rng, &[(4, 60.0)]), apriori),
-        (t0 + 2.0, range_epoch(&sky, &[System::Gps], &mut rng, &[(2, 80.0), (7, -70.0)]), apriori),
-        (t0 + 3.0, range_epoch(&sky, &[System::Gps, System::Galileo], &mut rng, &[(5, 45.0)]), None),
-        (t0 + 4.0, range_epoch(&sky[..5], &[System::Gps], &mut rng, &[]), apriori),
-        (t0 + 5.0, range_epoch(&sky[..4], &[System::Gps], &mut rng, &[]), apriori),
+        (
+            t0,
+            range_epoch(&sky[..8], &[System::Gps], &mut rng, &[]),
+            None,
+        ),
+        (
+            t0 + 1.0,
+            range_epoch(&sky[..9], &[System::Gps], &mut rng, &[(4, 60.0)]),
+            apriori,
+        ),
+        (
+            t0 + 2.0,
+            range_epoch(&sky, &[System::Gps], &mut rng, &[(2, 80.0), (7, -70.0)]),
+            apriori,
+        ),
+        (
+            t0 + 3.0,
+            range_epoch(
+                &sky,
+                &[System::Gps, System::Galileo],
+                &mut rng,
+                &[(5, 45.0)],
+            ),
+            None,
+        ),
+        (
+            t0 + 4.0,
+            range_epoch(&sky[..5], &[System::Gps], &mut rng, &[]),
+            apriori,
+        ),
+        (
+            t0 + 5.0,
+            range_epoch(&sky[..4], &[System::Gps], &mut rng, &[]),
+            apriori,
+        ),
     ]
 }
