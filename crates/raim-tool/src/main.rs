@@ -1,8 +1,10 @@
 //! `raim`: host tools for the raim-core integrity monitor.
 
 mod arl;
+mod campaign;
 mod config_args;
 mod epoch_json;
+mod pci;
 mod replay;
 mod result_json;
 
@@ -42,6 +44,13 @@ enum Command {
     Replay(Box<replay::ReplayArgs>),
     /// MCUSUM average run lengths (SPEC §7.2): ARL0(h) / h(ARL0) by the integral equation, ARL1 by simulation, the device table.
     Arl(arl::ArlArgs),
+    /// Seeded Monte Carlo validation campaigns (false-alarm rate; single-fault identification).
+    Campaign {
+        #[command(subcommand)]
+        which: campaign::CampaignCmd,
+    },
+    /// Probability of correct identification per satellite, MLE vs L-RAIM (exact and Monte Carlo), P_D, MDB.
+    Pci(pci::PciArgs),
     /// The chi-square detection threshold; with --pmd, lambda and pbias too.
     Threshold {
         #[arg(long)]
@@ -59,6 +68,8 @@ fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Snapshot { config, json, input } => snapshot(&config, json, input),
         Command::Threshold { pfa, dof, pmd, json } => threshold(pfa, dof, pmd, json),
+        Command::Pci(args) => pci::run(&args),
+        Command::Campaign { which } => campaign::run(&which),
         Command::Arl(args) => arl::run(&args),
         Command::Replay(args) => replay::run(&args),
     }
