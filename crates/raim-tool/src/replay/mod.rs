@@ -5,6 +5,7 @@
 //! mask) -> a clean run (the reference position is its mean) -> the faulted
 //! run -> per-epoch text / JSON lines / NMEA, a summary table and a plot.
 
+mod engine;
 mod nmea;
 mod plot;
 pub mod record;
@@ -22,6 +23,7 @@ use raim_gnss::ranging::{default_codes, prepare_epoch, PreparedEpoch, RangingOpt
 use raim_gnss::{parse_system, NavData, ObsData};
 
 use crate::config_args::ConfigArgs;
+use engine::Engine;
 use record::EpochRecord;
 use summary::Summary;
 
@@ -33,6 +35,8 @@ pub const REPLAY_CAPACITY: usize = 48;
 pub enum Target {
     /// The core on the host.
     Host,
+    /// The firmware under QEMU (mps2-an386), through raim-qemu.
+    Qemu,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -220,21 +224,26 @@ fn fault_plan(args: &ReplayArgs, first: f64) -> Result<FaultPlan> {
     Ok(plan)
 }
 
-/// Run the monitor over the epochs with `plan`'s faults.
+/// Run the monitor over the epochs with `plan`'s faults on a fresh engine.
+/// For an ambiguity alarm, both candidate subsets are re-tested on a
+/// separate host engine (a diagnostic that must not touch the monitor's
+/// state across epochs).
 fn run_core(
+    target: Target,
     cfg: &Config,
     epochs: &[PreparedEpoch],
     plan: &FaultPlan,
     reference: Option<[f64; 3]>,
     progress: Option<&indicatif::ProgressBar>,
-) -> Vec<EpochRecord> {
-    let mut raim = Raim::<REPLAY_CAPACITY>::new();
+) -> Result<Vec<EpochRecord>> {
+    let mut engine = Engine::start(target, cfg)?;
+    let mut scratch = Raim::<REPLAY_CAPACITY>::new();
     let mut out = Vec::with_capacity(epochs.len());
     for e in epochs {
         let mut sats = e.observations();
         let injected = plan.apply(e.time_gps_s, &mut sats);
         let epoch = Epoch::ranges(e.time_gps_s, &sats, e.reference_m);
-        let rec = match raim.process(cfg, &epoch) {
+        let rec = match engine.process(cfg, &epoch)? {
             Ok(r) => {
                 let mut rec = EpochRecord::from_result(
                     &r,
@@ -249,7 +258,7 @@ fn run_core(
                         .filter_map(|&id| {
                             let subset: Vec<_> =
                                 sats.iter().copied().filter(|s| s.id != id).collect();
-                            let sub = raim
+                            let sub = scratch
                                 .process(cfg, &Epoch::ranges(e.time_gps_s, &subset, e.reference_m))
                                 .ok()?;
                             let t = sub.initial_test;
@@ -266,7 +275,7 @@ fn run_core(
             p.inc(1);
         }
     }
-    out
+    Ok(out)
 }
 
 /// Mean ECEF position of the usable epochs.
@@ -304,7 +313,14 @@ pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
         );
         b
     });
-    let clean = run_core(&cfg, &epochs, &FaultPlan::default(), None, bar.as_ref());
+    let clean = run_core(
+        args.target,
+        &cfg,
+        &epochs,
+        &FaultPlan::default(),
+        None,
+        bar.as_ref(),
+    )?;
     let reference = match args.reference {
         Reference::CleanMean => mean_position(&clean),
         Reference::Header => header,
@@ -312,7 +328,7 @@ pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
     let mut records = if plan.is_empty() {
         clean
     } else {
-        run_core(&cfg, &epochs, &plan, reference, bar.as_ref())
+        run_core(args.target, &cfg, &epochs, &plan, reference, bar.as_ref())?
     };
     if plan.is_empty() {
         // Recompute the errors of the clean run against the reference.

@@ -4,7 +4,8 @@
 
 use raim_core::fde::AlarmCause;
 use raim_core::frames::{ecef_to_geodetic, enu_rotation, rotate};
-use raim_core::{Decision, EpochResult, SatId};
+use raim_core::{Decision, SatId};
+use raim_proto::result::WireResult;
 use serde::Serialize;
 
 /// The epoch as the JSON lines print it.
@@ -102,8 +103,10 @@ pub fn error_enu(p: [f64; 3], reference: [f64; 3]) -> [f64; 3] {
 }
 
 impl EpochRecord {
-    pub fn from_result<const N: usize>(
-        r: &EpochResult<N>,
+    /// From the wire form of a result (the host engine converts its
+    /// `EpochResult` with `WireResult::from_result`; the firmware sends it).
+    pub fn from_result(
+        r: &WireResult,
         time_gps_s: f64,
         n_sats: usize,
         faulted: &[(SatId, f64)],
@@ -140,8 +143,8 @@ impl EpochRecord {
             error_enu_m: err,
             error_h_m: err.map(|e| e[0].hypot(e[1])),
             error_v_m: err.map(|e| e[2].abs()),
-            hpl_m: finite(r.protection.hpl_m),
-            vpl_m: finite(r.protection.vpl_m),
+            hpl_m: finite(r.hpl_m),
+            vpl_m: finite(r.vpl_m),
             sigma_enu_m: r.sigma_enu_m,
             ambiguity: Vec::new(),
             gbs_bias,
@@ -162,7 +165,7 @@ impl EpochRecord {
         time_gps_s: f64,
         n_sats: usize,
         faulted: &[(SatId, f64)],
-        e: &raim_core::RaimError,
+        e: &dyn std::fmt::Display,
     ) -> Self {
         EpochRecord {
             time_gps_s,

@@ -1,0 +1,51 @@
+//! Where the epochs run: the core on the host, or the firmware under QEMU
+//! (`crates/raim-qemu`, the same core built for Cortex-M4F, reached over
+//! its framed UART protocol). Both answer in the wire form of a result,
+//! so the records, summary and plots are identical for the two targets.
+
+use anyhow::Result;
+use raim_core::{Config, Epoch, Raim};
+use raim_proto::result::WireResult;
+use raim_qemu::QemuSession;
+
+use super::{Target, REPLAY_CAPACITY};
+
+pub enum Engine {
+    Host(Box<Raim<REPLAY_CAPACITY>>),
+    Qemu(Box<QemuSession>),
+}
+
+impl Engine {
+    /// A fresh engine configured with `cfg` (the firmware is built if
+    /// needed, or taken from `$RAIM_FIRMWARE_ELF`).
+    pub fn start(target: Target, cfg: &Config) -> Result<Self> {
+        Ok(match target {
+            Target::Host => Engine::Host(Box::new(Raim::new())),
+            Target::Qemu => {
+                let elf = raim_qemu::firmware_elf()?;
+                let mut s = QemuSession::start(&elf)?;
+                s.configure(cfg)?;
+                Engine::Qemu(Box::new(s))
+            }
+        })
+    }
+
+    /// One epoch: the result, or the monitor's typed error as text. A
+    /// transport failure (QEMU gone, timeout) is an `Err` of the outer result.
+    pub fn process(
+        &mut self,
+        cfg: &Config,
+        epoch: &Epoch<'_>,
+    ) -> Result<Result<WireResult, String>> {
+        Ok(match self {
+            Engine::Host(raim) => match raim.process(cfg, epoch) {
+                Ok(r) => Ok(WireResult::from_result(&r)),
+                Err(e) => Err(e.to_string()),
+            },
+            Engine::Qemu(s) => match s.process(epoch)?.outcome {
+                Ok(r) => Ok(r),
+                Err(e) => Err(e.to_string()),
+            },
+        })
+    }
+}
