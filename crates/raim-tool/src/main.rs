@@ -5,6 +5,7 @@ mod campaign;
 mod config_args;
 mod epoch_json;
 mod pci;
+mod qemu;
 mod replay;
 mod result_json;
 
@@ -51,6 +52,8 @@ enum Command {
     },
     /// Probability of correct identification per satellite, MLE vs L-RAIM (exact and Monte Carlo), P_D, MDB.
     Pci(pci::PciArgs),
+    /// Replay a JSON-lines epoch file through the firmware under QEMU; print decisions and NMEA (docs/PROTOCOL.md).
+    Qemu(qemu::QemuArgs),
     /// The chi-square detection threshold; with --pmd, lambda and pbias too.
     Threshold {
         #[arg(long)]
@@ -68,6 +71,7 @@ fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Snapshot { config, json, input } => snapshot(&config, json, input),
         Command::Threshold { pfa, dof, pmd, json } => threshold(pfa, dof, pmd, json),
+        Command::Qemu(args) => qemu::run(&args),
         Command::Pci(args) => pci::run(&args),
         Command::Campaign { which } => campaign::run(&which),
         Command::Arl(args) => arl::run(&args),
