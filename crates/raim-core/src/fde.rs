@@ -108,6 +108,148 @@ fn strongest_alternative<const N: usize>(
         })
 }
 
+/// A pair of rows, their joint bias estimates (sigma units) and the
+/// statistic of the subset without them.
+#[derive(Debug, Clone, Copy)]
+struct PairFit {
+    rows: (usize, usize),
+    bias_sigma: (f64, f64),
+    statistic: f64,
+}
+
+/// The two pairs of identifiable rows whose removal leaves the smallest
+/// weighted SSE: RSS_T = D^2 - r_T^T (S_TT)^-1 r_T for T = {j, k} (SPEC §8.4).
+/// S_jk comes from the column S e_j = U2 U2^T e_j, one column at a time, so
+/// nothing n x n is stored. Pairs whose S_TT is singular (e.g. the two
+/// satellites of a constellation, whose sum is its clock column) are skipped.
+fn best_pairs<const N: usize>(
+    parity: &crate::parity::Parity<N>,
+    min_s_ii: f64,
+) -> [Option<PairFit>; 2] {
+    let d2 = parity.sse();
+    let r = parity.residuals();
+    let s = parity.s_ii();
+    let mut best: [Option<PairFit>; 2] = [None, None];
+    let mut e = [0.0; N];
+    let mut y = [0.0; N];
+    for (j, (&rj, &sjj)) in r.iter().zip(s).enumerate() {
+        if sjj < min_s_ii {
+            continue;
+        }
+        if let Some(v) = e.get_mut(j) {
+            *v = 1.0;
+        }
+        let k_dims = parity.project(&e, &mut y);
+        let col = parity.lift(y.get(..k_dims).unwrap_or(&[]));
+        if let Some(v) = e.get_mut(j) {
+            *v = 0.0;
+        }
+        for (k, ((&rk, &skk), &sjk)) in r.iter().zip(s).zip(col.iter()).enumerate().skip(j + 1) {
+            if skk < min_s_ii {
+                continue;
+            }
+            let det = sjj * skk - sjk * sjk;
+            if !(det > 1e-9 * sjj * skk) {
+                continue;
+            }
+            let bj = (skk * rj - sjk * rk) / det;
+            let bk = (sjj * rk - sjk * rj) / det;
+            let fit = PairFit {
+                rows: (j, k),
+                bias_sigma: (bj, bk),
+                statistic: d2 - (rj * bj + rk * bk),
+            };
+            match best {
+                [Some(b0), _] if fit.statistic >= b0.statistic => {
+                    if best[1].is_none_or(|b1| fit.statistic < b1.statistic) {
+                        best[1] = Some(fit);
+                    }
+                }
+                _ => best = [Some(fit), best[0]],
+            }
+        }
+    }
+    best
+}
+
+// No heap to box into; the value lives for one call and is moved once.
+#[allow(clippy::large_enum_variant)]
+enum PairOutcome<const N: usize> {
+    Excluded(Solution<N>, TestStatistic, [Exclusion; 2]),
+    Ambiguous(AlarmCause),
+    NotFound,
+}
+
+/// Exclude the best-fitting pair if its subset passes and no other pair
+/// also explains the data at level pwe.
+fn exclude_pair<const N: usize>(
+    cfg: &Config,
+    thresholds: &mut Thresholds<N>,
+    epoch: &Epoch<'_>,
+    mask: &[bool; N],
+    current: &Solution<N>,
+    before: TestStatistic,
+) -> Result<PairOutcome<N>, RaimError> {
+    let [Some(pair), second] = best_pairs(&current.parity, cfg.min_s_ii) else {
+        return Ok(PairOutcome::NotFound);
+    };
+    let dof_pair = current.parity.dof() - 2;
+    let (t2, _) = thresholds.get(cfg.pfa, cfg.pmd, dof_pair)?;
+    if !(pair.statistic < t2) {
+        return Ok(PairOutcome::NotFound);
+    }
+    let (j, k) = pair.rows;
+    let (Some(id_j), Some(id_k), Some(src_j), Some(src_k)) = (
+        current.ids.get(j).copied(),
+        current.ids.get(k).copied(),
+        current.source.get(j).copied(),
+        current.source.get(k).copied(),
+    ) else {
+        return Ok(PairOutcome::NotFound);
+    };
+    if let Some(alt) = second {
+        let t2_we = dist::chi2_quantile_upper(cfg.pwe, dof_pair as u32)?;
+        if alt.statistic < t2_we {
+            let (a, b) = alt.rows;
+            let other = if a != j && a != k { a } else { b };
+            let mine = if j != a && j != b { j } else { k };
+            let id = |row: usize| current.ids.get(row).copied().unwrap_or(id_j);
+            return Ok(PairOutcome::Ambiguous(AlarmCause::Ambiguous {
+                best: id(mine),
+                runner_up: id(other),
+            }));
+        }
+    }
+    let subset = without(&without(mask, src_j), src_k);
+    let solution = match solve::<N>(cfg, epoch, &subset) {
+        Ok(s) => s,
+        Err(RaimError::RankDeficient { .. }) | Err(RaimError::TooFewSatellites { .. }) => {
+            return Ok(PairOutcome::NotFound)
+        }
+        Err(e) => return Err(e),
+    };
+    let after = test(cfg, thresholds, &solution)?;
+    if after.alarm() {
+        return Ok(PairOutcome::NotFound);
+    }
+    let record = |id: SatId, index: usize, row: usize, bias_sigma: f64| Exclusion {
+        id,
+        index,
+        before,
+        after,
+        score: f64::NAN,
+        bias_m: bias_sigma * current.sigma_m.get(row).copied().unwrap_or(1.0),
+    };
+    Ok(PairOutcome::Excluded(
+        solution,
+        after,
+        [
+            record(id_j, src_j, j, pair.bias_sigma.0),
+            record(id_k, src_k, k, pair.bias_sigma.1),
+        ],
+    ))
+}
+
 /// FDE starting from the all-in-view solution `first` of `epoch`.
 pub fn run<const N: usize>(
     cfg: &Config,
@@ -162,6 +304,28 @@ pub fn run<const N: usize>(
             Err(e) => return Err(e),
         };
         let after = test(cfg, thresholds, &candidate)?;
+        if after.alarm() && out.exclusions.is_empty() && max_excl >= 2 && current.parity.dof() >= 3
+        {
+            // One exclusion is not enough: before excluding greedily, look
+            // for the pair of satellites that explains the all-in-view
+            // residuals (SPEC §8.4, t = 2), in closed form.
+            match exclude_pair(cfg, thresholds, epoch, &mask, current, test_now)? {
+                PairOutcome::Excluded(solution, after, records) => {
+                    for r in records {
+                        // Capacity MAX_EXCLUSIONS >= 2.
+                        let _ = out.exclusions.push(r);
+                    }
+                    out.solution = solution;
+                    out.test = after;
+                    break;
+                }
+                PairOutcome::Ambiguous(cause) if cfg.require_unique_exclusion => {
+                    out.cause = Some(cause);
+                    break;
+                }
+                PairOutcome::Ambiguous(_) | PairOutcome::NotFound => {}
+            }
+        }
         if !after.alarm() && cfg.require_unique_exclusion {
             // Excluding row j lowers the weighted SSE by exactly w_j^2
             // (r_j^2 / S_jj) when the state keeps its dimension, so every
