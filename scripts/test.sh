@@ -5,6 +5,11 @@ cd "$(dirname "$0")/.."
 
 rustup target add thumbv7em-none-eabihf >/dev/null
 rustup component add clippy rustfmt >/dev/null 2>&1 || true
+# QEMU for the firmware tests (host-tests/tests/qemu_*.rs); CI runs as root.
+if ! command -v qemu-system-arm >/dev/null; then
+    SUDO=""; [ "$(id -u)" = 0 ] || SUDO="sudo"
+    $SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq qemu-system-arm >/dev/null
+fi
 
 echo "== fmt"
 cargo fmt --all -- --check
@@ -13,5 +18,8 @@ cargo clippy --workspace --all-targets -- -D warnings
 echo "== no_std build of the core for Cortex-M4F"
 cargo build -p raim-core --target thumbv7em-none-eabihf --release
 cargo build -p raim-core --target thumbv7em-none-eabihf --release --features defmt
-echo "== tests"
+echo "== firmware (own workspace: QEMU mps2-an386 and STM32F4 builds, clippy, fmt)"
+(cd firmware && cargo fmt -- --check && cargo clippy --release -- -D warnings && cargo build --release \
+    && cargo build --release --no-default-features --features board-stm32f4 --target-dir target/stm32f4)
+echo "== tests (including the firmware under QEMU: host-tests/tests/qemu_*.rs)"
 cargo test --workspace --release
