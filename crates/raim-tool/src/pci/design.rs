@@ -24,8 +24,13 @@ pub fn threshold(pfa: f64, d: usize) -> Result<f64> {
     dist::chi2_quantile_upper(pfa, d as u32).map_err(|e| anyhow!("threshold: {e}"))
 }
 
-/// P(ncx2(d, lambda) >= T^2).
+/// P(ncx2(d, lambda) >= T^2). Above the core's `MAX_LAMBDA` (1e5) the
+/// mean lambda + d is thousands of standard deviations above any threshold
+/// T^2 < 1e4, so P_D is 1 to double precision.
 pub fn p_detect(t2: f64, d: usize, lambda: f64) -> Result<f64> {
+    if lambda > dist::MAX_LAMBDA && t2 < 1e4 {
+        return Ok(1.0);
+    }
     Ok(1.0 - dist::ncx2_cdf(t2, d as u32, lambda).map_err(|e| anyhow!("ncx2_cdf: {e}"))?)
 }
 
