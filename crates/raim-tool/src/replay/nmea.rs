@@ -33,14 +33,14 @@ fn lat_lon(lat_rad: f64, lon_rad: f64) -> String {
 pub fn sentences(r: &EpochRecord, utc: &str) -> Vec<String> {
     let mut out = Vec::new();
     let usable = r.usable();
+    // Satellites in the solution; the altitude field carries the
+    // ellipsoidal height (geoid separation given as 0).
+    let used = r.n_sats.saturating_sub(r.excluded_ids.len());
     let pos = match r.geodetic {
-        Some((lat, lon, h)) if usable => format!(
-            "{},1,{:02},,{:.3},M,0.0,M,,",
-            lat_lon(lat, lon),
-            r.n_sats,
-            h
-        ),
-        _ => format!(",,,,0,{:02},,,M,,M,,", r.n_sats),
+        Some((lat, lon, h)) if usable => {
+            format!("{},1,{:02},,{:.3},M,0.0,M,,", lat_lon(lat, lon), used, h)
+        }
+        _ => format!(",,,,0,{used:02},,,M,,M,,"),
     };
     out.push(sentence(format!("GNGGA,{utc},{pos}")));
     let [se, sn, su] = r.sigma_enu_m;

@@ -191,3 +191,69 @@ impl Summary {
         out
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use raim_core::{SatId, System};
+
+    fn rec(
+        t: f64,
+        decision: &str,
+        excluded: &[u8],
+        faulted: &[(u8, f64)],
+        err_h: f64,
+    ) -> EpochRecord {
+        let g = |p: u8| SatId::new(System::Gps, p);
+        let mut r = EpochRecord::from_error(t, 8, &[], &"x");
+        r.decision = decision.into();
+        r.error = None;
+        r.statistic = 1.0;
+        r.threshold = 30.0;
+        r.dof = 2;
+        r.excluded_ids = excluded.iter().map(|&p| g(p)).collect();
+        r.faulted_ids = faulted.iter().map(|&(p, _)| g(p)).collect();
+        r.faulted = faulted
+            .iter()
+            .map(|&(p, b)| (g(p).to_string(), b))
+            .collect();
+        r.error_h_m = Some(err_h);
+        r.error_v_m = Some(0.0);
+        r.hpl_m = 10.0;
+        r.vpl_m = 10.0;
+        r
+    }
+
+    /// Every class of the table, counted on a hand-made run.
+    #[test]
+    fn counts_each_class() {
+        let recs = vec![
+            rec(0.0, "ok", &[], &[], 1.0),
+            rec(30.0, "excluded", &[3], &[], 2.0), // false + wrong exclusion
+            rec(60.0, "ok", &[], &[(24, 5.0)], 3.0), // missed
+            rec(90.0, "alarm", &[], &[(24, 8.0)], 50.0), // detected (alarm), not usable
+            rec(120.0, "excluded", &[24], &[(24, 11.0)], 4.0), // correct
+            rec(150.0, "excluded", &[24], &[(24, 14.0), (11, 14.0)], 20.0), // partial, error > HPL
+        ];
+        let s = summarise(&recs, Some(60.0));
+        assert_eq!(
+            (s.epochs, s.solved, s.ok, s.excluded, s.alarms),
+            (6, 5, 2, 3, 1)
+        );
+        assert_eq!(
+            (s.faulted_epochs, s.correct_exclusions, s.partial_exclusions),
+            (4, 1, 1)
+        );
+        assert_eq!((s.wrong_exclusions, s.missed_detections), (1, 1));
+        assert_eq!((s.false_alarms, s.false_exclusions), (0, 1));
+        assert_eq!(
+            (s.detection_delay_s, s.bias_at_detection_m),
+            (Some(30.0), Some(8.0))
+        );
+        // Usable errors 1, 2, 3, 4, 20: median 3, max 20; one exceeds its PL.
+        assert_eq!(
+            (s.error_h_median_m, s.error_h_max_m, s.misleading),
+            (3.0, 20.0, 1)
+        );
+    }
+}
