@@ -23,6 +23,11 @@
 //! reproduces seed 001's published ARL1 row (22, 8.6, 5.2) and is what that
 //! row computes; the simulation gives the true values (SPEC §7.2).
 
+// `!(a < b)` is deliberate: it is true for NaN, so a NaN fails safe.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod scenario;
+
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -360,6 +365,9 @@ pub fn table_row(k: f64, d: usize, logs: &[f64]) -> Result<Vec<f64>> {
     Ok(row)
 }
 
+/// One computed row of the table, keyed by (k index, d).
+type TableRow = ((usize, usize), Result<Vec<f64>>);
+
 /// The device table's Rust source: h(k, d, ARL0) rounded to 1e-4.
 pub fn table_source() -> Result<String> {
     let logs = table_log10();
@@ -369,7 +377,7 @@ pub fn table_source() -> Result<String> {
     let threads = std::thread::available_parallelism()
         .map_or(1, |n| n.get())
         .min(8);
-    let rows: Vec<((usize, usize), Result<Vec<f64>>)> = std::thread::scope(|scope| {
+    let rows: Vec<TableRow> = std::thread::scope(|scope| {
         let handles: Vec<_> = (0..threads)
             .map(|t| {
                 let jobs = &jobs;
@@ -491,6 +499,17 @@ pub struct ArlArgs {
     /// Output file for --table.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Run the step/ramp comparison of snapshot, MCUSUM reset, MCUSUM
+    /// transport and the combination on a moving 8-12 satellite sky at ARL0
+    /// --arl0 (default 3e6) with --runs runs (docs/MCRAIM.md).
+    #[arg(long)]
+    pub scenario: bool,
+    /// In-control ARL0 for the scenario's false-alarm count.
+    #[arg(long, default_value_t = 500.0)]
+    pub fa_arl0: f64,
+    /// Length of each fault-free run of the scenario's false-alarm count, epochs.
+    #[arg(long, default_value_t = 5000)]
+    pub fa_epochs: u64,
 }
 
 pub fn run(a: &ArlArgs) -> Result<()> {
@@ -506,6 +525,26 @@ pub fn run(a: &ArlArgs) -> Result<()> {
     }
     if a.seed001 {
         return seed001(a.runs, a.seed, a.json);
+    }
+    if a.scenario {
+        let p = scenario::Params {
+            arl0: a.arl0.unwrap_or(3.0e6),
+            share: raim_core::config::DEFAULT_SNAPSHOT_SHARE,
+            k: a.k.unwrap_or(raim_core::config::DEFAULT_MCUSUM_K),
+            warmup_s: 300,
+            cap_s: 1000,
+        };
+        let rows = scenario::compare(&p, a.runs, a.seed, a.fa_arl0, a.runs, a.fa_epochs)?;
+        if a.json {
+            println!("{}", serde_json::to_string(&rows)?);
+        } else {
+            println!(
+                "ARL0 {} epochs (1 s), k = {}, snapshot share {}; {} runs, seed {}; false alarms: ARL0 {}, {} runs x {} epochs",
+                p.arl0, p.k, p.share, a.runs, a.seed, a.fa_arl0, a.runs, a.fa_epochs
+            );
+            scenario::print_table(&rows);
+        }
+        return Ok(());
     }
     let (Some(d), Some(k)) = (a.dim, a.k) else {
         bail!("give --dim and --k (or --table, or --seed001)");
