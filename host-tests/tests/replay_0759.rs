@@ -81,14 +81,18 @@ fn step_50_m_on_g24_is_excluded_or_alarmed_never_misattributed() {
             other => panic!("{}: {other:?}", r.tod),
         }
     }
-    // The ambiguous stretch is 00:39:00-00:40:30 (4 epochs); the other 47
-    // faulted epochs of 00:20:00-00:45:00 exclude G24.
-    let expect: Vec<String> = ["00:39:00", "00:39:30", "00:40:00", "00:40:30"]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-    assert_eq!(alarms, expect);
-    assert_eq!(excluded, 47);
+    // Today the ambiguous stretch is 00:39:00-00:40:30 (4 epochs) and the
+    // other 47 faulted epochs of 00:20:00-00:45:00 exclude G24. Tolerated
+    // if the core's uniqueness check changes: alarms only around the
+    // README's 00:39:30-00:40:00, and at least 45 exclusions of G24.
+    assert!(
+        alarms
+            .iter()
+            .all(|t| ("00:38:00"..="00:42:00").contains(&t.as_str())),
+        "{alarms:?}"
+    );
+    assert!(excluded >= 45, "{excluded}");
+    assert_eq!(excluded + alarms.len(), 51);
 }
 
 /// 0.1 m/s ramp on G24 from 00:20:00: RTKLIB first excludes it at 00:23:00
