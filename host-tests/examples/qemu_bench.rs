@@ -17,7 +17,9 @@ use raim_qemu::{Options, QemuSession};
 const INSTRUCTIONS_PER_TICK: u64 = 40;
 
 fn sky(n: usize) -> Vec<(f64, f64)> {
-    (0..n).map(|i| ((i as f64 * 137.5) % 360.0, 10.0 + (i as f64 * 29.0) % 75.0)).collect()
+    (0..n)
+        .map(|i| ((i as f64 * 137.5) % 360.0, 10.0 + (i as f64 * 29.0) % 75.0))
+        .collect()
 }
 
 fn linear(n: usize) -> Vec<LinearObservation> {
@@ -42,7 +44,13 @@ fn main() -> anyhow::Result<()> {
     let cfg = Config::default();
     println!("| epoch | n | decision | instructions (SysTick x {INSTRUCTIONS_PER_TICK}) |");
     println!("| --- | --- | --- | --- |");
-    let mut fw = QemuSession::start_with(&elf, &Options { icount: true, ..Options::default() })?;
+    let mut fw = QemuSession::start_with(
+        &elf,
+        &Options {
+            icount: true,
+            ..Options::default()
+        },
+    )?;
     fw.configure(&cfg)?;
     let systems = [System::Gps, System::Galileo];
     for n in [8usize, 16, 32] {
@@ -71,7 +79,10 @@ fn main() -> anyhow::Result<()> {
             fw.process(&Epoch::linear(0.0, &lin))?;
             ticks = fw.status()?.last_epoch_ticks as u64;
         }
-        println!("| linearised, clean | {n} | Ok | {} |", ticks * INSTRUCTIONS_PER_TICK);
+        println!(
+            "| linearised, clean | {n} | Ok | {} |",
+            ticks * INSTRUCTIONS_PER_TICK
+        );
     }
     drop(fw);
 
@@ -80,7 +91,12 @@ fn main() -> anyhow::Result<()> {
     // (solve, FDE with re-solves, PLs, NMEA incl. ncx2_cdf).
     let mut fw = QemuSession::start(&elf)?;
     let idle = fw.status()?.stack_high_water_bytes;
-    let sats = range_epoch(&sky(32), &systems, &mut Rng::new(32), &[(2, 60.0), (9, -70.0)]);
+    let sats = range_epoch(
+        &sky(32),
+        &systems,
+        &mut Rng::new(32),
+        &[(2, 60.0), (9, -70.0)],
+    );
     let p = fw.process(&Epoch::ranges(1.7e9, &sats, None))?;
     let st = fw.status()?;
     println!(
