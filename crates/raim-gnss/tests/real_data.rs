@@ -213,3 +213,28 @@ fn missing_file_is_a_typed_error() {
     let e = ObsData::load(&data("no_such_file.05o")).unwrap_err();
     assert!(matches!(e, raim_gnss::GnssError::FileNotFound(_)), "{e}");
 }
+
+/// GEOP (phone) with the CORD nav file: satellites the phone tracks but
+/// the nav file has no ephemeris for (G11, G24, E11, E25) are dropped as
+/// `NoEphemeris`, never used with a wrong or stale orbit (issue 5).
+#[test]
+fn geop_satellites_without_ephemeris_are_dropped() {
+    use raim_gnss::ranging::Rejection;
+    let obs = ObsData::load(&data("GEOP092I.24o.gz")).unwrap();
+    let nav = NavData::load(&data("CORD00ARG_R_20240920000_01D_MN.rnx.gz")).unwrap();
+    let opts = RangingOptions {
+        systems: vec![System::Gps, System::Galileo],
+        ..Default::default()
+    };
+    let e = prepare_epoch(&nav, &obs.epochs[0], &opts, obs.approx_position_m);
+    for name in ["G11", "G24", "E11", "E25"] {
+        let id = raim_gnss::parse_sat(name).unwrap();
+        assert!(
+            e.rejected.contains(&(id, Rejection::NoEphemeris)),
+            "{name}: {:?}",
+            e.rejected
+        );
+        assert!(e.sats.iter().all(|s| s.obs.id != id));
+    }
+    assert!(e.sats.len() >= 8, "{}", e.sats.len());
+}
