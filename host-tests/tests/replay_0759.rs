@@ -123,3 +123,47 @@ fn ramp_on_g24_is_caught_earlier_than_the_classic_algorithm() {
         .iter()
         .all(|r| r.excluded.is_empty() || r.excluded == vec![g24]));
 }
+
+/// With the uniqueness check off, the two identification rules differ
+/// exactly where the classic algorithm failed: at 00:39:30 and 00:40:00
+/// the MLE rule (largest normalised residual) excludes G11, as RTKLIB did,
+/// leaving a 160+ m error; L-RAIM (the default rule, SPEC §4.2) excludes
+/// G24. In both cases the HPL after exclusion exceeds the NPA HAL there
+/// (the epoch is `Unavailable`), so neither position would be used.
+#[test]
+fn lraim_picks_g24_where_mle_picks_g11() {
+    use raim_core::FiRule;
+    let g24 = SatId::new(System::Gps, 24);
+    let g11 = SatId::new(System::Gps, 11);
+    let lax = |rule| raim_core::Config {
+        rule,
+        require_unique_exclusion: false,
+        ..geodetic_config()
+    };
+    let faults = ["step:G24:50@00:20:00"];
+    let lraim = replay(
+        OBS,
+        NAV,
+        &opts(),
+        &lax(FiRule::default()),
+        &faults,
+        "00:39:30",
+        "00:40:00",
+    );
+    let mle = replay(
+        OBS,
+        NAV,
+        &opts(),
+        &lax(FiRule::Mle),
+        &faults,
+        "00:39:30",
+        "00:40:00",
+    );
+    assert_eq!(lraim.len(), 2);
+    for (l, m) in lraim.iter().zip(&mle) {
+        assert_eq!(l.decision, Some(Decision::Unavailable), "{l:?}");
+        assert_eq!(m.decision, Some(Decision::Unavailable), "{m:?}");
+        assert_eq!(l.excluded_any, vec![g24], "{l:?}");
+        assert_eq!(m.excluded_any, vec![g11], "{m:?}");
+    }
+}

@@ -34,6 +34,9 @@ pub struct Row {
     pub cause: Option<AlarmCause>,
     /// Exclusions in force (decision Excluded).
     pub excluded: Vec<SatId>,
+    /// Exclusions made, whatever the decision (Unavailable after an
+    /// exclusion keeps them; an Alarm lists the attempts).
+    pub excluded_any: Vec<SatId>,
     pub faulted: Vec<SatId>,
     pub n: usize,
 }
@@ -80,6 +83,10 @@ pub fn replay(
                 excluded: r
                     .as_ref()
                     .filter(|r| r.decision == Decision::Excluded)
+                    .map(|r| r.exclusions.iter().map(|x| x.id).collect())
+                    .unwrap_or_default(),
+                excluded_any: r
+                    .as_ref()
                     .map(|r| r.exclusions.iter().map(|x| x.id).collect())
                     .unwrap_or_default(),
                 faulted: inj.faulted.iter().map(|(id, _)| *id).collect(),
