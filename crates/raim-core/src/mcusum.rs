@@ -36,6 +36,15 @@ pub use crate::mcusum_table::{K_VALUES, LOG10_ARL0, MAX_DIM};
 /// Most satellites held excluded after MCUSUM alarms at one time.
 pub const MAX_HELD: usize = 4;
 
+/// After an MCUSUM alarm the identification is refused as ambiguous when the
+/// runner-up explains at least this fraction of what the best candidate
+/// explains: (v_2^2 / S_22) / (v_1^2 / S_11) = cos^2 of its angle to S_t over
+/// the best's. With S_t along a_1 the ratio is the squared correlation
+/// rho_12^2 of the two fault directions, so 0.8 refuses pairs whose parity
+/// directions are within ~27 deg of each other (the G24/G11 pair of the 0759
+/// data, docs/MCRAIM.md). A heuristic guard, not a calibrated test.
+pub const AMBIGUITY_RATIO: f64 = 0.8;
+
 /// Largest distance of a configured k from a table value (sigma units).
 const K_MATCH_TOL: f64 = 1e-9;
 
