@@ -205,7 +205,11 @@ mod tests {
     fn largest_request_fits() {
         let s = sats(CAPACITY);
         let f = frame_of(&RequestRef::ranges(u32::MAX, 1e9, Some([1.0; 3]), &s));
-        assert!(f.len() <= MAX_REQUEST_FRAME, "{} bytes", f.len());
+        assert!(
+            f.len() <= crate::max_request_frame(CAPACITY),
+            "{} bytes",
+            f.len()
+        );
         assert_eq!(f.len(), 1425, "documented size in lib.rs and PROTOCOL.md");
         let got = feed_all(&mut Rx::new(), &f);
         assert!(matches!(got.as_slice(), [Ok(_)]));

@@ -64,6 +64,20 @@ pub const PROTOCOL_VERSION: u16 = 1;
 /// with their count rather than `Overflow`.
 pub const MAX_REQUEST_FRAME: usize = 2048;
 
+/// Upper bound of the encoded size of an epoch request with `n` satellites:
+/// request header (seq varint 5, command 1, time 8, a-priori 1 + 24, list
+/// length varint 2), 43 bytes per satellite (system 1, PRN 1, four f64 32,
+/// optional sigma 1 + 8), envelope (payload length varint 2, CRC varint 5),
+/// COBS overhead (one byte per 254 started) and the delimiter.
+pub const fn max_request_frame(n: usize) -> usize {
+    let payload = 5 + 1 + 8 + 25 + 2 + 43 * n;
+    let envelope = payload + 2 + 5;
+    envelope + envelope / 254 + 1 + 1
+}
+
+// The receive buffer holds any epoch at the capacity.
+const _: () = assert!(max_request_frame(CAPACITY) <= MAX_REQUEST_FRAME);
+
 /// Largest postcard payload of a response (before CRC and COBS).
 /// A result at [`CAPACITY`] satellites with every field present serializes
 /// to less than this (test `result::tests::largest_response_fits`).
