@@ -122,6 +122,7 @@ struct PairFit {
 /// S_jk comes from the column S e_j = U2 U2^T e_j, one column at a time, so
 /// nothing n x n is stored. Pairs whose S_TT is singular (e.g. the two
 /// satellites of a constellation, whose sum is its clock column) are skipped.
+#[inline(never)]
 fn best_pairs<const N: usize>(
     parity: &crate::parity::Parity<N>,
     min_s_ii: f64,
@@ -182,6 +183,7 @@ enum PairOutcome<const N: usize> {
 
 /// Exclude the best-fitting pair if its subset passes and no other pair
 /// also explains the data at level pwe.
+#[inline(never)]
 fn exclude_pair<const N: usize>(
     cfg: &Config,
     thresholds: &mut Thresholds<N>,
@@ -251,6 +253,7 @@ fn exclude_pair<const N: usize>(
 }
 
 /// FDE starting from the all-in-view solution `first` of `epoch`.
+#[inline(never)]
 pub fn run<const N: usize>(
     cfg: &Config,
     thresholds: &mut Thresholds<N>,

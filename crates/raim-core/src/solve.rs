@@ -5,8 +5,12 @@
 use crate::config::Config;
 use crate::error::RaimError;
 use crate::frames::{ecef_to_geodetic, enu_rotation, rotate, unrotate, Geodetic};
-use crate::measurement::{Epoch, Observations, SatId, System, MAX_STATES, MAX_SYSTEMS};
+use crate::measurement::{
+    Epoch, LinearObservation, Observations, RangeObservation, SatId, System, MAX_STATES,
+    MAX_SYSTEMS,
+};
 use crate::parity::Parity;
+use crate::qr::Householder;
 
 /// Below this norm (m) an a-priori position is "unknown" for the elevation
 /// model: elevations are meaningless near the Earth's centre.
@@ -82,139 +86,9 @@ pub fn solve<const N: usize>(
     mask: &[bool; N],
 ) -> Result<Solution<N>, RaimError> {
     match epoch.observations {
-        Observations::Linear { sats } => {
-            let mut b = Builder::<N>::new(
-                sats.iter()
-                    .zip(mask.iter())
-                    .filter(|(_, m)| **m)
-                    .map(|(s, _)| s.id.system),
-            );
-            for (i, s) in sats
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
-            {
-                let norm = libm::sqrt(s.los_enu.iter().map(|v| v * v).sum::<f64>());
-                let u = [
-                    s.los_enu[0] / norm,
-                    s.los_enu[1] / norm,
-                    s.los_enu[2] / norm,
-                ];
-                let el = crate::frames::elevation_rad(u);
-                let sigma = s.sigma_m.unwrap_or_else(|| cfg.sigma_model.sigma_m(el));
-                b.push(i, s.id, u, s.residual_m, sigma, el)?;
-            }
-            let parity = b.parity()?;
-            let dx = *parity.dx();
-            let mut clock_m = [None; MAX_SYSTEMS];
-            for (j, sys) in b.cols.iter().enumerate() {
-                if let (Some(sys), Some(v)) = (sys, dx.get(3 + j)) {
-                    if let Some(c) = clock_m.get_mut(sys.index()) {
-                        *c = Some(*v);
-                    }
-                }
-            }
-            Ok(Solution {
-                parity,
-                source: b.source,
-                ids: b.ids,
-                sigma_m: b.sigma,
-                elevation_rad: b.el,
-                clocks: b.cols,
-                position_ecef_m: None,
-                geodetic: None,
-                correction_enu_m: [dx[0], dx[1], dx[2]],
-                clock_m,
-                iterations: 1,
-            })
-        }
+        Observations::Linear { sats } => solve_linear(cfg, sats, mask),
         Observations::Ranges { sats, apriori_m } => {
-            let selected = || {
-                sats.iter()
-                    .enumerate()
-                    .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
-            };
-            let (cols, _) = clock_columns(selected().map(|(_, s)| s.id.system));
-            let mut x = apriori_m.unwrap_or([0.0; 3]);
-            let mut clock = [0.0; MAX_SYSTEMS];
-            let mut last_step_m = f64::INFINITY;
-            let mut iterations = 0;
-            let mut converged = false;
-            while iterations < cfg.max_iterations {
-                iterations += 1;
-                let radius = libm::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
-                let on_surface = radius > SURFACE_RADIUS_MIN_M;
-                let g = ecef_to_geodetic(x);
-                let rot = enu_rotation(&g);
-                let mut b = Builder::<N>::new(selected().map(|(_, s)| s.id.system));
-                for (i, s) in selected() {
-                    let d = [
-                        s.position_m[0] - x[0],
-                        s.position_m[1] - x[1],
-                        s.position_m[2] - x[2],
-                    ];
-                    let range = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-                    if !(range > MIN_RANGE_M) {
-                        return Err(RaimError::OutOfRange {
-                            field: "range_m",
-                            value: range,
-                            min: MIN_RANGE_M,
-                            max: f64::INFINITY,
-                        });
-                    }
-                    let u_ecef = [d[0] / range, d[1] / range, d[2] / range];
-                    // On the surface, use ENU so the model is final; near the
-                    // centre, ECEF axes are as good as any (position columns
-                    // are rotated back below).
-                    let u = if on_surface {
-                        rotate(&rot, u_ecef)
-                    } else {
-                        u_ecef
-                    };
-                    let el = if on_surface {
-                        crate::frames::elevation_rad(u)
-                    } else {
-                        core::f64::consts::FRAC_PI_2
-                    };
-                    let col = clock_column(&cols, s.id.system).unwrap_or(0);
-                    let z = s.pseudorange_m - range - clock.get(col).copied().unwrap_or(0.0);
-                    let sigma = match s.sigma_m {
-                        Some(v) => v,
-                        None if on_surface => cfg.sigma_model.sigma_m(el),
-                        None => 1.0,
-                    };
-                    b.push(i, s.id, u, z, sigma, el)?;
-                }
-                // Gauss-Newton needs only n >= m; the parity needs n > m.
-                let parity = b.parity()?;
-                let dx = *parity.dx();
-                let step_local = [dx[0], dx[1], dx[2]];
-                let step = if on_surface {
-                    unrotate(&rot, step_local)
-                } else {
-                    step_local
-                };
-                for (xk, dk) in x.iter_mut().zip(step.iter()) {
-                    *xk += dk;
-                }
-                for (j, c) in clock.iter_mut().enumerate() {
-                    *c += dx.get(3 + j).copied().unwrap_or(0.0);
-                }
-                last_step_m = libm::sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2]);
-                if !last_step_m.is_finite() {
-                    break;
-                }
-                if on_surface && last_step_m < cfg.convergence_m {
-                    converged = true;
-                    break;
-                }
-            }
-            if !converged {
-                return Err(RaimError::NoConvergence {
-                    iterations,
-                    step_m: last_step_m,
-                });
-            }
+            let (x, clock, cols, iterations) = gauss_newton(cfg, sats, apriori_m, mask)?;
             // Re-linearise once more at the converged point so the reported
             // model (residuals, parity) is exactly at x.
             finish_ranges(cfg, epoch, mask, x, clock, &cols, iterations)
@@ -222,7 +96,171 @@ pub fn solve<const N: usize>(
     }
 }
 
+// The helpers below are kept out of line so that their large locals
+// (model buffers of N rows) occupy the stack one call at a time.
+
+/// The linearised form: one least-squares solve at the given point.
+#[inline(never)]
+fn solve_linear<const N: usize>(
+    cfg: &Config,
+    sats: &[LinearObservation],
+    mask: &[bool; N],
+) -> Result<Solution<N>, RaimError> {
+    let mut b = Builder::<N>::new(
+        sats.iter()
+            .zip(mask.iter())
+            .filter(|(_, m)| **m)
+            .map(|(s, _)| s.id.system),
+    );
+    for (i, s) in sats
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
+    {
+        let norm = libm::sqrt(s.los_enu.iter().map(|v| v * v).sum::<f64>());
+        let u = [
+            s.los_enu[0] / norm,
+            s.los_enu[1] / norm,
+            s.los_enu[2] / norm,
+        ];
+        let el = crate::frames::elevation_rad(u);
+        let sigma = s.sigma_m.unwrap_or_else(|| cfg.sigma_model.sigma_m(el));
+        b.push(i, s.id, u, s.residual_m, sigma, el)?;
+    }
+    let parity = b.parity()?;
+    let dx = *parity.dx();
+    let mut clock_m = [None; MAX_SYSTEMS];
+    for (j, sys) in b.cols.iter().enumerate() {
+        if let (Some(sys), Some(v)) = (sys, dx.get(3 + j)) {
+            if let Some(c) = clock_m.get_mut(sys.index()) {
+                *c = Some(*v);
+            }
+        }
+    }
+    Ok(Solution {
+        parity,
+        source: b.source,
+        ids: b.ids,
+        sigma_m: b.sigma,
+        elevation_rad: b.el,
+        clocks: b.cols,
+        position_ecef_m: None,
+        geodetic: None,
+        correction_enu_m: [dx[0], dx[1], dx[2]],
+        clock_m,
+        iterations: 1,
+    })
+}
+
+/// Weighted Gauss-Newton from the a-priori point (or the Earth's centre):
+/// position, clock per system, clock columns and the iteration count.
+#[inline(never)]
+#[allow(clippy::type_complexity)]
+fn gauss_newton<const N: usize>(
+    cfg: &Config,
+    sats: &[RangeObservation],
+    apriori_m: Option<[f64; 3]>,
+    mask: &[bool; N],
+) -> Result<
+    (
+        [f64; 3],
+        [f64; MAX_SYSTEMS],
+        [Option<System>; MAX_SYSTEMS],
+        u32,
+    ),
+    RaimError,
+> {
+    let selected = || {
+        sats.iter()
+            .enumerate()
+            .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
+    };
+    let (cols, _) = clock_columns(selected().map(|(_, s)| s.id.system));
+    let mut x = apriori_m.unwrap_or([0.0; 3]);
+    let mut clock = [0.0; MAX_SYSTEMS];
+    let mut last_step_m = f64::INFINITY;
+    let mut iterations = 0;
+    let mut converged = false;
+    while iterations < cfg.max_iterations {
+        iterations += 1;
+        let radius = libm::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+        let on_surface = radius > SURFACE_RADIUS_MIN_M;
+        let g = ecef_to_geodetic(x);
+        let rot = enu_rotation(&g);
+        let mut b = Builder::<N>::new(selected().map(|(_, s)| s.id.system));
+        for (i, s) in selected() {
+            let d = [
+                s.position_m[0] - x[0],
+                s.position_m[1] - x[1],
+                s.position_m[2] - x[2],
+            ];
+            let range = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            if !(range > MIN_RANGE_M) {
+                return Err(RaimError::OutOfRange {
+                    field: "range_m",
+                    value: range,
+                    min: MIN_RANGE_M,
+                    max: f64::INFINITY,
+                });
+            }
+            let u_ecef = [d[0] / range, d[1] / range, d[2] / range];
+            // On the surface, use ENU so the model is final; near the
+            // centre, ECEF axes are as good as any (position columns
+            // are rotated back below).
+            let u = if on_surface {
+                rotate(&rot, u_ecef)
+            } else {
+                u_ecef
+            };
+            let el = if on_surface {
+                crate::frames::elevation_rad(u)
+            } else {
+                core::f64::consts::FRAC_PI_2
+            };
+            let col = clock_column(&cols, s.id.system).unwrap_or(0);
+            let z = s.pseudorange_m - range - clock.get(col).copied().unwrap_or(0.0);
+            let sigma = match s.sigma_m {
+                Some(v) => v,
+                None if on_surface => cfg.sigma_model.sigma_m(el),
+                None => 1.0,
+            };
+            b.push(i, s.id, u, z, sigma, el)?;
+        }
+        // A step needs only the least-squares solution, not the
+        // parity quantities (those come once, at the solution).
+        let dx = b.least_squares()?;
+        let step_local = [dx[0], dx[1], dx[2]];
+        let step = if on_surface {
+            unrotate(&rot, step_local)
+        } else {
+            step_local
+        };
+        for (xk, dk) in x.iter_mut().zip(step.iter()) {
+            *xk += dk;
+        }
+        for (j, c) in clock.iter_mut().enumerate() {
+            *c += dx.get(3 + j).copied().unwrap_or(0.0);
+        }
+        last_step_m = libm::sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2]);
+        if !last_step_m.is_finite() {
+            break;
+        }
+        if on_surface && last_step_m < cfg.convergence_m {
+            converged = true;
+            break;
+        }
+    }
+    if !converged {
+        return Err(RaimError::NoConvergence {
+            iterations,
+            step_m: last_step_m,
+        });
+    }
+    Ok((x, clock, cols, iterations))
+}
+
 /// Build the final model at the converged position `x`.
+#[inline(never)]
 fn finish_ranges<const N: usize>(
     cfg: &Config,
     epoch: &Epoch<'_>,
@@ -371,7 +409,27 @@ impl<const N: usize> Builder<N> {
         Ok(())
     }
 
+    #[inline(never)]
     fn parity(&self) -> Result<Parity<N>, RaimError> {
         Parity::new(&self.h, &self.z, self.n, self.m)
+    }
+
+    /// The least-squares correction alone (a Gauss-Newton step).
+    #[inline(never)]
+    fn least_squares(&self) -> Result<[f64; MAX_STATES], RaimError> {
+        if self.n <= self.m {
+            return Err(RaimError::TooFewSatellites {
+                have: self.n,
+                need: self.m + 1,
+            });
+        }
+        let qr = Householder::factor(&self.h, self.n, self.m)?;
+        let mut z = self.z;
+        qr.apply_ut(&mut z);
+        let mut rhs = [0.0; MAX_STATES];
+        for (r, v) in rhs.iter_mut().zip(z.iter()).take(self.m) {
+            *r = *v;
+        }
+        Ok(qr.solve_t(&rhs))
     }
 }
