@@ -90,6 +90,7 @@ fn bench(c: &mut Criterion) {
                     black_box(&s.parity),
                     1.0,
                     Carry::Transport,
+                    20.0,
                 )
             })
         });

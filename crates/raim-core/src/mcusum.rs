@@ -193,6 +193,9 @@ pub struct Mcusum<const N: usize> {
     v: [f64; N],
     ids: [SatId; N],
     n: usize,
+    /// Dimension and threshold of the last update (0 / NaN before the first).
+    last_dim: usize,
+    last_h: f64,
     held: heapless::Vec<Held, MAX_HELD>,
 }
 
@@ -202,6 +205,8 @@ impl<const N: usize> Default for Mcusum<N> {
             v: [0.0; N],
             ids: [SatId::default(); N],
             n: 0,
+            last_dim: 0,
+            last_h: f64::NAN,
             held: heapless::Vec::new(),
         }
     }
@@ -216,6 +221,8 @@ impl<const N: usize> Mcusum<N> {
     pub fn reset(&mut self) {
         self.n = 0;
         self.v = [0.0; N];
+        self.last_dim = 0;
+        self.last_h = f64::NAN;
     }
 
     /// Forget everything, holds included.
@@ -267,15 +274,37 @@ impl<const N: usize> Mcusum<N> {
     }
 
     /// One epoch: transport (or reset), then the Crosier step on this
-    /// epoch's parity vector. `ids` names the rows of `parity`.
-    pub fn update(&mut self, ids: &[SatId], parity: &Parity<N>, k: f64, carry: Carry) -> Step {
+    /// epoch's parity vector. `ids` names the rows of `parity`; `h` is this
+    /// epoch's threshold. When the dimension dropped since the last epoch
+    /// the transported state is also scaled by h / h_last: a d-dimensional
+    /// CUSUM sits higher in control than a (d-1)-dimensional one, and the
+    /// projection alone removes only ~1/d of it, so without the scaling a
+    /// setting satellite raises the false-alarm rate above the table's
+    /// (docs/MCRAIM.md measures it). When the dimension grows the state is
+    /// left as is (conservative).
+    pub fn update(
+        &mut self,
+        ids: &[SatId],
+        parity: &Parity<N>,
+        k: f64,
+        carry: Carry,
+        h: f64,
+    ) -> Step {
         let d = parity.dof();
         let mut s = [0.0; N];
         let carried = self.prior(ids, parity, carry, &mut s);
         let sd = s.get_mut(..d).unwrap_or(&mut []);
+        if d < self.last_dim && self.last_h > 0.0 && h < self.last_h {
+            let scale = h / self.last_h;
+            for x in sd.iter_mut() {
+                *x *= scale;
+            }
+        }
         let prior_norm = libm::sqrt(sd.iter().map(|x| x * x).sum::<f64>());
         let (c, statistic) = crosier_step(sd, parity.p(), k);
         self.store(ids, parity, sd);
+        self.last_dim = d;
+        self.last_h = h;
         Step {
             c,
             statistic,
@@ -306,6 +335,7 @@ impl<const N: usize> Mcusum<N> {
         self.prior(ids, parity, carry, &mut s);
         let sd = s.get(..d).unwrap_or(&[]);
         self.store(ids, parity, sd);
+        self.last_dim = d;
         self.norm()
     }
 
@@ -470,7 +500,7 @@ mod tests {
         for t in 0..50 {
             let sats = linear_epoch(&SKY8, 1.0, &mut rng, &[(3, 0.8)]);
             let sol = solution(&sats);
-            let step = mc.update(&ids(&sol), &sol.parity, 0.5, Carry::Transport);
+            let step = mc.update(&ids(&sol), &sol.parity, 0.5, Carry::Transport, f64::NAN);
             let (_, d_ref) = crosier_step(&mut s_ref, sol.parity.p(), 0.5);
             assert!(
                 (step.statistic - d_ref).abs() < ROUND_TOL,
@@ -557,7 +587,7 @@ mod tests {
                 } else {
                     (x.transpose() * &proj * &x)[(0, 0)].max(0.0).sqrt()
                 };
-                let step = mc.update(&now_ids, &sol.parity, 0.5, carry);
+                let step = mc.update(&now_ids, &sol.parity, 0.5, carry, f64::NAN);
                 assert!(
                     (step.prior_norm - expected).abs() < 1e-9 * (1.0 + expected),
                     "{carry:?} t {t}: {} vs {expected}",
@@ -597,7 +627,7 @@ mod tests {
             for t in 0..400 {
                 let sats = linear_epoch(&sky10, 1.0, &mut rng, &[(4, 4.0)]);
                 let sol = solution(&sats);
-                let step = mc.update(&ids(&sol), &sol.parity, 1.0, Carry::Transport);
+                let step = mc.update(&ids(&sol), &sol.parity, 1.0, Carry::Transport, h);
                 if step.statistic >= h {
                     let (best, _) = mc.identify(&sol.parity, 1e-4);
                     let row = best.unwrap().row;

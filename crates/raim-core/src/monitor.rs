@@ -391,7 +391,7 @@ impl<const N: usize> Raim<N> {
                 report.c = f64::NAN;
             }
             Ok(h) => {
-                let step = self.mcusum.update(ids, &sol.parity, mc.k, mc.carry);
+                let step = self.mcusum.update(ids, &sol.parity, mc.k, mc.carry, h);
                 report.available = true;
                 report.threshold = h;
                 report.statistic = step.statistic;
