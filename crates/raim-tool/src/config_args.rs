@@ -46,6 +46,23 @@ pub struct ConfigArgs {
     /// Allow an exclusion even when excluding the runner-up also passes.
     #[arg(long)]
     pub allow_ambiguous: bool,
+    /// Run the MCUSUM beside the snapshot test (SPEC §7); --pfa is then the
+    /// total per-epoch budget, split by --mcusum-share.
+    #[arg(long)]
+    pub mcusum: bool,
+    /// MCUSUM reference value k, sigma units (a table value: 0.5, 1, 1.5).
+    #[arg(long, default_value_t = raim_core::config::DEFAULT_MCUSUM_K)]
+    pub mcusum_k: f64,
+    /// Share of the false-alarm budget given to the snapshot test with --mcusum.
+    #[arg(long, default_value_t = raim_core::config::DEFAULT_SNAPSHOT_SHARE)]
+    pub mcusum_share: f64,
+    /// Restart the MCUSUM at 0 on every change of the satellite set instead
+    /// of transporting it (for comparison).
+    #[arg(long)]
+    pub mcusum_reset: bool,
+    /// How long an MCUSUM exclusion is held, s.
+    #[arg(long, default_value_t = raim_core::config::DEFAULT_MCUSUM_HOLD_S)]
+    pub mcusum_hold_s: f64,
 }
 
 impl ConfigArgs {
@@ -69,6 +86,14 @@ impl ConfigArgs {
         c.alert.val_m = self.val_m;
         c.max_exclusions = self.max_exclusions;
         c.require_unique_exclusion = !self.allow_ambiguous;
+        if self.mcusum {
+            c = c.split_false_alarm_budget(self.mcusum_share);
+            c.mcusum.k = self.mcusum_k;
+            c.mcusum.hold_s = self.mcusum_hold_s;
+            if self.mcusum_reset {
+                c.mcusum.carry = raim_core::config::Carry::Reset;
+            }
+        }
         c
     }
 }
