@@ -782,7 +782,7 @@ mod tests {
                 );
             }
         }
-        // In control, exp(4.3^2 / 2) = 10312 (closed form for dim 2).
+        // In control, exp(4.3^2 / 2) = 10353 (closed form for dim 2).
         let a0 = snapshot_arl(4.3, 2, 0.0).unwrap();
         assert!((a0 - (4.3f64 * 4.3 / 2.0).exp()).abs() < 1e-6 * a0);
     }
