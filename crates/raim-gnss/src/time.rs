@@ -51,9 +51,32 @@ pub fn utc_hhmmss(t_gps_s: f64) -> String {
     format!("{h:02}{m:02}{:05.2}", s as f64 + ns as f64 * 1e-9)
 }
 
+/// UTC seconds since 1970-01-01 of a GPS time (leap seconds from hifitime):
+/// the epoch time of the wire protocol (docs/PROTOCOL.md), from which the
+/// firmware writes the NMEA time and date.
+pub fn unix_utc_s(t_gps_s: f64) -> f64 {
+    use rinex::prelude::{Epoch, TimeScale};
+    Epoch::from_gpst_seconds(t_gps_s)
+        .to_time_scale(TimeScale::UTC)
+        .to_unix_seconds()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// 2020-06-25 00:00:00 GPST (ESBC's first epoch) is 2020-06-24
+    /// 23:59:42 UTC (18 leap seconds), Unix 1593043182.
+    #[test]
+    fn unix_utc_of_a_gps_time() {
+        // GPS week 2111, day 4 (Thursday) 00:00:00: 2111*604800 + 4*86400.
+        let t_gps = 2111.0 * 604_800.0 + 4.0 * DAY_S;
+        assert!(
+            (unix_utc_s(t_gps) - 1_593_043_182.0).abs() < 1e-6,
+            "{}",
+            unix_utc_s(t_gps)
+        );
+    }
 
     #[test]
     fn resolves_time_of_day_and_offsets() {

@@ -30,22 +30,30 @@ impl Engine {
         })
     }
 
-    /// One epoch: the result, or the monitor's typed error as text. A
+    /// One epoch: the result, or the monitor's typed error as text, and
+    /// the epoch's NMEA sentences (RMC, GGA, GSA, GST, GBS): the firmware's
+    /// own second-UART output under QEMU, the same writer on the host. A
     /// transport failure (QEMU gone, timeout) is an `Err` of the outer result.
     pub fn process(
         &mut self,
         cfg: &Config,
         epoch: &Epoch<'_>,
-    ) -> Result<Result<WireResult, String>> {
+    ) -> Result<(Result<WireResult, String>, Vec<String>)> {
         Ok(match self {
             Engine::Host(raim) => match raim.process(cfg, epoch) {
-                Ok(r) => Ok(WireResult::from_result(&r)),
-                Err(e) => Err(e.to_string()),
+                Ok(r) => {
+                    let w = WireResult::from_result(&r);
+                    let nmea = raim_proto::nmea::epoch_sentences(&w)
+                        .map(|v| v.iter().map(|s| s.as_str().to_string()).collect())
+                        .unwrap_or_default();
+                    (Ok(w), nmea)
+                }
+                Err(e) => (Err(e.to_string()), Vec::new()),
             },
-            Engine::Qemu(s) => match s.process(epoch)?.outcome {
-                Ok(r) => Ok(r),
-                Err(e) => Err(e.to_string()),
-            },
+            Engine::Qemu(s) => {
+                let p = s.process(epoch)?;
+                (p.outcome.map_err(|e| e.to_string()), p.nmea)
+            }
         })
     }
 }

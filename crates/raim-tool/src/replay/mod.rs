@@ -112,6 +112,11 @@ pub struct ReplayArgs {
     /// NMEA 0183 GGA + GBS per epoch instead of text.
     #[arg(long)]
     pub nmea: bool,
+    /// After each text line, the epoch's full NMEA output (RMC, GGA, GSA,
+    /// GST, GBS) as the monitor sends it: from the firmware's second UART
+    /// with `--target qemu`.
+    #[arg(long)]
+    pub with_nmea: bool,
     /// Print only the summary table.
     #[arg(long)]
     pub quiet: bool,
@@ -243,7 +248,15 @@ fn run_core(
         let mut sats = e.observations();
         let injected = plan.apply(e.time_gps_s, &mut sats);
         let epoch = Epoch::ranges(e.time_gps_s, &sats, e.reference_m);
-        let rec = match engine.process(cfg, &epoch)? {
+        // The monitor gets UTC Unix seconds, the protocol's epoch time, so
+        // the firmware's NMEA carries the right time and date.
+        let wire_epoch = Epoch::ranges(
+            raim_gnss::time::unix_utc_s(e.time_gps_s),
+            &sats,
+            e.reference_m,
+        );
+        let (outcome, nmea) = engine.process(cfg, &wire_epoch)?;
+        let mut rec = match outcome {
             Ok(r) => {
                 let mut rec = EpochRecord::from_result(
                     &r,
@@ -270,6 +283,7 @@ fn run_core(
             }
             Err(err) => EpochRecord::from_error(e.time_gps_s, sats.len(), &injected.faulted, &err),
         };
+        rec.nmea = nmea;
         out.push(rec);
         if let Some(p) = progress {
             p.inc(1);
@@ -385,6 +399,11 @@ fn write_outputs(args: &ReplayArgs) -> Result<()> {
                 }
             } else {
                 writeln!(w, "{}", r.text_line())?;
+                if args.with_nmea {
+                    for s in &r.nmea {
+                        writeln!(w, "    {s}")?;
+                    }
+                }
             }
         }
     }

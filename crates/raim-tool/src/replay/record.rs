@@ -11,6 +11,9 @@ use serde::Serialize;
 /// The epoch as the JSON lines print it.
 #[derive(Debug, Clone, Serialize)]
 pub struct EpochRecord {
+    /// The epoch's NMEA sentences from the monitor (not in the JSON line).
+    #[serde(skip)]
+    pub nmea: Vec<String>,
     /// GPS seconds since 1980-01-06.
     pub time_gps_s: f64,
     /// Time of day (GPS time), HH:MM:SS.
@@ -123,6 +126,7 @@ impl EpochRecord {
                 .map(|s| (id, s.bias_m, s.sigma_m / s.s_ii.max(1e-12).sqrt()))
         });
         EpochRecord {
+            nmea: Vec::new(),
             time_gps_s,
             tod: raim_gnss::time::time_of_day(time_gps_s),
             decision: decision_name(r.decision).into(),
@@ -168,6 +172,7 @@ impl EpochRecord {
         e: &dyn std::fmt::Display,
     ) -> Self {
         EpochRecord {
+            nmea: Vec::new(),
             time_gps_s,
             tod: raim_gnss::time::time_of_day(time_gps_s),
             decision: "error".into(),
