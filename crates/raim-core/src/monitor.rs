@@ -441,6 +441,9 @@ impl<const N: usize> Raim<N> {
     /// removes the identified fault's accumulated component (reset mode:
     /// restart at 0). Without redundancy or identification the alarm stands
     /// and the CUSUM restarts, as a CUSUM does after it signals.
+    /// Not inlined: its subset solution then occupies stack only in the
+    /// epochs that need it.
+    #[inline(never)]
     fn after_cusum_alarm(
         &mut self,
         cfg: &Config,
