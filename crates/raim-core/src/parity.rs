@@ -42,49 +42,47 @@ impl<const N: usize> Parity<N> {
                 need: m + 1,
             });
         }
-        let qr = Householder::factor(h, n, m)?;
-        let mut utz = *z;
-        qr.apply_ut(&mut utz);
+        // Built in place (one value, filled field by field) so that no
+        // N-sized temporaries are copied on the stack.
+        let mut p = Parity {
+            n,
+            m,
+            qr: Householder::factor(h, n, m)?,
+            utz: *z,
+            s_ii: [0.0; N],
+            residual: [0.0; N],
+            gain: [[0.0; N]; 3],
+            dx: [0.0; MAX_STATES],
+        };
+        p.qr.apply_ut(&mut p.utz);
         let mut rhs = [0.0; MAX_STATES];
-        for (r, u) in rhs.iter_mut().zip(utz.iter()).take(m) {
+        for (r, u) in rhs.iter_mut().zip(p.utz.iter()).take(m) {
             *r = *u;
         }
-        let dx = qr.solve_t(&rhs);
-        let mut s_ii = [0.0; N];
-        let mut residual = [0.0; N];
-        let mut gain = [[0.0; N]; 3];
+        p.dx = p.qr.solve_t(&rhs);
         for i in 0..n {
             let mut hi = [0.0; MAX_STATES];
             for (dst, col) in hi.iter_mut().zip(h.iter()).take(m) {
                 *dst = col.get(i).copied().unwrap_or(0.0);
             }
-            let g = qr.solve_tt(&hi);
+            let g = p.qr.solve_tt(&hi);
             let leverage: f64 = g.iter().take(m).map(|v| v * v).sum();
-            let a = qr.solve_t(&g);
-            let fitted: f64 = hi.iter().zip(dx.iter()).take(m).map(|(a, b)| a * b).sum();
-            if let Some(s) = s_ii.get_mut(i) {
+            let a = p.qr.solve_t(&g);
+            let fitted: f64 = hi.iter().zip(p.dx.iter()).take(m).map(|(a, b)| a * b).sum();
+            if let Some(s) = p.s_ii.get_mut(i) {
                 // Clamp rounding: S_ii is in [0, 1] mathematically.
                 *s = (1.0 - leverage).clamp(0.0, 1.0);
             }
-            if let (Some(r), Some(zi)) = (residual.get_mut(i), z.get(i)) {
+            if let (Some(r), Some(zi)) = (p.residual.get_mut(i), z.get(i)) {
                 *r = zi - fitted;
             }
-            for (row, ak) in gain.iter_mut().zip(a.iter()) {
+            for (row, ak) in p.gain.iter_mut().zip(a.iter()) {
                 if let Some(v) = row.get_mut(i) {
                     *v = *ak;
                 }
             }
         }
-        Ok(Parity {
-            n,
-            m,
-            qr,
-            utz,
-            s_ii,
-            residual,
-            gain,
-            dx,
-        })
+        Ok(p)
     }
 
     pub fn rows(&self) -> usize {

@@ -42,10 +42,15 @@ impl<const N: usize> Householder<N> {
                 need: m.max(1),
             });
         }
-        let mut a = *h;
-        let mut diag = [0.0; MAX_STATES];
+        // Built in place: the matrix is copied once into the value returned.
+        let mut qr = Householder {
+            n,
+            m,
+            a: *h,
+            diag: [0.0; MAX_STATES],
+        };
         for k in 0..m {
-            let (left, right) = a.split_at_mut(k + 1);
+            let (left, right) = qr.a.split_at_mut(k + 1);
             let Some(col) = left.last_mut() else {
                 return Err(RaimError::RankDeficient {
                     column: k,
@@ -67,14 +72,14 @@ impl<const N: usize> Householder<N> {
                     },
                 });
             }
-            if let Some(d) = diag.get_mut(k) {
+            if let Some(d) = qr.diag.get_mut(k) {
                 *d = alpha;
             }
             for other in right.iter_mut().take(m - k - 1) {
                 reflect(col, other, k, n);
             }
         }
-        Ok(Householder { n, m, a, diag })
+        Ok(qr)
     }
 
     pub fn rows(&self) -> usize {
