@@ -25,5 +25,5 @@ $RAIM pci --az 10,50,80,220,250,300,340,140,230,20,275,320 --el 75,40,55,35,50,3
 
 # Campaigns (random skies).
 $RAIM campaign single-fault --trials 100000 --n-min 6 --n-max 6 --seed 1 > campaign_single_fault_n6.txt
-$RAIM campaign single-fault --trials 1000 --n-min 7 --n-max 7 --seed 1 > campaign_single_fault_n7.txt
+$RAIM campaign single-fault --trials 150 --n-min 7 --n-max 7 --seed 1 > campaign_single_fault_n7.txt
 $RAIM campaign false-alarm --epochs 10000000 --pfa 1e-3,1e-5 --seed 1 > campaign_false_alarm.txt

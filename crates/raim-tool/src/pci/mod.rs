@@ -224,3 +224,92 @@ pub fn run(args: &PciArgs) -> Result<()> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Wrap {
+        #[command(flatten)]
+        args: PciArgs,
+    }
+
+    fn args(extra: &[&str]) -> PciArgs {
+        let mut v = vec!["pci"];
+        v.extend_from_slice(extra);
+        Wrap::parse_from(v).args
+    }
+
+    /// pd-matched: every satellite at the target P_D; fixed-b: one bias with
+    /// mean P_D at the target; averages are the means of the rows; MDB
+    /// follows sqrt(lambda / S_ii) with lambda from `raim threshold`'s dist.
+    #[test]
+    fn designs_and_averages() {
+        let g = geometry::fixtures::beidou();
+        const PD_TOL: f64 = 1e-9; // probability
+        let a = args(&["--pfa", "1e-3", "--pd", "0.9", "--mc", "0"]);
+        let r = analyse(&g, &a).unwrap();
+        for s in &r.sats {
+            assert!((s.p_d - 0.9).abs() < PD_TOL, "{}", s.p_d);
+            assert!((s.lambda - r.sats[0].lambda).abs() < 1e-9);
+        }
+        let lambda_md = raim_core::dist::ncx2_lambda(1e-3, 1e-3, 2).unwrap();
+        for (s, &sii) in r.sats.iter().zip(g.s_ii.iter()) {
+            assert!((s.mdb - (lambda_md / sii).sqrt()).abs() < 1e-9);
+        }
+        for (k, avg) in r.average.iter().enumerate() {
+            let m: f64 = r
+                .sats
+                .iter()
+                .map(|s| s.rules[k].p_ci_exact.unwrap())
+                .sum::<f64>()
+                / 6.0;
+            assert!((avg.p_ci.unwrap() - m).abs() < 1e-15);
+        }
+        let f = analyse(
+            &g,
+            &args(&[
+                "--pfa", "1e-3", "--pd", "0.9", "--design", "fixed-b", "--mc", "0",
+            ]),
+        )
+        .unwrap();
+        assert!((f.mean_p_d - 0.9).abs() < PD_TOL);
+        assert!(f.sats.iter().all(|s| s.bias == f.sats[0].bias));
+        // JSON carries the same numbers.
+        let j = serde_json::to_value(&f).unwrap();
+        assert_eq!(j["sats"][0]["rules"][1]["rule"], "lraim_flat");
+        assert_eq!(j["sats"][0]["bias"].as_f64().unwrap(), f.sats[0].bias);
+    }
+
+    #[test]
+    fn bad_options_are_errors() {
+        let g = geometry::fixtures::beidou();
+        assert!(analyse(&g, &args(&["--pfa", "0.7", "--pd", "0.9"])).is_err());
+        assert!(analyse(&g, &args(&["--pd", "1e-4"])).is_err());
+        assert!(analyse(&g, &args(&["--bias=-1"])).is_err());
+        assert!(analyse(&g, &args(&["--kappa", "0", "--bias", "3"])).is_err());
+        assert!(
+            analyse(&g, &args(&["--mc", "0"])).is_err(),
+            "neither --pd nor --bias"
+        );
+    }
+
+    /// A JSON epoch (linearised form) gives the same geometry as --az/--el.
+    #[test]
+    fn epoch_json_geometry() {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../docs/lraim/beidou_table1.json"
+        ))
+        .unwrap();
+        let e: EpochJson = serde_json::from_str(&text).unwrap();
+        let g = Geometry::new(epoch_sats(&e).unwrap()).unwrap();
+        let h = geometry::fixtures::beidou();
+        for (a, b) in g.s_ii.iter().zip(h.s_ii.iter()) {
+            assert!((a - b).abs() < 1e-12);
+        }
+        assert_eq!(g.sats[0].id.to_string(), "C05");
+    }
+}

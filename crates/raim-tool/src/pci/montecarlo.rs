@@ -194,3 +194,86 @@ pub fn run(
         p_d_se,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::design;
+    use super::super::geometry::{fixtures::beidou, sats_from_lists, Geometry};
+    use super::super::rules::rules;
+    use super::*;
+    use raim_core::config::DEFAULT_MIN_S_II;
+
+    /// The same seed gives the same numbers whatever the thread count
+    /// (chunk c always uses stream c).
+    #[test]
+    fn seeded_and_independent_of_threads() {
+        let g = beidou();
+        let t2 = design::threshold(1e-2, g.d).unwrap();
+        let b = vec![8.0; g.n()];
+        let spec = McSpec {
+            draws: 5 * CHUNK,
+            seed: 3,
+            progress: false,
+        };
+        let rs = rules(100.0);
+        let many = run(&g, &rs, DEFAULT_MIN_S_II, &b, t2, spec);
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| run(&g, &rs, DEFAULT_MIN_S_II, &b, t2, spec));
+        assert_eq!(many.p_d, one.p_d);
+        for (a, c) in many.cells.iter().zip(one.cells.iter()) {
+            assert_eq!(a, c);
+        }
+        let other = run(
+            &g,
+            &rs,
+            DEFAULT_MIN_S_II,
+            &b,
+            t2,
+            McSpec { seed: 4, ..spec },
+        );
+        assert_ne!(many.p_d, other.p_d);
+    }
+
+    /// Monte Carlo P_D of every satellite agrees with the core's
+    /// non-central chi-square P(ncx2(d, b^2 S_ii) >= T^2) within 3 standard
+    /// errors, for d = 2 and d = 6 (any d: the detection test has a closed form).
+    #[test]
+    fn detection_matches_noncentral_chi_square() {
+        const AGREE_SE: f64 = 3.0; // standard errors
+        let az = [
+            10.0, 50.0, 80.0, 220.0, 250.0, 300.0, 340.0, 140.0, 270.0, 20.0,
+        ];
+        let el = [75.0, 40.0, 55.0, 35.0, 50.0, 30.0, 45.0, 8.0, 20.0, 60.0];
+        let sky10 = Geometry::new(sats_from_lists(&az, &el).unwrap()).unwrap();
+        for g in [beidou(), sky10] {
+            let t2 = design::threshold(1e-2, g.d).unwrap();
+            let b: Vec<f64> = (0..g.n()).map(|i| 2.0 + i as f64).collect();
+            let spec = McSpec {
+                draws: 1 << 16,
+                seed: 9,
+                progress: false,
+            };
+            let mc = run(&g, &rules(100.0)[..1], DEFAULT_MIN_S_II, &b, t2, spec);
+            for i in 0..g.n() {
+                let pd = design::p_detect(t2, g.d, b[i] * b[i] * g.s_ii[i]).unwrap();
+                // Binomial standard error under the exact P_D (the sample one is 0
+                // when every draw alarms).
+                let se = (pd * (1.0 - pd) / mc.draws as f64)
+                    .sqrt()
+                    .max(mc.p_d_se[i])
+                    .max(1e-12);
+                let z = (mc.p_d[i] - pd) / se;
+                assert!(
+                    z.abs() <= AGREE_SE,
+                    "d={} sat {i}: MC {} +- {} vs {pd}",
+                    g.d,
+                    mc.p_d[i],
+                    mc.p_d_se[i]
+                );
+            }
+        }
+    }
+}

@@ -137,3 +137,34 @@ fn draw(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::geometry::fixtures::beidou;
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Wrap {
+        #[command(flatten)]
+        args: super::super::PciArgs,
+    }
+
+    /// The plot is written as a PNG with drawn curves and text (if a font is
+    /// installed; otherwise the typed "no TrueType font" error).
+    #[test]
+    fn writes_a_png() {
+        let a = Wrap::parse_from(["pci", "--pfa", "1e-2", "--bias", "5", "--mc", "2000"]).args;
+        let path = std::env::temp_dir().join(format!("raim_pci_plot_{}.png", std::process::id()));
+        match pci_vs_bias(&beidou(), &a, &path) {
+            Ok(()) => {
+                let bytes = std::fs::read(&path).unwrap();
+                assert_eq!(&bytes[1..4], b"PNG");
+                // Three panels of curves and text: far more than a blank image.
+                assert!(bytes.len() > 20_000, "{} bytes", bytes.len());
+                let _ = std::fs::remove_file(&path);
+            }
+            Err(e) => assert!(e.to_string().contains("no TrueType font"), "{e}"),
+        }
+    }
+}
