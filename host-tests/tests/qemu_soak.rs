@@ -5,7 +5,7 @@
 //! answer; every result equals the host core's; the firmware never resets
 //! (its frame counter keeps counting) and never stops answering.
 //!
-//! CI runs 2,000 frames (~30 s). The full run (10^5 frames, ~25 minutes):
+//! CI runs 2,000 frames (~30-40 s). The full run (10^5 frames, 37 MB; 37 minutes on a loaded 2-core VM):
 //! `cargo test --release -p host-tests --test qemu_soak -- --ignored --nocapture`
 //! (output recorded in docs/qemu-soak.txt).
 
@@ -220,7 +220,7 @@ fn qemu_soak_short_2000_frames_with_1_percent_damage() {
 }
 
 #[test]
-#[ignore = "10^5 frames, ~25 minutes: cargo test --release -p host-tests --test qemu_soak -- --ignored"]
+#[ignore = "10^5 frames, ~40 minutes: cargo test --release -p host-tests --test qemu_soak -- --ignored"]
 fn qemu_soak_full_100k_frames_with_1_percent_damage() {
     let s = soak(100_000, 2);
     report(&s);
