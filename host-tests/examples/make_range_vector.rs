@@ -14,7 +14,10 @@ use std::io::Write;
 fn main() -> std::io::Result<()> {
     let path = host_tests::vector_path("ranges_example.jsonl");
     let mut f = std::fs::File::create(&path)?;
-    writeln!(f, "# made by host-tests/examples/make_range_vector.rs (see there)")?;
+    writeln!(
+        f,
+        "# made by host-tests/examples/make_range_vector.rs (see there)"
+    )?;
     for (t, sats, apriori) in qemu_common::range_vectors(7) {
         let sats: Vec<serde_json::Value> = sats
             .iter()

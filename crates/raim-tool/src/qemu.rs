@@ -35,14 +35,16 @@ pub struct QemuArgs {
 
 pub fn run(args: &QemuArgs) -> Result<()> {
     let cfg = args.config.config();
-    cfg.validate().map_err(|e| anyhow::anyhow!("configuration: {e}"))?;
+    cfg.validate()
+        .map_err(|e| anyhow::anyhow!("configuration: {e}"))?;
     let elf = match &args.elf {
         Some(p) => p.clone(),
         None => raim_qemu::firmware_elf()?,
     };
     let mut fw = QemuSession::start(&elf)?;
     fw.configure(&cfg)?;
-    let file = std::fs::File::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;
+    let file = std::fs::File::open(&args.input)
+        .with_context(|| format!("opening {}", args.input.display()))?;
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     for (lineno, line) in std::io::BufReader::new(file).lines().enumerate() {
@@ -50,9 +52,11 @@ pub fn run(args: &QemuArgs) -> Result<()> {
         if line.trim().is_empty() || line.trim_start().starts_with('#') {
             continue;
         }
-        let e: EpochJson =
-            serde_json::from_str(&line).with_context(|| format!("line {}: not an epoch", lineno + 1))?;
-        let sats = e.to_sats().with_context(|| format!("line {}", lineno + 1))?;
+        let e: EpochJson = serde_json::from_str(&line)
+            .with_context(|| format!("line {}: not an epoch", lineno + 1))?;
+        let sats = e
+            .to_sats()
+            .with_context(|| format!("line {}", lineno + 1))?;
         let epoch = match &sats {
             Sats::Ranges(v) => Epoch::ranges(e.time_s, v, e.apriori_m),
             Sats::Linear(v) => Epoch::linear(e.time_s, v),
