@@ -12,7 +12,7 @@ use crate::dist;
 use crate::error::RaimError;
 use crate::lraim::rank;
 use crate::measurement::{Epoch, SatId};
-use crate::solve::{solve, Solution};
+use crate::solve::{solve_into, Solution};
 
 /// Most exclusions reported per epoch (the capacity of the list; the
 /// configured `max_exclusions` is clamped to it).
@@ -173,10 +173,10 @@ fn best_pairs<const N: usize>(
     best
 }
 
-// No heap to box into; the value lives for one call and is moved once.
-#[allow(clippy::large_enum_variant)]
-enum PairOutcome<const N: usize> {
-    Excluded(Solution<N>, TestStatistic, [Exclusion; 2]),
+/// What the pair search found. `Excluded` means the subset's solution was
+/// written into the caller's scratch solution.
+enum PairOutcome {
+    Excluded(TestStatistic, [Exclusion; 2]),
     Ambiguous(AlarmCause),
     NotFound,
 }
@@ -191,7 +191,8 @@ fn exclude_pair<const N: usize>(
     mask: &[bool; N],
     current: &Solution<N>,
     before: TestStatistic,
-) -> Result<PairOutcome<N>, RaimError> {
+    scratch: &mut Solution<N>,
+) -> Result<PairOutcome, RaimError> {
     let [Some(pair), second] = best_pairs(&current.parity, cfg.min_s_ii) else {
         return Ok(PairOutcome::NotFound);
     };
@@ -223,14 +224,14 @@ fn exclude_pair<const N: usize>(
         }
     }
     let subset = without(&without(mask, src_j), src_k);
-    let solution = match solve::<N>(cfg, epoch, &subset) {
-        Ok(s) => s,
+    match solve_into::<N>(cfg, epoch, &subset, scratch) {
+        Ok(()) => {}
         Err(RaimError::RankDeficient { .. }) | Err(RaimError::TooFewSatellites { .. }) => {
             return Ok(PairOutcome::NotFound)
         }
         Err(e) => return Err(e),
     };
-    let after = test(cfg, thresholds, &solution)?;
+    let after = test(cfg, thresholds, scratch)?;
     if after.alarm() {
         return Ok(PairOutcome::NotFound);
     }
@@ -243,7 +244,6 @@ fn exclude_pair<const N: usize>(
         bias_m: bias_sigma * current.sigma_m.get(row).copied().unwrap_or(1.0),
     };
     Ok(PairOutcome::Excluded(
-        solution,
         after,
         [
             record(id_j, src_j, j, pair.bias_sigma.0),
@@ -273,6 +273,8 @@ pub fn run<const N: usize>(
         cause: None,
     };
     let max_excl = usize::from(cfg.max_exclusions).min(MAX_EXCLUSIONS);
+    // The one subset solution FDE works on; accepted ones are swapped in.
+    let mut scratch = Solution::<N>::empty();
     while test_now.alarm() {
         let current = &out.solution;
         let (best, _) = rank(&current.parity, cfg.rule, cfg.min_s_ii);
@@ -297,38 +299,50 @@ pub fn run<const N: usize>(
             out.cause = Some(AlarmCause::Unidentifiable);
             break;
         };
+        if out.exclusions.is_empty() && max_excl >= 2 && current.parity.dof() >= 3 {
+            // The subset without `best` has statistic D^2 - w_best^2 (see
+            // the uniqueness check below). If even that fails, one
+            // exclusion is not enough: before excluding greedily, look for
+            // the pair that explains the all-in-view residuals (SPEC §8.4,
+            // t = 2), in closed form.
+            let (t2_single, _) = thresholds.get(cfg.pfa, cfg.pmd, current.parity.dof() - 1)?;
+            if !(test_now.statistic - best.w * best.w < t2_single) {
+                match exclude_pair(
+                    cfg,
+                    thresholds,
+                    epoch,
+                    &mask,
+                    current,
+                    test_now,
+                    &mut scratch,
+                )? {
+                    PairOutcome::Excluded(after, records) => {
+                        for r in records {
+                            // Capacity MAX_EXCLUSIONS >= 2.
+                            let _ = out.exclusions.push(r);
+                        }
+                        core::mem::swap(&mut out.solution, &mut scratch);
+                        out.test = after;
+                        break;
+                    }
+                    PairOutcome::Ambiguous(cause) if cfg.require_unique_exclusion => {
+                        out.cause = Some(cause);
+                        break;
+                    }
+                    PairOutcome::Ambiguous(_) | PairOutcome::NotFound => {}
+                }
+            }
+        }
         let next_mask = without(&mask, best_src);
-        let candidate = match solve::<N>(cfg, epoch, &next_mask) {
-            Ok(s) => s,
+        match solve_into::<N>(cfg, epoch, &next_mask, &mut scratch) {
+            Ok(()) => {}
             Err(RaimError::RankDeficient { .. }) | Err(RaimError::TooFewSatellites { .. }) => {
                 out.cause = Some(AlarmCause::SubsetGeometry { excluded: best_id });
                 break;
             }
             Err(e) => return Err(e),
         };
-        let after = test(cfg, thresholds, &candidate)?;
-        if after.alarm() && out.exclusions.is_empty() && max_excl >= 2 && current.parity.dof() >= 3
-        {
-            // One exclusion is not enough: before excluding greedily, look
-            // for the pair of satellites that explains the all-in-view
-            // residuals (SPEC §8.4, t = 2), in closed form.
-            match exclude_pair(cfg, thresholds, epoch, &mask, current, test_now)? {
-                PairOutcome::Excluded(solution, after, records) => {
-                    for r in records {
-                        // Capacity MAX_EXCLUSIONS >= 2.
-                        let _ = out.exclusions.push(r);
-                    }
-                    out.solution = solution;
-                    out.test = after;
-                    break;
-                }
-                PairOutcome::Ambiguous(cause) if cfg.require_unique_exclusion => {
-                    out.cause = Some(cause);
-                    break;
-                }
-                PairOutcome::Ambiguous(_) | PairOutcome::NotFound => {}
-            }
-        }
+        let after = test(cfg, thresholds, &scratch)?;
         if !after.alarm() && cfg.require_unique_exclusion {
             // Excluding row j lowers the weighted SSE by exactly w_j^2
             // (r_j^2 / S_jj) when the state keeps its dimension, so every
@@ -362,7 +376,7 @@ pub fn run<const N: usize>(
             break;
         }
         mask = next_mask;
-        out.solution = candidate;
+        core::mem::swap(&mut out.solution, &mut scratch);
         out.test = after;
         test_now = after;
     }
@@ -375,6 +389,7 @@ pub fn run<const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solve::solve;
     use crate::testutil::{linear_epoch, Rng, SKY8};
 
     /// The identity behind the uniqueness check: the statistic of the subset

@@ -28,6 +28,20 @@ pub struct Parity<const N: usize> {
 }
 
 impl<const N: usize> Parity<N> {
+    /// An empty parity (0 x 0), to be filled by [`Self::compute`].
+    pub fn empty() -> Self {
+        Parity {
+            n: 0,
+            m: 0,
+            qr: Householder::empty(),
+            utz: [0.0; N],
+            s_ii: [0.0; N],
+            residual: [0.0; N],
+            gain: [[0.0; N]; 3],
+            dx: [0.0; MAX_STATES],
+        }
+    }
+
     /// Factor the whitened column-major `h` (n x m) and project `z`.
     /// Needs n > m (at least one redundant measurement).
     pub fn new(
@@ -36,24 +50,34 @@ impl<const N: usize> Parity<N> {
         n: usize,
         m: usize,
     ) -> Result<Self, RaimError> {
+        let mut p = Self::empty();
+        p.compute(h, z, n, m)?;
+        Ok(p)
+    }
+
+    /// [`Self::new`] into existing storage: nothing N-sized is built on the
+    /// stack (the firmware's stack budget, BENCHMARKS.md).
+    pub fn compute(
+        &mut self,
+        h: &[[f64; N]; MAX_STATES],
+        z: &[f64; N],
+        n: usize,
+        m: usize,
+    ) -> Result<(), RaimError> {
         if n <= m {
             return Err(RaimError::TooFewSatellites {
                 have: n,
                 need: m + 1,
             });
         }
-        // Built in place (one value, filled field by field) so that no
-        // N-sized temporaries are copied on the stack.
-        let mut p = Parity {
-            n,
-            m,
-            qr: Householder::factor(h, n, m)?,
-            utz: *z,
-            s_ii: [0.0; N],
-            residual: [0.0; N],
-            gain: [[0.0; N]; 3],
-            dx: [0.0; MAX_STATES],
-        };
+        let p = self;
+        p.qr.factor_from(h, n, m)?;
+        p.n = n;
+        p.m = m;
+        p.utz = *z;
+        p.s_ii = [0.0; N];
+        p.residual = [0.0; N];
+        p.gain = [[0.0; N]; 3];
         p.qr.apply_ut(&mut p.utz);
         let mut rhs = [0.0; MAX_STATES];
         for (r, u) in rhs.iter_mut().zip(p.utz.iter()).take(m) {
@@ -82,7 +106,7 @@ impl<const N: usize> Parity<N> {
                 }
             }
         }
-        Ok(p)
+        Ok(())
     }
 
     pub fn rows(&self) -> usize {

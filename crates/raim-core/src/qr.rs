@@ -28,8 +28,30 @@ pub struct Householder<const N: usize> {
 }
 
 impl<const N: usize> Householder<N> {
+    /// An empty factorisation (0 x 0), to be filled by [`Self::factor_from`].
+    pub fn empty() -> Self {
+        Householder {
+            n: 0,
+            m: 0,
+            a: [[0.0; N]; MAX_STATES],
+            diag: [0.0; MAX_STATES],
+        }
+    }
+
     /// Factor the first `n` rows and `m` columns of the column-major `h`.
     pub fn factor(h: &[[f64; N]; MAX_STATES], n: usize, m: usize) -> Result<Self, RaimError> {
+        let mut qr = Self::empty();
+        qr.factor_from(h, n, m)?;
+        Ok(qr)
+    }
+
+    /// [`Self::factor`] into existing storage (no N-sized value on the stack).
+    pub fn factor_from(
+        &mut self,
+        h: &[[f64; N]; MAX_STATES],
+        n: usize,
+        m: usize,
+    ) -> Result<(), RaimError> {
         if n > N {
             return Err(RaimError::CapacityExceeded {
                 have: n,
@@ -42,15 +64,12 @@ impl<const N: usize> Householder<N> {
                 need: m.max(1),
             });
         }
-        // Built in place: the matrix is copied once into the value returned.
-        let mut qr = Householder {
-            n,
-            m,
-            a: *h,
-            diag: [0.0; MAX_STATES],
-        };
+        self.n = n;
+        self.m = m;
+        self.a = *h;
+        self.diag = [0.0; MAX_STATES];
         for k in 0..m {
-            let (left, right) = qr.a.split_at_mut(k + 1);
+            let (left, right) = self.a.split_at_mut(k + 1);
             let Some(col) = left.last_mut() else {
                 return Err(RaimError::RankDeficient {
                     column: k,
@@ -72,14 +91,14 @@ impl<const N: usize> Householder<N> {
                     },
                 });
             }
-            if let Some(d) = qr.diag.get_mut(k) {
+            if let Some(d) = self.diag.get_mut(k) {
                 *d = alpha;
             }
             for other in right.iter_mut().take(m - k - 1) {
                 reflect(col, other, k, n);
             }
         }
-        Ok(qr)
+        Ok(())
     }
 
     pub fn rows(&self) -> usize {

@@ -43,6 +43,23 @@ pub struct Solution<const N: usize> {
 }
 
 impl<const N: usize> Solution<N> {
+    /// An empty solution, to be filled by [`solve_into`].
+    pub fn empty() -> Self {
+        Solution {
+            parity: Parity::empty(),
+            source: [0; N],
+            ids: [SatId::default(); N],
+            sigma_m: [0.0; N],
+            elevation_rad: [0.0; N],
+            clocks: [None; MAX_SYSTEMS],
+            position_ecef_m: None,
+            geodetic: None,
+            correction_enu_m: [0.0; 3],
+            clock_m: [None; MAX_SYSTEMS],
+            iterations: 0,
+        }
+    }
+
     pub fn rows(&self) -> usize {
         self.parity.rows()
     }
@@ -85,13 +102,27 @@ pub fn solve<const N: usize>(
     epoch: &Epoch<'_>,
     mask: &[bool; N],
 ) -> Result<Solution<N>, RaimError> {
+    let mut out = Solution::empty();
+    solve_into(cfg, epoch, mask, &mut out)?;
+    Ok(out)
+}
+
+/// [`solve`] into existing storage: nothing N-sized is built on the stack
+/// but the model builder (the firmware's stack budget, BENCHMARKS.md). On
+/// error, `out` holds no usable solution.
+pub fn solve_into<const N: usize>(
+    cfg: &Config,
+    epoch: &Epoch<'_>,
+    mask: &[bool; N],
+    out: &mut Solution<N>,
+) -> Result<(), RaimError> {
     match epoch.observations {
-        Observations::Linear { sats } => solve_linear(cfg, sats, mask),
+        Observations::Linear { sats } => solve_linear(cfg, sats, mask, out),
         Observations::Ranges { sats, apriori_m } => {
             let (x, clock, cols, iterations) = gauss_newton(cfg, sats, apriori_m, mask)?;
             // Re-linearise once more at the converged point so the reported
             // model (residuals, parity) is exactly at x.
-            finish_ranges(cfg, epoch, mask, x, clock, &cols, iterations)
+            finish_ranges(cfg, epoch, mask, x, clock, &cols, iterations, out)
         }
     }
 }
@@ -105,7 +136,8 @@ fn solve_linear<const N: usize>(
     cfg: &Config,
     sats: &[LinearObservation],
     mask: &[bool; N],
-) -> Result<Solution<N>, RaimError> {
+    out: &mut Solution<N>,
+) -> Result<(), RaimError> {
     let mut b = Builder::<N>::new(
         sats.iter()
             .zip(mask.iter())
@@ -127,8 +159,8 @@ fn solve_linear<const N: usize>(
         let sigma = s.sigma_m.unwrap_or_else(|| cfg.sigma_model.sigma_m(el));
         b.push(i, s.id, u, s.residual_m, sigma, el)?;
     }
-    let parity = b.parity()?;
-    let dx = *parity.dx();
+    b.parity_into(&mut out.parity)?;
+    let dx = *out.parity.dx();
     let mut clock_m = [None; MAX_SYSTEMS];
     for (j, sys) in b.cols.iter().enumerate() {
         if let (Some(sys), Some(v)) = (sys, dx.get(3 + j)) {
@@ -137,19 +169,13 @@ fn solve_linear<const N: usize>(
             }
         }
     }
-    Ok(Solution {
-        parity,
-        source: b.source,
-        ids: b.ids,
-        sigma_m: b.sigma,
-        elevation_rad: b.el,
-        clocks: b.cols,
-        position_ecef_m: None,
-        geodetic: None,
-        correction_enu_m: [dx[0], dx[1], dx[2]],
-        clock_m,
-        iterations: 1,
-    })
+    b.fill(out);
+    out.position_ecef_m = None;
+    out.geodetic = None;
+    out.correction_enu_m = [dx[0], dx[1], dx[2]];
+    out.clock_m = clock_m;
+    out.iterations = 1;
+    Ok(())
 }
 
 /// Weighted Gauss-Newton from the a-priori point (or the Earth's centre):
@@ -261,6 +287,7 @@ fn gauss_newton<const N: usize>(
 
 /// Build the final model at the converged position `x`.
 #[inline(never)]
+#[allow(clippy::too_many_arguments)]
 fn finish_ranges<const N: usize>(
     cfg: &Config,
     epoch: &Epoch<'_>,
@@ -269,7 +296,8 @@ fn finish_ranges<const N: usize>(
     clock: [f64; MAX_SYSTEMS],
     cols: &[Option<System>; MAX_SYSTEMS],
     iterations: u32,
-) -> Result<Solution<N>, RaimError> {
+    out: &mut Solution<N>,
+) -> Result<(), RaimError> {
     let Observations::Ranges { sats, .. } = epoch.observations else {
         return Err(RaimError::TooFewSatellites { have: 0, need: 1 });
     };
@@ -299,33 +327,25 @@ fn finish_ranges<const N: usize>(
         let sigma = s.sigma_m.unwrap_or_else(|| cfg.sigma_model.sigma_m(el));
         b.push(i, s.id, u, z, sigma, el)?;
     }
-    let parity = b.parity()?;
+    b.parity_into(&mut out.parity)?;
+    let dx = *out.parity.dx();
     let mut clock_m = [None; MAX_SYSTEMS];
     for (j, sys) in cols.iter().enumerate() {
         if let Some(sys) = sys {
-            let v = clock.get(j).copied().unwrap_or(0.0)
-                + parity.dx().get(3 + j).copied().unwrap_or(0.0);
+            let v = clock.get(j).copied().unwrap_or(0.0) + dx.get(3 + j).copied().unwrap_or(0.0);
             if let Some(c) = clock_m.get_mut(sys.index()) {
                 *c = Some(v);
             }
         }
     }
-    Ok(Solution {
-        source: b.source,
-        ids: b.ids,
-        sigma_m: b.sigma,
-        elevation_rad: b.el,
-        clocks: *cols,
-        position_ecef_m: Some(x),
-        geodetic: Some(g),
-        correction_enu_m: {
-            let dx = parity.dx();
-            [dx[0], dx[1], dx[2]]
-        },
-        clock_m,
-        iterations,
-        parity,
-    })
+    b.fill(out);
+    out.clocks = *cols;
+    out.position_ecef_m = Some(x);
+    out.geodetic = Some(g);
+    out.correction_enu_m = [dx[0], dx[1], dx[2]];
+    out.clock_m = clock_m;
+    out.iterations = iterations;
+    Ok(())
 }
 
 /// Accumulates whitened rows [-u, onehot] / sigma and z / sigma.
@@ -410,8 +430,17 @@ impl<const N: usize> Builder<N> {
     }
 
     #[inline(never)]
-    fn parity(&self) -> Result<Parity<N>, RaimError> {
-        Parity::new(&self.h, &self.z, self.n, self.m)
+    fn parity_into(&self, out: &mut Parity<N>) -> Result<(), RaimError> {
+        out.compute(&self.h, &self.z, self.n, self.m)
+    }
+
+    /// Copy the per-row bookkeeping into a solution.
+    fn fill(&self, out: &mut Solution<N>) {
+        out.source = self.source;
+        out.ids = self.ids;
+        out.sigma_m = self.sigma;
+        out.elevation_rad = self.el;
+        out.clocks = self.cols;
     }
 
     /// The least-squares correction alone (a Gauss-Newton step).
