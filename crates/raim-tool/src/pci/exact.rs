@@ -47,6 +47,12 @@ const OUTER_MAX_DEPTH: u32 = 10;
 /// thousands of circles and uses lower ones.
 const ORDERS_D2: (usize, usize) = (32, 20);
 const ORDERS_D3: (usize, usize) = (14, 8);
+/// Each circle piece is cut at these fractions, graded toward its ends:
+/// where a constraint's A_j(u) -> 0 the interval bound B_j / A_j runs to
+/// infinity and the integrand, though smooth, is not analytic at the end
+/// (exp(-c / (phi - phi0)) behaviour), which slows Gauss-Legendre there.
+const GRADING_D2: [f64; 7] = [0.0, 0.02, 0.15, 0.5, 0.85, 0.98, 1.0];
+const GRADING_D3: [f64; 2] = [0.0, 1.0];
 /// Points sampled per circle to bracket the roots of a degree-2
 /// trigonometric polynomial (at most 4 roots, 4 critical points).
 const ROOT_SAMPLES: usize = 64;
@@ -269,6 +275,7 @@ impl Region {
         e: &[[f64; 3]; 3],
         gl: &Gl,
         orders: (usize, usize),
+        grading: &[f64],
     ) -> [f64; 4] {
         let [e1, e2, e3] = e;
         let u_at = |phi: f64| {
@@ -296,16 +303,19 @@ impl Region {
         breaks.sort_by(f64::total_cmp);
         let mut out = [0.0; 4];
         for w in breaks.windows(2) {
-            let (a, b) = (w[0], w[1]);
-            if !(b - a > 1e-15) {
+            let (a0, b0) = (w[0], w[1]);
+            if !(b0 - a0 > 1e-15) {
                 continue;
             }
-            let hi = gl.integrate(orders.0, a, b, |phi| self.ray(&u_at(phi)));
-            let lo = gl.integrate(orders.1, a, b, |phi| self.ray(&u_at(phi)));
-            out[0] += hi[0];
-            out[1] += hi[1];
-            out[2] += (hi[0] - lo[0]).abs();
-            out[3] += (hi[1] - lo[1]).abs();
+            for g in grading.windows(2) {
+                let (a, b) = (a0 + g[0] * (b0 - a0), a0 + g[1] * (b0 - a0));
+                let hi = gl.integrate(orders.0, a, b, |phi| self.ray(&u_at(phi)));
+                let lo = gl.integrate(orders.1, a, b, |phi| self.ray(&u_at(phi)));
+                out[0] += hi[0];
+                out[1] += hi[1];
+                out[2] += (hi[0] - lo[0]).abs();
+                out[3] += (hi[1] - lo[1]).abs();
+            }
         }
         out
     }
@@ -563,7 +573,7 @@ pub fn p_pick(
         }
         2 => {
             let e = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.0]];
-            region.circle(1.0, 0.0, &e, &gl, ORDERS_D2)
+            region.circle(1.0, 0.0, &e, &gl, ORDERS_D2, &GRADING_D2)
         }
         _ => {
             let mut ui = [0.0; 3];
@@ -574,7 +584,7 @@ pub fn p_pick(
             let e = frame(ui);
             let f = |theta: f64| {
                 let (s, c) = theta.sin_cos();
-                let v = region.circle(s, c, &e, &gl, ORDERS_D3);
+                let v = region.circle(s, c, &e, &gl, ORDERS_D3, &GRADING_D3);
                 [v[0] * s, v[1] * s, v[2] * s, v[3] * s]
             };
             adaptive(&gl, &f, 0.0, PI)

@@ -257,8 +257,8 @@ mod tests {
                 progress: false,
             };
             let mc = run(&g, &rules(100.0)[..1], DEFAULT_MIN_S_II, &b, t2, spec);
-            for i in 0..g.n() {
-                let pd = design::p_detect(t2, g.d, b[i] * b[i] * g.s_ii[i]).unwrap();
+            for (i, (&bi, &sii)) in b.iter().zip(g.s_ii.iter()).enumerate() {
+                let pd = design::p_detect(t2, g.d, bi * bi * sii).unwrap();
                 // Binomial standard error under the exact P_D (the sample one is 0
                 // when every draw alarms).
                 let se = (pd * (1.0 - pd) / mc.draws as f64)
