@@ -140,10 +140,11 @@ fn sky(rng: &mut ChaCha8Rng, horizon_s: f64) -> Vec<Pass> {
     let mut passes = Vec::new();
     let jitter = Uniform::new(-90.0f64, 90.0).expect("valid range");
     let unit = Uniform::new(0.0f64, 1.0).expect("valid range");
-    for (system, period, duration, n) in [
-        (System::Gps, 200.0, 1300.0, 40),
-        (System::Galileo, 330.0, 1150.0, 25),
+    for (system, period, duration) in [
+        (System::Gps, 200.0, 1300.0),
+        (System::Galileo, 330.0, 1150.0),
     ] {
+        let n = ((horizon_s + duration) / period).ceil() as usize + 2;
         for i in 0..n {
             let rise = -duration + i as f64 * period + jitter.sample(rng);
             if rise > horizon_s {
@@ -207,8 +208,12 @@ pub fn run_once(
         .iter()
         .filter(|q| q.id.system == System::Gps && q.az_el(onset).is_some())
         .max_by(|a, b| (a.rise_s + a.duration_s).total_cmp(&(b.rise_s + b.duration_s)))
-        .map(|q| (q.id, q.rise_s))
-        .ok_or_else(|| anyhow::anyhow!("no GPS satellite in view at the onset"))?;
+        .map(|q| (q.id, q.rise_s));
+    let faulty = match (faulty, fault) {
+        (Some(f), _) => Some(f),
+        (None, Fault::None) => None,
+        (None, _) => anyhow::bail!("no GPS satellite in view at the onset"),
+    };
     let cfg = scheme.config(p.arl0, p.share, p.k);
     let mut raim = Raim::<{ raim_core::DEFAULT_CAPACITY }>::new();
     let mut out = RunOutcome {
@@ -226,7 +231,7 @@ pub fn run_once(
             };
             let sigma = cfg.sigma_model.sigma_m(el);
             let z: f64 = StandardNormal.sample(&mut rng);
-            let f = if (q.id, q.rise_s) == faulty {
+            let f = if Some((q.id, q.rise_s)) == faulty {
                 fault.at(ts - onset)
             } else {
                 0.0
