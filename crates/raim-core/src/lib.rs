@@ -35,10 +35,10 @@ pub mod solve;
 #[cfg(test)]
 mod testutil;
 
-pub use config::{AlertLimits, Config, FiRule, Phase};
+pub use config::{AlertLimits, Carry, Config, FiRule, McusumConfig, Phase};
 pub use error::RaimError;
 pub use measurement::{Epoch, LinearObservation, Observations, RangeObservation, SatId, System};
-pub use monitor::{Decision, EpochResult, Raim, SatelliteResult};
+pub use monitor::{AlarmSource, Decision, EpochResult, McusumReport, Raim, SatelliteResult};
 
 /// The documented default capacity: 32 satellites.
 pub const DEFAULT_CAPACITY: usize = 32;
