@@ -135,3 +135,40 @@ fn compare(
     }
     p
 }
+
+/// With the MCUSUM on, the firmware's engine carries state from epoch to
+/// epoch: its answers must equal those of one persistent host engine fed the
+/// same sequence (the MCUSUM report included), epoch by epoch.
+#[test]
+fn qemu_mcusum_state_matches_a_persistent_host_engine() {
+    let mut fw = session();
+    let mut cfg = Config::default();
+    cfg.mcusum.enabled = true;
+    fw.configure(&cfg).unwrap();
+    let mut host = raim_core::Raim::<{ raim_proto::CAPACITY }>::new();
+    let mut with_report = 0;
+    for e in host_tests::read_vector("snapshot_example.jsonl") {
+        let sats = e.sats();
+        let epoch = match &sats {
+            Sats::Ranges(v) => Epoch::ranges(e.time_s, v, e.apriori_m),
+            Sats::Linear(v) => Epoch::linear(e.time_s, v),
+        };
+        let want = host
+            .process(&cfg, &epoch)
+            .map(|r| raim_proto::WireResult::from_result(&r));
+        let got = fw.process(&epoch).unwrap().outcome;
+        match (got, want) {
+            (Ok(g), Ok(w)) => {
+                assert_eq!(
+                    wire_bytes(&g),
+                    wire_bytes(&w),
+                    "t={}: {g:?}\n{w:?}",
+                    e.time_s
+                );
+                with_report += usize::from(g.mcusum.is_some());
+            }
+            (g, w) => panic!("t={}: firmware {g:?}, host {w:?}", e.time_s),
+        }
+    }
+    assert_eq!(with_report, 8, "every epoch carries the MCUSUM report");
+}

@@ -55,7 +55,7 @@ pub const CAPACITY: usize = raim_core::DEFAULT_CAPACITY;
 
 /// Version of the frame layout and message types; reported by `Status`.
 /// Bump on any change of a serialized type (postcard is not self-describing).
-pub const PROTOCOL_VERSION: u16 = 1;
+pub const PROTOCOL_VERSION: u16 = 2;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes

@@ -11,19 +11,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::CAPACITY;
 
-/// The sequential (MCUSUM, SPEC §7) detector's state after the epoch.
-/// Reserved: the core does not report it yet, so the firmware sends `None`.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct WireMcusum {
-    /// The cumulative statistic D_t.
-    pub statistic: f64,
-    /// Its alarm threshold h.
-    pub threshold: f64,
-    /// The reference value k.
-    pub k: f64,
-    pub alarm: bool,
-}
+/// The sequential (MCUSUM, SPEC §7) detector's state after the epoch: the
+/// core's own report (D_t, h, k, C_t, dimension, alarm and its source, the
+/// satellite identified and those held out). `None` when the MCUSUM is
+/// disabled in the configuration.
+pub type WireMcusum = raim_core::monitor::McusumReport;
 
 /// One epoch's result. Field meanings are those of `raim_core::EpochResult`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -86,7 +78,7 @@ impl WireResult {
             pl_available: r.pl_available,
             iterations: r.iterations,
             satellites,
-            mcusum: None,
+            mcusum: r.mcusum,
         }
     }
 
@@ -219,7 +211,18 @@ mod tests {
             pl_available: true,
             iterations: u32::MAX,
             satellites: core::iter::repeat_n(sat, CAPACITY).collect(),
-            mcusum: Some(WireMcusum::default()),
+            mcusum: Some(WireMcusum {
+                statistic: 1.0,
+                threshold: 1.0,
+                k: 1.0,
+                c: 1.0,
+                dim: u32::MAX,
+                prior_norm: 1.0,
+                identified: Some(sat.id),
+                after_exclusion: Some(1.0),
+                held: [Some(sat.id); raim_core::mcusum::MAX_HELD],
+                ..WireMcusum::default()
+            }),
         };
         let resp = Response {
             seq: Some(u32::MAX),
