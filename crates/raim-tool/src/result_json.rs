@@ -2,6 +2,7 @@
 //! summary for terminals.
 
 use raim_core::fde::AlarmCause;
+use raim_core::monitor::AlarmSource;
 use raim_core::{Decision, EpochResult, RaimError};
 use serde::Serialize;
 
@@ -27,6 +28,23 @@ pub struct ExclusionOut {
     pub threshold_after: f64,
     pub dof_after: u32,
     pub bias_m: f64,
+}
+
+/// The MCUSUM state of an epoch (SPEC §7), when the sequential test runs.
+#[derive(Debug, Serialize)]
+pub struct McusumOut {
+    /// D_t = ||S_t||, sigma units.
+    pub statistic: f64,
+    /// The alarm threshold h for this dimension.
+    pub threshold: f64,
+    pub k: f64,
+    pub dim: u32,
+    pub alarm: bool,
+    /// Which test alarmed: none | snapshot | cusum | both.
+    pub source: &'static str,
+    pub identified: Option<String>,
+    pub held: Vec<String>,
+    pub available: bool,
 }
 
 #[derive(Debug, Serialize)]
@@ -59,6 +77,8 @@ pub struct ResultOut {
     pub detection_available: bool,
     pub exclusion_available: bool,
     pub sats: Vec<SatOut>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mcusum: Option<McusumOut>,
 }
 
 #[derive(Debug, Serialize)]
@@ -149,6 +169,22 @@ pub fn result_out<const N: usize>(r: &EpochResult<N>) -> ResultOut {
                 score: s.identifiable.then_some(s.score),
             })
             .collect(),
+        mcusum: r.mcusum.map(|m| McusumOut {
+            statistic: m.statistic,
+            threshold: m.threshold,
+            k: m.k,
+            dim: m.dim,
+            alarm: m.alarm,
+            source: match m.source {
+                AlarmSource::None => "none",
+                AlarmSource::Snapshot => "snapshot",
+                AlarmSource::Cusum => "cusum",
+                AlarmSource::Both => "both",
+            },
+            identified: m.identified.map(|s| s.to_string()),
+            held: m.held.iter().flatten().map(|s| s.to_string()).collect(),
+            available: m.available,
+        }),
     }
 }
 
@@ -165,8 +201,12 @@ pub fn error_out(time_s: f64, e: &RaimError) -> ErrorOut {
 /// One readable line per epoch.
 pub fn text_line<const N: usize>(r: &EpochResult<N>) -> String {
     let excl: Vec<String> = r.exclusions.iter().map(|e| e.id.to_string()).collect();
+    let cusum = r
+        .mcusum
+        .map(|m| format!(" Dt={:.2} h={:.2}", m.statistic, m.threshold))
+        .unwrap_or_default();
     format!(
-        "t={:>10.1}s {:<11} D2={:>9.2} T2={:>6.2} dof={} {}{} HPL={:>8.1}m VPL={:>8.1}m",
+        "t={:>10.1}s {:<11} D2={:>9.2} T2={:>6.2} dof={} {}{} HPL={:>8.1}m VPL={:>8.1}m{}",
         r.time_s,
         decision_name(r.decision).to_uppercase(),
         r.initial_test.statistic,
@@ -182,5 +222,6 @@ pub fn text_line<const N: usize>(r: &EpochResult<N>) -> String {
             .unwrap_or_default(),
         finite(r.protection.hpl_m),
         finite(r.protection.vpl_m),
+        cusum,
     )
 }

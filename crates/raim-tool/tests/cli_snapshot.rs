@@ -102,3 +102,24 @@ fn threshold_matches_the_spec_tables() {
         assert!((p - pbias[dof - 1]).abs() < PBIAS_TOL, "dof {dof}: {p}");
     }
 }
+
+/// With `--mcusum` every result carries the MCUSUM state (SPEC §7): a finite
+/// threshold h for the dimension and the statistic D_t >= 0.
+#[test]
+fn snapshot_reports_the_mcusum_state() {
+    let out = raim(&["snapshot", "--json", "--mcusum"], &example());
+    let rows: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(rows.len(), 8);
+    for r in &rows {
+        let m = &r["mcusum"];
+        assert!(m["threshold"].as_f64().unwrap() > 0.0, "{r}");
+        assert!(m["statistic"].as_f64().unwrap() >= 0.0);
+        // dof 4 all in view; 3 or 2 while excluded satellites are held out.
+        let dim = m["dim"].as_u64().unwrap();
+        assert!((2..=4).contains(&dim), "{r}");
+    }
+    assert!(rows[0]["mcusum"]["alarm"] == false);
+}
