@@ -22,7 +22,11 @@ use epoch_json::{EpochJson, Sats};
 const N: usize = raim_core::DEFAULT_CAPACITY;
 
 #[derive(Parser)]
-#[command(name = "raim", version, about = "GNSS integrity monitor (RAIM) host tools")]
+#[command(
+    name = "raim",
+    version,
+    about = "GNSS integrity monitor (RAIM) host tools"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -41,10 +45,6 @@ enum Command {
         #[arg(long)]
         input: Option<std::path::PathBuf>,
     },
-    /// Replay RINEX data through the monitor with seeded faults (docs/REPLAY.md).
-    Replay(Box<replay::ReplayArgs>),
-    /// MCUSUM average run lengths (SPEC §7.2): ARL0(h) / h(ARL0) by the integral equation, ARL1 by simulation, the device table.
-    Arl(arl::ArlArgs),
     /// Seeded Monte Carlo validation campaigns (false-alarm rate; single-fault identification).
     Campaign {
         #[command(subcommand)]
@@ -52,6 +52,10 @@ enum Command {
     },
     /// Probability of correct identification per satellite, MLE vs L-RAIM (exact and Monte Carlo), P_D, MDB.
     Pci(pci::PciArgs),
+    /// MCUSUM average run lengths (SPEC §7.2): ARL0(h) / h(ARL0) by the integral equation, ARL1 by simulation, the device table.
+    Arl(arl::ArlArgs),
+    /// Replay RINEX data through the monitor with seeded faults (docs/REPLAY.md).
+    Replay(Box<replay::ReplayArgs>),
     /// Replay a JSON-lines epoch file through the firmware under QEMU; print decisions and NMEA (docs/PROTOCOL.md).
     Qemu(qemu::QemuArgs),
     /// The chi-square detection threshold; with --pmd, lambda and pbias too.
@@ -69,19 +73,29 @@ enum Command {
 
 fn main() -> Result<()> {
     match Cli::parse().command {
-        Command::Snapshot { config, json, input } => snapshot(&config, json, input),
-        Command::Threshold { pfa, dof, pmd, json } => threshold(pfa, dof, pmd, json),
+        Command::Snapshot {
+            config,
+            json,
+            input,
+        } => snapshot(&config, json, input),
+        Command::Threshold {
+            pfa,
+            dof,
+            pmd,
+            json,
+        } => threshold(pfa, dof, pmd, json),
         Command::Qemu(args) => qemu::run(&args),
-        Command::Pci(args) => pci::run(&args),
-        Command::Campaign { which } => campaign::run(&which),
-        Command::Arl(args) => arl::run(&args),
         Command::Replay(args) => replay::run(&args),
+        Command::Pci(args) => pci::run(&args),
+        Command::Arl(args) => arl::run(&args),
+        Command::Campaign { which } => campaign::run(&which),
     }
 }
 
 fn snapshot(args: &ConfigArgs, json: bool, input: Option<std::path::PathBuf>) -> Result<()> {
     let cfg = args.config();
-    cfg.validate().map_err(|e| anyhow::anyhow!("configuration: {e}"))?;
+    cfg.validate()
+        .map_err(|e| anyhow::anyhow!("configuration: {e}"))?;
     let reader: Box<dyn BufRead> = match &input {
         Some(p) => Box::new(std::io::BufReader::new(
             std::fs::File::open(p).with_context(|| format!("opening {}", p.display()))?,
@@ -96,19 +110,27 @@ fn snapshot(args: &ConfigArgs, json: bool, input: Option<std::path::PathBuf>) ->
         if line.trim().is_empty() || line.trim_start().starts_with('#') {
             continue;
         }
-        let epoch: EpochJson =
-            serde_json::from_str(&line).with_context(|| format!("line {}: not an epoch", lineno + 1))?;
-        let sats = epoch.to_sats().with_context(|| format!("line {}", lineno + 1))?;
+        let epoch: EpochJson = serde_json::from_str(&line)
+            .with_context(|| format!("line {}: not an epoch", lineno + 1))?;
+        let sats = epoch
+            .to_sats()
+            .with_context(|| format!("line {}", lineno + 1))?;
         let e = match &sats {
             Sats::Ranges(v) => Epoch::ranges(epoch.time_s, v, epoch.apriori_m),
             Sats::Linear(v) => Epoch::linear(epoch.time_s, v),
         };
         match raim.process(&cfg, &e) {
-            Ok(r) if json => writeln!(out, "{}", serde_json::to_string(&result_json::result_out(&r))?)?,
+            Ok(r) if json => writeln!(
+                out,
+                "{}",
+                serde_json::to_string(&result_json::result_out(&r))?
+            )?,
             Ok(r) => writeln!(out, "{}", result_json::text_line(&r))?,
-            Err(err) if json => {
-                writeln!(out, "{}", serde_json::to_string(&result_json::error_out(epoch.time_s, &err))?)?
-            }
+            Err(err) if json => writeln!(
+                out,
+                "{}",
+                serde_json::to_string(&result_json::error_out(epoch.time_s, &err))?
+            )?,
             Err(err) => writeln!(out, "t={:>10.1}s ERROR       {err}", epoch.time_s)?,
         }
     }

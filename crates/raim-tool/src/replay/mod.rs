@@ -247,7 +247,6 @@ fn run_core(
     for e in epochs {
         let mut sats = e.observations();
         let injected = plan.apply(e.time_gps_s, &mut sats);
-        let epoch = Epoch::ranges(e.time_gps_s, &sats, e.reference_m);
         // The monitor gets UTC Unix seconds, the protocol's epoch time, so
         // the firmware's NMEA carries the right time and date.
         let wire_epoch = Epoch::ranges(
