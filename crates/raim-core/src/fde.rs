@@ -252,26 +252,39 @@ fn exclude_pair<const N: usize>(
     ))
 }
 
-/// FDE starting from the all-in-view solution `first` of `epoch`.
+impl<const N: usize> FdeOutcome<N> {
+    /// An empty outcome whose `solution` is to be filled by
+    /// [`crate::solve::solve_into`] before [`run`].
+    pub fn empty() -> Self {
+        FdeOutcome {
+            solution: Solution::empty(),
+            test: TestStatistic::default(),
+            exclusions: heapless::Vec::new(),
+            identified: None,
+            cause: None,
+        }
+    }
+}
+
+/// FDE on `out`, whose `solution` holds the all-in-view solution of
+/// `epoch`; on return it holds the solution in force. In place, so no
+/// solution is moved on the stack (the firmware's stack budget).
 #[inline(never)]
 pub fn run<const N: usize>(
     cfg: &Config,
     thresholds: &mut Thresholds<N>,
     epoch: &Epoch<'_>,
-    first: Solution<N>,
-) -> Result<FdeOutcome<N>, RaimError> {
+    out: &mut FdeOutcome<N>,
+) -> Result<(), RaimError> {
     let mut mask = [false; N];
     for v in mask.iter_mut().take(epoch.len()) {
         *v = true;
     }
-    let mut test_now = test(cfg, thresholds, &first)?;
-    let mut out = FdeOutcome {
-        solution: first,
-        test: test_now,
-        exclusions: heapless::Vec::new(),
-        identified: None,
-        cause: None,
-    };
+    let mut test_now = test(cfg, thresholds, &out.solution)?;
+    out.test = test_now;
+    out.exclusions.clear();
+    out.identified = None;
+    out.cause = None;
     let max_excl = usize::from(cfg.max_exclusions).min(MAX_EXCLUSIONS);
     // The one subset solution FDE works on; accepted ones are swapped in.
     let mut scratch = Solution::<N>::empty();
@@ -383,7 +396,7 @@ pub fn run<const N: usize>(
     if !out.test.alarm() {
         out.cause = None;
     }
-    Ok(out)
+    Ok(())
 }
 
 #[cfg(test)]
@@ -463,7 +476,9 @@ mod tests {
             let mut mask = [false; 8];
             mask[..6].fill(true);
             let first = solve::<8>(&cfg, &epoch, &mask).unwrap();
-            let out = run(&cfg, &mut thresholds, &epoch, first.clone()).unwrap();
+            let mut out = FdeOutcome::empty();
+            out.solution = first.clone();
+            run(&cfg, &mut thresholds, &epoch, &mut out).unwrap();
             assert!(out.test.alarm(), "seed {seed}: {:?}", out.exclusions);
             match out.cause {
                 // The grid's geometry puts the sixth satellite next to the
@@ -480,7 +495,9 @@ mod tests {
                 require_unique_exclusion: false,
                 ..cfg
             };
-            let out = run(&lax, &mut thresholds, &epoch, first).unwrap();
+            let mut out = FdeOutcome::empty();
+            out.solution = first;
+            run(&lax, &mut thresholds, &epoch, &mut out).unwrap();
             assert!(
                 !out.test.alarm() && out.exclusions.len() == 1,
                 "seed {seed}"

@@ -8,7 +8,7 @@
 use crate::config::Config;
 use crate::detection::{TestStatistic, Thresholds};
 use crate::error::RaimError;
-use crate::fde::{self, AlarmCause, Exclusion, MAX_EXCLUSIONS};
+use crate::fde::{self, AlarmCause, Exclusion, FdeOutcome, MAX_EXCLUSIONS};
 use crate::frames::Geodetic;
 use crate::lraim;
 use crate::mcusum::{self, Mcusum, MAX_HELD};
@@ -16,7 +16,7 @@ use crate::measurement::{
     validate, Epoch, LinearObservation, Observations, RangeObservation, SatId, MAX_SYSTEMS,
 };
 use crate::protection::{self, ProtectionLevels};
-use crate::solve::{solve, Solution};
+use crate::solve::{solve, solve_into, Solution};
 
 /// The epoch's verdict.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -198,23 +198,27 @@ impl<const N: usize> Raim<N> {
             return self.process_sequential(cfg, epoch);
         }
         self.mcusum.clear();
-        Ok(self.snapshot(cfg, epoch)?.0)
+        let mut outcome = FdeOutcome::empty();
+        self.snapshot(cfg, epoch, &mut outcome)
     }
 
-    /// The snapshot monitor (SPEC §3-6): the result and the solution in force.
+    /// The snapshot monitor (SPEC §3-6): the result; the solution in force
+    /// is left in `outcome.solution` (caller storage: nothing solution-sized
+    /// is returned by value, for the firmware's stack).
     fn snapshot(
         &mut self,
         cfg: &Config,
         epoch: &Epoch<'_>,
-    ) -> Result<(EpochResult<N>, Solution<N>), RaimError> {
+        outcome: &mut FdeOutcome<N>,
+    ) -> Result<EpochResult<N>, RaimError> {
         let mut mask = [false; N];
         for v in mask.iter_mut().take(epoch.len()) {
             *v = true;
         }
-        let first = solve::<N>(cfg, epoch, &mask)?;
-        let initial_test = fde::test(cfg, &mut self.thresholds, &first)?;
-        let satellites = per_satellite(cfg, &first);
-        let outcome = fde::run(cfg, &mut self.thresholds, epoch, first)?;
+        solve_into::<N>(cfg, epoch, &mask, &mut outcome.solution)?;
+        let initial_test = fde::test(cfg, &mut self.thresholds, &outcome.solution)?;
+        let satellites = per_satellite(cfg, &outcome.solution);
+        fde::run(cfg, &mut self.thresholds, epoch, outcome)?;
         let sol = &outcome.solution;
         let dof = sol.parity.dof();
         let (_, lambda_md) = self.thresholds.get(cfg.pfa, cfg.pmd, dof)?;
@@ -257,10 +261,10 @@ impl<const N: usize> Raim<N> {
             exclusion_available: dof >= 2,
             pl_available,
             iterations: sol.iterations,
-            exclusions: outcome.exclusions,
+            exclusions: outcome.exclusions.clone(),
             mcusum: None,
         };
-        Ok((result, outcome.solution))
+        Ok(result)
     }
 }
 
@@ -369,7 +373,9 @@ impl<const N: usize> Raim<N> {
         input: &Epoch<'_>,
     ) -> Result<EpochResult<N>, RaimError> {
         let mc = cfg.mcusum;
-        let (mut result, sol) = self.snapshot(cfg, epoch)?;
+        let mut outcome = FdeOutcome::empty();
+        let mut result = self.snapshot(cfg, epoch, &mut outcome)?;
+        let sol = &outcome.solution;
         let to_input = |k: usize| src.get(k).copied().unwrap_or(k);
         for e in result.exclusions.iter_mut() {
             e.index = to_input(e.index);
@@ -402,7 +408,7 @@ impl<const N: usize> Raim<N> {
             }
         }
         if report.alarm {
-            self.after_cusum_alarm(cfg, epoch, &to_input, &sol, &mut result, &mut report)?;
+            self.after_cusum_alarm(cfg, epoch, &to_input, sol, &mut result, &mut report)?;
         }
         report.source = match (snapshot_alarm, report.alarm) {
             (false, false) => AlarmSource::None,
