@@ -54,14 +54,20 @@ pub fn rank<const N: usize>(
     rule: FiRule,
     min_s_ii: f64,
 ) -> (Option<Candidate>, Option<Candidate>) {
+    rank_rows(rule, parity.residuals(), parity.s_ii(), min_s_ii)
+}
+
+/// The best and the runner-up of `rule` over rows given by a residual-like
+/// vector (`residuals`, or the MCUSUM's accumulated vector) and S_ii.
+pub fn rank_rows(
+    rule: FiRule,
+    residuals: &[f64],
+    s_ii: &[f64],
+    min_s_ii: f64,
+) -> (Option<Candidate>, Option<Candidate>) {
     let mut best: Option<Candidate> = None;
     let mut second: Option<Candidate> = None;
-    for (row, (&r, &s)) in parity
-        .residuals()
-        .iter()
-        .zip(parity.s_ii().iter())
-        .enumerate()
-    {
+    for (row, (&r, &s)) in residuals.iter().zip(s_ii).enumerate() {
         let Some(mut c) = score(rule, r, s, min_s_ii) else {
             continue;
         };

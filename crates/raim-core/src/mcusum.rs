@@ -352,32 +352,8 @@ impl<const N: usize> Mcusum<N> {
         parity: &Parity<N>,
         min_s_ii: f64,
     ) -> (Option<Candidate>, Option<Candidate>) {
-        let mut best: Option<Candidate> = None;
-        let mut second: Option<Candidate> = None;
-        let rows = self
-            .v
-            .iter()
-            .zip(parity.s_ii().iter())
-            .take(self.n)
-            .enumerate();
-        for (row, (&vi, &s)) in rows {
-            let Some(mut c) = lraim::score(FiRule::Mle, vi, s, min_s_ii) else {
-                continue;
-            };
-            c.row = row;
-            match best {
-                Some(b) if c.score <= b.score => {
-                    if second.is_none_or(|s2| c.score > s2.score) {
-                        second = Some(c);
-                    }
-                }
-                _ => {
-                    second = best;
-                    best = Some(c);
-                }
-            }
-        }
-        (best, second)
+        let v = self.v.get(..self.n).unwrap_or(&[]);
+        lraim::rank_rows(FiRule::Mle, v, parity.s_ii(), min_s_ii)
     }
 
     /// Satellites held excluded.
