@@ -5,7 +5,7 @@
 
 mod replay_common;
 
-use raim_core::fde::AlarmCause;
+use raim_core::snapshot::fde::AlarmCause;
 use raim_core::{Decision, SatId, System};
 use raim_gnss::ranging::RangingOptions;
 use replay_common::{geodetic_config, replay};

@@ -6,7 +6,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use raim_core::config::Carry;
-use raim_core::mcusum::Mcusum;
+use raim_core::sequential::mcusum::Mcusum;
 use raim_core::solve::solve;
 use raim_core::{Config, Epoch, LinearObservation, Raim, SatId, System};
 use std::hint::black_box;

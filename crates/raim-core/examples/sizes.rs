@@ -1,7 +1,7 @@
 //! Prints the stack footprint of the core's per-epoch objects at N = 32.
 //! Run: cargo run -p raim-core --example sizes --release
-use raim_core::fde::FdeOutcome;
-use raim_core::parity::Parity;
+use raim_core::linalg::parity::Parity;
+use raim_core::snapshot::fde::FdeOutcome;
 use raim_core::solve::Solution;
 use raim_core::{EpochResult, Raim};
 

@@ -275,7 +275,7 @@ impl Config {
         non_negative("noise_m", s.noise_m)?;
         non_negative("min_elevation_rad", s.min_elevation_rad)?;
         if self.mcusum.enabled {
-            crate::mcusum::check_settings(self.mcusum.k, self.mcusum.arl0)?;
+            crate::sequential::mcusum::check_settings(self.mcusum.k, self.mcusum.arl0)?;
             non_negative("hold_s", self.mcusum.hold_s)?;
         }
         if self.max_iterations == 0 || self.max_iterations > 100 {

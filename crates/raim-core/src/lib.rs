@@ -4,6 +4,13 @@
 //!
 //! Entry point: [`Raim::process`] takes a [`Config`] and an [`Epoch`] and
 //! returns an [`EpochResult`] or a typed [`RaimError`].
+//!
+//! Layout: one folder per method, each with its own orchestration and
+//! tests: `snapshot` (detection, L-RAIM identification, FDE, protection
+//! levels) and `sequential` (MCUSUM). Shared layers beside them: `linalg`
+//! (QR, parity space), `stats` (distributions), `solve` (measurement model
+//! and Gauss-Newton), `measurement`, `frames`, `sigma`, `config`, `error`,
+//! `result`. `monitor` is the thin entry that validates and dispatches.
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(
@@ -26,29 +33,26 @@
 )]
 
 pub mod config;
-pub mod detection;
-pub mod dist;
 pub mod error;
-pub mod fde;
 pub mod frames;
-pub mod lraim;
-pub mod mcusum;
-#[rustfmt::skip]
-pub mod mcusum_table;
+pub mod linalg;
 pub mod measurement;
 pub mod monitor;
-pub mod parity;
-pub mod protection;
-pub mod qr;
+pub mod result;
+pub mod sequential;
 pub mod sigma;
+pub mod snapshot;
 pub mod solve;
+pub mod stats;
 #[cfg(test)]
 mod testutil;
 
 pub use config::{AlertLimits, Carry, Config, FiRule, McusumConfig, Phase};
 pub use error::RaimError;
 pub use measurement::{Epoch, LinearObservation, Observations, RangeObservation, SatId, System};
-pub use monitor::{AlarmSource, Decision, EpochResult, McusumReport, Raim, SatelliteResult};
+pub use monitor::Raim;
+pub use result::{Decision, EpochResult, SatelliteResult};
+pub use sequential::{AlarmSource, McusumReport};
 
 /// The documented default capacity: 32 satellites.
 pub const DEFAULT_CAPACITY: usize = 32;

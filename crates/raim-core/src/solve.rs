@@ -5,12 +5,12 @@
 use crate::config::Config;
 use crate::error::RaimError;
 use crate::frames::{ecef_to_geodetic, enu_rotation, rotate, unrotate, Geodetic};
+use crate::linalg::parity::Parity;
+use crate::linalg::qr::Householder;
 use crate::measurement::{
     Epoch, LinearObservation, Observations, RangeObservation, SatId, System, MAX_STATES,
     MAX_SYSTEMS,
 };
-use crate::parity::Parity;
-use crate::qr::Householder;
 
 /// Below this norm (m) an a-priori position is "unknown" for the elevation
 /// model: elevations are meaningless near the Earth's centre.

@@ -28,8 +28,9 @@
 
 use core::fmt::Write;
 
-use raim_core::monitor::Decision;
-use raim_core::{dist, SatId, System};
+use raim_core::stats::dist;
+use raim_core::Decision;
+use raim_core::{SatId, System};
 
 use crate::result::WireResult;
 

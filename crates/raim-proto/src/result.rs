@@ -2,11 +2,11 @@
 //! (SPEC §11: position, decision, statistics and thresholds, identified and
 //! excluded satellites, protection levels), plus room for the MCUSUM state.
 
-use raim_core::fde::{AlarmCause, Exclusion, MAX_EXCLUSIONS};
 use raim_core::frames::Geodetic;
 use raim_core::measurement::MAX_SYSTEMS;
-use raim_core::monitor::{Decision, EpochResult, SatelliteResult};
-use raim_core::{detection::TestStatistic, SatId};
+use raim_core::snapshot::fde::{AlarmCause, Exclusion, MAX_EXCLUSIONS};
+use raim_core::{snapshot::detection::TestStatistic, SatId};
+use raim_core::{Decision, EpochResult, SatelliteResult};
 use serde::{Deserialize, Serialize};
 
 use crate::CAPACITY;
@@ -15,7 +15,7 @@ use crate::CAPACITY;
 /// core's own report (D_t, h, k, C_t, dimension, alarm and its source, the
 /// satellite identified and those held out). `None` when the MCUSUM is
 /// disabled in the configuration.
-pub type WireMcusum = raim_core::monitor::McusumReport;
+pub type WireMcusum = raim_core::McusumReport;
 
 /// One epoch's result. Field meanings are those of `raim_core::EpochResult`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -107,7 +107,7 @@ mod tests {
     use super::*;
     use crate::message::{Response, ResponseBody};
     use crate::{frame, MAX_RESPONSE_FRAME, MAX_RESPONSE_PAYLOAD};
-    use raim_core::fde::AlarmCause;
+    use raim_core::snapshot::fde::AlarmCause;
     use raim_core::{Config, Epoch, LinearObservation, Raim, System};
 
     /// The seeds' 8-satellite sky with a 50 m step on G02 (docs/CORE.md
@@ -220,7 +220,7 @@ mod tests {
                 prior_norm: 1.0,
                 identified: Some(sat.id),
                 after_exclusion: Some(1.0),
-                held: [Some(sat.id); raim_core::mcusum::MAX_HELD],
+                held: [Some(sat.id); raim_core::sequential::mcusum::MAX_HELD],
                 ..WireMcusum::default()
             }),
         };

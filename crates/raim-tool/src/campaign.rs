@@ -23,7 +23,7 @@ use anyhow::{bail, Result};
 use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use raim_core::config::{DEFAULT_KAPPA, DEFAULT_MIN_S_II};
-use raim_core::detection::TestStatistic;
+use raim_core::snapshot::detection::TestStatistic;
 use raim_core::{Config, Decision, Epoch, LinearObservation, Raim, SatId, System};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};

@@ -13,7 +13,8 @@ use std::io::{BufRead, Write};
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use raim_core::{dist, Epoch, Raim};
+use raim_core::stats::dist;
+use raim_core::{Epoch, Raim};
 
 use config_args::ConfigArgs;
 use epoch_json::{EpochJson, Sats};

@@ -1,8 +1,8 @@
 //! One JSON object per epoch result (docs/FORMATS.md), and a one-line text
 //! summary for terminals.
 
-use raim_core::fde::AlarmCause;
-use raim_core::monitor::AlarmSource;
+use raim_core::snapshot::fde::AlarmCause;
+use raim_core::AlarmSource;
 use raim_core::{Decision, EpochResult, RaimError};
 use serde::Serialize;
 

@@ -5,7 +5,7 @@
 
 use std::path::PathBuf;
 
-use raim_core::fde::AlarmCause;
+use raim_core::snapshot::fde::AlarmCause;
 use raim_core::{Config, Decision, Epoch, Raim, SatId};
 use raim_gnss::faults::FaultPlan;
 use raim_gnss::ranging::{prepare_epoch, RangingOptions};

@@ -1,11 +1,11 @@
 //! Bias designs, detection probability and minimal detectable bias
-//! (SPEC §3, §4.3), from the core's distributions (`raim_core::dist`).
+//! (SPEC §3, §4.3), from the core's distributions (`raim_core::stats::dist`).
 //!
 //! A bias b (sigma units) on satellite i moves the parity vector by b a_i,
 //! so lambda_i = b^2 S_ii and P_D = P(ncx2(d, lambda_i) >= T^2).
 
 use anyhow::{anyhow, bail, Result};
-use raim_core::dist;
+use raim_core::stats::dist;
 
 use super::geometry::Geometry;
 

@@ -32,7 +32,7 @@
 use std::f64::consts::PI;
 
 use anyhow::{bail, Result};
-use raim_core::dist::normal_q;
+use raim_core::stats::dist::normal_q;
 use raim_core::FiRule;
 
 use super::geometry::Geometry;

@@ -1,6 +1,6 @@
 //! The parity-space picture of one geometry (SPEC §2, §4.3): for each
 //! satellite its S_ii and its parity direction a_i = U2^T e_i (|a_i|^2 = S_ii),
-//! computed by the core's Householder parity (`raim_core::parity::Parity`), so
+//! computed by the core's Householder parity (`raim_core::linalg::parity::Parity`), so
 //! the tool analyses the product's own projection.
 //!
 //! With unit noise (sigma = 1, biases in sigma units) and a fault b on
@@ -13,8 +13,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use anyhow::{bail, Result};
+use raim_core::linalg::parity::Parity;
 use raim_core::measurement::MAX_STATES;
-use raim_core::parity::Parity;
 use raim_core::{SatId, System};
 
 /// Capacity of the core buffers used here: the documented default.

@@ -255,7 +255,7 @@ mod tests {
             assert!((s.p_d - 0.9).abs() < PD_TOL, "{}", s.p_d);
             assert!((s.lambda - r.sats[0].lambda).abs() < 1e-9);
         }
-        let lambda_md = raim_core::dist::ncx2_lambda(1e-3, 1e-3, 2).unwrap();
+        let lambda_md = raim_core::stats::dist::ncx2_lambda(1e-3, 1e-3, 2).unwrap();
         for (s, &sii) in r.sats.iter().zip(g.s_ii.iter()) {
             assert!((s.mdb - (lambda_md / sii).sqrt()).abs() < 1e-9);
         }

@@ -1,5 +1,5 @@
 //! The identification rules under study (SPEC §4.1-4.2), evaluated with the
-//! core's own score, `raim_core::lraim::score`, so the tool measures the
+//! core's own score, `raim_core::snapshot::lraim::score`, so the tool measures the
 //! product's code rather than a re-implementation.
 //!
 //! Every rule's score has the form alpha_i w_i^2 + beta_i (w_i the
@@ -8,7 +8,7 @@
 //! [`affine`] reads alpha and beta off the core's score (at w = 0 and w = 1)
 //! for the exact integration; a test checks the form holds.
 
-use raim_core::lraim::score;
+use raim_core::snapshot::lraim::score;
 use raim_core::FiRule;
 
 /// Relative tolerance under which two scores are a tie. Ties have

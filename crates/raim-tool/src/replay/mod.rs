@@ -16,7 +16,7 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use raim_core::fde::AlarmCause;
+use raim_core::snapshot::fde::AlarmCause;
 use raim_core::{Config, Epoch, Raim, System};
 use raim_gnss::faults::{FaultPlan, Scenario};
 use raim_gnss::ranging::{default_codes, prepare_epoch, PreparedEpoch, RangingOptions};

@@ -2,8 +2,8 @@
 //! statistics, the exclusions, the injected truth, the position error
 //! against the reference and the protection levels.
 
-use raim_core::fde::AlarmCause;
 use raim_core::frames::{ecef_to_geodetic, enu_rotation, rotate};
+use raim_core::snapshot::fde::AlarmCause;
 use raim_core::{Decision, SatId};
 use raim_proto::result::WireResult;
 use serde::Serialize;

@@ -3,8 +3,8 @@
 //! protection-level non-centrality are cached per dof, since Pfa and Pmd
 //! rarely change while the dof changes every few epochs.
 
-use crate::dist;
 use crate::error::RaimError;
+use crate::stats::dist;
 
 /// One chi-square test: statistic, threshold and degrees of freedom.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

@@ -3,7 +3,7 @@
 //! each fault mode over the unknown bias instead of plugging in its maximum.
 
 use crate::config::FiRule;
-use crate::parity::Parity;
+use crate::linalg::parity::Parity;
 
 /// The per-satellite identification quantities, in sigma units.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

@@ -2,7 +2,7 @@
 //! (1-sigma ENU) of the least-squares position, both from the whitened gain
 //! A = (H^T H)^-1 H^T in local ENU.
 
-use crate::parity::Parity;
+use crate::linalg::parity::Parity;
 
 /// Horizontal and vertical protection levels and the satellites that set them.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

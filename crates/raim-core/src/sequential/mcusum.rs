@@ -26,12 +26,12 @@
 
 use crate::config::{Carry, FiRule};
 use crate::error::RaimError;
-use crate::lraim::{self, Candidate};
-use crate::mcusum_table as table;
+use crate::linalg::parity::Parity;
 use crate::measurement::SatId;
-use crate::parity::Parity;
+use crate::sequential::mcusum_table as table;
+use crate::snapshot::lraim::{self, Candidate};
 
-pub use crate::mcusum_table::{K_VALUES, LOG10_ARL0, MAX_DIM};
+pub use crate::sequential::mcusum_table::{K_VALUES, LOG10_ARL0, MAX_DIM};
 
 /// Most satellites held excluded after MCUSUM alarms at one time.
 pub const MAX_HELD: usize = 4;

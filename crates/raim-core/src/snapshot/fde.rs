@@ -7,12 +7,12 @@
 //! chi-square quantile at 1 - pwe. That check costs no second solve.
 
 use crate::config::Config;
-use crate::detection::{TestStatistic, Thresholds};
-use crate::dist;
 use crate::error::RaimError;
-use crate::lraim::rank;
 use crate::measurement::{Epoch, SatId};
+use crate::snapshot::detection::{TestStatistic, Thresholds};
+use crate::snapshot::lraim::rank;
 use crate::solve::{solve_into, Solution};
+use crate::stats::dist;
 
 /// Most exclusions reported per epoch (the capacity of the list; the
 /// configured `max_exclusions` is clamped to it).
@@ -91,7 +91,7 @@ fn without<const N: usize>(mask: &[bool; N], index: usize) -> [bool; N] {
 /// The row other than `best` with the largest w_j^2 = r_j^2 / S_jj among
 /// identifiable rows, and that w_j^2.
 fn strongest_alternative<const N: usize>(
-    parity: &crate::parity::Parity<N>,
+    parity: &crate::linalg::parity::Parity<N>,
     best: usize,
     min_s_ii: f64,
 ) -> Option<(usize, f64)> {
@@ -124,7 +124,7 @@ struct PairFit {
 /// satellites of a constellation, whose sum is its clock column) are skipped.
 #[inline(never)]
 fn best_pairs<const N: usize>(
-    parity: &crate::parity::Parity<N>,
+    parity: &crate::linalg::parity::Parity<N>,
     min_s_ii: f64,
 ) -> [Option<PairFit>; 2] {
     let d2 = parity.sse();

@@ -6,8 +6,8 @@
 //! `A = (H^T H)^-1 H^T` has columns `T1^-1 T1^-T h_i`.
 
 use crate::error::RaimError;
+use crate::linalg::qr::Householder;
 use crate::measurement::MAX_STATES;
-use crate::qr::Householder;
 
 /// Parity-space quantities of one (whitened) linear model.
 #[derive(Debug, Clone)]

@@ -1,0 +1,97 @@
+//! What the monitor says about one epoch: the decision, the statistics,
+//! the per-satellite quantities, the exclusions and the protection levels.
+//! Shared by the engines (`snapshot`, `sequential`) and returned by
+//! [`crate::Raim::process`].
+
+use crate::frames::Geodetic;
+use crate::measurement::{SatId, MAX_SYSTEMS};
+use crate::sequential::McusumReport;
+use crate::snapshot::detection::TestStatistic;
+use crate::snapshot::fde::{AlarmCause, Exclusion, MAX_EXCLUSIONS};
+use crate::snapshot::protection::ProtectionLevels;
+
+/// The epoch's verdict.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Decision {
+    /// The all-in-view test passes and the protection levels are within the
+    /// alert limits.
+    Ok,
+    /// The test fails and exclusion could not restore consistency: do not use.
+    Alarm,
+    /// One or more satellites were excluded; the subset passes and its
+    /// protection levels are within the alert limits.
+    Excluded,
+    /// The measurements are consistent, but integrity cannot be assured:
+    /// a protection level exceeds its alert limit.
+    Unavailable,
+}
+
+/// Per-satellite quantities from the all-in-view solution (where the
+/// detection and the first identification happen).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct SatelliteResult {
+    pub id: SatId,
+    /// In the solution in force (not excluded).
+    pub used: bool,
+    pub sigma_m: f64,
+    pub elevation_rad: f64,
+    /// Diagonal of S (1 - leverage).
+    pub s_ii: f64,
+    /// Leverage h_ii = 1 - S_ii.
+    pub h_ii: f64,
+    /// Normalised residual w_i = r_i / sqrt(S_ii), sigma units.
+    pub w: f64,
+    /// Bias estimate b_i = r_i / S_ii, in metres (seed 000 eq. 8).
+    pub bias_m: f64,
+    /// Identification score under the configured rule; NaN if unidentifiable.
+    pub score: f64,
+    pub identifiable: bool,
+}
+
+/// Everything the monitor says about one epoch.
+#[derive(Debug, Clone)]
+pub struct EpochResult<const N: usize> {
+    pub time_s: f64,
+    pub decision: Decision,
+    /// Why an alarm stands (None unless `decision == Alarm`).
+    pub alarm_cause: Option<AlarmCause>,
+    /// ECEF position of the solution in force (pseudorange input).
+    pub position_ecef_m: Option<[f64; 3]>,
+    pub geodetic: Option<Geodetic>,
+    /// ENU correction to the linearisation point (linear input), m.
+    pub correction_enu_m: [f64; 3],
+    /// Receiver clock per system in `System::ALL` order, m.
+    pub clock_m: [Option<f64>; MAX_SYSTEMS],
+    /// The all-in-view test.
+    pub initial_test: TestStatistic,
+    /// The test of the solution in force.
+    pub test: TestStatistic,
+    pub satellites: heapless::Vec<SatelliteResult, N>,
+    /// The satellite the rule identified on the all-in-view solution when
+    /// the test failed.
+    pub identified: Option<SatId>,
+    /// Exclusion steps. They are in force only when `decision` is
+    /// `Excluded` (or `Unavailable` after exclusion).
+    pub exclusions: heapless::Vec<Exclusion, MAX_EXCLUSIONS>,
+    pub protection: ProtectionLevels,
+    pub worst_h: Option<SatId>,
+    pub worst_v: Option<SatId>,
+    /// 1-sigma ENU position error of the solution in force, m.
+    pub sigma_enu_m: [f64; 3],
+    /// Non-centrality lambda_md used for the PLs (dof of the final set).
+    pub lambda_md: f64,
+    /// n - m >= 1 in the solution in force.
+    pub detection_available: bool,
+    /// n - m >= 2 in the solution in force.
+    pub exclusion_available: bool,
+    /// PLs within the alert limits.
+    pub pl_available: bool,
+    pub iterations: u32,
+    /// The sequential test's state and decision; `None` when the MCUSUM is
+    /// disabled (the result is then exactly the snapshot monitor's).
+    pub mcusum: Option<McusumReport>,
+}

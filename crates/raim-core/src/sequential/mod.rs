@@ -1,0 +1,392 @@
+//! The sequential monitor (SPEC §7): the snapshot test and the Crosier
+//! MCUSUM on the same parity vector, the satellites held excluded after an
+//! MCUSUM alarm, and identification and exclusion from the accumulated
+//! vector. Its state is the MCUSUM's (accumulated vector and holds); the
+//! snapshot engine it runs on is passed in.
+
+pub mod mcusum;
+#[rustfmt::skip]
+pub mod mcusum_table;
+
+use crate::config::Config;
+use crate::error::RaimError;
+use crate::measurement::{Epoch, LinearObservation, Observations, RangeObservation, SatId};
+use crate::result::{Decision, EpochResult, SatelliteResult};
+use crate::snapshot::fde::{self, AlarmCause, Exclusion, FdeOutcome};
+use crate::snapshot::{protection, Snapshot};
+use crate::solve::{solve, Solution};
+use mcusum::{Mcusum, MAX_HELD};
+
+/// Which test raised the epoch's alarm (SPEC §7.4: alarm if D_snap >= T or
+/// D_t >= h).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum AlarmSource {
+    #[default]
+    None,
+    /// The all-in-view snapshot test (D^2 >= T^2).
+    Snapshot,
+    /// The MCUSUM (D_t >= h).
+    Cusum,
+    Both,
+}
+
+/// The MCUSUM part of an epoch's result (SPEC §7).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct McusumReport {
+    /// D_t = ||S_t|| before any exclusion this epoch (sigma units).
+    pub statistic: f64,
+    /// The alarm threshold h for this epoch's dimension (NaN if none).
+    pub threshold: f64,
+    pub k: f64,
+    /// C_t = ||S_(t-1) + y_t||.
+    pub c: f64,
+    /// Parity dimension d of the solution the MCUSUM ran on.
+    pub dim: u32,
+    /// ||S_(t-1)|| after the transport into this epoch's parity space.
+    pub prior_norm: f64,
+    /// False when the state restarted at 0 this epoch (reset mode on a set
+    /// change, or no threshold for the dimension).
+    pub carried: bool,
+    /// D_t >= h.
+    pub alarm: bool,
+    /// Which test alarmed this epoch.
+    pub source: AlarmSource,
+    /// The satellite identified from the accumulated vector after an MCUSUM
+    /// alarm (MLE rule on v = U2 S_t, see `Mcusum::identify`).
+    pub identified: Option<SatId>,
+    /// D after the identified satellite's row was removed from the state.
+    pub after_exclusion: Option<f64>,
+    /// Satellites held excluded after MCUSUM alarms (this one included).
+    pub held: [Option<SatId>; MAX_HELD],
+    /// False when the table has no threshold for this dimension (d > MAX_DIM):
+    /// the MCUSUM did not run and its state was reset.
+    pub available: bool,
+}
+
+/// The sequential engine: the MCUSUM state carried between epochs.
+#[derive(Debug, Clone, Default)]
+pub struct Sequential<const N: usize> {
+    pub(crate) mcusum: Mcusum<N>,
+}
+
+impl<const N: usize> Sequential<N> {
+    pub fn new() -> Self {
+        Sequential {
+            mcusum: Mcusum::new(),
+        }
+    }
+    /// Snapshot test + MCUSUM (SPEC §7.4). Satellites held excluded after
+    /// earlier MCUSUM alarms are left out of the epoch first.
+    pub fn process(
+        &mut self,
+        snap: &mut Snapshot<N>,
+        cfg: &Config,
+        epoch: &Epoch<'_>,
+    ) -> Result<EpochResult<N>, RaimError> {
+        let present = |id: SatId| (0..epoch.len()).any(|i| epoch.id(i) == Some(id));
+        self.mcusum
+            .release(epoch.time_s, cfg.mcusum.hold_s, present);
+        if !self.mcusum.held().is_empty() {
+            let filtered = match epoch.observations {
+                Observations::Linear { sats } => {
+                    self.without_held_linear(snap, cfg, epoch.time_s, sats)
+                }
+                Observations::Ranges { sats, apriori_m } => {
+                    self.without_held_ranges(snap, cfg, epoch.time_s, sats, apriori_m)
+                }
+            };
+            match filtered {
+                Err(RaimError::TooFewSatellites { .. }) | Err(RaimError::RankDeficient { .. }) => {
+                    // The holds leave no solvable set: release them rather
+                    // than lose the epoch (the snapshot test still guards).
+                    self.mcusum.clear();
+                }
+                other => return other,
+            }
+        }
+        let mut identity = [0usize; N];
+        for (i, v) in identity.iter_mut().enumerate() {
+            *v = i;
+        }
+        self.sequential_on(snap, cfg, epoch, &identity, epoch)
+    }
+
+    #[inline(never)]
+    fn without_held_linear(
+        &mut self,
+        snap: &mut Snapshot<N>,
+        cfg: &Config,
+        time_s: f64,
+        sats: &[LinearObservation],
+    ) -> Result<EpochResult<N>, RaimError> {
+        let mut buf = [LinearObservation::default(); N];
+        let mut src = [0usize; N];
+        let n = self.keep_unheld(sats.iter().map(|s| s.id), |k, i| {
+            if let (Some(b), Some(o)) = (buf.get_mut(k), sats.get(i)) {
+                *b = *o;
+            }
+            if let Some(v) = src.get_mut(k) {
+                *v = i;
+            }
+        });
+        let e = Epoch::linear(time_s, buf.get(..n).unwrap_or(&[]));
+        self.sequential_on(snap, cfg, &e, &src, &Epoch::linear(time_s, sats))
+    }
+
+    #[inline(never)]
+    fn without_held_ranges(
+        &mut self,
+        snap: &mut Snapshot<N>,
+        cfg: &Config,
+        time_s: f64,
+        sats: &[RangeObservation],
+        apriori_m: Option<[f64; 3]>,
+    ) -> Result<EpochResult<N>, RaimError> {
+        let mut buf = [RangeObservation::default(); N];
+        let mut src = [0usize; N];
+        let n = self.keep_unheld(sats.iter().map(|s| s.id), |k, i| {
+            if let (Some(b), Some(o)) = (buf.get_mut(k), sats.get(i)) {
+                *b = *o;
+            }
+            if let Some(v) = src.get_mut(k) {
+                *v = i;
+            }
+        });
+        let e = Epoch::ranges(time_s, buf.get(..n).unwrap_or(&[]), apriori_m);
+        self.sequential_on(snap, cfg, &e, &src, &Epoch::ranges(time_s, sats, apriori_m))
+    }
+
+    /// Calls `keep(k, i)` for the k-th kept input satellite i; returns the count.
+    fn keep_unheld(
+        &self,
+        ids: impl Iterator<Item = SatId>,
+        mut keep: impl FnMut(usize, usize),
+    ) -> usize {
+        let mut k = 0;
+        for (i, id) in ids.enumerate() {
+            if !self.mcusum.is_held(id) {
+                keep(k, i);
+                k += 1;
+            }
+        }
+        k
+    }
+
+    /// The snapshot monitor on `epoch` (the input without held satellites;
+    /// `src[k]` is the input index of its satellite k), then the MCUSUM on
+    /// the solution in force, and identification + exclusion after an
+    /// MCUSUM alarm.
+    fn sequential_on(
+        &mut self,
+        snap: &mut Snapshot<N>,
+        cfg: &Config,
+        epoch: &Epoch<'_>,
+        src: &[usize; N],
+        input: &Epoch<'_>,
+    ) -> Result<EpochResult<N>, RaimError> {
+        let mc = cfg.mcusum;
+        let mut outcome = FdeOutcome::empty();
+        let mut result = snap.run(cfg, epoch, &mut outcome)?;
+        let sol = &outcome.solution;
+        let to_input = |k: usize| src.get(k).copied().unwrap_or(k);
+        for e in result.exclusions.iter_mut() {
+            e.index = to_input(e.index);
+        }
+        let rows = sol.rows();
+        let ids = sol.ids.get(..rows).unwrap_or(&[]);
+        let dim = sol.parity.dof();
+        let snapshot_alarm = result.initial_test.alarm();
+        let mut report = McusumReport {
+            k: mc.k,
+            dim: dim as u32,
+            ..McusumReport::default()
+        };
+        match mcusum::threshold(dim, mc.k, mc.arl0) {
+            Err(_) => {
+                self.mcusum.reset();
+                report.threshold = f64::NAN;
+                report.statistic = f64::NAN;
+                report.c = f64::NAN;
+            }
+            Ok(h) => {
+                let step = self.mcusum.update(ids, &sol.parity, mc.k, mc.carry, h);
+                report.available = true;
+                report.threshold = h;
+                report.statistic = step.statistic;
+                report.c = step.c;
+                report.prior_norm = step.prior_norm;
+                report.carried = step.carried;
+                report.alarm = !(step.statistic < h);
+            }
+        }
+        if report.alarm {
+            self.after_cusum_alarm(snap, cfg, epoch, &to_input, sol, &mut result, &mut report)?;
+        }
+        report.source = match (snapshot_alarm, report.alarm) {
+            (false, false) => AlarmSource::None,
+            (true, false) => AlarmSource::Snapshot,
+            (false, true) => AlarmSource::Cusum,
+            (true, true) => AlarmSource::Both,
+        };
+        for (slot, h) in report.held.iter_mut().zip(self.mcusum.held().iter()) {
+            *slot = Some(h.id);
+        }
+        // Satellites of the input that were held out are listed, unused.
+        for i in 0..input.len() {
+            let Some(id) = input.id(i) else { continue };
+            if self.mcusum.is_held(id) && !result.satellites.iter().any(|s| s.id == id) {
+                let _ = result.satellites.push(SatelliteResult {
+                    id,
+                    used: false,
+                    sigma_m: f64::NAN,
+                    elevation_rad: f64::NAN,
+                    s_ii: f64::NAN,
+                    h_ii: f64::NAN,
+                    w: f64::NAN,
+                    bias_m: f64::NAN,
+                    score: f64::NAN,
+                    identifiable: false,
+                });
+            }
+        }
+        result.mcusum = Some(report);
+        Ok(result)
+    }
+
+    /// After D_t >= h: identify from the accumulated vector, exclude the
+    /// satellite (re-solve and re-test the subset, as FDE does), hold it
+    /// excluded, and carry the state into the subset's parity space, which
+    /// removes the identified fault's accumulated component (reset mode:
+    /// restart at 0). Without redundancy or identification the alarm stands
+    /// and the CUSUM restarts, as a CUSUM does after it signals.
+    /// Not inlined: its subset solution then occupies stack only in the
+    /// epochs that need it.
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)] // the engine, the epoch and its solution, and the two results it edits
+    fn after_cusum_alarm(
+        &mut self,
+        snap: &mut Snapshot<N>,
+        cfg: &Config,
+        epoch: &Epoch<'_>,
+        to_input: &dyn Fn(usize) -> usize,
+        sol: &Solution<N>,
+        result: &mut EpochResult<N>,
+        report: &mut McusumReport,
+    ) -> Result<(), RaimError> {
+        let (best, second) = self.mcusum.identify(&sol.parity, cfg.min_s_ii);
+        let best = best.and_then(|b| Some((b, *sol.ids.get(b.row)?, *sol.source.get(b.row)?)));
+        report.identified = best.map(|(_, id, _)| id);
+        let runner_up = second.and_then(|s| Some((s, *sol.ids.get(s.row)?)));
+        let snapshot_failed = result.decision == Decision::Alarm;
+        let stand = |result: &mut EpochResult<N>, cause: AlarmCause| {
+            result.decision = Decision::Alarm;
+            if result.alarm_cause.is_none() {
+                result.alarm_cause = Some(cause);
+            }
+        };
+        let Some((cand, id, fidx)) = best else {
+            stand(result, AlarmCause::Unidentifiable);
+            self.mcusum.reset();
+            return Ok(());
+        };
+        if sol.parity.dof() < 2 {
+            stand(result, AlarmCause::NoRedundancy);
+            self.mcusum.reset();
+            return Ok(());
+        }
+        if let Some((s2, id2)) = runner_up {
+            if !(s2.score < mcusum::AMBIGUITY_RATIO * cand.score) {
+                // Two fault directions explain the accumulated vector about
+                // equally well: alarm rather than guess (as FDE does).
+                stand(
+                    result,
+                    AlarmCause::Ambiguous {
+                        best: id,
+                        runner_up: id2,
+                    },
+                );
+                self.mcusum.reset();
+                return Ok(());
+            }
+        }
+        let mut mask = [false; N];
+        for (r, &k) in sol.source.iter().enumerate().take(sol.rows()) {
+            if r != cand.row {
+                if let Some(m) = mask.get_mut(k) {
+                    *m = true;
+                }
+            }
+        }
+        let sub = match solve::<N>(cfg, epoch, &mask) {
+            Ok(s) => s,
+            Err(RaimError::RankDeficient { .. }) | Err(RaimError::TooFewSatellites { .. }) => {
+                stand(result, AlarmCause::SubsetGeometry { excluded: id });
+                self.mcusum.reset();
+                return Ok(());
+            }
+            Err(e) => return Err(e),
+        };
+        self.mcusum.hold(id, epoch.time_s);
+        let sub_ids = sub.ids.get(..sub.rows()).unwrap_or(&[]);
+        report.after_exclusion = Some(self.mcusum.carry_to(sub_ids, &sub.parity, cfg.mcusum.carry));
+        if snapshot_failed {
+            // The snapshot alarm stands this epoch; the hold applies from the next.
+            return Ok(());
+        }
+        let after = fde::test(cfg, &mut snap.thresholds, &sub)?;
+        let sigma = sol.sigma_m.get(cand.row).copied().unwrap_or(1.0);
+        let r_j = sol
+            .parity
+            .residuals()
+            .get(cand.row)
+            .copied()
+            .unwrap_or(f64::NAN);
+        let s_jj = sol.parity.s_ii().get(cand.row).copied().unwrap_or(f64::NAN);
+        let record = Exclusion {
+            id,
+            index: to_input(fidx),
+            before: result.test,
+            after,
+            score: cand.score,
+            bias_m: r_j / s_jj * sigma,
+        };
+        let _ = result.exclusions.push(record);
+        let dof = sub.parity.dof();
+        let (_, lambda_md) = snap.thresholds.get(cfg.pfa, cfg.pmd, dof)?;
+        let protection = protection::slope_levels(&sub.parity, lambda_md, cfg.min_s_ii);
+        let pl_available = protection.hpl_m <= cfg.alert.hal_m
+            && cfg.alert.val_m.is_none_or(|val| protection.vpl_m <= val);
+        let id_at = |row: Option<usize>| row.and_then(|r| sub.ids.get(r).copied());
+        result.decision = match (!after.alarm(), pl_available) {
+            (false, _) => Decision::Alarm,
+            (true, false) => Decision::Unavailable,
+            (true, true) => Decision::Excluded,
+        };
+        result.alarm_cause = None;
+        result.position_ecef_m = sub.position_ecef_m;
+        result.geodetic = sub.geodetic;
+        result.correction_enu_m = sub.correction_enu_m;
+        result.clock_m = sub.clock_m;
+        result.test = after;
+        result.worst_h = id_at(protection.worst_h_row);
+        result.worst_v = id_at(protection.worst_v_row);
+        result.protection = protection;
+        result.sigma_enu_m = protection::sigma_enu_m(&sub.parity);
+        result.lambda_md = lambda_md;
+        result.detection_available = dof >= 1;
+        result.exclusion_available = dof >= 2;
+        result.pl_available = pl_available;
+        let in_sub = |sid: SatId| sub.ids.iter().take(sub.rows()).any(|&x| x == sid);
+        for s in result.satellites.iter_mut() {
+            s.used = in_sub(s.id);
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests;

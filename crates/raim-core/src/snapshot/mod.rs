@@ -1,0 +1,152 @@
+//! The snapshot monitor (SPEC §3-6): detect with the parity-space test,
+//! identify (MLE or L-RAIM), exclude and re-test (FDE), and protect (slope
+//! PLs). Its only state is the per-dof threshold cache.
+
+pub mod detection;
+pub mod fde;
+pub mod lraim;
+pub mod protection;
+
+use crate::config::Config;
+use crate::error::RaimError;
+use crate::measurement::{Epoch, SatId};
+use crate::result::{Decision, EpochResult, SatelliteResult};
+use crate::solve::{solve_into, Solution};
+use detection::Thresholds;
+use fde::FdeOutcome;
+
+/// The snapshot engine: one epoch in, one result out; it keeps the
+/// chi-square thresholds per dof between epochs.
+#[derive(Debug, Clone, Default)]
+pub struct Snapshot<const N: usize> {
+    pub(crate) thresholds: Thresholds<N>,
+}
+
+impl<const N: usize> Snapshot<N> {
+    pub fn new() -> Self {
+        Snapshot {
+            thresholds: Thresholds::default(),
+        }
+    }
+
+    /// The chi-square threshold T^2 and lambda_md for a dof (cached).
+    pub fn thresholds(&mut self, cfg: &Config, dof: usize) -> Result<(f64, f64), RaimError> {
+        self.thresholds.get(cfg.pfa, cfg.pmd, dof)
+    }
+
+    /// One epoch through the snapshot monitor. The caller has validated
+    /// `cfg` and `epoch` (see [`crate::Raim::process`]).
+    pub fn process(
+        &mut self,
+        cfg: &Config,
+        epoch: &Epoch<'_>,
+    ) -> Result<EpochResult<N>, RaimError> {
+        let mut outcome = FdeOutcome::empty();
+        self.run(cfg, epoch, &mut outcome)
+    }
+
+    /// The snapshot monitor (SPEC §3-6): the result; the solution in force
+    /// is left in `outcome.solution` (caller storage: nothing solution-sized
+    /// is returned by value, for the firmware's stack).
+    pub(crate) fn run(
+        &mut self,
+        cfg: &Config,
+        epoch: &Epoch<'_>,
+        outcome: &mut FdeOutcome<N>,
+    ) -> Result<EpochResult<N>, RaimError> {
+        let mut mask = [false; N];
+        for v in mask.iter_mut().take(epoch.len()) {
+            *v = true;
+        }
+        solve_into::<N>(cfg, epoch, &mask, &mut outcome.solution)?;
+        let initial_test = fde::test(cfg, &mut self.thresholds, &outcome.solution)?;
+        let satellites = per_satellite(cfg, &outcome.solution);
+        fde::run(cfg, &mut self.thresholds, epoch, outcome)?;
+        let sol = &outcome.solution;
+        let dof = sol.parity.dof();
+        let (_, lambda_md) = self.thresholds.get(cfg.pfa, cfg.pmd, dof)?;
+        let protection = protection::slope_levels(&sol.parity, lambda_md, cfg.min_s_ii);
+        let pl_available = protection.hpl_m <= cfg.alert.hal_m
+            && cfg.alert.val_m.is_none_or(|val| protection.vpl_m <= val);
+        let excluded = |id: SatId| outcome.exclusions.iter().any(|e| e.id == id);
+        let passes = !outcome.test.alarm();
+        let decision = match (passes, outcome.exclusions.is_empty(), pl_available) {
+            (false, _, _) => Decision::Alarm,
+            (true, _, false) => Decision::Unavailable,
+            (true, true, true) => Decision::Ok,
+            (true, false, true) => Decision::Excluded,
+        };
+        let mut satellites = satellites;
+        if passes {
+            for s in satellites.iter_mut() {
+                s.used = !excluded(s.id);
+            }
+        }
+        let id_at = |row: Option<usize>| row.and_then(|r| sol.ids.get(r).copied());
+        let result = EpochResult {
+            time_s: epoch.time_s,
+            decision,
+            alarm_cause: if passes { None } else { outcome.cause },
+            position_ecef_m: sol.position_ecef_m,
+            geodetic: sol.geodetic,
+            correction_enu_m: sol.correction_enu_m,
+            clock_m: sol.clock_m,
+            initial_test,
+            test: outcome.test,
+            satellites,
+            identified: outcome.identified,
+            worst_h: id_at(protection.worst_h_row),
+            worst_v: id_at(protection.worst_v_row),
+            protection,
+            sigma_enu_m: protection::sigma_enu_m(&sol.parity),
+            lambda_md,
+            detection_available: dof >= 1,
+            exclusion_available: dof >= 2,
+            pl_available,
+            iterations: sol.iterations,
+            exclusions: outcome.exclusions.clone(),
+            mcusum: None,
+        };
+        Ok(result)
+    }
+}
+
+pub(crate) fn per_satellite<const N: usize>(
+    cfg: &Config,
+    sol: &Solution<N>,
+) -> heapless::Vec<SatelliteResult, N> {
+    let mut out = heapless::Vec::new();
+    let p = &sol.parity;
+    let rows = p
+        .residuals()
+        .iter()
+        .zip(p.s_ii())
+        .zip(sol.ids.iter())
+        .zip(sol.sigma_m.iter())
+        .zip(sol.elevation_rad.iter());
+    for ((((&r, &s), &id), &sigma), &el) in rows {
+        let c = lraim::score(cfg.rule, r, s, cfg.min_s_ii);
+        let (w, bias) = if s > 0.0 {
+            (r / libm::sqrt(s), r / s * sigma)
+        } else {
+            (f64::NAN, f64::NAN)
+        };
+        // Capacity N equals the solution's row capacity, so push cannot fail.
+        let _ = out.push(SatelliteResult {
+            id,
+            used: true,
+            sigma_m: sigma,
+            elevation_rad: el,
+            s_ii: s,
+            h_ii: 1.0 - s,
+            w,
+            bias_m: bias,
+            score: c.map_or(f64::NAN, |c| c.score),
+            identifiable: c.is_some(),
+        });
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests;

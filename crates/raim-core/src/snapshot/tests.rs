@@ -1,0 +1,379 @@
+//! The snapshot monitor end to end, through `Raim::process`.
+extern crate std;
+use crate::config::Config;
+use crate::config::{AlertLimits, FiRule, Phase};
+use crate::error::RaimError;
+use crate::measurement::{Epoch, LinearObservation, RangeObservation, SatId, System};
+use crate::monitor::Raim;
+use crate::result::Decision;
+use crate::snapshot::fde::AlarmCause;
+use crate::testutil::{linear_epoch, range_epoch, Rng, SKY8};
+use std::vec::Vec;
+
+fn cfg() -> Config {
+    Config::preset(Phase::Npa)
+}
+
+/// A 50 m step on one of 8 satellites (sigma 1 m) is detected,
+/// identified and excluded, for every seed of noise tried and for each
+/// rule; the subset passes. Sat 2 (row 1) is a mid-leverage satellite.
+#[test]
+fn fde_excludes_a_50_m_step_on_one_of_eight() {
+    let mut raim = Raim::<16>::new();
+    for rule in [FiRule::Mle, FiRule::LraimFlat, FiRule::default()] {
+        let c = Config { rule, ..cfg() };
+        for seed in 0..50 {
+            let sats = linear_epoch(&SKY8, 1.0, &mut Rng::new(seed), &[(1, 50.0)]);
+            let r = raim
+                .process(&c, &Epoch::linear(seed as f64, &sats))
+                .unwrap();
+            assert!(r.initial_test.alarm(), "seed {seed}: {:?}", r.initial_test);
+            assert_eq!(
+                r.decision,
+                Decision::Excluded,
+                "seed {seed} {rule:?}: {:?}",
+                r.alarm_cause
+            );
+            assert_eq!(r.exclusions.len(), 1);
+            let e = r.exclusions[0];
+            assert_eq!(e.id, SatId::new(System::Gps, 2));
+            assert!(e.before.statistic > e.before.threshold);
+            assert!(e.after.statistic < e.after.threshold);
+            assert_eq!(e.after.dof, 3);
+            // The bias estimate is the 50 m step within 5 sigma of its
+            // estimation noise (1 m / sqrt(S_ii)).
+            let s = r.satellites[1];
+            assert!(
+                (e.bias_m - 50.0).abs() < 5.0 / s.s_ii.sqrt(),
+                "{}",
+                e.bias_m
+            );
+            assert!(!s.used && r.satellites.iter().filter(|s| s.used).count() == 7);
+            assert!(r.detection_available && r.exclusion_available);
+        }
+    }
+}
+
+/// Two simultaneous faults (60 m and -45 m) on 10 satellites: both are
+/// excluded, one after the other, and the final subset passes.
+#[test]
+fn fde_excludes_two_faults() {
+    let sky10: Vec<(f64, f64)> = SKY8
+        .iter()
+        .copied()
+        .chain([(120.0, 70.0), (280.0, 65.0)])
+        .collect();
+    let mut raim = Raim::<16>::new();
+    for seed in 0..30 {
+        let sats = linear_epoch(
+            &sky10,
+            1.0,
+            &mut Rng::new(100 + seed),
+            &[(2, 60.0), (5, -45.0)],
+        );
+        let r = raim.process(&cfg(), &Epoch::linear(0.0, &sats)).unwrap();
+        assert_eq!(
+            r.decision,
+            Decision::Excluded,
+            "seed {seed}: {:?} {:?}",
+            r.alarm_cause,
+            r.exclusions
+        );
+        let mut ids: Vec<u8> = r.exclusions.iter().map(|e| e.id.prn).collect();
+        ids.sort();
+        assert_eq!(ids, [3, 6], "seed {seed}");
+        // One exclusion cannot explain two faults, so FDE finds the
+        // pair in closed form (docs/CORE.md); the subset passes.
+        assert!(!r.exclusions[1].after.alarm());
+        for e in &r.exclusions {
+            assert_eq!(e.before, r.initial_test);
+        }
+        // The joint bias estimates recover the injected 60 m and -45 m
+        // within 5 sigma of their estimation noise.
+        for e in &r.exclusions {
+            let truth = if e.id.prn == 3 { 60.0 } else { -45.0 };
+            assert!((e.bias_m - truth).abs() < 5.0 / 0.3f64.sqrt(), "{e:?}");
+        }
+        assert_eq!(r.test.dof, 4);
+    }
+}
+
+/// With no fault, 1000 noise draws give no exclusion at Pfa 3.3e-7.
+#[test]
+fn clean_epochs_pass() {
+    let mut raim = Raim::<16>::new();
+    for seed in 0..1000 {
+        let sats = linear_epoch(&SKY8, 1.0, &mut Rng::new(seed), &[]);
+        let r = raim.process(&cfg(), &Epoch::linear(0.0, &sats)).unwrap();
+        assert_eq!(r.decision, Decision::Ok, "seed {seed}");
+        assert!(r.exclusions.is_empty() && r.identified.is_none());
+    }
+}
+
+/// Slope PLs checked against a brute-force computation: for each
+/// satellite, the bias that gives non-centrality lambda_md,
+/// b_i = sqrt(lambda / S_ii), pushed through a dense nalgebra
+/// least-squares solve (normal equations, independent of the QR path),
+/// gives a horizontal error whose maximum over i is the HPL.
+#[test]
+fn protection_levels_match_brute_force_worst_bias() {
+    use nalgebra::{DMatrix, DVector};
+    let mut raim = Raim::<16>::new();
+    let sats = linear_epoch(&SKY8, 1.0, &mut Rng::new(7), &[]);
+    let r = raim.process(&cfg(), &Epoch::linear(0.0, &sats)).unwrap();
+    let n = sats.len();
+    let mut h = DMatrix::zeros(n, 4);
+    for (i, s) in sats.iter().enumerate() {
+        for k in 0..3 {
+            h[(i, k)] = -s.los_enu[k];
+        }
+        h[(i, 3)] = 1.0;
+    }
+    let a = (h.transpose() * &h).try_inverse().unwrap() * h.transpose();
+    let s_mat = DMatrix::identity(n, n) - &h * &a;
+    let (mut hpl, mut vpl) = (0.0f64, 0.0f64);
+    for i in 0..n {
+        let b = (r.lambda_md / s_mat[(i, i)]).sqrt();
+        let mut f = DVector::zeros(n);
+        f[i] = b;
+        let dx = &a * f;
+        hpl = hpl.max((dx[0] * dx[0] + dx[1] * dx[1]).sqrt());
+        vpl = vpl.max(dx[2].abs());
+    }
+    const PL_TOL_M: f64 = 1e-9;
+    assert!(
+        (r.protection.hpl_m - hpl).abs() < PL_TOL_M,
+        "{} {hpl}",
+        r.protection.hpl_m
+    );
+    assert!(
+        (r.protection.vpl_m - vpl).abs() < PL_TOL_M,
+        "{} {vpl}",
+        r.protection.vpl_m
+    );
+    // The 1-sigma accuracy is the diagonal of (H^T H)^-1.
+    let cov = (h.transpose() * &h).try_inverse().unwrap();
+    for k in 0..3 {
+        assert!((r.sigma_enu_m[k] - cov[(k, k)].sqrt()).abs() < 1e-12);
+    }
+    // A tiny alert limit makes the epoch unavailable, not alarmed.
+    let tight = Config {
+        alert: AlertLimits {
+            hal_m: 1.0,
+            val_m: None,
+        },
+        ..cfg()
+    };
+    let r2 = raim.process(&tight, &Epoch::linear(0.0, &sats)).unwrap();
+    assert_eq!(r2.decision, Decision::Unavailable);
+    assert!(!r2.pl_available);
+}
+
+/// Gauss-Newton from the Earth's centre recovers a receiver and two
+/// clocks (GPS + Galileo) from noise-free pseudoranges.
+#[test]
+fn gauss_newton_recovers_position_and_clocks() {
+    let rx = [-3_962_108.673, 3_381_309.574, 3_668_678.638];
+    let clock = [1234.5, -987.0, 0.0, 0.0, 0.0];
+    let sky = [
+        (System::Gps, 1, 10.0, 80.0),
+        (System::Gps, 5, 80.0, 30.0),
+        (System::Gps, 9, 170.0, 45.0),
+        (System::Gps, 12, 250.0, 20.0),
+        (System::Gps, 17, 320.0, 55.0),
+        (System::Galileo, 3, 40.0, 25.0),
+        (System::Galileo, 8, 200.0, 65.0),
+        (System::Galileo, 11, 290.0, 35.0),
+    ];
+    let sats = range_epoch(rx, &sky, &clock, 1.0, &mut Rng::new(1), &[]);
+    // Remove the noise to test the solver alone.
+    let clean: Vec<RangeObservation> = range_epoch(rx, &sky, &clock, 0.0, &mut Rng::new(1), &[])
+        .into_iter()
+        .map(|o| RangeObservation {
+            sigma_m: Some(1.0),
+            ..o
+        })
+        .collect();
+    let mut raim = Raim::<16>::new();
+    let r = raim
+        .process(&cfg(), &Epoch::ranges(0.0, &clean, None))
+        .unwrap();
+    let p = r.position_ecef_m.unwrap();
+    const POSITION_TOL_M: f64 = 1e-6;
+    for k in 0..3 {
+        assert!((p[k] - rx[k]).abs() < POSITION_TOL_M, "{p:?}");
+    }
+    assert!((r.clock_m[0].unwrap() - clock[0]).abs() < POSITION_TOL_M);
+    assert!((r.clock_m[1].unwrap() - clock[1]).abs() < POSITION_TOL_M);
+    assert_eq!(r.test.dof, 8 - 5);
+    assert_eq!(r.decision, Decision::Ok);
+    // With noise and a 50 m step on Galileo 8, FDE excludes it and
+    // re-solves the position by Gauss-Newton on the subset.
+    let mut faulty = sats.clone();
+    faulty[6].pseudorange_m += 50.0;
+    let r = raim
+        .process(&cfg(), &Epoch::ranges(0.0, &faulty, Some(rx)))
+        .unwrap();
+    assert_eq!(r.decision, Decision::Excluded, "{:?}", r.alarm_cause);
+    assert_eq!(r.exclusions[0].id, SatId::new(System::Galileo, 8));
+    let p = r.position_ecef_m.unwrap();
+    let err = ((p[0] - rx[0]).powi(2) + (p[1] - rx[1]).powi(2) + (p[2] - rx[2]).powi(2)).sqrt();
+    assert!(err < 10.0, "{err}");
+}
+
+fn sample() -> Vec<LinearObservation> {
+    linear_epoch(&SKY8, 1.0, &mut Rng::new(3), &[])
+}
+
+/// Every error variant is reachable from input and carries the
+/// offending value.
+#[test]
+fn bad_input_gets_typed_errors() {
+    let mut raim = Raim::<8>::new();
+    let c = cfg();
+    // NotFinite
+    let mut s = sample();
+    s[3].residual_m = f64::NAN;
+    match raim.process(&c, &Epoch::linear(0.0, &s)) {
+        Err(RaimError::NotFinite {
+            field: "residual_m",
+            index: 3,
+            value,
+        }) => assert!(value.is_nan()),
+        other => panic!("{other:?}"),
+    }
+    let mut s = sample();
+    s[0].los_enu[1] = f64::INFINITY;
+    assert!(matches!(
+        raim.process(&c, &Epoch::linear(0.0, &s)),
+        Err(RaimError::NotFinite {
+            field: "los_enu",
+            index: 0,
+            ..
+        })
+    ));
+    assert!(matches!(
+        raim.process(&c, &Epoch::linear(f64::NAN, &sample())),
+        Err(RaimError::NotFinite {
+            field: "time_s",
+            ..
+        })
+    ));
+    // DuplicateSatellite
+    let mut s = sample();
+    s[5].id = s[2].id;
+    assert_eq!(
+        raim.process(&c, &Epoch::linear(0.0, &s)).unwrap_err(),
+        RaimError::DuplicateSatellite {
+            system: System::Gps,
+            prn: 3,
+            first: 2,
+            second: 5
+        }
+    );
+    // TooFewSatellites: 4 satellites, 4 unknowns.
+    let s = sample();
+    assert_eq!(
+        raim.process(&c, &Epoch::linear(0.0, &s[..4])).unwrap_err(),
+        RaimError::TooFewSatellites { have: 4, need: 5 }
+    );
+    // RankDeficient: every line of sight identical.
+    let mut s = sample();
+    for o in s.iter_mut() {
+        o.los_enu = [0.0, 0.6, 0.8];
+    }
+    assert!(matches!(
+        raim.process(&c, &Epoch::linear(0.0, &s)),
+        Err(RaimError::RankDeficient { .. })
+    ));
+    // NonPositiveSigma
+    let mut s = sample();
+    s[4].sigma_m = Some(-1.0);
+    assert_eq!(
+        raim.process(&c, &Epoch::linear(0.0, &s)).unwrap_err(),
+        RaimError::NonPositiveSigma {
+            index: 4,
+            sigma_m: -1.0
+        }
+    );
+    // CapacityExceeded
+    let sky9: Vec<(f64, f64)> = SKY8.iter().copied().chain([(10.0, 10.0)]).collect();
+    let s = linear_epoch(&sky9, 1.0, &mut Rng::new(1), &[]);
+    assert_eq!(
+        raim.process(&c, &Epoch::linear(0.0, &s)).unwrap_err(),
+        RaimError::CapacityExceeded {
+            have: 9,
+            capacity: 8
+        }
+    );
+    // OutOfRange: configuration and a non-unit line of sight.
+    let bad = Config { pfa: 0.7, ..c };
+    assert_eq!(
+        raim.process(&bad, &Epoch::linear(0.0, &sample()))
+            .unwrap_err(),
+        RaimError::OutOfRange {
+            field: "pfa",
+            value: 0.7,
+            min: 0.0,
+            max: 0.5
+        }
+    );
+    let mut s = sample();
+    s[1].los_enu = [0.0, 0.0, 3.0];
+    assert!(matches!(
+        raim.process(&c, &Epoch::linear(0.0, &s)),
+        Err(RaimError::OutOfRange {
+            field: "los_enu_norm",
+            ..
+        })
+    ));
+    // NoConvergence: one Gauss-Newton iteration from the Earth's centre.
+    let rx = [4_000_000.0, 3_000_000.0, 3_900_000.0];
+    let sky: Vec<(System, u8, f64, f64)> = SKY8
+        .iter()
+        .enumerate()
+        .map(|(i, &(a, e))| (System::Gps, i as u8 + 1, a, e))
+        .collect();
+    let ranges = range_epoch(rx, &sky, &[0.0; 5], 1.0, &mut Rng::new(2), &[]);
+    let one = Config {
+        max_iterations: 1,
+        ..c
+    };
+    assert!(matches!(
+        raim.process(&one, &Epoch::ranges(0.0, &ranges, None)),
+        Err(RaimError::NoConvergence { iterations: 1, .. })
+    ));
+    // OutOfRange on a satellite at the receiver.
+    let mut at_rx = ranges.clone();
+    at_rx[0].position_m = rx;
+    assert!(matches!(
+        raim.process(&c, &Epoch::ranges(0.0, &at_rx, Some(rx))),
+        Err(RaimError::OutOfRange {
+            field: "range_m",
+            ..
+        })
+    ));
+    // InvalidDof: a threshold for dof 0 or beyond the capacity.
+    assert_eq!(
+        raim.thresholds(&c, 0).unwrap_err(),
+        RaimError::InvalidDof { dof: 0, max: 7 }
+    );
+    assert_eq!(
+        raim.thresholds(&c, 8).unwrap_err(),
+        RaimError::InvalidDof { dof: 8, max: 7 }
+    );
+}
+
+/// With only one redundant measurement, a fault is detected but cannot
+/// be excluded: the result says so.
+#[test]
+fn alarm_without_exclusion_capability() {
+    let mut raim = Raim::<8>::new();
+    let s = linear_epoch(&SKY8[..5], 1.0, &mut Rng::new(1), &[(2, 80.0)]);
+    let r = raim.process(&cfg(), &Epoch::linear(0.0, &s)).unwrap();
+    assert!(r.initial_test.alarm(), "{:?}", r.initial_test);
+    assert_eq!(r.decision, Decision::Alarm);
+    assert_eq!(r.alarm_cause, Some(AlarmCause::NoRedundancy));
+    assert!(r.exclusions.is_empty());
+    assert!(r.detection_available && !r.exclusion_available);
+}
