@@ -10,7 +10,8 @@
 //! levels) and `sequential` (MCUSUM). Shared layers beside them: `linalg`
 //! (QR, parity space), `stats` (distributions), `solve` (measurement model
 //! and Gauss-Newton), `measurement`, `frames`, `sigma`, `config`, `error`,
-//! `result`. `monitor` is the thin entry that validates and dispatches.
+//! `result`, and `real` (the precision policy: which quantities are `f64`
+//! and which run in the build's [`real::Stat`] precision). `monitor` is the thin entry that validates and dispatches.
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(
@@ -38,6 +39,7 @@ pub mod frames;
 pub mod linalg;
 pub mod measurement;
 pub mod monitor;
+pub mod real;
 pub mod result;
 pub mod sequential;
 pub mod sigma;
@@ -51,6 +53,7 @@ pub use config::{AlertLimits, Carry, Config, FiRule, McusumConfig, Phase};
 pub use error::RaimError;
 pub use measurement::{Epoch, LinearObservation, Observations, RangeObservation, SatId, System};
 pub use monitor::Raim;
+pub use real::{Real, Stat};
 pub use result::{Decision, EpochResult, SatelliteResult};
 pub use sequential::{AlarmSource, McusumReport};
 

@@ -1,0 +1,97 @@
+//! The precision policy, in one place (docs/CORE.md, "Precision").
+//!
+//! The M4F's FPU is single precision: every `f64` operation there is a
+//! software call (20-60 instructions for + and x, hundreds for sqrt, ln,
+//! exp). So the core computes in `f64` only where `f32` cannot hold the
+//! quantity, and everything else is written once, generic over [`Real`],
+//! and run in the build's [`Stat`] precision:
+//!
+//! - `f64` always: the range prediction and the residual formation
+//!   (ranges of 2e7 m at millimetre resolution; the f32 spacing there is
+//!   2 m), satellite and receiver ECEF positions, time, and the Gauss-Newton
+//!   state. A particle filter's state is stored as an offset from an `f64`
+//!   reference point, so it may be `T`.
+//! - [`Stat`] (`f32` with the `f32` feature, the M4F build; `f64` otherwise):
+//!   the unit lines of sight, the whitened geometry, the QR and parity
+//!   space, the test statistics, the identification scores, the
+//!   reconstructions, the ARAIM subset solutions and protection levels,
+//!   and the particle weights.
+//! - Thresholds (chi-square and normal quantiles) are computed in `f64`
+//!   once per configuration and dof, cached, and then compared in `T`.
+//!
+//! An engine is generic over `T: Real`; host tests run it at `f64` against
+//! independent references, and at `f32` against the `f64` run with a
+//! stated relative tolerance.
+
+/// A floating-point scalar the numeric engines are generic over: `f32` or
+/// `f64`. nalgebra's `RealField` supplies the arithmetic and the elementary
+/// functions (through `libm` in no_std); this adds the conversions the
+/// policy needs at its edges.
+pub trait Real:
+    nalgebra::RealField + Copy + Default + PartialOrd + core::fmt::Debug + Send + Sync + 'static
+{
+    /// The name of the precision, for reports.
+    const NAME: &'static str;
+    /// The machine epsilon.
+    const EPS: Self;
+    /// Converts from `f64`, rounding to nearest for `f32`.
+    fn of(x: f64) -> Self;
+    /// Widens (or passes) to `f64`.
+    fn to_f64(self) -> f64;
+}
+
+impl Real for f64 {
+    const NAME: &'static str = "f64";
+    const EPS: Self = f64::EPSILON;
+    #[inline(always)]
+    fn of(x: f64) -> Self {
+        x
+    }
+    #[inline(always)]
+    fn to_f64(self) -> f64 {
+        self
+    }
+}
+
+impl Real for f32 {
+    const NAME: &'static str = "f32";
+    const EPS: Self = f32::EPSILON;
+    #[inline(always)]
+    fn of(x: f64) -> Self {
+        x as f32
+    }
+    #[inline(always)]
+    fn to_f64(self) -> f64 {
+        self as f64
+    }
+}
+
+/// The precision of the statistics path on this build: `f32` with the
+/// `f32` feature (selected by the M4F firmware), `f64` otherwise.
+#[cfg(feature = "f32")]
+pub type Stat = f32;
+/// The precision of the statistics path on this build: `f32` with the
+/// `f32` feature (selected by the M4F firmware), `f64` otherwise.
+#[cfg(not(feature = "f32"))]
+pub type Stat = f64;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hypot<T: Real>(a: T, b: T) -> T {
+        (a * a + b * b).sqrt()
+    }
+
+    /// The same generic code runs in both precisions and agrees to the
+    /// f32 epsilon (relative).
+    #[test]
+    fn generic_code_runs_in_both_precisions() {
+        let d = hypot(3.0f64, 4.0);
+        let s = hypot(f32::of(3.0), f32::of(4.0));
+        assert_eq!(d, 5.0);
+        assert!((s.to_f64() - d).abs() <= 5.0 * f32::EPSILON as f64);
+        assert_eq!(f32::of(1e-40).to_f64(), 1e-40f32 as f64);
+        assert_eq!(<Stat as Real>::NAME.len(), 3);
+    }
+}
