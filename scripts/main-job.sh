@@ -18,4 +18,4 @@ cargo run -q --release -p raim-tool -- replay \
     --nav "$DATA/ESBC00DNK_R_20201770000_01D_MN.rnx.gz" \
     --ura-m 0.3 --iono-vertical-m 0.5 --noise-m 0.2 \
     --fault step:G15:30@01:00:00 \
-    --target qemu --with-nmea "$@"
+    --target qemu --nmea with-text "$@"

@@ -126,16 +126,9 @@ pub struct ReplayArgs {
     pub json: bool,
     /// The monitor's NMEA 0183 output per epoch (RMC, GGA, GSA, GST, GBS;
     /// from the firmware's second UART with --target qemu): `only` the
-    /// sentences (the default of a bare --nmea), or `with-text` after each
-    /// text line.
-    #[arg(
-        long,
-        value_enum,
-        value_name = "MODE",
-        num_args = 0..=1,
-        require_equals = true,
-        default_missing_value = "only"
-    )]
+    /// sentences (a stream for NMEA readers, no summary), or `with-text`
+    /// after each epoch's text line.
+    #[arg(long, value_enum, value_name = "MODE")]
     pub nmea: Option<NmeaMode>,
     /// Print only the summary table.
     #[arg(long)]
@@ -455,13 +448,13 @@ fn write_outputs(args: &ReplayArgs, out: &ReplayOutput) -> Result<()> {
                 _ if args.json => writeln!(w, "{}", serde_json::to_string(r)?)?,
                 Some(NmeaMode::Only) => {
                     for s in &r.nmea {
-                        writeln!(w, "{s}")?;
+                        writeln!(w, "{}", s.trim_end())?;
                     }
                 }
                 Some(NmeaMode::WithText) => {
                     writeln!(w, "{}", r.text_line())?;
                     for s in &r.nmea {
-                        writeln!(w, "    {s}")?;
+                        writeln!(w, "    {}", s.trim_end())?;
                     }
                 }
                 None => writeln!(w, "{}", r.text_line())?,
