@@ -163,6 +163,30 @@ fn elevation_out_of_range_is_refused_by_the_core_check() {
     }
 }
 
+/// `raim pci --az/--el` goes through the same core check: exit 1 (an
+/// argument error of a one-shot computation, not a refused epoch).
+#[test]
+fn pci_elevation_out_of_range_is_an_error() {
+    let r = raim(
+        &[
+            "pci",
+            "--az",
+            "0,90,180,270,45,135",
+            "--el",
+            "85,30,200,20,60,25",
+            "--mc",
+            "0",
+        ],
+        "",
+    );
+    assert_eq!(r.code, 1);
+    assert!(
+        r.stderr.contains("--az/--el satellite 3: el_rad = ") && r.stderr.contains("(el_deg 200)"),
+        "{}",
+        r.stderr
+    );
+}
+
 /// JSON cannot carry NaN or infinity: an azimuth beyond f64 is an
 /// unreadable line (exit 3), while any finite azimuth is valid (it wraps;
 /// the core's NotFinite check on az_rad is tested in raim-core).
