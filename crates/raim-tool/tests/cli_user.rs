@@ -584,3 +584,34 @@ fn a_plain_file_cut_inside_an_epoch_is_warned_about() {
     );
     assert!(r.stderr.contains("record lines present (file cut short?)"));
 }
+
+// ---- Install footprint: one quiet helper shared by both scripts.
+
+#[test]
+fn both_scripts_share_one_quiet_install_helper() {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+    let read = |p: &str| std::fs::read_to_string(format!("{root}/{p}")).unwrap();
+    let helper = read("scripts/install-deps.sh");
+    assert!(helper.contains("apt-get install -y -qq --no-install-recommends"));
+    assert!(
+        helper.contains(">\"$log\" 2>&1"),
+        "apt output goes to a log"
+    );
+    for (script, mode) in [("scripts/main-job.sh", "main"), ("scripts/test.sh", "test")] {
+        let s = read(script);
+        assert!(
+            s.contains(&format!("bash scripts/install-deps.sh {mode}")),
+            "{script}"
+        );
+        assert!(!s.contains("apt-get"), "{script} has its own apt call");
+        assert!(!s.contains("with-nmea"), "{script}");
+    }
+    // A wrong mode is a usage error that installs nothing.
+    let out = Command::new("bash")
+        .arg(format!("{root}/scripts/install-deps.sh"))
+        .arg("everything")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("usage:"));
+}
