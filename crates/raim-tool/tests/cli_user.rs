@@ -615,3 +615,58 @@ fn both_scripts_share_one_quiet_install_helper() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("usage:"));
 }
+
+// ---- docs/REPLAY.md "Scenario files": the example is a working file,
+// equal to the flags the text gives for it.
+
+#[test]
+fn the_documented_scenario_example_equals_its_flags() {
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/REPLAY.md"))
+        .unwrap();
+    let section = &doc[doc.find("## Scenario files").unwrap()..];
+    let body = section.split("```toml\n").nth(1).unwrap();
+    let toml = &body[..body.find("```").unwrap()];
+    let scen = tmp("doc_example.toml");
+    std::fs::write(&scen, toml).unwrap();
+    let obs = format!("{DATA}/ESBC00DNK_R_20201770000_03H_30S_MO.rnx.gz");
+    let nav = format!("{DATA}/ESBC00DNK_R_20201770000_01D_MN.rnx.gz");
+    let base = [
+        "replay",
+        "--obs",
+        &obs,
+        "--nav",
+        &nav,
+        "--ura-m",
+        "0.3",
+        "--iono-vertical-m",
+        "0.5",
+        "--noise-m",
+        "0.2",
+        "--start",
+        "00:55:00",
+        "--end",
+        "01:05:00",
+        "--json",
+    ];
+    let mut a = base.to_vec();
+    a.extend(["--scenario", scen.to_str().unwrap()]);
+    let mut b = base.to_vec();
+    b.extend([
+        "--fault",
+        "step:G15+G28:50@01:00:00..02:00:00",
+        "--fault",
+        "ramp:G13:0.1@+3480",
+        "--fault",
+        "noise:all:t3:1.0",
+        "--seed",
+        "7",
+    ]);
+    let (ra, rb) = (raim(&a, ""), raim(&b, ""));
+    assert_eq!(ra.code, 0, "{}", ra.stderr);
+    assert_eq!(rb.code, 0, "{}", rb.stderr);
+    assert_eq!(ra.stdout, rb.stdout);
+    let last = ra.stdout.lines().last().unwrap();
+    let s: serde_json::Value = serde_json::from_str(last).unwrap();
+    assert_eq!(s["summary"]["epochs"], 21);
+    assert!(s["summary"]["faulted_epochs"].as_u64().unwrap() >= 10);
+}
