@@ -172,10 +172,10 @@ mod tests {
             let w = partial_last_epoch(cut.as_bytes()).unwrap();
             assert!(w.contains(&format!("{have} of 8 record lines")), "{w}");
         }
-        assert_eq!(partial_last_epoch(text[..ends[8]].as_bytes()), None);
+        assert_eq!(partial_last_epoch(&text.as_bytes()[..ends[8]]), None);
         // Cut in the middle of the last record line: all lines are there,
         // the last one without its end of line.
-        let w = partial_last_epoch(text[..ends[8] - 10].as_bytes()).unwrap();
+        let w = partial_last_epoch(&text.as_bytes()[..ends[8] - 10]).unwrap();
         assert!(w.contains("no end of line"), "{w}");
     }
 }
