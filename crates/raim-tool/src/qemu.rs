@@ -68,7 +68,11 @@ pub fn run(args: &QemuArgs) -> Result<Tally> {
                     });
                     writeln!(out, "{v}")?;
                 } else {
-                    writeln!(out, "line {number}: ERROR       {detail}")?;
+                    let t = line.time_s.map_or("-".into(), |t| format!("{t:.1}"));
+                    writeln!(
+                        out,
+                        "t={t:>10}s seq=-     ERROR       line {number}: {detail}"
+                    )?;
                 }
                 continue;
             }

@@ -670,3 +670,51 @@ fn the_documented_scenario_example_equals_its_flags() {
     assert_eq!(s["summary"]["epochs"], 21);
     assert!(s["summary"]["faulted_epochs"].as_u64().unwrap() >= 10);
 }
+
+// ---- `raim qemu`: the same exit codes through the firmware (QEMU, ~1 s).
+
+#[test]
+fn qemu_refused_epochs_exit_3_unless_keep_going() {
+    let ex = example();
+    let lines = [
+        ex[0].clone(),
+        ex[1].replacen("\"prn\": 3,", "\"prn\": 2,", 1), // refused by the firmware's core
+        ex[2].replacen("\"el_deg\": 30,", "\"el_deg\": 200,", 1), // refused before it
+        "not json".to_string(),
+    ];
+    let input = tmp("qemu.jsonl");
+    std::fs::write(&input, lines.join("\n")).unwrap();
+    let r = raim(&["qemu", "--input", input.to_str().unwrap(), "--json"], "");
+    assert_eq!(r.code, 3, "{}", r.stderr);
+    let rows = json_rows(&r.stdout);
+    assert_eq!(rows.len(), 4);
+    assert_eq!(rows[0]["decision"], "ok");
+    assert!(
+        rows[1]["error"].as_str().unwrap().contains("duplicate"),
+        "{}",
+        rows[1]
+    );
+    assert_eq!(rows[2]["error"], "OutOfRange");
+    assert_eq!(rows[3]["error"], "Unreadable");
+    assert!(
+        r.stderr.contains("raim: 3 of 4 epochs refused"),
+        "{}",
+        r.stderr
+    );
+    let k = raim(
+        &[
+            "qemu",
+            "--input",
+            input.to_str().unwrap(),
+            "--json",
+            "--keep-going",
+        ],
+        "",
+    );
+    assert_eq!(k.code, 0, "{}", k.stderr);
+    let empty = tmp("empty.jsonl");
+    std::fs::write(&empty, "").unwrap();
+    let e = raim(&["qemu", "--input", empty.to_str().unwrap()], "");
+    assert_eq!(e.code, 0);
+    assert!(e.stderr.contains("raim qemu: no epochs in"), "{}", e.stderr);
+}
