@@ -89,6 +89,12 @@ pub enum WireError {
         dof: u32,
         max: u32,
     },
+    /// A `Configure` after `Lock` (or in a build with a compiled-in
+    /// configuration): refused until reset. `config_crc32` is the
+    /// fingerprint of the configuration that stays in force.
+    Locked {
+        config_crc32: u32,
+    },
 }
 
 fn u32_of(v: usize) -> u32 {
@@ -221,6 +227,10 @@ impl core::fmt::Display for WireError {
             WireError::InvalidDof { dof, max } => {
                 write!(f, "degrees of freedom {dof} outside 1..={max}")
             }
+            WireError::Locked { config_crc32 } => write!(
+                f,
+                "configuration locked until reset (in force: {config_crc32:#010x})"
+            ),
         }
     }
 }

@@ -18,6 +18,7 @@ use serde::ser::Serializer;
 use serde::{Deserialize, Serialize};
 
 use crate::error::WireError;
+use crate::lock::ConfigId;
 use crate::result::WireResult;
 use crate::CAPACITY;
 
@@ -104,6 +105,10 @@ pub enum Command {
     Configure(Config),
     Ranges(RangeEpoch),
     Linear(LinearEpoch),
+    /// Lock the configuration in force until reset: every later `Configure`
+    /// is refused with `WireError::Locked`. Answered with `LockEngaged`
+    /// (also when already locked).
+    Lock,
 }
 
 /// A request frame's payload.
@@ -133,6 +138,7 @@ pub enum CommandRef<'a> {
         time_s: f64,
         sats: &'a [LinearObservation],
     },
+    Lock,
 }
 
 /// The host's borrowed form of [`Request`].
@@ -187,6 +193,9 @@ pub struct Status {
     /// clock; under `qemu -icount shift=0` one tick is 40 guest instructions
     /// on mps2-an386).
     pub last_epoch_ticks: u32,
+    /// The configuration in force and the lock state (as in every
+    /// response's `config`).
+    pub config: ConfigId,
 }
 
 /// A response frame's payload.
@@ -195,6 +204,9 @@ pub struct Response {
     /// The request answered; `None` when the frame could not be read.
     pub seq: Option<u32>,
     pub body: ResponseBody,
+    /// The configuration in force when the answer was made (after a
+    /// `Configure` it answers, the new one) and the lock state.
+    pub config: ConfigId,
 }
 
 /// What the firmware answers. The result is by far the largest variant;
@@ -206,6 +218,8 @@ pub enum ResponseBody {
     Configured,
     Status(Status),
     Error(WireError),
+    /// The answer to `Lock`: the configuration is now locked until reset.
+    LockEngaged,
 }
 
 #[cfg(test)]

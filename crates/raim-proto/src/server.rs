@@ -12,6 +12,7 @@ use raim_core::{Config, Epoch, Raim};
 
 use crate::error::WireError;
 use crate::frame::{encode, FrameError, FrameReceiver};
+use crate::lock::{config_fingerprint, ConfigId};
 use crate::message::{Command, Request, Response, ResponseBody, Status};
 use crate::nmea;
 use crate::result::WireResult;
@@ -46,6 +47,8 @@ pub struct Server {
     raim: Raim<CAPACITY>,
     config: Config,
     expected_seq: Option<u32>,
+    /// Fingerprint of `config` and the lock (issue 15; `lock`).
+    config_id: ConfigId,
     status: Status,
     scratch: [u8; MAX_RESPONSE_PAYLOAD],
     out: [u8; MAX_RESPONSE_FRAME],
@@ -71,6 +74,10 @@ impl Server {
             raim: Raim::new(),
             config: Config::default(),
             expected_seq: None,
+            config_id: ConfigId {
+                crc32: config_fingerprint(&Config::default()),
+                locked: false,
+            },
             status: Status {
                 protocol_version: PROTOCOL_VERSION,
                 capacity: CAPACITY as u16,
@@ -81,8 +88,30 @@ impl Server {
         }
     }
 
+    /// A server that boots with `config` locked in (a build whose
+    /// configuration is compiled in): `Configure` is refused from the first
+    /// frame. The configuration must pass `Config::validate`.
+    pub fn new_locked(config: Config) -> Result<Self, raim_core::RaimError> {
+        config.validate()?;
+        let mut s = Server::new();
+        s.config = config;
+        s.config_id = ConfigId {
+            crc32: config_fingerprint(&config),
+            locked: true,
+        };
+        Ok(s)
+    }
+
     pub fn status(&self) -> Status {
-        self.status
+        Status {
+            config: self.config_id,
+            ..self.status
+        }
+    }
+
+    /// The fingerprint of the configuration in force and the lock state.
+    pub fn config_id(&self) -> ConfigId {
+        self.config_id
     }
 
     pub fn config(&self) -> &Config {
@@ -124,15 +153,25 @@ impl Server {
         let body = match request.command {
             Command::Status => {
                 self.status.stack_high_water_bytes = platform.stack_high_water_bytes();
-                ResponseBody::Status(self.status)
+                ResponseBody::Status(self.status())
+            }
+            Command::Configure(_) if self.config_id.locked => {
+                ResponseBody::Error(WireError::Locked {
+                    config_crc32: self.config_id.crc32,
+                })
             }
             Command::Configure(c) => match c.validate() {
                 Ok(()) => {
                     self.config = c;
+                    self.config_id.crc32 = config_fingerprint(&self.config);
                     ResponseBody::Configured
                 }
                 Err(e) => ResponseBody::Error(e.into()),
             },
+            Command::Lock => {
+                self.config_id.locked = true;
+                ResponseBody::LockEngaged
+            }
             Command::Ranges(e) if e.sats.overflowed() => too_many(e.sats.declared),
             Command::Linear(e) if e.sats.overflowed() => too_many(e.sats.declared),
             Command::Ranges(e) => self.epoch(
@@ -196,7 +235,8 @@ impl Server {
         if matches!(body, ResponseBody::Error(_)) {
             self.status.errors = self.status.errors.wrapping_add(1);
         }
-        let resp = Response { seq, body };
+        let config = self.config_id;
+        let resp = Response { seq, body, config };
         // The buffers hold the largest response (test
         // `result::tests::largest_response_fits`); should encoding ever
         // fail, a minimal error answer still goes out.
@@ -205,6 +245,7 @@ impl Server {
             Err(_) => {
                 let fallback = Response {
                     seq,
+                    config,
                     body: ResponseBody::Error(WireError::Overflow {
                         capacity: MAX_RESPONSE_PAYLOAD as u32,
                     }),
@@ -446,5 +487,95 @@ mod tests {
             panic!()
         };
         assert_eq!((st.frames, st.errors), (8, 8));
+    }
+
+    /// Issue 15: after `Lock` every `Configure` is refused with `Locked`
+    /// carrying the fingerprint in force, the configuration in force stays,
+    /// and every answer carries the fingerprint and the lock state.
+    #[test]
+    fn a_locked_server_refuses_configure() {
+        use raim_core::Phase;
+        let terminal = Config::preset(Phase::Terminal);
+        let (fp_default, fp_terminal) = (
+            crate::config_fingerprint(&Config::default()),
+            crate::config_fingerprint(&terminal),
+        );
+        assert_ne!(fp_default, fp_terminal);
+        let mut server = Server::new();
+        let default_cfg = Config::default();
+        let req = |seq, command| frame(&RequestRef { seq, command });
+        let s1 = sky(50.0);
+        let mut bytes = req(0, CommandRef::Status);
+        bytes.extend(req(1, CommandRef::Configure(&terminal)));
+        bytes.extend(req(2, CommandRef::Lock));
+        bytes.extend(req(3, CommandRef::Configure(&default_cfg)));
+        bytes.extend(req(4, CommandRef::Lock));
+        bytes.extend(frame(&RequestRef::linear(5, 1.0, &s1)));
+        bytes.extend(req(6, CommandRef::Status));
+        let (resp, _) = run(&mut server, &bytes);
+        assert_eq!(resp.len(), 7);
+        let id = |crc32, locked| ConfigId { crc32, locked };
+        let ResponseBody::Status(st0) = resp[0].body else {
+            panic!("{:?}", resp[0])
+        };
+        assert_eq!(st0.config, id(fp_default, false));
+        assert_eq!(st0.protocol_version, 3);
+        assert_eq!(resp[1].body, ResponseBody::Configured);
+        assert_eq!(resp[1].config, id(fp_terminal, false));
+        assert_eq!(resp[2].body, ResponseBody::LockEngaged);
+        assert_eq!(resp[2].config, id(fp_terminal, true));
+        assert_eq!(
+            resp[3].body,
+            ResponseBody::Error(WireError::Locked {
+                config_crc32: fp_terminal
+            })
+        );
+        assert_eq!(resp[4].body, ResponseBody::LockEngaged);
+        let ResponseBody::Result(r) = &resp[5].body else {
+            panic!("{:?}", resp[5])
+        };
+        assert_eq!(resp[5].config, id(fp_terminal, true));
+        // The result is the locked (terminal) configuration's.
+        let direct = Raim::<CAPACITY>::new()
+            .process(&terminal, &Epoch::linear(1.0, &s1))
+            .unwrap();
+        assert_eq!(*r, WireResult::from_result(&direct));
+        let ResponseBody::Status(st) = resp[6].body else {
+            panic!()
+        };
+        assert_eq!(st.config, id(fp_terminal, true));
+        assert_eq!(*server.config(), terminal);
+        // Only a reset (a new server) unlocks.
+        assert!(!Server::new().config_id().locked);
+    }
+
+    /// A build with its configuration compiled in refuses `Configure` from
+    /// the first frame, and refuses to boot with an invalid configuration.
+    #[test]
+    fn a_compiled_in_configuration_is_locked_from_boot() {
+        let cfg = Config::preset(raim_core::Phase::EnRoute);
+        let mut server = Server::new_locked(cfg).unwrap();
+        let bytes = frame(&RequestRef {
+            seq: 0,
+            command: CommandRef::Configure(&Config::default()),
+        });
+        let (resp, _) = run(&mut server, &bytes);
+        let fp = crate::config_fingerprint(&cfg);
+        assert_eq!(
+            resp[0].body,
+            ResponseBody::Error(WireError::Locked { config_crc32: fp })
+        );
+        assert_eq!(
+            resp[0].config,
+            ConfigId {
+                crc32: fp,
+                locked: true
+            }
+        );
+        let bad = Config { pfa: 1e-300, ..cfg };
+        assert!(matches!(
+            Server::new_locked(bad),
+            Err(raim_core::RaimError::OutOfRange { field: "pfa", .. })
+        ));
     }
 }
