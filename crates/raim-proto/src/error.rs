@@ -95,6 +95,8 @@ pub enum WireError {
     Locked {
         config_crc32: u32,
     },
+    /// A `TestFault` request to a build without test hooks.
+    TestHooksDisabled,
 }
 
 fn u32_of(v: usize) -> u32 {
@@ -231,6 +233,7 @@ impl core::fmt::Display for WireError {
                 f,
                 "configuration locked until reset (in force: {config_crc32:#010x})"
             ),
+            WireError::TestHooksDisabled => write!(f, "test hooks are disabled in this build"),
         }
     }
 }

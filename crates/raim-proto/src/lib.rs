@@ -48,7 +48,8 @@ pub use error::WireError;
 pub use frame::{encode, FrameError, FrameReceiver};
 pub use lock::{config_fingerprint, ConfigId};
 pub use message::{
-    Command, LinearEpoch, RangeEpoch, Request, RequestRef, Response, ResponseBody, SatList, Status,
+    Command, LinearEpoch, RangeEpoch, Request, RequestRef, ResetCause, Response, ResponseBody,
+    SatList, Status, TestFault,
 };
 pub use result::{WireMcusum, WireResult};
 
@@ -59,7 +60,8 @@ pub const CAPACITY: usize = raim_core::DEFAULT_CAPACITY;
 /// Version of the frame layout and message types; reported by `Status`.
 /// Bump on any change of a serialized type (postcard is not self-describing).
 /// 3: `Lock`, `LockEngaged`, `WireError::Locked`, the `ConfigId` in every
-/// response and in `Status` (issue 15).
+/// response and in `Status`, the reset count and cause in `Status`, the
+/// test-only `TestFault` (issue 15).
 pub const PROTOCOL_VERSION: u16 = 3;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.

@@ -109,6 +109,39 @@ pub enum Command {
     /// is refused with `WireError::Locked`. Answered with `LockEngaged`
     /// (also when already locked).
     Lock,
+    /// Test-only (issue 15): make the unit hang or panic, to test the
+    /// watchdog and the fault record under QEMU. Honoured only by a build
+    /// whose platform enables it (the QEMU board); elsewhere answered
+    /// `WireError::TestHooksDisabled`.
+    TestFault(TestFault),
+}
+
+/// What a `TestFault` request does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum TestFault {
+    /// Spin without feeding the watchdog (a hung epoch).
+    Hang,
+    /// Panic.
+    Panic,
+}
+
+/// Why the unit last reset (issue 15), from a record in RAM that a reset
+/// does not clear.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ResetCause {
+    /// Power-on, or no valid record (the platform keeps none).
+    #[default]
+    PowerOn,
+    /// A reset the firmware did not record (external, debugger).
+    Unrecorded,
+    /// A panic; `line` is the source line of the panic location.
+    Panic { line: u32 },
+    /// A hard fault at `pc`.
+    HardFault { pc: u32 },
+    /// The watchdog expired (a hung main loop); `pc` where it was.
+    Watchdog { pc: u32 },
 }
 
 /// A request frame's payload.
@@ -139,6 +172,7 @@ pub enum CommandRef<'a> {
         sats: &'a [LinearObservation],
     },
     Lock,
+    TestFault(TestFault),
 }
 
 /// The host's borrowed form of [`Request`].
@@ -196,6 +230,9 @@ pub struct Status {
     /// The configuration in force and the lock state (as in every
     /// response's `config`).
     pub config: ConfigId,
+    /// Resets since power-on, and the cause of the last one.
+    pub resets: u32,
+    pub reset_cause: ResetCause,
 }
 
 /// A response frame's payload.

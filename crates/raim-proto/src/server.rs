@@ -13,7 +13,7 @@ use raim_core::{Config, Epoch, Raim};
 use crate::error::WireError;
 use crate::frame::{encode, FrameError, FrameReceiver};
 use crate::lock::{config_fingerprint, ConfigId};
-use crate::message::{Command, Request, Response, ResponseBody, Status};
+use crate::message::{Command, Request, ResetCause, Response, ResponseBody, Status, TestFault};
 use crate::nmea;
 use crate::result::WireResult;
 use crate::{
@@ -29,6 +29,16 @@ pub trait Platform {
     /// Deepest stack use so far, bytes (0 if not measured).
     fn stack_high_water_bytes(&mut self) -> u32 {
         0
+    }
+    /// Resets since power-on and the cause of the last one (issue 15).
+    fn reset_record(&mut self) -> (u32, ResetCause) {
+        (0, ResetCause::PowerOn)
+    }
+    /// Carry out a test-only fault (hang, panic); `false` when the build
+    /// has no test hooks (the server then answers `TestHooksDisabled`).
+    /// Honoured, it does not return.
+    fn test_fault(&mut self, _fault: TestFault) -> bool {
+        false
     }
 }
 
@@ -153,7 +163,12 @@ impl Server {
         let body = match request.command {
             Command::Status => {
                 self.status.stack_high_water_bytes = platform.stack_high_water_bytes();
+                (self.status.resets, self.status.reset_cause) = platform.reset_record();
                 ResponseBody::Status(self.status())
+            }
+            Command::TestFault(f) => {
+                let _ = platform.test_fault(f);
+                ResponseBody::Error(WireError::TestHooksDisabled)
             }
             Command::Configure(_) if self.config_id.locked => {
                 ResponseBody::Error(WireError::Locked {
@@ -577,5 +592,59 @@ mod tests {
             Server::new_locked(bad),
             Err(raim_core::RaimError::OutOfRange { field: "pfa", .. })
         ));
+    }
+
+    /// Issue 15: `Status` carries the platform's reset count and cause; a
+    /// test fault on a platform without test hooks is refused, typed.
+    #[test]
+    fn status_reports_the_reset_record_and_test_hooks_are_off_by_default() {
+        struct Rebooted;
+        impl Platform for Rebooted {
+            fn now(&mut self) -> u32 {
+                0
+            }
+            fn reset_record(&mut self) -> (u32, ResetCause) {
+                (3, ResetCause::Watchdog { pc: 0x1234 })
+            }
+        }
+        let mut server = Server::new();
+        let mut bytes = frame(&RequestRef {
+            seq: 0,
+            command: CommandRef::Status,
+        });
+        bytes.extend(frame(&RequestRef {
+            seq: 1,
+            command: CommandRef::TestFault(TestFault::Hang),
+        }));
+        let (mut link, mut nmea) = (Sink::default(), Sink::default());
+        for &b in &bytes {
+            server
+                .on_byte(b, &mut link, &mut nmea, &mut Rebooted)
+                .unwrap();
+        }
+        let resp = responses(&link.0);
+        let ResponseBody::Status(st) = resp[0].body else {
+            panic!("{:?}", resp[0])
+        };
+        assert_eq!(
+            (st.resets, st.reset_cause),
+            (3, ResetCause::Watchdog { pc: 0x1234 })
+        );
+        assert_eq!(
+            resp[1].body,
+            ResponseBody::Error(WireError::TestHooksDisabled)
+        );
+        // The host-test platform keeps no record: power-on.
+        let (resp, _) = run(
+            &mut Server::new(),
+            &frame(&RequestRef {
+                seq: 0,
+                command: CommandRef::Status,
+            }),
+        );
+        let ResponseBody::Status(st) = resp[0].body else {
+            panic!()
+        };
+        assert_eq!((st.resets, st.reset_cause), (0, ResetCause::PowerOn));
     }
 }
