@@ -1,5 +1,5 @@
-//! Fail loud and recover (issue 15): a panic, a hard fault or a watchdog
-//! expiry records its cause (a code and a value: the PC, or the panic's
+//! Fail loud and recover (issue 15): a panic, a hard fault, a stack
+//! overflow (`guard`) or a watchdog expiry records its cause (a code and a value: the PC, or the panic's
 //! source line) in a RAM record that a reset does not clear (the
 //! `.uninit` section of cortex-m-rt, NOLOAD), then resets the unit. At boot
 //! the record gives the cause of the last reset and the number of resets
@@ -15,6 +15,7 @@ const CODE_NONE: u32 = 0;
 pub const CODE_PANIC: u32 = 1;
 pub const CODE_HARD_FAULT: u32 = 2;
 pub const CODE_WATCHDOG: u32 = 3;
+pub const CODE_STACK_OVERFLOW: u32 = 4;
 
 #[repr(C)]
 #[derive(Clone, Copy)]
@@ -68,6 +69,7 @@ pub fn boot() -> (u32, ResetCause) {
             CODE_PANIC => ResetCause::Panic { line: r.value },
             CODE_HARD_FAULT => ResetCause::HardFault { pc: r.value },
             CODE_WATCHDOG => ResetCause::Watchdog { pc: r.value },
+            CODE_STACK_OVERFLOW => ResetCause::StackOverflow { address: r.value },
             _ => ResetCause::Unrecorded,
         };
         (r.resets.wrapping_add(1), cause)

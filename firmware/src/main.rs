@@ -10,6 +10,7 @@
 
 mod board;
 mod fault;
+mod guard;
 mod stack;
 mod watchdog;
 
@@ -49,6 +50,7 @@ impl Platform for Board {
                 cortex_m::asm::nop();
             },
             TestFault::Panic => panic!("test hook"),
+            TestFault::StackOverflow => guard::overflow(0) != 0,
         }
     }
     #[cfg(not(feature = "board-qemu"))]
@@ -75,6 +77,7 @@ fn main() -> ! {
     };
     watchdog::start();
     stack::paint();
+    guard::enable();
     defmt::info!(
         "raim firmware up: capacity {=usize}, protocol {=u16}",
         raim_proto::CAPACITY,
@@ -101,6 +104,11 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 
 #[exception]
 unsafe fn HardFault(ef: &ExceptionFrame) -> ! {
+    let frame = core::ptr::from_ref(ef) as usize;
+    if guard::hit(frame) {
+        // Stacked inside the guard: a stack overflow. Reset at once.
+        fault::record_and_reset(fault::CODE_STACK_OVERFLOW, frame as u32)
+    }
     defmt::error!("hard fault at pc {=u32:#010x}", ef.pc());
     fault::record_and_reset(fault::CODE_HARD_FAULT, ef.pc())
 }

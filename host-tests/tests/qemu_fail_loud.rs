@@ -1,7 +1,9 @@
 //! Issue 15: the firmware fails loud and recovers. Under QEMU (mps2-an386)
 //! a hung main loop (the test-only `TestFault::Hang`) is reset by the CMSDK
 //! watchdog, a panic (`TestFault::Panic`) resets the unit, and the next
-//! `Status` reports the reset count and cause; the reset also unlocks the
+//! `Status` reports the reset count and cause, a stack overflow
+//! (`TestFault::StackOverflow`) is stopped by the MPU guard and reported
+//! the same way; the reset also unlocks the
 //! configuration (only a reset does), and the unit answers epochs again.
 
 mod qemu_common;
@@ -56,6 +58,24 @@ fn qemu_hang_and_panic_reset_the_unit_and_are_reported() {
         matches!(st.reset_cause, ResetCause::Panic { line } if line > 0),
         "{st:?}"
     );
+
+    // A stack overflow hits the MPU guard between the statics and the
+    // stack instead of overwriting the server state.
+    fw.send(CommandRef::TestFault(TestFault::StackOverflow))
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1000));
+    let st = fw.status().unwrap();
+    assert_eq!(st.resets, 3, "{st:?}");
+    let ResetCause::StackOverflow { address } = st.reset_cause else {
+        panic!("{st:?}")
+    };
+    // The frame was stacked in the guard, in RAM (mps2-an386: 0x2000_0000..).
+    assert!(
+        (0x2000_0000..0x2040_0000).contains(&address),
+        "{address:#x}"
+    );
+    // Stack painting still measures (above the guard).
+    assert!(st.stack_high_water_bytes > 0, "{st:?}");
 
     // Back in service: an epoch is answered bit for bit as on the host.
     let (time_s, sats, apriori) = &range_vectors(5)[1];

@@ -124,6 +124,8 @@ pub enum TestFault {
     Hang,
     /// Panic.
     Panic,
+    /// Recurse until the stack reaches its guard.
+    StackOverflow,
 }
 
 /// Why the unit last reset (issue 15), from a record in RAM that a reset
@@ -142,6 +144,8 @@ pub enum ResetCause {
     HardFault { pc: u32 },
     /// The watchdog expired (a hung main loop); `pc` where it was.
     Watchdog { pc: u32 },
+    /// The stack reached its guard region (MPU) at `address`.
+    StackOverflow { address: u32 },
 }
 
 /// A request frame's payload.
