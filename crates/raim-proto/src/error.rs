@@ -97,6 +97,20 @@ pub enum WireError {
     },
     /// A `TestFault` request to a build without test hooks.
     TestHooksDisabled,
+    /// A plain `Configure` to a unit with an authentication key.
+    AuthRequired,
+    /// An `AuthConfigure` to a unit without a key.
+    AuthNotProvisioned,
+    /// An `AuthConfigure` whose tag does not verify.
+    BadAuthTag {
+        counter: u64,
+    },
+    /// An `AuthConfigure` whose counter is not above the last one accepted
+    /// (a replayed or reordered frame).
+    Replayed {
+        counter: u64,
+        last: u64,
+    },
 }
 
 fn u32_of(v: usize) -> u32 {
@@ -234,6 +248,17 @@ impl core::fmt::Display for WireError {
                 "configuration locked until reset (in force: {config_crc32:#010x})"
             ),
             WireError::TestHooksDisabled => write!(f, "test hooks are disabled in this build"),
+            WireError::AuthRequired => write!(f, "configuration frames must be authenticated"),
+            WireError::AuthNotProvisioned => write!(f, "no authentication key provisioned"),
+            WireError::BadAuthTag { counter } => {
+                write!(f, "authentication tag does not verify (counter {counter})")
+            }
+            WireError::Replayed { counter, last } => {
+                write!(
+                    f,
+                    "replayed configuration: counter {counter} <= last {last}"
+                )
+            }
         }
     }
 }

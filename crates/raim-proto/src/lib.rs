@@ -36,6 +36,7 @@
     )
 )]
 
+pub mod auth;
 pub mod error;
 pub mod frame;
 pub mod lock;
@@ -44,6 +45,7 @@ pub mod nmea;
 pub mod result;
 pub mod server;
 
+pub use auth::{AuthConfigure, AuthKey};
 pub use error::WireError;
 pub use frame::{encode, FrameError, FrameReceiver};
 pub use lock::{config_fingerprint, ConfigId};

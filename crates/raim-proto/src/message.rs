@@ -114,6 +114,10 @@ pub enum Command {
     /// whose platform enables it (the QEMU board); elsewhere answered
     /// `WireError::TestHooksDisabled`.
     TestFault(TestFault),
+    /// An authenticated `Configure` (`auth`): accepted only by a unit with
+    /// a provisioned key, with a valid tag and a counter above every one
+    /// accepted since boot.
+    AuthConfigure(crate::auth::AuthConfigure),
 }
 
 /// What a `TestFault` request does.
@@ -177,6 +181,7 @@ pub enum CommandRef<'a> {
     },
     Lock,
     TestFault(TestFault),
+    AuthConfigure(&'a crate::auth::AuthConfigure),
 }
 
 /// The host's borrowed form of [`Request`].

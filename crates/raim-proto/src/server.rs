@@ -59,6 +59,8 @@ pub struct Server {
     expected_seq: Option<u32>,
     /// Fingerprint of `config` and the lock (issue 15; `lock`).
     config_id: ConfigId,
+    /// The authentication key and the last counter accepted (`auth`).
+    auth: Option<(crate::auth::AuthKey, Option<u64>)>,
     status: Status,
     scratch: [u8; MAX_RESPONSE_PAYLOAD],
     out: [u8; MAX_RESPONSE_FRAME],
@@ -88,6 +90,7 @@ impl Server {
                 crc32: config_fingerprint(&Config::default()),
                 locked: false,
             },
+            auth: None,
             status: Status {
                 protocol_version: PROTOCOL_VERSION,
                 capacity: CAPACITY as u16,
@@ -110,6 +113,14 @@ impl Server {
             locked: true,
         };
         Ok(s)
+    }
+
+    /// A server that accepts configurations only authenticated with `key`
+    /// (`auth`): plain `Configure` is refused with `AuthRequired`.
+    pub fn with_auth_key(key: crate::auth::AuthKey) -> Self {
+        let mut s = Server::new();
+        s.auth = Some((key, None));
+        s
     }
 
     pub fn status(&self) -> Status {
@@ -175,13 +186,33 @@ impl Server {
                     config_crc32: self.config_id.crc32,
                 })
             }
-            Command::Configure(c) => match c.validate() {
-                Ok(()) => {
-                    self.config = c;
-                    self.config_id.crc32 = config_fingerprint(&self.config);
-                    ResponseBody::Configured
+            Command::Configure(_) if self.auth.is_some() => {
+                ResponseBody::Error(WireError::AuthRequired)
+            }
+            Command::Configure(c) => self.apply(c),
+            Command::AuthConfigure(_) if self.config_id.locked => {
+                ResponseBody::Error(WireError::Locked {
+                    config_crc32: self.config_id.crc32,
+                })
+            }
+            Command::AuthConfigure(a) => match self.auth {
+                None => ResponseBody::Error(WireError::AuthNotProvisioned),
+                Some((key, last)) => {
+                    if !crate::auth::verify(&key, a.counter, &a.config, &a.tag) {
+                        ResponseBody::Error(WireError::BadAuthTag { counter: a.counter })
+                    } else if let Some(l) = last.filter(|&l| a.counter <= l) {
+                        ResponseBody::Error(WireError::Replayed {
+                            counter: a.counter,
+                            last: l,
+                        })
+                    } else {
+                        let body = self.apply(a.config);
+                        if body == ResponseBody::Configured {
+                            self.auth = Some((key, Some(a.counter)));
+                        }
+                        body
+                    }
                 }
-                Err(e) => ResponseBody::Error(e.into()),
             },
             Command::Lock => {
                 self.config_id.locked = true;
@@ -206,6 +237,18 @@ impl Server {
             }
         }
         self.send(link, Some(seq), body)
+    }
+
+    /// Validate and take a configuration.
+    fn apply(&mut self, c: Config) -> ResponseBody {
+        match c.validate() {
+            Ok(()) => {
+                self.config = c;
+                self.config_id.crc32 = config_fingerprint(&self.config);
+                ResponseBody::Configured
+            }
+            Err(e) => ResponseBody::Error(e.into()),
+        }
     }
 
     fn epoch<P: Platform>(&mut self, epoch: &Epoch<'_>, platform: &mut P) -> ResponseBody {
@@ -646,5 +689,99 @@ mod tests {
             panic!()
         };
         assert_eq!((st.resets, st.reset_cause), (0, ResetCause::PowerOn));
+    }
+
+    /// Issue 15: with a key, only an authenticated configuration with a
+    /// fresh counter is taken; a replayed frame (the same bytes again), a
+    /// forged tag, a stale counter and a plain `Configure` are refused,
+    /// typed, and the configuration in force stays.
+    #[test]
+    fn authenticated_configure_refuses_replay_and_forgery() {
+        use crate::auth::{tag, AuthConfigure};
+        let key = [0x5Au8; 32];
+        let terminal = Config::preset(raim_core::Phase::Terminal);
+        let enroute = Config::preset(raim_core::Phase::EnRoute);
+        let signed = |counter, config: Config| AuthConfigure {
+            counter,
+            config,
+            tag: tag(&key, counter, &config),
+        };
+        let a1 = signed(1, terminal);
+        let recorded = frame(&RequestRef {
+            seq: 0,
+            command: CommandRef::AuthConfigure(&a1),
+        });
+        let mut forged = signed(2, enroute);
+        forged.tag[0] ^= 1;
+        let stale = signed(1, enroute);
+        let a3 = signed(3, enroute);
+        let default_cfg = Config::default();
+        let mut server = Server::with_auth_key(key);
+        let mut bytes = recorded.clone();
+        bytes.extend(recorded.clone()); // the recorded frame, replayed
+        for (seq, command) in [
+            (1, CommandRef::AuthConfigure(&forged)),
+            (2, CommandRef::AuthConfigure(&stale)),
+            (3, CommandRef::Configure(&default_cfg)),
+        ] {
+            bytes.extend(frame(&RequestRef { seq, command }));
+        }
+        let (resp, _) = run(&mut server, &bytes);
+        let bodies: Vec<&ResponseBody> = resp
+            .iter()
+            .filter(|r| !matches!(r.body, ResponseBody::Error(WireError::SequenceGap { .. })))
+            .map(|r| &r.body)
+            .collect();
+        assert_eq!(
+            bodies,
+            [
+                &ResponseBody::Configured,
+                &ResponseBody::Error(WireError::Replayed {
+                    counter: 1,
+                    last: 1
+                }),
+                &ResponseBody::Error(WireError::BadAuthTag { counter: 2 }),
+                &ResponseBody::Error(WireError::Replayed {
+                    counter: 1,
+                    last: 1
+                }),
+                &ResponseBody::Error(WireError::AuthRequired),
+            ]
+        );
+        assert_eq!(*server.config(), terminal);
+        // A fresh counter is accepted; after Lock even that is refused.
+        let mut bytes = frame(&RequestRef {
+            seq: 4,
+            command: CommandRef::AuthConfigure(&a3),
+        });
+        bytes.extend(frame(&RequestRef {
+            seq: 5,
+            command: CommandRef::Lock,
+        }));
+        let a4 = signed(4, terminal);
+        bytes.extend(frame(&RequestRef {
+            seq: 6,
+            command: CommandRef::AuthConfigure(&a4),
+        }));
+        let (resp, _) = run(&mut server, &bytes);
+        assert_eq!(resp[0].body, ResponseBody::Configured);
+        assert_eq!(resp[1].body, ResponseBody::LockEngaged);
+        assert!(matches!(
+            resp[2].body,
+            ResponseBody::Error(WireError::Locked { .. })
+        ));
+        assert_eq!(*server.config(), enroute);
+        // Without a key, authenticated frames are refused, typed.
+        let (resp, _) = run(
+            &mut Server::new(),
+            &frame(&RequestRef {
+                seq: 0,
+                command: CommandRef::AuthConfigure(&a3),
+            }),
+        );
+        assert_eq!(
+            resp[0].body,
+            ResponseBody::Error(WireError::AuthNotProvisioned)
+        );
     }
 }
