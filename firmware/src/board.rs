@@ -91,6 +91,7 @@ mod uart {
                 if self.rx_ready() {
                     return self.0.read(DATA) as u8;
                 }
+                crate::watchdog::on_idle();
                 cortex_m::asm::wfi();
             }
         }
@@ -160,7 +161,9 @@ mod uart {
             self.0.read(SR) & SR_TXE != 0
         }
         pub fn read_byte(&mut self) -> u8 {
-            while !self.rx_ready() {}
+            while !self.rx_ready() {
+                crate::watchdog::on_idle();
+            }
             // Reading DR clears RXNE and an overrun; a lost byte shows up as
             // a bad frame, which is answered.
             self.0.read(DR) as u8

@@ -9,11 +9,15 @@
 #![no_main]
 
 mod board;
+mod fault;
+mod guard;
 mod stack;
+mod watchdog;
 
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use embedded_io::Read;
 use raim_proto::server::{Platform, Server};
+use raim_proto::{ResetCause, TestFault};
 
 #[cfg(feature = "board-stm32f4")]
 use defmt_rtt as _;
@@ -22,6 +26,8 @@ use defmt_semihosting as _;
 
 struct Board {
     ticks: board::Ticks,
+    /// Resets since power-on and the last cause (`fault::boot`).
+    reset: (u32, ResetCause),
 }
 
 impl Platform for Board {
@@ -32,10 +38,30 @@ impl Platform for Board {
     fn stack_high_water_bytes(&mut self) -> u32 {
         stack::high_water_bytes()
     }
+    fn reset_record(&mut self) -> (u32, ResetCause) {
+        self.reset
+    }
+    /// Test hooks exist on the QEMU board only (CI); the real board's
+    /// build answers `TestHooksDisabled`.
+    #[cfg(feature = "board-qemu")]
+    fn test_fault(&mut self, fault: TestFault) -> bool {
+        match fault {
+            TestFault::Hang => loop {
+                cortex_m::asm::nop();
+            },
+            TestFault::Panic => panic!("test hook"),
+            TestFault::StackOverflow => guard::overflow(0) != 0,
+        }
+    }
+    #[cfg(not(feature = "board-qemu"))]
+    fn test_fault(&mut self, _fault: TestFault) -> bool {
+        false
+    }
 }
 
 #[entry]
 fn main() -> ! {
+    let reset = fault::boot();
     let Some(core) = cortex_m::Peripherals::take() else {
         board::halt()
     };
@@ -47,8 +73,11 @@ fn main() -> ! {
     let (mut link, mut nmea) = board::uarts();
     let mut platform = Board {
         ticks: board::Ticks::new(core.SYST),
+        reset,
     };
+    watchdog::start();
     stack::paint();
+    guard::enable();
     defmt::info!(
         "raim firmware up: capacity {=usize}, protocol {=u16}",
         raim_proto::CAPACITY,
@@ -60,18 +89,34 @@ fn main() -> ! {
         for &b in buf.iter().take(n) {
             // The UARTs' error type is Infallible.
             let _ = server.on_byte(b, &mut link, &mut nmea, &mut platform);
+            watchdog::feed();
         }
     }
 }
 
+/// Fail loud (issue 15): log, record the cause, reset.
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
     defmt::error!("panic: {}", defmt::Display2Format(info));
-    board::halt()
+    let line = info.location().map_or(0, |l| l.line());
+    fault::record_and_reset(fault::CODE_PANIC, line)
 }
 
 #[exception]
 unsafe fn HardFault(ef: &ExceptionFrame) -> ! {
+    let frame = core::ptr::from_ref(ef) as usize;
+    if guard::hit(frame) {
+        // Stacked inside the guard: a stack overflow. Reset at once.
+        fault::record_and_reset(fault::CODE_STACK_OVERFLOW, frame as u32)
+    }
     defmt::error!("hard fault at pc {=u32:#010x}", ef.pc());
-    board::halt()
+    fault::record_and_reset(fault::CODE_HARD_FAULT, ef.pc())
+}
+
+/// The watchdog's first expiry (mps2-an386: its interrupt is the NMI).
+/// `unsafe` as cortex-m-rt requires of an NMI handler (it may preempt
+/// anything); it shares nothing with the interrupted code but the record.
+#[exception]
+unsafe fn NonMaskableInt() {
+    fault::record_and_reset(fault::CODE_WATCHDOG, 0)
 }

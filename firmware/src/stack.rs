@@ -19,7 +19,8 @@ extern "C" {
 }
 
 fn bounds() -> (usize, usize) {
-    let bottom = core::ptr::addr_of!(__sheap) as usize;
+    // Above the MPU guard region (`guard`), which faults on any access.
+    let bottom = crate::guard::end().max(core::ptr::addr_of!(__sheap) as usize);
     let top = core::ptr::addr_of!(_stack_start) as usize;
     (bottom.max(top.saturating_sub(SPAN_BYTES)), top)
 }

@@ -219,73 +219,10 @@ impl Config {
         self
     }
 
-    /// Check every field's range; returns the first offending one.
+    /// Check every field against its operational bound
+    /// (`config_bounds`, docs/PROTOCOL.md "Configuration bounds"); returns
+    /// the first offending field as `OutOfRange`.
     pub fn validate(&self) -> Result<(), RaimError> {
-        let prob = |field: &'static str, v: f64| {
-            if v > 0.0 && v < 0.5 {
-                Ok(())
-            } else {
-                Err(RaimError::OutOfRange {
-                    field,
-                    value: v,
-                    min: 0.0,
-                    max: 0.5,
-                })
-            }
-        };
-        prob("pfa", self.pfa)?;
-        prob("pmd", self.pmd)?;
-        prob("pwe", self.pwe)?;
-        let positive = |field: &'static str, v: f64, max: f64| {
-            if v > 0.0 && v <= max {
-                Ok(())
-            } else {
-                Err(RaimError::OutOfRange {
-                    field,
-                    value: v,
-                    min: 0.0,
-                    max,
-                })
-            }
-        };
-        if let FiRule::LraimGaussian { kappa } = self.rule {
-            positive("kappa", kappa, 1e12)?;
-        }
-        positive("hal_m", self.alert.hal_m, 1e7)?;
-        if let Some(v) = self.alert.val_m {
-            positive("val_m", v, 1e7)?;
-        }
-        positive("min_s_ii", self.min_s_ii, 0.5)?;
-        positive("convergence_m", self.convergence_m, 1e3)?;
-        let s = &self.sigma_model;
-        let non_negative = |field: &'static str, v: f64| {
-            if (0.0..=1e4).contains(&v) {
-                Ok(())
-            } else {
-                Err(RaimError::OutOfRange {
-                    field,
-                    value: v,
-                    min: 0.0,
-                    max: 1e4,
-                })
-            }
-        };
-        non_negative("ura_m", s.ura_m)?;
-        non_negative("iono_vertical_m", s.iono_vertical_m)?;
-        non_negative("noise_m", s.noise_m)?;
-        non_negative("min_elevation_rad", s.min_elevation_rad)?;
-        if self.mcusum.enabled {
-            crate::sequential::mcusum::check_settings(self.mcusum.k, self.mcusum.arl0)?;
-            non_negative("hold_s", self.mcusum.hold_s)?;
-        }
-        if self.max_iterations == 0 || self.max_iterations > 100 {
-            return Err(RaimError::OutOfRange {
-                field: "max_iterations",
-                value: self.max_iterations as f64,
-                min: 1.0,
-                max: 100.0,
-            });
-        }
-        Ok(())
+        crate::config_bounds::check(self)
     }
 }

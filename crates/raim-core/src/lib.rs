@@ -34,6 +34,7 @@
 )]
 
 pub mod config;
+pub mod config_bounds;
 pub mod error;
 pub mod frames;
 pub mod linalg;

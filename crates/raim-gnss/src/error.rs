@@ -13,6 +13,14 @@ pub enum GnssError {
         path: PathBuf,
         expected: &'static str,
     },
+    /// A corrupt epoch record (issue 15), caught before the `rinex` crate
+    /// (which panics on some) sees it. `line` counts from 1.
+    #[error("{path}:{line}: bad epoch record: {detail}")]
+    BadEpoch {
+        path: PathBuf,
+        line: usize,
+        detail: String,
+    },
     #[error("unknown system letter '{0}' (use G, E, C, J)")]
     UnknownSystem(char),
     #[error("bad satellite '{0}' (expected e.g. G24)")]

@@ -14,6 +14,7 @@ pub mod faults;
 pub mod geometry;
 pub mod iono;
 pub mod ranging;
+pub mod rinex_guard;
 pub mod rinex_io;
 pub mod time;
 pub mod tropo;

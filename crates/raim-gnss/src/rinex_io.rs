@@ -71,7 +71,18 @@ pub struct ObsData {
 }
 
 impl ObsData {
+    /// Load an observation file. A corrupt epoch record is refused with
+    /// `GnssError::BadEpoch` naming the line, and a panic inside the
+    /// `rinex` crate becomes `GnssError::Parse` (issue 15, `rinex_guard`).
     pub fn load(path: &Path) -> Result<Self, GnssError> {
+        if !path.is_file() {
+            return Err(GnssError::FileNotFound(path.to_path_buf()));
+        }
+        crate::rinex_guard::check_observation_epochs(path)?;
+        crate::rinex_guard::no_panic(path, || Self::load_unguarded(path))
+    }
+
+    fn load_unguarded(path: &Path) -> Result<Self, GnssError> {
         let r = open(path)?;
         if !r.is_observation_rinex() {
             return Err(GnssError::WrongKind {
@@ -129,6 +140,16 @@ pub struct NavData {
     pub klobuchar: Option<Klobuchar>,
 }
 
+/// The health word of a navigation record. A missing, negative,
+/// non-integer, NaN or too large value is unhealthy (`u32::MAX`), never
+/// healthy (issue 15: `NaN as u32` and `0.5 as u32` are 0, "healthy").
+pub fn health_word(v: Option<f64>) -> u32 {
+    match v {
+        Some(h) if h >= 0.0 && h <= f64::from(u32::MAX) && h.fract() == 0.0 => h as u32,
+        _ => u32::MAX,
+    }
+}
+
 /// Largest |t - toe| at which a broadcast ephemeris is used, s (the
 /// classic single-point choices: GPS 2 h, Galileo 4 h, BeiDou 6 h).
 pub fn max_ephemeris_age_s(system: System) -> f64 {
@@ -141,7 +162,13 @@ pub fn max_ephemeris_age_s(system: System) -> f64 {
 }
 
 impl NavData {
+    /// Load a navigation file; a panic inside the `rinex` crate becomes
+    /// `GnssError::Parse` (issue 15, `rinex_guard`).
     pub fn load(path: &Path) -> Result<Self, GnssError> {
+        crate::rinex_guard::no_panic(path, || Self::load_unguarded(path))
+    }
+
+    fn load_unguarded(path: &Path) -> Result<Self, GnssError> {
         let r = open(path)?;
         if !r.is_navigation_rinex() {
             return Err(GnssError::WrongKind {
@@ -214,7 +241,7 @@ impl NavData {
                 cic_rad: get("cic").unwrap_or(0.0),
                 cis_rad: get("cis").unwrap_or(0.0),
                 group_delay_s,
-                health: get("health").unwrap_or(1.0) as u32,
+                health: health_word(get("health")),
                 iod: ["iode", "iodnav", "aode"]
                     .iter()
                     .find_map(|f| get(f))
@@ -252,5 +279,26 @@ impl NavData {
             .filter(|(age, _)| *age <= max_age)
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .map(|(_, k)| k)
+    }
+}
+
+#[cfg(test)]
+mod health_tests {
+    use super::health_word;
+
+    #[test]
+    fn only_a_non_negative_integer_is_a_health_word() {
+        assert_eq!(health_word(Some(0.0)), 0);
+        assert_eq!(health_word(Some(63.0)), 63);
+        for bad in [
+            None,
+            Some(f64::NAN),
+            Some(0.5),
+            Some(-1.0),
+            Some(f64::INFINITY),
+            Some(1e10),
+        ] {
+            assert_eq!(health_word(bad), u32::MAX, "{bad:?}");
+        }
     }
 }

@@ -89,6 +89,28 @@ pub enum WireError {
         dof: u32,
         max: u32,
     },
+    /// A `Configure` after `Lock` (or in a build with a compiled-in
+    /// configuration): refused until reset. `config_crc32` is the
+    /// fingerprint of the configuration that stays in force.
+    Locked {
+        config_crc32: u32,
+    },
+    /// A `TestFault` request to a build without test hooks.
+    TestHooksDisabled,
+    /// A plain `Configure` to a unit with an authentication key.
+    AuthRequired,
+    /// An `AuthConfigure` to a unit without a key.
+    AuthNotProvisioned,
+    /// An `AuthConfigure` whose tag does not verify.
+    BadAuthTag {
+        counter: u64,
+    },
+    /// An `AuthConfigure` whose counter is not above the last one accepted
+    /// (a replayed or reordered frame).
+    Replayed {
+        counter: u64,
+        last: u64,
+    },
 }
 
 fn u32_of(v: usize) -> u32 {
@@ -220,6 +242,22 @@ impl core::fmt::Display for WireError {
             }
             WireError::InvalidDof { dof, max } => {
                 write!(f, "degrees of freedom {dof} outside 1..={max}")
+            }
+            WireError::Locked { config_crc32 } => write!(
+                f,
+                "configuration locked until reset (in force: {config_crc32:#010x})"
+            ),
+            WireError::TestHooksDisabled => write!(f, "test hooks are disabled in this build"),
+            WireError::AuthRequired => write!(f, "configuration frames must be authenticated"),
+            WireError::AuthNotProvisioned => write!(f, "no authentication key provisioned"),
+            WireError::BadAuthTag { counter } => {
+                write!(f, "authentication tag does not verify (counter {counter})")
+            }
+            WireError::Replayed { counter, last } => {
+                write!(
+                    f,
+                    "replayed configuration: counter {counter} <= last {last}"
+                )
             }
         }
     }

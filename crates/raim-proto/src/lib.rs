@@ -11,6 +11,7 @@
 //! - [`result`]: the epoch result on the wire, converted from
 //!   `raim_core::EpochResult`.
 //! - [`error`]: the typed errors of a response.
+//! - [`lock`]: the configuration lock and its CRC-32 fingerprint.
 //! - [`nmea`]: RMC, GGA, GSA, GST and GBS sentences for a solved epoch.
 //! - [`server`]: the firmware's protocol loop, generic over `embedded_io`
 //!   UARTs, so that the host tests it without an emulator.
@@ -35,17 +36,22 @@
     )
 )]
 
+pub mod auth;
 pub mod error;
 pub mod frame;
+pub mod lock;
 pub mod message;
 pub mod nmea;
 pub mod result;
 pub mod server;
 
+pub use auth::{AuthConfigure, AuthKey};
 pub use error::WireError;
 pub use frame::{encode, FrameError, FrameReceiver};
+pub use lock::{config_fingerprint, ConfigId};
 pub use message::{
-    Command, LinearEpoch, RangeEpoch, Request, RequestRef, Response, ResponseBody, SatList, Status,
+    Command, LinearEpoch, RangeEpoch, Request, RequestRef, ResetCause, Response, ResponseBody,
+    SatList, Status, TestFault,
 };
 pub use result::{WireMcusum, WireResult};
 
@@ -55,7 +61,10 @@ pub const CAPACITY: usize = raim_core::DEFAULT_CAPACITY;
 
 /// Version of the frame layout and message types; reported by `Status`.
 /// Bump on any change of a serialized type (postcard is not self-describing).
-pub const PROTOCOL_VERSION: u16 = 2;
+/// 3: `Lock`, `LockEngaged`, `WireError::Locked`, the `ConfigId` in every
+/// response and in `Status`, the reset count and cause in `Status`, the
+/// test-only `TestFault` (issue 15).
+pub const PROTOCOL_VERSION: u16 = 3;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes

@@ -18,6 +18,7 @@ use serde::ser::Serializer;
 use serde::{Deserialize, Serialize};
 
 use crate::error::WireError;
+use crate::lock::ConfigId;
 use crate::result::WireResult;
 use crate::CAPACITY;
 
@@ -104,6 +105,51 @@ pub enum Command {
     Configure(Config),
     Ranges(RangeEpoch),
     Linear(LinearEpoch),
+    /// Lock the configuration in force until reset: every later `Configure`
+    /// is refused with `WireError::Locked`. Answered with `LockEngaged`
+    /// (also when already locked).
+    Lock,
+    /// Test-only (issue 15): make the unit hang or panic, to test the
+    /// watchdog and the fault record under QEMU. Honoured only by a build
+    /// whose platform enables it (the QEMU board); elsewhere answered
+    /// `WireError::TestHooksDisabled`.
+    TestFault(TestFault),
+    /// An authenticated `Configure` (`auth`): accepted only by a unit with
+    /// a provisioned key, with a valid tag and a counter above every one
+    /// accepted since boot.
+    AuthConfigure(crate::auth::AuthConfigure),
+}
+
+/// What a `TestFault` request does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum TestFault {
+    /// Spin without feeding the watchdog (a hung epoch).
+    Hang,
+    /// Panic.
+    Panic,
+    /// Recurse until the stack reaches its guard.
+    StackOverflow,
+}
+
+/// Why the unit last reset (issue 15), from a record in RAM that a reset
+/// does not clear.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ResetCause {
+    /// Power-on, or no valid record (the platform keeps none).
+    #[default]
+    PowerOn,
+    /// A reset the firmware did not record (external, debugger).
+    Unrecorded,
+    /// A panic; `line` is the source line of the panic location.
+    Panic { line: u32 },
+    /// A hard fault at `pc`.
+    HardFault { pc: u32 },
+    /// The watchdog expired (a hung main loop); `pc` where it was.
+    Watchdog { pc: u32 },
+    /// The stack reached its guard region (MPU) at `address`.
+    StackOverflow { address: u32 },
 }
 
 /// A request frame's payload.
@@ -133,6 +179,9 @@ pub enum CommandRef<'a> {
         time_s: f64,
         sats: &'a [LinearObservation],
     },
+    Lock,
+    TestFault(TestFault),
+    AuthConfigure(&'a crate::auth::AuthConfigure),
 }
 
 /// The host's borrowed form of [`Request`].
@@ -187,6 +236,12 @@ pub struct Status {
     /// clock; under `qemu -icount shift=0` one tick is 40 guest instructions
     /// on mps2-an386).
     pub last_epoch_ticks: u32,
+    /// The configuration in force and the lock state (as in every
+    /// response's `config`).
+    pub config: ConfigId,
+    /// Resets since power-on, and the cause of the last one.
+    pub resets: u32,
+    pub reset_cause: ResetCause,
 }
 
 /// A response frame's payload.
@@ -195,6 +250,9 @@ pub struct Response {
     /// The request answered; `None` when the frame could not be read.
     pub seq: Option<u32>,
     pub body: ResponseBody,
+    /// The configuration in force when the answer was made (after a
+    /// `Configure` it answers, the new one) and the lock state.
+    pub config: ConfigId,
 }
 
 /// What the firmware answers. The result is by far the largest variant;
@@ -206,6 +264,8 @@ pub enum ResponseBody {
     Configured,
     Status(Status),
     Error(WireError),
+    /// The answer to `Lock`: the configuration is now locked until reset.
+    LockEngaged,
 }
 
 #[cfg(test)]

@@ -9,7 +9,9 @@
 //! - Talker `GP` when every satellite is GPS, else `GN`. Satellite numbers
 //!   in GSA/GBS: GPS 1-32, GLONASS 65-96, Galileo 301-, BeiDou 401-,
 //!   QZSS 193- (the extended numbering gpsd and u-blox use).
-//! - Validity: a position exists and the decision is not `Alarm`. RMC's
+//! - Validity: a position exists and the decision is `Ok` or `Excluded`.
+//!   An `Unavailable` or `Alarm` epoch is never a valid fix (issue 15): RMC
+//!   status `V` and mode `N`, GGA quality 0, GSA fix 1. RMC's
 //!   NMEA 4.1 navigational status carries the integrity decision:
 //!   `S` safe (ok / excluded), `C` caution (unavailable: PL above the alert
 //!   limit), `U` unsafe (alarm), `V` no position.
@@ -20,7 +22,10 @@
 //!   1-sigma east/north errors (no cross term in the result: axes along
 //!   north and east); 1-sigma lat/lon/alt errors.
 //! - GBS fields 2-4: the 1-sigma north, east and up errors of the solution
-//!   in force; 5: the most likely failed satellite ([`WireResult::most_likely_failed`]);
+//!   in force; 5: the excluded satellite when an exclusion is in force
+//!   (the first one), else the most likely failed satellite
+//!   ([`WireResult::most_likely_failed`]); GSA lists only the satellites
+//!   used, so an excluded satellite is absent there;
 //!   6: the probability that the all-in-view test misses a bias of the
 //!   estimated size on it, `ncx2_cdf(T^2; dof, w_i^2)` (SPEC §3, §6);
 //!   7: its bias estimate b_i (m); 8: the bias's standard deviation
@@ -167,8 +172,24 @@ pub fn epoch_sentences(r: &WireResult) -> Result<Sentences, TooLong> {
     Ok(out)
 }
 
+/// A valid fix: a position, and a decision under which it may be used.
+/// `Unavailable` (a protection level above its alert limit) and `Alarm`
+/// are not (issue 15: `Unavailable` used to be reported as a valid fix).
 fn usable(r: &WireResult) -> bool {
-    r.geodetic.is_some() && r.decision != Decision::Alarm
+    r.geodetic.is_some() && matches!(r.decision, Decision::Ok | Decision::Excluded)
+}
+
+/// The satellite GBS names as failed, and its bias estimate (m): the first
+/// exclusion in force (decision `Excluded`, or `Unavailable` after an
+/// exclusion), else the most likely failed satellite.
+fn gbs_satellite(r: &WireResult) -> Option<(&raim_core::SatelliteResult, f64)> {
+    let in_force = matches!(r.decision, Decision::Excluded | Decision::Unavailable);
+    if let Some(x) = r.exclusions.first().filter(|_| in_force) {
+        if let Some(s) = r.satellites.iter().find(|s| s.id == x.id) {
+            return Some((s, x.bias_m));
+        }
+    }
+    r.most_likely_failed().map(|s| (s, s.bias_m))
 }
 
 fn time_field<W: Write>(w: &mut W, utc: Option<Utc>) -> core::fmt::Result {
@@ -305,14 +326,14 @@ pub fn gbs(r: &WireResult) -> Result<Sentence, TooLong> {
         b.write_char(',')?;
         num(&mut b, v, 3)?;
     }
-    match r.most_likely_failed() {
-        Some(s) => {
+    match gbs_satellite(r) {
+        Some((s, bias_m)) => {
             let t = r.initial_test;
             let pmd = dist::ncx2_cdf(t.threshold, t.dof, s.w * s.w).unwrap_or(f64::NAN);
             write!(b, ",{:02},", nmea_svid(s.id))?;
             num(&mut b, pmd, 6)?;
             b.write_char(',')?;
-            num(&mut b, s.bias_m, 3)?;
+            num(&mut b, bias_m, 3)?;
             b.write_char(',')?;
             num(&mut b, s.sigma_m / libm::sqrt(s.s_ii), 3)?;
         }
@@ -466,5 +487,100 @@ mod tests {
         assert!(f[6].parse::<f64>().unwrap() > 0.9, "{gbs}");
         let (rmc, _) = parse(&all[0]);
         assert_eq!(rmc, "GPRMC,000000.50,V,,,,,,,290224,,,N,V");
+    }
+
+    /// Issue 15: only `Ok` and `Excluded` are a valid fix. `Unavailable`
+    /// and `Alarm` give RMC status V and mode N, GGA quality 0 and GSA fix
+    /// 1, with the integrity decision in RMC's navigational status; GBS
+    /// names the excluded satellite while its exclusion is in force.
+    #[test]
+    fn unavailable_and_alarm_epochs_are_not_a_valid_fix() {
+        let mut w = sky8_result(50.0);
+        assert_eq!(w.decision, Decision::Excluded);
+        w.geodetic = Some(Geodetic {
+            lat_rad: 0.5,
+            lon_rad: -1.2,
+            height_m: 10.0,
+        });
+        for (decision, nav) in [
+            (Decision::Ok, "S"),
+            (Decision::Excluded, "S"),
+            (Decision::Unavailable, "C"),
+            (Decision::Alarm, "U"),
+        ] {
+            w.decision = decision;
+            let valid = matches!(decision, Decision::Ok | Decision::Excluded);
+            let all = epoch_sentences(&w).unwrap();
+            let field = |k: usize| -> std::vec::Vec<String> {
+                parse(&all[k]).0.split(',').map(String::from).collect()
+            };
+            let (rmc, gga, gsa, gbs) = (field(0), field(1), field(2), field(4));
+            let want = |a: &str, b: &str| String::from(if valid { a } else { b });
+            assert_eq!(rmc[2], want("A", "V"), "{decision:?} {rmc:?}");
+            assert_eq!(rmc[12], want("A", "N"), "{decision:?} {rmc:?}");
+            assert_eq!(rmc[13], nav, "{decision:?} {rmc:?}");
+            assert_eq!(gga[6], want("1", "0"), "{decision:?} {gga:?}");
+            assert_eq!(gsa[2], want("3", "1"), "{decision:?} {gsa:?}");
+            // G02 (excluded, or identified for the alarm) is named failed,
+            // and GSA does not list it.
+            assert_eq!(gbs[5], "02", "{decision:?} {gbs:?}");
+            assert!(!gsa[3..15].contains(&String::from("02")), "{gsa:?}");
+        }
+    }
+
+    /// A real `Unavailable` epoch (the smallest HAL allowed, 40 m, with
+    /// 10 m sigmas) is written as no fix.
+    #[test]
+    fn a_processed_unavailable_epoch_is_no_fix() {
+        let cfg = Config {
+            alert: raim_core::AlertLimits {
+                hal_m: 40.0,
+                val_m: None,
+            },
+            ..Config::default()
+        };
+        let sky = [
+            (0.0, 85.0),
+            (45.0, 30.0),
+            (100.0, 50.0),
+            (150.0, 20.0),
+            (200.0, 60.0),
+            (250.0, 25.0),
+        ];
+        let sats: std::vec::Vec<LinearObservation> = sky
+            .iter()
+            .enumerate()
+            .map(|(i, &(az, el)): (usize, &(f64, f64))| {
+                let mut o = LinearObservation::from_az_el(
+                    SatId::new(System::Gps, i as u8 + 1),
+                    f64::to_radians(az),
+                    f64::to_radians(el),
+                    0.0,
+                );
+                o.sigma_m = Some(10.0);
+                o
+            })
+            .collect();
+        let r = Raim::<32>::new()
+            .process(&cfg, &Epoch::linear(1_709_164_800.0, &sats))
+            .unwrap();
+        assert_eq!(r.decision, Decision::Unavailable);
+        let mut w = WireResult::from_result(&r);
+        w.geodetic = Some(Geodetic {
+            lat_rad: 0.5,
+            lon_rad: -1.2,
+            height_m: 10.0,
+        });
+        let all = epoch_sentences(&w).unwrap();
+        assert!(
+            all[0].contains(",V,") && all[0].contains(",N,C*"),
+            "{}",
+            all[0]
+        );
+        assert!(
+            parse(&all[1]).0.split(',').nth(6) == Some("0"),
+            "{}",
+            all[1]
+        );
     }
 }

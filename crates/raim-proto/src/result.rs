@@ -227,6 +227,10 @@ mod tests {
         let resp = Response {
             seq: Some(u32::MAX),
             body: ResponseBody::Result(w),
+            config: crate::ConfigId {
+                crc32: u32::MAX,
+                locked: true,
+            },
         };
         let mut scratch = [0u8; MAX_RESPONSE_PAYLOAD];
         let mut out = [0u8; MAX_RESPONSE_FRAME];

@@ -12,7 +12,8 @@ use raim_core::{Config, Epoch, Raim};
 
 use crate::error::WireError;
 use crate::frame::{encode, FrameError, FrameReceiver};
-use crate::message::{Command, Request, Response, ResponseBody, Status};
+use crate::lock::{config_fingerprint, ConfigId};
+use crate::message::{Command, Request, ResetCause, Response, ResponseBody, Status, TestFault};
 use crate::nmea;
 use crate::result::WireResult;
 use crate::{
@@ -28,6 +29,16 @@ pub trait Platform {
     /// Deepest stack use so far, bytes (0 if not measured).
     fn stack_high_water_bytes(&mut self) -> u32 {
         0
+    }
+    /// Resets since power-on and the cause of the last one (issue 15).
+    fn reset_record(&mut self) -> (u32, ResetCause) {
+        (0, ResetCause::PowerOn)
+    }
+    /// Carry out a test-only fault (hang, panic); `false` when the build
+    /// has no test hooks (the server then answers `TestHooksDisabled`).
+    /// Honoured, it does not return.
+    fn test_fault(&mut self, _fault: TestFault) -> bool {
+        false
     }
 }
 
@@ -46,6 +57,10 @@ pub struct Server {
     raim: Raim<CAPACITY>,
     config: Config,
     expected_seq: Option<u32>,
+    /// Fingerprint of `config` and the lock (issue 15; `lock`).
+    config_id: ConfigId,
+    /// The authentication key and the last counter accepted (`auth`).
+    auth: Option<(crate::auth::AuthKey, Option<u64>)>,
     status: Status,
     scratch: [u8; MAX_RESPONSE_PAYLOAD],
     out: [u8; MAX_RESPONSE_FRAME],
@@ -71,6 +86,11 @@ impl Server {
             raim: Raim::new(),
             config: Config::default(),
             expected_seq: None,
+            config_id: ConfigId {
+                crc32: config_fingerprint(&Config::default()),
+                locked: false,
+            },
+            auth: None,
             status: Status {
                 protocol_version: PROTOCOL_VERSION,
                 capacity: CAPACITY as u16,
@@ -81,8 +101,38 @@ impl Server {
         }
     }
 
+    /// A server that boots with `config` locked in (a build whose
+    /// configuration is compiled in): `Configure` is refused from the first
+    /// frame. The configuration must pass `Config::validate`.
+    pub fn new_locked(config: Config) -> Result<Self, raim_core::RaimError> {
+        config.validate()?;
+        let mut s = Server::new();
+        s.config = config;
+        s.config_id = ConfigId {
+            crc32: config_fingerprint(&config),
+            locked: true,
+        };
+        Ok(s)
+    }
+
+    /// A server that accepts configurations only authenticated with `key`
+    /// (`auth`): plain `Configure` is refused with `AuthRequired`.
+    pub fn with_auth_key(key: crate::auth::AuthKey) -> Self {
+        let mut s = Server::new();
+        s.auth = Some((key, None));
+        s
+    }
+
     pub fn status(&self) -> Status {
-        self.status
+        Status {
+            config: self.config_id,
+            ..self.status
+        }
+    }
+
+    /// The fingerprint of the configuration in force and the lock state.
+    pub fn config_id(&self) -> ConfigId {
+        self.config_id
     }
 
     pub fn config(&self) -> &Config {
@@ -124,15 +174,50 @@ impl Server {
         let body = match request.command {
             Command::Status => {
                 self.status.stack_high_water_bytes = platform.stack_high_water_bytes();
-                ResponseBody::Status(self.status)
+                (self.status.resets, self.status.reset_cause) = platform.reset_record();
+                ResponseBody::Status(self.status())
             }
-            Command::Configure(c) => match c.validate() {
-                Ok(()) => {
-                    self.config = c;
-                    ResponseBody::Configured
+            Command::TestFault(f) => {
+                let _ = platform.test_fault(f);
+                ResponseBody::Error(WireError::TestHooksDisabled)
+            }
+            Command::Configure(_) if self.config_id.locked => {
+                ResponseBody::Error(WireError::Locked {
+                    config_crc32: self.config_id.crc32,
+                })
+            }
+            Command::Configure(_) if self.auth.is_some() => {
+                ResponseBody::Error(WireError::AuthRequired)
+            }
+            Command::Configure(c) => self.apply(c),
+            Command::AuthConfigure(_) if self.config_id.locked => {
+                ResponseBody::Error(WireError::Locked {
+                    config_crc32: self.config_id.crc32,
+                })
+            }
+            Command::AuthConfigure(a) => match self.auth {
+                None => ResponseBody::Error(WireError::AuthNotProvisioned),
+                Some((key, last)) => {
+                    if !crate::auth::verify(&key, a.counter, &a.config, &a.tag) {
+                        ResponseBody::Error(WireError::BadAuthTag { counter: a.counter })
+                    } else if let Some(l) = last.filter(|&l| a.counter <= l) {
+                        ResponseBody::Error(WireError::Replayed {
+                            counter: a.counter,
+                            last: l,
+                        })
+                    } else {
+                        let body = self.apply(a.config);
+                        if body == ResponseBody::Configured {
+                            self.auth = Some((key, Some(a.counter)));
+                        }
+                        body
+                    }
                 }
-                Err(e) => ResponseBody::Error(e.into()),
             },
+            Command::Lock => {
+                self.config_id.locked = true;
+                ResponseBody::LockEngaged
+            }
             Command::Ranges(e) if e.sats.overflowed() => too_many(e.sats.declared),
             Command::Linear(e) if e.sats.overflowed() => too_many(e.sats.declared),
             Command::Ranges(e) => self.epoch(
@@ -152,6 +237,18 @@ impl Server {
             }
         }
         self.send(link, Some(seq), body)
+    }
+
+    /// Validate and take a configuration.
+    fn apply(&mut self, c: Config) -> ResponseBody {
+        match c.validate() {
+            Ok(()) => {
+                self.config = c;
+                self.config_id.crc32 = config_fingerprint(&self.config);
+                ResponseBody::Configured
+            }
+            Err(e) => ResponseBody::Error(e.into()),
+        }
     }
 
     fn epoch<P: Platform>(&mut self, epoch: &Epoch<'_>, platform: &mut P) -> ResponseBody {
@@ -196,7 +293,8 @@ impl Server {
         if matches!(body, ResponseBody::Error(_)) {
             self.status.errors = self.status.errors.wrapping_add(1);
         }
-        let resp = Response { seq, body };
+        let config = self.config_id;
+        let resp = Response { seq, body, config };
         // The buffers hold the largest response (test
         // `result::tests::largest_response_fits`); should encoding ever
         // fail, a minimal error answer still goes out.
@@ -205,6 +303,7 @@ impl Server {
             Err(_) => {
                 let fallback = Response {
                     seq,
+                    config,
                     body: ResponseBody::Error(WireError::Overflow {
                         capacity: MAX_RESPONSE_PAYLOAD as u32,
                     }),
@@ -446,5 +545,243 @@ mod tests {
             panic!()
         };
         assert_eq!((st.frames, st.errors), (8, 8));
+    }
+
+    /// Issue 15: after `Lock` every `Configure` is refused with `Locked`
+    /// carrying the fingerprint in force, the configuration in force stays,
+    /// and every answer carries the fingerprint and the lock state.
+    #[test]
+    fn a_locked_server_refuses_configure() {
+        use raim_core::Phase;
+        let terminal = Config::preset(Phase::Terminal);
+        let (fp_default, fp_terminal) = (
+            crate::config_fingerprint(&Config::default()),
+            crate::config_fingerprint(&terminal),
+        );
+        assert_ne!(fp_default, fp_terminal);
+        let mut server = Server::new();
+        let default_cfg = Config::default();
+        let req = |seq, command| frame(&RequestRef { seq, command });
+        let s1 = sky(50.0);
+        let mut bytes = req(0, CommandRef::Status);
+        bytes.extend(req(1, CommandRef::Configure(&terminal)));
+        bytes.extend(req(2, CommandRef::Lock));
+        bytes.extend(req(3, CommandRef::Configure(&default_cfg)));
+        bytes.extend(req(4, CommandRef::Lock));
+        bytes.extend(frame(&RequestRef::linear(5, 1.0, &s1)));
+        bytes.extend(req(6, CommandRef::Status));
+        let (resp, _) = run(&mut server, &bytes);
+        assert_eq!(resp.len(), 7);
+        let id = |crc32, locked| ConfigId { crc32, locked };
+        let ResponseBody::Status(st0) = resp[0].body else {
+            panic!("{:?}", resp[0])
+        };
+        assert_eq!(st0.config, id(fp_default, false));
+        assert_eq!(st0.protocol_version, 3);
+        assert_eq!(resp[1].body, ResponseBody::Configured);
+        assert_eq!(resp[1].config, id(fp_terminal, false));
+        assert_eq!(resp[2].body, ResponseBody::LockEngaged);
+        assert_eq!(resp[2].config, id(fp_terminal, true));
+        assert_eq!(
+            resp[3].body,
+            ResponseBody::Error(WireError::Locked {
+                config_crc32: fp_terminal
+            })
+        );
+        assert_eq!(resp[4].body, ResponseBody::LockEngaged);
+        let ResponseBody::Result(r) = &resp[5].body else {
+            panic!("{:?}", resp[5])
+        };
+        assert_eq!(resp[5].config, id(fp_terminal, true));
+        // The result is the locked (terminal) configuration's.
+        let direct = Raim::<CAPACITY>::new()
+            .process(&terminal, &Epoch::linear(1.0, &s1))
+            .unwrap();
+        assert_eq!(*r, WireResult::from_result(&direct));
+        let ResponseBody::Status(st) = resp[6].body else {
+            panic!()
+        };
+        assert_eq!(st.config, id(fp_terminal, true));
+        assert_eq!(*server.config(), terminal);
+        // Only a reset (a new server) unlocks.
+        assert!(!Server::new().config_id().locked);
+    }
+
+    /// A build with its configuration compiled in refuses `Configure` from
+    /// the first frame, and refuses to boot with an invalid configuration.
+    #[test]
+    fn a_compiled_in_configuration_is_locked_from_boot() {
+        let cfg = Config::preset(raim_core::Phase::EnRoute);
+        let mut server = Server::new_locked(cfg).unwrap();
+        let bytes = frame(&RequestRef {
+            seq: 0,
+            command: CommandRef::Configure(&Config::default()),
+        });
+        let (resp, _) = run(&mut server, &bytes);
+        let fp = crate::config_fingerprint(&cfg);
+        assert_eq!(
+            resp[0].body,
+            ResponseBody::Error(WireError::Locked { config_crc32: fp })
+        );
+        assert_eq!(
+            resp[0].config,
+            ConfigId {
+                crc32: fp,
+                locked: true
+            }
+        );
+        let bad = Config { pfa: 1e-300, ..cfg };
+        assert!(matches!(
+            Server::new_locked(bad),
+            Err(raim_core::RaimError::OutOfRange { field: "pfa", .. })
+        ));
+    }
+
+    /// Issue 15: `Status` carries the platform's reset count and cause; a
+    /// test fault on a platform without test hooks is refused, typed.
+    #[test]
+    fn status_reports_the_reset_record_and_test_hooks_are_off_by_default() {
+        struct Rebooted;
+        impl Platform for Rebooted {
+            fn now(&mut self) -> u32 {
+                0
+            }
+            fn reset_record(&mut self) -> (u32, ResetCause) {
+                (3, ResetCause::Watchdog { pc: 0x1234 })
+            }
+        }
+        let mut server = Server::new();
+        let mut bytes = frame(&RequestRef {
+            seq: 0,
+            command: CommandRef::Status,
+        });
+        bytes.extend(frame(&RequestRef {
+            seq: 1,
+            command: CommandRef::TestFault(TestFault::Hang),
+        }));
+        let (mut link, mut nmea) = (Sink::default(), Sink::default());
+        for &b in &bytes {
+            server
+                .on_byte(b, &mut link, &mut nmea, &mut Rebooted)
+                .unwrap();
+        }
+        let resp = responses(&link.0);
+        let ResponseBody::Status(st) = resp[0].body else {
+            panic!("{:?}", resp[0])
+        };
+        assert_eq!(
+            (st.resets, st.reset_cause),
+            (3, ResetCause::Watchdog { pc: 0x1234 })
+        );
+        assert_eq!(
+            resp[1].body,
+            ResponseBody::Error(WireError::TestHooksDisabled)
+        );
+        // The host-test platform keeps no record: power-on.
+        let (resp, _) = run(
+            &mut Server::new(),
+            &frame(&RequestRef {
+                seq: 0,
+                command: CommandRef::Status,
+            }),
+        );
+        let ResponseBody::Status(st) = resp[0].body else {
+            panic!()
+        };
+        assert_eq!((st.resets, st.reset_cause), (0, ResetCause::PowerOn));
+    }
+
+    /// Issue 15: with a key, only an authenticated configuration with a
+    /// fresh counter is taken; a replayed frame (the same bytes again), a
+    /// forged tag, a stale counter and a plain `Configure` are refused,
+    /// typed, and the configuration in force stays.
+    #[test]
+    fn authenticated_configure_refuses_replay_and_forgery() {
+        use crate::auth::{tag, AuthConfigure};
+        let key = [0x5Au8; 32];
+        let terminal = Config::preset(raim_core::Phase::Terminal);
+        let enroute = Config::preset(raim_core::Phase::EnRoute);
+        let signed = |counter, config: Config| AuthConfigure {
+            counter,
+            config,
+            tag: tag(&key, counter, &config),
+        };
+        let a1 = signed(1, terminal);
+        let recorded = frame(&RequestRef {
+            seq: 0,
+            command: CommandRef::AuthConfigure(&a1),
+        });
+        let mut forged = signed(2, enroute);
+        forged.tag[0] ^= 1;
+        let stale = signed(1, enroute);
+        let a3 = signed(3, enroute);
+        let default_cfg = Config::default();
+        let mut server = Server::with_auth_key(key);
+        let mut bytes = recorded.clone();
+        bytes.extend(recorded.clone()); // the recorded frame, replayed
+        for (seq, command) in [
+            (1, CommandRef::AuthConfigure(&forged)),
+            (2, CommandRef::AuthConfigure(&stale)),
+            (3, CommandRef::Configure(&default_cfg)),
+        ] {
+            bytes.extend(frame(&RequestRef { seq, command }));
+        }
+        let (resp, _) = run(&mut server, &bytes);
+        let bodies: Vec<&ResponseBody> = resp
+            .iter()
+            .filter(|r| !matches!(r.body, ResponseBody::Error(WireError::SequenceGap { .. })))
+            .map(|r| &r.body)
+            .collect();
+        assert_eq!(
+            bodies,
+            [
+                &ResponseBody::Configured,
+                &ResponseBody::Error(WireError::Replayed {
+                    counter: 1,
+                    last: 1
+                }),
+                &ResponseBody::Error(WireError::BadAuthTag { counter: 2 }),
+                &ResponseBody::Error(WireError::Replayed {
+                    counter: 1,
+                    last: 1
+                }),
+                &ResponseBody::Error(WireError::AuthRequired),
+            ]
+        );
+        assert_eq!(*server.config(), terminal);
+        // A fresh counter is accepted; after Lock even that is refused.
+        let mut bytes = frame(&RequestRef {
+            seq: 4,
+            command: CommandRef::AuthConfigure(&a3),
+        });
+        bytes.extend(frame(&RequestRef {
+            seq: 5,
+            command: CommandRef::Lock,
+        }));
+        let a4 = signed(4, terminal);
+        bytes.extend(frame(&RequestRef {
+            seq: 6,
+            command: CommandRef::AuthConfigure(&a4),
+        }));
+        let (resp, _) = run(&mut server, &bytes);
+        assert_eq!(resp[0].body, ResponseBody::Configured);
+        assert_eq!(resp[1].body, ResponseBody::LockEngaged);
+        assert!(matches!(
+            resp[2].body,
+            ResponseBody::Error(WireError::Locked { .. })
+        ));
+        assert_eq!(*server.config(), enroute);
+        // Without a key, authenticated frames are refused, typed.
+        let (resp, _) = run(
+            &mut Server::new(),
+            &frame(&RequestRef {
+                seq: 0,
+                command: CommandRef::AuthConfigure(&a3),
+            }),
+        );
+        assert_eq!(
+            resp[0].body,
+            ResponseBody::Error(WireError::AuthNotProvisioned)
+        );
     }
 }

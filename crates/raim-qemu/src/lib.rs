@@ -27,7 +27,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use raim_core::{Config, Epoch, Observations};
 use raim_proto::frame::{encode, FrameError, FrameReceiver};
 use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody, Status};
-use raim_proto::{WireError, WireResult, MAX_REQUEST_FRAME, MAX_RESPONSE_FRAME};
+use raim_proto::{ConfigId, WireError, WireResult, MAX_REQUEST_FRAME, MAX_RESPONSE_FRAME};
 
 /// How long an answer may take (QEMU on a loaded 2-core machine; an epoch
 /// takes milliseconds).
@@ -110,6 +110,8 @@ pub struct QemuSession {
     next_seq: u32,
     dir: PathBuf,
     log: PathBuf,
+    /// The configuration fingerprint and lock state of the last answer.
+    last_config: Option<ConfigId>,
 }
 
 static SESSION_COUNTER: AtomicU32 = AtomicU32::new(0);
@@ -204,6 +206,7 @@ impl QemuSession {
             next_seq: 0,
             dir,
             log,
+            last_config: None,
         })
     }
 
@@ -262,6 +265,7 @@ impl QemuSession {
         let mut notices = Vec::new();
         loop {
             let r = self.recv(ANSWER_TIMEOUT)?;
+            self.last_config = Some(r.config);
             match (r.seq, r.body) {
                 (Some(s), ResponseBody::Error(e @ WireError::SequenceGap { .. })) if s == seq => {
                     notices.push(e)
@@ -277,6 +281,32 @@ impl QemuSession {
         match self.answer(seq)?.0 {
             ResponseBody::Status(s) => Ok(s),
             other => bail!("status request answered with {other:?}"),
+        }
+    }
+
+    /// The configuration fingerprint and lock state the last answer
+    /// carried (every response has them; docs/PROTOCOL.md).
+    pub fn last_config(&self) -> Option<ConfigId> {
+        self.last_config
+    }
+
+    /// Send `Configure`; the firmware's typed refusal (`OutOfRange`,
+    /// `Locked`) is the inner error.
+    pub fn try_configure(&mut self, cfg: &Config) -> Result<Result<(), WireError>> {
+        let seq = self.send(CommandRef::Configure(cfg))?;
+        match self.answer(seq)?.0 {
+            ResponseBody::Configured => Ok(Ok(())),
+            ResponseBody::Error(e) => Ok(Err(e)),
+            other => bail!("configure answered with {other:?}"),
+        }
+    }
+
+    /// Lock the configuration in force until the firmware resets.
+    pub fn lock(&mut self) -> Result<()> {
+        let seq = self.send(CommandRef::Lock)?;
+        match self.answer(seq)?.0 {
+            ResponseBody::LockEngaged => Ok(()),
+            other => bail!("lock answered with {other:?}"),
         }
     }
 

@@ -95,17 +95,42 @@ fn strongest_alternative<const N: usize>(
     best: usize,
     min_s_ii: f64,
 ) -> Option<(usize, f64)> {
-    parity
-        .residuals()
+    strongest_alternative_rows(parity.residuals(), parity.s_ii(), best, min_s_ii)
+}
+
+/// `strongest_alternative` on residuals and S_ii. Fails safe on NaN
+/// (issue 15): a row whose S_ii is NaN is kept, and a NaN w_j^2 counts as
+/// +inf, an alternative that explains everything and so cannot be rejected.
+/// (A NaN compared false and the row used to be passed over.)
+fn strongest_alternative_rows(
+    residuals: &[f64],
+    s_ii: &[f64],
+    best: usize,
+    min_s_ii: f64,
+) -> Option<(usize, f64)> {
+    residuals
         .iter()
-        .zip(parity.s_ii())
+        .zip(s_ii)
         .enumerate()
-        .filter(|(row, (_, s))| *row != best && **s >= min_s_ii)
-        .map(|(row, (r, s))| (row, r * r / s))
+        .filter(|(row, (_, s))| *row != best && !(**s < min_s_ii))
+        .map(|(row, (r, s))| {
+            let w2 = r * r / s;
+            (row, if w2.is_nan() { f64::INFINITY } else { w2 })
+        })
         .fold(None, |acc: Option<(usize, f64)>, c| match acc {
             Some(a) if a.1 >= c.1 => Some(a),
             _ => Some(c),
         })
+}
+
+/// The uniqueness test (docs/CORE.md FDE 3): the alternative explanation,
+/// whose subset statistic is `alternative_statistic`, is rejected only when
+/// that statistic reaches the pwe threshold. Written so that NaN is *not*
+/// a rejection: an alternative that cannot be evaluated leaves the
+/// exclusion ambiguous (issue 15: `statistic < threshold` was false on NaN,
+/// and the exclusion stood).
+fn alternative_rejected(alternative_statistic: f64, threshold: f64) -> bool {
+    alternative_statistic >= threshold
 }
 
 /// A pair of rows, their joint bias estimates (sigma units) and the
@@ -160,17 +185,36 @@ fn best_pairs<const N: usize>(
                 bias_sigma: (bj, bk),
                 statistic: d2 - (rj * bj + rk * bk),
             };
-            match best {
-                [Some(b0), _] if fit.statistic >= b0.statistic => {
-                    if best[1].is_none_or(|b1| fit.statistic < b1.statistic) {
-                        best[1] = Some(fit);
-                    }
-                }
-                _ => best = [Some(fit), best[0]],
-            }
+            insert_pair(&mut best, fit);
         }
     }
     best
+}
+
+/// Keep the two best pairs (smallest statistic first) in `best`.
+fn insert_pair(best: &mut [Option<PairFit>; 2], fit: PairFit) {
+    match *best {
+        [Some(b0), _] if !fits_before(fit.statistic, b0.statistic) => {
+            if best[1].is_none_or(|b1| fits_before(fit.statistic, b1.statistic)) {
+                best[1] = Some(fit);
+            }
+        }
+        _ => *best = [Some(fit), best[0]],
+    }
+}
+
+/// Whether pair statistic `a` ranks before `b` (smaller fits better). A NaN
+/// ranks before every number (issue 15): a pair that cannot be evaluated
+/// takes the best slot whatever the order of the rows, where it fails the
+/// subset test, so the closed-form pair exclusion is not used and the
+/// greedy path goes on with its own checks. It can never drop out of the
+/// ranking and let another pair's exclusion look unique.
+fn fits_before(a: f64, b: f64) -> bool {
+    match (a.is_nan(), b.is_nan()) {
+        (true, false) => true,
+        (false, false) => a < b,
+        (_, true) => false,
+    }
 }
 
 /// What the pair search found. `Excluded` means the subset's solution was
@@ -212,7 +256,7 @@ fn exclude_pair<const N: usize>(
     };
     if let Some(alt) = second {
         let t2_we = dist::chi2_quantile_upper(cfg.pwe, dof_pair as u32)?;
-        if alt.statistic < t2_we {
+        if !alternative_rejected(alt.statistic, t2_we) {
             let (a, b) = alt.rows;
             let other = if a != j && a != k { a } else { b };
             let mine = if j != a && j != b { j } else { k };
@@ -366,7 +410,7 @@ pub fn run<const N: usize>(
             if let Some(alt) = strongest_alternative(&current.parity, best.row, cfg.min_s_ii) {
                 let dof_alt = current.parity.dof() - 1;
                 let threshold = dist::chi2_quantile_upper(cfg.pwe, dof_alt as u32)?;
-                if test_now.statistic - alt.1 < threshold {
+                if !alternative_rejected(test_now.statistic - alt.1, threshold) {
                     out.cause = Some(AlarmCause::Ambiguous {
                         best: best_id,
                         runner_up: id_of(alt.0).unwrap_or(best_id),
@@ -502,6 +546,92 @@ mod tests {
                 !out.test.alarm() && out.exclusions.len() == 1,
                 "seed {seed}"
             );
+        }
+    }
+}
+
+/// Issue 15: the uniqueness checks and the pair ranking fail safe on NaN.
+#[cfg(test)]
+mod nan_tests {
+    extern crate std;
+    use super::*;
+    use std::vec::Vec;
+
+    /// An alternative whose subset statistic is NaN is not rejected, so the
+    /// exclusion is ambiguous; finite values compare as before.
+    #[test]
+    fn a_nan_alternative_is_not_rejected() {
+        assert!(!alternative_rejected(f64::NAN, 9.0));
+        assert!(!alternative_rejected(9.0, f64::NAN));
+        assert!(!alternative_rejected(8.9, 9.0));
+        assert!(alternative_rejected(9.0, 9.0));
+        assert!(alternative_rejected(f64::INFINITY, 9.0));
+    }
+
+    /// A NaN residual or S_ii on any row other than the excluded one is the
+    /// strongest alternative, with w^2 = +inf; without NaN the strongest is
+    /// the brute-force argmax of r^2 / S.
+    #[test]
+    fn a_nan_row_is_the_strongest_alternative() {
+        let r = [1.0, -3.0, 0.5, 2.0, -0.1];
+        let s = [0.5, 0.6, 0.4, 0.7, 0.3];
+        let brute = |best: usize| {
+            (0..5)
+                .filter(|&j| j != best)
+                .map(|j| (j, r[j] * r[j] / s[j]))
+                .fold((usize::MAX, -1.0), |a, c| if c.1 > a.1 { c } else { a })
+        };
+        for best in 0..5 {
+            assert_eq!(
+                strongest_alternative_rows(&r, &s, best, 1e-4),
+                Some(brute(best))
+            );
+            for bad in (0..5).filter(|&j| j != best) {
+                let mut r2 = r;
+                r2[bad] = f64::NAN;
+                assert_eq!(
+                    strongest_alternative_rows(&r2, &s, best, 1e-4),
+                    Some((bad, f64::INFINITY)),
+                    "residual: best {best} bad {bad}"
+                );
+                let mut s2 = s;
+                s2[bad] = f64::NAN;
+                assert_eq!(
+                    strongest_alternative_rows(&r, &s2, best, 1e-4),
+                    Some((bad, f64::INFINITY)),
+                    "S_ii: best {best} bad {bad}"
+                );
+            }
+        }
+    }
+
+    /// A NaN pair statistic takes the best slot wherever it comes in the
+    /// sequence, so the pair exclusion is not used (it fails `< T^2`);
+    /// among finite pairs the two smallest are kept, in order.
+    #[test]
+    fn a_nan_pair_takes_the_best_slot_in_any_order() {
+        let fit = |i: usize, statistic: f64| PairFit {
+            rows: (i, i + 1),
+            bias_sigma: (0.0, 0.0),
+            statistic,
+        };
+        let stats = [7.0, 2.0, 5.0, 3.0];
+        let mut best = [None, None];
+        for (i, &t) in stats.iter().enumerate() {
+            insert_pair(&mut best, fit(i, t));
+        }
+        assert_eq!(best[0].unwrap().statistic, 2.0);
+        assert_eq!(best[1].unwrap().statistic, 3.0);
+        for pos in 0..=stats.len() {
+            let mut best = [None, None];
+            let mut seq: Vec<PairFit> = stats.iter().enumerate().map(|(i, &t)| fit(i, t)).collect();
+            seq.insert(pos, fit(9, f64::NAN));
+            for f in seq {
+                insert_pair(&mut best, f);
+            }
+            let b0 = best[0].unwrap();
+            assert_eq!(b0.rows, (9, 10), "NaN at {pos}");
+            assert!(!(b0.statistic < 1e9));
         }
     }
 }

@@ -73,8 +73,8 @@ pub fn rank_rows(
         };
         c.row = row;
         match best {
-            Some(b) if c.score <= b.score => {
-                if second.is_none_or(|s2| c.score > s2.score) {
+            Some(b) if !outranks(c.score, b.score) => {
+                if second.is_none_or(|s2| outranks(c.score, s2.score)) {
                     second = Some(c);
                 }
             }
@@ -87,9 +87,46 @@ pub fn rank_rows(
     (best, second)
 }
 
+/// Whether score `a` ranks strictly above `b`. A NaN score (a satellite
+/// whose residual cannot be evaluated) ranks above every number, so it is
+/// identified first whatever its position in the list (issue 15: `<=` on a
+/// NaN made the ranking depend on the order of the rows). Between two NaNs
+/// the earlier row stays.
+fn outranks(a: f64, b: f64) -> bool {
+    match (a.is_nan(), b.is_nan()) {
+        (true, false) => true,
+        (false, false) => a > b,
+        (_, true) => false,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A NaN residual ranks first and the finite rows keep their order,
+    /// for every position of the NaN row and every rule.
+    #[test]
+    fn nan_ranking_does_not_depend_on_row_order() {
+        let s = [0.5, 0.6, 0.4, 0.7];
+        let r = [1.0, -3.0, 0.5, 2.0];
+        for rule in [FiRule::Mle, FiRule::LraimFlat, FiRule::default()] {
+            let (b, s2) = rank_rows(rule, &r, &s, 1e-4);
+            let (b, s2) = (b.unwrap().row, s2.unwrap().row);
+            for bad in 0..4 {
+                let mut r2 = r;
+                r2[bad] = f64::NAN;
+                let (nb, ns) = rank_rows(rule, &r2, &s, 1e-4);
+                assert_eq!(nb.unwrap().row, bad, "{rule:?} row {bad}");
+                // The runner-up is the best of the finite rows.
+                let expect = if bad == b { s2 } else { b };
+                assert_eq!(ns.unwrap().row, expect, "{rule:?} row {bad}");
+            }
+        }
+        assert!(outranks(f64::NAN, f64::INFINITY));
+        assert!(!outranks(f64::INFINITY, f64::NAN));
+        assert!(!outranks(f64::NAN, f64::NAN));
+    }
 
     /// The flat-prior score is 2 ln of the marginal likelihood
     /// integral exp(-J(b)/2) db of seed 000 eq. 7, up to a constant common

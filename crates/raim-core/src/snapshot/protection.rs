@@ -26,16 +26,30 @@ pub fn slope_levels<const N: usize>(
     lambda_md: f64,
     min_s_ii: f64,
 ) -> ProtectionLevels {
+    slope_levels_rows(
+        [parity.gain(0), parity.gain(1), parity.gain(2)],
+        parity.s_ii(),
+        lambda_md,
+        min_s_ii,
+    )
+}
+
+/// `slope_levels` on the gain rows E, N, U and S_ii. A slope that is NaN
+/// (a NaN gain or S_ii) counts as infinite: the largest-slope search must
+/// never skip a satellite whose slope it cannot evaluate (issue 15; a NaN
+/// compares false and used to be passed over, leaving a finite PL).
+pub fn slope_levels_rows(
+    gain_enu: [&[f64]; 3],
+    s_ii: &[f64],
+    lambda_md: f64,
+    min_s_ii: f64,
+) -> ProtectionLevels {
     let pbias = libm::sqrt(lambda_md);
     let mut out = ProtectionLevels::default();
     let (mut max_h, mut max_v) = (0.0f64, 0.0f64);
-    let rows = parity
-        .gain(0)
-        .iter()
-        .zip(parity.gain(1))
-        .zip(parity.gain(2))
-        .zip(parity.s_ii())
-        .enumerate();
+    let [ge, gn, gu] = gain_enu;
+    let rows = ge.iter().zip(gn).zip(gu).zip(s_ii).enumerate();
+    let nan_is_infinite = |x: f64| if x.is_nan() { f64::INFINITY } else { x };
     for (row, (((e, n), u), &s)) in rows {
         let (slope_h, slope_v) = if s >= min_s_ii {
             let k = 1.0 / libm::sqrt(s);
@@ -43,6 +57,7 @@ pub fn slope_levels<const N: usize>(
         } else {
             (f64::INFINITY, f64::INFINITY)
         };
+        let (slope_h, slope_v) = (nan_is_infinite(slope_h), nan_is_infinite(slope_v));
         if slope_h > max_h || out.worst_h_row.is_none() {
             max_h = slope_h;
             out.worst_h_row = Some(row);
@@ -62,4 +77,45 @@ pub fn slope_levels<const N: usize>(
 pub fn sigma_enu_m<const N: usize>(parity: &Parity<N>) -> [f64; 3] {
     let s = |axis: usize| libm::sqrt(parity.gain(axis).iter().map(|a| a * a).sum::<f64>());
     [s(0), s(1), s(2)]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A NaN gain on one row gives an infinite PL with that row as the
+    /// worst, wherever the row is (first, middle, last); the finite rows
+    /// alone give the brute-force maximum slope times sqrt(lambda).
+    #[test]
+    fn a_nan_slope_is_never_skipped() {
+        const PL_TOL_M: f64 = 1e-12;
+        let e = [0.3, -0.2, 0.5, 0.1];
+        let n = [0.1, 0.4, -0.2, 0.2];
+        let u = [0.6, -0.9, 0.3, 0.2];
+        let s = [0.5, 0.6, 0.4, 0.7];
+        let lambda = 30.0;
+        let clean = slope_levels_rows([&e, &n, &u], &s, lambda, 1e-4);
+        let brute_h = (0..4)
+            .map(|i| (e[i] * e[i] + n[i] * n[i]).sqrt() / s[i].sqrt())
+            .fold(0.0f64, f64::max);
+        let brute_v = (0..4)
+            .map(|i| u[i].abs() / s[i].sqrt())
+            .fold(0.0f64, f64::max);
+        assert!((clean.hpl_m - brute_h * lambda.sqrt()).abs() < PL_TOL_M);
+        assert!((clean.vpl_m - brute_v * lambda.sqrt()).abs() < PL_TOL_M);
+        for bad in 0..4 {
+            let (mut e2, mut u2, mut s2) = (e, u, s);
+            e2[bad] = f64::NAN;
+            let pl = slope_levels_rows([&e2, &n, &u], &s, lambda, 1e-4);
+            assert_eq!(pl.hpl_m, f64::INFINITY, "row {bad}");
+            assert_eq!(pl.worst_h_row, Some(bad));
+            u2[bad] = f64::NAN;
+            let pl = slope_levels_rows([&e, &n, &u2], &s, lambda, 1e-4);
+            assert_eq!(pl.vpl_m, f64::INFINITY, "row {bad}");
+            assert_eq!(pl.worst_v_row, Some(bad));
+            s2[bad] = f64::NAN;
+            let pl = slope_levels_rows([&e, &n, &u], &s2, lambda, 1e-4);
+            assert_eq!((pl.hpl_m, pl.vpl_m), (f64::INFINITY, f64::INFINITY));
+        }
+    }
 }

@@ -156,15 +156,18 @@ fn protection_levels_match_brute_force_worst_bias() {
     for k in 0..3 {
         assert!((r.sigma_enu_m[k] - cov[(k, k)].sqrt()).abs() < 1e-12);
     }
-    // A tiny alert limit makes the epoch unavailable, not alarmed.
+    // An alert limit below the HPL makes the epoch unavailable, not
+    // alarmed: the smallest HAL the bounds allow (40 m), with 10 m sigmas.
     let tight = Config {
         alert: AlertLimits {
-            hal_m: 1.0,
+            hal_m: 40.0,
             val_m: None,
         },
         ..cfg()
     };
-    let r2 = raim.process(&tight, &Epoch::linear(0.0, &sats)).unwrap();
+    let noisy = linear_epoch(&SKY8, 10.0, &mut Rng::new(7), &[]);
+    let r2 = raim.process(&tight, &Epoch::linear(0.0, &noisy)).unwrap();
+    assert!(r2.protection.hpl_m > 40.0, "{}", r2.protection.hpl_m);
     assert_eq!(r2.decision, Decision::Unavailable);
     assert!(!r2.pl_available);
 }
@@ -314,8 +317,8 @@ fn bad_input_gets_typed_errors() {
         RaimError::OutOfRange {
             field: "pfa",
             value: 0.7,
-            min: 0.0,
-            max: 0.5
+            min: 1e-9,
+            max: 1e-2
         }
     );
     let mut s = sample();

@@ -19,8 +19,10 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal, Uniform};
 
-/// Snapshot Pfa that stands for "snapshot test off" in the MCUSUM-only schemes.
-const SNAPSHOT_OFF_PFA: f64 = 1e-12;
+/// Snapshot Pfa that stands for "snapshot test off" in the MCUSUM-only
+/// schemes: the smallest the core accepts (`config_bounds::PFA`, issue 15;
+/// was 1e-12, which a monitor must no longer accept).
+const SNAPSHOT_OFF_PFA: f64 = raim_core::config_bounds::PFA.min;
 /// Elevation mask, rad (5 deg).
 const MASK_RAD: f64 = 5.0 * std::f64::consts::PI / 180.0;
 

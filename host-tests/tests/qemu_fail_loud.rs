@@ -1,0 +1,86 @@
+//! Issue 15: the firmware fails loud and recovers. Under QEMU (mps2-an386)
+//! a hung main loop (the test-only `TestFault::Hang`) is reset by the CMSDK
+//! watchdog, a panic (`TestFault::Panic`) resets the unit, and the next
+//! `Status` reports the reset count and cause, a stack overflow
+//! (`TestFault::StackOverflow`) is stopped by the MPU guard and reported
+//! the same way; the reset also unlocks the
+//! configuration (only a reset does), and the unit answers epochs again.
+
+mod qemu_common;
+
+use std::time::Duration;
+
+use qemu_common::{host_result, range_vectors, session, wire_bytes};
+use raim_core::{Config, Epoch, Phase};
+use raim_proto::message::CommandRef;
+use raim_proto::{config_fingerprint, ConfigId, ResetCause, TestFault};
+
+/// The watchdog fires 2 s after the last feed (firmware/src/watchdog.rs).
+const WATCHDOG_S: f64 = 2.0;
+
+#[test]
+fn qemu_hang_and_panic_reset_the_unit_and_are_reported() {
+    let mut fw = session();
+    let st = fw.status().unwrap();
+    assert_eq!((st.resets, st.reset_cause), (0, ResetCause::PowerOn));
+    // Idle longer than the watchdog timeout: the waiting loop feeds it.
+    std::thread::sleep(Duration::from_secs_f64(1.5 * WATCHDOG_S));
+    let st = fw.status().unwrap();
+    assert_eq!((st.resets, st.reset_cause), (0, ResetCause::PowerOn));
+
+    let terminal = Config::preset(Phase::Terminal);
+    fw.configure(&terminal).unwrap();
+    fw.lock().unwrap();
+    fw.send(CommandRef::TestFault(TestFault::Hang)).unwrap();
+    // Hung: no answer before the watchdog fires.
+    assert!(fw.recv(Duration::from_secs_f64(0.75 * WATCHDOG_S)).is_err());
+    std::thread::sleep(Duration::from_secs_f64(WATCHDOG_S));
+    let st = fw.status().unwrap();
+    assert_eq!(st.resets, 1, "{st:?}");
+    assert!(
+        matches!(st.reset_cause, ResetCause::Watchdog { .. }),
+        "{st:?}"
+    );
+    // The reset unlocked the unit and restored the default configuration.
+    assert_eq!(
+        st.config,
+        ConfigId {
+            crc32: config_fingerprint(&Config::default()),
+            locked: false
+        }
+    );
+
+    fw.send(CommandRef::TestFault(TestFault::Panic)).unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    let st = fw.status().unwrap();
+    assert_eq!(st.resets, 2, "{st:?}");
+    assert!(
+        matches!(st.reset_cause, ResetCause::Panic { line } if line > 0),
+        "{st:?}"
+    );
+
+    // A stack overflow hits the MPU guard between the statics and the
+    // stack instead of overwriting the server state.
+    fw.send(CommandRef::TestFault(TestFault::StackOverflow))
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1000));
+    let st = fw.status().unwrap();
+    assert_eq!(st.resets, 3, "{st:?}");
+    let ResetCause::StackOverflow { address } = st.reset_cause else {
+        panic!("{st:?}")
+    };
+    // The frame was stacked in the guard, in RAM (mps2-an386: 0x2000_0000..).
+    assert!(
+        (0x2000_0000..0x2040_0000).contains(&address),
+        "{address:#x}"
+    );
+    // Stack painting still measures (above the guard).
+    assert!(st.stack_high_water_bytes > 0, "{st:?}");
+
+    // Back in service: an epoch is answered bit for bit as on the host.
+    let (time_s, sats, apriori) = &range_vectors(5)[1];
+    let epoch = Epoch::ranges(*time_s, sats, *apriori);
+    let p = fw.process(&epoch).unwrap();
+    let want = host_result(&Config::default(), &epoch).unwrap();
+    assert_eq!(wire_bytes(&p.outcome.unwrap()), wire_bytes(&want));
+}
