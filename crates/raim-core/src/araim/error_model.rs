@@ -66,7 +66,10 @@ mod tests {
                 "sat {i}: C_acc {c_acc} vs published {}",
                 row.c_acc
             );
-            assert!((c_int - row.c_int).abs() <= TOL_M2, "sat {i}: C_int {c_int}");
+            assert!(
+                (c_int - row.c_int).abs() <= TOL_M2,
+                "sat {i}: C_int {c_int}"
+            );
         }
     }
 

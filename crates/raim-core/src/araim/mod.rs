@@ -233,7 +233,13 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         }
         for (i, s) in sats.iter().enumerate() {
             s.validate(i)?;
-            if ism.p_const.get(s.id.system.index()).copied().flatten().is_none() {
+            if ism
+                .p_const
+                .get(s.id.system.index())
+                .copied()
+                .flatten()
+                .is_none()
+            {
                 return Err(AraimError::MissingConstellationIsm {
                     system: s.id.system,
                     index: i,

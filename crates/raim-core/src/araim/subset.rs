@@ -151,7 +151,11 @@ pub fn factor<T: Real, const N: usize>(
         if !(s > tol * diag) {
             return Err(Deficient {
                 column: j,
-                pivot: if diag > zero { (s / diag).to_f64() } else { 0.0 },
+                pivot: if diag > zero {
+                    (s / diag).to_f64()
+                } else {
+                    0.0
+                },
             });
         }
         let ljj = s.sqrt();
@@ -201,7 +205,12 @@ pub fn factor<T: Real, const N: usize>(
             let mut s = z.get(i).copied().unwrap_or(zero);
             for k in (i + 1)..m {
                 s -= l.get(k).and_then(|r| r.get(i)).copied().unwrap_or(zero)
-                    * base.p.get(k).and_then(|r| r.get(c)).copied().unwrap_or(zero);
+                    * base
+                        .p
+                        .get(k)
+                        .and_then(|r| r.get(c))
+                        .copied()
+                        .unwrap_or(zero);
             }
             let lii = l.get(i).and_then(|r| r.get(i)).copied().unwrap_or(zero);
             if let Some(x) = base.p.get_mut(i).and_then(|r| r.get_mut(c)) {
@@ -342,16 +351,16 @@ pub fn downdate<T: Real, const N: usize>(
     for (q, cq) in coef.iter_mut().enumerate() {
         let mut z = [zero; MAX_EVENTS];
         for i in 0..r {
-            let mut s = v
-                .get(i)
-                .and_then(|x| x.get(q))
-                .copied()
-                .unwrap_or(zero);
+            let mut s = v.get(i).and_then(|x| x.get(q)).copied().unwrap_or(zero);
             for k in 0..i {
                 s -= l.get(i).and_then(|x| x.get(k)).copied().unwrap_or(zero)
                     * z.get(k).copied().unwrap_or(zero);
             }
-            let lii = l.get(i).and_then(|x| x.get(i)).copied().unwrap_or(T::of(1.0));
+            let lii = l
+                .get(i)
+                .and_then(|x| x.get(i))
+                .copied()
+                .unwrap_or(T::of(1.0));
             if let Some(x) = z.get_mut(i) {
                 *x = s / lii;
             }
@@ -362,12 +371,21 @@ pub fn downdate<T: Real, const N: usize>(
                 s -= l.get(k).and_then(|x| x.get(i)).copied().unwrap_or(zero)
                     * cq.get(k).copied().unwrap_or(zero);
             }
-            let lii = l.get(i).and_then(|x| x.get(i)).copied().unwrap_or(T::of(1.0));
+            let lii = l
+                .get(i)
+                .and_then(|x| x.get(i))
+                .copied()
+                .unwrap_or(T::of(1.0));
             if let Some(x) = cq.get_mut(i) {
                 *x = s / lii;
             }
         }
-        let mut var = base.p.get(q).and_then(|x| x.get(q)).copied().unwrap_or(zero);
+        let mut var = base
+            .p
+            .get(q)
+            .and_then(|x| x.get(q))
+            .copied()
+            .unwrap_or(zero);
         for k in 0..r {
             var += cq.get(k).copied().unwrap_or(zero)
                 * v.get(k).and_then(|x| x.get(q)).copied().unwrap_or(zero);
@@ -402,7 +420,12 @@ pub fn downdate<T: Real, const N: usize>(
             *hk = dot(vk, &g, m) * w;
         }
         for q in 0..3 {
-            let mut dq = base.d.get(q).and_then(|x| x.get(i)).copied().unwrap_or(zero);
+            let mut dq = base
+                .d
+                .get(q)
+                .and_then(|x| x.get(i))
+                .copied()
+                .unwrap_or(zero);
             if let Some(cq) = coef.get(q) {
                 for (ck, hk) in cq.iter().zip(h.iter()).take(r) {
                     dq += *ck * *hk;
