@@ -2,6 +2,8 @@
 //! brute-force reference, the enumeration against all subsets, bad input
 //! and f32 against f64.
 
+#![allow(clippy::needless_range_loop)]
+
 extern crate std;
 
 pub(crate) mod appendix_d {
