@@ -146,3 +146,4 @@ where
         Some(Solution { exact_m: x, add_m })
     }
 }
+
