@@ -21,10 +21,11 @@
 //! unavailable with [`Unavailable::ModeCapacity`]; it is never truncated.
 //! Generic over `T: Real` (geometry, subset statistics); probabilities, the
 //! K_fa quantiles and the PL search are `f64` (precision policy, `real.rs`).
-//! Not implemented yet: the ADD's exclusion (FDE), see docs/ARAIM.md.
+//! - [`fde`]: exclusion after a detection (unique consistent candidate).
 
 pub mod error;
 pub mod error_model;
+pub mod fde;
 pub mod ism;
 pub mod modes;
 pub mod pl;
@@ -33,6 +34,7 @@ pub mod subset;
 pub(crate) mod tests;
 
 pub use error::AraimError;
+pub use fde::{FdeAlarm, FdeDecision};
 pub use ism::{AraimConfig, AraimSat, Ism, PlOutput};
 pub use modes::{ModeEvents, MAX_EVENTS};
 pub use subset::SubsetStats;

@@ -852,3 +852,82 @@ fn f32_agrees_with_f64() {
         }
     }
 }
+
+mod fde_tests {
+    use super::*;
+
+    fn run(sats: &[AraimSat<f64>], ism: &Ism) -> (FdeDecision, AraimOutput<f64, 1024>) {
+        let cfg = AraimConfig::default();
+        let mut main = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        let mut scratch = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        main.process(&cfg, ism, sats).unwrap();
+        let d = main.fde(&cfg, ism, sats, &mut scratch).unwrap();
+        (d, scratch.output().clone())
+    }
+
+    fn sky20() -> std::vec::Vec<AraimSat<f64>> {
+        let mut rng = crate::testutil::Rng::new(2020);
+        let mut sats = random_sky(&mut rng, 20, &[System::Gps, System::Galileo], 1e-5);
+        for s in sats.iter_mut() {
+            s.residual_m = 0.0;
+        }
+        sats
+    }
+
+    #[test]
+    fn clean_epoch_needs_no_exclusion() {
+        let (d, _) = run(&sky20(), &ge_ism(1e-4));
+        assert_eq!(d, FdeDecision::NoFault);
+    }
+
+    /// A 30 m step on one satellite: that satellite (or a set containing
+    /// it) is excluded, and the subset passes its own tests.
+    #[test]
+    fn a_step_on_one_satellite_is_excluded() {
+        let mut sats = sky20();
+        let mut excluded_it = 0;
+        for target in 0..sats.len() {
+            for s in sats.iter_mut() {
+                s.residual_m = 0.0;
+            }
+            sats[target].residual_m = 30.0;
+            let (d, sub) = run(&sats, &ge_ism(1e-4));
+            match d {
+                FdeDecision::Excluded { sats: removed, .. } => {
+                    assert!(removed & (1 << target) != 0, "target {target}: {d:?}");
+                    assert!(sub.detection_passed);
+                    if removed == 1 << target {
+                        excluded_it += 1;
+                    }
+                }
+                // Weakly observed satellites may pass undetected, or be
+                // ambiguous; never a wrong exclusion.
+                FdeDecision::NoFault | FdeDecision::Alarm(_) => {}
+            }
+        }
+        assert!(excluded_it >= 10, "only {excluded_it} of 20 excluded");
+    }
+
+    /// A Galileo-wide fault: every Galileo range biased by a different
+    /// amount (10-30 m, by PRN). A common bias would be absorbed by the
+    /// Galileo clock, and a bias g_i . d by the position (then excluding
+    /// either constellation is consistent: ambiguous, as the engine says).
+    /// The Galileo constellation is excluded.
+    #[test]
+    fn a_constellation_bias_excludes_the_constellation() {
+        let mut sats = sky20();
+        for s in sats.iter_mut() {
+            if s.id.system == System::Galileo {
+                s.residual_m = 10.0 + 20.0 * ((s.id.prn as f64 * 0.37).fract());
+            }
+        }
+        let (d, sub) = run(&sats, &ge_ism(1e-4));
+        match d {
+            FdeDecision::Excluded { consts, .. } => {
+                assert_eq!(consts, 1 << System::Galileo.index(), "{d:?}");
+                assert!(sub.detection_passed);
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+}
