@@ -1,5 +1,6 @@
 //! `raim`: host tools for the raim-core integrity monitor.
 
+mod araim_cmd;
 mod arl;
 mod campaign;
 mod config_args;
@@ -46,6 +47,8 @@ enum Command {
         #[arg(long)]
         input: Option<std::path::PathBuf>,
     },
+    /// ARAIM (docs/ARAIM.md) on ARAIM epochs as JSON lines (docs/FORMATS.md).
+    Araim(araim_cmd::AraimArgs),
     /// Seeded Monte Carlo validation campaigns (false-alarm rate; single-fault identification).
     Campaign {
         #[command(subcommand)]
@@ -85,6 +88,7 @@ fn main() -> Result<()> {
             pmd,
             json,
         } => threshold(pfa, dof, pmd, json),
+        Command::Araim(args) => araim_cmd::run(&args),
         Command::Qemu(args) => qemu::run(&args),
         Command::Replay(args) => replay::run(&args),
         Command::Pci(args) => pci::run(&args),
