@@ -394,49 +394,58 @@ pub fn downdate<T: Real, const N: usize>(
             *x = var.sqrt();
         }
     }
-    // One pass over the satellites for the three axes.
+    // One pass over the satellites for the three axes. Fixed trip counts
+    // (all MAX_EVENTS rows of V, all MAX_STATES columns; the padding is
+    // zero and adds exact zeros) and zipped iterators: no bounds checks.
     let removed = base.removed | extra;
     let mut ss = [zero; 3];
     let mut bias = [zero; 3];
     let mut sep = [zero; 3];
-    for i in 0..n {
-        let cacc = geo.c_acc.get(i).copied().unwrap_or(zero);
-        let b = geo.b_nom.get(i).copied().unwrap_or(zero);
-        let y = geo.y.get(i).copied().unwrap_or(zero);
+    let [s0e, s0n, s0u] = s0;
+    let [de, dn, du] = &base.d;
+    let s0cols = s0e.iter().zip(s0n.iter()).zip(s0u.iter());
+    let dcols = de.iter().zip(dn.iter()).zip(du.iter());
+    let rows = geo
+        .g
+        .iter()
+        .zip(geo.w.iter())
+        .zip(geo.c_acc.iter())
+        .zip(geo.b_nom.iter())
+        .zip(geo.y.iter());
+    for (i, ((((((g, &w), &cacc), &b), &y), ((&se, &sn), &su)), ((&d0e, &d0n), &d0u))) in
+        rows.zip(s0cols).zip(dcols).enumerate().take(n)
+    {
+        let s = [se, sn, su];
         if removed & bit(i) != 0 {
-            for q in 0..3 {
-                let s = s0.get(q).and_then(|x| x.get(i)).copied().unwrap_or(zero);
-                if let (Some(a), Some(c)) = (ss.get_mut(q), sep.get_mut(q)) {
-                    *a += s * s * cacc;
-                    *c -= s * y;
-                }
+            for ((a, c), &sq) in ss.iter_mut().zip(sep.iter_mut()).zip(s.iter()) {
+                *a += sq * sq * cacc;
+                *c -= sq * y;
             }
             continue;
         }
-        let g = geo.g.get(i).copied().unwrap_or([zero; MAX_STATES]);
-        let w = geo.w.get(i).copied().unwrap_or(zero);
         let mut h = [zero; MAX_EVENTS];
-        for (hk, vk) in h.iter_mut().zip(v.iter()).take(r) {
-            *hk = dot(vk, &g, m) * w;
+        for (hk, vk) in h.iter_mut().zip(v.iter()) {
+            *hk = vk
+                .iter()
+                .zip(g.iter())
+                .fold(zero, |acc, (x, y)| acc + *x * *y)
+                * w;
         }
-        for q in 0..3 {
-            let mut dq = base
-                .d
-                .get(q)
-                .and_then(|x| x.get(i))
-                .copied()
-                .unwrap_or(zero);
-            if let Some(cq) = coef.get(q) {
-                for (ck, hk) in cq.iter().zip(h.iter()).take(r) {
-                    dq += *ck * *hk;
-                }
-            }
-            let s = s0.get(q).and_then(|x| x.get(i)).copied().unwrap_or(zero);
-            if let (Some(a), Some(bq), Some(c)) = (ss.get_mut(q), bias.get_mut(q), sep.get_mut(q)) {
-                *a += dq * dq * cacc;
-                *bq += (s + dq).abs() * b;
-                *c += dq * y;
-            }
+        let d0 = [d0e, d0n, d0u];
+        for ((((a, bq), c), (&dq0, cq)), &sq) in ss
+            .iter_mut()
+            .zip(bias.iter_mut())
+            .zip(sep.iter_mut())
+            .zip(d0.iter().zip(coef.iter()))
+            .zip(s.iter())
+        {
+            let dq = cq
+                .iter()
+                .zip(h.iter())
+                .fold(dq0, |acc, (ck, hk)| acc + *ck * *hk);
+            *a += dq * dq * cacc;
+            *bq += (sq + dq).abs() * b;
+            *c += dq * y;
         }
     }
     for q in 0..3 {
