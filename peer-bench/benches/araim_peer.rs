@@ -26,7 +26,7 @@ fn peer_system(s: System) -> GnssSystem {
     match s {
         System::Gps => GnssSystem::Gps,
         System::Galileo => GnssSystem::Galileo,
-        System::Beidou => GnssSystem::Beidou,
+        System::Beidou => GnssSystem::BeiDou,
         System::Glonass => GnssSystem::Glonass,
         System::Qzss => GnssSystem::Qzss,
     }
