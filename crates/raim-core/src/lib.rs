@@ -33,6 +33,7 @@
     )
 )]
 
+pub mod araim;
 pub mod config;
 pub mod config_bounds;
 pub mod error;

@@ -1,5 +1,6 @@
 //! `raim`: host tools for the raim-core integrity monitor.
 
+mod araim_cmd;
 mod arl;
 mod campaign;
 mod config_args;
@@ -69,6 +70,8 @@ enum Command {
         #[arg(long)]
         keep_going: bool,
     },
+    /// ARAIM (docs/ARAIM.md) on ARAIM epochs as JSON lines (docs/FORMATS.md).
+    Araim(araim_cmd::AraimArgs),
     /// Seeded Monte Carlo validation campaigns (false-alarm rate; single-fault identification).
     Campaign {
         #[command(subcommand)]
@@ -142,6 +145,7 @@ fn run(command: Command) -> Result<Tally> {
             pmd,
             json,
         } => none(threshold(pfa, dof, pmd, json)),
+        Command::Araim(args) => none(araim_cmd::run(&args)),
         Command::Qemu(args) => qemu::run(&args),
         Command::Replay(args) => replay::run(&args),
         Command::Pci(args) => none(pci::run(&args)),

@@ -1,0 +1,64 @@
+//! ARAIM epochs (issue 12): ADD v3.0 Appendix D (10 satellites, 12 modes),
+//! and 30 satellites G15 + E15 with P_sat 1e-4 (satellite pairs) at
+//! P_const 1e-8 and 1e-4 (satellite + constellation modes).
+//! Run: cargo bench -p raim-core --bench araim
+//! The same inputs run through the peer crate in peer-bench/ (benches/araim_peer.rs).
+
+use criterion::{criterion_group, criterion_main, Criterion};
+#[path = "common/araim_inputs.rs"]
+mod araim_inputs;
+
+use araim_inputs::{appendix_d, sky};
+use raim_core::araim::{Araim, AraimConfig, Ism};
+use raim_core::System;
+use std::hint::black_box;
+
+fn bench(c: &mut Criterion) {
+    let cfg = AraimConfig::default();
+    let ge = [System::Gps, System::Galileo];
+    let mut engine = Box::new(Araim::<f64, 32, 1024>::new());
+    let cases = [
+        ("appendix_d", appendix_d(), Ism::with(&ge, 1e-4)),
+        (
+            "sky20_psat1e-5_pconst1e-4",
+            sky(10, 1e-5),
+            Ism::with(&ge, 1e-4),
+        ),
+        (
+            "sky30_psat1e-4_pconst1e-8",
+            sky(15, 1e-4),
+            Ism::with(&ge, 1e-8),
+        ),
+        (
+            "sky30_psat1e-4_pconst1e-4",
+            sky(15, 1e-4),
+            Ism::with(&ge, 1e-4),
+        ),
+    ];
+    for (name, sats, ism) in cases.iter() {
+        let out = engine.process(&cfg, ism, sats).unwrap();
+        eprintln!(
+            "{name}: {} modes, VPL {:.3} m, HPL {:.3} m, EMT {:.3} m, available {:?}",
+            out.modes.len(),
+            out.pl_exact.vpl_m,
+            out.pl_exact.hpl_m,
+            out.emt_m,
+            out.unavailable
+        );
+    }
+    let mut group = c.benchmark_group("araim");
+    for (name, sats, ism) in cases.iter() {
+        group.bench_function(*name, |b| {
+            b.iter(|| {
+                let out = engine
+                    .process(black_box(&cfg), black_box(ism), black_box(sats))
+                    .unwrap();
+                black_box(out.pl_add.vpl_m)
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,45 @@
+//! Runs one ARAIM bench case `iters` times, for instruction counts that
+//! do not depend on the machine's load:
+//!   perf stat -e instructions:u target/release/examples/araim_count <case> <iters>
+//! (cost per epoch = (count at iters - count at 0) / iters). Cases: the
+//! inputs of benches/araim.rs: appendix_d, sky20, sky30_pconst1e-8,
+//! sky30_pconst1e-4.
+
+#[path = "../benches/common/araim_inputs.rs"]
+mod araim_inputs;
+
+use araim_inputs::{appendix_d, sky};
+use raim_core::araim::{Araim, AraimConfig, Ism};
+use raim_core::System;
+use std::hint::black_box;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let case = args.get(1).map(String::as_str).unwrap_or("appendix_d");
+    let iters: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1000);
+    let ge = [System::Gps, System::Galileo];
+    let (sats, p_const) = match case {
+        "appendix_d" => (appendix_d(), 1e-4),
+        "sky20" => (sky(10, 1e-5), 1e-4),
+        "sky30_pconst1e-8" => (sky(15, 1e-4), 1e-8),
+        "sky30_pconst1e-4" => (sky(15, 1e-4), 1e-4),
+        other => panic!("unknown case {other}"),
+    };
+    let ism = Ism::with(&ge, p_const);
+    let cfg = AraimConfig::default();
+    let mut engine = Box::new(Araim::<f64, 32, 1024>::new());
+    let mut acc = 0.0;
+    for _ in 0..iters {
+        let out = engine
+            .process(black_box(&cfg), black_box(&ism), black_box(&sats))
+            .unwrap();
+        acc += out.pl_add.vpl_m;
+    }
+    let out = engine.process(&cfg, &ism, &sats).unwrap();
+    println!(
+        "{case}: {} modes, VPL {:.3} m, HPL {:.3} m ({acc})",
+        out.modes.len(),
+        out.pl_exact.vpl_m,
+        out.pl_exact.hpl_m
+    );
+}

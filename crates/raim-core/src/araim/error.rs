@@ -1,0 +1,99 @@
+//! Typed rejections of an ARAIM epoch (issue 12). Every variant carries the
+//! offending values and, where it applies, the field name and the
+//! satellite index, so nothing is lost silently.
+
+use crate::measurement::System;
+
+/// Why an ARAIM epoch, its ISM or its configuration was rejected.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum AraimError {
+    /// A NaN or infinite value. `index` is the satellite (or constellation)
+    /// index, 0 for configuration fields.
+    NotFinite {
+        field: &'static str,
+        index: usize,
+        value: f64,
+    },
+    /// A value outside its documented range (bounds inclusive unless the
+    /// field's doc says otherwise: probabilities are in the open (0, 1)).
+    OutOfRange {
+        field: &'static str,
+        index: usize,
+        value: f64,
+        min: f64,
+        max: f64,
+    },
+    /// The same satellite appears twice in one epoch.
+    DuplicateSatellite {
+        system: System,
+        prn: u8,
+        first: usize,
+        second: usize,
+    },
+    /// More satellites than the capacity `N` of the engine (or than the
+    /// 64 a mode's bit mask can hold).
+    CapacityExceeded { have: usize, capacity: usize },
+    /// A constellation that has an ISM entry (is declared in use) but no
+    /// satellite in the epoch: its clock column would be unobservable.
+    EmptyConstellation { system: System },
+    /// A satellite of a constellation that has no ISM entry (no P_const).
+    MissingConstellationIsm { system: System, index: usize },
+    /// Fewer satellites than the all-in-view unknowns (3 + clocks).
+    TooFewSatellites { have: usize, need: usize },
+    /// The all-in-view normal matrix is singular: column `column` has a
+    /// Cholesky pivot of `pivot` relative to its diagonal.
+    RankDeficient { column: usize, pivot: f64 },
+}
+
+impl core::fmt::Display for AraimError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            AraimError::NotFinite {
+                field,
+                index,
+                value,
+            } => write!(f, "non-finite {field} at index {index}: {value}"),
+            AraimError::OutOfRange {
+                field,
+                index,
+                value,
+                min,
+                max,
+            } => write!(
+                f,
+                "{field} at index {index} is {value}, outside [{min}, {max}]"
+            ),
+            AraimError::DuplicateSatellite {
+                system,
+                prn,
+                first,
+                second,
+            } => write!(
+                f,
+                "duplicate satellite {}{prn:02} at indices {first} and {second}",
+                system.letter()
+            ),
+            AraimError::CapacityExceeded { have, capacity } => {
+                write!(f, "{have} satellites exceed capacity {capacity}")
+            }
+            AraimError::EmptyConstellation { system } => write!(
+                f,
+                "constellation {} has an ISM entry but no satellite",
+                system.letter()
+            ),
+            AraimError::MissingConstellationIsm { system, index } => write!(
+                f,
+                "satellite at index {index} is of constellation {} which has no ISM entry",
+                system.letter()
+            ),
+            AraimError::TooFewSatellites { have, need } => {
+                write!(f, "too few satellites: have {have}, need {need}")
+            }
+            AraimError::RankDeficient { column, pivot } => write!(
+                f,
+                "rank-deficient all-in-view geometry at column {column} (pivot {pivot:e})"
+            ),
+        }
+    }
+}

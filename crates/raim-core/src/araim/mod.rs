@@ -1,0 +1,630 @@
+//! ARAIM: multiple-hypothesis solution separation per the WG-C ARAIM
+//! Algorithm Description Document baseline (SPEC §9.1, seed 003, issue 12).
+//!
+//! One call per epoch, [`Araim::process`], on the linearised form: per
+//! satellite the ENU part of its geometry row (the clock column is implied
+//! by its constellation), C_int and C_acc (given, or from
+//! [`error_model`]), b_nom, P_sat and the range residual; per
+//! constellation P_const ([`Ism`]); and the [`AraimConfig`] (LPV-200
+//! defaults). It returns the fault modes with their subset statistics and
+//! tests, the protection levels (exact root and the ADD's bracket output),
+//! EMT, sigma_v,acc and the availability, or a typed [`AraimError`].
+//!
+//! - [`modes`]: fault-mode enumeration to P_THRES, nothing skipped.
+//! - [`subset`]: all subsets from one factorisation (bases + downdates).
+//! - [`pl`]: the PL equation, exact and ADD bracket.
+//! - [`error_model`]: C_int and C_acc from the elevation.
+//! - [`ism`]: the ISM, the configuration and their range checks.
+//!
+//! Capacity: `N` satellites (at most 64, the width of a mode's mask) and
+//! `K` fault modes. A mode list that does not fit `K` makes the epoch
+//! unavailable with [`Unavailable::ModeCapacity`]; it is never truncated.
+//! Generic over `T: Real` (geometry, subset statistics); probabilities, the
+//! K_fa quantiles and the PL search are `f64` (precision policy, `real.rs`).
+//! - [`fde`]: exclusion after a detection (unique consistent candidate).
+
+pub mod error;
+pub mod error_model;
+pub mod fde;
+pub mod ism;
+pub mod modes;
+pub mod pl;
+pub mod subset;
+#[cfg(test)]
+pub(crate) mod tests;
+
+pub use error::AraimError;
+pub use fde::{FdeAlarm, FdeDecision};
+pub use ism::{AraimConfig, AraimSat, Ism, PlOutput};
+pub use modes::{ModeEvents, MAX_EVENTS};
+pub use subset::SubsetStats;
+
+use crate::measurement::{MAX_STATES, MAX_SYSTEMS};
+use crate::real::Real;
+use crate::stats::dist::normal_q_inv;
+use heapless::Vec;
+use modes::{EnumerationLimit, Events};
+use subset::{Base, Deficient, Geometry};
+
+/// Widest satellite set a mode's bit mask holds.
+pub const MAX_SATS: usize = 64;
+
+/// Whether a fault mode's subset could be solved.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ModeStatus {
+    /// Solved and tested; its prior enters the PL sum.
+    #[default]
+    Monitored,
+    /// The subset is rank-deficient (`column`: the geometry column, or for
+    /// a downdate the satellite index, whose pivot `pivot` collapsed); its
+    /// prior is added to the unmonitored probability.
+    Unmonitorable { column: usize, pivot: f64 },
+}
+
+/// One fault mode: its events and prior, its subset statistics, the
+/// thresholds T_k,q = K_fa,q sigma_ss,q and the outcome of its test.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FaultMode<T> {
+    pub events: ModeEvents,
+    pub status: ModeStatus,
+    pub stats: SubsetStats<T>,
+    pub threshold_m: [T; 3],
+    /// |x_q^(k) - x_q^(0)| <= T_k,q on every axis (false for NaN, and for
+    /// unmonitorable modes, which have no test).
+    pub passed: bool,
+}
+
+/// Why the epoch gives no ARAIM service.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Unavailable {
+    /// The mode list needs `needed` entries; the engine holds `capacity`.
+    ModeCapacity { needed: usize, capacity: usize },
+    /// More than `MAX_EVENTS` simultaneous faults would have to be
+    /// monitored to bring P(more faults) to P_THRES.
+    TooManyEvents { p_exceed_at_max: f64 },
+    /// The unmonitored probability (beyond N_fault,max, plus the
+    /// unmonitorable modes) exceeds P_THRES.
+    Unmonitored { p_unmon: f64, p_thres: f64 },
+    /// The PL equation of `axis` (0 E, 1 N, 2 U) could not be bracketed.
+    PlNotSolved { axis: usize },
+    /// One or more of the LPV-200 limits fails (see `Limits`).
+    Limits,
+}
+
+/// The availability limits, each true when met.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Limits {
+    pub vpl: bool,
+    pub hpl: bool,
+    pub emt: bool,
+    pub sigma_acc: bool,
+}
+
+/// Protection levels, in metres.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ProtectionLevels {
+    pub vpl_m: f64,
+    pub hpl_m: f64,
+    /// The east and north roots (HPL = their root-sum-square).
+    pub hpl_axes_m: [f64; 2],
+}
+
+/// Everything one epoch produces.
+#[derive(Debug, Clone)]
+pub struct AraimOutput<T, const K: usize> {
+    pub modes: Vec<FaultMode<T>, K>,
+    /// Modes solved and tested (N_modes of K_fa).
+    pub n_monitored: usize,
+    /// N_fault,max.
+    pub max_faults: usize,
+    /// P(more than N_fault,max events).
+    pub p_exceed: f64,
+    /// p_exceed plus the priors of the unmonitorable modes.
+    pub p_unmon: f64,
+    /// K_fa for east, north, up.
+    pub k_fa: [f64; 3],
+    /// All in view: sigma_q^(0), b_q^(0) and the position correction S0 y.
+    pub sigma0_m: [T; 3],
+    pub bias0_m: [T; 3],
+    pub correction_enu_m: [T; 3],
+    pub sigma_v_acc_m: T,
+    pub emt_m: T,
+    /// The exact roots.
+    pub pl_exact: ProtectionLevels,
+    /// The ADD's bracket outputs at TOL_PL.
+    pub pl_add: ProtectionLevels,
+    /// Every monitored mode passed its solution-separation test.
+    pub detection_passed: bool,
+    pub limits: Limits,
+    /// None when available.
+    pub unavailable: Option<Unavailable>,
+}
+
+impl<T: Real, const K: usize> Default for AraimOutput<T, K> {
+    fn default() -> Self {
+        let z = T::of(0.0);
+        Self {
+            modes: Vec::new(),
+            n_monitored: 0,
+            max_faults: 0,
+            p_exceed: 0.0,
+            p_unmon: 0.0,
+            k_fa: [0.0; 3],
+            sigma0_m: [z; 3],
+            bias0_m: [z; 3],
+            correction_enu_m: [z; 3],
+            sigma_v_acc_m: z,
+            emt_m: z,
+            pl_exact: ProtectionLevels::default(),
+            pl_add: ProtectionLevels::default(),
+            detection_passed: false,
+            limits: Limits::default(),
+            unavailable: None,
+        }
+    }
+}
+
+impl<T: Real, const K: usize> AraimOutput<T, K> {
+    /// ARAIM service: no structural cause and every limit met.
+    pub fn available(&self) -> bool {
+        self.unavailable.is_none()
+    }
+}
+
+/// The ARAIM engine: `N` satellites, `K` fault modes, precision `T`. It
+/// owns its scratch and its output, so one epoch allocates nothing.
+pub struct Araim<T, const N: usize, const K: usize> {
+    geo: Geometry<T, N>,
+    s0: [[T; N]; 3],
+    base0: Base<T, N>,
+    const_bases: [Base<T, N>; MAX_SYSTEMS],
+    const_status: [Option<Deficient>; MAX_SYSTEMS],
+    scratch: Base<T, N>,
+    events: Vec<ModeEvents, K>,
+    out: AraimOutput<T, K>,
+}
+
+impl<T: Real, const N: usize, const K: usize> Default for Araim<T, N, K> {
+    fn default() -> Self {
+        Self {
+            geo: Geometry::default(),
+            s0: [[T::of(0.0); N]; 3],
+            base0: Base::default(),
+            const_bases: [Base::default(); MAX_SYSTEMS],
+            const_status: [None; MAX_SYSTEMS],
+            scratch: Base::default(),
+            events: Vec::new(),
+            out: AraimOutput::default(),
+        }
+    }
+}
+
+fn bit(i: usize) -> u64 {
+    if i < 64 {
+        1u64 << i
+    } else {
+        0
+    }
+}
+
+impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Validates the inputs (every ISM and configuration field, NaN,
+    /// duplicates, capacity, constellations) and builds the geometry.
+    fn load(
+        &mut self,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        sats: &[AraimSat<T>],
+    ) -> Result<(), AraimError> {
+        cfg.validate()?;
+        ism.validate()?;
+        let capacity = N.min(MAX_SATS);
+        if sats.len() > capacity {
+            return Err(AraimError::CapacityExceeded {
+                have: sats.len(),
+                capacity,
+            });
+        }
+        for (i, s) in sats.iter().enumerate() {
+            s.validate(i)?;
+            if ism
+                .p_const
+                .get(s.id.system.index())
+                .copied()
+                .flatten()
+                .is_none()
+            {
+                return Err(AraimError::MissingConstellationIsm {
+                    system: s.id.system,
+                    index: i,
+                });
+            }
+            if let Some(j) = sats.iter().take(i).position(|o| o.id == s.id) {
+                return Err(AraimError::DuplicateSatellite {
+                    system: s.id.system,
+                    prn: s.id.prn,
+                    first: j,
+                    second: i,
+                });
+            }
+        }
+        // One clock column per constellation in use, in System::ALL order.
+        let mut col_of = [0usize; MAX_SYSTEMS];
+        let mut m = 3;
+        for (j, p) in ism.p_const.iter().enumerate() {
+            if p.is_some() {
+                let system = crate::measurement::System::ALL
+                    .get(j)
+                    .copied()
+                    .unwrap_or_default();
+                if !sats.iter().any(|s| s.id.system.index() == j) {
+                    return Err(AraimError::EmptyConstellation { system });
+                }
+                if let Some(c) = col_of.get_mut(j) {
+                    *c = m;
+                }
+                m += 1;
+            }
+        }
+        if sats.len() < m {
+            return Err(AraimError::TooFewSatellites {
+                have: sats.len(),
+                need: m,
+            });
+        }
+        let zero = T::of(0.0);
+        let geo = &mut self.geo;
+        geo.n = sats.len();
+        geo.m = m;
+        for (i, s) in sats.iter().enumerate() {
+            let col = col_of.get(s.id.system.index()).copied().unwrap_or(3);
+            if let Some(g) = geo.g.get_mut(i) {
+                *g = [zero; MAX_STATES];
+                for (x, v) in g.iter_mut().zip(s.g_enu.iter()) {
+                    *x = *v;
+                }
+                if let Some(x) = g.get_mut(col) {
+                    *x = T::of(1.0);
+                }
+            }
+            if let Some(x) = geo.col.get_mut(i) {
+                *x = col;
+            }
+            if let Some(x) = geo.w.get_mut(i) {
+                *x = T::of(1.0) / s.c_int_m2;
+            }
+            if let Some(x) = geo.c_acc.get_mut(i) {
+                *x = s.c_acc_m2;
+            }
+            if let Some(x) = geo.b_nom.get_mut(i) {
+                *x = s.b_nom_m;
+            }
+            if let Some(x) = geo.y.get_mut(i) {
+                *x = s.residual_m;
+            }
+        }
+        Ok(())
+    }
+
+    /// Processes one epoch (SPEC §9.1 steps 1-6).
+    ///
+    /// # Errors
+    /// A typed [`AraimError`] for invalid input or a singular all-in-view
+    /// geometry. A valid epoch without service is `Ok` with
+    /// `unavailable` set.
+    pub fn process(
+        &mut self,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        sats: &[AraimSat<T>],
+    ) -> Result<&AraimOutput<T, K>, AraimError> {
+        self.load(cfg, ism, sats)?;
+        let zero = T::of(0.0);
+        let n = self.geo.n;
+        self.out = AraimOutput::default();
+
+        // Step 2: all in view.
+        let zeros = [[zero; N]; 3];
+        subset::factor(&self.geo, 0, 0, &zeros, &mut self.base0).map_err(|d| {
+            AraimError::RankDeficient {
+                column: d.column,
+                pivot: d.pivot,
+            }
+        })?;
+        self.s0 = self.base0.d;
+        self.base0.d = zeros;
+        let out = &mut self.out;
+        for q in 0..3 {
+            let row = self.s0.get(q).copied().unwrap_or([zero; N]);
+            let var = self
+                .base0
+                .p
+                .get(q)
+                .and_then(|r| r.get(q))
+                .copied()
+                .unwrap_or(zero);
+            let mut b = zero;
+            let mut x = zero;
+            for (i, s) in row.iter().enumerate().take(n) {
+                b += s.abs() * self.geo.b_nom.get(i).copied().unwrap_or(zero);
+                x += *s * self.geo.y.get(i).copied().unwrap_or(zero);
+            }
+            if let (Some(a), Some(bb), Some(c)) = (
+                out.sigma0_m.get_mut(q),
+                out.bias0_m.get_mut(q),
+                out.correction_enu_m.get_mut(q),
+            ) {
+                *a = var.sqrt();
+                *bb = b;
+                *c = x;
+            }
+        }
+        let mut acc = zero;
+        if let Some(row) = self.s0.get(2) {
+            for (i, s) in row.iter().enumerate().take(n) {
+                acc += *s * *s * self.geo.c_acc.get(i).copied().unwrap_or(zero);
+            }
+        }
+        out.sigma_v_acc_m = acc.sqrt();
+
+        // Constellation bases: clock column dropped.
+        let mut const_sats = [0u64; MAX_SYSTEMS];
+        for (i, s) in sats.iter().enumerate() {
+            if let Some(x) = const_sats.get_mut(s.id.system.index()) {
+                *x |= bit(i);
+            }
+        }
+        let mut const_cols = [0u16; MAX_SYSTEMS];
+        for (j, p) in ism.p_const.iter().enumerate() {
+            if p.is_none() {
+                continue;
+            }
+            let removed = const_sats.get(j).copied().unwrap_or(0);
+            let col = sats
+                .iter()
+                .zip(self.geo.col.iter())
+                .find(|(s, _)| s.id.system.index() == j)
+                .map(|(_, c)| *c)
+                .unwrap_or(0);
+            let dropped = 1u16 << col;
+            if let Some(x) = const_cols.get_mut(j) {
+                *x = dropped;
+            }
+            if let (Some(base), Some(st)) =
+                (self.const_bases.get_mut(j), self.const_status.get_mut(j))
+            {
+                *st = subset::factor(&self.geo, removed, dropped, &self.s0, base).err();
+            }
+        }
+
+        // Step 1: the fault modes.
+        let mut p_sat = [0.0f64; MAX_SATS];
+        let mut sat_system = [0u8; MAX_SATS];
+        for (i, s) in sats.iter().enumerate() {
+            if let (Some(p), Some(sys)) = (p_sat.get_mut(i), sat_system.get_mut(i)) {
+                *p = s.p_sat;
+                *sys = s.id.system.index() as u8;
+            }
+        }
+        let mut p_const: Vec<(u8, f64), MAX_SYSTEMS> = Vec::new();
+        for (j, p) in ism.p_const.iter().enumerate() {
+            if let Some(p) = *p {
+                let _ = p_const.push((j as u8, p));
+            }
+        }
+        let events = Events {
+            p_sat: p_sat.get(..n).unwrap_or(&[]),
+            sat_system: sat_system.get(..n).unwrap_or(&[]),
+            p_const: &p_const,
+        };
+        let enumeration = match modes::enumerate(&events, cfg.p_thres, &mut self.events) {
+            Ok(e) => e,
+            Err(limit) => {
+                out.unavailable = Some(match limit {
+                    EnumerationLimit::TooManyEvents { p_exceed_at_max } => {
+                        Unavailable::TooManyEvents { p_exceed_at_max }
+                    }
+                    EnumerationLimit::Capacity { needed, capacity } => {
+                        Unavailable::ModeCapacity { needed, capacity }
+                    }
+                });
+                return Ok(&self.out);
+            }
+        };
+        out.max_faults = enumeration.max_faults;
+        out.p_exceed = enumeration.p_exceed;
+
+        // Step 3: per mode, from its base.
+        let mut p_unmon = enumeration.p_exceed;
+        for ev in self.events.iter() {
+            let mut consts = ev.consts;
+            for (j, &cs) in const_sats.iter().enumerate() {
+                if cs != 0 && cs & ev.sats == cs {
+                    consts |= 1u8 << j;
+                }
+            }
+            let mut removed = 0u64;
+            let mut dropped = 0u16;
+            let mut count = 0;
+            let mut single = 0usize;
+            for j in 0..MAX_SYSTEMS {
+                if consts & (1u8 << j) != 0 {
+                    removed |= const_sats.get(j).copied().unwrap_or(0);
+                    dropped |= const_cols.get(j).copied().unwrap_or(0);
+                    count += 1;
+                    single = j;
+                }
+            }
+            let extra = ev.sats & !removed;
+            let result = match count {
+                0 => subset::downdate(&self.geo, &self.base0, extra, &self.s0),
+                1 => match self.const_status.get(single).copied().flatten() {
+                    Some(d) => Err(d),
+                    None => match self.const_bases.get(single) {
+                        Some(base) => subset::downdate(&self.geo, base, extra, &self.s0),
+                        None => Err(Deficient {
+                            column: 0,
+                            pivot: 0.0,
+                        }),
+                    },
+                },
+                _ => subset::factor(&self.geo, removed, dropped, &self.s0, &mut self.scratch)
+                    .and_then(|()| subset::downdate(&self.geo, &self.scratch, extra, &self.s0)),
+            };
+            let mode = match result {
+                Ok(stats) => FaultMode {
+                    events: *ev,
+                    status: ModeStatus::Monitored,
+                    stats,
+                    threshold_m: [zero; 3],
+                    passed: false,
+                },
+                Err(d) => {
+                    p_unmon += ev.prior;
+                    FaultMode {
+                        events: *ev,
+                        status: ModeStatus::Unmonitorable {
+                            column: d.column,
+                            pivot: d.pivot,
+                        },
+                        ..FaultMode::default()
+                    }
+                }
+            };
+            // Cannot fail: `events` and `modes` share the capacity K.
+            let _ = out.modes.push(mode);
+        }
+        out.p_unmon = p_unmon;
+        let n_mon = out
+            .modes
+            .iter()
+            .filter(|m| m.status == ModeStatus::Monitored)
+            .count();
+        out.n_monitored = n_mon;
+
+        // Step 4: thresholds and the solution-separation tests.
+        if n_mon > 0 {
+            let nm = n_mon as f64;
+            let kh = normal_q_inv(cfg.pfa_hor / (4.0 * nm)).unwrap_or(f64::NAN);
+            let kv = normal_q_inv(cfg.pfa_vert / (2.0 * nm)).unwrap_or(f64::NAN);
+            out.k_fa = [kh, kh, kv];
+        }
+        let k_fa = [T::of(out.k_fa[0]), T::of(out.k_fa[1]), T::of(out.k_fa[2])];
+        let mut all_passed = true;
+        let mut emt = zero;
+        for mode in out.modes.iter_mut() {
+            if mode.status != ModeStatus::Monitored {
+                continue;
+            }
+            let mut passed = true;
+            for q in 0..3 {
+                let k = k_fa.get(q).copied().unwrap_or(zero);
+                let t = k * mode.stats.sigma_ss_m.get(q).copied().unwrap_or(zero);
+                if let Some(x) = mode.threshold_m.get_mut(q) {
+                    *x = t;
+                }
+                let sep = mode.stats.separation_m.get(q).copied().unwrap_or(zero);
+                if !(sep.abs() <= t) {
+                    passed = false;
+                }
+            }
+            mode.passed = passed;
+            all_passed &= passed;
+            // Step 6: EMT over the modes with p_k >= P_EMT.
+            if mode.events.prior >= cfg.p_emt && mode.threshold_m[2] > emt {
+                emt = mode.threshold_m[2];
+            }
+        }
+        out.detection_passed = all_passed;
+        out.emt_m = emt;
+
+        if p_unmon > cfg.p_thres {
+            out.unavailable = Some(Unavailable::Unmonitored {
+                p_unmon,
+                p_thres: cfg.p_thres,
+            });
+            return Ok(&self.out);
+        }
+
+        // Step 5: protection levels.
+        let factor = 1.0 - p_unmon / (cfg.phmi_vert + cfg.phmi_hor);
+        let mut exact = [0.0f64; 3];
+        let mut add = [0.0f64; 3];
+        for q in 0..3 {
+            let rhs = if q == 2 {
+                cfg.phmi_vert * factor
+            } else {
+                0.5 * cfg.phmi_hor * factor
+            };
+            let modes = &out.modes;
+            let eq = pl::Equation {
+                fault_free: pl::Term {
+                    p: 2.0,
+                    offset_m: out.bias0_m.get(q).copied().unwrap_or(zero).to_f64(),
+                    sigma_m: out.sigma0_m.get(q).copied().unwrap_or(zero).to_f64(),
+                },
+                modes: || {
+                    modes
+                        .iter()
+                        .filter(|m| m.status == ModeStatus::Monitored)
+                        .map(move |m| pl::Term {
+                            p: m.events.prior,
+                            offset_m: (m.threshold_m.get(q).copied().unwrap_or(zero)
+                                + m.stats.bias_m.get(q).copied().unwrap_or(zero))
+                            .to_f64(),
+                            sigma_m: m.stats.sigma_m.get(q).copied().unwrap_or(zero).to_f64(),
+                        })
+                },
+                n_modes: n_mon,
+                rhs,
+            };
+            match eq.solve(cfg.tol_pl_m) {
+                Some(s) => {
+                    if let (Some(e), Some(a)) = (exact.get_mut(q), add.get_mut(q)) {
+                        *e = s.exact_m;
+                        *a = s.add_m;
+                    }
+                }
+                None => {
+                    out.unavailable = Some(Unavailable::PlNotSolved { axis: q });
+                    return Ok(&self.out);
+                }
+            }
+        }
+        let [e0, e1, e2] = exact;
+        let [a0, a1, a2] = add;
+        out.pl_exact = ProtectionLevels {
+            vpl_m: e2,
+            hpl_m: libm::hypot(e0, e1),
+            hpl_axes_m: [e0, e1],
+        };
+        out.pl_add = ProtectionLevels {
+            vpl_m: a2,
+            hpl_m: libm::hypot(a0, a1),
+            hpl_axes_m: [a0, a1],
+        };
+        let pl = match cfg.pl_output {
+            PlOutput::AddBracket => out.pl_add,
+            PlOutput::Exact => out.pl_exact,
+        };
+        out.limits = Limits {
+            vpl: pl.vpl_m <= cfg.val_m,
+            hpl: pl.hpl_m <= cfg.hal_m,
+            emt: emt.to_f64() <= cfg.emt_max_m,
+            sigma_acc: out.sigma_v_acc_m.to_f64() <= cfg.sigma_acc_max_m,
+        };
+        let l = out.limits;
+        if !(l.vpl && l.hpl && l.emt && l.sigma_acc) {
+            out.unavailable = Some(Unavailable::Limits);
+        }
+        Ok(&self.out)
+    }
+}

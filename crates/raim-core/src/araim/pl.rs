@@ -1,0 +1,230 @@
+//! Protection levels (SPEC §9.1 step 5): the root in x of
+//!
+//!   2 Q((x - b0) / sigma0) + sum_k p_k Q((x - T_k - b_k) / sigma_k) = rhs,
+//!
+//! per axis, where the left side decreases strictly in x. Two outputs:
+//! the exact root (safeguarded Newton on the logarithm of the left side
+//! inside the ADD's bracket, to `EXACT_TOL_M`), and the ADD's output, the
+//! upper end of its bisection bracket once narrower than TOL_PL (SPEC
+//! §9.1: why the published HPL is 14.5 m where the root is 14.416 m).
+//! Evaluated in `f64`: the terms are handed over as `f64` whatever the
+//! engine's precision, since they sit deep in the normal tail.
+
+use crate::stats::dist::normal_q_inv;
+
+/// Convergence of the exact root (m).
+pub const EXACT_TOL_M: f64 = 1e-10;
+/// Iteration cap of either search (never reached on valid input: the
+/// bisection halves a bracket of at most a few hundred metres).
+const MAX_ITER: usize = 200;
+
+const INV_SQRT_2PI: f64 = 0.398_942_280_401_432_7;
+
+/// One term p Q((x - offset) / sigma) of the PL equation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Term {
+    pub p: f64,
+    pub offset_m: f64,
+    pub sigma_m: f64,
+}
+
+/// The PL equation of one axis: the fault-free term (weight 2), the
+/// monitored modes and the right-hand side.
+pub struct Equation<F> {
+    pub fault_free: Term,
+    /// Returns an iterator over the modes' terms; called once per
+    /// evaluation.
+    pub modes: F,
+    /// The number of modes (for the ADD's upper bound).
+    pub n_modes: usize,
+    pub rhs: f64,
+}
+
+/// The two answers for one axis.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Solution {
+    /// The root, to `EXACT_TOL_M`.
+    pub exact_m: f64,
+    /// The ADD's bracket output at TOL_PL.
+    pub add_m: f64,
+}
+
+/// Above this z a term p Q(z) is not evaluated: it is replaced by its
+/// bound p Q(Z_CUT) (Q(10) = 7.6e-24), so the left side can only grow and
+/// the PL only rise, by at most n_modes * Q(Z_CUT) / rhs relative in
+/// probability (below 1e-12 for 1000 modes and rhs >= 1e-9).
+const Z_CUT: f64 = 10.0;
+/// Q(Z_CUT).
+const Q_CUT: f64 = 7.619_853_024_160_527e-24;
+/// Distinct priors whose quantiles are cached per bracket.
+const CACHE: usize = 16;
+
+/// Q(z) (erfc-based, no tail correction: its relative error is a few
+/// z^2 ulp) and the density phi(z), sharing nothing but the argument.
+#[inline]
+fn q_and_pdf(z: f64) -> (f64, f64) {
+    let e = libm::exp(-0.5 * z * z);
+    (
+        0.5 * libm::erfc(z * core::f64::consts::FRAC_1_SQRT_2),
+        INV_SQRT_2PI * e,
+    )
+}
+
+/// A small memo of Q^-1(target / p) by p: the priors take few distinct
+/// values (products of the ISM's probabilities).
+struct QuantileCache {
+    keys: [f64; CACHE],
+    vals: [Option<f64>; CACHE],
+    len: usize,
+    target: f64,
+}
+
+impl QuantileCache {
+    fn new(target: f64) -> Self {
+        Self {
+            keys: [0.0; CACHE],
+            vals: [None; CACHE],
+            len: 0,
+            target,
+        }
+    }
+
+    /// Q^-1(target / p), or None if p <= target (the term never reaches it).
+    fn get(&mut self, p: f64) -> Option<f64> {
+        if !(p > self.target) {
+            return None;
+        }
+        for (k, v) in self.keys.iter().zip(self.vals.iter()).take(self.len) {
+            if *k == p {
+                return *v;
+            }
+        }
+        let v = normal_q_inv(self.target / p).ok();
+        if self.len < CACHE {
+            if let (Some(k), Some(x)) = (self.keys.get_mut(self.len), self.vals.get_mut(self.len)) {
+                *k = p;
+                *x = v;
+                self.len += 1;
+            }
+        }
+        v
+    }
+}
+
+impl<F, I> Equation<F>
+where
+    F: Fn() -> I,
+    I: Iterator<Item = Term>,
+{
+    /// The left side and its derivative at `x` (terms beyond `Z_CUT`
+    /// bounded, see there).
+    fn eval(&self, x: f64) -> (f64, f64) {
+        let t = self.fault_free;
+        let z = (x - t.offset_m) / t.sigma_m;
+        let (q, pdf) = q_and_pdf(z);
+        let mut f = t.p * q;
+        let mut d = -t.p * pdf / t.sigma_m;
+        for t in (self.modes)() {
+            let z = (x - t.offset_m) / t.sigma_m;
+            if z > Z_CUT {
+                f += t.p * Q_CUT;
+                continue;
+            }
+            let (q, pdf) = q_and_pdf(z);
+            f += t.p * q;
+            d -= t.p * pdf / t.sigma_m;
+        }
+        (f, d)
+    }
+
+    /// The ADD's initial bracket: the left side is at least any one term
+    /// (lower end) and at most n_modes + 1 times the largest (upper end).
+    pub fn bracket(&self) -> Option<(f64, f64)> {
+        let share = self.rhs / (self.n_modes as f64 + 1.0);
+        let ff = self.fault_free;
+        let mut lo = ff.offset_m + ff.sigma_m * normal_q_inv(self.rhs / ff.p).ok()?;
+        let mut hi = ff.offset_m + ff.sigma_m * normal_q_inv(share / ff.p).ok()?;
+        let mut k_lo = QuantileCache::new(self.rhs);
+        let mut k_hi = QuantileCache::new(share);
+        for t in (self.modes)() {
+            if let Some(k) = k_lo.get(t.p) {
+                lo = lo.max(t.offset_m + k * t.sigma_m);
+            }
+            if let Some(k) = k_hi.get(t.p) {
+                hi = hi.max(t.offset_m + k * t.sigma_m);
+            }
+        }
+        if lo.is_finite() && hi.is_finite() && lo <= hi {
+            Some((lo, hi))
+        } else {
+            None
+        }
+    }
+
+    /// Both answers; None if the bracket cannot be formed (non-finite
+    /// terms), which the caller reports as unavailable.
+    ///
+    /// The exact root first (Newton on ln f from the lower end, safeguarded
+    /// by bisection). The ADD's bisection is then replayed against it
+    /// without evaluating: since f decreases, f(mid) > rhs exactly when
+    /// mid < root, except within `GUARD_M` of the root, where f is
+    /// evaluated as the ADD does.
+    pub fn solve(&self, tol_pl_m: f64) -> Option<Solution> {
+        const GUARD_M: f64 = 1e-6;
+        let (lo0, hi0) = self.bracket()?;
+        let (mut lo, mut hi) = (lo0, hi0);
+        let ln_rhs = libm::log(self.rhs);
+        let mut x = lo0;
+        for _ in 0..MAX_ITER {
+            let (f, d) = self.eval(x);
+            if f > self.rhs {
+                lo = x;
+            } else {
+                hi = x;
+            }
+            let newton = if f > 0.0 && d < 0.0 {
+                -(libm::log(f) - ln_rhs) * f / d
+            } else {
+                f64::NAN
+            };
+            // Converged: the Newton correction is below the tolerance
+            // (checked before the safeguard, which would otherwise bisect
+            // when rounding puts x a hair on the wrong side of the root).
+            if newton.abs() <= EXACT_TOL_M {
+                x += newton;
+                break;
+            }
+            let mut next = x + newton;
+            if !(next > lo && next < hi) {
+                next = 0.5 * (lo + hi);
+            }
+            x = next;
+            if hi - lo <= EXACT_TOL_M {
+                break;
+            }
+        }
+        let root = x;
+        // The ADD's bisection: keep the upper end.
+        let (mut lo, mut hi) = (lo0, hi0);
+        for _ in 0..MAX_ITER {
+            if hi - lo <= tol_pl_m {
+                break;
+            }
+            let mid = 0.5 * (lo + hi);
+            let above = if (mid - root).abs() > GUARD_M {
+                mid < root
+            } else {
+                self.eval(mid).0 > self.rhs
+            };
+            if above {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Some(Solution {
+            exact_m: root,
+            add_m: hi,
+        })
+    }
+}

@@ -1,0 +1,459 @@
+//! Subset solutions from one factorisation (SPEC §9.1 steps 2-3, issue 12).
+//!
+//! The all-in-view weighted least squares is factored once (Cholesky of
+//! the normal matrix, inverted: P0 = (G^T W G)^-1, at most 8 x 8), and
+//! once more per constellation with its clock column dropped ("bases").
+//! Every other mode is a low-rank downdate of its base by the Woodbury
+//! identity. With R the r removed rows of the base B, V = P_B G_R^T and
+//! M = W_R^-1 - G_R P_B G_R^T (the covariance of the removed residuals):
+//!
+//!   P_k = P_B + V M^-1 V^T,   S^(k)_i = S^(B)_i + V M^-1 h_i,
+//!   h_i = G_R S^(B)_i = V^T g_i w_i  (i kept),   S^(k)_i = 0  (i in R).
+//!
+//! So sigma_q^(k)^2 = (P_k)_qq (since S W^-1 S^T = P), and the three
+//! position rows of S^(k) - S^(0), which give sigma_ss, b^(k) and the
+//! separation x^(k) - x^(0), are formed in O(r m n) without any new least
+//! squares. A singular M (removing R leaves the geometry rank-deficient)
+//! makes the mode unmonitorable. A mode that empties a constellation
+//! (by its constellation event or by removing all its satellites) uses
+//! that constellation's base, whose clock column is dropped.
+
+use crate::measurement::MAX_STATES;
+use crate::real::Real;
+
+use super::modes::MAX_EVENTS;
+
+/// Relative pivot below which a Cholesky factor is declared singular.
+pub fn rank_tolerance<T: Real>() -> T {
+    let t = 1e3 * T::EPS.to_f64();
+    T::of(if t > 1e-9 { t } else { 1e-9 })
+}
+
+/// The whitened all-in-view problem of one epoch.
+#[derive(Debug, Clone, Copy)]
+pub struct Geometry<T, const N: usize> {
+    /// Number of satellites.
+    pub n: usize,
+    /// Number of columns: 3 + one clock per constellation in use.
+    pub m: usize,
+    /// Full geometry rows (ENU then the one-hot clock column).
+    pub g: [[T; MAX_STATES]; N],
+    /// W = C_int^-1 (diagonal).
+    pub w: [T; N],
+    pub c_acc: [T; N],
+    pub b_nom: [T; N],
+    pub y: [T; N],
+    /// Each satellite's clock column.
+    pub col: [usize; N],
+}
+
+impl<T: Real, const N: usize> Default for Geometry<T, N> {
+    fn default() -> Self {
+        Self {
+            n: 0,
+            m: 0,
+            g: [[T::of(0.0); MAX_STATES]; N],
+            w: [T::of(0.0); N],
+            c_acc: [T::of(0.0); N],
+            b_nom: [T::of(0.0); N],
+            y: [T::of(0.0); N],
+            col: [0; N],
+        }
+    }
+}
+
+/// A factored subset: P_B with the dropped columns zero, and the position
+/// rows of S^(B) - S^(0).
+#[derive(Debug, Clone, Copy)]
+pub struct Base<T, const N: usize> {
+    pub p: [[T; MAX_STATES]; MAX_STATES],
+    pub d: [[T; N]; 3],
+    /// Satellites removed by this base.
+    pub removed: u64,
+}
+
+impl<T: Real, const N: usize> Default for Base<T, N> {
+    fn default() -> Self {
+        Self {
+            p: [[T::of(0.0); MAX_STATES]; MAX_STATES],
+            d: [[T::of(0.0); N]; 3],
+            removed: 0,
+        }
+    }
+}
+
+/// A singular subset: `column` had the relative pivot `pivot`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Deficient {
+    pub column: usize,
+    pub pivot: f64,
+}
+
+/// sigma, b, sigma_ss and the separation of one subset, per axis E, N, U.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SubsetStats<T> {
+    pub sigma_m: [T; 3],
+    pub bias_m: [T; 3],
+    pub sigma_ss_m: [T; 3],
+    pub separation_m: [T; 3],
+}
+
+fn bit(i: usize) -> u64 {
+    if i < 64 {
+        1u64 << i
+    } else {
+        0
+    }
+}
+
+/// Factors the subset that keeps the satellites not in `removed` and the
+/// columns not in `dropped` (bit c = column c), into `base.p`; then fills
+/// `base.d` with S^(B) - `s0` (pass zeros for the all-in-view base).
+pub fn factor<T: Real, const N: usize>(
+    geo: &Geometry<T, N>,
+    removed: u64,
+    dropped: u16,
+    s0: &[[T; N]; 3],
+    base: &mut Base<T, N>,
+) -> Result<(), Deficient> {
+    let zero = T::of(0.0);
+    let m = geo.m.min(MAX_STATES);
+    let active = |c: usize| c < m && dropped & (1u16 << c) == 0;
+    // Normal matrix over the active columns.
+    let mut a = [[zero; MAX_STATES]; MAX_STATES];
+    for i in 0..geo.n.min(N) {
+        if removed & bit(i) != 0 {
+            continue;
+        }
+        let (Some(g), Some(&w)) = (geo.g.get(i), geo.w.get(i)) else {
+            continue;
+        };
+        for (r, ar) in a.iter_mut().enumerate().take(m) {
+            let gr = g.get(r).copied().unwrap_or(zero) * w;
+            for (c, x) in ar.iter_mut().enumerate().take(m) {
+                *x += gr * g.get(c).copied().unwrap_or(zero);
+            }
+        }
+    }
+    // Cholesky A = L L^T in place (lower triangle), active columns only.
+    let tol = rank_tolerance::<T>();
+    let mut l = [[zero; MAX_STATES]; MAX_STATES];
+    for j in 0..m {
+        if !active(j) {
+            continue;
+        }
+        let diag = a.get(j).and_then(|r| r.get(j)).copied().unwrap_or(zero);
+        let mut s = diag;
+        for k in 0..j {
+            let v = l.get(j).and_then(|r| r.get(k)).copied().unwrap_or(zero);
+            s -= v * v;
+        }
+        if !(s > tol * diag) {
+            return Err(Deficient {
+                column: j,
+                pivot: if diag > zero {
+                    (s / diag).to_f64()
+                } else {
+                    0.0
+                },
+            });
+        }
+        let ljj = s.sqrt();
+        if let Some(x) = l.get_mut(j).and_then(|r| r.get_mut(j)) {
+            *x = ljj;
+        }
+        for i in (j + 1)..m {
+            if !active(i) {
+                continue;
+            }
+            let mut s = a.get(i).and_then(|r| r.get(j)).copied().unwrap_or(zero);
+            for k in 0..j {
+                let lik = l.get(i).and_then(|r| r.get(k)).copied().unwrap_or(zero);
+                let ljk = l.get(j).and_then(|r| r.get(k)).copied().unwrap_or(zero);
+                s -= lik * ljk;
+            }
+            if let Some(x) = l.get_mut(i).and_then(|r| r.get_mut(j)) {
+                *x = s / ljj;
+            }
+        }
+    }
+    // P = A^-1, column by column: L z = e_c, L^T p = z.
+    base.p = [[zero; MAX_STATES]; MAX_STATES];
+    for c in 0..m {
+        if !active(c) {
+            continue;
+        }
+        let mut z = [zero; MAX_STATES];
+        for i in 0..m {
+            if !active(i) {
+                continue;
+            }
+            let mut s = if i == c { T::of(1.0) } else { zero };
+            for k in 0..i {
+                s -= l.get(i).and_then(|r| r.get(k)).copied().unwrap_or(zero)
+                    * z.get(k).copied().unwrap_or(zero);
+            }
+            let lii = l.get(i).and_then(|r| r.get(i)).copied().unwrap_or(zero);
+            if let Some(x) = z.get_mut(i) {
+                *x = s / lii;
+            }
+        }
+        for i in (0..m).rev() {
+            if !active(i) {
+                continue;
+            }
+            let mut s = z.get(i).copied().unwrap_or(zero);
+            for k in (i + 1)..m {
+                s -= l.get(k).and_then(|r| r.get(i)).copied().unwrap_or(zero)
+                    * base
+                        .p
+                        .get(k)
+                        .and_then(|r| r.get(c))
+                        .copied()
+                        .unwrap_or(zero);
+            }
+            let lii = l.get(i).and_then(|r| r.get(i)).copied().unwrap_or(zero);
+            if let Some(x) = base.p.get_mut(i).and_then(|r| r.get_mut(c)) {
+                *x = s / lii;
+            }
+        }
+    }
+    base.removed = removed;
+    for (q, (drow, s0row)) in base.d.iter_mut().zip(s0.iter()).enumerate() {
+        let prow = base.p.get(q).copied().unwrap_or([zero; MAX_STATES]);
+        for i in 0..geo.n.min(N) {
+            let s_b = if removed & bit(i) != 0 {
+                zero
+            } else {
+                let g = geo.g.get(i).copied().unwrap_or([zero; MAX_STATES]);
+                let w = geo.w.get(i).copied().unwrap_or(zero);
+                dot(&prow, &g, m) * w
+            };
+            if let (Some(x), Some(&s)) = (drow.get_mut(i), s0row.get(i)) {
+                *x = s_b - s;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn dot<T: Real>(a: &[T; MAX_STATES], b: &[T; MAX_STATES], m: usize) -> T {
+    a.iter()
+        .zip(b.iter())
+        .take(m)
+        .fold(T::of(0.0), |acc, (x, y)| acc + *x * *y)
+}
+
+/// The position rows of S^(0) from the all-in-view P0.
+pub fn gain_rows<T: Real, const N: usize>(
+    geo: &Geometry<T, N>,
+    p0: &[[T; MAX_STATES]; MAX_STATES],
+    s0: &mut [[T; N]; 3],
+) {
+    let zero = T::of(0.0);
+    for (q, row) in s0.iter_mut().enumerate() {
+        let prow = p0.get(q).copied().unwrap_or([zero; MAX_STATES]);
+        for (i, x) in row.iter_mut().enumerate().take(geo.n) {
+            let g = geo.g.get(i).copied().unwrap_or([zero; MAX_STATES]);
+            *x = dot(&prow, &g, geo.m) * geo.w.get(i).copied().unwrap_or(zero);
+        }
+    }
+}
+
+/// The statistics of the subset that removes the satellites `extra` (a
+/// bit mask, all kept by `base`) from `base`, by the rank-r downdate of
+/// the module doc. `s0` are the all-in-view position gain rows.
+pub fn downdate<T: Real, const N: usize>(
+    geo: &Geometry<T, N>,
+    base: &Base<T, N>,
+    extra: u64,
+    s0: &[[T; N]; 3],
+) -> Result<SubsetStats<T>, Deficient> {
+    let zero = T::of(0.0);
+    let m = geo.m.min(MAX_STATES);
+    let n = geo.n.min(N);
+    // The removed rows.
+    let mut rows = [0usize; MAX_EVENTS];
+    let mut r = 0usize;
+    for i in 0..n {
+        if extra & bit(i) != 0 {
+            if let Some(x) = rows.get_mut(r) {
+                *x = i;
+            }
+            r += 1;
+        }
+    }
+    if r > MAX_EVENTS {
+        return Err(Deficient {
+            column: 0,
+            pivot: 0.0,
+        });
+    }
+    // V = P_B G_R^T (stored by removed row), M = W_R^-1 - G_R V.
+    let mut v = [[zero; MAX_STATES]; MAX_EVENTS];
+    for (vr, &i) in v.iter_mut().zip(rows.iter()).take(r) {
+        let g = geo.g.get(i).copied().unwrap_or([zero; MAX_STATES]);
+        for (c, x) in vr.iter_mut().enumerate().take(m) {
+            let prow = base.p.get(c).copied().unwrap_or([zero; MAX_STATES]);
+            *x = dot(&prow, &g, m);
+        }
+    }
+    let mut mm = [[zero; MAX_EVENTS]; MAX_EVENTS];
+    for a in 0..r {
+        let ia = rows.get(a).copied().unwrap_or(0);
+        let ga = geo.g.get(ia).copied().unwrap_or([zero; MAX_STATES]);
+        for b in 0..r {
+            let vb = v.get(b).copied().unwrap_or([zero; MAX_STATES]);
+            let mut x = -dot(&ga, &vb, m);
+            if a == b {
+                x += T::of(1.0) / geo.w.get(ia).copied().unwrap_or(T::of(1.0));
+            }
+            if let Some(y) = mm.get_mut(a).and_then(|row| row.get_mut(b)) {
+                *y = x;
+            }
+        }
+    }
+    // Cholesky of M (r x r), pivots relative to C_int of the removed row.
+    let tol = rank_tolerance::<T>();
+    let mut l = [[zero; MAX_EVENTS]; MAX_EVENTS];
+    for j in 0..r {
+        let ij = rows.get(j).copied().unwrap_or(0);
+        let scale = T::of(1.0) / geo.w.get(ij).copied().unwrap_or(T::of(1.0));
+        let mut s = mm.get(j).and_then(|x| x.get(j)).copied().unwrap_or(zero);
+        for k in 0..j {
+            let x = l.get(j).and_then(|x| x.get(k)).copied().unwrap_or(zero);
+            s -= x * x;
+        }
+        if !(s > tol * scale) {
+            return Err(Deficient {
+                column: ij,
+                pivot: (s / scale).to_f64(),
+            });
+        }
+        let ljj = s.sqrt();
+        if let Some(x) = l.get_mut(j).and_then(|x| x.get_mut(j)) {
+            *x = ljj;
+        }
+        for i in (j + 1)..r {
+            let mut s = mm.get(i).and_then(|x| x.get(j)).copied().unwrap_or(zero);
+            for k in 0..j {
+                s -= l.get(i).and_then(|x| x.get(k)).copied().unwrap_or(zero)
+                    * l.get(j).and_then(|x| x.get(k)).copied().unwrap_or(zero);
+            }
+            if let Some(x) = l.get_mut(i).and_then(|x| x.get_mut(j)) {
+                *x = s / ljj;
+            }
+        }
+    }
+    // c_q = M^-1 V_q (V_q: the q-th components of the r columns of V).
+    let mut coef = [[zero; MAX_EVENTS]; 3];
+    let mut out = SubsetStats::default();
+    for (q, cq) in coef.iter_mut().enumerate() {
+        let mut z = [zero; MAX_EVENTS];
+        for i in 0..r {
+            let mut s = v.get(i).and_then(|x| x.get(q)).copied().unwrap_or(zero);
+            for k in 0..i {
+                s -= l.get(i).and_then(|x| x.get(k)).copied().unwrap_or(zero)
+                    * z.get(k).copied().unwrap_or(zero);
+            }
+            let lii = l
+                .get(i)
+                .and_then(|x| x.get(i))
+                .copied()
+                .unwrap_or(T::of(1.0));
+            if let Some(x) = z.get_mut(i) {
+                *x = s / lii;
+            }
+        }
+        for i in (0..r).rev() {
+            let mut s = z.get(i).copied().unwrap_or(zero);
+            for k in (i + 1)..r {
+                s -= l.get(k).and_then(|x| x.get(i)).copied().unwrap_or(zero)
+                    * cq.get(k).copied().unwrap_or(zero);
+            }
+            let lii = l
+                .get(i)
+                .and_then(|x| x.get(i))
+                .copied()
+                .unwrap_or(T::of(1.0));
+            if let Some(x) = cq.get_mut(i) {
+                *x = s / lii;
+            }
+        }
+        let mut var = base
+            .p
+            .get(q)
+            .and_then(|x| x.get(q))
+            .copied()
+            .unwrap_or(zero);
+        for k in 0..r {
+            var += cq.get(k).copied().unwrap_or(zero)
+                * v.get(k).and_then(|x| x.get(q)).copied().unwrap_or(zero);
+        }
+        if let Some(x) = out.sigma_m.get_mut(q) {
+            *x = var.sqrt();
+        }
+    }
+    // One pass over the satellites for the three axes. Fixed trip counts
+    // (all MAX_EVENTS rows of V, all MAX_STATES columns; the padding is
+    // zero and adds exact zeros) and zipped iterators: no bounds checks.
+    let removed = base.removed | extra;
+    let mut ss = [zero; 3];
+    let mut bias = [zero; 3];
+    let mut sep = [zero; 3];
+    let [s0e, s0n, s0u] = s0;
+    let [de, dn, du] = &base.d;
+    let s0cols = s0e.iter().zip(s0n.iter()).zip(s0u.iter());
+    let dcols = de.iter().zip(dn.iter()).zip(du.iter());
+    let rows = geo
+        .g
+        .iter()
+        .zip(geo.w.iter())
+        .zip(geo.c_acc.iter())
+        .zip(geo.b_nom.iter())
+        .zip(geo.y.iter());
+    for (i, ((((((g, &w), &cacc), &b), &y), ((&se, &sn), &su)), ((&d0e, &d0n), &d0u))) in
+        rows.zip(s0cols).zip(dcols).enumerate().take(n)
+    {
+        let s = [se, sn, su];
+        if removed & bit(i) != 0 {
+            for ((a, c), &sq) in ss.iter_mut().zip(sep.iter_mut()).zip(s.iter()) {
+                *a += sq * sq * cacc;
+                *c -= sq * y;
+            }
+            continue;
+        }
+        let mut h = [zero; MAX_EVENTS];
+        for (hk, vk) in h.iter_mut().zip(v.iter()) {
+            *hk = vk
+                .iter()
+                .zip(g.iter())
+                .fold(zero, |acc, (x, y)| acc + *x * *y)
+                * w;
+        }
+        let d0 = [d0e, d0n, d0u];
+        for ((((a, bq), c), (&dq0, cq)), &sq) in ss
+            .iter_mut()
+            .zip(bias.iter_mut())
+            .zip(sep.iter_mut())
+            .zip(d0.iter().zip(coef.iter()))
+            .zip(s.iter())
+        {
+            let dq = cq
+                .iter()
+                .zip(h.iter())
+                .fold(dq0, |acc, (ck, hk)| acc + *ck * *hk);
+            *a += dq * dq * cacc;
+            *bq += (sq + dq).abs() * b;
+            *c += dq * y;
+        }
+    }
+    for q in 0..3 {
+        if let (Some(o), Some(a)) = (out.sigma_ss_m.get_mut(q), ss.get(q)) {
+            *o = a.sqrt();
+        }
+    }
+    out.bias_m = bias;
+    out.separation_m = sep;
+    Ok(out)
+}
