@@ -173,6 +173,22 @@ impl<T: Real, const K: usize> AraimOutput<T, K> {
     pub fn available(&self) -> bool {
         self.unavailable.is_none()
     }
+
+    /// The epoch's one verdict, for a user of the position: `Alarm` when a
+    /// monitored mode failed its solution-separation test (whatever the
+    /// availability), `Unavailable` when the test passed but the service
+    /// is not available, `Ok` otherwise. `available()` alone is the
+    /// service availability and must not be read as "all clear".
+    pub fn decision(&self) -> crate::result::Decision {
+        use crate::result::Decision;
+        if !self.detection_passed {
+            Decision::Alarm
+        } else if !self.available() {
+            Decision::Unavailable
+        } else {
+            Decision::Ok
+        }
+    }
 }
 
 /// The ARAIM engine: `N` satellites, `K` fault modes, precision `T`. It

@@ -67,6 +67,27 @@ const TOL_HPL_ROOT_M: f64 = 0.01;
 mod add_appendix_d {
     use super::*;
 
+    /// The one verdict: a failed test is an alarm even when the service is
+    /// available, and an available, consistent epoch is Ok.
+    #[test]
+    fn decision_combines_the_test_and_the_availability() {
+        use crate::result::Decision;
+        let mut out = run();
+        assert!(out.available() && out.detection_passed);
+        assert_eq!(out.decision(), Decision::Ok);
+        out.detection_passed = false;
+        assert!(out.available());
+        assert_eq!(out.decision(), Decision::Alarm);
+        let mut worse = Araim::<f64, 16, 64>::new();
+        let mut sats = appendix_d_sats();
+        sats[2].residual_m += 30.0;
+        let faulted = worse
+            .process(&AraimConfig::default(), &ge_ism(1e-4), &sats)
+            .unwrap();
+        assert!(!faulted.detection_passed);
+        assert_eq!(faulted.decision(), Decision::Alarm);
+    }
+
     fn run() -> AraimOutput<f64, 64> {
         let mut engine = Araim::<f64, 16, 64>::new();
         let sats = appendix_d_sats();
