@@ -99,6 +99,22 @@ impl Default for FiRule {
     }
 }
 
+/// The fault detection and exclusion method of the snapshot monitor.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum FdeMethod {
+    /// Single exclusion by the identification rule, repeated, with the
+    /// closed-form pair search and the uniqueness check (SPEC §5).
+    #[default]
+    Sequential,
+    /// Error reconstruction over constraint groups (SPEC §8, seed 002): the
+    /// fewest satellites (1..t_max, at most 3 and at most
+    /// `max_exclusions`) whose exclusion explains the residuals, searching
+    /// at most `group_budget` groups per epoch (docs/MULTIFAULT.md).
+    Reconstruction { t_max: u8, group_budget: u16 },
+}
+
 /// Horizontal and vertical alert limits; `None` means "not monitored".
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -179,6 +195,8 @@ pub struct Config {
     pub max_iterations: u32,
     /// Sequential detection (MCUSUM, SPEC §7); disabled by default.
     pub mcusum: McusumConfig,
+    /// The FDE method; `Sequential` (today's) by default.
+    pub fde_method: FdeMethod,
 }
 
 impl Default for Config {
@@ -204,6 +222,7 @@ impl Config {
             convergence_m: 1e-4,
             max_iterations: 20,
             mcusum: McusumConfig::default(),
+            fde_method: FdeMethod::Sequential,
         }
     }
 
@@ -277,6 +296,29 @@ impl Config {
         if self.mcusum.enabled {
             crate::sequential::mcusum::check_settings(self.mcusum.k, self.mcusum.arl0)?;
             non_negative("hold_s", self.mcusum.hold_s)?;
+        }
+        if let FdeMethod::Reconstruction {
+            t_max,
+            group_budget,
+        } = self.fde_method
+        {
+            let max_t = crate::multifault::covering::MAX_FAULTS as f64;
+            if t_max == 0 || f64::from(t_max) > max_t {
+                return Err(RaimError::OutOfRange {
+                    field: "t_max",
+                    value: f64::from(t_max),
+                    min: 1.0,
+                    max: max_t,
+                });
+            }
+            if group_budget == 0 {
+                return Err(RaimError::OutOfRange {
+                    field: "group_budget",
+                    value: 0.0,
+                    min: 1.0,
+                    max: f64::from(u16::MAX),
+                });
+            }
         }
         if self.max_iterations == 0 || self.max_iterations > 100 {
             return Err(RaimError::OutOfRange {
