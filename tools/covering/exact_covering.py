@@ -48,7 +48,9 @@ def exact(n, k, t):
     for tt in itertools.combinations(range(n), t):
         prob += pulp.lpSum(x[i] for i, b in enumerate(sets) if set(tt) <= b) >= 1
     status = prob.solve(pulp.PULP_CBC_CMD(msg=False, timeLimit=TIME_LIMIT_S))
-    optimal = pulp.LpStatus[status] == "Optimal"
+    # CBC stopped by its time limit reports status "Optimal" with an
+    # integer-feasible solution; only sol_status 1 is a proof.
+    optimal = pulp.LpStatus[status] == "Optimal" and prob.sol_status == pulp.LpSolutionOptimal
     chosen = [blocks[i] for i in range(len(blocks)) if x[i].value() > 0.5]
     return chosen, optimal
 

@@ -109,7 +109,27 @@ pub fn search<T: Real, const N: usize>(
     min_s_ii: T,
     ws: &mut Workspace<T, N>,
     group: &mut GroupFit<T, N>,
+    on_group: impl FnMut(usize, &GroupFit<T, N>),
+) -> Result<Search<T>, MultifaultError> {
+    search_where(
+        model, covering, t_max, budget, min_s_ii, ws, group, on_group, |_| true,
+    )
+}
+
+/// [`search`] over the candidate sets that `keep` accepts only (the
+/// cross-size uniqueness check: the sets that do not contain the set about
+/// to be excluded).
+#[allow(clippy::too_many_arguments)]
+pub fn search_where<T: Real, const N: usize>(
+    model: &ResidualModel<T, N>,
+    covering: &Covering,
+    t_max: usize,
+    budget: usize,
+    min_s_ii: T,
+    ws: &mut Workspace<T, N>,
+    group: &mut GroupFit<T, N>,
     mut on_group: impl FnMut(usize, &GroupFit<T, N>),
+    keep: impl Fn(SatSet) -> bool,
 ) -> Result<Search<T>, MultifaultError> {
     if budget == 0 {
         return Err(MultifaultError::ZeroGroupBudget {
@@ -150,6 +170,9 @@ pub fn search<T: Real, const N: usize>(
         }
         on_group(i, group);
         for_each_subset(group.identifiable, t_max, |set| {
+            if !keep(set) {
+                return;
+            }
             if let Some(fit) = fit_subset(model, set) {
                 if let Some(level) = out.levels.get_mut(fit.count - 1) {
                     level.offer(fit);
@@ -161,7 +184,7 @@ pub fn search<T: Real, const N: usize>(
         // A set lost its cover only if it holds a swapped satellite.
         let mut repaired = 0;
         for_each_subset(covering::all(model.n()), t_max, |set| {
-            if set & swapped_union != 0 {
+            if set & swapped_union != 0 && keep(set) {
                 if let Some(fit) = fit_subset(model, set) {
                     repaired += 1;
                     if let Some(level) = out.levels.get_mut(fit.count - 1) {
@@ -311,6 +334,58 @@ pub struct Scratch<const N: usize> {
     pub model: ResidualModel<Stat, N>,
     pub ws: Workspace<Stat, N>,
     pub group: GroupFit<Stat, N>,
+}
+
+/// The search's fixed arguments, for the second pass.
+struct SearchArgs<'a> {
+    covering: &'a Covering,
+    t_max: usize,
+    budget: usize,
+}
+
+fn s_args(covering: &Covering, t_max: usize, budget: u16) -> SearchArgs<'_> {
+    SearchArgs {
+        covering,
+        t_max,
+        budget: usize::from(budget),
+    }
+}
+
+/// The least-RSS set of more than `best.count` satellites that does not
+/// contain `best.set` and is consistent at level pwe (its own dof), if any.
+#[inline(never)]
+fn larger_alternative<const N: usize>(
+    cfg: &Config,
+    args: &SearchArgs<'_>,
+    best: SubsetFit<Stat>,
+    dof: usize,
+    scratch: &mut Scratch<N>,
+) -> Result<Option<SubsetFit<Stat>>, RaimError> {
+    let found = search_where(
+        &scratch.model,
+        args.covering,
+        args.t_max,
+        args.budget,
+        Stat::of(cfg.min_s_ii),
+        &mut scratch.ws,
+        &mut scratch.group,
+        |_, _| {},
+        |set| set.count_ones() as usize > best.count && set & best.set != best.set,
+    );
+    let Ok(found) = found else {
+        return Ok(None);
+    };
+    for level in found.levels.iter().skip(best.count) {
+        let Some(alt) = level.best else { continue };
+        if alt.count + 1 > dof {
+            continue;
+        }
+        let t2_we = chi2_threshold(cfg.pwe, dof - alt.count)?;
+        if alt.rss.to_f64() < t2_we {
+            return Ok(Some(alt));
+        }
+    }
+    Ok(None)
 }
 
 /// [`run`] with its scratch on this function's own stack frame (out of
@@ -468,6 +543,21 @@ pub fn run<const N: usize>(
             }
             Verdict::Exclude(best) => {
                 report.best = Some(fault_set(&best, sol, dof));
+                if cfg.require_unique_exclusion && best.count < t_eff {
+                    // Larger sets always fit at least as well; one that
+                    // does not contain `best` and is consistent at level
+                    // pwe is another explanation of the data.
+                    if let Some(alt) = larger_alternative(cfg, &s_args(&covering, t_eff, group_budget), best, dof, scratch)? {
+                        report.runner_up = Some(fault_set(&alt, sol, dof));
+                        let only = |a: SatSet, b: SatSet| if a & !b != 0 { a & !b } else { a };
+                        out.identified = id_of(sol, best.set);
+                        out.cause = match (id_of(sol, only(best.set, alt.set)), id_of(sol, only(alt.set, best.set))) {
+                            (Some(b), Some(r)) => Some(AlarmCause::Ambiguous { best: b, runner_up: r }),
+                            _ => Some(AlarmCause::Unidentifiable),
+                        };
+                        break;
+                    }
+                }
                 if let Some(level) = s.levels.get(best.count - 1) {
                     report.runner_up = level.runner_up.map(|r| fault_set(&r, sol, dof));
                 }
