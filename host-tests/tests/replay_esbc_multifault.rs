@@ -104,4 +104,29 @@ fn three_faults_g15_g28_and_a_galileo_satellite() {
     assert_eq!(rows.len(), 21);
     let exact = check(&rows, &all);
     println!("G15+G28+{third}: {exact} of {} epochs excluded exactly", rows.len());
+    assert_eq!(exact, rows.len());
+    // Today's FDE on the same epochs, for docs/MULTIFAULT.md.
+    let today = replay(
+        OBS,
+        NAV,
+        &RangingOptions::default(),
+        &Config {
+            max_exclusions: 3,
+            ..geodetic_config()
+        },
+        &[&spec],
+        "01:00:00",
+        "01:10:00",
+    );
+    let count = |d| today.iter().filter(|r| r.decision == Some(d)).count();
+    let wrong = today
+        .iter()
+        .filter(|r| r.excluded_any.iter().any(|e| !all.contains(e)))
+        .count();
+    println!(
+        "today's FDE: {} excluded, {} alarms, {} epochs with a wrong exclusion",
+        count(Decision::Excluded),
+        count(Decision::Alarm),
+        wrong
+    );
 }

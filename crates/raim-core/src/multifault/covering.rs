@@ -213,13 +213,14 @@ fn unrank(mut rank: usize, g: usize, t: usize) -> Option<u64> {
 pub fn members(set: SatSet) -> ([u8; MAX_SATS], usize) {
     let mut out = [0u8; MAX_SATS];
     let mut k = 0;
-    for i in 0..MAX_SATS {
-        if set & (1u64 << i) != 0 {
-            if let Some(v) = out.get_mut(k) {
-                *v = i as u8;
-            }
-            k += 1;
+    let mut rest = set;
+    while rest != 0 {
+        if let Some(v) = out.get_mut(k) {
+            // trailing_zeros of a non-zero u64 is < 64.
+            *v = rest.trailing_zeros() as u8;
         }
+        rest &= rest - 1;
+        k += 1;
     }
     (out, k)
 }
