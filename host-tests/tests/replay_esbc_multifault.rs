@@ -90,7 +90,11 @@ fn three_faults_g15_g28_and_a_galileo_satellite() {
     assert!(galileo.len() >= 3, "{galileo:?}");
     let third = galileo[0];
     let spec = format!("step:G15+G28+{third}:50@01:00:00");
-    let mut all = vec![SatId::new(System::Gps, 15), SatId::new(System::Gps, 28), third];
+    let mut all = vec![
+        SatId::new(System::Gps, 15),
+        SatId::new(System::Gps, 28),
+        third,
+    ];
     all.sort();
     let rows = replay(
         OBS,
@@ -103,7 +107,10 @@ fn three_faults_g15_g28_and_a_galileo_satellite() {
     );
     assert_eq!(rows.len(), 21);
     let exact = check(&rows, &all);
-    println!("G15+G28+{third}: {exact} of {} epochs excluded exactly", rows.len());
+    println!(
+        "G15+G28+{third}: {exact} of {} epochs excluded exactly",
+        rows.len()
+    );
     assert_eq!(exact, rows.len());
     // Today's FDE on the same epochs, for docs/MULTIFAULT.md.
     let today = replay(

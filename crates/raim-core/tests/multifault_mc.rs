@@ -12,8 +12,17 @@ fn reconstruction_against_todays_fde_on_the_same_draws() {
     let tally = campaign::run(600, 7, 1000);
     assert!(tally.draws > 300, "{} kept", tally.draws);
     let (seq, rec) = (0, 1);
-    let wrong = |m| (0..3).map(|t| tally.total(m, t, Outcome::WrongExclusion)).sum::<u64>();
-    assert!(wrong(rec) <= wrong(seq), "wrong exclusions {} > {}", wrong(rec), wrong(seq));
+    let wrong = |m| {
+        (0..3)
+            .map(|t| tally.total(m, t, Outcome::WrongExclusion))
+            .sum::<u64>()
+    };
+    assert!(
+        wrong(rec) <= wrong(seq),
+        "wrong exclusions {} > {}",
+        wrong(rec),
+        wrong(seq)
+    );
     let c_rec = tally.total(rec, 2, Outcome::Correct);
     let c_seq = tally.total(seq, 2, Outcome::Correct);
     assert!(c_rec >= c_seq, "t = 3: correct {c_rec} < {c_seq}");

@@ -32,7 +32,12 @@ fn main() {
                 .iter()
                 .map(|o| format!("{:.4}", tally.total(m, t, *o) as f64 / total))
                 .collect();
-            println!("| {name} | {} | {} | {} |", t + 1, tally.draws_of(m, t), cells.join(" | "));
+            println!(
+                "| {name} | {} | {} | {} |",
+                t + 1,
+                tally.draws_of(m, t),
+                cells.join(" | ")
+            );
         }
     }
     println!();
@@ -45,7 +50,8 @@ fn main() {
         rule += " --- |";
     }
     println!("{header}\n{rule}");
-    let mut csv = String::from("method,t,bin_lo_m,bin_hi_m,draws,correct,wrong_exclusion,ambiguous\n");
+    let mut csv =
+        String::from("method,t,bin_lo_m,bin_hi_m,draws,correct,wrong_exclusion,ambiguous\n");
     for (m, name) in names.iter().enumerate() {
         for t in 0..3 {
             let mut line = format!("| {name} | {} |", t + 1);

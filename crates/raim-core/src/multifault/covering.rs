@@ -191,20 +191,18 @@ fn unrank(mut rank: usize, g: usize, t: usize) -> Option<u64> {
     let mut set = 0u64;
     let mut start = 0;
     for left in (1..=t).rev() {
-        let mut found = false;
+        let mut chosen = None;
         for a in start..g {
             let count = binomial(g - a - 1, left - 1);
             if rank < count {
-                set |= 1u64 << a;
-                start = a + 1;
-                found = true;
+                chosen = Some(a);
                 break;
             }
             rank -= count;
         }
-        if !found {
-            return None;
-        }
+        let a = chosen?;
+        set |= 1u64 << a;
+        start = a + 1;
     }
     Some(set)
 }
@@ -308,7 +306,10 @@ mod tests {
                     if check(n, m, t).is_err() {
                         continue;
                     }
-                    for c in [Covering::new(n, m, t).unwrap(), Covering::parts(n, m, t).unwrap()] {
+                    for c in [
+                        Covering::new(n, m, t).unwrap(),
+                        Covering::parts(n, m, t).unwrap(),
+                    ] {
                         let g = groups(&c);
                         assert_eq!(g.len(), c.len(), "n {n} m {m} t {t}");
                         assert_eq!(uncovered(&g, n, t), 0, "n {n} m {m} t {t}: {c:?}");
@@ -329,15 +330,17 @@ mod tests {
         for &(n, m, t, g) in EXACT {
             let (n, m, t) = (usize::from(n), usize::from(m), usize::from(t));
             assert_eq!(uncovered(g, n, t), 0, "n {n} m {m} t {t}");
-            assert!(g.iter().all(|f| f.count_ones() as usize <= n - m && f & !all(n) == 0));
+            assert!(g
+                .iter()
+                .all(|f| f.count_ones() as usize <= n - m && f & !all(n) == 0));
         }
         for m in [4, 5] {
             for n in 6..=12 {
                 for t in 1..=3 {
                     let expected = check(n, m, t).is_ok();
-                    let present = EXACT
-                        .iter()
-                        .any(|e| (usize::from(e.0), usize::from(e.1), usize::from(e.2)) == (n, m, t));
+                    let present = EXACT.iter().any(|e| {
+                        (usize::from(e.0), usize::from(e.1), usize::from(e.2)) == (n, m, t)
+                    });
                     assert_eq!(present, expected, "n {n} m {m} t {t}");
                 }
             }

@@ -9,7 +9,12 @@ pub enum MultifaultError {
     /// `t` simultaneous faults cannot be searched with `n` satellites and
     /// `m` states: a candidate set needs t <= n - m - 1 (its subset
     /// statistic RSS_T has n - m - t >= 1 degrees of freedom, SPEC §8.4).
-    TooManyFaults { t: usize, n: usize, m: usize, max: usize },
+    TooManyFaults {
+        t: usize,
+        n: usize,
+        m: usize,
+        max: usize,
+    },
     /// `t` is 0 or above the largest supported number of faults.
     FaultCountOutOfRange {
         field: &'static str,

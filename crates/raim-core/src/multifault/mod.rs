@@ -112,7 +112,15 @@ pub fn search<T: Real, const N: usize>(
     on_group: impl FnMut(usize, &GroupFit<T, N>),
 ) -> Result<Search<T>, MultifaultError> {
     search_where(
-        model, covering, t_max, budget, min_s_ii, ws, group, on_group, |_| true,
+        model,
+        covering,
+        t_max,
+        budget,
+        min_s_ii,
+        ws,
+        group,
+        on_group,
+        |_| true,
     )
 }
 
@@ -241,7 +249,13 @@ pub fn decide<T: Real>(
     pwe: f64,
     unique: bool,
 ) -> Result<Verdict<T>, RaimError> {
-    for (t, level) in s.levels.iter().enumerate().take(s.t_max).skip(from.max(1) - 1) {
+    for (t, level) in s
+        .levels
+        .iter()
+        .enumerate()
+        .take(s.t_max)
+        .skip(from.max(1) - 1)
+    {
         let t = t + 1;
         if t + 1 > dof {
             break;
@@ -306,7 +320,11 @@ pub struct MultifaultReport {
     pub q_min: Option<f64>,
 }
 
-fn fault_set<T: Real, const N: usize>(fit: &SubsetFit<T>, sol: &Solution<N>, dof: usize) -> FaultSet {
+fn fault_set<T: Real, const N: usize>(
+    fit: &SubsetFit<T>,
+    sol: &Solution<N>,
+    dof: usize,
+) -> FaultSet {
     let (rows, k) = covering::members(fit.set);
     let mut out = FaultSet {
         satellites: heapless::Vec::new(),
@@ -400,7 +418,15 @@ pub fn run_with_own_scratch<const N: usize>(
     out: &mut FdeOutcome<N>,
 ) -> Result<Option<MultifaultReport>, RaimError> {
     let mut scratch = Scratch::default();
-    run(cfg, t_max, group_budget, thresholds, epoch, out, &mut scratch)
+    run(
+        cfg,
+        t_max,
+        group_budget,
+        thresholds,
+        epoch,
+        out,
+        &mut scratch,
+    )
 }
 
 /// FDE by reconstruction (SPEC §8.4) on `out`, whose `solution` holds the
@@ -492,12 +518,20 @@ pub fn run<const N: usize>(
     };
     let id_of = |sol: &Solution<N>, set: SatSet| {
         let (rows, _) = covering::members(set);
-        rows.first().and_then(|r| sol.ids.get(usize::from(*r)).copied())
+        rows.first()
+            .and_then(|r| sol.ids.get(usize::from(*r)).copied())
     };
     let mut from = 1;
     let mut scratch_solution = Solution::<N>::empty();
     loop {
-        let verdict = decide(&s, from, dof, cfg.pfa, cfg.pwe, cfg.require_unique_exclusion)?;
+        let verdict = decide(
+            &s,
+            from,
+            dof,
+            cfg.pfa,
+            cfg.pwe,
+            cfg.require_unique_exclusion,
+        )?;
         let sol = &out.solution;
         match verdict {
             Verdict::NoConsistentSet => {
@@ -547,12 +581,24 @@ pub fn run<const N: usize>(
                     // Larger sets always fit at least as well; one that
                     // does not contain `best` and is consistent at level
                     // pwe is another explanation of the data.
-                    if let Some(alt) = larger_alternative(cfg, &s_args(&covering, t_eff, group_budget), best, dof, scratch)? {
+                    if let Some(alt) = larger_alternative(
+                        cfg,
+                        &s_args(&covering, t_eff, group_budget),
+                        best,
+                        dof,
+                        scratch,
+                    )? {
                         report.runner_up = Some(fault_set(&alt, sol, dof));
                         let only = |a: SatSet, b: SatSet| if a & !b != 0 { a & !b } else { a };
                         out.identified = id_of(sol, best.set);
-                        out.cause = match (id_of(sol, only(best.set, alt.set)), id_of(sol, only(alt.set, best.set))) {
-                            (Some(b), Some(r)) => Some(AlarmCause::Ambiguous { best: b, runner_up: r }),
+                        out.cause = match (
+                            id_of(sol, only(best.set, alt.set)),
+                            id_of(sol, only(alt.set, best.set)),
+                        ) {
+                            (Some(b), Some(r)) => Some(AlarmCause::Ambiguous {
+                                best: b,
+                                runner_up: r,
+                            }),
                             _ => Some(AlarmCause::Unidentifiable),
                         };
                         break;

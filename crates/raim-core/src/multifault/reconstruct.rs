@@ -271,7 +271,10 @@ pub fn reconstruct<T: Real, const N: usize>(
             *v = model.s(idx_a, j);
         }
         ws.forward(&mut l_row);
-        let energy = l_row.iter().take(ws.k).fold(T::zero(), |acc, v| acc + *v * *v);
+        let energy = l_row
+            .iter()
+            .take(ws.k)
+            .fold(T::zero(), |acc, v| acc + *v * *v);
         let d = s_jj - energy;
         if !(d > tol * s_jj) {
             out.swapped |= 1u64 << j;

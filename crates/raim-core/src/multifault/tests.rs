@@ -1,5 +1,6 @@
 //! Multiple-fault reconstruction: seed 002's tables, the independent dense
 //! references, the group validation, bad input, and f32 against f64.
+#![allow(clippy::type_complexity, clippy::needless_range_loop)]
 extern crate std;
 
 use super::covering::{all, for_each_subset, members, Covering, SatSet};
@@ -217,7 +218,10 @@ fn seed_002_residuals_and_statistics_from_v1() {
         z[sat] = 30.0;
         let r = &s * z;
         for i in 0..7 {
-            assert!((r[i] - printed_r[i]).abs() < RESIDUAL_TOL_M, "sat {sat} row {i}");
+            assert!(
+                (r[i] - printed_r[i]).abs() < RESIDUAL_TOL_M,
+                "sat {sat} row {i}"
+            );
         }
         let model = model_of(&s, &r);
         assert!(((model.d2() - printed_stat) / printed_stat).abs() < STATISTIC_REL_TOL);
@@ -264,7 +268,12 @@ fn brute_rss(s: &DMatrix<f64>, r: &DVector<f64>, set: SatSet) -> Option<(f64, Ve
     Some(((r - &a * &b).norm_squared(), b.iter().copied().collect()))
 }
 
-fn random_case(seed: u64, n: usize, systems: usize, faults: &[(usize, f64)]) -> (DMatrix<f64>, DMatrix<f64>, DVector<f64>) {
+fn random_case(
+    seed: u64,
+    n: usize,
+    systems: usize,
+    faults: &[(usize, f64)],
+) -> (DMatrix<f64>, DMatrix<f64>, DVector<f64>) {
     let mut rng = Rng::new(seed);
     let (h, _) = geometry(&mut rng, n, systems);
     let mut z = DVector::from_fn(n, |_, _| rng.normal());
@@ -297,12 +306,19 @@ fn kernels_match_dense_references() {
             let cols: Vec<usize> = idx[..k].iter().map(|&i| i as usize).collect();
             let a = s.select_columns(cols.iter());
             let e = a.clone().svd(true, true).solve(&r, 1e-12).unwrap();
-            let cov = s.select_rows(cols.iter()).select_columns(cols.iter()).try_inverse().unwrap();
+            let cov = s
+                .select_rows(cols.iter())
+                .select_columns(cols.iter())
+                .try_inverse()
+                .unwrap();
             let scale = 1.0 + e.amax();
             let mut sum = 0.0f64;
             let mut largest = 0.0f64;
             for (a_i, &c) in cols.iter().enumerate() {
-                assert!((g.error[c] - e[a_i]).abs() < REL_TOL * scale * 1e2, "seed {seed}");
+                assert!(
+                    (g.error[c] - e[a_i]).abs() < REL_TOL * scale * 1e2,
+                    "seed {seed}"
+                );
                 let v = cov[(a_i, a_i)];
                 assert!((g.variance[c] - v).abs() < REL_TOL * v * 1e2, "seed {seed}");
                 sum += e[a_i] * e[a_i];
@@ -314,9 +330,15 @@ fn kernels_match_dense_references() {
             let ours = fit_subset(&model, set);
             match (ours, brute_rss(&s, &r, set)) {
                 (Some(o), Some((rss, b))) => {
-                    assert!((o.rss - rss).abs() < REL_TOL * (1.0 + model.d2()), "seed {seed} {set:#b}");
+                    assert!(
+                        (o.rss - rss).abs() < REL_TOL * (1.0 + model.d2()),
+                        "seed {seed} {set:#b}"
+                    );
                     for (x, y) in o.bias.iter().zip(b.iter()) {
-                        assert!((x - y).abs() < 1e-5 * (1.0 + y.abs()), "seed {seed} {set:#b}");
+                        assert!(
+                            (x - y).abs() < 1e-5 * (1.0 + y.abs()),
+                            "seed {seed} {set:#b}"
+                        );
                     }
                 }
                 (None, None) => {}
@@ -365,8 +387,16 @@ fn search_finds_the_brute_force_minimum() {
             });
             all_fits.sort_by(|a, b| a.0.total_cmp(&b.0));
             let level = &found.levels[size - 1];
-            assert_eq!(level.best.unwrap().set, all_fits[0].1, "seed {seed} size {size}");
-            assert_eq!(level.runner_up.unwrap().rss, all_fits[1].0, "seed {seed} size {size}");
+            assert_eq!(
+                level.best.unwrap().set,
+                all_fits[0].1,
+                "seed {seed} size {size}"
+            );
+            assert_eq!(
+                level.runner_up.unwrap().rss,
+                all_fits[1].0,
+                "seed {seed} size {size}"
+            );
         }
     }
 }
@@ -430,7 +460,10 @@ fn every_constrained_set_has_rank_m() {
             let rest: Vec<usize> = (0..n).filter(|i| set & (1 << i) == 0).collect();
             if h.select_rows(rest.iter()).rank(1e-6) == m && fit_subset(&model, set).is_some() {
                 let in_group = finals.iter().any(|(f, _)| set & !f == 0);
-                assert!(in_group || found.repaired > 0, "seed {seed}: {set:#b} unsearched");
+                assert!(
+                    in_group || found.repaired > 0,
+                    "seed {seed}: {set:#b} unsearched"
+                );
                 offered += 1;
             }
         });
@@ -454,10 +487,33 @@ fn f32_agrees_with_f64() {
         let m32: ResidualModel<f32, N> =
             ResidualModel::from_projector(n, |i, j| s[(i, j)], r.as_slice()).unwrap();
         let covering = Covering::new(n, m, 3).unwrap();
-        let f64_search = search(&m64, &covering, 3, 1000, 1e-4, &mut Workspace::default(), &mut GroupFit::default(), |_, _| {}).unwrap();
-        let f32_search = search(&m32, &covering, 3, 1000, 1e-4f32, &mut Workspace::default(), &mut GroupFit::default(), |_, _| {}).unwrap();
+        let f64_search = search(
+            &m64,
+            &covering,
+            3,
+            1000,
+            1e-4,
+            &mut Workspace::default(),
+            &mut GroupFit::default(),
+            |_, _| {},
+        )
+        .unwrap();
+        let f32_search = search(
+            &m32,
+            &covering,
+            3,
+            1000,
+            1e-4f32,
+            &mut Workspace::default(),
+            &mut GroupFit::default(),
+            |_, _| {},
+        )
+        .unwrap();
         for size in 0..3 {
-            let (a, b) = (f64_search.levels[size].best.unwrap(), f32_search.levels[size].best.unwrap());
+            let (a, b) = (
+                f64_search.levels[size].best.unwrap(),
+                f32_search.levels[size].best.unwrap(),
+            );
             assert_eq!(a.set, b.set, "seed {seed} size {}", size + 1);
             let rel = (a.rss - b.rss as f64).abs() / a.rss.max(1.0);
             assert!(rel < RSS_REL_TOL, "seed {seed}: {} vs {}", a.rss, b.rss);
@@ -477,20 +533,46 @@ fn bad_input_is_typed() {
     let mut g = GroupFit::default();
     assert_eq!(
         search(&model, &c, 3, 0, 1e-4, &mut ws, &mut g, |_, _| {}),
-        Err(MultifaultError::ZeroGroupBudget { field: "group_budget" })
+        Err(MultifaultError::ZeroGroupBudget {
+            field: "group_budget"
+        })
     );
-    assert_eq!(Covering::new(8, 4, 4).unwrap_err(), MultifaultError::FaultCountOutOfRange { field: "t_max", t: 4, max: 3 });
+    assert_eq!(
+        Covering::new(8, 4, 4).unwrap_err(),
+        MultifaultError::FaultCountOutOfRange {
+            field: "t_max",
+            t: 4,
+            max: 3
+        }
+    );
     let (_, s6, r6) = random_case(2, 6, 1, &[]);
     let m6 = model_of(&s6, &r6);
     assert_eq!(
-        search(&m6, &Covering::new(6, 4, 1).unwrap(), 2, 5, 1e-4, &mut ws, &mut g, |_, _| {}),
-        Err(MultifaultError::TooManyFaults { t: 2, n: 6, m: 4, max: 1 })
+        search(
+            &m6,
+            &Covering::new(6, 4, 1).unwrap(),
+            2,
+            5,
+            1e-4,
+            &mut ws,
+            &mut g,
+            |_, _| {}
+        ),
+        Err(MultifaultError::TooManyFaults {
+            t: 2,
+            n: 6,
+            m: 4,
+            max: 1
+        })
     );
     // No constrained set of rank m: S = 0 (every row is in span H).
     let zero = ResidualModel::<f64, N>::from_projector(8, |_, _| 0.0, &[0.0; 8]).unwrap();
     assert_eq!(
         search(&zero, &c, 3, 100, 1e-4, &mut ws, &mut g, |_, _| {}),
-        Err(MultifaultError::NoIdentifiableGroup { n: 8, groups: c.len() })
+        Err(MultifaultError::NoIdentifiableGroup {
+            n: 8,
+            groups: c.len()
+        })
     );
     // Capacity.
     assert!(matches!(
@@ -498,15 +580,40 @@ fn bad_input_is_typed() {
         Err(MultifaultError::CapacityExceeded { .. })
     ));
     // The monitor: configuration checked, per-epoch limits are alarms.
-    let bad_t = Config { fde_method: FdeMethod::Reconstruction { t_max: 4, group_budget: 10 }, ..Config::default() };
-    assert!(matches!(bad_t.validate(), Err(crate::RaimError::OutOfRange { field: "t_max", .. })));
-    let bad_budget = Config { fde_method: FdeMethod::Reconstruction { t_max: 2, group_budget: 0 }, ..Config::default() };
-    assert!(matches!(bad_budget.validate(), Err(crate::RaimError::OutOfRange { field: "group_budget", .. })));
+    let bad_t = Config {
+        fde_method: FdeMethod::Reconstruction {
+            t_max: 4,
+            group_budget: 10,
+        },
+        ..Config::default()
+    };
+    assert!(matches!(
+        bad_t.validate(),
+        Err(crate::RaimError::OutOfRange { field: "t_max", .. })
+    ));
+    let bad_budget = Config {
+        fde_method: FdeMethod::Reconstruction {
+            t_max: 2,
+            group_budget: 0,
+        },
+        ..Config::default()
+    };
+    assert!(matches!(
+        bad_budget.validate(),
+        Err(crate::RaimError::OutOfRange {
+            field: "group_budget",
+            ..
+        })
+    ));
 }
 
 /// Linear observations: `sky` (az, el deg), one clock per system given,
 /// sigma 1 m, seeded noise and faults (row, m).
-fn epoch_sats(sky: &[(System, f64, f64)], seed: u64, faults: &[(usize, f64)]) -> Vec<LinearObservation> {
+fn epoch_sats(
+    sky: &[(System, f64, f64)],
+    seed: u64,
+    faults: &[(usize, f64)],
+) -> Vec<LinearObservation> {
     let mut rng = Rng::new(seed);
     sky.iter()
         .enumerate()
@@ -528,7 +635,11 @@ fn epoch_sats(sky: &[(System, f64, f64)], seed: u64, faults: &[(usize, f64)]) ->
 fn sky14() -> Vec<(System, f64, f64)> {
     let mut sky = Vec::new();
     for i in 0..14 {
-        let sys = if i % 2 == 0 { System::Gps } else { System::Galileo };
+        let sys = if i % 2 == 0 {
+            System::Gps
+        } else {
+            System::Galileo
+        };
         let az = (i as f64) * 360.0 / 14.0 + 7.0 * (i % 3) as f64;
         let el = 10.0 + ((i * 37) % 75) as f64;
         sky.push((sys, az, el));
@@ -538,7 +649,10 @@ fn sky14() -> Vec<(System, f64, f64)> {
 
 fn reconstruction(t_max: u8) -> Config {
     Config {
-        fde_method: FdeMethod::Reconstruction { t_max, group_budget: 200 },
+        fde_method: FdeMethod::Reconstruction {
+            t_max,
+            group_budget: 200,
+        },
         max_exclusions: 3,
         ..Config::preset(Phase::Npa)
     }
@@ -551,13 +665,25 @@ fn reconstruction(t_max: u8) -> Config {
 fn monitor_excludes_one_two_three_faults() {
     const BIAS_TOL_M: f64 = 5.0; // 5 sigma of a unit-sigma bias estimate
     let sky = sky14();
-    let cases: [&[(usize, f64)]; 3] = [&[(3, 60.0)], &[(3, 60.0), (8, -70.0)], &[(3, 60.0), (8, -70.0), (12, 80.0)]];
+    let cases: [&[(usize, f64)]; 3] = [
+        &[(3, 60.0)],
+        &[(3, 60.0), (8, -70.0)],
+        &[(3, 60.0), (8, -70.0), (12, 80.0)],
+    ];
     let mut raim = Raim::<N>::new();
     for faults in cases {
         for seed in 0..20 {
             let sats = epoch_sats(&sky, seed, faults);
-            let r = raim.process(&reconstruction(3), &Epoch::linear(0.0, &sats)).unwrap();
-            assert_eq!(r.decision, Decision::Excluded, "{faults:?} seed {seed}: {:?} {:?}", r.alarm_cause, r.multifault);
+            let r = raim
+                .process(&reconstruction(3), &Epoch::linear(0.0, &sats))
+                .unwrap();
+            assert_eq!(
+                r.decision,
+                Decision::Excluded,
+                "{faults:?} seed {seed}: {:?} {:?}",
+                r.alarm_cause,
+                r.multifault
+            );
             let mut got: Vec<usize> = r.exclusions.iter().map(|e| e.index).collect();
             got.sort_unstable();
             let want: Vec<usize> = faults.iter().map(|f| f.0).collect();
@@ -580,7 +706,9 @@ fn monitor_excludes_one_two_three_faults() {
 fn default_method_is_unchanged() {
     assert_eq!(Config::default().fde_method, FdeMethod::Sequential);
     let sats = epoch_sats(&sky14(), 3, &[(3, 60.0)]);
-    let r = Raim::<N>::new().process(&Config::default(), &Epoch::linear(0.0, &sats)).unwrap();
+    let r = Raim::<N>::new()
+        .process(&Config::default(), &Epoch::linear(0.0, &sats))
+        .unwrap();
     assert!(r.multifault.is_none());
     assert_eq!(r.decision, Decision::Excluded);
 }
@@ -591,15 +719,23 @@ fn default_method_is_unchanged() {
 fn budget_limit_is_reported_and_never_a_pick() {
     let sats = epoch_sats(&sky14(), 5, &[(3, 60.0), (8, -70.0)]);
     let cfg = Config {
-        fde_method: FdeMethod::Reconstruction { t_max: 3, group_budget: 1 },
+        fde_method: FdeMethod::Reconstruction {
+            t_max: 3,
+            group_budget: 1,
+        },
         max_exclusions: 3,
         ..Config::preset(Phase::Npa)
     };
-    let r = Raim::<N>::new().process(&cfg, &Epoch::linear(0.0, &sats)).unwrap();
+    let r = Raim::<N>::new()
+        .process(&cfg, &Epoch::linear(0.0, &sats))
+        .unwrap();
     let report = r.multifault.unwrap();
     assert!(report.budget_limited && report.groups_processed == 1 && report.groups_total > 1);
     assert_eq!(r.decision, Decision::Alarm);
-    assert!(matches!(r.alarm_cause, Some(AlarmCause::SearchIncomplete { budget: 1, .. })));
+    assert!(matches!(
+        r.alarm_cause,
+        Some(AlarmCause::SearchIncomplete { budget: 1, .. })
+    ));
 }
 
 /// A constellation of two satellites: its clock column is e_a + e_b, so
@@ -608,13 +744,24 @@ fn budget_limit_is_reported_and_never_a_pick() {
 /// naming both, never a silent pick (today's FDE does the same).
 #[test]
 fn indistinguishable_sets_alarm_as_ambiguous() {
-    let mut sky: Vec<(System, f64, f64)> = sky14().into_iter().map(|(_, az, el)| (System::Gps, az, el)).collect();
+    let mut sky: Vec<(System, f64, f64)> = sky14()
+        .into_iter()
+        .map(|(_, az, el)| (System::Gps, az, el))
+        .collect();
     sky[3].0 = System::Galileo;
     sky[5].0 = System::Galileo;
     for seed in 0..10 {
         let sats = epoch_sats(&sky, seed, &[(3, 60.0)]);
-        let r = Raim::<N>::new().process(&reconstruction(2), &Epoch::linear(0.0, &sats)).unwrap();
-        assert_eq!(r.decision, Decision::Alarm, "seed {seed}: {:?} {:?}", r.exclusions, r.multifault);
+        let r = Raim::<N>::new()
+            .process(&reconstruction(2), &Epoch::linear(0.0, &sats))
+            .unwrap();
+        assert_eq!(
+            r.decision,
+            Decision::Alarm,
+            "seed {seed}: {:?} {:?}",
+            r.exclusions,
+            r.multifault
+        );
         let Some(AlarmCause::Ambiguous { best, runner_up }) = r.alarm_cause else {
             panic!("seed {seed}: {:?}", r.alarm_cause);
         };
