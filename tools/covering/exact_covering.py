@@ -63,8 +63,8 @@ def main():
     out = []
     out.append("//! Exact covering designs C(n, n - m, t) for n = 6..12, m = 4 and 5,")
     out.append("//! t = 1..3 (t <= n - m - 1), found offline by integer linear programming")
-    out.append("//! (`tools/covering/exact_covering.py`, PuLP + CBC, optimality proven by the")
-    out.append("//! solver). Generated file: do not edit by hand; docs/MULTIFAULT.md has the")
+    out.append("//! (`tools/covering/exact_covering.py`, PuLP + CBC; optimal where not marked,")
+    out.append("//! the best found in the time limit where marked). Generated: do not edit; docs/MULTIFAULT.md has the")
     out.append("//! command. Each entry: (n, m, t, identifiable sets as bit masks).")
     out.append("")
     out.append("/// (n, m, t, the groups' identifiable sets; satellite i is bit i).")
