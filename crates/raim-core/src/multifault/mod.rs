@@ -37,8 +37,8 @@ use reconstruct::{fit_subset, reconstruct, GroupFit, ResidualModel, SubsetFit, W
 pub struct Level<T> {
     pub best: Option<SubsetFit<T>>,
     pub runner_up: Option<SubsetFit<T>>,
-    /// Distinct candidate sets evaluated at this size (counting repeats
-    /// across groups).
+    /// Candidate sets evaluated at this size (each once, but for repairs
+    /// and designs of more than 64 groups).
     pub evaluated: u32,
 }
 
@@ -95,6 +95,10 @@ pub struct Search<T> {
     /// The least Q over the groups and the group that has it.
     pub q_min: Option<(T, usize)>,
 }
+
+/// How many earlier groups the search remembers to evaluate each
+/// candidate set once (beyond, repeats are evaluated again: harmless).
+const EARLIER: usize = 64;
 
 /// Runs the groups of `covering` (at most `budget`) over `model`: each
 /// group's reconstruction and Q, and RSS_T for every set of 1..t_max
@@ -165,7 +169,13 @@ pub fn search_where<T: Real, const N: usize>(
     };
     let mut swapped_union: SatSet = 0;
     let mut any_identifiable = false;
+    // The design's earlier groups (up to EARLIER of them): a set inside one
+    // of them was evaluated there, or holds a satellite swapped out of it
+    // and is evaluated by the repair pass below, so it is skipped here.
+    let mut earlier = [0 as SatSet; EARLIER];
     for (i, f) in covering.groups().enumerate().take(budget) {
+        let seen = earlier.get(..i.min(EARLIER)).unwrap_or(&[]);
+        let first_cover = |set: SatSet| !seen.iter().any(|g| set & !g == 0);
         reconstruct(model, f, min_s_ii, ws, group);
         out.groups_processed += 1;
         out.swapped += group.swapped.count_ones();
@@ -178,7 +188,7 @@ pub fn search_where<T: Real, const N: usize>(
         }
         on_group(i, group);
         for_each_subset(group.identifiable, t_max, |set| {
-            if !keep(set) {
+            if !keep(set) || !first_cover(set) {
                 return;
             }
             if let Some(fit) = fit_subset(model, set) {
@@ -187,6 +197,9 @@ pub fn search_where<T: Real, const N: usize>(
                 }
             }
         });
+        if let Some(slot) = earlier.get_mut(i) {
+            *slot = f;
+        }
     }
     if swapped_union != 0 {
         // A set lost its cover only if it holds a swapped satellite.
