@@ -20,7 +20,11 @@ fn sky(n: usize, t: usize) -> Vec<LinearObservation> {
             let el = 10.0 + 75.0 * ((i * 7) % n) as f64 / n as f64;
             let noise = ((i as f64 * 12.9898).sin() * 43758.5453).fract() - 0.5;
             let fault = if faulty[..t].contains(&i) { 60.0 } else { 0.0 };
-            let sys = if i % 2 == 0 { System::Gps } else { System::Galileo };
+            let sys = if i % 2 == 0 {
+                System::Gps
+            } else {
+                System::Galileo
+            };
             let mut o = LinearObservation::from_az_el(
                 SatId::new(sys, i as u8 + 1),
                 az.to_radians(),
@@ -74,10 +78,8 @@ fn main() -> anyhow::Result<()> {
                 for _ in 0..2 {
                     let p = fw.process(&epoch)?;
                     if outcome.is_empty() {
-                        outcome = format!(
-                            "{:?}",
-                            p.outcome.map(|r| (r.decision, r.exclusions.len()))
-                        );
+                        outcome =
+                            format!("{:?}", p.outcome.map(|r| (r.decision, r.exclusions.len())));
                     }
                     ticks = fw.status()?.last_epoch_ticks as u64;
                 }

@@ -300,9 +300,11 @@ pub fn decide<T: Real>(
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct FaultSet {
-    pub satellites: heapless::Vec<SatId, MAX_FAULTS>,
+    /// How many satellites (1..=3); the first `count` entries below hold.
+    pub count: u8,
+    pub satellites: [SatId; MAX_FAULTS],
     /// Bias estimates b_T, m, in the order of `satellites`.
-    pub bias_m: heapless::Vec<f64, MAX_FAULTS>,
+    pub bias_m: [f64; MAX_FAULTS],
     /// RSS_T (chi-square units) and its dof n - m - |T|.
     pub rss: f64,
     pub dof: u32,
@@ -340,18 +342,24 @@ fn fault_set<T: Real, const N: usize>(
 ) -> FaultSet {
     let (rows, k) = covering::members(fit.set);
     let mut out = FaultSet {
-        satellites: heapless::Vec::new(),
-        bias_m: heapless::Vec::new(),
+        count: 0,
+        satellites: [SatId::default(); MAX_FAULTS],
+        bias_m: [0.0; MAX_FAULTS],
         rss: fit.rss.to_f64(),
         dof: dof.saturating_sub(fit.count) as u32,
     };
     for (row, b) in rows.iter().take(k.min(MAX_FAULTS)).zip(fit.bias.iter()) {
         let row = usize::from(*row);
-        if let Some(id) = sol.ids.get(row) {
-            // Capacity MAX_FAULTS >= k.
-            let _ = out.satellites.push(*id);
+        let slot = usize::from(out.count);
+        if let (Some(id), Some(dst_id), Some(dst_b)) = (
+            sol.ids.get(row),
+            out.satellites.get_mut(slot),
+            out.bias_m.get_mut(slot),
+        ) {
+            *dst_id = *id;
             let sigma = sol.sigma_m.get(row).copied().unwrap_or(1.0);
-            let _ = out.bias_m.push(b.to_f64() * sigma);
+            *dst_b = b.to_f64() * sigma;
+            out.count += 1;
         }
     }
     out
