@@ -3,13 +3,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-rustup target add thumbv7em-none-eabihf >/dev/null
-rustup component add clippy rustfmt >/dev/null 2>&1 || true
-# QEMU and gpsd for the firmware tests (host-tests/tests/qemu_*.rs); CI runs as root.
-if ! command -v qemu-system-arm >/dev/null || ! [ -x /usr/sbin/gpsd ]; then
-    SUDO=""; [ "$(id -u)" = 0 ] || SUDO="sudo"
-    $SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq qemu-system-arm gpsd >/dev/null
-fi
+# The thumbv7em target, clippy, rustfmt; QEMU and gpsd for the firmware
+# tests (host-tests/tests/qemu_*.rs), quietly and without recommends.
+bash scripts/install-deps.sh test
 
 echo "== fmt"
 cargo fmt --all -- --check

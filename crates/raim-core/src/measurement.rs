@@ -134,6 +134,23 @@ impl LinearObservation {
         }
     }
 
+    /// [`LinearObservation::from_az_el`] with its inputs range-checked first
+    /// (see [`check_az_el`]): the constructor for az/el that come from
+    /// outside (a file, a wire message). The line of sight alone cannot show
+    /// an elevation of 200° (it is the same unit vector as azimuth + 180°,
+    /// elevation -20°), so [`validate`] cannot catch it later.
+    pub fn try_from_az_el(
+        id: SatId,
+        index: usize,
+        az_rad: f64,
+        el_rad: f64,
+        residual_m: f64,
+    ) -> Result<Self, RaimError> {
+        check_az_el(index, az_rad, el_rad)?;
+        finite("residual_m", index, residual_m)?;
+        Ok(Self::from_az_el(id, az_rad, el_rad, residual_m))
+    }
+
     /// Elevation of the line of sight, radians.
     pub fn elevation_rad(&self) -> f64 {
         let [e, n, u] = self.los_enu;
@@ -211,6 +228,26 @@ pub(crate) fn finite(field: &'static str, index: usize, value: f64) -> Result<f6
     }
 }
 
+/// Range check of a linearised input's direction (SPEC §1, the rows of H
+/// come from azimuth and elevation): the azimuth must be finite (any value,
+/// it wraps), the elevation finite and within [-π/2, π/2] (negative
+/// elevations are real for an aircraft above the local horizon plane).
+/// `index` is the satellite's position in the epoch, for the error.
+pub fn check_az_el(index: usize, az_rad: f64, el_rad: f64) -> Result<(), RaimError> {
+    finite("az_rad", index, az_rad)?;
+    finite("el_rad", index, el_rad)?;
+    let half_pi = core::f64::consts::FRAC_PI_2;
+    if !(-half_pi..=half_pi).contains(&el_rad) {
+        return Err(RaimError::OutOfRange {
+            field: "el_rad",
+            value: el_rad,
+            min: -half_pi,
+            max: half_pi,
+        });
+    }
+    Ok(())
+}
+
 /// Check an epoch's inputs: capacity, finiteness, sigma sign, duplicates.
 /// O(n^2) duplicate check; n <= N is small.
 pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimError> {
@@ -280,4 +317,66 @@ pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimErro
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const G1: SatId = SatId::new(System::Gps, 1);
+
+    #[test]
+    fn elevation_outside_plus_minus_90_deg_is_out_of_range() {
+        for el_deg in [200.0f64, -90.5, 90.000_001, -200.0] {
+            let e = LinearObservation::try_from_az_el(G1, 3, 0.5, el_deg.to_radians(), 0.0)
+                .unwrap_err();
+            match e {
+                RaimError::OutOfRange {
+                    field,
+                    value,
+                    min,
+                    max,
+                } => {
+                    assert_eq!(field, "el_rad");
+                    assert_eq!(value, el_deg.to_radians());
+                    assert_eq!(min, -core::f64::consts::FRAC_PI_2);
+                    assert_eq!(max, core::f64::consts::FRAC_PI_2);
+                }
+                other => panic!("{other:?}"),
+            }
+        }
+    }
+
+    /// The bounds themselves (as the degree conversion gives them) and
+    /// negative elevations are valid; the result equals the unchecked
+    /// constructor's.
+    #[test]
+    fn elevation_bounds_and_negative_elevations_are_accepted() {
+        for el_deg in [90.0f64, -90.0, -30.0, 0.0, 45.0] {
+            let (az, el) = (1.0, el_deg.to_radians());
+            let o = LinearObservation::try_from_az_el(G1, 0, az, el, 2.0).unwrap();
+            assert_eq!(o, LinearObservation::from_az_el(G1, az, el, 2.0));
+        }
+        // Azimuth wraps: any finite value is valid.
+        assert!(LinearObservation::try_from_az_el(G1, 0, 7.0, 0.3, 0.0).is_ok());
+        assert!(LinearObservation::try_from_az_el(G1, 0, -7.0, 0.3, 0.0).is_ok());
+    }
+
+    #[test]
+    fn non_finite_azimuth_elevation_or_residual_names_the_field_and_index() {
+        let cases = [
+            (f64::NAN, 0.3, 0.0, "az_rad"),
+            (f64::INFINITY, 0.3, 0.0, "az_rad"),
+            (0.1, f64::NAN, 0.0, "el_rad"),
+            (0.1, 0.3, f64::NEG_INFINITY, "residual_m"),
+        ];
+        for (az, el, r, name) in cases {
+            match LinearObservation::try_from_az_el(G1, 5, az, el, r).unwrap_err() {
+                RaimError::NotFinite { field, index, .. } => {
+                    assert_eq!((field, index), (name, 5));
+                }
+                other => panic!("{other:?}"),
+            }
+        }
+    }
 }

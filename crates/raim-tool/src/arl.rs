@@ -520,7 +520,7 @@ pub fn run(a: &ArlArgs) -> Result<()> {
             Some(p) => {
                 std::fs::write(p, src).with_context(|| format!("writing {}", p.display()))?
             }
-            None => print!("{src}"),
+            None => crate::out!("{src}")?,
         }
         return Ok(());
     }
@@ -537,13 +537,13 @@ pub fn run(a: &ArlArgs) -> Result<()> {
         };
         let rows = scenario::compare(&p, a.runs, a.seed, a.fa_arl0, a.runs, a.fa_epochs)?;
         if a.json {
-            println!("{}", serde_json::to_string(&rows)?);
+            crate::outln!("{}", serde_json::to_string(&rows)?)?;
         } else {
-            println!(
+            crate::outln!(
                 "ARL0 {} epochs (1 s), k = {}, snapshot share {}; {} runs, seed {}; false alarms: ARL0 {}, {} runs x {} epochs",
                 p.arl0, p.k, p.share, a.runs, a.seed, a.fa_arl0, a.runs, a.fa_epochs
-            );
-            scenario::print_table(&rows);
+            )?;
+            scenario::print_table(&rows)?;
         }
         return Ok(());
     }
@@ -568,18 +568,18 @@ pub fn run(a: &ArlArgs) -> Result<()> {
         v["arl1_aligned_model"] = aligned.into();
     }
     if a.json {
-        println!("{v}");
+        crate::outln!("{v}")?;
     } else {
-        println!("dim={d} k={k} h={h:.6} ARL0={arl0:.3}");
+        crate::outln!("dim={d} k={k} h={h:.6} ARL0={arl0:.3}")?;
         if let Some(delta) = a.offset {
-            println!(
+            crate::outln!(
                 "offset={delta} ARL1={:.4} +- {:.4} (simulation, {} runs, seed {}); aligned-shift model {:.4}",
                 v["arl1"].as_f64().unwrap_or(f64::NAN),
                 v["arl1_se"].as_f64().unwrap_or(f64::NAN),
                 a.runs,
                 a.seed,
                 v["arl1_aligned_model"].as_f64().unwrap_or(f64::NAN)
-            );
+            )?;
         }
     }
     Ok(())
@@ -614,17 +614,22 @@ fn seed001(runs: usize, seed: u64, json: bool) -> Result<()> {
         "snapshot_t": t, "snapshot_arl0": snap0, "runs": runs, "seed": seed, "rows": rows,
     });
     if json {
-        println!("{v}");
+        crate::outln!("{v}")?;
         return Ok(());
     }
-    println!("seed 001 Table 2, dim {d}, k = {k}: h(ARL0 = 1e4) = {h_exact:.4}; ARL0(h = 5.21) = {arl0:.1}; snapshot ARL0(T = 4.3) = {snap0:.1}");
-    println!(
+    crate::outln!("seed 001 Table 2, dim {d}, k = {k}: h(ARL0 = 1e4) = {h_exact:.4}; ARL0(h = 5.21) = {arl0:.1}; snapshot ARL0(T = 4.3) = {snap0:.1}")?;
+    crate::outln!(
         "{:>6} | {:>9} {:>16} {:>9} | {:>9} {:>9}",
-        "delta", "MC publ.", "MC simulated", "aligned", "snap publ.", "snap exact"
-    );
+        "delta",
+        "MC publ.",
+        "MC simulated",
+        "aligned",
+        "snap publ.",
+        "snap exact"
+    )?;
     for r in rows {
         let f = |key: &str| r[key].as_f64().unwrap_or(f64::NAN);
-        println!(
+        crate::outln!(
             "{:>6} | {:>9} {:>9.3} ±{:<5.3} {:>9.3} | {:>9} {:>9.3}",
             f("offset"),
             f("mcusum_published"),
@@ -633,7 +638,7 @@ fn seed001(runs: usize, seed: u64, json: bool) -> Result<()> {
             f("mcusum_aligned_model"),
             f("snapshot_published"),
             f("snapshot_exact")
-        );
+        )?;
     }
     Ok(())
 }

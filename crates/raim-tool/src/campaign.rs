@@ -58,14 +58,18 @@ pub struct FalseAlarmArgs {
     #[arg(long, default_value_t = 1_000_000)]
     pub epochs: usize,
     /// False-alarm probabilities to test (comma separated).
-    #[arg(long, value_delimiter = ',', default_values_t = vec![1e-3, 1e-5])]
+    #[arg(long, value_delimiter = ',', default_value = "1e-3,1e-5")]
     pub pfa: Vec<f64>,
+    /// Fewest satellites per epoch (n uniform in [n_min, n_max]).
     #[arg(long, default_value_t = 6)]
     pub n_min: usize,
+    /// Most satellites per epoch.
     #[arg(long, default_value_t = 16)]
     pub n_max: usize,
+    /// Seed of the random geometries and noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Print JSON instead of the table (docs/FORMATS.md).
     #[arg(long)]
     pub json: bool,
 }
@@ -75,7 +79,8 @@ pub struct SingleFaultArgs {
     /// Trials (each runs every rule on the same epoch).
     #[arg(long, default_value_t = 20_000)]
     pub trials: usize,
-    #[arg(long, default_value_t = 1e-3)]
+    /// Probability of false alarm of the snapshot test.
+    #[arg(long, default_value = "1e-3")]
     pub pfa: f64,
     /// Largest bias, sigma units; each trial draws b uniform in [0, b_max].
     #[arg(long, default_value_t = 12.0)]
@@ -84,12 +89,16 @@ pub struct SingleFaultArgs {
     /// n - 4 <= 3, so n_max <= 7.
     #[arg(long, default_value_t = 6)]
     pub n_min: usize,
+    /// Most satellites per epoch (see --n-min).
     #[arg(long, default_value_t = 7)]
     pub n_max: usize,
+    /// kappa = tau^2/sigma^2 of the L-RAIM Gaussian bias prior.
     #[arg(long, default_value_t = DEFAULT_KAPPA)]
     pub kappa: f64,
+    /// Seed of the random geometries, faults and noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Print JSON instead of the table (docs/FORMATS.md).
     #[arg(long)]
     pub json: bool,
 }
@@ -99,17 +108,17 @@ pub fn run(cmd: &CampaignCmd) -> Result<()> {
         CampaignCmd::FalseAlarm(a) => {
             let r = false_alarm(a, true)?;
             if a.json {
-                println!("{}", serde_json::to_string_pretty(&r)?);
+                crate::outln!("{}", serde_json::to_string_pretty(&r)?)?;
             } else {
-                print!("{}", r.table());
+                crate::out!("{}", r.table())?;
             }
         }
         CampaignCmd::SingleFault(a) => {
             let r = single_fault(a, true)?;
             if a.json {
-                println!("{}", serde_json::to_string_pretty(&r)?);
+                crate::outln!("{}", serde_json::to_string_pretty(&r)?)?;
             } else {
-                print!("{}", r.table());
+                crate::out!("{}", r.table())?;
             }
         }
     }

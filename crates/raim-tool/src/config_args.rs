@@ -20,10 +20,10 @@ pub enum PhaseArg {
 #[derive(Debug, Clone, Args)]
 pub struct ConfigArgs {
     /// Probability of false alarm per sample.
-    #[arg(long, default_value_t = 3.3333e-7)]
+    #[arg(long, default_value = "3.3333e-7")]
     pub pfa: f64,
     /// Probability of missed detection (protection levels).
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value = "1e-3")]
     pub pmd: f64,
     /// Fault identification rule.
     #[arg(long, value_enum, default_value_t = RuleArg::Lraim)]

@@ -3,7 +3,7 @@
 //! and the NMEA sentences the firmware wrote on its second UART.
 //! The wire protocol is docs/PROTOCOL.md; the QEMU plumbing is `raim-qemu`.
 
-use std::io::{BufRead, Write};
+use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
@@ -13,7 +13,8 @@ use raim_proto::WireResult;
 use raim_qemu::{Processed, QemuSession};
 
 use crate::config_args::ConfigArgs;
-use crate::epoch_json::{EpochJson, Sats};
+use crate::epoch_json::{self, Sats};
+use crate::outcome::Tally;
 
 #[derive(Debug, Clone, Args)]
 pub struct QemuArgs {
@@ -31,9 +32,13 @@ pub struct QemuArgs {
     /// Do not print the NMEA sentences (text mode).
     #[arg(long)]
     pub no_nmea: bool,
+    /// Exit 0 even when some epochs were refused (they are still reported
+    /// in the output and counted on stderr).
+    #[arg(long)]
+    pub keep_going: bool,
 }
 
-pub fn run(args: &QemuArgs) -> Result<()> {
+pub fn run(args: &QemuArgs) -> Result<Tally> {
     let cfg = args.config.config();
     cfg.validate()
         .map_err(|e| anyhow::anyhow!("configuration: {e}"))?;
@@ -47,21 +52,40 @@ pub fn run(args: &QemuArgs) -> Result<()> {
         .with_context(|| format!("opening {}", args.input.display()))?;
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
-    for (lineno, line) in std::io::BufReader::new(file).lines().enumerate() {
-        let line = line?;
-        if line.trim().is_empty() || line.trim_start().starts_with('#') {
-            continue;
-        }
-        let e: EpochJson = serde_json::from_str(&line)
-            .with_context(|| format!("line {}: not an epoch", lineno + 1))?;
-        let sats = e
-            .to_sats()
-            .with_context(|| format!("line {}", lineno + 1))?;
+    let mut tally = Tally::default();
+    for line in epoch_json::lines(std::io::BufReader::new(file)) {
+        let line = line.with_context(|| format!("reading {}", args.input.display()))?;
+        let number = line.number;
+        let (e, sats) = match line.parsed {
+            Ok(p) => p,
+            Err(r) => {
+                // Refused before the firmware: answered here, counted.
+                let detail = r.to_string();
+                tally.refuse(|| format!("line {number}: {detail}"));
+                if args.json {
+                    let v = serde_json::json!({
+                        "line": number, "time_s": line.time_s, "error": r.name(), "detail": detail,
+                    });
+                    writeln!(out, "{v}")?;
+                } else {
+                    let t = line.time_s.map_or("-".into(), |t| format!("{t:.1}"));
+                    writeln!(
+                        out,
+                        "t={t:>10}s seq=-     ERROR       line {number}: {detail}"
+                    )?;
+                }
+                continue;
+            }
+        };
         let epoch = match &sats {
             Sats::Ranges(v) => Epoch::ranges(e.time_s, v, e.apriori_m),
             Sats::Linear(v) => Epoch::linear(e.time_s, v),
         };
         let p = fw.process(&epoch)?;
+        match &p.outcome {
+            Ok(_) => tally.answered(),
+            Err(err) => tally.refuse(|| format!("line {number}: {err}")),
+        }
         if args.json {
             writeln!(out, "{}", json_line(e.time_s, &p)?)?;
         } else {
@@ -73,6 +97,13 @@ pub fn run(args: &QemuArgs) -> Result<()> {
             }
         }
     }
+    if tally.epochs == 0 {
+        let _ = writeln!(
+            std::io::stderr(),
+            "raim qemu: no epochs in {} (empty input; format: docs/FORMATS.md)",
+            args.input.display()
+        );
+    }
     let st = fw.status()?;
     if !args.json {
         writeln!(
@@ -81,7 +112,7 @@ pub fn run(args: &QemuArgs) -> Result<()> {
             st.frames, st.epochs, st.errors, st.protocol_version, st.capacity
         )?;
     }
-    Ok(())
+    Ok(tally)
 }
 
 fn json_line(time_s: f64, p: &Processed) -> Result<String> {

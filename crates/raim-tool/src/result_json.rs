@@ -81,9 +81,13 @@ pub struct ResultOut {
     pub mcusum: Option<McusumOut>,
 }
 
+/// A refused epoch: the input line, the epoch time when it was read, the
+/// error's name (a `RaimError` variant, or `Unreadable`) and its message.
 #[derive(Debug, Serialize)]
 pub struct ErrorOut {
-    pub time_s: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub line: Option<usize>,
+    pub time_s: Option<f64>,
     pub error: String,
     pub detail: String,
 }
@@ -192,12 +196,17 @@ pub fn result_out<const N: usize>(r: &EpochResult<N>) -> ResultOut {
     }
 }
 
-pub fn error_out(time_s: f64, e: &RaimError) -> ErrorOut {
+/// The variant name of a core error (`DuplicateSatellite`, ...).
+pub fn error_name(e: &RaimError) -> String {
     let name = format!("{e:?}");
-    let variant = name.split([' ', '{', '(']).next().unwrap_or("").to_string();
+    name.split([' ', '{', '(']).next().unwrap_or("").to_string()
+}
+
+pub fn error_out(line: Option<usize>, time_s: f64, e: &RaimError) -> ErrorOut {
     ErrorOut {
-        time_s,
-        error: variant,
+        line,
+        time_s: Some(time_s),
+        error: error_name(e),
         detail: e.to_string(),
     }
 }

@@ -113,15 +113,19 @@ fn scenario_file_equals_flags() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// NMEA: every sentence's checksum is the XOR of its body.
+/// NMEA (`--nmea only`): the monitor's five sentences per epoch (RMC, GGA,
+/// GSA, GST, GBS), nothing else; every checksum is the XOR of its body.
 #[test]
 fn nmea_checksums() {
     let mut a = base();
-    a.push("--nmea".into());
+    a.extend(["--nmea", "only"].map(String::from));
     let (ok, out, _) = raim(&a.iter().map(String::as_str).collect::<Vec<_>>());
     assert!(ok);
     let lines: Vec<&str> = out.lines().collect();
-    assert_eq!(lines.len(), 26);
+    assert_eq!(lines.len(), 13 * 5);
+    for (k, kind) in ["RMC", "GGA", "GSA", "GST", "GBS"].iter().enumerate() {
+        assert_eq!(&lines[k][3..6], *kind, "{}", lines[k]);
+    }
     for l in lines {
         let (body, cs) = l.trim_start_matches('$').split_once('*').unwrap();
         let x = body.bytes().fold(0u8, |a, b| a ^ b);

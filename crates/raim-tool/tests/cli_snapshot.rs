@@ -59,7 +59,7 @@ fn snapshot_reports_typed_errors_and_goes_on() {
     let mut lines: Vec<String> = example().lines().take(2).map(String::from).collect();
     // A duplicate PRN in the first epoch: replace G03 by a second G02.
     lines[0] = lines[0].replacen("\"prn\": 3,", "\"prn\": 2,", 1);
-    let out = raim(&["snapshot", "--json"], &lines.join("\n"));
+    let out = raim(&["snapshot", "--json", "--keep-going"], &lines.join("\n"));
     let rows: Vec<serde_json::Value> = out
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())

@@ -376,8 +376,8 @@ pub fn compare(
     Ok(out)
 }
 
-pub fn print_table(rows: &[Summary]) {
-    println!(
+pub fn print_table(rows: &[Summary]) -> std::io::Result<()> {
+    crate::outln!(
         "{:<30} {:<14} {:>5} {:>9} {:>10} {:>9} {:>8} {:>10} {:>11} {:>7} {:>9}",
         "scheme",
         "fault",
@@ -390,9 +390,9 @@ pub fn print_table(rows: &[Summary]) {
         "clean ep.",
         "in view",
         "chg/1000s"
-    );
+    )?;
     for r in rows {
-        println!(
+        crate::outln!(
             "{:<30} {:<14} {:>5} {:>9} {:>10.1} {:>9.1} {:>8.1} {:>10} {:>11} {:>3}-{:<3} {:>9.1}",
             r.scheme,
             r.fault,
@@ -406,8 +406,9 @@ pub fn print_table(rows: &[Summary]) {
             r.min_in_view,
             r.max_in_view,
             r.mean_set_changes_per_1000_s
-        );
+        )?;
     }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -13,9 +13,9 @@ use super::geometry::Geometry;
 #[derive(Debug, Clone, Copy, PartialEq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum DesignKind {
-    /// Each satellite gets the bias that gives the chi-square test P_D.
+    // Each satellite gets the bias that gives the chi-square test P_D.
     PdMatched,
-    /// One bias for every satellite (given, or chosen so the mean P_D is the target).
+    // One bias for every satellite (given, or chosen so the mean P_D is the target).
     FixedB,
 }
 

@@ -149,12 +149,21 @@ pub fn sats_from_lists(az_deg: &[f64], el_deg: &[f64]) -> Result<Vec<Sat>> {
     if az_deg.len() != el_deg.len() {
         bail!("{} azimuths but {} elevations", az_deg.len(), el_deg.len());
     }
-    Ok(az_deg
+    az_deg
         .iter()
         .zip(el_deg.iter())
         .enumerate()
-        .map(|(i, (&az, &el))| Sat::from_az_el_deg(SatId::new(System::Gps, (i + 1) as u8), az, el))
-        .collect())
+        .map(|(i, (&az, &el))| {
+            // The core's range check: elevation in [-90, 90] deg, both finite.
+            raim_core::measurement::check_az_el(i, az.to_radians(), el.to_radians())
+                .map_err(|e| anyhow::anyhow!("--az/--el satellite {}: {e} (el_deg {el})", i + 1))?;
+            Ok(Sat::from_az_el_deg(
+                SatId::new(System::Gps, (i + 1) as u8),
+                az,
+                el,
+            ))
+        })
+        .collect()
 }
 
 /// Geometries shared by the tests of the pci modules.

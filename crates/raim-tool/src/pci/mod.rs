@@ -19,7 +19,7 @@ use std::io::Read;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use raim_core::config::{DEFAULT_KAPPA, DEFAULT_MIN_S_II};
+use raim_core::config::DEFAULT_KAPPA;
 
 use crate::epoch_json::EpochJson;
 use design::DesignKind;
@@ -37,7 +37,7 @@ pub struct PciArgs {
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub el: Vec<f64>,
     /// Probability of false alarm of the chi-square test.
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value = "1e-3")]
     pub pfa: f64,
     /// Target detection probability (sets the biases, see --design).
     #[arg(long, conflicts_with = "bias")]
@@ -45,17 +45,19 @@ pub struct PciArgs {
     /// One bias for every satellite, sigma units.
     #[arg(long)]
     pub bias: Option<f64>,
-    /// With --pd: pd-matched (each satellite its own bias) or fixed-b.
+    /// With --pd: pd-matched (each satellite gets the bias that gives the
+    /// chi-square test P_D) or fixed-b (one bias for every satellite: given,
+    /// or chosen so the mean P_D is the target).
     #[arg(long, value_enum, default_value_t = DesignKind::PdMatched)]
     pub design: DesignKind,
     /// Prior variance ratio of Gaussian L-RAIM (tau^2 / sigma^2).
     #[arg(long, default_value_t = DEFAULT_KAPPA)]
     pub kappa: f64,
     /// Missed-detection probability for the MDB.
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value = "1e-3")]
     pub pmd: f64,
     /// Smallest identifiable S_ii (the core's default).
-    #[arg(long, default_value_t = DEFAULT_MIN_S_II)]
+    #[arg(long, default_value = "1e-4")]
     pub min_s_ii: f64,
     /// Monte Carlo draws (0: none; exact only, d <= 3).
     #[arg(long, default_value_t = 200_000)]
@@ -212,14 +214,14 @@ pub fn run(args: &PciArgs) -> Result<()> {
     let geom = Geometry::new(read_sats(args)?)?;
     let rep = analyse(&geom, args)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&rep)?);
+        crate::outln!("{}", serde_json::to_string_pretty(&rep)?)?;
     } else {
-        print!("{}", rep.table());
+        crate::out!("{}", rep.table())?;
     }
     if let Some(path) = &args.plot {
         plot::pci_vs_bias(&geom, args, path)?;
         if !args.json {
-            println!("plot: {}", path.display());
+            crate::outln!("plot: {}", path.display())?;
         }
     }
     Ok(())

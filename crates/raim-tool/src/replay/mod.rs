@@ -5,8 +5,9 @@
 //! mask) -> a clean run (the reference position is its mean) -> the faulted
 //! run -> per-epoch text / JSON lines / NMEA, a summary table and a plot.
 
+mod checks;
 mod engine;
-mod nmea;
+mod input;
 mod plot;
 pub mod record;
 pub mod summary;
@@ -19,10 +20,11 @@ use clap::{Args, ValueEnum};
 use raim_core::snapshot::fde::AlarmCause;
 use raim_core::{Config, Epoch, Raim, System};
 use raim_gnss::faults::{FaultPlan, Scenario};
+use raim_gnss::parse_system;
 use raim_gnss::ranging::{default_codes, prepare_epoch, PreparedEpoch, RangingOptions};
-use raim_gnss::{parse_system, NavData, ObsData};
 
 use crate::config_args::ConfigArgs;
+use crate::outcome::Tally;
 use engine::Engine;
 use record::EpochRecord;
 use summary::Summary;
@@ -33,17 +35,27 @@ pub const REPLAY_CAPACITY: usize = 48;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Target {
-    /// The core on the host.
+    // The core on the host.
     Host,
-    /// The firmware under QEMU (mps2-an386), through raim-qemu.
+    // The firmware under QEMU (mps2-an386), through raim-qemu.
     Qemu,
+}
+
+/// What `--nmea` prints: in both cases the monitor's own sentences (RMC,
+/// GGA, GSA, GST, GBS; from the firmware's second UART with `--target qemu`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum NmeaMode {
+    // NMEA sentences only, no text and no summary: a stream for NMEA readers.
+    Only,
+    // Each epoch's text line followed by its sentences (indented), then the summary.
+    WithText,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Reference {
-    /// Mean position of the clean run's usable epochs.
+    // Mean position of the clean run's usable epochs.
     CleanMean,
-    /// APPROX POSITION XYZ of the observation header.
+    // APPROX POSITION XYZ of the observation header.
     Header,
 }
 
@@ -86,13 +98,16 @@ pub struct ReplayArgs {
     /// an optional ..END after the start time.
     #[arg(long = "fault", value_name = "SPEC")]
     pub faults: Vec<String>,
-    /// A TOML scenario file with [[fault]] tables (see raim_gnss::faults).
-    #[arg(long)]
+    /// A TOML scenario file: a seed and [[fault]] tables (format and
+    /// example: docs/REPLAY.md, section "Scenario files").
+    #[arg(long, value_name = "FILE")]
     pub scenario: Option<PathBuf>,
     /// Seed of the injected noise (overrides the scenario's).
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Where the position error is measured from.
+    /// Where the position error is measured from: clean-mean (the mean
+    /// position of the clean run's usable epochs) or header (the
+    /// observation header's APPROX POSITION XYZ).
     #[arg(long, value_enum, default_value_t = Reference::CleanMean)]
     pub reference: Reference,
     #[command(flatten)]
@@ -109,14 +124,12 @@ pub struct ReplayArgs {
     /// One JSON object per epoch, then a final {"summary": ...} line.
     #[arg(long)]
     pub json: bool,
-    /// NMEA 0183 GGA + GBS per epoch instead of text.
-    #[arg(long)]
-    pub nmea: bool,
-    /// After each text line, the epoch's full NMEA output (RMC, GGA, GSA,
-    /// GST, GBS) as the monitor sends it: from the firmware's second UART
-    /// with `--target qemu`.
-    #[arg(long)]
-    pub with_nmea: bool,
+    /// The monitor's NMEA 0183 output per epoch (RMC, GGA, GSA, GST, GBS;
+    /// from the firmware's second UART with --target qemu): `only` the
+    /// sentences (a stream for NMEA readers, no summary), or `with-text`
+    /// after each epoch's text line.
+    #[arg(long, value_enum, value_name = "MODE")]
+    pub nmea: Option<NmeaMode>,
     /// Print only the summary table.
     #[arg(long)]
     pub quiet: bool,
@@ -127,9 +140,15 @@ pub struct ReplayArgs {
     /// TrueType font for the plot (default: DejaVu Sans where installed).
     #[arg(long)]
     pub font: Option<PathBuf>,
-    /// Where the monitor runs.
+    /// Where the monitor runs: host (the core on this machine) or qemu (the
+    /// firmware under QEMU, mps2-an386; built on first use or taken from
+    /// $RAIM_FIRMWARE_ELF).
     #[arg(long, value_enum, default_value_t = Target::Host)]
     pub target: Target,
+    /// Exit 0 even when some epochs were refused by the monitor (they are
+    /// still in the output and counted on stderr).
+    #[arg(long)]
+    pub keep_going: bool,
 }
 
 /// Everything a replay produces.
@@ -185,15 +204,15 @@ impl ReplayArgs {
     }
 }
 
-/// Load, prepare and select the epochs.
+/// Load, prepare and select the epochs; reject a `--start`/`--end` window
+/// that is reversed or selects nothing.
 fn prepare(args: &ReplayArgs) -> Result<(Vec<PreparedEpoch>, Option<[f64; 3]>, f64)> {
-    let obs = ObsData::load(&args.obs)?;
-    let nav = NavData::load(&args.nav)?;
-    let first = obs
-        .epochs
-        .first()
-        .map(|e| e.time_gps_s)
-        .context("no epochs in the observation file")?;
+    let obs = input::load_obs(&args.obs)?;
+    let nav = input::load_nav(&args.nav)?;
+    let (first, last) = match (obs.epochs.first(), obs.epochs.last()) {
+        (Some(a), Some(b)) => (a.time_gps_s, b.time_gps_s),
+        _ => bail!("no epochs in the observation file {}", args.obs.display()),
+    };
     let start = args
         .start
         .as_deref()
@@ -204,29 +223,52 @@ fn prepare(args: &ReplayArgs) -> Result<(Vec<PreparedEpoch>, Option<[f64; 3]>, f
         .as_deref()
         .map(|s| raim_gnss::time::resolve(s, first))
         .transpose()?;
+    checks::window(
+        start,
+        end,
+        (
+            args.start.as_deref().unwrap_or(""),
+            args.end.as_deref().unwrap_or(""),
+        ),
+    )?;
     let opts = args.ranging()?;
-    let epochs = obs
+    let epochs: Vec<PreparedEpoch> = obs
         .epochs
         .iter()
         .filter(|e| start.is_none_or(|s| e.time_gps_s >= s - 0.5))
         .filter(|e| end.is_none_or(|s| e.time_gps_s <= s + 0.5))
         .map(|e| prepare_epoch(&nav, e, &opts, obs.approx_position_m))
         .collect();
+    if epochs.is_empty() {
+        bail!(
+            "no epochs between --start and --end: the file covers {}..{}",
+            raim_gnss::time::time_of_day(first),
+            raim_gnss::time::time_of_day(last)
+        );
+    }
     Ok((epochs, obs.approx_position_m, first))
 }
 
-fn fault_plan(args: &ReplayArgs, first: f64) -> Result<FaultPlan> {
-    let mut plan = match &args.scenario {
-        Some(p) => Scenario::load(p)?.plan(first)?,
-        None => FaultPlan::default(),
+/// The plan, with each fault's label (its spec as written) for the checks.
+fn fault_plan(args: &ReplayArgs, first: f64) -> Result<(FaultPlan, Vec<String>)> {
+    let (mut plan, mut labels) = match &args.scenario {
+        Some(p) => {
+            let scen = Scenario::load(p)?;
+            let labels = (1..=scen.fault.len())
+                .map(|k| format!("{} [[fault]] #{k}", p.display()))
+                .collect();
+            (scen.plan(first)?, labels)
+        }
+        None => (FaultPlan::default(), Vec::new()),
     };
     for f in &args.faults {
         plan.faults.push(FaultPlan::parse_cli(f, first)?);
+        labels.push(f.clone());
     }
     if let Some(s) = args.seed {
         plan.seed = s;
     }
-    Ok(plan)
+    Ok((plan, labels))
 }
 
 /// Run the monitor over the epochs with `plan`'s faults on a fresh engine.
@@ -311,7 +353,16 @@ pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
     cfg.validate()
         .map_err(|e| anyhow::anyhow!("configuration: {e}"))?;
     let (epochs, header, first) = prepare(args)?;
-    let plan = fault_plan(args, first)?;
+    let (plan, labels) = fault_plan(args, first)?;
+    let labelled: Vec<checks::LabelledFault<'_>> = plan
+        .faults
+        .iter()
+        .zip(labels)
+        .map(|(fault, label)| checks::LabelledFault { label, fault })
+        .collect();
+    for w in checks::faults(&labelled, &epochs)? {
+        let _ = writeln!(std::io::stderr(), "{w}");
+    }
     let show = std::io::stderr().is_terminal();
     let total = if plan.is_empty() {
         epochs.len()
@@ -371,38 +422,42 @@ pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
     })
 }
 
-/// `raim replay`. A closed pipe (`| head`) ends the output quietly.
-pub fn run(args: &ReplayArgs) -> Result<()> {
-    match write_outputs(args) {
-        Err(e)
-            if e.downcast_ref::<std::io::Error>()
-                .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) =>
-        {
-            Ok(())
+/// `raim replay`: the output, and the count of epochs the monitor refused
+/// (a closed pipe is handled by the caller, crate::outcome).
+pub fn run(args: &ReplayArgs) -> Result<Tally> {
+    let out = replay(args)?;
+    write_outputs(args, &out)?;
+    let mut tally = Tally::default();
+    for r in &out.records {
+        match &r.error {
+            Some(e) => {
+                tally.refuse(|| format!("{} {e}", raim_gnss::time::time_of_day(r.time_gps_s)))
+            }
+            None => tally.answered(),
         }
-        r => r,
     }
+    Ok(tally)
 }
 
-fn write_outputs(args: &ReplayArgs) -> Result<()> {
-    let out = replay(args)?;
+fn write_outputs(args: &ReplayArgs, out: &ReplayOutput) -> Result<()> {
     let stdout = std::io::stdout();
     let mut w = stdout.lock();
     if !args.quiet {
         for r in &out.records {
-            if args.json {
-                writeln!(w, "{}", serde_json::to_string(r)?)?;
-            } else if args.nmea {
-                for s in nmea::sentences(r, &raim_gnss::time::utc_hhmmss(r.time_gps_s)) {
-                    writeln!(w, "{s}")?;
-                }
-            } else {
-                writeln!(w, "{}", r.text_line())?;
-                if args.with_nmea {
+            match args.nmea {
+                _ if args.json => writeln!(w, "{}", serde_json::to_string(r)?)?,
+                Some(NmeaMode::Only) => {
                     for s in &r.nmea {
-                        writeln!(w, "    {s}")?;
+                        writeln!(w, "{}", s.trim_end())?;
                     }
                 }
+                Some(NmeaMode::WithText) => {
+                    writeln!(w, "{}", r.text_line())?;
+                    for s in &r.nmea {
+                        writeln!(w, "    {}", s.trim_end())?;
+                    }
+                }
+                None => writeln!(w, "{}", r.text_line())?,
             }
         }
     }
@@ -412,11 +467,12 @@ fn write_outputs(args: &ReplayArgs) -> Result<()> {
             "{}",
             serde_json::json!({ "summary": out.summary, "reference_ecef_m": out.reference_m })
         )?;
-    } else if !args.nmea {
+    } else if args.nmea != Some(NmeaMode::Only) {
         writeln!(w, "{}", out.summary.table())?;
     }
+    w.flush()?;
     if let Some(p) = &args.plot {
-        plot::draw(&out, &args.core_config(), p, args.font.as_deref())?;
+        plot::draw(out, &args.core_config(), p, args.font.as_deref())?;
     }
     Ok(())
 }

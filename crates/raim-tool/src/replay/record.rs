@@ -55,12 +55,6 @@ pub struct EpochRecord {
     /// (satellite, D^2, T^2, dof) of the subset without it. Both pass.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub ambiguity: Vec<(String, f64, f64, u32)>,
-    /// For the NMEA GBS sentence: the identified satellite's bias estimate
-    /// and its standard deviation, m.
-    #[serde(skip)]
-    pub gbs_bias: Option<(SatId, f64, f64)>,
-    #[serde(skip)]
-    pub geodetic: Option<(f64, f64, f64)>,
     #[serde(skip)]
     pub excluded_ids: Vec<SatId>,
     #[serde(skip)]
@@ -123,12 +117,6 @@ impl EpochRecord {
             (Some(p), Some(rf)) => Some(error_enu(p, rf)),
             _ => None,
         };
-        let gbs_bias = r.identified.and_then(|id| {
-            r.satellites
-                .iter()
-                .find(|s| s.id == id)
-                .map(|s| (id, s.bias_m, s.sigma_m / s.s_ii.max(1e-12).sqrt()))
-        });
         EpochRecord {
             nmea: Vec::new(),
             time_gps_s,
@@ -155,8 +143,6 @@ impl EpochRecord {
             vpl_m: finite(r.vpl_m),
             sigma_enu_m: r.sigma_enu_m,
             ambiguity: Vec::new(),
-            gbs_bias,
-            geodetic: r.geodetic.map(|g| (g.lat_rad, g.lon_rad, g.height_m)),
             excluded_ids: if r.decision == Decision::Excluded
                 || (r.decision == Decision::Unavailable && !r.exclusions.is_empty())
             {
@@ -201,8 +187,6 @@ impl EpochRecord {
             vpl_m: f64::MAX,
             sigma_enu_m: [f64::NAN; 3],
             ambiguity: Vec::new(),
-            gbs_bias: None,
-            geodetic: None,
             excluded_ids: Vec::new(),
             faulted_ids: faulted.iter().map(|(id, _)| *id).collect(),
         }

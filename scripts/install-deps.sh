@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Installs what the project's scripts need and the machine lacks, quietly,
+# shared by scripts/main-job.sh and scripts/test.sh (issue 16).
+#
+#   bash scripts/install-deps.sh main   # the main job: thumbv7em target, qemu-system-arm
+#   bash scripts/install-deps.sh test   # the tests: also clippy, rustfmt and gpsd
+#
+# Debian/Ubuntu packages are installed with --no-install-recommends (plain
+# `apt-get install qemu-system-arm` also pulls the GTK/SDL front ends, about
+# 170 packages); apt's output goes to a log that is shown only on failure.
+# Prints one line per thing it installs, nothing when all is present.
+set -euo pipefail
+what="${1:-test}"
+case "$what" in main | test) ;; *) echo "usage: $0 [main|test]" >&2; exit 2 ;; esac
+
+if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
+    echo "install-deps: rust target thumbv7em-none-eabihf"
+    rustup target add thumbv7em-none-eabihf >/dev/null 2>&1
+fi
+if [ "$what" = test ]; then
+    for c in clippy rustfmt; do
+        if ! rustup component list --installed 2>/dev/null | grep -q "^$c"; then
+            echo "install-deps: rust component $c"
+            rustup component add "$c" >/dev/null 2>&1 || true
+        fi
+    done
+fi
+
+# Debian packages, by the command each provides.
+pkgs=()
+command -v qemu-system-arm >/dev/null || pkgs+=(qemu-system-arm)
+if [ "$what" = test ] && ! [ -x /usr/sbin/gpsd ]; then pkgs+=(gpsd); fi
+if [ "${#pkgs[@]}" -gt 0 ]; then
+    echo "install-deps: apt packages ${pkgs[*]} (--no-install-recommends)"
+    SUDO=""; [ "$(id -u)" = 0 ] || SUDO="sudo"
+    log="$(mktemp)"
+    if ! { $SUDO apt-get update -qq \
+        && DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${pkgs[@]}"; } \
+        >"$log" 2>&1; then
+        cat "$log" >&2
+        echo "install-deps: apt-get failed (log above)" >&2
+        exit 1
+    fi
+    rm -f "$log"
+fi
