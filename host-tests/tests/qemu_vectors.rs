@@ -172,3 +172,47 @@ fn qemu_mcusum_state_matches_a_persistent_host_engine() {
     }
     assert_eq!(with_report, 8, "every epoch carries the MCUSUM report");
 }
+
+/// The reconstruction FDE (`FdeMethod::Reconstruction`, docs/MULTIFAULT.md)
+/// in the firmware: the pseudorange vectors (clean, one, two faults, a
+/// Galileo fault) and a 20-satellite pseudorange epoch with three faults
+/// give the host core's answers bit for bit.
+#[test]
+fn qemu_reconstruction_fde_matches_the_host_core() {
+    let mut fw = session();
+    let cfg = Config {
+        fde_method: raim_core::FdeMethod::Reconstruction {
+            t_max: 3,
+            group_budget: 1000,
+        },
+        max_exclusions: 3,
+        ..Config::preset(Phase::Terminal)
+    };
+    fw.configure(&cfg).unwrap();
+    for (i, (time_s, sats, apriori)) in range_vectors(7).iter().enumerate() {
+        let epoch = Epoch::ranges(*time_s, sats, *apriori);
+        compare(
+            &mut fw,
+            &cfg,
+            &epoch,
+            &format!("reconstruction range epoch {i}"),
+        );
+    }
+    let sky: Vec<(f64, f64)> = (0..20)
+        .map(|i| (i as f64 * 137.5 % 360.0, 12.0 + (i as f64 * 29.0) % 70.0))
+        .collect();
+    let sats = qemu_common::range_epoch(
+        &sky,
+        &[raim_core::System::Gps, raim_core::System::Galileo],
+        &mut qemu_common::Rng::new(3),
+        &[(2, 60.0), (7, -70.0), (11, 80.0)],
+    );
+    let epoch = Epoch::ranges(1.7e9, &sats, None);
+    let p = compare(&mut fw, &cfg, &epoch, "three faults");
+    let got = p.outcome.map(|r| {
+        let mut x: Vec<usize> = r.exclusions.iter().map(|e| e.index).collect();
+        x.sort();
+        (r.decision, x)
+    });
+    assert_eq!(got, Ok((Decision::Excluded, vec![2, 7, 11])));
+}

@@ -99,6 +99,22 @@ impl Default for FiRule {
     }
 }
 
+/// The fault detection and exclusion method of the snapshot monitor.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum FdeMethod {
+    /// Single exclusion by the identification rule, repeated, with the
+    /// closed-form pair search and the uniqueness check (SPEC §5).
+    #[default]
+    Sequential,
+    /// Error reconstruction over constraint groups (SPEC §8, seed 002): the
+    /// fewest satellites (1..t_max, at most 3 and at most
+    /// `max_exclusions`) whose exclusion explains the residuals, searching
+    /// at most `group_budget` groups per epoch (docs/MULTIFAULT.md).
+    Reconstruction { t_max: u8, group_budget: u16 },
+}
+
 /// Horizontal and vertical alert limits; `None` means "not monitored".
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -179,6 +195,8 @@ pub struct Config {
     pub max_iterations: u32,
     /// Sequential detection (MCUSUM, SPEC §7); disabled by default.
     pub mcusum: McusumConfig,
+    /// The FDE method; `Sequential` (today's) by default.
+    pub fde_method: FdeMethod,
 }
 
 impl Default for Config {
@@ -204,6 +222,7 @@ impl Config {
             convergence_m: 1e-4,
             max_iterations: 20,
             mcusum: McusumConfig::default(),
+            fde_method: FdeMethod::Sequential,
         }
     }
 

@@ -13,7 +13,7 @@
 //! that NaN falls outside). A rejection is `RaimError::OutOfRange` carrying
 //! the field name, the offending value and the bound.
 
-use crate::config::{Config, FiRule};
+use crate::config::{Config, FdeMethod, FiRule};
 use crate::error::RaimError;
 use crate::snapshot::fde::MAX_EXCLUSIONS;
 
@@ -156,6 +156,21 @@ pub const HOLD_S: Bound = Bound {
     max: 1e4,
 };
 
+/// Simultaneous faults the reconstruction FDE searches for (SPEC §8; the
+/// covering designs exist for t = 1..3).
+pub const T_MAX: Bound = Bound {
+    field: "t_max",
+    min: 1.0,
+    max: crate::multifault::covering::MAX_FAULTS as f64,
+};
+/// Constraint groups the reconstruction FDE may solve per epoch: at least
+/// one (0 would switch the multi-fault search off).
+pub const GROUP_BUDGET: Bound = Bound {
+    field: "group_budget",
+    min: 1.0,
+    max: u16::MAX as f64,
+};
+
 /// Check every field of `cfg`; the first offending one is returned.
 pub fn check(cfg: &Config) -> Result<(), RaimError> {
     PFA.check(cfg.pfa)?;
@@ -180,6 +195,14 @@ pub fn check(cfg: &Config) -> Result<(), RaimError> {
     if cfg.mcusum.enabled {
         crate::sequential::mcusum::check_settings(cfg.mcusum.k, cfg.mcusum.arl0)?;
         HOLD_S.check(cfg.mcusum.hold_s)?;
+    }
+    if let FdeMethod::Reconstruction {
+        t_max,
+        group_budget,
+    } = cfg.fde_method
+    {
+        T_MAX.check(f64::from(t_max))?;
+        GROUP_BUDGET.check(f64::from(group_budget))?;
     }
     Ok(())
 }

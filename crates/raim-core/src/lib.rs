@@ -41,6 +41,7 @@ pub mod frames;
 pub mod linalg;
 pub mod measurement;
 pub mod monitor;
+pub mod multifault;
 pub mod real;
 pub mod result;
 pub mod sequential;
@@ -51,7 +52,7 @@ pub mod stats;
 #[cfg(test)]
 mod testutil;
 
-pub use config::{AlertLimits, Carry, Config, FiRule, McusumConfig, Phase};
+pub use config::{AlertLimits, Carry, Config, FdeMethod, FiRule, McusumConfig, Phase};
 pub use error::RaimError;
 pub use measurement::{Epoch, LinearObservation, Observations, RangeObservation, SatId, System};
 pub use monitor::Raim;

@@ -94,4 +94,7 @@ pub struct EpochResult<const N: usize> {
     /// The sequential test's state and decision; `None` when the MCUSUM is
     /// disabled (the result is then exactly the snapshot monitor's).
     pub mcusum: Option<McusumReport>,
+    /// The reconstruction FDE's search (`FdeMethod::Reconstruction`, when
+    /// the all-in-view test failed); `None` otherwise.
+    pub multifault: Option<crate::multifault::MultifaultReport>,
 }

@@ -63,6 +63,14 @@ pub struct ConfigArgs {
     /// How long an MCUSUM exclusion is held, s.
     #[arg(long, default_value_t = raim_core::config::DEFAULT_MCUSUM_HOLD_S)]
     pub mcusum_hold_s: f64,
+    /// FDE by error reconstruction over constraint groups (SPEC §8,
+    /// docs/MULTIFAULT.md) for up to this many simultaneous faults (1-3);
+    /// also raises --max-exclusions to it. Default: today's FDE.
+    #[arg(long)]
+    pub multifault_t_max: Option<u8>,
+    /// Constraint groups searched per epoch by the reconstruction FDE.
+    #[arg(long, default_value_t = 1000)]
+    pub group_budget: u16,
 }
 
 impl ConfigArgs {
@@ -86,6 +94,13 @@ impl ConfigArgs {
         c.alert.val_m = self.val_m;
         c.max_exclusions = self.max_exclusions;
         c.require_unique_exclusion = !self.allow_ambiguous;
+        if let Some(t_max) = self.multifault_t_max {
+            c.fde_method = raim_core::FdeMethod::Reconstruction {
+                t_max,
+                group_budget: self.group_budget,
+            };
+            c.max_exclusions = c.max_exclusions.max(t_max);
+        }
         if self.mcusum {
             c = c.split_false_alarm_budget(self.mcusum_share);
             c.mcusum.k = self.mcusum_k;

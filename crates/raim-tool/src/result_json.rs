@@ -108,6 +108,10 @@ fn cause_name(c: AlarmCause) -> String {
         AlarmCause::Ambiguous { best, runner_up } => format!("ambiguous:{best}/{runner_up}"),
         AlarmCause::MaxExclusions => "max_exclusions".into(),
         AlarmCause::SubsetGeometry { excluded } => format!("subset_geometry:{excluded}"),
+        AlarmCause::NoConsistentSet => "no_consistent_set".into(),
+        AlarmCause::SearchIncomplete { groups, budget } => {
+            format!("search_incomplete:{budget}/{groups}")
+        }
     }
 }
 

@@ -39,6 +39,8 @@ pub struct Row {
     pub excluded_any: Vec<SatId>,
     pub faulted: Vec<SatId>,
     pub n: usize,
+    /// The satellites of the epoch.
+    pub in_view: Vec<SatId>,
 }
 
 /// Replay `[start, end]` (times of day) of a data pair with `faults`.
@@ -91,6 +93,7 @@ pub fn replay(
                     .unwrap_or_default(),
                 faulted: inj.faulted.iter().map(|(id, _)| *id).collect(),
                 n: sats.len(),
+                in_view: sats.iter().map(|s| s.id).collect(),
             }
         })
         .collect()

@@ -50,6 +50,13 @@ pub enum AlarmCause {
     MaxExclusions,
     /// The subset left after an exclusion cannot be solved (rank).
     SubsetGeometry { excluded: SatId },
+    /// Reconstruction FDE (SPEC §8.4): no set of 1..t_max satellites
+    /// explains the residuals.
+    NoConsistentSet,
+    /// Reconstruction FDE: a set explains the residuals, but the group
+    /// budget stopped the search before all `groups`, so the uniqueness
+    /// check is incomplete and nothing is excluded.
+    SearchIncomplete { groups: u32, budget: u32 },
 }
 
 /// The outcome of FDE for one epoch.

@@ -7,7 +7,7 @@ pub mod fde;
 pub mod lraim;
 pub mod protection;
 
-use crate::config::Config;
+use crate::config::{Config, FdeMethod};
 use crate::error::RaimError;
 use crate::measurement::{Epoch, SatId};
 use crate::result::{Decision, EpochResult, SatelliteResult};
@@ -61,7 +61,23 @@ impl<const N: usize> Snapshot<N> {
         solve_into::<N>(cfg, epoch, &mask, &mut outcome.solution)?;
         let initial_test = fde::test(cfg, &mut self.thresholds, &outcome.solution)?;
         let satellites = per_satellite(cfg, &outcome.solution);
-        fde::run(cfg, &mut self.thresholds, epoch, outcome)?;
+        let multifault = match cfg.fde_method {
+            FdeMethod::Sequential => {
+                fde::run(cfg, &mut self.thresholds, epoch, outcome)?;
+                None
+            }
+            FdeMethod::Reconstruction {
+                t_max,
+                group_budget,
+            } => crate::multifault::run_with_own_scratch(
+                cfg,
+                t_max,
+                group_budget,
+                &mut self.thresholds,
+                epoch,
+                outcome,
+            )?,
+        };
         let sol = &outcome.solution;
         let dof = sol.parity.dof();
         let (_, lambda_md) = self.thresholds.get(cfg.pfa, cfg.pmd, dof)?;
@@ -106,6 +122,7 @@ impl<const N: usize> Snapshot<N> {
             iterations: sol.iterations,
             exclusions: outcome.exclusions.clone(),
             mcusum: None,
+            multifault,
         };
         Ok(result)
     }

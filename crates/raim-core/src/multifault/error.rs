@@ -1,0 +1,58 @@
+//! Typed errors of the multiple-fault reconstruction (SPEC §8). Each carries
+//! the offending values; none is a panic.
+
+/// Why a covering or a reconstruction could not be built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum MultifaultError {
+    /// `t` simultaneous faults cannot be searched with `n` satellites and
+    /// `m` states: a candidate set needs t <= n - m - 1 (its subset
+    /// statistic RSS_T has n - m - t >= 1 degrees of freedom, SPEC §8.4).
+    TooManyFaults {
+        t: usize,
+        n: usize,
+        m: usize,
+        max: usize,
+    },
+    /// `t` is 0 or above the largest supported number of faults.
+    FaultCountOutOfRange {
+        field: &'static str,
+        t: usize,
+        max: usize,
+    },
+    /// The group budget per epoch is 0: nothing could be searched.
+    ZeroGroupBudget { field: &'static str },
+    /// More satellites than the engine's capacity (or the 64-bit set masks).
+    CapacityExceeded { have: usize, capacity: usize },
+    /// No group's constrained set has rank m in H: nothing is identifiable
+    /// (every identifiable set lost all its satellites to rank swaps).
+    NoIdentifiableGroup { n: usize, groups: usize },
+    /// A group given by the caller names a satellite outside 0..n.
+    GroupOutOfRange { group: usize, mask: u64, n: usize },
+}
+
+impl core::fmt::Display for MultifaultError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            MultifaultError::TooManyFaults { t, n, m, max } => write!(
+                f,
+                "{t} faults cannot be searched with n = {n}, m = {m} (at most {max})"
+            ),
+            MultifaultError::FaultCountOutOfRange { field, t, max } => {
+                write!(f, "{field} = {t} outside 1..={max}")
+            }
+            MultifaultError::ZeroGroupBudget { field } => write!(f, "{field} is 0"),
+            MultifaultError::CapacityExceeded { have, capacity } => {
+                write!(f, "{have} satellites exceed capacity {capacity}")
+            }
+            MultifaultError::NoIdentifiableGroup { n, groups } => write!(
+                f,
+                "no constrained set of rank m among {groups} groups of {n} satellites"
+            ),
+            MultifaultError::GroupOutOfRange { group, mask, n } => {
+                write!(f, "group {group} (mask {mask:#x}) names a satellite >= {n}")
+            }
+        }
+    }
+}

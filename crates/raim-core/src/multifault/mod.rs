@@ -1,0 +1,686 @@
+//! Multiple simultaneous faults by error reconstruction over constraint
+//! groups (SPEC §8, seed 002), for up to three faults.
+//!
+//! - [`covering`]: the constraint groups, a covering design (exact table for
+//!   small n, an on-device construction for any n).
+//! - [`reconstruct`]: per group, e_F, its covariance and the seed's Q; per
+//!   candidate set T, the whitened subset statistic RSS_T and the biases.
+//! - [`search`] (here): every group within the budget, every candidate set
+//!   of 1..t_max satellites they cover, the least and runner-up RSS_T per
+//!   size; [`decide`]: the decision rule of SPEC §8.4 with the uniqueness
+//!   check. [`fde`] runs it as the snapshot monitor's FDE method
+//!   (`Config::fde_method`), excluding and re-testing with a real solve.
+
+pub mod covering;
+mod covering_table;
+pub mod error;
+pub mod reconstruct;
+
+#[cfg(test)]
+mod tests;
+
+use crate::config::Config;
+use crate::error::RaimError;
+use crate::measurement::{Epoch, SatId};
+use crate::real::{Real, Stat};
+use crate::snapshot::detection::Thresholds;
+use crate::snapshot::fde::{self, AlarmCause, Exclusion, FdeOutcome};
+use crate::solve::{solve_into, Solution};
+use crate::stats::dist;
+use covering::{for_each_subset, Covering, SatSet, MAX_FAULTS};
+use error::MultifaultError;
+use reconstruct::{fit_subset, reconstruct, GroupFit, ResidualModel, SubsetFit, Workspace};
+
+/// The least and runner-up candidate sets of one size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Level<T> {
+    pub best: Option<SubsetFit<T>>,
+    pub runner_up: Option<SubsetFit<T>>,
+    /// Candidate sets evaluated at this size (each once, but for repairs
+    /// and designs of more than 64 groups).
+    pub evaluated: u32,
+}
+
+impl<T: Real> Default for Level<T> {
+    fn default() -> Self {
+        Level {
+            best: None,
+            runner_up: None,
+            evaluated: 0,
+        }
+    }
+}
+
+impl<T: Real> Level<T> {
+    /// Keeps the two least RSS_T among distinct sets.
+    fn offer(&mut self, fit: SubsetFit<T>) {
+        self.evaluated += 1;
+        let same = |o: &Option<SubsetFit<T>>| o.is_some_and(|b| b.set == fit.set);
+        if same(&self.best) || same(&self.runner_up) {
+            return;
+        }
+        match self.best {
+            Some(b) if !(fit.rss < b.rss) => {
+                if self.runner_up.is_none_or(|r| fit.rss < r.rss) {
+                    self.runner_up = Some(fit);
+                }
+            }
+            _ => {
+                self.runner_up = self.best;
+                self.best = Some(fit);
+            }
+        }
+    }
+}
+
+/// What the group search found (SPEC §8.3-8.4).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Search<T> {
+    /// The candidate sets of 1, 2, 3 satellites.
+    pub levels: [Level<T>; MAX_FAULTS],
+    /// The largest fault count searched.
+    pub t_max: usize,
+    pub groups_total: usize,
+    pub groups_processed: usize,
+    /// The group budget stopped the search before the last group.
+    pub budget_limited: bool,
+    /// Satellites moved into a constrained set for rank (summed over groups).
+    pub swapped: u32,
+    /// Candidate sets evaluated directly because a swap took one of their
+    /// satellites out of a group's identifiable set (keeps the search
+    /// complete: SPEC §8.3's "swap and say so").
+    pub repaired: u32,
+    /// The least Q over the groups and the group that has it.
+    pub q_min: Option<(T, usize)>,
+}
+
+/// How many earlier groups the search remembers to evaluate each
+/// candidate set once (beyond, repeats are evaluated again: harmless).
+const EARLIER: usize = 64;
+
+/// Runs the groups of `covering` (at most `budget`) over `model`: each
+/// group's reconstruction and Q, and RSS_T for every set of 1..t_max
+/// satellites inside its identifiable set. `on_group` sees every group's
+/// reconstruction (the seed's table; reports).
+#[allow(clippy::too_many_arguments)]
+pub fn search<T: Real, const N: usize>(
+    model: &ResidualModel<T, N>,
+    covering: &Covering,
+    t_max: usize,
+    budget: usize,
+    min_s_ii: T,
+    ws: &mut Workspace<T, N>,
+    group: &mut GroupFit<T, N>,
+    on_group: impl FnMut(usize, &GroupFit<T, N>),
+) -> Result<Search<T>, MultifaultError> {
+    search_where(
+        model,
+        covering,
+        t_max,
+        budget,
+        min_s_ii,
+        ws,
+        group,
+        on_group,
+        |_| true,
+    )
+}
+
+/// [`search`] over the candidate sets that `keep` accepts only (the
+/// cross-size uniqueness check: the sets that do not contain the set about
+/// to be excluded).
+#[allow(clippy::too_many_arguments)]
+pub fn search_where<T: Real, const N: usize>(
+    model: &ResidualModel<T, N>,
+    covering: &Covering,
+    t_max: usize,
+    budget: usize,
+    min_s_ii: T,
+    ws: &mut Workspace<T, N>,
+    group: &mut GroupFit<T, N>,
+    mut on_group: impl FnMut(usize, &GroupFit<T, N>),
+    keep: impl Fn(SatSet) -> bool,
+) -> Result<Search<T>, MultifaultError> {
+    if budget == 0 {
+        return Err(MultifaultError::ZeroGroupBudget {
+            field: "group_budget",
+        });
+    }
+    covering::check(model.n(), covering.states(), t_max)?;
+    if covering.satellites() != model.n() || t_max > covering.faults() {
+        return Err(MultifaultError::TooManyFaults {
+            t: t_max,
+            n: model.n(),
+            m: covering.states(),
+            max: covering.faults(),
+        });
+    }
+    let mut out = Search {
+        levels: [Level::default(); MAX_FAULTS],
+        t_max,
+        groups_total: covering.len(),
+        groups_processed: 0,
+        budget_limited: covering.len() > budget,
+        swapped: 0,
+        repaired: 0,
+        q_min: None,
+    };
+    let mut swapped_union: SatSet = 0;
+    let mut any_identifiable = false;
+    // The design's earlier groups (up to EARLIER of them): a set inside one
+    // of them was evaluated there, or holds a satellite swapped out of it
+    // and is evaluated by the repair pass below, so it is skipped here.
+    let mut earlier = [0 as SatSet; EARLIER];
+    for (i, f) in covering.groups().enumerate().take(budget) {
+        let seen = earlier.get(..i.min(EARLIER)).unwrap_or(&[]);
+        let first_cover = |set: SatSet| !seen.iter().any(|g| set & !g == 0);
+        reconstruct(model, f, min_s_ii, ws, group);
+        out.groups_processed += 1;
+        out.swapped += group.swapped.count_ones();
+        swapped_union |= group.swapped;
+        if group.identifiable != 0 {
+            any_identifiable = true;
+            if out.q_min.is_none_or(|(q, _)| group.q < q) {
+                out.q_min = Some((group.q, i));
+            }
+        }
+        on_group(i, group);
+        for_each_subset(group.identifiable, t_max, |set| {
+            if !keep(set) || !first_cover(set) {
+                return;
+            }
+            if let Some(fit) = fit_subset(model, set) {
+                if let Some(level) = out.levels.get_mut(fit.count - 1) {
+                    level.offer(fit);
+                }
+            }
+        });
+        if let Some(slot) = earlier.get_mut(i) {
+            *slot = f;
+        }
+    }
+    if swapped_union != 0 {
+        // A set lost its cover only if it holds a swapped satellite.
+        let mut repaired = 0;
+        for_each_subset(covering::all(model.n()), t_max, |set| {
+            if set & swapped_union != 0 && keep(set) {
+                if let Some(fit) = fit_subset(model, set) {
+                    repaired += 1;
+                    if let Some(level) = out.levels.get_mut(fit.count - 1) {
+                        level.offer(fit);
+                    }
+                }
+            }
+        });
+        out.repaired = repaired;
+    }
+    if !any_identifiable && out.levels.iter().all(|l| l.best.is_none()) {
+        return Err(MultifaultError::NoIdentifiableGroup {
+            n: model.n(),
+            groups: out.groups_processed,
+        });
+    }
+    Ok(out)
+}
+
+/// The decision of SPEC §8.4 over a [`Search`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Verdict<T> {
+    /// The least RSS_T among sets of `count` satellites passes its
+    /// chi-square quantile and no other set of that size explains the data
+    /// at level pwe: exclude it.
+    Exclude(SubsetFit<T>),
+    /// The best set passes, but so does the runner-up at level pwe.
+    Ambiguous {
+        best: SubsetFit<T>,
+        runner_up: SubsetFit<T>,
+    },
+    /// The best set passes, but the group budget cut the search short, so
+    /// the uniqueness check is incomplete.
+    Incomplete(SubsetFit<T>),
+    /// No candidate set of 1..t_max satellites passes.
+    NoConsistentSet,
+}
+
+/// Chi-square thresholds at the level `p` for a dof, in f64.
+pub fn chi2_threshold(p: f64, dof: usize) -> Result<f64, RaimError> {
+    dist::chi2_quantile_upper(p, u32::try_from(dof).unwrap_or(u32::MAX))
+}
+
+/// The decision rule (SPEC §8.4), from size `from` upward: the fewest
+/// faults that explain the data. For size t the least RSS_T is accepted if
+/// RSS_T < chi2 quantile(1 - pfa; dof - t); then the runner-up of the same
+/// size must reach the quantile at 1 - pwe, else `Ambiguous` (never a silent
+/// pick). `unique` = false skips the runner-up and budget checks.
+pub fn decide<T: Real>(
+    s: &Search<T>,
+    from: usize,
+    dof: usize,
+    pfa: f64,
+    pwe: f64,
+    unique: bool,
+) -> Result<Verdict<T>, RaimError> {
+    for (t, level) in s
+        .levels
+        .iter()
+        .enumerate()
+        .take(s.t_max)
+        .skip(from.max(1) - 1)
+    {
+        let t = t + 1;
+        if t + 1 > dof {
+            break;
+        }
+        let Some(best) = level.best else { continue };
+        let t2 = chi2_threshold(pfa, dof - t)?;
+        if !(best.rss.to_f64() < t2) {
+            continue;
+        }
+        if !unique {
+            return Ok(Verdict::Exclude(best));
+        }
+        if let Some(runner_up) = level.runner_up {
+            let t2_we = chi2_threshold(pwe, dof - t)?;
+            if runner_up.rss.to_f64() < t2_we {
+                return Ok(Verdict::Ambiguous { best, runner_up });
+            }
+        }
+        if s.budget_limited {
+            return Ok(Verdict::Incomplete(best));
+        }
+        return Ok(Verdict::Exclude(best));
+    }
+    Ok(Verdict::NoConsistentSet)
+}
+
+/// One candidate set in the per-epoch report, in physical units.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct FaultSet {
+    /// How many satellites (1..=3); the first `count` entries below hold.
+    pub count: u8,
+    pub satellites: [SatId; MAX_FAULTS],
+    /// Bias estimates b_T, m, in the order of `satellites`.
+    pub bias_m: [f64; MAX_FAULTS],
+    /// RSS_T (chi-square units) and its dof n - m - |T|.
+    pub rss: f64,
+    pub dof: u32,
+}
+
+/// The multiple-fault search's part of an epoch result (`fde_method =
+/// Reconstruction`).
+#[derive(Debug, Clone, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct MultifaultReport {
+    /// The fault count searched (t_max, reduced to n - m - 1 if needed).
+    pub t_searched: u8,
+    /// The set excluded (or, with an alarm, the best candidate).
+    pub best: Option<FaultSet>,
+    /// The runner-up of the same size.
+    pub runner_up: Option<FaultSet>,
+    pub groups_total: u32,
+    pub groups_processed: u32,
+    /// The group budget limited the search (then no exclusion is made
+    /// while `require_unique_exclusion` holds).
+    pub budget_limited: bool,
+    /// Satellites moved into constrained sets for rank, and candidate sets
+    /// evaluated directly to keep the search complete.
+    pub swapped: u32,
+    pub repaired: u32,
+    /// The seed's least Q over the groups, sigma^2 units.
+    pub q_min: Option<f64>,
+}
+
+fn fault_set<T: Real, const N: usize>(
+    fit: &SubsetFit<T>,
+    sol: &Solution<N>,
+    dof: usize,
+) -> FaultSet {
+    let (rows, k) = covering::members(fit.set);
+    let mut out = FaultSet {
+        count: 0,
+        satellites: [SatId::default(); MAX_FAULTS],
+        bias_m: [0.0; MAX_FAULTS],
+        rss: fit.rss.to_f64(),
+        dof: dof.saturating_sub(fit.count) as u32,
+    };
+    for (row, b) in rows.iter().take(k.min(MAX_FAULTS)).zip(fit.bias.iter()) {
+        let row = usize::from(*row);
+        let slot = usize::from(out.count);
+        if let (Some(id), Some(dst_id), Some(dst_b)) = (
+            sol.ids.get(row),
+            out.satellites.get_mut(slot),
+            out.bias_m.get_mut(slot),
+        ) {
+            *dst_id = *id;
+            let sigma = sol.sigma_m.get(row).copied().unwrap_or(1.0);
+            *dst_b = b.to_f64() * sigma;
+            out.count += 1;
+        }
+    }
+    out
+}
+
+/// The scratch the reconstruction FDE needs (about 2 N^2 + 4 N values of
+/// [`Stat`]: 17 KB at N = 32 in f64, 8.5 KB in f32). Kept out of the
+/// snapshot engine so the default FDE pays nothing for it.
+#[derive(Debug, Clone, Default)]
+pub struct Scratch<const N: usize> {
+    pub model: ResidualModel<Stat, N>,
+    pub ws: Workspace<Stat, N>,
+    pub group: GroupFit<Stat, N>,
+}
+
+/// The search's fixed arguments, for the second pass.
+struct SearchArgs<'a> {
+    covering: &'a Covering,
+    t_max: usize,
+    budget: usize,
+}
+
+fn s_args(covering: &Covering, t_max: usize, budget: u16) -> SearchArgs<'_> {
+    SearchArgs {
+        covering,
+        t_max,
+        budget: usize::from(budget),
+    }
+}
+
+/// The least-RSS set of more than `best.count` satellites that does not
+/// contain `best.set` and is consistent at level pwe (its own dof), if any.
+#[inline(never)]
+fn larger_alternative<const N: usize>(
+    cfg: &Config,
+    args: &SearchArgs<'_>,
+    best: SubsetFit<Stat>,
+    dof: usize,
+    scratch: &mut Scratch<N>,
+) -> Result<Option<SubsetFit<Stat>>, RaimError> {
+    let found = search_where(
+        &scratch.model,
+        args.covering,
+        args.t_max,
+        args.budget,
+        Stat::of(cfg.min_s_ii),
+        &mut scratch.ws,
+        &mut scratch.group,
+        |_, _| {},
+        |set| set.count_ones() as usize > best.count && set & best.set != best.set,
+    );
+    let Ok(found) = found else {
+        return Ok(None);
+    };
+    for level in found.levels.iter().skip(best.count) {
+        let Some(alt) = level.best else { continue };
+        if alt.count + 1 > dof {
+            continue;
+        }
+        let t2_we = chi2_threshold(cfg.pwe, dof - alt.count)?;
+        if alt.rss.to_f64() < t2_we {
+            return Ok(Some(alt));
+        }
+    }
+    Ok(None)
+}
+
+/// [`run`] with its scratch on this function's own stack frame (out of
+/// line, so the default FDE's frames do not reserve it).
+#[inline(never)]
+pub fn run_with_own_scratch<const N: usize>(
+    cfg: &Config,
+    t_max: u8,
+    group_budget: u16,
+    thresholds: &mut Thresholds<N>,
+    epoch: &Epoch<'_>,
+    out: &mut FdeOutcome<N>,
+) -> Result<Option<MultifaultReport>, RaimError> {
+    let mut scratch = Scratch::default();
+    run(
+        cfg,
+        t_max,
+        group_budget,
+        thresholds,
+        epoch,
+        out,
+        &mut scratch,
+    )
+}
+
+/// FDE by reconstruction (SPEC §8.4) on `out`, whose `solution` holds the
+/// all-in-view solution: detect; if the test fails, search the groups for
+/// the fewest satellites (1..t_max) that explain the residuals, check the
+/// runner-up, exclude, re-solve and re-test; if the subset still fails, go
+/// on with more satellites. Fills the same outcome as [`fde::run`] (so the
+/// snapshot result is built the same way) and returns the report.
+#[inline(never)]
+pub fn run<const N: usize>(
+    cfg: &Config,
+    t_max: u8,
+    group_budget: u16,
+    thresholds: &mut Thresholds<N>,
+    epoch: &Epoch<'_>,
+    out: &mut FdeOutcome<N>,
+    scratch: &mut Scratch<N>,
+) -> Result<Option<MultifaultReport>, RaimError> {
+    let before = fde::test(cfg, thresholds, &out.solution)?;
+    out.test = before;
+    out.exclusions.clear();
+    out.identified = None;
+    out.cause = None;
+    if !before.alarm() {
+        return Ok(None);
+    }
+    let dof = out.solution.parity.dof();
+    if dof < 2 {
+        out.cause = Some(AlarmCause::NoRedundancy);
+        return Ok(None);
+    }
+    let n = out.solution.rows();
+    let m = out.solution.parity.states();
+    // The most satellites this epoch may lose: t_max, the configured
+    // exclusion cap, and n - m - 1 (a subset statistic needs a dof).
+    let t_eff = usize::from(t_max)
+        .min(usize::from(cfg.max_exclusions))
+        .min(fde::MAX_EXCLUSIONS)
+        .min(dof - 1)
+        .min(MAX_FAULTS);
+    if t_eff == 0 {
+        out.cause = Some(AlarmCause::MaxExclusions);
+        return Ok(None);
+    }
+    let to_raim = |e: MultifaultError| match e {
+        MultifaultError::CapacityExceeded { have, capacity } => {
+            RaimError::CapacityExceeded { have, capacity }
+        }
+        _ => RaimError::OutOfRange {
+            field: "t_max",
+            value: f64::from(t_max),
+            min: 1.0,
+            max: MAX_FAULTS as f64,
+        },
+    };
+    let covering = Covering::new(n, m, t_eff).map_err(to_raim)?;
+    scratch
+        .model
+        .fill_from_parity(&out.solution.parity)
+        .map_err(to_raim)?;
+    let found = search(
+        &scratch.model,
+        &covering,
+        t_eff,
+        usize::from(group_budget),
+        Stat::of(cfg.min_s_ii),
+        &mut scratch.ws,
+        &mut scratch.group,
+        |_, _| {},
+    );
+    let s = match found {
+        Ok(s) => s,
+        Err(MultifaultError::NoIdentifiableGroup { .. }) => {
+            out.cause = Some(AlarmCause::Unidentifiable);
+            return Ok(None);
+        }
+        Err(e) => return Err(to_raim(e)),
+    };
+    let mut report = MultifaultReport {
+        t_searched: t_eff as u8,
+        best: None,
+        runner_up: None,
+        groups_total: s.groups_total as u32,
+        groups_processed: s.groups_processed as u32,
+        budget_limited: s.budget_limited,
+        swapped: s.swapped,
+        repaired: s.repaired,
+        q_min: s.q_min.map(|(q, _)| q.to_f64()),
+    };
+    let id_of = |sol: &Solution<N>, set: SatSet| {
+        let (rows, _) = covering::members(set);
+        rows.first()
+            .and_then(|r| sol.ids.get(usize::from(*r)).copied())
+    };
+    let mut from = 1;
+    let mut scratch_solution = Solution::<N>::empty();
+    loop {
+        let verdict = decide(
+            &s,
+            from,
+            dof,
+            cfg.pfa,
+            cfg.pwe,
+            cfg.require_unique_exclusion,
+        )?;
+        let sol = &out.solution;
+        match verdict {
+            Verdict::NoConsistentSet => {
+                if s.budget_limited {
+                    out.cause = Some(AlarmCause::SearchIncomplete {
+                        groups: s.groups_total as u32,
+                        budget: u32::from(group_budget),
+                    });
+                } else if out.cause.is_none() {
+                    out.cause = Some(AlarmCause::NoConsistentSet);
+                }
+                if let Some(best) = s.levels.iter().take(t_eff).rev().find_map(|l| l.best) {
+                    report.best = Some(fault_set(&best, sol, dof));
+                }
+                break;
+            }
+            Verdict::Ambiguous { best, runner_up } => {
+                report.best = Some(fault_set(&best, sol, dof));
+                report.runner_up = Some(fault_set(&runner_up, sol, dof));
+                let first_only = |a: SatSet, b: SatSet| if a & !b != 0 { a & !b } else { a };
+                let (Some(b), Some(r)) = (
+                    id_of(sol, first_only(best.set, runner_up.set)),
+                    id_of(sol, first_only(runner_up.set, best.set)),
+                ) else {
+                    out.cause = Some(AlarmCause::Unidentifiable);
+                    break;
+                };
+                out.identified = Some(b);
+                out.cause = Some(AlarmCause::Ambiguous {
+                    best: b,
+                    runner_up: r,
+                });
+                break;
+            }
+            Verdict::Incomplete(best) => {
+                report.best = Some(fault_set(&best, sol, dof));
+                out.identified = id_of(sol, best.set);
+                out.cause = Some(AlarmCause::SearchIncomplete {
+                    groups: s.groups_total as u32,
+                    budget: u32::from(group_budget),
+                });
+                break;
+            }
+            Verdict::Exclude(best) => {
+                report.best = Some(fault_set(&best, sol, dof));
+                if cfg.require_unique_exclusion && best.count < t_eff {
+                    // Larger sets always fit at least as well; one that
+                    // does not contain `best` and is consistent at level
+                    // pwe is another explanation of the data.
+                    if let Some(alt) = larger_alternative(
+                        cfg,
+                        &s_args(&covering, t_eff, group_budget),
+                        best,
+                        dof,
+                        scratch,
+                    )? {
+                        report.runner_up = Some(fault_set(&alt, sol, dof));
+                        let only = |a: SatSet, b: SatSet| if a & !b != 0 { a & !b } else { a };
+                        out.identified = id_of(sol, best.set);
+                        out.cause = match (
+                            id_of(sol, only(best.set, alt.set)),
+                            id_of(sol, only(alt.set, best.set)),
+                        ) {
+                            (Some(b), Some(r)) => Some(AlarmCause::Ambiguous {
+                                best: b,
+                                runner_up: r,
+                            }),
+                            _ => Some(AlarmCause::Unidentifiable),
+                        };
+                        break;
+                    }
+                }
+                if let Some(level) = s.levels.get(best.count - 1) {
+                    report.runner_up = level.runner_up.map(|r| fault_set(&r, sol, dof));
+                }
+                out.identified = id_of(sol, best.set);
+                let mut mask = [false; N];
+                for v in mask.iter_mut().take(epoch.len()) {
+                    *v = true;
+                }
+                let (rows, k) = covering::members(best.set);
+                for row in rows.iter().take(k) {
+                    if let Some(src) = sol.source.get(usize::from(*row)) {
+                        if let Some(v) = mask.get_mut(*src) {
+                            *v = false;
+                        }
+                    }
+                }
+                match solve_into::<N>(cfg, epoch, &mask, &mut scratch_solution) {
+                    Ok(()) => {}
+                    Err(RaimError::RankDeficient { .. })
+                    | Err(RaimError::TooFewSatellites { .. }) => {
+                        let excluded = id_of(sol, best.set).unwrap_or_default();
+                        out.cause = Some(AlarmCause::SubsetGeometry { excluded });
+                        from = best.count + 1;
+                        continue;
+                    }
+                    Err(e) => return Err(e),
+                }
+                let after = fde::test(cfg, thresholds, &scratch_solution)?;
+                if after.alarm() {
+                    // The subset is not consistent after all (non-linear
+                    // model, or a lost clock column): try more satellites.
+                    from = best.count + 1;
+                    continue;
+                }
+                for (row, b) in rows.iter().take(k).zip(best.bias.iter()) {
+                    let row = usize::from(*row);
+                    let (Some(id), Some(index)) = (sol.ids.get(row), sol.source.get(row)) else {
+                        continue;
+                    };
+                    let sigma = sol.sigma_m.get(row).copied().unwrap_or(1.0);
+                    // Capacity MAX_EXCLUSIONS >= t_eff >= k.
+                    let _ = out.exclusions.push(Exclusion {
+                        id: *id,
+                        index: *index,
+                        before,
+                        after,
+                        score: best.rss.to_f64(),
+                        bias_m: b.to_f64() * sigma,
+                    });
+                }
+                core::mem::swap(&mut out.solution, &mut scratch_solution);
+                out.test = after;
+                out.cause = None;
+                break;
+            }
+        }
+    }
+    Ok(Some(report))
+}
