@@ -39,6 +39,7 @@ pub mod frames;
 pub mod linalg;
 pub mod measurement;
 pub mod monitor;
+pub mod pf;
 pub mod real;
 pub mod result;
 pub mod sequential;
