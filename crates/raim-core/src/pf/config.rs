@@ -74,6 +74,9 @@ pub struct PfConfig {
     /// Exclude the isolated satellite and restart the filters from its
     /// auxiliary filter (seed 004 step 7).
     pub exclude: bool,
+    /// An excluded satellite is readmitted after this many seconds (its
+    /// auxiliary filter restarts from the main one); 0 excludes for good.
+    pub readmit_s: f64,
     /// A common-mode residual of one constellation larger than this (m) is
     /// taken as a receiver clock jump and moves that clock's reference
     /// (docs/PF.md, "clock jumps"); 0 disables.
@@ -103,6 +106,7 @@ impl Default for PfConfig {
             window: 10,
             threshold: 20.0,
             exclude: true,
+            readmit_s: 0.0,
             clock_jump_m: 1000.0,
             collapse_sigma: 100.0,
         }
@@ -158,6 +162,7 @@ impl PfConfig {
             });
         }
         non_negative("clock_jump_m", self.clock_jump_m)?;
+        non_negative("readmit_s", self.readmit_s)?;
         positive("collapse_sigma", self.collapse_sigma)?;
         match self.likelihood {
             Likelihood::Gaussian => {}

@@ -88,7 +88,10 @@ pub struct PfRaim<T: Real, E: Estimator<T>, const S: usize> {
     windows: [LlrWindow; S],
     reference: Reference,
     time_s: Option<f64>,
-    excluded: heapless::Vec<SatId, S>,
+    /// Epochs processed since the first fix (the second one sets the drift).
+    epochs: u32,
+    /// Excluded satellites with the time of their exclusion.
+    excluded: heapless::Vec<(SatId, f64), S>,
     rng: PfRng,
     _t: PhantomData<T>,
 }
@@ -103,6 +106,7 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
             windows: [LlrWindow::default(); S],
             reference: Reference::default(),
             time_s: None,
+            epochs: 0,
             excluded: heapless::Vec::new(),
             rng: rng::seeded(seed),
             _t: PhantomData,
@@ -112,8 +116,8 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
     /// Bytes of state (filters, windows, reference).
     pub const BYTES: usize = core::mem::size_of::<Self>();
 
-    /// The satellites excluded so far.
-    pub fn excluded(&self) -> &[SatId] {
+    /// The satellites excluded now, with the time of their exclusion.
+    pub fn excluded(&self) -> &[(SatId, f64)] {
         &self.excluded
     }
 
@@ -196,10 +200,16 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         obs: &[RangeObservation],
     ) -> Result<PfOutput<S>, PfError> {
         self.validate(cfg, time_s, obs)?;
+        if cfg.readmit_s > 0.0 {
+            self.excluded.retain(|(_, t)| time_s - *t < cfg.readmit_s);
+        }
         // The usable satellites: not excluded.
         let mut used: heapless::Vec<RangeObservation, S> = heapless::Vec::new();
         let mut systems = [false; MAX_SYSTEMS];
-        for o in obs.iter().filter(|o| !self.excluded.contains(&o.id)) {
+        for o in obs
+            .iter()
+            .filter(|o| !self.excluded.iter().any(|(e, _)| *e == o.id))
+        {
             if used.push(*o).is_err() {
                 return Err(PfError::Capacity {
                     field: "observations",
@@ -220,19 +230,20 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         }
         let sigma = |o: &RangeObservation| o.sigma_m.unwrap_or(cfg.sigma_m);
 
+        let mut inputs: heapless::Vec<FixInput, S> = heapless::Vec::new();
+        for o in used.iter() {
+            let _ = inputs.push(FixInput {
+                sat_m: o.position_m,
+                pseudorange_m: o.pseudorange_m,
+                sigma_m: sigma(o),
+                sys: o.id.system.index(),
+            });
+        }
         // Initialise on the first epoch, else predict.
         let dt_s = match self.time_s {
             None => {
-                let mut inputs: heapless::Vec<FixInput, S> = heapless::Vec::new();
-                for o in used.iter() {
-                    let _ = inputs.push(FixInput {
-                        sat_m: o.position_m,
-                        pseudorange_m: o.pseudorange_m,
-                        sigma_m: sigma(o),
-                        sys: o.id.system.index(),
-                    });
-                }
                 self.reference = fix(&inputs, [0.0; 3])?;
+                self.epochs = 0;
                 self.main.init(cfg, &mut self.rng);
                 self.aux_id = [None; S];
                 for w in self.windows.iter_mut() {
@@ -240,9 +251,30 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
                 }
                 0.0
             }
-            Some(prev) => time_s - prev,
+            Some(prev) => {
+                let dt_s = time_s - prev;
+                if self.epochs == 1 {
+                    // Two-epoch clock initialisation: the drift from two
+                    // snapshot clocks (a phone's oscillator can be off by
+                    // hundreds of m/s, far outside any particle prior).
+                    let now = fix(&inputs, self.reference.position_m)?;
+                    let sys = used.first().map_or(0, |o| o.id.system.index());
+                    if let (Some(a), Some(b)) =
+                        (now.clock_m.get(sys), self.reference.clock_m.get(sys))
+                    {
+                        self.reference.drift_m_s = (a - b) / dt_s;
+                    }
+                    self.reference.clock_m = now.clock_m;
+                } else {
+                    for c in self.reference.clock_m.iter_mut() {
+                        *c += self.reference.drift_m_s * dt_s;
+                    }
+                }
+                dt_s
+            }
         };
         self.time_s = Some(time_s);
+        self.epochs = self.epochs.saturating_add(1);
 
         // Auxiliary filters follow the satellites in view.
         for (id, w) in self.aux_id.iter_mut().zip(self.windows.iter_mut()) {
@@ -382,7 +414,7 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
             if out.alarm {
                 out.isolated = Some(b.id);
                 if cfg.exclude {
-                    self.exclude(b.id);
+                    self.exclude(b.id, time_s);
                     out.excluded = Some(b.id);
                 }
             }
@@ -391,11 +423,10 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         // Recentre on the main estimate.
         let m = self.main.mean();
         let mut delta = [T::zero(); DIM];
-        for (i, (d, &v)) in delta.iter_mut().zip(m.iter()).enumerate() {
-            if i < DRIFT {
-                *d = -v;
-            }
+        for (d, &v) in delta.iter_mut().zip(m.iter()) {
+            *d = -v;
         }
+        self.reference.drift_m_s += m.get(DRIFT).map_or(0.0, |v| v.to_f64());
         for (p, &v) in self.reference.position_m.iter_mut().zip(m.iter()) {
             *p += v.to_f64();
         }
@@ -410,14 +441,14 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         }
         out.position_m = Some(self.reference.position_m);
         out.clock_m = self.reference.clock_m;
-        out.drift_m_s = m.get(DRIFT).map_or(f64::NAN, |v| v.to_f64());
+        out.drift_m_s = self.reference.drift_m_s;
         Ok(out)
     }
 
     /// Excludes `id`: its auxiliary filter becomes the main filter, the
     /// others restart from it, all windows are cleared.
-    fn exclude(&mut self, id: SatId) {
-        let _ = self.excluded.push(id);
+    fn exclude(&mut self, id: SatId, time_s: f64) {
+        let _ = self.excluded.push((id, time_s));
         if let Some(slot) = self.aux_id.iter().position(|s| *s == Some(id)) {
             if let Some(a) = self.aux.get(slot) {
                 self.main.copy_from(a);

@@ -36,6 +36,9 @@ pub struct Reference {
     pub position_m: [f64; 3],
     /// Clock bias per constellation (System::index), m.
     pub clock_m: [f64; MAX_SYSTEMS],
+    /// Receiver clock drift (one oscillator), m/s; the clock references
+    /// advance by it each epoch so that the state holds only the offset.
+    pub drift_m_s: f64,
 }
 
 /// One satellite's measurement, reduced against the reference.

@@ -7,6 +7,7 @@
 
 mod engine;
 mod nmea;
+pub mod pf;
 mod plot;
 pub mod record;
 pub mod summary;
@@ -130,6 +131,9 @@ pub struct ReplayArgs {
     /// Where the monitor runs.
     #[arg(long, value_enum, default_value_t = Target::Host)]
     pub target: Target,
+    /// Particle-filter RAIM (seed 004; docs/PF.md): --pf {ekf,pf,gapf}.
+    #[command(flatten)]
+    pub pf: pf::PfArgs,
 }
 
 /// Everything a replay produces.
@@ -385,6 +389,9 @@ pub fn run(args: &ReplayArgs) -> Result<()> {
 }
 
 fn write_outputs(args: &ReplayArgs) -> Result<()> {
+    if args.pf.pf.is_some() {
+        return pf::run(args);
+    }
     let out = replay(args)?;
     let stdout = std::io::stdout();
     let mut w = stdout.lock();
