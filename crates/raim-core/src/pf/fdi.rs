@@ -88,8 +88,6 @@ pub struct PfRaim<T: Real, E: Estimator<T>, const S: usize> {
     windows: [LlrWindow; S],
     reference: Reference,
     time_s: Option<f64>,
-    /// Epochs processed since the first fix (the second one sets the drift).
-    epochs: u32,
     /// Excluded satellites with the time of their exclusion.
     excluded: heapless::Vec<(SatId, f64), S>,
     rng: PfRng,
@@ -106,7 +104,6 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
             windows: [LlrWindow::default(); S],
             reference: Reference::default(),
             time_s: None,
-            epochs: 0,
             excluded: heapless::Vec::new(),
             rng: rng::seeded(seed),
             _t: PhantomData,
@@ -243,7 +240,6 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         let dt_s = match self.time_s {
             None => {
                 self.reference = fix(&inputs, [0.0; 3])?;
-                self.epochs = 0;
                 self.main.init(cfg, &mut self.rng);
                 self.aux_id = [None; S];
                 for w in self.windows.iter_mut() {
@@ -253,28 +249,15 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
             }
             Some(prev) => {
                 let dt_s = time_s - prev;
-                if self.epochs == 1 {
-                    // Two-epoch clock initialisation: the drift from two
-                    // snapshot clocks (a phone's oscillator can be off by
-                    // hundreds of m/s, far outside any particle prior).
-                    let now = fix(&inputs, self.reference.position_m)?;
-                    let sys = used.first().map_or(0, |o| o.id.system.index());
-                    if let (Some(a), Some(b)) =
-                        (now.clock_m.get(sys), self.reference.clock_m.get(sys))
-                    {
-                        self.reference.drift_m_s = (a - b) / dt_s;
-                    }
-                    self.reference.clock_m = now.clock_m;
-                } else {
-                    for c in self.reference.clock_m.iter_mut() {
-                        *c += self.reference.drift_m_s * dt_s;
-                    }
+                // The clock references advance with the reference drift
+                // (the state keeps only the offsets, small enough for f32).
+                for c in self.reference.clock_m.iter_mut() {
+                    *c += self.reference.drift_m_s * dt_s;
                 }
                 dt_s
             }
         };
         self.time_s = Some(time_s);
-        self.epochs = self.epochs.saturating_add(1);
 
         // Auxiliary filters follow the satellites in view.
         for (id, w) in self.aux_id.iter_mut().zip(self.windows.iter_mut()) {

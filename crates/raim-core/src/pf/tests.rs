@@ -347,6 +347,7 @@ fn ekf_matches_linear_closed_form() {
     let r = model::Reference {
         position_m: RECEIVER_M,
         clock_m: [0.0; 5],
+        drift_m_s: 0.0,
     };
     let truth = [1.0, -2.0, 0.5, 3.0, 0.0, 0.0, 0.0, 0.0, 0.0];
     let mut ekf = Ekf::<f64>::blank();
@@ -410,4 +411,48 @@ fn ekf_matches_linear_closed_form() {
             assert!((ekf.covariance()[(i, j)] - p[(i, j)]).abs() < TOL_M);
         }
     }
+}
+
+/// The RAM of the monitor against the closed form (S + 1) filters of
+/// P (DIM + 1) scalars + DIM, plus S LLR windows of MAX_WINDOW f64; and
+/// the table docs/PF.md quotes (run with --nocapture to print it).
+#[test]
+fn memory_matches_formula() {
+    fn formula(p: usize, s: usize, t: usize) -> usize {
+        let filter = p * (model::DIM + 1) * t + model::DIM * t;
+        let window = config::MAX_WINDOW * 8 + 2 * 8;
+        (s + 1) * filter + s * window
+    }
+    macro_rules! row {
+        ($t:ty, $p:literal, $s:literal) => {{
+            let b = PfRaim::<$t, GaPf<$t, $p>, $s>::BYTES;
+            let f = formula($p, $s, core::mem::size_of::<$t>());
+            // Slack: the reference, times, exclusion list and RNG state.
+            assert!(b >= f && b <= f + 160 + $s * 24, "{b} vs {f}");
+            std::println!(
+                "| {} | {} | {} | {:.1} | {} |",
+                <$t as Real>::NAME,
+                $p,
+                $s,
+                b as f64 / 1024.0,
+                if b <= 192 * 1024 - 32 * 1024 {
+                    "yes"
+                } else {
+                    "no"
+                }
+            );
+        }};
+    }
+    row!(f32, 100, 6);
+    row!(f32, 100, 12);
+    row!(f32, 300, 6);
+    row!(f32, 300, 8);
+    row!(f32, 300, 10);
+    row!(f32, 300, 12);
+    row!(f32, 500, 8);
+    row!(f64, 100, 12);
+    row!(f64, 300, 6);
+    row!(f64, 300, 12);
+    let ekf = PfRaim::<f32, Ekf<f32>, 12>::BYTES;
+    std::println!("| f32 EKF | - | 12 | {:.1} | yes |", ekf as f64 / 1024.0);
 }

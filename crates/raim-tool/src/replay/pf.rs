@@ -110,8 +110,8 @@ impl PfArgs {
             },
             likelihood: self.likelihood()?,
             sigma_m: self.pf_sigma_m,
-            init_position_m: 3.0 * self.pf_sigma_m,
-            init_clock_m: 3.0 * self.pf_sigma_m,
+            init_position_m: self.pf_sigma_m,
+            init_clock_m: self.pf_sigma_m,
             init_drift_m_s: 2.0,
             mutation_m: 0.5 * self.pf_sigma_m,
             window: self.pf_window,
@@ -362,21 +362,26 @@ pub fn summarise(
 }
 
 /// The (1 - pfa) empirical quantile of the per-epoch D_k over `runs`
-/// fault-free runs without exclusion (an upper order statistic).
+/// fault-free runs without exclusion (an upper order statistic). The
+/// plan's satellite faults are removed; its noise and clock faults (the
+/// environment, not a fault to detect) are kept.
 pub fn calibrate(
     args: &PfArgs,
     cfg: &PfConfig,
     pfa: f64,
     epochs: &[PreparedEpoch],
+    plan: &FaultPlan,
     reference: Option<[f64; 3]>,
 ) -> Result<(f64, usize)> {
+    let mut clean = plan.clone();
+    clean.faults.retain(|f| !f.is_satellite_fault());
     if !(pfa > 0.0 && pfa < 1.0) {
         bail!("--pf-calibrate {pfa}: expected a probability in (0, 1)");
     }
     let kind = args.pf.context("--pf-calibrate needs --pf")?;
     let free = PfConfig {
         exclude: false,
-        threshold: f64::INFINITY,
+        threshold: f64::MAX,
         ..*cfg
     };
     let mut d = Vec::new();
@@ -388,7 +393,7 @@ pub fn calibrate(
             &free,
             args.pf_seed + 1000 + r,
             epochs,
-            &FaultPlan::default(),
+            &clean,
             reference,
         )?;
         d.extend(recs.iter().filter_map(|r| r.decision));
@@ -414,7 +419,7 @@ pub fn run(args: &ReplayArgs) -> Result<()> {
     let stdout = std::io::stdout();
     let mut w = stdout.lock();
     if let Some(pfa) = pf.pf_calibrate {
-        let (t, n) = calibrate(pf, &cfg, pfa, &epochs, reference)?;
+        let (t, n) = calibrate(pf, &cfg, pfa, &epochs, &plan, reference)?;
         writeln!(
             w,
             "# calibrated threshold {t:.3}: the {:.4} quantile of D_k over {n} fault-free epochs",
