@@ -75,7 +75,9 @@ fn geop_step_detected_isolated_and_deterministic() {
             .collect()
     };
     assert_eq!(strip(&first), strip(&second));
-    assert!(std::fs::metadata(&plot).map(|m| m.len() > 10_000).unwrap_or(false));
+    assert!(std::fs::metadata(&plot)
+        .map(|m| m.len() > 10_000)
+        .unwrap_or(false));
 }
 
 #[test]

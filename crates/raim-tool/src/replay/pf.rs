@@ -77,6 +77,9 @@ pub struct PfArgs {
     /// Readmit an excluded satellite after this many seconds (0: never).
     #[arg(long, default_value_t = 0.0)]
     pub pf_readmit_s: f64,
+    /// f32 particle state (the device precision) instead of f64.
+    #[arg(long)]
+    pub pf_f32: bool,
     /// Do not exclude the isolated satellite (detection only).
     #[arg(long)]
     pub pf_no_exclude: bool,
@@ -87,6 +90,14 @@ pub struct PfArgs {
 }
 
 impl PfArgs {
+    pub fn choice(&self, kind: PfKind) -> FilterChoice {
+        FilterChoice {
+            kind,
+            particles: self.particles,
+            f32_state: self.pf_f32,
+        }
+    }
+
     pub fn likelihood(&self) -> Result<Likelihood> {
         let s = self.pf_likelihood.as_str();
         let parts: Vec<&str> = s.split(':').collect();
@@ -264,18 +275,29 @@ fn fill(rec: &mut PfRecord, o: &PfOutput<PF_CAPACITY>, reference: Option<[f64; 3
         .collect();
 }
 
-/// One run of `kind` with `particles` particles (f64 state on the host;
-/// `f32` selects the device precision).
+/// Which filter runs: method, particle count, state precision.
+#[derive(Debug, Clone, Copy)]
+pub struct FilterChoice {
+    pub kind: PfKind,
+    pub particles: usize,
+    /// f32 particle state (the device precision) instead of f64.
+    pub f32_state: bool,
+}
+
+/// One run of the chosen filter.
 pub fn run_once(
-    kind: PfKind,
-    particles: usize,
-    f32_state: bool,
+    choice: FilterChoice,
     cfg: &PfConfig,
     seed: u64,
     epochs: &[PreparedEpoch],
     plan: &FaultPlan,
     reference: Option<[f64; 3]>,
 ) -> Result<Vec<PfRecord>> {
+    let FilterChoice {
+        kind,
+        particles,
+        f32_state,
+    } = choice;
     macro_rules! pick {
         ($t:ty) => {
             match (kind, particles) {
@@ -387,9 +409,7 @@ pub fn calibrate(
     let mut d = Vec::new();
     for r in 0..args.pf_calibration_runs.max(1) {
         let recs = run_once(
-            kind,
-            args.particles,
-            false,
+            args.choice(kind),
             &free,
             args.pf_seed + 1000 + r,
             epochs,
@@ -428,16 +448,7 @@ pub fn run(args: &ReplayArgs) -> Result<()> {
         cfg.threshold = t;
     }
     let t0 = std::time::Instant::now();
-    let recs = run_once(
-        kind,
-        pf.particles,
-        false,
-        &cfg,
-        pf.pf_seed,
-        &epochs,
-        &plan,
-        reference,
-    )?;
+    let recs = run_once(pf.choice(kind), &cfg, pf.pf_seed, &epochs, &plan, reference)?;
     let ms = t0.elapsed().as_secs_f64() * 1e3 / recs.len().max(1) as f64;
     if !args.quiet {
         for r in &recs {
