@@ -456,3 +456,44 @@ fn memory_matches_formula() {
     let ekf = PfRaim::<f32, Ekf<f32>, 12>::BYTES;
     std::println!("| f32 EKF | - | 12 | {:.1} | yes |", ekf as f64 / 1024.0);
 }
+
+/// Exclusion: after the alarm the faulty satellite is out (7 used) and the
+/// persisting fault raises no further alarm; with `readmit_s` it comes back
+/// after that time (8 used) and, the fault persisting, is caught again.
+#[test]
+fn exclusion_and_readmission() {
+    let c = PfConfig {
+        readmit_s: 10.0,
+        ..cfg()
+    };
+    let mut m = std::boxed::Box::new(PfRaim::<f64, Ekf<f64>, 12>::new(1));
+    let mut noise = rng::seeded(2);
+    let g4 = SatId::new(System::Gps, 4);
+    let mut excluded_at = None;
+    let mut readmitted = false;
+    let mut second_alarm = false;
+    for k in 0..60 {
+        let f = (k >= 20).then_some((3, 40.0));
+        let out = m
+            .process(&c, k as f64, &epoch(8, k, &mut noise, f))
+            .unwrap();
+        if let Some(t) = excluded_at {
+            if k < t + 10 {
+                assert_eq!(out.used, 7, "epoch {k}");
+                assert!(!out.alarm, "epoch {k}");
+            } else if out.used == 8 {
+                readmitted = true;
+            }
+            if readmitted && out.alarm && out.isolated == Some(g4) {
+                second_alarm = true;
+            }
+        } else if out.excluded == Some(g4) {
+            assert!(k >= 20);
+            assert_eq!(m.excluded(), &[(g4, k as f64)]);
+            excluded_at = Some(k);
+        } else {
+            assert!(!out.alarm, "epoch {k}");
+        }
+    }
+    assert!(excluded_at.is_some() && readmitted && second_alarm);
+}
