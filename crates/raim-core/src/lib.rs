@@ -7,7 +7,9 @@
 //!
 //! Layout: one folder per method, each with its own orchestration and
 //! tests: `snapshot` (detection, L-RAIM identification, FDE, protection
-//! levels) and `sequential` (MCUSUM). Shared layers beside them: `linalg`
+//! levels) and `sequential` (MCUSUM), and `pf` (particle-filter RAIM of
+//! seed 004: GA-PF, SIR PF and EKF in a main + auxiliary LLR structure,
+//! docs/PF.md). Shared layers beside them: `linalg`
 //! (QR, parity space), `stats` (distributions), `solve` (measurement model
 //! and Gauss-Newton), `measurement`, `frames`, `sigma`, `config`, `error`,
 //! `result`, and `real` (the precision policy: which quantities are `f64`
@@ -42,6 +44,7 @@ pub mod linalg;
 pub mod measurement;
 pub mod monitor;
 pub mod multifault;
+pub mod pf;
 pub mod real;
 pub mod result;
 pub mod sequential;

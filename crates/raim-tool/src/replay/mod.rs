@@ -8,6 +8,7 @@
 mod checks;
 mod engine;
 mod input;
+pub mod pf;
 mod plot;
 pub mod record;
 pub mod summary;
@@ -149,6 +150,9 @@ pub struct ReplayArgs {
     /// still in the output and counted on stderr).
     #[arg(long)]
     pub keep_going: bool,
+    /// Particle-filter RAIM (seed 004; docs/PF.md): --pf {ekf,pf,gapf}.
+    #[command(flatten)]
+    pub pf: pf::PfArgs,
 }
 
 /// Everything a replay produces.
@@ -425,6 +429,11 @@ pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
 /// `raim replay`: the output, and the count of epochs the monitor refused
 /// (a closed pipe is handled by the caller, crate::outcome).
 pub fn run(args: &ReplayArgs) -> Result<Tally> {
+    if args.pf.pf.is_some() {
+        // Particle-filter RAIM (docs/PF.md): its own per-epoch output.
+        pf::run(args)?;
+        return Ok(Tally::default());
+    }
     let out = replay(args)?;
     write_outputs(args, &out)?;
     let mut tally = Tally::default();

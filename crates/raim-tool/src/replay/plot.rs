@@ -31,7 +31,7 @@ const FONT_CANDIDATES: [&str; 3] = [
 
 /// Text is drawn by plotters' ab_glyph backend from a TrueType file read at
 /// run time (no fontconfig): `--font`, or DejaVu Sans where installed.
-fn register_font(path: Option<&Path>) -> Result<()> {
+pub(super) fn register_font(path: Option<&Path>) -> Result<()> {
     let path = match path {
         Some(p) => p.to_path_buf(),
         None => FONT_CANDIDATES

@@ -1,0 +1,197 @@
+//! Configuration of the particle-filter RAIM: process model, measurement
+//! likelihood, genetic operators and the LLR test (SPEC §10, seed 004).
+
+use super::error::PfError;
+
+/// The measurement noise law used to weight particles (seed 004 eq. 1's
+/// p(z|x)), per satellite with scale `sigma_m`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Likelihood {
+    /// N(0, sigma^2).
+    Gaussian,
+    /// Student-t with `nu` degrees of freedom and scale sigma (nu > 2 so
+    /// the EKF baseline has a variance to use).
+    StudentT { nu: f64 },
+    /// (1 - eps) N(0, sigma^2) + eps N(0, (k sigma)^2): a Gaussian core
+    /// with an outlier component, `outlier_prob` = eps, `outlier_scale` = k.
+    Mixture {
+        outlier_prob: f64,
+        outlier_scale: f64,
+    },
+}
+
+impl Likelihood {
+    /// The variance of the law in units of sigma^2: what the EKF baseline
+    /// (Gaussian by construction) uses in place of the true law.
+    pub fn variance_factor(&self) -> f64 {
+        match *self {
+            Likelihood::Gaussian => 1.0,
+            Likelihood::StudentT { nu } => nu / (nu - 2.0),
+            Likelihood::Mixture {
+                outlier_prob,
+                outlier_scale,
+            } => (1.0 - outlier_prob) + outlier_prob * outlier_scale * outlier_scale,
+        }
+    }
+}
+
+/// Random-walk process model (seed 004 eq. 7 with F the identity on the
+/// position and the clock integrating the drift): the noise densities,
+/// scaled by sqrt(dt) each epoch.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ProcessModel {
+    /// Position random walk per axis, m / sqrt(s).
+    pub position_m_per_sqrt_s: f64,
+    /// Clock-bias random walk (each constellation), m / sqrt(s).
+    pub clock_m_per_sqrt_s: f64,
+    /// Clock-drift random walk, (m/s) / sqrt(s).
+    pub drift_m_s_per_sqrt_s: f64,
+}
+
+/// Everything the `pf` monitor needs besides the measurements.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PfConfig {
+    pub process: ProcessModel,
+    pub likelihood: Likelihood,
+    /// Ranging sigma when an observation carries none, m.
+    pub sigma_m: f64,
+    /// Initial spread of the position about the first fix, per axis, m.
+    pub init_position_m: f64,
+    /// Initial spread of each clock bias, m.
+    pub init_clock_m: f64,
+    /// Initial spread of the clock drift, m/s.
+    pub init_drift_m_s: f64,
+    /// GA-PF mutation step (seed 004 step 4b), position and clock, m.
+    pub mutation_m: f64,
+    /// Window U of the decision function (seed 004 eq. 13), epochs
+    /// (1..=[`MAX_WINDOW`]).
+    pub window: usize,
+    /// Decision threshold lambda on the windowed accumulated LLR (eq. 13).
+    pub threshold: f64,
+    /// Exclude the isolated satellite and restart the filters from its
+    /// auxiliary filter (seed 004 step 7).
+    pub exclude: bool,
+    /// An excluded satellite is readmitted after this many seconds (its
+    /// auxiliary filter restarts from the main one); 0 excludes for good.
+    pub readmit_s: f64,
+    /// A common-mode residual of one constellation larger than this (m) is
+    /// taken as a receiver clock jump and moves that clock's reference
+    /// (docs/PF.md, "clock jumps"); 0 disables.
+    pub clock_jump_m: f64,
+    /// A filter whose best particle explains the epoch worse than this
+    /// RMS normalised residual (in sigmas) is collapsed and reinitialised.
+    pub collapse_sigma: f64,
+}
+
+/// The longest decision window the monitor stores.
+pub const MAX_WINDOW: usize = 64;
+
+impl Default for PfConfig {
+    fn default() -> Self {
+        PfConfig {
+            process: ProcessModel {
+                position_m_per_sqrt_s: 1.0,
+                clock_m_per_sqrt_s: 1.0,
+                drift_m_s_per_sqrt_s: 0.1,
+            },
+            likelihood: Likelihood::Gaussian,
+            sigma_m: 5.0,
+            init_position_m: 10.0,
+            init_clock_m: 10.0,
+            init_drift_m_s: 1.0,
+            mutation_m: 1.0,
+            window: 10,
+            threshold: 20.0,
+            exclude: true,
+            readmit_s: 0.0,
+            clock_jump_m: 1000.0,
+            collapse_sigma: 100.0,
+        }
+    }
+}
+
+fn positive(field: &'static str, value: f64) -> Result<(), PfError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(PfError::InvalidConfig { field, value })
+    }
+}
+
+fn non_negative(field: &'static str, value: f64) -> Result<(), PfError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(PfError::InvalidConfig { field, value })
+    }
+}
+
+impl PfConfig {
+    /// Checks every field's domain; the first bad one is reported.
+    pub fn validate(&self) -> Result<(), PfError> {
+        non_negative(
+            "process.position_m_per_sqrt_s",
+            self.process.position_m_per_sqrt_s,
+        )?;
+        non_negative(
+            "process.clock_m_per_sqrt_s",
+            self.process.clock_m_per_sqrt_s,
+        )?;
+        non_negative(
+            "process.drift_m_s_per_sqrt_s",
+            self.process.drift_m_s_per_sqrt_s,
+        )?;
+        positive("sigma_m", self.sigma_m)?;
+        positive("init_position_m", self.init_position_m)?;
+        positive("init_clock_m", self.init_clock_m)?;
+        positive("init_drift_m_s", self.init_drift_m_s)?;
+        non_negative("mutation_m", self.mutation_m)?;
+        if self.window == 0 || self.window > MAX_WINDOW {
+            return Err(PfError::InvalidConfig {
+                field: "window",
+                value: self.window as f64,
+            });
+        }
+        if !self.threshold.is_finite() {
+            return Err(PfError::InvalidConfig {
+                field: "threshold",
+                value: self.threshold,
+            });
+        }
+        non_negative("clock_jump_m", self.clock_jump_m)?;
+        non_negative("readmit_s", self.readmit_s)?;
+        positive("collapse_sigma", self.collapse_sigma)?;
+        match self.likelihood {
+            Likelihood::Gaussian => {}
+            Likelihood::StudentT { nu } => {
+                if !(nu.is_finite() && nu > 2.0) {
+                    return Err(PfError::InvalidConfig {
+                        field: "likelihood.nu",
+                        value: nu,
+                    });
+                }
+            }
+            Likelihood::Mixture {
+                outlier_prob,
+                outlier_scale,
+            } => {
+                if !(outlier_prob.is_finite() && outlier_prob > 0.0 && outlier_prob < 1.0) {
+                    return Err(PfError::InvalidConfig {
+                        field: "likelihood.outlier_prob",
+                        value: outlier_prob,
+                    });
+                }
+                if !(outlier_scale.is_finite() && outlier_scale >= 1.0) {
+                    return Err(PfError::InvalidConfig {
+                        field: "likelihood.outlier_scale",
+                        value: outlier_scale,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+}

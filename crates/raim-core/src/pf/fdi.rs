@@ -1,0 +1,495 @@
+//! The FDI structure of seed 004 Fig. 1 (SPEC §10): one main filter on all
+//! satellites and one auxiliary filter per satellite left out, the
+//! accumulated LLR test (eqs. 9-15), isolation (eq. 14), exclusion and
+//! reinitialisation. Generic over the filter ([`Estimator`]): the same
+//! structure and test run the EKF, the SIR PF and the GA-PF.
+//!
+//! Per epoch ([`PfRaim::process`]):
+//! 1. validate (finite, no duplicates, capacity, enough satellites); a
+//!    refused epoch leaves every filter untouched;
+//! 2. drop the auxiliary filter of a satellite that left view, spawn one
+//!    (a copy of the main filter) for a satellite that entered;
+//! 3. predict every filter over dt; reduce the measurements against the
+//!    shared f64 reference (a constellation-wide residual beyond
+//!    `clock_jump_m` moves that clock's reference: a receiver clock jump);
+//! 4. update the main filter and each auxiliary filter; s_k(q) =
+//!    ln p_q(y^{-q}) - ln p_A(y) - ln(sqrt(2 pi e v) sigma_q) into q's
+//!    window (eqs. 9, 11, 12, 15; docs/PF.md "the LLR");
+//! 5. a collapsed filter is reinitialised and reported: the main one from
+//!    the prior about the reference (no position this epoch, all windows
+//!    cleared), an auxiliary one from the main filter;
+//! 6. D_k = max_q max_j S_j^k(q) > threshold is an alarm (a NaN statistic
+//!    alarms); the isolated satellite is the argmax (eq. 14); with
+//!    `exclude`, its auxiliary filter (which never used it) becomes the
+//!    main filter and the other auxiliaries restart from it;
+//! 7. recentre the reference on the main estimate.
+
+use core::marker::PhantomData;
+
+use crate::measurement::{RangeObservation, SatId, MAX_SYSTEMS};
+use crate::real::Real;
+
+use super::config::PfConfig;
+use super::error::PfError;
+use super::init::{fix, FixInput};
+use super::llr::LlrWindow;
+use super::model::{Estimator, Reference, SatTerm, CLOCK0, DIM, DRIFT};
+use super::rng::{self, PfRng};
+
+/// One auxiliary filter's line in the output.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SatLlr {
+    /// The satellite the auxiliary filter leaves out.
+    pub id: SatId,
+    /// This epoch's s_k(q) (eq. 15).
+    pub llr: f64,
+    /// max_j S_j^k(q) over the window (eq. 13).
+    pub windowed: f64,
+}
+
+/// The monitor's answer for one epoch.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PfOutput<const S: usize> {
+    pub time_s: f64,
+    /// The main filter's position; `None` when it collapsed this epoch.
+    pub position_m: Option<[f64; 3]>,
+    /// Clock bias per constellation (System::index), m.
+    pub clock_m: [f64; MAX_SYSTEMS],
+    /// Clock drift, m/s.
+    pub drift_m_s: f64,
+    /// D_k (eq. 13); -inf before any LLR exists.
+    pub decision: f64,
+    pub threshold: f64,
+    pub alarm: bool,
+    /// argmax_q of the windowed LLR at an alarm (eq. 14).
+    pub isolated: Option<SatId>,
+    /// The satellite excluded this epoch (with `exclude`).
+    pub excluded: Option<SatId>,
+    /// The main filter's N_eff (0 for the EKF).
+    pub n_eff: f64,
+    /// Satellites used by the main filter.
+    pub used: usize,
+    /// The main filter collapsed and was reinitialised.
+    pub main_collapsed: bool,
+    /// Auxiliary filters that collapsed and were reinitialised.
+    pub aux_collapsed: usize,
+    /// A receiver clock jump moved a clock reference.
+    pub clock_jump: bool,
+    pub llr: heapless::Vec<SatLlr, S>,
+}
+
+/// Particle-filter RAIM with filter `E` in precision `T` and room for `S`
+/// satellites (main filter + `S` auxiliary filters, all fixed arrays).
+pub struct PfRaim<T: Real, E: Estimator<T>, const S: usize> {
+    main: E,
+    aux: [E; S],
+    aux_id: [Option<SatId>; S],
+    windows: [LlrWindow; S],
+    reference: Reference,
+    time_s: Option<f64>,
+    /// Excluded satellites with the time of their exclusion.
+    excluded: heapless::Vec<(SatId, f64), S>,
+    rng: PfRng,
+    _t: PhantomData<T>,
+}
+
+impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
+    /// A monitor whose randomness is seeded with `seed`.
+    pub fn new(seed: u64) -> Self {
+        PfRaim {
+            main: E::blank(),
+            aux: core::array::from_fn(|_| E::blank()),
+            aux_id: [None; S],
+            windows: [LlrWindow::default(); S],
+            reference: Reference::default(),
+            time_s: None,
+            excluded: heapless::Vec::new(),
+            rng: rng::seeded(seed),
+            _t: PhantomData,
+        }
+    }
+
+    /// Bytes of state (filters, windows, reference).
+    pub const BYTES: usize = core::mem::size_of::<Self>();
+
+    /// The satellites excluded now, with the time of their exclusion.
+    pub fn excluded(&self) -> &[(SatId, f64)] {
+        &self.excluded
+    }
+
+    /// The current reference (the main estimate after each epoch).
+    pub fn reference(&self) -> &Reference {
+        &self.reference
+    }
+
+    /// The main filter.
+    pub fn main(&self) -> &E {
+        &self.main
+    }
+
+    fn validate(
+        &self,
+        cfg: &PfConfig,
+        time_s: f64,
+        obs: &[RangeObservation],
+    ) -> Result<(), PfError> {
+        cfg.validate()?;
+        if !time_s.is_finite() {
+            return Err(PfError::NotFinite {
+                field: "time_s",
+                index: 0,
+                value: time_s,
+            });
+        }
+        if let Some(prev) = self.time_s {
+            if !(time_s > prev) {
+                return Err(PfError::TimeNotIncreasing {
+                    previous_s: prev,
+                    now_s: time_s,
+                });
+            }
+        }
+        if obs.len() > S {
+            return Err(PfError::Capacity {
+                field: "observations",
+                have: obs.len(),
+                max: S,
+            });
+        }
+        for (i, o) in obs.iter().enumerate() {
+            let bad = |field: &'static str, value: f64| {
+                if value.is_finite() {
+                    Ok(())
+                } else {
+                    Err(PfError::NotFinite {
+                        field,
+                        index: i,
+                        value,
+                    })
+                }
+            };
+            bad("pseudorange_m", o.pseudorange_m)?;
+            for &p in o.position_m.iter() {
+                bad("position_m", p)?;
+            }
+            if let Some(s) = o.sigma_m {
+                bad("sigma_m", s)?;
+                if !(s > 0.0) {
+                    return Err(PfError::InvalidConfig {
+                        field: "sigma_m",
+                        value: s,
+                    });
+                }
+            }
+            if obs.iter().take(i).any(|p| p.id == o.id) {
+                return Err(PfError::DuplicateSatellite { id: o.id });
+            }
+        }
+        Ok(())
+    }
+
+    /// Processes one epoch of corrected pseudoranges at `time_s`.
+    pub fn process(
+        &mut self,
+        cfg: &PfConfig,
+        time_s: f64,
+        obs: &[RangeObservation],
+    ) -> Result<PfOutput<S>, PfError> {
+        self.validate(cfg, time_s, obs)?;
+        if cfg.readmit_s > 0.0 {
+            self.excluded.retain(|(_, t)| time_s - *t < cfg.readmit_s);
+        }
+        // The usable satellites: not excluded.
+        let mut used: heapless::Vec<RangeObservation, S> = heapless::Vec::new();
+        let mut systems = [false; MAX_SYSTEMS];
+        for o in obs
+            .iter()
+            .filter(|o| !self.excluded.iter().any(|(e, _)| *e == o.id))
+        {
+            if used.push(*o).is_err() {
+                return Err(PfError::Capacity {
+                    field: "observations",
+                    have: obs.len(),
+                    max: S,
+                });
+            }
+            if let Some(f) = systems.get_mut(o.id.system.index()) {
+                *f = true;
+            }
+        }
+        let need = 3 + systems.iter().filter(|&&f| f).count() + 1;
+        if used.len() < need {
+            return Err(PfError::TooFewSatellites {
+                have: used.len(),
+                need,
+            });
+        }
+        let sigma = |o: &RangeObservation| o.sigma_m.unwrap_or(cfg.sigma_m);
+
+        let mut inputs: heapless::Vec<FixInput, S> = heapless::Vec::new();
+        for o in used.iter() {
+            let _ = inputs.push(FixInput {
+                sat_m: o.position_m,
+                pseudorange_m: o.pseudorange_m,
+                sigma_m: sigma(o),
+                sys: o.id.system.index(),
+            });
+        }
+        // Initialise on the first epoch, else predict.
+        let dt_s = match self.time_s {
+            None => {
+                self.reference = fix(&inputs, [0.0; 3])?;
+                self.main.init(cfg, &mut self.rng);
+                self.aux_id = [None; S];
+                for w in self.windows.iter_mut() {
+                    w.clear();
+                }
+                0.0
+            }
+            Some(prev) => {
+                let dt_s = time_s - prev;
+                // The clock references advance with the reference drift
+                // (the state keeps only the offsets, small enough for f32).
+                for c in self.reference.clock_m.iter_mut() {
+                    *c += self.reference.drift_m_s * dt_s;
+                }
+                dt_s
+            }
+        };
+        self.time_s = Some(time_s);
+
+        // Auxiliary filters follow the satellites in view.
+        for (id, w) in self.aux_id.iter_mut().zip(self.windows.iter_mut()) {
+            if let Some(i) = *id {
+                if !used.iter().any(|o| o.id == i) {
+                    *id = None;
+                    w.clear();
+                }
+            }
+        }
+        for o in used.iter() {
+            if self.aux_id.contains(&Some(o.id)) {
+                continue;
+            }
+            if let Some(slot) = self.aux_id.iter().position(|s| s.is_none()) {
+                if let (Some(a), Some(id), Some(w)) = (
+                    self.aux.get_mut(slot),
+                    self.aux_id.get_mut(slot),
+                    self.windows.get_mut(slot),
+                ) {
+                    a.copy_from(&self.main);
+                    *id = Some(o.id);
+                    w.clear();
+                }
+            }
+        }
+
+        // Predict.
+        if dt_s > 0.0 {
+            self.main.predict(cfg, dt_s, &mut self.rng);
+            for (a, id) in self.aux.iter_mut().zip(self.aux_id.iter()) {
+                if id.is_some() {
+                    a.predict(cfg, dt_s, &mut self.rng);
+                }
+            }
+        }
+
+        // Reduce against the reference; absorb receiver clock jumps.
+        let clock_jump = self.absorb_clock_jump(cfg, &used, dt_s);
+        let mut terms: heapless::Vec<SatTerm<T>, S> = heapless::Vec::new();
+        for o in used.iter() {
+            let _ = terms.push(SatTerm::new(
+                o.id,
+                o.pseudorange_m,
+                &o.position_m,
+                sigma(o),
+                &self.reference,
+            ));
+        }
+
+        // Update the main filter and the auxiliary ones.
+        let main_step = self.main.update(cfg, &terms, None, &mut self.rng);
+        let mut out = PfOutput {
+            time_s,
+            position_m: None,
+            clock_m: [0.0; MAX_SYSTEMS],
+            drift_m_s: 0.0,
+            decision: f64::NEG_INFINITY,
+            threshold: cfg.threshold,
+            alarm: false,
+            isolated: None,
+            excluded: None,
+            n_eff: main_step.n_eff,
+            used: used.len(),
+            main_collapsed: main_step.collapsed,
+            aux_collapsed: 0,
+            clock_jump,
+            llr: heapless::Vec::new(),
+        };
+        if main_step.collapsed {
+            // Never a position from a collapsed filter: restart everything
+            // from the prior about the last reference.
+            self.main.init(cfg, &mut self.rng);
+            for ((a, id), w) in self
+                .aux
+                .iter_mut()
+                .zip(self.aux_id.iter())
+                .zip(self.windows.iter_mut())
+            {
+                w.clear();
+                if id.is_some() {
+                    a.copy_from(&self.main);
+                }
+            }
+            out.clock_m = self.reference.clock_m;
+            return Ok(out);
+        }
+        // sqrt(2 pi e var_factor): E[-ln p(y_q)] = ln(c_norm sigma_q) for a
+        // Gaussian of the law's variance.
+        let c_norm = libm::sqrt(
+            2.0 * core::f64::consts::PI * core::f64::consts::E * cfg.likelihood.variance_factor(),
+        );
+        for ((a, id), w) in self
+            .aux
+            .iter_mut()
+            .zip(self.aux_id.iter())
+            .zip(self.windows.iter_mut())
+        {
+            let Some(id) = *id else { continue };
+            let Some(q) = terms.iter().position(|t| t.id == id) else {
+                continue;
+            };
+            let step = a.update(cfg, &terms, Some(q), &mut self.rng);
+            if step.collapsed {
+                a.copy_from(&self.main);
+                w.clear();
+                out.aux_collapsed += 1;
+                continue;
+            }
+            // eq. 15 with each filter's density of its own data, the
+            // left-out satellite's density replaced by its expected value
+            // under no fault (docs/PF.md, "the LLR").
+            let sigma_q = terms.get(q).map_or(f64::NAN, |t| t.sigma.to_f64());
+            let s = step.ln_predictive - main_step.ln_predictive - libm::log(c_norm * sigma_q);
+            w.push(s);
+            let _ = out.llr.push(SatLlr {
+                id,
+                llr: s,
+                windowed: w.windowed_max(cfg.window),
+            });
+        }
+
+        // Decision (eq. 13) and isolation (eq. 14).
+        let mut best: Option<SatLlr> = None;
+        for l in out.llr.iter() {
+            let better = match best {
+                None => true,
+                Some(b) => l.windowed.is_nan() || l.windowed > b.windowed,
+            };
+            if better && !best.is_some_and(|b| b.windowed.is_nan()) {
+                best = Some(*l);
+            }
+        }
+        if let Some(b) = best {
+            out.decision = b.windowed;
+            out.alarm = !(b.windowed <= cfg.threshold);
+            if out.alarm {
+                out.isolated = Some(b.id);
+                if cfg.exclude {
+                    self.exclude(b.id, time_s);
+                    out.excluded = Some(b.id);
+                }
+            }
+        }
+
+        // Recentre on the main estimate.
+        let m = self.main.mean();
+        let mut delta = [T::zero(); DIM];
+        for (d, &v) in delta.iter_mut().zip(m.iter()) {
+            *d = -v;
+        }
+        self.reference.drift_m_s += m.get(DRIFT).map_or(0.0, |v| v.to_f64());
+        for (p, &v) in self.reference.position_m.iter_mut().zip(m.iter()) {
+            *p += v.to_f64();
+        }
+        for (c, &v) in self.reference.clock_m.iter_mut().zip(m.iter().skip(CLOCK0)) {
+            *c += v.to_f64();
+        }
+        self.main.shift(&delta);
+        for (a, id) in self.aux.iter_mut().zip(self.aux_id.iter()) {
+            if id.is_some() {
+                a.shift(&delta);
+            }
+        }
+        out.position_m = Some(self.reference.position_m);
+        out.clock_m = self.reference.clock_m;
+        out.drift_m_s = self.reference.drift_m_s;
+        Ok(out)
+    }
+
+    /// Excludes `id`: its auxiliary filter becomes the main filter, the
+    /// others restart from it, all windows are cleared.
+    fn exclude(&mut self, id: SatId, time_s: f64) {
+        let _ = self.excluded.push((id, time_s));
+        if let Some(slot) = self.aux_id.iter().position(|s| *s == Some(id)) {
+            if let Some(a) = self.aux.get(slot) {
+                self.main.copy_from(a);
+            }
+            if let Some(s) = self.aux_id.get_mut(slot) {
+                *s = None;
+            }
+        }
+        for ((a, id), w) in self
+            .aux
+            .iter_mut()
+            .zip(self.aux_id.iter())
+            .zip(self.windows.iter_mut())
+        {
+            w.clear();
+            if id.is_some() {
+                a.copy_from(&self.main);
+            }
+        }
+    }
+
+    /// Per constellation, the median residual at the predicted main state;
+    /// beyond `clock_jump_m` it moves the clock reference (all filters
+    /// alike, so the LLRs are unaffected). Returns whether it did.
+    fn absorb_clock_jump(&mut self, cfg: &PfConfig, used: &[RangeObservation], dt_s: f64) -> bool {
+        if !(cfg.clock_jump_m > 0.0) {
+            return false;
+        }
+        let mut x = self.main.mean();
+        let drift = x.get(DRIFT).copied().unwrap_or_else(T::zero);
+        for v in x.iter_mut().take(DRIFT).skip(CLOCK0) {
+            *v += drift * T::of(dt_s);
+        }
+        let mut jumped = false;
+        for sys in 0..MAX_SYSTEMS {
+            let mut r: heapless::Vec<f64, S> = heapless::Vec::new();
+            for o in used.iter().filter(|o| o.id.system.index() == sys) {
+                let t =
+                    SatTerm::<f64>::new(o.id, o.pseudorange_m, &o.position_m, 1.0, &self.reference);
+                let xf: [f64; DIM] = x.map(|v| v.to_f64());
+                let _ = r.push(t.residual(&xf));
+            }
+            if r.is_empty() {
+                continue;
+            }
+            r.sort_unstable_by(|a, b| a.partial_cmp(b).unwrap_or(core::cmp::Ordering::Equal));
+            let n = r.len();
+            let med = match (r.get(n / 2), r.get(n.div_ceil(2) - 1)) {
+                (Some(a), Some(b)) => 0.5 * (a + b),
+                _ => 0.0,
+            };
+            if med.abs() > cfg.clock_jump_m {
+                if let Some(c) = self.reference.clock_m.get_mut(sys) {
+                    *c += med;
+                    jumped = true;
+                }
+            }
+        }
+        jumped
+    }
+}

@@ -1,0 +1,499 @@
+//! Tests of the `pf` monitor on synthetic epochs: determinism, f32 vs
+//! f64, collapse, too few satellites, a satellite leaving view, a step
+//! fault detected and isolated by all three filters, and the EKF against a
+//! closed-form linear Kalman/least-squares result.
+
+use super::*;
+use crate::measurement::{RangeObservation, SatId, System};
+use crate::real::Real;
+use nalgebra::{DMatrix, DVector};
+
+const RECEIVER_M: [f64; 3] = [3_512_000.0, 778_000.0, 5_248_000.0];
+const CLOCK_M: f64 = 12_345.0;
+const SIGMA_M: f64 = 3.0;
+
+/// `n` GPS satellites at 20 200 km altitude spread in azimuth and
+/// elevation above the receiver.
+fn satellites(n: usize) -> [[f64; 3]; 12] {
+    let r = RECEIVER_M;
+    let norm = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+    let up = [r[0] / norm, r[1] / norm, r[2] / norm];
+    let east = {
+        let e = [-up[1], up[0], 0.0];
+        let m = (e[0] * e[0] + e[1] * e[1]).sqrt();
+        [e[0] / m, e[1] / m, 0.0]
+    };
+    let north = [
+        up[1] * east[2] - up[2] * east[1],
+        up[2] * east[0] - up[0] * east[2],
+        up[0] * east[1] - up[1] * east[0],
+    ];
+    let mut out = [[0.0; 3]; 12];
+    for (k, s) in out.iter_mut().enumerate().take(n) {
+        let az = k as f64 * 2.4;
+        let el = 0.3 + 1.1 * ((k * 7) % 12) as f64 / 12.0;
+        let los = [
+            el.cos() * az.sin() * east[0] + el.cos() * az.cos() * north[0] + el.sin() * up[0],
+            el.cos() * az.sin() * east[1] + el.cos() * az.cos() * north[1] + el.sin() * up[1],
+            el.cos() * az.sin() * east[2] + el.cos() * az.cos() * north[2] + el.sin() * up[2],
+        ];
+        // Range along los to a sphere of radius 26 560 km.
+        let b = 2.0 * (los[0] * r[0] + los[1] * r[1] + los[2] * r[2]);
+        let c = norm * norm - 26_560_000.0f64.powi(2);
+        let d = (-b + (b * b - 4.0 * c).sqrt()) / 2.0;
+        *s = [r[0] + d * los[0], r[1] + d * los[1], r[2] + d * los[2]];
+    }
+    out
+}
+
+/// One epoch: true range + clock + seeded Gaussian noise + `bias` on
+/// satellite index `faulty`.
+fn epoch(
+    n: usize,
+    k: usize,
+    noise: &mut rng::PfRng,
+    faulty: Option<(usize, f64)>,
+) -> heapless::Vec<RangeObservation, 12> {
+    let sats = satellites(n);
+    let mut v = heapless::Vec::new();
+    for (i, s) in sats.iter().enumerate().take(n) {
+        let d = [
+            s[0] - RECEIVER_M[0],
+            s[1] - RECEIVER_M[1],
+            s[2] - RECEIVER_M[2],
+        ];
+        let range = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let bias = match faulty {
+            Some((f, b)) if f == i => b,
+            _ => 0.0,
+        };
+        let pr = range + CLOCK_M + 0.5 * k as f64 + SIGMA_M * rng::normal(noise) + bias;
+        v.push(RangeObservation {
+            id: SatId::new(System::Gps, i as u8 + 1),
+            pseudorange_m: pr,
+            position_m: *s,
+            sigma_m: Some(SIGMA_M),
+        })
+        .unwrap();
+    }
+    v
+}
+
+fn cfg() -> PfConfig {
+    PfConfig {
+        process: ProcessModel {
+            position_m_per_sqrt_s: 1.0,
+            clock_m_per_sqrt_s: 1.0,
+            drift_m_s_per_sqrt_s: 0.1,
+        },
+        sigma_m: SIGMA_M,
+        init_position_m: 10.0,
+        init_clock_m: 10.0,
+        init_drift_m_s: 1.0,
+        mutation_m: 0.5,
+        window: 8,
+        threshold: 15.0,
+        ..PfConfig::default()
+    }
+}
+
+fn error_m(p: &[f64; 3]) -> f64 {
+    let d = [
+        p[0] - RECEIVER_M[0],
+        p[1] - RECEIVER_M[1],
+        p[2] - RECEIVER_M[2],
+    ];
+    (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+}
+
+/// Runs `epochs` epochs with a step `bias_m` on satellite index 3 from
+/// epoch `onset`; returns (first alarm epoch, isolated, alarms before onset,
+/// RMS position error before onset).
+fn scenario<T: Real, E: Estimator<T>>(
+    seed: u64,
+    epochs: usize,
+    onset: usize,
+    bias_m: f64,
+) -> (Option<usize>, Option<SatId>, usize, f64) {
+    let c = cfg();
+    let mut m = std::boxed::Box::new(PfRaim::<T, E, 12>::new(seed));
+    let mut noise = rng::seeded(seed ^ 0xABCD);
+    let (mut first, mut iso, mut false_alarms, mut se, mut ne) = (None, None, 0, 0.0, 0);
+    for k in 0..epochs {
+        let f = (k >= onset).then_some((3, bias_m));
+        let obs = epoch(8, k, &mut noise, f);
+        let out = m.process(&c, k as f64, &obs).unwrap();
+        if out.alarm && k < onset {
+            false_alarms += 1;
+        }
+        if out.alarm && k >= onset && first.is_none() {
+            first = Some(k);
+            iso = out.isolated;
+        }
+        if k < onset && k >= 5 {
+            se += error_m(&out.position_m.unwrap()).powi(2);
+            ne += 1;
+        }
+    }
+    (first, iso, false_alarms, (se / ne as f64).sqrt())
+}
+
+extern crate std;
+
+/// A 40 m step on G4 from epoch 40: every filter stays quiet before it,
+/// alarms within 10 epochs after it and isolates G4; the fault-free
+/// position error is within 5 m RMS (sigma 3 m, 8 satellites).
+#[test]
+fn step_fault_detected_and_isolated_by_all_three() {
+    const MAX_DELAY_EPOCHS: usize = 10;
+    const RMS_BOUND_M: f64 = 5.0;
+    let g4 = Some(SatId::new(System::Gps, 4));
+    let runs = [
+        ("ekf", scenario::<f64, Ekf<f64>>(1, 60, 40, 40.0)),
+        ("pf", scenario::<f64, SirPf<f64, 200>>(1, 60, 40, 40.0)),
+        ("gapf", scenario::<f64, GaPf<f64, 200>>(1, 60, 40, 40.0)),
+    ];
+    for (name, (first, iso, fa, rms)) in runs {
+        std::println!("{name}: alarm {first:?} isolated {iso:?} false alarms {fa} rms {rms:.2} m");
+    }
+    for (name, (first, iso, fa, rms)) in runs {
+        assert_eq!(fa, 0, "{name} false alarms");
+        let first = first.unwrap_or_else(|| panic!("{name} never alarmed"));
+        assert!(first < 40 + MAX_DELAY_EPOCHS, "{name} alarm at {first}");
+        assert_eq!(iso, g4, "{name} isolated");
+        assert!(rms < RMS_BOUND_M, "{name} rms {rms}");
+    }
+}
+
+/// Same seed, bit-identical outputs; another seed, different particles.
+#[test]
+fn same_seed_same_output() {
+    let run = |seed| {
+        let c = cfg();
+        let mut m = std::boxed::Box::new(PfRaim::<f64, GaPf<f64, 64>, 12>::new(seed));
+        let mut noise = rng::seeded(99);
+        let mut v = std::vec::Vec::new();
+        for k in 0..15 {
+            let out = m
+                .process(&c, k as f64, &epoch(8, k, &mut noise, None))
+                .unwrap();
+            v.push((
+                out.position_m.unwrap(),
+                out.decision.to_bits(),
+                out.n_eff.to_bits(),
+            ));
+        }
+        v
+    };
+    assert_eq!(run(5), run(5));
+    assert_ne!(run(5), run(6));
+}
+
+/// f32 particle state against f64 on the same seed and data: the GA-PF
+/// positions agree within 1.5 m (Monte Carlo spread: rounding changes some
+/// resampling draws, so the clouds differ by about sigma/sqrt(N)), the EKF
+/// within 1 cm.
+#[test]
+fn f32_state_matches_f64() {
+    const TOL_PF_M: f64 = 1.5;
+    const TOL_EKF_M: f64 = 0.01;
+    fn run<T: Real, E: Estimator<T>>() -> std::vec::Vec<[f64; 3]> {
+        let c = cfg();
+        let mut m = std::boxed::Box::new(PfRaim::<T, E, 12>::new(11));
+        let mut noise = rng::seeded(12);
+        (0..30)
+            .map(|k| {
+                m.process(&c, k as f64, &epoch(8, k, &mut noise, None))
+                    .unwrap()
+                    .position_m
+                    .unwrap()
+            })
+            .collect()
+    }
+    let check = |a: &[[f64; 3]], b: &[[f64; 3]], tol: f64, name: &str| {
+        for (k, (p, q)) in a.iter().zip(b).enumerate().skip(5) {
+            let d = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+            assert!(d < tol, "{name} epoch {k}: {d} m");
+        }
+    };
+    check(
+        &run::<f64, GaPf<f64, 300>>(),
+        &run::<f32, GaPf<f32, 300>>(),
+        TOL_PF_M,
+        "gapf",
+    );
+    check(
+        &run::<f64, Ekf<f64>>(),
+        &run::<f32, Ekf<f32>>(),
+        TOL_EKF_M,
+        "ekf",
+    );
+}
+
+/// A gross inconsistency (+-100 km on alternate satellites) collapses the
+/// main filter: it is reported, no position is given, and the next good
+/// epoch gives a position again.
+#[test]
+fn collapse_is_reported_and_reinitialised() {
+    let c = cfg();
+    let mut m = std::boxed::Box::new(PfRaim::<f64, GaPf<f64, 64>, 12>::new(3));
+    let mut noise = rng::seeded(4);
+    for k in 0..5 {
+        m.process(&c, k as f64, &epoch(8, k, &mut noise, None))
+            .unwrap();
+    }
+    let mut bad = epoch(8, 5, &mut noise, None);
+    for (i, o) in bad.iter_mut().enumerate() {
+        o.pseudorange_m += if i % 2 == 0 { 1e5 } else { -1e5 };
+    }
+    let out = m.process(&c, 5.0, &bad).unwrap();
+    assert!(out.main_collapsed);
+    assert_eq!(out.position_m, None);
+    assert!(!out.alarm);
+    let out = m.process(&c, 6.0, &epoch(8, 6, &mut noise, None)).unwrap();
+    assert!(!out.main_collapsed);
+    assert!(error_m(&out.position_m.unwrap()) < 50.0);
+}
+
+/// Too few satellites: a typed error, and the filters are untouched (the
+/// next epoch with enough satellites continues); bad input is typed too.
+#[test]
+fn too_few_satellites_and_bad_input() {
+    let c = cfg();
+    let mut m = std::boxed::Box::new(PfRaim::<f64, SirPf<f64, 64>, 12>::new(3));
+    let mut noise = rng::seeded(4);
+    let four = epoch(4, 0, &mut noise, None);
+    assert_eq!(
+        m.process(&c, 0.0, &four),
+        Err(PfError::TooFewSatellites { have: 4, need: 5 })
+    );
+    m.process(&c, 1.0, &epoch(8, 1, &mut noise, None)).unwrap();
+    let r0 = *m.reference();
+    assert!(matches!(
+        m.process(&c, 2.0, &epoch(4, 2, &mut noise, None)),
+        Err(PfError::TooFewSatellites { .. })
+    ));
+    assert_eq!(*m.reference(), r0);
+    let mut nan = epoch(8, 3, &mut noise, None);
+    nan[2].pseudorange_m = f64::NAN;
+    assert!(matches!(
+        m.process(&c, 3.0, &nan),
+        Err(PfError::NotFinite {
+            field: "pseudorange_m",
+            index: 2,
+            ..
+        })
+    ));
+    let mut dup = epoch(8, 3, &mut noise, None);
+    dup[1].id = dup[0].id;
+    assert!(matches!(
+        m.process(&c, 3.0, &dup),
+        Err(PfError::DuplicateSatellite { .. })
+    ));
+    assert!(matches!(
+        m.process(&c, 1.0, &epoch(8, 3, &mut noise, None)),
+        Err(PfError::TimeNotIncreasing { .. })
+    ));
+    let bad_cfg = PfConfig { window: 0, ..c };
+    assert!(matches!(
+        m.process(&bad_cfg, 3.0, &epoch(8, 3, &mut noise, None)),
+        Err(PfError::InvalidConfig {
+            field: "window",
+            ..
+        })
+    ));
+    m.process(&c, 3.0, &epoch(8, 3, &mut noise, None)).unwrap();
+}
+
+/// A satellite leaving view mid-window drops its auxiliary filter; one
+/// that comes back gets a fresh one; no alarm either way.
+#[test]
+fn satellite_leaving_view() {
+    let c = cfg();
+    let mut m = std::boxed::Box::new(PfRaim::<f64, GaPf<f64, 100>, 12>::new(8));
+    let mut noise = rng::seeded(9);
+    for k in 0..30 {
+        let mut obs = epoch(8, k, &mut noise, None);
+        if (10..20).contains(&k) {
+            obs.remove(5);
+        }
+        let out = m.process(&c, k as f64, &obs).unwrap();
+        assert!(!out.alarm, "epoch {k}: {}", out.decision);
+        let expect = if (10..20).contains(&k) { 7 } else { 8 };
+        assert_eq!(out.llr.len(), expect);
+        assert_eq!(out.used, expect);
+    }
+}
+
+/// The EKF on a linear toy problem (1/R0 = 0, static state, no process
+/// noise) against the closed form: after K epochs, the posterior mean and
+/// covariance equal the batch least squares with the prior,
+/// P = (P0^-1 + sum H^T R^-1 H)^-1, x = P sum H^T R^-1 z, and the first
+/// epoch's predictive density is N(z; 0, H P0 H^T + R).
+#[test]
+fn ekf_matches_linear_closed_form() {
+    const TOL_M: f64 = 1e-6;
+    const TOL_LN: f64 = 1e-8;
+    let c = PfConfig {
+        process: ProcessModel {
+            position_m_per_sqrt_s: 0.0,
+            clock_m_per_sqrt_s: 0.0,
+            drift_m_s_per_sqrt_s: 0.0,
+        },
+        ..cfg()
+    };
+    let mut rng = rng::seeded(1);
+    let sats = satellites(6);
+    let r = model::Reference {
+        position_m: RECEIVER_M,
+        clock_m: [0.0; 5],
+        drift_m_s: 0.0,
+    };
+    let truth = [1.0, -2.0, 0.5, 3.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    let mut ekf = Ekf::<f64>::blank();
+    ekf.init(&c, &mut rng);
+    let s0 = model::init_sigmas(&c);
+    let p0 = DMatrix::from_diagonal(&DVector::from_iterator(9, s0.iter().map(|v| v * v)));
+    let mut info = p0.clone().try_inverse().unwrap();
+    let mut rhs = DVector::zeros(9);
+    let mut noise = rng::seeded(2);
+    for k in 0..4 {
+        let mut terms: std::vec::Vec<model::SatTerm<f64>> = std::vec::Vec::new();
+        let mut h = DMatrix::zeros(6, 9);
+        let mut z = DVector::zeros(6);
+        for (i, s) in sats.iter().enumerate().take(6) {
+            let mut t = model::SatTerm::<f64>::new(
+                SatId::new(System::Gps, i as u8 + 1),
+                0.0,
+                s,
+                SIGMA_M,
+                &r,
+            );
+            t.inv_range = 0.0;
+            let zi = t.predict(&truth) + SIGMA_M * rng::normal(&mut noise);
+            t.z0 = zi;
+            let row = t.jacobian(&[0.0; 9]);
+            for j in 0..9 {
+                h[(i, j)] = row[j];
+            }
+            z[i] = zi;
+            terms.push(t);
+        }
+        let rinv = 1.0 / (SIGMA_M * SIGMA_M);
+        if k == 0 {
+            let s = &h * &p0 * h.transpose() + DMatrix::identity(6, 6) * (SIGMA_M * SIGMA_M);
+            let ln = -0.5 * (z.transpose() * s.clone().try_inverse().unwrap() * &z)[(0, 0)]
+                - 0.5 * s.determinant().ln()
+                - 3.0 * (2.0 * core::f64::consts::PI).ln();
+            let step = ekf.update(&c, &terms, None, &mut rng);
+            assert!(
+                (step.ln_predictive - ln).abs() < TOL_LN,
+                "{} vs {ln}",
+                step.ln_predictive
+            );
+        } else {
+            ekf.update(&c, &terms, None, &mut rng);
+        }
+        info += h.transpose() * &h * rinv;
+        rhs += h.transpose() * &z * rinv;
+    }
+    let p = info.try_inverse().unwrap();
+    let x = &p * rhs;
+    let m = ekf.mean();
+    for j in 0..9 {
+        assert!(
+            (m[j] - x[j]).abs() < TOL_M,
+            "state {j}: {} vs {}",
+            m[j],
+            x[j]
+        );
+        for i in 0..9 {
+            assert!((ekf.covariance()[(i, j)] - p[(i, j)]).abs() < TOL_M);
+        }
+    }
+}
+
+/// The RAM of the monitor against the closed form (S + 1) filters of
+/// P (DIM + 1) scalars + DIM, plus S LLR windows of MAX_WINDOW f64; and
+/// the table docs/PF.md quotes (run with --nocapture to print it).
+#[test]
+fn memory_matches_formula() {
+    fn formula(p: usize, s: usize, t: usize) -> usize {
+        let filter = p * (model::DIM + 1) * t + model::DIM * t;
+        let window = config::MAX_WINDOW * 8 + 2 * 8;
+        (s + 1) * filter + s * window
+    }
+    macro_rules! row {
+        ($t:ty, $p:literal, $s:literal) => {{
+            let b = PfRaim::<$t, GaPf<$t, $p>, $s>::BYTES;
+            let f = formula($p, $s, core::mem::size_of::<$t>());
+            // Slack: the reference, times, exclusion list and RNG state.
+            assert!(b >= f && b <= f + 160 + $s * 24, "{b} vs {f}");
+            std::println!(
+                "| {} | {} | {} | {:.1} | {} |",
+                <$t as Real>::NAME,
+                $p,
+                $s,
+                b as f64 / 1024.0,
+                if b <= 192 * 1024 - 32 * 1024 {
+                    "yes"
+                } else {
+                    "no"
+                }
+            );
+        }};
+    }
+    row!(f32, 100, 6);
+    row!(f32, 100, 12);
+    row!(f32, 300, 6);
+    row!(f32, 300, 8);
+    row!(f32, 300, 10);
+    row!(f32, 300, 12);
+    row!(f32, 500, 8);
+    row!(f64, 100, 12);
+    row!(f64, 300, 6);
+    row!(f64, 300, 12);
+    let ekf = PfRaim::<f32, Ekf<f32>, 12>::BYTES;
+    std::println!("| f32 EKF | - | 12 | {:.1} | yes |", ekf as f64 / 1024.0);
+}
+
+/// Exclusion: after the alarm the faulty satellite is out (7 used) and the
+/// persisting fault raises no further alarm; with `readmit_s` it comes back
+/// after that time (8 used) and, the fault persisting, is caught again.
+#[test]
+fn exclusion_and_readmission() {
+    let c = PfConfig {
+        readmit_s: 10.0,
+        ..cfg()
+    };
+    let mut m = std::boxed::Box::new(PfRaim::<f64, Ekf<f64>, 12>::new(1));
+    let mut noise = rng::seeded(2);
+    let g4 = SatId::new(System::Gps, 4);
+    let mut excluded_at = None;
+    let mut readmitted = false;
+    let mut second_alarm = false;
+    for k in 0..60 {
+        let f = (k >= 20).then_some((3, 40.0));
+        let out = m
+            .process(&c, k as f64, &epoch(8, k, &mut noise, f))
+            .unwrap();
+        if let Some(t) = excluded_at {
+            if k < t + 10 {
+                assert_eq!(out.used, 7, "epoch {k}");
+                assert!(!out.alarm, "epoch {k}");
+            } else if out.used == 8 {
+                readmitted = true;
+            }
+            if readmitted && out.alarm && out.isolated == Some(g4) {
+                second_alarm = true;
+            }
+        } else if out.excluded == Some(g4) {
+            assert!(k >= 20);
+            assert_eq!(m.excluded(), &[(g4, k as f64)]);
+            excluded_at = Some(k);
+        } else {
+            assert!(!out.alarm, "epoch {k}");
+        }
+    }
+    assert!(excluded_at.is_some() && readmitted && second_alarm);
+}

@@ -1,0 +1,621 @@
+//! `raim replay --pf {ekf,pf,gapf}`: the particle-filter RAIM of seed 004
+//! (raim_core::pf, docs/PF.md) on the replay's corrected pseudoranges,
+//! with the same fault injection. Per epoch: position error, N_eff, the
+//! decision statistic D_k against the threshold, alarm, isolation and
+//! exclusion; a summary in the shape of seed 004 Table 1; optionally the
+//! threshold calibrated on fault-free runs for a stated false-alarm rate,
+//! and a plot of the LLRs and the position error.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{anyhow, bail, Context, Result};
+use clap::{Args, ValueEnum};
+use plotters::prelude::*;
+use raim_core::pf::{
+    Ekf, Estimator, GaPf, Likelihood, PfConfig, PfOutput, PfRaim, ProcessModel, SirPf,
+};
+use raim_core::Real;
+use raim_gnss::faults::FaultPlan;
+use raim_gnss::ranging::PreparedEpoch;
+use serde::Serialize;
+
+use super::{fault_plan, mean_position, prepare, record, run_core, ReplayArgs, Target};
+
+/// Satellite capacity of the PF monitor in replays (GEOP G+E has up to ~20).
+pub const PF_CAPACITY: usize = 32;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize)]
+pub enum PfKind {
+    /// Extended Kalman filter baseline.
+    Ekf,
+    /// Plain SIR particle filter baseline.
+    Pf,
+    /// Genetic-resampling particle filter (seed 004's method).
+    Gapf,
+}
+
+#[derive(Debug, Clone, Args)]
+pub struct PfArgs {
+    /// Run the particle-filter RAIM (seed 004) instead of the snapshot monitor.
+    #[arg(long, value_enum)]
+    pub pf: Option<PfKind>,
+    /// Particles per filter: 50, 100, 300 or 1000.
+    #[arg(long, default_value_t = 100)]
+    pub particles: usize,
+    /// Seed of the filters' random generator.
+    #[arg(long, default_value_t = 1)]
+    pub pf_seed: u64,
+    /// Ranging sigma, m.
+    #[arg(long, default_value_t = 10.0)]
+    pub pf_sigma_m: f64,
+    /// Likelihood: gauss, t:NU (Student-t), mix:EPS:K (Gaussian mixture).
+    #[arg(long, default_value = "gauss")]
+    pub pf_likelihood: String,
+    /// Position random walk, m/sqrt(s).
+    #[arg(long, default_value_t = 2.0)]
+    pub pf_q_pos: f64,
+    /// Clock random walk, m/sqrt(s).
+    #[arg(long, default_value_t = 5.0)]
+    pub pf_q_clock: f64,
+    /// Clock-drift random walk, (m/s)/sqrt(s).
+    #[arg(long, default_value_t = 0.5)]
+    pub pf_q_drift: f64,
+    /// Window U of the decision function (eq. 13), epochs.
+    #[arg(long, default_value_t = 10)]
+    pub pf_window: usize,
+    /// Decision threshold on the windowed accumulated LLR.
+    #[arg(long, default_value_t = 30.0)]
+    pub pf_threshold: f64,
+    /// Calibrate the threshold first: the (1 - PFA) quantile of D_k over
+    /// fault-free runs (seeds pf_seed+1000..), per epoch.
+    #[arg(long)]
+    pub pf_calibrate: Option<f64>,
+    /// Fault-free runs for the calibration.
+    #[arg(long, default_value_t = 3)]
+    pub pf_calibration_runs: u64,
+    /// Readmit an excluded satellite after this many seconds (0: never).
+    #[arg(long, default_value_t = 0.0)]
+    pub pf_readmit_s: f64,
+    /// f32 particle state (the device precision) instead of f64.
+    #[arg(long)]
+    pub pf_f32: bool,
+    /// Do not exclude the isolated satellite (detection only).
+    #[arg(long)]
+    pub pf_no_exclude: bool,
+    /// Plot D_k against the threshold, the per-satellite LLRs and the
+    /// position error into this PNG.
+    #[arg(long)]
+    pub pf_plot: Option<PathBuf>,
+}
+
+impl PfArgs {
+    pub fn choice(&self, kind: PfKind) -> FilterChoice {
+        FilterChoice {
+            kind,
+            particles: self.particles,
+            f32_state: self.pf_f32,
+        }
+    }
+
+    pub fn likelihood(&self) -> Result<Likelihood> {
+        let s = self.pf_likelihood.as_str();
+        let parts: Vec<&str> = s.split(':').collect();
+        Ok(match parts.as_slice() {
+            ["gauss"] => Likelihood::Gaussian,
+            ["t", nu] => Likelihood::StudentT { nu: nu.parse()? },
+            ["mix", e, k] => Likelihood::Mixture {
+                outlier_prob: e.parse()?,
+                outlier_scale: k.parse()?,
+            },
+            _ => bail!("--pf-likelihood {s}: expected gauss, t:NU or mix:EPS:K"),
+        })
+    }
+
+    pub fn config(&self) -> Result<PfConfig> {
+        let c = PfConfig {
+            process: ProcessModel {
+                position_m_per_sqrt_s: self.pf_q_pos,
+                clock_m_per_sqrt_s: self.pf_q_clock,
+                drift_m_s_per_sqrt_s: self.pf_q_drift,
+            },
+            likelihood: self.likelihood()?,
+            sigma_m: self.pf_sigma_m,
+            init_position_m: self.pf_sigma_m,
+            init_clock_m: self.pf_sigma_m,
+            init_drift_m_s: 2.0,
+            mutation_m: 0.5 * self.pf_sigma_m,
+            window: self.pf_window,
+            threshold: self.pf_threshold,
+            exclude: !self.pf_no_exclude,
+            readmit_s: self.pf_readmit_s,
+            ..PfConfig::default()
+        };
+        c.validate().map_err(|e| anyhow!("pf configuration: {e}"))?;
+        Ok(c)
+    }
+}
+
+/// One epoch of a PF replay.
+#[derive(Debug, Clone, Serialize)]
+pub struct PfRecord {
+    pub epoch: usize,
+    pub time_gps_s: f64,
+    pub sats: usize,
+    pub used: usize,
+    pub faulted: Vec<String>,
+    pub error_3d_m: Option<f64>,
+    pub error_h_m: Option<f64>,
+    pub n_eff: f64,
+    pub decision: Option<f64>,
+    pub threshold: f64,
+    pub alarm: bool,
+    pub isolated: Option<String>,
+    pub excluded: Option<String>,
+    pub main_collapsed: bool,
+    pub aux_collapsed: usize,
+    pub clock_jump: bool,
+    pub drift_m_s: f64,
+    /// (satellite, s_k, windowed max) per auxiliary filter.
+    pub llr: Vec<(String, f64, f64)>,
+    pub error: Option<String>,
+}
+
+/// The seed 004 Table 1 line of a run, with the detection results.
+#[derive(Debug, Clone, Serialize)]
+pub struct PfSummary {
+    pub filter: PfKind,
+    pub particles: usize,
+    pub seed: u64,
+    pub epochs: usize,
+    /// 3D position RMSE over epochs with a position (eq. 17), m.
+    pub rmse_3d_m: f64,
+    /// Mean N_eff of the main filter (eq. 16); 0 for the EKF.
+    pub mean_n_eff: f64,
+    pub threshold: f64,
+    pub fault_epoch: Option<usize>,
+    pub first_alarm_epoch: Option<usize>,
+    pub isolated: Option<String>,
+    pub false_alarms_before_fault: usize,
+    pub max_decision_before_fault: f64,
+    pub collapses: usize,
+    pub errors: usize,
+    pub host_ms_per_epoch: f64,
+}
+
+type Prepared = (Vec<PreparedEpoch>, FaultPlan, Option<[f64; 3]>);
+
+fn load(args: &ReplayArgs) -> Result<Prepared> {
+    let (epochs, header, first) = prepare(args)?;
+    let (plan, _labels) = fault_plan(args, first)?;
+    let reference = match args.reference {
+        super::Reference::Header => header,
+        super::Reference::CleanMean => {
+            let clean = run_core(
+                Target::Host,
+                &args.core_config(),
+                &epochs,
+                &FaultPlan::default(),
+                None,
+                None,
+            )?;
+            mean_position(&clean)
+        }
+    };
+    Ok((epochs, plan, reference))
+}
+
+fn run_typed<T: Real, E: Estimator<T>>(
+    cfg: &PfConfig,
+    seed: u64,
+    epochs: &[PreparedEpoch],
+    plan: &FaultPlan,
+    reference: Option<[f64; 3]>,
+) -> Vec<PfRecord> {
+    let mut m: Box<PfRaim<T, E, PF_CAPACITY>> = Box::new(PfRaim::new(seed));
+    let mut out = Vec::with_capacity(epochs.len());
+    for (k, e) in epochs.iter().enumerate() {
+        let mut sats = e.observations();
+        let injected = plan.apply(e.time_gps_s, &mut sats);
+        let faulted = injected
+            .faulted
+            .iter()
+            .map(|(id, b)| format!("{id}:{b:.1}"))
+            .collect();
+        let mut rec = PfRecord {
+            epoch: k,
+            time_gps_s: e.time_gps_s,
+            sats: sats.len(),
+            used: 0,
+            faulted,
+            error_3d_m: None,
+            error_h_m: None,
+            n_eff: 0.0,
+            decision: None,
+            threshold: cfg.threshold,
+            alarm: false,
+            isolated: None,
+            excluded: None,
+            main_collapsed: false,
+            aux_collapsed: 0,
+            clock_jump: false,
+            drift_m_s: 0.0,
+            llr: Vec::new(),
+            error: None,
+        };
+        match m.process(cfg, e.time_gps_s, &sats) {
+            Ok(o) => fill(&mut rec, &o, reference),
+            Err(err) => rec.error = Some(err.to_string()),
+        }
+        out.push(rec);
+    }
+    out
+}
+
+fn fill(rec: &mut PfRecord, o: &PfOutput<PF_CAPACITY>, reference: Option<[f64; 3]>) {
+    rec.used = o.used;
+    if let (Some(p), Some(r)) = (o.position_m, reference) {
+        let e = record::error_enu(p, r);
+        rec.error_3d_m = Some((e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt());
+        rec.error_h_m = Some(e[0].hypot(e[1]));
+    }
+    rec.n_eff = o.n_eff;
+    rec.decision = o.decision.is_finite().then_some(o.decision);
+    rec.alarm = o.alarm;
+    rec.isolated = o.isolated.map(|s| s.to_string());
+    rec.excluded = o.excluded.map(|s| s.to_string());
+    rec.main_collapsed = o.main_collapsed;
+    rec.aux_collapsed = o.aux_collapsed;
+    rec.clock_jump = o.clock_jump;
+    rec.drift_m_s = o.drift_m_s;
+    rec.llr = o
+        .llr
+        .iter()
+        .map(|l| (l.id.to_string(), l.llr, l.windowed))
+        .collect();
+}
+
+/// Which filter runs: method, particle count, state precision.
+#[derive(Debug, Clone, Copy)]
+pub struct FilterChoice {
+    pub kind: PfKind,
+    pub particles: usize,
+    /// f32 particle state (the device precision) instead of f64.
+    pub f32_state: bool,
+}
+
+/// One run of the chosen filter.
+pub fn run_once(
+    choice: FilterChoice,
+    cfg: &PfConfig,
+    seed: u64,
+    epochs: &[PreparedEpoch],
+    plan: &FaultPlan,
+    reference: Option<[f64; 3]>,
+) -> Result<Vec<PfRecord>> {
+    let FilterChoice {
+        kind,
+        particles,
+        f32_state,
+    } = choice;
+    macro_rules! pick {
+        ($t:ty) => {
+            match (kind, particles) {
+                (PfKind::Ekf, _) => run_typed::<$t, Ekf<$t>>(cfg, seed, epochs, plan, reference),
+                (PfKind::Pf, 50) => {
+                    run_typed::<$t, SirPf<$t, 50>>(cfg, seed, epochs, plan, reference)
+                }
+                (PfKind::Pf, 100) => {
+                    run_typed::<$t, SirPf<$t, 100>>(cfg, seed, epochs, plan, reference)
+                }
+                (PfKind::Pf, 300) => {
+                    run_typed::<$t, SirPf<$t, 300>>(cfg, seed, epochs, plan, reference)
+                }
+                (PfKind::Pf, 1000) => {
+                    run_typed::<$t, SirPf<$t, 1000>>(cfg, seed, epochs, plan, reference)
+                }
+                (PfKind::Gapf, 50) => {
+                    run_typed::<$t, GaPf<$t, 50>>(cfg, seed, epochs, plan, reference)
+                }
+                (PfKind::Gapf, 100) => {
+                    run_typed::<$t, GaPf<$t, 100>>(cfg, seed, epochs, plan, reference)
+                }
+                (PfKind::Gapf, 300) => {
+                    run_typed::<$t, GaPf<$t, 300>>(cfg, seed, epochs, plan, reference)
+                }
+                (PfKind::Gapf, 1000) => {
+                    run_typed::<$t, GaPf<$t, 1000>>(cfg, seed, epochs, plan, reference)
+                }
+                (_, n) => bail!("--particles {n}: supported counts are 50, 100, 300, 1000"),
+            }
+        };
+    }
+    // The filters hold up to (1 + 32) x 1000 particles: give the run a big stack.
+    std::thread::scope(|scope| {
+        let h = std::thread::Builder::new()
+            .stack_size(256 << 20)
+            .spawn_scoped(scope, || -> Result<Vec<PfRecord>> {
+                Ok(if f32_state { pick!(f32) } else { pick!(f64) })
+            })?;
+        h.join().map_err(|_| anyhow!("pf run thread panicked"))?
+    })
+}
+
+/// The summary of a run (fault onset: the first epoch with an injected
+/// satellite fault).
+pub fn summarise(
+    kind: PfKind,
+    particles: usize,
+    seed: u64,
+    threshold: f64,
+    recs: &[PfRecord],
+    host_ms_per_epoch: f64,
+) -> PfSummary {
+    let fault_epoch = recs.iter().position(|r| !r.faulted.is_empty());
+    let before = |r: &&PfRecord| fault_epoch.is_none_or(|f| r.epoch < f);
+    let errs: Vec<f64> = recs.iter().filter_map(|r| r.error_3d_m).collect();
+    let rmse = (errs.iter().map(|e| e * e).sum::<f64>() / errs.len().max(1) as f64).sqrt();
+    let with_pos = recs
+        .iter()
+        .filter(|r| r.error.is_none() && !r.main_collapsed);
+    let neffs: Vec<f64> = with_pos.map(|r| r.n_eff).collect();
+    let first = fault_epoch.and_then(|f| recs.iter().find(|r| r.epoch >= f && r.alarm));
+    PfSummary {
+        filter: kind,
+        particles: if kind == PfKind::Ekf { 0 } else { particles },
+        seed,
+        epochs: recs.len(),
+        rmse_3d_m: rmse,
+        mean_n_eff: neffs.iter().sum::<f64>() / neffs.len().max(1) as f64,
+        threshold,
+        fault_epoch,
+        first_alarm_epoch: first.map(|r| r.epoch),
+        isolated: first.and_then(|r| r.isolated.clone()),
+        false_alarms_before_fault: recs.iter().filter(before).filter(|r| r.alarm).count(),
+        max_decision_before_fault: recs
+            .iter()
+            .filter(before)
+            .filter_map(|r| r.decision)
+            .fold(f64::NEG_INFINITY, f64::max),
+        collapses: recs.iter().filter(|r| r.main_collapsed).count(),
+        errors: recs.iter().filter(|r| r.error.is_some()).count(),
+        host_ms_per_epoch,
+    }
+}
+
+/// The (1 - pfa) empirical quantile of the per-epoch D_k over `runs`
+/// fault-free runs without exclusion (an upper order statistic). The
+/// plan's satellite faults are removed; its noise and clock faults (the
+/// environment, not a fault to detect) are kept.
+pub fn calibrate(
+    args: &PfArgs,
+    cfg: &PfConfig,
+    pfa: f64,
+    epochs: &[PreparedEpoch],
+    plan: &FaultPlan,
+    reference: Option<[f64; 3]>,
+) -> Result<(f64, usize)> {
+    let mut clean = plan.clone();
+    clean.faults.retain(|f| !f.is_satellite_fault());
+    if !(pfa > 0.0 && pfa < 1.0) {
+        bail!("--pf-calibrate {pfa}: expected a probability in (0, 1)");
+    }
+    let kind = args.pf.context("--pf-calibrate needs --pf")?;
+    let free = PfConfig {
+        exclude: false,
+        threshold: f64::MAX,
+        ..*cfg
+    };
+    let mut d = Vec::new();
+    for r in 0..args.pf_calibration_runs.max(1) {
+        let recs = run_once(
+            args.choice(kind),
+            &free,
+            args.pf_seed + 1000 + r,
+            epochs,
+            &clean,
+            reference,
+        )?;
+        d.extend(recs.iter().filter_map(|r| r.decision));
+        if kind == PfKind::Ekf {
+            break; // deterministic: one run is all runs
+        }
+    }
+    if d.is_empty() {
+        bail!("calibration: no decision statistic was produced");
+    }
+    d.sort_by(|a, b| a.total_cmp(b));
+    let k = ((1.0 - pfa) * d.len() as f64).ceil() as usize;
+    let t = d[k.min(d.len() - 1)];
+    Ok((t, d.len()))
+}
+
+/// `raim replay --pf ...`: runs, prints records (text or JSON) and the summary.
+pub fn run(args: &ReplayArgs) -> Result<()> {
+    let pf = &args.pf;
+    let kind = pf.pf.context("--pf not given")?;
+    let mut cfg = pf.config()?;
+    let (epochs, plan, reference) = load(args)?;
+    let stdout = std::io::stdout();
+    let mut w = stdout.lock();
+    if let Some(pfa) = pf.pf_calibrate {
+        let (t, n) = calibrate(pf, &cfg, pfa, &epochs, &plan, reference)?;
+        writeln!(
+            w,
+            "# calibrated threshold {t:.3}: the {:.4} quantile of D_k over {n} fault-free epochs",
+            1.0 - pfa
+        )?;
+        cfg.threshold = t;
+    }
+    let t0 = std::time::Instant::now();
+    let recs = run_once(pf.choice(kind), &cfg, pf.pf_seed, &epochs, &plan, reference)?;
+    let ms = t0.elapsed().as_secs_f64() * 1e3 / recs.len().max(1) as f64;
+    if !args.quiet {
+        for r in &recs {
+            if args.json {
+                writeln!(w, "{}", serde_json::to_string(r)?)?;
+            } else {
+                writeln!(w, "{}", text_line(r))?;
+            }
+        }
+    }
+    let s = summarise(kind, pf.particles, pf.pf_seed, cfg.threshold, &recs, ms);
+    if args.json {
+        writeln!(w, "{}", serde_json::json!({ "pf_summary": s }))?;
+    } else {
+        writeln!(w, "{}", summary_header())?;
+        writeln!(w, "{}", summary_row(&s))?;
+    }
+    if let Some(p) = &pf.pf_plot {
+        plot(&recs, &s, p, args.font.as_deref())?;
+    }
+    Ok(())
+}
+
+fn text_line(r: &PfRecord) -> String {
+    let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));
+    format!(
+        "{:4} t={:.0} n={}/{} err3d={} neff={:.1} D={} alarm={} iso={} excl={}{}{}{}",
+        r.epoch,
+        r.time_gps_s,
+        r.used,
+        r.sats,
+        f(r.error_3d_m),
+        r.n_eff,
+        f(r.decision),
+        r.alarm as u8,
+        r.isolated.as_deref().unwrap_or("-"),
+        r.excluded.as_deref().unwrap_or("-"),
+        if r.main_collapsed { " COLLAPSED" } else { "" },
+        if r.faulted.is_empty() {
+            String::new()
+        } else {
+            format!(" fault={}", r.faulted.join(","))
+        },
+        r.error
+            .as_deref()
+            .map_or(String::new(), |e| format!(" error: {e}")),
+    )
+}
+
+pub fn summary_header() -> String {
+    "| filter | N | RMSE 3D (m) | mean N_eff | threshold | fault at | alarm at | isolated | false alarms before | max D before | collapses | ms/epoch |\n\
+     | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+        .to_string()
+}
+
+pub fn summary_row(s: &PfSummary) -> String {
+    let o = |v: Option<usize>| v.map_or("-".to_string(), |v| v.to_string());
+    format!(
+        "| {:?} | {} | {:.2} | {:.1} | {:.2} | {} | {} | {} | {} | {:.2} | {} | {:.2} |",
+        s.filter,
+        if s.particles == 0 {
+            "-".to_string()
+        } else {
+            s.particles.to_string()
+        },
+        s.rmse_3d_m,
+        s.mean_n_eff,
+        s.threshold,
+        o(s.fault_epoch),
+        o(s.first_alarm_epoch),
+        s.isolated.as_deref().unwrap_or("-"),
+        s.false_alarms_before_fault,
+        s.max_decision_before_fault,
+        s.collapses,
+        s.host_ms_per_epoch,
+    )
+}
+
+fn perr<E: std::fmt::Display>(e: E) -> anyhow::Error {
+    anyhow!("plot: {e}")
+}
+
+/// Two panels: D_k and every auxiliary filter's windowed LLR against the
+/// threshold; the 3D position error.
+pub fn plot(recs: &[PfRecord], s: &PfSummary, path: &Path, font: Option<&Path>) -> Result<()> {
+    super::plot::register_font(font)?;
+    let root = BitMapBackend::new(path, (1400, 900)).into_drawing_area();
+    root.fill(&WHITE).map_err(perr)?;
+    let (top, bottom) = root.split_vertically(500);
+    let n = recs.len() as f64;
+    let dmax = recs
+        .iter()
+        .flat_map(|r| r.llr.iter().map(|l| l.2))
+        .filter(|v| v.is_finite())
+        .fold(s.threshold * 1.5, f64::max)
+        .min(s.threshold * 20.0);
+    let dmin = recs
+        .iter()
+        .flat_map(|r| r.llr.iter().map(|l| l.2))
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::min)
+        .max(-s.threshold * 5.0);
+    let mut c = ChartBuilder::on(&top)
+        .caption(
+            format!(
+                "{:?} N={} windowed accumulated LLR per auxiliary filter vs threshold",
+                s.filter, s.particles
+            ),
+            ("sans-serif", 20),
+        )
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(50)
+        .build_cartesian_2d(0.0..n, dmin..dmax)
+        .map_err(perr)?;
+    c.configure_mesh().x_desc("epoch").draw().map_err(perr)?;
+    let mut names: Vec<String> = recs
+        .iter()
+        .flat_map(|r| r.llr.iter().map(|l| l.0.clone()))
+        .collect();
+    names.sort();
+    names.dedup();
+    for (i, name) in names.iter().enumerate() {
+        let col = Palette99::pick(i).to_rgba();
+        let pts: Vec<(f64, f64)> = recs
+            .iter()
+            .filter_map(|r| {
+                r.llr
+                    .iter()
+                    .find(|l| &l.0 == name)
+                    .map(|l| (r.epoch as f64, l.2.clamp(dmin, dmax)))
+            })
+            .collect();
+        c.draw_series(LineSeries::new(pts, col.stroke_width(1)))
+            .map_err(perr)?;
+    }
+    c.draw_series(LineSeries::new(
+        [(0.0, s.threshold), (n, s.threshold)],
+        RED.stroke_width(2),
+    ))
+    .map_err(perr)?;
+    if let Some(f) = s.fault_epoch {
+        c.draw_series(LineSeries::new(
+            [(f as f64, dmin), (f as f64, dmax)],
+            BLACK.stroke_width(1),
+        ))
+        .map_err(perr)?;
+    }
+    let emax = recs
+        .iter()
+        .filter_map(|r| r.error_3d_m)
+        .fold(1.0, f64::max)
+        .min(200.0);
+    let mut c = ChartBuilder::on(&bottom)
+        .caption("3D position error (m)", ("sans-serif", 20))
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(50)
+        .build_cartesian_2d(0.0..n, 0.0..emax)
+        .map_err(perr)?;
+    c.configure_mesh().x_desc("epoch").draw().map_err(perr)?;
+    c.draw_series(LineSeries::new(
+        recs.iter()
+            .filter_map(|r| r.error_3d_m.map(|e| (r.epoch as f64, e.min(emax)))),
+        BLUE.stroke_width(1),
+    ))
+    .map_err(perr)?;
+    root.present().map_err(perr)?;
+    Ok(())
+}
