@@ -197,6 +197,7 @@ impl<const N: usize, T: Real> Householder<N, T> {
 
 /// sum a_i b_i, left to right (the order of the f64 `Iterator::sum` it
 /// replaces, so f64 results are unchanged).
+#[inline(always)]
 pub(crate) fn dot<'a, T: Real>(
     a: impl Iterator<Item = &'a T>,
     b: impl Iterator<Item = &'a T>,
@@ -246,8 +247,14 @@ fn make_reflector<T: Real>(x: &mut [T], full_norm: T) -> (T, bool) {
 }
 
 /// y[k..n] <- (I - 2 v v^T) y[k..n] with v stored in col[k..n].
+#[inline(always)]
 fn reflect<const N: usize, T: Real>(col: &[T; N], y: &mut [T; N], k: usize, n: usize) {
-    let d = dot(col.iter().take(n).skip(k), y.iter().take(n).skip(k));
+    let d = col
+        .iter()
+        .zip(y.iter())
+        .take(n)
+        .skip(k)
+        .fold(T::zero(), |acc, (v, w)| acc + *v * *w);
     let f = d + d;
     for (v, w) in col.iter().zip(y.iter_mut()).take(n).skip(k) {
         *w -= f * *v;
