@@ -25,7 +25,7 @@ fn noise(i: usize) -> f64 {
 }
 
 fn id(i: usize) -> SatId {
-    let sys = if i % 2 == 0 {
+    let sys = if i.is_multiple_of(2) {
         System::Gps
     } else {
         System::Galileo
@@ -55,7 +55,7 @@ fn ranges(n: usize, fault_m: f64) -> Vec<RangeObservation> {
             let b: f64 = RX.iter().zip(d.iter()).map(|(p, q)| p * q).sum();
             let c = RX.iter().map(|p| p * p).sum::<f64>() - rs * rs;
             let range = -b + (b * b - c).sqrt();
-            let clock = if i % 2 == 0 { 1234.5 } else { -987.0 };
+            let clock = if i.is_multiple_of(2) { 1234.5 } else { -987.0 };
             RangeObservation {
                 id: id(i),
                 pseudorange_m: range + clock + noise(i) + if i == 2 { fault_m } else { 0.0 },

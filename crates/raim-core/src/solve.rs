@@ -311,12 +311,6 @@ impl Linearisation {
     }
 }
 
-/// Per epoch satellite: elevation and sigma at the current linearisation,
-/// once computed.
-struct SatModel<const N: usize> {
-    el_sigma: [Option<(f64, f64)>; N],
-}
-
 /// Weighted Gauss-Newton (SPEC §1) from `start`, filling `out` with the
 /// parity quantities of the model at the reported position.
 ///
@@ -346,10 +340,12 @@ fn gauss_newton<const N: usize>(
             .enumerate()
             .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
     };
-    let (cols, _) = clock_columns(selected().map(|(_, s)| s.id.system));
-    let mut model = SatModel::<N> {
-        el_sigma: [None; N],
-    };
+    // One builder for all iterations: its rows are the selected
+    // satellites in order, and its per-row elevations and sigmas are the
+    // cache, valid while `cached` (same linearisation, on the surface).
+    let mut b = Builder::<N>::new(selected().map(|(_, s)| s.id.system));
+    let cols = b.cols;
+    let mut cached = false;
     let mut lin: Option<Linearisation> = None;
     let (mut x, start_clock) = match start {
         Start::Cold => (apriori_m.unwrap_or([0.0; 3]), [None; MAX_SYSTEMS]),
@@ -357,11 +353,18 @@ fn gauss_newton<const N: usize>(
         Start::Sibling(s) => {
             lin = s.linearisation;
             if lin.is_some() {
-                for (i, _) in selected() {
-                    if let (Some(m), Some(v)) =
-                        (model.el_sigma.get_mut(i), sibling_model(Some(s), i))
-                    {
-                        *m = Some(v);
+                cached = true;
+                for (k, (i, _)) in selected().enumerate() {
+                    match (
+                        sibling_model(Some(s), i),
+                        b.el.get_mut(k),
+                        b.sigma.get_mut(k),
+                    ) {
+                        (Some((el, sigma)), Some(e), Some(g)) => {
+                            *e = el;
+                            *g = sigma;
+                        }
+                        _ => cached = false,
                     }
                 }
             }
@@ -390,11 +393,12 @@ fn gauss_newton<const N: usize>(
                 .is_none_or(|l| !(l.distance_m(&x) <= RELINEARISE_M))
         {
             lin = Some(Linearisation::at(x, lin.as_ref()));
-            model.el_sigma = [None; N];
+            cached = false;
         }
         let frame = if on_surface { lin } else { None };
-        let mut b = Builder::<N>::new(selected().map(|(_, s)| s.id.system));
-        for (i, s) in selected() {
+        let reuse = cached && frame.is_some();
+        b.n = 0;
+        for (k, (i, s)) in selected().enumerate() {
             let d = [
                 s.position_m[0] - x[0],
                 s.position_m[1] - x[1],
@@ -416,16 +420,11 @@ fn gauss_newton<const N: usize>(
             let (u, el, sigma) = match &frame {
                 Some(l) => {
                     let u = rotate(&l.rotation, u_ecef);
-                    let cached = model.el_sigma.get(i).copied().flatten();
-                    let (el, sigma) = match cached {
-                        Some(v) => v,
-                        None => {
+                    let (el, sigma) = match (reuse, b.el.get(k), b.sigma.get(k)) {
+                        (true, Some(&el), Some(&sigma)) => (el, sigma),
+                        _ => {
                             let el = crate::frames::elevation_rad(u);
-                            let sigma = s.sigma_m.unwrap_or_else(|| cfg.sigma_model.sigma_m(el));
-                            if let Some(m) = model.el_sigma.get_mut(i) {
-                                *m = Some((el, sigma));
-                            }
-                            (el, sigma)
+                            (el, s.sigma_m.unwrap_or_else(|| cfg.sigma_model.sigma_m(el)))
                         }
                     };
                     (u, el, sigma)
@@ -440,6 +439,7 @@ fn gauss_newton<const N: usize>(
             let z = s.pseudorange_m - range - clock.get(col).copied().unwrap_or(0.0);
             b.push(i, s.id, u, z, sigma, el)?;
         }
+        cached = frame.is_some();
         let full =
             frame.is_some() && last_step_m * last_step_m < cfg.convergence_m * PARITY_STEP_SCALE_M;
         // A step needs only the least-squares solution; the parity
