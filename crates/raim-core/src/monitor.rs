@@ -39,6 +39,12 @@ impl<const N: usize> Raim<N> {
         self.sequential.mcusum.clear();
     }
 
+    /// Gauss-Newton warm start from the last epoch's solution (off by
+    /// default; see [`Snapshot::set_warm_start`]).
+    pub fn set_warm_start(&mut self, on: bool) {
+        self.snapshot.set_warm_start(on);
+    }
+
     /// The chi-square threshold T^2 and lambda_md for a dof (cached).
     pub fn thresholds(&mut self, cfg: &Config, dof: usize) -> Result<(f64, f64), RaimError> {
         self.snapshot.thresholds(cfg, dof)

@@ -84,4 +84,39 @@ mod tests {
         assert!((low - (t * t + mp * mp).sqrt()).abs() < 1e-12);
         assert!(low > z);
     }
+
+    /// The bound behind `solve::RELINEARISE_M`: an elevation error of
+    /// `RELINEARISE_EL_RAD` moves the sigma by less than 3e-4 relative, at
+    /// every elevation from the floor to the zenith, for the default model
+    /// and for the terms alone that vary fastest (tropo + multipath).
+    #[test]
+    fn sigma_model_is_flat_within_the_relinearisation_bound() {
+        const SIGMA_REL_TOL: f64 = 3e-4;
+        let d = crate::solve::RELINEARISE_EL_RAD;
+        assert!(d < 2.2e-5, "{d}");
+        let steep = SigmaModel {
+            ura_m: 0.0,
+            iono_vertical_m: 0.0,
+            noise_m: 0.0,
+            ..SigmaModel::default()
+        };
+        let replay = SigmaModel {
+            ura_m: 0.3,
+            iono_vertical_m: 0.5,
+            noise_m: 0.2,
+            ..SigmaModel::default()
+        };
+        let mut worst = 0.0f64;
+        for m in [SigmaModel::default(), steep, replay] {
+            for k in 0..=9000 {
+                let el = (k as f64 * 0.01).to_radians();
+                for e2 in [el - d, el + d] {
+                    let rel = (m.sigma_m(e2) - m.sigma_m(el)).abs() / m.sigma_m(el);
+                    worst = worst.max(rel);
+                }
+            }
+        }
+        assert!(worst < SIGMA_REL_TOL, "{worst}");
+        assert!(worst > 1e-5, "the bound is not vacuous: {worst}");
+    }
 }

@@ -4,13 +4,16 @@
 
 use crate::config::Config;
 use crate::error::RaimError;
-use crate::frames::{ecef_to_geodetic, enu_rotation, rotate, unrotate, Geodetic};
+use crate::frames::{
+    ecef_to_geodetic, ecef_to_geodetic_from, enu_rotation, rotate, unrotate, Geodetic,
+};
 use crate::linalg::parity::Parity;
 use crate::linalg::qr::Householder;
 use crate::measurement::{
     Epoch, LinearObservation, Observations, RangeObservation, SatId, System, MAX_STATES,
     MAX_SYSTEMS,
 };
+use nalgebra::Matrix3;
 
 /// Below this norm (m) an a-priori position is "unknown" for the elevation
 /// model: elevations are meaningless near the Earth's centre.
@@ -18,6 +21,31 @@ const SURFACE_RADIUS_MIN_M: f64 = 5.0e6;
 
 /// A satellite closer than this to the receiver is an input error.
 const MIN_RANGE_M: f64 = 1.0;
+
+/// How far (m) Gauss-Newton's point may move from the linearisation point
+/// before the geodetic conversion, the ENU rotation, the elevations and the
+/// sigma model are evaluated again. 100 m tilts the local frame by at most
+/// 100 m / 6.36e6 m = 1.6e-5 rad and turns a line of sight to a satellite
+/// (>= 1.9e7 m away) by at most 5.3e-6 rad, so an elevation is off by at
+/// most [`RELINEARISE_EL_RAD`]; the sigma model then moves by less than
+/// 3e-4 relative (test `sigma_model_is_flat_within_the_relinearisation_bound`),
+/// and the protection levels, whose axes tilt by 1.6e-5 rad, by less than
+/// 2e-5 relative. The test statistic does not depend on the frame at all.
+pub const RELINEARISE_M: f64 = 100.0;
+
+/// The largest elevation error that reusing a linearisation within
+/// [`RELINEARISE_M`] makes, rad (frame tilt plus line-of-sight turn).
+pub const RELINEARISE_EL_RAD: f64 = RELINEARISE_M / 6.356e6 + RELINEARISE_M / 1.9e7;
+
+/// After a Gauss-Newton step s, the next step is of the order of the
+/// model's curvature times s^2, s^2 / (2 rho) with rho >= 1.9e7 m the range,
+/// times the geometry's amplification (a few). When s^2 is below
+/// `convergence_m` times this scale (m), i.e. 5e6 m = rho / 4 (an
+/// amplification of 8 allowed for), the next step is expected to be below
+/// `convergence_m` (s < 22 m at the default 1e-4 m): the next iteration
+/// builds the full parity model, which is then final. A wrong guess costs
+/// one more parity iteration, never a different answer.
+pub const PARITY_STEP_SCALE_M: f64 = 5.0e6;
 
 /// One solved subset of an epoch's satellites: the parity quantities of its
 /// whitened ENU model, and the position.
@@ -34,6 +62,9 @@ pub struct Solution<const N: usize> {
     /// ECEF position (pseudorange input) after Gauss-Newton.
     pub position_ecef_m: Option<[f64; 3]>,
     pub geodetic: Option<Geodetic>,
+    /// The point whose local frame, elevations and sigmas the model uses
+    /// (within [`RELINEARISE_M`] of the position; pseudorange input).
+    pub linearisation: Option<Linearisation>,
     /// ENU correction to the linearisation point, m (linear input), or zero
     /// after convergence (pseudorange input).
     pub correction_enu_m: [f64; 3],
@@ -54,6 +85,7 @@ impl<const N: usize> Solution<N> {
             clocks: [None; MAX_SYSTEMS],
             position_ecef_m: None,
             geodetic: None,
+            linearisation: None,
             correction_enu_m: [0.0; 3],
             clock_m: [None; MAX_SYSTEMS],
             iterations: 0,
@@ -96,7 +128,42 @@ fn clock_column(cols: &[Option<System>; MAX_SYSTEMS], sys: System) -> Option<usi
     cols.iter().position(|c| *c == Some(sys))
 }
 
-/// Solve the subset `mask` (indexed like the epoch's satellites).
+/// Where Gauss-Newton starts, and what it may reuse (docs/CORE.md, "Do the
+/// work once").
+#[derive(Debug, Clone, Copy)]
+pub enum Start<'a, const N: usize> {
+    /// From the epoch's a-priori position, or the Earth's centre.
+    Cold,
+    /// From a previous epoch's solution (the engine's warm start).
+    Fix(Fix),
+    /// From another solution of the *same* epoch (an FDE subset): its
+    /// position and clocks, and its per-satellite elevations and sigmas,
+    /// which stay valid while the point moves less than [`RELINEARISE_M`].
+    Sibling(&'a Solution<N>),
+}
+
+/// A position and receiver clocks to start Gauss-Newton from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Fix {
+    pub time_s: f64,
+    pub position_ecef_m: [f64; 3],
+    /// Receiver clock bias per system, m, in `System::ALL` order.
+    pub clock_m: [Option<f64>; MAX_SYSTEMS],
+}
+
+impl Fix {
+    /// The fix of a pseudorange solution (none for the linearised form).
+    pub fn of<const N: usize>(time_s: f64, sol: &Solution<N>) -> Option<Fix> {
+        sol.position_ecef_m.map(|position_ecef_m| Fix {
+            time_s,
+            position_ecef_m,
+            clock_m: sol.clock_m,
+        })
+    }
+}
+
+/// Solve the subset `mask` (indexed like the epoch's satellites), cold.
 pub fn solve<const N: usize>(
     cfg: &Config,
     epoch: &Epoch<'_>,
@@ -116,13 +183,26 @@ pub fn solve_into<const N: usize>(
     mask: &[bool; N],
     out: &mut Solution<N>,
 ) -> Result<(), RaimError> {
+    solve_from(cfg, epoch, mask, Start::Cold, out)
+}
+
+/// [`solve_into`] from a [`Start`]: a warm start from the last epoch's fix,
+/// or from a solution of the same epoch whose per-satellite model is reused.
+pub fn solve_from<const N: usize>(
+    cfg: &Config,
+    epoch: &Epoch<'_>,
+    mask: &[bool; N],
+    start: Start<'_, N>,
+    out: &mut Solution<N>,
+) -> Result<(), RaimError> {
+    let sibling = match start {
+        Start::Sibling(s) => Some(s),
+        _ => None,
+    };
     match epoch.observations {
-        Observations::Linear { sats } => solve_linear(cfg, sats, mask, out),
+        Observations::Linear { sats } => solve_linear(cfg, sats, mask, sibling, out),
         Observations::Ranges { sats, apriori_m } => {
-            let (x, clock, cols, iterations) = gauss_newton(cfg, sats, apriori_m, mask)?;
-            // Re-linearise once more at the converged point so the reported
-            // model (residuals, parity) is exactly at x.
-            finish_ranges(cfg, epoch, mask, x, clock, &cols, iterations, out)
+            gauss_newton(cfg, sats, apriori_m, mask, start, out)
         }
     }
 }
@@ -130,12 +210,24 @@ pub fn solve_into<const N: usize>(
 // The helpers below are kept out of line so that their large locals
 // (model buffers of N rows) occupy the stack one call at a time.
 
+/// The elevation and sigma of the epoch satellite `index` as a sibling
+/// solution of the same epoch has them (same line of sight, same model).
+fn sibling_model<const N: usize>(
+    sibling: Option<&Solution<N>>,
+    index: usize,
+) -> Option<(f64, f64)> {
+    let s = sibling?;
+    let row = s.row_of(index)?;
+    Some((*s.elevation_rad.get(row)?, *s.sigma_m.get(row)?))
+}
+
 /// The linearised form: one least-squares solve at the given point.
 #[inline(never)]
 fn solve_linear<const N: usize>(
     cfg: &Config,
     sats: &[LinearObservation],
     mask: &[bool; N],
+    sibling: Option<&Solution<N>>,
     out: &mut Solution<N>,
 ) -> Result<(), RaimError> {
     let mut b = Builder::<N>::new(
@@ -155,8 +247,15 @@ fn solve_linear<const N: usize>(
             s.los_enu[1] / norm,
             s.los_enu[2] / norm,
         ];
-        let el = crate::frames::elevation_rad(u);
-        let sigma = s.sigma_m.unwrap_or_else(|| cfg.sigma_model.sigma_m(el));
+        // The elevation and sigma depend on the line of sight alone, so a
+        // sibling's are bit for bit what would be computed here.
+        let (el, sigma) = match sibling_model(sibling, i) {
+            Some(v) => v,
+            None => {
+                let el = crate::frames::elevation_rad(u);
+                (el, s.sigma_m.unwrap_or_else(|| cfg.sigma_model.sigma_m(el)))
+            }
+        };
         b.push(i, s.id, u, s.residual_m, sigma, el)?;
     }
     b.parity_into(&mut out.parity)?;
@@ -172,49 +271,134 @@ fn solve_linear<const N: usize>(
     b.fill(out);
     out.position_ecef_m = None;
     out.geodetic = None;
+    out.linearisation = None;
     out.correction_enu_m = [dx[0], dx[1], dx[2]];
     out.clock_m = clock_m;
     out.iterations = 1;
     Ok(())
 }
 
-/// Weighted Gauss-Newton from the a-priori point (or the Earth's centre):
-/// position, clock per system, clock columns and the iteration count.
+/// The local frame of one linearisation point: the point, its geodetic
+/// coordinates and the ECEF-to-ENU rotation. Elevations and sigmas are
+/// computed in it and reused until the point moves by [`RELINEARISE_M`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Linearisation {
+    pub point_ecef_m: [f64; 3],
+    pub geodetic: Geodetic,
+    pub rotation: Matrix3<f64>,
+}
+
+impl Linearisation {
+    fn at(point_ecef_m: [f64; 3], near: Option<&Linearisation>) -> Self {
+        let geodetic = match near {
+            Some(l) => ecef_to_geodetic_from(point_ecef_m, l.geodetic.lat_rad),
+            None => ecef_to_geodetic(point_ecef_m),
+        };
+        Linearisation {
+            point_ecef_m,
+            geodetic,
+            rotation: enu_rotation(&geodetic),
+        }
+    }
+
+    fn distance_m(&self, x: &[f64; 3]) -> f64 {
+        let d = [
+            x[0] - self.point_ecef_m[0],
+            x[1] - self.point_ecef_m[1],
+            x[2] - self.point_ecef_m[2],
+        ];
+        libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    }
+}
+
+/// Weighted Gauss-Newton (SPEC §1) from `start`, filling `out` with the
+/// parity quantities of the model at the reported position.
+///
+/// Work done once (docs/CORE.md, "Do the work once"): the geodetic
+/// conversion, the ENU rotation, the elevations and the sigma model are
+/// evaluated at a linearisation point and reused on later iterations (and,
+/// through [`Start::Sibling`], by the FDE subsets of the same epoch) until
+/// the position has moved by more than [`RELINEARISE_M`]. Only the range,
+/// the unit line of sight and the residual are formed on every iteration.
+/// The iteration stops when the position step is below
+/// `cfg.convergence_m`. Once a step is small enough ([`PARITY_STEP_SCALE_M`]), the next
+/// iteration builds the full parity model instead of the bare least-squares
+/// step, so the converged iteration is also the final model: the reported
+/// position is its least-squares estimate (the point plus the last step, <
+/// `convergence_m`), and `correction_enu_m` is zero.
 #[inline(never)]
-#[allow(clippy::type_complexity)]
 fn gauss_newton<const N: usize>(
     cfg: &Config,
     sats: &[RangeObservation],
     apriori_m: Option<[f64; 3]>,
     mask: &[bool; N],
-) -> Result<
-    (
-        [f64; 3],
-        [f64; MAX_SYSTEMS],
-        [Option<System>; MAX_SYSTEMS],
-        u32,
-    ),
-    RaimError,
-> {
+    start: Start<'_, N>,
+    out: &mut Solution<N>,
+) -> Result<(), RaimError> {
     let selected = || {
         sats.iter()
             .enumerate()
             .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
     };
-    let (cols, _) = clock_columns(selected().map(|(_, s)| s.id.system));
-    let mut x = apriori_m.unwrap_or([0.0; 3]);
+    // One builder for all iterations: its rows are the selected
+    // satellites in order, and its per-row elevations and sigmas are the
+    // cache, valid while `cached` (same linearisation, on the surface).
+    let mut b = Builder::<N>::new(selected().map(|(_, s)| s.id.system));
+    let cols = b.cols;
+    let mut cached = false;
+    let mut lin: Option<Linearisation> = None;
+    let (mut x, start_clock) = match start {
+        Start::Cold => (apriori_m.unwrap_or([0.0; 3]), [None; MAX_SYSTEMS]),
+        Start::Fix(f) => (f.position_ecef_m, f.clock_m),
+        Start::Sibling(s) => {
+            lin = s.linearisation;
+            if lin.is_some() {
+                cached = true;
+                for (k, (i, _)) in selected().enumerate() {
+                    match (
+                        sibling_model(Some(s), i),
+                        b.el.get_mut(k),
+                        b.sigma.get_mut(k),
+                    ) {
+                        (Some((el, sigma)), Some(e), Some(g)) => {
+                            *e = el;
+                            *g = sigma;
+                        }
+                        _ => cached = false,
+                    }
+                }
+            }
+            (
+                s.position_ecef_m.or(apriori_m).unwrap_or([0.0; 3]),
+                s.clock_m,
+            )
+        }
+    };
+    // Clock per column, from the start's clock of each column's system.
     let mut clock = [0.0; MAX_SYSTEMS];
+    for (c, sys) in clock.iter_mut().zip(cols.iter()) {
+        if let Some(v) = sys.and_then(|s| start_clock.get(s.index()).copied().flatten()) {
+            *c = v;
+        }
+    }
     let mut last_step_m = f64::INFINITY;
     let mut iterations = 0;
-    let mut converged = false;
     while iterations < cfg.max_iterations {
         iterations += 1;
         let radius = libm::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
         let on_surface = radius > SURFACE_RADIUS_MIN_M;
-        let g = ecef_to_geodetic(x);
-        let rot = enu_rotation(&g);
-        let mut b = Builder::<N>::new(selected().map(|(_, s)| s.id.system));
-        for (i, s) in selected() {
+        if on_surface
+            && lin
+                .as_ref()
+                .is_none_or(|l| !(l.distance_m(&x) <= RELINEARISE_M))
+        {
+            lin = Some(Linearisation::at(x, lin.as_ref()));
+            cached = false;
+        }
+        let frame = if on_surface { lin } else { None };
+        let reuse = cached && frame.is_some();
+        b.n = 0;
+        for (k, (i, s)) in selected().enumerate() {
             let d = [
                 s.position_m[0] - x[0],
                 s.position_m[1] - x[1],
@@ -232,120 +416,88 @@ fn gauss_newton<const N: usize>(
             let u_ecef = [d[0] / range, d[1] / range, d[2] / range];
             // On the surface, use ENU so the model is final; near the
             // centre, ECEF axes are as good as any (position columns
-            // are rotated back below).
-            let u = if on_surface {
-                rotate(&rot, u_ecef)
-            } else {
-                u_ecef
-            };
-            let el = if on_surface {
-                crate::frames::elevation_rad(u)
-            } else {
-                core::f64::consts::FRAC_PI_2
+            // are rotated back below) and the weights are unit.
+            let (u, el, sigma) = match &frame {
+                Some(l) => {
+                    let u = rotate(&l.rotation, u_ecef);
+                    let (el, sigma) = match (reuse, b.el.get(k), b.sigma.get(k)) {
+                        (true, Some(&el), Some(&sigma)) => (el, sigma),
+                        _ => {
+                            let el = crate::frames::elevation_rad(u);
+                            (el, s.sigma_m.unwrap_or_else(|| cfg.sigma_model.sigma_m(el)))
+                        }
+                    };
+                    (u, el, sigma)
+                }
+                None => (
+                    u_ecef,
+                    core::f64::consts::FRAC_PI_2,
+                    s.sigma_m.unwrap_or(1.0),
+                ),
             };
             let col = clock_column(&cols, s.id.system).unwrap_or(0);
             let z = s.pseudorange_m - range - clock.get(col).copied().unwrap_or(0.0);
-            let sigma = match s.sigma_m {
-                Some(v) => v,
-                None if on_surface => cfg.sigma_model.sigma_m(el),
-                None => 1.0,
-            };
             b.push(i, s.id, u, z, sigma, el)?;
         }
-        // A step needs only the least-squares solution, not the
-        // parity quantities (those come once, at the solution).
-        let dx = b.least_squares()?;
-        let step_local = [dx[0], dx[1], dx[2]];
-        let step = if on_surface {
-            unrotate(&rot, step_local)
+        cached = frame.is_some();
+        let full =
+            frame.is_some() && last_step_m * last_step_m < cfg.convergence_m * PARITY_STEP_SCALE_M;
+        // A step needs only the least-squares solution; the parity
+        // quantities come once, with the final model.
+        let dx = if full {
+            b.parity_into(&mut out.parity)?;
+            *out.parity.dx()
         } else {
-            step_local
+            b.least_squares()?
         };
+        let step_local = [dx[0], dx[1], dx[2]];
+        let step = match &frame {
+            Some(l) => unrotate(&l.rotation, step_local),
+            None => step_local,
+        };
+        let step_m = libm::sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2]);
+        if let (Some(l), true) = (frame, step_m < cfg.convergence_m) {
+            // Converged: this iteration's model, at x, is the solution.
+            if !full {
+                b.parity_into(&mut out.parity)?;
+            }
+            let dx = *out.parity.dx();
+            let mut clock_m = [None; MAX_SYSTEMS];
+            for (j, sys) in cols.iter().enumerate() {
+                if let Some(sys) = sys {
+                    let v = clock.get(j).copied().unwrap_or(0.0)
+                        + dx.get(3 + j).copied().unwrap_or(0.0);
+                    if let Some(c) = clock_m.get_mut(sys.index()) {
+                        *c = Some(v);
+                    }
+                }
+            }
+            b.fill(out);
+            let x_ls = [x[0] + step[0], x[1] + step[1], x[2] + step[2]];
+            out.clocks = cols;
+            out.position_ecef_m = Some(x_ls);
+            out.geodetic = Some(ecef_to_geodetic_from(x_ls, l.geodetic.lat_rad));
+            out.linearisation = Some(l);
+            out.correction_enu_m = [0.0; 3];
+            out.clock_m = clock_m;
+            out.iterations = iterations;
+            return Ok(());
+        }
         for (xk, dk) in x.iter_mut().zip(step.iter()) {
             *xk += dk;
         }
         for (j, c) in clock.iter_mut().enumerate() {
             *c += dx.get(3 + j).copied().unwrap_or(0.0);
         }
-        last_step_m = libm::sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2]);
+        last_step_m = step_m;
         if !last_step_m.is_finite() {
             break;
         }
-        if on_surface && last_step_m < cfg.convergence_m {
-            converged = true;
-            break;
-        }
     }
-    if !converged {
-        return Err(RaimError::NoConvergence {
-            iterations,
-            step_m: last_step_m,
-        });
-    }
-    Ok((x, clock, cols, iterations))
-}
-
-/// Build the final model at the converged position `x`.
-#[inline(never)]
-#[allow(clippy::too_many_arguments)]
-fn finish_ranges<const N: usize>(
-    cfg: &Config,
-    epoch: &Epoch<'_>,
-    mask: &[bool; N],
-    x: [f64; 3],
-    clock: [f64; MAX_SYSTEMS],
-    cols: &[Option<System>; MAX_SYSTEMS],
-    iterations: u32,
-    out: &mut Solution<N>,
-) -> Result<(), RaimError> {
-    let Observations::Ranges { sats, .. } = epoch.observations else {
-        return Err(RaimError::TooFewSatellites { have: 0, need: 1 });
-    };
-    let g = ecef_to_geodetic(x);
-    let rot = enu_rotation(&g);
-    let mut b = Builder::<N>::new(
-        sats.iter()
-            .enumerate()
-            .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
-            .map(|(_, s)| s.id.system),
-    );
-    for (i, s) in sats
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
-    {
-        let d = [
-            s.position_m[0] - x[0],
-            s.position_m[1] - x[1],
-            s.position_m[2] - x[2],
-        ];
-        let range = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        let u = rotate(&rot, [d[0] / range, d[1] / range, d[2] / range]);
-        let el = crate::frames::elevation_rad(u);
-        let col = clock_column(cols, s.id.system).unwrap_or(0);
-        let z = s.pseudorange_m - range - clock.get(col).copied().unwrap_or(0.0);
-        let sigma = s.sigma_m.unwrap_or_else(|| cfg.sigma_model.sigma_m(el));
-        b.push(i, s.id, u, z, sigma, el)?;
-    }
-    b.parity_into(&mut out.parity)?;
-    let dx = *out.parity.dx();
-    let mut clock_m = [None; MAX_SYSTEMS];
-    for (j, sys) in cols.iter().enumerate() {
-        if let Some(sys) = sys {
-            let v = clock.get(j).copied().unwrap_or(0.0) + dx.get(3 + j).copied().unwrap_or(0.0);
-            if let Some(c) = clock_m.get_mut(sys.index()) {
-                *c = Some(v);
-            }
-        }
-    }
-    b.fill(out);
-    out.clocks = *cols;
-    out.position_ecef_m = Some(x);
-    out.geodetic = Some(g);
-    out.correction_enu_m = [dx[0], dx[1], dx[2]];
-    out.clock_m = clock_m;
-    out.iterations = iterations;
-    Ok(())
+    Err(RaimError::NoConvergence {
+        iterations,
+        step_m: last_step_m,
+    })
 }
 
 /// Accumulates whitened rows [-u, onehot] / sigma and z / sigma.
@@ -462,3 +614,7 @@ impl<const N: usize> Builder<N> {
         Ok(qr.solve_t(&rhs))
     }
 }
+
+#[cfg(test)]
+#[path = "solve_tests.rs"]
+mod tests;

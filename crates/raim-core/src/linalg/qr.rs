@@ -8,6 +8,7 @@
 
 use crate::error::RaimError;
 use crate::measurement::MAX_STATES;
+use crate::real::Real;
 
 /// A column whose Householder pivot falls below this fraction of the
 /// column's own norm is treated as linearly dependent (rank deficiency).
@@ -15,31 +16,46 @@ use crate::measurement::MAX_STATES;
 /// thousands), far beyond anything a protection level could use.
 pub const RANK_TOLERANCE: f64 = 1e-9;
 
-/// The factorisation of an `n x m` matrix, column-major.
+/// The rank tolerance in precision `T`: [`RANK_TOLERANCE`], but never below
+/// 100 machine epsilons (1.2e-5 in f32), under which a pivot is rounding
+/// noise: in f32 a dependent column leaves a pivot of ~1e-7, which 1e-9
+/// would accept.
+pub fn rank_tolerance<T: Real>() -> T {
+    let floor = 100.0 * T::EPS.to_f64();
+    T::of(if floor > RANK_TOLERANCE {
+        floor
+    } else {
+        RANK_TOLERANCE
+    })
+}
+
+/// The factorisation of an `n x m` matrix, column-major, in precision `T`
+/// (the build's [`crate::real::Stat`] on the statistics path; `f64` by
+/// default).
 #[derive(Debug, Clone)]
-pub struct Householder<const N: usize> {
+pub struct Householder<const N: usize, T: Real = f64> {
     n: usize,
     m: usize,
     /// Column k holds the unit Householder vector v_k in rows k..n, and the
     /// strictly upper part of T in rows 0..k of later columns.
-    a: [[f64; N]; MAX_STATES],
+    a: [[T; N]; MAX_STATES],
     /// Diagonal of T.
-    diag: [f64; MAX_STATES],
+    diag: [T; MAX_STATES],
 }
 
-impl<const N: usize> Householder<N> {
+impl<const N: usize, T: Real> Householder<N, T> {
     /// An empty factorisation (0 x 0), to be filled by [`Self::factor_from`].
     pub fn empty() -> Self {
         Householder {
             n: 0,
             m: 0,
-            a: [[0.0; N]; MAX_STATES],
-            diag: [0.0; MAX_STATES],
+            a: [[T::zero(); N]; MAX_STATES],
+            diag: [T::zero(); MAX_STATES],
         }
     }
 
     /// Factor the first `n` rows and `m` columns of the column-major `h`.
-    pub fn factor(h: &[[f64; N]; MAX_STATES], n: usize, m: usize) -> Result<Self, RaimError> {
+    pub fn factor(h: &[[T; N]; MAX_STATES], n: usize, m: usize) -> Result<Self, RaimError> {
         let mut qr = Self::empty();
         qr.factor_from(h, n, m)?;
         Ok(qr)
@@ -48,7 +64,7 @@ impl<const N: usize> Householder<N> {
     /// [`Self::factor`] into existing storage (no N-sized value on the stack).
     pub fn factor_from(
         &mut self,
-        h: &[[f64; N]; MAX_STATES],
+        h: &[[T; N]; MAX_STATES],
         n: usize,
         m: usize,
     ) -> Result<(), RaimError> {
@@ -67,7 +83,7 @@ impl<const N: usize> Householder<N> {
         self.n = n;
         self.m = m;
         self.a = *h;
-        self.diag = [0.0; MAX_STATES];
+        self.diag = [T::zero(); MAX_STATES];
         for k in 0..m {
             let (left, right) = self.a.split_at_mut(k + 1);
             let Some(col) = left.last_mut() else {
@@ -84,8 +100,8 @@ impl<const N: usize> Householder<N> {
             if !ok {
                 return Err(RaimError::RankDeficient {
                     column: k,
-                    pivot: if full_norm > 0.0 {
-                        alpha / full_norm
+                    pivot: if full_norm > T::zero() {
+                        (alpha / full_norm).to_f64()
                     } else {
                         0.0
                     },
@@ -111,33 +127,37 @@ impl<const N: usize> Householder<N> {
 
     /// x <- U^T x (first n entries). Entries m..n are then the parity
     /// vector U2^T x (SPEC §2).
-    pub fn apply_ut(&self, x: &mut [f64; N]) {
+    pub fn apply_ut(&self, x: &mut [T; N]) {
         for col in self.a.iter().take(self.m).enumerate() {
             reflect(col.1, x, col.0, self.n);
         }
     }
 
     /// x <- U x (first n entries): the inverse of [`Self::apply_ut`].
-    pub fn apply_u(&self, x: &mut [f64; N]) {
+    pub fn apply_u(&self, x: &mut [T; N]) {
         for (k, col) in self.a.iter().take(self.m).enumerate().rev() {
             reflect(col, x, k, self.n);
         }
     }
 
     /// T1[i][j] for i <= j < m, zero below the diagonal.
-    pub fn t(&self, i: usize, j: usize) -> f64 {
+    pub fn t(&self, i: usize, j: usize) -> T {
         if i > j || j >= self.m {
-            0.0
+            T::zero()
         } else if i == j {
-            self.diag.get(i).copied().unwrap_or(0.0)
+            self.diag.get(i).copied().unwrap_or(T::zero())
         } else {
-            self.a.get(j).and_then(|c| c.get(i)).copied().unwrap_or(0.0)
+            self.a
+                .get(j)
+                .and_then(|c| c.get(i))
+                .copied()
+                .unwrap_or(T::zero())
         }
     }
 
     /// Solve T1 x = y for the first m entries (column-oriented back
     /// substitution: column j of T1 above the diagonal is stored in a[j][..j]).
-    pub fn solve_t(&self, y: &[f64; MAX_STATES]) -> [f64; MAX_STATES] {
+    pub fn solve_t(&self, y: &[T; MAX_STATES]) -> [T; MAX_STATES] {
         let mut x = *y;
         for j in (0..self.m).rev() {
             let (Some(col), Some(&d)) = (self.a.get(j), self.diag.get(j)) else {
@@ -151,63 +171,73 @@ impl<const N: usize> Householder<N> {
             *xj /= d;
             let v = *xj;
             for (xi, t) in head.iter_mut().zip(col.iter()) {
-                *xi -= t * v;
+                *xi -= *t * v;
             }
         }
         for v in x.iter_mut().skip(self.m) {
-            *v = 0.0;
+            *v = T::zero();
         }
         x
     }
 
     /// Solve T1^T x = y (forward substitution: row i of T1^T is column i
     /// of T1, stored in a[i][..i]).
-    pub fn solve_tt(&self, y: &[f64; MAX_STATES]) -> [f64; MAX_STATES] {
-        let mut x = [0.0; MAX_STATES];
+    pub fn solve_tt(&self, y: &[T; MAX_STATES]) -> [T; MAX_STATES] {
+        let mut x = [T::zero(); MAX_STATES];
         for (i, (col, &d)) in self.a.iter().zip(self.diag.iter()).take(self.m).enumerate() {
             let (head, tail) = x.split_at_mut(i);
-            let dot: f64 = head.iter().zip(col.iter()).map(|(a, b)| a * b).sum();
+            let dot = dot(head.iter(), col.iter());
             if let (Some(xi), Some(yi)) = (tail.first_mut(), y.get(i)) {
-                *xi = (yi - dot) / d;
+                *xi = (*yi - dot) / d;
             }
         }
         x
     }
 }
 
-fn norm<'a>(it: impl Iterator<Item = &'a f64>) -> f64 {
+/// sum a_i b_i, left to right (the order of the f64 `Iterator::sum` it
+/// replaces, so f64 results are unchanged).
+#[inline(always)]
+pub(crate) fn dot<'a, T: Real>(
+    a: impl Iterator<Item = &'a T>,
+    b: impl Iterator<Item = &'a T>,
+) -> T {
+    a.zip(b).fold(T::zero(), |acc, (x, y)| acc + *x * *y)
+}
+
+fn norm<'a, T: Real>(it: impl Iterator<Item = &'a T>) -> T {
     // Scaled to avoid overflow on huge (ECEF-sized) entries.
-    let mut scale = 0.0f64;
-    let mut ssq = 1.0f64;
+    let mut scale = T::zero();
+    let mut ssq = T::one();
     for &v in it {
-        let a = libm::fabs(v);
-        if a > 0.0 {
+        let a = v.abs();
+        if a > T::zero() {
             if scale < a {
-                ssq = 1.0 + ssq * (scale / a) * (scale / a);
+                ssq = T::one() + ssq * (scale / a) * (scale / a);
                 scale = a;
             } else {
                 ssq += (a / scale) * (a / scale);
             }
         }
     }
-    scale * libm::sqrt(ssq)
+    scale * ssq.sqrt()
 }
 
 /// Turn `x` (rows k..n of a column) into the unit Householder vector v with
 /// (I - 2 v v^T) x = alpha e1. Returns alpha and whether the pivot is usable.
-fn make_reflector(x: &mut [f64], full_norm: f64) -> (f64, bool) {
+fn make_reflector<T: Real>(x: &mut [T], full_norm: T) -> (T, bool) {
     let sigma = norm(x.iter());
     let Some(x0) = x.first_mut() else {
-        return (0.0, false);
+        return (T::zero(), false);
     };
-    let alpha = if *x0 >= 0.0 { -sigma } else { sigma };
-    if !(sigma > RANK_TOLERANCE * full_norm) || !sigma.is_finite() {
+    let alpha = if *x0 >= T::zero() { -sigma } else { sigma };
+    if !(sigma > rank_tolerance::<T>() * full_norm) || !sigma.is_finite() {
         return (sigma, false);
     }
     // v = x - alpha e1, then normalise.
     *x0 -= alpha;
     let vnorm = norm(x.iter());
-    if !(vnorm > 0.0) {
+    if !(vnorm > T::zero()) {
         return (sigma, false);
     }
     for v in x.iter_mut() {
@@ -217,17 +247,17 @@ fn make_reflector(x: &mut [f64], full_norm: f64) -> (f64, bool) {
 }
 
 /// y[k..n] <- (I - 2 v v^T) y[k..n] with v stored in col[k..n].
-fn reflect<const N: usize>(col: &[f64; N], y: &mut [f64; N], k: usize, n: usize) {
-    let dot: f64 = col
+#[inline(always)]
+fn reflect<const N: usize, T: Real>(col: &[T; N], y: &mut [T; N], k: usize, n: usize) {
+    let d = col
         .iter()
         .zip(y.iter())
         .take(n)
         .skip(k)
-        .map(|(v, w)| v * w)
-        .sum();
-    let f = 2.0 * dot;
+        .fold(T::zero(), |acc, (v, w)| acc + *v * *w);
+    let f = d + d;
     for (v, w) in col.iter().zip(y.iter_mut()).take(n).skip(k) {
-        *w -= f * v;
+        *w -= f * *v;
     }
 }
 

@@ -11,8 +11,7 @@ use crate::error::RaimError;
 use crate::measurement::{Epoch, SatId};
 use crate::snapshot::detection::{TestStatistic, Thresholds};
 use crate::snapshot::lraim::rank;
-use crate::solve::{solve_into, Solution};
-use crate::stats::dist;
+use crate::solve::{solve_from, Solution, Start};
 
 /// Most exclusions reported per epoch (the capacity of the list; the
 /// configured `max_exclusions` is clamped to it).
@@ -262,7 +261,7 @@ fn exclude_pair<const N: usize>(
         return Ok(PairOutcome::NotFound);
     };
     if let Some(alt) = second {
-        let t2_we = dist::chi2_quantile_upper(cfg.pwe, dof_pair as u32)?;
+        let t2_we = thresholds.wrong_exclusion(cfg.pwe, dof_pair)?;
         if !alternative_rejected(alt.statistic, t2_we) {
             let (a, b) = alt.rows;
             let other = if a != j && a != k { a } else { b };
@@ -275,7 +274,7 @@ fn exclude_pair<const N: usize>(
         }
     }
     let subset = without(&without(mask, src_j), src_k);
-    match solve_into::<N>(cfg, epoch, &subset, scratch) {
+    match solve_from::<N>(cfg, epoch, &subset, Start::Sibling(current), scratch) {
         Ok(()) => {}
         Err(RaimError::RankDeficient { .. }) | Err(RaimError::TooFewSatellites { .. }) => {
             return Ok(PairOutcome::NotFound)
@@ -398,7 +397,13 @@ pub fn run<const N: usize>(
             }
         }
         let next_mask = without(&mask, best_src);
-        match solve_into::<N>(cfg, epoch, &next_mask, &mut scratch) {
+        match solve_from::<N>(
+            cfg,
+            epoch,
+            &next_mask,
+            Start::Sibling(current),
+            &mut scratch,
+        ) {
             Ok(()) => {}
             Err(RaimError::RankDeficient { .. }) | Err(RaimError::TooFewSatellites { .. }) => {
                 out.cause = Some(AlarmCause::SubsetGeometry { excluded: best_id });
@@ -416,7 +421,7 @@ pub fn run<const N: usize>(
             // cannot be attributed safely.
             if let Some(alt) = strongest_alternative(&current.parity, best.row, cfg.min_s_ii) {
                 let dof_alt = current.parity.dof() - 1;
-                let threshold = dist::chi2_quantile_upper(cfg.pwe, dof_alt as u32)?;
+                let threshold = thresholds.wrong_exclusion(cfg.pwe, dof_alt)?;
                 if !alternative_rejected(test_now.statistic - alt.1, threshold) {
                     out.cause = Some(AlarmCause::Ambiguous {
                         best: best_id,

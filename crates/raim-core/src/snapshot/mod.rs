@@ -6,26 +6,59 @@ pub mod detection;
 pub mod fde;
 pub mod lraim;
 pub mod protection;
+pub mod threshold_table;
 
 use crate::config::{Config, FdeMethod};
 use crate::error::RaimError;
 use crate::measurement::{Epoch, SatId};
 use crate::result::{Decision, EpochResult, SatelliteResult};
-use crate::solve::{solve_into, Solution};
+use crate::solve::{solve_from, Fix, Solution, Start};
 use detection::Thresholds;
 use fde::FdeOutcome;
 
+/// A warm start is used only if the last fix is at most this old (s): at
+/// 300 m/s, 60 s is 18 km, still far inside Gauss-Newton's convergence
+/// region, and a stale fix is never worse than the Earth's centre.
+pub const WARM_START_MAX_AGE_S: f64 = 60.0;
+
 /// The snapshot engine: one epoch in, one result out; it keeps the
-/// chi-square thresholds per dof between epochs.
+/// chi-square thresholds per dof between epochs and, when enabled, the last
+/// fix for a Gauss-Newton warm start.
 #[derive(Debug, Clone, Default)]
 pub struct Snapshot<const N: usize> {
     pub(crate) thresholds: Thresholds<N>,
+    warm_start: bool,
+    last_fix: Option<Fix>,
 }
 
 impl<const N: usize> Snapshot<N> {
     pub fn new() -> Self {
         Snapshot {
             thresholds: Thresholds::default(),
+            warm_start: false,
+            last_fix: None,
+        }
+    }
+
+    /// Start Gauss-Newton from the last epoch's solution (when it is at
+    /// most [`WARM_START_MAX_AGE_S`] old) instead of the a-priori position.
+    /// Off by default: with it, an epoch's answer depends on the previous
+    /// epoch at the `convergence_m` level, so two engines fed different
+    /// histories (a lost frame on the link, a host reference run epoch by
+    /// epoch) are no longer bit-exact (docs/CORE.md, "Do the work once").
+    pub fn set_warm_start(&mut self, on: bool) {
+        self.warm_start = on;
+        if !on {
+            self.last_fix = None;
+        }
+    }
+
+    fn start(&self, time_s: f64) -> Start<'static, N> {
+        match self.last_fix {
+            Some(f) if self.warm_start && libm::fabs(time_s - f.time_s) <= WARM_START_MAX_AGE_S => {
+                Start::Fix(f)
+            }
+            _ => Start::Cold,
         }
     }
 
@@ -58,7 +91,8 @@ impl<const N: usize> Snapshot<N> {
         for v in mask.iter_mut().take(epoch.len()) {
             *v = true;
         }
-        solve_into::<N>(cfg, epoch, &mask, &mut outcome.solution)?;
+        let start = self.start(epoch.time_s);
+        solve_from::<N>(cfg, epoch, &mask, start, &mut outcome.solution)?;
         let initial_test = fde::test(cfg, &mut self.thresholds, &outcome.solution)?;
         let satellites = per_satellite(cfg, &outcome.solution);
         let multifault = match cfg.fde_method {
@@ -79,6 +113,9 @@ impl<const N: usize> Snapshot<N> {
             )?,
         };
         let sol = &outcome.solution;
+        if self.warm_start {
+            self.last_fix = Fix::of(epoch.time_s, sol).or(self.last_fix);
+        }
         let dof = sol.parity.dof();
         let (_, lambda_md) = self.thresholds.get(cfg.pfa, cfg.pmd, dof)?;
         let protection = protection::slope_levels(&sol.parity, lambda_md, cfg.min_s_ii);

@@ -1,0 +1,237 @@
+//! "Do the work once" (issue 10): the reused linearisation, the sibling
+//! start of FDE subsets and the warm start, each against an independent
+//! reference (a model built from scratch at the solution, or a cold solve).
+extern crate std;
+use super::*;
+use crate::frames::elevation_rad;
+use crate::monitor::Raim;
+use crate::testutil::{range_epoch, Rng};
+use nalgebra::{DMatrix, DVector};
+use std::vec::Vec;
+
+const RX: [f64; 3] = [-3_962_108.673, 3_381_309.574, 3_668_678.638];
+const CLOCK: [f64; 5] = [1234.5, -987.0, 0.0, 0.0, 0.0];
+
+fn sky12() -> Vec<(System, u8, f64, f64)> {
+    (0..12)
+        .map(|i| {
+            let sys = if i % 3 == 2 {
+                System::Galileo
+            } else {
+                System::Gps
+            };
+            (
+                sys,
+                i as u8 + 1,
+                (i as f64 * 137.5) % 360.0,
+                7.0 + (i as f64 * 29.0) % 80.0,
+            )
+        })
+        .collect()
+}
+
+/// Observations without a sigma, so the elevation model is used.
+fn modelled(rx: [f64; 3], seed: u64, faults: &[(usize, f64)]) -> Vec<RangeObservation> {
+    range_epoch(rx, &sky12(), &CLOCK, 0.8, &mut Rng::new(seed), faults)
+        .into_iter()
+        .map(|o| RangeObservation { sigma_m: None, ..o })
+        .collect()
+}
+
+/// Independent reference at a given position: geodetic, rotation,
+/// elevations and sigmas evaluated there from scratch, and the weighted
+/// SSE of the linearised model by dense normal equations (nalgebra).
+fn reference_at(
+    cfg: &Config,
+    sats: &[RangeObservation],
+    x: [f64; 3],
+    clock: &[f64],
+) -> (Vec<f64>, Vec<f64>, f64) {
+    let rot = enu_rotation(&ecef_to_geodetic(x));
+    let (mut els, mut sigmas) = (Vec::new(), Vec::new());
+    let n = sats.len();
+    let mut h = DMatrix::zeros(n, 5);
+    let mut z = DVector::zeros(n);
+    for (i, s) in sats.iter().enumerate() {
+        let d = [
+            s.position_m[0] - x[0],
+            s.position_m[1] - x[1],
+            s.position_m[2] - x[2],
+        ];
+        let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let u = rotate(&rot, [d[0] / r, d[1] / r, d[2] / r]);
+        let el = elevation_rad(u);
+        let sigma = cfg.sigma_model.sigma_m(el);
+        els.push(el);
+        sigmas.push(sigma);
+        let c = s.id.system.index();
+        for k in 0..3 {
+            h[(i, k)] = -u[k] / sigma;
+        }
+        h[(i, 3 + c)] = 1.0 / sigma;
+        z[i] = (s.pseudorange_m - r - clock[c]) / sigma;
+    }
+    let hth = h.transpose() * &h;
+    let dx = hth.try_inverse().unwrap() * h.transpose() * &z;
+    let res = &z - &h * dx;
+    (els, sigmas, res.dot(&res))
+}
+
+/// Cold from the Earth's centre: the per-satellite model the solution
+/// carries (computed at a linearisation point within RELINEARISE_M) agrees
+/// with one computed from scratch at the solution, within the stated
+/// bounds; so does the statistic; and the noise-free position is exact.
+#[test]
+fn reused_linearisation_matches_a_model_built_at_the_solution() {
+    const EL_TOL_RAD: f64 = RELINEARISE_EL_RAD;
+    const SIGMA_REL_TOL: f64 = 3e-4;
+    // The SSE moves with the weights: twice the sigma bound, relative.
+    const SSE_REL_TOL: f64 = 6e-4;
+    const POSITION_TOL_M: f64 = 1e-6;
+    let cfg = Config::default();
+    let sats = modelled(RX, 5, &[(4, 20.0)]);
+    let mask = [true; 16];
+    let mut mask12 = mask;
+    mask12.iter_mut().skip(12).for_each(|m| *m = false);
+    let sol = solve::<16>(&cfg, &Epoch::ranges(0.0, &sats, None), &mask12).unwrap();
+    let x = sol.position_ecef_m.unwrap();
+    let lin = sol.linearisation.unwrap();
+    assert!(lin.distance_m(&x) <= RELINEARISE_M);
+    let clock = [sol.clock_m[0].unwrap(), sol.clock_m[1].unwrap()];
+    let (els, sigmas, sse) = reference_at(&cfg, &sats, x, &clock);
+    for k in 0..12 {
+        assert!((sol.elevation_rad[k] - els[k]).abs() <= EL_TOL_RAD, "{k}");
+        assert!(
+            ((sol.sigma_m[k] - sigmas[k]) / sigmas[k]).abs() <= SIGMA_REL_TOL,
+            "{k}"
+        );
+    }
+    assert!(
+        ((sol.parity.sse() - sse) / sse).abs() < SSE_REL_TOL,
+        "{} vs {sse}",
+        sol.parity.sse()
+    );
+    // Noise-free: the position itself.
+    let exact: Vec<RangeObservation> =
+        range_epoch(RX, &sky12(), &CLOCK, 0.0, &mut Rng::new(5), &[])
+            .into_iter()
+            .map(|o| RangeObservation { sigma_m: None, ..o })
+            .collect();
+    let sol = solve::<16>(&cfg, &Epoch::ranges(0.0, &exact, None), &mask12).unwrap();
+    let p = sol.position_ecef_m.unwrap();
+    for k in 0..3 {
+        assert!((p[k] - RX[k]).abs() < POSITION_TOL_M, "{p:?}");
+    }
+}
+
+/// An FDE subset started from the all-in-view solution of the same epoch
+/// (reusing its model) agrees with the cold solve of the same subset, in
+/// fewer iterations.
+#[test]
+fn sibling_start_agrees_with_a_cold_subset_solve() {
+    const POSITION_TOL_M: f64 = 1e-3;
+    const SSE_REL_TOL: f64 = 1e-6;
+    let cfg = Config::default();
+    let sats = modelled(RX, 9, &[(4, 40.0)]);
+    let epoch = Epoch::ranges(0.0, &sats, Some(RX.map(|v| v + 3000.0)));
+    let mut all = [false; 16];
+    all.iter_mut().take(12).for_each(|m| *m = true);
+    let full = solve::<16>(&cfg, &epoch, &all).unwrap();
+    let mut subset = all;
+    subset[4] = false;
+    let cold = solve::<16>(&cfg, &epoch, &subset).unwrap();
+    let mut warm = Solution::<16>::empty();
+    solve_from(&cfg, &epoch, &subset, Start::Sibling(&full), &mut warm).unwrap();
+    let (a, b) = (cold.position_ecef_m.unwrap(), warm.position_ecef_m.unwrap());
+    for k in 0..3 {
+        assert!((a[k] - b[k]).abs() < POSITION_TOL_M, "{a:?} {b:?}");
+    }
+    assert!(((cold.parity.sse() - warm.parity.sse()) / cold.parity.sse()).abs() < SSE_REL_TOL);
+    assert_eq!(cold.ids, warm.ids);
+    assert!(
+        warm.iterations < cold.iterations,
+        "{} vs {}",
+        warm.iterations,
+        cold.iterations
+    );
+    // Linearised input: the sibling's elevations and sigmas are exact.
+    let lin = crate::testutil::linear_epoch(&crate::testutil::SKY8, 1.0, &mut Rng::new(2), &[]);
+    let lin: Vec<_> = lin
+        .into_iter()
+        .map(|o| LinearObservation { sigma_m: None, ..o })
+        .collect();
+    let e = Epoch::linear(0.0, &lin);
+    let mut m8 = [false; 16];
+    m8.iter_mut().take(8).for_each(|m| *m = true);
+    let full = solve::<16>(&cfg, &e, &m8).unwrap();
+    m8[3] = false;
+    let cold = solve::<16>(&cfg, &e, &m8).unwrap();
+    let mut warm = Solution::<16>::empty();
+    solve_from(&cfg, &e, &m8, Start::Sibling(&full), &mut warm).unwrap();
+    assert_eq!(cold.sigma_m, warm.sigma_m);
+    assert_eq!(cold.parity.sse().to_bits(), warm.parity.sse().to_bits());
+}
+
+/// The warm start from the last epoch's fix: a receiver moving 5 m per
+/// 1 s epoch, noise and a fault every 5th epoch; every decision, exclusion
+/// and identification equals the cold engine's, positions agree within
+/// 1e-3 m, and the statistic and PLs within the relinearisation bounds (the
+/// warm engine's model may be evaluated at the last epoch's point, up to
+/// RELINEARISE_M away: sigmas within 3e-4, so D^2 within 6e-4 and the PLs
+/// within 3e-4 + 2e-5 relative), in fewer iterations. A fix
+/// older than WARM_START_MAX_AGE_S is not used (bit-exact with a cold run).
+#[test]
+fn warm_start_agrees_with_cold_start() {
+    const POSITION_TOL_M: f64 = 1e-3;
+    const STAT_REL_TOL: f64 = 6e-4;
+    const PL_REL_TOL: f64 = 3.2e-4;
+    let cfg = Config::default();
+    let (mut worst_stat, mut worst_pl) = (0.0f64, 0.0f64);
+    let mut cold = Raim::<16>::new();
+    let mut warm = Raim::<16>::new();
+    warm.set_warm_start(true);
+    let (mut it_cold, mut it_warm) = (0, 0);
+    let enu = enu_rotation(&ecef_to_geodetic(RX));
+    let east = unrotate(&enu, [1.0, 0.0, 0.0]);
+    for t in 0..30 {
+        let rx = [0, 1, 2].map(|k| RX[k] + 5.0 * t as f64 * east[k]);
+        let faults: Vec<(usize, f64)> = if t % 5 == 4 {
+            std::vec![(t % 12, 60.0)]
+        } else {
+            std::vec![]
+        };
+        let sats = modelled(rx, 100 + t as u64, &faults);
+        let epoch = Epoch::ranges(t as f64, &sats, Some(RX.map(|v| v + 200.0)));
+        let a = cold.process(&cfg, &epoch).unwrap();
+        let b = warm.process(&cfg, &epoch).unwrap();
+        assert_eq!(a.decision, b.decision, "t={t}");
+        assert_eq!(a.identified, b.identified, "t={t}");
+        let ids = |r: &crate::result::EpochResult<16>| {
+            r.exclusions.iter().map(|e| e.id).collect::<Vec<_>>()
+        };
+        assert_eq!(ids(&a), ids(&b), "t={t}");
+        let (pa, pb) = (a.position_ecef_m.unwrap(), b.position_ecef_m.unwrap());
+        for k in 0..3 {
+            assert!((pa[k] - pb[k]).abs() < POSITION_TOL_M, "t={t}");
+        }
+        let rel = |x: f64, y: f64| ((x - y) / x).abs();
+        worst_stat = worst_stat.max(rel(a.test.statistic, b.test.statistic));
+        worst_pl = worst_pl.max(rel(a.protection.hpl_m, b.protection.hpl_m));
+        worst_pl = worst_pl.max(rel(a.protection.vpl_m, b.protection.vpl_m));
+        it_cold += a.iterations;
+        it_warm += b.iterations;
+    }
+    std::println!("warm vs cold: D^2 {worst_stat:.2e}, PL {worst_pl:.2e} relative; iterations {it_warm} vs {it_cold}");
+    assert!(worst_stat < STAT_REL_TOL, "{worst_stat}");
+    assert!(worst_pl < PL_REL_TOL, "{worst_pl}");
+    assert!(it_warm < it_cold, "{it_warm} vs {it_cold}");
+    // A stale fix (61 s later) is ignored: bit-exact with a fresh engine.
+    let sats = modelled(RX, 7, &[]);
+    let epoch = Epoch::ranges(29.0 + WARM_AGE_PLUS, &sats, Some(RX));
+    let a = Raim::<16>::new().process(&cfg, &epoch).unwrap();
+    let b = warm.process(&cfg, &epoch).unwrap();
+    assert_eq!(a.test.statistic.to_bits(), b.test.statistic.to_bits());
+    assert_eq!(a.position_ecef_m, b.position_ecef_m);
+}
+
+const WARM_AGE_PLUS: f64 = crate::snapshot::WARM_START_MAX_AGE_S + 1.0;
