@@ -119,3 +119,30 @@ fn station_0759_step_detected_and_isolated() {
     assert!((60..=60 + MAX_DELAY_EPOCHS).contains(&alarm), "{alarm}");
     assert_eq!(s["isolated"], "G24");
 }
+
+/// `--pf` refuses a fault that matches no epoch, as the snapshot replay
+/// does (issue 16): G99 is never in view, so the run is an error naming
+/// the spec, with no panic, instead of a silent fault-free run.
+#[test]
+fn fault_matching_nothing_is_refused_under_pf_too() {
+    let out = Command::new(env!("CARGO_BIN_EXE_raim"))
+        .args(args(&[
+            "replay",
+            "--obs",
+            &format!("{DATA}/07590920.05o"),
+            "--nav",
+            &format!("{DATA}/07590920.05n"),
+            "--systems",
+            "G",
+            "--fault",
+            "step:G99:50@+1800",
+            "--pf",
+            "ekf",
+        ]))
+        .output()
+        .expect("spawn raim");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("step:G99:50@+1800"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -352,21 +352,36 @@ fn mean_position(records: &[EpochRecord]) -> Option<[f64; 3]> {
 }
 
 /// The whole replay, without printing (used by the tests too).
+/// The fault plan, refused when a fault touches no epoch of the window
+/// (issue 16); a fault that touches only part of its target is a warning on
+/// stderr. Shared by the snapshot replay and `--pf`.
+fn checked_fault_plan(
+    args: &ReplayArgs,
+    first: f64,
+    epochs: &[PreparedEpoch],
+) -> Result<FaultPlan> {
+    let (plan, labels) = fault_plan(args, first)?;
+    let warnings = {
+        let labelled: Vec<checks::LabelledFault<'_>> = plan
+            .faults
+            .iter()
+            .zip(labels)
+            .map(|(fault, label)| checks::LabelledFault { label, fault })
+            .collect();
+        checks::faults(&labelled, epochs)?
+    };
+    for w in warnings {
+        let _ = writeln!(std::io::stderr(), "{w}");
+    }
+    Ok(plan)
+}
+
 pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
     let cfg = args.core_config();
     cfg.validate()
         .map_err(|e| anyhow::anyhow!("configuration: {e}"))?;
     let (epochs, header, first) = prepare(args)?;
-    let (plan, labels) = fault_plan(args, first)?;
-    let labelled: Vec<checks::LabelledFault<'_>> = plan
-        .faults
-        .iter()
-        .zip(labels)
-        .map(|(fault, label)| checks::LabelledFault { label, fault })
-        .collect();
-    for w in checks::faults(&labelled, &epochs)? {
-        let _ = writeln!(std::io::stderr(), "{w}");
-    }
+    let plan = checked_fault_plan(args, first, &epochs)?;
     let show = std::io::stderr().is_terminal();
     let total = if plan.is_empty() {
         epochs.len()

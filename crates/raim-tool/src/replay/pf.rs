@@ -20,24 +20,28 @@ use raim_gnss::faults::FaultPlan;
 use raim_gnss::ranging::PreparedEpoch;
 use serde::Serialize;
 
-use super::{fault_plan, mean_position, prepare, record, run_core, ReplayArgs, Target};
+use super::{checked_fault_plan, mean_position, prepare, record, run_core, ReplayArgs, Target};
 
 /// Satellite capacity of the PF monitor in replays (GEOP G+E has up to ~20).
 pub const PF_CAPACITY: usize = 32;
 
+/// The filter: `ekf` (extended Kalman filter baseline), `pf` (plain SIR
+/// particle filter baseline), `gapf` (genetic-resampling particle filter,
+/// seed 004's method). Plain comments on the variants: value docs would
+/// switch `--help` to clap's long layout (issue 16's one layout).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize)]
 pub enum PfKind {
-    /// Extended Kalman filter baseline.
+    // Extended Kalman filter baseline.
     Ekf,
-    /// Plain SIR particle filter baseline.
+    // Plain SIR particle filter baseline.
     Pf,
-    /// Genetic-resampling particle filter (seed 004's method).
+    // Genetic-resampling particle filter (seed 004's method).
     Gapf,
 }
 
 #[derive(Debug, Clone, Args)]
 pub struct PfArgs {
-    /// Run the particle-filter RAIM (seed 004) instead of the snapshot monitor.
+    /// Run the particle-filter RAIM (seed 004) instead of the snapshot monitor: ekf (EKF baseline), pf (plain SIR PF baseline) or gapf (genetic-resampling PF).
     #[arg(long, value_enum)]
     pub pf: Option<PfKind>,
     /// Particles per filter: 50, 100, 300 or 1000.
@@ -187,7 +191,7 @@ type Prepared = (Vec<PreparedEpoch>, FaultPlan, Option<[f64; 3]>);
 
 fn load(args: &ReplayArgs) -> Result<Prepared> {
     let (epochs, header, first) = prepare(args)?;
-    let (plan, _labels) = fault_plan(args, first)?;
+    let plan = checked_fault_plan(args, first, &epochs)?;
     let reference = match args.reference {
         super::Reference::Header => header,
         super::Reference::CleanMean => {
