@@ -49,6 +49,9 @@ impl Platform for Board {
             TestFault::Hang => loop {
                 cortex_m::asm::nop();
             },
+            // Deliberate: the fail-loud test (host-tests/tests/qemu_fail_loud.rs)
+            // checks that a panic is recorded and the unit resets. Reachable only
+            // from a `TestFault` frame, on the QEMU board build only.
             TestFault::Panic => panic!("test hook"),
             TestFault::StackOverflow => guard::overflow(0) != 0,
         }
