@@ -111,6 +111,8 @@ pub enum WireError {
         counter: u64,
         last: u64,
     },
+    /// ARAIM's own refusals (issue 12; `araim_msg::AraimWireError`).
+    Araim(crate::araim_msg::AraimWireError),
 }
 
 fn u32_of(v: usize) -> u32 {
@@ -259,6 +261,7 @@ impl core::fmt::Display for WireError {
                     "replayed configuration: counter {counter} <= last {last}"
                 )
             }
+            WireError::Araim(e) => write!(f, "ARAIM: {e}"),
         }
     }
 }

@@ -12,6 +12,7 @@
 //!   `raim_core::EpochResult`.
 //! - [`error`]: the typed errors of a response.
 //! - [`lock`]: the configuration lock and its CRC-32 fingerprint.
+//! - [`araim_msg`]: the ISM, the ARAIM epoch and result (issue 12).
 //! - [`nmea`]: RMC, GGA, GSA, GST and GBS sentences for a solved epoch.
 //! - [`server`]: the firmware's protocol loop, generic over `embedded_io`
 //!   UARTs, so that the host tests it without an emulator.
@@ -36,6 +37,7 @@
     )
 )]
 
+pub mod araim_msg;
 pub mod auth;
 pub mod error;
 pub mod frame;

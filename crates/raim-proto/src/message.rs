@@ -118,6 +118,8 @@ pub enum Command {
     /// a provisioned key, with a valid tag and a counter above every one
     /// accepted since boot.
     AuthConfigure(crate::auth::AuthConfigure),
+    /// ARAIM (issue 12): an ISM frame or an ARAIM epoch (`araim_msg`).
+    Araim(crate::araim_msg::AraimCommand),
 }
 
 /// What a `TestFault` request does.
@@ -182,6 +184,7 @@ pub enum CommandRef<'a> {
     Lock,
     TestFault(TestFault),
     AuthConfigure(&'a crate::auth::AuthConfigure),
+    Araim(crate::araim_msg::AraimCommandRef<'a>),
 }
 
 /// The host's borrowed form of [`Request`].
@@ -266,6 +269,8 @@ pub enum ResponseBody {
     Error(WireError),
     /// The answer to `Lock`: the configuration is now locked until reset.
     LockEngaged,
+    /// The answer to `Command::Araim` (issue 12; `araim_msg`).
+    Araim(crate::araim_msg::AraimAnswer),
 }
 
 #[cfg(test)]

@@ -7,6 +7,8 @@
 //! firmware only supplies the UARTs (`embedded_io::Write`) and a
 //! [`Platform`] (a tick counter and the stack high-water mark).
 
+mod araim;
+
 use embedded_io::Write;
 use raim_core::{Config, Epoch, Raim};
 
@@ -62,6 +64,8 @@ pub struct Server {
     /// The authentication key and the last counter accepted (`auth`).
     auth: Option<(crate::auth::AuthKey, Option<u64>)>,
     status: Status,
+    /// The ISM in force and the ARAIM engines (issue 12; `server/araim.rs`).
+    araim: araim::AraimState,
     scratch: [u8; MAX_RESPONSE_PAYLOAD],
     out: [u8; MAX_RESPONSE_FRAME],
 }
@@ -96,6 +100,7 @@ impl Server {
                 capacity: CAPACITY as u16,
                 ..Status::default()
             },
+            araim: araim::AraimState::new(),
             scratch: [0; MAX_RESPONSE_PAYLOAD],
             out: [0; MAX_RESPONSE_FRAME],
         }
@@ -225,6 +230,7 @@ impl Server {
                 platform,
             ),
             Command::Linear(e) => self.epoch(&Epoch::linear(e.time_s, &e.sats.items), platform),
+            Command::Araim(c) => self.araim(c, platform),
         };
         if let ResponseBody::Result(r) = &body {
             // Sentences cannot exceed 82 characters with the formats used;
@@ -244,7 +250,8 @@ impl Server {
         match c.validate() {
             Ok(()) => {
                 self.config = c;
-                self.config_id.crc32 = config_fingerprint(&self.config);
+                // Covers the ISM in force too (issue 12).
+                self.config_id.crc32 = araim::fingerprint(&self.config, self.araim.ism.as_ref());
                 ResponseBody::Configured
             }
             Err(e) => ResponseBody::Error(e.into()),

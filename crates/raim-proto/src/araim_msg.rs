@@ -1,0 +1,538 @@
+//! ARAIM on the wire (issue 12; docs/PROTOCOL.md "ARAIM"): the integrity
+//! support message (ISM) with the ARAIM configuration, the ARAIM epoch, its
+//! result and its typed errors.
+//!
+//! Each reaches the shared enums through one appended variant
+//! (`Command::Araim`, `ResponseBody::Araim`, `WireError::Araim`), so the
+//! ARAIM messages can grow here without touching the other variants'
+//! indices.
+//!
+//! The core's types (`raim_core::araim::{AraimConfig, Ism, AraimOutput}`)
+//! carry `usize` and no serde derives; the wire forms below mirror them
+//! field by field with fixed-width integers, and convert both ways.
+
+use raim_core::araim::{
+    AraimConfig, AraimError, AraimOutput, FdeAlarm, FdeDecision, Limits, PlOutput, Unavailable,
+};
+use raim_core::measurement::MAX_SYSTEMS;
+use raim_core::{Decision, LinearObservation, Real, SatId, System};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{FieldName, WireError};
+use crate::message::{LinearEpoch, SatList};
+use crate::CAPACITY;
+
+/// The ISM entry of one satellite (ADD ISM content; SPEC §9.1).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct IsmSat {
+    pub id: SatId,
+    /// sigma_URA: the integrity clock-and-ephemeris sigma (m), >= 0.
+    pub sigma_ura_m: f64,
+    /// sigma_URE: the accuracy (continuity) sigma (m), >= 0.
+    pub sigma_ure_m: f64,
+    /// b_nom: the maximum nominal bias (m), >= 0.
+    pub b_nom_m: f64,
+    /// P_sat: the prior probability of a satellite fault, in (0, 1).
+    pub p_sat: f64,
+}
+
+/// `raim_core::araim::AraimConfig` on the wire, field for field (units and
+/// defaults there: LPV-200).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct WireAraimConfig {
+    pub phmi_vert: f64,
+    pub phmi_hor: f64,
+    pub pfa_vert: f64,
+    pub pfa_hor: f64,
+    pub p_thres: f64,
+    pub p_emt: f64,
+    pub val_m: f64,
+    pub hal_m: f64,
+    pub tol_pl_m: f64,
+    pub emt_max_m: f64,
+    pub sigma_acc_max_m: f64,
+    /// The PL that feeds the availability: false = the ADD's bracket
+    /// output (default), true = the exact root.
+    pub pl_exact: bool,
+}
+
+impl From<AraimConfig> for WireAraimConfig {
+    fn from(c: AraimConfig) -> Self {
+        WireAraimConfig {
+            phmi_vert: c.phmi_vert,
+            phmi_hor: c.phmi_hor,
+            pfa_vert: c.pfa_vert,
+            pfa_hor: c.pfa_hor,
+            p_thres: c.p_thres,
+            p_emt: c.p_emt,
+            val_m: c.val_m,
+            hal_m: c.hal_m,
+            tol_pl_m: c.tol_pl_m,
+            emt_max_m: c.emt_max_m,
+            sigma_acc_max_m: c.sigma_acc_max_m,
+            pl_exact: c.pl_output == PlOutput::Exact,
+        }
+    }
+}
+
+impl From<WireAraimConfig> for AraimConfig {
+    fn from(c: WireAraimConfig) -> Self {
+        AraimConfig {
+            phmi_vert: c.phmi_vert,
+            phmi_hor: c.phmi_hor,
+            pfa_vert: c.pfa_vert,
+            pfa_hor: c.pfa_hor,
+            p_thres: c.p_thres,
+            p_emt: c.p_emt,
+            val_m: c.val_m,
+            hal_m: c.hal_m,
+            tol_pl_m: c.tol_pl_m,
+            emt_max_m: c.emt_max_m,
+            sigma_acc_max_m: c.sigma_acc_max_m,
+            pl_output: if c.pl_exact {
+                PlOutput::Exact
+            } else {
+                PlOutput::AddBracket
+            },
+        }
+    }
+}
+
+impl Default for WireAraimConfig {
+    fn default() -> Self {
+        AraimConfig::default().into()
+    }
+}
+
+/// An ISM frame: the ARAIM configuration, P_const per constellation
+/// (indexed by `System::index()`; `None` = constellation not in use) and
+/// the per-satellite entries (up to [`CAPACITY`]). It replaces the ISM in
+/// force as a whole, or not at all.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct IsmFrame {
+    pub config: WireAraimConfig,
+    pub p_const: [Option<f64>; MAX_SYSTEMS],
+    pub sats: SatList<IsmSat>,
+}
+
+/// The host's borrowed form of [`IsmFrame`] (same bytes).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct IsmFrameRef<'a> {
+    pub config: WireAraimConfig,
+    pub p_const: [Option<f64>; MAX_SYSTEMS],
+    pub sats: &'a [IsmSat],
+}
+
+/// The payload of `Command::Araim`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum AraimCommand {
+    /// Replace the ISM and ARAIM configuration in force. Answered
+    /// `AraimAnswer::IsmAccepted` or a typed error (the previous ISM stays).
+    Ism(IsmFrame),
+    /// One linearised epoch through ARAIM (and its FDE after a detection).
+    /// Answered `AraimAnswer::Result` or a typed error.
+    Epoch(LinearEpoch),
+}
+
+/// The host's borrowed form of [`AraimCommand`] (same bytes).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub enum AraimCommandRef<'a> {
+    Ism(IsmFrameRef<'a>),
+    Epoch {
+        time_s: f64,
+        sats: &'a [LinearObservation],
+    },
+}
+
+/// Why an epoch gives no ARAIM service (`raim_core::araim::Unavailable`
+/// with fixed-width integers).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum WireUnavailable {
+    ModeCapacity { needed: u32, capacity: u32 },
+    TooManyEvents { p_exceed_at_max: f64 },
+    Unmonitored { p_unmon: f64, p_thres: f64 },
+    PlNotSolved { axis: u32 },
+    Limits,
+}
+
+fn u32_of(v: usize) -> u32 {
+    u32::try_from(v).unwrap_or(u32::MAX)
+}
+
+impl From<Unavailable> for WireUnavailable {
+    fn from(u: Unavailable) -> Self {
+        match u {
+            Unavailable::ModeCapacity { needed, capacity } => WireUnavailable::ModeCapacity {
+                needed: u32_of(needed),
+                capacity: u32_of(capacity),
+            },
+            Unavailable::TooManyEvents { p_exceed_at_max } => {
+                WireUnavailable::TooManyEvents { p_exceed_at_max }
+            }
+            Unavailable::Unmonitored { p_unmon, p_thres } => {
+                WireUnavailable::Unmonitored { p_unmon, p_thres }
+            }
+            Unavailable::PlNotSolved { axis } => {
+                WireUnavailable::PlNotSolved { axis: u32_of(axis) }
+            }
+            Unavailable::Limits => WireUnavailable::Limits,
+        }
+    }
+}
+
+/// The availability limits, each true when met (`araim::Limits`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct WireLimits {
+    pub vpl: bool,
+    pub hpl: bool,
+    pub emt: bool,
+    pub sigma_acc: bool,
+}
+
+impl From<Limits> for WireLimits {
+    fn from(l: Limits) -> Self {
+        WireLimits {
+            vpl: l.vpl,
+            hpl: l.hpl,
+            emt: l.emt,
+            sigma_acc: l.sigma_acc,
+        }
+    }
+}
+
+/// What one ARAIM run (all in view, or the subset left after an
+/// exclusion) produced. Lengths in metres; probabilities as numbers.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct AraimSummary {
+    /// Fault modes enumerated, and those solved and tested.
+    pub modes: u32,
+    pub monitored: u32,
+    /// N_fault,max.
+    pub max_faults: u32,
+    /// Unmonitored probability (beyond N_fault,max + unmonitorable modes).
+    pub p_unmon: f64,
+    /// The PLs that feed the availability (the configured `pl_exact`
+    /// choice: ADD bracket output or exact root).
+    pub vpl_m: f64,
+    pub hpl_m: f64,
+    /// The exact roots of the PL equations.
+    pub vpl_exact_m: f64,
+    pub hpl_exact_m: f64,
+    /// Effective monitor threshold (vertical).
+    pub emt_m: f64,
+    /// sigma_v,acc.
+    pub sigma_v_acc_m: f64,
+    /// Every monitored mode passed its solution-separation test.
+    pub detection_passed: bool,
+    pub limits: WireLimits,
+    /// `None` when ARAIM service is available.
+    pub unavailable: Option<WireUnavailable>,
+}
+
+impl AraimSummary {
+    pub fn from_output<T: Real, const K: usize>(out: &AraimOutput<T, K>, pl_exact: bool) -> Self {
+        let pl = if pl_exact { out.pl_exact } else { out.pl_add };
+        AraimSummary {
+            modes: u32_of(out.modes.len()),
+            monitored: u32_of(out.n_monitored),
+            max_faults: u32_of(out.max_faults),
+            p_unmon: out.p_unmon,
+            vpl_m: pl.vpl_m,
+            hpl_m: pl.hpl_m,
+            vpl_exact_m: out.pl_exact.vpl_m,
+            hpl_exact_m: out.pl_exact.hpl_m,
+            emt_m: out.emt_m.to_f64(),
+            sigma_v_acc_m: out.sigma_v_acc_m.to_f64(),
+            detection_passed: out.detection_passed,
+            limits: out.limits.into(),
+            unavailable: out.unavailable.map(Into::into),
+        }
+    }
+
+    /// Service available: no structural cause and every limit met.
+    pub fn available(&self) -> bool {
+        self.unavailable.is_none()
+    }
+}
+
+/// The FDE outcome (`raim_core::araim::FdeDecision`); mode indices are
+/// into the all-in-view mode list.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum WireFde {
+    NoFault,
+    Excluded {
+        mode: u32,
+        consts: u8,
+    },
+    /// No single-event subset passes all its own tests.
+    NoCandidate,
+    /// Two consistent candidates that do not nest: never a silent pick.
+    Ambiguous {
+        first: u32,
+        second: u32,
+    },
+}
+
+impl From<FdeDecision> for WireFde {
+    fn from(d: FdeDecision) -> Self {
+        match d {
+            FdeDecision::NoFault => WireFde::NoFault,
+            FdeDecision::Excluded { mode, consts, .. } => WireFde::Excluded {
+                mode: u32_of(mode),
+                consts,
+            },
+            FdeDecision::Alarm(FdeAlarm::NoCandidate) => WireFde::NoCandidate,
+            FdeDecision::Alarm(FdeAlarm::Ambiguous { first, second }) => WireFde::Ambiguous {
+                first: u32_of(first),
+                second: u32_of(second),
+            },
+        }
+    }
+}
+
+/// One ARAIM epoch's result.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WireAraimResult {
+    pub time_s: f64,
+    /// The verdict for a user of the position: `Ok` (consistent,
+    /// available), `Unavailable` (consistent or excluded, service not
+    /// available), `Excluded` (a fault excluded and the subset available),
+    /// `Alarm` (a test failed and nothing could be excluded).
+    pub decision: Decision,
+    pub all_in_view: AraimSummary,
+    pub fde: WireFde,
+    /// The satellites excluded (those of an excluded constellation
+    /// included), in epoch order; empty unless `fde` is `Excluded`.
+    pub excluded: heapless::Vec<SatId, CAPACITY>,
+    /// The subset's own ARAIM after an exclusion (its PLs are those in
+    /// force); `None` otherwise.
+    pub after_exclusion: Option<AraimSummary>,
+}
+
+impl WireAraimResult {
+    /// The summary in force: the subset's after an exclusion, else the
+    /// all-in-view one.
+    pub fn in_force(&self) -> &AraimSummary {
+        self.after_exclusion.as_ref().unwrap_or(&self.all_in_view)
+    }
+}
+
+/// The payload of `ResponseBody::Araim`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum AraimAnswer {
+    /// The ISM frame was taken; `satellites` entries are in force. The
+    /// response's `config.crc32` now covers it (docs/PROTOCOL.md).
+    IsmAccepted {
+        satellites: u32,
+    },
+    Result(WireAraimResult),
+}
+
+/// ARAIM's own typed refusals (the payload of `WireError::Araim`). The
+/// errors ARAIM shares with the snapshot monitor (NaN, duplicate,
+/// capacity, too few, rank) use the existing `WireError` variants.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum AraimWireError {
+    /// This build has no ARAIM engine (a firmware built without the
+    /// `araim` feature).
+    Disabled,
+    /// An ARAIM epoch before any ISM was accepted since reset.
+    NoIsm,
+    /// A satellite of the epoch (`index`) has no entry in the ISM in force.
+    NotInIsm { id: SatId, index: u32 },
+    /// An ISM field out of its range (`index`: satellite or constellation
+    /// index, 0 for configuration fields). Probabilities are in the open
+    /// (0, 1).
+    OutOfRange {
+        field: FieldName,
+        index: u32,
+        value: f64,
+        min: f64,
+        max: f64,
+    },
+    /// The ISM declares P_const for a constellation with no satellite entry.
+    EmptyConstellation { system: System },
+    /// A satellite (`index`) of a constellation without P_const.
+    MissingConstellationIsm { system: System, index: u32 },
+}
+
+impl core::fmt::Display for AraimWireError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            AraimWireError::Disabled => write!(f, "this build has no ARAIM engine"),
+            AraimWireError::NoIsm => write!(f, "ARAIM epoch before any ISM"),
+            AraimWireError::NotInIsm { id, index } => {
+                write!(f, "satellite {id} at index {index} has no ISM entry")
+            }
+            AraimWireError::OutOfRange {
+                field,
+                index,
+                value,
+                min,
+                max,
+            } => write!(
+                f,
+                "ISM {field} at index {index} is {value}, outside [{min}, {max}]"
+            ),
+            AraimWireError::EmptyConstellation { system } => write!(
+                f,
+                "the ISM gives P_const for {} but no satellite of it",
+                system.letter()
+            ),
+            AraimWireError::MissingConstellationIsm { system, index } => write!(
+                f,
+                "satellite at index {index} is of {}, which has no P_const",
+                system.letter()
+            ),
+        }
+    }
+}
+
+fn field(name: &str) -> FieldName {
+    let mut s = FieldName::new();
+    for c in name.chars() {
+        if s.push(c).is_err() {
+            break;
+        }
+    }
+    s
+}
+
+impl From<AraimError> for WireError {
+    fn from(e: AraimError) -> Self {
+        match e {
+            AraimError::NotFinite {
+                field: f,
+                index,
+                value,
+            } => WireError::NonFinite {
+                field: field(f),
+                index: u32_of(index),
+                value,
+            },
+            AraimError::OutOfRange {
+                field: f,
+                index,
+                value,
+                min,
+                max,
+            } => WireError::Araim(AraimWireError::OutOfRange {
+                field: field(f),
+                index: u32_of(index),
+                value,
+                min,
+                max,
+            }),
+            AraimError::DuplicateSatellite {
+                system,
+                prn,
+                first,
+                second,
+            } => WireError::DuplicateSatellite {
+                id: SatId::new(system, prn),
+                first: u32_of(first),
+                second: u32_of(second),
+            },
+            AraimError::CapacityExceeded { have, capacity } => WireError::TooManySatellites {
+                have: u32_of(have),
+                capacity: u32_of(capacity),
+            },
+            AraimError::EmptyConstellation { system } => {
+                WireError::Araim(AraimWireError::EmptyConstellation { system })
+            }
+            AraimError::MissingConstellationIsm { system, index } => {
+                WireError::Araim(AraimWireError::MissingConstellationIsm {
+                    system,
+                    index: u32_of(index),
+                })
+            }
+            AraimError::TooFewSatellites { have, need } => WireError::TooFewSatellites {
+                have: u32_of(have),
+                need: u32_of(need),
+            },
+            AraimError::RankDeficient { column, pivot } => WireError::DegenerateGeometry {
+                column: u32_of(column),
+                pivot,
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::message::{CommandRef, Request, RequestRef};
+
+    fn ism_sats(n: u8) -> std::vec::Vec<IsmSat> {
+        (1..=n)
+            .map(|prn| IsmSat {
+                id: SatId::new(System::Gps, prn),
+                sigma_ura_m: 0.75,
+                sigma_ure_m: 0.5,
+                b_nom_m: 0.5,
+                p_sat: 1e-5,
+            })
+            .collect()
+    }
+
+    /// The borrowed and owned forms encode alike, and the configuration
+    /// converts to the core's and back unchanged.
+    #[test]
+    fn borrowed_and_owned_araim_requests_encode_alike() {
+        let sats = ism_sats(4);
+        let mut p_const = [None; MAX_SYSTEMS];
+        p_const[System::Gps.index()] = Some(1e-4);
+        let config = WireAraimConfig {
+            pl_exact: true,
+            val_m: 50.0,
+            ..WireAraimConfig::default()
+        };
+        assert_eq!(WireAraimConfig::from(AraimConfig::from(config)), config);
+        let owned = Request {
+            seq: 7,
+            command: crate::Command::Araim(AraimCommand::Ism(IsmFrame {
+                config,
+                p_const,
+                sats: SatList {
+                    items: sats.iter().copied().collect(),
+                    declared: 4,
+                },
+            })),
+        };
+        let borrowed = RequestRef {
+            seq: 7,
+            command: CommandRef::Araim(AraimCommandRef::Ism(IsmFrameRef {
+                config,
+                p_const,
+                sats: &sats,
+            })),
+        };
+        let (mut buf_a, mut buf_b) = ([0u8; 512], [0u8; 512]);
+        let a = postcard::to_slice(&owned, &mut buf_a).unwrap();
+        let b = postcard::to_slice(&borrowed, &mut buf_b).unwrap();
+        assert_eq!(a, b);
+        assert_eq!(postcard::from_bytes::<Request>(a).unwrap(), owned);
+    }
+
+    /// An ISM frame at the capacity fits the receive buffer.
+    #[test]
+    fn largest_ism_frame_fits() {
+        let sats = ism_sats(CAPACITY as u8);
+        let req = RequestRef {
+            seq: u32::MAX,
+            command: CommandRef::Araim(AraimCommandRef::Ism(IsmFrameRef {
+                config: WireAraimConfig {
+                    pl_exact: true,
+                    ..WireAraimConfig::default()
+                },
+                p_const: [Some(0.5); MAX_SYSTEMS],
+                sats: &sats,
+            })),
+        };
+        let mut scratch = [0u8; 4 * crate::MAX_REQUEST_FRAME];
+        let mut out = [0u8; 4 * crate::MAX_REQUEST_FRAME];
+        let f = crate::frame::encode(&req, &mut scratch, &mut out).unwrap();
+        assert!(f.len() <= crate::MAX_REQUEST_FRAME, "{}", f.len());
+    }
+}
