@@ -388,7 +388,7 @@ impl core::fmt::Display for AraimWireError {
     }
 }
 
-fn field(name: &str) -> FieldName {
+pub(crate) fn field(name: &str) -> FieldName {
     let mut s = FieldName::new();
     for c in name.chars() {
         if s.push(c).is_err() {

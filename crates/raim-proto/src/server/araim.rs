@@ -381,8 +381,444 @@ mod engine {
 #[cfg(test)]
 mod tests {
     extern crate std;
+    use super::*;
+    use crate::araim_msg::{AraimCommandRef, IsmFrameRef, WireAraimConfig, WireFde};
+    use crate::frame::{encode, FrameReceiver};
+    use crate::lock::config_fingerprint;
+    use crate::message::{CommandRef, RequestRef, Response};
+    use crate::server::NoPlatform;
+    use crate::MAX_RESPONSE_FRAME;
+    use raim_core::{Decision, LinearObservation, SatId, System};
+    use std::vec::Vec;
+
+    #[derive(Default)]
+    struct Sink(Vec<u8>);
+    impl embedded_io::ErrorType for Sink {
+        type Error = core::convert::Infallible;
+    }
+    impl embedded_io::Write for Sink {
+        fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+            self.0.extend_from_slice(buf);
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> Result<(), Self::Error> {
+            Ok(())
+        }
+    }
+
+    /// Sends each command with consecutive sequence numbers; one response
+    /// per command.
+    struct Link {
+        server: std::boxed::Box<Server>,
+        seq: u32,
+    }
+
+    impl Link {
+        fn new() -> Self {
+            Link {
+                server: std::boxed::Box::new(Server::new()),
+                seq: 0,
+            }
+        }
+        fn ask(&mut self, command: CommandRef<'_>) -> Response {
+            let mut scratch = std::vec![0u8; 8192];
+            let mut out = std::vec![0u8; 8192];
+            let bytes = encode(
+                &RequestRef {
+                    seq: self.seq,
+                    command,
+                },
+                &mut scratch,
+                &mut out,
+            )
+            .unwrap()
+            .to_vec();
+            self.seq += 1;
+            let (mut link, mut nmea) = (Sink::default(), Sink::default());
+            for &b in &bytes {
+                self.server
+                    .on_byte(b, &mut link, &mut nmea, &mut NoPlatform)
+                    .unwrap();
+            }
+            assert!(nmea.0.is_empty(), "ARAIM writes no NMEA");
+            let mut rx = FrameReceiver::<MAX_RESPONSE_FRAME>::new();
+            let resp: Vec<Response> = link
+                .0
+                .iter()
+                .filter_map(|&b| {
+                    rx.push(b)
+                        .map(|p| postcard::from_bytes(p.unwrap()).unwrap())
+                })
+                .collect();
+            assert_eq!(resp.len(), 1, "{resp:?}");
+            resp.into_iter().next().unwrap()
+        }
+        fn ism(&mut self, sats: &[IsmSat], p_const: [Option<f64>; MAX_SYSTEMS]) -> Response {
+            self.ask(CommandRef::Araim(AraimCommandRef::Ism(IsmFrameRef {
+                config: WireAraimConfig::default(),
+                p_const,
+                sats,
+            })))
+        }
+        fn epoch(&mut self, sats: &[LinearObservation]) -> Response {
+            self.ask(CommandRef::Araim(AraimCommandRef::Epoch {
+                time_s: 1.0,
+                sats,
+            }))
+        }
+    }
+
+    fn gal() -> [Option<f64>; MAX_SYSTEMS] {
+        let mut p = [None; MAX_SYSTEMS];
+        p[System::Gps.index()] = Some(1e-4);
+        p[System::Galileo.index()] = Some(1e-4);
+        p
+    }
+
+    /// G10 + E10 (the bench's sky spread): ISM entries (sigma_URA 0.75 m,
+    /// sigma_URE 0.5 m, b_nom 0.5 m, P_sat 1e-5) and a linearised epoch
+    /// with small residuals plus `fault_m` on satellite `faulty`.
+    fn sky20(faulty: usize, fault_m: f64) -> (Vec<IsmSat>, Vec<LinearObservation>) {
+        let mut ism = Vec::new();
+        let mut obs = Vec::new();
+        for i in 0..20usize {
+            let system = if i % 2 == 0 {
+                System::Gps
+            } else {
+                System::Galileo
+            };
+            let id = SatId::new(system, (i / 2) as u8 + 1);
+            let az = (i as f64 * 137.5) % 360.0;
+            let el = 10.0 + (i as f64 * 29.0) % 75.0;
+            let r = 0.3 * (((i * 7919) % 11) as f64 / 11.0 - 0.5);
+            let f = if i == faulty { fault_m } else { 0.0 };
+            obs.push(LinearObservation::from_az_el(
+                id,
+                az.to_radians(),
+                el.to_radians(),
+                r + f,
+            ));
+            ism.push(IsmSat {
+                id,
+                sigma_ura_m: 0.75,
+                sigma_ure_m: 0.5,
+                b_nom_m: 0.5,
+                p_sat: 1e-5,
+            });
+        }
+        (ism, obs)
+    }
+
+    fn result(r: &Response) -> &crate::araim_msg::WireAraimResult {
+        match &r.body {
+            ResponseBody::Araim(AraimAnswer::Result(w)) => w,
+            other => panic!("{other:?}"),
+        }
+    }
+
+    fn error(r: &Response) -> &WireError {
+        match &r.body {
+            ResponseBody::Error(e) => e,
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// No ISM at reset; an ISM is taken and its fingerprint is the CRC of
+    /// the configuration's and the ISM's bytes (computed here from the
+    /// encoded bytes, independently of the server's streaming CRC);
+    /// `Configure` keeps the ISM; after `Lock` an ISM frame is refused and
+    /// the ISM in force stays; a reset forgets it.
     #[test]
-    fn sizes() {
-        std::println!("server {}", core::mem::size_of::<super::Server>());
+    fn ism_lifecycle_lock_and_fingerprint() {
+        let (ism, obs) = sky20(usize::MAX, 0.0);
+        let mut l = Link::new();
+        assert_eq!(
+            *error(&l.epoch(&obs)),
+            WireError::Araim(AraimWireError::NoIsm)
+        );
+        let cfg = Config::default();
+        let r = l.ism(&ism, gal());
+        assert_eq!(
+            r.body,
+            ResponseBody::Araim(AraimAnswer::IsmAccepted { satellites: 20 })
+        );
+        let frame = IsmFrame {
+            config: WireAraimConfig::default(),
+            p_const: gal(),
+            sats: crate::message::SatList {
+                items: ism.iter().copied().collect(),
+                declared: 20,
+            },
+        };
+        let mut bytes = Vec::new();
+        let mut buf = [0u8; 4096];
+        bytes.extend_from_slice(postcard::to_slice(&cfg, &mut buf).unwrap());
+        bytes.extend_from_slice(postcard::to_slice(&frame, &mut buf).unwrap());
+        let with_ism = crate::frame::CRC32.checksum(&bytes);
+        assert_eq!(r.config.crc32, with_ism);
+        assert_ne!(with_ism, config_fingerprint(&cfg));
+        assert_eq!(fingerprint(&cfg, None), config_fingerprint(&cfg));
+        // Another configuration: the fingerprint covers it and the ISM.
+        let terminal = Config::preset(raim_core::Phase::Terminal);
+        let r = l.ask(CommandRef::Configure(&terminal));
+        assert_eq!(r.body, ResponseBody::Configured);
+        assert_eq!(r.config.crc32, fingerprint(&terminal, Some(&frame)));
+        let clean = result(&l.epoch(&obs)).clone();
+        assert_eq!(clean.decision, Decision::Ok);
+        // Locked: a new ISM is refused; the one in force stays.
+        assert_eq!(l.ask(CommandRef::Lock).body, ResponseBody::LockEngaged);
+        let mut other = ism.clone();
+        other[0].p_sat = 1e-4;
+        let r = l.ism(&other, gal());
+        assert_eq!(
+            *error(&r),
+            WireError::Locked {
+                config_crc32: fingerprint(&terminal, Some(&frame))
+            }
+        );
+        assert_eq!(*result(&l.epoch(&obs)), clean);
+        // A reset (a new server) has no ISM.
+        let mut fresh = Link::new();
+        assert_eq!(
+            *error(&fresh.epoch(&obs)),
+            WireError::Araim(AraimWireError::NoIsm)
+        );
+        // A unit with an authentication key refuses plain ISM frames.
+        let mut keyed = Link {
+            server: std::boxed::Box::new(Server::with_auth_key([1; 32])),
+            seq: 0,
+        };
+        assert_eq!(*error(&keyed.ism(&ism, gal())), WireError::AuthRequired);
+    }
+
+    /// The bad inputs, over the wire: each is a typed error with
+    /// its values, the ISM in force stays, and every frame is answered and
+    /// counted.
+    #[test]
+    fn bad_input_is_typed_and_nothing_is_lost() {
+        let (ism, obs) = sky20(usize::MAX, 0.0);
+        let mut l = Link::new();
+        assert!(matches!(
+            l.ism(&ism, gal()).body,
+            ResponseBody::Araim(AraimAnswer::IsmAccepted { satellites: 20 })
+        ));
+        let good = result(&l.epoch(&obs)).clone();
+        let with = |f: &dyn Fn(&mut Vec<IsmSat>)| {
+            let mut v = ism.clone();
+            f(&mut v);
+            v
+        };
+        let oor = |field: &str, index: u32, value: f64, min: f64, max: f64| {
+            WireError::Araim(AraimWireError::OutOfRange {
+                field: crate::araim_msg::field(field),
+                index,
+                value,
+                min,
+                max,
+            })
+        };
+        let mut gps_only = [None; MAX_SYSTEMS];
+        gps_only[System::Gps.index()] = Some(1e-4);
+        let mut nan_const = gal();
+        nan_const[System::Galileo.index()] = Some(f64::NAN);
+        let mut with_beidou = gal();
+        with_beidou[System::Beidou.index()] = Some(1e-4);
+        let forty: Vec<IsmSat> = (0..40u8)
+            .map(|k| IsmSat {
+                id: SatId::new(System::Gps, k + 1),
+                ..ism[0]
+            })
+            .collect();
+        let cases: Vec<(Vec<IsmSat>, [Option<f64>; MAX_SYSTEMS], WireError)> = std::vec![
+            (
+                with(&|v| v[3].sigma_ura_m = f64::NAN),
+                gal(),
+                WireError::NonFinite {
+                    field: crate::araim_msg::field("sigma_ura_m"),
+                    index: 3,
+                    value: f64::NAN
+                }
+            ),
+            (
+                with(&|v| v[4].p_sat = 0.0),
+                gal(),
+                oor("p_sat", 4, 0.0, 0.0, 1.0)
+            ),
+            (
+                with(&|v| v[5].p_sat = 1.0),
+                gal(),
+                oor("p_sat", 5, 1.0, 0.0, 1.0)
+            ),
+            (
+                with(&|v| v[6].p_sat = 1.5),
+                gal(),
+                oor("p_sat", 6, 1.5, 0.0, 1.0)
+            ),
+            (
+                with(&|v| v[7].b_nom_m = -0.1),
+                gal(),
+                oor("b_nom_m", 7, -0.1, 0.0, f64::INFINITY)
+            ),
+            (
+                ism.clone(),
+                nan_const,
+                WireError::NonFinite {
+                    field: crate::araim_msg::field("p_const"),
+                    index: 1,
+                    value: f64::NAN
+                }
+            ),
+            (
+                ism.clone(),
+                with_beidou,
+                WireError::Araim(AraimWireError::EmptyConstellation {
+                    system: System::Beidou
+                })
+            ),
+            (
+                ism.clone(),
+                gps_only,
+                WireError::Araim(AraimWireError::MissingConstellationIsm {
+                    system: System::Galileo,
+                    index: 1
+                })
+            ),
+            (
+                forty,
+                gal(),
+                WireError::TooManySatellites {
+                    have: 40,
+                    capacity: 32
+                }
+            ),
+            (
+                with(&|v| v[9].id = v[2].id),
+                gal(),
+                WireError::DuplicateSatellite {
+                    id: ism[2].id,
+                    first: 2,
+                    second: 9
+                }
+            ),
+        ];
+        let mut errors = 0;
+        for (k, (sats, p_const, want)) in cases.iter().enumerate() {
+            let r = l.ism(sats, *p_const);
+            // NaN != NaN: compare the encoded bytes.
+            let (mut a, mut b) = ([0u8; 256], [0u8; 256]);
+            assert_eq!(
+                postcard::to_slice(error(&r), &mut a).unwrap(),
+                postcard::to_slice(want, &mut b).unwrap(),
+                "case {k}: {r:?}"
+            );
+            errors += 1;
+        }
+        // The configuration: NaN and out of range.
+        let bad_cfg = WireAraimConfig {
+            p_thres: 1e-6,
+            ..WireAraimConfig::default()
+        };
+        let r = l.ask(CommandRef::Araim(AraimCommandRef::Ism(IsmFrameRef {
+            config: bad_cfg,
+            p_const: gal(),
+            sats: &ism,
+        })));
+        assert!(
+            matches!(error(&r), WireError::Araim(AraimWireError::OutOfRange { field, .. }) if field.as_str() == "p_thres"),
+            "{r:?}"
+        );
+        errors += 1;
+        // Epoch errors.
+        let mut dup = obs.clone();
+        dup[9].id = dup[2].id;
+        let mut nan = obs.clone();
+        nan[4].residual_m = f64::NAN;
+        let mut zero_sigma = obs.clone();
+        zero_sigma[1].sigma_m = Some(0.0);
+        let mut stranger = obs.clone();
+        stranger[8].id = SatId::new(System::Gps, 30);
+        let forty_obs: Vec<LinearObservation> = (0..40).map(|k| obs[k % 20]).collect();
+        let r = l.epoch(&dup);
+        assert!(
+            matches!(
+                error(&r),
+                WireError::DuplicateSatellite {
+                    first: 2,
+                    second: 9,
+                    ..
+                }
+            ),
+            "{r:?}"
+        );
+        let r = l.epoch(&nan);
+        assert!(
+            matches!(error(&r), WireError::NonFinite { field, index: 4, .. } if field.as_str() == "residual_m"),
+            "{r:?}"
+        );
+        let r = l.epoch(&zero_sigma);
+        assert_eq!(
+            *error(&r),
+            WireError::NonPositiveSigma {
+                index: 1,
+                sigma_m: 0.0
+            }
+        );
+        let r = l.epoch(&stranger);
+        assert_eq!(
+            *error(&r),
+            WireError::Araim(AraimWireError::NotInIsm {
+                id: SatId::new(System::Gps, 30),
+                index: 8
+            })
+        );
+        let r = l.epoch(&forty_obs);
+        assert_eq!(
+            *error(&r),
+            WireError::TooManySatellites {
+                have: 40,
+                capacity: 32
+            }
+        );
+        errors += 5;
+        // The good ISM stayed in force: the same answer as before.
+        assert_eq!(*result(&l.epoch(&obs)), good);
+        let ResponseBody::Status(st) = l.ask(CommandRef::Status).body else {
+            panic!()
+        };
+        // ISM + good epoch + cases + config + 5 epochs + epoch + status.
+        assert_eq!(st.frames, l.seq);
+        assert_eq!(st.errors, errors);
+    }
+
+    /// A 100 m fault on one satellite of the 20-satellite sky is detected
+    /// and that satellite (only) is excluded; the clean sky is Ok; the
+    /// results match the core engine run directly on the same inputs.
+    #[test]
+    fn a_faulted_satellite_is_excluded() {
+        let (ism, clean) = sky20(usize::MAX, 0.0);
+        let mut l = Link::new();
+        l.ism(&ism, gal());
+        let ok = result(&l.epoch(&clean)).clone();
+        assert_eq!(ok.decision, Decision::Ok);
+        assert_eq!(ok.fde, WireFde::NoFault);
+        assert_eq!(ok.all_in_view.modes, 22);
+        let mut excluded = 0;
+        for faulty in 0..20 {
+            let (_, obs) = sky20(faulty, 100.0);
+            let r = result(&l.epoch(&obs)).clone();
+            assert!(!r.all_in_view.detection_passed, "sat {faulty}");
+            match r.decision {
+                Decision::Excluded | Decision::Unavailable
+                    if matches!(r.fde, WireFde::Excluded { .. }) =>
+                {
+                    assert_eq!(r.excluded.as_slice(), &[obs[faulty].id], "sat {faulty}");
+                    assert!(r.after_exclusion.is_some());
+                    excluded += 1;
+                }
+                Decision::Alarm => assert!(r.excluded.is_empty()),
+                other => panic!("sat {faulty}: {other:?} {r:?}"),
+            }
+        }
+        assert!(excluded >= 10, "{excluded} of 20 excluded");
     }
 }
