@@ -248,7 +248,7 @@ impl Server {
 
 #[cfg(feature = "araim")]
 mod engine {
-    use raim_core::araim::error_model::{elevation_from_g, variances_m2};
+    use raim_core::araim::error_model::iono_free_factor_sq;
     use raim_core::araim::{Araim, AraimConfig, AraimSat, FdeDecision, Ism};
     use raim_core::{Decision, Real, Stat};
 
@@ -306,15 +306,14 @@ mod engine {
                 }
                 // The ADD's G row is minus the line of sight.
                 let g = o.los_enu.map(|v| Stat::of(-v));
-                let (ura, ure) = (Stat::of(entry.sigma_ura_m), Stat::of(entry.sigma_ure_m));
-                let (c_int_m2, c_acc_m2) = match o.sigma_m {
+                let nominal_m2 = match o.sigma_m {
                     // The host's own sigma of the tropo + airborne terms.
-                    Some(s) => {
-                        let v = Stat::of(s * s);
-                        (ura * ura + v, ure * ure + v)
-                    }
-                    None => variances_m2(elevation_from_g(&g), ura, ure),
+                    Some(s) => s * s,
+                    None => nominal_variance_m2(&o.los_enu),
                 };
+                let (ura, ure) = (entry.sigma_ura_m, entry.sigma_ure_m);
+                let c_int_m2 = Stat::of(ura * ura + nominal_m2);
+                let c_acc_m2 = Stat::of(ure * ure + nominal_m2);
                 if let Some(slot) = self.sats.get_mut(i) {
                     *slot = AraimSat {
                         id: o.id,
@@ -373,12 +372,32 @@ mod engine {
         }
     }
 
+    /// The ADD's nominal variance sigma_tropo^2 + sigma_user^2 (m^2) of
+    /// `raim_core::araim::error_model::nominal_variance_m2`, at the
+    /// elevation of `los_enu` (sin el = |up| / |los|), evaluated in `f64`
+    /// through `libm` itself: the core's generic version reaches
+    /// `exp`/`asin`/`sin` through nalgebra's `RealField`, which a host
+    /// build with nalgebra's `std` feature (the workspace's) sends to the
+    /// platform's libm, so host and firmware would differ in the last bits.
+    /// Test `nominal_variance_is_the_cores`.
+    pub(super) fn nominal_variance_m2(los_enu: &[f64; 3]) -> f64 {
+        const DEG_RAD: f64 = core::f64::consts::PI / 180.0;
+        let [e, n, u] = *los_enu;
+        let el_rad = libm::asin(libm::fabs(u) / libm::sqrt(e * e + n * n + u * u));
+        let s = libm::sin(el_rad);
+        let tropo = 0.12 * 1.001 / libm::sqrt(0.002001 + s * s);
+        let el_deg = el_rad / DEG_RAD;
+        let mp = 0.13 + 0.53 * libm::exp(-el_deg / 10.0);
+        let noise = 0.15 + 0.43 * libm::exp(-el_deg / 6.9);
+        tropo * tropo + iono_free_factor_sq() * (mp * mp + noise * noise)
+    }
+
     fn ism_pl_exact(cfg: &AraimConfig) -> bool {
         cfg.pl_output == raim_core::araim::PlOutput::Exact
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "araim"))]
 mod tests {
     extern crate std;
     use super::*;
@@ -788,6 +807,22 @@ mod tests {
         // ISM + good epoch + cases + config + 5 epochs + epoch + status.
         assert_eq!(st.frames, l.seq);
         assert_eq!(st.errors, errors);
+    }
+
+    /// The device's f64/libm evaluation of the ADD error model is the
+    /// core's `error_model` (to rounding) from 2 to 90 degrees.
+    #[test]
+    fn nominal_variance_is_the_cores() {
+        use raim_core::araim::error_model::{elevation_from_g, nominal_variance_m2};
+        for k in 0..=88 {
+            let el = (2.0 + k as f64).to_radians();
+            let az = (k as f64 * 37.0).to_radians();
+            let los = [el.cos() * az.sin(), el.cos() * az.cos(), el.sin()];
+            let ours = super::engine::nominal_variance_m2(&los);
+            let g = los.map(|v| -v);
+            let core = nominal_variance_m2::<f64>(elevation_from_g(&g));
+            assert!((ours - core).abs() <= 1e-13 * core, "{k}: {ours} {core}");
+        }
     }
 
     /// A 100 m fault on one satellite of the 20-satellite sky is detected

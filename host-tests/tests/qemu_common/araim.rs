@@ -1,0 +1,218 @@
+//! ARAIM over the wire (issue 12), shared by `qemu_araim.rs` and the
+//! `qemu_araim_bench` example: the App. D vector and a 20-satellite sky as
+//! ISM + linearised epochs, and a twin that sends every request to the
+//! firmware under QEMU and to a host `Server` and checks that the two
+//! answers are the same bytes.
+#![allow(dead_code)]
+
+use raim_core::measurement::MAX_SYSTEMS;
+use raim_core::{LinearObservation, SatId, System};
+use raim_proto::araim_msg::{AraimCommandRef, IsmFrameRef, IsmSat, WireAraimConfig};
+use raim_proto::frame::FrameReceiver;
+use raim_proto::message::{CommandRef, Response};
+use raim_proto::server::{NoPlatform, Server};
+use raim_qemu::QemuSession;
+use serde_json::Value;
+
+/// One ARAIM scenario: the ISM frame's content and an epoch.
+pub struct Scenario {
+    pub config: WireAraimConfig,
+    pub p_const: [Option<f64>; MAX_SYSTEMS],
+    pub ism: Vec<IsmSat>,
+    pub obs: Vec<LinearObservation>,
+}
+
+impl Scenario {
+    pub fn ism_command(&self) -> CommandRef<'_> {
+        CommandRef::Araim(AraimCommandRef::Ism(IsmFrameRef {
+            config: self.config,
+            p_const: self.p_const,
+            sats: &self.ism,
+        }))
+    }
+}
+
+pub fn epoch_command(time_s: f64, sats: &[LinearObservation]) -> CommandRef<'_> {
+    CommandRef::Araim(AraimCommandRef::Epoch { time_s, sats })
+}
+
+/// The ISM of ADD v3.0 App. D: sigma_URA 0.75 m, sigma_URE 0.5 m (with
+/// the elevation model they give all ten published C_int, C_acc to
+/// 1e-4 m^2: `raim_core::araim::error_model` tests), b_nom and P_sat of
+/// the vector; the epoch's line of sight is minus the G row.
+pub fn appendix_d() -> (Scenario, Value) {
+    let text = std::fs::read_to_string(host_tests::vector_path("add_v3_appendix_d.json")).unwrap();
+    let v: Value = serde_json::from_str(&text).unwrap();
+    let c = &v["araim_config"];
+    let f = |o: &Value, k: &str| o[k].as_f64().unwrap_or_else(|| panic!("{k}"));
+    let config = WireAraimConfig {
+        phmi_vert: f(c, "phmi_vert"),
+        phmi_hor: f(c, "phmi_hor"),
+        pfa_vert: f(c, "pfa_vert"),
+        pfa_hor: f(c, "pfa_hor"),
+        p_thres: f(c, "p_thres"),
+        p_emt: f(c, "p_emt"),
+        val_m: f(c, "val_m"),
+        hal_m: f(c, "hal_m"),
+        tol_pl_m: f(c, "tol_pl_m"),
+        ..WireAraimConfig::default()
+    };
+    let mut p_const = [None; MAX_SYSTEMS];
+    for (letter, p) in v["ism"]["p_const"].as_object().unwrap() {
+        let s = System::from_letter(letter.chars().next().unwrap()).unwrap();
+        p_const[s.index()] = p.as_f64();
+    }
+    let mut ism = Vec::new();
+    let mut obs = Vec::new();
+    for s in v["sats"].as_array().unwrap() {
+        let id = SatId::new(
+            System::from_letter(s["sys"].as_str().unwrap().chars().next().unwrap()).unwrap(),
+            s["prn"].as_u64().unwrap() as u8,
+        );
+        let g: Vec<f64> = s["g_enu"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        ism.push(IsmSat {
+            id,
+            sigma_ura_m: 0.75,
+            sigma_ure_m: 0.5,
+            b_nom_m: f(s, "b_nom_m"),
+            p_sat: f(s, "p_sat"),
+        });
+        obs.push(LinearObservation {
+            id,
+            los_enu: [-g[0], -g[1], -g[2]],
+            residual_m: f(s, "residual_m"),
+            sigma_m: None,
+        });
+    }
+    let expected = v["expected"].clone();
+    (
+        Scenario {
+            config,
+            p_const,
+            ism,
+            obs,
+        },
+        expected,
+    )
+}
+
+/// G10 + E10 spread over the sky (azimuth 137.5 deg apart, elevations 10
+/// to 85 deg), ISM entries sigma_URA 0.75 m, sigma_URE 0.5 m, b_nom 0.5 m,
+/// P_sat 1e-5, P_const 1e-4, residuals within +-0.15 m, plus `fault_m` on
+/// satellite `faulty` (none when out of range).
+pub fn sky20(faulty: usize, fault_m: f64) -> Scenario {
+    let mut p_const = [None; MAX_SYSTEMS];
+    p_const[System::Gps.index()] = Some(1e-4);
+    p_const[System::Galileo.index()] = Some(1e-4);
+    let mut ism = Vec::new();
+    let mut obs = Vec::new();
+    for i in 0..20usize {
+        let system = if i % 2 == 0 {
+            System::Gps
+        } else {
+            System::Galileo
+        };
+        let id = SatId::new(system, (i / 2) as u8 + 1);
+        let az = (i as f64 * 137.5) % 360.0;
+        let el = 10.0 + (i as f64 * 29.0) % 75.0;
+        let r = 0.3 * (((i * 7919) % 11) as f64 / 11.0 - 0.5);
+        let f = if i == faulty { fault_m } else { 0.0 };
+        obs.push(LinearObservation::from_az_el(
+            id,
+            az.to_radians(),
+            el.to_radians(),
+            r + f,
+        ));
+        ism.push(IsmSat {
+            id,
+            sigma_ura_m: 0.75,
+            sigma_ure_m: 0.5,
+            b_nom_m: 0.5,
+            p_sat: 1e-5,
+        });
+    }
+    Scenario {
+        config: WireAraimConfig::default(),
+        p_const,
+        ism,
+        obs,
+    }
+}
+
+/// postcard bytes of a response: the bit-exact comparison (NaN included).
+pub fn response_bytes(r: &Response) -> Vec<u8> {
+    let mut buf = vec![0u8; raim_proto::MAX_RESPONSE_PAYLOAD];
+    postcard::to_slice(r, &mut buf).unwrap().to_vec()
+}
+
+struct Sink(Vec<u8>);
+impl embedded_io::ErrorType for Sink {
+    type Error = core::convert::Infallible;
+}
+impl embedded_io::Write for Sink {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        self.0.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+/// The firmware under QEMU and a host `Server` (same crate, same code,
+/// the host's `raim_core::Stat`), fed the same frames.
+pub struct Twin {
+    pub fw: QemuSession,
+    pub host: Box<Server>,
+}
+
+impl Twin {
+    pub fn new(fw: QemuSession) -> Self {
+        Twin {
+            fw,
+            host: Box::new(Server::new()),
+        }
+    }
+
+    /// The host server's answers to `bytes`.
+    pub fn host_answers(&mut self, bytes: &[u8]) -> Vec<Response> {
+        let (mut link, mut nmea) = (Sink(Vec::new()), Sink(Vec::new()));
+        for &b in bytes {
+            self.host
+                .on_byte(b, &mut link, &mut nmea, &mut NoPlatform)
+                .unwrap();
+        }
+        assert!(nmea.0.is_empty(), "ARAIM answers write no NMEA");
+        let mut rx = Box::new(FrameReceiver::<{ raim_proto::MAX_RESPONSE_FRAME }>::new());
+        link.0
+            .iter()
+            .filter_map(|&b| {
+                rx.push(b)
+                    .map(|p| postcard::from_bytes(p.unwrap()).unwrap())
+            })
+            .collect()
+    }
+
+    /// Sends `command` to both; the firmware's answer must be the host's,
+    /// byte for byte (body and configuration fingerprint).
+    pub fn ask(&mut self, command: CommandRef<'_>, what: &str) -> Response {
+        let (seq, bytes) = self.fw.frame(command).unwrap();
+        self.fw.send_raw(&bytes).unwrap();
+        let fw = self.fw.recv(raim_qemu::ANSWER_TIMEOUT).unwrap();
+        let host = self.host_answers(&bytes);
+        assert_eq!(host.len(), 1, "{what}: {host:?}");
+        assert_eq!(fw.seq, Some(seq), "{what}: {fw:?}");
+        assert_eq!(
+            response_bytes(&fw),
+            response_bytes(&host[0]),
+            "{what}: firmware {fw:?}\nhost {:?}",
+            host[0]
+        );
+        fw
+    }
+}
