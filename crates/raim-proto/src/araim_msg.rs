@@ -271,6 +271,15 @@ pub enum WireFde {
         first: u32,
         second: u32,
     },
+    /// The fault modes could not be enumerated (`ModeCapacity`,
+    /// `TooManyEvents`): no test was run, the epoch is `Unavailable`.
+    NotTested,
+    /// The test failed with more monitored modes than the device attempts
+    /// exclusion for (`server::araim::MAX_FDE_MODES`: its cost would pass
+    /// the watchdog's period); the epoch is an `Alarm`.
+    NotAttempted {
+        modes: u32,
+    },
 }
 
 impl From<FdeDecision> for WireFde {

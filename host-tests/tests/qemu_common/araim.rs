@@ -106,12 +106,17 @@ pub fn appendix_d() -> (Scenario, Value) {
 /// P_sat 1e-5, P_const 1e-4, residuals within +-0.15 m, plus `fault_m` on
 /// satellite `faulty` (none when out of range).
 pub fn sky20(faulty: usize, fault_m: f64) -> Scenario {
+    sky(20, faulty, fault_m)
+}
+
+/// [`sky20`] with `n` satellites (GPS and Galileo alternating).
+pub fn sky(n: usize, faulty: usize, fault_m: f64) -> Scenario {
     let mut p_const = [None; MAX_SYSTEMS];
     p_const[System::Gps.index()] = Some(1e-4);
     p_const[System::Galileo.index()] = Some(1e-4);
     let mut ism = Vec::new();
     let mut obs = Vec::new();
-    for i in 0..20usize {
+    for i in 0..n {
         let system = if i % 2 == 0 {
             System::Gps
         } else {

@@ -23,9 +23,23 @@ use crate::CAPACITY;
 
 /// Fault modes the device engine holds (per engine; the FDE scratch has as
 /// many). A mode list that needs more makes the epoch unavailable with
-/// `ModeCapacity`, never truncated. 32 satellites at P_sat 1e-5 and
-/// P_const 1e-4 need 34 modes; G15+E15 at P_sat 1e-4, 498.
-pub const MAX_MODES: usize = 512;
+/// `ModeCapacity`, never truncated. At P_sat 1e-5 and P_const 1e-4: 20
+/// satellites need 22 modes (single faults), 24 need 327 (pairs), 32 need
+/// 563 (BENCHMARKS.md). The engines take ~280 KB of static RAM.
+pub const MAX_MODES: usize = 600;
+
+/// Exclusion is attempted only when the failed all-in-view run has at most
+/// this many monitored modes; above it the epoch is an alarm
+/// (`WireFde::NotAttempted`). Why: FDE re-runs ARAIM on every single-event
+/// subset, so its cost is about (satellites + constellations) times the
+/// all-in-view run. Under QEMU (BENCHMARKS.md) the 22-mode 20-satellite
+/// epoch costs 7.3 M guest instructions and its FDE 140 M; 64 modes with
+/// 34 candidates is then about 0.7 G, a third of the 2 s watchdog period
+/// at `-icount shift=0`, while the next mode count up (24 satellites at
+/// P_sat 1e-5 need satellite pairs: 327 modes, 100 M all in view) would
+/// be about 2.5 G, past it. In practice: exclusion when one fault at a
+/// time is monitored (N_fault,max = 1), detection only beyond.
+pub const MAX_FDE_MODES: u32 = 64;
 
 /// CRC-32/ISO-HDLC, as `frame::CRC32`; a static so that a digest can
 /// borrow it.
@@ -249,11 +263,11 @@ impl Server {
 #[cfg(feature = "araim")]
 mod engine {
     use raim_core::araim::error_model::iono_free_factor_sq;
-    use raim_core::araim::{Araim, AraimConfig, AraimSat, FdeDecision, Ism};
+    use raim_core::araim::{Araim, AraimConfig, AraimSat, FdeDecision, Ism, Unavailable};
     use raim_core::{Decision, Real, Stat};
 
-    use super::{AraimWireError, IsmFrame, MAX_MODES, MAX_SYSTEMS};
-    use crate::araim_msg::{AraimSummary, WireAraimResult};
+    use super::{AraimWireError, IsmFrame, MAX_FDE_MODES, MAX_MODES, MAX_SYSTEMS};
+    use crate::araim_msg::{AraimSummary, WireAraimResult, WireFde};
     use crate::error::WireError;
     use crate::message::LinearEpoch;
     use crate::CAPACITY;
@@ -333,6 +347,31 @@ mod engine {
             let pl_exact = ism_pl_exact(&cfg);
             let out = self.main.process(&cfg, &ism, sats)?;
             let all_in_view = AraimSummary::from_output(out, pl_exact);
+            // No test was run when the modes could not be enumerated.
+            let untested = matches!(
+                out.unavailable,
+                Some(Unavailable::ModeCapacity { .. } | Unavailable::TooManyEvents { .. })
+            );
+            if untested || (!out.detection_passed && all_in_view.monitored > MAX_FDE_MODES) {
+                let (decision, fde) = if untested {
+                    (Decision::Unavailable, WireFde::NotTested)
+                } else {
+                    (
+                        Decision::Alarm,
+                        WireFde::NotAttempted {
+                            modes: all_in_view.monitored,
+                        },
+                    )
+                };
+                return Ok(WireAraimResult {
+                    time_s: epoch.time_s,
+                    decision,
+                    all_in_view,
+                    fde,
+                    excluded: heapless::Vec::new(),
+                    after_exclusion: None,
+                });
+            }
             let (fde, after_exclusion) = if out.detection_passed {
                 (FdeDecision::NoFault, None)
             } else {

@@ -1,0 +1,88 @@
+//! ARAIM on the firmware under QEMU (BENCHMARKS.md, "ARAIM on the device"):
+//! guest instructions per ARAIM epoch (`-icount shift=0`, SysTick x 40,
+//! the second run of each epoch) and the stack high water by painting, for
+//! the ADD App. D epoch and the 20-satellite sky (clean, and 100 m faults
+//! that end in an exclusion or an alarm).
+//!
+//! `cargo run --release -p host-tests --example qemu_araim_bench`
+
+#[path = "../tests/qemu_common/araim.rs"]
+mod araim_common;
+
+use araim_common::{appendix_d, epoch_command, sky, sky20, Scenario};
+use raim_proto::araim_msg::AraimAnswer;
+use raim_proto::message::ResponseBody;
+use raim_qemu::{Options, QemuSession};
+
+/// Instructions per SysTick tick under `-icount shift=0` at 25 MHz.
+const INSTRUCTIONS_PER_TICK: u64 = 40;
+
+fn run(fw: &mut QemuSession, s: &Scenario, what: &str) -> anyhow::Result<()> {
+    let seq = fw.send(s.ism_command())?;
+    let r = fw.recv(raim_qemu::ANSWER_TIMEOUT)?;
+    anyhow::ensure!(r.seq == Some(seq), "{r:?}");
+    let mut ticks = Vec::new();
+    let mut summary = String::new();
+    for _ in 0..2 {
+        let seq = fw.send(epoch_command(0.0, &s.obs))?;
+        let r = fw.recv(raim_qemu::ANSWER_TIMEOUT)?;
+        anyhow::ensure!(r.seq == Some(seq), "{r:?}");
+        summary = match r.body {
+            ResponseBody::Araim(AraimAnswer::Result(w)) => format!(
+                "{:?}, {} modes{}, {:?}, excluded {:?}",
+                w.decision,
+                w.all_in_view.modes,
+                w.all_in_view
+                    .unavailable
+                    .map(|u| format!(" ({u:?})"))
+                    .unwrap_or_default(),
+                w.fde,
+                w.excluded.iter().map(|x| x.to_string()).collect::<Vec<_>>()
+            ),
+            other => format!("{other:?}"),
+        };
+        ticks.push(fw.status()?.last_epoch_ticks as u64);
+    }
+    let st = fw.status()?;
+    println!(
+        "| {what} | {summary} | {} | {} | {} |",
+        ticks[0] * INSTRUCTIONS_PER_TICK,
+        ticks[1] * INSTRUCTIONS_PER_TICK,
+        st.stack_high_water_bytes
+    );
+    Ok(())
+}
+
+fn main() -> anyhow::Result<()> {
+    let elf = raim_qemu::firmware_elf()?;
+    let opts = Options {
+        icount: true,
+        ..Options::default()
+    };
+    let mut fw = QemuSession::start_with(&elf, &opts)?;
+    println!(
+        "stack high water after boot + Status: {} B",
+        fw.status()?.stack_high_water_bytes
+    );
+    println!("| epoch | answer | instructions (first run) | instructions (second run) | stack high water since boot |");
+    println!("| --- | --- | --- | --- | --- |");
+    run(&mut fw, &appendix_d().0, "ADD App. D (10 satellites)")?;
+    run(&mut fw, &sky20(usize::MAX, 0.0), "G10+E10, clean")?;
+    for faulty in [0, 1, 2] {
+        run(
+            &mut fw,
+            &sky20(faulty, 100.0),
+            &format!("G10+E10, 100 m on satellite {faulty}"),
+        )?;
+    }
+    for n in [24, 32] {
+        run(
+            &mut fw,
+            &sky(n, usize::MAX, 0.0),
+            &format!("G{}+E{}, clean", n / 2, n / 2),
+        )?;
+    }
+    run(&mut fw, &sky(24, 0, 100.0), "G12+E12, 100 m on satellite 0")?;
+    run(&mut fw, &sky(32, 0, 100.0), "G16+E16, 100 m on satellite 0")?;
+    Ok(())
+}
