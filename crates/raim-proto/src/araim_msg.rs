@@ -123,7 +123,9 @@ pub struct IsmFrameRef<'a> {
     pub sats: &'a [IsmSat],
 }
 
-/// The payload of `Command::Araim`.
+/// The payload of `Command::Araim`. Without a heap the frames cannot be
+/// boxed; only one request exists at a time.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum AraimCommand {
     /// Replace the ISM and ARAIM configuration in force. Answered
@@ -326,7 +328,8 @@ impl WireAraimResult {
     }
 }
 
-/// The payload of `ResponseBody::Araim`.
+/// The payload of `ResponseBody::Araim` (unboxed, as `ResponseBody`).
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum AraimAnswer {
     /// The ISM frame was taken; `satellites` entries are in force. The

@@ -7,7 +7,7 @@
 //! firmware only supplies the UARTs (`embedded_io::Write`) and a
 //! [`Platform`] (a tick counter and the stack high-water mark).
 
-mod araim;
+pub mod araim;
 
 use embedded_io::Write;
 use raim_core::{Config, Epoch, Raim};

@@ -12,7 +12,6 @@
 //! parameters the unit must not invent.
 
 use raim_core::araim::{AraimConfig, AraimError, Ism};
-use raim_core::measurement::MAX_SYSTEMS;
 use raim_core::Config;
 
 use super::Server;
@@ -206,15 +205,17 @@ impl Server {
         platform: &mut P,
     ) -> ResponseBody {
         let answer = match command {
-            AraimCommand::Ism(_) if !cfg!(feature = "araim") => {
-                Err(WireError::Araim(AraimWireError::Disabled))
-            }
+            #[cfg(not(feature = "araim"))]
+            AraimCommand::Ism(_) => Err(WireError::Araim(AraimWireError::Disabled)),
+            #[cfg(feature = "araim")]
             AraimCommand::Ism(_) if self.config_id.locked => Err(WireError::Locked {
                 config_crc32: self.config_id.crc32,
             }),
             // ISM frames are not authenticated yet: a unit with a key
             // refuses them rather than take unauthenticated integrity data.
+            #[cfg(feature = "araim")]
             AraimCommand::Ism(_) if self.auth.is_some() => Err(WireError::AuthRequired),
+            #[cfg(feature = "araim")]
             AraimCommand::Ism(frame) => check_ism(&frame).map(|()| {
                 let satellites = u32::try_from(frame.sats.items.len()).unwrap_or(u32::MAX);
                 self.araim.ism = Some(frame);
@@ -266,11 +267,12 @@ mod engine {
     use raim_core::araim::{Araim, AraimConfig, AraimSat, FdeDecision, Ism, Unavailable};
     use raim_core::{Decision, Real, Stat};
 
-    use super::{AraimWireError, IsmFrame, MAX_FDE_MODES, MAX_MODES, MAX_SYSTEMS};
+    use super::{AraimWireError, IsmFrame, MAX_FDE_MODES, MAX_MODES};
     use crate::araim_msg::{AraimSummary, WireAraimResult, WireFde};
     use crate::error::WireError;
     use crate::message::LinearEpoch;
     use crate::CAPACITY;
+    use raim_core::measurement::MAX_SYSTEMS;
 
     type Engine = Araim<Stat, CAPACITY, MAX_MODES>;
 
@@ -446,6 +448,7 @@ mod tests {
     use crate::message::{CommandRef, RequestRef, Response};
     use crate::server::NoPlatform;
     use crate::MAX_RESPONSE_FRAME;
+    use raim_core::measurement::MAX_SYSTEMS;
     use raim_core::{Decision, LinearObservation, SatId, System};
     use std::vec::Vec;
 
@@ -537,9 +540,14 @@ mod tests {
     /// sigma_URE 0.5 m, b_nom 0.5 m, P_sat 1e-5) and a linearised epoch
     /// with small residuals plus `fault_m` on satellite `faulty`.
     fn sky20(faulty: usize, fault_m: f64) -> (Vec<IsmSat>, Vec<LinearObservation>) {
+        sky(20, faulty, fault_m)
+    }
+
+    /// [`sky20`] with `n` satellites.
+    fn sky(n: usize, faulty: usize, fault_m: f64) -> (Vec<IsmSat>, Vec<LinearObservation>) {
         let mut ism = Vec::new();
         let mut obs = Vec::new();
-        for i in 0..20usize {
+        for i in 0..n {
             let system = if i % 2 == 0 {
                 System::Gps
             } else {
@@ -894,5 +902,34 @@ mod tests {
             }
         }
         assert!(excluded >= 10, "{excluded} of 20 excluded");
+    }
+
+    /// Larger skies: 24 satellites need satellite pairs (327 modes), so a
+    /// failed test is an alarm without an exclusion attempt
+    /// (`NotAttempted`); 32 satellites at P_sat 1e-3 need more modes than
+    /// the engine holds: unavailable, untested, never an alarm over zero
+    /// modes.
+    #[test]
+    fn larger_skies_alarm_without_fde_or_are_unavailable() {
+        let mut l = Link::new();
+        let (ism, obs) = sky(24, 0, 100.0);
+        l.ism(&ism, gal());
+        let r = result(&l.epoch(&obs)).clone();
+        assert_eq!(r.all_in_view.modes, 327);
+        assert!(!r.all_in_view.detection_passed);
+        assert_eq!(r.decision, Decision::Alarm);
+        assert!(matches!(r.fde, WireFde::NotAttempted { modes } if modes > MAX_FDE_MODES));
+        let (mut ism, obs) = sky(32, usize::MAX, 0.0);
+        for s in ism.iter_mut() {
+            s.p_sat = 1e-3;
+        }
+        l.ism(&ism, gal());
+        let r = result(&l.epoch(&obs)).clone();
+        assert_eq!(r.decision, Decision::Unavailable);
+        assert_eq!(r.fde, WireFde::NotTested);
+        assert!(matches!(
+            r.all_in_view.unavailable,
+            Some(crate::araim_msg::WireUnavailable::ModeCapacity { needed, capacity: 600 }) if needed > 600
+        ));
     }
 }
