@@ -47,4 +47,39 @@ fn main() {
     for (name, bytes) in seeds {
         std::fs::write(dir.join(name), bytes).expect("write seed");
     }
+    araim_seeds();
+}
+
+/// Seeds of `araim_server` (issue 12): ARAIM epochs over the ISM the target
+/// puts in force (GPS and Galileo 1-6), a fault, ISM frames good and bad.
+fn araim_seeds() {
+    use raim_proto::araim_msg::{AraimCommandRef, IsmFrameRef, IsmSat, WireAraimConfig};
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus/araim_server");
+    std::fs::create_dir_all(&dir).expect("corpus dir");
+    let ids: Vec<SatId> = (0..12u8).map(|i| SatId::new(if i % 2 == 0 { System::Gps } else { System::Galileo }, i / 2 + 1)).collect();
+    let epoch: Vec<LinearObservation> = ids
+        .iter()
+        .enumerate()
+        .map(|(i, &id)| LinearObservation::from_az_el(id, i as f64 * 2.4, 0.2 + (i as f64 * 0.5) % 1.3, 0.05 * i as f64 - 0.3))
+        .collect();
+    let mut faulted = epoch.clone();
+    faulted[3].residual_m += 80.0;
+    let ism: Vec<IsmSat> = ids.iter().map(|&id| IsmSat { id, sigma_ura_m: 0.75, sigma_ure_m: 0.5, b_nom_m: 0.5, p_sat: 1e-5 }).collect();
+    let mut bad = ism.clone();
+    bad[2].p_sat = 1.0;
+    let mut p_const = [None; 5];
+    p_const[System::Gps.index()] = Some(1e-4);
+    p_const[System::Galileo.index()] = Some(1e-4);
+    let ism_cmd = |seq, sats: &[IsmSat]| frame(&RequestRef { seq, command: CommandRef::Araim(AraimCommandRef::Ism(IsmFrameRef { config: WireAraimConfig::default(), p_const, sats })) });
+    let epoch_cmd = |seq, sats: &[LinearObservation]| frame(&RequestRef { seq, command: CommandRef::Araim(AraimCommandRef::Epoch { time_s: 1.0, sats }) });
+    let seeds: Vec<(&str, Vec<u8>)> = vec![
+        ("epoch12", epoch_cmd(1, &epoch)),
+        ("faulted12", epoch_cmd(1, &faulted)),
+        ("ism_then_epoch", [ism_cmd(1, &ism), epoch_cmd(2, &epoch)].concat()),
+        ("bad_ism", ism_cmd(1, &bad)),
+        ("lock_then_ism", [frame(&RequestRef { seq: 1, command: CommandRef::Lock }), ism_cmd(2, &ism)].concat()),
+    ];
+    for (name, bytes) in seeds {
+        std::fs::write(dir.join(name), bytes).expect("write seed");
+    }
 }
