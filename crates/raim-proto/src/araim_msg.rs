@@ -134,6 +134,14 @@ pub enum AraimCommand {
     /// One linearised epoch through ARAIM (and its FDE after a detection).
     /// Answered `AraimAnswer::Result` or a typed error.
     Epoch(LinearEpoch),
+    /// An authenticated `Ism` (`server::araim::ism_tag`): accepted only by
+    /// a unit with a key, with a valid tag and a counter above every one
+    /// accepted since boot (shared with `AuthConfigure`).
+    AuthIsm {
+        counter: u64,
+        ism: IsmFrame,
+        tag: crate::auth::Tag,
+    },
 }
 
 /// The host's borrowed form of [`AraimCommand`] (same bytes).
@@ -143,6 +151,11 @@ pub enum AraimCommandRef<'a> {
     Epoch {
         time_s: f64,
         sats: &'a [LinearObservation],
+    },
+    AuthIsm {
+        counter: u64,
+        ism: IsmFrameRef<'a>,
+        tag: crate::auth::Tag,
     },
 }
 
@@ -527,20 +540,24 @@ mod tests {
         assert_eq!(postcard::from_bytes::<Request>(a).unwrap(), owned);
     }
 
-    /// An ISM frame at the capacity fits the receive buffer.
+    /// An (authenticated) ISM frame at the capacity fits the receive buffer.
     #[test]
     fn largest_ism_frame_fits() {
         let sats = ism_sats(CAPACITY as u8);
         let req = RequestRef {
             seq: u32::MAX,
-            command: CommandRef::Araim(AraimCommandRef::Ism(IsmFrameRef {
-                config: WireAraimConfig {
-                    pl_exact: true,
-                    ..WireAraimConfig::default()
+            command: CommandRef::Araim(AraimCommandRef::AuthIsm {
+                counter: u64::MAX,
+                ism: IsmFrameRef {
+                    config: WireAraimConfig {
+                        pl_exact: true,
+                        ..WireAraimConfig::default()
+                    },
+                    p_const: [Some(0.5); MAX_SYSTEMS],
+                    sats: &sats,
                 },
-                p_const: [Some(0.5); MAX_SYSTEMS],
-                sats: &sats,
-            })),
+                tag: [0xFF; 32],
+            }),
         };
         let mut scratch = [0u8; 4 * crate::MAX_REQUEST_FRAME];
         let mut out = [0u8; 4 * crate::MAX_REQUEST_FRAME];

@@ -7,15 +7,20 @@
 //! configuration as a whole after every check passes (else the previous one
 //! stays); `Configure` leaves it alone; `Lock` locks it with the snapshot
 //! configuration (an `Ism` frame is then `Locked`); the configuration
-//! fingerprint covers it. An epoch satellite without an ISM entry is a typed
+//! fingerprint covers it. A unit with an authentication key takes the ISM
+//! only as `AuthIsm` (HMAC-SHA256, counter shared with `AuthConfigure`). An epoch satellite without an ISM entry is a typed
 //! error (`NotInIsm`), never a default: P_sat and sigma_URA are integrity
 //! parameters the unit must not invent.
 
 use raim_core::araim::{AraimConfig, AraimError, Ism};
 use raim_core::Config;
 
+use hmac::{Hmac, Mac};
+use sha2::Sha256;
+
 use super::Server;
-use crate::araim_msg::{AraimAnswer, AraimCommand, AraimWireError, IsmFrame, IsmSat};
+use crate::araim_msg::{AraimAnswer, AraimCommand, AraimWireError, IsmFrame, IsmFrameRef, IsmSat};
+use crate::auth::{AuthKey, Tag};
 use crate::error::WireError;
 use crate::message::{LinearEpoch, ResponseBody};
 use crate::CAPACITY;
@@ -73,6 +78,53 @@ fn feed<T: serde::Serialize>(
     };
     let _ = v.serialize(&mut ser);
     ser.output.0
+}
+
+/// A postcard output that feeds an HMAC (no buffer).
+struct MacFlavor(Hmac<Sha256>);
+
+impl postcard::ser_flavors::Flavor for MacFlavor {
+    type Output = Hmac<Sha256>;
+    fn try_extend(&mut self, data: &[u8]) -> postcard::Result<()> {
+        self.0.update(data);
+        Ok(())
+    }
+    fn try_push(&mut self, data: u8) -> postcard::Result<()> {
+        self.0.update(&[data]);
+        Ok(())
+    }
+    fn finalize(self) -> postcard::Result<Self::Output> {
+        Ok(self.0)
+    }
+}
+
+/// Domain of the ISM tags (distinct from `auth`'s configuration tags, so a
+/// tag of one can never verify as the other).
+const ISM_DOMAIN: &[u8] = b"raim-ism-v1";
+
+/// `HMAC-SHA256(key, "raim-ism-v1" || counter (u64 LE) || postcard(ism))`;
+/// `ism` is an `IsmFrame` or an `IsmFrameRef` (same bytes).
+fn ism_mac<T: serde::Serialize>(key: &AuthKey, counter: u64, ism: &T) -> Option<Hmac<Sha256>> {
+    let mut m = <Hmac<Sha256> as Mac>::new_from_slice(key).ok()?;
+    m.update(ISM_DOMAIN);
+    m.update(&counter.to_le_bytes());
+    let mut ser = postcard::Serializer {
+        output: MacFlavor(m),
+    };
+    ism.serialize(&mut ser).ok()?;
+    Some(ser.output.0)
+}
+
+/// The tag of an authenticated ISM frame (the host side).
+pub fn ism_tag(key: &AuthKey, counter: u64, ism: &IsmFrameRef<'_>) -> Tag {
+    ism_mac(key, counter, ism)
+        .map(|m| m.finalize().into_bytes().into())
+        .unwrap_or([0; 32])
+}
+
+/// Constant-time check of an ISM frame's tag (the unit side).
+pub fn verify_ism(key: &AuthKey, counter: u64, ism: &IsmFrame, tag: &Tag) -> bool {
+    ism_mac(key, counter, ism).is_some_and(|m| m.verify_slice(tag).is_ok())
 }
 
 /// The fingerprint of what is in force: CRC-32/ISO-HDLC of
@@ -216,18 +268,46 @@ impl Server {
             #[cfg(feature = "araim")]
             AraimCommand::Ism(_) if self.auth.is_some() => Err(WireError::AuthRequired),
             #[cfg(feature = "araim")]
-            AraimCommand::Ism(frame) => check_ism(&frame).map(|()| {
-                let satellites = u32::try_from(frame.sats.items.len()).unwrap_or(u32::MAX);
-                self.araim.ism = Some(frame);
-                self.config_id.crc32 = fingerprint(&self.config, self.araim.ism.as_ref());
-                AraimAnswer::IsmAccepted { satellites }
+            AraimCommand::Ism(frame) => self.take_ism(frame),
+            #[cfg(not(feature = "araim"))]
+            AraimCommand::AuthIsm { .. } => Err(WireError::Araim(AraimWireError::Disabled)),
+            #[cfg(feature = "araim")]
+            AraimCommand::AuthIsm { .. } if self.config_id.locked => Err(WireError::Locked {
+                config_crc32: self.config_id.crc32,
             }),
+            #[cfg(feature = "araim")]
+            AraimCommand::AuthIsm { counter, ism, tag } => match self.auth {
+                None => Err(WireError::AuthNotProvisioned),
+                Some((key, last)) => {
+                    if !verify_ism(&key, counter, &ism, &tag) {
+                        Err(WireError::BadAuthTag { counter })
+                    } else if let Some(l) = last.filter(|&l| counter <= l) {
+                        Err(WireError::Replayed { counter, last: l })
+                    } else {
+                        let r = self.take_ism(ism);
+                        if r.is_ok() {
+                            self.auth = Some((key, Some(counter)));
+                        }
+                        r
+                    }
+                }
+            },
             AraimCommand::Epoch(e) => self.araim_epoch(&e, platform),
         };
         match answer {
             Ok(a) => ResponseBody::Araim(a),
             Err(e) => ResponseBody::Error(e),
         }
+    }
+
+    /// Checks an ISM frame and, if it passes, puts it in force.
+    #[cfg(feature = "araim")]
+    fn take_ism(&mut self, frame: IsmFrame) -> Result<AraimAnswer, WireError> {
+        check_ism(&frame)?;
+        let satellites = u32::try_from(frame.sats.items.len()).unwrap_or(u32::MAX);
+        self.araim.ism = Some(frame);
+        self.config_id.crc32 = fingerprint(&self.config, self.araim.ism.as_ref());
+        Ok(AraimAnswer::IsmAccepted { satellites })
     }
 
     fn araim_epoch<P: super::Platform>(
@@ -649,12 +729,120 @@ mod tests {
             *error(&fresh.epoch(&obs)),
             WireError::Araim(AraimWireError::NoIsm)
         );
-        // A unit with an authentication key refuses plain ISM frames.
-        let mut keyed = Link {
-            server: std::boxed::Box::new(Server::with_auth_key([1; 32])),
+    }
+
+    /// With a key: a plain ISM frame is refused; an authenticated one is
+    /// taken with a fresh counter; a replay, a forged tag, a tag made for
+    /// other ISM bytes are refused and the ISM in force stays; the counter
+    /// is shared with `AuthConfigure`; after `Lock` even a valid one is
+    /// refused. Without a key, authenticated ISM frames are refused.
+    #[test]
+    fn authenticated_ism_refuses_replay_and_forgery() {
+        let key = [0x5Au8; 32];
+        let (ism, obs) = sky20(usize::MAX, 0.0);
+        fn frame(sats: &[IsmSat]) -> IsmFrameRef<'_> {
+            IsmFrameRef {
+                config: WireAraimConfig::default(),
+                p_const: gal(),
+                sats,
+            }
+        }
+        fn signed<'a>(
+            key: &AuthKey,
+            counter: u64,
+            sats: &'a [IsmSat],
+            tag: Option<Tag>,
+        ) -> (u64, IsmFrameRef<'a>, Tag) {
+            let f = frame(sats);
+            (counter, f, tag.unwrap_or_else(|| ism_tag(key, counter, &f)))
+        }
+        let send = |l: &mut Link, (counter, ism, tag): (u64, IsmFrameRef<'_>, Tag)| {
+            l.ask(CommandRef::Araim(AraimCommandRef::AuthIsm {
+                counter,
+                ism,
+                tag,
+            }))
+        };
+        let mut l = Link {
+            server: std::boxed::Box::new(Server::with_auth_key(key)),
             seq: 0,
         };
-        assert_eq!(*error(&keyed.ism(&ism, gal())), WireError::AuthRequired);
+        assert_eq!(*error(&l.ism(&ism, gal())), WireError::AuthRequired);
+        // The tag is the HMAC of the domain, the counter and the frame's
+        // bytes, computed here from the encoded bytes.
+        let mut buf = [0u8; 4096];
+        let bytes = postcard::to_slice(&frame(&ism), &mut buf).unwrap();
+        let mut m = <Hmac<Sha256> as Mac>::new_from_slice(&key).unwrap();
+        m.update(b"raim-ism-v1");
+        m.update(&1u64.to_le_bytes());
+        m.update(bytes);
+        let want: Tag = m.finalize().into_bytes().into();
+        assert_eq!(signed(&key, 1, &ism, None).2, want);
+        let r = send(&mut l, signed(&key, 1, &ism, None));
+        assert_eq!(
+            r.body,
+            ResponseBody::Araim(AraimAnswer::IsmAccepted { satellites: 20 })
+        );
+        let crc = r.config.crc32;
+        let clean = result(&l.epoch(&obs)).clone();
+        // Replayed: the same frame again.
+        assert_eq!(
+            *error(&send(&mut l, signed(&key, 1, &ism, None))),
+            WireError::Replayed {
+                counter: 1,
+                last: 1
+            }
+        );
+        // Forged: the tag of other bytes (P_sat changed after signing).
+        let mut changed = ism.clone();
+        changed[0].p_sat = 1e-4;
+        let wrong_tag = ism_tag(&key, 2, &frame(&ism));
+        assert_eq!(
+            *error(&send(&mut l, signed(&key, 2, &changed, Some(wrong_tag)))),
+            WireError::BadAuthTag { counter: 2 }
+        );
+        // A configuration tag over the same counter does not verify as an
+        // ISM tag (separate domains).
+        let cfg_tag = crate::auth::tag(&key, 2, &Config::default());
+        assert_eq!(
+            *error(&send(&mut l, signed(&key, 2, &ism, Some(cfg_tag)))),
+            WireError::BadAuthTag { counter: 2 }
+        );
+        assert_eq!(l.ask(CommandRef::Status).config.crc32, crc);
+        assert_eq!(*result(&l.epoch(&obs)), clean);
+        // The counter is shared with AuthConfigure.
+        let a3 = crate::auth::AuthConfigure {
+            counter: 3,
+            config: Config::default(),
+            tag: crate::auth::tag(&key, 3, &Config::default()),
+        };
+        assert_eq!(
+            l.ask(CommandRef::AuthConfigure(&a3)).body,
+            ResponseBody::Configured
+        );
+        assert_eq!(
+            *error(&send(&mut l, signed(&key, 3, &changed, None))),
+            WireError::Replayed {
+                counter: 3,
+                last: 3
+            }
+        );
+        let r = send(&mut l, signed(&key, 4, &changed, None));
+        assert!(matches!(
+            r.body,
+            ResponseBody::Araim(AraimAnswer::IsmAccepted { .. })
+        ));
+        assert_ne!(r.config.crc32, crc);
+        assert_eq!(l.ask(CommandRef::Lock).body, ResponseBody::LockEngaged);
+        assert!(matches!(
+            error(&send(&mut l, signed(&key, 5, &ism, None))),
+            WireError::Locked { .. }
+        ));
+        let mut plain = Link::new();
+        assert_eq!(
+            *error(&send(&mut plain, signed(&key, 1, &ism, None))),
+            WireError::AuthNotProvisioned
+        );
     }
 
     /// The bad inputs, over the wire: each is a typed error with
