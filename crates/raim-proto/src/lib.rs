@@ -42,6 +42,7 @@ pub mod frame;
 pub mod lock;
 pub mod message;
 pub mod nmea;
+pub mod pf_msg;
 pub mod result;
 pub mod server;
 
@@ -53,6 +54,7 @@ pub use message::{
     Command, LinearEpoch, RangeEpoch, Request, RequestRef, ResetCause, Response, ResponseBody,
     SatList, Status, TestFault,
 };
+pub use pf_msg::{PfKind, WirePfConfig, WirePfResult};
 pub use result::{WireMcusum, WireResult};
 
 /// Satellites per epoch: the firmware's `Raim::<CAPACITY>` and every list on

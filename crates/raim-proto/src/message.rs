@@ -118,6 +118,16 @@ pub enum Command {
     /// a provisioned key, with a valid tag and a counter above every one
     /// accepted since boot.
     AuthConfigure(crate::auth::AuthConfigure),
+    /// Particle-filter RAIM (issue 14, `pf_msg`): take a PF configuration
+    /// (filter, particle count, seed, `PfConfig`) and restart the filter.
+    /// Answered `Configured`, or an error (`PfParticles`,
+    /// `PfInvalidConfig`, `Locked`, `PfUnavailable`) with the previous PF
+    /// configuration kept.
+    PfConfigure(crate::pf_msg::WirePfConfig),
+    /// One pseudorange epoch for the particle-filter monitor (`apriori_m`
+    /// is not used: the PF initialises from its own first fix). Answered
+    /// `PfResult` or an error.
+    PfRanges(RangeEpoch),
 }
 
 /// What a `TestFault` request does.
@@ -182,6 +192,12 @@ pub enum CommandRef<'a> {
     Lock,
     TestFault(TestFault),
     AuthConfigure(&'a crate::auth::AuthConfigure),
+    PfConfigure(&'a crate::pf_msg::WirePfConfig),
+    PfRanges {
+        time_s: f64,
+        apriori_m: Option<[f64; 3]>,
+        sats: &'a [RangeObservation],
+    },
 }
 
 /// The host's borrowed form of [`Request`].
@@ -266,6 +282,8 @@ pub enum ResponseBody {
     Error(WireError),
     /// The answer to `Lock`: the configuration is now locked until reset.
     LockEngaged,
+    /// The answer to a `PfRanges` epoch (issue 14).
+    PfResult(crate::pf_msg::WirePfResult),
 }
 
 #[cfg(test)]

@@ -20,6 +20,12 @@ use crate::{
     CAPACITY, MAX_REQUEST_FRAME, MAX_RESPONSE_FRAME, MAX_RESPONSE_PAYLOAD, PROTOCOL_VERSION,
 };
 
+// Particle-filter RAIM (issue 14): a child module, so it reaches the
+// server's fields while its code stays out of this file.
+#[path = "server_pf.rs"]
+mod pf;
+pub use pf::{map_error as pf_error, PfUnit};
+
 /// What the board provides besides the UARTs.
 pub trait Platform {
     /// A free-running tick counter (any rate); wraps at `TICK_MASK + 1`.
@@ -64,6 +70,8 @@ pub struct Server {
     status: Status,
     scratch: [u8; MAX_RESPONSE_PAYLOAD],
     out: [u8; MAX_RESPONSE_FRAME],
+    /// The particle-filter storage, lent by the owner (`attach_pf`).
+    pf: Option<&'static mut PfUnit>,
 }
 
 impl Default for Server {
@@ -98,6 +106,7 @@ impl Server {
             },
             scratch: [0; MAX_RESPONSE_PAYLOAD],
             out: [0; MAX_RESPONSE_FRAME],
+            pf: None,
         }
     }
 
@@ -225,6 +234,17 @@ impl Server {
                 platform,
             ),
             Command::Linear(e) => self.epoch(&Epoch::linear(e.time_s, &e.sats.items), platform),
+            Command::PfConfigure(_) if self.config_id.locked => {
+                ResponseBody::Error(WireError::Locked {
+                    config_crc32: self.config_id.crc32,
+                })
+            }
+            Command::PfConfigure(_) if self.auth.is_some() => {
+                ResponseBody::Error(WireError::AuthRequired)
+            }
+            Command::PfConfigure(c) => self.pf_configure(c),
+            Command::PfRanges(e) if e.sats.overflowed() => too_many(e.sats.declared),
+            Command::PfRanges(e) => self.pf_epoch(e.time_s, &e.sats.items, platform),
         };
         if let ResponseBody::Result(r) = &body {
             // Sentences cannot exceed 82 characters with the formats used;
@@ -244,7 +264,7 @@ impl Server {
         match c.validate() {
             Ok(()) => {
                 self.config = c;
-                self.config_id.crc32 = config_fingerprint(&self.config);
+                self.config_id.crc32 = self.fingerprint();
                 ResponseBody::Configured
             }
             Err(e) => ResponseBody::Error(e.into()),
