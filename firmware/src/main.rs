@@ -73,6 +73,17 @@ fn main() -> ! {
     let Some(server) = cortex_m::singleton!(: Server = Server::new()) else {
         board::halt()
     };
+    #[cfg(feature = "pf")]
+    {
+        // The particle-filter state (~160 KiB) in its own static, zero-filled
+        // by the startup code (`PfUnit::EMPTY` is a constant): never on the
+        // stack. Lent to the server for good.
+        static mut PF_UNIT: raim_proto::server::PfUnit = raim_proto::server::PfUnit::EMPTY;
+        // SAFETY: `main` runs once and never returns, so this is the only
+        // reference to PF_UNIT ever made; no interrupt handler touches it.
+        let unit = unsafe { &mut *core::ptr::addr_of_mut!(PF_UNIT) };
+        server.attach_pf(unit);
+    }
     let (mut link, mut nmea) = board::uarts();
     let mut platform = Board {
         ticks: board::Ticks::new(core.SYST),

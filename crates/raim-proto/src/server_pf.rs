@@ -38,7 +38,10 @@ mod engine {
     const _: () = assert!(PF_PARTICLE_COUNTS[0] == 100 && PF_PARTICLE_COUNTS[1] == 300);
 
     /// One engine at a time; the enum is as large as its largest variant.
+    /// `repr(u8)`: `Empty` is tag 0, so [`super::PfUnit::EMPTY`] is all
+    /// zero bytes (and uninitialised payload) and a static of it is `.bss`.
     #[allow(clippy::large_enum_variant)]
+    #[repr(u8)]
     pub enum Engine {
         Empty,
         Ekf(PfRaim<PfT, Ekf<PfT>, PF_SATS>),
@@ -47,11 +50,25 @@ mod engine {
         Ga100(PfRaim<PfT, GaPf<PfT, 100>, PF_SATS>),
         Ga300(PfRaim<PfT, GaPf<PfT, 300>, PF_SATS>),
     }
+
+    /// Replaces the engine in `slot` by a new one of variant `wrap`. Not
+    /// inlined, and written as one move into `*slot`, so that the compiler
+    /// builds the ~160 KiB value in place rather than in a stack temporary
+    /// (measured: the firmware's stack high water, qemu_pf).
+    #[inline(never)]
+    pub fn fresh<X: raim_core::pf::Estimator<PfT>>(
+        slot: &mut Engine,
+        seed: u64,
+        wrap: fn(PfRaim<PfT, X, PF_SATS>) -> Engine,
+    ) {
+        *slot = wrap(PfRaim::new(seed));
+    }
 }
 
 #[cfg(not(feature = "pf"))]
 mod engine {
     /// Without the `pf` feature the unit holds no engine.
+    #[repr(u8)]
     pub enum Engine {
         Empty,
     }
@@ -62,15 +79,46 @@ use engine::Engine;
 /// The PF configuration in force and the engine, in the caller's static
 /// storage.
 pub struct PfUnit {
-    config: Option<WirePfConfig>,
+    /// `config` is in force (a flag rather than an `Option`, whose `None`
+    /// would be a non-zero niche byte and put the static in `.data`).
+    configured: bool,
+    config: WirePfConfig,
     engine: Engine,
 }
 
+/// An all-zero configuration: the placeholder of an unconfigured unit.
+const ZERO_CONFIG: WirePfConfig = WirePfConfig {
+    kind: PfKind::Ekf,
+    particles: 0,
+    seed: 0,
+    config: raim_core::pf::PfConfig {
+        process: raim_core::pf::ProcessModel {
+            position_m_per_sqrt_s: 0.0,
+            clock_m_per_sqrt_s: 0.0,
+            drift_m_s_per_sqrt_s: 0.0,
+        },
+        likelihood: raim_core::pf::Likelihood::Gaussian,
+        sigma_m: 0.0,
+        init_position_m: 0.0,
+        init_clock_m: 0.0,
+        init_drift_m_s: 0.0,
+        mutation_m: 0.0,
+        window: 0,
+        threshold: 0.0,
+        exclude: false,
+        readmit_s: 0.0,
+        clock_jump_m: 0.0,
+        collapse_sigma: 0.0,
+    },
+};
+
 impl PfUnit {
-    /// An empty unit: no configuration, no engine. A constant, so a
-    /// `static` initialised with it is zero-filled RAM, not a copy.
+    /// An empty unit: no configuration, no engine. A constant of zero
+    /// bytes, so a `static` initialised with it is `.bss` (zero-filled at
+    /// start-up), neither a flash image nor a copy through the stack.
     pub const EMPTY: PfUnit = PfUnit {
-        config: None,
+        configured: false,
+        config: ZERO_CONFIG,
         engine: Engine::Empty,
     };
 
@@ -79,7 +127,7 @@ impl PfUnit {
 
     /// The PF configuration in force.
     pub fn config(&self) -> Option<&WirePfConfig> {
-        self.config.as_ref()
+        self.configured.then_some(&self.config)
     }
 
     /// Checks `c` and makes it the configuration in force, restarting the
@@ -88,13 +136,14 @@ impl PfUnit {
         check_particles(&c)?;
         c.config.validate().map_err(|e| map_error(e, &[]))?;
         self.install(&c)?;
-        self.config = Some(c);
+        self.config = c;
+        self.configured = true;
         Ok(())
     }
 
     #[cfg(feature = "pf")]
     fn install(&mut self, c: &WirePfConfig) -> Result<(), WireError> {
-        use raim_core::pf::PfRaim;
+        use engine::fresh;
         let seed = c.seed;
         match (&mut self.engine, c.kind, c.particles) {
             (Engine::Ekf(m), PfKind::Ekf, _) => m.restart(seed),
@@ -102,11 +151,11 @@ impl PfUnit {
             (Engine::Pf300(m), PfKind::Pf, 300) => m.restart(seed),
             (Engine::Ga100(m), PfKind::Gapf, 100) => m.restart(seed),
             (Engine::Ga300(m), PfKind::Gapf, 300) => m.restart(seed),
-            (_, PfKind::Ekf, _) => self.engine = Engine::Ekf(PfRaim::new(seed)),
-            (_, PfKind::Pf, 100) => self.engine = Engine::Pf100(PfRaim::new(seed)),
-            (_, PfKind::Pf, 300) => self.engine = Engine::Pf300(PfRaim::new(seed)),
-            (_, PfKind::Gapf, 100) => self.engine = Engine::Ga100(PfRaim::new(seed)),
-            (_, PfKind::Gapf, 300) => self.engine = Engine::Ga300(PfRaim::new(seed)),
+            (_, PfKind::Ekf, _) => fresh(&mut self.engine, seed, Engine::Ekf),
+            (_, PfKind::Pf, 100) => fresh(&mut self.engine, seed, Engine::Pf100),
+            (_, PfKind::Pf, 300) => fresh(&mut self.engine, seed, Engine::Pf300),
+            (_, PfKind::Gapf, 100) => fresh(&mut self.engine, seed, Engine::Ga100),
+            (_, PfKind::Gapf, 300) => fresh(&mut self.engine, seed, Engine::Ga300),
             (_, _, requested) => {
                 return Err(WireError::PfParticles {
                     requested,
@@ -129,9 +178,10 @@ impl PfUnit {
         time_s: f64,
         sats: &[RangeObservation],
     ) -> Result<WirePfResult, WireError> {
-        let Some(c) = self.config else {
+        if !self.configured {
             return Err(WireError::PfNotConfigured);
-        };
+        }
+        let c = self.config;
         #[cfg(feature = "pf")]
         {
             let cfg = &c.config;
