@@ -18,7 +18,7 @@ use qemu_common::{range_epoch, Rng};
 use raim_core::pf::PfConfig;
 use raim_core::{RangeObservation, System};
 use raim_proto::message::{CommandRef, RequestRef, ResponseBody};
-use raim_proto::server::{NoPlatform, PfUnit, Server};
+use raim_proto::server::{NoPlatform, PfEngines, Server};
 use raim_proto::{PfKind, WirePfConfig};
 use raim_qemu::{Options, QemuSession};
 
@@ -60,8 +60,17 @@ fn main() -> anyhow::Result<()> {
             ..Options::default()
         },
     )?;
+    fn leak<T>(t: T) -> Option<&'static mut T> {
+        Some(Box::leak(Box::new(t)))
+    }
     let mut host = Server::new();
-    host.attach_pf(Box::leak(Box::new(PfUnit::EMPTY)));
+    host.attach_pf(PfEngines {
+        ekf: leak(raim_core::pf::PfRaim::new(0)),
+        pf100: leak(raim_core::pf::PfRaim::new(0)),
+        pf300: leak(raim_core::pf::PfRaim::new(0)),
+        ga100: leak(raim_core::pf::PfRaim::new(0)),
+        ga300: leak(raim_core::pf::PfRaim::new(0)),
+    });
     let mut host_seq = 0;
     println!("| filter | particles | satellites | guest instructions / epoch | M cycles at CPI 1.5 | fits 1 Hz at 168 MHz | host us / epoch |");
     println!("| --- | --- | --- | --- | --- | --- | --- |");
@@ -133,8 +142,7 @@ fn main() -> anyhow::Result<()> {
     use raim_core::pf::{Ekf, GaPf, PfRaim, SirPf};
     const S: usize = raim_proto::pf_msg::PF_SATS;
     println!(
-        "RAM (bytes): PfUnit (the firmware's PF static) {}; engines at {S} satellites, f32: EKF {}, PF/GA-PF 100 {}, PF/GA-PF 300 {} (SIR {}, f64 GA-PF 300 {})",
-        PfUnit::BYTES,
+        "RAM (bytes): engines at {S} satellites, f32: EKF {}, GA-PF 100 {}, GA-PF 300 {} (SIR 300 {}, f64 GA-PF 300 {})",
         PfRaim::<f32, Ekf<f32>, S>::BYTES,
         PfRaim::<f32, GaPf<f32, 100>, S>::BYTES,
         PfRaim::<f32, GaPf<f32, 300>, S>::BYTES,

@@ -24,7 +24,9 @@ use crate::{
 // server's fields while its code stays out of this file.
 #[path = "server_pf.rs"]
 mod pf;
-pub use pf::{map_error as pf_error, PfUnit};
+pub use pf::{map_error as pf_error, PfEngines, PfUnit};
+#[cfg(feature = "pf")]
+pub use pf::{EkfEngine, Ga100Engine, Ga300Engine, Pf100Engine, Pf300Engine, PfT};
 
 /// What the board provides besides the UARTs.
 pub trait Platform {
@@ -70,8 +72,9 @@ pub struct Server {
     status: Status,
     scratch: [u8; MAX_RESPONSE_PAYLOAD],
     out: [u8; MAX_RESPONSE_FRAME],
-    /// The particle-filter storage, lent by the owner (`attach_pf`).
-    pf: Option<&'static mut PfUnit>,
+    /// The PF configuration and the engines lent by the owner
+    /// (`attach_pf`; a few pointers, the engines stay where they are).
+    pf: PfUnit,
 }
 
 impl Default for Server {
@@ -106,7 +109,7 @@ impl Server {
             },
             scratch: [0; MAX_RESPONSE_PAYLOAD],
             out: [0; MAX_RESPONSE_FRAME],
-            pf: None,
+            pf: PfUnit::EMPTY,
         }
     }
 

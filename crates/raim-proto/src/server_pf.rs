@@ -2,19 +2,17 @@
 //! of `server`, so that `Server`'s own file only dispatches to it).
 //!
 //! The PF state (main filter + one auxiliary filter per satellite, each of
-//! up to [`PF_MAX_PARTICLES`] particles of `f32` state) is ~160 KiB: far
-//! too large for the stack or for the `Server` itself (the firmware builds
-//! the `Server` by value). It lives in a [`PfUnit`] that the caller owns in
-//! static storage and lends to the server for good
-//! ([`Server::attach_pf`]): the firmware's own `static`, a leaked box on
-//! the host. [`PfUnit::EMPTY`] is a constant, so the firmware's static is
-//! zero-initialised memory (`.bss`), never copied through the stack.
-//!
-//! A `PfConfigure` for the filter and particle count already in the unit
-//! restarts it in place (`PfRaim::restart`); another filter or count
-//! replaces the engine (one assignment into the static storage; its stack
-//! cost is measured under QEMU, BENCHMARKS.md "Particle filter on the
-//! device").
+//! up to [`PF_MAX_PARTICLES`] particles of `f32` state) is up to ~160 KiB
+//! per engine: far too large for the stack or for the `Server` itself (the
+//! firmware builds the `Server` by value). Each engine lives in storage the
+//! owner provides for good ([`PfEngines`], [`Server::attach_pf`]): the
+//! firmware's zero-initialised statics, leaked boxes on the host. The
+//! server never moves or builds an engine: a `PfConfigure` selects the
+//! engine of the requested filter and particle count and restarts it in
+//! place (`PfRaim::restart`), so no engine ever passes through the stack.
+//! (An enum of engines sharing one storage needs a new value, built on the
+//! stack, at every change of filter: measured 318 KiB of stack for a
+//! 300-particle engine, so it was dropped.)
 
 use raim_core::pf::PfError;
 use raim_core::RangeObservation;
@@ -37,138 +35,98 @@ mod engine {
 
     const _: () = assert!(PF_PARTICLE_COUNTS[0] == 100 && PF_PARTICLE_COUNTS[1] == 300);
 
-    /// One engine at a time; the enum is as large as its largest variant.
-    /// `repr(u8)`: `Empty` is tag 0, so [`super::PfUnit::EMPTY`] is all
-    /// zero bytes (and uninitialised payload) and a static of it is `.bss`.
-    #[allow(clippy::large_enum_variant)]
-    #[repr(u8)]
-    pub enum Engine {
-        Empty,
-        Ekf(PfRaim<PfT, Ekf<PfT>, PF_SATS>),
-        Pf100(PfRaim<PfT, SirPf<PfT, 100>, PF_SATS>),
-        Pf300(PfRaim<PfT, SirPf<PfT, 300>, PF_SATS>),
-        Ga100(PfRaim<PfT, GaPf<PfT, 100>, PF_SATS>),
-        Ga300(PfRaim<PfT, GaPf<PfT, 300>, PF_SATS>),
+    /// The EKF baseline in seed 004's structure.
+    pub type EkfEngine = PfRaim<PfT, Ekf<PfT>, PF_SATS>;
+    /// The SIR particle filter, 100 particles.
+    pub type Pf100Engine = PfRaim<PfT, SirPf<PfT, 100>, PF_SATS>;
+    /// The SIR particle filter, 300 particles.
+    pub type Pf300Engine = PfRaim<PfT, SirPf<PfT, 300>, PF_SATS>;
+    /// The GA-PF, 100 particles.
+    pub type Ga100Engine = PfRaim<PfT, GaPf<PfT, 100>, PF_SATS>;
+    /// The GA-PF, 300 particles.
+    pub type Ga300Engine = PfRaim<PfT, GaPf<PfT, 300>, PF_SATS>;
+
+    /// The engines a build provides, each in its owner's static storage;
+    /// `None` for an engine the build leaves out (its `PfConfigure` is
+    /// answered `PfParticles` or `PfUnavailable`).
+    #[derive(Default)]
+    pub struct PfEngines {
+        pub ekf: Option<&'static mut EkfEngine>,
+        pub pf100: Option<&'static mut Pf100Engine>,
+        pub pf300: Option<&'static mut Pf300Engine>,
+        pub ga100: Option<&'static mut Ga100Engine>,
+        pub ga300: Option<&'static mut Ga300Engine>,
     }
 
-    /// Replaces the engine in `slot` by a new one of variant `wrap`. Not
-    /// inlined, and written as one move into `*slot`, so that the compiler
-    /// builds the ~160 KiB value in place rather than in a stack temporary
-    /// (measured: the firmware's stack high water, qemu_pf).
-    #[inline(never)]
-    pub fn fresh<X: raim_core::pf::Estimator<PfT>>(
-        slot: &mut Engine,
-        seed: u64,
-        wrap: fn(PfRaim<PfT, X, PF_SATS>) -> Engine,
-    ) {
-        *slot = wrap(PfRaim::new(seed));
+    impl PfEngines {
+        pub const NONE: PfEngines = PfEngines {
+            ekf: None,
+            pf100: None,
+            pf300: None,
+            ga100: None,
+            ga300: None,
+        };
     }
 }
 
 #[cfg(not(feature = "pf"))]
 mod engine {
-    /// Without the `pf` feature the unit holds no engine.
-    #[repr(u8)]
-    pub enum Engine {
-        Empty,
+    /// Without the `pf` feature a build has no engine.
+    #[derive(Default)]
+    pub struct PfEngines {}
+
+    impl PfEngines {
+        pub const NONE: PfEngines = PfEngines {};
     }
 }
 
-use engine::Engine;
+pub use engine::*;
 
-/// The PF configuration in force and the engine, in the caller's static
-/// storage.
+/// The PF configuration in force and the engines.
 pub struct PfUnit {
-    /// `config` is in force (a flag rather than an `Option`, whose `None`
-    /// would be a non-zero niche byte and put the static in `.data`).
-    configured: bool,
-    config: WirePfConfig,
-    engine: Engine,
+    config: Option<WirePfConfig>,
+    engines: PfEngines,
 }
 
-/// An all-zero configuration: the placeholder of an unconfigured unit.
-const ZERO_CONFIG: WirePfConfig = WirePfConfig {
-    kind: PfKind::Ekf,
-    particles: 0,
-    seed: 0,
-    config: raim_core::pf::PfConfig {
-        process: raim_core::pf::ProcessModel {
-            position_m_per_sqrt_s: 0.0,
-            clock_m_per_sqrt_s: 0.0,
-            drift_m_s_per_sqrt_s: 0.0,
-        },
-        likelihood: raim_core::pf::Likelihood::Gaussian,
-        sigma_m: 0.0,
-        init_position_m: 0.0,
-        init_clock_m: 0.0,
-        init_drift_m_s: 0.0,
-        mutation_m: 0.0,
-        window: 0,
-        threshold: 0.0,
-        exclude: false,
-        readmit_s: 0.0,
-        clock_jump_m: 0.0,
-        collapse_sigma: 0.0,
-    },
-};
-
 impl PfUnit {
-    /// An empty unit: no configuration, no engine. A constant of zero
-    /// bytes, so a `static` initialised with it is `.bss` (zero-filled at
-    /// start-up), neither a flash image nor a copy through the stack.
+    /// No configuration, no engine.
     pub const EMPTY: PfUnit = PfUnit {
-        configured: false,
-        config: ZERO_CONFIG,
-        engine: Engine::Empty,
+        config: None,
+        engines: PfEngines::NONE,
     };
-
-    /// Bytes of the unit (the engine's largest variant).
-    pub const BYTES: usize = core::mem::size_of::<PfUnit>();
 
     /// The PF configuration in force.
     pub fn config(&self) -> Option<&WirePfConfig> {
-        self.configured.then_some(&self.config)
+        self.config.as_ref()
     }
 
     /// Checks `c` and makes it the configuration in force, restarting the
-    /// filter; on error nothing changes.
+    /// selected engine in place; on error nothing changes.
     fn configure(&mut self, c: WirePfConfig) -> Result<(), WireError> {
         check_particles(&c)?;
         c.config.validate().map_err(|e| map_error(e, &[]))?;
-        self.install(&c)?;
-        self.config = c;
-        self.configured = true;
+        self.restart(&c)?;
+        self.config = Some(c);
         Ok(())
     }
 
     #[cfg(feature = "pf")]
-    fn install(&mut self, c: &WirePfConfig) -> Result<(), WireError> {
-        use engine::fresh;
+    fn restart(&mut self, c: &WirePfConfig) -> Result<(), WireError> {
+        let e = &mut self.engines;
         let seed = c.seed;
-        match (&mut self.engine, c.kind, c.particles) {
-            (Engine::Ekf(m), PfKind::Ekf, _) => m.restart(seed),
-            (Engine::Pf100(m), PfKind::Pf, 100) => m.restart(seed),
-            (Engine::Pf300(m), PfKind::Pf, 300) => m.restart(seed),
-            (Engine::Ga100(m), PfKind::Gapf, 100) => m.restart(seed),
-            (Engine::Ga300(m), PfKind::Gapf, 300) => m.restart(seed),
-            (_, PfKind::Ekf, _) => fresh(&mut self.engine, seed, Engine::Ekf),
-            (_, PfKind::Pf, 100) => fresh(&mut self.engine, seed, Engine::Pf100),
-            (_, PfKind::Pf, 300) => fresh(&mut self.engine, seed, Engine::Pf300),
-            (_, PfKind::Gapf, 100) => fresh(&mut self.engine, seed, Engine::Ga100),
-            (_, PfKind::Gapf, 300) => fresh(&mut self.engine, seed, Engine::Ga300),
-            (_, _, requested) => {
-                return Err(WireError::PfParticles {
-                    requested,
-                    max: PF_MAX_PARTICLES,
-                })
-            }
-        }
-        Ok(())
+        let done = match (c.kind, c.particles) {
+            (PfKind::Ekf, _) => e.ekf.as_mut().map(|m| m.restart(seed)),
+            (PfKind::Pf, 100) => e.pf100.as_mut().map(|m| m.restart(seed)),
+            (PfKind::Pf, 300) => e.pf300.as_mut().map(|m| m.restart(seed)),
+            (PfKind::Gapf, 100) => e.ga100.as_mut().map(|m| m.restart(seed)),
+            (PfKind::Gapf, 300) => e.ga300.as_mut().map(|m| m.restart(seed)),
+            _ => None,
+        };
+        done.ok_or(WireError::PfUnavailable)
     }
 
     #[cfg(not(feature = "pf"))]
-    fn install(&mut self, _c: &WirePfConfig) -> Result<(), WireError> {
-        let Engine::Empty = self.engine;
+    fn restart(&mut self, _c: &WirePfConfig) -> Result<(), WireError> {
         Err(WireError::PfUnavailable)
     }
 
@@ -178,27 +136,31 @@ impl PfUnit {
         time_s: f64,
         sats: &[RangeObservation],
     ) -> Result<WirePfResult, WireError> {
-        if !self.configured {
+        let Some(c) = self.config else {
             return Err(WireError::PfNotConfigured);
-        }
-        let c = self.config;
+        };
         #[cfg(feature = "pf")]
         {
             let cfg = &c.config;
-            let out = match &mut self.engine {
-                Engine::Empty => return Err(WireError::PfNotConfigured),
-                Engine::Ekf(m) => m.process(cfg, time_s, sats),
-                Engine::Pf100(m) => m.process(cfg, time_s, sats),
-                Engine::Pf300(m) => m.process(cfg, time_s, sats),
-                Engine::Ga100(m) => m.process(cfg, time_s, sats),
-                Engine::Ga300(m) => m.process(cfg, time_s, sats),
+            let e = &mut self.engines;
+            let out = match (c.kind, c.particles) {
+                (PfKind::Ekf, _) => e.ekf.as_mut().map(|m| m.process(cfg, time_s, sats)),
+                (PfKind::Pf, 100) => e.pf100.as_mut().map(|m| m.process(cfg, time_s, sats)),
+                (PfKind::Pf, 300) => e.pf300.as_mut().map(|m| m.process(cfg, time_s, sats)),
+                (PfKind::Gapf, 100) => e.ga100.as_mut().map(|m| m.process(cfg, time_s, sats)),
+                (PfKind::Gapf, 300) => e.ga300.as_mut().map(|m| m.process(cfg, time_s, sats)),
+                _ => None,
             };
-            out.map(|o| WirePfResult::from_output(&o))
-                .map_err(|e| map_error(e, sats))
+            match out {
+                None => Err(WireError::PfUnavailable),
+                Some(r) => r
+                    .map(|o| WirePfResult::from_output(&o))
+                    .map_err(|e| map_error(e, sats)),
+            }
         }
         #[cfg(not(feature = "pf"))]
         {
-            let _ = (c, time_s, sats);
+            let _ = (c, time_s, sats, &self.engines);
             Err(WireError::PfUnavailable)
         }
     }
@@ -269,18 +231,20 @@ pub fn map_error(e: PfError, sats: &[RangeObservation]) -> WireError {
 }
 
 impl Server {
-    /// Lends the server the PF storage for good (issue 14): from then on it
-    /// answers `PfConfigure` and `PfRanges`; without it they are answered
-    /// `PfUnavailable`. The unit's configuration (if any) joins the
-    /// fingerprint.
-    pub fn attach_pf(&mut self, unit: &'static mut PfUnit) {
-        self.pf = Some(unit);
+    /// Lends the server the PF engines for good (issue 14): from then on
+    /// it answers `PfConfigure` and `PfRanges` for them; without them they
+    /// are answered `PfUnavailable`. Any PF configuration is dropped.
+    pub fn attach_pf(&mut self, engines: PfEngines) {
+        self.pf = PfUnit {
+            config: None,
+            engines,
+        };
         self.config_id.crc32 = self.fingerprint();
     }
 
     /// The PF configuration in force, if any.
     pub fn pf_config(&self) -> Option<&WirePfConfig> {
-        self.pf.as_ref().and_then(|u| u.config())
+        self.pf.config()
     }
 
     /// The fingerprint of the snapshot configuration and, when one is in
@@ -291,10 +255,7 @@ impl Server {
 
     /// `PfConfigure` (the lock is checked by the caller).
     pub(super) fn pf_configure(&mut self, c: WirePfConfig) -> ResponseBody {
-        let Some(unit) = self.pf.as_mut() else {
-            return ResponseBody::Error(WireError::PfUnavailable);
-        };
-        match unit.configure(c) {
+        match self.pf.configure(c) {
             Ok(()) => {
                 self.config_id.crc32 = self.fingerprint();
                 ResponseBody::Configured
@@ -310,12 +271,9 @@ impl Server {
         sats: &[RangeObservation],
         platform: &mut P,
     ) -> ResponseBody {
-        let Some(unit) = self.pf.as_mut() else {
-            return ResponseBody::Error(WireError::PfUnavailable);
-        };
         self.status.epochs = self.status.epochs.wrapping_add(1);
         let t0 = platform.now();
-        let r = unit.process(time_s, sats);
+        let r = self.pf.process(time_s, sats);
         let t1 = platform.now();
         self.status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
         match r {
@@ -448,8 +406,17 @@ mod tests {
     }
 
     fn pf_server() -> Server {
+        fn leak<T>(t: T) -> Option<&'static mut T> {
+            Some(Box::leak(Box::new(t)))
+        }
         let mut s = Server::new();
-        s.attach_pf(Box::leak(Box::new(PfUnit::EMPTY)));
+        s.attach_pf(PfEngines {
+            ekf: leak(PfRaim::new(0)),
+            pf100: leak(PfRaim::new(0)),
+            pf300: leak(PfRaim::new(0)),
+            ga100: leak(PfRaim::new(0)),
+            ga300: leak(PfRaim::new(0)),
+        });
         s
     }
 
@@ -718,7 +685,26 @@ mod tests {
             &[CommandRef::PfConfigure(&c100), ranges(0.0, &e0)],
         );
         assert_eq!(resp[0].body, ResponseBody::Error(WireError::PfUnavailable));
-        assert_eq!(resp[1].body, ResponseBody::Error(WireError::PfUnavailable));
+        assert_eq!(
+            resp[1].body,
+            ResponseBody::Error(WireError::PfNotConfigured)
+        );
+        // A build with the GA-PF 100 only: the others are unavailable.
+        let mut only = Server::new();
+        only.attach_pf(PfEngines {
+            ga100: Some(Box::leak(Box::new(PfRaim::new(0)))),
+            ..PfEngines::NONE
+        });
+        let resp = exchange(
+            &mut only,
+            0,
+            &[
+                CommandRef::PfConfigure(&c300),
+                CommandRef::PfConfigure(&c100),
+            ],
+        );
+        assert_eq!(resp[0].body, ResponseBody::Error(WireError::PfUnavailable));
+        assert_eq!(resp[1].body, ResponseBody::Configured);
         // Reconfiguring the same filter restarts it in place: the answers
         // repeat bit for bit.
         let mut server = pf_server();
