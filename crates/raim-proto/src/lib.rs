@@ -66,7 +66,9 @@ pub const CAPACITY: usize = raim_core::DEFAULT_CAPACITY;
 /// 3: `Lock`, `LockEngaged`, `WireError::Locked`, the `ConfigId` in every
 /// response and in `Status`, the reset count and cause in `Status`, the
 /// test-only `TestFault` (issue 15).
-pub const PROTOCOL_VERSION: u16 = 3;
+/// 4: the particle-filter messages `PfConfigure`, `PfRanges`, `PfResult`
+/// and their errors, appended to the enums (issue 14, `pf_msg`).
+pub const PROTOCOL_VERSION: u16 = 4;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes
