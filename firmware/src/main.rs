@@ -69,6 +69,8 @@ fn main() -> ! {
         board::halt()
     };
     let server = server();
+    #[cfg(feature = "pf")]
+    server.attach_pf(pf_engines());
     let (mut link, mut nmea) = board::uarts();
     let mut platform = Board {
         ticks: board::Ticks::new(core.SYST),
@@ -103,6 +105,46 @@ fn server() -> &'static mut Server {
     match cortex_m::singleton!(: Server = Server::new()) {
         Some(s) => s,
         None => board::halt(),
+    }
+}
+
+/// The particle-filter engines (issue 14), each in its own zero-filled
+/// static (`.bss`: no flash image, never built on the stack), handed to
+/// the server for good. Called once, from `main`.
+///
+/// All-zero bytes are a valid value of every engine: its fields are `f32`
+/// and `f64` arrays, integers, `Option<f64>` (its tag is 0 or 1, both
+/// valid), `Option<SatId>` (`System` has a variant with discriminant 0, so
+/// zero is a valid `SatId` whatever the niche), `heapless::Vec` (length
+/// 0) and the generator's `[u64; 4]`. The server restarts an engine
+/// (`PfRaim::restart`: fresh history, reseeded generator) at every
+/// `PfConfigure` before its first epoch, and the first epoch overwrites the
+/// particles, so the zero contents are never used (host-tests/tests/
+/// qemu_pf.rs `a_zeroed_engine_restarted_equals_a_new_one`).
+#[cfg(feature = "pf")]
+fn pf_engines() -> raim_proto::server::PfEngines {
+    use core::mem::MaybeUninit;
+    use core::ptr::addr_of_mut;
+    use raim_proto::server::{
+        EkfEngine, Ga100Engine, Ga300Engine, Pf100Engine, Pf300Engine, PfEngines,
+    };
+    static mut EKF: MaybeUninit<EkfEngine> = MaybeUninit::zeroed();
+    static mut PF100: MaybeUninit<Pf100Engine> = MaybeUninit::zeroed();
+    static mut PF300: MaybeUninit<Pf300Engine> = MaybeUninit::zeroed();
+    static mut GA100: MaybeUninit<Ga100Engine> = MaybeUninit::zeroed();
+    static mut GA300: MaybeUninit<Ga300Engine> = MaybeUninit::zeroed();
+    // SAFETY: zero is a valid value of each engine (above); this function
+    // runs once (from `main`, which never returns), so each `&'static mut`
+    // is the only reference to its static ever made; no interrupt handler
+    // touches them.
+    unsafe {
+        PfEngines {
+            ekf: Some((*addr_of_mut!(EKF)).assume_init_mut()),
+            pf100: Some((*addr_of_mut!(PF100)).assume_init_mut()),
+            pf300: Some((*addr_of_mut!(PF300)).assume_init_mut()),
+            ga100: Some((*addr_of_mut!(GA100)).assume_init_mut()),
+            ga300: Some((*addr_of_mut!(GA300)).assume_init_mut()),
+        }
     }
 }
 

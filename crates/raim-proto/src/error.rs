@@ -113,6 +113,34 @@ pub enum WireError {
     },
     /// ARAIM's own refusals (issue 12; `araim_msg::AraimWireError`).
     Araim(crate::araim_msg::AraimWireError),
+    /// A `PfRanges` epoch before any `PfConfigure` was taken (issue 14).
+    PfNotConfigured,
+    /// A PF request to a build without the particle-filter engine (or
+    /// without its static storage attached).
+    PfUnavailable,
+    /// A `PfConfigure` whose particle count is not compiled in: above the
+    /// capacity `max`, or not one of `raim_proto::pf_msg::PF_PARTICLE_COUNTS`
+    /// (non-zero for the EKF). The previous PF configuration stays.
+    PfParticles {
+        requested: u32,
+        max: u32,
+    },
+    /// A `PfConfigure` value outside its domain (`PfConfig::validate`), or
+    /// a non-positive per-satellite sigma in a PF epoch.
+    PfInvalidConfig {
+        field: FieldName,
+        value: f64,
+    },
+    /// A PF epoch whose time does not follow the previous one's.
+    TimeNotIncreasing {
+        previous_s: f64,
+        now_s: f64,
+    },
+}
+
+/// A field name for the wire (truncated to 24 bytes).
+pub(crate) fn field_name(name: &str) -> FieldName {
+    field(name)
 }
 
 fn u32_of(v: usize) -> u32 {
@@ -262,6 +290,19 @@ impl core::fmt::Display for WireError {
                 )
             }
             WireError::Araim(e) => write!(f, "ARAIM: {e}"),
+            WireError::PfNotConfigured => write!(f, "no particle-filter configuration taken yet"),
+            WireError::PfUnavailable => write!(f, "this build has no particle-filter engine"),
+            WireError::PfParticles { requested, max } => write!(
+                f,
+                "{requested} particles not compiled in (counts {:?}, at most {max})",
+                crate::pf_msg::PF_PARTICLE_COUNTS
+            ),
+            WireError::PfInvalidConfig { field, value } => {
+                write!(f, "particle-filter {field} = {value} is out of range")
+            }
+            WireError::TimeNotIncreasing { previous_s, now_s } => {
+                write!(f, "time {now_s} s does not follow {previous_s} s")
+            }
         }
     }
 }

@@ -44,6 +44,7 @@ pub mod frame;
 pub mod lock;
 pub mod message;
 pub mod nmea;
+pub mod pf_msg;
 pub mod result;
 pub mod server;
 
@@ -55,6 +56,7 @@ pub use message::{
     Command, LinearEpoch, RangeEpoch, Request, RequestRef, ResetCause, Response, ResponseBody,
     SatList, Status, TestFault,
 };
+pub use pf_msg::{PfKind, WirePfConfig, WirePfResult};
 pub use result::{WireMcusum, WireResult};
 
 /// Satellites per epoch: the firmware's `Raim::<CAPACITY>` and every list on
@@ -68,7 +70,9 @@ pub const CAPACITY: usize = raim_core::DEFAULT_CAPACITY;
 /// test-only `TestFault` (issue 15).
 /// 4: `Command::Araim`, `ResponseBody::Araim`, `WireError::Araim` (issue 12,
 /// appended; the earlier variants keep their indices).
-pub const PROTOCOL_VERSION: u16 = 4;
+/// 5: the particle-filter messages `PfConfigure`, `PfRanges`, `PfResult`
+/// and their errors, appended to the enums (issue 14, `pf_msg`).
+pub const PROTOCOL_VERSION: u16 = 5;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes

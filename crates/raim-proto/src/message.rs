@@ -120,6 +120,16 @@ pub enum Command {
     AuthConfigure(crate::auth::AuthConfigure),
     /// ARAIM (issue 12): an ISM frame or an ARAIM epoch (`araim_msg`).
     Araim(crate::araim_msg::AraimCommand),
+    /// Particle-filter RAIM (issue 14, `pf_msg`): take a PF configuration
+    /// (filter, particle count, seed, `PfConfig`) and restart the filter.
+    /// Answered `Configured`, or an error (`PfParticles`,
+    /// `PfInvalidConfig`, `Locked`, `PfUnavailable`) with the previous PF
+    /// configuration kept.
+    PfConfigure(crate::pf_msg::WirePfConfig),
+    /// One pseudorange epoch for the particle-filter monitor (`apriori_m`
+    /// is not used: the PF initialises from its own first fix). Answered
+    /// `PfResult` or an error.
+    PfRanges(RangeEpoch),
 }
 
 /// What a `TestFault` request does.
@@ -185,6 +195,12 @@ pub enum CommandRef<'a> {
     TestFault(TestFault),
     AuthConfigure(&'a crate::auth::AuthConfigure),
     Araim(crate::araim_msg::AraimCommandRef<'a>),
+    PfConfigure(&'a crate::pf_msg::WirePfConfig),
+    PfRanges {
+        time_s: f64,
+        apriori_m: Option<[f64; 3]>,
+        sats: &'a [RangeObservation],
+    },
 }
 
 /// The host's borrowed form of [`Request`].
@@ -271,6 +287,8 @@ pub enum ResponseBody {
     LockEngaged,
     /// The answer to `Command::Araim` (issue 12; `araim_msg`).
     Araim(crate::araim_msg::AraimAnswer),
+    /// The answer to a `PfRanges` epoch (issue 14).
+    PfResult(crate::pf_msg::WirePfResult),
 }
 
 #[cfg(test)]

@@ -22,6 +22,14 @@ use crate::{
     CAPACITY, MAX_REQUEST_FRAME, MAX_RESPONSE_FRAME, MAX_RESPONSE_PAYLOAD, PROTOCOL_VERSION,
 };
 
+// Particle-filter RAIM (issue 14): a child module, so it reaches the
+// server's fields while its code stays out of this file.
+#[path = "server_pf.rs"]
+mod pf;
+pub use pf::{map_error as pf_error, PfEngines, PfUnit};
+#[cfg(feature = "pf")]
+pub use pf::{EkfEngine, Ga100Engine, Ga300Engine, Pf100Engine, Pf300Engine, PfT};
+
 /// What the board provides besides the UARTs.
 pub trait Platform {
     /// A free-running tick counter (any rate); wraps at `TICK_MASK + 1`.
@@ -68,6 +76,9 @@ pub struct Server {
     araim: araim::AraimState,
     scratch: [u8; MAX_RESPONSE_PAYLOAD],
     out: [u8; MAX_RESPONSE_FRAME],
+    /// The PF configuration and the engines lent by the owner
+    /// (`attach_pf`; a few pointers, the engines stay where they are).
+    pf: PfUnit,
 }
 
 impl Default for Server {
@@ -103,6 +114,7 @@ impl Server {
             araim: araim::AraimState::new(),
             scratch: [0; MAX_RESPONSE_PAYLOAD],
             out: [0; MAX_RESPONSE_FRAME],
+            pf: PfUnit::EMPTY,
         }
     }
 
@@ -231,6 +243,17 @@ impl Server {
             ),
             Command::Linear(e) => self.epoch(&Epoch::linear(e.time_s, &e.sats.items), platform),
             Command::Araim(c) => self.araim(c, platform),
+            Command::PfConfigure(_) if self.config_id.locked => {
+                ResponseBody::Error(WireError::Locked {
+                    config_crc32: self.config_id.crc32,
+                })
+            }
+            Command::PfConfigure(_) if self.auth.is_some() => {
+                ResponseBody::Error(WireError::AuthRequired)
+            }
+            Command::PfConfigure(c) => self.pf_configure(c),
+            Command::PfRanges(e) if e.sats.overflowed() => too_many(e.sats.declared),
+            Command::PfRanges(e) => self.pf_epoch(e.time_s, &e.sats.items, platform),
         };
         if let ResponseBody::Result(r) = &body {
             // Sentences cannot exceed 82 characters with the formats used;
@@ -250,8 +273,8 @@ impl Server {
         match c.validate() {
             Ok(()) => {
                 self.config = c;
-                // Covers the ISM in force too (issue 12).
-                self.config_id.crc32 = araim::fingerprint(&self.config, self.araim.ism.as_ref());
+                // Covers the ISM and the PF configuration in force too.
+                self.config_id.crc32 = self.fingerprint();
                 ResponseBody::Configured
             }
             Err(e) => ResponseBody::Error(e.into()),

@@ -7,6 +7,7 @@ use super::error::PfError;
 /// p(z|x)), per satellite with scale `sigma_m`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Likelihood {
     /// N(0, sigma^2).
     Gaussian,
@@ -41,6 +42,7 @@ impl Likelihood {
 /// scaled by sqrt(dt) each epoch.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ProcessModel {
     /// Position random walk per axis, m / sqrt(s).
     pub position_m_per_sqrt_s: f64,
@@ -53,6 +55,7 @@ pub struct ProcessModel {
 /// Everything the `pf` monitor needs besides the measurements.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct PfConfig {
     pub process: ProcessModel,
     pub likelihood: Likelihood,

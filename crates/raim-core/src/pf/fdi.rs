@@ -39,6 +39,7 @@ use super::rng::{self, PfRng};
 /// One auxiliary filter's line in the output.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SatLlr {
     /// The satellite the auxiliary filter leaves out.
     pub id: SatId,
@@ -108,6 +109,24 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
             rng: rng::seeded(seed),
             _t: PhantomData,
         }
+    }
+
+    /// Forgets everything in place (no temporary copy of the filters, so a
+    /// monitor in static storage can be restarted without stack): the next
+    /// epoch initialises from its own first fix, exactly as in a monitor
+    /// made by [`PfRaim::new`] with the same `seed` (test
+    /// `restart_equals_new`). The filters' arrays are left as they are:
+    /// the first epoch overwrites the main filter (`Estimator::init`) and
+    /// every auxiliary filter is copied from it before its first use.
+    pub fn restart(&mut self, seed: u64) {
+        self.aux_id = [None; S];
+        for w in self.windows.iter_mut() {
+            w.clear();
+        }
+        self.reference = Reference::default();
+        self.time_s = None;
+        self.excluded.clear();
+        self.rng = rng::seeded(seed);
     }
 
     /// Bytes of state (filters, windows, reference).

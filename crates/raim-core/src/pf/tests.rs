@@ -189,6 +189,37 @@ fn same_seed_same_output() {
     assert_ne!(run(5), run(6));
 }
 
+/// `restart` in place equals a fresh monitor: a monitor that ran 6 epochs
+/// with a fault and an exclusion, restarted with seed 5, then fed 8 epochs
+/// from t = 100 s, answers bit for bit like `new(5)` fed the same epochs.
+#[test]
+fn restart_equals_new() {
+    let c = cfg();
+    let fresh = |m: &mut PfRaim<f32, GaPf<f32, 64>, 12>| {
+        let mut noise = rng::seeded(77);
+        (0..8)
+            .map(|k| {
+                let out = m
+                    .process(&c, 100.0 + k as f64, &epoch(8, k, &mut noise, None))
+                    .unwrap();
+                std::format!("{out:?}")
+            })
+            .collect::<std::vec::Vec<_>>()
+    };
+    let mut used = std::boxed::Box::new(PfRaim::<f32, GaPf<f32, 64>, 12>::new(9));
+    let mut noise = rng::seeded(4);
+    for k in 0..6 {
+        let faulty = (k >= 2).then_some((3, 500.0));
+        used.process(&c, k as f64, &epoch(8, k, &mut noise, faulty))
+            .unwrap();
+    }
+    assert!(!used.excluded().is_empty());
+    used.restart(5);
+    assert!(used.excluded().is_empty());
+    let mut new = std::boxed::Box::new(PfRaim::<f32, GaPf<f32, 64>, 12>::new(5));
+    assert_eq!(fresh(&mut used), fresh(&mut new));
+}
+
 /// f32 particle state against f64 on the same seed and data: the GA-PF
 /// positions agree within 1.5 m (Monte Carlo spread: rounding changes some
 /// resampling draws, so the clouds differ by about sigma/sqrt(N)), the EKF

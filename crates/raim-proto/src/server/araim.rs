@@ -131,9 +131,26 @@ pub fn verify_ism(key: &AuthKey, counter: u64, ism: &IsmFrame, tag: &Tag) -> boo
 /// `postcard(config)`, followed by `postcard(ism)` when an ISM is in
 /// force. Without an ISM it equals `config_fingerprint(config)`.
 pub fn fingerprint(config: &Config, ism: Option<&IsmFrame>) -> u32 {
+    fingerprint_all(config, ism, None)
+}
+
+/// The fingerprint of everything in force on the unit: CRC-32/ISO-HDLC of
+/// `postcard(config)`, then `postcard(ism)` when an ISM is in force, then
+/// `postcard(pf)` when a particle-filter configuration is. Each absent part
+/// adds no bytes, so it reduces to [`fingerprint`] without a PF
+/// configuration, to `pf_msg::fingerprint` without an ISM, and to
+/// `config_fingerprint` with neither.
+pub fn fingerprint_all(
+    config: &Config,
+    ism: Option<&IsmFrame>,
+    pf: Option<&crate::pf_msg::WirePfConfig>,
+) -> u32 {
     let mut digest = feed(config, CRC32.digest());
     if let Some(i) = ism {
         digest = feed(i, digest);
+    }
+    if let Some(p) = pf {
+        digest = feed(p, digest);
     }
     digest.finalize()
 }
@@ -306,7 +323,7 @@ impl Server {
         check_ism(&frame)?;
         let satellites = u32::try_from(frame.sats.items.len()).unwrap_or(u32::MAX);
         self.araim.ism = Some(frame);
-        self.config_id.crc32 = fingerprint(&self.config, self.araim.ism.as_ref());
+        self.config_id.crc32 = self.fingerprint();
         Ok(AraimAnswer::IsmAccepted { satellites })
     }
 

@@ -1,0 +1,718 @@
+//! The particle-filter side of the protocol loop (issue 14; a child module
+//! of `server`, so that `Server`'s own file only dispatches to it).
+//!
+//! The PF state (main filter + one auxiliary filter per satellite, each of
+//! up to [`PF_MAX_PARTICLES`] particles of `f32` state) is up to ~160 KiB
+//! per engine: far too large for the stack or for the `Server` itself (the
+//! firmware builds the `Server` by value). Each engine lives in storage the
+//! owner provides for good ([`PfEngines`], [`Server::attach_pf`]): the
+//! firmware's zero-initialised statics, leaked boxes on the host. The
+//! server never moves or builds an engine: a `PfConfigure` selects the
+//! engine of the requested filter and particle count and restarts it in
+//! place (`PfRaim::restart`), so no engine ever passes through the stack.
+//! (An enum of engines sharing one storage needs a new value, built on the
+//! stack, at every change of filter: measured 318 KiB of stack for a
+//! 300-particle engine, so it was dropped.)
+
+use raim_core::pf::PfError;
+use raim_core::RangeObservation;
+
+use crate::error::{field_name, WireError};
+use crate::message::ResponseBody;
+use crate::pf_msg::{PfKind, WirePfConfig, WirePfResult, PF_MAX_PARTICLES};
+
+use super::Server;
+
+#[cfg(feature = "pf")]
+mod engine {
+    use raim_core::pf::{Ekf, GaPf, PfRaim, SirPf};
+
+    use crate::pf_msg::{PF_PARTICLE_COUNTS, PF_SATS};
+
+    /// The particle state's precision on host and device (docs/PF.md
+    /// "Memory": 300 particles x 12 satellites fit 192 KiB only in f32).
+    pub type PfT = f32;
+
+    const _: () = assert!(PF_PARTICLE_COUNTS[0] == 100 && PF_PARTICLE_COUNTS[1] == 300);
+
+    /// The EKF baseline in seed 004's structure.
+    pub type EkfEngine = PfRaim<PfT, Ekf<PfT>, PF_SATS>;
+    /// The SIR particle filter, 100 particles.
+    pub type Pf100Engine = PfRaim<PfT, SirPf<PfT, 100>, PF_SATS>;
+    /// The SIR particle filter, 300 particles.
+    pub type Pf300Engine = PfRaim<PfT, SirPf<PfT, 300>, PF_SATS>;
+    /// The GA-PF, 100 particles.
+    pub type Ga100Engine = PfRaim<PfT, GaPf<PfT, 100>, PF_SATS>;
+    /// The GA-PF, 300 particles.
+    pub type Ga300Engine = PfRaim<PfT, GaPf<PfT, 300>, PF_SATS>;
+
+    /// The engines a build provides, each in its owner's static storage;
+    /// `None` for an engine the build leaves out (its `PfConfigure` is
+    /// answered `PfParticles` or `PfUnavailable`).
+    #[derive(Default)]
+    pub struct PfEngines {
+        pub ekf: Option<&'static mut EkfEngine>,
+        pub pf100: Option<&'static mut Pf100Engine>,
+        pub pf300: Option<&'static mut Pf300Engine>,
+        pub ga100: Option<&'static mut Ga100Engine>,
+        pub ga300: Option<&'static mut Ga300Engine>,
+    }
+
+    impl PfEngines {
+        pub const NONE: PfEngines = PfEngines {
+            ekf: None,
+            pf100: None,
+            pf300: None,
+            ga100: None,
+            ga300: None,
+        };
+    }
+}
+
+#[cfg(not(feature = "pf"))]
+mod engine {
+    /// Without the `pf` feature a build has no engine.
+    #[derive(Default)]
+    pub struct PfEngines {}
+
+    impl PfEngines {
+        pub const NONE: PfEngines = PfEngines {};
+    }
+}
+
+pub use engine::*;
+
+/// The PF configuration in force and the engines.
+pub struct PfUnit {
+    config: Option<WirePfConfig>,
+    engines: PfEngines,
+}
+
+impl PfUnit {
+    /// No configuration, no engine.
+    pub const EMPTY: PfUnit = PfUnit {
+        config: None,
+        engines: PfEngines::NONE,
+    };
+
+    /// The PF configuration in force.
+    pub fn config(&self) -> Option<&WirePfConfig> {
+        self.config.as_ref()
+    }
+
+    /// Checks `c` and makes it the configuration in force, restarting the
+    /// selected engine in place; on error nothing changes.
+    fn configure(&mut self, c: WirePfConfig) -> Result<(), WireError> {
+        check_particles(&c)?;
+        c.config.validate().map_err(|e| map_error(e, &[]))?;
+        self.restart(&c)?;
+        self.config = Some(c);
+        Ok(())
+    }
+
+    #[cfg(feature = "pf")]
+    fn restart(&mut self, c: &WirePfConfig) -> Result<(), WireError> {
+        let e = &mut self.engines;
+        let seed = c.seed;
+        let done = match (c.kind, c.particles) {
+            (PfKind::Ekf, _) => e.ekf.as_mut().map(|m| m.restart(seed)),
+            (PfKind::Pf, 100) => e.pf100.as_mut().map(|m| m.restart(seed)),
+            (PfKind::Pf, 300) => e.pf300.as_mut().map(|m| m.restart(seed)),
+            (PfKind::Gapf, 100) => e.ga100.as_mut().map(|m| m.restart(seed)),
+            (PfKind::Gapf, 300) => e.ga300.as_mut().map(|m| m.restart(seed)),
+            _ => None,
+        };
+        done.ok_or(WireError::PfUnavailable)
+    }
+
+    #[cfg(not(feature = "pf"))]
+    fn restart(&mut self, _c: &WirePfConfig) -> Result<(), WireError> {
+        Err(WireError::PfUnavailable)
+    }
+
+    /// One epoch through the configured filter.
+    fn process(
+        &mut self,
+        time_s: f64,
+        sats: &[RangeObservation],
+    ) -> Result<WirePfResult, WireError> {
+        let Some(c) = self.config else {
+            return Err(WireError::PfNotConfigured);
+        };
+        #[cfg(feature = "pf")]
+        {
+            let cfg = &c.config;
+            let e = &mut self.engines;
+            let out = match (c.kind, c.particles) {
+                (PfKind::Ekf, _) => e.ekf.as_mut().map(|m| m.process(cfg, time_s, sats)),
+                (PfKind::Pf, 100) => e.pf100.as_mut().map(|m| m.process(cfg, time_s, sats)),
+                (PfKind::Pf, 300) => e.pf300.as_mut().map(|m| m.process(cfg, time_s, sats)),
+                (PfKind::Gapf, 100) => e.ga100.as_mut().map(|m| m.process(cfg, time_s, sats)),
+                (PfKind::Gapf, 300) => e.ga300.as_mut().map(|m| m.process(cfg, time_s, sats)),
+                _ => None,
+            };
+            match out {
+                None => Err(WireError::PfUnavailable),
+                Some(r) => r
+                    .map(|o| WirePfResult::from_output(&o))
+                    .map_err(|e| map_error(e, sats)),
+            }
+        }
+        #[cfg(not(feature = "pf"))]
+        {
+            let _ = (c, time_s, sats, &self.engines);
+            Err(WireError::PfUnavailable)
+        }
+    }
+}
+
+/// The particle count must be compiled in (0 for the EKF).
+fn check_particles(c: &WirePfConfig) -> Result<(), WireError> {
+    let ok = match c.kind {
+        PfKind::Ekf => c.particles == 0,
+        PfKind::Pf | PfKind::Gapf => crate::pf_msg::PF_PARTICLE_COUNTS.contains(&c.particles),
+    };
+    if ok {
+        Ok(())
+    } else {
+        Err(WireError::PfParticles {
+            requested: c.particles,
+            max: PF_MAX_PARTICLES,
+        })
+    }
+}
+
+fn u32_of(v: usize) -> u32 {
+    u32::try_from(v).unwrap_or(u32::MAX)
+}
+
+/// A `PfError` on the wire, with the offending values; a duplicate
+/// satellite gets the indices of its two occurrences in `sats`.
+pub fn map_error(e: PfError, sats: &[RangeObservation]) -> WireError {
+    match e {
+        PfError::NotFinite {
+            field,
+            index,
+            value,
+        } => WireError::NonFinite {
+            field: field_name(field),
+            index: u32_of(index),
+            value,
+        },
+        PfError::DuplicateSatellite { id } => {
+            let mut at = sats.iter().enumerate().filter(|(_, o)| o.id == id);
+            let first = at.next().map_or(0, |(i, _)| i);
+            let second = at.next().map_or(0, |(i, _)| i);
+            WireError::DuplicateSatellite {
+                id,
+                first: u32_of(first),
+                second: u32_of(second),
+            }
+        }
+        PfError::TooFewSatellites { have, need } => WireError::TooFewSatellites {
+            have: u32_of(have),
+            need: u32_of(need),
+        },
+        PfError::Capacity { have, max, .. } => WireError::TooManySatellites {
+            have: u32_of(have),
+            capacity: u32_of(max),
+        },
+        PfError::InvalidConfig { field, value } => WireError::PfInvalidConfig {
+            field: field_name(field),
+            value,
+        },
+        PfError::TimeNotIncreasing { previous_s, now_s } => {
+            WireError::TimeNotIncreasing { previous_s, now_s }
+        }
+        PfError::NoInitialFix { iterations, step_m } => {
+            WireError::NoConvergence { iterations, step_m }
+        }
+    }
+}
+
+impl Server {
+    /// Lends the server the PF engines for good (issue 14): from then on
+    /// it answers `PfConfigure` and `PfRanges` for them; without them they
+    /// are answered `PfUnavailable`. Any PF configuration is dropped.
+    pub fn attach_pf(&mut self, engines: PfEngines) {
+        self.pf = PfUnit {
+            config: None,
+            engines,
+        };
+        self.config_id.crc32 = self.fingerprint();
+    }
+
+    /// The PF configuration in force, if any.
+    pub fn pf_config(&self) -> Option<&WirePfConfig> {
+        self.pf.config()
+    }
+
+    /// The fingerprint of everything in force: the snapshot configuration,
+    /// the ISM and the PF configuration (`server::araim::fingerprint_all`).
+    pub(super) fn fingerprint(&self) -> u32 {
+        super::araim::fingerprint_all(&self.config, self.araim.ism.as_ref(), self.pf_config())
+    }
+
+    /// `PfConfigure` (the lock is checked by the caller).
+    pub(super) fn pf_configure(&mut self, c: WirePfConfig) -> ResponseBody {
+        match self.pf.configure(c) {
+            Ok(()) => {
+                self.config_id.crc32 = self.fingerprint();
+                ResponseBody::Configured
+            }
+            Err(e) => ResponseBody::Error(e),
+        }
+    }
+
+    /// `PfRanges`: one epoch, timed like a snapshot epoch.
+    pub(super) fn pf_epoch<P: super::Platform>(
+        &mut self,
+        time_s: f64,
+        sats: &[RangeObservation],
+        platform: &mut P,
+    ) -> ResponseBody {
+        self.status.epochs = self.status.epochs.wrapping_add(1);
+        let t0 = platform.now();
+        let r = self.pf.process(time_s, sats);
+        let t1 = platform.now();
+        self.status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
+        match r {
+            Ok(r) => ResponseBody::PfResult(r),
+            Err(e) => ResponseBody::Error(e),
+        }
+    }
+}
+
+#[cfg(all(test, feature = "pf"))]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::frame::{encode, FrameReceiver};
+    use crate::message::{CommandRef, RequestRef, Response};
+    use crate::server::NoPlatform;
+    use crate::{ConfigId, MAX_RESPONSE_FRAME};
+    use raim_core::pf::{rng, GaPf, PfConfig, PfRaim};
+    use raim_core::{Config, SatId, System};
+    use std::boxed::Box;
+    use std::vec::Vec;
+
+    const RECEIVER_M: [f64; 3] = [-3_962_108.673, 3_381_309.574, 3_668_678.638];
+    const SIGMA_M: f64 = 3.0;
+
+    /// `n` satellites at GPS orbit radius spread over the receiver's sky;
+    /// pseudorange = range + 100 m clock + 0.5 m/s drift + N(0, 3 m) +
+    /// `fault` (index, m).
+    fn epoch(
+        n: usize,
+        k: usize,
+        noise: &mut rng::PfRng,
+        fault: Option<(usize, f64)>,
+    ) -> Vec<RangeObservation> {
+        let r = libm::sqrt(RECEIVER_M.iter().map(|v| v * v).sum::<f64>());
+        let up = RECEIVER_M.map(|v| v / r);
+        let east = {
+            let e = [-up[1], up[0], 0.0];
+            let ne = libm::sqrt(e[0] * e[0] + e[1] * e[1]);
+            e.map(|v| v / ne)
+        };
+        let north = [
+            up[1] * east[2] - up[2] * east[1],
+            up[2] * east[0] - up[0] * east[2],
+            up[0] * east[1] - up[1] * east[0],
+        ];
+        (0..n)
+            .map(|i| {
+                let az = (i as f64 * 137.5).to_radians();
+                let el = (15.0 + (i as f64 * 23.0) % 70.0).to_radians();
+                let los: [f64; 3] = core::array::from_fn(|j| {
+                    libm::cos(el) * (libm::sin(az) * east[j] + libm::cos(az) * north[j])
+                        + libm::sin(el) * up[j]
+                });
+                // Range to a sphere of radius 26,560 km along the line of sight.
+                let b: f64 = (0..3).map(|j| RECEIVER_M[j] * los[j]).sum();
+                let c = r * r - 26_560_000.0f64 * 26_560_000.0;
+                let range = -b + libm::sqrt(b * b - c);
+                let sat = core::array::from_fn(|j| RECEIVER_M[j] + range * los[j]);
+                let bias = fault.filter(|f| f.0 == i).map_or(0.0, |f| f.1);
+                RangeObservation {
+                    id: SatId::new(System::Gps, i as u8 + 1),
+                    pseudorange_m: range
+                        + 100.0
+                        + 0.5 * k as f64
+                        + SIGMA_M * rng::normal(noise)
+                        + bias,
+                    position_m: sat,
+                    sigma_m: Some(SIGMA_M),
+                }
+            })
+            .collect()
+    }
+
+    fn pf_config(particles: u32) -> WirePfConfig {
+        WirePfConfig {
+            kind: PfKind::Gapf,
+            particles,
+            seed: 11,
+            config: PfConfig {
+                sigma_m: SIGMA_M,
+                mutation_m: 0.5,
+                window: 8,
+                threshold: 15.0,
+                ..PfConfig::default()
+            },
+        }
+    }
+
+    struct Sink(Vec<u8>);
+    impl embedded_io::ErrorType for Sink {
+        type Error = core::convert::Infallible;
+    }
+    impl embedded_io::Write for Sink {
+        fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+            self.0.extend_from_slice(buf);
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> Result<(), Self::Error> {
+            Ok(())
+        }
+    }
+
+    /// Sends each command as a frame (sequence numbers from `seq0`) and
+    /// returns the answers.
+    fn exchange(server: &mut Server, seq0: u32, commands: &[CommandRef<'_>]) -> Vec<Response> {
+        let (mut link, mut nmea) = (Sink(Vec::new()), Sink(Vec::new()));
+        for (i, c) in commands.iter().enumerate() {
+            let req = RequestRef {
+                seq: seq0 + i as u32,
+                command: *c,
+            };
+            let mut scratch = [0u8; 4096];
+            let mut out = [0u8; 4096];
+            for &mut b in encode(&req, &mut scratch, &mut out).unwrap() {
+                server
+                    .on_byte(b, &mut link, &mut nmea, &mut NoPlatform)
+                    .unwrap();
+            }
+        }
+        assert!(nmea.0.is_empty(), "no NMEA for PF epochs");
+        let mut rx = FrameReceiver::<MAX_RESPONSE_FRAME>::new();
+        link.0
+            .iter()
+            .filter_map(|&b| {
+                rx.push(b)
+                    .map(|p| postcard::from_bytes(p.unwrap()).unwrap())
+            })
+            .collect()
+    }
+
+    fn pf_server() -> Server {
+        fn leak<T>(t: T) -> Option<&'static mut T> {
+            Some(Box::leak(Box::new(t)))
+        }
+        let mut s = Server::new();
+        s.attach_pf(PfEngines {
+            ekf: leak(PfRaim::new(0)),
+            pf100: leak(PfRaim::new(0)),
+            pf300: leak(PfRaim::new(0)),
+            ga100: leak(PfRaim::new(0)),
+            ga300: leak(PfRaim::new(0)),
+        });
+        s
+    }
+
+    fn ranges<'a>(time_s: f64, sats: &'a [RangeObservation]) -> CommandRef<'a> {
+        CommandRef::PfRanges {
+            time_s,
+            apriori_m: None,
+            sats,
+        }
+    }
+
+    /// The GA-PF through the wire answers exactly what the core's
+    /// `PfRaim<f32, GaPf<f32, 100>, 12>` answers for the same seed and
+    /// epochs, and on a 60 m step on G04 from epoch 6 it alarms, isolates
+    /// and excludes G04 with no alarm before.
+    #[test]
+    fn gapf_over_the_wire_equals_the_core_and_isolates_a_step() {
+        let mut server = pf_server();
+        let cfg = pf_config(100);
+        let mut noise = rng::seeded(3);
+        let epochs: Vec<Vec<RangeObservation>> = (0..10)
+            .map(|k| epoch(8, k, &mut noise, (k >= 6).then_some((3, 60.0))))
+            .collect();
+        let mut cmds = std::vec![CommandRef::PfConfigure(&cfg)];
+        cmds.extend(epochs.iter().enumerate().map(|(k, e)| ranges(k as f64, e)));
+        let resp = exchange(&mut server, 0, &cmds);
+        assert_eq!(resp[0].body, ResponseBody::Configured);
+        let mut core = Box::new(PfRaim::<f32, GaPf<f32, 100>, 12>::new(cfg.seed));
+        let mut first_alarm = None;
+        for (k, (r, e)) in resp[1..].iter().zip(&epochs).enumerate() {
+            let want = core.process(&cfg.config, k as f64, e).unwrap();
+            let ResponseBody::PfResult(got) = &r.body else {
+                panic!("epoch {k}: {r:?}")
+            };
+            assert_eq!(*got, WirePfResult::from_output(&want), "epoch {k}");
+            if got.alarm && first_alarm.is_none() {
+                first_alarm = Some((k, got.isolated, got.excluded));
+            }
+        }
+        let g4 = Some(SatId::new(System::Gps, 4));
+        let (k, isolated, excluded) = first_alarm.unwrap();
+        assert!((6..=8).contains(&k), "alarm at {k}");
+        assert_eq!((isolated, excluded), (g4, g4));
+    }
+
+    /// Bad input over the wire: typed errors, never a position; the filter
+    /// is untouched by a refused epoch; a satellite leaving view mid-window
+    /// drops its auxiliary filter; a collapsed filter is reinitialised and
+    /// reported without a position.
+    #[test]
+    fn bad_pf_input_gets_typed_errors() {
+        let mut server = pf_server();
+        let mut noise = rng::seeded(5);
+        let good: Vec<Vec<RangeObservation>> =
+            (0..8).map(|k| epoch(8, k, &mut noise, None)).collect();
+        let four = epoch(4, 1, &mut noise, None);
+        let mut nan = good[1].clone();
+        nan[2].pseudorange_m = f64::NAN;
+        let mut dup = good[1].clone();
+        dup[5].id = dup[1].id;
+        let many = epoch(13, 1, &mut noise, None);
+        let mut zero_sigma = good[1].clone();
+        zero_sigma[0].sigma_m = Some(0.0);
+        let leaving = good[2][1..].to_vec(); // G01 leaves view
+        let mut jump = good[4].clone();
+        for (i, o) in jump.iter_mut().enumerate() {
+            o.pseudorange_m += if i % 2 == 0 { 1e5 } else { -1e5 };
+        }
+        let c100 = pf_config(100);
+        let c400 = pf_config(400);
+        let c200 = pf_config(200);
+        let ekf_with_particles = WirePfConfig {
+            kind: PfKind::Ekf,
+            ..c100
+        };
+        let bad_window = WirePfConfig {
+            config: PfConfig {
+                window: 0,
+                ..c100.config
+            },
+            ..c100
+        };
+        let cmds = [
+            ranges(0.0, &good[0]),                        // 0 not configured
+            CommandRef::PfConfigure(&c400),               // 1 above capacity
+            CommandRef::PfConfigure(&c200),               // 2 not compiled
+            CommandRef::PfConfigure(&ekf_with_particles), // 3
+            CommandRef::PfConfigure(&bad_window),         // 4
+            ranges(0.0, &good[0]),                        // 5 still not configured
+            CommandRef::PfConfigure(&c100),               // 6
+            ranges(0.0, &good[0]),                        // 7 ok
+            ranges(1.0, &four),                           // 8 too few
+            ranges(1.0, &nan),                            // 9
+            ranges(1.0, &dup),                            // 10
+            ranges(1.0, &many),                           // 11 above the PF's 12
+            ranges(1.0, &zero_sigma),                     // 12
+            ranges(0.0, &good[1]),                        // 13 time not increasing
+            ranges(1.0, &good[1]),                        // 14 ok
+            ranges(2.0, &leaving),                        // 15 ok, 7 satellites
+            ranges(3.0, &good[3]),                        // 16 ok, G01 back
+            ranges(4.0, &jump),                           // 17 collapse
+            ranges(5.0, &good[5]),                        // 18 ok again
+        ];
+        let resp = exchange(&mut server, 0, &cmds);
+        assert_eq!(resp.len(), cmds.len());
+        let err = |i: usize| match &resp[i].body {
+            ResponseBody::Error(e) => e.clone(),
+            other => panic!("{i}: {other:?}"),
+        };
+        let res = |i: usize| match &resp[i].body {
+            ResponseBody::PfResult(r) => r.clone(),
+            other => panic!("{i}: {other:?}"),
+        };
+        assert_eq!(err(0), WireError::PfNotConfigured);
+        assert_eq!(
+            err(1),
+            WireError::PfParticles {
+                requested: 400,
+                max: 300
+            }
+        );
+        assert_eq!(
+            err(2),
+            WireError::PfParticles {
+                requested: 200,
+                max: 300
+            }
+        );
+        assert_eq!(
+            err(3),
+            WireError::PfParticles {
+                requested: 100,
+                max: 300
+            }
+        );
+        assert!(
+            matches!(err(4), WireError::PfInvalidConfig { ref field, value } if field.as_str() == "window" && value == 0.0)
+        );
+        assert_eq!(err(5), WireError::PfNotConfigured);
+        assert_eq!(resp[6].body, ResponseBody::Configured);
+        assert!(res(7).position_ecef_m.is_some());
+        assert_eq!(err(8), WireError::TooFewSatellites { have: 4, need: 5 });
+        assert!(
+            matches!(err(9), WireError::NonFinite { ref field, index: 2, .. } if field.as_str() == "pseudorange_m")
+        );
+        assert_eq!(
+            err(10),
+            WireError::DuplicateSatellite {
+                id: SatId::new(System::Gps, 2),
+                first: 1,
+                second: 5
+            }
+        );
+        assert_eq!(
+            err(11),
+            WireError::TooManySatellites {
+                have: 13,
+                capacity: 12
+            }
+        );
+        assert!(
+            matches!(err(12), WireError::PfInvalidConfig { ref field, value } if field.as_str() == "sigma_m" && value == 0.0)
+        );
+        assert_eq!(
+            err(13),
+            WireError::TimeNotIncreasing {
+                previous_s: 0.0,
+                now_s: 0.0
+            }
+        );
+        // The refused epochs left the filter as it was: epoch 14 equals a
+        // core monitor fed only the accepted epochs.
+        let mut core = Box::new(PfRaim::<f32, GaPf<f32, 100>, 12>::new(c100.seed));
+        core.process(&c100.config, 0.0, &good[0]).unwrap();
+        let want = core.process(&c100.config, 1.0, &good[1]).unwrap();
+        assert_eq!(res(14), WirePfResult::from_output(&want));
+        assert_eq!(res(14).llr.len(), 8);
+        let r15 = res(15);
+        assert_eq!((r15.used, r15.llr.len()), (7, 7));
+        assert!(r15.llr.iter().all(|l| l.id != SatId::new(System::Gps, 1)));
+        // G01 back: a fresh auxiliary filter with an empty window.
+        let r16 = res(16);
+        assert_eq!(r16.llr.len(), 8);
+        let g1 = r16
+            .llr
+            .iter()
+            .find(|l| l.id == SatId::new(System::Gps, 1))
+            .unwrap();
+        assert_eq!(g1.windowed, g1.llr);
+        let r17 = res(17);
+        assert!(r17.main_collapsed && r17.position_ecef_m.is_none() && !r17.alarm);
+        let r18 = res(18);
+        assert!(!r18.main_collapsed);
+        let p = r18.position_ecef_m.unwrap();
+        let d: f64 = (0..3)
+            .map(|j| (p[j] - RECEIVER_M[j]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(d < 50.0, "{d}");
+        // No answer carried a position it should not have.
+        for (i, r) in resp.iter().enumerate() {
+            if let ResponseBody::PfResult(r) = &r.body {
+                assert_eq!(r.position_ecef_m.is_none(), r.main_collapsed, "{i}");
+            }
+        }
+    }
+
+    /// The lock covers the PF configuration: its fingerprint joins the
+    /// configuration id, a locked unit refuses `PfConfigure` with `Locked`
+    /// and keeps running the PF configuration in force; a server without PF
+    /// storage answers `PfUnavailable`.
+    #[test]
+    fn the_lock_and_fingerprint_cover_the_pf_configuration() {
+        let mut server = pf_server();
+        let c100 = pf_config(100);
+        let c300 = pf_config(300);
+        let mut noise = rng::seeded(8);
+        let e0 = epoch(8, 0, &mut noise, None);
+        let resp = exchange(
+            &mut server,
+            0,
+            &[
+                CommandRef::Status,
+                CommandRef::PfConfigure(&c100),
+                CommandRef::Lock,
+                CommandRef::PfConfigure(&c300),
+                ranges(0.0, &e0),
+            ],
+        );
+        let default = Config::default();
+        let fp0 = crate::config_fingerprint(&default);
+        let fp1 = crate::pf_msg::fingerprint(&default, Some(&c100));
+        assert_ne!(fp0, fp1);
+        assert_eq!(
+            resp[0].config,
+            ConfigId {
+                crc32: fp0,
+                locked: false
+            }
+        );
+        assert_eq!(
+            resp[1].config,
+            ConfigId {
+                crc32: fp1,
+                locked: false
+            }
+        );
+        assert_eq!(resp[2].body, ResponseBody::LockEngaged);
+        assert_eq!(
+            resp[3].body,
+            ResponseBody::Error(WireError::Locked { config_crc32: fp1 })
+        );
+        assert!(matches!(resp[4].body, ResponseBody::PfResult(_)));
+        assert_eq!(
+            resp[4].config,
+            ConfigId {
+                crc32: fp1,
+                locked: true
+            }
+        );
+        assert_eq!(server.pf_config(), Some(&c100));
+        // Without storage.
+        let resp = exchange(
+            &mut Server::new(),
+            0,
+            &[CommandRef::PfConfigure(&c100), ranges(0.0, &e0)],
+        );
+        assert_eq!(resp[0].body, ResponseBody::Error(WireError::PfUnavailable));
+        assert_eq!(
+            resp[1].body,
+            ResponseBody::Error(WireError::PfNotConfigured)
+        );
+        // A build with the GA-PF 100 only: the others are unavailable.
+        let mut only = Server::new();
+        only.attach_pf(PfEngines {
+            ga100: Some(Box::leak(Box::new(PfRaim::new(0)))),
+            ..PfEngines::NONE
+        });
+        let resp = exchange(
+            &mut only,
+            0,
+            &[
+                CommandRef::PfConfigure(&c300),
+                CommandRef::PfConfigure(&c100),
+            ],
+        );
+        assert_eq!(resp[0].body, ResponseBody::Error(WireError::PfUnavailable));
+        assert_eq!(resp[1].body, ResponseBody::Configured);
+        // Reconfiguring the same filter restarts it in place: the answers
+        // repeat bit for bit.
+        let mut server = pf_server();
+        let run = |s: &mut Server, seq0| {
+            exchange(s, seq0, &[CommandRef::PfConfigure(&c300), ranges(0.0, &e0)])
+        };
+        let a = run(&mut server, 0);
+        let b = run(&mut server, 2);
+        assert_eq!(a[1].body, b[1].body);
+    }
+}
