@@ -25,6 +25,7 @@
 
 pub mod error;
 pub mod error_model;
+pub mod esq;
 pub mod fde;
 pub mod ism;
 pub mod modes;
