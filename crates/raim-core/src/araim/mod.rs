@@ -29,6 +29,7 @@ pub mod esq;
 pub mod fde;
 pub mod ism;
 pub mod modes;
+pub mod pca;
 pub mod pl;
 pub mod subset;
 #[cfg(test)]
