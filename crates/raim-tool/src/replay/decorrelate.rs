@@ -77,9 +77,24 @@ fn whitened_residuals(s: &Setup, k: usize) -> Vec<(SatId, f64)> {
     sats.iter().zip(r.iter()).map(|(a, v)| (a.id, *v)).collect()
 }
 
-/// rho(L) for L = 1..=MAX_LAG epochs.
-pub fn parity_autocorrelation(s: &Setup) -> Vec<f64> {
-    let res: Vec<Vec<(SatId, f64)>> = (0..s.epochs.len()).map(|k| whitened_residuals(s, k)).collect();
+/// rho(L) for L = 1..=MAX_LAG epochs; with `demean`, each satellite's
+/// mean residual over the file is removed first (the fluctuating part).
+pub fn parity_autocorrelation(s: &Setup, demean: bool) -> Vec<f64> {
+    let mut res: Vec<Vec<(SatId, f64)>> =
+        (0..s.epochs.len()).map(|k| whitened_residuals(s, k)).collect();
+    if demean {
+        let mut sums: std::collections::BTreeMap<SatId, (f64, usize)> = Default::default();
+        for (id, v) in res.iter().flatten() {
+            let e = sums.entry(*id).or_insert((0.0, 0));
+            e.0 += v;
+            e.1 += 1;
+        }
+        for (id, v) in res.iter_mut().flatten() {
+            if let Some((s, n)) = sums.get(id) {
+                *v -= s / *n as f64;
+            }
+        }
+    }
     (1..=MAX_LAG)
         .map(|lag| {
             let (mut num, mut a2, mut b2) = (0.0, 0.0, 0.0);
@@ -157,26 +172,33 @@ pub fn run(args: &ReplayArgs, w: &mut impl Write) -> Result<()> {
         eph: Vec::new(),
         receiver_m: s.receiver_m,
         cfg: s.cfg,
+        p_const: s.p_const,
         onset_gps_s: None,
     };
-    let rho = parity_autocorrelation(&clean);
-    let e_fold = rho.iter().position(|r| *r < (-1.0f64).exp()).map(|l| (l + 1) as f64 * dt);
-    let integrated = dt * (1.0 + 2.0 * rho.iter().take_while(|r| **r > 0.0).sum::<f64>());
-    writeln!(
-        w,
-        "parity-vector autocorrelation (whitened post-fit residuals, {} epochs, step {dt:.0} s): rho(1) {:.3} rho(2) {:.3} rho(5) {:.3} rho(10) {:.3} rho(20) {:.3}",
-        s.epochs.len(),
-        rho.first().copied().unwrap_or(f64::NAN),
-        rho.get(1).copied().unwrap_or(f64::NAN),
-        rho.get(4).copied().unwrap_or(f64::NAN),
-        rho.get(9).copied().unwrap_or(f64::NAN),
-        rho.get(19).copied().unwrap_or(f64::NAN),
-    )?;
-    writeln!(
-        w,
-        "correlation time: 1/e at {} ; integrated (1 + 2 sum rho) {integrated:.0} s",
-        e_fold.map_or(format!("> {} s", MAX_LAG as f64 * dt), |t| format!("{t:.0} s"))
-    )?;
+    let mut e_fold = None;
+    for demean in [false, true] {
+        let rho = parity_autocorrelation(&clean, demean);
+        let fold = rho
+            .iter()
+            .position(|r| *r < (-1.0f64).exp())
+            .map(|l| (l + 1) as f64 * dt);
+        let integrated = dt * (1.0 + 2.0 * rho.iter().take_while(|r| **r > 0.0).sum::<f64>());
+        writeln!(
+            w,
+            "parity-vector autocorrelation ({}, {} epochs, step {dt:.0} s): rho(1) {:.3} rho(2) {:.3} rho(5) {:.3} rho(10) {:.3} rho(20) {:.3}; 1/e at {}; integrated (1 + 2 sum rho) {integrated:.0} s",
+            if demean { "per-satellite mean removed" } else { "raw" },
+            s.epochs.len(),
+            rho.first().copied().unwrap_or(f64::NAN),
+            rho.get(1).copied().unwrap_or(f64::NAN),
+            rho.get(4).copied().unwrap_or(f64::NAN),
+            rho.get(9).copied().unwrap_or(f64::NAN),
+            rho.get(19).copied().unwrap_or(f64::NAN),
+            fold.map_or(format!("> {} s", MAX_LAG as f64 * dt), |t| format!("{t:.0} s"))
+        )?;
+        if demean {
+            e_fold = fold;
+        }
+    }
     let interval = match args.esq.esq_decimate_s {
         Some(v) if v > 0.0 && v.is_finite() => v,
         Some(v) => return Err(anyhow!("--esq-decimate-s {v}: must be positive")),

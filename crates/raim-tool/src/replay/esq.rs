@@ -17,7 +17,7 @@
 //! moves every solution alike and no separation), C_acc = the replay's
 //! sigma model squared (`--ura-m`, `--iono-vertical-m`, `--noise-m`),
 //! C_int = C_acc + 0.75^2 - 0.5^2 m^2 (the ADD's URA/URE gap), b_nom 0.5 m,
-//! P_sat 1e-5, P_const 1e-4 per constellation in use.
+//! P_sat 1e-5, P_const `--esq-pconst` (1e-4) per constellation in use.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -45,7 +45,6 @@ pub const PCA_SLOTS: usize = 48;
 const C_INT_MINUS_C_ACC_M2: f64 = 0.75 * 0.75 - 0.5 * 0.5;
 const B_NOM_M: f64 = 0.5;
 const P_SAT: f64 = 1e-5;
-const P_CONST: f64 = 1e-4;
 
 #[derive(Debug, Clone, Args)]
 pub struct EsqArgs {
@@ -70,6 +69,9 @@ pub struct EsqArgs {
     /// An ephemeris-like fault: SYS:RADIAL_M@START, a radial orbit error on every satellite of SYS, projected on each line of sight.
     #[arg(long, value_name = "SPEC")]
     pub eph_fault: Vec<String>,
+    /// P_const of every constellation in use (ADD: 1e-4; 1e-8 for a GPS-only sky, which otherwise has an unmonitorable constellation mode and no PL).
+    #[arg(long, default_value_t = 1e-4)]
+    pub esq_pconst: f64,
     /// Decimation interval of --esq-mcusum, s (default: the measured correlation time).
     #[arg(long)]
     pub esq_decimate_s: Option<f64>,
@@ -120,6 +122,7 @@ pub struct Setup {
     pub eph: Vec<EphFault>,
     pub receiver_m: [f64; 3],
     pub cfg: Config,
+    pub p_const: f64,
     /// Earliest onset of a satellite fault (step, ramp, ephemeris), GPS s.
     pub onset_gps_s: Option<f64>,
 }
@@ -150,6 +153,7 @@ pub fn setup(args: &ReplayArgs) -> Result<Setup> {
         eph,
         receiver_m,
         cfg,
+        p_const: args.esq.esq_pconst,
         onset_gps_s: onset,
     })
 }
@@ -199,7 +203,7 @@ impl Setup {
                 }
             })
             .collect();
-        (sats, Ism::with(&systems, P_CONST))
+        (sats, Ism::with(&systems, self.p_const))
     }
 }
 
