@@ -78,6 +78,19 @@ pub fn run(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
             d.map_or("-".into(), |d| format!("{d:.0} s")),
         )?;
     }
+    // The statistic's scale: its largest value before the onset (the
+    // threshold that would have given no false alarm) against its largest
+    // in the first five faulted epochs.
+    let max_ratio = |it: &mut dyn Iterator<Item = &Row>| {
+        it.filter_map(|r| r.pca.map(|t| t.ratio))
+            .fold(f64::NAN, f64::max)
+    };
+    let clean_max = max_ratio(&mut rows.iter().filter(|r| !r.faulted));
+    let onset_max = max_ratio(&mut rows.iter().filter(|r| r.faulted).take(5));
+    writeln!(
+        w,
+        "  PCA ratio: max before onset {clean_max:.2}, max in the first 5 faulted epochs {onset_max:.2}"
+    )?;
     if let Some(p) = &args.esq.esq_plot {
         plot(rows, p, args.font.as_deref())?;
     }
