@@ -80,8 +80,9 @@ fn whitened_residuals(s: &Setup, k: usize) -> Vec<(SatId, f64)> {
 /// rho(L) for L = 1..=MAX_LAG epochs; with `demean`, each satellite's
 /// mean residual over the file is removed first (the fluctuating part).
 pub fn parity_autocorrelation(s: &Setup, demean: bool) -> Vec<f64> {
-    let mut res: Vec<Vec<(SatId, f64)>> =
-        (0..s.epochs.len()).map(|k| whitened_residuals(s, k)).collect();
+    let mut res: Vec<Vec<(SatId, f64)>> = (0..s.epochs.len())
+        .map(|k| whitened_residuals(s, k))
+        .collect();
     if demean {
         let mut sums: std::collections::BTreeMap<SatId, (f64, usize)> = Default::default();
         for (id, v) in res.iter().flatten() {

@@ -129,8 +129,7 @@ pub struct Setup {
 
 pub fn setup(args: &ReplayArgs) -> Result<Setup> {
     let cfg = args.core_config();
-    cfg.validate()
-        .map_err(|e| anyhow!("configuration: {e}"))?;
+    cfg.validate().map_err(|e| anyhow!("configuration: {e}"))?;
     let (epochs, header, first) = prepare(args)?;
     let plan = checked_fault_plan(args, first, &epochs)?;
     let eph = args
@@ -168,7 +167,8 @@ impl Setup {
                 continue;
             }
             for s in sats.iter_mut().filter(|s| s.id.system == f.system) {
-                s.pseudorange_m += ephemeris_radial_error_m(s.position_m, self.receiver_m, f.radial_m);
+                s.pseudorange_m +=
+                    ephemeris_radial_error_m(s.position_m, self.receiver_m, f.radial_m);
             }
         }
         sats
@@ -326,7 +326,8 @@ fn run_esq(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
                 "{} n {:2} N* {} dTe {:7.1} s {} ARAIM ratio {:6.3}{}",
                 raim_gnss::time::time_of_day(r.t_gps_s),
                 r.n_sats,
-                r.esq.map_or("   -  ".into(), |e| format!("{:6.3}", e.n_star)),
+                r.esq
+                    .map_or("   -  ".into(), |e| format!("{:6.3}", e.n_star)),
                 dte[i],
                 if emitted[i] { "emit" } else { "skip" },
                 r.araim_ratio,
@@ -347,10 +348,18 @@ fn run_esq(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
     }
     let n = rows.len();
     let solves = emitted.iter().filter(|&&e| e).count();
-    let ns: Vec<f64> = rows.iter().filter_map(|r| r.esq.map(|e| e.n_star)).collect();
+    let ns: Vec<f64> = rows
+        .iter()
+        .filter_map(|r| r.esq.map(|e| e.n_star))
+        .collect();
     let mut sorted = ns.clone();
     sorted.sort_by(f64::total_cmp);
-    let q = |p: f64| sorted.get(((sorted.len() as f64 - 1.0) * p).round() as usize).copied().unwrap_or(f64::NAN);
+    let q = |p: f64| {
+        sorted
+            .get(((sorted.len() as f64 - 1.0) * p).round() as usize)
+            .copied()
+            .unwrap_or(f64::NAN)
+    };
     let all_alarm = |r: &Row| r.araim_alarm;
     let d_all = first_after(rows, s.onset_gps_s, all_alarm);
     let d_esq = {
@@ -386,7 +395,10 @@ fn run_esq(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
         w,
         "  ARAIM alarms before onset: every epoch {}, effective samples {}",
         false_alarms(rows, all_alarm),
-        rows.iter().zip(&emitted).filter(|(r, e)| !r.faulted && r.araim_alarm && **e).count()
+        rows.iter()
+            .zip(&emitted)
+            .filter(|(r, e)| !r.faulted && r.araim_alarm && **e)
+            .count()
     )?;
     if s.onset_gps_s.is_some() {
         writeln!(
@@ -409,7 +421,13 @@ fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow!("plot: {e}")
 }
 
-fn plot_esq(rows: &[Row], dte: &[f64], emitted: &[bool], path: &Path, font: Option<&Path>) -> Result<()> {
+fn plot_esq(
+    rows: &[Row],
+    dte: &[f64],
+    emitted: &[bool],
+    path: &Path,
+    font: Option<&Path>,
+) -> Result<()> {
     super::plot::register_font(font)?;
     let root = BitMapBackend::new(path, (1400, 1200)).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;

@@ -15,6 +15,9 @@ use plotters::prelude::*;
 use super::esq::{false_alarms, first_after, Row, Setup};
 use super::ReplayArgs;
 
+/// Whether a method alarmed on an epoch.
+type Hit = dyn Fn(&Row) -> bool;
+
 fn verdict(alarm: bool) -> &'static str {
     if alarm {
         "ALARM"
@@ -44,7 +47,11 @@ pub fn run(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
                 pca,
                 r.araim_ratio,
                 verdict(r.araim_alarm),
-                if r.araim_const_alarm { " (constellation mode)" } else { "" },
+                if r.araim_const_alarm {
+                    " (constellation mode)"
+                } else {
+                    ""
+                },
                 verdict(r.snapshot_alarm)
             )?;
         }
@@ -60,7 +67,7 @@ pub fn run(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
         rows.len(),
         super::esq::PCA_WINDOW
     )?;
-    let methods: [(&str, &dyn Fn(&Row) -> bool); 4] = [
+    let methods: [(&str, &Hit); 4] = [
         ("PCA", &pca_hit),
         ("ARAIM (any mode)", &|r: &Row| r.araim_alarm),
         ("ARAIM constellation mode", &|r: &Row| r.araim_const_alarm),
