@@ -65,7 +65,10 @@ macro_rules! pca_epoch {
         let mut m = nalgebra::SMatrix::<f64, $n, $n>::zeros();
         for i in 0..$n {
             for j in 0..$n {
-                m[(i, j)] = (0..60).map(|t| residual(t, i) * residual(t, j)).sum::<f64>() / 59.0;
+                m[(i, j)] = (0..60)
+                    .map(|t| residual(t, i) * residual(t, j))
+                    .sum::<f64>()
+                    / 59.0;
             }
         }
         $c.bench_function(&format!("pca_svd/n{}", $n), |b| {

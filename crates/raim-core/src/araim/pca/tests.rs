@@ -323,10 +323,30 @@ fn synthetic_constellation_faults_table() {
     let cases: [(&str, f64, Fault); 6] = [
         ("bias", 5.0, |k, _, x, _| if k >= 200 { x } else { 0.0 }),
         ("bias", 20.0, |k, _, x, _| if k >= 200 { x } else { 0.0 }),
-        ("ramp m/epoch", 0.3, |k, _, x, _| if k >= 200 { x * (k - 200) as f64 } else { 0.0 }),
-        ("ramp m/epoch", 1.5, |k, _, x, _| if k >= 200 { x * (k - 200) as f64 } else { 0.0 }),
-        ("ephemeris", 50.0, |k, s, x, e| if k >= 200 { x * e(s) } else { 0.0 }),
-        ("ephemeris", 200.0, |k, s, x, e| if k >= 200 { x * e(s) } else { 0.0 }),
+        ("ramp m/epoch", 0.3, |k, _, x, _| {
+            if k >= 200 {
+                x * (k - 200) as f64
+            } else {
+                0.0
+            }
+        }),
+        ("ramp m/epoch", 1.5, |k, _, x, _| {
+            if k >= 200 {
+                x * (k - 200) as f64
+            } else {
+                0.0
+            }
+        }),
+        (
+            "ephemeris",
+            50.0,
+            |k, s, x, e| if k >= 200 { x * e(s) } else { 0.0 },
+        ),
+        (
+            "ephemeris",
+            200.0,
+            |k, s, x, e| if k >= 200 { x * e(s) } else { 0.0 },
+        ),
     ];
     let cfg = PcaConfig::default();
     let acfg = AraimConfig::default();
