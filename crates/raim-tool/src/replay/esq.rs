@@ -64,13 +64,13 @@ pub struct EsqArgs {
     #[arg(long, default_value_t = 0.99)]
     pub pca_share: f64,
     /// False-alert probability per epoch of the PCA separation test.
-    #[arg(long, default_value_t = 3.9e-6)]
+    #[arg(long, default_value = "3.9e-6")]
     pub pca_pfa: f64,
     /// An ephemeris-like fault: SYS:RADIAL_M@START, a radial orbit error on every satellite of SYS, projected on each line of sight.
     #[arg(long, value_name = "SPEC")]
     pub eph_fault: Vec<String>,
     /// P_const of every constellation in use (ADD: 1e-4; 1e-8 for a GPS-only sky, which otherwise has an unmonitorable constellation mode and no PL).
-    #[arg(long, default_value_t = 1e-4)]
+    #[arg(long, default_value = "1e-4")]
     pub esq_pconst: f64,
     /// Decimation interval of --esq-mcusum, s (default: the measured correlation time).
     #[arg(long)]
@@ -222,6 +222,9 @@ pub struct Row {
     pub pca: Option<PcaTest<PCA_SLOTS>>,
     pub snapshot_alarm: bool,
     pub faulted: bool,
+    /// What a monitor refused this epoch (typed error, printed), or why N*
+    /// is missing.
+    pub errors: Vec<String>,
 }
 
 /// Run the monitors over every epoch. `with_pca` / `with_snapshot` skip
@@ -250,28 +253,40 @@ pub fn rows(s: &Setup, args: &EsqArgs, with_pca: bool, with_snapshot: bool) -> R
             pca: None,
             snapshot_alarm: false,
             faulted,
+            errors: Vec::new(),
         };
-        if let Ok(a) = araim.process(&acfg, &ism, &sats) {
-            row.esq = esq::effective_samples(a, 2, PlOutput::AddBracket).ok();
-            let st = esq::statistic(a);
-            row.araim_ratio = st.ratio;
-            row.araim_alarm = !a.detection_passed;
-            row.araim_const_alarm = a.modes.iter().any(|m| {
-                m.status == ModeStatus::Monitored
-                    && m.events.sats == 0
-                    && m.events.consts != 0
-                    && !m.passed
-            });
+        match araim.process(&acfg, &ism, &sats) {
+            Err(e) => row.errors.push(format!("ARAIM: {e:?}")),
+            Ok(a) => {
+                match esq::effective_samples(a, 2, PlOutput::AddBracket) {
+                    Ok(v) => row.esq = Some(v),
+                    Err(e) => row.errors.push(format!("N*: {e:?}")),
+                }
+                let st = esq::statistic(a);
+                row.araim_ratio = st.ratio;
+                row.araim_alarm = !a.detection_passed;
+                row.araim_const_alarm = a.modes.iter().any(|m| {
+                    m.status == ModeStatus::Monitored
+                        && m.events.sats == 0
+                        && m.events.consts != 0
+                        && !m.passed
+                });
+            }
         }
         if with_pca {
-            if let Ok(PcaOutcome::Tested(t)) = pca.process(&pcfg, e.time_gps_s, &sats) {
-                row.pca = Some(t);
+            match pca.process(&pcfg, e.time_gps_s, &sats) {
+                Ok(PcaOutcome::Tested(t)) => row.pca = Some(t),
+                Ok(PcaOutcome::WarmingUp { .. }) => {}
+                Err(e) => row.errors.push(format!("PCA: {e:?}")),
             }
         }
         if with_snapshot {
             let ep = Epoch::ranges(e.time_gps_s, &obs, e.reference_m);
-            if let Ok(r) = snap.process(&s.cfg, &ep) {
-                row.snapshot_alarm = matches!(r.decision, Decision::Alarm | Decision::Excluded);
+            match snap.process(&s.cfg, &ep) {
+                Ok(r) => {
+                    row.snapshot_alarm = matches!(r.decision, Decision::Alarm | Decision::Excluded)
+                }
+                Err(e) => row.errors.push(format!("snapshot: {e}")),
             }
         }
         out.push(row);
@@ -323,7 +338,7 @@ fn run_esq(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
         if !args.quiet && !args.json {
             writeln!(
                 w,
-                "{} n {:2} N* {} dTe {:7.1} s {} ARAIM ratio {:6.3}{}",
+                "{} n {:2} N* {} dTe {:7.1} s {} ARAIM ratio {:6.3}{}{}",
                 raim_gnss::time::time_of_day(r.t_gps_s),
                 r.n_sats,
                 r.esq
@@ -332,6 +347,11 @@ fn run_esq(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
                 if emitted[i] { "emit" } else { "skip" },
                 r.araim_ratio,
                 if r.araim_alarm { " ALARM" } else { "" },
+                if r.errors.is_empty() {
+                    String::new()
+                } else {
+                    format!(" [{}]", r.errors.join("; "))
+                },
             )?;
         } else if args.json {
             writeln!(
@@ -409,6 +429,13 @@ fn run_esq(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
             faulted_alarmed,
             faulted_alarmed_emitted,
             faulted_alarmed - faulted_alarmed_emitted
+        )?;
+    }
+    let refused = rows.iter().filter(|r| !r.errors.is_empty()).count();
+    if refused > 0 {
+        writeln!(
+            w,
+            "  epochs with a refusal or no N* (listed per epoch): {refused}"
         )?;
     }
     if let Some(p) = &args.esq.esq_plot {

@@ -41,7 +41,7 @@ pub fn run(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
             };
             writeln!(
                 w,
-                "{} n {:2} PCA {} | ARAIM ratio {:7.3} {:5}{} | snapshot {}",
+                "{} n {:2} PCA {} | ARAIM ratio {:7.3} {:5}{} | snapshot {}{}",
                 raim_gnss::time::time_of_day(r.t_gps_s),
                 r.n_sats,
                 pca,
@@ -52,7 +52,12 @@ pub fn run(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
                 } else {
                     ""
                 },
-                verdict(r.snapshot_alarm)
+                verdict(r.snapshot_alarm),
+                if r.errors.is_empty() {
+                    String::new()
+                } else {
+                    format!(" [{}]", r.errors.join("; "))
+                },
             )?;
         }
     }
@@ -98,6 +103,10 @@ pub fn run(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
         w,
         "  PCA ratio: max before onset {clean_max:.2}, max in the first 5 faulted epochs {onset_max:.2}"
     )?;
+    let refused = rows.iter().filter(|r| !r.errors.is_empty()).count();
+    if refused > 0 {
+        writeln!(w, "  epochs with a refusal (listed per epoch): {refused}")?;
+    }
     if let Some(p) = &args.esq.esq_plot {
         plot(rows, p, args.font.as_deref())?;
     }
