@@ -500,3 +500,48 @@ mod tests {
         }
     }
 }
+
+/// An ephemeris-like fault seen by one receiver (ESQ/PCA tests, issue 13):
+/// the broadcast orbit of a satellite at `sat_m` (ECEF) is wrong by
+/// `radial_m` along its radial direction, so its range to the receiver at
+/// `receiver_m` is off by the projection of that error on the line of
+/// sight, radial_m (r_sat . los) with unit vectors. It differs per
+/// satellite (0.97-1.0 of `radial_m` for a ground receiver, since a
+/// satellite sees the Earth within about 14 degrees of nadir). Returns the
+/// pseudorange error, m.
+pub fn ephemeris_radial_error_m(sat_m: [f64; 3], receiver_m: [f64; 3], radial_m: f64) -> f64 {
+    let r = (sat_m[0].powi(2) + sat_m[1].powi(2) + sat_m[2].powi(2)).sqrt();
+    let d = [
+        sat_m[0] - receiver_m[0],
+        sat_m[1] - receiver_m[1],
+        sat_m[2] - receiver_m[2],
+    ];
+    let n = (d[0].powi(2) + d[1].powi(2) + d[2].powi(2)).sqrt();
+    if !(r > 0.0 && n > 0.0) {
+        return 0.0;
+    }
+    radial_m * (sat_m[0] * d[0] + sat_m[1] * d[1] + sat_m[2] * d[2]) / (r * n)
+}
+
+#[cfg(test)]
+mod ephemeris_tests {
+    use super::ephemeris_radial_error_m;
+
+    #[test]
+    fn zenith_is_the_full_error_and_the_edge_of_the_earth_less() {
+        // Satellite straight above: the whole radial error.
+        let rx = [6_378_137.0, 0.0, 0.0];
+        let sat = [26_560_000.0, 0.0, 0.0];
+        assert!((ephemeris_radial_error_m(sat, rx, 10.0) - 10.0).abs() < 1e-12);
+        // Satellite at the receiver's horizon: cos of the nadir angle
+        // sin(nadir) = R_e / r.
+        let r = 26_560_000.0f64;
+        let re = 6_378_137.0f64;
+        // Horizon point: the line of sight is tangent to the Earth at rx.
+        let x = re;
+        let y = (r * r - re * re).sqrt();
+        let got = ephemeris_radial_error_m([x, y, 0.0], rx, 10.0);
+        let expect = 10.0 * (1.0 - (re / r).powi(2)).sqrt();
+        assert!((got - expect).abs() < 1e-9, "{got} {expect}");
+    }
+}

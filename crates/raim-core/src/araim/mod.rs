@@ -25,9 +25,11 @@
 
 pub mod error;
 pub mod error_model;
+pub mod esq;
 pub mod fde;
 pub mod ism;
 pub mod modes;
+pub mod pca;
 pub mod pl;
 pub mod subset;
 #[cfg(test)]

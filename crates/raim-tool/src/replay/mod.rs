@@ -6,8 +6,11 @@
 //! run -> per-epoch text / JSON lines / NMEA, a summary table and a plot.
 
 mod checks;
+mod decorrelate;
 mod engine;
+pub mod esq;
 mod input;
+mod pca;
 pub mod pf;
 mod plot;
 pub mod record;
@@ -153,6 +156,9 @@ pub struct ReplayArgs {
     /// Particle-filter RAIM (seed 004; docs/PF.md): --pf {ekf,pf,gapf}.
     #[command(flatten)]
     pub pf: pf::PfArgs,
+    /// Seed 003's ESQ and PCA (docs/ESQ.md): --esq, --pca, --esq-mcusum.
+    #[command(flatten)]
+    pub esq: esq::EsqArgs,
 }
 
 /// Everything a replay produces.
@@ -447,6 +453,11 @@ pub fn run(args: &ReplayArgs) -> Result<Tally> {
     if args.pf.pf.is_some() {
         // Particle-filter RAIM (docs/PF.md): its own per-epoch output.
         pf::run(args)?;
+        return Ok(Tally::default());
+    }
+    if args.esq.any() {
+        // Seed 003's own claims (docs/ESQ.md): their own per-epoch output.
+        esq::run(args)?;
         return Ok(Tally::default());
     }
     let out = replay(args)?;

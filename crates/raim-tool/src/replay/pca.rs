@@ -1,0 +1,182 @@
+//! `raim replay --pca`: seed 003's constellation-fault monitor
+//! (raim_core::araim::pca) beside the ARAIM separation test (any mode, and
+//! the constellation modes alone) and the snapshot monitor, on the same
+//! faulted epochs. Per epoch: the PCA dimension n_c, k, the statistic
+//! max_q |dx_q| / T_q and the three verdicts; then one summary row per
+//! method (false alarms before the onset, first detection after it), the
+//! rows of the table in docs/ESQ.md.
+
+use std::io::Write;
+use std::path::Path;
+
+use anyhow::{anyhow, Result};
+use plotters::prelude::*;
+
+use super::esq::{false_alarms, first_after, Row, Setup};
+use super::ReplayArgs;
+
+/// Whether a method alarmed on an epoch.
+type Hit = dyn Fn(&Row) -> bool;
+
+fn verdict(alarm: bool) -> &'static str {
+    if alarm {
+        "ALARM"
+    } else {
+        "ok"
+    }
+}
+
+pub fn run(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Result<()> {
+    if !args.quiet {
+        for r in rows {
+            let pca = match &r.pca {
+                Some(t) => format!(
+                    "n_c {:2} k {:2} ratio {:7.3} {:5}",
+                    t.n_complete,
+                    t.k,
+                    t.ratio,
+                    verdict(t.fault)
+                ),
+                None => "warming up                    ".into(),
+            };
+            writeln!(
+                w,
+                "{} n {:2} PCA {} | ARAIM ratio {:7.3} {:5}{} | snapshot {}{}",
+                raim_gnss::time::time_of_day(r.t_gps_s),
+                r.n_sats,
+                pca,
+                r.araim_ratio,
+                verdict(r.araim_alarm),
+                if r.araim_const_alarm {
+                    " (constellation mode)"
+                } else {
+                    ""
+                },
+                verdict(r.snapshot_alarm),
+                if r.errors.is_empty() {
+                    String::new()
+                } else {
+                    format!(" [{}]", r.errors.join("; "))
+                },
+            )?;
+        }
+    }
+    let pca_hit = |r: &Row| r.pca.is_some_and(|t| t.fault);
+    let tested = rows.iter().filter(|r| r.pca.is_some()).count();
+    let ks: Vec<usize> = rows.iter().filter_map(|r| r.pca.map(|t| t.k)).collect();
+    let k_min = ks.iter().copied().min().unwrap_or(0);
+    let k_max = ks.iter().copied().max().unwrap_or(0);
+    writeln!(
+        w,
+        "PCA summary: {} epochs, {tested} tested (window {} epochs), k {k_min}..{k_max}",
+        rows.len(),
+        super::esq::PCA_WINDOW
+    )?;
+    let methods: [(&str, &Hit); 4] = [
+        ("PCA", &pca_hit),
+        ("ARAIM (any mode)", &|r: &Row| r.araim_alarm),
+        ("ARAIM constellation mode", &|r: &Row| r.araim_const_alarm),
+        ("snapshot", &|r: &Row| r.snapshot_alarm),
+    ];
+    for (name, hit) in methods {
+        let faulted = rows.iter().filter(|r| r.faulted).count();
+        let detected = rows.iter().filter(|r| r.faulted && hit(r)).count();
+        let d = first_after(rows, s.onset_gps_s, hit);
+        writeln!(
+            w,
+            "  {name:26} false alarms {:3} | detected {} delay {} | faulted epochs alarmed {detected}/{faulted}",
+            false_alarms(rows, hit),
+            if d.is_some() { "yes" } else { "no " },
+            d.map_or("-".into(), |d| format!("{d:.0} s")),
+        )?;
+    }
+    // The statistic's scale: its largest value before the onset (the
+    // threshold that would have given no false alarm) against its largest
+    // in the first five faulted epochs.
+    let max_ratio = |it: &mut dyn Iterator<Item = &Row>| {
+        it.filter_map(|r| r.pca.map(|t| t.ratio))
+            .fold(f64::NAN, f64::max)
+    };
+    let clean_max = max_ratio(&mut rows.iter().filter(|r| !r.faulted));
+    let onset_max = max_ratio(&mut rows.iter().filter(|r| r.faulted).take(5));
+    writeln!(
+        w,
+        "  PCA ratio: max before onset {clean_max:.2}, max in the first 5 faulted epochs {onset_max:.2}"
+    )?;
+    let refused = rows.iter().filter(|r| !r.errors.is_empty()).count();
+    if refused > 0 {
+        writeln!(w, "  epochs with a refusal (listed per epoch): {refused}")?;
+    }
+    if let Some(p) = &args.esq.esq_plot {
+        plot(rows, p, args.font.as_deref())?;
+    }
+    Ok(())
+}
+
+fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
+    anyhow!("plot: {e}")
+}
+
+fn plot(rows: &[Row], path: &Path, font: Option<&Path>) -> Result<()> {
+    super::plot::register_font(font)?;
+    let root = BitMapBackend::new(path, (1400, 900)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let panels = root.split_evenly((2, 1));
+    let t0 = rows.first().map_or(0.0, |r| r.t_gps_s);
+    let mins = |t: f64| (t - t0) / 60.0;
+    let t_max = rows.last().map_or(1.0, |r| mins(r.t_gps_s)).max(1.0);
+    let pts: Vec<(f64, f64)> = rows
+        .iter()
+        .filter_map(|r| r.pca.map(|t| (mins(r.t_gps_s), t.ratio)))
+        .filter(|p| p.1.is_finite())
+        .collect();
+    let y_max = pts.iter().map(|p| p.1).fold(1.5, f64::max) * 1.1;
+    let mut c = ChartBuilder::on(&panels[0])
+        .caption(
+            "PCA: max_q |dx_q| / T_q (blue; alarms red) against the threshold 1",
+            ("sans-serif", 22),
+        )
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(50)
+        .build_cartesian_2d(0.0..t_max, (0.01f64..y_max).log_scale())
+        .map_err(err)?;
+    c.configure_mesh().x_desc("minutes").draw().map_err(err)?;
+    c.draw_series(LineSeries::new(
+        pts.iter().map(|&(x, y)| (x, y.max(0.011))),
+        &BLUE,
+    ))
+    .map_err(err)?;
+    c.draw_series(
+        pts.iter()
+            .filter(|p| p.1 > 1.0)
+            .map(|&(x, y)| Circle::new((x, y), 3, RED.filled())),
+    )
+    .map_err(err)?;
+    c.draw_series(LineSeries::new([(0.0, 1.0), (t_max, 1.0)], &RED))
+        .map_err(err)?;
+    let ks: Vec<(f64, f64)> = rows
+        .iter()
+        .filter_map(|r| r.pca.map(|t| (mins(r.t_gps_s), t.k as f64)))
+        .collect();
+    let nc: Vec<(f64, f64)> = rows
+        .iter()
+        .filter_map(|r| r.pca.map(|t| (mins(r.t_gps_s), t.n_complete as f64)))
+        .collect();
+    let n_max = nc.iter().map(|p| p.1).fold(2.0, f64::max) + 1.0;
+    let mut c = ChartBuilder::on(&panels[1])
+        .caption(
+            "k (blue) of n_c satellites with a complete window (black)",
+            ("sans-serif", 22),
+        )
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(50)
+        .build_cartesian_2d(0.0..t_max, 0.0..n_max)
+        .map_err(err)?;
+    c.configure_mesh().x_desc("minutes").draw().map_err(err)?;
+    c.draw_series(LineSeries::new(ks, &BLUE)).map_err(err)?;
+    c.draw_series(LineSeries::new(nc, &BLACK)).map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(())
+}
