@@ -1026,6 +1026,13 @@ mod tests {
             matches!(error(&r), WireError::NonFinite { field, index: 4, .. } if field.as_str() == "residual_m"),
             "{r:?}"
         );
+        let mut nan_los = obs.clone();
+        nan_los[5].los_enu[1] = f64::NAN;
+        let r = l.epoch(&nan_los);
+        assert!(
+            matches!(error(&r), WireError::NonFinite { field, index: 5, .. } if field.as_str() == "g_n"),
+            "{r:?}"
+        );
         let r = l.epoch(&zero_sigma);
         assert_eq!(
             *error(&r),
@@ -1050,7 +1057,7 @@ mod tests {
                 capacity: 32
             }
         );
-        errors += 5;
+        errors += 6;
         // The good ISM stayed in force: the same answer as before.
         assert_eq!(*result(&l.epoch(&obs)), good);
         let ResponseBody::Status(st) = l.ask(CommandRef::Status).body else {
