@@ -31,8 +31,9 @@ fn free_port() -> u16 {
         .port()
 }
 
-/// Serve `epochs` (NMEA sentences per epoch) to gpsd; its JSON reports.
-fn through_gpsd(epochs: &[Vec<String>], wanted_tpv: usize) -> Vec<serde_json::Value> {
+/// Serve `epochs` (NMEA sentences per epoch) to gpsd; its JSON reports, up
+/// to the TPV of the last of `n_epochs` epochs (or gpsd's silence).
+fn through_gpsd(epochs: &[Vec<String>], n_epochs: usize) -> Vec<serde_json::Value> {
     let source = TcpListener::bind("127.0.0.1:0").unwrap();
     let src_port = source.local_addr().unwrap().port();
     let gpsd_port = free_port();
@@ -68,13 +69,23 @@ fn through_gpsd(epochs: &[Vec<String>], wanted_tpv: usize) -> Vec<serde_json::Va
         .write_all(b"?WATCH={\"enable\":true,\"json\":true}\n")
         .unwrap();
     let (mut feed, _) = source.accept().unwrap();
+    // Epoch k is stamped 12:00:0k (see the test).
+    let last_tag = format!("T12:00:{:02}", n_epochs.saturating_sub(1));
     let reports = std::thread::spawn(move || {
         let mut out: Vec<serde_json::Value> = Vec::new();
         for line in BufReader::new(client).lines() {
             let Ok(line) = line else { break };
             let v: serde_json::Value = serde_json::from_str(&line).unwrap();
+            // gpsd may report an epoch more than once (three TPVs for the
+            // first epoch were seen), so a count of TPVs is no end mark: stop
+            // at the last epoch's TPV (its time tag), else at the read
+            // timeout or when gpsd closes.
+            let last = v["class"] == "TPV"
+                && v["time"]
+                    .as_str()
+                    .is_some_and(|t| t.contains(&last_tag));
             out.push(v);
-            if out.iter().filter(|r| r["class"] == "TPV").count() >= wanted_tpv {
+            if last {
                 break;
             }
         }
