@@ -38,6 +38,13 @@ pub trait Real:
     fn of(x: f64) -> Self;
     /// Widens (or passes) to `f64`.
     fn to_f64(self) -> f64;
+    /// ln x through `libm` on every target, so that the host and the
+    /// device round alike (nalgebra's `ln` is the platform's on a std host).
+    fn ln_m(self) -> Self;
+    /// ln(1 + x) through `libm` (see [`Real::ln_m`]).
+    fn ln_1p_m(self) -> Self;
+    /// Whether the value is NaN.
+    fn is_nan_m(self) -> bool;
 }
 
 impl Real for f64 {
@@ -51,6 +58,18 @@ impl Real for f64 {
     fn to_f64(self) -> f64 {
         self
     }
+    #[inline(always)]
+    fn ln_m(self) -> Self {
+        libm::log(self)
+    }
+    #[inline(always)]
+    fn ln_1p_m(self) -> Self {
+        libm::log1p(self)
+    }
+    #[inline(always)]
+    fn is_nan_m(self) -> bool {
+        self.is_nan()
+    }
 }
 
 impl Real for f32 {
@@ -63,6 +82,18 @@ impl Real for f32 {
     #[inline(always)]
     fn to_f64(self) -> f64 {
         self as f64
+    }
+    #[inline(always)]
+    fn ln_m(self) -> Self {
+        libm::logf(self)
+    }
+    #[inline(always)]
+    fn ln_1p_m(self) -> Self {
+        libm::log1pf(self)
+    }
+    #[inline(always)]
+    fn is_nan_m(self) -> bool {
+        self.is_nan()
     }
 }
 

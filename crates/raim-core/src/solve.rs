@@ -13,6 +13,7 @@ use crate::measurement::{
     Epoch, LinearObservation, Observations, RangeObservation, SatId, System, MAX_STATES,
     MAX_SYSTEMS,
 };
+use crate::real::{Real, Stat};
 use nalgebra::Matrix3;
 
 /// Below this norm (m) an a-priori position is "unknown" for the elevation
@@ -47,11 +48,38 @@ pub const RELINEARISE_EL_RAD: f64 = RELINEARISE_M / 6.356e6 + RELINEARISE_M / 1.
 /// one more parity iteration, never a different answer.
 pub const PARITY_STEP_SCALE_M: f64 = 5.0e6;
 
+/// The rounding floor of a Gauss-Newton step computed in precision `T`,
+/// as a length scale (m) times `T::EPS`. The residuals are formed in f64 at
+/// every iteration (so the iteration is an iterative refinement and the
+/// position converges), but the step solved from them in `T` carries an
+/// error of about eps x cond(H) x |r| that does not shrink with the step:
+/// |r| up to 1e3 m (a large fault) and cond(H) up to 100 give eps x 1e5 m.
+/// In f32 that is 1.2e-2 m, above the default `convergence_m` (1e-4 m),
+/// which an f32 step could then never reach; in f64 it is 2.2e-11 m, below
+/// every configurable `convergence_m`, so the f64 engine is unchanged.
+pub const STEP_ROUNDING_SCALE_M: f64 = 1.0e5;
+
+/// The step (m) below which Gauss-Newton in precision `T` has converged:
+/// `convergence_m`, floored at the step's rounding noise
+/// ([`STEP_ROUNDING_SCALE_M`]). The reported position is the last model's
+/// least-squares estimate, within about the f32 noise (1e-4 m) of the f64
+/// one; the parity quantities do not depend on where in that neighbourhood
+/// the model is linearised (the difference lies in the column space of H).
+pub fn convergence_bound_m<T: Real>(convergence_m: f64) -> f64 {
+    let floor = T::EPS.to_f64() * STEP_ROUNDING_SCALE_M;
+    if convergence_m > floor {
+        convergence_m
+    } else {
+        floor
+    }
+}
+
 /// One solved subset of an epoch's satellites: the parity quantities of its
-/// whitened ENU model, and the position.
+/// whitened ENU model (in precision `T`, the build's [`Stat`] by default),
+/// and the position, elevations and sigmas (f64: docs/CORE.md, "Precision").
 #[derive(Debug, Clone)]
-pub struct Solution<const N: usize> {
-    pub parity: Parity<N>,
+pub struct Solution<const N: usize, T: Real = Stat> {
+    pub parity: Parity<N, T>,
     /// Row k of the model is the epoch's satellite `source[k]`.
     pub source: [usize; N],
     pub ids: [SatId; N],
@@ -73,7 +101,7 @@ pub struct Solution<const N: usize> {
     pub iterations: u32,
 }
 
-impl<const N: usize> Solution<N> {
+impl<const N: usize, T: Real> Solution<N, T> {
     /// An empty solution, to be filled by [`solve_into`].
     pub fn empty() -> Self {
         Solution {
@@ -131,7 +159,7 @@ fn clock_column(cols: &[Option<System>; MAX_SYSTEMS], sys: System) -> Option<usi
 /// Where Gauss-Newton starts, and what it may reuse (docs/CORE.md, "Do the
 /// work once").
 #[derive(Debug, Clone, Copy)]
-pub enum Start<'a, const N: usize> {
+pub enum Start<'a, const N: usize, T: Real = Stat> {
     /// From the epoch's a-priori position, or the Earth's centre.
     Cold,
     /// From a previous epoch's solution (the engine's warm start).
@@ -139,7 +167,7 @@ pub enum Start<'a, const N: usize> {
     /// From another solution of the *same* epoch (an FDE subset): its
     /// position and clocks, and its per-satellite elevations and sigmas,
     /// which stay valid while the point moves less than [`RELINEARISE_M`].
-    Sibling(&'a Solution<N>),
+    Sibling(&'a Solution<N, T>),
 }
 
 /// A position and receiver clocks to start Gauss-Newton from.
@@ -154,7 +182,7 @@ pub struct Fix {
 
 impl Fix {
     /// The fix of a pseudorange solution (none for the linearised form).
-    pub fn of<const N: usize>(time_s: f64, sol: &Solution<N>) -> Option<Fix> {
+    pub fn of<const N: usize, T: Real>(time_s: f64, sol: &Solution<N, T>) -> Option<Fix> {
         sol.position_ecef_m.map(|position_ecef_m| Fix {
             time_s,
             position_ecef_m,
@@ -163,12 +191,13 @@ impl Fix {
     }
 }
 
-/// Solve the subset `mask` (indexed like the epoch's satellites), cold.
+/// Solve the subset `mask` (indexed like the epoch's satellites), cold, in
+/// the build's precision [`Stat`] (any precision: [`solve_into`]).
 pub fn solve<const N: usize>(
     cfg: &Config,
     epoch: &Epoch<'_>,
     mask: &[bool; N],
-) -> Result<Solution<N>, RaimError> {
+) -> Result<Solution<N, Stat>, RaimError> {
     let mut out = Solution::empty();
     solve_into(cfg, epoch, mask, &mut out)?;
     Ok(out)
@@ -177,23 +206,23 @@ pub fn solve<const N: usize>(
 /// [`solve`] into existing storage: nothing N-sized is built on the stack
 /// but the model builder (the firmware's stack budget, BENCHMARKS.md). On
 /// error, `out` holds no usable solution.
-pub fn solve_into<const N: usize>(
+pub fn solve_into<const N: usize, T: Real>(
     cfg: &Config,
     epoch: &Epoch<'_>,
     mask: &[bool; N],
-    out: &mut Solution<N>,
+    out: &mut Solution<N, T>,
 ) -> Result<(), RaimError> {
     solve_from(cfg, epoch, mask, Start::Cold, out)
 }
 
 /// [`solve_into`] from a [`Start`]: a warm start from the last epoch's fix,
 /// or from a solution of the same epoch whose per-satellite model is reused.
-pub fn solve_from<const N: usize>(
+pub fn solve_from<const N: usize, T: Real>(
     cfg: &Config,
     epoch: &Epoch<'_>,
     mask: &[bool; N],
-    start: Start<'_, N>,
-    out: &mut Solution<N>,
+    start: Start<'_, N, T>,
+    out: &mut Solution<N, T>,
 ) -> Result<(), RaimError> {
     let sibling = match start {
         Start::Sibling(s) => Some(s),
@@ -212,8 +241,8 @@ pub fn solve_from<const N: usize>(
 
 /// The elevation and sigma of the epoch satellite `index` as a sibling
 /// solution of the same epoch has them (same line of sight, same model).
-fn sibling_model<const N: usize>(
-    sibling: Option<&Solution<N>>,
+fn sibling_model<const N: usize, T: Real>(
+    sibling: Option<&Solution<N, T>>,
     index: usize,
 ) -> Option<(f64, f64)> {
     let s = sibling?;
@@ -223,14 +252,14 @@ fn sibling_model<const N: usize>(
 
 /// The linearised form: one least-squares solve at the given point.
 #[inline(never)]
-fn solve_linear<const N: usize>(
+fn solve_linear<const N: usize, T: Real>(
     cfg: &Config,
     sats: &[LinearObservation],
     mask: &[bool; N],
-    sibling: Option<&Solution<N>>,
-    out: &mut Solution<N>,
+    sibling: Option<&Solution<N, T>>,
+    out: &mut Solution<N, T>,
 ) -> Result<(), RaimError> {
-    let mut b = Builder::<N>::new(
+    let mut b = Builder::<N, T>::new(
         sats.iter()
             .zip(mask.iter())
             .filter(|(_, m)| **m)
@@ -259,7 +288,7 @@ fn solve_linear<const N: usize>(
         b.push(i, s.id, u, s.residual_m, sigma, el)?;
     }
     b.parity_into(&mut out.parity)?;
-    let dx = *out.parity.dx();
+    let dx = out.parity.dx().map(T::to_f64);
     let mut clock_m = [None; MAX_SYSTEMS];
     for (j, sys) in b.cols.iter().enumerate() {
         if let (Some(sys), Some(v)) = (sys, dx.get(3 + j)) {
@@ -327,14 +356,15 @@ impl Linearisation {
 /// position is its least-squares estimate (the point plus the last step, <
 /// `convergence_m`), and `correction_enu_m` is zero.
 #[inline(never)]
-fn gauss_newton<const N: usize>(
+fn gauss_newton<const N: usize, T: Real>(
     cfg: &Config,
     sats: &[RangeObservation],
     apriori_m: Option<[f64; 3]>,
     mask: &[bool; N],
-    start: Start<'_, N>,
-    out: &mut Solution<N>,
+    start: Start<'_, N, T>,
+    out: &mut Solution<N, T>,
 ) -> Result<(), RaimError> {
+    let converged_m = convergence_bound_m::<T>(cfg.convergence_m);
     let selected = || {
         sats.iter()
             .enumerate()
@@ -343,7 +373,7 @@ fn gauss_newton<const N: usize>(
     // One builder for all iterations: its rows are the selected
     // satellites in order, and its per-row elevations and sigmas are the
     // cache, valid while `cached` (same linearisation, on the surface).
-    let mut b = Builder::<N>::new(selected().map(|(_, s)| s.id.system));
+    let mut b = Builder::<N, T>::new(selected().map(|(_, s)| s.id.system));
     let cols = b.cols;
     let mut cached = false;
     let mut lin: Option<Linearisation> = None;
@@ -440,15 +470,14 @@ fn gauss_newton<const N: usize>(
             b.push(i, s.id, u, z, sigma, el)?;
         }
         cached = frame.is_some();
-        let full =
-            frame.is_some() && last_step_m * last_step_m < cfg.convergence_m * PARITY_STEP_SCALE_M;
+        let full = frame.is_some() && last_step_m * last_step_m < converged_m * PARITY_STEP_SCALE_M;
         // A step needs only the least-squares solution; the parity
         // quantities come once, with the final model.
         let dx = if full {
             b.parity_into(&mut out.parity)?;
-            *out.parity.dx()
+            out.parity.dx().map(T::to_f64)
         } else {
-            b.least_squares()?
+            b.least_squares()?.map(T::to_f64)
         };
         let step_local = [dx[0], dx[1], dx[2]];
         let step = match &frame {
@@ -456,12 +485,12 @@ fn gauss_newton<const N: usize>(
             None => step_local,
         };
         let step_m = libm::sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2]);
-        if let (Some(l), true) = (frame, step_m < cfg.convergence_m) {
+        if let (Some(l), true) = (frame, step_m < converged_m) {
             // Converged: this iteration's model, at x, is the solution.
             if !full {
                 b.parity_into(&mut out.parity)?;
             }
-            let dx = *out.parity.dx();
+            let dx = out.parity.dx().map(T::to_f64);
             let mut clock_m = [None; MAX_SYSTEMS];
             for (j, sys) in cols.iter().enumerate() {
                 if let Some(sys) = sys {
@@ -500,28 +529,29 @@ fn gauss_newton<const N: usize>(
     })
 }
 
-/// Accumulates whitened rows [-u, onehot] / sigma and z / sigma.
-struct Builder<const N: usize> {
+/// Accumulates whitened rows [-u, onehot] / sigma and z / sigma, in `T`
+/// (the residual z itself is formed in f64 by the caller).
+struct Builder<const N: usize, T: Real> {
     n: usize,
     m: usize,
     cols: [Option<System>; MAX_SYSTEMS],
-    h: [[f64; N]; MAX_STATES],
-    z: [f64; N],
+    h: [[T; N]; MAX_STATES],
+    z: [T; N],
     source: [usize; N],
     ids: [SatId; N],
     sigma: [f64; N],
     el: [f64; N],
 }
 
-impl<const N: usize> Builder<N> {
+impl<const N: usize, T: Real> Builder<N, T> {
     fn new(systems: impl Iterator<Item = System>) -> Self {
         let (cols, k) = clock_columns(systems);
         Builder {
             n: 0,
             m: 3 + k,
             cols,
-            h: [[0.0; N]; MAX_STATES],
-            z: [0.0; N],
+            h: [[T::zero(); N]; MAX_STATES],
+            z: [T::zero(); N],
             source: [0; N],
             ids: [SatId::default(); N],
             sigma: [0.0; N],
@@ -552,23 +582,26 @@ impl<const N: usize> Builder<N> {
             });
         }
         let w = 1.0 / sigma;
+        let wt = T::of(w);
         let clock = clock_column(&self.cols, id.system).map(|c| 3 + c);
         for (j, col) in self.h.iter_mut().enumerate() {
             let v = match j {
-                0..=2 => -u.get(j).copied().unwrap_or(0.0) * w,
-                _ if Some(j) == clock => w,
-                _ => 0.0,
+                0..=2 => -T::of(u.get(j).copied().unwrap_or(0.0)) * wt,
+                _ if Some(j) == clock => wt,
+                _ => T::zero(),
             };
             if let Some(cell) = col.get_mut(k) {
                 *cell = v;
             }
+        }
+        if let Some(c) = self.z.get_mut(k) {
+            *c = T::of(z * w);
         }
         let set = |a: &mut [f64; N], v: f64| {
             if let Some(c) = a.get_mut(k) {
                 *c = v;
             }
         };
-        set(&mut self.z, z * w);
         set(&mut self.sigma, sigma);
         set(&mut self.el, el);
         if let Some(c) = self.source.get_mut(k) {
@@ -582,12 +615,12 @@ impl<const N: usize> Builder<N> {
     }
 
     #[inline(never)]
-    fn parity_into(&self, out: &mut Parity<N>) -> Result<(), RaimError> {
+    fn parity_into(&self, out: &mut Parity<N, T>) -> Result<(), RaimError> {
         out.compute(&self.h, &self.z, self.n, self.m)
     }
 
     /// Copy the per-row bookkeeping into a solution.
-    fn fill(&self, out: &mut Solution<N>) {
+    fn fill(&self, out: &mut Solution<N, T>) {
         out.source = self.source;
         out.ids = self.ids;
         out.sigma_m = self.sigma;
@@ -597,7 +630,7 @@ impl<const N: usize> Builder<N> {
 
     /// The least-squares correction alone (a Gauss-Newton step).
     #[inline(never)]
-    fn least_squares(&self) -> Result<[f64; MAX_STATES], RaimError> {
+    fn least_squares(&self) -> Result<[T; MAX_STATES], RaimError> {
         if self.n <= self.m {
             return Err(RaimError::TooFewSatellites {
                 have: self.n,
@@ -607,7 +640,7 @@ impl<const N: usize> Builder<N> {
         let qr = Householder::factor(&self.h, self.n, self.m)?;
         let mut z = self.z;
         qr.apply_ut(&mut z);
-        let mut rhs = [0.0; MAX_STATES];
+        let mut rhs = [T::zero(); MAX_STATES];
         for (r, v) in rhs.iter_mut().zip(z.iter()).take(self.m) {
             *r = *v;
         }

@@ -335,9 +335,9 @@ pub struct MultifaultReport {
     pub q_min: Option<f64>,
 }
 
-fn fault_set<T: Real, const N: usize>(
+fn fault_set<T: Real, P: Real, const N: usize>(
     fit: &SubsetFit<T>,
-    sol: &Solution<N>,
+    sol: &Solution<N, P>,
     dof: usize,
 ) -> FaultSet {
     let (rows, k) = covering::members(fit.set);
@@ -430,13 +430,13 @@ fn larger_alternative<const N: usize>(
 /// [`run`] with its scratch on this function's own stack frame (out of
 /// line, so the default FDE's frames do not reserve it).
 #[inline(never)]
-pub fn run_with_own_scratch<const N: usize>(
+pub fn run_with_own_scratch<const N: usize, P: Real>(
     cfg: &Config,
     t_max: u8,
     group_budget: u16,
     thresholds: &mut Thresholds<N>,
     epoch: &Epoch<'_>,
-    out: &mut FdeOutcome<N>,
+    out: &mut FdeOutcome<N, P>,
 ) -> Result<Option<MultifaultReport>, RaimError> {
     let mut scratch = Scratch::default();
     run(
@@ -457,13 +457,13 @@ pub fn run_with_own_scratch<const N: usize>(
 /// on with more satellites. Fills the same outcome as [`fde::run`] (so the
 /// snapshot result is built the same way) and returns the report.
 #[inline(never)]
-pub fn run<const N: usize>(
+pub fn run<const N: usize, P: Real>(
     cfg: &Config,
     t_max: u8,
     group_budget: u16,
     thresholds: &mut Thresholds<N>,
     epoch: &Epoch<'_>,
-    out: &mut FdeOutcome<N>,
+    out: &mut FdeOutcome<N, P>,
     scratch: &mut Scratch<N>,
 ) -> Result<Option<MultifaultReport>, RaimError> {
     let before = fde::test(cfg, thresholds, &out.solution)?;
@@ -537,13 +537,13 @@ pub fn run<const N: usize>(
         repaired: s.repaired,
         q_min: s.q_min.map(|(q, _)| q.to_f64()),
     };
-    let id_of = |sol: &Solution<N>, set: SatSet| {
+    let id_of = |sol: &Solution<N, P>, set: SatSet| {
         let (rows, _) = covering::members(set);
         rows.first()
             .and_then(|r| sol.ids.get(usize::from(*r)).copied())
     };
     let mut from = 1;
-    let mut scratch_solution = Solution::<N>::empty();
+    let mut scratch_solution = Solution::<N, P>::empty();
     loop {
         let verdict = decide(
             &s,
@@ -641,7 +641,7 @@ pub fn run<const N: usize>(
                         }
                     }
                 }
-                match solve_into::<N>(cfg, epoch, &mask, &mut scratch_solution) {
+                match solve_into(cfg, epoch, &mask, &mut scratch_solution) {
                     Ok(()) => {}
                     Err(RaimError::RankDeficient { .. })
                     | Err(RaimError::TooFewSatellites { .. }) => {
