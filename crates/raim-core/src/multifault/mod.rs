@@ -369,10 +369,10 @@ fn fault_set<T: Real, P: Real, const N: usize>(
 /// [`Stat`]: 17 KB at N = 32 in f64, 8.5 KB in f32). Kept out of the
 /// snapshot engine so the default FDE pays nothing for it.
 #[derive(Debug, Clone, Default)]
-pub struct Scratch<const N: usize> {
-    pub model: ResidualModel<Stat, N>,
-    pub ws: Workspace<Stat, N>,
-    pub group: GroupFit<Stat, N>,
+pub struct Scratch<const N: usize, T: Real = Stat> {
+    pub model: ResidualModel<T, N>,
+    pub ws: Workspace<T, N>,
+    pub group: GroupFit<T, N>,
 }
 
 /// The search's fixed arguments, for the second pass.
@@ -393,19 +393,19 @@ fn s_args(covering: &Covering, t_max: usize, budget: u16) -> SearchArgs<'_> {
 /// The least-RSS set of more than `best.count` satellites that does not
 /// contain `best.set` and is consistent at level pwe (its own dof), if any.
 #[inline(never)]
-fn larger_alternative<const N: usize>(
+fn larger_alternative<const N: usize, T: Real>(
     cfg: &Config,
     args: &SearchArgs<'_>,
-    best: SubsetFit<Stat>,
+    best: SubsetFit<T>,
     dof: usize,
-    scratch: &mut Scratch<N>,
-) -> Result<Option<SubsetFit<Stat>>, RaimError> {
+    scratch: &mut Scratch<N, T>,
+) -> Result<Option<SubsetFit<T>>, RaimError> {
     let found = search_where(
         &scratch.model,
         args.covering,
         args.t_max,
         args.budget,
-        Stat::of(cfg.min_s_ii),
+        T::of(cfg.min_s_ii),
         &mut scratch.ws,
         &mut scratch.group,
         |_, _| {},
@@ -438,7 +438,7 @@ pub fn run_with_own_scratch<const N: usize, P: Real>(
     epoch: &Epoch<'_>,
     out: &mut FdeOutcome<N, P>,
 ) -> Result<Option<MultifaultReport>, RaimError> {
-    let mut scratch = Scratch::default();
+    let mut scratch = Scratch::<N, P>::default();
     run(
         cfg,
         t_max,
@@ -464,7 +464,7 @@ pub fn run<const N: usize, P: Real>(
     thresholds: &mut Thresholds<N>,
     epoch: &Epoch<'_>,
     out: &mut FdeOutcome<N, P>,
-    scratch: &mut Scratch<N>,
+    scratch: &mut Scratch<N, P>,
 ) -> Result<Option<MultifaultReport>, RaimError> {
     let before = fde::test(cfg, thresholds, &out.solution)?;
     out.test = before;
@@ -513,7 +513,7 @@ pub fn run<const N: usize, P: Real>(
         &covering,
         t_eff,
         usize::from(group_budget),
-        Stat::of(cfg.min_s_ii),
+        P::of(cfg.min_s_ii),
         &mut scratch.ws,
         &mut scratch.group,
         |_, _| {},
