@@ -45,6 +45,21 @@ pub trait Real:
     fn ln_1p_m(self) -> Self;
     /// Whether the value is NaN.
     fn is_nan_m(self) -> bool;
+    /// sin x through `libm` (see [`Real::ln_m`]).
+    fn sin_m(self) -> Self;
+    /// cos x through `libm`.
+    fn cos_m(self) -> Self;
+    /// e^x through `libm`.
+    fn exp_m(self) -> Self;
+    /// atan2(self, x) through `libm`.
+    fn atan2_m(self, x: Self) -> Self;
+    /// The square root of a squared range `r2` (m^2), in f64 whatever `T`:
+    /// ranges are f64 quantities (the policy). In an f64 engine, `libm`'s
+    /// correctly rounded sqrt; in an f32 engine (the M4F, where an f64 sqrt
+    /// is a long software routine) the FPU's f32 sqrt refined by one
+    /// Newton step in f64, which leaves an error of ~(6e-8)^2 relative
+    /// plus one f64 rounding: below 1e-8 m at 2.6e7 m.
+    fn range_sqrt(r2: f64) -> f64;
 }
 
 impl Real for f64 {
@@ -70,6 +85,26 @@ impl Real for f64 {
     fn is_nan_m(self) -> bool {
         self.is_nan()
     }
+    #[inline(always)]
+    fn sin_m(self) -> Self {
+        libm::sin(self)
+    }
+    #[inline(always)]
+    fn cos_m(self) -> Self {
+        libm::cos(self)
+    }
+    #[inline(always)]
+    fn exp_m(self) -> Self {
+        libm::exp(self)
+    }
+    #[inline(always)]
+    fn atan2_m(self, x: Self) -> Self {
+        libm::atan2(self, x)
+    }
+    #[inline(always)]
+    fn range_sqrt(r2: f64) -> f64 {
+        libm::sqrt(r2)
+    }
 }
 
 impl Real for f32 {
@@ -94,6 +129,31 @@ impl Real for f32 {
     #[inline(always)]
     fn is_nan_m(self) -> bool {
         self.is_nan()
+    }
+    #[inline(always)]
+    fn sin_m(self) -> Self {
+        libm::sinf(self)
+    }
+    #[inline(always)]
+    fn cos_m(self) -> Self {
+        libm::cosf(self)
+    }
+    #[inline(always)]
+    fn exp_m(self) -> Self {
+        libm::expf(self)
+    }
+    #[inline(always)]
+    fn atan2_m(self, x: Self) -> Self {
+        libm::atan2f(self, x)
+    }
+    #[inline]
+    fn range_sqrt(r2: f64) -> f64 {
+        let r0 = libm::sqrtf(r2 as f32) as f64;
+        if !(r0 > 0.0) || !r0.is_finite() {
+            // 0, NaN, or beyond f32 (r2 > 3.4e38): the exact routine.
+            return libm::sqrt(r2);
+        }
+        0.5 * (r0 + r2 / r0)
     }
 }
 

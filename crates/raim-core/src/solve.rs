@@ -5,7 +5,8 @@
 use crate::config::Config;
 use crate::error::RaimError;
 use crate::frames::{
-    ecef_to_geodetic, ecef_to_geodetic_from, enu_rotation, rotate, unrotate, Geodetic,
+    bowring_latitude_rad, ecef_to_geodetic_from, enu_rotation, rotate, unrotate, Geodetic,
+    WGS84_A_M, WGS84_F,
 };
 use crate::linalg::parity::Parity;
 use crate::linalg::qr::Householder;
@@ -37,6 +38,11 @@ pub const RELINEARISE_M: f64 = 100.0;
 /// The largest elevation error that reusing a linearisation within
 /// [`RELINEARISE_M`] makes, rad (frame tilt plus line-of-sight turn).
 pub const RELINEARISE_EL_RAD: f64 = RELINEARISE_M / 6.356e6 + RELINEARISE_M / 1.9e7;
+
+/// The reported position's geodetic coordinates come from the final
+/// linearisation's by a first-order update when the position is within this
+/// distance of it (m): see `Linearisation::geodetic_of`.
+pub const GEODETIC_LINEAR_MAX_M: f64 = 1.0;
 
 /// After a Gauss-Newton step s, the next step is of the order of the
 /// model's curvature times s^2, s^2 / (2 rho) with rho >= 1.9e7 m the range,
@@ -270,19 +276,22 @@ fn solve_linear<const N: usize, T: Real>(
         .enumerate()
         .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
     {
-        let norm = libm::sqrt(s.los_enu.iter().map(|v| v * v).sum::<f64>());
-        let u = [
-            s.los_enu[0] / norm,
-            s.los_enu[1] / norm,
-            s.los_enu[2] / norm,
-        ];
+        // The unit line of sight, its elevation and the sigma model in `T`
+        // (the same operations as in f64).
+        let l = s.los_enu.map(T::of);
+        let norm = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+        let u = [l[0] / norm, l[1] / norm, l[2] / norm];
         // The elevation and sigma depend on the line of sight alone, so a
         // sibling's are bit for bit what would be computed here.
         let (el, sigma) = match sibling_model(sibling, i) {
             Some(v) => v,
             None => {
-                let el = crate::frames::elevation_rad(u);
-                (el, s.sigma_m.unwrap_or_else(|| cfg.sigma_model.sigma_m(el)))
+                let el = crate::frames::elevation(u);
+                let sigma = match s.sigma_m {
+                    Some(v) => v,
+                    None => cfg.sigma_model.sigma(el).to_f64(),
+                };
+                (el.to_f64(), sigma)
             }
         };
         b.push(i, s.id, u, s.residual_m, sigma, el)?;
@@ -319,14 +328,56 @@ pub struct Linearisation {
 
 impl Linearisation {
     fn at(point_ecef_m: [f64; 3], near: Option<&Linearisation>) -> Self {
-        let geodetic = match near {
-            Some(l) => ecef_to_geodetic_from(point_ecef_m, l.geodetic.lat_rad),
-            None => ecef_to_geodetic(point_ecef_m),
+        // The same fixed point either way: started from the previous
+        // latitude, or from Bowring's closed form (1-2 iterations instead
+        // of 10).
+        let lat0_rad = match near {
+            Some(l) => l.geodetic.lat_rad,
+            None => bowring_latitude_rad(point_ecef_m),
         };
+        let geodetic = ecef_to_geodetic_from(point_ecef_m, lat0_rad);
         Linearisation {
             point_ecef_m,
             geodetic,
             rotation: enu_rotation(&geodetic),
+        }
+    }
+
+    /// The geodetic coordinates of a point `x` within
+    /// [`GEODETIC_LINEAR_MAX_M`] of this one, by the first-order update
+    /// through the local frame: lat += dN / (M + h), lon += dE / ((N + h)
+    /// cos lat), h += dU. The neglected second-order terms are below
+    /// d^2 / R = 1.6e-7 m (d <= 1 m), far under the iterative conversion's
+    /// own tolerance (`GEODETIC_STEP_TOL_RAD`, 0.6 mm). Further away, or
+    /// near a pole, the iterative conversion.
+    fn geodetic_of(&self, x: [f64; 3]) -> Geodetic {
+        let d = [
+            x[0] - self.point_ecef_m[0],
+            x[1] - self.point_ecef_m[1],
+            x[2] - self.point_ecef_m[2],
+        ];
+        let dist = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        // Rows E, N, U; sin and cos of the latitude are U_z and N_z.
+        let r = &self.rotation;
+        let (sl, cl) = (r[(2, 2)], r[(1, 2)]);
+        let g = self.geodetic;
+        let pi = core::f64::consts::PI;
+        if !(dist <= GEODETIC_LINEAR_MAX_M) || !(cl > 1e-6) {
+            return ecef_to_geodetic_from(x, g.lat_rad);
+        }
+        let [de, dn, du] = rotate(r, d);
+        let e2 = WGS84_F * (2.0 - WGS84_F);
+        let w = libm::sqrt(1.0 - e2 * sl * sl);
+        let n_rad = WGS84_A_M / w;
+        let m_rad = n_rad * (1.0 - e2) / (w * w);
+        let lon_rad = g.lon_rad + de / ((n_rad + g.height_m) * cl);
+        if !(lon_rad > -pi && lon_rad <= pi) {
+            return ecef_to_geodetic_from(x, g.lat_rad);
+        }
+        Geodetic {
+            lat_rad: g.lat_rad + dn / (m_rad + g.height_m),
+            lon_rad,
+            height_m: g.height_m + du,
         }
     }
 
@@ -377,6 +428,8 @@ fn gauss_newton<const N: usize, T: Real>(
     let cols = b.cols;
     let mut cached = false;
     let mut lin: Option<Linearisation> = None;
+    // The ECEF-to-ENU rotation of `lin` in `T`, for the lines of sight.
+    let mut rot = Matrix3::<T>::identity();
     let (mut x, start_clock) = match start {
         Start::Cold => (apriori_m.unwrap_or([0.0; 3]), [None; MAX_SYSTEMS]),
         Start::Fix(f) => (f.position_ecef_m, f.clock_m),
@@ -426,6 +479,9 @@ fn gauss_newton<const N: usize, T: Real>(
             cached = false;
         }
         let frame = if on_surface { lin } else { None };
+        if let Some(l) = &frame {
+            rot = l.rotation.map(T::of);
+        }
         let reuse = cached && frame.is_some();
         b.n = 0;
         for (k, (i, s)) in selected().enumerate() {
@@ -434,7 +490,7 @@ fn gauss_newton<const N: usize, T: Real>(
                 s.position_m[1] - x[1],
                 s.position_m[2] - x[2],
             ];
-            let range = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            let range = T::range_sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             if !(range > MIN_RANGE_M) {
                 return Err(RaimError::OutOfRange {
                     field: "range_m",
@@ -443,18 +499,25 @@ fn gauss_newton<const N: usize, T: Real>(
                     max: f64::INFINITY,
                 });
             }
-            let u_ecef = [d[0] / range, d[1] / range, d[2] / range];
+            // The unit line of sight in `T` (the policy: only the range
+            // and the residual need f64).
+            let r_t = T::of(range);
+            let u_ecef = [T::of(d[0]) / r_t, T::of(d[1]) / r_t, T::of(d[2]) / r_t];
             // On the surface, use ENU so the model is final; near the
             // centre, ECEF axes are as good as any (position columns
             // are rotated back below) and the weights are unit.
             let (u, el, sigma) = match &frame {
-                Some(l) => {
-                    let u = rotate(&l.rotation, u_ecef);
+                Some(_) => {
+                    let u = rotate(&rot, u_ecef);
                     let (el, sigma) = match (reuse, b.el.get(k), b.sigma.get(k)) {
                         (true, Some(&el), Some(&sigma)) => (el, sigma),
                         _ => {
-                            let el = crate::frames::elevation_rad(u);
-                            (el, s.sigma_m.unwrap_or_else(|| cfg.sigma_model.sigma_m(el)))
+                            let el = crate::frames::elevation(u);
+                            let sigma = match s.sigma_m {
+                                Some(v) => v,
+                                None => cfg.sigma_model.sigma(el).to_f64(),
+                            };
+                            (el.to_f64(), sigma)
                         }
                     };
                     (u, el, sigma)
@@ -505,7 +568,7 @@ fn gauss_newton<const N: usize, T: Real>(
             let x_ls = [x[0] + step[0], x[1] + step[1], x[2] + step[2]];
             out.clocks = cols;
             out.position_ecef_m = Some(x_ls);
-            out.geodetic = Some(ecef_to_geodetic_from(x_ls, l.geodetic.lat_rad));
+            out.geodetic = Some(l.geodetic_of(x_ls));
             out.linearisation = Some(l);
             out.correction_enu_m = [0.0; 3];
             out.clock_m = clock_m;
@@ -563,7 +626,7 @@ impl<const N: usize, T: Real> Builder<N, T> {
         &mut self,
         index: usize,
         id: SatId,
-        u: [f64; 3],
+        u: [T; 3],
         z: f64,
         sigma: f64,
         el: f64,
@@ -581,12 +644,12 @@ impl<const N: usize, T: Real> Builder<N, T> {
                 sigma_m: sigma,
             });
         }
-        let w = 1.0 / sigma;
-        let wt = T::of(w);
+        // The weight in `T`; in f64 the same operations as before.
+        let wt = T::one() / T::of(sigma);
         let clock = clock_column(&self.cols, id.system).map(|c| 3 + c);
         for (j, col) in self.h.iter_mut().enumerate() {
             let v = match j {
-                0..=2 => -T::of(u.get(j).copied().unwrap_or(0.0)) * wt,
+                0..=2 => -u.get(j).copied().unwrap_or(T::zero()) * wt,
                 _ if Some(j) == clock => wt,
                 _ => T::zero(),
             };
@@ -595,7 +658,7 @@ impl<const N: usize, T: Real> Builder<N, T> {
             }
         }
         if let Some(c) = self.z.get_mut(k) {
-            *c = T::of(z * w);
+            *c = T::of(z) * wt;
         }
         let set = |a: &mut [f64; N], v: f64| {
             if let Some(c) = a.get_mut(k) {
