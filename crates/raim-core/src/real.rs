@@ -158,13 +158,13 @@ impl Real for f32 {
 }
 
 /// The precision of the statistics path on this build: `f32` with the
-/// `f32` feature (meant for the M4F firmware, which does not enable it
-/// yet: issue 10), `f64` otherwise.
+/// `f32` feature (the M4F firmware enables it: firmware/Cargo.toml),
+/// `f64` otherwise.
 #[cfg(feature = "f32")]
 pub type Stat = f32;
 /// The precision of the statistics path on this build: `f32` with the
-/// `f32` feature (meant for the M4F firmware, which does not enable it
-/// yet: issue 10), `f64` otherwise.
+/// `f32` feature (the M4F firmware enables it: firmware/Cargo.toml),
+/// `f64` otherwise.
 #[cfg(not(feature = "f32"))]
 pub type Stat = f64;
 

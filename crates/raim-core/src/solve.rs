@@ -65,6 +65,20 @@ pub const PARITY_STEP_SCALE_M: f64 = 5.0e6;
 /// every configurable `convergence_m`, so the f64 engine is unchanged.
 pub const STEP_ROUNDING_SCALE_M: f64 = 1.0e5;
 
+/// Gauss-Newton in a precision coarser than f64 has stalled at its
+/// rounding floor, and has converged, when a parity iteration's step (m)
+/// after another parity iteration is below [`STALL_MAX_M`] and no smaller
+/// than this fraction of the previous step: in the quadratic regime a real
+/// step shrinks by orders of magnitude per iteration, so a step that does
+/// not halve is rounding noise (eps x cond(H) x |r|, which on a weak f32
+/// geometry reaches centimetres: 3 epochs in 10^6 of the equivalence
+/// Monte Carlo stalled at 4-13 cm, docs/F32_EQUIVALENCE.md).
+pub const STALL_RATIO: f64 = 0.5;
+
+/// The largest step (m) that can count as stalled at the rounding floor
+/// (a diverging iteration is never accepted: its steps grow).
+pub const STALL_MAX_M: f64 = 1.0;
+
 /// The step (m) below which Gauss-Newton in precision `T` has converged:
 /// `convergence_m`, floored at the step's rounding noise
 /// ([`STEP_ROUNDING_SCALE_M`]). The reported position is the last model's
@@ -465,6 +479,7 @@ fn gauss_newton<const N: usize, T: Real>(
         }
     }
     let mut last_step_m = f64::INFINITY;
+    let mut last_full = false;
     let mut iterations = 0;
     while iterations < cfg.max_iterations {
         iterations += 1;
@@ -548,7 +563,15 @@ fn gauss_newton<const N: usize, T: Real>(
             None => step_local,
         };
         let step_m = libm::sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2]);
-        if let (Some(l), true) = (frame, step_m < converged_m) {
+        // Converged: the step is below the bound, or (an engine in a
+        // precision coarser than f64, on a weak geometry) two consecutive
+        // parity iterations have stalled at the rounding floor.
+        let stalled = T::EPS.to_f64() > f64::EPSILON
+            && full
+            && last_full
+            && step_m < STALL_MAX_M
+            && !(step_m < STALL_RATIO * last_step_m);
+        if let (Some(l), true) = (frame, step_m < converged_m || stalled) {
             // Converged: this iteration's model, at x, is the solution.
             if !full {
                 b.parity_into(&mut out.parity)?;
@@ -582,6 +605,7 @@ fn gauss_newton<const N: usize, T: Real>(
             *c += dx.get(3 + j).copied().unwrap_or(0.0);
         }
         last_step_m = step_m;
+        last_full = full;
         if !last_step_m.is_finite() {
             break;
         }
