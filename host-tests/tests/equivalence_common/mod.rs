@@ -184,6 +184,49 @@ fn classify<const N: usize>(cfg: &Config, a: &EpochResult<N>, r: &EpochResult<N>
         // two are named.
         return Tie::Identification;
     }
+    // dof 1, NoRedundancy on both sides: the alarm and its cause agree and
+    // only the diagnostic `identified` differs. In a one-dimensional parity
+    // space every w_i^2 equals D^2, so MLE ranks by rounding alone and the
+    // L-RAIM score depends on S_ii alone, whose f32 error is eps x cond^2.
+    use raim_core::snapshot::fde::AlarmCause::NoRedundancy;
+    if a.decision == r.decision
+        && a.alarm_cause == Some(NoRedundancy)
+        && r.alarm_cause == Some(NoRedundancy)
+    {
+        return Tie::Identification;
+    }
+    // Ok / Excluded against Unavailable: a PL at its alert limit, or a
+    // satellite's S_ii at the identifiability bound (the PL is finite on
+    // one side and infinite on the other).
+    let availability_only = matches!(
+        (a.decision, r.decision),
+        (Decision::Ok, Decision::Unavailable)
+            | (Decision::Unavailable, Decision::Ok)
+            | (Decision::Excluded, Decision::Unavailable)
+            | (Decision::Unavailable, Decision::Excluded)
+    );
+    if availability_only {
+        let near_val = cfg
+            .alert
+            .val_m
+            .is_some_and(|v| rel(r.protection.vpl_m, v) < PL_REL_TOL);
+        if rel(r.protection.hpl_m, cfg.alert.hal_m) < PL_REL_TOL || near_val {
+            return Tie::AlertLimit;
+        }
+        // A satellite's S_ii at the identifiability bound (`min_s_ii`): f32
+        // carries eps x cond(H)^2 on S_ii, so the bound itself is the tie,
+        // and the PL is finite on one side and infinite on the other.
+        let weakest = a
+            .satellites
+            .iter()
+            .chain(r.satellites.iter())
+            .filter(|s| s.used && s.s_ii.is_finite())
+            .map(|s| s.s_ii)
+            .fold(f64::INFINITY, f64::min);
+        if weakest < 10.0 * cfg.min_s_ii {
+            return Tie::Identifiability;
+        }
+    }
     let t = &r.initial_test;
     if rel(t.statistic, t.threshold) < TIE_REL {
         return Tie::Detection;
