@@ -19,3 +19,5 @@ echo "== firmware (own workspace: QEMU mps2-an386 and STM32F4 builds, clippy, fm
     && cargo build --release --no-default-features --features board-stm32f4 --target-dir target/stm32f4)
 echo "== tests (including the firmware under QEMU: host-tests/tests/qemu_*.rs)"
 cargo test --workspace --release
+echo "== the QEMU tests again with the whole host side in the firmware's precision (raim-core/f32)"
+cargo test -p host-tests --release --features f32 qemu

@@ -73,16 +73,21 @@ fn main() -> anyhow::Result<()> {
                 ticks[1] * INSTRUCTIONS_PER_TICK
             );
         }
-        let lin = linear(n);
-        let mut ticks = 0;
-        for _ in 0..2 {
-            fw.process(&Epoch::linear(0.0, &lin))?;
-            ticks = fw.status()?.last_epoch_ticks as u64;
+        for (what, fault_m) in [("clean", 0.0), ("one 60 m fault", 60.0)] {
+            let mut lin = linear(n);
+            lin[2].residual_m += fault_m;
+            let mut ticks = 0;
+            let mut decision = String::new();
+            for _ in 0..2 {
+                let p = fw.process(&Epoch::linear(0.0, &lin))?;
+                decision = format!("{:?}", p.outcome.map(|r| r.decision));
+                ticks = fw.status()?.last_epoch_ticks as u64;
+            }
+            println!(
+                "| linearised, {what} | {n} | {decision} | {} |",
+                ticks * INSTRUCTIONS_PER_TICK
+            );
         }
-        println!(
-            "| linearised, clean | {n} | Ok | {} |",
-            ticks * INSTRUCTIONS_PER_TICK
-        );
     }
     drop(fw);
 

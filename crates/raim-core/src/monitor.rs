@@ -8,20 +8,24 @@
 use crate::config::Config;
 use crate::error::RaimError;
 use crate::measurement::{validate, Epoch};
+use crate::real::{Real, Stat};
 use crate::result::EpochResult;
 use crate::sequential::mcusum::Mcusum;
 use crate::sequential::Sequential;
 use crate::snapshot::Snapshot;
 
 /// The integrity monitor. `N` is the satellite capacity (default 32); all
-/// buffers are `[f64; N]`-sized and live on the stack.
+/// buffers are N-sized and live on the stack. `T` is the precision of the
+/// statistics path (docs/CORE.md, "Precision"): the build's [`Stat`] by
+/// default (f32 with the core's `f32` feature, the M4F firmware; f64
+/// otherwise); `Raim::<N, f32>` and `Raim::<N, f64>` can run side by side.
 #[derive(Debug, Clone, Default)]
-pub struct Raim<const N: usize = 32> {
-    snapshot: Snapshot<N>,
-    sequential: Sequential<N>,
+pub struct Raim<const N: usize = 32, T: Real = Stat> {
+    snapshot: Snapshot<N, T>,
+    sequential: Sequential<N, T>,
 }
 
-impl<const N: usize> Raim<N> {
+impl<const N: usize, T: Real> Raim<N, T> {
     pub fn new() -> Self {
         Raim {
             snapshot: Snapshot::new(),
@@ -30,7 +34,7 @@ impl<const N: usize> Raim<N> {
     }
 
     /// The MCUSUM state (accumulated vector and holds).
-    pub fn mcusum(&self) -> &Mcusum<N> {
+    pub fn mcusum(&self) -> &Mcusum<N, T> {
         &self.sequential.mcusum
     }
 

@@ -38,6 +38,29 @@ pub trait Real:
     fn of(x: f64) -> Self;
     /// Widens (or passes) to `f64`.
     fn to_f64(self) -> f64;
+    /// ln x through `libm` on every target, so that the host and the
+    /// device round alike (nalgebra's `ln` is the platform's on a std host).
+    fn ln_m(self) -> Self;
+    /// ln(1 + x) through `libm` (see [`Real::ln_m`]).
+    fn ln_1p_m(self) -> Self;
+    /// Whether the value is NaN.
+    fn is_nan_m(self) -> bool;
+    /// sin x through `libm` (see [`Real::ln_m`]).
+    fn sin_m(self) -> Self;
+    /// cos x through `libm`.
+    fn cos_m(self) -> Self;
+    /// e^x through `libm`.
+    fn exp_m(self) -> Self;
+    /// atan2(self, x) through `libm`.
+    fn atan2_m(self, x: Self) -> Self;
+    /// The square root of a squared range `r2` (m^2), in f64 whatever `T`:
+    /// ranges are f64 quantities (the policy). In an f64 engine, `libm`'s
+    /// correctly rounded sqrt; in an f32 engine (the M4F, where an f64 sqrt
+    /// is a long software routine) the FPU's f32 sqrt refined by one
+    /// Newton step in f64, which leaves an error of about half the square
+    /// of the seed's (<= 9e-8) relative: below 2e-7 m at 2.7e7 m (test
+    /// `f32_range_sqrt_is_f64_accurate`), against millimetre ranging.
+    fn range_sqrt(r2: f64) -> f64;
 }
 
 impl Real for f64 {
@@ -50,6 +73,38 @@ impl Real for f64 {
     #[inline(always)]
     fn to_f64(self) -> f64 {
         self
+    }
+    #[inline(always)]
+    fn ln_m(self) -> Self {
+        libm::log(self)
+    }
+    #[inline(always)]
+    fn ln_1p_m(self) -> Self {
+        libm::log1p(self)
+    }
+    #[inline(always)]
+    fn is_nan_m(self) -> bool {
+        self.is_nan()
+    }
+    #[inline(always)]
+    fn sin_m(self) -> Self {
+        libm::sin(self)
+    }
+    #[inline(always)]
+    fn cos_m(self) -> Self {
+        libm::cos(self)
+    }
+    #[inline(always)]
+    fn exp_m(self) -> Self {
+        libm::exp(self)
+    }
+    #[inline(always)]
+    fn atan2_m(self, x: Self) -> Self {
+        libm::atan2(self, x)
+    }
+    #[inline(always)]
+    fn range_sqrt(r2: f64) -> f64 {
+        libm::sqrt(r2)
     }
 }
 
@@ -64,16 +119,53 @@ impl Real for f32 {
     fn to_f64(self) -> f64 {
         self as f64
     }
+    #[inline(always)]
+    fn ln_m(self) -> Self {
+        libm::logf(self)
+    }
+    #[inline(always)]
+    fn ln_1p_m(self) -> Self {
+        libm::log1pf(self)
+    }
+    #[inline(always)]
+    fn is_nan_m(self) -> bool {
+        self.is_nan()
+    }
+    #[inline(always)]
+    fn sin_m(self) -> Self {
+        libm::sinf(self)
+    }
+    #[inline(always)]
+    fn cos_m(self) -> Self {
+        libm::cosf(self)
+    }
+    #[inline(always)]
+    fn exp_m(self) -> Self {
+        libm::expf(self)
+    }
+    #[inline(always)]
+    fn atan2_m(self, x: Self) -> Self {
+        libm::atan2f(self, x)
+    }
+    #[inline]
+    fn range_sqrt(r2: f64) -> f64 {
+        let r0 = libm::sqrtf(r2 as f32) as f64;
+        if !(r0 > 0.0) || !r0.is_finite() {
+            // 0, NaN, or beyond f32 (r2 > 3.4e38): the exact routine.
+            return libm::sqrt(r2);
+        }
+        0.5 * (r0 + r2 / r0)
+    }
 }
 
 /// The precision of the statistics path on this build: `f32` with the
-/// `f32` feature (meant for the M4F firmware, which does not enable it
-/// yet: issue 10), `f64` otherwise.
+/// `f32` feature (the M4F firmware enables it: firmware/Cargo.toml),
+/// `f64` otherwise.
 #[cfg(feature = "f32")]
 pub type Stat = f32;
 /// The precision of the statistics path on this build: `f32` with the
-/// `f32` feature (meant for the M4F firmware, which does not enable it
-/// yet: issue 10), `f64` otherwise.
+/// `f32` feature (the M4F firmware enables it: firmware/Cargo.toml),
+/// `f64` otherwise.
 #[cfg(not(feature = "f32"))]
 pub type Stat = f64;
 
@@ -95,5 +187,33 @@ mod tests {
         assert!((s.to_f64() - d).abs() <= 5.0 * f32::EPSILON as f64);
         assert_eq!(f32::of(1e-40).to_f64(), 1e-40f32 as f64);
         assert_eq!(<Stat as Real>::NAME.len(), 3);
+    }
+
+    /// The f32 engine's range square root (an f32 seed plus one f64 Newton
+    /// step) against the correctly rounded f64 sqrt, over GNSS ranges
+    /// (1.9e7-2.7e7 m) and short ones: within 2e-7 m; the f64 engine's is
+    /// the f64 sqrt itself.
+    #[test]
+    fn f32_range_sqrt_is_f64_accurate() {
+        const RANGE_TOL_M: f64 = 2e-7;
+        let mut r = 1.0f64;
+        while r < 3.0e7 {
+            for f in [1.0, 1.000_000_123, 1.37, 1.999_999_9] {
+                let x = r * f;
+                let r2 = x * x;
+                assert!(
+                    (f32::range_sqrt(r2) - libm::sqrt(r2)).abs() < RANGE_TOL_M,
+                    "{x}"
+                );
+                assert_eq!(f64::range_sqrt(r2), libm::sqrt(r2));
+            }
+            r *= 1.7;
+        }
+        for k in 0..1000 {
+            let x = 1.9e7 + k as f64 * 8_000.123_456;
+            assert!((f32::range_sqrt(x * x) - x).abs() < RANGE_TOL_M, "{x}");
+        }
+        assert!(f32::range_sqrt(f64::NAN).is_nan());
+        assert_eq!(f32::range_sqrt(0.0), 0.0);
     }
 }

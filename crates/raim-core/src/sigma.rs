@@ -1,6 +1,8 @@
 //! Elevation-dependent ranging sigma (SPEC §1), DO-229 style:
 //! sigma^2 = sigma_ura^2 + sigma_iono(el)^2 + sigma_tropo(el)^2 + sigma_user(el)^2.
 
+use crate::real::Real;
+
 /// Parameters of the elevation model. Defaults are DO-229D's airborne
 /// accuracy designator A receiver, a 0.75 m URA (ARAIM ADD baseline), and a
 /// single-frequency Klobuchar residual of 2.5 m vertical (documented in
@@ -33,29 +35,28 @@ impl Default for SigmaModel {
 impl SigmaModel {
     /// One-sigma ranging error at elevation `el_rad`, m.
     pub fn sigma_m(&self, el_rad: f64) -> f64 {
-        let el = if el_rad > self.min_elevation_rad {
-            el_rad
-        } else {
-            self.min_elevation_rad
-        };
-        let s = libm::sin(el);
+        self.sigma::<f64>(el_rad)
+    }
+
+    /// [`Self::sigma_m`] in the precision `T` (the same operations; the
+    /// engines evaluate it in their statistics precision, docs/CORE.md
+    /// "Precision": a sigma needs no more than f32's 6e-8 relative).
+    pub fn sigma<T: Real>(&self, el_rad: T) -> T {
+        let min_el = T::of(self.min_elevation_rad);
+        let el = if el_rad > min_el { el_rad } else { min_el };
+        let s = el.sin_m();
         // DO-229D A.4.2.4: tropospheric residual, 0.12 m at zenith.
-        let tropo = 0.12 * 1.001 / libm::sqrt(0.002_001 + s * s);
+        let tropo = T::of(0.12) * T::of(1.001) / (T::of(0.002_001) + s * s).sqrt();
         // DO-229D J.2.4: airborne multipath 0.13 + 0.53 exp(-el_deg / 10).
-        let el_deg = el * 180.0 / core::f64::consts::PI;
-        let multipath = 0.13 + 0.53 * libm::exp(-el_deg / 10.0);
+        let el_deg = el * T::of(180.0) / T::of(core::f64::consts::PI);
+        let multipath = T::of(0.13) + T::of(0.53) * (-el_deg / T::of(10.0)).exp_m();
         // Ionospheric obliquity factor, thin shell at 350 km (DO-229D A.4.4.10.4).
-        let re_ratio = 6378.1363 / (6378.1363 + 350.0);
-        let c = re_ratio * libm::cos(el);
-        let obliquity = 1.0 / libm::sqrt(1.0 - c * c);
-        let iono = self.iono_vertical_m * obliquity;
-        libm::sqrt(
-            self.ura_m * self.ura_m
-                + iono * iono
-                + tropo * tropo
-                + multipath * multipath
-                + self.noise_m * self.noise_m,
-        )
+        let re_ratio = T::of(6378.1363) / (T::of(6378.1363) + T::of(350.0));
+        let c = re_ratio * el.cos_m();
+        let obliquity = T::one() / (T::one() - c * c).sqrt();
+        let iono = T::of(self.iono_vertical_m) * obliquity;
+        let (ura, noise) = (T::of(self.ura_m), T::of(self.noise_m));
+        (ura * ura + iono * iono + tropo * tropo + multipath * multipath + noise * noise).sqrt()
     }
 }
 

@@ -5,7 +5,8 @@
 use crate::config::Config;
 use crate::error::RaimError;
 use crate::frames::{
-    ecef_to_geodetic, ecef_to_geodetic_from, enu_rotation, rotate, unrotate, Geodetic,
+    bowring_latitude_rad, ecef_to_geodetic_from, enu_rotation, rotate, unrotate, Geodetic,
+    WGS84_A_M, WGS84_F,
 };
 use crate::linalg::parity::Parity;
 use crate::linalg::qr::Householder;
@@ -13,6 +14,7 @@ use crate::measurement::{
     Epoch, LinearObservation, Observations, RangeObservation, SatId, System, MAX_STATES,
     MAX_SYSTEMS,
 };
+use crate::real::{Real, Stat};
 use nalgebra::Matrix3;
 
 /// Below this norm (m) an a-priori position is "unknown" for the elevation
@@ -37,6 +39,11 @@ pub const RELINEARISE_M: f64 = 100.0;
 /// [`RELINEARISE_M`] makes, rad (frame tilt plus line-of-sight turn).
 pub const RELINEARISE_EL_RAD: f64 = RELINEARISE_M / 6.356e6 + RELINEARISE_M / 1.9e7;
 
+/// The reported position's geodetic coordinates come from the final
+/// linearisation's by a first-order update when the position is within this
+/// distance of it (m): see `Linearisation::geodetic_of`.
+pub const GEODETIC_LINEAR_MAX_M: f64 = 1.0;
+
 /// After a Gauss-Newton step s, the next step is of the order of the
 /// model's curvature times s^2, s^2 / (2 rho) with rho >= 1.9e7 m the range,
 /// times the geometry's amplification (a few). When s^2 is below
@@ -47,11 +54,52 @@ pub const RELINEARISE_EL_RAD: f64 = RELINEARISE_M / 6.356e6 + RELINEARISE_M / 1.
 /// one more parity iteration, never a different answer.
 pub const PARITY_STEP_SCALE_M: f64 = 5.0e6;
 
+/// The rounding floor of a Gauss-Newton step computed in precision `T`,
+/// as a length scale (m) times `T::EPS`. The residuals are formed in f64 at
+/// every iteration (so the iteration is an iterative refinement and the
+/// position converges), but the step solved from them in `T` carries an
+/// error of about eps x cond(H) x |r| that does not shrink with the step:
+/// |r| up to 1e3 m (a large fault) and cond(H) up to 100 give eps x 1e5 m.
+/// In f32 that is 1.2e-2 m, above the default `convergence_m` (1e-4 m),
+/// which an f32 step could then never reach; in f64 it is 2.2e-11 m, below
+/// every configurable `convergence_m`, so the f64 engine is unchanged.
+pub const STEP_ROUNDING_SCALE_M: f64 = 1.0e5;
+
+/// Gauss-Newton in a precision coarser than f64 has stalled at its
+/// rounding floor, and has converged, when a parity iteration's step (m)
+/// after another parity iteration is below [`STALL_MAX_M`] and no smaller
+/// than this fraction of the previous step: in the quadratic regime a real
+/// step shrinks by orders of magnitude per iteration, so a step that does
+/// not halve is rounding noise (eps x cond(H) x |r|, which on a weak f32
+/// geometry reaches centimetres: 3 epochs in 10^6 of the equivalence
+/// Monte Carlo stalled at 4-13 cm, docs/F32_EQUIVALENCE.md).
+pub const STALL_RATIO: f64 = 0.5;
+
+/// The largest step (m) that can count as stalled at the rounding floor
+/// (a diverging iteration is never accepted: its steps grow).
+pub const STALL_MAX_M: f64 = 1.0;
+
+/// The step (m) below which Gauss-Newton in precision `T` has converged:
+/// `convergence_m`, floored at the step's rounding noise
+/// ([`STEP_ROUNDING_SCALE_M`]). The reported position is the last model's
+/// least-squares estimate, within about the f32 noise (1e-4 m) of the f64
+/// one; the parity quantities do not depend on where in that neighbourhood
+/// the model is linearised (the difference lies in the column space of H).
+pub fn convergence_bound_m<T: Real>(convergence_m: f64) -> f64 {
+    let floor = T::EPS.to_f64() * STEP_ROUNDING_SCALE_M;
+    if convergence_m > floor {
+        convergence_m
+    } else {
+        floor
+    }
+}
+
 /// One solved subset of an epoch's satellites: the parity quantities of its
-/// whitened ENU model, and the position.
+/// whitened ENU model (in precision `T`, the build's [`Stat`] by default),
+/// and the position, elevations and sigmas (f64: docs/CORE.md, "Precision").
 #[derive(Debug, Clone)]
-pub struct Solution<const N: usize> {
-    pub parity: Parity<N>,
+pub struct Solution<const N: usize, T: Real = Stat> {
+    pub parity: Parity<N, T>,
     /// Row k of the model is the epoch's satellite `source[k]`.
     pub source: [usize; N],
     pub ids: [SatId; N],
@@ -73,7 +121,7 @@ pub struct Solution<const N: usize> {
     pub iterations: u32,
 }
 
-impl<const N: usize> Solution<N> {
+impl<const N: usize, T: Real> Solution<N, T> {
     /// An empty solution, to be filled by [`solve_into`].
     pub fn empty() -> Self {
         Solution {
@@ -131,7 +179,7 @@ fn clock_column(cols: &[Option<System>; MAX_SYSTEMS], sys: System) -> Option<usi
 /// Where Gauss-Newton starts, and what it may reuse (docs/CORE.md, "Do the
 /// work once").
 #[derive(Debug, Clone, Copy)]
-pub enum Start<'a, const N: usize> {
+pub enum Start<'a, const N: usize, T: Real = Stat> {
     /// From the epoch's a-priori position, or the Earth's centre.
     Cold,
     /// From a previous epoch's solution (the engine's warm start).
@@ -139,7 +187,7 @@ pub enum Start<'a, const N: usize> {
     /// From another solution of the *same* epoch (an FDE subset): its
     /// position and clocks, and its per-satellite elevations and sigmas,
     /// which stay valid while the point moves less than [`RELINEARISE_M`].
-    Sibling(&'a Solution<N>),
+    Sibling(&'a Solution<N, T>),
 }
 
 /// A position and receiver clocks to start Gauss-Newton from.
@@ -154,7 +202,7 @@ pub struct Fix {
 
 impl Fix {
     /// The fix of a pseudorange solution (none for the linearised form).
-    pub fn of<const N: usize>(time_s: f64, sol: &Solution<N>) -> Option<Fix> {
+    pub fn of<const N: usize, T: Real>(time_s: f64, sol: &Solution<N, T>) -> Option<Fix> {
         sol.position_ecef_m.map(|position_ecef_m| Fix {
             time_s,
             position_ecef_m,
@@ -163,12 +211,13 @@ impl Fix {
     }
 }
 
-/// Solve the subset `mask` (indexed like the epoch's satellites), cold.
+/// Solve the subset `mask` (indexed like the epoch's satellites), cold, in
+/// the build's precision [`Stat`] (any precision: [`solve_into`]).
 pub fn solve<const N: usize>(
     cfg: &Config,
     epoch: &Epoch<'_>,
     mask: &[bool; N],
-) -> Result<Solution<N>, RaimError> {
+) -> Result<Solution<N, Stat>, RaimError> {
     let mut out = Solution::empty();
     solve_into(cfg, epoch, mask, &mut out)?;
     Ok(out)
@@ -177,23 +226,23 @@ pub fn solve<const N: usize>(
 /// [`solve`] into existing storage: nothing N-sized is built on the stack
 /// but the model builder (the firmware's stack budget, BENCHMARKS.md). On
 /// error, `out` holds no usable solution.
-pub fn solve_into<const N: usize>(
+pub fn solve_into<const N: usize, T: Real>(
     cfg: &Config,
     epoch: &Epoch<'_>,
     mask: &[bool; N],
-    out: &mut Solution<N>,
+    out: &mut Solution<N, T>,
 ) -> Result<(), RaimError> {
     solve_from(cfg, epoch, mask, Start::Cold, out)
 }
 
 /// [`solve_into`] from a [`Start`]: a warm start from the last epoch's fix,
 /// or from a solution of the same epoch whose per-satellite model is reused.
-pub fn solve_from<const N: usize>(
+pub fn solve_from<const N: usize, T: Real>(
     cfg: &Config,
     epoch: &Epoch<'_>,
     mask: &[bool; N],
-    start: Start<'_, N>,
-    out: &mut Solution<N>,
+    start: Start<'_, N, T>,
+    out: &mut Solution<N, T>,
 ) -> Result<(), RaimError> {
     let sibling = match start {
         Start::Sibling(s) => Some(s),
@@ -212,8 +261,8 @@ pub fn solve_from<const N: usize>(
 
 /// The elevation and sigma of the epoch satellite `index` as a sibling
 /// solution of the same epoch has them (same line of sight, same model).
-fn sibling_model<const N: usize>(
-    sibling: Option<&Solution<N>>,
+fn sibling_model<const N: usize, T: Real>(
+    sibling: Option<&Solution<N, T>>,
     index: usize,
 ) -> Option<(f64, f64)> {
     let s = sibling?;
@@ -223,14 +272,14 @@ fn sibling_model<const N: usize>(
 
 /// The linearised form: one least-squares solve at the given point.
 #[inline(never)]
-fn solve_linear<const N: usize>(
+fn solve_linear<const N: usize, T: Real>(
     cfg: &Config,
     sats: &[LinearObservation],
     mask: &[bool; N],
-    sibling: Option<&Solution<N>>,
-    out: &mut Solution<N>,
+    sibling: Option<&Solution<N, T>>,
+    out: &mut Solution<N, T>,
 ) -> Result<(), RaimError> {
-    let mut b = Builder::<N>::new(
+    let mut b = Builder::<N, T>::new(
         sats.iter()
             .zip(mask.iter())
             .filter(|(_, m)| **m)
@@ -241,25 +290,28 @@ fn solve_linear<const N: usize>(
         .enumerate()
         .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
     {
-        let norm = libm::sqrt(s.los_enu.iter().map(|v| v * v).sum::<f64>());
-        let u = [
-            s.los_enu[0] / norm,
-            s.los_enu[1] / norm,
-            s.los_enu[2] / norm,
-        ];
+        // The unit line of sight, its elevation and the sigma model in `T`
+        // (the same operations as in f64).
+        let l = s.los_enu.map(T::of);
+        let norm = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+        let u = [l[0] / norm, l[1] / norm, l[2] / norm];
         // The elevation and sigma depend on the line of sight alone, so a
         // sibling's are bit for bit what would be computed here.
         let (el, sigma) = match sibling_model(sibling, i) {
             Some(v) => v,
             None => {
-                let el = crate::frames::elevation_rad(u);
-                (el, s.sigma_m.unwrap_or_else(|| cfg.sigma_model.sigma_m(el)))
+                let el = crate::frames::elevation(u);
+                let sigma = match s.sigma_m {
+                    Some(v) => v,
+                    None => cfg.sigma_model.sigma(el).to_f64(),
+                };
+                (el.to_f64(), sigma)
             }
         };
         b.push(i, s.id, u, s.residual_m, sigma, el)?;
     }
     b.parity_into(&mut out.parity)?;
-    let dx = *out.parity.dx();
+    let dx = out.parity.dx().map(T::to_f64);
     let mut clock_m = [None; MAX_SYSTEMS];
     for (j, sys) in b.cols.iter().enumerate() {
         if let (Some(sys), Some(v)) = (sys, dx.get(3 + j)) {
@@ -290,14 +342,56 @@ pub struct Linearisation {
 
 impl Linearisation {
     fn at(point_ecef_m: [f64; 3], near: Option<&Linearisation>) -> Self {
-        let geodetic = match near {
-            Some(l) => ecef_to_geodetic_from(point_ecef_m, l.geodetic.lat_rad),
-            None => ecef_to_geodetic(point_ecef_m),
+        // The same fixed point either way: started from the previous
+        // latitude, or from Bowring's closed form (1-2 iterations instead
+        // of 10).
+        let lat0_rad = match near {
+            Some(l) => l.geodetic.lat_rad,
+            None => bowring_latitude_rad(point_ecef_m),
         };
+        let geodetic = ecef_to_geodetic_from(point_ecef_m, lat0_rad);
         Linearisation {
             point_ecef_m,
             geodetic,
             rotation: enu_rotation(&geodetic),
+        }
+    }
+
+    /// The geodetic coordinates of a point `x` within
+    /// [`GEODETIC_LINEAR_MAX_M`] of this one, by the first-order update
+    /// through the local frame: lat += dN / (M + h), lon += dE / ((N + h)
+    /// cos lat), h += dU. The neglected second-order terms are below
+    /// d^2 / R = 1.6e-7 m (d <= 1 m), far under the iterative conversion's
+    /// own tolerance (`GEODETIC_STEP_TOL_RAD`, 0.6 mm). Further away, or
+    /// near a pole, the iterative conversion.
+    fn geodetic_of(&self, x: [f64; 3]) -> Geodetic {
+        let d = [
+            x[0] - self.point_ecef_m[0],
+            x[1] - self.point_ecef_m[1],
+            x[2] - self.point_ecef_m[2],
+        ];
+        let dist = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        // Rows E, N, U; sin and cos of the latitude are U_z and N_z.
+        let r = &self.rotation;
+        let (sl, cl) = (r[(2, 2)], r[(1, 2)]);
+        let g = self.geodetic;
+        let pi = core::f64::consts::PI;
+        if !(dist <= GEODETIC_LINEAR_MAX_M) || !(cl > 1e-6) {
+            return ecef_to_geodetic_from(x, g.lat_rad);
+        }
+        let [de, dn, du] = rotate(r, d);
+        let e2 = WGS84_F * (2.0 - WGS84_F);
+        let w = libm::sqrt(1.0 - e2 * sl * sl);
+        let n_rad = WGS84_A_M / w;
+        let m_rad = n_rad * (1.0 - e2) / (w * w);
+        let lon_rad = g.lon_rad + de / ((n_rad + g.height_m) * cl);
+        if !(lon_rad > -pi && lon_rad <= pi) {
+            return ecef_to_geodetic_from(x, g.lat_rad);
+        }
+        Geodetic {
+            lat_rad: g.lat_rad + dn / (m_rad + g.height_m),
+            lon_rad,
+            height_m: g.height_m + du,
         }
     }
 
@@ -327,14 +421,15 @@ impl Linearisation {
 /// position is its least-squares estimate (the point plus the last step, <
 /// `convergence_m`), and `correction_enu_m` is zero.
 #[inline(never)]
-fn gauss_newton<const N: usize>(
+fn gauss_newton<const N: usize, T: Real>(
     cfg: &Config,
     sats: &[RangeObservation],
     apriori_m: Option<[f64; 3]>,
     mask: &[bool; N],
-    start: Start<'_, N>,
-    out: &mut Solution<N>,
+    start: Start<'_, N, T>,
+    out: &mut Solution<N, T>,
 ) -> Result<(), RaimError> {
+    let converged_m = convergence_bound_m::<T>(cfg.convergence_m);
     let selected = || {
         sats.iter()
             .enumerate()
@@ -343,10 +438,12 @@ fn gauss_newton<const N: usize>(
     // One builder for all iterations: its rows are the selected
     // satellites in order, and its per-row elevations and sigmas are the
     // cache, valid while `cached` (same linearisation, on the surface).
-    let mut b = Builder::<N>::new(selected().map(|(_, s)| s.id.system));
+    let mut b = Builder::<N, T>::new(selected().map(|(_, s)| s.id.system));
     let cols = b.cols;
     let mut cached = false;
     let mut lin: Option<Linearisation> = None;
+    // The ECEF-to-ENU rotation of `lin` in `T`, for the lines of sight.
+    let mut rot = Matrix3::<T>::identity();
     let (mut x, start_clock) = match start {
         Start::Cold => (apriori_m.unwrap_or([0.0; 3]), [None; MAX_SYSTEMS]),
         Start::Fix(f) => (f.position_ecef_m, f.clock_m),
@@ -382,6 +479,7 @@ fn gauss_newton<const N: usize>(
         }
     }
     let mut last_step_m = f64::INFINITY;
+    let mut last_full = false;
     let mut iterations = 0;
     while iterations < cfg.max_iterations {
         iterations += 1;
@@ -396,6 +494,9 @@ fn gauss_newton<const N: usize>(
             cached = false;
         }
         let frame = if on_surface { lin } else { None };
+        if let Some(l) = &frame {
+            rot = l.rotation.map(T::of);
+        }
         let reuse = cached && frame.is_some();
         b.n = 0;
         for (k, (i, s)) in selected().enumerate() {
@@ -404,7 +505,7 @@ fn gauss_newton<const N: usize>(
                 s.position_m[1] - x[1],
                 s.position_m[2] - x[2],
             ];
-            let range = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            let range = T::range_sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             if !(range > MIN_RANGE_M) {
                 return Err(RaimError::OutOfRange {
                     field: "range_m",
@@ -413,18 +514,25 @@ fn gauss_newton<const N: usize>(
                     max: f64::INFINITY,
                 });
             }
-            let u_ecef = [d[0] / range, d[1] / range, d[2] / range];
+            // The unit line of sight in `T` (the policy: only the range
+            // and the residual need f64).
+            let r_t = T::of(range);
+            let u_ecef = [T::of(d[0]) / r_t, T::of(d[1]) / r_t, T::of(d[2]) / r_t];
             // On the surface, use ENU so the model is final; near the
             // centre, ECEF axes are as good as any (position columns
             // are rotated back below) and the weights are unit.
             let (u, el, sigma) = match &frame {
-                Some(l) => {
-                    let u = rotate(&l.rotation, u_ecef);
+                Some(_) => {
+                    let u = rotate(&rot, u_ecef);
                     let (el, sigma) = match (reuse, b.el.get(k), b.sigma.get(k)) {
                         (true, Some(&el), Some(&sigma)) => (el, sigma),
                         _ => {
-                            let el = crate::frames::elevation_rad(u);
-                            (el, s.sigma_m.unwrap_or_else(|| cfg.sigma_model.sigma_m(el)))
+                            let el = crate::frames::elevation(u);
+                            let sigma = match s.sigma_m {
+                                Some(v) => v,
+                                None => cfg.sigma_model.sigma(el).to_f64(),
+                            };
+                            (el.to_f64(), sigma)
                         }
                     };
                     (u, el, sigma)
@@ -440,15 +548,14 @@ fn gauss_newton<const N: usize>(
             b.push(i, s.id, u, z, sigma, el)?;
         }
         cached = frame.is_some();
-        let full =
-            frame.is_some() && last_step_m * last_step_m < cfg.convergence_m * PARITY_STEP_SCALE_M;
+        let full = frame.is_some() && last_step_m * last_step_m < converged_m * PARITY_STEP_SCALE_M;
         // A step needs only the least-squares solution; the parity
         // quantities come once, with the final model.
         let dx = if full {
             b.parity_into(&mut out.parity)?;
-            *out.parity.dx()
+            out.parity.dx().map(T::to_f64)
         } else {
-            b.least_squares()?
+            b.least_squares()?.map(T::to_f64)
         };
         let step_local = [dx[0], dx[1], dx[2]];
         let step = match &frame {
@@ -456,12 +563,20 @@ fn gauss_newton<const N: usize>(
             None => step_local,
         };
         let step_m = libm::sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2]);
-        if let (Some(l), true) = (frame, step_m < cfg.convergence_m) {
+        // Converged: the step is below the bound, or (an engine in a
+        // precision coarser than f64, on a weak geometry) two consecutive
+        // parity iterations have stalled at the rounding floor.
+        let stalled = T::EPS.to_f64() > f64::EPSILON
+            && full
+            && last_full
+            && step_m < STALL_MAX_M
+            && !(step_m < STALL_RATIO * last_step_m);
+        if let (Some(l), true) = (frame, step_m < converged_m || stalled) {
             // Converged: this iteration's model, at x, is the solution.
             if !full {
                 b.parity_into(&mut out.parity)?;
             }
-            let dx = *out.parity.dx();
+            let dx = out.parity.dx().map(T::to_f64);
             let mut clock_m = [None; MAX_SYSTEMS];
             for (j, sys) in cols.iter().enumerate() {
                 if let Some(sys) = sys {
@@ -476,7 +591,7 @@ fn gauss_newton<const N: usize>(
             let x_ls = [x[0] + step[0], x[1] + step[1], x[2] + step[2]];
             out.clocks = cols;
             out.position_ecef_m = Some(x_ls);
-            out.geodetic = Some(ecef_to_geodetic_from(x_ls, l.geodetic.lat_rad));
+            out.geodetic = Some(l.geodetic_of(x_ls));
             out.linearisation = Some(l);
             out.correction_enu_m = [0.0; 3];
             out.clock_m = clock_m;
@@ -490,6 +605,7 @@ fn gauss_newton<const N: usize>(
             *c += dx.get(3 + j).copied().unwrap_or(0.0);
         }
         last_step_m = step_m;
+        last_full = full;
         if !last_step_m.is_finite() {
             break;
         }
@@ -500,28 +616,29 @@ fn gauss_newton<const N: usize>(
     })
 }
 
-/// Accumulates whitened rows [-u, onehot] / sigma and z / sigma.
-struct Builder<const N: usize> {
+/// Accumulates whitened rows [-u, onehot] / sigma and z / sigma, in `T`
+/// (the residual z itself is formed in f64 by the caller).
+struct Builder<const N: usize, T: Real> {
     n: usize,
     m: usize,
     cols: [Option<System>; MAX_SYSTEMS],
-    h: [[f64; N]; MAX_STATES],
-    z: [f64; N],
+    h: [[T; N]; MAX_STATES],
+    z: [T; N],
     source: [usize; N],
     ids: [SatId; N],
     sigma: [f64; N],
     el: [f64; N],
 }
 
-impl<const N: usize> Builder<N> {
+impl<const N: usize, T: Real> Builder<N, T> {
     fn new(systems: impl Iterator<Item = System>) -> Self {
         let (cols, k) = clock_columns(systems);
         Builder {
             n: 0,
             m: 3 + k,
             cols,
-            h: [[0.0; N]; MAX_STATES],
-            z: [0.0; N],
+            h: [[T::zero(); N]; MAX_STATES],
+            z: [T::zero(); N],
             source: [0; N],
             ids: [SatId::default(); N],
             sigma: [0.0; N],
@@ -533,7 +650,7 @@ impl<const N: usize> Builder<N> {
         &mut self,
         index: usize,
         id: SatId,
-        u: [f64; 3],
+        u: [T; 3],
         z: f64,
         sigma: f64,
         el: f64,
@@ -551,24 +668,27 @@ impl<const N: usize> Builder<N> {
                 sigma_m: sigma,
             });
         }
-        let w = 1.0 / sigma;
+        // The weight in `T`; in f64 the same operations as before.
+        let wt = T::one() / T::of(sigma);
         let clock = clock_column(&self.cols, id.system).map(|c| 3 + c);
         for (j, col) in self.h.iter_mut().enumerate() {
             let v = match j {
-                0..=2 => -u.get(j).copied().unwrap_or(0.0) * w,
-                _ if Some(j) == clock => w,
-                _ => 0.0,
+                0..=2 => -u.get(j).copied().unwrap_or(T::zero()) * wt,
+                _ if Some(j) == clock => wt,
+                _ => T::zero(),
             };
             if let Some(cell) = col.get_mut(k) {
                 *cell = v;
             }
+        }
+        if let Some(c) = self.z.get_mut(k) {
+            *c = T::of(z) * wt;
         }
         let set = |a: &mut [f64; N], v: f64| {
             if let Some(c) = a.get_mut(k) {
                 *c = v;
             }
         };
-        set(&mut self.z, z * w);
         set(&mut self.sigma, sigma);
         set(&mut self.el, el);
         if let Some(c) = self.source.get_mut(k) {
@@ -582,12 +702,12 @@ impl<const N: usize> Builder<N> {
     }
 
     #[inline(never)]
-    fn parity_into(&self, out: &mut Parity<N>) -> Result<(), RaimError> {
+    fn parity_into(&self, out: &mut Parity<N, T>) -> Result<(), RaimError> {
         out.compute(&self.h, &self.z, self.n, self.m)
     }
 
     /// Copy the per-row bookkeeping into a solution.
-    fn fill(&self, out: &mut Solution<N>) {
+    fn fill(&self, out: &mut Solution<N, T>) {
         out.source = self.source;
         out.ids = self.ids;
         out.sigma_m = self.sigma;
@@ -597,7 +717,7 @@ impl<const N: usize> Builder<N> {
 
     /// The least-squares correction alone (a Gauss-Newton step).
     #[inline(never)]
-    fn least_squares(&self) -> Result<[f64; MAX_STATES], RaimError> {
+    fn least_squares(&self) -> Result<[T; MAX_STATES], RaimError> {
         if self.n <= self.m {
             return Err(RaimError::TooFewSatellites {
                 have: self.n,
@@ -607,7 +727,7 @@ impl<const N: usize> Builder<N> {
         let qr = Householder::factor(&self.h, self.n, self.m)?;
         let mut z = self.z;
         qr.apply_ut(&mut z);
-        let mut rhs = [0.0; MAX_STATES];
+        let mut rhs = [T::zero(); MAX_STATES];
         for (r, v) in rhs.iter_mut().zip(z.iter()).take(self.m) {
             *r = *v;
         }

@@ -14,9 +14,10 @@ pub fn session() -> QemuSession {
     QemuSession::start(elf).expect("qemu-system-arm with the firmware")
 }
 
-/// The host core's result for an epoch, in wire form.
+/// The host core's result for an epoch, in wire form, in the firmware's
+/// precision ([`host_tests::Device`]).
 pub fn host_result(cfg: &Config, epoch: &Epoch<'_>) -> Result<WireResult, RaimError> {
-    Raim::<CAPACITY>::new()
+    Raim::<CAPACITY, host_tests::Device>::new()
         .process(cfg, epoch)
         .map(|r| WireResult::from_result(&r))
 }

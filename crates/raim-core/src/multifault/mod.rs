@@ -335,9 +335,9 @@ pub struct MultifaultReport {
     pub q_min: Option<f64>,
 }
 
-fn fault_set<T: Real, const N: usize>(
+fn fault_set<T: Real, P: Real, const N: usize>(
     fit: &SubsetFit<T>,
-    sol: &Solution<N>,
+    sol: &Solution<N, P>,
     dof: usize,
 ) -> FaultSet {
     let (rows, k) = covering::members(fit.set);
@@ -369,10 +369,10 @@ fn fault_set<T: Real, const N: usize>(
 /// [`Stat`]: 17 KB at N = 32 in f64, 8.5 KB in f32). Kept out of the
 /// snapshot engine so the default FDE pays nothing for it.
 #[derive(Debug, Clone, Default)]
-pub struct Scratch<const N: usize> {
-    pub model: ResidualModel<Stat, N>,
-    pub ws: Workspace<Stat, N>,
-    pub group: GroupFit<Stat, N>,
+pub struct Scratch<const N: usize, T: Real = Stat> {
+    pub model: ResidualModel<T, N>,
+    pub ws: Workspace<T, N>,
+    pub group: GroupFit<T, N>,
 }
 
 /// The search's fixed arguments, for the second pass.
@@ -393,19 +393,19 @@ fn s_args(covering: &Covering, t_max: usize, budget: u16) -> SearchArgs<'_> {
 /// The least-RSS set of more than `best.count` satellites that does not
 /// contain `best.set` and is consistent at level pwe (its own dof), if any.
 #[inline(never)]
-fn larger_alternative<const N: usize>(
+fn larger_alternative<const N: usize, T: Real>(
     cfg: &Config,
     args: &SearchArgs<'_>,
-    best: SubsetFit<Stat>,
+    best: SubsetFit<T>,
     dof: usize,
-    scratch: &mut Scratch<N>,
-) -> Result<Option<SubsetFit<Stat>>, RaimError> {
+    scratch: &mut Scratch<N, T>,
+) -> Result<Option<SubsetFit<T>>, RaimError> {
     let found = search_where(
         &scratch.model,
         args.covering,
         args.t_max,
         args.budget,
-        Stat::of(cfg.min_s_ii),
+        T::of(cfg.min_s_ii),
         &mut scratch.ws,
         &mut scratch.group,
         |_, _| {},
@@ -430,15 +430,15 @@ fn larger_alternative<const N: usize>(
 /// [`run`] with its scratch on this function's own stack frame (out of
 /// line, so the default FDE's frames do not reserve it).
 #[inline(never)]
-pub fn run_with_own_scratch<const N: usize>(
+pub fn run_with_own_scratch<const N: usize, P: Real>(
     cfg: &Config,
     t_max: u8,
     group_budget: u16,
     thresholds: &mut Thresholds<N>,
     epoch: &Epoch<'_>,
-    out: &mut FdeOutcome<N>,
+    out: &mut FdeOutcome<N, P>,
 ) -> Result<Option<MultifaultReport>, RaimError> {
-    let mut scratch = Scratch::default();
+    let mut scratch = Scratch::<N, P>::default();
     run(
         cfg,
         t_max,
@@ -457,14 +457,14 @@ pub fn run_with_own_scratch<const N: usize>(
 /// on with more satellites. Fills the same outcome as [`fde::run`] (so the
 /// snapshot result is built the same way) and returns the report.
 #[inline(never)]
-pub fn run<const N: usize>(
+pub fn run<const N: usize, P: Real>(
     cfg: &Config,
     t_max: u8,
     group_budget: u16,
     thresholds: &mut Thresholds<N>,
     epoch: &Epoch<'_>,
-    out: &mut FdeOutcome<N>,
-    scratch: &mut Scratch<N>,
+    out: &mut FdeOutcome<N, P>,
+    scratch: &mut Scratch<N, P>,
 ) -> Result<Option<MultifaultReport>, RaimError> {
     let before = fde::test(cfg, thresholds, &out.solution)?;
     out.test = before;
@@ -513,7 +513,7 @@ pub fn run<const N: usize>(
         &covering,
         t_eff,
         usize::from(group_budget),
-        Stat::of(cfg.min_s_ii),
+        P::of(cfg.min_s_ii),
         &mut scratch.ws,
         &mut scratch.group,
         |_, _| {},
@@ -537,13 +537,13 @@ pub fn run<const N: usize>(
         repaired: s.repaired,
         q_min: s.q_min.map(|(q, _)| q.to_f64()),
     };
-    let id_of = |sol: &Solution<N>, set: SatSet| {
+    let id_of = |sol: &Solution<N, P>, set: SatSet| {
         let (rows, _) = covering::members(set);
         rows.first()
             .and_then(|r| sol.ids.get(usize::from(*r)).copied())
     };
     let mut from = 1;
-    let mut scratch_solution = Solution::<N>::empty();
+    let mut scratch_solution = Solution::<N, P>::empty();
     loop {
         let verdict = decide(
             &s,
@@ -641,7 +641,7 @@ pub fn run<const N: usize>(
                         }
                     }
                 }
-                match solve_into::<N>(cfg, epoch, &mask, &mut scratch_solution) {
+                match solve_into(cfg, epoch, &mask, &mut scratch_solution) {
                     Ok(()) => {}
                     Err(RaimError::RankDeficient { .. })
                     | Err(RaimError::TooFewSatellites { .. }) => {

@@ -96,7 +96,12 @@ impl<T: Real, const N: usize> ResidualModel<T, N> {
 
     /// From a parity space (SPEC §2) through its public accessors only: the
     /// column S e_j = U2 (U2^T e_j), the residuals, and D^2 = p^T p.
-    pub fn fill_from_parity(&mut self, parity: &Parity<N>) -> Result<(), MultifaultError> {
+    /// `P` is the parity space's precision (the engine's); its values are
+    /// converted to `T` here.
+    pub fn fill_from_parity<P: Real>(
+        &mut self,
+        parity: &Parity<N, P>,
+    ) -> Result<(), MultifaultError> {
         let n = parity.rows();
         if n > MAX_SATS {
             return Err(MultifaultError::CapacityExceeded {
@@ -105,27 +110,27 @@ impl<T: Real, const N: usize> ResidualModel<T, N> {
             });
         }
         self.n = n;
-        let mut e = [0.0f64; N];
-        let mut y = [0.0f64; N];
+        let mut e = [P::zero(); N];
+        let mut y = [P::zero(); N];
         for j in 0..n {
             if let Some(v) = e.get_mut(j) {
-                *v = 1.0;
+                *v = P::one();
             }
             let k = parity.project(&e, &mut y);
             let col = parity.lift(y.get(..k).unwrap_or(&[]));
             if let Some(v) = e.get_mut(j) {
-                *v = 0.0;
+                *v = P::zero();
             }
             for (row, c) in self.s.iter_mut().zip(col.iter()).take(n) {
                 if let Some(v) = row.get_mut(j) {
-                    *v = T::of(*c);
+                    *v = T::of(c.to_f64());
                 }
             }
         }
         for (dst, v) in self.r.iter_mut().zip(parity.residuals()) {
-            *dst = T::of(*v);
+            *dst = T::of(v.to_f64());
         }
-        self.d2 = T::of(parity.sse());
+        self.d2 = T::of(parity.sse().to_f64());
         Ok(())
     }
 

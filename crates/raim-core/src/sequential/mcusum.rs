@@ -28,6 +28,7 @@ use crate::config::{Carry, FiRule};
 use crate::error::RaimError;
 use crate::linalg::parity::Parity;
 use crate::measurement::SatId;
+use crate::real::{Real, Stat};
 use crate::sequential::mcusum_table as table;
 use crate::snapshot::lraim::{self, Candidate};
 
@@ -51,25 +52,30 @@ const K_MATCH_TOL: f64 = 1e-9;
 /// One Crosier step in place on the parity-space state `s` (length d) with
 /// the observation `y` (length d). Returns (C_t, D_t). A NaN observation
 /// gives a NaN state and statistic, which alarms (`!(D < h)`).
-pub fn crosier_step(s: &mut [f64], y: &[f64], k: f64) -> (f64, f64) {
-    let mut c2 = 0.0;
+pub fn crosier_step<T: Real>(s: &mut [T], y: &[T], k: T) -> (T, T) {
+    let mut c2 = T::zero();
     for (si, yi) in s.iter_mut().zip(y.iter()) {
         *si += *yi;
         c2 += *si * *si;
     }
-    let c = libm::sqrt(c2);
+    let c = c2.sqrt();
     if c <= k {
         for si in s.iter_mut() {
-            *si = 0.0;
+            *si = T::zero();
         }
-        (c, 0.0)
+        (c, T::zero())
     } else {
-        let shrink = 1.0 - k / c;
+        let shrink = T::one() - k / c;
         for si in s.iter_mut() {
             *si *= shrink;
         }
         (c, c - k)
     }
+}
+
+/// The Euclidean norm, in `T`.
+fn norm<'a, T: Real>(v: impl Iterator<Item = &'a T>) -> T {
+    v.fold(T::zero(), |acc, x| acc + *x * *x).sqrt()
 }
 
 /// Check the MCUSUM settings against the device table: k must be one of
@@ -187,10 +193,11 @@ pub struct Held {
 
 /// The MCUSUM state that lives across epochs: v = U2 S_t in measurement
 /// space (whitened, sigma units), indexed by satellite, and the satellites
-/// held excluded after MCUSUM alarms.
+/// held excluded after MCUSUM alarms. The vector is in the precision `T`
+/// of the statistics path.
 #[derive(Debug, Clone)]
-pub struct Mcusum<const N: usize> {
-    v: [f64; N],
+pub struct Mcusum<const N: usize, T: Real = Stat> {
+    v: [T; N],
     ids: [SatId; N],
     n: usize,
     /// Dimension and threshold of the last update (0 / NaN before the first).
@@ -199,10 +206,10 @@ pub struct Mcusum<const N: usize> {
     held: heapless::Vec<Held, MAX_HELD>,
 }
 
-impl<const N: usize> Default for Mcusum<N> {
+impl<const N: usize, T: Real> Default for Mcusum<N, T> {
     fn default() -> Self {
         Mcusum {
-            v: [0.0; N],
+            v: [T::zero(); N],
             ids: [SatId::default(); N],
             n: 0,
             last_dim: 0,
@@ -212,7 +219,7 @@ impl<const N: usize> Default for Mcusum<N> {
     }
 }
 
-impl<const N: usize> Mcusum<N> {
+impl<const N: usize, T: Real> Mcusum<N, T> {
     pub fn new() -> Self {
         Self::default()
     }
@@ -220,7 +227,7 @@ impl<const N: usize> Mcusum<N> {
     /// Restart the CUSUM at S = 0 (the holds are kept).
     pub fn reset(&mut self) {
         self.n = 0;
-        self.v = [0.0; N];
+        self.v = [T::zero(); N];
         self.last_dim = 0;
         self.last_h = f64::NAN;
     }
@@ -233,7 +240,7 @@ impl<const N: usize> Mcusum<N> {
 
     /// The accumulated vector v = U2 S_t in measurement space, with the
     /// satellite of each entry.
-    pub fn state(&self) -> (&[SatId], &[f64]) {
+    pub fn state(&self) -> (&[SatId], &[T]) {
         (
             self.ids.get(..self.n).unwrap_or(&[]),
             self.v.get(..self.n).unwrap_or(&[]),
@@ -242,7 +249,7 @@ impl<const N: usize> Mcusum<N> {
 
     /// D = ||S|| = ||v|| (U2 has orthonormal columns).
     pub fn norm(&self) -> f64 {
-        libm::sqrt(self.v.iter().take(self.n).map(|x| x * x).sum::<f64>())
+        norm(self.v.iter().take(self.n)).to_f64()
     }
 
     fn same_set(&self, ids: &[SatId]) -> bool {
@@ -255,18 +262,18 @@ impl<const N: usize> Mcusum<N> {
     /// The previous state in this epoch's parity coordinates: v mapped onto
     /// `ids` (0 for satellites it does not hold), then U2^T. Written into
     /// `out` (first d entries). Returns false if the state was reset.
-    fn prior(&self, ids: &[SatId], parity: &Parity<N>, carry: Carry, out: &mut [f64; N]) -> bool {
-        *out = [0.0; N];
+    fn prior(&self, ids: &[SatId], parity: &Parity<N, T>, carry: Carry, out: &mut [T; N]) -> bool {
+        *out = [T::zero(); N];
         if self.n == 0 {
             return true;
         }
         if carry == Carry::Reset && !self.same_set(ids) {
             return false;
         }
-        let mut x = [0.0; N];
+        let mut x = [T::zero(); N];
         for (xi, id) in x.iter_mut().zip(ids.iter()) {
             if let Some(pos) = self.ids.iter().take(self.n).position(|o| o == id) {
-                *xi = self.v.get(pos).copied().unwrap_or(0.0);
+                *xi = self.v.get(pos).copied().unwrap_or(T::zero());
             }
         }
         parity.project(&x, out);
@@ -285,36 +292,36 @@ impl<const N: usize> Mcusum<N> {
     pub fn update(
         &mut self,
         ids: &[SatId],
-        parity: &Parity<N>,
+        parity: &Parity<N, T>,
         k: f64,
         carry: Carry,
         h: f64,
     ) -> Step {
         let d = parity.dof();
-        let mut s = [0.0; N];
+        let mut s = [T::zero(); N];
         let carried = self.prior(ids, parity, carry, &mut s);
         let sd = s.get_mut(..d).unwrap_or(&mut []);
         if d < self.last_dim && self.last_h > 0.0 && h < self.last_h {
-            let scale = h / self.last_h;
+            let scale = T::of(h / self.last_h);
             for x in sd.iter_mut() {
                 *x *= scale;
             }
         }
-        let prior_norm = libm::sqrt(sd.iter().map(|x| x * x).sum::<f64>());
-        let (c, statistic) = crosier_step(sd, parity.p(), k);
+        let prior_norm = norm(sd.iter()).to_f64();
+        let (c, statistic) = crosier_step(sd, parity.p(), T::of(k));
         self.store(ids, parity, sd);
         self.last_dim = d;
         self.last_h = h;
         Step {
-            c,
-            statistic,
+            c: c.to_f64(),
+            statistic: statistic.to_f64(),
             prior_norm,
             dim: d,
             carried,
         }
     }
 
-    fn store(&mut self, ids: &[SatId], parity: &Parity<N>, s: &[f64]) {
+    fn store(&mut self, ids: &[SatId], parity: &Parity<N, T>, s: &[T]) {
         self.v = parity.lift(s);
         let n = ids.len().min(N).min(parity.rows());
         for (dst, src) in self.ids.iter_mut().zip(ids.iter()).take(n) {
@@ -329,9 +336,9 @@ impl<const N: usize> Mcusum<N> {
     /// along that satellite's fault signature S e_j (the subset's parity space
     /// is the full one minus that direction), so the evidence for the
     /// identified fault is cleared and the rest is kept. Returns the new D.
-    pub fn carry_to(&mut self, ids: &[SatId], parity: &Parity<N>, carry: Carry) -> f64 {
+    pub fn carry_to(&mut self, ids: &[SatId], parity: &Parity<N, T>, carry: Carry) -> f64 {
         let d = parity.dof();
-        let mut s = [0.0; N];
+        let mut s = [T::zero(); N];
         self.prior(ids, parity, carry, &mut s);
         let sd = s.get(..d).unwrap_or(&[]);
         self.store(ids, parity, sd);
@@ -349,11 +356,11 @@ impl<const N: usize> Mcusum<N> {
     /// the last [`Self::update`]. Returns the best and the runner-up.
     pub fn identify(
         &self,
-        parity: &Parity<N>,
+        parity: &Parity<N, T>,
         min_s_ii: f64,
-    ) -> (Option<Candidate>, Option<Candidate>) {
+    ) -> (Option<Candidate<T>>, Option<Candidate<T>>) {
         let v = self.v.get(..self.n).unwrap_or(&[]);
-        lraim::rank_rows(FiRule::Mle, v, parity.s_ii(), min_s_ii)
+        lraim::rank_rows(FiRule::Mle, v, parity.s_ii(), T::of(min_s_ii))
     }
 
     /// Satellites held excluded.
@@ -442,7 +449,7 @@ mod tests {
     /// C = 0.5 <= k so S = 0.
     #[test]
     fn crosier_step_by_hand() {
-        let mut s = [0.0, 0.0];
+        let mut s = [0.0f64, 0.0];
         let (c, d) = crosier_step(&mut s, &[3.0, 4.0], 1.0);
         assert!((c - 5.0).abs() < ROUND_TOL && (d - 4.0).abs() < ROUND_TOL);
         assert!((s[0] - 2.4).abs() < ROUND_TOL && (s[1] - 3.2).abs() < ROUND_TOL);
@@ -458,7 +465,7 @@ mod tests {
     /// k / C, so the two disagree (SPEC §7.1 explains why the norm is right).
     #[test]
     fn misprinted_squared_form_differs() {
-        let mut s = [0.0, 0.0];
+        let mut s = [0.0f64, 0.0];
         let (_, d) = crosier_step(&mut s, &[3.0, 4.0], 1.0);
         let c2 = 25.0f64;
         let d_squared_form = 5.0 * (1.0 - 1.0 / c2);

@@ -11,10 +11,11 @@ pub mod mcusum_table;
 use crate::config::Config;
 use crate::error::RaimError;
 use crate::measurement::{Epoch, LinearObservation, Observations, RangeObservation, SatId};
+use crate::real::{Real, Stat};
 use crate::result::{Decision, EpochResult, SatelliteResult};
 use crate::snapshot::fde::{self, AlarmCause, Exclusion, FdeOutcome};
 use crate::snapshot::{protection, Snapshot};
-use crate::solve::{solve, Solution};
+use crate::solve::{solve_into, Solution};
 use mcusum::{Mcusum, MAX_HELD};
 
 /// Which test raised the epoch's alarm (SPEC §7.4: alarm if D_snap >= T or
@@ -69,11 +70,11 @@ pub struct McusumReport {
 
 /// The sequential engine: the MCUSUM state carried between epochs.
 #[derive(Debug, Clone, Default)]
-pub struct Sequential<const N: usize> {
-    pub(crate) mcusum: Mcusum<N>,
+pub struct Sequential<const N: usize, T: Real = Stat> {
+    pub(crate) mcusum: Mcusum<N, T>,
 }
 
-impl<const N: usize> Sequential<N> {
+impl<const N: usize, T: Real> Sequential<N, T> {
     pub fn new() -> Self {
         Sequential {
             mcusum: Mcusum::new(),
@@ -83,7 +84,7 @@ impl<const N: usize> Sequential<N> {
     /// earlier MCUSUM alarms are left out of the epoch first.
     pub fn process(
         &mut self,
-        snap: &mut Snapshot<N>,
+        snap: &mut Snapshot<N, T>,
         cfg: &Config,
         epoch: &Epoch<'_>,
     ) -> Result<EpochResult<N>, RaimError> {
@@ -118,7 +119,7 @@ impl<const N: usize> Sequential<N> {
     #[inline(never)]
     fn without_held_linear(
         &mut self,
-        snap: &mut Snapshot<N>,
+        snap: &mut Snapshot<N, T>,
         cfg: &Config,
         time_s: f64,
         sats: &[LinearObservation],
@@ -140,7 +141,7 @@ impl<const N: usize> Sequential<N> {
     #[inline(never)]
     fn without_held_ranges(
         &mut self,
-        snap: &mut Snapshot<N>,
+        snap: &mut Snapshot<N, T>,
         cfg: &Config,
         time_s: f64,
         sats: &[RangeObservation],
@@ -182,7 +183,7 @@ impl<const N: usize> Sequential<N> {
     /// MCUSUM alarm.
     fn sequential_on(
         &mut self,
-        snap: &mut Snapshot<N>,
+        snap: &mut Snapshot<N, T>,
         cfg: &Config,
         epoch: &Epoch<'_>,
         src: &[usize; N],
@@ -269,11 +270,11 @@ impl<const N: usize> Sequential<N> {
     #[allow(clippy::too_many_arguments)] // the engine, the epoch and its solution, and the two results it edits
     fn after_cusum_alarm(
         &mut self,
-        snap: &mut Snapshot<N>,
+        snap: &mut Snapshot<N, T>,
         cfg: &Config,
         epoch: &Epoch<'_>,
         to_input: &dyn Fn(usize) -> usize,
-        sol: &Solution<N>,
+        sol: &Solution<N, T>,
         result: &mut EpochResult<N>,
         report: &mut McusumReport,
     ) -> Result<(), RaimError> {
@@ -299,7 +300,7 @@ impl<const N: usize> Sequential<N> {
             return Ok(());
         }
         if let Some((s2, id2)) = runner_up {
-            if !(s2.score < mcusum::AMBIGUITY_RATIO * cand.score) {
+            if !(s2.score < T::of(mcusum::AMBIGUITY_RATIO) * cand.score) {
                 // Two fault directions explain the accumulated vector about
                 // equally well: alarm rather than guess (as FDE does).
                 stand(
@@ -321,8 +322,9 @@ impl<const N: usize> Sequential<N> {
                 }
             }
         }
-        let sub = match solve::<N>(cfg, epoch, &mask) {
-            Ok(s) => s,
+        let mut sub = Solution::<N, T>::empty();
+        match solve_into(cfg, epoch, &mask, &mut sub) {
+            Ok(()) => {}
             Err(RaimError::RankDeficient { .. }) | Err(RaimError::TooFewSatellites { .. }) => {
                 stand(result, AlarmCause::SubsetGeometry { excluded: id });
                 self.mcusum.reset();
@@ -339,20 +341,16 @@ impl<const N: usize> Sequential<N> {
         }
         let after = fde::test(cfg, &mut snap.thresholds, &sub)?;
         let sigma = sol.sigma_m.get(cand.row).copied().unwrap_or(1.0);
-        let r_j = sol
-            .parity
-            .residuals()
-            .get(cand.row)
-            .copied()
-            .unwrap_or(f64::NAN);
-        let s_jj = sol.parity.s_ii().get(cand.row).copied().unwrap_or(f64::NAN);
+        let nan = T::of(f64::NAN);
+        let r_j = sol.parity.residuals().get(cand.row).copied().unwrap_or(nan);
+        let s_jj = sol.parity.s_ii().get(cand.row).copied().unwrap_or(nan);
         let record = Exclusion {
             id,
             index: to_input(fidx),
             before: result.test,
             after,
-            score: cand.score,
-            bias_m: r_j / s_jj * sigma,
+            score: cand.score.to_f64(),
+            bias_m: (r_j / s_jj).to_f64() * sigma,
         };
         let _ = result.exclusions.push(record);
         let dof = sub.parity.dof();

@@ -9,6 +9,7 @@
 use crate::config::Config;
 use crate::error::RaimError;
 use crate::measurement::{Epoch, SatId};
+use crate::real::{Real, Stat};
 use crate::snapshot::detection::{TestStatistic, Thresholds};
 use crate::snapshot::lraim::rank;
 use crate::solve::{solve_from, Solution, Start};
@@ -60,9 +61,9 @@ pub enum AlarmCause {
 
 /// The outcome of FDE for one epoch.
 #[derive(Debug, Clone)]
-pub struct FdeOutcome<const N: usize> {
+pub struct FdeOutcome<const N: usize, T: Real = Stat> {
     /// The solution in force: all-in-view, or the subset after exclusions.
-    pub solution: Solution<N>,
+    pub solution: Solution<N, T>,
     pub test: TestStatistic,
     pub exclusions: heapless::Vec<Exclusion, MAX_EXCLUSIONS>,
     /// The satellite the rule picked first (on the all-in-view solution).
@@ -71,16 +72,18 @@ pub struct FdeOutcome<const N: usize> {
     pub cause: Option<AlarmCause>,
 }
 
-/// Run the chi-square test on a solution.
-pub fn test<const N: usize>(
+/// Run the chi-square test on a solution. The statistic D^2, computed in
+/// `T`, is widened to f64 and compared there with the f64 threshold, so the
+/// comparison itself adds no rounding.
+pub fn test<const N: usize, T: Real>(
     cfg: &Config,
     thresholds: &mut Thresholds<N>,
-    solution: &Solution<N>,
+    solution: &Solution<N, T>,
 ) -> Result<TestStatistic, RaimError> {
     let dof = solution.parity.dof();
     let (t2, _) = thresholds.get(cfg.pfa, cfg.pmd, dof)?;
     Ok(TestStatistic {
-        statistic: solution.parity.sse(),
+        statistic: solution.parity.sse().to_f64(),
         threshold: t2,
         dof: dof as u32,
     })
@@ -96,34 +99,42 @@ fn without<const N: usize>(mask: &[bool; N], index: usize) -> [bool; N] {
 
 /// The row other than `best` with the largest w_j^2 = r_j^2 / S_jj among
 /// identifiable rows, and that w_j^2.
-fn strongest_alternative<const N: usize>(
-    parity: &crate::linalg::parity::Parity<N>,
+fn strongest_alternative<const N: usize, T: Real>(
+    parity: &crate::linalg::parity::Parity<N, T>,
     best: usize,
     min_s_ii: f64,
 ) -> Option<(usize, f64)> {
-    strongest_alternative_rows(parity.residuals(), parity.s_ii(), best, min_s_ii)
+    strongest_alternative_rows(parity.residuals(), parity.s_ii(), best, T::of(min_s_ii))
+        .map(|(row, w2)| (row, w2.to_f64()))
 }
 
 /// `strongest_alternative` on residuals and S_ii. Fails safe on NaN
 /// (issue 15): a row whose S_ii is NaN is kept, and a NaN w_j^2 counts as
 /// +inf, an alternative that explains everything and so cannot be rejected.
 /// (A NaN compared false and the row used to be passed over.)
-fn strongest_alternative_rows(
-    residuals: &[f64],
-    s_ii: &[f64],
+fn strongest_alternative_rows<T: Real>(
+    residuals: &[T],
+    s_ii: &[T],
     best: usize,
-    min_s_ii: f64,
-) -> Option<(usize, f64)> {
+    min_s_ii: T,
+) -> Option<(usize, T)> {
     residuals
         .iter()
         .zip(s_ii)
         .enumerate()
         .filter(|(row, (_, s))| *row != best && !(**s < min_s_ii))
-        .map(|(row, (r, s))| {
+        .map(|(row, (&r, &s))| {
             let w2 = r * r / s;
-            (row, if w2.is_nan() { f64::INFINITY } else { w2 })
+            (
+                row,
+                if w2.is_nan_m() {
+                    T::of(f64::INFINITY)
+                } else {
+                    w2
+                },
+            )
         })
-        .fold(None, |acc: Option<(usize, f64)>, c| match acc {
+        .fold(None, |acc: Option<(usize, T)>, c| match acc {
             Some(a) if a.1 >= c.1 => Some(a),
             _ => Some(c),
         })
@@ -142,10 +153,24 @@ fn alternative_rejected(alternative_statistic: f64, threshold: f64) -> bool {
 /// A pair of rows, their joint bias estimates (sigma units) and the
 /// statistic of the subset without them.
 #[derive(Debug, Clone, Copy)]
-struct PairFit {
+struct PairFit<T: Real> {
     rows: (usize, usize),
-    bias_sigma: (f64, f64),
-    statistic: f64,
+    bias_sigma: (T, T),
+    statistic: T,
+}
+
+/// The relative determinant below which a pair's S_TT counts as singular:
+/// 1e-9, floored at 100 machine epsilons of `T` (1.2e-5 in f32), since the
+/// determinant S_jj S_kk - S_jk^2 of an exactly singular pair (two
+/// satellites of one constellation) rounds to ~eps S_jj S_kk, not to 0.
+fn pair_singular_tol<T: Real>() -> T {
+    let floor = T::EPS * T::of(100.0);
+    let tol = T::of(1e-9);
+    if tol > floor {
+        tol
+    } else {
+        floor
+    }
 }
 
 /// The two pairs of identifiable rows whose removal leaves the smallest
@@ -154,34 +179,36 @@ struct PairFit {
 /// nothing n x n is stored. Pairs whose S_TT is singular (e.g. the two
 /// satellites of a constellation, whose sum is its clock column) are skipped.
 #[inline(never)]
-fn best_pairs<const N: usize>(
-    parity: &crate::linalg::parity::Parity<N>,
+fn best_pairs<const N: usize, T: Real>(
+    parity: &crate::linalg::parity::Parity<N, T>,
     min_s_ii: f64,
-) -> [Option<PairFit>; 2] {
+) -> [Option<PairFit<T>>; 2] {
+    let min_s_ii = T::of(min_s_ii);
+    let singular = pair_singular_tol::<T>();
     let d2 = parity.sse();
     let r = parity.residuals();
     let s = parity.s_ii();
-    let mut best: [Option<PairFit>; 2] = [None, None];
-    let mut e = [0.0; N];
-    let mut y = [0.0; N];
+    let mut best: [Option<PairFit<T>>; 2] = [None, None];
+    let mut e = [T::zero(); N];
+    let mut y = [T::zero(); N];
     for (j, (&rj, &sjj)) in r.iter().zip(s).enumerate() {
         if sjj < min_s_ii {
             continue;
         }
         if let Some(v) = e.get_mut(j) {
-            *v = 1.0;
+            *v = T::one();
         }
         let k_dims = parity.project(&e, &mut y);
         let col = parity.lift(y.get(..k_dims).unwrap_or(&[]));
         if let Some(v) = e.get_mut(j) {
-            *v = 0.0;
+            *v = T::zero();
         }
         for (k, ((&rk, &skk), &sjk)) in r.iter().zip(s).zip(col.iter()).enumerate().skip(j + 1) {
             if skk < min_s_ii {
                 continue;
             }
             let det = sjj * skk - sjk * sjk;
-            if !(det > 1e-9 * sjj * skk) {
+            if !(det > singular * sjj * skk) {
                 continue;
             }
             let bj = (skk * rj - sjk * rk) / det;
@@ -198,7 +225,7 @@ fn best_pairs<const N: usize>(
 }
 
 /// Keep the two best pairs (smallest statistic first) in `best`.
-fn insert_pair(best: &mut [Option<PairFit>; 2], fit: PairFit) {
+fn insert_pair<T: Real>(best: &mut [Option<PairFit<T>>; 2], fit: PairFit<T>) {
     match *best {
         [Some(b0), _] if !fits_before(fit.statistic, b0.statistic) => {
             if best[1].is_none_or(|b1| fits_before(fit.statistic, b1.statistic)) {
@@ -215,8 +242,8 @@ fn insert_pair(best: &mut [Option<PairFit>; 2], fit: PairFit) {
 /// subset test, so the closed-form pair exclusion is not used and the
 /// greedy path goes on with its own checks. It can never drop out of the
 /// ranking and let another pair's exclusion look unique.
-fn fits_before(a: f64, b: f64) -> bool {
-    match (a.is_nan(), b.is_nan()) {
+fn fits_before<T: Real>(a: T, b: T) -> bool {
+    match (a.is_nan_m(), b.is_nan_m()) {
         (true, false) => true,
         (false, false) => a < b,
         (_, true) => false,
@@ -234,21 +261,21 @@ enum PairOutcome {
 /// Exclude the best-fitting pair if its subset passes and no other pair
 /// also explains the data at level pwe.
 #[inline(never)]
-fn exclude_pair<const N: usize>(
+fn exclude_pair<const N: usize, T: Real>(
     cfg: &Config,
     thresholds: &mut Thresholds<N>,
     epoch: &Epoch<'_>,
     mask: &[bool; N],
-    current: &Solution<N>,
+    current: &Solution<N, T>,
     before: TestStatistic,
-    scratch: &mut Solution<N>,
+    scratch: &mut Solution<N, T>,
 ) -> Result<PairOutcome, RaimError> {
     let [Some(pair), second] = best_pairs(&current.parity, cfg.min_s_ii) else {
         return Ok(PairOutcome::NotFound);
     };
     let dof_pair = current.parity.dof() - 2;
     let (t2, _) = thresholds.get(cfg.pfa, cfg.pmd, dof_pair)?;
-    if !(pair.statistic < t2) {
+    if !(pair.statistic.to_f64() < t2) {
         return Ok(PairOutcome::NotFound);
     }
     let (j, k) = pair.rows;
@@ -262,7 +289,7 @@ fn exclude_pair<const N: usize>(
     };
     if let Some(alt) = second {
         let t2_we = thresholds.wrong_exclusion(cfg.pwe, dof_pair)?;
-        if !alternative_rejected(alt.statistic, t2_we) {
+        if !alternative_rejected(alt.statistic.to_f64(), t2_we) {
             let (a, b) = alt.rows;
             let other = if a != j && a != k { a } else { b };
             let mine = if j != a && j != b { j } else { k };
@@ -274,7 +301,7 @@ fn exclude_pair<const N: usize>(
         }
     }
     let subset = without(&without(mask, src_j), src_k);
-    match solve_from::<N>(cfg, epoch, &subset, Start::Sibling(current), scratch) {
+    match solve_from(cfg, epoch, &subset, Start::Sibling(current), scratch) {
         Ok(()) => {}
         Err(RaimError::RankDeficient { .. }) | Err(RaimError::TooFewSatellites { .. }) => {
             return Ok(PairOutcome::NotFound)
@@ -285,13 +312,13 @@ fn exclude_pair<const N: usize>(
     if after.alarm() {
         return Ok(PairOutcome::NotFound);
     }
-    let record = |id: SatId, index: usize, row: usize, bias_sigma: f64| Exclusion {
+    let record = |id: SatId, index: usize, row: usize, bias_sigma: T| Exclusion {
         id,
         index,
         before,
         after,
         score: f64::NAN,
-        bias_m: bias_sigma * current.sigma_m.get(row).copied().unwrap_or(1.0),
+        bias_m: bias_sigma.to_f64() * current.sigma_m.get(row).copied().unwrap_or(1.0),
     };
     Ok(PairOutcome::Excluded(
         after,
@@ -302,7 +329,7 @@ fn exclude_pair<const N: usize>(
     ))
 }
 
-impl<const N: usize> FdeOutcome<N> {
+impl<const N: usize, T: Real> FdeOutcome<N, T> {
     /// An empty outcome whose `solution` is to be filled by
     /// [`crate::solve::solve_into`] before [`run`].
     pub fn empty() -> Self {
@@ -320,11 +347,11 @@ impl<const N: usize> FdeOutcome<N> {
 /// `epoch`; on return it holds the solution in force. In place, so no
 /// solution is moved on the stack (the firmware's stack budget).
 #[inline(never)]
-pub fn run<const N: usize>(
+pub fn run<const N: usize, T: Real>(
     cfg: &Config,
     thresholds: &mut Thresholds<N>,
     epoch: &Epoch<'_>,
-    out: &mut FdeOutcome<N>,
+    out: &mut FdeOutcome<N, T>,
 ) -> Result<(), RaimError> {
     let mut mask = [false; N];
     for v in mask.iter_mut().take(epoch.len()) {
@@ -337,7 +364,7 @@ pub fn run<const N: usize>(
     out.cause = None;
     let max_excl = usize::from(cfg.max_exclusions).min(MAX_EXCLUSIONS);
     // The one subset solution FDE works on; accepted ones are swapped in.
-    let mut scratch = Solution::<N>::empty();
+    let mut scratch = Solution::<N, T>::empty();
     while test_now.alarm() {
         let current = &out.solution;
         let (best, _) = rank(&current.parity, cfg.rule, cfg.min_s_ii);
@@ -369,7 +396,7 @@ pub fn run<const N: usize>(
             // the pair that explains the all-in-view residuals (SPEC §8.4,
             // t = 2), in closed form.
             let (t2_single, _) = thresholds.get(cfg.pfa, cfg.pmd, current.parity.dof() - 1)?;
-            if !(test_now.statistic - best.w * best.w < t2_single) {
+            if !(test_now.statistic - (best.w * best.w).to_f64() < t2_single) {
                 match exclude_pair(
                     cfg,
                     thresholds,
@@ -397,7 +424,7 @@ pub fn run<const N: usize>(
             }
         }
         let next_mask = without(&mask, best_src);
-        match solve_from::<N>(
+        match solve_from(
             cfg,
             epoch,
             &next_mask,
@@ -437,8 +464,8 @@ pub fn run<const N: usize>(
             index: best_src,
             before: test_now,
             after,
-            score: best.score,
-            bias_m: best.bias_sigma * sigma,
+            score: best.score.to_f64(),
+            bias_m: best.bias_sigma.to_f64() * sigma,
         };
         if out.exclusions.push(record).is_err() {
             out.cause = Some(AlarmCause::MaxExclusions);
@@ -636,7 +663,8 @@ mod nan_tests {
         assert_eq!(best[1].unwrap().statistic, 3.0);
         for pos in 0..=stats.len() {
             let mut best = [None, None];
-            let mut seq: Vec<PairFit> = stats.iter().enumerate().map(|(i, &t)| fit(i, t)).collect();
+            let mut seq: Vec<PairFit<f64>> =
+                stats.iter().enumerate().map(|(i, &t)| fit(i, t)).collect();
             seq.insert(pos, fit(9, f64::NAN));
             for f in seq {
                 insert_pair(&mut best, f);

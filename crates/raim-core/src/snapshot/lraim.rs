@@ -4,25 +4,25 @@
 
 use crate::config::FiRule;
 use crate::linalg::parity::Parity;
+use crate::real::Real;
 
-/// The per-satellite identification quantities, in sigma units.
+/// The per-satellite identification quantities, in sigma units, in the
+/// precision `T` of the parity space they come from.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Candidate {
+pub struct Candidate<T: Real = f64> {
     /// Row in the model.
     pub row: usize,
     /// Normalised residual w_i = r_i / sqrt(S_ii) (the w-test).
-    pub w: f64,
+    pub w: T,
     /// Bias estimate b_i = r_i / S_ii, sigma units (seed 000 eq. 8).
-    pub bias_sigma: f64,
+    pub bias_sigma: T,
     /// The rule's score (larger = more likely faulty).
-    pub score: f64,
+    pub score: T,
 }
 
 /// The score of one satellite under a rule, from its whitened residual and
 /// S_ii. `None` when S_ii is below `min_s_ii` (unidentifiable).
-pub fn score(rule: FiRule, residual: f64, s_ii: f64, min_s_ii: f64) -> Option<Candidate> {
+pub fn score<T: Real>(rule: FiRule, residual: T, s_ii: T, min_s_ii: T) -> Option<Candidate<T>> {
     if !(s_ii >= min_s_ii) {
         return None;
     }
@@ -31,17 +31,17 @@ pub fn score(rule: FiRule, residual: f64, s_ii: f64, min_s_ii: f64) -> Option<Ca
         FiRule::Mle => w2,
         // 2 ln of the flat-prior marginal likelihood, up to a constant:
         // w^2 - ln S_ii (SPEC §4.2).
-        FiRule::LraimFlat => w2 - libm::log(s_ii),
+        FiRule::LraimFlat => w2 - s_ii.ln_m(),
         // Exact Gaussian prior b ~ N(0, kappa sigma^2):
         // w^2 kS/(1+kS) - ln(1+kS).
         FiRule::LraimGaussian { kappa } => {
-            let ks = kappa * s_ii;
-            w2 * ks / (1.0 + ks) - libm::log1p(ks)
+            let ks = T::of(kappa) * s_ii;
+            w2 * ks / (T::one() + ks) - ks.ln_1p_m()
         }
     };
     Some(Candidate {
         row: 0,
-        w: residual / libm::sqrt(s_ii),
+        w: residual / s_ii.sqrt(),
         bias_sigma: residual / s_ii,
         score,
     })
@@ -49,24 +49,24 @@ pub fn score(rule: FiRule, residual: f64, s_ii: f64, min_s_ii: f64) -> Option<Ca
 
 /// The best and the runner-up candidate of a parity solution under `rule`.
 /// `None` for the best means no satellite is identifiable.
-pub fn rank<const N: usize>(
-    parity: &Parity<N>,
+pub fn rank<const N: usize, T: Real>(
+    parity: &Parity<N, T>,
     rule: FiRule,
     min_s_ii: f64,
-) -> (Option<Candidate>, Option<Candidate>) {
-    rank_rows(rule, parity.residuals(), parity.s_ii(), min_s_ii)
+) -> (Option<Candidate<T>>, Option<Candidate<T>>) {
+    rank_rows(rule, parity.residuals(), parity.s_ii(), T::of(min_s_ii))
 }
 
 /// The best and the runner-up of `rule` over rows given by a residual-like
 /// vector (`residuals`, or the MCUSUM's accumulated vector) and S_ii.
-pub fn rank_rows(
+pub fn rank_rows<T: Real>(
     rule: FiRule,
-    residuals: &[f64],
-    s_ii: &[f64],
-    min_s_ii: f64,
-) -> (Option<Candidate>, Option<Candidate>) {
-    let mut best: Option<Candidate> = None;
-    let mut second: Option<Candidate> = None;
+    residuals: &[T],
+    s_ii: &[T],
+    min_s_ii: T,
+) -> (Option<Candidate<T>>, Option<Candidate<T>>) {
+    let mut best: Option<Candidate<T>> = None;
+    let mut second: Option<Candidate<T>> = None;
     for (row, (&r, &s)) in residuals.iter().zip(s_ii).enumerate() {
         let Some(mut c) = score(rule, r, s, min_s_ii) else {
             continue;
@@ -92,8 +92,8 @@ pub fn rank_rows(
 /// identified first whatever its position in the list (issue 15: `<=` on a
 /// NaN made the ranking depend on the order of the rows). Between two NaNs
 /// the earlier row stays.
-fn outranks(a: f64, b: f64) -> bool {
-    match (a.is_nan(), b.is_nan()) {
+fn outranks<T: Real>(a: T, b: T) -> bool {
+    match (a.is_nan_m(), b.is_nan_m()) {
         (true, false) => true,
         (false, false) => a > b,
         (_, true) => false,

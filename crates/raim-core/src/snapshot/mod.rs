@@ -11,6 +11,7 @@ pub mod threshold_table;
 use crate::config::{Config, FdeMethod};
 use crate::error::RaimError;
 use crate::measurement::{Epoch, SatId};
+use crate::real::{Real, Stat};
 use crate::result::{Decision, EpochResult, SatelliteResult};
 use crate::solve::{solve_from, Fix, Solution, Start};
 use detection::Thresholds;
@@ -23,20 +24,29 @@ pub const WARM_START_MAX_AGE_S: f64 = 60.0;
 
 /// The snapshot engine: one epoch in, one result out; it keeps the
 /// chi-square thresholds per dof between epochs and, when enabled, the last
-/// fix for a Gauss-Newton warm start.
-#[derive(Debug, Clone, Default)]
-pub struct Snapshot<const N: usize> {
+/// fix for a Gauss-Newton warm start. `T` is the precision of the
+/// statistics path (docs/CORE.md, "Precision").
+#[derive(Debug, Clone)]
+pub struct Snapshot<const N: usize, T: Real = Stat> {
     pub(crate) thresholds: Thresholds<N>,
     warm_start: bool,
     last_fix: Option<Fix>,
+    _precision: core::marker::PhantomData<T>,
 }
 
-impl<const N: usize> Snapshot<N> {
+impl<const N: usize, T: Real> Default for Snapshot<N, T> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize, T: Real> Snapshot<N, T> {
     pub fn new() -> Self {
         Snapshot {
             thresholds: Thresholds::default(),
             warm_start: false,
             last_fix: None,
+            _precision: core::marker::PhantomData,
         }
     }
 
@@ -53,7 +63,7 @@ impl<const N: usize> Snapshot<N> {
         }
     }
 
-    fn start(&self, time_s: f64) -> Start<'static, N> {
+    fn start(&self, time_s: f64) -> Start<'static, N, T> {
         match self.last_fix {
             Some(f) if self.warm_start && libm::fabs(time_s - f.time_s) <= WARM_START_MAX_AGE_S => {
                 Start::Fix(f)
@@ -85,14 +95,14 @@ impl<const N: usize> Snapshot<N> {
         &mut self,
         cfg: &Config,
         epoch: &Epoch<'_>,
-        outcome: &mut FdeOutcome<N>,
+        outcome: &mut FdeOutcome<N, T>,
     ) -> Result<EpochResult<N>, RaimError> {
         let mut mask = [false; N];
         for v in mask.iter_mut().take(epoch.len()) {
             *v = true;
         }
         let start = self.start(epoch.time_s);
-        solve_from::<N>(cfg, epoch, &mask, start, &mut outcome.solution)?;
+        solve_from(cfg, epoch, &mask, start, &mut outcome.solution)?;
         let initial_test = fde::test(cfg, &mut self.thresholds, &outcome.solution)?;
         let satellites = per_satellite(cfg, &outcome.solution);
         let multifault = match cfg.fde_method {
@@ -165,12 +175,14 @@ impl<const N: usize> Snapshot<N> {
     }
 }
 
-pub(crate) fn per_satellite<const N: usize>(
+/// The per-satellite output, computed in `T` and widened to f64.
+pub(crate) fn per_satellite<const N: usize, T: Real>(
     cfg: &Config,
-    sol: &Solution<N>,
+    sol: &Solution<N, T>,
 ) -> heapless::Vec<SatelliteResult, N> {
     let mut out = heapless::Vec::new();
     let p = &sol.parity;
+    let min_s_ii = T::of(cfg.min_s_ii);
     let rows = p
         .residuals()
         .iter()
@@ -179,9 +191,9 @@ pub(crate) fn per_satellite<const N: usize>(
         .zip(sol.sigma_m.iter())
         .zip(sol.elevation_rad.iter());
     for ((((&r, &s), &id), &sigma), &el) in rows {
-        let c = lraim::score(cfg.rule, r, s, cfg.min_s_ii);
-        let (w, bias) = if s > 0.0 {
-            (r / libm::sqrt(s), r / s * sigma)
+        let c = lraim::score(cfg.rule, r, s, min_s_ii);
+        let (w, bias) = if s > T::zero() {
+            ((r / s.sqrt()).to_f64(), (r / s).to_f64() * sigma)
         } else {
             (f64::NAN, f64::NAN)
         };
@@ -191,11 +203,11 @@ pub(crate) fn per_satellite<const N: usize>(
             used: true,
             sigma_m: sigma,
             elevation_rad: el,
-            s_ii: s,
-            h_ii: 1.0 - s,
+            s_ii: s.to_f64(),
+            h_ii: (T::one() - s).to_f64(),
             w,
             bias_m: bias,
-            score: c.map_or(f64::NAN, |c| c.score),
+            score: c.map_or(f64::NAN, |c| c.score.to_f64()),
             identifiable: c.is_some(),
         });
     }

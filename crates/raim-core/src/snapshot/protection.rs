@@ -3,6 +3,7 @@
 //! A = (H^T H)^-1 H^T in local ENU.
 
 use crate::linalg::parity::Parity;
+use crate::real::Real;
 
 /// Horizontal and vertical protection levels and the satellites that set them.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -21,8 +22,8 @@ pub struct ProtectionLevels {
 /// slope_H,i = sqrt(A_E,i^2 + A_N,i^2) / sqrt(S_ii), slope_V,i = |A_U,i| /
 /// sqrt(S_ii); PL = max slope * sqrt(lambda_md). A satellite with S_ii below
 /// `min_s_ii` has an unbounded slope, so its PLs are infinite.
-pub fn slope_levels<const N: usize>(
-    parity: &Parity<N>,
+pub fn slope_levels<const N: usize, T: Real>(
+    parity: &Parity<N, T>,
     lambda_md: f64,
     min_s_ii: f64,
 ) -> ProtectionLevels {
@@ -38,24 +39,28 @@ pub fn slope_levels<const N: usize>(
 /// (a NaN gain or S_ii) counts as infinite: the largest-slope search must
 /// never skip a satellite whose slope it cannot evaluate (issue 15; a NaN
 /// compares false and used to be passed over, leaving a finite PL).
-pub fn slope_levels_rows(
-    gain_enu: [&[f64]; 3],
-    s_ii: &[f64],
+/// The slopes are computed and compared in `T`; the PLs, slope times
+/// sqrt(lambda_md), in f64.
+pub fn slope_levels_rows<T: Real>(
+    gain_enu: [&[T]; 3],
+    s_ii: &[T],
     lambda_md: f64,
     min_s_ii: f64,
 ) -> ProtectionLevels {
     let pbias = libm::sqrt(lambda_md);
+    let min_s_ii = T::of(min_s_ii);
     let mut out = ProtectionLevels::default();
-    let (mut max_h, mut max_v) = (0.0f64, 0.0f64);
+    let (mut max_h, mut max_v) = (T::zero(), T::zero());
     let [ge, gn, gu] = gain_enu;
     let rows = ge.iter().zip(gn).zip(gu).zip(s_ii).enumerate();
-    let nan_is_infinite = |x: f64| if x.is_nan() { f64::INFINITY } else { x };
-    for (row, (((e, n), u), &s)) in rows {
+    let inf = T::of(f64::INFINITY);
+    let nan_is_infinite = |x: T| if x.is_nan_m() { inf } else { x };
+    for (row, (((&e, &n), &u), &s)) in rows {
         let (slope_h, slope_v) = if s >= min_s_ii {
-            let k = 1.0 / libm::sqrt(s);
-            (libm::sqrt(e * e + n * n) * k, libm::fabs(*u) * k)
+            let k = T::one() / s.sqrt();
+            ((e * e + n * n).sqrt() * k, u.abs() * k)
         } else {
-            (f64::INFINITY, f64::INFINITY)
+            (inf, inf)
         };
         let (slope_h, slope_v) = (nan_is_infinite(slope_h), nan_is_infinite(slope_v));
         if slope_h > max_h || out.worst_h_row.is_none() {
@@ -67,15 +72,22 @@ pub fn slope_levels_rows(
             out.worst_v_row = Some(row);
         }
     }
-    out.hpl_m = max_h * pbias;
-    out.vpl_m = max_v * pbias;
+    out.hpl_m = max_h.to_f64() * pbias;
+    out.vpl_m = max_v.to_f64() * pbias;
     out
 }
 
 /// 1-sigma position error along E, N, U in metres: sqrt of the diagonal of
 /// (H^T H)^-1 (whitened), i.e. sqrt(sum_i A_k,i^2).
-pub fn sigma_enu_m<const N: usize>(parity: &Parity<N>) -> [f64; 3] {
-    let s = |axis: usize| libm::sqrt(parity.gain(axis).iter().map(|a| a * a).sum::<f64>());
+pub fn sigma_enu_m<const N: usize, T: Real>(parity: &Parity<N, T>) -> [f64; 3] {
+    let s = |axis: usize| {
+        parity
+            .gain(axis)
+            .iter()
+            .fold(T::zero(), |acc, a| acc + *a * *a)
+            .sqrt()
+            .to_f64()
+    };
     [s(0), s(1), s(2)]
 }
 
@@ -89,10 +101,10 @@ mod tests {
     #[test]
     fn a_nan_slope_is_never_skipped() {
         const PL_TOL_M: f64 = 1e-12;
-        let e = [0.3, -0.2, 0.5, 0.1];
-        let n = [0.1, 0.4, -0.2, 0.2];
-        let u = [0.6, -0.9, 0.3, 0.2];
-        let s = [0.5, 0.6, 0.4, 0.7];
+        let e = [0.3f64, -0.2, 0.5, 0.1];
+        let n = [0.1f64, 0.4, -0.2, 0.2];
+        let u = [0.6f64, -0.9, 0.3, 0.2];
+        let s = [0.5f64, 0.6, 0.4, 0.7];
         let lambda = 30.0;
         let clean = slope_levels_rows([&e, &n, &u], &s, lambda, 1e-4);
         let brute_h = (0..4)

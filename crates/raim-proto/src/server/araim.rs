@@ -362,7 +362,7 @@ impl Server {
 mod engine {
     use raim_core::araim::error_model::iono_free_factor_sq;
     use raim_core::araim::{Araim, AraimConfig, AraimSat, FdeDecision, Ism, Unavailable};
-    use raim_core::{Decision, Real, Stat};
+    use raim_core::{Decision, Real};
 
     use super::{AraimWireError, IsmFrame, MAX_FDE_MODES, MAX_MODES};
     use crate::araim_msg::{AraimSummary, WireAraimResult, WireFde};
@@ -371,13 +371,20 @@ mod engine {
     use crate::CAPACITY;
     use raim_core::measurement::MAX_SYSTEMS;
 
-    type Engine = Araim<Stat, CAPACITY, MAX_MODES>;
+    /// The unit's ARAIM precision, on every build: `f32`, the M4F's FPU
+    /// (docs/CORE.md "Precision": subset solutions and PLs are f32 on the
+    /// device). Fixed here rather than taken from the build's `Stat` so the
+    /// host `Server` reproduces the firmware bit for bit whatever the host's
+    /// own features (as the particle filter's `PfT`).
+    pub type AraimT = f32;
+
+    type Engine = Araim<AraimT, CAPACITY, MAX_MODES>;
 
     /// The engine, the FDE's scratch engine and the epoch's satellites.
     pub(super) struct Engines {
         main: Engine,
         scratch: Engine,
-        sats: [AraimSat<Stat>; CAPACITY],
+        sats: [AraimSat<AraimT>; CAPACITY],
     }
 
     impl Engines {
@@ -418,24 +425,24 @@ mod engine {
                     }
                 }
                 // The ADD's G row is minus the line of sight.
-                let g = o.los_enu.map(|v| Stat::of(-v));
+                let g = o.los_enu.map(|v| AraimT::of(-v));
                 let nominal_m2 = match o.sigma_m {
                     // The host's own sigma of the tropo + airborne terms.
                     Some(s) => s * s,
                     None => nominal_variance_m2(&o.los_enu),
                 };
                 let (ura, ure) = (entry.sigma_ura_m, entry.sigma_ure_m);
-                let c_int_m2 = Stat::of(ura * ura + nominal_m2);
-                let c_acc_m2 = Stat::of(ure * ure + nominal_m2);
+                let c_int_m2 = AraimT::of(ura * ura + nominal_m2);
+                let c_acc_m2 = AraimT::of(ure * ure + nominal_m2);
                 if let Some(slot) = self.sats.get_mut(i) {
                     *slot = AraimSat {
                         id: o.id,
                         g_enu: g,
                         c_int_m2,
                         c_acc_m2,
-                        b_nom_m: Stat::of(entry.b_nom_m),
+                        b_nom_m: AraimT::of(entry.b_nom_m),
                         p_sat: entry.p_sat,
-                        residual_m: Stat::of(o.residual_m),
+                        residual_m: AraimT::of(o.residual_m),
                     };
                     n += 1;
                 }
