@@ -386,7 +386,7 @@ pub fn constellation_bias(
             s.position_m[2] - receiver_ecef_m[2],
         ];
         let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        if !(r > 0.0) {
+        if r.is_nan() || r <= 0.0 {
             continue;
         }
         let along = (d[0] * shift_ecef_m[0] + d[1] * shift_ecef_m[1] + d[2] * shift_ecef_m[2]) / r;

@@ -5,6 +5,7 @@
 //! mask) -> a clean run (the reference position is its mean) -> the faulted
 //! run -> per-epoch text / JSON lines / NMEA, a summary table and a plot.
 
+pub mod araim;
 mod checks;
 mod engine;
 mod input;
@@ -153,6 +154,9 @@ pub struct ReplayArgs {
     /// Particle-filter RAIM (seed 004; docs/PF.md): --pf {ekf,pf,gapf}.
     #[command(flatten)]
     pub pf: pf::PfArgs,
+    /// ARAIM (issue 12; docs/ARAIM.md): --araim and its options.
+    #[command(flatten)]
+    pub araim: araim::AraimReplayArgs,
 }
 
 /// Everything a replay produces.
@@ -444,6 +448,11 @@ pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
 /// `raim replay`: the output, and the count of epochs the monitor refused
 /// (a closed pipe is handled by the caller, crate::outcome).
 pub fn run(args: &ReplayArgs) -> Result<Tally> {
+    if args.araim.araim {
+        // ARAIM (docs/ARAIM.md): its own per-epoch output.
+        araim::run(args)?;
+        return Ok(Tally::default());
+    }
     if args.pf.pf.is_some() {
         // Particle-filter RAIM (docs/PF.md): its own per-epoch output.
         pf::run(args)?;
