@@ -739,6 +739,7 @@ pub fn draw(
         .label("alarm")
         .legend(|(x, y)| Cross::new((x + 10, y), 6, RED.stroke_width(2)));
         c.configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
             .draw()
