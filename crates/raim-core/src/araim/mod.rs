@@ -202,6 +202,7 @@ pub struct Araim<T, const N: usize, const K: usize> {
     scratch: Base<T, N>,
     events: Vec<ModeEvents, K>,
     out: AraimOutput<T, K>,
+    budget_share: f64,
 }
 
 impl<T: Real, const N: usize, const K: usize> Default for Araim<T, N, K> {
@@ -215,6 +216,7 @@ impl<T: Real, const N: usize, const K: usize> Default for Araim<T, N, K> {
             scratch: Base::default(),
             events: Vec::new(),
             out: AraimOutput::default(),
+            budget_share: 1.0,
         }
     }
 }
@@ -342,6 +344,26 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         ism: &Ism,
         sats: &[AraimSat<T>],
     ) -> Result<&AraimOutput<T, K>, AraimError> {
+        self.process_scaled(cfg, ism, sats, 1.0)
+    }
+
+    /// The share of the integrity budget the last `process` gave its PL
+    /// equations: 1 for an epoch, 1 / N_ex for the subset after an
+    /// exclusion (fde.rs, the exclusion risk).
+    pub fn integrity_budget_share(&self) -> f64 {
+        self.budget_share
+    }
+
+    /// `process` with the right-hand side of the PL equations (step 5)
+    /// multiplied by `budget_share` in (0, 1] (fde.rs).
+    pub(crate) fn process_scaled(
+        &mut self,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        sats: &[AraimSat<T>],
+        budget_share: f64,
+    ) -> Result<&AraimOutput<T, K>, AraimError> {
+        self.budget_share = budget_share;
         self.load(cfg, ism, sats)?;
         let zero = T::of(0.0);
         let n = self.geo.n;
@@ -575,11 +597,12 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         let mut exact = [0.0f64; 3];
         let mut add = [0.0f64; 3];
         for q in 0..3 {
-            let rhs = if q == 2 {
-                cfg.phmi_vert * factor
-            } else {
-                0.5 * cfg.phmi_hor * factor
-            };
+            let rhs = budget_share
+                * if q == 2 {
+                    cfg.phmi_vert * factor
+                } else {
+                    0.5 * cfg.phmi_hor * factor
+                };
             let modes = &out.modes;
             let eq = pl::Equation {
                 fault_free: pl::Term {
