@@ -49,7 +49,8 @@ pub enum FdeAlarm {
     Ambiguous { first: usize, second: usize },
 }
 
-/// The outcome of ARAIM FDE.
+/// The outcome of ARAIM FDE. (After an alarm the scratch engine holds
+/// the last candidate's tests only, marked `PlNotSolved { axis: 0 }`.)
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum FdeDecision {
@@ -112,7 +113,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             }
             n_ex += 1;
             let removed = removed_sats(sats, ev.sats, ev.consts);
-            if self.consistent(cfg, ism, sats, removed, &mut subset, scratch, 1.0)? {
+            if self.consistent(cfg, ism, sats, removed, &mut subset, scratch, None)? {
                 // Single-event modes number at most 64 + 5: never full.
                 let _ = found.push((k, removed));
             }
@@ -144,7 +145,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         // Leave the chosen subset's output in the scratch engine, its PLs
         // with the exclusion risk: 1 / N_ex of the budget (module doc).
         let share = 1.0 / n_ex.max(1) as f64;
-        self.consistent(cfg, ism, sats, removed, &mut subset, scratch, share)?;
+        self.consistent(cfg, ism, sats, removed, &mut subset, scratch, Some(share))?;
         let consts = self.out.modes.get(k).map(|m| m.events.consts).unwrap_or(0);
         Ok(FdeDecision::Excluded {
             mode: k,
@@ -153,8 +154,10 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         })
     }
 
-    /// Processes the subset without `removed` in `scratch` (PL budget
-    /// share `share`); true when it is valid and passes all its own tests.
+    /// Processes the subset without `removed` in `scratch`, with its PLs at
+    /// the budget share `share`, or its tests only (`None`: the candidate
+    /// search needs no PLs); true when it is valid and passes all its own
+    /// tests.
     #[allow(clippy::too_many_arguments)]
     fn consistent(
         &self,
@@ -164,7 +167,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         removed: u64,
         buf: &mut [AraimSat<T>; N],
         scratch: &mut Araim<T, N, K>,
-        share: f64,
+        share: Option<f64>,
     ) -> Result<bool, AraimError> {
         let mut n = 0;
         let mut sub_ism = Ism::default();
@@ -184,7 +187,11 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         let Some(subset) = buf.get(..n) else {
             return Ok(false);
         };
-        match scratch.process_scaled(cfg, &sub_ism, subset, share) {
+        let result = match share {
+            Some(share) => scratch.process_scaled(cfg, &sub_ism, subset, share),
+            None => scratch.process_tests_only(cfg, &sub_ism, subset),
+        };
+        match result {
             Ok(out) => Ok(out.detection_passed && out.n_monitored > 0),
             // Too few satellites or a singular subset: not a candidate.
             Err(AraimError::TooFewSatellites { .. } | AraimError::RankDeficient { .. }) => {

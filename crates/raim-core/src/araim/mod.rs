@@ -169,6 +169,27 @@ impl<T: Real, const K: usize> Default for AraimOutput<T, K> {
 }
 
 impl<T: Real, const K: usize> AraimOutput<T, K> {
+    /// Every field to its default, the mode list emptied in place.
+    fn reset(&mut self) {
+        let z = T::of(0.0);
+        self.modes.clear();
+        self.n_monitored = 0;
+        self.max_faults = 0;
+        self.p_exceed = 0.0;
+        self.p_unmon = 0.0;
+        self.k_fa = [0.0; 3];
+        self.sigma0_m = [z; 3];
+        self.bias0_m = [z; 3];
+        self.correction_enu_m = [z; 3];
+        self.sigma_v_acc_m = z;
+        self.emt_m = z;
+        self.pl_exact = ProtectionLevels::default();
+        self.pl_add = ProtectionLevels::default();
+        self.detection_passed = false;
+        self.limits = Limits::default();
+        self.unavailable = None;
+    }
+
     /// ARAIM service: no structural cause and every limit met.
     pub fn available(&self) -> bool {
         self.unavailable.is_none()
@@ -366,11 +387,36 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         sats: &[AraimSat<T>],
         budget_share: f64,
     ) -> Result<&AraimOutput<T, K>, AraimError> {
+        self.process_impl(cfg, ism, sats, budget_share, true)
+    }
+
+    /// Steps 1-4 only (modes, subsets, tests, EMT): the FDE's consistency
+    /// check of a candidate needs no PLs. The output is marked
+    /// `PlNotSolved { axis: 0 }` (never read as available).
+    pub(crate) fn process_tests_only(
+        &mut self,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        sats: &[AraimSat<T>],
+    ) -> Result<&AraimOutput<T, K>, AraimError> {
+        self.process_impl(cfg, ism, sats, 1.0, false)
+    }
+
+    fn process_impl(
+        &mut self,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        sats: &[AraimSat<T>],
+        budget_share: f64,
+        with_pls: bool,
+    ) -> Result<&AraimOutput<T, K>, AraimError> {
         self.budget_share = budget_share;
         self.load(cfg, ism, sats)?;
         let zero = T::of(0.0);
         let n = self.geo.n;
-        self.out = AraimOutput::default();
+        // In place: `AraimOutput::default()` would build and copy the
+        // whole K-mode list.
+        self.out.reset();
 
         // Step 2: all in view.
         let zeros = [[zero; N]; 3];
@@ -486,6 +532,16 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
 
         // Step 3: per mode, from its base.
         let mut p_unmon = enumeration.p_exceed;
+        // Tests only (FDE candidates): a mode whose separation exceeds the
+        // threshold at K_fa for *all* the enumerated modes (>= the
+        // monitored ones, so that K_fa is at least the true one) fails its
+        // test whatever the rest: the subset is inconsistent, stop there.
+        let k_upper = {
+            let nm = self.events.len().max(1) as f64;
+            let kh = normal_q_inv(cfg.pfa_hor / (4.0 * nm)).unwrap_or(f64::INFINITY);
+            let kv = normal_q_inv(cfg.pfa_vert / (2.0 * nm)).unwrap_or(f64::INFINITY);
+            [T::of(kh), T::of(kh), T::of(kv)]
+        };
         for ev in self.events.iter() {
             let mut consts = ev.consts;
             for (j, &cs) in const_sats.iter().enumerate() {
@@ -547,8 +603,20 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
                     }
                 }
             };
+            let certain_failure = !with_pls
+                && mode.status == ModeStatus::Monitored
+                && (0..3).any(|q| {
+                    let sep = mode.stats.separation_m.get(q).copied().unwrap_or(zero);
+                    let ss = mode.stats.sigma_ss_m.get(q).copied().unwrap_or(zero);
+                    sep.abs() > k_upper.get(q).copied().unwrap_or(zero) * ss
+                });
             // Cannot fail: `events` and `modes` share the capacity K.
             let _ = out.modes.push(mode);
+            if certain_failure {
+                out.detection_passed = false;
+                out.unavailable = Some(Unavailable::PlNotSolved { axis: 0 });
+                return Ok(&self.out);
+            }
         }
         out.p_unmon = p_unmon;
         let n_mon = out
@@ -599,6 +667,10 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
                 p_unmon,
                 p_thres: cfg.p_thres,
             });
+            return Ok(&self.out);
+        }
+        if !with_pls {
+            out.unavailable = Some(Unavailable::PlNotSolved { axis: 0 });
             return Ok(&self.out);
         }
 

@@ -1023,4 +1023,34 @@ mod fde_tests {
         }
         assert!(checked >= 10, "{checked}");
     }
+
+    /// The FDE's tests-only check (early exit at a certain failure, no
+    /// PLs) gives the same verdict as a full `process` for every
+    /// single-satellite candidate of 20 faulted epochs.
+    #[test]
+    fn tests_only_check_agrees_with_full_processing() {
+        let cfg = AraimConfig::default();
+        let ism = ge_ism(1e-4);
+        let mut a = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        let mut b = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        let mut early = 0;
+        for target in 0..20 {
+            let mut sats = sky20();
+            sats[target].residual_m = 30.0;
+            for drop in 0..20 {
+                let sub: std::vec::Vec<AraimSat<f64>> = sats
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| *i != drop)
+                    .map(|(_, s)| *s)
+                    .collect();
+                let full = a.process(&cfg, &ism, &sub).unwrap();
+                let quick = b.process_tests_only(&cfg, &ism, &sub).unwrap();
+                assert_eq!(full.detection_passed, quick.detection_passed);
+                assert!(quick.unavailable.is_some());
+                early += (quick.modes.len() < full.modes.len()) as usize;
+            }
+        }
+        assert!(early > 100, "{early}");
+    }
 }
