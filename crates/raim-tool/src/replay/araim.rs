@@ -62,7 +62,7 @@ pub struct AraimReplayArgs {
     /// ARAIM: residual ionosphere of single-frequency data, vertical sigma in m, times the obliquity, added to C_int and C_acc (0: the ADD's dual-frequency model alone).
     #[arg(long, default_value_t = 0.0)]
     pub araim_iono_m: f64,
-    /// ARAIM: a constellation-wide fault, SYS:COMMON_M:E_M,N_M,U_M@START[..END]: a common range error plus the range change of a shift (E, N, U) of that constellation's solution (raim_gnss::faults::constellation_bias); repeatable.
+    /// ARAIM: a constellation-wide fault, SYS:COMMON_M:E_M,N_M,U_M@START[..END]: a common range error plus the range change of a shift (E, N, U) of that constellation's solution (docs/ARAIM.md); repeatable.
     #[arg(long = "araim-const-fault", value_name = "SPEC")]
     pub araim_const_faults: Vec<String>,
     /// ARAIM: VPL, HPL and EMT over time against VAL/HAL, and the vertical and horizontal Stanford diagrams, into this PNG.
