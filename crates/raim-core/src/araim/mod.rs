@@ -536,7 +536,9 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         // threshold at K_fa for *all* the enumerated modes (>= the
         // monitored ones, so that K_fa is at least the true one) fails its
         // test whatever the rest: the subset is inconsistent, stop there.
-        let k_upper = {
+        let k_upper = if with_pls {
+            [zero; 3]
+        } else {
             let nm = self.events.len().max(1) as f64;
             let kh = normal_q_inv(cfg.pfa_hor / (4.0 * nm)).unwrap_or(f64::INFINITY);
             let kv = normal_q_inv(cfg.pfa_vert / (2.0 * nm)).unwrap_or(f64::INFINITY);
