@@ -54,7 +54,7 @@ pub struct AraimReplayArgs {
     #[arg(long, default_value_t = 0.5)]
     pub araim_b_nom_m: f64,
     /// ARAIM: P_sat for every satellite.
-    #[arg(long, default_value_t = 1e-5)]
+    #[arg(long, default_value = "1e-5")]
     pub araim_p_sat: f64,
     /// ARAIM: P_const, for every constellation (P) or one (SYS=P, e.g. G=1e-8); repeatable; default 1e-4.
     #[arg(long = "araim-p-const", value_name = "[SYS=]P")]
