@@ -678,6 +678,9 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
 
         // Step 5: protection levels.
         let factor = 1.0 - p_unmon / (cfg.phmi_vert + cfg.phmi_hor);
+        // One bracket memo for east and north (same rhs and priors).
+        let mut horizontal = pl::BracketCache::new(0.0, 0);
+        let mut vertical = pl::BracketCache::new(0.0, 0);
         let mut exact = [0.0f64; 3];
         let mut add = [0.0f64; 3];
         for q in 0..3 {
@@ -709,7 +712,12 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
                 n_modes: n_mon,
                 rhs,
             };
-            match eq.solve(cfg.tol_pl_m) {
+            let cache = if q == 2 {
+                &mut vertical
+            } else {
+                &mut horizontal
+            };
+            match eq.solve_cached(cfg.tol_pl_m, cache) {
                 Some(s) => {
                     if let (Some(e), Some(a)) = (exact.get_mut(q), add.get_mut(q)) {
                         *e = s.exact_m;
