@@ -1,6 +1,7 @@
 //! ARAIM epochs (issue 12): ADD v3.0 Appendix D (10 satellites, 12 modes),
 //! and 30 satellites G15 + E15 with P_sat 1e-4 (satellite pairs) at
 //! P_const 1e-8 and 1e-4 (satellite + constellation modes).
+//! Each case also with 30 m on its first satellite, then FDE (`+fde`).
 //! Run: cargo bench -p raim-core --bench araim
 //! The same inputs run through the peer crate in peer-bench/ (benches/araim_peer.rs).
 
@@ -54,6 +55,22 @@ fn bench(c: &mut Criterion) {
                     .process(black_box(&cfg), black_box(ism), black_box(sats))
                     .unwrap();
                 black_box(out.pl_add.vpl_m)
+            })
+        });
+    }
+    // After a detection: 30 m on the first satellite, process + FDE (the
+    // tests-only check of every single-event candidate, then the chosen
+    // subset with its exclusion-risk PLs).
+    let mut scratch = Box::new(Araim::<f64, 32, 1024>::new());
+    for (name, sats, ism) in cases.iter() {
+        let mut faulted = sats.clone();
+        faulted[0].residual_m = 30.0;
+        group.bench_function(format!("{name}+fde"), |b| {
+            b.iter(|| {
+                engine
+                    .process(black_box(&cfg), black_box(ism), black_box(&faulted))
+                    .unwrap();
+                black_box(engine.fde(&cfg, ism, &faulted, &mut scratch).unwrap())
             })
         });
     }

@@ -18,14 +18,22 @@ fn main() {
     let case = args.get(1).map(String::as_str).unwrap_or("appendix_d");
     let iters: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1000);
     let ge = [System::Gps, System::Galileo];
-    let (sats, p_const) = match case {
+    let (sats, p_const) = match case.trim_end_matches("+fde") {
         "appendix_d" => (appendix_d(), 1e-4),
         "sky20" => (sky(10, 1e-5), 1e-4),
         "sky30_pconst1e-8" => (sky(15, 1e-4), 1e-8),
         "sky30_pconst1e-4" => (sky(15, 1e-4), 1e-4),
         other => panic!("unknown case {other}"),
     };
+    // `<case>+fde`: 30 m on the first satellite, then FDE (the
+    // consistency check of every single-event candidate).
+    let fde = case.ends_with("+fde");
+    let mut sats = sats;
+    if fde {
+        sats[0].residual_m = 30.0;
+    }
     let ism = Ism::with(&ge, p_const);
+    let mut scratch = Box::new(Araim::<f64, 32, 1024>::new());
     let cfg = AraimConfig::default();
     let mut engine = Box::new(Araim::<f64, 32, 1024>::new());
     let mut acc = 0.0;
@@ -34,6 +42,12 @@ fn main() {
             .process(black_box(&cfg), black_box(&ism), black_box(&sats))
             .unwrap();
         acc += out.pl_add.vpl_m;
+        if fde {
+            let d = engine
+                .fde(black_box(&cfg), &ism, &sats, &mut scratch)
+                .unwrap();
+            acc += matches!(d, raim_core::araim::FdeDecision::Excluded { .. }) as u8 as f64;
+        }
     }
     let out = engine.process(&cfg, &ism, &sats).unwrap();
     println!(

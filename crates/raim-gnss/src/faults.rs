@@ -357,6 +357,46 @@ impl Scenario {
     }
 }
 
+/// A constellation-wide fault (issue 12, ARAIM; the ADD's constellation
+/// fault mode): every satellite of `system` in `sats` gets the range error
+///
+///   b_i = common_m - u_i . shift_ecef_m,
+///
+/// u_i the unit line of sight from `receiver_ecef_m` to satellite i. The
+/// second term is what a common error of the constellation's orbits (an
+/// Earth-orientation or frame error: every satellite displaced so that the
+/// constellation alone puts the receiver at `receiver + shift`) does to the
+/// ranges, to first order (|shift|^2 / range). The uniform `common_m` is a
+/// constellation clock/time-offset error; on its own it is absorbed by the
+/// constellation's clock column and moves no position. Returns each
+/// satellite touched with its bias (m). Additive: the fault plan's
+/// `step:E:..` (a uniform step) is unchanged.
+pub fn constellation_bias(
+    sats: &mut [RangeObservation],
+    system: System,
+    receiver_ecef_m: [f64; 3],
+    common_m: f64,
+    shift_ecef_m: [f64; 3],
+) -> Vec<(SatId, f64)> {
+    let mut out = Vec::new();
+    for s in sats.iter_mut().filter(|s| s.id.system == system) {
+        let d = [
+            s.position_m[0] - receiver_ecef_m[0],
+            s.position_m[1] - receiver_ecef_m[1],
+            s.position_m[2] - receiver_ecef_m[2],
+        ];
+        let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        if r.is_nan() || r <= 0.0 {
+            continue;
+        }
+        let along = (d[0] * shift_ecef_m[0] + d[1] * shift_ecef_m[1] + d[2] * shift_ecef_m[2]) / r;
+        let b = common_m - along;
+        s.pseudorange_m += b;
+        out.push((s.id, b));
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -498,6 +538,48 @@ mod tests {
         ] {
             assert!(FaultPlan::parse_cli(s, T0).is_err(), "{s}");
         }
+    }
+
+    /// `constellation_bias` against the exact range change: the biased
+    /// ranges of the constellation are the ranges from the shifted receiver
+    /// (to |shift|^2 / range), plus the common part; other systems untouched.
+    #[test]
+    fn constellation_bias_is_the_range_change_of_a_shift() {
+        let rx = [3_512_000.0, 778_000.0, 5_248_000.0];
+        let shift = [12.0, -7.0, 20.0];
+        let mk = |system, prn, p: [f64; 3]| RangeObservation {
+            id: SatId { system, prn },
+            pseudorange_m: 0.0,
+            position_m: p,
+            sigma_m: None,
+        };
+        let pos = [
+            [15_000_000.0, 5_000_000.0, 20_000_000.0],
+            [5_000_000.0, -12_000_000.0, 22_000_000.0],
+            [20_000_000.0, 9_000_000.0, 15_000_000.0],
+        ];
+        let range = |a: [f64; 3], b: [f64; 3]| {
+            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+        };
+        let mut sats: Vec<_> = pos
+            .iter()
+            .enumerate()
+            .map(|(k, p)| mk(System::Galileo, k as u8 + 1, *p))
+            .chain([mk(System::Gps, 3, pos[0])])
+            .collect();
+        let hit = constellation_bias(&mut sats, System::Galileo, rx, 2.5, shift);
+        assert_eq!(hit.len(), 3);
+        let moved = [rx[0] + shift[0], rx[1] + shift[1], rx[2] + shift[2]];
+        for (s, p) in sats.iter().zip(pos.iter()).take(3) {
+            let exact = range(*p, moved) - range(*p, rx) + 2.5;
+            // |shift|^2 / range: 6e-4 m^2 / 2e7 m.
+            assert!(
+                (s.pseudorange_m - exact).abs() < 1e-4,
+                "{}",
+                s.pseudorange_m - exact
+            );
+        }
+        assert_eq!(sats[3].pseudorange_m, 0.0);
     }
 }
 

@@ -12,10 +12,25 @@
 //! - otherwise two consistent candidates that do not nest: the data
 //!   cannot tell them apart, alarm (`Ambiguous`), never a silent pick.
 //!
-//! After an exclusion the protection levels are those of the remaining
-//! subset with its own fault modes (the scratch engine's output). The
-//! ADD's additional wrong-exclusion term is not included yet (see
-//! docs/ARAIM.md, "Not done").
+//! After an exclusion of E, the protection levels are those of the
+//! remaining subset with its fault modes re-enumerated on it (its own
+//! priors, thresholds and K_fa; the scratch engine's output), with the
+//! exclusion risk in the integrity budget (docs/ARAIM.md, "Exclusion
+//! risk"): per axis q, PL_q^(E) solves
+//!
+//!   2 Q((PL - b_q^(E)) / sigma_q^(E))
+//!     + sum_{k in modes(E)} p_k Q((PL - T_k,q^(E) - b_q^(E,k)) / sigma_q^(E,k))
+//!   = (1 / N_ex) PHMI_q (1 - P_unmon^(E) / (PHMI_VERT + PHMI_HOR)),
+//!
+//! N_ex the number of exclusions the FDE could have made (the monitorable
+//! single-event modes of the all-in-view list, each a candidate). Which
+//! candidate passes is decided by the noise as much as by the fault: a
+//! wrong exclusion is one of these outcomes. Each outcome gets 1 / N_ex of
+//! the budget, so their union, P(HMI, some exclusion) <= sum_E P(HMI, E
+//! excluded), stays within PHMI_q whichever one the FDE returns. Each term
+//! bounds its outcome with unconditional priors: an all-in-view fault mode j
+//! leaves, in the subset, the mode j \ E, whose prior on the subset is the
+//! sum of p_j over the excluded satellites' states (the re-enumeration).
 
 use super::{Araim, AraimConfig, AraimError, AraimSat, Ism, ModeStatus};
 use crate::measurement::MAX_SYSTEMS;
@@ -34,7 +49,8 @@ pub enum FdeAlarm {
     Ambiguous { first: usize, second: usize },
 }
 
-/// The outcome of ARAIM FDE.
+/// The outcome of ARAIM FDE. (After an alarm the scratch engine holds
+/// the last candidate's tests only, marked `PlNotSolved { axis: 0 }`.)
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum FdeDecision {
@@ -87,6 +103,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         let mut subset = [AraimSat::<T>::default(); N];
         // (mode index, removed satellite mask) of the consistent candidates.
         let mut found: heapless::Vec<(usize, u64), MAX_CANDIDATES> = heapless::Vec::new();
+        let mut n_ex = 0usize;
         for (k, mode) in self.out.modes.iter().enumerate() {
             let ev = mode.events;
             if mode.status != ModeStatus::Monitored
@@ -94,8 +111,9 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             {
                 continue;
             }
+            n_ex += 1;
             let removed = removed_sats(sats, ev.sats, ev.consts);
-            if self.consistent(cfg, ism, sats, removed, &mut subset, scratch)? {
+            if self.consistent(cfg, ism, sats, removed, &mut subset, scratch, None)? {
                 // Single-event modes number at most 64 + 5: never full.
                 let _ = found.push((k, removed));
             }
@@ -124,8 +142,10 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
                 second,
             }));
         };
-        // Leave the chosen subset's output in the scratch engine.
-        self.consistent(cfg, ism, sats, removed, &mut subset, scratch)?;
+        // Leave the chosen subset's output in the scratch engine, its PLs
+        // with the exclusion risk: 1 / N_ex of the budget (module doc).
+        let share = 1.0 / n_ex.max(1) as f64;
+        self.consistent(cfg, ism, sats, removed, &mut subset, scratch, Some(share))?;
         let consts = self.out.modes.get(k).map(|m| m.events.consts).unwrap_or(0);
         Ok(FdeDecision::Excluded {
             mode: k,
@@ -134,8 +154,11 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         })
     }
 
-    /// Processes the subset without `removed` in `scratch`; true when it
-    /// is valid and passes all its own tests.
+    /// Processes the subset without `removed` in `scratch`, with its PLs at
+    /// the budget share `share`, or its tests only (`None`: the candidate
+    /// search needs no PLs); true when it is valid and passes all its own
+    /// tests.
+    #[allow(clippy::too_many_arguments)]
     fn consistent(
         &self,
         cfg: &AraimConfig,
@@ -144,6 +167,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         removed: u64,
         buf: &mut [AraimSat<T>; N],
         scratch: &mut Araim<T, N, K>,
+        share: Option<f64>,
     ) -> Result<bool, AraimError> {
         let mut n = 0;
         let mut sub_ism = Ism::default();
@@ -163,7 +187,11 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         let Some(subset) = buf.get(..n) else {
             return Ok(false);
         };
-        match scratch.process(cfg, &sub_ism, subset) {
+        let result = match share {
+            Some(share) => scratch.process_scaled(cfg, &sub_ism, subset, share),
+            None => scratch.process_tests_only(cfg, &sub_ism, subset),
+        };
+        match result {
             Ok(out) => Ok(out.detection_passed && out.n_monitored > 0),
             // Too few satellites or a singular subset: not a candidate.
             Err(AraimError::TooFewSatellites { .. } | AraimError::RankDeficient { .. }) => {

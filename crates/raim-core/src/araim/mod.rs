@@ -171,6 +171,27 @@ impl<T: Real, const K: usize> Default for AraimOutput<T, K> {
 }
 
 impl<T: Real, const K: usize> AraimOutput<T, K> {
+    /// Every field to its default, the mode list emptied in place.
+    fn reset(&mut self) {
+        let z = T::of(0.0);
+        self.modes.clear();
+        self.n_monitored = 0;
+        self.max_faults = 0;
+        self.p_exceed = 0.0;
+        self.p_unmon = 0.0;
+        self.k_fa = [0.0; 3];
+        self.sigma0_m = [z; 3];
+        self.bias0_m = [z; 3];
+        self.correction_enu_m = [z; 3];
+        self.sigma_v_acc_m = z;
+        self.emt_m = z;
+        self.pl_exact = ProtectionLevels::default();
+        self.pl_add = ProtectionLevels::default();
+        self.detection_passed = false;
+        self.limits = Limits::default();
+        self.unavailable = None;
+    }
+
     /// ARAIM service: no structural cause and every limit met.
     pub fn available(&self) -> bool {
         self.unavailable.is_none()
@@ -199,11 +220,14 @@ pub struct Araim<T, const N: usize, const K: usize> {
     geo: Geometry<T, N>,
     s0: [[T; N]; 3],
     base0: Base<T, N>,
+    /// The all-in-view base's coupling matrix (subset::coupling).
+    q0: [[T; N]; N],
     const_bases: [Base<T, N>; MAX_SYSTEMS],
     const_status: [Option<Deficient>; MAX_SYSTEMS],
     scratch: Base<T, N>,
     events: Vec<ModeEvents, K>,
     out: AraimOutput<T, K>,
+    budget_share: f64,
 }
 
 impl<T: Real, const N: usize, const K: usize> Default for Araim<T, N, K> {
@@ -212,11 +236,13 @@ impl<T: Real, const N: usize, const K: usize> Default for Araim<T, N, K> {
             geo: Geometry::default(),
             s0: [[T::of(0.0); N]; 3],
             base0: Base::default(),
+            q0: [[T::of(0.0); N]; N],
             const_bases: [Base::default(); MAX_SYSTEMS],
             const_status: [None; MAX_SYSTEMS],
             scratch: Base::default(),
             events: Vec::new(),
             out: AraimOutput::default(),
+            budget_share: 1.0,
         }
     }
 }
@@ -344,10 +370,55 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         ism: &Ism,
         sats: &[AraimSat<T>],
     ) -> Result<&AraimOutput<T, K>, AraimError> {
+        self.process_scaled(cfg, ism, sats, 1.0)
+    }
+
+    /// The share of the integrity budget the last `process` gave its PL
+    /// equations: 1 for an epoch, 1 / N_ex for the subset after an
+    /// exclusion (fde.rs, the exclusion risk).
+    pub fn integrity_budget_share(&self) -> f64 {
+        self.budget_share
+    }
+
+    /// `process` with the right-hand side of the PL equations (step 5)
+    /// multiplied by `budget_share` in (0, 1] (fde.rs).
+    pub(crate) fn process_scaled(
+        &mut self,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        sats: &[AraimSat<T>],
+        budget_share: f64,
+    ) -> Result<&AraimOutput<T, K>, AraimError> {
+        self.process_impl(cfg, ism, sats, budget_share, true)
+    }
+
+    /// Steps 1-4 only (modes, subsets, tests, EMT): the FDE's consistency
+    /// check of a candidate needs no PLs. The output is marked
+    /// `PlNotSolved { axis: 0 }` (never read as available).
+    pub(crate) fn process_tests_only(
+        &mut self,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        sats: &[AraimSat<T>],
+    ) -> Result<&AraimOutput<T, K>, AraimError> {
+        self.process_impl(cfg, ism, sats, 1.0, false)
+    }
+
+    fn process_impl(
+        &mut self,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        sats: &[AraimSat<T>],
+        budget_share: f64,
+        with_pls: bool,
+    ) -> Result<&AraimOutput<T, K>, AraimError> {
+        self.budget_share = budget_share;
         self.load(cfg, ism, sats)?;
         let zero = T::of(0.0);
         let n = self.geo.n;
-        self.out = AraimOutput::default();
+        // In place: `AraimOutput::default()` would build and copy the
+        // whole K-mode list.
+        self.out.reset();
 
         // Step 2: all in view.
         let zeros = [[zero; N]; 3];
@@ -359,6 +430,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         })?;
         self.s0 = self.base0.d;
         self.base0.d = zeros;
+        subset::coupling(&self.geo, &self.base0, &mut self.q0);
         let out = &mut self.out;
         for q in 0..3 {
             let row = self.s0.get(q).copied().unwrap_or([zero; N]);
@@ -462,6 +534,18 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
 
         // Step 3: per mode, from its base.
         let mut p_unmon = enumeration.p_exceed;
+        // Tests only (FDE candidates): a mode whose separation exceeds the
+        // threshold at K_fa for *all* the enumerated modes (>= the
+        // monitored ones, so that K_fa is at least the true one) fails its
+        // test whatever the rest: the subset is inconsistent, stop there.
+        let k_upper = if with_pls {
+            [zero; 3]
+        } else {
+            let nm = self.events.len().max(1) as f64;
+            let kh = normal_q_inv(cfg.pfa_hor / (4.0 * nm)).unwrap_or(f64::INFINITY);
+            let kv = normal_q_inv(cfg.pfa_vert / (2.0 * nm)).unwrap_or(f64::INFINITY);
+            [T::of(kh), T::of(kh), T::of(kv)]
+        };
         for ev in self.events.iter() {
             let mut consts = ev.consts;
             for (j, &cs) in const_sats.iter().enumerate() {
@@ -483,7 +567,13 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             }
             let extra = ev.sats & !removed;
             let result = match count {
-                0 => subset::downdate(&self.geo, &self.base0, extra, &self.s0),
+                0 => subset::downdate_coupled(
+                    &self.geo,
+                    &self.base0,
+                    extra,
+                    &self.s0,
+                    Some(&self.q0),
+                ),
                 1 => match self.const_status.get(single).copied().flatten() {
                     Some(d) => Err(d),
                     None => match self.const_bases.get(single) {
@@ -517,8 +607,20 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
                     }
                 }
             };
+            let certain_failure = !with_pls
+                && mode.status == ModeStatus::Monitored
+                && (0..3).any(|q| {
+                    let sep = mode.stats.separation_m.get(q).copied().unwrap_or(zero);
+                    let ss = mode.stats.sigma_ss_m.get(q).copied().unwrap_or(zero);
+                    sep.abs() > k_upper.get(q).copied().unwrap_or(zero) * ss
+                });
             // Cannot fail: `events` and `modes` share the capacity K.
             let _ = out.modes.push(mode);
+            if certain_failure {
+                out.detection_passed = false;
+                out.unavailable = Some(Unavailable::PlNotSolved { axis: 0 });
+                return Ok(&self.out);
+            }
         }
         out.p_unmon = p_unmon;
         let n_mon = out
@@ -571,17 +673,25 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             });
             return Ok(&self.out);
         }
+        if !with_pls {
+            out.unavailable = Some(Unavailable::PlNotSolved { axis: 0 });
+            return Ok(&self.out);
+        }
 
         // Step 5: protection levels.
         let factor = 1.0 - p_unmon / (cfg.phmi_vert + cfg.phmi_hor);
+        // One bracket memo for east and north (same rhs and priors).
+        let mut horizontal = pl::BracketCache::new(0.0, 0);
+        let mut vertical = pl::BracketCache::new(0.0, 0);
         let mut exact = [0.0f64; 3];
         let mut add = [0.0f64; 3];
         for q in 0..3 {
-            let rhs = if q == 2 {
-                cfg.phmi_vert * factor
-            } else {
-                0.5 * cfg.phmi_hor * factor
-            };
+            let rhs = budget_share
+                * if q == 2 {
+                    cfg.phmi_vert * factor
+                } else {
+                    0.5 * cfg.phmi_hor * factor
+                };
             let modes = &out.modes;
             let eq = pl::Equation {
                 fault_free: pl::Term {
@@ -604,7 +714,12 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
                 n_modes: n_mon,
                 rhs,
             };
-            match eq.solve(cfg.tol_pl_m) {
+            let cache = if q == 2 {
+                &mut vertical
+            } else {
+                &mut horizontal
+            };
+            match eq.solve_cached(cfg.tol_pl_m, cache) {
                 Some(s) => {
                     if let (Some(e), Some(a)) = (exact.get_mut(q), add.get_mut(q)) {
                         *e = s.exact_m;

@@ -242,7 +242,7 @@ mod brute_force {
         (a - b).abs() <= TOL_M + U * kappa * a.abs()
     }
 
-    struct Dense {
+    pub(super) struct Dense {
         /// Position rows of S (3 x n, zero columns for removed satellites).
         s: DMatrix<f64>,
         p_diag: [f64; 3],
@@ -250,7 +250,7 @@ mod brute_force {
     }
 
     /// WLS gain of the kept satellites; None if rank-deficient.
-    fn dense_subset(sats: &[AraimSat<f64>], ism: &Ism, removed: u64) -> Option<Dense> {
+    pub(super) fn dense_subset(sats: &[AraimSat<f64>], ism: &Ism, removed: u64) -> Option<Dense> {
         let n = sats.len();
         let kept: Vec<usize> = (0..n).filter(|i| removed & (1 << i) == 0).collect();
         let clocks: Vec<usize> = (0..5)
@@ -329,6 +329,19 @@ mod brute_force {
     fn check_epoch(sats: &[AraimSat<f64>], ism: &Ism, cfg: &AraimConfig) -> (usize, usize) {
         let mut engine = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
         let out = engine.process(cfg, ism, sats).unwrap().clone();
+        check_output(sats, ism, cfg, &out, 1.0)
+    }
+
+    /// Checks an engine output for `sats` against the dense reference, the
+    /// PL equations' right-hand side multiplied by `share` (1 for an
+    /// epoch; 1 / N_ex after an exclusion).
+    pub(super) fn check_output<const K: usize>(
+        sats: &[AraimSat<f64>],
+        ism: &Ism,
+        cfg: &AraimConfig,
+        out: &AraimOutput<f64, K>,
+        share: f64,
+    ) -> (usize, usize) {
         if matches!(
             out.unavailable,
             Some(Unavailable::ModeCapacity { .. }) | Some(Unavailable::TooManyEvents { .. })
@@ -439,11 +452,12 @@ mod brute_force {
         let factor = 1.0 - unmon / (cfg.phmi_vert + cfg.phmi_hor);
         let mut roots = [0.0; 3];
         for qx in 0..3 {
-            let rhs = if qx == 2 {
-                cfg.phmi_vert * factor
-            } else {
-                0.5 * cfg.phmi_hor * factor
-            };
+            let rhs = share
+                * if qx == 2 {
+                    cfg.phmi_vert * factor
+                } else {
+                    0.5 * cfg.phmi_hor * factor
+                };
             roots[qx] = dense_root((out.bias0_m[qx], out.sigma0_m[qx]), &terms[qx], rhs);
         }
         let got = [
@@ -950,5 +964,93 @@ mod fde_tests {
             }
             other => panic!("{other:?}"),
         }
+    }
+
+    /// The PLs after an exclusion (fde.rs, docs/ARAIM.md "Exclusion
+    /// risk") against the dense reference: the subset, its modes
+    /// re-enumerated by the reference itself, every mode a fresh dense
+    /// WLS, the PL by dense bisection with 1 / N_ex of the budget, N_ex
+    /// counted here as the single-event modes of the all-in-view list
+    /// whose dense subset is solvable. Also: the exclusion's PLs are never
+    /// below the subset's detection-only PLs.
+    #[test]
+    fn post_exclusion_pls_match_dense_reference_with_the_exclusion_budget() {
+        let cfg = AraimConfig::default();
+        let ism = ge_ism(1e-4);
+        let mut checked = 0;
+        for target in 0..20 {
+            let mut sats = sky20();
+            sats[target].residual_m = 30.0;
+            let mut main = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+            let mut scratch = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+            let all = main.process(&cfg, &ism, &sats).unwrap().clone();
+            let d = main.fde(&cfg, &ism, &sats, &mut scratch).unwrap();
+            let FdeDecision::Excluded { sats: removed, .. } = d else {
+                continue;
+            };
+            let n_ex = all
+                .modes
+                .iter()
+                .filter(|m| m.events.sats.count_ones() + m.events.consts.count_ones() == 1)
+                .filter(|m| {
+                    let mut r = m.events.sats;
+                    for (i, s) in sats.iter().enumerate() {
+                        if m.events.consts & (1 << s.id.system.index()) != 0 {
+                            r |= 1 << i;
+                        }
+                    }
+                    super::brute_force::dense_subset(&sats, &ism, r).is_some()
+                })
+                .count();
+            assert_eq!(n_ex, 22, "20 satellites + 2 constellations");
+            let subset: std::vec::Vec<AraimSat<f64>> = sats
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| removed & (1 << i) == 0)
+                .map(|(_, s)| *s)
+                .collect();
+            let mut sub_ism = Ism::default();
+            for s in &subset {
+                sub_ism.p_const[s.id.system.index()] = ism.p_const[s.id.system.index()];
+            }
+            let post = scratch.output().clone();
+            assert!((scratch.integrity_budget_share() - 1.0 / n_ex as f64).abs() < 1e-15);
+            super::brute_force::check_output(&subset, &sub_ism, &cfg, &post, 1.0 / n_ex as f64);
+            let own = scratch.process(&cfg, &sub_ism, &subset).unwrap();
+            assert!(post.pl_exact.vpl_m > own.pl_exact.vpl_m);
+            assert!(post.pl_exact.hpl_m > own.pl_exact.hpl_m);
+            checked += 1;
+        }
+        assert!(checked >= 10, "{checked}");
+    }
+
+    /// The FDE's tests-only check (early exit at a certain failure, no
+    /// PLs) gives the same verdict as a full `process` for every
+    /// single-satellite candidate of 20 faulted epochs.
+    #[test]
+    fn tests_only_check_agrees_with_full_processing() {
+        let cfg = AraimConfig::default();
+        let ism = ge_ism(1e-4);
+        let mut a = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        let mut b = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        let mut early = 0;
+        for target in 0..20 {
+            let mut sats = sky20();
+            sats[target].residual_m = 30.0;
+            for drop in 0..20 {
+                let sub: std::vec::Vec<AraimSat<f64>> = sats
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| *i != drop)
+                    .map(|(_, s)| *s)
+                    .collect();
+                let full = a.process(&cfg, &ism, &sub).unwrap();
+                let quick = b.process_tests_only(&cfg, &ism, &sub).unwrap();
+                assert_eq!(full.detection_passed, quick.detection_passed);
+                assert!(quick.unavailable.is_some());
+                early += (quick.modes.len() < full.modes.len()) as usize;
+            }
+        }
+        assert!(early > 100, "{early}");
     }
 }

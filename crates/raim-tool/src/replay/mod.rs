@@ -5,6 +5,7 @@
 //! mask) -> a clean run (the reference position is its mean) -> the faulted
 //! run -> per-epoch text / JSON lines / NMEA, a summary table and a plot.
 
+pub mod araim;
 mod checks;
 mod decorrelate;
 mod engine;
@@ -156,6 +157,9 @@ pub struct ReplayArgs {
     /// Particle-filter RAIM (seed 004; docs/PF.md): --pf {ekf,pf,gapf}.
     #[command(flatten)]
     pub pf: pf::PfArgs,
+    /// ARAIM (issue 12; docs/ARAIM.md): --araim and its options.
+    #[command(flatten)]
+    pub araim: araim::AraimReplayArgs,
     /// Seed 003's ESQ and PCA (docs/ESQ.md): --esq, --pca, --esq-mcusum.
     #[command(flatten)]
     pub esq: esq::EsqArgs,
@@ -450,14 +454,21 @@ pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
 /// `raim replay`: the output, and the count of epochs the monitor refused
 /// (a closed pipe is handled by the caller, crate::outcome).
 pub fn run(args: &ReplayArgs) -> Result<Tally> {
+    if args.esq.any() {
+        // Seed 003's own claims (docs/ESQ.md), built on its ARAIM modes:
+        // their own per-epoch output; `--araim --esq` and `--araim --pca`
+        // run these (the ESQ/PCA options set their ARAIM inputs).
+        esq::run(args)?;
+        return Ok(Tally::default());
+    }
+    if args.araim.araim {
+        // ARAIM (docs/ARAIM.md): its own per-epoch output.
+        araim::run(args)?;
+        return Ok(Tally::default());
+    }
     if args.pf.pf.is_some() {
         // Particle-filter RAIM (docs/PF.md): its own per-epoch output.
         pf::run(args)?;
-        return Ok(Tally::default());
-    }
-    if args.esq.any() {
-        // Seed 003's own claims (docs/ESQ.md): their own per-epoch output.
-        esq::run(args)?;
         return Ok(Tally::default());
     }
     let out = replay(args)?;

@@ -1,0 +1,838 @@
+//! `raim replay --araim`: ARAIM (issue 12, docs/ARAIM.md) on the replay's
+//! corrected pseudoranges, with the same fault injection plus the
+//! constellation-wide fault of `raim_gnss::faults::constellation_bias`.
+//!
+//! Per epoch: the linearised ARAIM epoch at the all-in-view solution (the
+//! ADD elevation model for C_int/C_acc, the command's ISM), the ARAIM
+//! output, FDE after a detection, the protection levels of the position
+//! actually output (all in view, or the excluded subset's with the
+//! exclusion's added risk), and the position error against the reference.
+//! Text or JSON lines, a summary, and a plot (PLs and EMT over time against
+//! VAL/HAL, the vertical and horizontal Stanford diagrams).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{anyhow, bail, Context, Result};
+use clap::Args;
+use plotters::prelude::*;
+use raim_core::araim::{error_model, Araim, AraimConfig, AraimSat, FdeAlarm, FdeDecision, Ism};
+use raim_core::frames::{ecef_to_geodetic, enu_rotation, rotate, unrotate};
+use raim_core::{RangeObservation, SatId, System};
+use raim_gnss::faults::{constellation_bias, FaultPlan};
+use raim_gnss::ranging::PreparedEpoch;
+use serde::Serialize;
+
+use super::{checked_fault_plan, prepare, record::error_enu, ReplayArgs};
+
+/// Satellites per epoch (ESBC G+E+C at a 10 degree mask has up to ~30).
+pub const ARAIM_SATS: usize = super::REPLAY_CAPACITY;
+/// Fault modes per epoch (G+E+C with pairs: about 700).
+pub const ARAIM_MODES: usize = 4096;
+
+type Engine = Araim<f64, ARAIM_SATS, ARAIM_MODES>;
+
+/// Ionospheric shell height of the obliquity factor (m).
+const IONO_SHELL_M: f64 = 350_000.0;
+const EARTH_RADIUS_M: f64 = 6_371_000.0;
+/// Linearisation: relinearise until the correction is below this (m).
+const LIN_TOL_M: f64 = 1e-4;
+const LIN_MAX_ITER: usize = 6;
+
+#[derive(Debug, Clone, Args)]
+pub struct AraimReplayArgs {
+    /// Run ARAIM (issue 12; docs/ARAIM.md) instead of the snapshot monitor, with the ADD elevation model for C_int and C_acc.
+    #[arg(long)]
+    pub araim: bool,
+    /// ARAIM: sigma_URA for every satellite, m.
+    #[arg(long, default_value_t = 0.75)]
+    pub araim_ura_m: f64,
+    /// ARAIM: sigma_URE for every satellite, m.
+    #[arg(long, default_value_t = 0.5)]
+    pub araim_ure_m: f64,
+    /// ARAIM: b_nom for every satellite, m.
+    #[arg(long, default_value_t = 0.5)]
+    pub araim_b_nom_m: f64,
+    /// ARAIM: P_sat for every satellite.
+    #[arg(long, default_value = "1e-5")]
+    pub araim_p_sat: f64,
+    /// ARAIM: P_const, for every constellation (P) or one (SYS=P, e.g. G=1e-8); repeatable; default 1e-4.
+    #[arg(long = "araim-p-const", value_name = "[SYS=]P")]
+    pub araim_p_const: Vec<String>,
+    /// ARAIM: residual ionosphere of single-frequency data, vertical sigma in m, times the obliquity, added to C_int and C_acc (0: the ADD's dual-frequency model alone).
+    #[arg(long, default_value_t = 0.0)]
+    pub araim_iono_m: f64,
+    /// ARAIM: a constellation-wide fault, SYS:COMMON_M:E_M,N_M,U_M@START[..END]: a common range error plus the range change of a shift (E, N, U) of that constellation's solution (docs/ARAIM.md); repeatable.
+    #[arg(long = "araim-const-fault", value_name = "SPEC")]
+    pub araim_const_faults: Vec<String>,
+    /// ARAIM: VPL, HPL and EMT over time against VAL/HAL, and the vertical and horizontal Stanford diagrams, into this PNG.
+    #[arg(long)]
+    pub araim_plot: Option<PathBuf>,
+}
+
+/// A parsed `--araim-const-fault`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConstFault {
+    pub system: System,
+    pub common_m: f64,
+    pub shift_enu_m: [f64; 3],
+    pub start_gps_s: f64,
+    pub end_gps_s: Option<f64>,
+}
+
+impl ConstFault {
+    pub fn parse(spec: &str, first_gps_s: f64) -> Result<Self> {
+        let bad = || {
+            anyhow!("--araim-const-fault {spec}: expected SYS:COMMON_M:E_M,N_M,U_M@START[..END]")
+        };
+        let (body, when) = spec.split_once('@').ok_or_else(bad)?;
+        let (s, e) = match when.split_once("..") {
+            Some((s, e)) => (s, Some(e)),
+            None => (when, None),
+        };
+        let start_gps_s = raim_gnss::time::resolve(s, first_gps_s)?;
+        let end_gps_s = e
+            .map(|e| raim_gnss::time::resolve(e, first_gps_s))
+            .transpose()?;
+        let parts: Vec<&str> = body.split(':').collect();
+        let [sys, common, shift] = parts.as_slice() else {
+            return Err(bad());
+        };
+        let system = raim_gnss::parse_system(sys.chars().next().ok_or_else(bad)?)?;
+        let num = |t: &str| -> Result<f64> {
+            t.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(bad)
+        };
+        let common_m = num(common)?;
+        let v: Vec<f64> = shift.split(',').map(num).collect::<Result<_>>()?;
+        let [e_m, n_m, u_m] = v.as_slice() else {
+            return Err(bad());
+        };
+        Ok(Self {
+            system,
+            common_m,
+            shift_enu_m: [*e_m, *n_m, *u_m],
+            start_gps_s,
+            end_gps_s,
+        })
+    }
+
+    fn active(&self, t: f64) -> bool {
+        t >= self.start_gps_s && self.end_gps_s.is_none_or(|e| t < e)
+    }
+}
+
+impl AraimReplayArgs {
+    /// The ISM for the systems of the run.
+    pub fn ism(&self, systems: &[System]) -> Result<Ism> {
+        let mut all = 1e-4;
+        let mut per: Vec<(System, f64)> = Vec::new();
+        for s in &self.araim_p_const {
+            match s.split_once('=') {
+                Some((sys, p)) => {
+                    let sys = raim_gnss::parse_system(sys.chars().next().unwrap_or(' '))?;
+                    per.push((
+                        sys,
+                        p.parse().with_context(|| format!("--araim-p-const {s}"))?,
+                    ));
+                }
+                None => all = s.parse().with_context(|| format!("--araim-p-const {s}"))?,
+            }
+        }
+        let mut ism = Ism::with(systems, all);
+        for (sys, p) in per {
+            if let Some(slot) = ism.p_const.get_mut(sys.index()) {
+                *slot = Some(p);
+            }
+        }
+        ism.validate().map_err(|e| anyhow!("ISM: {e:?}"))?;
+        Ok(ism)
+    }
+}
+
+/// One epoch of an ARAIM replay.
+#[derive(Debug, Clone, Serialize, Default)]
+pub struct AraimRecord {
+    pub time_gps_s: f64,
+    pub sats: usize,
+    /// Injected faults, `SAT:BIAS_M`.
+    pub faulted: Vec<String>,
+    pub modes: usize,
+    pub monitored: usize,
+    pub max_faults: usize,
+    pub p_unmon: f64,
+    /// All in view: ADD bracket outputs and exact roots, EMT, sigma_v,acc.
+    pub vpl_all_m: f64,
+    pub hpl_all_m: f64,
+    pub vpl_all_exact_m: f64,
+    pub hpl_all_exact_m: f64,
+    pub emt_m: f64,
+    pub sigma_v_acc_m: f64,
+    pub detection_passed: bool,
+    /// `no_fault`, `excluded`, `alarm_ambiguous`, `alarm_no_candidate`.
+    pub fde: String,
+    pub excluded: Vec<String>,
+    /// The protection levels of the position output (all in view, or the
+    /// excluded subset's, with the exclusion risk); None on an alarm.
+    pub vpl_m: Option<f64>,
+    pub hpl_m: Option<f64>,
+    /// ARAIM service for the position output (false on an alarm).
+    pub available: bool,
+    pub unavailable: Option<String>,
+    /// The position output's error against the reference (ENU, m); on an
+    /// alarm, the all-in-view position's.
+    pub error_enu_m: Option<[f64; 3]>,
+    pub error_h_m: Option<f64>,
+    pub error_v_m: Option<f64>,
+    /// `correct` (every faulted satellite excluded) or `wrong`.
+    pub exclusion: Option<String>,
+    pub error: Option<String>,
+    #[serde(skip)]
+    pub position_ecef_m: Option<[f64; 3]>,
+}
+
+impl AraimRecord {
+    fn output_pls(&self) -> Option<(f64, f64)> {
+        Some((self.vpl_m?, self.hpl_m?))
+    }
+
+    pub fn text_line(&self) -> String {
+        let t = raim_gnss::time::time_of_day(self.time_gps_s);
+        if let Some(e) = &self.error {
+            return format!("{t} error {e}");
+        }
+        let pl = match self.output_pls() {
+            Some((v, h)) => format!("VPL {v:7.2} HPL {h:7.2}"),
+            None => "VPL     --- HPL     ---".to_string(),
+        };
+        let err = match (self.error_v_m, self.error_h_m) {
+            (Some(v), Some(h)) => format!("err V {v:5.2} H {h:5.2}"),
+            _ => "err ---".to_string(),
+        };
+        format!(
+            "{t} n {:2} modes {:4} {pl} EMT {:6.2} {err} {} {}{}",
+            self.sats,
+            self.modes,
+            self.emt_m,
+            if self.available { "avail" } else { "unavail" },
+            self.fde,
+            if self.excluded.is_empty() {
+                String::new()
+            } else {
+                format!(" {}", self.excluded.join("+"))
+            },
+        )
+    }
+}
+
+/// The run's numbers (docs/ARAIM.md tables).
+#[derive(Debug, Clone, Serialize, Default)]
+pub struct AraimSummary {
+    pub epochs: usize,
+    pub errors: usize,
+    pub available: usize,
+    pub availability_pct: f64,
+    pub alarms: usize,
+    pub exclusions: usize,
+    pub correct_exclusions: usize,
+    pub wrong_exclusions: usize,
+    pub faulted_epochs: usize,
+    /// Faulted epochs with a failed all-in-view test.
+    pub faulted_detected: usize,
+    /// Fault-free epochs with a failed all-in-view test.
+    pub false_detections: usize,
+    pub max_modes: usize,
+    pub mean_vpl_m: f64,
+    pub max_vpl_m: f64,
+    pub mean_hpl_m: f64,
+    pub max_hpl_m: f64,
+    pub max_emt_m: f64,
+    pub max_error_v_m: f64,
+    pub max_error_h_m: f64,
+    /// max over epochs with a position output of error / PL.
+    pub max_ratio_v: f64,
+    pub max_ratio_h: f64,
+    /// Epochs with a position output whose error exceeds its PL.
+    pub error_above_pl: usize,
+    /// ... of which declared available (misleading information).
+    pub misleading: usize,
+}
+
+impl AraimSummary {
+    pub fn table(&self) -> String {
+        format!(
+            "| epochs | available | alarms | exclusions (correct/wrong) | faulted (detected) | false detections | max modes | VPL mean/max | HPL mean/max | EMT max | error V/H max | error/PL V/H max | error > PL | MI |\n\
+             |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n\
+             | {} | {} ({:.1} %) | {} | {} ({}/{}) | {} ({}) | {} | {} | {:.2}/{:.2} m | {:.2}/{:.2} m | {:.2} m | {:.2}/{:.2} m | {:.3}/{:.3} | {} | {} |",
+            self.epochs,
+            self.available,
+            self.availability_pct,
+            self.alarms,
+            self.exclusions,
+            self.correct_exclusions,
+            self.wrong_exclusions,
+            self.faulted_epochs,
+            self.faulted_detected,
+            self.false_detections,
+            self.max_modes,
+            self.mean_vpl_m,
+            self.max_vpl_m,
+            self.mean_hpl_m,
+            self.max_hpl_m,
+            self.max_emt_m,
+            self.max_error_v_m,
+            self.max_error_h_m,
+            self.max_ratio_v,
+            self.max_ratio_h,
+            self.error_above_pl,
+            self.misleading,
+        )
+    }
+}
+
+pub fn summarise(recs: &[AraimRecord]) -> AraimSummary {
+    let mut s = AraimSummary {
+        epochs: recs.len(),
+        ..AraimSummary::default()
+    };
+    let (mut sum_v, mut sum_h, mut n_pl) = (0.0, 0.0, 0usize);
+    for r in recs {
+        if r.error.is_some() {
+            s.errors += 1;
+            continue;
+        }
+        s.available += r.available as usize;
+        s.max_modes = s.max_modes.max(r.modes);
+        s.max_emt_m = s.max_emt_m.max(r.emt_m);
+        match r.fde.as_str() {
+            "excluded" => s.exclusions += 1,
+            "no_fault" => {}
+            _ => s.alarms += 1,
+        }
+        match r.exclusion.as_deref() {
+            Some("correct") => s.correct_exclusions += 1,
+            Some("wrong") => s.wrong_exclusions += 1,
+            _ => {}
+        }
+        if r.faulted.is_empty() {
+            s.false_detections += !r.detection_passed as usize;
+        } else {
+            s.faulted_epochs += 1;
+            s.faulted_detected += !r.detection_passed as usize;
+        }
+        let (Some(ev), Some(eh)) = (r.error_v_m, r.error_h_m) else {
+            continue;
+        };
+        let Some((vpl, hpl)) = r.output_pls() else {
+            continue;
+        };
+        if !(vpl.is_finite() && hpl.is_finite()) {
+            continue;
+        }
+        sum_v += vpl;
+        sum_h += hpl;
+        n_pl += 1;
+        s.max_vpl_m = s.max_vpl_m.max(vpl);
+        s.max_hpl_m = s.max_hpl_m.max(hpl);
+        s.max_error_v_m = s.max_error_v_m.max(ev);
+        s.max_error_h_m = s.max_error_h_m.max(eh);
+        s.max_ratio_v = s.max_ratio_v.max(ev / vpl);
+        s.max_ratio_h = s.max_ratio_h.max(eh / hpl);
+        if ev > vpl || eh > hpl {
+            s.error_above_pl += 1;
+            s.misleading += r.available as usize;
+        }
+    }
+    if n_pl > 0 {
+        s.mean_vpl_m = sum_v / n_pl as f64;
+        s.mean_hpl_m = sum_h / n_pl as f64;
+    }
+    if s.epochs > 0 {
+        s.availability_pct = 100.0 * s.available as f64 / s.epochs as f64;
+    }
+    s
+}
+
+/// Obliquity of the thin-shell ionosphere at elevation `el_rad`.
+fn obliquity(el_rad: f64) -> f64 {
+    let c = EARTH_RADIUS_M * el_rad.cos() / (EARTH_RADIUS_M + IONO_SHELL_M);
+    1.0 / (1.0 - c * c).sqrt()
+}
+
+/// The linearised ARAIM epoch at `x0` (ECEF): G rows (ENU, ADD sign),
+/// residuals, C_int/C_acc from the ADD model at the elevation seen from x0.
+fn linearise(a: &AraimReplayArgs, sats: &[RangeObservation], x0: [f64; 3]) -> Vec<AraimSat<f64>> {
+    let rot = enu_rotation(&ecef_to_geodetic(x0));
+    sats.iter()
+        .map(|s| {
+            let d = [
+                s.position_m[0] - x0[0],
+                s.position_m[1] - x0[1],
+                s.position_m[2] - x0[2],
+            ];
+            let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let u = rotate(&rot, [d[0] / r, d[1] / r, d[2] / r]);
+            let el = u[2].clamp(-1.0, 1.0).asin();
+            let (mut c_int, mut c_acc) =
+                error_model::variances_m2(el.max(0.0), a.araim_ura_m, a.araim_ure_m);
+            let iono = a.araim_iono_m * obliquity(el);
+            c_int += iono * iono;
+            c_acc += iono * iono;
+            AraimSat {
+                id: s.id,
+                g_enu: [-u[0], -u[1], -u[2]],
+                c_int_m2: c_int,
+                c_acc_m2: c_acc,
+                b_nom_m: a.araim_b_nom_m,
+                p_sat: a.araim_p_sat,
+                residual_m: s.pseudorange_m - r,
+            }
+        })
+        .collect()
+}
+
+fn name(id: SatId) -> String {
+    format!("{}{:02}", id.system.letter(), id.prn)
+}
+
+/// The ISM restricted to the constellations present in the epoch (an ISM
+/// entry without satellites is an error in the core).
+fn epoch_ism(ism: &Ism, sats: &[RangeObservation]) -> Ism {
+    let mut out = Ism::default();
+    for s in sats {
+        let j = s.id.system.index();
+        if let (Some(d), Some(p)) = (out.p_const.get_mut(j), ism.p_const.get(j)) {
+            *d = *p;
+        }
+    }
+    out
+}
+
+/// One epoch: relinearise at the all-in-view solution, process, FDE.
+fn epoch(
+    a: &AraimReplayArgs,
+    cfg: &AraimConfig,
+    ism: &Ism,
+    e: &PreparedEpoch,
+    sats: &[RangeObservation],
+    (engine, scratch): (&mut Engine, &mut Engine),
+    rec: &mut AraimRecord,
+) -> Result<Option<[f64; 3]>> {
+    let mut x0 = e
+        .reference_m
+        .ok_or_else(|| anyhow!("no linearisation point"))?;
+    let ism = epoch_ism(ism, sats);
+    let mut lin = linearise(a, sats, x0);
+    for _ in 0..LIN_MAX_ITER {
+        let out = engine
+            .process(cfg, &ism, &lin)
+            .map_err(|e| anyhow!("{e:?}"))?;
+        let corr = out.correction_enu_m;
+        let rot = enu_rotation(&ecef_to_geodetic(x0));
+        let d = unrotate(&rot, corr);
+        x0 = [x0[0] + d[0], x0[1] + d[1], x0[2] + d[2]];
+        lin = linearise(a, sats, x0);
+        if corr.iter().map(|c| c * c).sum::<f64>().sqrt() < LIN_TOL_M {
+            break;
+        }
+    }
+    let out = engine
+        .process(cfg, &ism, &lin)
+        .map_err(|e| anyhow!("{e:?}"))?;
+    rec.modes = out.modes.len();
+    rec.monitored = out.n_monitored;
+    rec.max_faults = out.max_faults;
+    rec.p_unmon = out.p_unmon;
+    rec.vpl_all_m = out.pl_add.vpl_m;
+    rec.hpl_all_m = out.pl_add.hpl_m;
+    rec.vpl_all_exact_m = out.pl_exact.vpl_m;
+    rec.hpl_all_exact_m = out.pl_exact.hpl_m;
+    rec.emt_m = out.emt_m;
+    rec.sigma_v_acc_m = out.sigma_v_acc_m;
+    rec.detection_passed = out.detection_passed;
+    let all_in_view = {
+        let rot = enu_rotation(&ecef_to_geodetic(x0));
+        let d = unrotate(&rot, out.correction_enu_m);
+        [x0[0] + d[0], x0[1] + d[1], x0[2] + d[2]]
+    };
+    let unavailable = out.unavailable.map(|u| format!("{u:?}"));
+    let available = out.available();
+    let pls = (out.pl_add.vpl_m, out.pl_add.hpl_m);
+    let fde = engine
+        .fde(cfg, &ism, &lin, scratch)
+        .map_err(|e| anyhow!("{e:?}"))?;
+    Ok(match fde {
+        FdeDecision::NoFault => {
+            rec.fde = "no_fault".into();
+            rec.vpl_m = Some(pls.0);
+            rec.hpl_m = Some(pls.1);
+            rec.available = available;
+            rec.unavailable = unavailable;
+            Some(all_in_view)
+        }
+        FdeDecision::Excluded { sats: mask, .. } => {
+            rec.fde = "excluded".into();
+            rec.excluded = lin
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i < 64 && mask & (1u64 << i) != 0)
+                .map(|(_, s)| name(s.id))
+                .collect();
+            let sub = scratch.output();
+            rec.vpl_m = Some(sub.pl_add.vpl_m);
+            rec.hpl_m = Some(sub.pl_add.hpl_m);
+            rec.available = sub.available();
+            rec.unavailable = sub.unavailable.map(|u| format!("{u:?}"));
+            // The subset's correction is relative to the same x0.
+            let rot = enu_rotation(&ecef_to_geodetic(x0));
+            let d = unrotate(&rot, sub.correction_enu_m);
+            Some([x0[0] + d[0], x0[1] + d[1], x0[2] + d[2]])
+        }
+        FdeDecision::Alarm(cause) => {
+            rec.fde = match cause {
+                FdeAlarm::Ambiguous { .. } => "alarm_ambiguous",
+                FdeAlarm::NoCandidate => "alarm_no_candidate",
+            }
+            .into();
+            rec.available = false;
+            rec.unavailable = Some("Alarm".into());
+            Some(all_in_view)
+        }
+    })
+}
+
+fn run_epochs(
+    a: &AraimReplayArgs,
+    cfg: &AraimConfig,
+    ism: &Ism,
+    epochs: &[PreparedEpoch],
+    plan: &FaultPlan,
+    const_faults: &[ConstFault],
+    reference: Option<[f64; 3]>,
+) -> Vec<AraimRecord> {
+    let mut engine: Box<Engine> = Box::default();
+    let mut scratch: Box<Engine> = Box::default();
+    let mut out = Vec::with_capacity(epochs.len());
+    for e in epochs {
+        let mut sats = e.observations();
+        let injected = plan.apply(e.time_gps_s, &mut sats);
+        let mut faulted = injected.faulted.clone();
+        if let Some(rx) = e.reference_m {
+            let rot = enu_rotation(&ecef_to_geodetic(rx));
+            for f in const_faults.iter().filter(|f| f.active(e.time_gps_s)) {
+                let shift = unrotate(&rot, f.shift_enu_m);
+                faulted.extend(constellation_bias(
+                    &mut sats, f.system, rx, f.common_m, shift,
+                ));
+            }
+        }
+        let mut rec = AraimRecord {
+            time_gps_s: e.time_gps_s,
+            sats: sats.len(),
+            faulted: faulted
+                .iter()
+                .map(|(id, b)| format!("{}:{b:.1}", name(*id)))
+                .collect(),
+            ..AraimRecord::default()
+        };
+        match epoch(a, cfg, ism, e, &sats, (&mut engine, &mut scratch), &mut rec) {
+            Ok(p) => {
+                rec.position_ecef_m = p;
+                if let (Some(p), Some(rf)) = (p, reference) {
+                    let err = error_enu(p, rf);
+                    rec.error_enu_m = Some(err);
+                    rec.error_h_m = Some(err[0].hypot(err[1]));
+                    rec.error_v_m = Some(err[2].abs());
+                }
+                if rec.fde == "excluded" {
+                    let all = faulted
+                        .iter()
+                        .filter(|(_, b)| b.abs() > 0.0)
+                        .all(|(id, _)| rec.excluded.contains(&name(*id)));
+                    rec.exclusion = Some(if all { "correct" } else { "wrong" }.into());
+                }
+            }
+            Err(err) => rec.error = Some(err.to_string()),
+        }
+        out.push(rec);
+    }
+    out
+}
+
+/// The whole ARAIM replay, without printing (used by the tests too).
+pub fn replay(args: &ReplayArgs) -> Result<(Vec<AraimRecord>, AraimSummary, Option<[f64; 3]>)> {
+    let a = &args.araim;
+    if args.pf.pf.is_some() {
+        bail!("--araim and --pf are two different monitors: choose one");
+    }
+    let cfg = AraimConfig::default();
+    let systems = args.ranging()?.systems;
+    let ism = a.ism(&systems)?;
+    let (epochs, header, first) = prepare(args)?;
+    let plan = checked_fault_plan(args, first, &epochs)?;
+    let const_faults = a
+        .araim_const_faults
+        .iter()
+        .map(|s| ConstFault::parse(s, first))
+        .collect::<Result<Vec<_>>>()?;
+    let reference = match args.reference {
+        super::Reference::Header => header,
+        super::Reference::CleanMean => {
+            let clean = run_epochs(a, &cfg, &ism, &epochs, &FaultPlan::default(), &[], None);
+            let ps: Vec<[f64; 3]> = clean
+                .iter()
+                .filter(|r| r.available)
+                .filter_map(|r| r.position_ecef_m)
+                .collect();
+            let n = ps.len() as f64;
+            (!ps.is_empty()).then(|| [0, 1, 2].map(|k| ps.iter().map(|p| p[k]).sum::<f64>() / n))
+        }
+    };
+    let recs = run_epochs(a, &cfg, &ism, &epochs, &plan, &const_faults, reference);
+    let summary = summarise(&recs);
+    Ok((recs, summary, reference))
+}
+
+pub fn run(args: &ReplayArgs) -> Result<()> {
+    let (recs, summary, reference) = replay(args)?;
+    let stdout = std::io::stdout();
+    let mut w = stdout.lock();
+    if !args.quiet {
+        for r in &recs {
+            if args.json {
+                writeln!(w, "{}", serde_json::to_string(r)?)?;
+            } else {
+                writeln!(w, "{}", r.text_line())?;
+            }
+        }
+    }
+    if args.json {
+        writeln!(
+            w,
+            "{}",
+            serde_json::json!({ "araim_summary": summary, "reference_ecef_m": reference })
+        )?;
+    } else {
+        writeln!(w, "{}", summary.table())?;
+    }
+    w.flush()?;
+    if let Some(p) = &args.araim.araim_plot {
+        draw(&recs, &AraimConfig::default(), p, args.font.as_deref())?;
+    }
+    Ok(())
+}
+
+fn perr<E: std::fmt::Display>(e: E) -> anyhow::Error {
+    anyhow!("plot: {e}")
+}
+
+/// Three panels: PLs and EMT over time with VAL/HAL and the errors, and
+/// the vertical and horizontal Stanford diagrams (error against PL).
+pub fn draw(
+    recs: &[AraimRecord],
+    cfg: &AraimConfig,
+    path: &Path,
+    font: Option<&Path>,
+) -> Result<()> {
+    super::plot::register_font(font)?;
+    let root = BitMapBackend::new(path, (1600, 1200)).into_drawing_area();
+    root.fill(&WHITE).map_err(perr)?;
+    let (top, bottom) = root.split_vertically(600);
+    let lower = bottom.split_evenly((1, 2));
+    let t0 = recs.first().map_or(0.0, |r| r.time_gps_s);
+    let mins = |t: f64| (t - t0) / 60.0;
+    let t_max = recs.last().map_or(1.0, |r| mins(r.time_gps_s)).max(1.0);
+    let solved: Vec<&AraimRecord> = recs.iter().filter(|r| r.error.is_none()).collect();
+    let with_pl: Vec<(&AraimRecord, f64, f64)> = solved
+        .iter()
+        .filter_map(|r| r.output_pls().map(|(v, h)| (*r, v, h)))
+        .filter(|(_, v, h)| v.is_finite() && h.is_finite())
+        .collect();
+    let y_max = with_pl
+        .iter()
+        .map(|(_, v, h)| v.max(*h))
+        .fold(cfg.hal_m.max(cfg.val_m), f64::max)
+        * 1.1;
+    {
+        let mut c = ChartBuilder::on(&top)
+            .caption(
+                "ARAIM: VPL, HPL, EMT and errors vs VAL/HAL",
+                ("sans-serif", 24),
+            )
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..t_max, 0.0..y_max)
+            .map_err(perr)?;
+        c.configure_mesh()
+            .x_desc("minutes from start")
+            .y_desc("m")
+            .draw()
+            .map_err(perr)?;
+        type Get = fn(&(&AraimRecord, f64, f64)) -> f64;
+        let series: [(&str, RGBColor, Get); 2] = [("VPL", BLUE, |x| x.1), ("HPL", GREEN, |x| x.2)];
+        for (label, color, get) in series {
+            c.draw_series(LineSeries::new(
+                with_pl.iter().map(|x| (mins(x.0.time_gps_s), get(x))),
+                &color,
+            ))
+            .map_err(perr)?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+        }
+        let emt = RGBColor(200, 120, 0);
+        c.draw_series(LineSeries::new(
+            solved.iter().map(|r| (mins(r.time_gps_s), r.emt_m)),
+            &emt,
+        ))
+        .map_err(perr)?
+        .label("EMT")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], emt));
+        for (label, v, color) in [("VAL", cfg.val_m, RED), ("HAL", cfg.hal_m, MAGENTA)] {
+            c.draw_series(LineSeries::new(
+                [(0.0, v), (t_max, v)],
+                color.stroke_width(2),
+            ))
+            .map_err(perr)?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+        }
+        let ev = RGBColor(0, 0, 120);
+        c.draw_series(
+            solved
+                .iter()
+                .filter_map(|r| Some((mins(r.time_gps_s), r.error_v_m?)))
+                .map(|p| Circle::new(p, 2, ev.filled())),
+        )
+        .map_err(perr)?
+        .label("|error V|")
+        .legend(move |(x, y)| Circle::new((x + 10, y), 3, ev.filled()));
+        let eh = RGBColor(0, 120, 0);
+        c.draw_series(
+            solved
+                .iter()
+                .filter_map(|r| Some((mins(r.time_gps_s), r.error_h_m?)))
+                .map(|p| TriangleMarker::new(p, 3, eh.filled())),
+        )
+        .map_err(perr)?
+        .label("error H")
+        .legend(move |(x, y)| TriangleMarker::new((x + 10, y), 3, eh.filled()));
+        c.draw_series(
+            solved
+                .iter()
+                .filter(|r| r.fde == "excluded")
+                .map(|r| Circle::new((mins(r.time_gps_s), y_max * 0.97), 4, GREEN.filled())),
+        )
+        .map_err(perr)?
+        .label("exclusion")
+        .legend(|(x, y)| Circle::new((x + 10, y), 4, GREEN.filled()));
+        c.draw_series(
+            solved
+                .iter()
+                .filter(|r| r.fde.starts_with("alarm"))
+                .map(|r| Cross::new((mins(r.time_gps_s), y_max * 0.94), 6, RED.stroke_width(2))),
+        )
+        .map_err(perr)?
+        .label("alarm")
+        .legend(|(x, y)| Cross::new((x + 10, y), 6, RED.stroke_width(2)));
+        c.configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(perr)?;
+    }
+    for (panel, (title, limit, vertical)) in lower.iter().zip([
+        ("ARAIM Stanford diagram, vertical", cfg.val_m, true),
+        ("ARAIM Stanford diagram, horizontal", cfg.hal_m, false),
+    ]) {
+        let pts: Vec<(f64, f64, bool)> = with_pl
+            .iter()
+            .filter_map(|(r, v, h)| {
+                let e = if vertical { r.error_v_m? } else { r.error_h_m? };
+                Some((e, if vertical { *v } else { *h }, r.available))
+            })
+            .collect();
+        let m = pts.iter().map(|p| p.0.max(p.1)).fold(limit, f64::max) * 1.1;
+        let mut c = ChartBuilder::on(panel)
+            .caption(title, ("sans-serif", 22))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..m, 0.0..m)
+            .map_err(perr)?;
+        c.configure_mesh()
+            .x_desc("position error (m)")
+            .y_desc("protection level (m)")
+            .draw()
+            .map_err(perr)?;
+        c.draw_series(LineSeries::new([(0.0, 0.0), (m, m)], &BLACK))
+            .map_err(perr)?
+            .label("error = PL")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+        c.draw_series(LineSeries::new(
+            [(0.0, limit), (m, limit)],
+            RED.stroke_width(2),
+        ))
+        .map_err(perr)?
+        .label(if vertical { "VAL" } else { "HAL" })
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
+        c.draw_series(
+            pts.iter()
+                .filter(|p| p.2)
+                .map(|p| Circle::new((p.0, p.1), 3, BLUE.filled())),
+        )
+        .map_err(perr)?
+        .label("available")
+        .legend(|(x, y)| Circle::new((x + 10, y), 3, BLUE.filled()));
+        c.draw_series(
+            pts.iter()
+                .filter(|p| !p.2)
+                .map(|p| Circle::new((p.0, p.1), 3, RGBColor(160, 160, 160).filled())),
+        )
+        .map_err(perr)?
+        .label("unavailable")
+        .legend(|(x, y)| Circle::new((x + 10, y), 3, RGBColor(160, 160, 160).filled()));
+        c.configure_series_labels()
+            .position(SeriesLabelPosition::LowerRight)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(perr)?;
+    }
+    root.present().map_err(perr)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn const_fault_spec_parses_and_rejects() {
+        let f = ConstFault::parse("E:0:0,20,-5@+60..+120", 1000.0).unwrap();
+        assert_eq!(f.system, System::Galileo);
+        assert_eq!(f.shift_enu_m, [0.0, 20.0, -5.0]);
+        assert_eq!((f.start_gps_s, f.end_gps_s), (1060.0, Some(1120.0)));
+        assert!(f.active(1060.0) && !f.active(1120.0));
+        for bad in [
+            "E:0:0,20@+60",
+            "E:0:0,20,1",
+            "E:x:0,0,0@+1",
+            "E:0:0,0,inf@+1",
+        ] {
+            assert!(ConstFault::parse(bad, 0.0).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn obliquity_is_one_at_zenith_and_about_three_at_the_horizon() {
+        assert!((obliquity(core::f64::consts::FRAC_PI_2) - 1.0).abs() < 1e-12);
+        let h = obliquity(0.0);
+        // 1 / sqrt(1 - (6371 / 6721)^2) = 3.1398.
+        assert!((h - 3.1398).abs() < 1e-3, "{h}");
+    }
+}
