@@ -11,6 +11,7 @@
 //! - [`result`]: the epoch result on the wire, converted from
 //!   `raim_core::EpochResult`.
 //! - [`error`]: the typed errors of a response.
+//! - [`alert`]: the integrity-alarm discrete output's state machine.
 //! - [`lock`]: the configuration lock and its CRC-32 fingerprint.
 //! - [`nmea`]: RMC, GGA, GSA, GST and GBS sentences for a solved epoch.
 //! - [`server`]: the firmware's protocol loop, generic over `embedded_io`
@@ -36,6 +37,7 @@
     )
 )]
 
+pub mod alert;
 pub mod auth;
 pub mod error;
 pub mod frame;
@@ -45,6 +47,7 @@ pub mod nmea;
 pub mod result;
 pub mod server;
 
+pub use alert::{AlarmOutput, AlertMonitor};
 pub use auth::{AuthConfigure, AuthKey};
 pub use error::WireError;
 pub use frame::{encode, FrameError, FrameReceiver};
