@@ -10,7 +10,9 @@
 //!   USART2 (PA2/PA3) is the link, USART3 (PB10/PB11) the NMEA output, both
 //!   115200 8N1.
 
+#[cfg(feature = "board-qemu")]
 use core::convert::Infallible;
+#[cfg(feature = "board-qemu")]
 use core::ptr::{read_volatile, write_volatile};
 
 use core::sync::atomic::{AtomicU32, Ordering};
@@ -18,10 +20,13 @@ use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::{SCB, SYST};
 
-/// A memory-mapped register block at a fixed address.
+/// A memory-mapped register block at a fixed address (the QEMU board,
+/// which has no HAL).
+#[cfg(feature = "board-qemu")]
 #[derive(Clone, Copy)]
 struct Regs(usize);
 
+#[cfg(feature = "board-qemu")]
 impl Regs {
     fn read(self, offset: usize) -> u32 {
         // SAFETY: the address is a device register of this board (see the
@@ -95,12 +100,12 @@ mod uart {
         }
         /// The waiting byte (call when `rx_ready`) and whether the UART
         /// overran before it (cleared here).
-        pub fn read(&mut self) -> (u8, bool) {
+        pub fn read(&mut self) -> (Option<u8>, bool) {
             let overrun = self.0.read(STATE) & STATE_RX_OVERRUN != 0;
             if overrun {
                 self.0.write(STATE, STATE_RX_OVERRUN);
             }
-            (self.0.read(DATA) as u8, overrun)
+            (Some(self.0.read(DATA) as u8), overrun)
         }
         /// Acknowledge the RX interrupt (write-one-to-clear).
         pub fn ack(&mut self) {
@@ -122,105 +127,105 @@ mod uart {
     }
 }
 
+/// The STM32F4 board on `stm32f4xx-hal` (embedded-hal 1.0): the HAL sets
+/// up the pins, the USARTs and the alarm pin; this module only adapts its
+/// non-blocking transmitter to `embedded_io::Write` and its receiver to
+/// the receive port `link_rx` drives.
 #[cfg(feature = "board-stm32f4")]
 mod uart {
-    use super::Regs;
+    use stm32f4xx_hal::gpio::{Output, PushPull, PD12};
+    use stm32f4xx_hal::pac;
+    use stm32f4xx_hal::prelude::*;
+    use stm32f4xx_hal::serial::{self, RxISR, RxListen, Serial};
 
-    /// STM32F4 USART (RM0090 §30.6): the transmit side.
-    pub struct Uart(Regs);
-    /// The receive side of the link USART, driven by its RXNE interrupt.
-    pub struct RxPort(Regs);
+    /// A USART's transmit side (blocking `embedded_io::Write`).
+    pub struct Uart<U: serial::Instance>(serial::Tx<U, u8>);
+    /// The link USART's receive side, driven by its RXNE interrupt.
+    pub struct RxPort(serial::Rx<pac::USART2, u8>);
+    /// PD12 (the green LED of an STM32F4-Discovery), push-pull; the HAL's
+    /// pin implements embedded-hal's `OutputPin` and `StatefulOutputPin`.
+    pub type AlarmPin = PD12<Output<PushPull>>;
 
-    const SR: usize = 0x00;
-    const DR: usize = 0x04;
-    const BRR: usize = 0x08;
-    const CR1: usize = 0x0C;
-    const SR_RXNE: u32 = 1 << 5;
-    const SR_TXE: u32 = 1 << 7;
-    const SR_ORE: u32 = 1 << 3;
-    const CR1_UE: u32 = 1 << 13;
-    const CR1_RXNEIE: u32 = 1 << 5;
-    const CR1_TE: u32 = 1 << 3;
-    const CR1_RE: u32 = 1 << 2;
-    /// 16 MHz HSI / 115200 = 138.9 -> mantissa 8, fraction 11 (0x8B).
-    const BRR_115200_AT_16MHZ: u32 = 0x8B;
-
-    pub const USART2: usize = 0x4000_4400;
-    pub const USART3: usize = 0x4000_4800;
     /// USART2's interrupt (RM0090 Table 61, position 38).
-    pub const LINK_RX_IRQ: u16 = 38;
-    const RCC: usize = 0x4002_3800;
-    const RCC_AHB1ENR: usize = 0x30;
-    const RCC_APB1ENR: usize = 0x40;
-    const GPIOA: usize = 0x4002_0000;
-    const GPIOB: usize = 0x4002_0400;
-    const MODER: usize = 0x00;
-    const AFRL: usize = 0x20;
-    const AFRH: usize = 0x24;
+    pub const LINK_RX_IRQ: u16 = pac::Interrupt::USART2 as u16;
 
-    /// Clocks and pins: GPIOA/B/D, USART2/3; PA2/PA3 and PB10/PB11 to AF7.
-    /// The core stays on the 16 MHz HSI it resets to: nothing waits for a
-    /// ready bit (docs/SAFETY.md).
-    pub fn init_pins() {
-        let rcc = Regs(RCC);
-        rcc.write(RCC_AHB1ENR, rcc.read(RCC_AHB1ENR) | 0b1011);
-        rcc.write(RCC_APB1ENR, rcc.read(RCC_APB1ENR) | (1 << 17) | (1 << 18));
-        let (a, b) = (Regs(GPIOA), Regs(GPIOB));
-        a.write(MODER, (a.read(MODER) & !(0xF << 4)) | (0b1010 << 4));
-        a.write(AFRL, (a.read(AFRL) & !(0xFF << 8)) | (0x77 << 8));
-        b.write(MODER, (b.read(MODER) & !(0xF << 20)) | (0b1010 << 20));
-        b.write(AFRH, (b.read(AFRH) & !(0xFF << 8)) | (0x77 << 8));
+    /// The link (USART2 on PA2/PA3), the NMEA output (USART3 TX on PB10)
+    /// and the alarm pin (PD12, at its alarm level), all 115200 8N1. The
+    /// clocks stay at the 16 MHz HSI the part resets to: `constrain`
+    /// configures nothing, so nothing waits for a ready bit (QEMU's
+    /// netduinoplus2 does not model the RCC; docs/SAFETY.md).
+    pub fn parts() -> Option<(Uart<pac::USART2>, RxPort, Uart<pac::USART3>, AlarmPin)> {
+        let dp = pac::Peripherals::take()?;
+        let mut rcc = dp.RCC.constrain();
+        let gpioa = dp.GPIOA.split(&mut rcc);
+        let gpiob = dp.GPIOB.split(&mut rcc);
+        let gpiod = dp.GPIOD.split(&mut rcc);
+        let config = serial::Config::default().baudrate(115_200.bps());
+        let link = Serial::new(dp.USART2, (gpioa.pa2, gpioa.pa3), config, &mut rcc).ok()?;
+        let (link_tx, mut link_rx) = link.split();
+        link_rx.listen();
+        let nmea = dp.USART3.tx(gpiob.pb10, config, &mut rcc).ok()?;
+        let alarm = gpiod.pd12.into_push_pull_output_in_state(false.into());
+        Some((Uart(link_tx), RxPort(link_rx), Uart(nmea), alarm))
     }
 
-    impl Uart {
-        /// # Safety
-        /// `base` is a USART of this part, clocked, owned by nobody else.
-        /// With `rx`, reception and its RXNE interrupt are enabled too.
-        pub unsafe fn new(base: usize, rx: bool) -> Self {
-            let r = Regs(base);
-            r.write(BRR, BRR_115200_AT_16MHZ);
-            let rx_bits = if rx { CR1_RE | CR1_RXNEIE } else { 0 };
-            r.write(CR1, CR1_UE | CR1_TE | rx_bits);
-            Uart(r)
+    impl<U: serial::Instance> embedded_io::ErrorType for Uart<U> {
+        type Error = serial::Error;
+    }
+
+    impl<U: serial::Instance> embedded_io::Write for Uart<U>
+    where
+        serial::Tx<U, u8>: embedded_hal_nb::serial::Write<u8, Error = serial::Error>,
+    {
+        /// Blocks until every byte is in the transmitter (the HAL's own
+        /// `write` returns `Ok(0)` when busy, which `write_all` forbids).
+        fn write(&mut self, buf: &[u8]) -> Result<usize, serial::Error> {
+            for &b in buf {
+                nb::block!(embedded_hal_nb::serial::Write::write(&mut self.0, b))?;
+            }
+            Ok(buf.len())
         }
-        pub fn rx_port(&self) -> RxPort {
-            RxPort(self.0)
-        }
-        pub fn tx_ready(&self) -> bool {
-            self.0.read(SR) & SR_TXE != 0
-        }
-        pub fn write_byte(&mut self, b: u8) {
-            while !self.tx_ready() {}
-            self.0.write(DR, u32::from(b));
+        fn flush(&mut self) -> Result<(), serial::Error> {
+            nb::block!(embedded_hal_nb::serial::Write::flush(&mut self.0))
         }
     }
 
     impl RxPort {
         pub fn rx_ready(&self) -> bool {
-            self.0.read(SR) & (SR_RXNE | SR_ORE) != 0
+            self.0.is_rx_not_empty()
         }
-        /// The waiting byte and whether the USART overran before it.
-        /// Reading SR then DR clears RXNE and ORE.
-        pub fn read(&mut self) -> (u8, bool) {
-            let overrun = self.0.read(SR) & SR_ORE != 0;
-            (self.0.read(DR) as u8, overrun)
+        /// The waiting byte, if it could be read, and whether one was
+        /// lost: an overrun, or a framing, parity or noise error (the HAL
+        /// reads the data register to clear them and drops the byte).
+        pub fn read(&mut self) -> (Option<u8>, bool) {
+            match embedded_hal_nb::serial::Read::read(&mut self.0) {
+                Ok(b) => (Some(b), false),
+                Err(nb::Error::WouldBlock) => (None, false),
+                Err(nb::Error::Other(_)) => (None, true),
+            }
         }
-        /// RXNE clears when DR is read: nothing to acknowledge.
+        /// RXNE clears when the data register is read.
         pub fn ack(&mut self) {}
         pub fn set_irq(&mut self, on: bool) {
-            let c = self.0.read(CR1);
-            self.0
-                .write(CR1, if on { c | CR1_RXNEIE } else { c & !CR1_RXNEIE });
+            if on {
+                self.0.listen()
+            } else {
+                self.0.unlisten()
+            }
         }
     }
 }
 
+#[cfg(feature = "board-stm32f4")]
+pub use uart::AlarmPin;
 pub use uart::{RxPort, Uart, LINK_RX_IRQ};
 
+#[cfg(feature = "board-qemu")]
 impl embedded_io::ErrorType for Uart {
     type Error = Infallible;
 }
 
+#[cfg(feature = "board-qemu")]
 impl embedded_io::Write for Uart {
     fn write(&mut self, buf: &[u8]) -> Result<usize, Infallible> {
         for &b in buf {
@@ -233,25 +238,33 @@ impl embedded_io::Write for Uart {
     }
 }
 
-/// The link UART (receive by interrupt, `link_rx`) and the NMEA UART
-/// (transmit only). Interrupts stay masked (PRIMASK) until `main` has set
-/// up the receive ring.
-pub fn uarts() -> (Uart, Uart) {
+/// The link UART (transmit side, and its receive port for `link_rx`), the
+/// NMEA UART (transmit only) and the integrity-alarm pin (at its alarm
+/// level). Interrupts stay masked (PRIMASK) until `main` has set up the
+/// receive ring. `None` if called twice.
+#[cfg(feature = "board-qemu")]
+pub fn parts() -> Option<(Uart, RxPort, Uart, AlarmPin)> {
+    use core::sync::atomic::AtomicBool;
+    static TAKEN: AtomicBool = AtomicBool::new(false);
     cortex_m::interrupt::disable();
-    #[cfg(feature = "board-qemu")]
-    // SAFETY: called once from `main`; UART0/UART1 are used nowhere else.
-    unsafe {
-        (Uart::new(uart::UART0, true), Uart::new(uart::UART1, false))
+    if TAKEN.swap(true, Ordering::Relaxed) {
+        return None;
     }
-    #[cfg(feature = "board-stm32f4")]
-    // SAFETY: called once from `main`; USART2/USART3 are used nowhere else.
-    unsafe {
-        uart::init_pins();
-        (
-            Uart::new(uart::USART2, true),
-            Uart::new(uart::USART3, false),
-        )
-    }
+    // SAFETY: taken once (above); UART0/UART1 are used nowhere else.
+    let (link, nmea) = unsafe { (Uart::new(uart::UART0, true), Uart::new(uart::UART1, false)) };
+    let rx = link.rx_port();
+    Some((link, rx, nmea, AlarmPin::new()))
+}
+
+#[cfg(feature = "board-stm32f4")]
+pub fn parts() -> Option<(
+    Uart<stm32f4xx_hal::pac::USART2>,
+    RxPort,
+    Uart<stm32f4xx_hal::pac::USART3>,
+    AlarmPin,
+)> {
+    cortex_m::interrupt::disable();
+    uart::parts()
 }
 
 /// The core clock, Hz: SysTick counts at it.
@@ -303,70 +316,47 @@ impl Ticks {
     }
 }
 
-/// The integrity-alarm discrete output (issue 15) behind embedded-hal 1.0's
-/// `OutputPin` and `StatefulOutputPin`. Active low: the pin is driven high
-/// only while integrity is assured, so a unit that stops, resets or loses
-/// power shows the alarm (docs/SAFETY.md). `StatefulOutputPin` reads the
-/// level back from the hardware's output register.
+/// The integrity-alarm discrete output (issue 15) of the QEMU board,
+/// behind embedded-hal 1.0's `OutputPin` and `StatefulOutputPin` (the
+/// STM32F4's is the HAL's PD12). Active low on both boards: the pin is
+/// driven high only while integrity is assured, so a unit that stops,
+/// resets or loses power shows the alarm (docs/SAFETY.md).
+/// `StatefulOutputPin` reads the level back from the register.
 ///
-/// - `board-qemu`: the FPGA I/O block of mps2-an385/an386 (0x4002_8000,
-///   register LED0 at offset 0, bit 0: the first user LED; QEMU
-///   `hw/misc/mps2-fpgaio.c`).
-/// - `board-stm32f4`: PD12 (the green LED of an STM32F4-Discovery), push-pull.
+/// The FPGA I/O block of mps2-an385/an386 (0x4002_8000, register LED0 at
+/// offset 0, bit 0: the first user LED; QEMU `hw/misc/mps2-fpgaio.c`).
+#[cfg(feature = "board-qemu")]
 pub struct AlarmPin(Regs);
 
 #[cfg(feature = "board-qemu")]
 mod pin {
-    pub const BASE: usize = 0x4002_8000;
+    pub const FPGAIO: usize = 0x4002_8000;
     /// LED0: written and read back.
-    pub const OUT: usize = 0x00;
-    pub const SET: Option<usize> = None;
+    pub const LED0: usize = 0x00;
     pub const BIT: u32 = 1 << 0;
 }
 
-#[cfg(feature = "board-stm32f4")]
-mod pin {
-    /// GPIOD (clocked in `uart::init_pins`).
-    pub const BASE: usize = 0x4002_0C00;
-    pub const MODER: usize = 0x00;
-    /// ODR, read back.
-    pub const OUT: usize = 0x14;
-    /// BSRR: atomic set (bits 0-15) and reset (16-31).
-    pub const SET: Option<usize> = Some(0x18);
-    pub const BIT: u32 = 1 << 12;
-}
-
+#[cfg(feature = "board-qemu")]
 impl AlarmPin {
     /// The pin, at its alarm level.
-    pub fn new() -> Self {
-        let r = Regs(pin::BASE);
-        #[cfg(feature = "board-stm32f4")]
-        r.write(
-            pin::MODER,
-            (r.read(pin::MODER) & !(0b11 << 24)) | (0b01 << 24),
-        );
-        let mut p = AlarmPin(r);
-        let _ = embedded_hal::digital::OutputPin::set_low(&mut p);
+    fn new() -> Self {
+        let mut p = AlarmPin(Regs(pin::FPGAIO));
+        p.level(false);
         p
     }
     fn level(&mut self, high: bool) {
-        match pin::SET {
-            Some(bsrr) => self
-                .0
-                .write(bsrr, if high { pin::BIT } else { pin::BIT << 16 }),
-            None => {
-                let v = self.0.read(pin::OUT);
-                self.0
-                    .write(pin::OUT, if high { v | pin::BIT } else { v & !pin::BIT });
-            }
-        }
+        let v = self.0.read(pin::LED0);
+        self.0
+            .write(pin::LED0, if high { v | pin::BIT } else { v & !pin::BIT });
     }
 }
 
+#[cfg(feature = "board-qemu")]
 impl embedded_hal::digital::ErrorType for AlarmPin {
     type Error = Infallible;
 }
 
+#[cfg(feature = "board-qemu")]
 impl embedded_hal::digital::OutputPin for AlarmPin {
     fn set_low(&mut self) -> Result<(), Infallible> {
         self.level(false);
@@ -378,12 +368,13 @@ impl embedded_hal::digital::OutputPin for AlarmPin {
     }
 }
 
+#[cfg(feature = "board-qemu")]
 impl embedded_hal::digital::StatefulOutputPin for AlarmPin {
     fn is_set_high(&mut self) -> Result<bool, Infallible> {
-        Ok(self.0.read(pin::OUT) & pin::BIT != 0)
+        Ok(self.0.read(pin::LED0) & pin::BIT != 0)
     }
     fn is_set_low(&mut self) -> Result<bool, Infallible> {
-        Ok(self.0.read(pin::OUT) & pin::BIT == 0)
+        Ok(self.0.read(pin::LED0) & pin::BIT == 0)
     }
 }
 

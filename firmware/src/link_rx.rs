@@ -74,12 +74,14 @@ fn pump_into(rx: &mut Rx) {
             }
             return;
         }
-        let (byte, overrun) = rx.port.read();
-        if overrun {
+        let (byte, lost) = rx.port.read();
+        if lost {
             OVERRUNS.fetch_add(1, Ordering::Relaxed);
         }
-        // `ready()` said there is room, and only this side enqueues.
-        let _ = rx.producer.enqueue(byte);
+        if let Some(b) = byte {
+            // `ready()` said there is room, and only this side enqueues.
+            let _ = rx.producer.enqueue(b);
+        }
     }
     if rx.paused {
         rx.paused = false;

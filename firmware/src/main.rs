@@ -101,14 +101,16 @@ fn main() -> ! {
     let Some(server) = cortex_m::singleton!(: Server = Server::new()) else {
         board::halt()
     };
-    let (mut link, mut nmea) = board::uarts();
-    let Some(mut rx) = link_rx::init(link.rx_port()) else {
+    let Some((mut link, rx_port, mut nmea, alarm_pin)) = board::parts() else {
+        board::halt()
+    };
+    let Some(mut rx) = link_rx::init(rx_port) else {
         board::halt()
     };
     let mut platform = Board {
         ticks: board::Ticks::new(core.SYST),
         reset,
-        discrete: discrete::Discrete::new(board::AlarmPin::new()),
+        discrete: discrete::Discrete::new(alarm_pin),
     };
     watchdog::start();
     stack::paint();

@@ -1,4 +1,4 @@
-//! Issue 15, under QEMU (mps2-an386):
+//! Issue 15, under QEMU (mps2-an386, and netduinoplus2 for the stream):
 //! - no byte lost: the host streams 1,000 frames back to back without
 //!   waiting for answers; the firmware receives them by interrupt into its
 //!   ring (`firmware/src/link_rx.rs`) and answers every one, in order, bit
@@ -14,14 +14,16 @@ mod qemu_common;
 
 use std::time::{Duration, Instant};
 
-use qemu_common::{host_result, range_epoch, range_vectors, session, wire_bytes, Rng};
+use qemu_common::{host_result, range_epoch, range_vectors, session_on, wire_bytes, Rng};
 use raim_core::{Config, Decision, Epoch, System};
 use raim_proto::message::{CommandRef, ResponseBody};
 use raim_proto::AlarmOutput;
-use raim_qemu::{epoch_command, Options, QemuSession, ANSWER_TIMEOUT};
+use raim_qemu::{epoch_command, Machine, Options, QemuSession, ANSWER_TIMEOUT};
 
-/// Frames streamed back to back.
+/// Frames streamed back to back on mps2-an386, and (to keep CI short) on
+/// netduinoplus2.
 const STREAM_FRAMES: u32 = 1000;
+const STREAM_FRAMES_NETDUINO: u32 = 200;
 /// The firmware's default time-to-alert (`RAIM_TIME_TO_ALERT_S`).
 const TIME_TO_ALERT_S: f64 = 10.0;
 /// The output asserts up to one SysTick wrap (2^24 ticks at 25 MHz) before
@@ -30,7 +32,20 @@ const CHECK_PERIOD_S: f64 = 16_777_216.0 / 25.0e6;
 
 #[test]
 fn qemu_streamed_frames_are_all_answered_in_order() {
-    let mut fw = session();
+    stream(Machine::Mps2An386, STREAM_FRAMES);
+}
+
+/// The real-board build (USART2 by interrupt on stm32f4xx-hal) under
+/// QEMU's netduinoplus2.
+#[test]
+fn qemu_netduinoplus2_streamed_frames_are_all_answered_in_order() {
+    stream(Machine::NetduinoPlus2, STREAM_FRAMES_NETDUINO);
+}
+
+fn stream(machine: Machine, frames: u32) {
+    let mut fw = session_on(machine);
+    let before = fw.status().unwrap();
+    let seq0 = fw.next_seq();
     let cfg = Config::default();
     let vectors = range_vectors(11);
     let expected: Vec<Result<Vec<u8>, ()>> = vectors
@@ -44,7 +59,7 @@ fn qemu_streamed_frames_are_all_answered_in_order() {
     // Every other frame a Status, the others the vectors in turn.
     let mut stream = Vec::new();
     let mut kinds = Vec::new();
-    for i in 0..STREAM_FRAMES as usize {
+    for i in 0..frames as usize {
         let command = if i % 2 == 1 {
             kinds.push(None);
             CommandRef::Status
@@ -55,17 +70,17 @@ fn qemu_streamed_frames_are_all_answered_in_order() {
             epoch_command(&Epoch::ranges(*t, s, *a))
         };
         let (seq, bytes) = fw.frame(command).unwrap();
-        assert_eq!(seq, i as u32);
+        assert_eq!(seq, seq0 + i as u32);
         stream.extend(bytes);
     }
     let t0 = Instant::now();
     fw.send_raw(&stream).unwrap();
     for (i, kind) in kinds.iter().enumerate() {
         let r = fw.recv(ANSWER_TIMEOUT).unwrap();
-        assert_eq!(r.seq, Some(i as u32), "answer {i}: {:?}", r.body);
+        assert_eq!(r.seq, Some(seq0 + i as u32), "answer {i}: {:?}", r.body);
         match (kind, r.body) {
             (None, ResponseBody::Status(st)) => {
-                assert_eq!(st.frames, i as u32 + 1);
+                assert_eq!(st.frames, before.frames + i as u32 + 1);
                 assert_eq!(st.uart_overruns, 0);
             }
             (Some(v), ResponseBody::Result(res)) => {
@@ -77,13 +92,13 @@ fn qemu_streamed_frames_are_all_answered_in_order() {
     }
     let s = t0.elapsed().as_secs_f64();
     let st = fw.status().unwrap();
-    assert_eq!(st.frames, STREAM_FRAMES + 1);
+    assert_eq!(st.frames, before.frames + frames + 1);
     assert_eq!(st.uart_overruns, 0);
     eprintln!(
-        "{STREAM_FRAMES} frames ({} bytes) streamed and answered in {s:.2} s: {:.0} frames/s, \
+        "{machine:?}: {frames} frames ({} bytes) streamed and answered in {s:.2} s: {:.0} frames/s, \
          {:.0} bytes/s; ring full {} times",
         stream.len(),
-        f64::from(STREAM_FRAMES) / s,
+        f64::from(frames) / s,
         stream.len() as f64 / s,
         st.rx_ring_overflows
     );
