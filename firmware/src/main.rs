@@ -13,6 +13,7 @@ mod board;
 mod discrete;
 mod fault;
 mod guard;
+mod key;
 mod link_rx;
 mod stack;
 mod watchdog;
@@ -98,7 +99,12 @@ fn main() -> ! {
     };
     // The server (receive buffer, engine, transmit buffers) lives in a
     // static; no heap anywhere.
-    let Some(server) = cortex_m::singleton!(: Server = Server::new()) else {
+    // With a key provisioned in flash (`key`), only authenticated
+    // configurations are taken.
+    let Some(server) = cortex_m::singleton!(: Server = match key::provisioned() {
+        Some(k) => Server::with_auth_key(k),
+        None => Server::new(),
+    }) else {
         board::halt()
     };
     let Some((mut link, rx_port, mut nmea, alarm_pin)) = board::parts() else {

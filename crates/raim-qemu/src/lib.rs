@@ -85,6 +85,46 @@ pub fn firmware_elf() -> Result<PathBuf> {
     }
 }
 
+/// A copy of the firmware ELF `elf` with `key` written into its `.raim_key`
+/// section (firmware/src/key.rs), as production provisions a unit: the
+/// unit then takes only authenticated configurations. Written next to the
+/// original as `<name>.key-<first bytes in hex>`.
+pub fn provision_key(elf: &Path, key: &raim_proto::AuthKey) -> Result<PathBuf> {
+    let mut bytes = std::fs::read(elf).with_context(|| format!("reading {}", elf.display()))?;
+    let (offset, size) = elf32_section(&bytes, ".raim_key")
+        .with_context(|| format!("no .raim_key section in {}", elf.display()))?;
+    if size != key.len() {
+        bail!(".raim_key is {size} bytes, the key {}", key.len());
+    }
+    bytes
+        .get_mut(offset..offset + size)
+        .context(".raim_key outside the file")?
+        .copy_from_slice(key);
+    let hex: String = key.iter().take(4).map(|b| format!("{b:02x}")).collect();
+    let out = elf.with_extension(format!("key-{hex}"));
+    std::fs::write(&out, bytes)?;
+    Ok(out)
+}
+
+/// File offset and size of a section of a little-endian ELF32 file.
+fn elf32_section(elf: &[u8], name: &str) -> Option<(usize, usize)> {
+    let u16_at = |o: usize| Some(u16::from_le_bytes(elf.get(o..o + 2)?.try_into().ok()?) as usize);
+    let u32_at = |o: usize| Some(u32::from_le_bytes(elf.get(o..o + 4)?.try_into().ok()?) as usize);
+    if elf.get(..6)? != b"\x7fELF\x01\x01" {
+        return None;
+    }
+    let (shoff, shentsize, shnum, shstrndx) =
+        (u32_at(0x20)?, u16_at(0x2E)?, u16_at(0x30)?, u16_at(0x32)?);
+    let header = |i: usize| shoff + i * shentsize;
+    let strtab = u32_at(header(shstrndx) + 16)?;
+    (0..shnum).find_map(|i| {
+        let h = header(i);
+        let start = strtab + u32_at(h)?;
+        let end = start + elf.get(start..)?.iter().position(|&b| b == 0)?;
+        (elf.get(start..end)? == name.as_bytes()).then_some((u32_at(h + 16)?, u32_at(h + 20)?))
+    })
+}
+
 /// The machine QEMU emulates, and the firmware build that runs on it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Machine {
@@ -388,6 +428,13 @@ impl QemuSession {
                 (s, body) => bail!("expected the answer to {seq}, got {s:?}: {body:?}"),
             }
         }
+    }
+
+    /// Send any command and wait for its answer (sequence-gap notices
+    /// before it are skipped).
+    pub fn call(&mut self, command: CommandRef<'_>) -> Result<ResponseBody> {
+        let seq = self.send(command)?;
+        Ok(self.answer(seq)?.0)
     }
 
     pub fn status(&mut self) -> Result<Status> {
