@@ -18,7 +18,7 @@
 //! hand-written vector table.
 
 use core::cell::RefCell;
-use core::sync::atomic::{AtomicU32, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use cortex_m::interrupt::{CriticalSection, Mutex};
 use heapless::spsc::{Consumer, Producer, Queue};
@@ -51,7 +51,16 @@ pub struct LinkRx {
 /// Set up the ring; call once, with interrupts masked, before they are
 /// enabled. `None` if called twice.
 pub fn init(port: RxPort) -> Option<LinkRx> {
-    let queue = cortex_m::singleton!(: Queue<u8, RING_SLOTS> = Queue::new())?;
+    static TAKEN: AtomicBool = AtomicBool::new(false);
+    // A const-initialised static: the 4 KiB ring is never built on the
+    // stack (`cortex_m::singleton!` would build it there first).
+    static mut QUEUE: Queue<u8, RING_SLOTS> = Queue::new();
+    if TAKEN.swap(true, Ordering::AcqRel) {
+        return None;
+    }
+    // SAFETY: reached once (`TAKEN`), so this is the only reference to
+    // QUEUE; it is split into its two 'static ends at once.
+    let queue = unsafe { &mut *core::ptr::addr_of_mut!(QUEUE) };
     let (producer, consumer) = queue.split();
     cortex_m::interrupt::free(|cs| {
         RX.borrow(cs).replace(Some(Rx {

@@ -99,14 +99,14 @@ fn main() -> ! {
     };
     // The server (receive buffer, engine, transmit buffers) lives in a
     // static; no heap anywhere.
-    // With a key provisioned in flash (`key`), only authenticated
-    // configurations are taken.
-    let Some(server) = cortex_m::singleton!(: Server = match key::provisioned() {
-        Some(k) => Server::with_auth_key(k),
-        None => Server::new(),
-    }) else {
+    let Some(server) = cortex_m::singleton!(: Server = Server::new()) else {
         board::halt()
     };
+    // With a key provisioned in flash (`key`), only authenticated
+    // configurations are taken.
+    if let Some(k) = key::provisioned() {
+        server.set_auth_key(k);
+    }
     let Some((mut link, rx_port, mut nmea, alarm_pin)) = board::parts() else {
         board::halt()
     };

@@ -130,6 +130,14 @@ impl Server {
         s
     }
 
+    /// Make this server take only configurations authenticated with
+    /// `key` from now on, as `with_auth_key` (the firmware provisions its
+    /// static server in place at boot, without a second server on the
+    /// stack).
+    pub fn set_auth_key(&mut self, key: crate::auth::AuthKey) {
+        self.auth = Some((key, None));
+    }
+
     pub fn status(&self) -> Status {
         Status {
             config: self.config_id,
