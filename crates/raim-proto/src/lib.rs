@@ -67,7 +67,9 @@ pub const CAPACITY: usize = raim_core::DEFAULT_CAPACITY;
 /// 3: `Lock`, `LockEngaged`, `WireError::Locked`, the `ConfigId` in every
 /// response and in `Status`, the reset count and cause in `Status`, the
 /// test-only `TestFault` (issue 15).
-pub const PROTOCOL_VERSION: u16 = 3;
+/// 4: `Status` gains uart_overruns, rx_ring_overflows, alarm_output,
+/// alarm_pin_asserted and auth_provisioned (issue 15, appended).
+pub const PROTOCOL_VERSION: u16 = 4;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes

@@ -598,7 +598,7 @@ mod tests {
             panic!("{:?}", resp[0])
         };
         assert_eq!(st0.config, id(fp_default, false));
-        assert_eq!(st0.protocol_version, 3);
+        assert_eq!(st0.protocol_version, 4);
         assert_eq!(resp[1].body, ResponseBody::Configured);
         assert_eq!(resp[1].config, id(fp_terminal, false));
         assert_eq!(resp[2].body, ResponseBody::LockEngaged);
