@@ -3,21 +3,27 @@
 //! (`raim_core::Raim`), answers every frame with the result or a typed
 //! error, and writes NMEA 0183 for every solved epoch on the second UART.
 //! The protocol loop is `raim_proto::server::Server`; this crate adds the
-//! board (UARTs, ticks), logging and the fatal-error path.
+//! board (UARTs, ticks), the receive ring (`link_rx`, by interrupt), the
+//! integrity-alarm output (`discrete`), logging and the fatal-error path.
 //! Wire protocol: docs/PROTOCOL.md.
 #![no_std]
 #![no_main]
 
 mod board;
+mod discrete;
 mod fault;
 mod guard;
+mod key;
+mod link_rx;
 mod stack;
 mod watchdog;
 
+use cortex_m::interrupt::InterruptNumber;
+use cortex_m::peripheral::NVIC;
 use cortex_m_rt::{entry, exception, ExceptionFrame};
-use embedded_io::Read;
+use raim_core::Decision;
 use raim_proto::server::{Platform, Server};
-use raim_proto::{ResetCause, TestFault};
+use raim_proto::{ResetCause, Status, TestFault};
 
 #[cfg(feature = "board-stm32f4")]
 use defmt_rtt as _;
@@ -28,6 +34,20 @@ struct Board {
     ticks: board::Ticks,
     /// Resets since power-on and the last cause (`fault::boot`).
     reset: (u32, ResetCause),
+    /// The integrity-alarm discrete output.
+    discrete: discrete::BoardDiscrete,
+}
+
+/// An interrupt line by number, for the NVIC (no device crate).
+#[derive(Clone, Copy)]
+struct Irq(u16);
+
+// SAFETY: the numbers used are interrupt lines of the board
+// (`board::LINK_RX_IRQ`, or the one `DefaultHandler` was entered for).
+unsafe impl InterruptNumber for Irq {
+    fn number(self) -> u16 {
+        self.0
+    }
 }
 
 impl Platform for Board {
@@ -40,6 +60,15 @@ impl Platform for Board {
     }
     fn reset_record(&mut self) -> (u32, ResetCause) {
         self.reset
+    }
+    fn on_epoch(&mut self, decision: Option<Decision>) {
+        let now = self.ticks.now64();
+        self.discrete.on_epoch(now, decision);
+    }
+    fn board_status(&mut self, status: &mut Status) {
+        (status.uart_overruns, status.rx_ring_overflows) = link_rx::counters();
+        status.alarm_output = self.discrete.update(self.ticks.now64());
+        status.alarm_pin_asserted = self.discrete.pin_asserted();
     }
     /// Test hooks exist on the QEMU board only (CI); the real board's
     /// build answers `TestHooksDisabled`.
@@ -71,10 +100,21 @@ fn main() -> ! {
     let server = server();
     #[cfg(feature = "pf")]
     server.attach_pf(pf_engines());
-    let (mut link, mut nmea) = board::uarts();
+    // With a key provisioned in flash (`key`), only authenticated
+    // configurations are taken.
+    if let Some(k) = key::provisioned() {
+        server.set_auth_key(k);
+    }
+    let Some((mut link, rx_port, mut nmea, alarm_pin)) = board::parts() else {
+        board::halt()
+    };
+    let Some(mut rx) = link_rx::init(rx_port) else {
+        board::halt()
+    };
     let mut platform = Board {
         ticks: board::Ticks::new(core.SYST),
         reset,
+        discrete: discrete::Discrete::new(alarm_pin),
     };
     watchdog::start();
     stack::paint();
@@ -84,14 +124,54 @@ fn main() -> ! {
         raim_proto::CAPACITY,
         raim_proto::PROTOCOL_VERSION
     );
-    let mut buf = [0u8; 64];
+    // SAFETY: the ring and its interrupt side are set up (`link_rx::init`);
+    // the handlers (`DefaultHandler`, `SysTick`) share only atomics and the
+    // critical-section-guarded receive side with this loop.
+    unsafe {
+        NVIC::unmask(Irq(board::LINK_RX_IRQ));
+        cortex_m::interrupt::enable();
+    }
     loop {
-        let Ok(n) = link.read(&mut buf);
-        for &b in buf.iter().take(n) {
+        while let Some(b) = rx.next() {
             // The UARTs' error type is Infallible.
             let _ = server.on_byte(b, &mut link, &mut nmea, &mut platform);
             watchdog::feed();
         }
+        let now = platform.ticks.now64();
+        platform.discrete.update(now);
+        // Sleep until the next byte or SysTick wrap, unless a byte came in
+        // since the ring was found empty: interrupts are masked between
+        // the check and WFI (a pending interrupt still ends WFI, and its
+        // handler runs once they are unmasked).
+        cortex_m::interrupt::free(|cs| {
+            if !rx.pump(cs) {
+                watchdog::feed();
+                cortex_m::asm::wfi();
+            }
+        });
+    }
+}
+
+/// SysTick's wrap (every 2^24 core ticks): extends the tick counter and
+/// wakes the waiting loop.
+#[exception]
+fn SysTick() {
+    board::on_systick();
+}
+
+/// Every device interrupt (cortex-m-rt's `DefaultHandler` receives its
+/// number; no device crate, no hand-written vector table): the link UART's
+/// receive interrupt goes to `link_rx`. Any other line was never enabled;
+/// should one fire, it is masked again.
+#[exception]
+unsafe fn DefaultHandler(irqn: i16) {
+    if irqn == board::LINK_RX_IRQ as i16 {
+        link_rx::on_irq();
+    } else if let Ok(line) = u16::try_from(irqn) {
+        NVIC::mask(Irq(line));
+    } else {
+        // A system exception without a handler (none is enabled).
+        fault::record_and_reset(fault::CODE_HARD_FAULT, 0)
     }
 }
 

@@ -8,8 +8,8 @@
 //!   WDOGCLK 25 MHz, ARM DDI 0479C §4.4), interrupt on NMI. Its first
 //!   expiry raises the NMI, whose handler records and resets; the second
 //!   (RESEN) resets in hardware should the handler not run. The waiting
-//!   loop sleeps in WFI, so SysTick's interrupt (pending only: PRIMASK is
-//!   set, no handler runs) wakes it every 2^24 ticks (0.67 s) to feed.
+//!   loop sleeps in WFI; SysTick's exception wakes it every 2^24 ticks
+//!   (0.67 s) to feed.
 //! - `board-stm32f4`: the IWDG (LSI ~32 kHz, /64, reload 1000: ~2 s).
 
 use core::ptr::write_volatile;
@@ -28,12 +28,6 @@ mod imp {
     const CTRL_RESEN: u32 = 1 << 1;
     /// 2 s at 25 MHz to the first expiry.
     const LOAD_2S: u32 = 50_000_000;
-    /// SysTick control and status: TICKINT.
-    const SYST_CSR: usize = 0xE000_E010;
-    const SYST_TICKINT: u32 = 1 << 1;
-    /// Interrupt control and state: PENDSTCLR.
-    const SCB_ICSR: usize = 0xE000_ED04;
-    const ICSR_PENDSTCLR: u32 = 1 << 25;
 
     fn reg(offset: usize, v: u32) {
         // SAFETY: a register of the CMSDK watchdog of this machine.
@@ -45,26 +39,12 @@ mod imp {
         reg(LOAD, LOAD_2S);
         reg(CTRL, CTRL_INTEN | CTRL_RESEN);
         reg(LOCK, 0);
-        // SAFETY: SysTick CSR; only TICKINT is added (the counter is
-        // already running, `board::Ticks`).
-        unsafe {
-            let csr = core::ptr::read_volatile(SYST_CSR as *const u32);
-            write_volatile(SYST_CSR as *mut u32, csr | SYST_TICKINT);
-        }
     }
 
     pub fn feed() {
         reg(LOCK, UNLOCK_KEY);
         reg(INTCLR, 1);
         reg(LOCK, 0);
-    }
-
-    /// Called by the waiting loop before it sleeps: clears SysTick's
-    /// pending state (so WFI sleeps until the next wrap or byte) and feeds.
-    pub fn on_idle() {
-        // SAFETY: the SCB's ICSR; PENDSTCLR only clears SysTick's pending bit.
-        unsafe { write_volatile(SCB_ICSR as *mut u32, ICSR_PENDSTCLR) };
-        feed();
     }
 }
 
@@ -92,10 +72,6 @@ mod imp {
     pub fn feed() {
         reg(IWDG_KR, 0xAAAA);
     }
-
-    pub fn on_idle() {
-        feed();
-    }
 }
 
-pub use imp::{feed, on_idle, start};
+pub use imp::{feed, start};

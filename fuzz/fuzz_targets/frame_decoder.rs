@@ -19,13 +19,19 @@ fuzz_target!(|data: &[u8]| {
         let Some(ev) = rx.push(b) else { continue };
         events += 1;
         let Ok(payload) = ev else { continue };
-        let Ok(req) = postcard::from_bytes::<Request>(payload) else { continue };
+        let Ok(req) = postcard::from_bytes::<Request>(payload) else {
+            continue;
+        };
         let mut a = [0u8; 4 * MAX_REQUEST_FRAME];
-        let Ok(bytes) = postcard::to_slice(&req, &mut a) else { panic!("a decoded request does not re-encode") };
+        let Ok(bytes) = postcard::to_slice(&req, &mut a) else {
+            panic!("a decoded request does not re-encode")
+        };
         let bytes = bytes.to_vec();
         let mut scratch = [0u8; 4 * MAX_REQUEST_FRAME];
         let mut out = [0u8; 4 * MAX_REQUEST_FRAME];
-        let frame = encode(&req, &mut scratch, &mut out).expect("encode").to_vec();
+        let frame = encode(&req, &mut scratch, &mut out)
+            .expect("encode")
+            .to_vec();
         let mut rx2 = FrameReceiver::<{ 4 * MAX_REQUEST_FRAME }>::new();
         let mut again: Vec<Vec<u8>> = Vec::new();
         for &b in &frame {
@@ -38,5 +44,8 @@ fuzz_target!(|data: &[u8]| {
     // One event per delimiter at most (plus one per overflow, whose chunk
     // then yields nothing more).
     let delimiters = data.iter().filter(|&&b| b == 0).count();
-    assert!(events <= delimiters + data.len() / MAX_REQUEST_FRAME + 1, "{events} events, {delimiters} delimiters");
+    assert!(
+        events <= delimiters + data.len() / MAX_REQUEST_FRAME + 1,
+        "{events} events, {delimiters} delimiters"
+    );
 });

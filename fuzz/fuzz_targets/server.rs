@@ -31,7 +31,16 @@ fuzz_target!(|data: &[u8]| {
     let (mut link, mut nmea) = (Sink(Vec::new()), Sink(Vec::new()));
     let mut scratch = [0u8; 256];
     let mut out = [0u8; 256];
-    let status = encode(&RequestRef { seq: 0xABCD, command: CommandRef::Status }, &mut scratch, &mut out).unwrap().to_vec();
+    let status = encode(
+        &RequestRef {
+            seq: 0xABCD,
+            command: CommandRef::Status,
+        },
+        &mut scratch,
+        &mut out,
+    )
+    .unwrap()
+    .to_vec();
     for &b in data.iter().chain(&[0u8]).chain(&status) {
         let _ = server.on_byte(b, &mut link, &mut nmea, &mut NoPlatform);
     }
@@ -39,7 +48,10 @@ fuzz_target!(|data: &[u8]| {
     let mut last = None;
     for &b in &link.0 {
         if let Some(p) = rx.push(b) {
-            last = Some(postcard::from_bytes::<Response>(p.expect("the firmware's own frames are valid")).expect("decodable"));
+            last = Some(
+                postcard::from_bytes::<Response>(p.expect("the firmware's own frames are valid"))
+                    .expect("decodable"),
+            );
         }
     }
     let last = last.expect("an answer");

@@ -80,10 +80,8 @@ fn through_gpsd(epochs: &[Vec<String>], n_epochs: usize) -> Vec<serde_json::Valu
             // first epoch were seen), so a count of TPVs is no end mark: stop
             // at the last epoch's TPV (its time tag), else at the read
             // timeout or when gpsd closes.
-            let last = v["class"] == "TPV"
-                && v["time"]
-                    .as_str()
-                    .is_some_and(|t| t.contains(&last_tag));
+            let last =
+                v["class"] == "TPV" && v["time"].as_str().is_some_and(|t| t.contains(&last_tag));
             out.push(v);
             if last {
                 break;

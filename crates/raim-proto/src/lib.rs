@@ -11,6 +11,7 @@
 //! - [`result`]: the epoch result on the wire, converted from
 //!   `raim_core::EpochResult`.
 //! - [`error`]: the typed errors of a response.
+//! - [`alert`]: the integrity-alarm discrete output's state machine.
 //! - [`lock`]: the configuration lock and its CRC-32 fingerprint.
 //! - [`araim_msg`]: the ISM, the ARAIM epoch and result (issue 12).
 //! - [`nmea`]: RMC, GGA, GSA, GST and GBS sentences for a solved epoch.
@@ -37,6 +38,7 @@
     )
 )]
 
+pub mod alert;
 pub mod araim_msg;
 pub mod auth;
 pub mod error;
@@ -48,6 +50,7 @@ pub mod pf_msg;
 pub mod result;
 pub mod server;
 
+pub use alert::{AlarmOutput, AlertMonitor};
 pub use auth::{AuthConfigure, AuthKey};
 pub use error::WireError;
 pub use frame::{encode, FrameError, FrameReceiver};
@@ -72,7 +75,9 @@ pub const CAPACITY: usize = raim_core::DEFAULT_CAPACITY;
 /// appended; the earlier variants keep their indices).
 /// 5: the particle-filter messages `PfConfigure`, `PfRanges`, `PfResult`
 /// and their errors, appended to the enums (issue 14, `pf_msg`).
-pub const PROTOCOL_VERSION: u16 = 5;
+/// 6: `Status` gains uart_overruns, rx_ring_overflows, alarm_output,
+/// alarm_pin_asserted and auth_provisioned (issue 15, appended).
+pub const PROTOCOL_VERSION: u16 = 6;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes

@@ -261,6 +261,23 @@ pub struct Status {
     /// Resets since power-on, and the cause of the last one.
     pub resets: u32,
     pub reset_cause: ResetCause,
+    /// Link bytes lost in the UART since reset: times its receive register
+    /// overran (a byte arrived before the previous one was read). 0 where
+    /// the UART model has no overrun (QEMU applies back-pressure).
+    pub uart_overruns: u32,
+    /// Times a received byte found the firmware's receive ring full since
+    /// reset. Reception then pauses until the main loop makes room: the
+    /// UART holds that byte, and a further byte overruns the UART (counted
+    /// in `uart_overruns`); under QEMU nothing is lost (docs/SAFETY.md).
+    pub rx_ring_overflows: u32,
+    /// The integrity-alarm discrete output's state and why (`alert`).
+    pub alarm_output: crate::alert::AlarmOutput,
+    /// The output pin as read back from the hardware: true when it is at
+    /// its alarm level. Must agree with `alarm_output.asserted()`.
+    pub alarm_pin_asserted: bool,
+    /// True when the unit holds an authentication key for `AuthConfigure`
+    /// (then a plain `Configure` is refused).
+    pub auth_provisioned: bool,
 }
 
 /// A response frame's payload.

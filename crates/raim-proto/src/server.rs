@@ -50,6 +50,13 @@ pub trait Platform {
     fn test_fault(&mut self, _fault: TestFault) -> bool {
         false
     }
+    /// Called after every epoch with its decision, or `None` when it was
+    /// answered with a typed error, before the answer goes out (the
+    /// integrity-alarm output, `alert`).
+    fn on_epoch(&mut self, _decision: Option<raim_core::Decision>) {}
+    /// Fills the board's fields of a `Status` (link counters, the alarm
+    /// output, the key) before it is sent.
+    fn board_status(&mut self, _status: &mut Status) {}
 }
 
 /// A platform without a clock (host tests).
@@ -140,6 +147,14 @@ impl Server {
         s
     }
 
+    /// Make this server take only configurations authenticated with
+    /// `key` from now on, as `with_auth_key` (the firmware provisions its
+    /// static server in place at boot, without a second server on the
+    /// stack).
+    pub fn set_auth_key(&mut self, key: crate::auth::AuthKey) {
+        self.auth = Some((key, None));
+    }
+
     pub fn status(&self) -> Status {
         Status {
             config: self.config_id,
@@ -192,6 +207,8 @@ impl Server {
             Command::Status => {
                 self.status.stack_high_water_bytes = platform.stack_high_water_bytes();
                 (self.status.resets, self.status.reset_cause) = platform.reset_record();
+                self.status.auth_provisioned = self.auth.is_some();
+                platform.board_status(&mut self.status);
                 ResponseBody::Status(self.status())
             }
             Command::TestFault(f) => {
@@ -235,8 +252,8 @@ impl Server {
                 self.config_id.locked = true;
                 ResponseBody::LockEngaged
             }
-            Command::Ranges(e) if e.sats.overflowed() => too_many(e.sats.declared),
-            Command::Linear(e) if e.sats.overflowed() => too_many(e.sats.declared),
+            Command::Ranges(e) if e.sats.overflowed() => too_many(e.sats.declared, platform),
+            Command::Linear(e) if e.sats.overflowed() => too_many(e.sats.declared, platform),
             Command::Ranges(e) => self.epoch(
                 &Epoch::ranges(e.time_s, &e.sats.items, e.apriori_m),
                 platform,
@@ -252,7 +269,7 @@ impl Server {
                 ResponseBody::Error(WireError::AuthRequired)
             }
             Command::PfConfigure(c) => self.pf_configure(c),
-            Command::PfRanges(e) if e.sats.overflowed() => too_many(e.sats.declared),
+            Command::PfRanges(e) if e.sats.overflowed() => too_many(e.sats.declared, platform),
             Command::PfRanges(e) => self.pf_epoch(e.time_s, &e.sats.items, platform),
         };
         if let ResponseBody::Result(r) = &body {
@@ -287,6 +304,7 @@ impl Server {
         let r = self.raim.process(&self.config, epoch);
         let t1 = platform.now();
         self.status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
+        platform.on_epoch(r.as_ref().ok().map(|r| r.decision));
         match r {
             Ok(r) => ResponseBody::Result(WireResult::from_result(&r)),
             Err(e) => ResponseBody::Error(e.into()),
@@ -349,7 +367,10 @@ impl Server {
     }
 }
 
-fn too_many(declared: u32) -> ResponseBody {
+/// An epoch with more satellites than the capacity: an epoch answered
+/// with an error, for the alarm output too.
+fn too_many<P: Platform>(declared: u32, platform: &mut P) -> ResponseBody {
+    platform.on_epoch(None);
     ResponseBody::Error(WireError::TooManySatellites {
         have: declared,
         capacity: CAPACITY as u32,
@@ -719,6 +740,90 @@ mod tests {
             panic!()
         };
         assert_eq!((st.resets, st.reset_cause), (0, ResetCause::PowerOn));
+    }
+
+    /// Issue 15: the platform hears every epoch's verdict (typed errors as
+    /// `None`, too-many-satellites included) and fills its Status fields;
+    /// Status tells whether a key is provisioned.
+    #[test]
+    fn the_platform_hears_every_epoch_verdict_and_fills_status() {
+        use crate::alert::{AlarmOutput, AlertMonitor};
+        use raim_core::Decision;
+        struct Discrete(AlertMonitor, u64);
+        impl Platform for Discrete {
+            fn now(&mut self) -> u32 {
+                0
+            }
+            fn on_epoch(&mut self, decision: Option<Decision>) {
+                self.1 += 1;
+                self.0.on_epoch(self.1, decision);
+            }
+            fn board_status(&mut self, status: &mut Status) {
+                status.alarm_output = self.0.output(self.1);
+                status.alarm_pin_asserted = status.alarm_output.asserted();
+                status.rx_ring_overflows = 7;
+            }
+        }
+        let (ok, fault) = (sky(0.0), sky(50.0));
+        let mut nan = sky(0.0);
+        nan[0].residual_m = f64::NAN;
+        let many: Vec<LinearObservation> = (0..40)
+            .map(|i| LinearObservation {
+                id: SatId::new(System::Gps, i),
+                ..ok[0]
+            })
+            .collect();
+        let status = |seq| {
+            frame(&RequestRef {
+                seq,
+                command: CommandRef::Status,
+            })
+        };
+        let mut bytes = status(0);
+        bytes.extend(frame(&RequestRef::linear(1, 0.0, &ok)));
+        bytes.extend(status(2));
+        bytes.extend(frame(&RequestRef::linear(3, 1.0, &nan)));
+        bytes.extend(status(4));
+        bytes.extend(frame(&RequestRef::linear(5, 2.0, &fault)));
+        bytes.extend(status(6));
+        bytes.extend(frame(&RequestRef::linear(7, 3.0, &many)));
+        bytes.extend(status(8));
+        let mut server = Server::new();
+        let mut p = Discrete(AlertMonitor::new(100), 0);
+        let (mut link, mut nmea) = (Sink::default(), Sink::default());
+        for &b in &bytes {
+            server.on_byte(b, &mut link, &mut nmea, &mut p).unwrap();
+        }
+        let outputs: Vec<(AlarmOutput, bool, u32, bool)> = responses(&link.0)
+            .iter()
+            .filter_map(|r| match r.body {
+                ResponseBody::Status(s) => Some((
+                    s.alarm_output,
+                    s.alarm_pin_asserted,
+                    s.rx_ring_overflows,
+                    s.auth_provisioned,
+                )),
+                _ => None,
+            })
+            .collect();
+        // The 50 m fault on one of 8 satellites is excluded: valid.
+        assert_eq!(
+            outputs,
+            [
+                (AlarmOutput::NoValidEpoch, true, 7, false),
+                (AlarmOutput::Clear, false, 7, false),
+                (AlarmOutput::EpochError, true, 7, false),
+                (AlarmOutput::Clear, false, 7, false),
+                (AlarmOutput::EpochError, true, 7, false),
+            ]
+        );
+        assert_eq!(p.1, 4);
+        let mut keyed = Server::with_auth_key([1; 32]);
+        let (resp, _) = run(&mut keyed, &status(0));
+        let ResponseBody::Status(st) = resp[0].body else {
+            panic!()
+        };
+        assert!(st.auth_provisioned);
     }
 
     /// Issue 15: with a key, only an authenticated configuration with a

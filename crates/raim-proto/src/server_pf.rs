@@ -230,6 +230,25 @@ pub fn map_error(e: PfError, sats: &[RangeObservation]) -> WireError {
     }
 }
 
+/// The integrity-alarm output's reading of a PF epoch (issue 15's discrete
+/// output; docs/SAFETY.md): no position (a collapsed filter) is
+/// `Unavailable`; an alarm this epoch is `Alarm`, even when the isolated
+/// satellite was excluded in the same epoch (the position of that epoch
+/// came from the filter that included it); an exclusion without an alarm
+/// is `Excluded`; otherwise `Ok`.
+fn pf_decision(r: &WirePfResult) -> raim_core::Decision {
+    use raim_core::Decision;
+    if r.position_ecef_m.is_none() {
+        Decision::Unavailable
+    } else if r.alarm {
+        Decision::Alarm
+    } else if r.excluded.is_some() {
+        Decision::Excluded
+    } else {
+        Decision::Ok
+    }
+}
+
 impl Server {
     /// Lends the server the PF engines for good (issue 14): from then on
     /// it answers `PfConfigure` and `PfRanges` for them; without them they
@@ -276,6 +295,7 @@ impl Server {
         let r = self.pf.process(time_s, sats);
         let t1 = platform.now();
         self.status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
+        platform.on_epoch(r.as_ref().ok().map(pf_decision));
         match r {
             Ok(r) => ResponseBody::PfResult(r),
             Err(e) => ResponseBody::Error(e),

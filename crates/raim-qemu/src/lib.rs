@@ -1,7 +1,9 @@
-//! Runs the RAIM firmware under `qemu-system-arm -machine mps2-an386` and
-//! talks to it: the link UART (UART0) and the NMEA UART (UART1) are Unix
-//! sockets QEMU serves; semihosting output (the firmware's defmt log, binary)
-//! goes to a log file.
+//! Runs the RAIM firmware under `qemu-system-arm` and talks to it: the
+//! link UART and the NMEA UART are Unix sockets QEMU serves; semihosting
+//! output (the firmware's defmt log, binary) goes to a log file. Two
+//! machines ([`Machine`], `Options::machine`): `mps2-an386` (default; UART0
+//! and UART1) and `netduinoplus2`, an STM32F405 running the real-board
+//! build (USART2 and USART3).
 //!
 //! ```no_run
 //! # fn main() -> anyhow::Result<()> {
@@ -45,10 +47,15 @@ pub fn firmware_elf_path() -> PathBuf {
 
 /// `cd firmware && cargo build --release` (a no-op when up to date).
 pub fn build_firmware() -> Result<PathBuf> {
+    cargo_in_firmware(&["build", "--release", "--quiet"])?;
+    Ok(firmware_elf_path())
+}
+
+/// Run cargo in `firmware/` (its own workspace).
+fn cargo_in_firmware(args: &[&str]) -> Result<()> {
     let dir = repo_root().join("firmware");
     let mut cmd = Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()));
-    cmd.current_dir(&dir)
-        .args(["build", "--release", "--quiet"]);
+    cmd.current_dir(&dir).args(args);
     // Settings of an outer cargo (e.g. under `cargo test`) must not leak
     // into the firmware's own workspace.
     for (k, _) in std::env::vars_os() {
@@ -67,7 +74,7 @@ pub fn build_firmware() -> Result<PathBuf> {
     if !st.success() {
         bail!("firmware build failed ({st})");
     }
-    Ok(firmware_elf_path())
+    Ok(())
 }
 
 /// The firmware ELF: `$RAIM_FIRMWARE_ELF` if set, else built from `firmware/`.
@@ -75,6 +82,116 @@ pub fn firmware_elf() -> Result<PathBuf> {
     match std::env::var_os("RAIM_FIRMWARE_ELF") {
         Some(p) => Ok(PathBuf::from(p)),
         None => build_firmware(),
+    }
+}
+
+/// A copy of the firmware ELF `elf` with `key` written into its `.raim_key`
+/// section (firmware/src/key.rs), as production provisions a unit: the
+/// unit then takes only authenticated configurations. Written next to the
+/// original as `<name>.key-<first bytes in hex>`.
+pub fn provision_key(elf: &Path, key: &raim_proto::AuthKey) -> Result<PathBuf> {
+    let mut bytes = std::fs::read(elf).with_context(|| format!("reading {}", elf.display()))?;
+    let (offset, size) = elf32_section(&bytes, ".raim_key")
+        .with_context(|| format!("no .raim_key section in {}", elf.display()))?;
+    if size != key.len() {
+        bail!(".raim_key is {size} bytes, the key {}", key.len());
+    }
+    bytes
+        .get_mut(offset..offset + size)
+        .context(".raim_key outside the file")?
+        .copy_from_slice(key);
+    let hex: String = key.iter().take(4).map(|b| format!("{b:02x}")).collect();
+    let out = elf.with_extension(format!("key-{hex}"));
+    std::fs::write(&out, bytes)?;
+    Ok(out)
+}
+
+/// File offset and size of a section of a little-endian ELF32 file.
+fn elf32_section(elf: &[u8], name: &str) -> Option<(usize, usize)> {
+    let u16_at = |o: usize| Some(u16::from_le_bytes(elf.get(o..o + 2)?.try_into().ok()?) as usize);
+    let u32_at = |o: usize| Some(u32::from_le_bytes(elf.get(o..o + 4)?.try_into().ok()?) as usize);
+    if elf.get(..6)? != b"\x7fELF\x01\x01" {
+        return None;
+    }
+    let (shoff, shentsize, shnum, shstrndx) =
+        (u32_at(0x20)?, u16_at(0x2E)?, u16_at(0x30)?, u16_at(0x32)?);
+    let header = |i: usize| shoff + i * shentsize;
+    let strtab = u32_at(header(shstrndx) + 16)?;
+    (0..shnum).find_map(|i| {
+        let h = header(i);
+        let start = strtab + u32_at(h)?;
+        let end = start + elf.get(start..)?.iter().position(|&b| b == 0)?;
+        (elf.get(start..end)? == name.as_bytes()).then_some((u32_at(h + 16)?, u32_at(h + 20)?))
+    })
+}
+
+/// The machine QEMU emulates, and the firmware build that runs on it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Machine {
+    /// `mps2-an386` (Cortex-M4, CMSDK UARTs): the default build
+    /// (`board-qemu`), with test hooks, semihosting and the FPGA LED as the
+    /// alarm output.
+    #[default]
+    Mps2An386,
+    /// `netduinoplus2` (an STM32F405): the real-board build
+    /// (`board-stm32f4`). QEMU models its USARTs (USART2 is the second
+    /// `-serial`, USART3 the third) but not its RCC, GPIO or IWDG.
+    NetduinoPlus2,
+}
+
+impl Machine {
+    /// Both machines, for tests that run on each.
+    pub const ALL: [Machine; 2] = [Machine::Mps2An386, Machine::NetduinoPlus2];
+
+    /// QEMU's `-machine` name.
+    pub fn qemu_name(self) -> &'static str {
+        match self {
+            Machine::Mps2An386 => "mps2-an386",
+            Machine::NetduinoPlus2 => "netduinoplus2",
+        }
+    }
+
+    /// `-serial` ports before the link UART (netduinoplus2: USART1).
+    fn serials_before_link(self) -> usize {
+        match self {
+            Machine::Mps2An386 => 0,
+            Machine::NetduinoPlus2 => 1,
+        }
+    }
+
+    /// Where `firmware_elf_for` builds this machine's firmware.
+    pub fn elf_path(self) -> PathBuf {
+        match self {
+            Machine::Mps2An386 => firmware_elf_path(),
+            Machine::NetduinoPlus2 => repo_root()
+                .join("firmware/target/stm32f4/thumbv7em-none-eabihf/release/raim-firmware"),
+        }
+    }
+}
+
+/// The firmware ELF for `machine`: for mps2-an386 as `firmware_elf`; for
+/// netduinoplus2 `$RAIM_FIRMWARE_ELF_STM32F4` if set, else the STM32F4
+/// build (`--features board-stm32f4`, into `firmware/target/stm32f4`, as
+/// scripts/test.sh builds it).
+pub fn firmware_elf_for(machine: Machine) -> Result<PathBuf> {
+    match machine {
+        Machine::Mps2An386 => firmware_elf(),
+        Machine::NetduinoPlus2 => match std::env::var_os("RAIM_FIRMWARE_ELF_STM32F4") {
+            Some(p) => Ok(PathBuf::from(p)),
+            None => {
+                cargo_in_firmware(&[
+                    "build",
+                    "--release",
+                    "--quiet",
+                    "--no-default-features",
+                    "--features",
+                    "board-stm32f4",
+                    "--target-dir",
+                    "target/stm32f4",
+                ])?;
+                Ok(machine.elf_path())
+            }
+        },
     }
 }
 
@@ -87,6 +204,9 @@ pub struct Options {
     /// Where QEMU's semihosting output (the defmt log) goes; default: a file
     /// in the session's temporary directory.
     pub log: Option<PathBuf>,
+    /// The machine (default mps2-an386); the ELF must be its build
+    /// (`firmware_elf_for`).
+    pub machine: Machine,
 }
 
 /// One epoch's answer.
@@ -154,17 +274,16 @@ impl QemuSession {
             .clone()
             .unwrap_or_else(|| dir.join("semihosting.log"));
         let mut cmd = Command::new("qemu-system-arm");
+        cmd.args(["-machine", opts.machine.qemu_name()]);
+        if opts.machine == Machine::Mps2An386 {
+            cmd.args(["-cpu", "cortex-m4"]);
+        }
+        cmd.args(["-nographic", "-monitor", "none"])
+            .args(["-semihosting-config", "enable=on,target=native"]);
+        for _ in 0..opts.machine.serials_before_link() {
+            cmd.args(["-serial", "null"]);
+        }
         cmd.args([
-            "-machine",
-            "mps2-an386",
-            "-cpu",
-            "cortex-m4",
-            "-nographic",
-            "-monitor",
-            "none",
-        ])
-        .args(["-semihosting-config", "enable=on,target=native"])
-        .args([
             "-chardev",
             &format!("socket,id=u0,path={},server=on,wait=on", s0.display()),
         ])
@@ -198,7 +317,7 @@ impl QemuSession {
         let (link, nmea_sock) = link;
         let responses = spawn_link_reader(link.try_clone()?);
         let nmea = spawn_nmea_reader(nmea_sock);
-        Ok(QemuSession {
+        let mut session = QemuSession {
             child,
             link,
             responses,
@@ -207,7 +326,42 @@ impl QemuSession {
             dir,
             log,
             last_config: None,
-        })
+        };
+        if opts.machine == Machine::NetduinoPlus2 {
+            session.sync()?;
+        }
+        Ok(session)
+    }
+
+    /// Wait until the firmware answers. QEMU's STM32 USART model drops the
+    /// bytes that arrive before the firmware has enabled the receiver (the
+    /// CMSDK UART of mps2-an386 holds them back instead), so a frame sent
+    /// at once may be lost: send `Status` until one is answered, then let
+    /// late answers to earlier attempts drain.
+    fn sync(&mut self) -> Result<()> {
+        for _ in 0..40 {
+            // A delimiter first ends whatever part of an earlier attempt
+            // the firmware did receive.
+            self.send_raw(&[0])?;
+            let seq = self.send(CommandRef::Status)?;
+            let deadline = Instant::now() + Duration::from_millis(500);
+            while let Some(left) = deadline.checked_duration_since(Instant::now()) {
+                match self.responses.recv_timeout(left) {
+                    Ok(Ok(r)) if r.seq == Some(seq) => {
+                        while self
+                            .responses
+                            .recv_timeout(Duration::from_millis(200))
+                            .is_ok()
+                        {}
+                        return Ok(());
+                    }
+                    Ok(_) => {}
+                    Err(RecvTimeoutError::Timeout) => break,
+                    Err(RecvTimeoutError::Disconnected) => bail!("the firmware's link closed"),
+                }
+            }
+        }
+        bail!("the firmware never answered a Status frame")
     }
 
     /// The semihosting log file (binary defmt frames; decode with
@@ -274,6 +428,13 @@ impl QemuSession {
                 (s, body) => bail!("expected the answer to {seq}, got {s:?}: {body:?}"),
             }
         }
+    }
+
+    /// Send any command and wait for its answer (sequence-gap notices
+    /// before it are skipped).
+    pub fn call(&mut self, command: CommandRef<'_>) -> Result<ResponseBody> {
+        let seq = self.send(command)?;
+        Ok(self.answer(seq)?.0)
     }
 
     pub fn status(&mut self) -> Result<Status> {

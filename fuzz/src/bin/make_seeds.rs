@@ -15,25 +15,72 @@ fn main() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus/frame_decoder");
     std::fs::create_dir_all(&dir).expect("corpus dir");
     let lin: Vec<LinearObservation> = (0..8)
-        .map(|i| LinearObservation::from_az_el(SatId::new(System::Gps, i + 1), i as f64 * 0.7, 0.2 + i as f64 * 0.15, 0.1 * i as f64))
+        .map(|i| {
+            LinearObservation::from_az_el(
+                SatId::new(System::Gps, i + 1),
+                i as f64 * 0.7,
+                0.2 + i as f64 * 0.15,
+                0.1 * i as f64,
+            )
+        })
         .collect();
     let rng: Vec<RangeObservation> = (0..6)
         .map(|i| RangeObservation {
-            id: SatId::new(if i % 2 == 0 { System::Gps } else { System::Galileo }, i + 1),
+            id: SatId::new(
+                if i % 2 == 0 {
+                    System::Gps
+                } else {
+                    System::Galileo
+                },
+                i + 1,
+            ),
             pseudorange_m: 2.1e7 + 1e5 * i as f64,
             position_m: [1.5e7, -1.0e7 + 1e6 * i as f64, 2.0e7],
             sigma_m: if i == 3 { None } else { Some(1.5) },
         })
         .collect();
-    let cfg = Config { rule: FiRule::LraimGaussian { kappa: 50.0 }, ..Config::default() };
-    let many: Vec<LinearObservation> = (0..40).map(|i| LinearObservation { id: SatId::new(System::Beidou, i), ..lin[0] }).collect();
+    let cfg = Config {
+        rule: FiRule::LraimGaussian { kappa: 50.0 },
+        ..Config::default()
+    };
+    let many: Vec<LinearObservation> = (0..40)
+        .map(|i| LinearObservation {
+            id: SatId::new(System::Beidou, i),
+            ..lin[0]
+        })
+        .collect();
     let seeds: Vec<(&str, Vec<u8>)> = vec![
-        ("status", frame(&RequestRef { seq: 0, command: CommandRef::Status })),
-        ("configure", frame(&RequestRef { seq: 1, command: CommandRef::Configure(&cfg) })),
+        (
+            "status",
+            frame(&RequestRef {
+                seq: 0,
+                command: CommandRef::Status,
+            }),
+        ),
+        (
+            "configure",
+            frame(&RequestRef {
+                seq: 1,
+                command: CommandRef::Configure(&cfg),
+            }),
+        ),
         ("linear8", frame(&RequestRef::linear(2, 3.0, &lin))),
-        ("ranges6", frame(&RequestRef::ranges(3, 1.7e9, Some([1.0, 2.0, 3.0]), &rng))),
+        (
+            "ranges6",
+            frame(&RequestRef::ranges(3, 1.7e9, Some([1.0, 2.0, 3.0]), &rng)),
+        ),
         ("toomany", frame(&RequestRef::linear(4, 0.0, &many))),
-        ("two", [frame(&RequestRef::linear(5, 0.0, &lin)), frame(&RequestRef { seq: 6, command: CommandRef::Status })].concat()),
+        (
+            "two",
+            [
+                frame(&RequestRef::linear(5, 0.0, &lin)),
+                frame(&RequestRef {
+                    seq: 6,
+                    command: CommandRef::Status,
+                }),
+            ]
+            .concat(),
+        ),
         ("truncated", {
             let f = frame(&RequestRef::ranges(7, 0.0, None, &rng));
             [&f[..f.len() / 2], &[0u8][..]].concat()

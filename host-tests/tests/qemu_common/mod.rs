@@ -14,6 +14,21 @@ pub fn session() -> QemuSession {
     QemuSession::start(elf).expect("qemu-system-arm with the firmware")
 }
 
+/// A session on `machine` with its firmware build (issue 15: the QEMU
+/// tests that the machine supports run on both boards).
+#[allow(dead_code)]
+pub fn session_on(machine: raim_qemu::Machine) -> QemuSession {
+    let elf = raim_qemu::firmware_elf_for(machine).expect("firmware build");
+    QemuSession::start_with(
+        &elf,
+        &raim_qemu::Options {
+            machine,
+            ..raim_qemu::Options::default()
+        },
+    )
+    .expect("qemu-system-arm with the firmware")
+}
+
 /// The host core's result for an epoch, in wire form, in the firmware's
 /// precision ([`host_tests::Device`]).
 pub fn host_result(cfg: &Config, epoch: &Epoch<'_>) -> Result<WireResult, RaimError> {

@@ -327,7 +327,22 @@ impl Server {
         Ok(AraimAnswer::IsmAccepted { satellites })
     }
 
+    /// An ARAIM epoch; its decision (or its refusal, as `None`) drives the
+    /// integrity-alarm output like a snapshot epoch's (`Platform::on_epoch`).
     fn araim_epoch<P: super::Platform>(
+        &mut self,
+        epoch: &LinearEpoch,
+        platform: &mut P,
+    ) -> Result<AraimAnswer, WireError> {
+        let r = self.araim_epoch_answer(epoch, platform);
+        platform.on_epoch(match &r {
+            Ok(AraimAnswer::Result(res)) => Some(res.decision),
+            _ => None,
+        });
+        r
+    }
+
+    fn araim_epoch_answer<P: super::Platform>(
         &mut self,
         epoch: &LinearEpoch,
         platform: &mut P,

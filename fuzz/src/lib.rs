@@ -1,0 +1,343 @@
+//! Structured fuzzing of the protocol server (issue 15): `arbitrary`
+//! builds a sequence of well-formed requests with valid CRCs (linearised
+//! epochs with faults and NaNs, configurations in and out of bounds,
+//! locks, status requests, garbage frames), feeds them to
+//! `raim_proto::server::Server` as the firmware does, and checks after
+//! every answer:
+//! - every frame gets exactly one answer, in order, with its sequence
+//!   number (garbage: one answer without one);
+//! - an `Ok` or `Excluded` result has a finite test statistic below its
+//!   finite threshold and finite protection levels within the alert limits
+//!   of the configuration in force (Decision's definition, raim-core
+//!   `result.rs`);
+//! - the configuration in force changes only on `Configured`, never after
+//!   `Lock`, and every answer carries its fingerprint and the lock state.
+//!
+//! Run by `fuzz_targets/server_structured.rs` (cargo-fuzz, nightly) or by
+//! `src/bin/structured_loop.rs` (stable: seeded bytes, no coverage).
+
+use arbitrary::{Arbitrary, Unstructured};
+use raim_core::{AlertLimits, Config, FiRule, LinearObservation, Phase, SatId, System};
+use raim_proto::frame::{encode, FrameReceiver};
+use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody};
+use raim_proto::result::WireResult;
+use raim_proto::server::{NoPlatform, Server};
+use raim_proto::{config_fingerprint, ConfigId, WireError, MAX_RESPONSE_FRAME};
+
+/// At most this many steps per scenario.
+pub const MAX_STEPS: usize = 8;
+
+/// One request of a scenario.
+#[derive(Debug, Arbitrary)]
+pub enum Step {
+    /// A linearised epoch: `sats` satellites (4-14) on a sky drawn from
+    /// `sky_seed`, unit-sigma noise scaled by `noise_tenths` / 10, up to two
+    /// faults (satellite index, fiftieths of a metre) and a NaN residual.
+    Epoch {
+        sats: u8,
+        sky_seed: u32,
+        noise_tenths: u8,
+        fault: Option<(u8, i16)>,
+        second_fault: Option<(u8, i16)>,
+        nan_at: Option<u8>,
+        time_s: u32,
+    },
+    /// A configuration: a preset, then fields from the fuzzer (some out of
+    /// bounds, which must be refused).
+    Configure {
+        phase: u8,
+        pfa_exp: u8,
+        rule: u8,
+        kappa: u16,
+        hal_m: u16,
+        val_m: Option<u16>,
+        max_exclusions: u8,
+        wild_pfa: Option<f64>,
+    },
+    Lock,
+    Status,
+    /// Non-zero bytes and a delimiter: one frame that is not a request.
+    Garbage(Vec<u8>),
+}
+
+/// A sequence of requests.
+#[derive(Debug)]
+pub struct Scenario(pub Vec<Step>);
+
+impl<'a> Arbitrary<'a> for Scenario {
+    fn arbitrary(u: &mut Unstructured<'a>) -> arbitrary::Result<Self> {
+        let mut steps = Vec::new();
+        while steps.len() < MAX_STEPS && !u.is_empty() {
+            steps.push(Step::arbitrary(u)?);
+        }
+        Ok(Scenario(steps))
+    }
+}
+
+/// What the scenarios covered (for the run's record).
+#[derive(Debug, Default, Clone, Copy)]
+pub struct Tally {
+    pub frames: u64,
+    pub epochs: u64,
+    pub ok: u64,
+    pub excluded: u64,
+    pub alarm: u64,
+    pub unavailable: u64,
+    pub epoch_errors: u64,
+    pub configured: u64,
+    pub refused_configs: u64,
+    pub locked_refusals: u64,
+}
+
+struct Sink(Vec<u8>);
+impl embedded_io::ErrorType for Sink {
+    type Error = core::convert::Infallible;
+}
+impl embedded_io::Write for Sink {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        self.0.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+/// A small deterministic generator for the sky and the noise.
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn normal(&mut self) -> f64 {
+        let (u1, u2) = (self.next().max(1e-300), self.next());
+        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+    }
+}
+
+fn sky(step: &Step) -> Vec<LinearObservation> {
+    let Step::Epoch {
+        sats,
+        sky_seed,
+        noise_tenths,
+        fault,
+        second_fault,
+        nan_at,
+        ..
+    } = step
+    else {
+        return Vec::new();
+    };
+    let n = 4 + usize::from(*sats % 11);
+    let mut rng = Lcg(u64::from(*sky_seed) ^ 0x9E37_79B9_7F4A_7C15);
+    (0..n)
+        .map(|i| {
+            let az = rng.next() * 2.0 * std::f64::consts::PI;
+            let el = (5.0 + 85.0 * rng.next()).to_radians();
+            let mut r = rng.normal() * f64::from(*noise_tenths) / 10.0;
+            // Faults up to +-655 m in 2 cm steps: the region around the
+            // threshold and the PLs, where a wrong "Ok" would hide.
+            for (k, m) in [fault, second_fault].into_iter().flatten() {
+                if usize::from(*k) % n == i {
+                    r += f64::from(*m) / 50.0;
+                }
+            }
+            // One epoch in 16 of those that ask has a NaN residual.
+            if nan_at.is_some_and(|k| k < 16 && usize::from(k) % n == i) {
+                r = f64::NAN;
+            }
+            let mut o =
+                LinearObservation::from_az_el(SatId::new(System::Gps, i as u8 + 1), az, el, r);
+            o.sigma_m = Some(1.0);
+            o
+        })
+        .collect()
+}
+
+fn config(step: &Step) -> Option<Config> {
+    let Step::Configure {
+        phase,
+        pfa_exp,
+        rule,
+        kappa,
+        hal_m,
+        val_m,
+        max_exclusions,
+        wild_pfa,
+    } = step
+    else {
+        return None;
+    };
+    let phase = [Phase::EnRoute, Phase::Terminal, Phase::Npa][usize::from(*phase % 3)];
+    let base = Config::preset(phase);
+    Some(Config {
+        pfa: wild_pfa.unwrap_or(10f64.powi(-i32::from(2 + *pfa_exp % 12))),
+        rule: match rule % 3 {
+            0 => FiRule::Mle,
+            1 => FiRule::LraimFlat,
+            _ => FiRule::LraimGaussian {
+                kappa: f64::from(*kappa),
+            },
+        },
+        alert: AlertLimits {
+            hal_m: f64::from(*hal_m),
+            val_m: val_m.map(f64::from),
+        },
+        max_exclusions: *max_exclusions % 4,
+        ..base
+    })
+}
+
+/// The first invariant a result breaks, if any.
+fn check_result(r: &WireResult, cfg: &Config) -> Result<(), String> {
+    use raim_core::Decision;
+    if !matches!(r.decision, Decision::Ok | Decision::Excluded) {
+        return Ok(());
+    }
+    let t = &r.test;
+    if !(t.statistic.is_finite() && t.threshold.is_finite() && t.statistic < t.threshold) {
+        return Err(format!("{:?} with test {t:?}", r.decision));
+    }
+    if !(r.hpl_m.is_finite() && r.hpl_m <= cfg.alert.hal_m) {
+        return Err(format!(
+            "{:?} with HPL {} > HAL {}",
+            r.decision, r.hpl_m, cfg.alert.hal_m
+        ));
+    }
+    if let Some(val) = cfg.alert.val_m {
+        if !(r.vpl_m.is_finite() && r.vpl_m <= val) {
+            return Err(format!("{:?} with VPL {} > VAL {val}", r.decision, r.vpl_m));
+        }
+    }
+    Ok(())
+}
+
+/// Run a scenario through a fresh server; `Err` names the broken invariant.
+pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
+    let mut server = Box::new(Server::new());
+    let mut in_force = Config::default();
+    let mut locked = false;
+    let (mut link, mut nmea) = (Sink(Vec::new()), Sink(Vec::new()));
+    let mut rx = Box::new(FrameReceiver::<MAX_RESPONSE_FRAME>::new());
+    let mut scratch = vec![0u8; 8192];
+    let mut out = vec![0u8; 8192];
+    let mut next_seq = 0u32;
+    for step in &scenario.0 {
+        let seq = next_seq;
+        if !matches!(step, Step::Garbage(_)) {
+            next_seq += 1;
+        }
+        let sats = sky(step);
+        let cfg = config(step);
+        let frame: Vec<u8> = match step {
+            Step::Garbage(bytes) => bytes
+                .iter()
+                .filter(|&&b| b != 0)
+                .copied()
+                .chain([0u8])
+                .collect(),
+            _ => {
+                let command = match step {
+                    Step::Epoch { time_s, .. } => CommandRef::Linear {
+                        time_s: f64::from(*time_s),
+                        sats: &sats,
+                    },
+                    Step::Configure { .. } => {
+                        CommandRef::Configure(cfg.as_ref().ok_or("no configuration")?)
+                    }
+                    Step::Lock => CommandRef::Lock,
+                    _ => CommandRef::Status,
+                };
+                encode(&RequestRef { seq, command }, &mut scratch, &mut out)
+                    .map_err(|e| format!("encoding: {e:?}"))?
+                    .to_vec()
+            }
+        };
+        link.0.clear();
+        for &b in &frame {
+            let _ = server.on_byte(b, &mut link, &mut nmea, &mut NoPlatform);
+        }
+        tally.frames += 1;
+        let mut answers: Vec<Response> = Vec::new();
+        for &b in &link.0 {
+            match rx.push(b) {
+                None => {}
+                Some(Ok(p)) => answers.push(postcard::from_bytes(p).map_err(|e| format!("{e}"))?),
+                Some(Err(e)) => return Err(format!("the server's own frame: {e:?}")),
+            }
+        }
+        // A garbage chunk that is only a delimiter is not a frame.
+        let empty = matches!(step, Step::Garbage(_)) && frame.len() == 1;
+        if empty {
+            if !answers.is_empty() {
+                return Err(format!("an empty chunk answered: {answers:?}"));
+            }
+            continue;
+        }
+        let [answer] = answers.as_slice() else {
+            return Err(format!(
+                "step {seq} {step:?}: {} answers {answers:?}",
+                answers.len()
+            ));
+        };
+        let want_seq = (!matches!(step, Step::Garbage(_))).then_some(seq);
+        if answer.seq != want_seq {
+            return Err(format!("step {seq}: answer for {:?}", answer.seq));
+        }
+        match (step, &answer.body) {
+            (Step::Epoch { .. }, ResponseBody::Result(r)) => {
+                tally.epochs += 1;
+                match r.decision {
+                    raim_core::Decision::Ok => tally.ok += 1,
+                    raim_core::Decision::Excluded => tally.excluded += 1,
+                    raim_core::Decision::Alarm => tally.alarm += 1,
+                    raim_core::Decision::Unavailable => tally.unavailable += 1,
+                }
+                check_result(r, &in_force).map_err(|e| format!("step {seq}: {e}"))?;
+            }
+            (Step::Epoch { .. }, ResponseBody::Error(_)) => {
+                tally.epochs += 1;
+                tally.epoch_errors += 1;
+            }
+            (Step::Configure { .. }, ResponseBody::Configured) => {
+                if locked {
+                    return Err(format!("step {seq}: configured while locked"));
+                }
+                let c = cfg.ok_or("no configuration")?;
+                if c.validate().is_err() {
+                    return Err(format!("step {seq}: an invalid configuration taken: {c:?}"));
+                }
+                in_force = c;
+                tally.configured += 1;
+            }
+            (Step::Configure { .. }, ResponseBody::Error(WireError::Locked { .. })) if locked => {
+                tally.locked_refusals += 1;
+            }
+            (Step::Configure { .. }, ResponseBody::Error(_)) if !locked => {
+                tally.refused_configs += 1;
+            }
+            (Step::Lock, ResponseBody::LockEngaged) => locked = true,
+            (Step::Status, ResponseBody::Status(_)) => {}
+            (Step::Garbage(_), ResponseBody::Error(_)) => {}
+            (s, b) => return Err(format!("step {seq}: {s:?} answered {b:?}")),
+        }
+        let id = ConfigId {
+            crc32: config_fingerprint(&in_force),
+            locked,
+        };
+        if answer.config != id {
+            return Err(format!(
+                "step {seq}: answer carries {:?}, in force {id:?}",
+                answer.config
+            ));
+        }
+    }
+    if std::str::from_utf8(&nmea.0).is_err() {
+        return Err("NMEA output is not text".into());
+    }
+    Ok(())
+}

@@ -1,0 +1,178 @@
+//! Issue 15, under QEMU (mps2-an386, and netduinoplus2 for the stream):
+//! - no byte lost: the host streams 1,000 frames back to back without
+//!   waiting for answers; the firmware receives them by interrupt into its
+//!   ring (`firmware/src/link_rx.rs`) and answers every one, in order, bit
+//!   for bit as the host core; no UART overrun is counted (QEMU's UART
+//!   holds the sender back), and when the ring filled (reception paused,
+//!   `rx_ring_overflows`) no byte was lost either;
+//! - the integrity-alarm discrete output (`firmware/src/discrete.rs`): its
+//!   state in `Status` (and the pin read back) from boot, after a valid
+//!   epoch, after an alarm or unavailable epoch, after an errored epoch,
+//!   and once the time-to-alert has passed without an epoch.
+
+mod qemu_common;
+
+use std::time::{Duration, Instant};
+
+use qemu_common::{host_result, range_epoch, range_vectors, session_on, wire_bytes, Rng};
+use raim_core::{Config, Decision, Epoch, System};
+use raim_proto::message::{CommandRef, ResponseBody};
+use raim_proto::AlarmOutput;
+use raim_qemu::{epoch_command, Machine, Options, QemuSession, ANSWER_TIMEOUT};
+
+/// Frames streamed back to back on mps2-an386, and (to keep CI short) on
+/// netduinoplus2.
+const STREAM_FRAMES: u32 = 1000;
+const STREAM_FRAMES_NETDUINO: u32 = 200;
+/// The firmware's default time-to-alert (`RAIM_TIME_TO_ALERT_S`).
+const TIME_TO_ALERT_S: f64 = 10.0;
+/// The output asserts up to one SysTick wrap (2^24 ticks at 25 MHz) before
+/// the time-to-alert (firmware/src/discrete.rs).
+const CHECK_PERIOD_S: f64 = 16_777_216.0 / 25.0e6;
+
+#[test]
+fn qemu_streamed_frames_are_all_answered_in_order() {
+    stream(Machine::Mps2An386, STREAM_FRAMES);
+}
+
+/// The real-board build (USART2 by interrupt on stm32f4xx-hal) under
+/// QEMU's netduinoplus2.
+#[test]
+fn qemu_netduinoplus2_streamed_frames_are_all_answered_in_order() {
+    stream(Machine::NetduinoPlus2, STREAM_FRAMES_NETDUINO);
+}
+
+fn stream(machine: Machine, frames: u32) {
+    let mut fw = session_on(machine);
+    let before = fw.status().unwrap();
+    let seq0 = fw.next_seq();
+    let cfg = Config::default();
+    let vectors = range_vectors(11);
+    let expected: Vec<Result<Vec<u8>, ()>> = vectors
+        .iter()
+        .map(|(t, s, a)| {
+            host_result(&cfg, &Epoch::ranges(*t, s, *a))
+                .map(|r| wire_bytes(&r))
+                .map_err(|_| ())
+        })
+        .collect();
+    // Every other frame a Status, the others the vectors in turn.
+    let mut stream = Vec::new();
+    let mut kinds = Vec::new();
+    for i in 0..frames as usize {
+        let command = if i % 2 == 1 {
+            kinds.push(None);
+            CommandRef::Status
+        } else {
+            let v = (i / 2) % vectors.len();
+            kinds.push(Some(v));
+            let (t, s, a) = &vectors[v];
+            epoch_command(&Epoch::ranges(*t, s, *a))
+        };
+        let (seq, bytes) = fw.frame(command).unwrap();
+        assert_eq!(seq, seq0 + i as u32);
+        stream.extend(bytes);
+    }
+    let t0 = Instant::now();
+    fw.send_raw(&stream).unwrap();
+    for (i, kind) in kinds.iter().enumerate() {
+        let r = fw.recv(ANSWER_TIMEOUT).unwrap();
+        assert_eq!(r.seq, Some(seq0 + i as u32), "answer {i}: {:?}", r.body);
+        match (kind, r.body) {
+            (None, ResponseBody::Status(st)) => {
+                assert_eq!(st.frames, before.frames + i as u32 + 1);
+                assert_eq!(st.uart_overruns, 0);
+            }
+            (Some(v), ResponseBody::Result(res)) => {
+                assert_eq!(Ok(wire_bytes(&res)), expected[*v], "frame {i}")
+            }
+            (Some(v), ResponseBody::Error(_)) => assert!(expected[*v].is_err(), "frame {i}"),
+            (k, body) => panic!("frame {i} ({k:?}) answered {body:?}"),
+        }
+    }
+    let s = t0.elapsed().as_secs_f64();
+    let st = fw.status().unwrap();
+    assert_eq!(st.frames, before.frames + frames + 1);
+    assert_eq!(st.uart_overruns, 0);
+    eprintln!(
+        "{machine:?}: {frames} frames ({} bytes) streamed and answered in {s:.2} s: {:.0} frames/s, \
+         {:.0} bytes/s; ring full {} times",
+        stream.len(),
+        f64::from(frames) / s,
+        stream.len() as f64 / s,
+        st.rx_ring_overflows
+    );
+}
+
+#[test]
+fn qemu_integrity_alarm_output_follows_the_epochs_and_the_time_to_alert() {
+    // -icount shift=0: the guest's SysTick runs on QEMU's virtual clock,
+    // which follows real time while the guest sleeps.
+    let elf = raim_qemu::firmware_elf().unwrap();
+    let mut fw = QemuSession::start_with(
+        &elf,
+        &Options {
+            icount: true,
+            ..Options::default()
+        },
+    )
+    .unwrap();
+    let cfg = Config::default();
+    let mut vectors = range_vectors(3);
+    // Five satellites, one with a 200 m fault: detected, and no subset is
+    // left to exclude it with: Alarm.
+    let sky: Vec<(f64, f64)> = (0..5)
+        .map(|i| (i as f64 * 31.0, 12.0 + (i as f64 * 23.0) % 70.0))
+        .collect();
+    let faulty = range_epoch(&sky, &[System::Gps], &mut Rng::new(5), &[(2, 200.0)]);
+    vectors.push((vectors[0].0 + 10.0, faulty, None));
+    let outcome = |v: &(f64, Vec<_>, Option<[f64; 3]>)| {
+        host_result(&cfg, &Epoch::ranges(v.0, &v.1, v.2)).map(|r| r.decision)
+    };
+    let pick = |want: &dyn Fn(Result<Decision, ()>) -> bool| {
+        vectors
+            .iter()
+            .find(|v| want(outcome(v).map_err(|_| ())))
+            .expect("a vector of each kind")
+    };
+    let valid = pick(&|d| matches!(d, Ok(Decision::Ok | Decision::Excluded)));
+    let alarm = pick(&|d| matches!(d, Ok(Decision::Alarm | Decision::Unavailable)));
+    let errored = pick(&|d| d.is_err());
+    let alarm_state = match outcome(alarm) {
+        Ok(Decision::Alarm) => AlarmOutput::Alarm,
+        _ => AlarmOutput::Unavailable,
+    };
+    let state = |fw: &mut QemuSession| {
+        let st = fw.status().unwrap();
+        assert_eq!(st.alarm_pin_asserted, st.alarm_output.asserted(), "{st:?}");
+        st.alarm_output
+    };
+    let run = |fw: &mut QemuSession, v: &(f64, Vec<_>, Option<[f64; 3]>)| {
+        fw.process(&Epoch::ranges(v.0, &v.1, v.2)).unwrap();
+    };
+    assert_eq!(state(&mut fw), AlarmOutput::NoValidEpoch);
+    run(&mut fw, valid);
+    assert_eq!(state(&mut fw), AlarmOutput::Clear);
+    run(&mut fw, alarm);
+    assert_eq!(state(&mut fw), alarm_state);
+    run(&mut fw, valid);
+    assert_eq!(state(&mut fw), AlarmOutput::Clear);
+    run(&mut fw, errored);
+    assert_eq!(state(&mut fw), AlarmOutput::EpochError);
+    run(&mut fw, valid);
+    let t_valid = Instant::now();
+    assert_eq!(state(&mut fw), AlarmOutput::Clear);
+    // Half the time-to-alert: still clear.
+    std::thread::sleep(Duration::from_secs_f64(TIME_TO_ALERT_S / 2.0));
+    assert_eq!(state(&mut fw), AlarmOutput::Clear);
+    // Not before the time-to-alert less one check period ...
+    let early = Duration::from_secs_f64(TIME_TO_ALERT_S - CHECK_PERIOD_S - 0.5);
+    std::thread::sleep(early.saturating_sub(t_valid.elapsed()));
+    assert_eq!(state(&mut fw), AlarmOutput::Clear);
+    // ... and asserted once it has passed.
+    let late = Duration::from_secs_f64(TIME_TO_ALERT_S + 0.3);
+    std::thread::sleep(late.saturating_sub(t_valid.elapsed()));
+    assert_eq!(state(&mut fw), AlarmOutput::TimeToAlertExceeded);
+    run(&mut fw, valid);
+    assert_eq!(state(&mut fw), AlarmOutput::Clear);
+}
