@@ -736,3 +736,51 @@ mod tests {
         assert_eq!(a[1].body, b[1].body);
     }
 }
+
+/// The alarm output's reading of a PF epoch (`pf_decision`), on every
+/// combination of the three flags it reads.
+#[cfg(test)]
+mod decision_tests {
+    use super::pf_decision;
+    use crate::pf_msg::WirePfResult;
+    use raim_core::{Decision, SatId, System};
+
+    fn result(position: bool, alarm: bool, excluded: bool) -> WirePfResult {
+        let g = SatId::new(System::Gps, 4);
+        WirePfResult {
+            time_s: 0.0,
+            position_ecef_m: position.then_some([1.0, 2.0, 3.0]),
+            clock_m: Default::default(),
+            drift_m_s: 0.0,
+            decision: if alarm { 10.0 } else { 0.0 },
+            threshold: 5.0,
+            alarm,
+            isolated: alarm.then_some(g),
+            excluded: excluded.then_some(g),
+            n_eff: 0.0,
+            used: 8,
+            main_collapsed: !position,
+            aux_collapsed: 0,
+            clock_jump: false,
+            llr: heapless::Vec::new(),
+        }
+    }
+
+    #[test]
+    fn no_position_is_unavailable_an_alarm_is_an_alarm() {
+        for alarm in [false, true] {
+            for excluded in [false, true] {
+                assert_eq!(
+                    pf_decision(&result(false, alarm, excluded)),
+                    Decision::Unavailable
+                );
+                let want = match (alarm, excluded) {
+                    (true, _) => Decision::Alarm,
+                    (false, true) => Decision::Excluded,
+                    (false, false) => Decision::Ok,
+                };
+                assert_eq!(pf_decision(&result(true, alarm, excluded)), want);
+            }
+        }
+    }
+}

@@ -565,7 +565,6 @@ mod tests {
     use crate::frame::{encode, FrameReceiver};
     use crate::lock::config_fingerprint;
     use crate::message::{CommandRef, RequestRef, Response};
-    use crate::server::NoPlatform;
     use crate::MAX_RESPONSE_FRAME;
     use raim_core::measurement::MAX_SYSTEMS;
     use raim_core::{Decision, LinearObservation, SatId, System};
@@ -591,6 +590,21 @@ mod tests {
     struct Link {
         server: std::boxed::Box<Server>,
         seq: u32,
+        /// What the platform heard (`Platform::on_epoch`), per request.
+        heard: Heard,
+    }
+
+    /// A platform that records each verdict the server reports to it (the
+    /// integrity-alarm output's input, issue 15).
+    #[derive(Default)]
+    struct Heard(Vec<Option<Decision>>);
+    impl crate::server::Platform for Heard {
+        fn now(&mut self) -> u32 {
+            0
+        }
+        fn on_epoch(&mut self, decision: Option<Decision>) {
+            self.0.push(decision);
+        }
     }
 
     impl Link {
@@ -598,6 +612,7 @@ mod tests {
             Link {
                 server: std::boxed::Box::new(Server::new()),
                 seq: 0,
+                heard: Heard::default(),
             }
         }
         fn ask(&mut self, command: CommandRef<'_>) -> Response {
@@ -617,7 +632,7 @@ mod tests {
             let (mut link, mut nmea) = (Sink::default(), Sink::default());
             for &b in &bytes {
                 self.server
-                    .on_byte(b, &mut link, &mut nmea, &mut NoPlatform)
+                    .on_byte(b, &mut link, &mut nmea, &mut self.heard)
                     .unwrap();
             }
             assert!(nmea.0.is_empty(), "ARAIM writes no NMEA");
@@ -805,6 +820,7 @@ mod tests {
         let mut l = Link {
             server: std::boxed::Box::new(Server::with_auth_key(key)),
             seq: 0,
+            heard: Heard::default(),
         };
         assert_eq!(*error(&l.ism(&ism, gal())), WireError::AuthRequired);
         // The tag is the HMAC of the domain, the counter and the frame's
@@ -1136,6 +1152,39 @@ mod tests {
             }
         }
         assert!(excluded >= 10, "{excluded} of 20 excluded");
+    }
+
+    /// Issue 15 with issue 12: every ARAIM epoch's verdict reaches the
+    /// integrity-alarm output (`Platform::on_epoch`) exactly as it goes on
+    /// the wire (an ARAIM alarm asserts the discrete), a refused epoch as
+    /// `None` (an epoch error), and an ISM frame is no epoch.
+    #[test]
+    fn araim_verdicts_drive_the_alarm_output() {
+        let (ism, clean) = sky20(usize::MAX, 0.0);
+        let mut l = Link::new();
+        assert!(matches!(
+            error(&l.epoch(&clean)),
+            WireError::Araim(AraimWireError::NoIsm)
+        ));
+        assert_eq!(l.heard.0, [None]);
+        l.ism(&ism, gal());
+        assert_eq!(l.heard.0.len(), 1, "an ISM frame is no epoch");
+        let mut want = std::vec![None];
+        for fault_m in [0.0, 100.0, 0.0] {
+            let (_, obs) = sky20(3, fault_m);
+            want.push(Some(result(&l.epoch(&obs)).decision));
+        }
+        let mut nan = clean.clone();
+        nan[0].residual_m = f64::NAN;
+        assert!(matches!(l.epoch(&nan).body, ResponseBody::Error(_)));
+        want.push(None);
+        assert_eq!(l.heard.0, want);
+        // Not vacuous: a clean and a faulted verdict were both heard.
+        assert_eq!(want.get(1), Some(&Some(Decision::Ok)));
+        assert!(matches!(
+            want.get(2),
+            Some(Some(Decision::Excluded | Decision::Alarm))
+        ));
     }
 
     /// Larger skies: 24 satellites need satellite pairs (327 modes), so a
