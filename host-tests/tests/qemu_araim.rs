@@ -62,7 +62,7 @@ fn qemu_araim_appendix_d_and_a_20_satellite_sky_match_the_host() {
     assert_eq!((w.decision, w.fde), (Decision::Ok, WireFde::NoFault));
 
     // The 20-satellite sky: clean, then 100 m on each of the first three
-    // satellites in turn (each FDE is ~140 M guest instructions).
+    // satellites in turn (each FDE ~9.5 M guest instructions in f32).
     let clean = sky20(usize::MAX, 0.0);
     t.ask(clean.ism_command(), "sky20 ISM");
     let r = t.ask(epoch_command(1.0, &clean.obs), "sky20 clean");
@@ -86,6 +86,17 @@ fn qemu_araim_appendix_d_and_a_20_satellite_sky_match_the_host() {
         }
     }
     assert_eq!(excluded, 3, "{excluded} of 3 excluded");
+
+    // 24 satellites need satellite pairs (327 modes): a 100 m fault on the
+    // last satellite is still excluded on the device (FDE whenever the
+    // modes fit; about 55 M guest instructions), bit for bit with the host.
+    let s = araim_common::sky(24, 23, 100.0);
+    t.ask(s.ism_command(), "sky24 ISM");
+    let r = t.ask(epoch_command(10.0, &s.obs), "sky24 100 m on the last");
+    let w = result(&r);
+    assert_eq!(w.all_in_view.modes, 327);
+    assert!(matches!(w.fde, WireFde::Excluded { .. }), "{:?}", w.fde);
+    assert_eq!(w.excluded.as_slice(), &[s.obs[23].id]);
     assert!(t.fw.drain_nmea().is_empty(), "ARAIM writes no NMEA");
 }
 

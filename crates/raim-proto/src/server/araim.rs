@@ -32,18 +32,21 @@ use crate::CAPACITY;
 /// 563 (BENCHMARKS.md). The engines take ~280 KB of static RAM.
 pub const MAX_MODES: usize = 600;
 
-/// Exclusion is attempted only when the failed all-in-view run has at most
-/// this many monitored modes; above it the epoch is an alarm
-/// (`WireFde::NotAttempted`). Why: FDE re-runs ARAIM on every single-event
-/// subset, so its cost is about (satellites + constellations) times the
-/// all-in-view run. Under QEMU (BENCHMARKS.md) the 22-mode 20-satellite
-/// epoch costs 7.3 M guest instructions and its FDE 140 M; 64 modes with
-/// 34 candidates is then about 0.7 G, a third of the 2 s watchdog period
-/// at `-icount shift=0`, while the next mode count up (24 satellites at
-/// P_sat 1e-5 need satellite pairs: 327 modes, 100 M all in view) would
-/// be about 2.5 G, past it. In practice: exclusion when one fault at a
-/// time is monitored (N_fault,max = 1), detection only beyond.
-pub const MAX_FDE_MODES: u32 = 64;
+/// Exclusion is attempted when the failed all-in-view run has at most
+/// this many monitored modes; above it the epoch would be an alarm
+/// (`WireFde::NotAttempted`). Since the core's FDE checks each candidate
+/// by its tests only, with an early exit at a certain failure (branch
+/// araim, c4c9919), its cost is about one more all-in-view run plus the
+/// failing candidates' early exits. Measured under QEMU with the f32
+/// engine (BENCHMARKS.md "ARAIM on the device, f32"): 20 satellites / 22
+/// modes 2.7 M clean, 9.3-9.8 M with an exclusion; 24 satellites / 327
+/// modes 28.1 M clean, 55.1 M with an exclusion; 32 satellites / 563 modes
+/// 42.4 M clean, 93.3 M with an exclusion: under 5 % of the 2 s watchdog
+/// period at `-icount shift=0`, about 0.8 s at 168 MHz if every
+/// instruction took 1.5 cycles. So the limit is now the engine's mode
+/// capacity: exclusion is attempted whenever the modes fit (it was 64
+/// while FDE re-ran a full ARAIM epoch per candidate, 140 M for 22 modes).
+pub const MAX_FDE_MODES: u32 = 600;
 
 /// CRC-32/ISO-HDLC, as `frame::CRC32`; a static so that a digest can
 /// borrow it.
@@ -1187,21 +1190,26 @@ mod tests {
         ));
     }
 
-    /// Larger skies: 24 satellites need satellite pairs (327 modes), so a
-    /// failed test is an alarm without an exclusion attempt
-    /// (`NotAttempted`); 32 satellites at P_sat 1e-3 need more modes than
-    /// the engine holds: unavailable, untested, never an alarm over zero
-    /// modes.
+    /// Larger skies: 24 satellites need satellite pairs (327 modes), and
+    /// a 100 m fault there is still excluded (FDE is attempted whenever the
+    /// modes fit, `MAX_FDE_MODES`); 32 satellites at P_sat 1e-3 need more
+    /// modes than the engine holds: unavailable, untested, never an alarm
+    /// over zero modes.
     #[test]
-    fn larger_skies_alarm_without_fde_or_are_unavailable() {
+    fn larger_skies_exclude_or_are_unavailable() {
         let mut l = Link::new();
         let (ism, obs) = sky(24, 0, 100.0);
         l.ism(&ism, gal());
         let r = result(&l.epoch(&obs)).clone();
         assert_eq!(r.all_in_view.modes, 327);
+        assert!(r.all_in_view.monitored <= MAX_FDE_MODES);
         assert!(!r.all_in_view.detection_passed);
-        assert_eq!(r.decision, Decision::Alarm);
-        assert!(matches!(r.fde, WireFde::NotAttempted { modes } if modes > MAX_FDE_MODES));
+        assert!(matches!(r.fde, WireFde::Excluded { .. }), "{:?}", r.fde);
+        assert_eq!(r.excluded.as_slice(), &[obs[0].id]);
+        assert!(matches!(
+            r.decision,
+            Decision::Excluded | Decision::Unavailable
+        ));
         let (mut ism, obs) = sky(32, usize::MAX, 0.0);
         for s in ism.iter_mut() {
             s.p_sat = 1e-3;
