@@ -290,8 +290,10 @@ pub enum WireFde {
     /// `TooManyEvents`): no test was run, the epoch is `Unavailable`.
     NotTested,
     /// The test failed with more monitored modes than the device attempts
-    /// exclusion for (`server::araim::MAX_FDE_MODES`: its cost would pass
-    /// the watchdog's period); the epoch is an `Alarm`.
+    /// exclusion for (`server::araim::MAX_FDE_MODES`); the epoch is an
+    /// `Alarm`. Kept for a build with a limit below the mode capacity: the
+    /// firmware's limit equals it (600), so there every failed test with
+    /// enumerated modes gets an exclusion attempt.
     NotAttempted {
         modes: u32,
     },
