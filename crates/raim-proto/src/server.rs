@@ -10,7 +10,7 @@
 pub mod araim;
 
 use embedded_io::Write;
-use raim_core::{Config, Epoch, Raim};
+use raim_core::{Config, Epoch, EpochResult, Raim};
 use serde::Serialize;
 
 use crate::error::WireError;
@@ -89,7 +89,9 @@ pub struct Server {
     /// The last request decoded (`on_byte`): decoded here rather than on
     /// the stack (issue 10).
     request: Option<Request>,
-    /// The last epoch's wire result, written in place (issue 10).
+    /// The last epoch's result (`Raim::process_into`) and its wire form,
+    /// both written in place (issue 10).
+    result: EpochResult<CAPACITY>,
     wire: WireResult,
     /// The PF configuration and the engines lent by the owner
     /// (`attach_pf`; a few pointers, the engines stay where they are).
@@ -130,6 +132,7 @@ impl Server {
             scratch: [0; MAX_RESPONSE_PAYLOAD],
             out: [0; MAX_RESPONSE_FRAME],
             request: None,
+            result: EpochResult::empty(),
             wire: WireResult::empty(),
             pf: PfUnit::EMPTY,
         }
@@ -238,9 +241,11 @@ impl Server {
                 raim,
                 config,
                 status,
+                result,
                 wire,
                 ..
             } = self;
+            let slots = (&mut *result, &mut *wire);
             match request.as_ref().map(|r| &r.command) {
                 Some(Command::Ranges(e)) if e.sats.overflowed() => {
                     Err(too_many(e.sats.declared, platform))
@@ -252,7 +257,7 @@ impl Server {
                     raim,
                     config,
                     status,
-                    wire,
+                    slots,
                     &Epoch::ranges(e.time_s, &e.sats.items, e.apriori_m),
                     platform,
                 ),
@@ -260,7 +265,7 @@ impl Server {
                     raim,
                     config,
                     status,
-                    wire,
+                    slots,
                     &Epoch::linear(e.time_s, &e.sats.items),
                     platform,
                 ),
@@ -270,18 +275,26 @@ impl Server {
         };
         match outcome {
             Ok(()) => {
-                // Sentences cannot exceed 82 characters with the formats
-                // used; if one ever did, the epoch's answer still goes out.
-                if let Ok(sentences) = nmea::epoch_sentences(&self.wire) {
-                    for s in sentences.iter() {
-                        nmea_out.write_all(s.as_bytes()).map_err(IoError::Nmea)?;
-                    }
-                    nmea_out.flush().map_err(IoError::Nmea)?;
-                }
-                let wire = core::mem::replace(&mut self.wire, WireResult::empty());
-                let r = self.send(link, Some(seq), BodyRef::Result(&wire));
-                self.wire = wire;
-                r
+                write_nmea(&self.wire, nmea_out).map_err(IoError::Nmea)?;
+                let Server {
+                    scratch,
+                    out,
+                    status,
+                    config_id,
+                    wire,
+                    ..
+                } = self;
+                send_answer(
+                    Buffers {
+                        scratch,
+                        out,
+                        status,
+                        config: *config_id,
+                    },
+                    link,
+                    Some(seq),
+                    BodyRef::Result(wire),
+                )
             }
             Err(e) => self.send(link, Some(seq), BodyRef::Error(&e)),
         }
@@ -429,29 +442,45 @@ impl Server {
     }
 }
 
-/// One epoch through the engine; the result written into `wire`, or the
-/// typed error. The platform hears the verdict.
+/// One epoch through the engine; the result written into `result` and
+/// its wire form into `wire`, or the typed error. The platform hears the
+/// verdict.
 fn run_epoch<P: Platform>(
     raim: &mut Raim<CAPACITY>,
     config: &Config,
     status: &mut Status,
-    wire: &mut WireResult,
+    (result, wire): (&mut EpochResult<CAPACITY>, &mut WireResult),
     epoch: &Epoch<'_>,
     platform: &mut P,
 ) -> Result<(), WireError> {
     status.epochs = status.epochs.wrapping_add(1);
     let t0 = platform.now();
-    let r = raim.process(config, epoch);
+    let r = raim.process_into(config, epoch, result);
     let t1 = platform.now();
     status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
-    platform.on_epoch(r.as_ref().ok().map(|r| r.decision));
+    platform.on_epoch(r.as_ref().ok().map(|()| result.decision));
     match r {
-        Ok(r) => {
-            wire.set_from_result(&r);
+        Ok(()) => {
+            wire.set_from_result(result);
             Ok(())
         }
         Err(e) => Err(e.into()),
     }
+}
+
+/// The epoch's NMEA sentences. Its own frame (the sentences), not on the
+/// epoch's path (issue 10). Sentences cannot exceed 82 characters with the
+/// formats used; if one ever did, none is written and the epoch's answer
+/// still goes out.
+#[inline(never)]
+fn write_nmea<M: Write>(wire: &WireResult, nmea_out: &mut M) -> Result<(), M::Error> {
+    if let Ok(sentences) = nmea::epoch_sentences(wire) {
+        for s in sentences.iter() {
+            nmea_out.write_all(s.as_bytes())?;
+        }
+        nmea_out.flush()?;
+    }
+    Ok(())
 }
 
 /// Decode a request payload into `slot`; its sequence number, or the
@@ -524,7 +553,9 @@ struct ResponseRef<'a> {
     config: ConfigId,
 }
 
-/// Encode and write one answer.
+/// Encode and write one answer. Its own frame (the fallback answer), not
+/// on the epoch's path (issue 10).
+#[inline(never)]
 fn send_answer<L: Write, M>(
     buf: Buffers<'_>,
     link: &mut L,
