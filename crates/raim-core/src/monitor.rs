@@ -16,7 +16,9 @@ use crate::snapshot::fde::FdeOutcome;
 use crate::snapshot::Snapshot;
 
 /// The integrity monitor. `N` is the satellite capacity (default 32); all
-/// buffers are N-sized and live on the stack. `T` is the precision of the
+/// buffers are N-sized, on the stack or, for the epoch's FDE outcome (the
+/// solution in force), in the monitor itself (scratch, reset at every
+/// epoch; issue 10: the firmware keeps the monitor in a static). `T` is the precision of the
 /// statistics path (docs/CORE.md, "Precision"): the build's [`Stat`] by
 /// default (f32 with the core's `f32` feature, the M4F firmware; f64
 /// otherwise); `Raim::<N, f32>` and `Raim::<N, f64>` can run side by side.
