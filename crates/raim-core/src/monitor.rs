@@ -12,17 +12,30 @@ use crate::real::{Real, Stat};
 use crate::result::EpochResult;
 use crate::sequential::mcusum::Mcusum;
 use crate::sequential::Sequential;
+use crate::snapshot::fde::FdeOutcome;
 use crate::snapshot::Snapshot;
 
 /// The integrity monitor. `N` is the satellite capacity (default 32); all
-/// buffers are N-sized and live on the stack. `T` is the precision of the
+/// buffers are N-sized, on the stack or, for the epoch's FDE outcome (the
+/// solution in force), in the monitor itself (scratch, reset at every
+/// epoch; issue 10: the firmware keeps the monitor in a static). `T` is the precision of the
 /// statistics path (docs/CORE.md, "Precision"): the build's [`Stat`] by
 /// default (f32 with the core's `f32` feature, the M4F firmware; f64
 /// otherwise); `Raim::<N, f32>` and `Raim::<N, f64>` can run side by side.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct Raim<const N: usize = 32, T: Real = Stat> {
     snapshot: Snapshot<N, T>,
     sequential: Sequential<N, T>,
+    /// Scratch, not state: the epoch's FDE outcome (the solution in force),
+    /// kept here rather than on the stack (issue 10) and reset at every
+    /// epoch, so no result depends on an earlier epoch through it.
+    outcome: FdeOutcome<N, T>,
+}
+
+impl<const N: usize, T: Real> Default for Raim<N, T> {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl<const N: usize, T: Real> Raim<N, T> {
@@ -30,6 +43,7 @@ impl<const N: usize, T: Real> Raim<N, T> {
         Raim {
             snapshot: Snapshot::new(),
             sequential: Sequential::new(),
+            outcome: FdeOutcome::empty(),
         }
     }
 
@@ -61,12 +75,34 @@ impl<const N: usize, T: Real> Raim<N, T> {
         cfg: &Config,
         epoch: &Epoch<'_>,
     ) -> Result<EpochResult<N>, RaimError> {
+        let mut result = EpochResult::empty();
+        self.process_into(cfg, epoch, &mut result)?;
+        Ok(result)
+    }
+
+    /// [`Raim::process`] with the result written into `out` (every field;
+    /// on an error `out` is unspecified and the error is returned). For a
+    /// caller that keeps the result in its own storage (the firmware's
+    /// static server): no result-sized value on the stack (issue 10).
+    pub fn process_into(
+        &mut self,
+        cfg: &Config,
+        epoch: &Epoch<'_>,
+        out: &mut EpochResult<N>,
+    ) -> Result<(), RaimError> {
         cfg.validate()?;
         validate::<N>(epoch)?;
         if cfg.mcusum.enabled {
-            return self.sequential.process(&mut self.snapshot, cfg, epoch);
+            return self.sequential.process_into(
+                &mut self.snapshot,
+                cfg,
+                epoch,
+                &mut self.outcome,
+                out,
+            );
         }
         self.sequential.mcusum.clear();
-        self.snapshot.process(cfg, epoch)
+        self.outcome.reset();
+        self.snapshot.run(cfg, epoch, &mut self.outcome, out)
     }
 }

@@ -98,3 +98,37 @@ pub struct EpochResult<const N: usize> {
     /// the all-in-view test failed); `None` otherwise.
     pub multifault: Option<crate::multifault::MultifaultReport>,
 }
+
+impl<const N: usize> EpochResult<N> {
+    /// A placeholder (an unavailable epoch with no satellites) for
+    /// [`crate::Raim::process_into`] to overwrite: a caller that keeps the
+    /// result in its own storage (the firmware's static server) builds one
+    /// once and reuses it.
+    pub fn empty() -> Self {
+        EpochResult {
+            time_s: 0.0,
+            decision: Decision::Unavailable,
+            alarm_cause: None,
+            position_ecef_m: None,
+            geodetic: None,
+            correction_enu_m: [0.0; 3],
+            clock_m: [None; MAX_SYSTEMS],
+            initial_test: TestStatistic::default(),
+            test: TestStatistic::default(),
+            satellites: heapless::Vec::new(),
+            identified: None,
+            exclusions: heapless::Vec::new(),
+            protection: ProtectionLevels::default(),
+            worst_h: None,
+            worst_v: None,
+            sigma_enu_m: [0.0; 3],
+            lambda_md: 0.0,
+            detection_available: false,
+            exclusion_available: false,
+            pl_available: false,
+            iterations: 0,
+            mcusum: None,
+            multifault: None,
+        }
+    }
+}

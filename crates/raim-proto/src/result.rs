@@ -51,35 +51,75 @@ impl WireResult {
     /// would be cut, which `from_result` documents rather than hides:
     /// `satellites.len()` would be shorter than the epoch).
     pub fn from_result<const N: usize>(r: &EpochResult<N>) -> Self {
-        let mut satellites = heapless::Vec::new();
-        for s in r.satellites.iter() {
-            let _ = satellites.push(*s);
-        }
+        let mut w = Self::empty();
+        w.set_from_result(r);
+        w
+    }
+
+    /// A placeholder (an unavailable epoch with no satellites), to be
+    /// overwritten by [`WireResult::set_from_result`]: the server keeps one
+    /// `WireResult` in its own (static) storage and fills it in place.
+    pub fn empty() -> Self {
         WireResult {
-            time_s: r.time_s,
-            decision: r.decision,
-            alarm_cause: r.alarm_cause,
-            position_ecef_m: r.position_ecef_m,
-            geodetic: r.geodetic,
-            correction_enu_m: r.correction_enu_m,
-            clock_m: r.clock_m,
-            initial_test: r.initial_test,
-            test: r.test,
-            identified: r.identified,
-            exclusions: r.exclusions.clone(),
-            hpl_m: r.protection.hpl_m,
-            vpl_m: r.protection.vpl_m,
-            worst_h: r.worst_h,
-            worst_v: r.worst_v,
-            sigma_enu_m: r.sigma_enu_m,
-            lambda_md: r.lambda_md,
-            detection_available: r.detection_available,
-            exclusion_available: r.exclusion_available,
-            pl_available: r.pl_available,
-            iterations: r.iterations,
-            satellites,
-            mcusum: r.mcusum,
+            time_s: 0.0,
+            decision: Decision::Unavailable,
+            alarm_cause: None,
+            position_ecef_m: None,
+            geodetic: None,
+            correction_enu_m: [0.0; 3],
+            clock_m: [None; MAX_SYSTEMS],
+            initial_test: TestStatistic::default(),
+            test: TestStatistic::default(),
+            identified: None,
+            exclusions: heapless::Vec::new(),
+            hpl_m: 0.0,
+            vpl_m: 0.0,
+            worst_h: None,
+            worst_v: None,
+            sigma_enu_m: [0.0; 3],
+            lambda_md: 0.0,
+            detection_available: false,
+            exclusion_available: false,
+            pl_available: false,
+            iterations: 0,
+            satellites: heapless::Vec::new(),
+            mcusum: None,
         }
+    }
+
+    /// Overwrite every field with the wire form of `r` (as
+    /// [`WireResult::from_result`], without a result-sized value on the
+    /// stack: issue 10, the firmware's stack).
+    pub fn set_from_result<const N: usize>(&mut self, r: &EpochResult<N>) {
+        self.satellites.clear();
+        for s in r.satellites.iter() {
+            let _ = self.satellites.push(*s);
+        }
+        self.time_s = r.time_s;
+        self.decision = r.decision;
+        self.alarm_cause = r.alarm_cause;
+        self.position_ecef_m = r.position_ecef_m;
+        self.geodetic = r.geodetic;
+        self.correction_enu_m = r.correction_enu_m;
+        self.clock_m = r.clock_m;
+        self.initial_test = r.initial_test;
+        self.test = r.test;
+        self.identified = r.identified;
+        self.exclusions.clear();
+        for e in r.exclusions.iter() {
+            let _ = self.exclusions.push(*e);
+        }
+        self.hpl_m = r.protection.hpl_m;
+        self.vpl_m = r.protection.vpl_m;
+        self.worst_h = r.worst_h;
+        self.worst_v = r.worst_v;
+        self.sigma_enu_m = r.sigma_enu_m;
+        self.lambda_md = r.lambda_md;
+        self.detection_available = r.detection_available;
+        self.exclusion_available = r.exclusion_available;
+        self.pl_available = r.pl_available;
+        self.iterations = r.iterations;
+        self.mcusum = r.mcusum;
     }
 
     /// The satellite most likely to be faulty: the identified one if the

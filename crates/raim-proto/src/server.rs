@@ -10,12 +10,15 @@
 pub mod araim;
 
 use embedded_io::Write;
-use raim_core::{Config, Epoch, Raim};
+use raim_core::{Config, Epoch, EpochResult, Raim};
+use serde::Serialize;
 
 use crate::error::WireError;
 use crate::frame::{encode, FrameError, FrameReceiver};
 use crate::lock::{config_fingerprint, ConfigId};
-use crate::message::{Command, Request, ResetCause, Response, ResponseBody, Status, TestFault};
+#[cfg(doc)]
+use crate::message::Response;
+use crate::message::{Command, Request, ResetCause, ResponseBody, Status, TestFault};
 use crate::nmea;
 use crate::result::WireResult;
 use crate::{
@@ -67,8 +70,10 @@ impl Platform for NoPlatform {
     }
 }
 
-/// The protocol state: receive buffer, engine, configuration, counters and
-/// the transmit buffers. About 7 KiB; the firmware keeps it in a static.
+/// The protocol state: receive buffer, engine, configuration, counters, the
+/// transmit buffers, and the last request, result and wire result (kept
+/// here rather than on the stack, issue 10). The firmware keeps it in a
+/// static (BENCHMARKS.md, "Issue 10: stack, second pass").
 pub struct Server {
     rx: FrameReceiver<MAX_REQUEST_FRAME>,
     raim: Raim<CAPACITY>,
@@ -83,6 +88,13 @@ pub struct Server {
     araim: araim::AraimState,
     scratch: [u8; MAX_RESPONSE_PAYLOAD],
     out: [u8; MAX_RESPONSE_FRAME],
+    /// The last request decoded (`on_byte`): decoded here rather than on
+    /// the stack (issue 10).
+    request: Option<Request>,
+    /// The last epoch's result (`Raim::process_into`) and its wire form,
+    /// both written in place (issue 10).
+    result: EpochResult<CAPACITY>,
+    wire: WireResult,
     /// The PF configuration and the engines lent by the owner
     /// (`attach_pf`; a few pointers, the engines stay where they are).
     pf: PfUnit,
@@ -121,6 +133,9 @@ impl Server {
             araim: araim::AraimState::new(),
             scratch: [0; MAX_RESPONSE_PAYLOAD],
             out: [0; MAX_RESPONSE_FRAME],
+            request: None,
+            result: EpochResult::empty(),
+            wire: WireResult::empty(),
             pf: PfUnit::EMPTY,
         }
     }
@@ -173,6 +188,14 @@ impl Server {
 
     /// Feed one received byte; writes the answers (and NMEA) when it
     /// completes a frame.
+    ///
+    /// Storage (issue 10, the firmware's stack): the request is decoded
+    /// into the server's own `request` slot (by `decode`, whose frame is
+    /// gone before the epoch runs), a range or linear epoch is answered
+    /// from references into it with the wire result written in place
+    /// (`wire`), and answers are encoded from references (`ResponseRef`):
+    /// no request-, result- or answer-sized value is on the stack of the
+    /// epoch path.
     pub fn on_byte<L: Write, M: Write, P: Platform>(
         &mut self,
         byte: u8,
@@ -180,29 +203,117 @@ impl Server {
         nmea_out: &mut M,
         platform: &mut P,
     ) -> Result<(), IoError<L::Error, M::Error>> {
-        let decoded: Result<Request, (Option<u32>, WireError)> = match self.rx.push(byte) {
+        let decoded: Result<u32, (Option<u32>, WireError)> = match self.rx.push(byte) {
             None => return Ok(()),
             Some(Err(e)) => Err((None, WireError::from(e))),
-            Some(Ok(payload)) => postcard::from_bytes::<Request>(payload).map_err(|_| {
-                let seq = postcard::take_from_bytes::<u32>(payload)
-                    .ok()
-                    .map(|(s, _)| s);
-                let len = u32::try_from(payload.len()).unwrap_or(u32::MAX);
-                (seq, WireError::from(FrameError::Undecodable { len }))
-            }),
+            Some(Ok(payload)) => decode(payload, &mut self.request),
         };
         self.status.frames = self.status.frames.wrapping_add(1);
-        let request = match decoded {
-            Ok(r) => r,
+        let seq = match decoded {
+            Ok(seq) => seq,
             Err((seq, e)) => {
                 if let Some(s) = seq {
                     self.check_sequence(s, link)?;
                 }
-                return self.send(link, seq, ResponseBody::Error(e));
+                return self.send(link, seq, BodyRef::Error(&e));
             }
         };
-        let seq = request.seq;
         self.check_sequence(seq, link)?;
+        match self.request.as_ref().map(|r| &r.command) {
+            Some(Command::Ranges(_) | Command::Linear(_)) => {
+                self.answer_epoch(seq, link, nmea_out, platform)
+            }
+            _ => self.answer_other(seq, link, platform),
+        }
+    }
+
+    /// A `Ranges` or `Linear` request (in `self.request`): the epoch, its
+    /// NMEA sentences and the answer, the result written into `self.wire`.
+    #[inline(never)]
+    fn answer_epoch<L: Write, M: Write, P: Platform>(
+        &mut self,
+        seq: u32,
+        link: &mut L,
+        nmea_out: &mut M,
+        platform: &mut P,
+    ) -> Result<(), IoError<L::Error, M::Error>> {
+        let outcome = {
+            let Server {
+                request,
+                raim,
+                config,
+                status,
+                result,
+                wire,
+                ..
+            } = self;
+            let slots = (&mut *result, &mut *wire);
+            match request.as_ref().map(|r| &r.command) {
+                Some(Command::Ranges(e)) if e.sats.overflowed() => {
+                    Err(too_many(e.sats.declared, platform))
+                }
+                Some(Command::Linear(e)) if e.sats.overflowed() => {
+                    Err(too_many(e.sats.declared, platform))
+                }
+                Some(Command::Ranges(e)) => run_epoch(
+                    raim,
+                    config,
+                    status,
+                    slots,
+                    &Epoch::ranges(e.time_s, &e.sats.items, e.apriori_m),
+                    platform,
+                ),
+                Some(Command::Linear(e)) => run_epoch(
+                    raim,
+                    config,
+                    status,
+                    slots,
+                    &Epoch::linear(e.time_s, &e.sats.items),
+                    platform,
+                ),
+                // `on_byte` sends only epochs here.
+                _ => return Ok(()),
+            }
+        };
+        match outcome {
+            Ok(()) => {
+                write_nmea(&self.wire, nmea_out).map_err(IoError::Nmea)?;
+                let Server {
+                    scratch,
+                    out,
+                    status,
+                    config_id,
+                    wire,
+                    ..
+                } = self;
+                send_answer(
+                    Buffers {
+                        scratch,
+                        out,
+                        status,
+                        config: *config_id,
+                    },
+                    link,
+                    Some(seq),
+                    BodyRef::Result(wire),
+                )
+            }
+            Err(e) => self.send(link, Some(seq), BodyRef::Error(&e)),
+        }
+    }
+    /// Every request but a range or linear epoch: taken out of
+    /// `self.request` (this frame holds the request and the answer; the
+    /// epoch path does not pass through here).
+    #[inline(never)]
+    fn answer_other<L: Write, M, P: Platform>(
+        &mut self,
+        seq: u32,
+        link: &mut L,
+        platform: &mut P,
+    ) -> Result<(), IoError<L::Error, M>> {
+        let Some(request) = self.request.take() else {
+            return Ok(());
+        };
         let body = match request.command {
             Command::Status => {
                 self.status.stack_high_water_bytes = platform.stack_high_water_bytes();
@@ -252,13 +363,8 @@ impl Server {
                 self.config_id.locked = true;
                 ResponseBody::LockEngaged
             }
-            Command::Ranges(e) if e.sats.overflowed() => too_many(e.sats.declared, platform),
-            Command::Linear(e) if e.sats.overflowed() => too_many(e.sats.declared, platform),
-            Command::Ranges(e) => self.epoch(
-                &Epoch::ranges(e.time_s, &e.sats.items, e.apriori_m),
-                platform,
-            ),
-            Command::Linear(e) => self.epoch(&Epoch::linear(e.time_s, &e.sats.items), platform),
+            // Epochs are answered by `answer_epoch`.
+            Command::Ranges(_) | Command::Linear(_) => return Ok(()),
             Command::Araim(c) => self.araim(c, platform),
             Command::PfConfigure(_) if self.config_id.locked => {
                 ResponseBody::Error(WireError::Locked {
@@ -269,20 +375,12 @@ impl Server {
                 ResponseBody::Error(WireError::AuthRequired)
             }
             Command::PfConfigure(c) => self.pf_configure(c),
-            Command::PfRanges(e) if e.sats.overflowed() => too_many(e.sats.declared, platform),
+            Command::PfRanges(e) if e.sats.overflowed() => {
+                ResponseBody::Error(too_many(e.sats.declared, platform))
+            }
             Command::PfRanges(e) => self.pf_epoch(e.time_s, &e.sats.items, platform),
         };
-        if let ResponseBody::Result(r) = &body {
-            // Sentences cannot exceed 82 characters with the formats used;
-            // if one ever did, the epoch's answer still goes out.
-            if let Ok(sentences) = nmea::epoch_sentences(r) {
-                for s in sentences.iter() {
-                    nmea_out.write_all(s.as_bytes()).map_err(IoError::Nmea)?;
-                }
-                nmea_out.flush().map_err(IoError::Nmea)?;
-            }
-        }
-        self.send(link, Some(seq), body)
+        self.send(link, Some(seq), BodyRef::from(&body))
     }
 
     /// Validate and take a configuration.
@@ -294,19 +392,6 @@ impl Server {
                 self.config_id.crc32 = self.fingerprint();
                 ResponseBody::Configured
             }
-            Err(e) => ResponseBody::Error(e.into()),
-        }
-    }
-
-    fn epoch<P: Platform>(&mut self, epoch: &Epoch<'_>, platform: &mut P) -> ResponseBody {
-        self.status.epochs = self.status.epochs.wrapping_add(1);
-        let t0 = platform.now();
-        let r = self.raim.process(&self.config, epoch);
-        let t1 = platform.now();
-        self.status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
-        platform.on_epoch(r.as_ref().ok().map(|r| r.decision));
-        match r {
-            Ok(r) => ResponseBody::Result(WireResult::from_result(&r)),
             Err(e) => ResponseBody::Error(e.into()),
         }
     }
@@ -323,7 +408,7 @@ impl Server {
             Some(e) if e != seq => self.send(
                 link,
                 Some(seq),
-                ResponseBody::Error(WireError::SequenceGap {
+                BodyRef::Error(&WireError::SequenceGap {
                     expected: e,
                     received: seq,
                 }),
@@ -336,52 +421,192 @@ impl Server {
         &mut self,
         link: &mut L,
         seq: Option<u32>,
-        body: ResponseBody,
+        body: BodyRef<'_>,
     ) -> Result<(), IoError<L::Error, M>> {
-        if matches!(body, ResponseBody::Error(_)) {
-            self.status.errors = self.status.errors.wrapping_add(1);
-        }
-        let config = self.config_id;
-        let resp = Response { seq, body, config };
-        // The buffers hold the largest response (test
-        // `result::tests::largest_response_fits`); should encoding ever
-        // fail, a minimal error answer still goes out.
-        let frame = match encode(&resp, &mut self.scratch, &mut self.out) {
-            Ok(f) => f,
-            Err(_) => {
-                let fallback = Response {
-                    seq,
-                    config,
-                    body: ResponseBody::Error(WireError::Overflow {
-                        capacity: MAX_RESPONSE_PAYLOAD as u32,
-                    }),
-                };
-                match encode(&fallback, &mut self.scratch, &mut self.out) {
-                    Ok(f) => f,
-                    Err(_) => return Ok(()),
-                }
-            }
-        };
-        link.write_all(frame).map_err(IoError::Link)?;
-        link.flush().map_err(IoError::Link)
+        let Server {
+            scratch,
+            out,
+            status,
+            config_id,
+            ..
+        } = self;
+        send_answer(
+            Buffers {
+                scratch,
+                out,
+                status,
+                config: *config_id,
+            },
+            link,
+            seq,
+            body,
+        )
     }
+}
+
+/// One epoch through the engine; the result written into `result` and
+/// its wire form into `wire`, or the typed error. The platform hears the
+/// verdict.
+fn run_epoch<P: Platform>(
+    raim: &mut Raim<CAPACITY>,
+    config: &Config,
+    status: &mut Status,
+    (result, wire): (&mut EpochResult<CAPACITY>, &mut WireResult),
+    epoch: &Epoch<'_>,
+    platform: &mut P,
+) -> Result<(), WireError> {
+    status.epochs = status.epochs.wrapping_add(1);
+    let t0 = platform.now();
+    let r = raim.process_into(config, epoch, result);
+    let t1 = platform.now();
+    status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
+    platform.on_epoch(r.as_ref().ok().map(|()| result.decision));
+    match r {
+        Ok(()) => {
+            wire.set_from_result(result);
+            Ok(())
+        }
+        Err(e) => Err(e.into()),
+    }
+}
+
+/// The epoch's NMEA sentences. Its own frame (the sentences), not on the
+/// epoch's path (issue 10). Sentences cannot exceed 82 characters with the
+/// formats used; if one ever did, none is written and the epoch's answer
+/// still goes out.
+#[inline(never)]
+fn write_nmea<M: Write>(wire: &WireResult, nmea_out: &mut M) -> Result<(), M::Error> {
+    if let Ok(sentences) = nmea::epoch_sentences(wire) {
+        for s in sentences.iter() {
+            nmea_out.write_all(s.as_bytes())?;
+        }
+        nmea_out.flush()?;
+    }
+    Ok(())
+}
+
+/// Decode a request payload into `slot`; its sequence number, or the
+/// error answer (with the sequence number when the payload starts with
+/// one). Its own frame, not inlined: the decoder's temporaries are gone
+/// before the request is acted on (issue 10).
+#[inline(never)]
+fn decode(payload: &[u8], slot: &mut Option<Request>) -> Result<u32, (Option<u32>, WireError)> {
+    *slot = None;
+    match postcard::from_bytes::<Request>(payload) {
+        Ok(r) => {
+            let seq = r.seq;
+            *slot = Some(r);
+            Ok(seq)
+        }
+        Err(_) => {
+            let seq = postcard::take_from_bytes::<u32>(payload)
+                .ok()
+                .map(|(s, _)| s);
+            let len = u32::try_from(payload.len()).unwrap_or(u32::MAX);
+            Err((seq, WireError::from(FrameError::Undecodable { len })))
+        }
+    }
+}
+
+/// The server's transmit buffers and counters, borrowed apart from the
+/// rest of the server so that an answer can be encoded from a reference
+/// into the server (`BodyRef::Result(&self.wire)`).
+struct Buffers<'a> {
+    scratch: &'a mut [u8; MAX_RESPONSE_PAYLOAD],
+    out: &'a mut [u8; MAX_RESPONSE_FRAME],
+    status: &'a mut Status,
+    config: ConfigId,
+}
+
+/// A [`ResponseBody`] by reference: encodes byte for byte as the
+/// `ResponseBody` of the same variant (postcard writes an enum as its
+/// variant index, then the payload; `&T` serializes as `T`; the variants
+/// are in the same order: test `body_ref_encodes_as_response_body`).
+#[derive(Serialize)]
+enum BodyRef<'a> {
+    Result(&'a WireResult),
+    Configured,
+    Status(&'a Status),
+    Error(&'a WireError),
+    LockEngaged,
+    Araim(&'a crate::araim_msg::AraimAnswer),
+    PfResult(&'a crate::pf_msg::WirePfResult),
+}
+
+impl<'a> From<&'a ResponseBody> for BodyRef<'a> {
+    fn from(b: &'a ResponseBody) -> Self {
+        match b {
+            ResponseBody::Result(r) => BodyRef::Result(r),
+            ResponseBody::Configured => BodyRef::Configured,
+            ResponseBody::Status(s) => BodyRef::Status(s),
+            ResponseBody::Error(e) => BodyRef::Error(e),
+            ResponseBody::LockEngaged => BodyRef::LockEngaged,
+            ResponseBody::Araim(a) => BodyRef::Araim(a),
+            ResponseBody::PfResult(p) => BodyRef::PfResult(p),
+        }
+    }
+}
+
+/// A [`Response`] by reference (same encoding, field for field).
+#[derive(Serialize)]
+struct ResponseRef<'a> {
+    seq: Option<u32>,
+    body: BodyRef<'a>,
+    config: ConfigId,
+}
+
+/// Encode and write one answer. Its own frame (the fallback answer), not
+/// on the epoch's path (issue 10).
+#[inline(never)]
+fn send_answer<L: Write, M>(
+    buf: Buffers<'_>,
+    link: &mut L,
+    seq: Option<u32>,
+    body: BodyRef<'_>,
+) -> Result<(), IoError<L::Error, M>> {
+    if matches!(body, BodyRef::Error(_)) {
+        buf.status.errors = buf.status.errors.wrapping_add(1);
+    }
+    let config = buf.config;
+    let resp = ResponseRef { seq, body, config };
+    // The buffers hold the largest response (test
+    // `result::tests::largest_response_fits`); should encoding ever
+    // fail, a minimal error answer still goes out.
+    let frame = match encode(&resp, buf.scratch, buf.out) {
+        Ok(f) => f,
+        Err(_) => {
+            let fallback = ResponseRef {
+                seq,
+                config,
+                body: BodyRef::Error(&WireError::Overflow {
+                    capacity: MAX_RESPONSE_PAYLOAD as u32,
+                }),
+            };
+            match encode(&fallback, buf.scratch, buf.out) {
+                Ok(f) => f,
+                Err(_) => return Ok(()),
+            }
+        }
+    };
+    link.write_all(frame).map_err(IoError::Link)?;
+    link.flush().map_err(IoError::Link)
 }
 
 /// An epoch with more satellites than the capacity: an epoch answered
 /// with an error, for the alarm output too.
-fn too_many<P: Platform>(declared: u32, platform: &mut P) -> ResponseBody {
+fn too_many<P: Platform>(declared: u32, platform: &mut P) -> WireError {
     platform.on_epoch(None);
-    ResponseBody::Error(WireError::TooManySatellites {
+    WireError::TooManySatellites {
         have: declared,
         capacity: CAPACITY as u32,
-    })
+    }
 }
 
 #[cfg(test)]
 mod tests {
     extern crate std;
     use super::*;
-    use crate::message::{CommandRef, RequestRef};
+    use crate::message::{CommandRef, RequestRef, Response};
     use raim_core::{FiRule, LinearObservation, RangeObservation, SatId, System};
     use std::vec::Vec;
 
@@ -596,6 +821,58 @@ mod tests {
             panic!()
         };
         assert_eq!((st.frames, st.errors), (8, 8));
+    }
+
+    /// Issue 10: the answers are encoded from references (`ResponseRef`);
+    /// the bytes are those of the owned `Response`, variant by variant.
+    #[test]
+    fn body_ref_encodes_as_response_body() {
+        let direct = Raim::<CAPACITY>::new()
+            .process(&Config::default(), &Epoch::linear(1.0, &sky(50.0)))
+            .unwrap();
+        let mut server = Server::new();
+        let (st, _) = run(
+            &mut server,
+            &frame(&RequestRef {
+                seq: 0,
+                command: CommandRef::Status,
+            }),
+        );
+        let ResponseBody::Status(status) = st[0].body else {
+            panic!()
+        };
+        let bodies = [
+            ResponseBody::Result(WireResult::from_result(&direct)),
+            ResponseBody::Configured,
+            ResponseBody::Status(status),
+            ResponseBody::Error(WireError::SequenceGap {
+                expected: 3,
+                received: 5,
+            }),
+            ResponseBody::LockEngaged,
+        ];
+        fn enc<T: Serialize>(x: &T) -> Vec<u8> {
+            let mut b = std::vec![0u8; MAX_RESPONSE_PAYLOAD];
+            postcard::to_slice(x, &mut b).unwrap().to_vec()
+        }
+        for (i, body) in bodies.iter().enumerate() {
+            let config = ConfigId {
+                crc32: 0xDEAD_BEEF,
+                locked: i % 2 == 0,
+            };
+            let seq = Some(i as u32);
+            let owned = enc(&Response {
+                seq,
+                body: body.clone(),
+                config,
+            });
+            let by_ref = enc(&ResponseRef {
+                seq,
+                body: BodyRef::from(body),
+                config,
+            });
+            assert_eq!(owned, by_ref, "{body:?}");
+        }
     }
 
     /// Issue 15: after `Lock` every `Configure` is refused with `Locked`

@@ -88,23 +88,47 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         cfg: &Config,
         epoch: &Epoch<'_>,
     ) -> Result<EpochResult<N>, RaimError> {
+        let mut outcome = FdeOutcome::empty();
+        let mut result = EpochResult::empty();
+        self.process_into(snap, cfg, epoch, &mut outcome, &mut result)?;
+        Ok(result)
+    }
+
+    /// [`Sequential::process`] with the result written into `out` and the
+    /// FDE outcome (the solution in force) in caller storage, which is
+    /// reset here (issue 10: nothing result- or solution-sized on the
+    /// stack; the monitor keeps both in its own state).
+    pub(crate) fn process_into(
+        &mut self,
+        snap: &mut Snapshot<N, T>,
+        cfg: &Config,
+        epoch: &Epoch<'_>,
+        outcome: &mut FdeOutcome<N, T>,
+        out: &mut EpochResult<N>,
+    ) -> Result<(), RaimError> {
+        outcome.reset();
         let present = |id: SatId| (0..epoch.len()).any(|i| epoch.id(i) == Some(id));
         self.mcusum
             .release(epoch.time_s, cfg.mcusum.hold_s, present);
         if !self.mcusum.held().is_empty() {
             let filtered = match epoch.observations {
                 Observations::Linear { sats } => {
-                    self.without_held_linear(snap, cfg, epoch.time_s, sats)
+                    self.without_held_linear(snap, cfg, epoch.time_s, sats, outcome, out)
                 }
-                Observations::Ranges { sats, apriori_m } => {
-                    self.without_held_ranges(snap, cfg, epoch.time_s, sats, apriori_m)
-                }
+                Observations::Ranges { sats, apriori_m } => self.without_held_ranges(
+                    snap,
+                    cfg,
+                    (epoch.time_s, sats, apriori_m),
+                    outcome,
+                    out,
+                ),
             };
             match filtered {
                 Err(RaimError::TooFewSatellites { .. }) | Err(RaimError::RankDeficient { .. }) => {
                     // The holds leave no solvable set: release them rather
                     // than lose the epoch (the snapshot test still guards).
                     self.mcusum.clear();
+                    outcome.reset();
                 }
                 other => return other,
             }
@@ -113,7 +137,7 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         for (i, v) in identity.iter_mut().enumerate() {
             *v = i;
         }
-        self.sequential_on(snap, cfg, epoch, &identity, epoch)
+        self.sequential_on(snap, cfg, epoch, &identity, epoch, outcome, out)
     }
 
     #[inline(never)]
@@ -123,7 +147,9 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         cfg: &Config,
         time_s: f64,
         sats: &[LinearObservation],
-    ) -> Result<EpochResult<N>, RaimError> {
+        outcome: &mut FdeOutcome<N, T>,
+        out: &mut EpochResult<N>,
+    ) -> Result<(), RaimError> {
         let mut buf = [LinearObservation::default(); N];
         let mut src = [0usize; N];
         let n = self.keep_unheld(sats.iter().map(|s| s.id), |k, i| {
@@ -135,7 +161,8 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             }
         });
         let e = Epoch::linear(time_s, buf.get(..n).unwrap_or(&[]));
-        self.sequential_on(snap, cfg, &e, &src, &Epoch::linear(time_s, sats))
+        let input = Epoch::linear(time_s, sats);
+        self.sequential_on(snap, cfg, &e, &src, &input, outcome, out)
     }
 
     #[inline(never)]
@@ -143,10 +170,10 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         &mut self,
         snap: &mut Snapshot<N, T>,
         cfg: &Config,
-        time_s: f64,
-        sats: &[RangeObservation],
-        apriori_m: Option<[f64; 3]>,
-    ) -> Result<EpochResult<N>, RaimError> {
+        (time_s, sats, apriori_m): (f64, &[RangeObservation], Option<[f64; 3]>),
+        outcome: &mut FdeOutcome<N, T>,
+        out: &mut EpochResult<N>,
+    ) -> Result<(), RaimError> {
         let mut buf = [RangeObservation::default(); N];
         let mut src = [0usize; N];
         let n = self.keep_unheld(sats.iter().map(|s| s.id), |k, i| {
@@ -158,7 +185,8 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             }
         });
         let e = Epoch::ranges(time_s, buf.get(..n).unwrap_or(&[]), apriori_m);
-        self.sequential_on(snap, cfg, &e, &src, &Epoch::ranges(time_s, sats, apriori_m))
+        let input = Epoch::ranges(time_s, sats, apriori_m);
+        self.sequential_on(snap, cfg, &e, &src, &input, outcome, out)
     }
 
     /// Calls `keep(k, i)` for the k-th kept input satellite i; returns the count.
@@ -180,7 +208,9 @@ impl<const N: usize, T: Real> Sequential<N, T> {
     /// The snapshot monitor on `epoch` (the input without held satellites;
     /// `src[k]` is the input index of its satellite k), then the MCUSUM on
     /// the solution in force, and identification + exclusion after an
-    /// MCUSUM alarm.
+    /// MCUSUM alarm. The result is written into `result`; `outcome` (reset
+    /// on entry) holds the snapshot monitor's solution in force.
+    #[allow(clippy::too_many_arguments)] // the engines, the epoch twice and the two caller-owned outputs
     fn sequential_on(
         &mut self,
         snap: &mut Snapshot<N, T>,
@@ -188,10 +218,11 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         epoch: &Epoch<'_>,
         src: &[usize; N],
         input: &Epoch<'_>,
-    ) -> Result<EpochResult<N>, RaimError> {
+        outcome: &mut FdeOutcome<N, T>,
+        result: &mut EpochResult<N>,
+    ) -> Result<(), RaimError> {
         let mc = cfg.mcusum;
-        let mut outcome = FdeOutcome::empty();
-        let mut result = snap.run(cfg, epoch, &mut outcome)?;
+        snap.run(cfg, epoch, outcome, result)?;
         let sol = &outcome.solution;
         let to_input = |k: usize| src.get(k).copied().unwrap_or(k);
         for e in result.exclusions.iter_mut() {
@@ -225,7 +256,7 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             }
         }
         if report.alarm {
-            self.after_cusum_alarm(snap, cfg, epoch, &to_input, sol, &mut result, &mut report)?;
+            self.after_cusum_alarm(snap, cfg, epoch, &to_input, sol, result, &mut report)?;
         }
         report.source = match (snapshot_alarm, report.alarm) {
             (false, false) => AlarmSource::None,
@@ -255,7 +286,7 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             }
         }
         result.mcusum = Some(report);
-        Ok(result)
+        Ok(())
     }
 
     /// After D_t >= h: identify from the accumulated vector, exclude the

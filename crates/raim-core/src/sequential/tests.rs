@@ -258,3 +258,39 @@ fn mcusum_refuses_ambiguous_identification() {
     }
     assert!(alarms >= 2, "{alarms}");
 }
+
+/// Issue 10: `Raim::process_into` writes every field of a reused result,
+/// and the FDE scratch the monitor keeps between epochs carries nothing
+/// over: a monitor that has run faulted, alarmed and failed epochs (with
+/// the MCUSUM on and off) answers each snapshot epoch exactly as a fresh
+/// monitor's by-value `process` does.
+#[test]
+fn process_into_reused_storage_equals_a_fresh_monitor() {
+    let mut kept = Raim::<16>::new();
+    let mut out = EpochResult::<16>::empty();
+    let on = mcusum_cfg(crate::config::Carry::Transport);
+    for seed in 0..40u64 {
+        let faults: &[(usize, f64)] = match seed % 4 {
+            0 => &[(1, 60.0)],
+            1 => &[],
+            2 => &[(2, 40.0), (5, -45.0)],
+            _ => &[(0, 8.0)],
+        };
+        let sats = linear_epoch(&SKY8, 1.0, &mut Rng::new(900 + seed), faults);
+        // A history for the scratch: the MCUSUM path and a failed epoch.
+        let _ = kept.process_into(&on, &Epoch::linear(seed as f64, &sats), &mut out);
+        assert!(kept
+            .process_into(&cfg(), &Epoch::linear(0.0, &sats[..3]), &mut out)
+            .is_err());
+        kept.process_into(&cfg(), &Epoch::linear(0.0, &sats), &mut out)
+            .unwrap();
+        let fresh = Raim::<16>::new()
+            .process(&cfg(), &Epoch::linear(0.0, &sats))
+            .unwrap();
+        assert_eq!(
+            std::format!("{out:?}"),
+            std::format!("{fresh:?}"),
+            "seed {seed}"
+        );
+    }
+}

@@ -330,6 +330,16 @@ fn exclude_pair<const N: usize, T: Real>(
 }
 
 impl<const N: usize, T: Real> FdeOutcome<N, T> {
+    /// Back to [`FdeOutcome::empty`], in place (an outcome kept in an
+    /// engine's state and reused every epoch, issue 10).
+    pub fn reset(&mut self) {
+        self.solution = Solution::empty();
+        self.test = TestStatistic::default();
+        self.exclusions.clear();
+        self.identified = None;
+        self.cause = None;
+    }
+
     /// An empty outcome whose `solution` is to be filled by
     /// [`crate::solve::solve_into`] before [`run`].
     pub fn empty() -> Self {

@@ -85,18 +85,24 @@ impl<const N: usize, T: Real> Snapshot<N, T> {
         epoch: &Epoch<'_>,
     ) -> Result<EpochResult<N>, RaimError> {
         let mut outcome = FdeOutcome::empty();
-        self.run(cfg, epoch, &mut outcome)
+        let mut result = EpochResult::empty();
+        self.run(cfg, epoch, &mut outcome, &mut result)?;
+        Ok(result)
     }
 
-    /// The snapshot monitor (SPEC §3-6): the result; the solution in force
-    /// is left in `outcome.solution` (caller storage: nothing solution-sized
-    /// is returned by value, for the firmware's stack).
+    /// The snapshot monitor (SPEC §3-6): the result written into `out`
+    /// (every field; on an error its contents are unspecified); the
+    /// solution in force is left in `outcome.solution`, which must be
+    /// `FdeOutcome::empty()` on entry. Caller storage: nothing solution- or
+    /// result-sized is on this frame or returned by value, for the
+    /// firmware's stack (issue 10).
     pub(crate) fn run(
         &mut self,
         cfg: &Config,
         epoch: &Epoch<'_>,
         outcome: &mut FdeOutcome<N, T>,
-    ) -> Result<EpochResult<N>, RaimError> {
+        out: &mut EpochResult<N>,
+    ) -> Result<(), RaimError> {
         let mut mask = [false; N];
         for v in mask.iter_mut().take(epoch.len()) {
             *v = true;
@@ -104,7 +110,7 @@ impl<const N: usize, T: Real> Snapshot<N, T> {
         let start = self.start(epoch.time_s);
         solve_from(cfg, epoch, &mask, start, &mut outcome.solution)?;
         let initial_test = fde::test(cfg, &mut self.thresholds, &outcome.solution)?;
-        let satellites = per_satellite(cfg, &outcome.solution);
+        per_satellite(cfg, &outcome.solution, &mut out.satellites);
         let multifault = match cfg.fde_method {
             FdeMethod::Sequential => {
                 fde::run(cfg, &mut self.thresholds, epoch, outcome)?;
@@ -139,48 +145,49 @@ impl<const N: usize, T: Real> Snapshot<N, T> {
             (true, true, true) => Decision::Ok,
             (true, false, true) => Decision::Excluded,
         };
-        let mut satellites = satellites;
         if passes {
-            for s in satellites.iter_mut() {
+            for s in out.satellites.iter_mut() {
                 s.used = !excluded(s.id);
             }
         }
         let id_at = |row: Option<usize>| row.and_then(|r| sol.ids.get(r).copied());
-        let result = EpochResult {
-            time_s: epoch.time_s,
-            decision,
-            alarm_cause: if passes { None } else { outcome.cause },
-            position_ecef_m: sol.position_ecef_m,
-            geodetic: sol.geodetic,
-            correction_enu_m: sol.correction_enu_m,
-            clock_m: sol.clock_m,
-            initial_test,
-            test: outcome.test,
-            satellites,
-            identified: outcome.identified,
-            worst_h: id_at(protection.worst_h_row),
-            worst_v: id_at(protection.worst_v_row),
-            protection,
-            sigma_enu_m: protection::sigma_enu_m(&sol.parity),
-            lambda_md,
-            detection_available: dof >= 1,
-            exclusion_available: dof >= 2,
-            pl_available,
-            iterations: sol.iterations,
-            exclusions: outcome.exclusions.clone(),
-            mcusum: None,
-            multifault,
-        };
-        Ok(result)
+        out.time_s = epoch.time_s;
+        out.decision = decision;
+        out.alarm_cause = if passes { None } else { outcome.cause };
+        out.position_ecef_m = sol.position_ecef_m;
+        out.geodetic = sol.geodetic;
+        out.correction_enu_m = sol.correction_enu_m;
+        out.clock_m = sol.clock_m;
+        out.initial_test = initial_test;
+        out.test = outcome.test;
+        out.identified = outcome.identified;
+        out.worst_h = id_at(protection.worst_h_row);
+        out.worst_v = id_at(protection.worst_v_row);
+        out.protection = protection;
+        out.sigma_enu_m = protection::sigma_enu_m(&sol.parity);
+        out.lambda_md = lambda_md;
+        out.detection_available = dof >= 1;
+        out.exclusion_available = dof >= 2;
+        out.pl_available = pl_available;
+        out.iterations = sol.iterations;
+        out.exclusions.clear();
+        for e in outcome.exclusions.iter() {
+            let _ = out.exclusions.push(*e);
+        }
+        out.mcusum = None;
+        out.multifault = multifault;
+        Ok(())
     }
 }
 
-/// The per-satellite output, computed in `T` and widened to f64.
+/// The per-satellite output, computed in `T` and widened to f64, written
+/// into `out` (cleared first).
 pub(crate) fn per_satellite<const N: usize, T: Real>(
     cfg: &Config,
     sol: &Solution<N, T>,
-) -> heapless::Vec<SatelliteResult, N> {
-    let mut out = heapless::Vec::new();
+    out: &mut heapless::Vec<SatelliteResult, N>,
+) {
+    out.clear();
     let p = &sol.parity;
     let min_s_ii = T::of(cfg.min_s_ii);
     let rows = p
@@ -211,7 +218,6 @@ pub(crate) fn per_satellite<const N: usize, T: Real>(
             identifiable: c.is_some(),
         });
     }
-    out
 }
 
 #[cfg(test)]
