@@ -35,6 +35,11 @@ fn error(r: &Response) -> &WireError {
     }
 }
 
+/// App. D's vertical effective sample quantity, docs/ESQ.md (f64 core).
+const N_STAR_APP_D: f64 = 1.334;
+/// Its printed precision plus the f32 engine's spread (dimensionless).
+const N_STAR_TOL: f64 = 0.005;
+
 #[test]
 fn qemu_araim_appendix_d_and_a_20_satellite_sky_match_the_host() {
     let mut t = Twin::new(qemu_common::session());
@@ -60,6 +65,12 @@ fn qemu_araim_appendix_d_and_a_20_satellite_sky_match_the_host() {
     );
     assert!((a.vpl_exact_m - num("vpl_root_m")).abs() <= 0.01, "{a:?}");
     assert_eq!((w.decision, w.fde), (Decision::Ok, WireFde::NoFault));
+    // Seed 003's N* on the device (issue 13): App. D's vertical N* from
+    // the f64 core, docs/ESQ.md (P_Sigma checked there against the
+    // allocated risk at the PL root), within the f32 engine's spread.
+    let n_star = w.n_star_vertical.expect("N* on App. D");
+    eprintln!("App. D N* (vertical) on the device: {n_star}");
+    assert!((n_star - N_STAR_APP_D).abs() <= N_STAR_TOL, "{n_star}");
 
     // The 20-satellite sky: clean, then 100 m on each of the first three
     // satellites in turn (each FDE ~9.5 M guest instructions in f32).

@@ -333,6 +333,12 @@ pub struct WireAraimResult {
     /// The subset's own ARAIM after an exclusion (its PLs are those in
     /// force); `None` otherwise.
     pub after_exclusion: Option<AraimSummary>,
+    /// Seed 003's effective sample quantity N* = P_Sigma / P_max on the
+    /// vertical axis of the all-in-view run, at the PL the result reports
+    /// (`raim_core::araim::esq::effective_samples`, SPEC §9.2; docs/ESQ.md);
+    /// `None` when it is undefined (no PL, modes not enumerated). The host
+    /// divides its window by it for dT_e (issue 13).
+    pub n_star_vertical: Option<f64>,
 }
 
 impl WireAraimResult {

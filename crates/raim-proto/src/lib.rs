@@ -77,7 +77,8 @@ pub const CAPACITY: usize = raim_core::DEFAULT_CAPACITY;
 /// and their errors, appended to the enums (issue 14, `pf_msg`).
 /// 6: `Status` gains uart_overruns, rx_ring_overflows, alarm_output,
 /// alarm_pin_asserted and auth_provisioned (issue 15, appended).
-pub const PROTOCOL_VERSION: u16 = 6;
+/// 7: `WireAraimResult` gains `n_star_vertical` (issue 13, appended).
+pub const PROTOCOL_VERSION: u16 = 7;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes

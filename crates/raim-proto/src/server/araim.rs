@@ -379,7 +379,8 @@ impl Server {
 #[cfg(feature = "araim")]
 mod engine {
     use raim_core::araim::error_model::iono_free_factor_sq;
-    use raim_core::araim::{Araim, AraimConfig, AraimSat, FdeDecision, Ism, Unavailable};
+    use raim_core::araim::esq::effective_samples;
+    use raim_core::araim::{Araim, AraimConfig, AraimSat, FdeDecision, Ism, PlOutput, Unavailable};
     use raim_core::{Decision, Real};
 
     use super::{AraimWireError, IsmFrame, MAX_FDE_MODES, MAX_MODES};
@@ -471,6 +472,13 @@ mod engine {
             let pl_exact = ism_pl_exact(&cfg);
             let out = self.main.process(&cfg, &ism, sats)?;
             let all_in_view = AraimSummary::from_output(out, pl_exact);
+            // Seed 003's N* (vertical, at the PL reported), issue 13.
+            let pl_kind = if pl_exact {
+                PlOutput::Exact
+            } else {
+                PlOutput::AddBracket
+            };
+            let n_star_vertical = effective_samples(out, 2, pl_kind).ok().map(|e| e.n_star);
             // No test was run when the modes could not be enumerated.
             let untested = matches!(
                 out.unavailable,
@@ -494,6 +502,7 @@ mod engine {
                     fde,
                     excluded: heapless::Vec::new(),
                     after_exclusion: None,
+                    n_star_vertical: None,
                 });
             }
             let (fde, after_exclusion) = if out.detection_passed {
@@ -531,6 +540,7 @@ mod engine {
                 fde: fde.into(),
                 excluded,
                 after_exclusion,
+                n_star_vertical,
             })
         }
     }
