@@ -100,10 +100,11 @@ pub struct EpochResult<const N: usize> {
 }
 
 impl<const N: usize> EpochResult<N> {
-    /// A placeholder (an unavailable epoch with no satellites) for
-    /// [`crate::Raim::process_into`] to overwrite: a caller that keeps the
-    /// result in its own storage (the firmware's static server) builds one
-    /// once and reuses it.
+    /// The initial value of caller-owned result storage: an unavailable
+    /// epoch with no satellites (a real, conservative verdict, never read
+    /// as a fix), which [`crate::Raim::process_into`] overwrites in full. A
+    /// caller that keeps the result in its own storage (the firmware's
+    /// static server) builds one once and reuses it.
     pub fn empty() -> Self {
         EpochResult {
             time_s: 0.0,

@@ -56,9 +56,11 @@ impl WireResult {
         w
     }
 
-    /// A placeholder (an unavailable epoch with no satellites), to be
-    /// overwritten by [`WireResult::set_from_result`]: the server keeps one
-    /// `WireResult` in its own (static) storage and fills it in place.
+    /// The initial value of the server's result storage: an unavailable
+    /// epoch with no satellites (a conservative verdict, never a fix),
+    /// overwritten in full by [`WireResult::set_from_result`]: the server
+    /// keeps one `WireResult` in its own (static) storage and fills it in
+    /// place.
     pub fn empty() -> Self {
         WireResult {
             time_s: 0.0,

@@ -1,5 +1,11 @@
 //! Multiple-fault reconstruction: seed 002's tables, the independent dense
 //! references, the group validation, bad input, and f32 against f64.
+//!
+//! Test code only: `multifault/mod.rs` includes this file as
+//! `#[cfg(test)] mod tests;`, so its `unwrap`s and `panic!`s (on dense
+//! nalgebra references and on fixtures built here) are assertions of the
+//! test harness and are not compiled into the core or the firmware. The
+//! product path's typed errors are tested here (`MultifaultError`).
 #![allow(clippy::type_complexity, clippy::needless_range_loop)]
 extern crate std;
 

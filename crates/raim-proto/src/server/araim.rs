@@ -771,6 +771,21 @@ mod tests {
         assert_eq!(r.config.crc32, with_ism);
         assert_ne!(with_ism, config_fingerprint(&cfg));
         assert_eq!(fingerprint(&cfg, None), config_fingerprint(&cfg));
+        // All three parts in force: the CRC of the concatenated bytes,
+        // computed here; and each absent part adds nothing (merge of the
+        // ARAIM and PF branches: one fingerprint of what the unit runs).
+        let pf = crate::pf_msg::WirePfConfig::gapf(100, 7);
+        let mut all = bytes.clone();
+        all.extend_from_slice(postcard::to_slice(&pf, &mut buf).unwrap());
+        assert_eq!(
+            fingerprint_all(&cfg, Some(&frame), Some(&pf)),
+            crate::frame::CRC32.checksum(&all)
+        );
+        assert_eq!(fingerprint_all(&cfg, Some(&frame), None), with_ism);
+        assert_eq!(
+            fingerprint_all(&cfg, None, Some(&pf)),
+            crate::pf_msg::fingerprint(&cfg, Some(&pf))
+        );
         // Another configuration: the fingerprint covers it and the ISM.
         let terminal = Config::preset(raim_core::Phase::Terminal);
         let r = l.ask(CommandRef::Configure(&terminal));
