@@ -21,3 +21,5 @@ echo "== tests (including the firmware under QEMU: host-tests/tests/qemu_*.rs)"
 cargo test --workspace --release
 echo "== the QEMU tests again with the whole host side in the firmware's precision (raim-core/f32)"
 cargo test -p host-tests --release --features f32 qemu
+echo "== the core's own tests in the firmware's precision (Stat = f32; ~1 min to build, < 1 s to run)"
+cargo test -p raim-core --release --features f32 --lib

@@ -107,7 +107,7 @@ fn reused_linearisation_matches_a_model_built_at_the_solution() {
         );
     }
     assert!(
-        ((sol.parity.sse() - sse) / sse).abs() < SSE_REL_TOL,
+        ((sol.parity.sse().to_f64() - sse) / sse).abs() < SSE_REL_TOL,
         "{} vs {sse}",
         sol.parity.sse()
     );
@@ -146,7 +146,11 @@ fn sibling_start_agrees_with_a_cold_subset_solve() {
     for k in 0..3 {
         assert!((a[k] - b[k]).abs() < POSITION_TOL_M, "{a:?} {b:?}");
     }
-    assert!(((cold.parity.sse() - warm.parity.sse()) / cold.parity.sse()).abs() < SSE_REL_TOL);
+    let (cold_sse, warm_sse) = (cold.parity.sse().to_f64(), warm.parity.sse().to_f64());
+    assert!(
+        ((cold_sse - warm_sse) / cold_sse).abs() < SSE_REL_TOL,
+        "{cold_sse} vs {warm_sse}"
+    );
     assert_eq!(cold.ids, warm.ids);
     assert!(
         warm.iterations < cold.iterations,
@@ -224,7 +228,15 @@ fn warm_start_agrees_with_cold_start() {
     std::println!("warm vs cold: D^2 {worst_stat:.2e}, PL {worst_pl:.2e} relative; iterations {it_warm} vs {it_cold}");
     assert!(worst_stat < STAT_REL_TOL, "{worst_stat}");
     assert!(worst_pl < PL_REL_TOL, "{worst_pl}");
-    assert!(it_warm < it_cold, "{it_warm} vs {it_cold}");
+    // In f64, fewer iterations (62 vs 86). In f32 both take the minimum,
+    // 2 per epoch (60 vs 60): the convergence step's floor
+    // (STEP_ROUNDING_SCALE_M x eps, 1.2e-2 m) ends the cold start as early,
+    // so the warm start saves nothing there; it must never cost more.
+    if cfg!(feature = "f32") {
+        assert!(it_warm <= it_cold, "{it_warm} vs {it_cold}");
+    } else {
+        assert!(it_warm < it_cold, "{it_warm} vs {it_cold}");
+    }
     // A stale fix (61 s later) is ignored: bit-exact with a fresh engine.
     let sats = modelled(RX, 7, &[]);
     let epoch = Epoch::ranges(29.0 + WARM_AGE_PLUS, &sats, Some(RX));

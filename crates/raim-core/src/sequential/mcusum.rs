@@ -403,13 +403,29 @@ mod tests {
     use crate::config::Config;
     use crate::measurement::{Epoch, LinearObservation, System};
     use crate::solve::{solve, Solution};
-    use crate::testutil::{linear_epoch, Rng, SKY8};
+    use crate::testutil::{at_stat, linear_epoch, Rng, SKY8};
     use nalgebra::{DMatrix, DVector};
     use std::vec::Vec;
 
     const N: usize = 16;
-    /// Rounding tolerance of orthogonal transforms on O(10) values.
+    /// Rounding tolerance of the Crosier step on O(10) f64 values (the
+    /// hand-computed tests call it at f64 whatever the build's precision).
     const ROUND_TOL: f64 = 1e-10;
+    /// The transported prior norm against the dense f64 projector, relative
+    /// to 1 + norm: 1e-9 in f64; in f32 the state is rotated and projected
+    /// through the f32 QR of each epoch (eps x cond(H) per carry over 60
+    /// epochs), 1e-4.
+    /// The transported state against the plain recursion over 50 epochs
+    /// (values up to ~20): 1e-10 in f64; in f32 the transport's rotation
+    /// and the recursion round differently at every step, and the
+    /// differences accumulate in the state (1.05e-5 measured at t = 30 on
+    /// D = 13.5): 1e-4.
+    const RECURSION_TOL: f64 = at_stat(1e-10, 1e-4);
+    const PRIOR_REL_TOL: f64 = at_stat(1e-9, 1e-4);
+    /// |H^T v| of the stored state, relative to 1 + |v|_max: 1e-9 in f64,
+    /// 1e-5 in f32 (the state lies in the f32 parity space, orthogonal to
+    /// H to a few eps x |H| |v|).
+    const ORTHO_REL_TOL: f64 = at_stat(1e-9, 1e-5);
 
     fn solution(sats: &[LinearObservation]) -> Solution<N> {
         let mut mask = [false; N];
@@ -484,13 +500,14 @@ mod tests {
             let sats = linear_epoch(&SKY8, 1.0, &mut rng, &[(3, 0.8)]);
             let sol = solution(&sats);
             let step = mc.update(&ids(&sol), &sol.parity, 0.5, Carry::Transport, f64::NAN);
-            let (_, d_ref) = crosier_step(&mut s_ref, sol.parity.p(), 0.5);
+            let (_, d_ref) = crosier_step(&mut s_ref, sol.parity.p(), Stat::of(0.5));
+            let d_ref = d_ref.to_f64();
             assert!(
-                (step.statistic - d_ref).abs() < ROUND_TOL,
+                (step.statistic - d_ref).abs() < RECURSION_TOL,
                 "t {t}: {} vs {d_ref}",
                 step.statistic
             );
-            assert!((mc.norm() - d_ref).abs() < ROUND_TOL);
+            assert!((mc.norm() - d_ref).abs() < RECURSION_TOL);
         }
     }
 
@@ -552,7 +569,7 @@ mod tests {
                         old_ids
                             .iter()
                             .position(|o| o == id)
-                            .map_or(0.0, |p| old_v[p])
+                            .map_or(0.0, |p| old_v[p].to_f64())
                     }),
                 );
                 let h = dense_h(&sats);
@@ -572,7 +589,7 @@ mod tests {
                 };
                 let step = mc.update(&now_ids, &sol.parity, 0.5, carry, f64::NAN);
                 assert!(
-                    (step.prior_norm - expected).abs() < 1e-9 * (1.0 + expected),
+                    (step.prior_norm - expected).abs() < PRIOR_REL_TOL * (1.0 + expected),
                     "{carry:?} t {t}: {} vs {expected}",
                     step.prior_norm
                 );
@@ -583,8 +600,8 @@ mod tests {
                 );
                 // The stored v lies in the parity space: H^T v = 0.
                 let (_, v) = mc.state();
-                let v = DVector::from_column_slice(v);
-                assert!((h.transpose() * &v).amax() < 1e-9 * (1.0 + v.amax()));
+                let v = DVector::from_iterator(v.len(), v.iter().map(|x| x.to_f64()));
+                assert!((h.transpose() * &v).amax() < ORTHO_REL_TOL * (1.0 + v.amax()));
                 prev_ids = now_ids;
             }
         }
