@@ -366,13 +366,30 @@ fn fault_set<T: Real, P: Real, const N: usize>(
 }
 
 /// The scratch the reconstruction FDE needs (about 2 N^2 + 4 N values of
-/// [`Stat`]: 17 KB at N = 32 in f64, 8.5 KB in f32). Kept out of the
-/// snapshot engine so the default FDE pays nothing for it.
-#[derive(Debug, Clone, Default)]
+/// [`Stat`] and one subset solution: ~21 KB at N = 32 in f64, ~11 KB in
+/// f32). Scratch, not state: every field is overwritten before it is read
+/// in each epoch. The snapshot engine keeps one (issue 10: on the
+/// firmware's stack it took the reconstruction epoch to 22.7 KB; in the
+/// engine's own storage it costs static RAM instead, whichever FDE is
+/// configured).
+#[derive(Debug, Clone)]
 pub struct Scratch<const N: usize, T: Real = Stat> {
     pub model: ResidualModel<T, N>,
     pub ws: Workspace<T, N>,
     pub group: GroupFit<T, N>,
+    /// The re-solved subset before it becomes the solution in force.
+    pub solution: Solution<N, T>,
+}
+
+impl<const N: usize, T: Real> Default for Scratch<N, T> {
+    fn default() -> Self {
+        Scratch {
+            model: ResidualModel::default(),
+            ws: Workspace::default(),
+            group: GroupFit::default(),
+            solution: Solution::empty(),
+        }
+    }
 }
 
 /// The search's fixed arguments, for the second pass.
@@ -425,29 +442,6 @@ fn larger_alternative<const N: usize, T: Real>(
         }
     }
     Ok(None)
-}
-
-/// [`run`] with its scratch on this function's own stack frame (out of
-/// line, so the default FDE's frames do not reserve it).
-#[inline(never)]
-pub fn run_with_own_scratch<const N: usize, P: Real>(
-    cfg: &Config,
-    t_max: u8,
-    group_budget: u16,
-    thresholds: &mut Thresholds<N>,
-    epoch: &Epoch<'_>,
-    out: &mut FdeOutcome<N, P>,
-) -> Result<Option<MultifaultReport>, RaimError> {
-    let mut scratch = Scratch::<N, P>::default();
-    run(
-        cfg,
-        t_max,
-        group_budget,
-        thresholds,
-        epoch,
-        out,
-        &mut scratch,
-    )
 }
 
 /// FDE by reconstruction (SPEC §8.4) on `out`, whose `solution` holds the
@@ -543,7 +537,6 @@ pub fn run<const N: usize, P: Real>(
             .and_then(|r| sol.ids.get(usize::from(*r)).copied())
     };
     let mut from = 1;
-    let mut scratch_solution = Solution::<N, P>::empty();
     loop {
         let verdict = decide(
             &s,
@@ -641,7 +634,7 @@ pub fn run<const N: usize, P: Real>(
                         }
                     }
                 }
-                match solve_into(cfg, epoch, &mask, &mut scratch_solution) {
+                match solve_into(cfg, epoch, &mask, &mut scratch.solution) {
                     Ok(()) => {}
                     Err(RaimError::RankDeficient { .. })
                     | Err(RaimError::TooFewSatellites { .. }) => {
@@ -652,7 +645,7 @@ pub fn run<const N: usize, P: Real>(
                     }
                     Err(e) => return Err(e),
                 }
-                let after = fde::test(cfg, thresholds, &scratch_solution)?;
+                let after = fde::test(cfg, thresholds, &scratch.solution)?;
                 if after.alarm() {
                     // The subset is not consistent after all (non-linear
                     // model, or a lost clock column): try more satellites.
@@ -675,7 +668,7 @@ pub fn run<const N: usize, P: Real>(
                         bias_m: b.to_f64() * sigma,
                     });
                 }
-                core::mem::swap(&mut out.solution, &mut scratch_solution);
+                core::mem::swap(&mut out.solution, &mut scratch.solution);
                 out.test = after;
                 out.cause = None;
                 break;

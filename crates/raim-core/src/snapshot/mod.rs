@@ -31,6 +31,9 @@ pub struct Snapshot<const N: usize, T: Real = Stat> {
     pub(crate) thresholds: Thresholds<N>,
     warm_start: bool,
     last_fix: Option<Fix>,
+    /// The reconstruction FDE's scratch (not state), here rather than on
+    /// the stack (issue 10).
+    multifault: crate::multifault::Scratch<N, T>,
     _precision: core::marker::PhantomData<T>,
 }
 
@@ -46,6 +49,7 @@ impl<const N: usize, T: Real> Snapshot<N, T> {
             thresholds: Thresholds::default(),
             warm_start: false,
             last_fix: None,
+            multifault: crate::multifault::Scratch::default(),
             _precision: core::marker::PhantomData,
         }
     }
@@ -119,13 +123,14 @@ impl<const N: usize, T: Real> Snapshot<N, T> {
             FdeMethod::Reconstruction {
                 t_max,
                 group_budget,
-            } => crate::multifault::run_with_own_scratch(
+            } => crate::multifault::run(
                 cfg,
                 t_max,
                 group_budget,
                 &mut self.thresholds,
                 epoch,
                 outcome,
+                &mut self.multifault,
             )?,
         };
         let sol = &outcome.solution;
