@@ -68,16 +68,47 @@ pub struct McusumReport {
     pub available: bool,
 }
 
-/// The sequential engine: the MCUSUM state carried between epochs.
-#[derive(Debug, Clone, Default)]
+/// The sequential engine: the MCUSUM state carried between epochs, and
+/// the scratch for an epoch without its held satellites.
+#[derive(Debug, Clone)]
 pub struct Sequential<const N: usize, T: Real = Stat> {
     pub(crate) mcusum: Mcusum<N, T>,
+    held_out: HeldOut<N>,
+}
+
+/// Scratch, not state: the input of an epoch with the held satellites left
+/// out (one of the two arrays, the first `n` entries), and the input index
+/// of each kept satellite. Here rather than on the stack (issue 10: the
+/// epochs after an MCUSUM exclusion were the firmware's deepest, 15.7 KB at
+/// N = 32, of which 2 KB was this copy).
+#[derive(Debug, Clone)]
+struct HeldOut<const N: usize> {
+    ranges: [RangeObservation; N],
+    linear: [LinearObservation; N],
+    src: [usize; N],
+}
+
+impl<const N: usize> HeldOut<N> {
+    fn new() -> Self {
+        HeldOut {
+            ranges: [RangeObservation::default(); N],
+            linear: [LinearObservation::default(); N],
+            src: [0; N],
+        }
+    }
+}
+
+impl<const N: usize, T: Real> Default for Sequential<N, T> {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl<const N: usize, T: Real> Sequential<N, T> {
     pub fn new() -> Self {
         Sequential {
             mcusum: Mcusum::new(),
+            held_out: HeldOut::new(),
         }
     }
     /// Snapshot test + MCUSUM (SPEC §7.4). Satellites held excluded after
@@ -137,7 +168,16 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         for (i, v) in identity.iter_mut().enumerate() {
             *v = i;
         }
-        self.sequential_on(snap, cfg, epoch, &identity, epoch, outcome, out)
+        Self::sequential_on(
+            &mut self.mcusum,
+            snap,
+            cfg,
+            epoch,
+            &identity,
+            epoch,
+            outcome,
+            out,
+        )
     }
 
     #[inline(never)]
@@ -150,9 +190,9 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         outcome: &mut FdeOutcome<N, T>,
         out: &mut EpochResult<N>,
     ) -> Result<(), RaimError> {
-        let mut buf = [LinearObservation::default(); N];
-        let mut src = [0usize; N];
-        let n = self.keep_unheld(sats.iter().map(|s| s.id), |k, i| {
+        let Sequential { mcusum, held_out } = self;
+        let (buf, src) = (&mut held_out.linear, &mut held_out.src);
+        let n = keep_unheld(mcusum, sats.iter().map(|s| s.id), |k, i| {
             if let (Some(b), Some(o)) = (buf.get_mut(k), sats.get(i)) {
                 *b = *o;
             }
@@ -160,9 +200,10 @@ impl<const N: usize, T: Real> Sequential<N, T> {
                 *v = i;
             }
         });
+        src.iter_mut().skip(n).for_each(|v| *v = 0);
         let e = Epoch::linear(time_s, buf.get(..n).unwrap_or(&[]));
         let input = Epoch::linear(time_s, sats);
-        self.sequential_on(snap, cfg, &e, &src, &input, outcome, out)
+        Self::sequential_on(mcusum, snap, cfg, &e, src, &input, outcome, out)
     }
 
     #[inline(never)]
@@ -174,9 +215,9 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         outcome: &mut FdeOutcome<N, T>,
         out: &mut EpochResult<N>,
     ) -> Result<(), RaimError> {
-        let mut buf = [RangeObservation::default(); N];
-        let mut src = [0usize; N];
-        let n = self.keep_unheld(sats.iter().map(|s| s.id), |k, i| {
+        let Sequential { mcusum, held_out } = self;
+        let (buf, src) = (&mut held_out.ranges, &mut held_out.src);
+        let n = keep_unheld(mcusum, sats.iter().map(|s| s.id), |k, i| {
             if let (Some(b), Some(o)) = (buf.get_mut(k), sats.get(i)) {
                 *b = *o;
             }
@@ -184,25 +225,10 @@ impl<const N: usize, T: Real> Sequential<N, T> {
                 *v = i;
             }
         });
+        src.iter_mut().skip(n).for_each(|v| *v = 0);
         let e = Epoch::ranges(time_s, buf.get(..n).unwrap_or(&[]), apriori_m);
         let input = Epoch::ranges(time_s, sats, apriori_m);
-        self.sequential_on(snap, cfg, &e, &src, &input, outcome, out)
-    }
-
-    /// Calls `keep(k, i)` for the k-th kept input satellite i; returns the count.
-    fn keep_unheld(
-        &self,
-        ids: impl Iterator<Item = SatId>,
-        mut keep: impl FnMut(usize, usize),
-    ) -> usize {
-        let mut k = 0;
-        for (i, id) in ids.enumerate() {
-            if !self.mcusum.is_held(id) {
-                keep(k, i);
-                k += 1;
-            }
-        }
-        k
+        Self::sequential_on(mcusum, snap, cfg, &e, src, &input, outcome, out)
     }
 
     /// The snapshot monitor on `epoch` (the input without held satellites;
@@ -212,7 +238,7 @@ impl<const N: usize, T: Real> Sequential<N, T> {
     /// on entry) holds the snapshot monitor's solution in force.
     #[allow(clippy::too_many_arguments)] // the engines, the epoch twice and the two caller-owned outputs
     fn sequential_on(
-        &mut self,
+        mcusum: &mut Mcusum<N, T>,
         snap: &mut Snapshot<N, T>,
         cfg: &Config,
         epoch: &Epoch<'_>,
@@ -239,13 +265,13 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         };
         match mcusum::threshold(dim, mc.k, mc.arl0) {
             Err(_) => {
-                self.mcusum.reset();
+                mcusum.reset();
                 report.threshold = f64::NAN;
                 report.statistic = f64::NAN;
                 report.c = f64::NAN;
             }
             Ok(h) => {
-                let step = self.mcusum.update(ids, &sol.parity, mc.k, mc.carry, h);
+                let step = mcusum.update(ids, &sol.parity, mc.k, mc.carry, h);
                 report.available = true;
                 report.threshold = h;
                 report.statistic = step.statistic;
@@ -256,7 +282,16 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             }
         }
         if report.alarm {
-            self.after_cusum_alarm(snap, cfg, epoch, &to_input, sol, result, &mut report)?;
+            Self::after_cusum_alarm(
+                mcusum,
+                snap,
+                cfg,
+                epoch,
+                &to_input,
+                sol,
+                result,
+                &mut report,
+            )?;
         }
         report.source = match (snapshot_alarm, report.alarm) {
             (false, false) => AlarmSource::None,
@@ -264,13 +299,13 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             (false, true) => AlarmSource::Cusum,
             (true, true) => AlarmSource::Both,
         };
-        for (slot, h) in report.held.iter_mut().zip(self.mcusum.held().iter()) {
+        for (slot, h) in report.held.iter_mut().zip(mcusum.held().iter()) {
             *slot = Some(h.id);
         }
         // Satellites of the input that were held out are listed, unused.
         for i in 0..input.len() {
             let Some(id) = input.id(i) else { continue };
-            if self.mcusum.is_held(id) && !result.satellites.iter().any(|s| s.id == id) {
+            if mcusum.is_held(id) && !result.satellites.iter().any(|s| s.id == id) {
                 let _ = result.satellites.push(SatelliteResult {
                     id,
                     used: false,
@@ -300,7 +335,7 @@ impl<const N: usize, T: Real> Sequential<N, T> {
     #[inline(never)]
     #[allow(clippy::too_many_arguments)] // the engine, the epoch and its solution, and the two results it edits
     fn after_cusum_alarm(
-        &mut self,
+        mcusum: &mut Mcusum<N, T>,
         snap: &mut Snapshot<N, T>,
         cfg: &Config,
         epoch: &Epoch<'_>,
@@ -309,7 +344,7 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         result: &mut EpochResult<N>,
         report: &mut McusumReport,
     ) -> Result<(), RaimError> {
-        let (best, second) = self.mcusum.identify(&sol.parity, cfg.min_s_ii);
+        let (best, second) = mcusum.identify(&sol.parity, cfg.min_s_ii);
         let best = best.and_then(|b| Some((b, *sol.ids.get(b.row)?, *sol.source.get(b.row)?)));
         report.identified = best.map(|(_, id, _)| id);
         let runner_up = second.and_then(|s| Some((s, *sol.ids.get(s.row)?)));
@@ -322,12 +357,12 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         };
         let Some((cand, id, fidx)) = best else {
             stand(result, AlarmCause::Unidentifiable);
-            self.mcusum.reset();
+            mcusum.reset();
             return Ok(());
         };
         if sol.parity.dof() < 2 {
             stand(result, AlarmCause::NoRedundancy);
-            self.mcusum.reset();
+            mcusum.reset();
             return Ok(());
         }
         if let Some((s2, id2)) = runner_up {
@@ -341,7 +376,7 @@ impl<const N: usize, T: Real> Sequential<N, T> {
                         runner_up: id2,
                     },
                 );
-                self.mcusum.reset();
+                mcusum.reset();
                 return Ok(());
             }
         }
@@ -358,14 +393,14 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             Ok(()) => {}
             Err(RaimError::RankDeficient { .. }) | Err(RaimError::TooFewSatellites { .. }) => {
                 stand(result, AlarmCause::SubsetGeometry { excluded: id });
-                self.mcusum.reset();
+                mcusum.reset();
                 return Ok(());
             }
             Err(e) => return Err(e),
         };
-        self.mcusum.hold(id, epoch.time_s);
+        mcusum.hold(id, epoch.time_s);
         let sub_ids = sub.ids.get(..sub.rows()).unwrap_or(&[]);
-        report.after_exclusion = Some(self.mcusum.carry_to(sub_ids, &sub.parity, cfg.mcusum.carry));
+        report.after_exclusion = Some(mcusum.carry_to(sub_ids, &sub.parity, cfg.mcusum.carry));
         if snapshot_failed {
             // The snapshot alarm stands this epoch; the hold applies from the next.
             return Ok(());
@@ -415,6 +450,23 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         }
         Ok(())
     }
+}
+
+/// Calls `keep(k, i)` for the k-th input satellite i that `mcusum` does not
+/// hold; returns the count.
+fn keep_unheld<const N: usize, T: Real>(
+    mcusum: &Mcusum<N, T>,
+    ids: impl Iterator<Item = SatId>,
+    mut keep: impl FnMut(usize, usize),
+) -> usize {
+    let mut k = 0;
+    for (i, id) in ids.enumerate() {
+        if !mcusum.is_held(id) {
+            keep(k, i);
+            k += 1;
+        }
+    }
+    k
 }
 
 #[cfg(test)]
