@@ -429,6 +429,32 @@ fn larger_alternative<const N: usize, T: Real>(
 
 /// [`run`] with its scratch on this function's own stack frame (out of
 /// line, so the default FDE's frames do not reserve it).
+///
+/// Without the feature `multifault` the search is not built: the call is
+/// refused with the configuration check's error (`t_max` outside [0, 0]),
+/// which `Config::validate` has already returned for such a
+/// configuration, so nothing falls back to another FDE silently.
+#[cfg(not(feature = "multifault"))]
+pub fn run_with_own_scratch<const N: usize, P: Real>(
+    _cfg: &Config,
+    t_max: u8,
+    _group_budget: u16,
+    _thresholds: &mut Thresholds<N>,
+    _epoch: &Epoch<'_>,
+    _out: &mut FdeOutcome<N, P>,
+) -> Result<Option<MultifaultReport>, RaimError> {
+    let not_built = crate::config_bounds::T_MAX_NOT_BUILT;
+    Err(RaimError::OutOfRange {
+        field: not_built.field,
+        value: f64::from(t_max),
+        min: not_built.min,
+        max: not_built.max,
+    })
+}
+
+/// [`run`] with its scratch on this function's own stack frame (out of
+/// line, so the default FDE's frames do not reserve it).
+#[cfg(feature = "multifault")]
 #[inline(never)]
 pub fn run_with_own_scratch<const N: usize, P: Real>(
     cfg: &Config,
