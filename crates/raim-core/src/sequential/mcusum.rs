@@ -34,6 +34,9 @@ use crate::snapshot::lraim::{self, Candidate};
 
 pub use crate::sequential::mcusum_table::{K_VALUES, LOG10_ARL0, MAX_DIM};
 
+/// Scale of [`H_E4`]: the generated table is rounded to 1e-4.
+const H_UNITS_PER_ONE: f64 = 1e4;
+
 /// The device table's h in units of 1e-4, the rounding of the generated
 /// table (`mcusum_table::H`): half the flash of the f64 table (5,040 B
 /// instead of 10,080 B on the firmware, issue 10), and read back exactly:
@@ -51,7 +54,7 @@ static H_E4: [[[u32; LOG10_ARL0.len()]; MAX_DIM]; K_VALUES.len()] = {
                 // Compile-time indexing: out of range is a build error.
                 #[allow(clippy::indexing_slicing)]
                 {
-                    out[k][d][j] = (table::H[k][d][j] * 1e4 + 0.5) as u32;
+                    out[k][d][j] = (table::H[k][d][j] * H_UNITS_PER_ONE + 0.5) as u32;
                 }
                 j += 1;
             }
@@ -61,9 +64,6 @@ static H_E4: [[[u32; LOG10_ARL0.len()]; MAX_DIM]; K_VALUES.len()] = {
     }
     out
 };
-
-/// Scale of [`H_E4`].
-const H_UNITS_PER_ONE: f64 = 1e4;
 
 /// Most satellites held excluded after MCUSUM alarms at one time.
 pub const MAX_HELD: usize = 4;
