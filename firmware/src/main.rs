@@ -229,10 +229,24 @@ fn pf_engines() -> raim_proto::server::PfEngines {
 }
 
 /// Fail loud (issue 15): log, record the cause, reset.
+///
+/// The log carries the location and the message when it is a literal;
+/// a message with run-time arguments (core's bounds checks, say) is not
+/// formatted, so that `core::fmt` stays out of the flash (issue 10: it
+/// was ~1.7 KB for this one call); the location finds it in the source.
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
-    defmt::error!("panic: {}", defmt::Display2Format(info));
-    let line = info.location().map_or(0, |l| l.line());
+    let (file, line, column) = info
+        .location()
+        .map_or(("?", 0, 0), |l| (l.file(), l.line(), l.column()));
+    let message = info.message().as_str().unwrap_or("(formatted message)");
+    defmt::error!(
+        "panic at {=str}:{=u32}:{=u32}: {=str}",
+        file,
+        line,
+        column,
+        message
+    );
     fault::record_and_reset(fault::CODE_PANIC, line)
 }
 

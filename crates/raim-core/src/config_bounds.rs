@@ -163,6 +163,15 @@ pub const T_MAX: Bound = Bound {
     min: 1.0,
     max: crate::multifault::covering::MAX_FAULTS as f64,
 };
+/// `t_max` in a build without the reconstruction FDE (raim-core's feature
+/// `multifault` off): no simultaneous faults may be searched for, so any
+/// `FdeMethod::Reconstruction` is refused with this bound instead of
+/// falling back to the sequential FDE.
+pub const T_MAX_NOT_BUILT: Bound = Bound {
+    field: "t_max",
+    min: 0.0,
+    max: 0.0,
+};
 /// Constraint groups the reconstruction FDE may solve per epoch: at least
 /// one (0 would switch the multi-fault search off).
 pub const GROUP_BUDGET: Bound = Bound {
@@ -201,6 +210,9 @@ pub fn check(cfg: &Config) -> Result<(), RaimError> {
         group_budget,
     } = cfg.fde_method
     {
+        if !cfg!(feature = "multifault") {
+            T_MAX_NOT_BUILT.check(f64::from(t_max))?;
+        }
         T_MAX.check(f64::from(t_max))?;
         GROUP_BUDGET.check(f64::from(group_budget))?;
     }

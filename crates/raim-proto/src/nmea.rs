@@ -2,7 +2,10 @@
 //! and GBS, in that order (gpsd matches GBS to the fix by its time, so the
 //! fix sentences come first). Each sentence is at most 82 characters
 //! (`$` to `\n`), written with `core::fmt::Write` into a `heapless::String`,
-//! with the XOR checksum of the characters between `$` and `*`.
+//! with the XOR checksum of the characters between `$` and `*`. Numbers are
+//! written by [`fixed`] in integer arithmetic, the same text as `format!`
+//! would give, without linking `core::fmt`'s float formatting (issue 10:
+//! flash).
 //!
 //! Field choices (docs/PROTOCOL.md):
 //! - Time: the epoch's `time_s` read as UTC seconds since 1970-01-01.
@@ -32,6 +35,8 @@
 //!   sigma_i / sqrt(S_ii) (m).
 
 use core::fmt::Write;
+
+mod fixed;
 
 use raim_core::stats::dist;
 use raim_core::Decision;
@@ -64,8 +69,16 @@ pub fn checksum(body: &[u8]) -> u8 {
 
 /// `$` + body + `*hh\r\n`.
 fn finish(body: &heapless::String<80>) -> Result<Sentence, TooLong> {
+    const HEX: &[u8; 16] = b"0123456789ABCDEF";
+    let c = checksum(body.as_bytes());
+    let hex = |n: u8| char::from(HEX.get(usize::from(n & 0xf)).copied().unwrap_or(b'0'));
     let mut s = Sentence::new();
-    write!(s, "${body}*{:02X}\r\n", checksum(body.as_bytes()))?;
+    s.write_char('$')?;
+    s.write_str(body)?;
+    s.write_char('*')?;
+    s.write_char(hex(c >> 4))?;
+    s.write_char(hex(c))?;
+    s.write_str("\r\n")?;
     Ok(s)
 }
 
@@ -107,12 +120,18 @@ impl Utc {
     fn write_time<W: Write>(&self, w: &mut W) -> core::fmt::Result {
         let c = self.centiseconds_of_day;
         let (h, m, s, cs) = (c / 360_000, c / 6000 % 60, c / 100 % 60, c % 100);
-        write!(w, "{h:02}{m:02}{s:02}.{cs:02}")
+        for v in [h, m, s] {
+            fixed::uint(w, u64::from(v), 2)?;
+        }
+        w.write_char('.')?;
+        fixed::uint(w, u64::from(cs), 2)
     }
 
     fn write_date<W: Write>(&self, w: &mut W) -> core::fmt::Result {
         let (y, m, d) = civil_from_days(self.days);
-        write!(w, "{d:02}{m:02}{:02}", y.rem_euclid(100))
+        fixed::uint(w, u64::from(d), 2)?;
+        fixed::uint(w, u64::from(m), 2)?;
+        fixed::uint(w, y.rem_euclid(100).unsigned_abs(), 2)
     }
 }
 
@@ -121,7 +140,7 @@ impl Utc {
 fn write_angle<W: Write>(
     w: &mut W,
     rad: f64,
-    deg_digits: usize,
+    deg_digits: u32,
     pos: char,
     neg: char,
 ) -> core::fmt::Result {
@@ -131,13 +150,18 @@ fn write_angle<W: Write>(
     let (d, rest) = (total / (60 * UNITS_PER_MIN), total % (60 * UNITS_PER_MIN));
     let (m, frac) = (rest / UNITS_PER_MIN, rest % UNITS_PER_MIN);
     let hemi = if deg < 0.0 { neg } else { pos };
-    write!(w, "{d:0deg_digits$}{m:02}.{frac:06},{hemi}")
+    fixed::uint(w, d, deg_digits)?;
+    fixed::uint(w, m, 2)?;
+    w.write_char('.')?;
+    fixed::uint(w, frac, 6)?;
+    w.write_char(',')?;
+    w.write_char(hemi)
 }
 
 /// A number with `prec` decimals, or an empty field if not finite.
-fn num<W: Write>(w: &mut W, v: f64, prec: usize) -> core::fmt::Result {
+fn num<W: Write>(w: &mut W, v: f64, prec: u32) -> core::fmt::Result {
     if v.is_finite() {
-        write!(w, "{v:.prec$}")
+        fixed::decimal(w, v, prec)
     } else {
         Ok(())
     }
@@ -215,9 +239,12 @@ fn position_fields<W: Write>(w: &mut W, r: &WireResult) -> core::fmt::Result {
 pub fn rmc(r: &WireResult) -> Result<Sentence, TooLong> {
     let utc = Utc::from_unix_s(r.time_s);
     let mut b = heapless::String::<80>::new();
-    write!(b, "{}RMC,", talker(r))?;
+    b.write_str(talker(r))?;
+    b.write_str("RMC,")?;
     time_field(&mut b, utc)?;
-    write!(b, ",{},", if usable(r) { 'A' } else { 'V' })?;
+    b.write_char(',')?;
+    b.write_char(if usable(r) { 'A' } else { 'V' })?;
+    b.write_char(',')?;
     position_fields(&mut b, r)?;
     b.write_str(",,,")?;
     if let Some(u) = utc {
@@ -229,7 +256,10 @@ pub fn rmc(r: &WireResult) -> Result<Sentence, TooLong> {
         (true, Decision::Unavailable) => 'C',
         (true, Decision::Alarm) => 'U',
     };
-    write!(b, ",,,{},{nav}", if usable(r) { 'A' } else { 'N' })?;
+    b.write_str(",,,")?;
+    b.write_char(if usable(r) { 'A' } else { 'N' })?;
+    b.write_char(',')?;
+    b.write_char(nav)?;
     finish(&b)
 }
 
@@ -237,12 +267,17 @@ pub fn rmc(r: &WireResult) -> Result<Sentence, TooLong> {
 /// (no HDOP), ellipsoidal height, geoid separation 0.
 pub fn gga(r: &WireResult) -> Result<Sentence, TooLong> {
     let mut b = heapless::String::<80>::new();
-    write!(b, "{}GGA,", talker(r))?;
+    b.write_str(talker(r))?;
+    b.write_str("GGA,")?;
     time_field(&mut b, Utc::from_unix_s(r.time_s))?;
     b.write_char(',')?;
     position_fields(&mut b, r)?;
     let used = r.satellites.iter().filter(|s| s.used).count();
-    write!(b, ",{},{used:02},,", u8::from(usable(r)))?;
+    b.write_char(',')?;
+    b.write_char(if usable(r) { '1' } else { '0' })?;
+    b.write_char(',')?;
+    fixed::uint(&mut b, used as u64, 2)?;
+    b.write_str(",,")?;
     match r.geodetic {
         Some(g) => {
             num(&mut b, g.height_m, 3)?;
@@ -256,12 +291,9 @@ pub fn gga(r: &WireResult) -> Result<Sentence, TooLong> {
 /// GSA: automatic mode, 3D fix or none, up to 12 satellites used, (no DOPs).
 pub fn gsa(r: &WireResult) -> Result<Sentence, TooLong> {
     let mut b = heapless::String::<80>::new();
-    write!(
-        b,
-        "{}GSA,A,{}",
-        talker(r),
-        if usable(r) { '3' } else { '1' }
-    )?;
+    b.write_str(talker(r))?;
+    b.write_str("GSA,A,")?;
+    b.write_char(if usable(r) { '3' } else { '1' })?;
     let mut used = r
         .satellites
         .iter()
@@ -269,7 +301,10 @@ pub fn gsa(r: &WireResult) -> Result<Sentence, TooLong> {
         .map(|s| nmea_svid(s.id));
     for _ in 0..12 {
         match used.next() {
-            Some(n) => write!(b, ",{n:02}")?,
+            Some(n) => {
+                b.write_char(',')?;
+                fixed::uint(&mut b, u64::from(n), 2)?;
+            }
             None => b.write_char(',')?,
         }
     }
@@ -281,7 +316,8 @@ pub fn gsa(r: &WireResult) -> Result<Sentence, TooLong> {
 pub fn gst(r: &WireResult) -> Result<Sentence, TooLong> {
     let [e, n, u] = r.sigma_enu_m;
     let mut b = heapless::String::<80>::new();
-    write!(b, "{}GST,", talker(r))?;
+    b.write_str(talker(r))?;
+    b.write_str("GST,")?;
     time_field(&mut b, Utc::from_unix_s(r.time_s))?;
     b.write_char(',')?;
     num(&mut b, range_rms_m(r), 3)?;
@@ -320,7 +356,8 @@ pub fn range_rms_m(r: &WireResult) -> f64 {
 pub fn gbs(r: &WireResult) -> Result<Sentence, TooLong> {
     let [e, n, u] = r.sigma_enu_m;
     let mut b = heapless::String::<80>::new();
-    write!(b, "{}GBS,", talker(r))?;
+    b.write_str(talker(r))?;
+    b.write_str("GBS,")?;
     time_field(&mut b, Utc::from_unix_s(r.time_s))?;
     for v in [n, e, u] {
         b.write_char(',')?;
@@ -330,7 +367,9 @@ pub fn gbs(r: &WireResult) -> Result<Sentence, TooLong> {
         Some((s, bias_m)) => {
             let t = r.initial_test;
             let pmd = dist::ncx2_cdf(t.threshold, t.dof, s.w * s.w).unwrap_or(f64::NAN);
-            write!(b, ",{:02},", nmea_svid(s.id))?;
+            b.write_char(',')?;
+            fixed::uint(&mut b, u64::from(nmea_svid(s.id)), 2)?;
+            b.write_char(',')?;
             num(&mut b, pmd, 6)?;
             b.write_char(',')?;
             num(&mut b, bias_m, 3)?;

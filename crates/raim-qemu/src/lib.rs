@@ -195,6 +195,28 @@ pub fn firmware_elf_for(machine: Machine) -> Result<PathBuf> {
     }
 }
 
+/// The QEMU board's build without the default `araim`, `pf` and
+/// `multifault` features (`--no-default-features --features board-qemu`,
+/// into `firmware/target/snapshot`, as scripts/test.sh builds it): the
+/// configuration whose flash issue 10 bounds to 128 KiB
+/// (host-tests/tests/qemu_flash.rs). `$RAIM_FIRMWARE_ELF_SNAPSHOT` if set.
+pub fn firmware_elf_snapshot() -> Result<PathBuf> {
+    if let Some(p) = std::env::var_os("RAIM_FIRMWARE_ELF_SNAPSHOT") {
+        return Ok(PathBuf::from(p));
+    }
+    cargo_in_firmware(&[
+        "build",
+        "--release",
+        "--quiet",
+        "--no-default-features",
+        "--features",
+        "board-qemu",
+        "--target-dir",
+        "target/snapshot",
+    ])?;
+    Ok(repo_root().join("firmware/target/snapshot/thumbv7em-none-eabihf/release/raim-firmware"))
+}
+
 /// Options of the emulator.
 #[derive(Debug, Clone, Default)]
 pub struct Options {

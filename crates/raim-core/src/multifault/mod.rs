@@ -10,6 +10,10 @@
 //!   size; [`decide`]: the decision rule of SPEC §8.4 with the uniqueness
 //!   check. [`fde`] runs it as the snapshot monitor's FDE method
 //!   (`Config::fde_method`), excluding and re-testing with a real solve.
+//!
+//! Without the feature `multifault` (docs/FLASH.md) [`run`] refuses, and the
+//! FDE's private helpers below it are compiled but never called.
+#![cfg_attr(not(feature = "multifault"), allow(dead_code, unused_imports))]
 
 pub mod covering;
 mod covering_table;
@@ -444,12 +448,36 @@ fn larger_alternative<const N: usize, T: Real>(
     Ok(None)
 }
 
+/// [`run`] without the feature `multifault`: the search is not built, and
+/// the call is refused with the configuration check's error (`t_max`
+/// outside [0, 0]), which `Config::validate` has already returned for such
+/// a configuration, so nothing falls back to another FDE silently.
+#[cfg(not(feature = "multifault"))]
+pub fn run<const N: usize, P: Real>(
+    _cfg: &Config,
+    t_max: u8,
+    _group_budget: u16,
+    _thresholds: &mut Thresholds<N>,
+    _epoch: &Epoch<'_>,
+    _out: &mut FdeOutcome<N, P>,
+    _scratch: &mut Scratch<N, P>,
+) -> Result<Option<MultifaultReport>, RaimError> {
+    let not_built = crate::config_bounds::T_MAX_NOT_BUILT;
+    Err(RaimError::OutOfRange {
+        field: not_built.field,
+        value: f64::from(t_max),
+        min: not_built.min,
+        max: not_built.max,
+    })
+}
+
 /// FDE by reconstruction (SPEC §8.4) on `out`, whose `solution` holds the
 /// all-in-view solution: detect; if the test fails, search the groups for
 /// the fewest satellites (1..t_max) that explain the residuals, check the
 /// runner-up, exclude, re-solve and re-test; if the subset still fails, go
 /// on with more satellites. Fills the same outcome as [`fde::run`] (so the
 /// snapshot result is built the same way) and returns the report.
+#[cfg(feature = "multifault")]
 #[inline(never)]
 pub fn run<const N: usize, P: Real>(
     cfg: &Config,

@@ -34,6 +34,37 @@ use crate::snapshot::lraim::{self, Candidate};
 
 pub use crate::sequential::mcusum_table::{K_VALUES, LOG10_ARL0, MAX_DIM};
 
+/// Scale of [`H_E4`]: the generated table is rounded to 1e-4.
+const H_UNITS_PER_ONE: f64 = 1e4;
+
+/// The device table's h in units of 1e-4, the rounding of the generated
+/// table (`mcusum_table::H`): half the flash of the f64 table (5,040 B
+/// instead of 10,080 B on the firmware, issue 10), and read back exactly:
+/// `n / 1e4` is the f64 nearest to the decimal `n * 1e-4`, which is what the
+/// table's literal parses to (the test `integer_table_reads_back_bit_for_bit`).
+/// Converted at compile time; `H` itself is not linked.
+static H_E4: [[[u32; LOG10_ARL0.len()]; MAX_DIM]; K_VALUES.len()] = {
+    let mut out = [[[0u32; LOG10_ARL0.len()]; MAX_DIM]; K_VALUES.len()];
+    let mut k = 0;
+    while k < K_VALUES.len() {
+        let mut d = 0;
+        while d < MAX_DIM {
+            let mut j = 0;
+            while j < LOG10_ARL0.len() {
+                // Compile-time indexing: out of range is a build error.
+                #[allow(clippy::indexing_slicing)]
+                {
+                    out[k][d][j] = (table::H[k][d][j] * H_UNITS_PER_ONE + 0.5) as u32;
+                }
+                j += 1;
+            }
+            d += 1;
+        }
+        k += 1;
+    }
+    out
+};
+
 /// Most satellites held excluded after MCUSUM alarms at one time.
 pub const MAX_HELD: usize = 4;
 
@@ -116,7 +147,7 @@ fn k_index(k: f64) -> Result<usize, RaimError> {
 pub fn threshold(dim: usize, k: f64, arl0: f64) -> Result<f64, RaimError> {
     check_settings(k, arl0)?;
     let ki = k_index(k)?;
-    let row = table::H
+    let row = H_E4
         .get(ki)
         .and_then(|rows| rows.get(dim.wrapping_sub(1)))
         .filter(|_| dim >= 1)
@@ -151,8 +182,8 @@ pub fn threshold(dim: usize, k: f64, arl0: f64) -> Result<f64, RaimError> {
             max: MAX_DIM as u32,
         });
     };
-    let (Some(&y0), Some(&y1), Some(&y2)) = (row.get(mid - 1), row.get(mid), row.get(mid + 1))
-    else {
+    let y = |i: usize| row.get(i).map(|&n| f64::from(n) / H_UNITS_PER_ONE);
+    let (Some(y0), Some(y1), Some(y2)) = (y(mid - 1), y(mid), y(mid + 1)) else {
         return Err(RaimError::InvalidDof {
             dof: dim as u32,
             max: MAX_DIM as u32,
@@ -713,6 +744,18 @@ mod tests {
 
     /// Seed 001 Table 2: dim 2, k = 1, ARL0 = 1e4 gives h = 5.21 (exact
     /// 5.206, SPEC §7.1) from the device table.
+    #[test]
+    fn integer_table_reads_back_bit_for_bit() {
+        for (k, rows) in table::H.iter().enumerate() {
+            for (d, row) in rows.iter().enumerate() {
+                for (j, h) in row.iter().enumerate() {
+                    let back = f64::from(H_E4[k][d][j]) / H_UNITS_PER_ONE;
+                    assert_eq!(back.to_bits(), h.to_bits(), "k {k} d {} j {j}: {h}", d + 1);
+                }
+            }
+        }
+    }
+
     #[test]
     fn table_gives_seed_001_threshold() {
         let h = threshold(2, 1.0, 1e4).unwrap();
