@@ -70,6 +70,13 @@ pub struct FdeOutcome<const N: usize, T: Real = Stat> {
     pub identified: Option<SatId>,
     /// Set when the final test still fails.
     pub cause: Option<AlarmCause>,
+    /// Scratch, not state: the subset solution FDE works on (accepted ones
+    /// are swapped into `solution`). Kept here, beside the solution in
+    /// force, so that an epoch neither zero-fills nor carries a
+    /// solution-sized value on its stack (issue 10). Every solve writes
+    /// every field it is later read through, so nothing in it depends on
+    /// an earlier epoch.
+    pub(crate) scratch: Solution<N, T>,
 }
 
 /// Run the chi-square test on a solution. The statistic D^2, computed in
@@ -330,10 +337,13 @@ fn exclude_pair<const N: usize, T: Real>(
 }
 
 impl<const N: usize, T: Real> FdeOutcome<N, T> {
-    /// Back to [`FdeOutcome::empty`], in place (an outcome kept in an
-    /// engine's state and reused every epoch, issue 10).
+    /// Back to [`FdeOutcome::empty`]'s verdict, in place (an outcome kept
+    /// in an engine's state and reused every epoch, issue 10). The two
+    /// solutions' storage is kept, not zero-filled (issue 10: that was a
+    /// fifth of a clean linearised epoch's instructions): the epoch's solve
+    /// overwrites every field of the solution it fills (`solve::solve_from`;
+    /// test `a_reused_engine_equals_a_fresh_one`).
     pub fn reset(&mut self) {
-        self.solution = Solution::empty();
         self.test = TestStatistic::default();
         self.exclusions.clear();
         self.identified = None;
@@ -349,6 +359,7 @@ impl<const N: usize, T: Real> FdeOutcome<N, T> {
             exclusions: heapless::Vec::new(),
             identified: None,
             cause: None,
+            scratch: Solution::empty(),
         }
     }
 }
@@ -373,8 +384,8 @@ pub fn run<const N: usize, T: Real>(
     out.identified = None;
     out.cause = None;
     let max_excl = usize::from(cfg.max_exclusions).min(MAX_EXCLUSIONS);
-    // The one subset solution FDE works on; accepted ones are swapped in.
-    let mut scratch = Solution::<N, T>::empty();
+    // The one subset solution FDE works on (the outcome's scratch);
+    // accepted ones are swapped in.
     while test_now.alarm() {
         let current = &out.solution;
         let (best, _) = rank(&current.parity, cfg.rule, cfg.min_s_ii);
@@ -414,14 +425,14 @@ pub fn run<const N: usize, T: Real>(
                     &mask,
                     current,
                     test_now,
-                    &mut scratch,
+                    &mut out.scratch,
                 )? {
                     PairOutcome::Excluded(after, records) => {
                         for r in records {
                             // Capacity MAX_EXCLUSIONS >= 2.
                             let _ = out.exclusions.push(r);
                         }
-                        core::mem::swap(&mut out.solution, &mut scratch);
+                        core::mem::swap(&mut out.solution, &mut out.scratch);
                         out.test = after;
                         break;
                     }
@@ -439,7 +450,7 @@ pub fn run<const N: usize, T: Real>(
             epoch,
             &next_mask,
             Start::Sibling(current),
-            &mut scratch,
+            &mut out.scratch,
         ) {
             Ok(()) => {}
             Err(RaimError::RankDeficient { .. }) | Err(RaimError::TooFewSatellites { .. }) => {
@@ -448,7 +459,7 @@ pub fn run<const N: usize, T: Real>(
             }
             Err(e) => return Err(e),
         };
-        let after = test(cfg, thresholds, &scratch)?;
+        let after = test(cfg, thresholds, &out.scratch)?;
         if !after.alarm() && cfg.require_unique_exclusion {
             // Excluding row j lowers the weighted SSE by exactly w_j^2
             // (r_j^2 / S_jj) when the state keeps its dimension, so every
@@ -482,7 +493,7 @@ pub fn run<const N: usize, T: Real>(
             break;
         }
         mask = next_mask;
-        core::mem::swap(&mut out.solution, &mut scratch);
+        core::mem::swap(&mut out.solution, &mut out.scratch);
         out.test = after;
         test_now = after;
     }
