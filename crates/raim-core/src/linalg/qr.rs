@@ -155,6 +155,28 @@ impl<const N: usize, T: Real> Householder<N, T> {
         }
     }
 
+    /// The first `M` columns of T1, dense: `(t, d)` with `t[j][i]` =
+    /// T1[i][j] for i < j (zero elsewhere) and `d` its diagonal. For
+    /// the fixed-size row loops of [`crate::linalg::parity`] (issue 10),
+    /// which perform [`Self::solve_tt`]'s and [`Self::solve_t`]'s
+    /// operations in the same order on these copies.
+    pub(crate) fn triangle<const M: usize>(&self) -> ([[T; M]; M], [T; M]) {
+        let mut t = [[T::zero(); M]; M];
+        let mut d = [T::zero(); M];
+        for (j, ((dst, src), (dj, sj))) in t
+            .iter_mut()
+            .zip(self.a.iter())
+            .zip(d.iter_mut().zip(self.diag.iter()))
+            .enumerate()
+        {
+            for (x, y) in dst.iter_mut().zip(src.iter()).take(j) {
+                *x = *y;
+            }
+            *dj = *sj;
+        }
+        (t, d)
+    }
+
     /// Solve T1 x = y for the first m entries (column-oriented back
     /// substitution: column j of T1 above the diagonal is stored in a[j][..j]).
     pub fn solve_t(&self, y: &[T; MAX_STATES]) -> [T; MAX_STATES] {
