@@ -11,7 +11,7 @@ use crate::error::RaimError;
 use crate::measurement::{Epoch, SatId};
 use crate::real::{Real, Stat};
 use crate::snapshot::detection::{TestStatistic, Thresholds};
-use crate::snapshot::lraim::rank;
+use crate::snapshot::lraim::{rank, Candidate};
 use crate::solve::{solve_from, Solution, Start};
 
 /// Most exclusions reported per epoch (the capacity of the list; the
@@ -77,6 +77,10 @@ pub struct FdeOutcome<const N: usize, T: Real = Stat> {
     /// every field it is later read through, so nothing in it depends on
     /// an earlier epoch.
     pub(crate) scratch: Solution<N, T>,
+    /// The rule's best candidate on `solution` when the caller has ranked
+    /// it already (the snapshot engine, from the per-satellite output it
+    /// scores anyway: issue 10); taken, and cleared, by [`run`].
+    pub(crate) first_best: Option<Option<Candidate<T>>>,
 }
 
 /// Run the chi-square test on a solution. The statistic D^2, computed in
@@ -348,6 +352,7 @@ impl<const N: usize, T: Real> FdeOutcome<N, T> {
         self.exclusions.clear();
         self.identified = None;
         self.cause = None;
+        self.first_best = None;
     }
 
     /// An empty outcome whose `solution` is to be filled by
@@ -360,6 +365,7 @@ impl<const N: usize, T: Real> FdeOutcome<N, T> {
             identified: None,
             cause: None,
             scratch: Solution::empty(),
+            first_best: None,
         }
     }
 }
@@ -386,9 +392,13 @@ pub fn run<const N: usize, T: Real>(
     let max_excl = usize::from(cfg.max_exclusions).min(MAX_EXCLUSIONS);
     // The one subset solution FDE works on (the outcome's scratch);
     // accepted ones are swapped in.
+    let mut first_best = out.first_best.take();
     while test_now.alarm() {
         let current = &out.solution;
-        let (best, _) = rank(&current.parity, cfg.rule, cfg.min_s_ii);
+        let best = match first_best.take() {
+            Some(best) => best,
+            None => rank(&current.parity, cfg.rule, cfg.min_s_ii).0,
+        };
         let id_of = |row: usize| current.ids.get(row).copied();
         let src_of = |row: usize| current.source.get(row).copied();
         if out.identified.is_none() {

@@ -455,3 +455,54 @@ fn a_reused_engine_equals_a_fresh_one() {
         assert!(decisions.contains(&d), "{d:?} missing: {decisions:?}");
     }
 }
+
+/// FDE's first ranking comes from the per-satellite output (issue 10):
+/// for every rule, on 300 noisy 8- and 10-satellite epochs with 0-2
+/// faults, it is bit for bit `lraim::rank`'s best, and `None` when not
+/// asked for.
+#[test]
+fn per_satellite_ranking_equals_rank() {
+    use crate::real::Real;
+    use crate::snapshot::{lraim, per_satellite};
+    use crate::solve::solve;
+    let sky10: Vec<(f64, f64)> = SKY8
+        .iter()
+        .copied()
+        .chain([(120.0, 70.0), (280.0, 65.0)])
+        .collect();
+    let mut ranked = 0;
+    for rule in [FiRule::Mle, FiRule::LraimFlat, FiRule::default()] {
+        let c = Config { rule, ..cfg() };
+        for seed in 0..100u64 {
+            let sky: &[(f64, f64)] = if seed % 2 == 0 { &SKY8 } else { &sky10 };
+            let faults: &[(usize, f64)] = match seed % 3 {
+                0 => &[],
+                1 => &[(1, 40.0)],
+                _ => &[(1, 40.0), (4, -30.0)],
+            };
+            let sats = linear_epoch(sky, 1.0, &mut Rng::new(900 + seed), faults);
+            let mut mask = [true; 16];
+            for m in mask.iter_mut().skip(sats.len()) {
+                *m = false;
+            }
+            let sol = solve::<16>(&c, &Epoch::linear(0.0, &sats), &mask).unwrap();
+            let mut out = heapless::Vec::new();
+            let got = per_satellite(&c, &sol, &mut out, true);
+            let want = lraim::rank(&sol.parity, c.rule, c.min_s_ii).0;
+            let bits = |x: Option<lraim::Candidate<crate::real::Stat>>| {
+                x.map(|c| {
+                    (
+                        c.row,
+                        c.w.to_f64().to_bits(),
+                        c.bias_sigma.to_f64().to_bits(),
+                        c.score.to_f64().to_bits(),
+                    )
+                })
+            };
+            assert_eq!(bits(got), bits(want), "{rule:?} seed {seed}");
+            ranked += usize::from(want.is_some());
+            assert!(per_satellite(&c, &sol, &mut out, false).is_none());
+        }
+    }
+    assert!(ranked > 250, "{ranked}");
+}
