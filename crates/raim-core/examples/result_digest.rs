@@ -1,6 +1,8 @@
-//! Every field of 8,000 results (3,000 linearised and 1,000 pseudorange
+//! Every field of 12,200 results (3,000 linearised and 1,000 pseudorange
 //! epochs, random skies of 5-32 satellites in 1-3 constellations, 0-3
-//! faults of 10-70 m, each rule; the f64 and the f32 engine), printed with
+//! faults of 10-70 m, each rule; 1,500 of the linearised epochs also in
+//! sequence through an engine with the MCUSUM on, 600 with the
+//! reconstruction FDE; the f64 and the f32 engine), printed with
 //! `Debug` (shortest round-trip floats: equal text is equal bits) into a
 //! file, with its FNV-1a digest. Two builds whose digests agree give the
 //! same results bit for bit (issue 10: the speed work was checked this way
@@ -23,6 +25,18 @@ fn main() {
     let mut rng = Rng(0x9e3779b97f4a7c15);
     let rot = enu_rotation(&ecef_to_geodetic(RX));
     let mut out = String::new();
+    // Engines that persist across the epochs: the MCUSUM on (its state and
+    // holds carry over), and the reconstruction FDE.
+    let mcusum_cfg = Config::default().split_false_alarm_budget(0.5);
+    let recon_cfg = Config {
+        fde_method: raim_core::config::FdeMethod::Reconstruction {
+            t_max: 3,
+            group_budget: 200,
+        },
+        ..Config::default()
+    };
+    let mut mcusum64 = Raim::<32, f64>::new();
+    let mut mcusum32 = Raim::<32, f32>::new();
     for trial in 0..3000 {
         let n = 5 + trial % 28;
         let sys = [System::Gps, System::Galileo, System::Beidou];
@@ -69,6 +83,21 @@ fn main() {
             Raim::<32, f64>::new().process(&cfg, &e1),
             Raim::<32, f32>::new().process(&cfg, &e1)
         );
+        if trial % 2 == 0 {
+            // The MCUSUM engines see the linearised epochs in sequence.
+            out += &format!(
+                "{:?}\n{:?}\n",
+                mcusum64.process(&mcusum_cfg, &e1),
+                mcusum32.process(&mcusum_cfg, &e1)
+            );
+        }
+        if trial % 5 == 1 {
+            out += &format!(
+                "{:?}\n{:?}\n",
+                Raim::<32, f64>::new().process(&recon_cfg, &e1),
+                Raim::<32, f32>::new().process(&recon_cfg, &e1)
+            );
+        }
         if trial % 3 == 0 {
             out += &format!(
                 "{:?}\n{:?}\n",
