@@ -302,6 +302,28 @@ pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimErro
             }
         }
     }
+    // One pass over a bitmap of the (system, PRN) pairs seen (issue 10:
+    // the pairwise comparison cost O(n^2) on every epoch); only when it
+    // finds a repeat does the pairwise search below run, so the error names
+    // the same first pair as before.
+    let mut seen = [[0u64; 4]; MAX_SYSTEMS];
+    let mut repeated = false;
+    for i in 0..n {
+        let Some(id) = epoch.id(i) else {
+            continue;
+        };
+        let (word, bit) = (usize::from(id.prn >> 6), id.prn & 63);
+        if let Some(w) = seen
+            .get_mut(id.system.index())
+            .and_then(|s| s.get_mut(word))
+        {
+            repeated |= *w & (1u64 << bit) != 0;
+            *w |= 1u64 << bit;
+        }
+    }
+    if !repeated {
+        return Ok(());
+    }
     for i in 0..n {
         for j in (i + 1)..n {
             if let (Some(a), Some(b)) = (epoch.id(i), epoch.id(j)) {
@@ -324,6 +346,63 @@ mod tests {
     use super::*;
 
     const G1: SatId = SatId::new(System::Gps, 1);
+
+    /// The duplicate check (a bitmap pass, then the pairwise search only on
+    /// a repeat) names the lexicographically first pair (i, j), like the
+    /// pairwise search alone: checked against a brute force on 3,000
+    /// random id lists (n = 0..20, few distinct ids so repeats are common,
+    /// PRNs 0 and 255 included), e.g. A B B A gives (0, 3), not (1, 2).
+    #[test]
+    fn duplicates_are_named_by_the_first_pair() {
+        extern crate std;
+        use std::vec::Vec;
+        let mut rng = crate::testutil::Rng::new(7);
+        let prns = [0u8, 1, 63, 64, 200, 255];
+        let mut errors = 0;
+        for trial in 0..3000 {
+            let n = trial % 21;
+            let sats: Vec<LinearObservation> = (0..n)
+                .map(|_| {
+                    let sys = System::ALL[(rng.uniform() * 2.0) as usize];
+                    let prn = prns[(rng.uniform() * (2.0 + (trial % 5) as f64)) as usize];
+                    LinearObservation::from_az_el(SatId::new(sys, prn), 0.3, 0.7, 0.0)
+                })
+                .collect();
+            let mut expected = Ok(());
+            'outer: for i in 0..n {
+                for j in i + 1..n {
+                    if sats[i].id == sats[j].id {
+                        expected = Err(RaimError::DuplicateSatellite {
+                            system: sats[i].id.system,
+                            prn: sats[i].id.prn,
+                            first: i,
+                            second: j,
+                        });
+                        break 'outer;
+                    }
+                }
+            }
+            errors += usize::from(expected.is_err());
+            assert_eq!(
+                validate::<32>(&Epoch::linear(0.0, &sats)),
+                expected,
+                "{trial}"
+            );
+        }
+        assert!(errors > 1000, "{errors}");
+        let id = |prn| SatId::new(System::Gps, prn);
+        let abba: Vec<LinearObservation> = [1, 2, 2, 1]
+            .map(|p| LinearObservation::from_az_el(id(p), 0.3, 0.7, 0.0))
+            .to_vec();
+        assert!(matches!(
+            validate::<32>(&Epoch::linear(0.0, &abba)),
+            Err(RaimError::DuplicateSatellite {
+                first: 0,
+                second: 3,
+                ..
+            })
+        ));
+    }
 
     #[test]
     fn elevation_outside_plus_minus_90_deg_is_out_of_range() {

@@ -259,15 +259,42 @@ pub fn solve_from<const N: usize, T: Real>(
 // The helpers below are kept out of line so that their large locals
 // (model buffers of N rows) occupy the stack one call at a time.
 
-/// The elevation and sigma of the epoch satellite `index` as a sibling
-/// solution of the same epoch has them (same line of sight, same model).
-fn sibling_model<const N: usize, T: Real>(
-    sibling: Option<&Solution<N, T>>,
-    index: usize,
-) -> Option<(f64, f64)> {
-    let s = sibling?;
-    let row = s.row_of(index)?;
-    Some((*s.elevation_rad.get(row)?, *s.sigma_m.get(row)?))
+/// The elevation and sigma of epoch satellites as a sibling solution of
+/// the same epoch has them (same line of sight, same model), for indices
+/// asked in increasing order: a cursor over the sibling's rows, which
+/// `Builder` fills in increasing epoch order, so a subset's lookups cost
+/// O(n) in all instead of a search per row (issue 10). A row the cursor
+/// does not find where expected is searched for in full, so the answer
+/// never depends on that order.
+struct SiblingModel<'a, const N: usize, T: Real> {
+    sibling: Option<&'a Solution<N, T>>,
+    next_row: usize,
+}
+
+impl<'a, const N: usize, T: Real> SiblingModel<'a, N, T> {
+    fn new(sibling: Option<&'a Solution<N, T>>) -> Self {
+        SiblingModel {
+            sibling,
+            next_row: 0,
+        }
+    }
+
+    /// The sibling's (elevation, sigma) of the epoch satellite `index`.
+    fn get(&mut self, index: usize) -> Option<(f64, f64)> {
+        let s = self.sibling?;
+        let rows = s.rows();
+        let mut row = self.next_row;
+        while row < rows && s.source.get(row).is_some_and(|&src| src < index) {
+            row += 1;
+        }
+        let row = if row < rows && s.source.get(row) == Some(&index) {
+            row
+        } else {
+            s.row_of(index)?
+        };
+        self.next_row = row + 1;
+        Some((*s.elevation_rad.get(row)?, *s.sigma_m.get(row)?))
+    }
 }
 
 /// The linearised form: one least-squares solve at the given point.
@@ -285,6 +312,7 @@ fn solve_linear<const N: usize, T: Real>(
             .filter(|(_, m)| **m)
             .map(|(s, _)| s.id.system),
     );
+    let mut sibling_model = SiblingModel::new(sibling);
     for (i, s) in sats
         .iter()
         .enumerate()
@@ -297,7 +325,7 @@ fn solve_linear<const N: usize, T: Real>(
         let u = [l[0] / norm, l[1] / norm, l[2] / norm];
         // The elevation and sigma depend on the line of sight alone, so a
         // sibling's are bit for bit what would be computed here.
-        let (el, sigma) = match sibling_model(sibling, i) {
+        let (el, sigma) = match sibling_model.get(i) {
             Some(v) => v,
             None => {
                 let el = crate::frames::elevation(u);
@@ -451,12 +479,9 @@ fn gauss_newton<const N: usize, T: Real>(
             lin = s.linearisation;
             if lin.is_some() {
                 cached = true;
+                let mut sibling_model = SiblingModel::new(Some(s));
                 for (k, (i, _)) in selected().enumerate() {
-                    match (
-                        sibling_model(Some(s), i),
-                        b.el.get_mut(k),
-                        b.sigma.get_mut(k),
-                    ) {
+                    match (sibling_model.get(i), b.el.get_mut(k), b.sigma.get_mut(k)) {
                         (Some((el, sigma)), Some(e), Some(g)) => {
                             *e = el;
                             *g = sigma;

@@ -92,11 +92,11 @@ impl<const N: usize, T: Real> Householder<N, T> {
                     pivot: 0.0,
                 });
             };
-            let full_norm = norm(col.iter().take(n));
+            let head_norm = norm(col.iter().take(k));
             let Some(tail) = col.get_mut(k..n) else {
                 return Err(RaimError::TooFewSatellites { have: n, need: m });
             };
-            let (alpha, ok) = make_reflector(tail, full_norm);
+            let (alpha, full_norm, ok) = make_reflector(tail, head_norm);
             if !ok {
                 return Err(RaimError::RankDeficient {
                     column: k,
@@ -153,6 +153,28 @@ impl<const N: usize, T: Real> Householder<N, T> {
                 .copied()
                 .unwrap_or(T::zero())
         }
+    }
+
+    /// The first `M` columns of T1, dense: `(t, d)` with `t[j][i]` =
+    /// T1[i][j] for i < j (zero elsewhere) and `d` its diagonal. For
+    /// the fixed-size row loops of [`crate::linalg::parity`] (issue 10),
+    /// which perform [`Self::solve_tt`]'s and [`Self::solve_t`]'s
+    /// operations in the same order on these copies.
+    pub(crate) fn triangle<const M: usize>(&self) -> ([[T; M]; M], [T; M]) {
+        let mut t = [[T::zero(); M]; M];
+        let mut d = [T::zero(); M];
+        for (j, ((dst, src), (dj, sj))) in t
+            .iter_mut()
+            .zip(self.a.iter())
+            .zip(d.iter_mut().zip(self.diag.iter()))
+            .enumerate()
+        {
+            for (x, y) in dst.iter_mut().zip(src.iter()).take(j) {
+                *x = *y;
+            }
+            *dj = *sj;
+        }
+        (t, d)
     }
 
     /// Solve T1 x = y for the first m entries (column-oriented back
@@ -223,40 +245,61 @@ fn norm<'a, T: Real>(it: impl Iterator<Item = &'a T>) -> T {
     scale * ssq.sqrt()
 }
 
+/// sqrt(a^2 + b^2) for a, b >= 0 without overflow: the larger times
+/// sqrt(1 + (smaller / larger)^2); exactly `b` when `a` is zero.
+fn hypot_nonneg<T: Real>(a: T, b: T) -> T {
+    let (big, small) = if a > b { (a, b) } else { (b, a) };
+    if !(big > T::zero()) || !(small > T::zero()) {
+        return big;
+    }
+    let q = small / big;
+    big * (T::one() + q * q).sqrt()
+}
+
 /// Turn `x` (rows k..n of a column) into the unit Householder vector v with
-/// (I - 2 v v^T) x = alpha e1. Returns alpha and whether the pivot is usable.
-fn make_reflector<T: Real>(x: &mut [T], full_norm: T) -> (T, bool) {
+/// (I - 2 v v^T) x = alpha e1. `head_norm` is the norm of the column's rows
+/// 0..k (the entries of T1 already formed), so the column's full norm, the
+/// scale of the rank test, is hypot(head_norm, sigma): the reflections
+/// before k are orthogonal and leave it unchanged (issue 10: this replaces
+/// a third pass over rows 0..n per column; it is the same as that pass up
+/// to rounding, and enters only the rank test at [`RANK_TOLERANCE`]).
+/// Returns alpha, the column's norm and whether the pivot is usable.
+fn make_reflector<T: Real>(x: &mut [T], head_norm: T) -> (T, T, bool) {
     let sigma = norm(x.iter());
+    let full_norm = hypot_nonneg(head_norm, sigma);
     let Some(x0) = x.first_mut() else {
-        return (T::zero(), false);
+        return (T::zero(), full_norm, false);
     };
     let alpha = if *x0 >= T::zero() { -sigma } else { sigma };
     if !(sigma > rank_tolerance::<T>() * full_norm) || !sigma.is_finite() {
-        return (sigma, false);
+        return (sigma, full_norm, false);
     }
     // v = x - alpha e1, then normalise.
     *x0 -= alpha;
     let vnorm = norm(x.iter());
     if !(vnorm > T::zero()) {
-        return (sigma, false);
+        return (sigma, full_norm, false);
     }
     for v in x.iter_mut() {
         *v /= vnorm;
     }
-    (alpha, true)
+    (alpha, full_norm, true)
 }
 
 /// y[k..n] <- (I - 2 v v^T) y[k..n] with v stored in col[k..n].
 #[inline(always)]
 fn reflect<const N: usize, T: Real>(col: &[T; N], y: &mut [T; N], k: usize, n: usize) {
-    let d = col
+    // On the slices k..n directly (issue 10: `take(n).skip(k)` over the
+    // whole buffer cost a third more instructions); the same operations.
+    let (Some(v), Some(w)) = (col.get(k..n), y.get_mut(k..n)) else {
+        return;
+    };
+    let d = v
         .iter()
-        .zip(y.iter())
-        .take(n)
-        .skip(k)
+        .zip(w.iter())
         .fold(T::zero(), |acc, (v, w)| acc + *v * *w);
     let f = d + d;
-    for (v, w) in col.iter().zip(y.iter_mut()).take(n).skip(k) {
+    for (v, w) in v.iter().zip(w.iter_mut()) {
         *w -= f * *v;
     }
 }
@@ -294,6 +337,27 @@ mod tests {
         for i in 0..4 {
             assert!((v[i] - orig[i]).abs() < 1e-12);
         }
+    }
+
+    /// The rank test's column norm from the head and the pivot:
+    /// hypot(a, b) against the direct sqrt(a^2 + b^2) (1 ulp-level, f64),
+    /// exactly b for a = 0, and no overflow where a^2 would overflow.
+    #[test]
+    fn column_norm_from_head_and_pivot() {
+        const REL_TOL: f64 = 4.0 * f64::EPSILON;
+        let mut rng = crate::testutil::Rng::new(3);
+        for _ in 0..1000 {
+            let (a, b) = (rng.uniform() * 10.0, rng.uniform() * 1e-3);
+            let direct = (a * a + b * b).sqrt();
+            assert!((hypot_nonneg(a, b) - direct).abs() <= REL_TOL * direct);
+            assert!((hypot_nonneg(b, a) - direct).abs() <= REL_TOL * direct);
+            assert_eq!(hypot_nonneg(0.0, b), b);
+        }
+        assert_eq!(hypot_nonneg(0.0f64, 0.0), 0.0);
+        let big = hypot_nonneg(3e200f64, 4e200);
+        assert!((big - 5e200).abs() <= REL_TOL * 5e200, "{big}");
+        let big32 = hypot_nonneg(3e30f32, 4e30);
+        assert!((big32 / 5e30 - 1.0).abs() < 1e-6, "{big32}");
     }
 
     #[test]

@@ -11,7 +11,7 @@ use crate::error::RaimError;
 use crate::measurement::{Epoch, SatId};
 use crate::real::{Real, Stat};
 use crate::snapshot::detection::{TestStatistic, Thresholds};
-use crate::snapshot::lraim::rank;
+use crate::snapshot::lraim::{rank, Candidate};
 use crate::solve::{solve_from, Solution, Start};
 
 /// Most exclusions reported per epoch (the capacity of the list; the
@@ -70,6 +70,17 @@ pub struct FdeOutcome<const N: usize, T: Real = Stat> {
     pub identified: Option<SatId>,
     /// Set when the final test still fails.
     pub cause: Option<AlarmCause>,
+    /// Scratch, not state: the subset solution FDE works on (accepted ones
+    /// are swapped into `solution`). Kept here, beside the solution in
+    /// force, so that an epoch neither zero-fills nor carries a
+    /// solution-sized value on its stack (issue 10). Every solve writes
+    /// every field it is later read through, so nothing in it depends on
+    /// an earlier epoch.
+    pub(crate) scratch: Solution<N, T>,
+    /// The rule's best candidate on `solution` when the caller has ranked
+    /// it already (the snapshot engine, from the per-satellite output it
+    /// scores anyway: issue 10); taken, and cleared, by [`run`].
+    pub(crate) first_best: Option<Option<Candidate<T>>>,
 }
 
 /// Run the chi-square test on a solution. The statistic D^2, computed in
@@ -330,14 +341,18 @@ fn exclude_pair<const N: usize, T: Real>(
 }
 
 impl<const N: usize, T: Real> FdeOutcome<N, T> {
-    /// Back to [`FdeOutcome::empty`], in place (an outcome kept in an
-    /// engine's state and reused every epoch, issue 10).
+    /// Back to [`FdeOutcome::empty`]'s verdict, in place (an outcome kept
+    /// in an engine's state and reused every epoch, issue 10). The two
+    /// solutions' storage is kept, not zero-filled (issue 10: that was a
+    /// fifth of a clean linearised epoch's instructions): the epoch's solve
+    /// overwrites every field of the solution it fills (`solve::solve_from`;
+    /// test `a_reused_engine_equals_a_fresh_one`).
     pub fn reset(&mut self) {
-        self.solution = Solution::empty();
         self.test = TestStatistic::default();
         self.exclusions.clear();
         self.identified = None;
         self.cause = None;
+        self.first_best = None;
     }
 
     /// An empty outcome whose `solution` is to be filled by
@@ -349,6 +364,8 @@ impl<const N: usize, T: Real> FdeOutcome<N, T> {
             exclusions: heapless::Vec::new(),
             identified: None,
             cause: None,
+            scratch: Solution::empty(),
+            first_best: None,
         }
     }
 }
@@ -373,11 +390,15 @@ pub fn run<const N: usize, T: Real>(
     out.identified = None;
     out.cause = None;
     let max_excl = usize::from(cfg.max_exclusions).min(MAX_EXCLUSIONS);
-    // The one subset solution FDE works on; accepted ones are swapped in.
-    let mut scratch = Solution::<N, T>::empty();
+    // The one subset solution FDE works on (the outcome's scratch);
+    // accepted ones are swapped in.
+    let mut first_best = out.first_best.take();
     while test_now.alarm() {
         let current = &out.solution;
-        let (best, _) = rank(&current.parity, cfg.rule, cfg.min_s_ii);
+        let best = match first_best.take() {
+            Some(best) => best,
+            None => rank(&current.parity, cfg.rule, cfg.min_s_ii).0,
+        };
         let id_of = |row: usize| current.ids.get(row).copied();
         let src_of = |row: usize| current.source.get(row).copied();
         if out.identified.is_none() {
@@ -414,14 +435,14 @@ pub fn run<const N: usize, T: Real>(
                     &mask,
                     current,
                     test_now,
-                    &mut scratch,
+                    &mut out.scratch,
                 )? {
                     PairOutcome::Excluded(after, records) => {
                         for r in records {
                             // Capacity MAX_EXCLUSIONS >= 2.
                             let _ = out.exclusions.push(r);
                         }
-                        core::mem::swap(&mut out.solution, &mut scratch);
+                        core::mem::swap(&mut out.solution, &mut out.scratch);
                         out.test = after;
                         break;
                     }
@@ -439,7 +460,7 @@ pub fn run<const N: usize, T: Real>(
             epoch,
             &next_mask,
             Start::Sibling(current),
-            &mut scratch,
+            &mut out.scratch,
         ) {
             Ok(()) => {}
             Err(RaimError::RankDeficient { .. }) | Err(RaimError::TooFewSatellites { .. }) => {
@@ -448,7 +469,7 @@ pub fn run<const N: usize, T: Real>(
             }
             Err(e) => return Err(e),
         };
-        let after = test(cfg, thresholds, &scratch)?;
+        let after = test(cfg, thresholds, &out.scratch)?;
         if !after.alarm() && cfg.require_unique_exclusion {
             // Excluding row j lowers the weighted SSE by exactly w_j^2
             // (r_j^2 / S_jj) when the state keeps its dimension, so every
@@ -482,7 +503,7 @@ pub fn run<const N: usize, T: Real>(
             break;
         }
         mask = next_mask;
-        core::mem::swap(&mut out.solution, &mut scratch);
+        core::mem::swap(&mut out.solution, &mut out.scratch);
         out.test = after;
         test_now = after;
     }

@@ -65,26 +65,49 @@ pub fn rank_rows<T: Real>(
     s_ii: &[T],
     min_s_ii: T,
 ) -> (Option<Candidate<T>>, Option<Candidate<T>>) {
-    let mut best: Option<Candidate<T>> = None;
-    let mut second: Option<Candidate<T>> = None;
+    let mut ranking = Ranking::new();
     for (row, (&r, &s)) in residuals.iter().zip(s_ii).enumerate() {
         let Some(mut c) = score(rule, r, s, min_s_ii) else {
             continue;
         };
         c.row = row;
-        match best {
+        ranking.offer(c);
+    }
+    (ranking.best, ranking.second)
+}
+
+/// The running best and runner-up of a ranking, fed candidates in row
+/// order: [`rank_rows`]'s update, shared with the per-satellite output,
+/// which scores every row anyway (issue 10: FDE's first ranking, on the
+/// all-in-view solution, is taken from there instead of scoring again).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Ranking<T: Real> {
+    pub(crate) best: Option<Candidate<T>>,
+    pub(crate) second: Option<Candidate<T>>,
+}
+
+impl<T: Real> Ranking<T> {
+    pub(crate) fn new() -> Self {
+        Ranking {
+            best: None,
+            second: None,
+        }
+    }
+
+    /// Offer the next row's candidate.
+    pub(crate) fn offer(&mut self, c: Candidate<T>) {
+        match self.best {
             Some(b) if !outranks(c.score, b.score) => {
-                if second.is_none_or(|s2| outranks(c.score, s2.score)) {
-                    second = Some(c);
+                if self.second.is_none_or(|s2| outranks(c.score, s2.score)) {
+                    self.second = Some(c);
                 }
             }
             _ => {
-                second = best;
-                best = Some(c);
+                self.second = self.best;
+                self.best = Some(c);
             }
         }
     }
-    (best, second)
 }
 
 /// Whether score `a` ranks strictly above `b`. A NaN score (a satellite

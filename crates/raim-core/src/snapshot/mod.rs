@@ -114,9 +114,16 @@ impl<const N: usize, T: Real> Snapshot<N, T> {
         let start = self.start(epoch.time_s);
         solve_from(cfg, epoch, &mask, start, &mut outcome.solution)?;
         let initial_test = fde::test(cfg, &mut self.thresholds, &outcome.solution)?;
-        per_satellite(cfg, &outcome.solution, &mut out.satellites);
+        // FDE ranks the all-in-view solution only if its test fails.
+        let best = per_satellite(
+            cfg,
+            &outcome.solution,
+            &mut out.satellites,
+            initial_test.alarm(),
+        );
         let multifault = match cfg.fde_method {
             FdeMethod::Sequential => {
+                outcome.first_best = Some(best);
                 fde::run(cfg, &mut self.thresholds, epoch, outcome)?;
                 None
             }
@@ -186,12 +193,15 @@ impl<const N: usize, T: Real> Snapshot<N, T> {
 }
 
 /// The per-satellite output, computed in `T` and widened to f64, written
-/// into `out` (cleared first).
+/// into `out` (cleared first). With `rank`, returns the rule's best
+/// candidate, as [`lraim::rank`] on `sol` would (the same scores, offered
+/// in row order); without, `None`.
 pub(crate) fn per_satellite<const N: usize, T: Real>(
     cfg: &Config,
     sol: &Solution<N, T>,
     out: &mut heapless::Vec<SatelliteResult, N>,
-) {
+    rank: bool,
+) -> Option<lraim::Candidate<T>> {
     out.clear();
     let p = &sol.parity;
     let min_s_ii = T::of(cfg.min_s_ii);
@@ -202,8 +212,13 @@ pub(crate) fn per_satellite<const N: usize, T: Real>(
         .zip(sol.ids.iter())
         .zip(sol.sigma_m.iter())
         .zip(sol.elevation_rad.iter());
-    for ((((&r, &s), &id), &sigma), &el) in rows {
+    let mut ranking = lraim::Ranking::new();
+    for (row, ((((&r, &s), &id), &sigma), &el)) in rows.enumerate() {
         let c = lraim::score(cfg.rule, r, s, min_s_ii);
+        if let (Some(mut c), true) = (c, rank) {
+            c.row = row;
+            ranking.offer(c);
+        }
         let (w, bias) = if s > T::zero() {
             ((r / s.sqrt()).to_f64(), (r / s).to_f64() * sigma)
         } else {
@@ -223,6 +238,7 @@ pub(crate) fn per_satellite<const N: usize, T: Real>(
             identifiable: c.is_some(),
         });
     }
+    ranking.best
 }
 
 #[cfg(test)]
