@@ -1,16 +1,28 @@
 //! ARAIM exclusion (issue 12), after a failed solution-separation test.
 //!
-//! Candidates: the single-event modes (each satellite, each
-//! constellation) whose subset is monitorable. Each candidate subset is
-//! processed as an epoch of its own (its own fault modes, K_fa,
+//! Candidates, in two stages: first the single-event modes (each
+//! satellite, each constellation); then, only when none of those is
+//! consistent, the multi-event modes of the all-in-view list (satellite
+//! pairs, satellite + constellation, ...: every monitored mode with two or
+//! more events). Only monitorable modes are candidates. Each candidate
+//! subset is processed as an epoch of its own (its own fault modes, K_fa,
 //! thresholds), and it is *consistent* when every one of its own tests
-//! passes. Decision:
-//! - no consistent candidate: alarm (`NoCandidate`);
+//! passes. Decision, on the consistent candidates of the stage that found
+//! any:
+//! - none in either stage: alarm (`NoCandidate`);
 //! - the consistent candidates all contain one of them (e.g. satellite G5
-//!   and the GPS constellation, which contains G5): exclude that smallest
-//!   one, since every other consistent explanation removes it too;
+//!   and the GPS constellation, which contains G5; or the pair {G5, E11}
+//!   and {G5} + Galileo): exclude that smallest one, since every other
+//!   consistent explanation removes it too;
 //! - otherwise two consistent candidates that do not nest: the data
 //!   cannot tell them apart, alarm (`Ambiguous`), never a silent pick.
+//!
+//! Why stages and not all candidates at once: a single fault leaves every
+//! pair that holds the faulty satellite consistent too (they nest), but
+//! also, by chance, a pair that does not (they do not nest: a needless
+//! alarm); and the multi-event search costs about the square of the
+//! single-event one. A multi-event exclusion is looked for only when no
+//! single event explains the data.
 //!
 //! After an exclusion of E, the protection levels are those of the
 //! remaining subset with its fault modes re-enumerated on it (its own
@@ -22,8 +34,10 @@
 //!     + sum_{k in modes(E)} p_k Q((PL - T_k,q^(E) - b_q^(E,k)) / sigma_q^(E,k))
 //!   = (1 / N_ex) PHMI_q (1 - P_unmon^(E) / (PHMI_VERT + PHMI_HOR)),
 //!
-//! N_ex the number of exclusions the FDE could have made (the monitorable
-//! single-event modes of the all-in-view list, each a candidate). Which
+//! N_ex the number of exclusions the FDE could have made: the monitorable
+//! modes of the all-in-view list, single-event and multi-event alike (each
+//! a candidate of one of the stages; with no multi-event modes, as at
+//! P_sat 1e-5, the single-event ones only). Which
 //! candidate passes is decided by the noise as much as by the fault: a
 //! wrong exclusion is one of these outcomes. Each outcome gets 1 / N_ex of
 //! the budget, so their union, P(HMI, some exclusion) <= sum_E P(HMI, E
@@ -33,17 +47,14 @@
 //! sum of p_j over the excluded satellites' states (the re-enumeration).
 
 use super::{Araim, AraimConfig, AraimError, AraimSat, Ism, ModeStatus};
-use crate::measurement::MAX_SYSTEMS;
 use crate::real::Real;
-
-/// Single-event candidates: 64 satellites + the constellations.
-const MAX_CANDIDATES: usize = super::MAX_SATS + MAX_SYSTEMS;
 
 /// Why an exclusion was not made.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum FdeAlarm {
-    /// No single-event subset passes all its own tests.
+    /// No candidate subset (single- or multi-event) passes all its own
+    /// tests.
     NoCandidate,
     /// Two consistent candidates (mode indices) that do not nest.
     Ambiguous { first: usize, second: usize },
@@ -80,6 +91,74 @@ fn removed_sats<T: Real>(sats: &[AraimSat<T>], ev_sats: u64, consts: u8) -> u64 
     m
 }
 
+/// The number of events (satellites and constellations) of a mode.
+fn events_of<T>(mode: &super::FaultMode<T>) -> u32 {
+    mode.events.sats.count_ones() + mode.events.consts.count_ones()
+}
+
+/// The two stages of the candidate search.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Stage {
+    Single,
+    Multi,
+}
+
+/// The consistent candidates of one stage, folded as they come (no list:
+/// a stage may hold up to K of them). A candidate contained in all the
+/// others is the one whose removed set equals their intersection.
+#[derive(Default)]
+struct Found {
+    /// The first consistent candidate (mode index, removed satellites).
+    first: Option<(usize, u64)>,
+    /// The second one, and the first that does not nest with `first`.
+    second: Option<usize>,
+    clash: Option<usize>,
+    /// The intersection of all the removed sets.
+    meet: u64,
+    /// The candidate with the fewest removed satellites (the first such).
+    smallest: Option<(usize, u64)>,
+}
+
+impl Found {
+    fn add(&mut self, k: usize, removed: u64) {
+        match self.first {
+            None => {
+                self.first = Some((k, removed));
+                self.meet = removed;
+            }
+            Some((_, c)) => {
+                if self.second.is_none() {
+                    self.second = Some(k);
+                }
+                if self.clash.is_none() && removed & c != c && removed & c != removed {
+                    self.clash = Some(k);
+                }
+                self.meet &= removed;
+            }
+        }
+        if self
+            .smallest
+            .is_none_or(|(_, s)| removed.count_ones() < s.count_ones())
+        {
+            self.smallest = Some((k, removed));
+        }
+    }
+
+    /// The candidate to exclude, or the alarm.
+    fn decide(&self) -> Result<(usize, u64), FdeAlarm> {
+        let Some((k0, _)) = self.first else {
+            return Err(FdeAlarm::NoCandidate);
+        };
+        match self.smallest {
+            Some((k, removed)) if removed == self.meet => Ok((k, removed)),
+            _ => Err(FdeAlarm::Ambiguous {
+                first: k0,
+                second: self.clash.or(self.second).unwrap_or(k0),
+            }),
+        }
+    }
+}
+
 impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
     /// The output of the last `process`.
     pub fn output(&self) -> &super::AraimOutput<T, K> {
@@ -101,46 +180,40 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             return Ok(FdeDecision::NoFault);
         }
         let mut subset = [AraimSat::<T>::default(); N];
-        // (mode index, removed satellite mask) of the consistent candidates.
-        let mut found: heapless::Vec<(usize, u64), MAX_CANDIDATES> = heapless::Vec::new();
-        let mut n_ex = 0usize;
-        for (k, mode) in self.out.modes.iter().enumerate() {
-            let ev = mode.events;
-            if mode.status != ModeStatus::Monitored
-                || ev.sats.count_ones() + ev.consts.count_ones() != 1
-            {
-                continue;
-            }
-            n_ex += 1;
-            let removed = removed_sats(sats, ev.sats, ev.consts);
-            if self.consistent(cfg, ism, sats, removed, &mut subset, scratch, None)? {
-                // Single-event modes number at most 64 + 5: never full.
-                let _ = found.push((k, removed));
+        // N_ex: every candidate the search could return, single-event and
+        // multi-event alike (module doc, "Exclusion risk").
+        let (mut n_single, mut n_multi) = (0usize, 0usize);
+        for mode in self.out.modes.iter() {
+            if mode.status == ModeStatus::Monitored {
+                match events_of(mode) {
+                    1 => n_single += 1,
+                    _ => n_multi += 1,
+                }
             }
         }
-        let Some(&(k0, _)) = found.first() else {
-            return Ok(FdeDecision::Alarm(FdeAlarm::NoCandidate));
-        };
-        // The smallest candidate: contained in every other one.
-        let minimal = found
-            .iter()
-            .find(|(_, c)| found.iter().all(|(_, o)| o & c == *c))
-            .copied();
-        let Some((k, removed)) = minimal else {
-            let second = found
-                .iter()
-                .skip(1)
-                .find(|(_, o)| {
-                    let c = found.first().map(|f| f.1).unwrap_or(0);
-                    o & c != c && o & c != *o
-                })
-                .or(found.get(1))
-                .map(|f| f.0)
-                .unwrap_or(k0);
-            return Ok(FdeDecision::Alarm(FdeAlarm::Ambiguous {
-                first: k0,
-                second,
-            }));
+        let n_ex = n_single + n_multi;
+        // Stage 1, the single-event candidates; stage 2, only when no
+        // single event explains the data, the multi-event ones.
+        let mut found = Found::default();
+        for stage in [Stage::Single, Stage::Multi] {
+            for (k, mode) in self.out.modes.iter().enumerate() {
+                let ev = mode.events;
+                let single = events_of(mode) == 1;
+                if mode.status != ModeStatus::Monitored || single != (stage == Stage::Single) {
+                    continue;
+                }
+                let removed = removed_sats(sats, ev.sats, ev.consts);
+                if self.consistent(cfg, ism, sats, removed, &mut subset, scratch, None)? {
+                    found.add(k, removed);
+                }
+            }
+            if found.first.is_some() {
+                break;
+            }
+        }
+        let (k, removed) = match found.decide() {
+            Ok(c) => c,
+            Err(alarm) => return Ok(FdeDecision::Alarm(alarm)),
         };
         // Leave the chosen subset's output in the scratch engine, its PLs
         // with the exclusion risk: 1 / N_ex of the budget (module doc).
