@@ -22,7 +22,13 @@ use super::Server;
 use crate::araim_msg::{AraimAnswer, AraimCommand, AraimWireError, IsmFrame, IsmFrameRef, IsmSat};
 use crate::auth::{AuthKey, Tag};
 use crate::error::WireError;
-use crate::message::{LinearEpoch, ResponseBody};
+use crate::message::{LinearEpoch, RangeEpoch, ResponseBody};
+
+/// An ARAIM epoch as it arrived: linearised, or pseudoranges.
+enum Input<'a> {
+    Linear(&'a LinearEpoch),
+    Ranges(&'a RangeEpoch),
+}
 use crate::CAPACITY;
 
 /// Fault modes the device engine holds (per engine; the FDE scratch has as
@@ -312,7 +318,8 @@ impl Server {
                     }
                 }
             },
-            AraimCommand::Epoch(e) => self.araim_epoch(&e, platform),
+            AraimCommand::Epoch(e) => self.araim_epoch(&Input::Linear(&e), platform),
+            AraimCommand::Ranges(e) => self.araim_epoch(&Input::Ranges(&e), platform),
         };
         match answer {
             Ok(a) => ResponseBody::Araim(a),
@@ -334,7 +341,7 @@ impl Server {
     /// integrity-alarm output like a snapshot epoch's (`Platform::on_epoch`).
     fn araim_epoch<P: super::Platform>(
         &mut self,
-        epoch: &LinearEpoch,
+        epoch: &Input<'_>,
         platform: &mut P,
     ) -> Result<AraimAnswer, WireError> {
         let r = self.araim_epoch_answer(epoch, platform);
@@ -347,7 +354,7 @@ impl Server {
 
     fn araim_epoch_answer<P: super::Platform>(
         &mut self,
-        epoch: &LinearEpoch,
+        epoch: &Input<'_>,
         platform: &mut P,
     ) -> Result<AraimAnswer, WireError> {
         #[cfg(feature = "araim")]
@@ -355,15 +362,22 @@ impl Server {
             let Some(ism) = self.araim.ism.as_ref() else {
                 return Err(WireError::Araim(AraimWireError::NoIsm));
             };
-            if epoch.sats.overflowed() {
+            let (overflowed, declared) = match epoch {
+                Input::Linear(e) => (e.sats.overflowed(), e.sats.declared),
+                Input::Ranges(e) => (e.sats.overflowed(), e.sats.declared),
+            };
+            if overflowed {
                 return Err(WireError::TooManySatellites {
-                    have: epoch.sats.declared,
+                    have: declared,
                     capacity: CAPACITY as u32,
                 });
             }
             self.status.epochs = self.status.epochs.wrapping_add(1);
             let t0 = platform.now();
-            let r = self.araim.engine.run(ism, epoch);
+            let r = match epoch {
+                Input::Linear(e) => self.araim.engine.run(ism, e),
+                Input::Ranges(e) => self.araim.engine.run_ranges(&self.config, ism, e),
+            };
             let t1 = platform.now();
             self.status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
             r.map(AraimAnswer::Result)
@@ -386,9 +400,12 @@ mod engine {
     use super::{AraimWireError, IsmFrame, MAX_FDE_MODES, MAX_MODES};
     use crate::araim_msg::{AraimSummary, WireAraimResult, WireFde};
     use crate::error::WireError;
-    use crate::message::LinearEpoch;
+    use crate::message::{LinearEpoch, RangeEpoch};
     use crate::CAPACITY;
+    use raim_core::frames::{enu_rotation, rotate, unrotate};
     use raim_core::measurement::MAX_SYSTEMS;
+    use raim_core::solve::{solve_into, Solution};
+    use raim_core::{Config, Epoch, LinearObservation};
 
     /// The unit's ARAIM precision, on every build: `f32`, the M4F's FPU
     /// (docs/CORE.md "Precision": subset solutions and PLs are f32 on the
@@ -399,11 +416,15 @@ mod engine {
 
     type Engine = Araim<AraimT, CAPACITY, MAX_MODES>;
 
-    /// The engine, the FDE's scratch engine and the epoch's satellites.
+    /// The engine, the FDE's scratch engine, the epoch's satellites and,
+    /// for a pseudorange epoch, its Gauss-Newton solution and linearised
+    /// form (static, so the main loop's stack carries none of them).
     pub(super) struct Engines {
         main: Engine,
         scratch: Engine,
         sats: [AraimSat<AraimT>; CAPACITY],
+        solution: Solution<CAPACITY, AraimT>,
+        lin: [LinearObservation; CAPACITY],
     }
 
     impl Engines {
@@ -412,137 +433,252 @@ mod engine {
                 main: Engine::new(),
                 scratch: Engine::new(),
                 sats: [AraimSat::default(); CAPACITY],
+                solution: Solution::empty(),
+                lin: [LinearObservation::default(); CAPACITY],
             }
         }
 
-        /// One epoch: the satellites from the epoch and the ISM, ARAIM all
-        /// in view, FDE after a detection.
+        /// One linearised epoch: the satellites from the epoch and the ISM,
+        /// ARAIM all in view, FDE after a detection.
         pub(super) fn run(
             &mut self,
             ism: &IsmFrame,
             epoch: &LinearEpoch,
         ) -> Result<WireAraimResult, WireError> {
-            let mut p_const = [None; MAX_SYSTEMS];
+            let Engines {
+                main, scratch, sats, ..
+            } = self;
+            evaluate(main, scratch, sats, ism, epoch.time_s, &epoch.sats.items).map(|r| r.0)
+        }
+
+        /// One pseudorange epoch (`AraimCommand::Ranges`): Gauss-Newton all
+        /// in view with the snapshot configuration in force (`cfg`: its
+        /// iteration limit, convergence and, as weights, its sigma model;
+        /// ranges and residuals in f64, the steps in `AraimT`), then the
+        /// linearised epoch at that solution x0: per satellite the unit line
+        /// of sight in ENU at x0 and the residual
+        /// `pseudorange - |sat - x0| - clock(system)`, all in f64 (docs/CORE.md
+        /// "Precision"); the range model is the snapshot solver's. ARAIM and
+        /// FDE then run on it as on a linearised epoch, and the position in
+        /// force is x0 plus the ENU correction of the solution in force
+        /// (all in view, or the excluded subset's).
+        pub(super) fn run_ranges(
+            &mut self,
+            cfg: &Config,
+            ism: &IsmFrame,
+            epoch: &RangeEpoch,
+        ) -> Result<WireAraimResult, WireError> {
+            let Engines {
+                main,
+                scratch,
+                sats,
+                solution,
+                lin,
+            } = self;
+            let obs = &epoch.sats.items;
+            let mut mask = [false; CAPACITY];
+            for m in mask.iter_mut().take(obs.len()) {
+                *m = true;
+            }
+            let ep = Epoch::ranges(epoch.time_s, obs, epoch.apriori_m);
+            solve_into(cfg, &ep, &mask, solution)?;
+            let (Some(x0), Some(geo)) = (solution.position_ecef_m, solution.geodetic) else {
+                // A solution that ends off the Earth's surface has no local
+                // frame for the elevation model.
+                return Err(WireError::from(raim_core::RaimError::OutOfRange {
+                    field: "position_radius_m",
+                    value: libm::sqrt(
+                        solution
+                            .position_ecef_m
+                            .map(|p| p[0] * p[0] + p[1] * p[1] + p[2] * p[2])
+                            .unwrap_or(0.0),
+                    ),
+                    min: 5.0e6,
+                    max: f64::INFINITY,
+                }));
+            };
+            let rot = enu_rotation(&geo);
             let mut n = 0;
-            for (i, o) in epoch.sats.items.iter().enumerate() {
-                let Some(entry) = ism.sats.items.iter().find(|s| s.id == o.id) else {
-                    return Err(WireError::Araim(AraimWireError::NotInIsm {
-                        id: o.id,
+            for (o, slot) in obs.iter().zip(lin.iter_mut()) {
+                let d = [
+                    o.position_m[0] - x0[0],
+                    o.position_m[1] - x0[1],
+                    o.position_m[2] - x0[2],
+                ];
+                let range_m = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                let u = rotate(&rot, [d[0] / range_m, d[1] / range_m, d[2] / range_m]);
+                let clock_m = solution
+                    .clock_m
+                    .get(o.id.system.index())
+                    .copied()
+                    .flatten()
+                    .unwrap_or(0.0);
+                *slot = LinearObservation {
+                    id: o.id,
+                    los_enu: u,
+                    residual_m: o.pseudorange_m - range_m - clock_m,
+                    sigma_m: o.sigma_m,
+                };
+                n += 1;
+            }
+            let lin = lin.get(..n).unwrap_or(&[]);
+            let (mut result, correction) = evaluate(main, scratch, sats, ism, epoch.time_s, lin)?;
+            let shift = unrotate(&rot, correction.map(|c| c.to_f64()));
+            result.position_ecef_m = Some([x0[0] + shift[0], x0[1] + shift[1], x0[2] + shift[2]]);
+            Ok(result)
+        }
+    }
+
+    /// ARAIM all in view on the linearised satellites `obs` and the ISM,
+    /// FDE after a detection; the result and the ENU position correction
+    /// of the solution in force (the subset's after an exclusion).
+    fn evaluate(
+        main: &mut Engine,
+        scratch: &mut Engine,
+        buf: &mut [AraimSat<AraimT>; CAPACITY],
+        ism: &IsmFrame,
+        time_s: f64,
+        obs: &[LinearObservation],
+    ) -> Result<(WireAraimResult, [AraimT; 3]), WireError> {
+        let r = evaluate_result(main, scratch, buf, ism, time_s, obs)?;
+        let correction = if r.after_exclusion.is_some() {
+            scratch.output().correction_enu_m
+        } else {
+            main.output().correction_enu_m
+        };
+        Ok((r, correction))
+    }
+
+    fn evaluate_result(
+        main: &mut Engine,
+        scratch: &mut Engine,
+        buf: &mut [AraimSat<AraimT>; CAPACITY],
+        ism: &IsmFrame,
+        time_s: f64,
+        obs: &[LinearObservation],
+    ) -> Result<WireAraimResult, WireError> {
+        let mut p_const = [None; MAX_SYSTEMS];
+        let mut n = 0;
+        for (i, o) in obs.iter().enumerate() {
+            let Some(entry) = ism.sats.items.iter().find(|s| s.id == o.id) else {
+                return Err(WireError::Araim(AraimWireError::NotInIsm {
+                    id: o.id,
+                    index: u32::try_from(i).unwrap_or(u32::MAX),
+                }));
+            };
+            let j = o.id.system.index();
+            if let (Some(dst), Some(src)) = (p_const.get_mut(j), ism.p_const.get(j)) {
+                *dst = *src;
+            }
+            if let Some(s) = o.sigma_m {
+                if !(s > 0.0) || !s.is_finite() {
+                    return Err(WireError::NonPositiveSigma {
                         index: u32::try_from(i).unwrap_or(u32::MAX),
-                    }));
-                };
-                let j = o.id.system.index();
-                if let (Some(dst), Some(src)) = (p_const.get_mut(j), ism.p_const.get(j)) {
-                    *dst = *src;
-                }
-                if let Some(s) = o.sigma_m {
-                    if !(s > 0.0) || !s.is_finite() {
-                        return Err(WireError::NonPositiveSigma {
-                            index: u32::try_from(i).unwrap_or(u32::MAX),
-                            sigma_m: s,
-                        });
-                    }
-                }
-                // The ADD's G row is minus the line of sight.
-                let g = o.los_enu.map(|v| AraimT::of(-v));
-                let nominal_m2 = match o.sigma_m {
-                    // The host's own sigma of the tropo + airborne terms.
-                    Some(s) => s * s,
-                    None => nominal_variance_m2(&o.los_enu),
-                };
-                let (ura, ure) = (entry.sigma_ura_m, entry.sigma_ure_m);
-                let c_int_m2 = AraimT::of(ura * ura + nominal_m2);
-                let c_acc_m2 = AraimT::of(ure * ure + nominal_m2);
-                if let Some(slot) = self.sats.get_mut(i) {
-                    *slot = AraimSat {
-                        id: o.id,
-                        g_enu: g,
-                        c_int_m2,
-                        c_acc_m2,
-                        b_nom_m: AraimT::of(entry.b_nom_m),
-                        p_sat: entry.p_sat,
-                        residual_m: AraimT::of(o.residual_m),
-                    };
-                    n += 1;
+                        sigma_m: s,
+                    });
                 }
             }
-            let sats = self.sats.get(..n).unwrap_or(&[]);
-            let cfg = AraimConfig::from(ism.config);
-            let ism = Ism { p_const };
-            let pl_exact = ism_pl_exact(&cfg);
-            let out = self.main.process(&cfg, &ism, sats)?;
-            let all_in_view = AraimSummary::from_output(out, pl_exact);
-            // Seed 003's N* (vertical, at the PL reported), issue 13.
-            let pl_kind = if pl_exact {
-                PlOutput::Exact
+            // The ADD's G row is minus the line of sight.
+            let g = o.los_enu.map(|v| AraimT::of(-v));
+            let nominal_m2 = match o.sigma_m {
+                // The host's own sigma of the tropo + airborne terms.
+                Some(s) => s * s,
+                None => nominal_variance_m2(&o.los_enu),
+            };
+            let (ura, ure) = (entry.sigma_ura_m, entry.sigma_ure_m);
+            let c_int_m2 = AraimT::of(ura * ura + nominal_m2);
+            let c_acc_m2 = AraimT::of(ure * ure + nominal_m2);
+            if let Some(slot) = buf.get_mut(i) {
+                *slot = AraimSat {
+                    id: o.id,
+                    g_enu: g,
+                    c_int_m2,
+                    c_acc_m2,
+                    b_nom_m: AraimT::of(entry.b_nom_m),
+                    p_sat: entry.p_sat,
+                    residual_m: AraimT::of(o.residual_m),
+                };
+                n += 1;
+            }
+        }
+        let sats = buf.get(..n).unwrap_or(&[]);
+        let cfg = AraimConfig::from(ism.config);
+        let ism = Ism { p_const };
+        let pl_exact = ism_pl_exact(&cfg);
+        let out = main.process(&cfg, &ism, sats)?;
+        let all_in_view = AraimSummary::from_output(out, pl_exact);
+        // Seed 003's N* (vertical, at the PL reported), issue 13.
+        let pl_kind = if pl_exact {
+            PlOutput::Exact
+        } else {
+            PlOutput::AddBracket
+        };
+        let n_star_vertical = effective_samples(out, 2, pl_kind).ok().map(|e| e.n_star);
+        // No test was run when the modes could not be enumerated.
+        let untested = matches!(
+            out.unavailable,
+            Some(Unavailable::ModeCapacity { .. } | Unavailable::TooManyEvents { .. })
+        );
+        if untested || (!out.detection_passed && all_in_view.monitored > MAX_FDE_MODES) {
+            let (decision, fde) = if untested {
+                (Decision::Unavailable, WireFde::NotTested)
             } else {
-                PlOutput::AddBracket
+                (
+                    Decision::Alarm,
+                    WireFde::NotAttempted {
+                        modes: all_in_view.monitored,
+                    },
+                )
             };
-            let n_star_vertical = effective_samples(out, 2, pl_kind).ok().map(|e| e.n_star);
-            // No test was run when the modes could not be enumerated.
-            let untested = matches!(
-                out.unavailable,
-                Some(Unavailable::ModeCapacity { .. } | Unavailable::TooManyEvents { .. })
-            );
-            if untested || (!out.detection_passed && all_in_view.monitored > MAX_FDE_MODES) {
-                let (decision, fde) = if untested {
-                    (Decision::Unavailable, WireFde::NotTested)
-                } else {
-                    (
-                        Decision::Alarm,
-                        WireFde::NotAttempted {
-                            modes: all_in_view.monitored,
-                        },
-                    )
-                };
-                return Ok(WireAraimResult {
-                    time_s: epoch.time_s,
-                    decision,
-                    all_in_view,
-                    fde,
-                    excluded: heapless::Vec::new(),
-                    after_exclusion: None,
-                    n_star_vertical: None,
-                });
-            }
-            let (fde, after_exclusion) = if out.detection_passed {
-                (FdeDecision::NoFault, None)
-            } else {
-                let d = self.main.fde(&cfg, &ism, sats, &mut self.scratch)?;
-                let after = match d {
-                    FdeDecision::Excluded { .. } => {
-                        Some(AraimSummary::from_output(self.scratch.output(), pl_exact))
-                    }
-                    _ => None,
-                };
-                (d, after)
-            };
-            let mut excluded = heapless::Vec::new();
-            if let FdeDecision::Excluded { sats: mask, .. } = fde {
-                for (i, s) in sats.iter().enumerate() {
-                    if i < 64 && mask & (1u64 << i) != 0 {
-                        // At most CAPACITY satellites: never full.
-                        let _ = excluded.push(s.id);
-                    }
-                }
-            }
-            let decision = match (&fde, &after_exclusion) {
-                (FdeDecision::NoFault, _) if all_in_view.available() => Decision::Ok,
-                (FdeDecision::NoFault, _) => Decision::Unavailable,
-                (FdeDecision::Excluded { .. }, Some(a)) if a.available() => Decision::Excluded,
-                (FdeDecision::Excluded { .. }, _) => Decision::Unavailable,
-                (FdeDecision::Alarm(_), _) => Decision::Alarm,
-            };
-            Ok(WireAraimResult {
-                time_s: epoch.time_s,
+            return Ok(WireAraimResult {
+                time_s,
                 decision,
                 all_in_view,
-                fde: fde.into(),
-                excluded,
-                after_exclusion,
-                n_star_vertical,
-            })
+                fde,
+                excluded: heapless::Vec::new(),
+                after_exclusion: None,
+                n_star_vertical: None,
+                position_ecef_m: None,
+            });
         }
+        let (fde, after_exclusion) = if out.detection_passed {
+            (FdeDecision::NoFault, None)
+        } else {
+            let d = main.fde(&cfg, &ism, sats, scratch)?;
+            let after = match d {
+                FdeDecision::Excluded { .. } => {
+                    Some(AraimSummary::from_output(scratch.output(), pl_exact))
+                }
+                _ => None,
+            };
+            (d, after)
+        };
+        let mut excluded = heapless::Vec::new();
+        if let FdeDecision::Excluded { sats: mask, .. } = fde {
+            for (i, s) in sats.iter().enumerate() {
+                if i < 64 && mask & (1u64 << i) != 0 {
+                    // At most CAPACITY satellites: never full.
+                    let _ = excluded.push(s.id);
+                }
+            }
+        }
+        let decision = match (&fde, &after_exclusion) {
+            (FdeDecision::NoFault, _) if all_in_view.available() => Decision::Ok,
+            (FdeDecision::NoFault, _) => Decision::Unavailable,
+            (FdeDecision::Excluded { .. }, Some(a)) if a.available() => Decision::Excluded,
+            (FdeDecision::Excluded { .. }, _) => Decision::Unavailable,
+            (FdeDecision::Alarm(_), _) => Decision::Alarm,
+        };
+        Ok(WireAraimResult {
+            time_s,
+            decision,
+            all_in_view,
+            fde: fde.into(),
+            excluded,
+            after_exclusion,
+            n_star_vertical,
+            position_ecef_m: None,
+        })
     }
 
     /// The ADD's nominal variance sigma_tropo^2 + sigma_user^2 (m^2) of
