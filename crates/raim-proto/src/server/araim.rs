@@ -446,7 +446,10 @@ mod engine {
             epoch: &LinearEpoch,
         ) -> Result<WireAraimResult, WireError> {
             let Engines {
-                main, scratch, sats, ..
+                main,
+                scratch,
+                sats,
+                ..
             } = self;
             evaluate(main, scratch, sats, ism, epoch.time_s, &epoch.sats.items).map(|r| r.0)
         }
@@ -476,6 +479,30 @@ mod engine {
                 lin,
             } = self;
             let obs = &epoch.sats.items;
+            // The pseudorange inputs' checks before the solver (its own
+            // check is crate-private), typed with field and index; sigma,
+            // duplicates and the ISM are checked by `evaluate`.
+            let finite = |field: &'static str, index: usize, value: f64| {
+                if value.is_finite() {
+                    Ok(())
+                } else {
+                    Err(WireError::from(raim_core::RaimError::NotFinite {
+                        field,
+                        index,
+                        value,
+                    }))
+                }
+            };
+            finite("time_s", 0, epoch.time_s)?;
+            for v in epoch.apriori_m.iter().flatten() {
+                finite("apriori_m", 0, *v)?;
+            }
+            for (i, o) in obs.iter().enumerate() {
+                finite("pseudorange_m", i, o.pseudorange_m)?;
+                for v in o.position_m {
+                    finite("position_m", i, v)?;
+                }
+            }
             let mut mask = [false; CAPACITY];
             for m in mask.iter_mut().take(obs.len()) {
                 *m = true;
