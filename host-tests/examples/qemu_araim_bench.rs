@@ -96,6 +96,22 @@ fn main() -> anyhow::Result<()> {
     }
     run(&mut fw, &sky(24, 0, 100.0), "G12+E12, 100 m on satellite 0")?;
     run(&mut fw, &sky(32, 0, 100.0), "G16+E16, 100 m on satellite 0")?;
+    // Two faults on a sky with pair modes: no single event is consistent,
+    // the FDE searches the multi-event candidates (stage 2).
+    for n in [24, 32] {
+        let mut s = sky(n, 0, 100.0);
+        s.obs[n - 1].residual_m -= 100.0;
+        run(
+            &mut fw,
+            &s,
+            &format!(
+                "G{}+E{}, 100 m on satellite 0, -100 m on {}",
+                n / 2,
+                n / 2,
+                n - 1
+            ),
+        )?;
+    }
     // The same skies as pseudorange epochs (Gauss-Newton on the device).
     run_as(
         &mut fw,
