@@ -111,6 +111,18 @@ fn qemu_araim_appendix_d_and_a_20_satellite_sky_match_the_host() {
     assert_eq!(w.all_in_view.modes, 327);
     assert!(matches!(w.fde, WireFde::Excluded { .. }), "{:?}", w.fde);
     assert_eq!(w.excluded.as_slice(), &[s.obs[23].id]);
+
+    // Two faults on that sky: no single event is consistent, and FDE's
+    // stage 2 (the multi-event candidates, core `fde_multi` tests against
+    // the brute force) excludes the pair, bit for bit with the host
+    // (~115 M guest instructions).
+    let mut two = araim_common::sky(24, 0, 100.0);
+    two.obs[23].residual_m -= 100.0;
+    let r = t.ask(epoch_command(11.0, &two.obs), "sky24 two faults");
+    let w = result(&r);
+    assert!(matches!(w.fde, WireFde::Excluded { .. }), "{:?}", w.fde);
+    assert_eq!(w.excluded.as_slice(), &[two.obs[0].id, two.obs[23].id]);
+    assert_eq!(w.decision, Decision::Excluded);
     assert!(t.fw.drain_nmea().is_empty(), "ARAIM writes no NMEA");
 }
 
