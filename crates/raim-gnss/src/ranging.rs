@@ -82,7 +82,7 @@ fn iono_free(system: System, code: &str, p1: f64, p2: f64, k: &Kepler) -> Option
     let (a, b) = split_pair(code)?;
     let (f1, f2) = (band_hz(system, a)?, band_hz(system, b)?);
     let g = (f1 / f2).powi(2);
-    if !(g > 1.0) {
+    if g.is_nan() || g <= 1.0 {
         return None;
     }
     let p = (g * p1 - p2) / (g - 1.0);
