@@ -1411,4 +1411,80 @@ mod tests {
             Some(crate::araim_msg::WireUnavailable::ModeCapacity { needed, capacity: 600 }) if needed > 600
         ));
     }
+
+    /// A pseudorange epoch (protocol 8) against the same sky sent
+    /// linearised at the truth: the device-side Gauss-Newton and
+    /// linearisation change nothing that matters (same decision, FDE and
+    /// excluded set; PLs within 1 mm: the lines of sight move by |x0 - x|
+    /// / 2e7 rad), and the position is the truth within the residuals'
+    /// effect (< 1 m; a linearised epoch has none). Bad input is typed.
+    #[test]
+    fn pseudorange_epoch_matches_the_linearised_one() {
+        /// The PL agreement of the two forms (m).
+        const PL_TOL_M: f64 = 1e-3;
+        let x = [3_582_105.0, 532_589.0, 5_232_755.0];
+        let rot = raim_core::frames::enu_rotation(&raim_core::frames::ecef_to_geodetic(x));
+        let to_ranges = |obs: &[LinearObservation]| -> Vec<raim_core::RangeObservation> {
+            obs.iter()
+                .enumerate()
+                .map(|(i, o)| {
+                    let rho = 2.0e7 + 1.0e5 * i as f64;
+                    let u = raim_core::frames::unrotate(&rot, o.los_enu);
+                    let clock = if o.id.system == System::Gps {
+                        1234.5
+                    } else {
+                        1240.25
+                    };
+                    raim_core::RangeObservation {
+                        id: o.id,
+                        pseudorange_m: rho + clock + o.residual_m,
+                        position_m: [x[0] + rho * u[0], x[1] + rho * u[1], x[2] + rho * u[2]],
+                        sigma_m: None,
+                    }
+                })
+                .collect()
+        };
+        for (faulty, fault_m) in [(usize::MAX, 0.0), (5, 100.0)] {
+            let (ism, obs) = sky(20, faulty, fault_m);
+            let mut l = Link::new();
+            l.ism(&ism, gal());
+            let lin = l.epoch(&obs);
+            let ranges = to_ranges(&obs);
+            let rng = l.ask(CommandRef::Araim(AraimCommandRef::Ranges {
+                time_s: 1.0,
+                apriori_m: None,
+                sats: &ranges,
+            }));
+            let (a, b) = (result(&lin), result(&rng));
+            assert_eq!((a.decision, a.fde), (b.decision, b.fde), "{faulty}");
+            assert_eq!(a.excluded, b.excluded);
+            for (p, q) in [
+                (a.in_force().vpl_exact_m, b.in_force().vpl_exact_m),
+                (a.in_force().hpl_exact_m, b.in_force().hpl_exact_m),
+            ] {
+                assert!((p - q).abs() <= PL_TOL_M, "{p} {q}");
+            }
+            assert!(a.position_ecef_m.is_none());
+            let p = b.position_ecef_m.unwrap();
+            let d = ((p[0] - x[0]).powi(2) + (p[1] - x[1]).powi(2) + (p[2] - x[2]).powi(2)).sqrt();
+            assert!(d < 1.0, "{d}");
+            if faulty == 5 {
+                assert_eq!(b.excluded.as_slice(), &[obs[5].id]);
+            }
+            let mut nan = ranges.clone();
+            nan[2].position_m[1] = f64::NAN;
+            let r = l.ask(CommandRef::Araim(AraimCommandRef::Ranges {
+                time_s: 2.0,
+                apriori_m: None,
+                sats: &nan,
+            }));
+            assert!(
+                matches!(
+                    &r.body,
+                    ResponseBody::Error(WireError::NonFinite { index: 2, .. })
+                ),
+                "{r:?}"
+            );
+        }
+    }
 }
