@@ -24,7 +24,9 @@ use crate::auth::{AuthKey, Tag};
 use crate::error::WireError;
 use crate::message::{LinearEpoch, RangeEpoch, ResponseBody};
 
-/// An ARAIM epoch as it arrived: linearised, or pseudoranges.
+/// An ARAIM epoch as it arrived: linearised, or pseudoranges. (Without the
+/// `araim` feature it is only refused, `Disabled`.)
+#[cfg_attr(not(feature = "araim"), allow(dead_code))]
 enum Input<'a> {
     Linear(&'a LinearEpoch),
     Ranges(&'a RangeEpoch),
