@@ -24,6 +24,20 @@
 //! single-event one. A multi-event exclusion is looked for only when no
 //! single event explains the data.
 //!
+//! Work budget ([`FdeBudget`]): the search processes each candidate
+//! subset as an epoch of its own, so its cost grows with the number of
+//! candidates it processes (stage 1's, then stage 2's). A caller with a
+//! deadline (the device, whose watchdog resets a unit that overruns)
+//! gives the maximum number of candidates; the number a stage needs is
+//! known before the stage starts (its monitorable modes), so a stage that
+//! would take the total beyond the budget is not started and the outcome
+//! is the alarm `BudgetExceeded`: never a pass, never a partial search
+//! that could pick a wrong candidate. It is returned exactly when the
+//! unlimited search would process more candidates than the budget, and
+//! otherwise the outcome is the unlimited one (test
+//! `budget_limited_fde_is_the_unlimited_one_or_budget_exceeded`). The
+//! host's default, [`Araim::fde`], is unlimited.
+//!
 //! After an exclusion of E, the protection levels are those of the
 //! remaining subset with its fault modes re-enumerated on it (its own
 //! priors, thresholds and K_fa; the scratch engine's output), with the
@@ -58,6 +72,27 @@ pub enum FdeAlarm {
     NoCandidate,
     /// Two consistent candidates (mode indices) that do not nest.
     Ambiguous { first: usize, second: usize },
+    /// The search would process more candidate subsets than the budget
+    /// allows: `candidates` is the number through the stage that was not
+    /// started (stage 1's, or stage 1's plus stage 2's), `budget` the
+    /// maximum. Nothing was excluded.
+    BudgetExceeded { candidates: usize, budget: usize },
+}
+
+/// The work the FDE may do: the maximum number of candidate subsets it
+/// processes (module doc, "Work budget"). The final run of the chosen
+/// subset (with its PLs) is not counted: it is one more subset.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FdeBudget {
+    pub max_candidates: usize,
+}
+
+impl FdeBudget {
+    /// No limit (the host's default).
+    pub const UNLIMITED: Self = Self {
+        max_candidates: usize::MAX,
+    };
 }
 
 /// The outcome of ARAIM FDE. (After an alarm the scratch engine holds
@@ -166,15 +201,29 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
     }
 
     /// Runs the exclusion logic of the module doc on the epoch last
-    /// processed by `self` (same `cfg`, `ism`, `sats`). `scratch` is used
-    /// for the candidate subsets; after `Excluded` it holds the chosen
-    /// subset's output.
+    /// processed by `self` (same `cfg`, `ism`, `sats`), without a work
+    /// limit. `scratch` is used for the candidate subsets; after
+    /// `Excluded` it holds the chosen subset's output.
     pub fn fde(
         &self,
         cfg: &AraimConfig,
         ism: &Ism,
         sats: &[AraimSat<T>],
         scratch: &mut Araim<T, N, K>,
+    ) -> Result<FdeDecision, AraimError> {
+        self.fde_within(cfg, ism, sats, scratch, FdeBudget::UNLIMITED)
+    }
+
+    /// [`Self::fde`] within `budget`: the alarm `BudgetExceeded` when the
+    /// search would process more candidates than the budget (module doc,
+    /// "Work budget"), otherwise the same outcome.
+    pub fn fde_within(
+        &self,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        sats: &[AraimSat<T>],
+        scratch: &mut Araim<T, N, K>,
+        budget: FdeBudget,
     ) -> Result<FdeDecision, AraimError> {
         if self.out.detection_passed {
             return Ok(FdeDecision::NoFault);
@@ -196,6 +245,18 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         // single event explains the data, the multi-event ones.
         let mut found = Found::default();
         for stage in [Stage::Single, Stage::Multi] {
+            // The candidates processed once this stage is done; a stage
+            // that would exceed the budget is not started.
+            let through = match stage {
+                Stage::Single => n_single,
+                Stage::Multi => n_ex,
+            };
+            if through > budget.max_candidates {
+                return Ok(FdeDecision::Alarm(FdeAlarm::BudgetExceeded {
+                    candidates: through,
+                    budget: budget.max_candidates,
+                }));
+            }
             for (k, mode) in self.out.modes.iter().enumerate() {
                 let ev = mode.events;
                 let single = events_of(mode) == 1;

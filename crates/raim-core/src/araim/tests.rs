@@ -1238,6 +1238,9 @@ mod fde_multi {
             }
             FdeDecision::Alarm(FdeAlarm::NoCandidate) => Dense::NoCandidate,
             FdeDecision::Alarm(FdeAlarm::Ambiguous { .. }) => Dense::Ambiguous,
+            FdeDecision::Alarm(FdeAlarm::BudgetExceeded { .. }) => {
+                panic!("unlimited FDE out of budget: {d:?}")
+            }
         };
         assert_eq!(got, want, "{d:?}");
         (want, pairs)
@@ -1315,5 +1318,108 @@ mod fde_multi {
         }
         std::eprintln!("no fault, single, multi, ambiguous, no candidate: {seen:?}");
         assert!(seen.iter().all(|&c| c > 0), "{seen:?}");
+    }
+
+    /// The candidates the unlimited search processes, counted by the brute
+    /// force: the monitorable single-event modes, plus the multi-event
+    /// ones when no single event is consistent (0 when the epoch passes).
+    fn dense_candidates(sats: &[AraimSat<f64>], ism: &Ism, cfg: &AraimConfig) -> usize {
+        if passes(sats, ism, cfg) {
+            return 0;
+        }
+        let modes: Vec<Mode> = enumerate(sats, ism, cfg.p_thres)
+            .unwrap()
+            .into_iter()
+            .filter(|m| dense_subset(sats, ism, m.removed).is_some())
+            .collect();
+        let singles: Vec<&Mode> = modes.iter().filter(|m| m.single).collect();
+        let stage1 = singles.iter().any(|m| {
+            let (sub, sub_ism) = subset(sats, ism, m.removed);
+            passes(&sub, &sub_ism, cfg)
+        });
+        if stage1 {
+            singles.len()
+        } else {
+            modes.len()
+        }
+    }
+
+    /// The budget-limited FDE (`fde_within`) on the random epochs of
+    /// `random_faults_match_brute_force_fde`, at budgets around the
+    /// brute force's candidate count: `BudgetExceeded` exactly when the
+    /// unlimited search needs more candidates than the budget (its
+    /// `candidates` above the budget and at most the need), otherwise
+    /// the unlimited outcome with the same subset output (PLs bit for
+    /// bit).
+    #[test]
+    fn budget_limited_fde_is_the_unlimited_one_or_budget_exceeded() {
+        use crate::araim::fde::FdeBudget;
+        let mut rng = crate::testutil::Rng::new(1212);
+        let ism = ge_ism(1e-4);
+        let cfg = AraimConfig::default();
+        let mut main = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        let mut scratch = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        let mut scratch_b = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        let (mut exceeded, mut kept, mut stage2_needed) = (0, 0, 0);
+        for trial in 0..60 {
+            let n = 8 + trial % 7;
+            let mut sats = random_sky(&mut rng, n, &[System::Gps, System::Galileo], 1e-4);
+            let faults = 1 + trial % 3;
+            for _ in 0..faults {
+                let i = (rng.uniform() * n as f64) as usize % n;
+                let sign = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+                sats[i].residual_m += sign * (10.0 + 50.0 * rng.uniform());
+            }
+            let need = dense_candidates(&sats, &ism, &cfg);
+            main.process(&cfg, &ism, &sats).unwrap();
+            let free = main.fde(&cfg, &ism, &sats, &mut scratch).unwrap();
+            let singles = main
+                .output()
+                .modes
+                .iter()
+                .filter(|m| {
+                    m.status == crate::araim::ModeStatus::Monitored
+                        && m.events.sats.count_ones() + m.events.consts.count_ones() == 1
+                })
+                .count();
+            if need > singles {
+                stage2_needed += 1;
+            }
+            for budget in [0, 1, singles, need.saturating_sub(1), need, need + 1, 5000] {
+                let limited = main
+                    .fde_within(
+                        &cfg,
+                        &ism,
+                        &sats,
+                        &mut scratch_b,
+                        FdeBudget {
+                            max_candidates: budget,
+                        },
+                    )
+                    .unwrap();
+                if need > budget {
+                    match limited {
+                        FdeDecision::Alarm(FdeAlarm::BudgetExceeded {
+                            candidates,
+                            budget: b,
+                        }) => {
+                            assert_eq!(b, budget);
+                            assert!(candidates > budget && candidates <= need, "{candidates}");
+                        }
+                        other => panic!("trial {trial} budget {budget} need {need}: {other:?}"),
+                    }
+                    exceeded += 1;
+                } else {
+                    assert_eq!(limited, free, "trial {trial} budget {budget} need {need}");
+                    if let FdeDecision::Excluded { .. } = free {
+                        assert_eq!(scratch_b.output().pl_exact, scratch.output().pl_exact);
+                        assert_eq!(scratch_b.output().pl_add, scratch.output().pl_add);
+                    }
+                    kept += 1;
+                }
+            }
+        }
+        std::eprintln!("exceeded {exceeded}, kept {kept}, stage 2 needed {stage2_needed}");
+        assert!(exceeded > 0 && kept > 0 && stage2_needed > 0);
     }
 }

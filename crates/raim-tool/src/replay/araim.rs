@@ -547,6 +547,7 @@ fn epoch(
             rec.fde = match cause {
                 FdeAlarm::Ambiguous { .. } => "alarm_ambiguous",
                 FdeAlarm::NoCandidate => "alarm_no_candidate",
+                FdeAlarm::BudgetExceeded { .. } => "alarm_budget_exceeded",
             }
             .into();
             rec.available = false;
