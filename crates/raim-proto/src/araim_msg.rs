@@ -311,6 +311,15 @@ pub enum WireFde {
     NotAttempted {
         modes: u32,
     },
+    /// The exclusion search would process more candidate subsets than the
+    /// device's work budget allows (`server::araim::FDE_WORK_BUDGET`,
+    /// kept within the watchdog period): `candidates` through the stage
+    /// not started, `budget` the maximum for this epoch's mode count.
+    /// Nothing excluded; the epoch is an `Alarm`. (Appended: protocol 8.)
+    BudgetExceeded {
+        candidates: u32,
+        budget: u32,
+    },
 }
 
 impl From<FdeDecision> for WireFde {
@@ -326,6 +335,12 @@ impl From<FdeDecision> for WireFde {
                 first: u32_of(first),
                 second: u32_of(second),
             },
+            FdeDecision::Alarm(FdeAlarm::BudgetExceeded { candidates, budget }) => {
+                WireFde::BudgetExceeded {
+                    candidates: u32_of(candidates),
+                    budget: u32_of(budget),
+                }
+            }
         }
     }
 }

@@ -56,6 +56,37 @@ pub const MAX_MODES: usize = 600;
 /// while FDE re-ran a full ARAIM epoch per candidate, 140 M for 22 modes).
 pub const MAX_FDE_MODES: u32 = 600;
 
+/// The FDE's work budget, in candidate-modes: the search may process at
+/// most `FDE_WORK_BUDGET / m` candidate subsets when the all-in-view run
+/// has `m` monitored modes (`raim_core::araim::fde::FdeBudget`); beyond
+/// it the epoch is an `Alarm`, `WireFde::BudgetExceeded`, before the
+/// stage that would overrun is started. Why: a candidate is a subset
+/// processed as an epoch of its own with about `m` modes, so a search
+/// costs about (candidates x m) x c; measured under QEMU with the f32
+/// engines (BENCHMARKS.md, branch araimdev), c is 0.8-1.0 k guest
+/// instructions (G12+E12, 327 modes, stage 2: 327 x 327 = 107 k
+/// candidate-modes, 115 M instructions for the whole epoch; G16+E16, 563
+/// modes, stage 2: 317 k, 347 M). The firmware's watchdog period is 2 s;
+/// at 168 MHz and an assumed 1.5 cycles per instruction it allows 224 M
+/// instructions. 110 k keeps the costliest epoch the budget admits (a
+/// stage-2 search at 331 modes, ~118 M instructions by the 327-mode
+/// measurement scaled by (331/327)^2) at about 1.05 s, half the period (a
+/// margin of 1.9; 1.4 s even at 2 cycles per instruction). What it
+/// admits: stage 1 at any mode count up to the capacity (at most ~36
+/// single events x 600 modes = 22 k), stage 2 up to 331 monitored modes
+/// (24 satellites at P_sat 1e-5); the 563-mode stage 2 (32 satellites),
+/// 3.1 s, is `BudgetExceeded` after its stage 1 (~96 M).
+pub const FDE_WORK_BUDGET: u32 = 110_000;
+
+/// The FDE budget for an all-in-view run with `monitored` modes.
+#[cfg_attr(not(feature = "araim"), allow(dead_code))]
+pub(crate) fn fde_budget(monitored: u32) -> raim_core::araim::fde::FdeBudget {
+    let per = FDE_WORK_BUDGET / monitored.max(1);
+    raim_core::araim::fde::FdeBudget {
+        max_candidates: usize::try_from(per).unwrap_or(usize::MAX),
+    }
+}
+
 /// CRC-32/ISO-HDLC, as `frame::CRC32`; a static so that a digest can
 /// borrow it.
 static CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
@@ -399,7 +430,7 @@ mod engine {
     use raim_core::araim::{Araim, AraimConfig, AraimSat, FdeDecision, Ism, PlOutput, Unavailable};
     use raim_core::{Decision, Real};
 
-    use super::{AraimWireError, IsmFrame, MAX_FDE_MODES, MAX_MODES};
+    use super::{fde_budget, AraimWireError, IsmFrame, MAX_FDE_MODES, MAX_MODES};
     use crate::araim_msg::{AraimSummary, WireAraimResult, WireFde};
     use crate::error::WireError;
     use crate::message::{LinearEpoch, RangeEpoch};
@@ -673,7 +704,9 @@ mod engine {
         let (fde, after_exclusion) = if out.detection_passed {
             (FdeDecision::NoFault, None)
         } else {
-            let d = main.fde(&cfg, &ism, sats, scratch)?;
+            // Within the work budget: the watchdog (FDE_WORK_BUDGET).
+            let d =
+                main.fde_within(&cfg, &ism, sats, scratch, fde_budget(all_in_view.monitored))?;
             let after = match d {
                 FdeDecision::Excluded { .. } => {
                     Some(AraimSummary::from_output(scratch.output(), pl_exact))
@@ -1412,6 +1445,84 @@ mod tests {
             r.all_in_view.unavailable,
             Some(crate::araim_msg::WireUnavailable::ModeCapacity { needed, capacity: 600 }) if needed > 600
         ));
+    }
+
+    /// The FDE work budget (`FDE_WORK_BUDGET`): a pair fault on 24
+    /// satellites (327 modes, 326 monitored: 106 k candidate-modes) is
+    /// searched through stage 2 and the pair excluded; the same on 32
+    /// satellites (563 modes, 562 monitored: stage 2 would take 562
+    /// candidates, the budget is 195) is an `Alarm`
+    /// with `BudgetExceeded` on the wire and at the alarm output, never a
+    /// pass; a single fault there is still excluded in stage 1 (34
+    /// candidates). The core's unlimited FDE on the same 32-satellite
+    /// epoch does find the pair: the budget, not the data, is the cause.
+    #[test]
+    fn fde_work_budget_bounds_the_search() {
+        let mut l = Link::new();
+        let pair = |n: usize| {
+            let (ism, mut obs) = sky(n, 0, 100.0);
+            obs[n - 1].residual_m -= 100.0;
+            (ism, obs)
+        };
+        let (ism, obs) = pair(24);
+        l.ism(&ism, gal());
+        let r = result(&l.epoch(&obs)).clone();
+        assert_eq!(r.all_in_view.modes, 327);
+        let m = r.all_in_view.monitored;
+        assert!(m * m <= FDE_WORK_BUDGET, "{m}");
+        assert_eq!(r.excluded.as_slice(), &[obs[0].id, obs[23].id]);
+
+        let (ism, obs) = pair(32);
+        l.ism(&ism, gal());
+        let r = result(&l.epoch(&obs)).clone();
+        assert_eq!(r.all_in_view.modes, 563);
+        // Every monitored mode is a candidate (stage 1's and stage 2's).
+        let m = r.all_in_view.monitored;
+        assert_eq!(
+            r.fde,
+            WireFde::BudgetExceeded {
+                candidates: m,
+                budget: FDE_WORK_BUDGET / m,
+            }
+        );
+        assert_eq!(r.decision, Decision::Alarm);
+        assert!(r.excluded.is_empty() && r.after_exclusion.is_none());
+        assert_eq!(l.heard.0.last(), Some(&Some(Decision::Alarm)));
+        let mut monitor = crate::alert::AlertMonitor::new(10);
+        monitor.on_epoch(0, Some(r.decision));
+        assert_eq!(monitor.output(0), crate::alert::AlarmOutput::Alarm);
+
+        // The unlimited core FDE on the same epoch: the pair.
+        let mut sats = Vec::new();
+        for o in &obs {
+            let g = o.los_enu.map(|v| -v);
+            let nom = super::engine::nominal_variance_m2(&o.los_enu);
+            sats.push(raim_core::araim::AraimSat::<f64> {
+                id: o.id,
+                g_enu: g,
+                c_int_m2: 0.75 * 0.75 + nom,
+                c_acc_m2: 0.5 * 0.5 + nom,
+                b_nom_m: 0.5,
+                p_sat: 1e-5,
+                residual_m: o.residual_m,
+            });
+        }
+        let core_ism = raim_core::araim::Ism { p_const: gal() };
+        let cfg = AraimConfig::from(WireAraimConfig::default());
+        let mut main = std::boxed::Box::new(raim_core::araim::Araim::<f64, 32, 600>::new());
+        let mut scratch = std::boxed::Box::new(raim_core::araim::Araim::<f64, 32, 600>::new());
+        main.process(&cfg, &core_ism, &sats).unwrap();
+        let d = main.fde(&cfg, &core_ism, &sats, &mut scratch).unwrap();
+        assert!(
+            matches!(d, raim_core::araim::FdeDecision::Excluded { sats, .. } if sats == (1 | 1 << 31)),
+            "{d:?}"
+        );
+
+        let (ism, obs) = sky(32, 0, 100.0);
+        l.ism(&ism, gal());
+        let r = result(&l.epoch(&obs)).clone();
+        assert!(matches!(r.fde, WireFde::Excluded { .. }), "{:?}", r.fde);
+        assert_eq!(r.excluded.as_slice(), &[obs[0].id]);
     }
 
     /// A pseudorange epoch (protocol 8) against the same sky sent
