@@ -123,6 +123,31 @@ fn qemu_araim_appendix_d_and_a_20_satellite_sky_match_the_host() {
     assert!(matches!(w.fde, WireFde::Excluded { .. }), "{:?}", w.fde);
     assert_eq!(w.excluded.as_slice(), &[two.obs[0].id, two.obs[23].id]);
     assert_eq!(w.decision, Decision::Excluded);
+
+    // The same two faults on 32 satellites (563 modes): stage 2 would
+    // process every monitored mode as a candidate, 347 M guest
+    // instructions (~3.1 s at 168 MHz, beyond the 2 s watchdog); the
+    // server's work budget (`FDE_WORK_BUDGET / monitored` candidates)
+    // refuses it after stage 1: an `Alarm` with `BudgetExceeded` on the
+    // wire, bit for bit with the host, never a pass (~96 M instructions,
+    // BENCHMARKS.md).
+    let mut two = araim_common::sky(32, 0, 100.0);
+    two.obs[31].residual_m -= 100.0;
+    t.ask(two.ism_command(), "sky32 ISM");
+    let r = t.ask(epoch_command(12.0, &two.obs), "sky32 two faults");
+    let w = result(&r);
+    assert_eq!(w.all_in_view.modes, 563);
+    let m = w.all_in_view.monitored;
+    assert_eq!(
+        w.fde,
+        WireFde::BudgetExceeded {
+            candidates: m,
+            budget: raim_proto::server::araim::FDE_WORK_BUDGET / m,
+        }
+    );
+    assert!(m > raim_proto::server::araim::FDE_WORK_BUDGET / m);
+    assert_eq!(w.decision, Decision::Alarm);
+    assert!(w.excluded.is_empty() && w.after_exclusion.is_none());
     assert!(t.fw.drain_nmea().is_empty(), "ARAIM writes no NMEA");
 }
 
