@@ -54,28 +54,34 @@ pub const MAX_MODES: usize = 600;
 /// instruction took 1.5 cycles. So the limit is now the engine's mode
 /// capacity: exclusion is attempted whenever the modes fit (it was 64
 /// while FDE re-ran a full ARAIM epoch per candidate, 140 M for 22 modes).
+/// Those figures are stage 1's; the multi-event stage 2 costs about the
+/// square of the mode count and is bounded by `FDE_WORK_BUDGET`.
 pub const MAX_FDE_MODES: u32 = 600;
 
 /// The FDE's work budget, in candidate-modes: the search may process at
 /// most `FDE_WORK_BUDGET / m` candidate subsets when the all-in-view run
 /// has `m` monitored modes (`raim_core::araim::fde::FdeBudget`); beyond
-/// it the epoch is an `Alarm`, `WireFde::BudgetExceeded`, before the
-/// stage that would overrun is started. Why: a candidate is a subset
-/// processed as an epoch of its own with about `m` modes, so a search
-/// costs about (candidates x m) x c; measured under QEMU with the f32
-/// engines (BENCHMARKS.md, branch araimdev), c is 0.8-1.0 k guest
-/// instructions (G12+E12, 327 modes, stage 2: 327 x 327 = 107 k
-/// candidate-modes, 115 M instructions for the whole epoch; G16+E16, 563
-/// modes, stage 2: 317 k, 347 M). The firmware's watchdog period is 2 s;
-/// at 168 MHz and an assumed 1.5 cycles per instruction it allows 224 M
-/// instructions. 110 k keeps the costliest epoch the budget admits (a
-/// stage-2 search at 331 modes, ~118 M instructions by the 327-mode
-/// measurement scaled by (331/327)^2) at about 1.05 s, half the period (a
-/// margin of 1.9; 1.4 s even at 2 cycles per instruction). What it
-/// admits: stage 1 at any mode count up to the capacity (at most ~36
-/// single events x 600 modes = 22 k), stage 2 up to 331 monitored modes
-/// (24 satellites at P_sat 1e-5); the 563-mode stage 2 (32 satellites),
-/// 3.1 s, is `BudgetExceeded` after its stage 1 (~96 M).
+/// it the epoch is an `Alarm`, `WireFde::BudgetExceeded`, decided before
+/// the stage that would overrun is started. Why per mode: a candidate is
+/// a subset processed as an epoch of its own with about `m` modes, so a
+/// search costs about (candidates x m) x c. The firmware's watchdog
+/// period is 2 s; at 168 MHz and an assumed 1.5 cycles per instruction it
+/// allows 224 M instructions per epoch. Measured under QEMU with the f32
+/// engines (BENCHMARKS.md, "ARAIM FDE work budget"): the costliest epochs
+/// the budget admits are stage-2 searches at 326 monitored modes (24
+/// satellites, 106 k candidate-modes): 115-119 M guest instructions for a
+/// pair exclusion, 130 M for an `Ambiguous` alarm (10 m on two
+/// satellites: more candidates pass all their tests, no early exit);
+/// scaled by (331/326)^2 to the largest mode count admitted to stage 2
+/// (331), ~134 M: ~1.2 s at 1.5 cycles per instruction, 60 % of the
+/// period (a margin of 1.67; 1.6 s even at 2 cycles per instruction).
+/// Stage 1 is admitted at every mode count up to the capacity (at most
+/// ~36 single events x 600 modes = 22 k; 563 modes: 95 M). The 563-mode
+/// stage 2 (32 satellites), 347 M or ~3.1 s, is `BudgetExceeded` after
+/// its stage 1 (67 M). The budget counts candidates, not tests: an epoch
+/// where far more candidates pass all their own tests than in the
+/// measured sweep would cost more per candidate (docs/ARAIM.md, "FDE work
+/// budget").
 pub const FDE_WORK_BUDGET: u32 = 110_000;
 
 /// The FDE budget for an all-in-view run with `monitored` modes.
