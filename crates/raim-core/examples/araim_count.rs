@@ -3,7 +3,10 @@
 //!   perf stat -e instructions:u target/release/examples/araim_count <case> <iters>
 //! (cost per epoch = (count at iters - count at 0) / iters). Cases: the
 //! inputs of benches/araim.rs: appendix_d, sky20, sky30_pconst1e-8,
-//! sky30_pconst1e-4.
+//! sky30_pconst1e-4; `<case>+fde`: 30 m on the first satellite, then FDE;
+//! `<case>+fde2`: also -30 m on the last one (a second constellation on the
+//! skies), so that no single event is consistent and FDE searches the
+//! multi-event candidates.
 
 #[path = "../benches/common/araim_inputs.rs"]
 mod araim_inputs;
@@ -18,7 +21,7 @@ fn main() {
     let case = args.get(1).map(String::as_str).unwrap_or("appendix_d");
     let iters: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1000);
     let ge = [System::Gps, System::Galileo];
-    let (sats, p_const) = match case.trim_end_matches("+fde") {
+    let (sats, p_const) = match case.trim_end_matches("+fde2").trim_end_matches("+fde") {
         "appendix_d" => (appendix_d(), 1e-4),
         "sky20" => (sky(10, 1e-5), 1e-4),
         "sky30_pconst1e-8" => (sky(15, 1e-4), 1e-8),
@@ -27,10 +30,16 @@ fn main() {
     };
     // `<case>+fde`: 30 m on the first satellite, then FDE (the
     // consistency check of every single-event candidate).
-    let fde = case.ends_with("+fde");
+    let fde2 = case.ends_with("+fde2");
+    let fde = fde2 || case.ends_with("+fde");
     let mut sats = sats;
     if fde {
         sats[0].residual_m = 30.0;
+    }
+    if fde2 {
+        if let Some(last) = sats.last_mut() {
+            last.residual_m = -30.0;
+        }
     }
     let ism = Ism::with(&ge, p_const);
     let mut scratch = Box::new(Araim::<f64, 32, 1024>::new());
@@ -47,6 +56,9 @@ fn main() {
                 .fde(black_box(&cfg), &ism, &sats, &mut scratch)
                 .unwrap();
             acc += matches!(d, raim_core::araim::FdeDecision::Excluded { .. }) as u8 as f64;
+            if iters == 1 {
+                println!("{d:?}");
+            }
         }
     }
     let out = engine.process(&cfg, &ism, &sats).unwrap();

@@ -58,6 +58,10 @@ pub struct Kepler {
     /// Group delay to apply for the single-frequency code used, s: GPS TGD
     /// (L1 C/A), Galileo BGD(E1,E5b) for I/NAV, BeiDou TGD1 (B1I). 0 if absent.
     pub group_delay_s: f64,
+    /// Galileo I/NAV only: BGD(E1,E5a), s (the record carries both BGDs),
+    /// for the E1/E5a iono-free combination with the I/NAV clock
+    /// (`ranging::iono_free`); 0 otherwise or if absent.
+    pub group_delay_e5a_s: f64,
     /// Raw health word from the nav file (0 = healthy for GPS, Galileo, BeiDou).
     pub health: u32,
     /// Issue of data, for diagnostics.
@@ -211,6 +215,7 @@ mod tests {
             cic_rad: 0.0,
             cis_rad: 0.0,
             group_delay_s: 0.0,
+            group_delay_e5a_s: 0.0,
             health: 0,
             iod: 0,
         }

@@ -34,6 +34,66 @@ pub struct RangingOptions {
     pub group_delay: bool,
 }
 
+/// Carrier frequency (Hz) of a RINEX 3 code's band digit, per system; None
+/// for a band this crate does not know.
+pub fn band_hz(system: System, code: &str) -> Option<f64> {
+    let band = code.get(1..2)?;
+    Some(match (system, band) {
+        (System::Gps | System::Qzss, "1") | (System::Galileo, "1") => 1_575.42e6,
+        (System::Gps | System::Qzss, "2") => 1_227.60e6,
+        (System::Gps | System::Qzss, "5") | (System::Galileo, "5") => 1_176.45e6,
+        (System::Galileo, "7") | (System::Beidou, "7") => 1_207.14e6,
+        (System::Galileo, "8") => 1_191.795e6,
+        (System::Galileo, "6") => 1_278.75e6,
+        (System::Beidou, "2") | (System::Beidou, "1") => F_B1I_HZ,
+        (System::Beidou, "6") => 1_268.52e6,
+        _ => return None,
+    })
+}
+
+/// A dual-frequency code pair "C1W+C2W": the two codes.
+fn split_pair(code: &str) -> Option<(&str, &str)> {
+    code.split_once('+')
+}
+
+/// The iono-free combination's noise amplification sqrt(g^2 + 1) / (g - 1),
+/// g = (f1 / f2)^2, for equal noise on both codes (2.59 for L1/L5 and
+/// E1/E5a, 2.98 for L1/L2, 3.53 for B1I/B3I); None for a single code.
+pub fn iono_free_noise_factor(system: System, code: &str) -> Option<f64> {
+    let (a, b) = split_pair(code)?;
+    let g = (band_hz(system, a)? / band_hz(system, b)?).powi(2);
+    Some((g * g + 1.0).sqrt() / (g - 1.0))
+}
+
+/// The iono-free pseudorange of a code pair and the group delay (m,
+/// subtracted like the single-frequency TGD/BGD) that refers it to the
+/// broadcast clock:
+/// - GPS/QZSS: the LNAV clock is the L1/L2 P(Y) combination's, so C1W+C2W
+///   needs none (other GPS pairs: none applied either; the inter-signal
+///   corrections of CNAV are not in the navigation file).
+/// - Galileo with the I/NAV clock (the E1/E5b combination's): a pair
+///   E1 + E5a gets c (BGD(E1,E5b) - BGD(E1,E5a)) (the E1 clock
+///   dt - BGD(E1,E5b) = dt' - BGD(E1,E5a) solved for the E1/E5a clock dt');
+///   E1 + E5b none.
+/// - BeiDou (clock of B3I): B1I + B3I gets c g / (g - 1) TGD1.
+///
+/// The first code must be the higher frequency. None if a band is unknown.
+fn iono_free(system: System, code: &str, p1: f64, p2: f64, k: &Kepler) -> Option<(f64, f64)> {
+    let (a, b) = split_pair(code)?;
+    let (f1, f2) = (band_hz(system, a)?, band_hz(system, b)?);
+    let g = (f1 / f2).powi(2);
+    if g.is_nan() || g <= 1.0 {
+        return None;
+    }
+    let p = (g * p1 - p2) / (g - 1.0);
+    let delay_s = match (system, b.get(1..2)) {
+        (System::Galileo, Some("5")) => k.group_delay_s - k.group_delay_e5a_s,
+        (System::Beidou, Some("6")) => g / (g - 1.0) * k.group_delay_s,
+        _ => 0.0,
+    };
+    Some((p, C_M_S * delay_s))
+}
+
 /// Default code preferences: GPS and QZSS L1 C/A (RINEX 3 "C1C", RINEX 2
 /// "C1"), Galileo E1 (C1C pilot+data as Septentrio logs it, C1X, C1B),
 /// BeiDou B1I (C2I in RINEX 3.02+, C1I in 3.01).
@@ -126,11 +186,15 @@ fn group_delay_applies(system: System, code: &str) -> bool {
     }
 }
 
-/// Pick the first preferred code present.
-fn pick_code<'a>(codes: &[String], have: &'a [CodeObs]) -> Option<&'a CodeObs> {
-    codes
-        .iter()
-        .find_map(|c| have.iter().find(|o| &o.code == c))
+/// Pick the first preferred code present: a single code, or a pair
+/// "C1W+C2W" (both present) for the iono-free combination; returns the
+/// code name and its one or two pseudoranges.
+fn pick_code(codes: &[String], have: &[CodeObs]) -> Option<(String, f64, Option<f64>)> {
+    let find = |c: &str| have.iter().find(|o| o.code == c).map(|o| o.value_m);
+    codes.iter().find_map(|c| match split_pair(c) {
+        Some((a, b)) => Some((c.clone(), find(a)?, Some(find(b)?))),
+        None => Some((c.clone(), find(c)?, None)),
+    })
 }
 
 /// Satellite position (ECEF at transmit time, not yet rotated) and clock,
@@ -168,7 +232,20 @@ fn build(
             rejected.push((id, Rejection::NoEphemeris));
             continue;
         };
-        let p = code.value_m;
+        let (code_name, p1, p2) = code;
+        // An iono-free pair: the combination, its group delay, no
+        // Klobuchar (the combination removes the first-order ionosphere).
+        let pair = match p2 {
+            Some(p2) => match iono_free(id.system, &code_name, p1, p2, k) {
+                Some(v) => Some(v),
+                None => {
+                    rejected.push((id, Rejection::NoCode));
+                    continue;
+                }
+            },
+            None => None,
+        };
+        let p = pair.map(|v| v.0).unwrap_or(p1);
         let (pos_tx, clock_s) = transmit_state(k, epoch.time_gps_s, p);
         let transit_s = match rx_m {
             Some(rx) => {
@@ -180,10 +257,13 @@ fn build(
             None => p / C_M_S,
         };
         let pos = rotate_earth(pos_tx, transit_s);
-        let group_delay_m = if opts.group_delay && group_delay_applies(id.system, &code.code) {
-            C_M_S * k.group_delay_s
-        } else {
-            0.0
+        let group_delay_m = match pair {
+            Some((_, d)) if opts.group_delay => d,
+            Some(_) => 0.0,
+            None if opts.group_delay && group_delay_applies(id.system, &code_name) => {
+                C_M_S * k.group_delay_s
+            }
+            None => 0.0,
         };
         let (mut az, mut el, mut iono_m, mut tropo_m) =
             (0.0, std::f64::consts::FRAC_PI_2, 0.0, 0.0);
@@ -195,11 +275,11 @@ fn build(
                 rejected.push((id, Rejection::BelowMask { elevation_rad: el }));
                 continue;
             }
-            if opts.iono {
+            if opts.iono && pair.is_none() {
                 if let Some(kb) = &nav.klobuchar {
                     let tow = epoch.time_gps_s.rem_euclid(WEEK_S);
                     let l1 = kb.delay_l1_m(g.lat_rad, g.lon_rad, az, el, tow);
-                    iono_m = scale_to_frequency(l1, carrier_hz(id.system, &code.code));
+                    iono_m = scale_to_frequency(l1, carrier_hz(id.system, &code_name));
                 }
             }
             if opts.tropo {
@@ -215,7 +295,7 @@ fn build(
                 position_m: pos,
                 sigma_m: None,
             },
-            code: code.code.clone(),
+            code: code_name,
             raw_pseudorange_m: p,
             elevation_rad: el,
             azimuth_rad: az,
@@ -271,5 +351,126 @@ pub fn prepare_epoch(
     match reference {
         Some(rx) => build(nav, epoch, opts, Some(rx), true),
         None => first,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Relative tolerance of the combination's closed forms (f64 rounding
+    /// of 2e7 m ranges).
+    const TOL_M: f64 = 1e-6;
+
+    fn kepler(system: System, group_delay_s: f64, group_delay_e5a_s: f64) -> Kepler {
+        Kepler {
+            system,
+            prn: 1,
+            toc_gps_s: 0.0,
+            toe_sow_s: 0.0,
+            af0_s: 0.0,
+            af1_s_s: 0.0,
+            af2_s_s2: 0.0,
+            sqrt_a_m05: 5153.0,
+            e: 0.0,
+            i0_rad: 0.0,
+            omega0_rad: 0.0,
+            omega_rad: 0.0,
+            m0_rad: 0.0,
+            delta_n_rad_s: 0.0,
+            omega_dot_rad_s: 0.0,
+            idot_rad_s: 0.0,
+            cuc_rad: 0.0,
+            cus_rad: 0.0,
+            crc_m: 0.0,
+            crs_m: 0.0,
+            cic_rad: 0.0,
+            cis_rad: 0.0,
+            group_delay_s,
+            group_delay_e5a_s,
+            health: 0,
+            iod: 0,
+        }
+    }
+
+    /// The noise factors against their published values: 2.59 (L1/L5,
+    /// the ADD's, `error_model::iono_free_factor_sq`), 2.98 (L1/L2), 3.53
+    /// (B1I/B3I); a single code has none.
+    #[test]
+    fn noise_factors() {
+        let l15 = iono_free_noise_factor(System::Gps, "C1C+C5Q").unwrap();
+        assert!((l15 * l15 - raim_core::araim::error_model::iono_free_factor_sq()).abs() < 1e-12);
+        assert!((iono_free_noise_factor(System::Galileo, "C1C+C5Q").unwrap() - l15).abs() < 1e-12);
+        let l12 = iono_free_noise_factor(System::Gps, "C1W+C2W").unwrap();
+        assert!((l12 - 2.978).abs() < 1e-3, "{l12}");
+        let b13 = iono_free_noise_factor(System::Beidou, "C2I+C6I").unwrap();
+        assert!((b13 - 3.53).abs() < 1e-2, "{b13}");
+        assert!(iono_free_noise_factor(System::Gps, "C1C").is_none());
+        assert!(iono_free_noise_factor(System::Gps, "C1C+C9X").is_none());
+    }
+
+    /// A first-order ionosphere (delay 40.3 TEC / f^2 on each code) leaves
+    /// the combination exactly; and the satellite hardware delays T1, T5a,
+    /// T5b of E1, E5a, E5b, whose broadcast BGDs are (T1 - Tx) / (1 -
+    /// (f1/fx)^2), are referred to the I/NAV clock (dt minus the E1/E5b
+    /// combination's delay): the corrected E1/E5a combination equals the
+    /// delay-free range, as the E1 single-frequency correction does.
+    #[test]
+    fn combination_removes_the_ionosphere_and_refers_to_the_inav_clock() {
+        let range_m = 2.3e7;
+        let tec = 4.0e17;
+        let iono = |f: f64| 40.3 * tec / (f * f);
+        let (f1, f5a, f5b) = (1_575.42e6, 1_176.45e6, 1_207.14e6);
+        let (t1, t5a, t5b) = (3.0e-9, -2.0e-9, 5.0e-9);
+        let c = C_M_S;
+        let bgd = |tx: f64, fx: f64| (t1 - tx) / (1.0 - (f1 / fx).powi(2));
+        let (bgd_a, bgd_b) = (bgd(t5a, f5a), bgd(t5b, f5b));
+        let k = kepler(System::Galileo, bgd_b, bgd_a);
+        // The I/NAV clock's own offset: the E1/E5b combination's delay.
+        let g_b = (f1 / f5b).powi(2);
+        let t_if_b = (g_b * t1 - t5b) / (g_b - 1.0);
+        let p1 = range_m + iono(f1) + c * t1;
+        let p5a = range_m + iono(f5a) + c * t5a;
+        let (p, delay_m) = iono_free(System::Galileo, "C1C+C5Q", p1, p5a, &k).unwrap();
+        // corrected = P + c dt_inav - group delay, dt_inav = -T_IF(E1,E5b).
+        let corrected = p - c * t_if_b - delay_m;
+        assert!(
+            (corrected - range_m).abs() < TOL_M * 10.0,
+            "{}",
+            corrected - range_m
+        );
+        // E1 alone with BGD(E1,E5b), iono removed: the same range.
+        let e1 = p1 - iono(f1) - c * t_if_b - c * bgd_b;
+        assert!((e1 - range_m).abs() < TOL_M * 10.0, "{}", e1 - range_m);
+        // GPS L1/L2 P(Y): the LNAV clock's own combination, no delay.
+        let (f2, t2) = (1_227.60e6, 1.0e-9);
+        let g = (f1 / f2).powi(2);
+        let t_if = (g * t1 - t2) / (g - 1.0);
+        let (p, delay_m) = iono_free(
+            System::Gps,
+            "C1W+C2W",
+            range_m + iono(f1) + c * t1,
+            range_m + iono(f2) + c * t2,
+            &kepler(System::Gps, 0.0, 0.0),
+        )
+        .unwrap();
+        assert_eq!(delay_m, 0.0);
+        assert!((p - c * t_if - range_m).abs() < TOL_M * 10.0);
+        // BeiDou B1I/B3I with the B3I clock: TGD1 = T1 - T3.
+        let (fb1, fb3, tb1, tb3) = (F_B1I_HZ, 1_268.52e6, 4.0e-9, 1.5e-9);
+        let (p, delay_m) = iono_free(
+            System::Beidou,
+            "C2I+C6I",
+            range_m + iono(fb1) + c * tb1,
+            range_m + iono(fb3) + c * tb3,
+            &kepler(System::Beidou, tb1 - tb3, 0.0),
+        )
+        .unwrap();
+        let corrected = p - c * tb3 - delay_m;
+        assert!(
+            (corrected - range_m).abs() < TOL_M * 10.0,
+            "{}",
+            corrected - range_m
+        );
     }
 }

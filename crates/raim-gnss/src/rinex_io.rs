@@ -202,6 +202,12 @@ impl NavData {
                 _ => get("tgd"),
             }
             .unwrap_or(0.0);
+            let group_delay_e5a_s = match (system, key.msgtype) {
+                (System::Galileo, NavMessageType::FNAV) => None,
+                (System::Galileo, _) => get("bgdE5aE1"),
+                _ => None,
+            }
+            .unwrap_or(0.0);
             let fields = (
                 get("toe"),
                 get("sqrta"),
@@ -241,6 +247,7 @@ impl NavData {
                 cic_rad: get("cic").unwrap_or(0.0),
                 cis_rad: get("cis").unwrap_or(0.0),
                 group_delay_s,
+                group_delay_e5a_s,
                 health: health_word(get("health")),
                 iod: ["iode", "iodnav", "aode"]
                     .iter()

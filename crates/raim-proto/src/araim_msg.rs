@@ -15,11 +15,11 @@ use raim_core::araim::{
     AraimConfig, AraimError, AraimOutput, FdeAlarm, FdeDecision, Limits, PlOutput, Unavailable,
 };
 use raim_core::measurement::MAX_SYSTEMS;
-use raim_core::{Decision, LinearObservation, Real, SatId, System};
+use raim_core::{Decision, LinearObservation, RangeObservation, Real, SatId, System};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{FieldName, WireError};
-use crate::message::{LinearEpoch, SatList};
+use crate::message::{LinearEpoch, RangeEpoch, SatList};
 use crate::CAPACITY;
 
 /// The ISM entry of one satellite (ADD ISM content; SPEC §9.1).
@@ -142,6 +142,14 @@ pub enum AraimCommand {
         ism: IsmFrame,
         tag: crate::auth::Tag,
     },
+    /// One pseudorange epoch (the unit's normal input, as `Command::Ranges`)
+    /// through ARAIM (protocol 8): the unit linearises it at its
+    /// all-in-view Gauss-Newton solution (ranges and residuals in f64),
+    /// takes the lines of sight and elevations there, C_int/C_acc from the
+    /// ISM and the ADD elevation model, and runs ARAIM and FDE as for
+    /// `Epoch`. Answered `AraimAnswer::Result` with `position_ecef_m`, or a
+    /// typed error (the snapshot solver's for bad ranges).
+    Ranges(RangeEpoch),
 }
 
 /// The host's borrowed form of [`AraimCommand`] (same bytes).
@@ -156,6 +164,11 @@ pub enum AraimCommandRef<'a> {
         counter: u64,
         ism: IsmFrameRef<'a>,
         tag: crate::auth::Tag,
+    },
+    Ranges {
+        time_s: f64,
+        apriori_m: Option<[f64; 3]>,
+        sats: &'a [RangeObservation],
     },
 }
 
@@ -279,7 +292,8 @@ pub enum WireFde {
         mode: u32,
         consts: u8,
     },
-    /// No single-event subset passes all its own tests.
+    /// No candidate subset (single-event, then multi-event) passes all
+    /// its own tests.
     NoCandidate,
     /// Two consistent candidates that do not nest: never a silent pick.
     Ambiguous {
@@ -297,6 +311,15 @@ pub enum WireFde {
     NotAttempted {
         modes: u32,
     },
+    /// The exclusion search would process more candidate subsets than the
+    /// device's work budget allows (`server::araim::FDE_WORK_BUDGET`,
+    /// kept within the watchdog period): `candidates` through the stage
+    /// not started, `budget` the maximum for this epoch's mode count.
+    /// Nothing excluded; the epoch is an `Alarm`. (Appended: protocol 8.)
+    BudgetExceeded {
+        candidates: u32,
+        budget: u32,
+    },
 }
 
 impl From<FdeDecision> for WireFde {
@@ -312,6 +335,12 @@ impl From<FdeDecision> for WireFde {
                 first: u32_of(first),
                 second: u32_of(second),
             },
+            FdeDecision::Alarm(FdeAlarm::BudgetExceeded { candidates, budget }) => {
+                WireFde::BudgetExceeded {
+                    candidates: u32_of(candidates),
+                    budget: u32_of(budget),
+                }
+            }
         }
     }
 }
@@ -339,6 +368,13 @@ pub struct WireAraimResult {
     /// `None` when it is undefined (no PL, modes not enumerated). The host
     /// divides its window by it for dT_e (issue 13).
     pub n_star_vertical: Option<f64>,
+    /// The ECEF position in force (m) for a pseudorange epoch
+    /// (`AraimCommand::Ranges`): the linearisation point plus the ARAIM
+    /// solution's correction, the subset's after an exclusion, the
+    /// all-in-view one otherwise (also when the verdict is `Alarm` or
+    /// `Unavailable`: the verdict says whether it may be used). `None` for
+    /// a linearised epoch (no ECEF point) (protocol 8).
+    pub position_ecef_m: Option<[f64; 3]>,
 }
 
 impl WireAraimResult {

@@ -78,7 +78,9 @@ pub const CAPACITY: usize = raim_core::DEFAULT_CAPACITY;
 /// 6: `Status` gains uart_overruns, rx_ring_overflows, alarm_output,
 /// alarm_pin_asserted and auth_provisioned (issue 15, appended).
 /// 7: `WireAraimResult` gains `n_star_vertical` (issue 13, appended).
-pub const PROTOCOL_VERSION: u16 = 7;
+/// 8: `AraimCommand::Ranges` (ARAIM from a pseudorange epoch) and
+/// `WireAraimResult::position_ecef_m` (issue 12, appended).
+pub const PROTOCOL_VERSION: u16 = 8;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes

@@ -221,3 +221,45 @@ impl Twin {
         fw
     }
 }
+
+/// A pseudorange epoch (protocol 8, `AraimCommand::Ranges`) built from a
+/// linearised scenario: a receiver at `RECEIVER_ECEF_M` (near ESBC), each
+/// satellite on its scenario line of sight at 20,000-23,000 km, pseudorange
+/// = geometric range + the constellation's receiver clock + the scenario
+/// residual (fault included). The scenario's ISM applies unchanged.
+pub const RECEIVER_ECEF_M: [f64; 3] = [3_582_105.0, 532_589.0, 5_232_755.0];
+/// Receiver clock per system (m), `System::ALL` order.
+pub const CLOCK_M: [f64; MAX_SYSTEMS] = [1_234.5, 1_240.25, 0.0, 0.0, 0.0];
+
+pub fn ranges_of(s: &Scenario) -> Vec<raim_core::RangeObservation> {
+    let g = raim_core::frames::ecef_to_geodetic(RECEIVER_ECEF_M);
+    let r = raim_core::frames::enu_rotation(&g);
+    s.obs
+        .iter()
+        .enumerate()
+        .map(|(i, o)| {
+            let l = o.los_enu;
+            let norm = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+            let range_m = 2.0e7 + 1.0e5 * i as f64;
+            let u = raim_core::frames::unrotate(&r, [l[0] / norm, l[1] / norm, l[2] / norm]);
+            raim_core::RangeObservation {
+                id: o.id,
+                pseudorange_m: range_m + CLOCK_M[o.id.system.index()] + o.residual_m,
+                position_m: [
+                    RECEIVER_ECEF_M[0] + range_m * u[0],
+                    RECEIVER_ECEF_M[1] + range_m * u[1],
+                    RECEIVER_ECEF_M[2] + range_m * u[2],
+                ],
+                sigma_m: o.sigma_m,
+            }
+        })
+        .collect()
+}
+
+pub fn ranges_command(time_s: f64, sats: &[raim_core::RangeObservation]) -> CommandRef<'_> {
+    CommandRef::Araim(AraimCommandRef::Ranges {
+        time_s,
+        apriori_m: None,
+        sats,
+    })
+}

@@ -1,16 +1,42 @@
 //! ARAIM exclusion (issue 12), after a failed solution-separation test.
 //!
-//! Candidates: the single-event modes (each satellite, each
-//! constellation) whose subset is monitorable. Each candidate subset is
-//! processed as an epoch of its own (its own fault modes, K_fa,
+//! Candidates, in two stages: first the single-event modes (each
+//! satellite, each constellation); then, only when none of those is
+//! consistent, the multi-event modes of the all-in-view list (satellite
+//! pairs, satellite + constellation, ...: every monitored mode with two or
+//! more events). Only monitorable modes are candidates. Each candidate
+//! subset is processed as an epoch of its own (its own fault modes, K_fa,
 //! thresholds), and it is *consistent* when every one of its own tests
-//! passes. Decision:
-//! - no consistent candidate: alarm (`NoCandidate`);
+//! passes. Decision, on the consistent candidates of the stage that found
+//! any:
+//! - none in either stage: alarm (`NoCandidate`);
 //! - the consistent candidates all contain one of them (e.g. satellite G5
-//!   and the GPS constellation, which contains G5): exclude that smallest
-//!   one, since every other consistent explanation removes it too;
+//!   and the GPS constellation, which contains G5; or the pair {G5, E11}
+//!   and {G5} + Galileo): exclude that smallest one, since every other
+//!   consistent explanation removes it too;
 //! - otherwise two consistent candidates that do not nest: the data
 //!   cannot tell them apart, alarm (`Ambiguous`), never a silent pick.
+//!
+//! Why stages and not all candidates at once: a single fault leaves every
+//! pair that holds the faulty satellite consistent too (they nest), but
+//! also, by chance, a pair that does not (they do not nest: a needless
+//! alarm); and the multi-event search costs about the square of the
+//! single-event one. A multi-event exclusion is looked for only when no
+//! single event explains the data.
+//!
+//! Work budget ([`FdeBudget`]): the search processes each candidate
+//! subset as an epoch of its own, so its cost grows with the number of
+//! candidates it processes (stage 1's, then stage 2's). A caller with a
+//! deadline (the device, whose watchdog resets a unit that overruns)
+//! gives the maximum number of candidates; the number a stage needs is
+//! known before the stage starts (its monitorable modes), so a stage that
+//! would take the total beyond the budget is not started and the outcome
+//! is the alarm `BudgetExceeded`: never a pass, never a partial search
+//! that could pick a wrong candidate. It is returned exactly when the
+//! unlimited search would process more candidates than the budget, and
+//! otherwise the outcome is the unlimited one (test
+//! `budget_limited_fde_is_the_unlimited_one_or_budget_exceeded`). The
+//! host's default, [`Araim::fde`], is unlimited.
 //!
 //! After an exclusion of E, the protection levels are those of the
 //! remaining subset with its fault modes re-enumerated on it (its own
@@ -22,8 +48,10 @@
 //!     + sum_{k in modes(E)} p_k Q((PL - T_k,q^(E) - b_q^(E,k)) / sigma_q^(E,k))
 //!   = (1 / N_ex) PHMI_q (1 - P_unmon^(E) / (PHMI_VERT + PHMI_HOR)),
 //!
-//! N_ex the number of exclusions the FDE could have made (the monitorable
-//! single-event modes of the all-in-view list, each a candidate). Which
+//! N_ex the number of exclusions the FDE could have made: the monitorable
+//! modes of the all-in-view list, single-event and multi-event alike (each
+//! a candidate of one of the stages; with no multi-event modes, as at
+//! P_sat 1e-5, the single-event ones only). Which
 //! candidate passes is decided by the noise as much as by the fault: a
 //! wrong exclusion is one of these outcomes. Each outcome gets 1 / N_ex of
 //! the budget, so their union, P(HMI, some exclusion) <= sum_E P(HMI, E
@@ -33,20 +61,38 @@
 //! sum of p_j over the excluded satellites' states (the re-enumeration).
 
 use super::{Araim, AraimConfig, AraimError, AraimSat, Ism, ModeStatus};
-use crate::measurement::MAX_SYSTEMS;
 use crate::real::Real;
-
-/// Single-event candidates: 64 satellites + the constellations.
-const MAX_CANDIDATES: usize = super::MAX_SATS + MAX_SYSTEMS;
 
 /// Why an exclusion was not made.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum FdeAlarm {
-    /// No single-event subset passes all its own tests.
+    /// No candidate subset (single- or multi-event) passes all its own
+    /// tests.
     NoCandidate,
     /// Two consistent candidates (mode indices) that do not nest.
     Ambiguous { first: usize, second: usize },
+    /// The search would process more candidate subsets than the budget
+    /// allows: `candidates` is the number through the stage that was not
+    /// started (stage 1's, or stage 1's plus stage 2's), `budget` the
+    /// maximum. Nothing was excluded.
+    BudgetExceeded { candidates: usize, budget: usize },
+}
+
+/// The work the FDE may do: the maximum number of candidate subsets it
+/// processes (module doc, "Work budget"). The final run of the chosen
+/// subset (with its PLs) is not counted: it is one more subset.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FdeBudget {
+    pub max_candidates: usize,
+}
+
+impl FdeBudget {
+    /// No limit (the host's default).
+    pub const UNLIMITED: Self = Self {
+        max_candidates: usize::MAX,
+    };
 }
 
 /// The outcome of ARAIM FDE. (After an alarm the scratch engine holds
@@ -80,6 +126,74 @@ fn removed_sats<T: Real>(sats: &[AraimSat<T>], ev_sats: u64, consts: u8) -> u64 
     m
 }
 
+/// The number of events (satellites and constellations) of a mode.
+fn events_of<T>(mode: &super::FaultMode<T>) -> u32 {
+    mode.events.sats.count_ones() + mode.events.consts.count_ones()
+}
+
+/// The two stages of the candidate search.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Stage {
+    Single,
+    Multi,
+}
+
+/// The consistent candidates of one stage, folded as they come (no list:
+/// a stage may hold up to K of them). A candidate contained in all the
+/// others is the one whose removed set equals their intersection.
+#[derive(Default)]
+struct Found {
+    /// The first consistent candidate (mode index, removed satellites).
+    first: Option<(usize, u64)>,
+    /// The second one, and the first that does not nest with `first`.
+    second: Option<usize>,
+    clash: Option<usize>,
+    /// The intersection of all the removed sets.
+    meet: u64,
+    /// The candidate with the fewest removed satellites (the first such).
+    smallest: Option<(usize, u64)>,
+}
+
+impl Found {
+    fn add(&mut self, k: usize, removed: u64) {
+        match self.first {
+            None => {
+                self.first = Some((k, removed));
+                self.meet = removed;
+            }
+            Some((_, c)) => {
+                if self.second.is_none() {
+                    self.second = Some(k);
+                }
+                if self.clash.is_none() && removed & c != c && removed & c != removed {
+                    self.clash = Some(k);
+                }
+                self.meet &= removed;
+            }
+        }
+        if self
+            .smallest
+            .is_none_or(|(_, s)| removed.count_ones() < s.count_ones())
+        {
+            self.smallest = Some((k, removed));
+        }
+    }
+
+    /// The candidate to exclude, or the alarm.
+    fn decide(&self) -> Result<(usize, u64), FdeAlarm> {
+        let Some((k0, _)) = self.first else {
+            return Err(FdeAlarm::NoCandidate);
+        };
+        match self.smallest {
+            Some((k, removed)) if removed == self.meet => Ok((k, removed)),
+            _ => Err(FdeAlarm::Ambiguous {
+                first: k0,
+                second: self.clash.or(self.second).unwrap_or(k0),
+            }),
+        }
+    }
+}
+
 impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
     /// The output of the last `process`.
     pub fn output(&self) -> &super::AraimOutput<T, K> {
@@ -87,9 +201,9 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
     }
 
     /// Runs the exclusion logic of the module doc on the epoch last
-    /// processed by `self` (same `cfg`, `ism`, `sats`). `scratch` is used
-    /// for the candidate subsets; after `Excluded` it holds the chosen
-    /// subset's output.
+    /// processed by `self` (same `cfg`, `ism`, `sats`), without a work
+    /// limit. `scratch` is used for the candidate subsets; after
+    /// `Excluded` it holds the chosen subset's output.
     pub fn fde(
         &self,
         cfg: &AraimConfig,
@@ -97,50 +211,70 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         sats: &[AraimSat<T>],
         scratch: &mut Araim<T, N, K>,
     ) -> Result<FdeDecision, AraimError> {
+        self.fde_within(cfg, ism, sats, scratch, FdeBudget::UNLIMITED)
+    }
+
+    /// [`Self::fde`] within `budget`: the alarm `BudgetExceeded` when the
+    /// search would process more candidates than the budget (module doc,
+    /// "Work budget"), otherwise the same outcome.
+    pub fn fde_within(
+        &self,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        sats: &[AraimSat<T>],
+        scratch: &mut Araim<T, N, K>,
+        budget: FdeBudget,
+    ) -> Result<FdeDecision, AraimError> {
         if self.out.detection_passed {
             return Ok(FdeDecision::NoFault);
         }
         let mut subset = [AraimSat::<T>::default(); N];
-        // (mode index, removed satellite mask) of the consistent candidates.
-        let mut found: heapless::Vec<(usize, u64), MAX_CANDIDATES> = heapless::Vec::new();
-        let mut n_ex = 0usize;
-        for (k, mode) in self.out.modes.iter().enumerate() {
-            let ev = mode.events;
-            if mode.status != ModeStatus::Monitored
-                || ev.sats.count_ones() + ev.consts.count_ones() != 1
-            {
-                continue;
-            }
-            n_ex += 1;
-            let removed = removed_sats(sats, ev.sats, ev.consts);
-            if self.consistent(cfg, ism, sats, removed, &mut subset, scratch, None)? {
-                // Single-event modes number at most 64 + 5: never full.
-                let _ = found.push((k, removed));
+        // N_ex: every candidate the search could return, single-event and
+        // multi-event alike (module doc, "Exclusion risk").
+        let (mut n_single, mut n_multi) = (0usize, 0usize);
+        for mode in self.out.modes.iter() {
+            if mode.status == ModeStatus::Monitored {
+                match events_of(mode) {
+                    1 => n_single += 1,
+                    _ => n_multi += 1,
+                }
             }
         }
-        let Some(&(k0, _)) = found.first() else {
-            return Ok(FdeDecision::Alarm(FdeAlarm::NoCandidate));
-        };
-        // The smallest candidate: contained in every other one.
-        let minimal = found
-            .iter()
-            .find(|(_, c)| found.iter().all(|(_, o)| o & c == *c))
-            .copied();
-        let Some((k, removed)) = minimal else {
-            let second = found
-                .iter()
-                .skip(1)
-                .find(|(_, o)| {
-                    let c = found.first().map(|f| f.1).unwrap_or(0);
-                    o & c != c && o & c != *o
-                })
-                .or(found.get(1))
-                .map(|f| f.0)
-                .unwrap_or(k0);
-            return Ok(FdeDecision::Alarm(FdeAlarm::Ambiguous {
-                first: k0,
-                second,
-            }));
+        let n_ex = n_single + n_multi;
+        // Stage 1, the single-event candidates; stage 2, only when no
+        // single event explains the data, the multi-event ones.
+        let mut found = Found::default();
+        for stage in [Stage::Single, Stage::Multi] {
+            // The candidates processed once this stage is done; a stage
+            // that would exceed the budget is not started.
+            let through = match stage {
+                Stage::Single => n_single,
+                Stage::Multi => n_ex,
+            };
+            if through > budget.max_candidates {
+                return Ok(FdeDecision::Alarm(FdeAlarm::BudgetExceeded {
+                    candidates: through,
+                    budget: budget.max_candidates,
+                }));
+            }
+            for (k, mode) in self.out.modes.iter().enumerate() {
+                let ev = mode.events;
+                let single = events_of(mode) == 1;
+                if mode.status != ModeStatus::Monitored || single != (stage == Stage::Single) {
+                    continue;
+                }
+                let removed = removed_sats(sats, ev.sats, ev.consts);
+                if self.consistent(cfg, ism, sats, removed, &mut subset, scratch, None)? {
+                    found.add(k, removed);
+                }
+            }
+            if found.first.is_some() {
+                break;
+            }
+        }
+        let (k, removed) = match found.decide() {
+            Ok(c) => c,
+            Err(alarm) => return Ok(FdeDecision::Alarm(alarm)),
         };
         // Leave the chosen subset's output in the scratch engine, its PLs
         // with the exclusion risk: 1 / N_ex of the budget (module doc).

@@ -244,7 +244,7 @@ mod brute_force {
 
     pub(super) struct Dense {
         /// Position rows of S (3 x n, zero columns for removed satellites).
-        s: DMatrix<f64>,
+        pub(super) s: DMatrix<f64>,
         p_diag: [f64; 3],
         kappa: f64,
     }
@@ -299,7 +299,7 @@ mod brute_force {
         Normal::standard().sf(z)
     }
 
-    fn q_inv(p: f64) -> f64 {
+    pub(super) fn q_inv(p: f64) -> f64 {
         -Normal::standard().inverse_cdf(p)
     }
 
@@ -1052,5 +1052,374 @@ mod fde_tests {
             }
         }
         assert!(early > 100, "{early}");
+    }
+}
+
+/// FDE with multi-event candidates (fde.rs, stage 2) against a dense
+/// brute force: every candidate subset gets a fresh dense WLS of each of
+/// its own re-enumerated fault modes (all event combinations up to its own
+/// N_fault,max, the constellation/own-satellite merge), its own K_fa and
+/// thresholds; the decision rule is applied to the brute-force verdicts.
+mod fde_multi {
+    extern crate std;
+    use super::brute_force::{dense_subset, q_inv};
+    use super::*;
+    use nalgebra::DVector;
+    use std::vec::Vec;
+
+    /// The brute force's FDE outcome (removed-satellite masks).
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    enum Dense {
+        NoFault,
+        Excluded(u64),
+        NoCandidate,
+        Ambiguous,
+    }
+
+    /// A mode of an independent enumeration: its removed satellites and
+    /// whether it holds one event.
+    struct Mode {
+        removed: u64,
+        single: bool,
+    }
+
+    /// Every combination of 1..=r events of `sats` (satellites, then the
+    /// constellations in use), without a constellation together with one
+    /// of its own satellites (merged: same subset), r the smallest count
+    /// with P(more than r events) <= P_THRES (exact Poisson-binomial
+    /// counts); None when r would exceed 4.
+    fn enumerate(sats: &[AraimSat<f64>], ism: &Ism, p_thres: f64) -> Option<Vec<Mode>> {
+        let consts: Vec<usize> = (0..5)
+            .filter(|&j| ism.p_const[j].is_some())
+            .filter(|&j| sats.iter().any(|s| s.id.system.index() == j))
+            .collect();
+        let mut probs: Vec<f64> = sats.iter().map(|s| s.p_sat).collect();
+        probs.extend(consts.iter().map(|&j| ism.p_const[j].unwrap()));
+        let n_ev = probs.len();
+        let mut exact = std::vec![0.0f64; n_ev + 1];
+        exact[0] = 1.0;
+        for &p in &probs {
+            for j in (0..=n_ev).rev() {
+                exact[j] = exact[j] * (1.0 - p) + if j > 0 { exact[j - 1] * p } else { 0.0 };
+            }
+        }
+        let r = (0..=4).find(|&r| exact[r + 1..].iter().sum::<f64>() <= p_thres)?;
+        let mut modes = Vec::new();
+        for combo in 1u64..(1u64 << n_ev) {
+            let k = combo.count_ones() as usize;
+            if k > r {
+                continue;
+            }
+            let mut removed = combo & ((1u64 << sats.len()) - 1);
+            let mut clash = false;
+            for (c, &j) in consts.iter().enumerate() {
+                if combo & (1u64 << (sats.len() + c)) != 0 {
+                    for (i, s) in sats.iter().enumerate() {
+                        if s.id.system.index() == j {
+                            clash |= removed & (1 << i) != 0 && combo & (1 << i) != 0;
+                            removed |= 1 << i;
+                        }
+                    }
+                }
+            }
+            if !clash {
+                modes.push(Mode {
+                    removed,
+                    single: k == 1,
+                });
+            }
+        }
+        Some(modes)
+    }
+
+    /// The subset of `sats` without `removed`, with its ISM.
+    fn subset(sats: &[AraimSat<f64>], ism: &Ism, removed: u64) -> (Vec<AraimSat<f64>>, Ism) {
+        let sub: Vec<AraimSat<f64>> = sats
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| removed & (1 << i) == 0)
+            .map(|(_, s)| *s)
+            .collect();
+        let mut sub_ism = Ism::default();
+        for s in &sub {
+            sub_ism.p_const[s.id.system.index()] = ism.p_const[s.id.system.index()];
+        }
+        (sub, sub_ism)
+    }
+
+    /// Whether the epoch passes all its own tests (dense, mode by mode).
+    fn passes(sats: &[AraimSat<f64>], ism: &Ism, cfg: &AraimConfig) -> bool {
+        let Some(d0) = dense_subset(sats, ism, 0) else {
+            return false;
+        };
+        let Some(modes) = enumerate(sats, ism, cfg.p_thres) else {
+            return false;
+        };
+        let dense: Vec<_> = modes
+            .iter()
+            .filter_map(|m| dense_subset(sats, ism, m.removed))
+            .collect();
+        if dense.is_empty() {
+            return false;
+        }
+        let nm = dense.len() as f64;
+        let k = [
+            q_inv(cfg.pfa_hor / (4.0 * nm)),
+            q_inv(cfg.pfa_hor / (4.0 * nm)),
+            q_inv(cfg.pfa_vert / (2.0 * nm)),
+        ];
+        let y = DVector::from_iterator(sats.len(), sats.iter().map(|s| s.residual_m));
+        dense.iter().all(|dk| {
+            let diff = &dk.s - &d0.s;
+            let sep = &diff * &y;
+            (0..3).all(|q| {
+                let ss = (0..sats.len())
+                    .map(|i| diff[(q, i)].powi(2) * sats[i].c_acc_m2)
+                    .sum::<f64>()
+                    .sqrt();
+                sep[q].abs() <= k[q] * ss
+            })
+        })
+    }
+
+    /// The brute-force FDE, and N_ex (the monitorable candidates).
+    fn dense_fde(sats: &[AraimSat<f64>], ism: &Ism, cfg: &AraimConfig) -> (Dense, usize, usize) {
+        if passes(sats, ism, cfg) {
+            return (Dense::NoFault, 0, 0);
+        }
+        let modes: Vec<Mode> = enumerate(sats, ism, cfg.p_thres)
+            .unwrap()
+            .into_iter()
+            .filter(|m| dense_subset(sats, ism, m.removed).is_some())
+            .collect();
+        let mut pairs = 0;
+        for stage in [true, false] {
+            let found: Vec<u64> = modes
+                .iter()
+                .filter(|m| m.single == stage)
+                .map(|m| m.removed)
+                .filter(|&r| {
+                    let (sub, sub_ism) = subset(sats, ism, r);
+                    passes(&sub, &sub_ism, cfg)
+                })
+                .collect();
+            if !stage {
+                pairs = found.iter().filter(|r| r.count_ones() == 2).count();
+            }
+            if found.is_empty() {
+                continue;
+            }
+            let d = match found.iter().find(|&&c| found.iter().all(|&o| o & c == c)) {
+                Some(&c) => Dense::Excluded(c),
+                None => Dense::Ambiguous,
+            };
+            return (d, modes.len(), pairs);
+        }
+        (Dense::NoCandidate, modes.len(), pairs)
+    }
+
+    /// Runs the engine's FDE; checks it against the brute force (decision
+    /// and N_ex). Returns the brute force's decision and its number of
+    /// consistent removed sets of two satellites in stage 2.
+    fn check(sats: &[AraimSat<f64>], ism: &Ism) -> (Dense, usize) {
+        let cfg = AraimConfig::default();
+        let mut main = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        let mut scratch = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        main.process(&cfg, ism, sats).unwrap();
+        let d = main.fde(&cfg, ism, sats, &mut scratch).unwrap();
+        let (want, n_ex, pairs) = dense_fde(sats, ism, &cfg);
+        let got = match d {
+            FdeDecision::NoFault => Dense::NoFault,
+            FdeDecision::Excluded { sats: removed, .. } => {
+                let share = scratch.integrity_budget_share();
+                assert!((share - 1.0 / n_ex as f64).abs() < 1e-15, "N_ex {n_ex}");
+                assert!(scratch.output().detection_passed);
+                Dense::Excluded(removed)
+            }
+            FdeDecision::Alarm(FdeAlarm::NoCandidate) => Dense::NoCandidate,
+            FdeDecision::Alarm(FdeAlarm::Ambiguous { .. }) => Dense::Ambiguous,
+            FdeDecision::Alarm(FdeAlarm::BudgetExceeded { .. }) => {
+                panic!("unlimited FDE out of budget: {d:?}")
+            }
+        };
+        assert_eq!(got, want, "{d:?}");
+        (want, pairs)
+    }
+
+    fn sky14(seed: u64) -> Vec<AraimSat<f64>> {
+        let mut rng = crate::testutil::Rng::new(seed);
+        let mut sats = random_sky(&mut rng, 14, &[System::Gps, System::Galileo], 1e-4);
+        for s in sats.iter_mut() {
+            s.residual_m = 0.0;
+        }
+        sats
+    }
+
+    /// Two simultaneous 40 m faults, one GPS and one Galileo satellite, on
+    /// a sky whose modes include the pairs (P_sat 1e-4): no single event
+    /// is consistent, the brute force finds exactly one consistent
+    /// satellite pair, and the engine excludes exactly that pair (the
+    /// pair + constellation candidates that also pass contain it).
+    #[test]
+    fn two_faults_exclude_the_one_consistent_pair() {
+        let sats0 = sky14(77);
+        let ism = ge_ism(1e-4);
+        let gps: Vec<usize> = (0..14)
+            .filter(|&i| sats0[i].id.system == System::Gps)
+            .collect();
+        let gal: Vec<usize> = (0..14)
+            .filter(|&i| sats0[i].id.system != System::Gps)
+            .collect();
+        let mut pair_exclusions = 0;
+        let mut cases = 0;
+        for (&a, &b) in gps.iter().zip(gal.iter()) {
+            let mut sats = sats0.clone();
+            sats[a].residual_m = 40.0;
+            sats[b].residual_m = -40.0;
+            let (d, pairs) = check(&sats, &ism);
+            cases += 1;
+            if d == Dense::Excluded((1 << a) | (1 << b)) {
+                assert_eq!(pairs, 1, "{a} {b}");
+                pair_exclusions += 1;
+            }
+        }
+        std::eprintln!("{pair_exclusions} pair exclusions of {cases}");
+        assert!(pair_exclusions >= 3, "{pair_exclusions} of {cases}");
+    }
+
+    /// Random skies (8-14 satellites, G+E, pairs monitored), noise and one
+    /// to three faults of 10-60 m: the engine's FDE equals the brute force
+    /// on every epoch, and every outcome occurs: no fault, a single and a
+    /// pair exclusion, an ambiguity between candidates that do not nest,
+    /// and no consistent candidate.
+    #[test]
+    fn random_faults_match_brute_force_fde() {
+        let mut rng = crate::testutil::Rng::new(1212);
+        let ism = ge_ism(1e-4);
+        let mut seen = [0usize; 5];
+        for trial in 0..60 {
+            let n = 8 + trial % 7;
+            let mut sats = random_sky(&mut rng, n, &[System::Gps, System::Galileo], 1e-4);
+            let faults = 1 + trial % 3;
+            for _ in 0..faults {
+                let i = (rng.uniform() * n as f64) as usize % n;
+                let sign = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+                sats[i].residual_m += sign * (10.0 + 50.0 * rng.uniform());
+            }
+            let (d, _) = check(&sats, &ism);
+            let slot = match d {
+                Dense::NoFault => 0,
+                Dense::Excluded(r) if r.count_ones() == 1 => 1,
+                Dense::Excluded(_) => 2,
+                Dense::Ambiguous => 3,
+                Dense::NoCandidate => 4,
+            };
+            seen[slot] += 1;
+        }
+        std::eprintln!("no fault, single, multi, ambiguous, no candidate: {seen:?}");
+        assert!(seen.iter().all(|&c| c > 0), "{seen:?}");
+    }
+
+    /// The candidates the unlimited search processes, counted by the brute
+    /// force: the monitorable single-event modes, plus the multi-event
+    /// ones when no single event is consistent (0 when the epoch passes).
+    fn dense_candidates(sats: &[AraimSat<f64>], ism: &Ism, cfg: &AraimConfig) -> usize {
+        if passes(sats, ism, cfg) {
+            return 0;
+        }
+        let modes: Vec<Mode> = enumerate(sats, ism, cfg.p_thres)
+            .unwrap()
+            .into_iter()
+            .filter(|m| dense_subset(sats, ism, m.removed).is_some())
+            .collect();
+        let singles: Vec<&Mode> = modes.iter().filter(|m| m.single).collect();
+        let stage1 = singles.iter().any(|m| {
+            let (sub, sub_ism) = subset(sats, ism, m.removed);
+            passes(&sub, &sub_ism, cfg)
+        });
+        if stage1 {
+            singles.len()
+        } else {
+            modes.len()
+        }
+    }
+
+    /// The budget-limited FDE (`fde_within`) on the random epochs of
+    /// `random_faults_match_brute_force_fde`, at budgets around the
+    /// brute force's candidate count: `BudgetExceeded` exactly when the
+    /// unlimited search needs more candidates than the budget (its
+    /// `candidates` above the budget and at most the need), otherwise
+    /// the unlimited outcome with the same subset output (PLs bit for
+    /// bit).
+    #[test]
+    fn budget_limited_fde_is_the_unlimited_one_or_budget_exceeded() {
+        use crate::araim::fde::FdeBudget;
+        let mut rng = crate::testutil::Rng::new(1212);
+        let ism = ge_ism(1e-4);
+        let cfg = AraimConfig::default();
+        let mut main = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        let mut scratch = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        let mut scratch_b = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        let (mut exceeded, mut kept, mut stage2_needed) = (0, 0, 0);
+        for trial in 0..60 {
+            let n = 8 + trial % 7;
+            let mut sats = random_sky(&mut rng, n, &[System::Gps, System::Galileo], 1e-4);
+            let faults = 1 + trial % 3;
+            for _ in 0..faults {
+                let i = (rng.uniform() * n as f64) as usize % n;
+                let sign = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+                sats[i].residual_m += sign * (10.0 + 50.0 * rng.uniform());
+            }
+            let need = dense_candidates(&sats, &ism, &cfg);
+            main.process(&cfg, &ism, &sats).unwrap();
+            let free = main.fde(&cfg, &ism, &sats, &mut scratch).unwrap();
+            let singles = main
+                .output()
+                .modes
+                .iter()
+                .filter(|m| {
+                    m.status == crate::araim::ModeStatus::Monitored
+                        && m.events.sats.count_ones() + m.events.consts.count_ones() == 1
+                })
+                .count();
+            if need > singles {
+                stage2_needed += 1;
+            }
+            for budget in [0, 1, singles, need.saturating_sub(1), need, need + 1, 5000] {
+                let limited = main
+                    .fde_within(
+                        &cfg,
+                        &ism,
+                        &sats,
+                        &mut scratch_b,
+                        FdeBudget {
+                            max_candidates: budget,
+                        },
+                    )
+                    .unwrap();
+                if need > budget {
+                    match limited {
+                        FdeDecision::Alarm(FdeAlarm::BudgetExceeded {
+                            candidates,
+                            budget: b,
+                        }) => {
+                            assert_eq!(b, budget);
+                            assert!(candidates > budget && candidates <= need, "{candidates}");
+                        }
+                        other => panic!("trial {trial} budget {budget} need {need}: {other:?}"),
+                    }
+                    exceeded += 1;
+                } else {
+                    assert_eq!(limited, free, "trial {trial} budget {budget} need {need}");
+                    if let FdeDecision::Excluded { .. } = free {
+                        assert_eq!(scratch_b.output().pl_exact, scratch.output().pl_exact);
+                        assert_eq!(scratch_b.output().pl_add, scratch.output().pl_add);
+                    }
+                    kept += 1;
+                }
+            }
+        }
+        std::eprintln!("exceeded {exceeded}, kept {kept}, stage 2 needed {stage2_needed}");
+        assert!(exceeded > 0 && kept > 0 && stage2_needed > 0);
     }
 }

@@ -22,7 +22,15 @@ use super::Server;
 use crate::araim_msg::{AraimAnswer, AraimCommand, AraimWireError, IsmFrame, IsmFrameRef, IsmSat};
 use crate::auth::{AuthKey, Tag};
 use crate::error::WireError;
-use crate::message::{LinearEpoch, ResponseBody};
+use crate::message::{LinearEpoch, RangeEpoch, ResponseBody};
+
+/// An ARAIM epoch as it arrived: linearised, or pseudoranges. (Without the
+/// `araim` feature it is only refused, `Disabled`.)
+#[cfg_attr(not(feature = "araim"), allow(dead_code))]
+enum Input<'a> {
+    Linear(&'a LinearEpoch),
+    Ranges(&'a RangeEpoch),
+}
 use crate::CAPACITY;
 
 /// Fault modes the device engine holds (per engine; the FDE scratch has as
@@ -46,7 +54,44 @@ pub const MAX_MODES: usize = 600;
 /// instruction took 1.5 cycles. So the limit is now the engine's mode
 /// capacity: exclusion is attempted whenever the modes fit (it was 64
 /// while FDE re-ran a full ARAIM epoch per candidate, 140 M for 22 modes).
+/// Those figures are stage 1's; the multi-event stage 2 costs about the
+/// square of the mode count and is bounded by `FDE_WORK_BUDGET`.
 pub const MAX_FDE_MODES: u32 = 600;
+
+/// The FDE's work budget, in candidate-modes: the search may process at
+/// most `FDE_WORK_BUDGET / m` candidate subsets when the all-in-view run
+/// has `m` monitored modes (`raim_core::araim::fde::FdeBudget`); beyond
+/// it the epoch is an `Alarm`, `WireFde::BudgetExceeded`, decided before
+/// the stage that would overrun is started. Why per mode: a candidate is
+/// a subset processed as an epoch of its own with about `m` modes, so a
+/// search costs about (candidates x m) x c. The firmware's watchdog
+/// period is 2 s; at 168 MHz and an assumed 1.5 cycles per instruction it
+/// allows 224 M instructions per epoch. Measured under QEMU with the f32
+/// engines (BENCHMARKS.md, "ARAIM FDE work budget"): the costliest epochs
+/// the budget admits are stage-2 searches at 326 monitored modes (24
+/// satellites, 106 k candidate-modes): 115-119 M guest instructions for a
+/// pair exclusion, 130 M for an `Ambiguous` alarm (10 m on two
+/// satellites: more candidates pass all their tests, no early exit);
+/// scaled by (331/326)^2 to the largest mode count admitted to stage 2
+/// (331), ~134 M: ~1.2 s at 1.5 cycles per instruction, 60 % of the
+/// period (a margin of 1.67; 1.6 s even at 2 cycles per instruction).
+/// Stage 1 is admitted at every mode count up to the capacity (at most
+/// ~36 single events x 600 modes = 22 k; 563 modes: 95 M). The 563-mode
+/// stage 2 (32 satellites), 347 M or ~3.1 s, is `BudgetExceeded` after
+/// its stage 1 (67 M). The budget counts candidates, not tests: an epoch
+/// where far more candidates pass all their own tests than in the
+/// measured sweep would cost more per candidate (docs/ARAIM.md, "FDE work
+/// budget").
+pub const FDE_WORK_BUDGET: u32 = 110_000;
+
+/// The FDE budget for an all-in-view run with `monitored` modes.
+#[cfg_attr(not(feature = "araim"), allow(dead_code))]
+pub(crate) fn fde_budget(monitored: u32) -> raim_core::araim::fde::FdeBudget {
+    let per = FDE_WORK_BUDGET / monitored.max(1);
+    raim_core::araim::fde::FdeBudget {
+        max_candidates: usize::try_from(per).unwrap_or(usize::MAX),
+    }
+}
 
 /// CRC-32/ISO-HDLC, as `frame::CRC32`; a static so that a digest can
 /// borrow it.
@@ -312,7 +357,8 @@ impl Server {
                     }
                 }
             },
-            AraimCommand::Epoch(e) => self.araim_epoch(&e, platform),
+            AraimCommand::Epoch(e) => self.araim_epoch(&Input::Linear(&e), platform),
+            AraimCommand::Ranges(e) => self.araim_epoch(&Input::Ranges(&e), platform),
         };
         match answer {
             Ok(a) => ResponseBody::Araim(a),
@@ -334,7 +380,7 @@ impl Server {
     /// integrity-alarm output like a snapshot epoch's (`Platform::on_epoch`).
     fn araim_epoch<P: super::Platform>(
         &mut self,
-        epoch: &LinearEpoch,
+        epoch: &Input<'_>,
         platform: &mut P,
     ) -> Result<AraimAnswer, WireError> {
         let r = self.araim_epoch_answer(epoch, platform);
@@ -347,7 +393,7 @@ impl Server {
 
     fn araim_epoch_answer<P: super::Platform>(
         &mut self,
-        epoch: &LinearEpoch,
+        epoch: &Input<'_>,
         platform: &mut P,
     ) -> Result<AraimAnswer, WireError> {
         #[cfg(feature = "araim")]
@@ -355,15 +401,22 @@ impl Server {
             let Some(ism) = self.araim.ism.as_ref() else {
                 return Err(WireError::Araim(AraimWireError::NoIsm));
             };
-            if epoch.sats.overflowed() {
+            let (overflowed, declared) = match epoch {
+                Input::Linear(e) => (e.sats.overflowed(), e.sats.declared),
+                Input::Ranges(e) => (e.sats.overflowed(), e.sats.declared),
+            };
+            if overflowed {
                 return Err(WireError::TooManySatellites {
-                    have: epoch.sats.declared,
+                    have: declared,
                     capacity: CAPACITY as u32,
                 });
             }
             self.status.epochs = self.status.epochs.wrapping_add(1);
             let t0 = platform.now();
-            let r = self.araim.engine.run(ism, epoch);
+            let r = match epoch {
+                Input::Linear(e) => self.araim.engine.run(ism, e),
+                Input::Ranges(e) => self.araim.engine.run_ranges(&self.config, ism, e),
+            };
             let t1 = platform.now();
             self.status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
             r.map(AraimAnswer::Result)
@@ -383,12 +436,15 @@ mod engine {
     use raim_core::araim::{Araim, AraimConfig, AraimSat, FdeDecision, Ism, PlOutput, Unavailable};
     use raim_core::{Decision, Real};
 
-    use super::{AraimWireError, IsmFrame, MAX_FDE_MODES, MAX_MODES};
+    use super::{fde_budget, AraimWireError, IsmFrame, MAX_FDE_MODES, MAX_MODES};
     use crate::araim_msg::{AraimSummary, WireAraimResult, WireFde};
     use crate::error::WireError;
-    use crate::message::LinearEpoch;
+    use crate::message::{LinearEpoch, RangeEpoch};
     use crate::CAPACITY;
+    use raim_core::frames::{enu_rotation, rotate, unrotate};
     use raim_core::measurement::MAX_SYSTEMS;
+    use raim_core::solve::{solve_into, Solution};
+    use raim_core::{Config, Epoch, LinearObservation};
 
     /// The unit's ARAIM precision, on every build: `f32`, the M4F's FPU
     /// (docs/CORE.md "Precision": subset solutions and PLs are f32 on the
@@ -399,11 +455,15 @@ mod engine {
 
     type Engine = Araim<AraimT, CAPACITY, MAX_MODES>;
 
-    /// The engine, the FDE's scratch engine and the epoch's satellites.
+    /// The engine, the FDE's scratch engine, the epoch's satellites and,
+    /// for a pseudorange epoch, its Gauss-Newton solution and linearised
+    /// form (static, so the main loop's stack carries none of them).
     pub(super) struct Engines {
         main: Engine,
         scratch: Engine,
         sats: [AraimSat<AraimT>; CAPACITY],
+        solution: Solution<CAPACITY, AraimT>,
+        lin: [LinearObservation; CAPACITY],
     }
 
     impl Engines {
@@ -412,137 +472,281 @@ mod engine {
                 main: Engine::new(),
                 scratch: Engine::new(),
                 sats: [AraimSat::default(); CAPACITY],
+                solution: Solution::empty(),
+                lin: [LinearObservation::default(); CAPACITY],
             }
         }
 
-        /// One epoch: the satellites from the epoch and the ISM, ARAIM all
-        /// in view, FDE after a detection.
+        /// One linearised epoch: the satellites from the epoch and the ISM,
+        /// ARAIM all in view, FDE after a detection.
         pub(super) fn run(
             &mut self,
             ism: &IsmFrame,
             epoch: &LinearEpoch,
         ) -> Result<WireAraimResult, WireError> {
-            let mut p_const = [None; MAX_SYSTEMS];
-            let mut n = 0;
-            for (i, o) in epoch.sats.items.iter().enumerate() {
-                let Some(entry) = ism.sats.items.iter().find(|s| s.id == o.id) else {
-                    return Err(WireError::Araim(AraimWireError::NotInIsm {
-                        id: o.id,
-                        index: u32::try_from(i).unwrap_or(u32::MAX),
-                    }));
-                };
-                let j = o.id.system.index();
-                if let (Some(dst), Some(src)) = (p_const.get_mut(j), ism.p_const.get(j)) {
-                    *dst = *src;
-                }
-                if let Some(s) = o.sigma_m {
-                    if !(s > 0.0) || !s.is_finite() {
-                        return Err(WireError::NonPositiveSigma {
-                            index: u32::try_from(i).unwrap_or(u32::MAX),
-                            sigma_m: s,
-                        });
-                    }
-                }
-                // The ADD's G row is minus the line of sight.
-                let g = o.los_enu.map(|v| AraimT::of(-v));
-                let nominal_m2 = match o.sigma_m {
-                    // The host's own sigma of the tropo + airborne terms.
-                    Some(s) => s * s,
-                    None => nominal_variance_m2(&o.los_enu),
-                };
-                let (ura, ure) = (entry.sigma_ura_m, entry.sigma_ure_m);
-                let c_int_m2 = AraimT::of(ura * ura + nominal_m2);
-                let c_acc_m2 = AraimT::of(ure * ure + nominal_m2);
-                if let Some(slot) = self.sats.get_mut(i) {
-                    *slot = AraimSat {
-                        id: o.id,
-                        g_enu: g,
-                        c_int_m2,
-                        c_acc_m2,
-                        b_nom_m: AraimT::of(entry.b_nom_m),
-                        p_sat: entry.p_sat,
-                        residual_m: AraimT::of(o.residual_m),
-                    };
-                    n += 1;
-                }
-            }
-            let sats = self.sats.get(..n).unwrap_or(&[]);
-            let cfg = AraimConfig::from(ism.config);
-            let ism = Ism { p_const };
-            let pl_exact = ism_pl_exact(&cfg);
-            let out = self.main.process(&cfg, &ism, sats)?;
-            let all_in_view = AraimSummary::from_output(out, pl_exact);
-            // Seed 003's N* (vertical, at the PL reported), issue 13.
-            let pl_kind = if pl_exact {
-                PlOutput::Exact
-            } else {
-                PlOutput::AddBracket
-            };
-            let n_star_vertical = effective_samples(out, 2, pl_kind).ok().map(|e| e.n_star);
-            // No test was run when the modes could not be enumerated.
-            let untested = matches!(
-                out.unavailable,
-                Some(Unavailable::ModeCapacity { .. } | Unavailable::TooManyEvents { .. })
-            );
-            if untested || (!out.detection_passed && all_in_view.monitored > MAX_FDE_MODES) {
-                let (decision, fde) = if untested {
-                    (Decision::Unavailable, WireFde::NotTested)
+            let Engines {
+                main,
+                scratch,
+                sats,
+                ..
+            } = self;
+            evaluate(main, scratch, sats, ism, epoch.time_s, &epoch.sats.items).map(|r| r.0)
+        }
+
+        /// One pseudorange epoch (`AraimCommand::Ranges`): Gauss-Newton all
+        /// in view with the snapshot configuration in force (`cfg`: its
+        /// iteration limit, convergence and, as weights, its sigma model;
+        /// ranges and residuals in f64, the steps in `AraimT`), then the
+        /// linearised epoch at that solution x0: per satellite the unit line
+        /// of sight in ENU at x0 and the residual
+        /// `pseudorange - |sat - x0| - clock(system)`, all in f64 (docs/CORE.md
+        /// "Precision"); the range model is the snapshot solver's. ARAIM and
+        /// FDE then run on it as on a linearised epoch, and the position in
+        /// force is x0 plus the ENU correction of the solution in force
+        /// (all in view, or the excluded subset's).
+        pub(super) fn run_ranges(
+            &mut self,
+            cfg: &Config,
+            ism: &IsmFrame,
+            epoch: &RangeEpoch,
+        ) -> Result<WireAraimResult, WireError> {
+            let Engines {
+                main,
+                scratch,
+                sats,
+                solution,
+                lin,
+            } = self;
+            let obs = &epoch.sats.items;
+            // The pseudorange inputs' checks before the solver (its own
+            // check is crate-private), typed with field and index; sigma,
+            // duplicates and the ISM are checked by `evaluate`.
+            let finite = |field: &'static str, index: usize, value: f64| {
+                if value.is_finite() {
+                    Ok(())
                 } else {
-                    (
-                        Decision::Alarm,
-                        WireFde::NotAttempted {
-                            modes: all_in_view.monitored,
-                        },
-                    )
-                };
-                return Ok(WireAraimResult {
-                    time_s: epoch.time_s,
-                    decision,
-                    all_in_view,
-                    fde,
-                    excluded: heapless::Vec::new(),
-                    after_exclusion: None,
-                    n_star_vertical: None,
-                });
-            }
-            let (fde, after_exclusion) = if out.detection_passed {
-                (FdeDecision::NoFault, None)
-            } else {
-                let d = self.main.fde(&cfg, &ism, sats, &mut self.scratch)?;
-                let after = match d {
-                    FdeDecision::Excluded { .. } => {
-                        Some(AraimSummary::from_output(self.scratch.output(), pl_exact))
-                    }
-                    _ => None,
-                };
-                (d, after)
+                    Err(WireError::from(raim_core::RaimError::NotFinite {
+                        field,
+                        index,
+                        value,
+                    }))
+                }
             };
-            let mut excluded = heapless::Vec::new();
-            if let FdeDecision::Excluded { sats: mask, .. } = fde {
-                for (i, s) in sats.iter().enumerate() {
-                    if i < 64 && mask & (1u64 << i) != 0 {
-                        // At most CAPACITY satellites: never full.
-                        let _ = excluded.push(s.id);
-                    }
+            finite("time_s", 0, epoch.time_s)?;
+            for v in epoch.apriori_m.iter().flatten() {
+                finite("apriori_m", 0, *v)?;
+            }
+            for (i, o) in obs.iter().enumerate() {
+                finite("pseudorange_m", i, o.pseudorange_m)?;
+                for v in o.position_m {
+                    finite("position_m", i, v)?;
                 }
             }
-            let decision = match (&fde, &after_exclusion) {
-                (FdeDecision::NoFault, _) if all_in_view.available() => Decision::Ok,
-                (FdeDecision::NoFault, _) => Decision::Unavailable,
-                (FdeDecision::Excluded { .. }, Some(a)) if a.available() => Decision::Excluded,
-                (FdeDecision::Excluded { .. }, _) => Decision::Unavailable,
-                (FdeDecision::Alarm(_), _) => Decision::Alarm,
+            let mut mask = [false; CAPACITY];
+            for m in mask.iter_mut().take(obs.len()) {
+                *m = true;
+            }
+            let ep = Epoch::ranges(epoch.time_s, obs, epoch.apriori_m);
+            solve_into(cfg, &ep, &mask, solution)?;
+            let (Some(x0), Some(geo)) = (solution.position_ecef_m, solution.geodetic) else {
+                // A solution that ends off the Earth's surface has no local
+                // frame for the elevation model.
+                return Err(WireError::from(raim_core::RaimError::OutOfRange {
+                    field: "position_radius_m",
+                    value: libm::sqrt(
+                        solution
+                            .position_ecef_m
+                            .map(|p| p[0] * p[0] + p[1] * p[1] + p[2] * p[2])
+                            .unwrap_or(0.0),
+                    ),
+                    min: 5.0e6,
+                    max: f64::INFINITY,
+                }));
             };
-            Ok(WireAraimResult {
-                time_s: epoch.time_s,
+            let rot = enu_rotation(&geo);
+            let mut n = 0;
+            for (o, slot) in obs.iter().zip(lin.iter_mut()) {
+                let d = [
+                    o.position_m[0] - x0[0],
+                    o.position_m[1] - x0[1],
+                    o.position_m[2] - x0[2],
+                ];
+                let range_m = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                let u = rotate(&rot, [d[0] / range_m, d[1] / range_m, d[2] / range_m]);
+                let clock_m = solution
+                    .clock_m
+                    .get(o.id.system.index())
+                    .copied()
+                    .flatten()
+                    .unwrap_or(0.0);
+                *slot = LinearObservation {
+                    id: o.id,
+                    los_enu: u,
+                    residual_m: o.pseudorange_m - range_m - clock_m,
+                    sigma_m: o.sigma_m,
+                };
+                n += 1;
+            }
+            let lin = lin.get(..n).unwrap_or(&[]);
+            let (mut result, correction) = evaluate(main, scratch, sats, ism, epoch.time_s, lin)?;
+            let shift = unrotate(&rot, correction.map(|c| c.to_f64()));
+            result.position_ecef_m = Some([x0[0] + shift[0], x0[1] + shift[1], x0[2] + shift[2]]);
+            Ok(result)
+        }
+    }
+
+    /// ARAIM all in view on the linearised satellites `obs` and the ISM,
+    /// FDE after a detection; the result and the ENU position correction
+    /// of the solution in force (the subset's after an exclusion).
+    fn evaluate(
+        main: &mut Engine,
+        scratch: &mut Engine,
+        buf: &mut [AraimSat<AraimT>; CAPACITY],
+        ism: &IsmFrame,
+        time_s: f64,
+        obs: &[LinearObservation],
+    ) -> Result<(WireAraimResult, [AraimT; 3]), WireError> {
+        let r = evaluate_result(main, scratch, buf, ism, time_s, obs)?;
+        let correction = if r.after_exclusion.is_some() {
+            scratch.output().correction_enu_m
+        } else {
+            main.output().correction_enu_m
+        };
+        Ok((r, correction))
+    }
+
+    fn evaluate_result(
+        main: &mut Engine,
+        scratch: &mut Engine,
+        buf: &mut [AraimSat<AraimT>; CAPACITY],
+        ism: &IsmFrame,
+        time_s: f64,
+        obs: &[LinearObservation],
+    ) -> Result<WireAraimResult, WireError> {
+        let mut p_const = [None; MAX_SYSTEMS];
+        let mut n = 0;
+        for (i, o) in obs.iter().enumerate() {
+            let Some(entry) = ism.sats.items.iter().find(|s| s.id == o.id) else {
+                return Err(WireError::Araim(AraimWireError::NotInIsm {
+                    id: o.id,
+                    index: u32::try_from(i).unwrap_or(u32::MAX),
+                }));
+            };
+            let j = o.id.system.index();
+            if let (Some(dst), Some(src)) = (p_const.get_mut(j), ism.p_const.get(j)) {
+                *dst = *src;
+            }
+            if let Some(s) = o.sigma_m {
+                if !(s > 0.0) || !s.is_finite() {
+                    return Err(WireError::NonPositiveSigma {
+                        index: u32::try_from(i).unwrap_or(u32::MAX),
+                        sigma_m: s,
+                    });
+                }
+            }
+            // The ADD's G row is minus the line of sight.
+            let g = o.los_enu.map(|v| AraimT::of(-v));
+            let nominal_m2 = match o.sigma_m {
+                // The host's own sigma of the tropo + airborne terms.
+                Some(s) => s * s,
+                None => nominal_variance_m2(&o.los_enu),
+            };
+            let (ura, ure) = (entry.sigma_ura_m, entry.sigma_ure_m);
+            let c_int_m2 = AraimT::of(ura * ura + nominal_m2);
+            let c_acc_m2 = AraimT::of(ure * ure + nominal_m2);
+            if let Some(slot) = buf.get_mut(i) {
+                *slot = AraimSat {
+                    id: o.id,
+                    g_enu: g,
+                    c_int_m2,
+                    c_acc_m2,
+                    b_nom_m: AraimT::of(entry.b_nom_m),
+                    p_sat: entry.p_sat,
+                    residual_m: AraimT::of(o.residual_m),
+                };
+                n += 1;
+            }
+        }
+        let sats = buf.get(..n).unwrap_or(&[]);
+        let cfg = AraimConfig::from(ism.config);
+        let ism = Ism { p_const };
+        let pl_exact = ism_pl_exact(&cfg);
+        let out = main.process(&cfg, &ism, sats)?;
+        let all_in_view = AraimSummary::from_output(out, pl_exact);
+        // Seed 003's N* (vertical, at the PL reported), issue 13.
+        let pl_kind = if pl_exact {
+            PlOutput::Exact
+        } else {
+            PlOutput::AddBracket
+        };
+        let n_star_vertical = effective_samples(out, 2, pl_kind).ok().map(|e| e.n_star);
+        // No test was run when the modes could not be enumerated.
+        let untested = matches!(
+            out.unavailable,
+            Some(Unavailable::ModeCapacity { .. } | Unavailable::TooManyEvents { .. })
+        );
+        if untested || (!out.detection_passed && all_in_view.monitored > MAX_FDE_MODES) {
+            let (decision, fde) = if untested {
+                (Decision::Unavailable, WireFde::NotTested)
+            } else {
+                (
+                    Decision::Alarm,
+                    WireFde::NotAttempted {
+                        modes: all_in_view.monitored,
+                    },
+                )
+            };
+            return Ok(WireAraimResult {
+                time_s,
                 decision,
                 all_in_view,
-                fde: fde.into(),
-                excluded,
-                after_exclusion,
-                n_star_vertical,
-            })
+                fde,
+                excluded: heapless::Vec::new(),
+                after_exclusion: None,
+                n_star_vertical: None,
+                position_ecef_m: None,
+            });
         }
+        let (fde, after_exclusion) = if out.detection_passed {
+            (FdeDecision::NoFault, None)
+        } else {
+            // Within the work budget: the watchdog (FDE_WORK_BUDGET).
+            let d =
+                main.fde_within(&cfg, &ism, sats, scratch, fde_budget(all_in_view.monitored))?;
+            let after = match d {
+                FdeDecision::Excluded { .. } => {
+                    Some(AraimSummary::from_output(scratch.output(), pl_exact))
+                }
+                _ => None,
+            };
+            (d, after)
+        };
+        let mut excluded = heapless::Vec::new();
+        if let FdeDecision::Excluded { sats: mask, .. } = fde {
+            for (i, s) in sats.iter().enumerate() {
+                if i < 64 && mask & (1u64 << i) != 0 {
+                    // At most CAPACITY satellites: never full.
+                    let _ = excluded.push(s.id);
+                }
+            }
+        }
+        let decision = match (&fde, &after_exclusion) {
+            (FdeDecision::NoFault, _) if all_in_view.available() => Decision::Ok,
+            (FdeDecision::NoFault, _) => Decision::Unavailable,
+            (FdeDecision::Excluded { .. }, Some(a)) if a.available() => Decision::Excluded,
+            (FdeDecision::Excluded { .. }, _) => Decision::Unavailable,
+            (FdeDecision::Alarm(_), _) => Decision::Alarm,
+        };
+        Ok(WireAraimResult {
+            time_s,
+            decision,
+            all_in_view,
+            fde: fde.into(),
+            excluded,
+            after_exclusion,
+            n_star_vertical,
+            position_ecef_m: None,
+        })
     }
 
     /// The ADD's nominal variance sigma_tropo^2 + sigma_user^2 (m^2) of
@@ -1247,5 +1451,159 @@ mod tests {
             r.all_in_view.unavailable,
             Some(crate::araim_msg::WireUnavailable::ModeCapacity { needed, capacity: 600 }) if needed > 600
         ));
+    }
+
+    /// The FDE work budget (`FDE_WORK_BUDGET`): a pair fault on 24
+    /// satellites (327 modes, 326 monitored: 106 k candidate-modes) is
+    /// searched through stage 2 and the pair excluded; the same on 32
+    /// satellites (563 modes, 562 monitored: stage 2 would take 562
+    /// candidates, the budget is 195) is an `Alarm`
+    /// with `BudgetExceeded` on the wire and at the alarm output, never a
+    /// pass; a single fault there is still excluded in stage 1 (34
+    /// candidates). The core's unlimited FDE on the same 32-satellite
+    /// epoch does find the pair: the budget, not the data, is the cause.
+    #[test]
+    fn fde_work_budget_bounds_the_search() {
+        let mut l = Link::new();
+        let pair = |n: usize| {
+            let (ism, mut obs) = sky(n, 0, 100.0);
+            obs[n - 1].residual_m -= 100.0;
+            (ism, obs)
+        };
+        let (ism, obs) = pair(24);
+        l.ism(&ism, gal());
+        let r = result(&l.epoch(&obs)).clone();
+        assert_eq!(r.all_in_view.modes, 327);
+        let m = r.all_in_view.monitored;
+        assert!(m * m <= FDE_WORK_BUDGET, "{m}");
+        assert_eq!(r.excluded.as_slice(), &[obs[0].id, obs[23].id]);
+
+        let (ism, obs) = pair(32);
+        l.ism(&ism, gal());
+        let r = result(&l.epoch(&obs)).clone();
+        assert_eq!(r.all_in_view.modes, 563);
+        // Every monitored mode is a candidate (stage 1's and stage 2's).
+        let m = r.all_in_view.monitored;
+        assert_eq!(
+            r.fde,
+            WireFde::BudgetExceeded {
+                candidates: m,
+                budget: FDE_WORK_BUDGET / m,
+            }
+        );
+        assert_eq!(r.decision, Decision::Alarm);
+        assert!(r.excluded.is_empty() && r.after_exclusion.is_none());
+        assert_eq!(l.heard.0.last(), Some(&Some(Decision::Alarm)));
+        let mut monitor = crate::alert::AlertMonitor::new(10);
+        monitor.on_epoch(0, Some(r.decision));
+        assert_eq!(monitor.output(0), crate::alert::AlarmOutput::Alarm);
+
+        // The unlimited core FDE on the same epoch: the pair.
+        let mut sats = Vec::new();
+        for o in &obs {
+            let g = o.los_enu.map(|v| -v);
+            let nom = super::engine::nominal_variance_m2(&o.los_enu);
+            sats.push(raim_core::araim::AraimSat::<f64> {
+                id: o.id,
+                g_enu: g,
+                c_int_m2: 0.75 * 0.75 + nom,
+                c_acc_m2: 0.5 * 0.5 + nom,
+                b_nom_m: 0.5,
+                p_sat: 1e-5,
+                residual_m: o.residual_m,
+            });
+        }
+        let core_ism = raim_core::araim::Ism { p_const: gal() };
+        let cfg = AraimConfig::from(WireAraimConfig::default());
+        let mut main = std::boxed::Box::new(raim_core::araim::Araim::<f64, 32, 600>::new());
+        let mut scratch = std::boxed::Box::new(raim_core::araim::Araim::<f64, 32, 600>::new());
+        main.process(&cfg, &core_ism, &sats).unwrap();
+        let d = main.fde(&cfg, &core_ism, &sats, &mut scratch).unwrap();
+        assert!(
+            matches!(d, raim_core::araim::FdeDecision::Excluded { sats, .. } if sats == (1 | 1 << 31)),
+            "{d:?}"
+        );
+
+        let (ism, obs) = sky(32, 0, 100.0);
+        l.ism(&ism, gal());
+        let r = result(&l.epoch(&obs)).clone();
+        assert!(matches!(r.fde, WireFde::Excluded { .. }), "{:?}", r.fde);
+        assert_eq!(r.excluded.as_slice(), &[obs[0].id]);
+    }
+
+    /// A pseudorange epoch (protocol 8) against the same sky sent
+    /// linearised at the truth: the device-side Gauss-Newton and
+    /// linearisation change nothing that matters (same decision, FDE and
+    /// excluded set; PLs within 1 mm: the lines of sight move by |x0 - x|
+    /// / 2e7 rad), and the position is the truth within the residuals'
+    /// effect (< 1 m; a linearised epoch has none). Bad input is typed.
+    #[test]
+    fn pseudorange_epoch_matches_the_linearised_one() {
+        /// The PL agreement of the two forms (m).
+        const PL_TOL_M: f64 = 1e-3;
+        let x = [3_582_105.0, 532_589.0, 5_232_755.0];
+        let rot = raim_core::frames::enu_rotation(&raim_core::frames::ecef_to_geodetic(x));
+        let to_ranges = |obs: &[LinearObservation]| -> Vec<raim_core::RangeObservation> {
+            obs.iter()
+                .enumerate()
+                .map(|(i, o)| {
+                    let rho = 2.0e7 + 1.0e5 * i as f64;
+                    let u = raim_core::frames::unrotate(&rot, o.los_enu);
+                    let clock = if o.id.system == System::Gps {
+                        1234.5
+                    } else {
+                        1240.25
+                    };
+                    raim_core::RangeObservation {
+                        id: o.id,
+                        pseudorange_m: rho + clock + o.residual_m,
+                        position_m: [x[0] + rho * u[0], x[1] + rho * u[1], x[2] + rho * u[2]],
+                        sigma_m: None,
+                    }
+                })
+                .collect()
+        };
+        for (faulty, fault_m) in [(usize::MAX, 0.0), (5, 100.0)] {
+            let (ism, obs) = sky(20, faulty, fault_m);
+            let mut l = Link::new();
+            l.ism(&ism, gal());
+            let lin = l.epoch(&obs);
+            let ranges = to_ranges(&obs);
+            let rng = l.ask(CommandRef::Araim(AraimCommandRef::Ranges {
+                time_s: 1.0,
+                apriori_m: None,
+                sats: &ranges,
+            }));
+            let (a, b) = (result(&lin), result(&rng));
+            assert_eq!((a.decision, a.fde), (b.decision, b.fde), "{faulty}");
+            assert_eq!(a.excluded, b.excluded);
+            for (p, q) in [
+                (a.in_force().vpl_exact_m, b.in_force().vpl_exact_m),
+                (a.in_force().hpl_exact_m, b.in_force().hpl_exact_m),
+            ] {
+                assert!((p - q).abs() <= PL_TOL_M, "{p} {q}");
+            }
+            assert!(a.position_ecef_m.is_none());
+            let p = b.position_ecef_m.unwrap();
+            let d = ((p[0] - x[0]).powi(2) + (p[1] - x[1]).powi(2) + (p[2] - x[2]).powi(2)).sqrt();
+            assert!(d < 1.0, "{d}");
+            if faulty == 5 {
+                assert_eq!(b.excluded.as_slice(), &[obs[5].id]);
+            }
+            let mut nan = ranges.clone();
+            nan[2].position_m[1] = f64::NAN;
+            let r = l.ask(CommandRef::Araim(AraimCommandRef::Ranges {
+                time_s: 2.0,
+                apriori_m: None,
+                sats: &nan,
+            }));
+            assert!(
+                matches!(
+                    &r.body,
+                    ResponseBody::Error(WireError::NonFinite { index: 2, .. })
+                ),
+                "{r:?}"
+            );
+        }
     }
 }

@@ -362,9 +362,41 @@ fn obliquity(el_rad: f64) -> f64 {
     1.0 / (1.0 - c * c).sqrt()
 }
 
+/// DO-229's airborne tropospheric sigma (m) at elevation `el_rad`: the
+/// tropo term of `error_model::nominal_variance_m2`, split off to rescale
+/// the airborne term alone.
+fn tropo_sigma_m(el_rad: f64) -> f64 {
+    let s = el_rad.sin();
+    0.12 * 1.001 / (0.002001 + s * s).sqrt()
+}
+
+/// The ADD nominal variance (m^2) at `el_rad` for a satellite ranged with
+/// `code`: the model as it is (L1/L5 iono-free multipath and noise curves,
+/// factor 2.59) for a single code and for an L1/L5-type pair; for another
+/// iono-free pair (L1/L2: 2.98, B1I/B3I: 3.53) the airborne term scaled by
+/// (its factor / 2.59)^2: the same per-frequency curves through that
+/// combination (docs/ARAIM.md "Iono-free replay").
+fn nominal_variance_m2(el_rad: f64, system: System, code: Option<&str>) -> f64 {
+    let v = error_model::nominal_variance_m2(el_rad);
+    match code.and_then(|c| raim_gnss::ranging::iono_free_noise_factor(system, c)) {
+        Some(k) => {
+            let t2 = tropo_sigma_m(el_rad).powi(2);
+            t2 + (v - t2) * (k * k / error_model::iono_free_factor_sq())
+        }
+        None => v,
+    }
+}
+
 /// The linearised ARAIM epoch at `x0` (ECEF): G rows (ENU, ADD sign),
-/// residuals, C_int/C_acc from the ADD model at the elevation seen from x0.
-fn linearise(a: &AraimReplayArgs, sats: &[RangeObservation], x0: [f64; 3]) -> Vec<AraimSat<f64>> {
+/// residuals, C_int/C_acc from the ADD model at the elevation seen from x0
+/// (with the noise factor of each satellite's iono-free pair, if any, from
+/// the prepared epoch `e`).
+fn linearise(
+    a: &AraimReplayArgs,
+    sats: &[RangeObservation],
+    x0: [f64; 3],
+    e: &PreparedEpoch,
+) -> Vec<AraimSat<f64>> {
     let rot = enu_rotation(&ecef_to_geodetic(x0));
     sats.iter()
         .map(|s| {
@@ -376,8 +408,14 @@ fn linearise(a: &AraimReplayArgs, sats: &[RangeObservation], x0: [f64; 3]) -> Ve
             let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
             let u = rotate(&rot, [d[0] / r, d[1] / r, d[2] / r]);
             let el = u[2].clamp(-1.0, 1.0).asin();
-            let (mut c_int, mut c_acc) =
-                error_model::variances_m2(el.max(0.0), a.araim_ura_m, a.araim_ure_m);
+            let code = e
+                .sats
+                .iter()
+                .find(|p| p.obs.id == s.id)
+                .map(|p| p.code.as_str());
+            let v = nominal_variance_m2(el.max(0.0), s.id.system, code);
+            let mut c_int = a.araim_ura_m * a.araim_ura_m + v;
+            let mut c_acc = a.araim_ure_m * a.araim_ure_m + v;
             let iono = a.araim_iono_m * obliquity(el);
             c_int += iono * iono;
             c_acc += iono * iono;
@@ -411,6 +449,19 @@ fn epoch_ism(ism: &Ism, sats: &[RangeObservation]) -> Ism {
     out
 }
 
+/// The (VPL, HPL) of an output when they were solved: available, or
+/// unavailable for the limits only. A structural cause (`Unmonitored`,
+/// `PlNotSolved`, `ModeCapacity`, `TooManyEvents`) leaves no PL (the
+/// output's fields are 0 then, which is not a bound).
+fn solved_pls<const K: usize>(out: &raim_core::araim::AraimOutput<f64, K>) -> Option<(f64, f64)> {
+    match out.unavailable {
+        None | Some(raim_core::araim::Unavailable::Limits) => {
+            Some((out.pl_add.vpl_m, out.pl_add.hpl_m))
+        }
+        Some(_) => None,
+    }
+}
+
 /// One epoch: relinearise at the all-in-view solution, process, FDE.
 fn epoch(
     a: &AraimReplayArgs,
@@ -425,7 +476,7 @@ fn epoch(
         .reference_m
         .ok_or_else(|| anyhow!("no linearisation point"))?;
     let ism = epoch_ism(ism, sats);
-    let mut lin = linearise(a, sats, x0);
+    let mut lin = linearise(a, sats, x0, e);
     for _ in 0..LIN_MAX_ITER {
         let out = engine
             .process(cfg, &ism, &lin)
@@ -434,7 +485,7 @@ fn epoch(
         let rot = enu_rotation(&ecef_to_geodetic(x0));
         let d = unrotate(&rot, corr);
         x0 = [x0[0] + d[0], x0[1] + d[1], x0[2] + d[2]];
-        lin = linearise(a, sats, x0);
+        lin = linearise(a, sats, x0, e);
         if corr.iter().map(|c| c * c).sum::<f64>().sqrt() < LIN_TOL_M {
             break;
         }
@@ -460,15 +511,15 @@ fn epoch(
     };
     let unavailable = out.unavailable.map(|u| format!("{u:?}"));
     let available = out.available();
-    let pls = (out.pl_add.vpl_m, out.pl_add.hpl_m);
+    let pls = solved_pls(out);
     let fde = engine
         .fde(cfg, &ism, &lin, scratch)
         .map_err(|e| anyhow!("{e:?}"))?;
     Ok(match fde {
         FdeDecision::NoFault => {
             rec.fde = "no_fault".into();
-            rec.vpl_m = Some(pls.0);
-            rec.hpl_m = Some(pls.1);
+            rec.vpl_m = pls.map(|p| p.0);
+            rec.hpl_m = pls.map(|p| p.1);
             rec.available = available;
             rec.unavailable = unavailable;
             Some(all_in_view)
@@ -482,8 +533,9 @@ fn epoch(
                 .map(|(_, s)| name(s.id))
                 .collect();
             let sub = scratch.output();
-            rec.vpl_m = Some(sub.pl_add.vpl_m);
-            rec.hpl_m = Some(sub.pl_add.hpl_m);
+            let pls = solved_pls(sub);
+            rec.vpl_m = pls.map(|p| p.0);
+            rec.hpl_m = pls.map(|p| p.1);
             rec.available = sub.available();
             rec.unavailable = sub.unavailable.map(|u| format!("{u:?}"));
             // The subset's correction is relative to the same x0.
@@ -495,6 +547,7 @@ fn epoch(
             rec.fde = match cause {
                 FdeAlarm::Ambiguous { .. } => "alarm_ambiguous",
                 FdeAlarm::NoCandidate => "alarm_no_candidate",
+                FdeAlarm::BudgetExceeded { .. } => "alarm_budget_exceeded",
             }
             .into();
             rec.available = false;
