@@ -32,6 +32,7 @@ pub mod modes;
 pub mod pca;
 pub mod pl;
 pub mod subset;
+pub mod tail;
 #[cfg(test)]
 pub(crate) mod tests;
 

@@ -10,6 +10,7 @@
 //! Evaluated in `f64`: the terms are handed over as `f64` whatever the
 //! engine's precision, since they sit deep in the normal tail.
 
+use super::tail::q_and_pdf;
 use crate::stats::dist::normal_q_inv;
 
 /// Convergence of the exact root (m).
@@ -19,8 +20,6 @@ const LAST_STEP_M: f64 = 1e-6;
 /// Iteration cap of either search (never reached on valid input: the
 /// bisection halves a bracket of at most a few hundred metres).
 const MAX_ITER: usize = 200;
-
-const INV_SQRT_2PI: f64 = 0.398_942_280_401_432_7;
 
 /// One term p Q((x - offset) / sigma) of the PL equation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -60,17 +59,6 @@ const Z_CUT: f64 = 10.0;
 const Q_CUT: f64 = 7.619_853_024_160_527e-24;
 /// Distinct priors whose quantiles are cached per bracket.
 const CACHE: usize = 16;
-
-/// Q(z) (erfc-based, no tail correction: its relative error is a few
-/// z^2 ulp) and the density phi(z), sharing nothing but the argument.
-#[inline]
-fn q_and_pdf(z: f64) -> (f64, f64) {
-    let e = libm::exp(-0.5 * z * z);
-    (
-        0.5 * libm::erfc(z * core::f64::consts::FRAC_1_SQRT_2),
-        INV_SQRT_2PI * e,
-    )
-}
 
 /// The two quantile memos of one right-hand side (the bracket's lower and
 /// upper ends). The east and north axes share one: same right-hand side,
