@@ -227,6 +227,8 @@ pub struct Araim<T, const N: usize, const K: usize> {
     const_status: [Option<Deficient>; MAX_SYSTEMS],
     scratch: Base<T, N>,
     events: Vec<ModeEvents, K>,
+    /// The PL search's active terms (pl.rs, the fold).
+    pl_terms: [pl::Term; K],
     out: AraimOutput<T, K>,
     budget_share: f64,
 }
@@ -242,6 +244,7 @@ impl<T: Real, const N: usize, const K: usize> Default for Araim<T, N, K> {
             const_status: [None; MAX_SYSTEMS],
             scratch: Base::default(),
             events: Vec::new(),
+            pl_terms: [pl::Term::default(); K],
             out: AraimOutput::default(),
             budget_share: 1.0,
         }
@@ -720,7 +723,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             } else {
                 &mut horizontal
             };
-            match eq.solve_cached(cfg.tol_pl_m, cache) {
+            match eq.solve_cached(cfg.tol_pl_m, cache, &mut self.pl_terms) {
                 Some(s) => {
                     if let (Some(e), Some(a)) = (exact.get_mut(q), add.get_mut(q)) {
                         *e = s.exact_m;
