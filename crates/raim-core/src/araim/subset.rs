@@ -331,10 +331,10 @@ pub fn coupling<T: Real, const N: usize>(
         }
     }
 }
-/// the module doc (the all-in-view gain rows s0 come from the base's [`pack`]).
+
 /// The statistics of the subset that removes the satellites `extra` (a
 /// bit mask, all kept by `base`) from `base`, by the rank-r downdate of
-/// the module doc. `s0` are the all-in-view position gain rows.
+/// the module doc (the all-in-view gain rows s0 from the base's [`pack`]).
 pub fn downdate<T: Real, const N: usize>(
     geo: &Geometry<T, N>,
     base: &Base<T, N>,
