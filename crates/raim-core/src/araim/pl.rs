@@ -103,6 +103,9 @@ struct QuantileCache {
     vals: [Option<f64>; CACHE],
     len: usize,
     target: f64,
+    /// The last prior asked and its answer (consecutive modes mostly share
+    /// their prior: pairs, then satellite + constellation).
+    last: (f64, Option<f64>),
 }
 
 impl QuantileCache {
@@ -112,6 +115,7 @@ impl QuantileCache {
             vals: [None; CACHE],
             len: 0,
             target,
+            last: (f64::NAN, None),
         }
     }
 
@@ -120,12 +124,17 @@ impl QuantileCache {
         if !(p > self.target) {
             return None;
         }
+        if p == self.last.0 {
+            return self.last.1;
+        }
         for (k, v) in self.keys.iter().zip(self.vals.iter()).take(self.len) {
             if *k == p {
+                self.last = (p, *v);
                 return *v;
             }
         }
         let v = normal_q_inv(self.target / p).ok();
+        self.last = (p, v);
         if self.len < CACHE {
             if let (Some(k), Some(x)) = (self.keys.get_mut(self.len), self.vals.get_mut(self.len)) {
                 *k = p;
