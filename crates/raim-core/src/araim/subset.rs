@@ -372,27 +372,52 @@ pub fn downdate_coupled<T: Real, const N: usize>(
             pivot: 0.0,
         });
     }
-    // V = P_B G_R^T (stored by removed row), M = W_R^-1 - G_R V.
+    // V = P_B G_R^T (stored by removed row), M = W_R^-1 - G_R V. With
+    // the coupling matrix both are read, not formed: the position rows of
+    // V are s0_q[i] / w_i (S0 = P0 G^T W) and g_a^T P0 g_b = Q[a][b] / w_b
+    // (only the position rows of V are used on that path).
     let mut v = [[zero; MAX_STATES]; MAX_EVENTS];
-    for (vr, &i) in v.iter_mut().zip(rows.iter()).take(r) {
-        let g = geo.g.get(i).copied().unwrap_or([zero; MAX_STATES]);
-        for (c, x) in vr.iter_mut().enumerate().take(m) {
-            let prow = base.p.get(c).copied().unwrap_or([zero; MAX_STATES]);
-            *x = dot(&prow, &g, m);
-        }
-    }
     let mut mm = [[zero; MAX_EVENTS]; MAX_EVENTS];
-    for a in 0..r {
-        let ia = rows.get(a).copied().unwrap_or(0);
-        let ga = geo.g.get(ia).copied().unwrap_or([zero; MAX_STATES]);
-        for b in 0..r {
-            let vb = v.get(b).copied().unwrap_or([zero; MAX_STATES]);
-            let mut x = -dot(&ga, &vb, m);
-            if a == b {
-                x += T::of(1.0) / geo.w.get(ia).copied().unwrap_or(T::of(1.0));
+    if let Some(cm) = coupling {
+        for (a, (vr, &ia)) in v.iter_mut().zip(rows.iter()).take(r).enumerate() {
+            let wa = geo.w.get(ia).copied().unwrap_or(T::of(1.0));
+            if let Some(pk) = base.pack.get(ia) {
+                for (x, &sq) in vr.iter_mut().zip(pk.s.iter()) {
+                    *x = sq / wa;
+                }
             }
-            if let Some(y) = mm.get_mut(a).and_then(|row| row.get_mut(b)) {
-                *y = x;
+            let qa = cm.get(ia);
+            if let Some(mrow) = mm.get_mut(a) {
+                for (b, (y, &ib)) in mrow.iter_mut().zip(rows.iter()).take(r).enumerate() {
+                    let wb = geo.w.get(ib).copied().unwrap_or(T::of(1.0));
+                    let mut x = -qa.and_then(|row| row.get(ib)).copied().unwrap_or(zero) / wb;
+                    if a == b {
+                        x += T::of(1.0) / wa;
+                    }
+                    *y = x;
+                }
+            }
+        }
+    } else {
+        for (vr, &i) in v.iter_mut().zip(rows.iter()).take(r) {
+            let g = geo.g.get(i).copied().unwrap_or([zero; MAX_STATES]);
+            for (c, x) in vr.iter_mut().enumerate().take(m) {
+                let prow = base.p.get(c).copied().unwrap_or([zero; MAX_STATES]);
+                *x = dot(&prow, &g, m);
+            }
+        }
+        for a in 0..r {
+            let ia = rows.get(a).copied().unwrap_or(0);
+            let ga = geo.g.get(ia).copied().unwrap_or([zero; MAX_STATES]);
+            for b in 0..r {
+                let vb = v.get(b).copied().unwrap_or([zero; MAX_STATES]);
+                let mut x = -dot(&ga, &vb, m);
+                if a == b {
+                    x += T::of(1.0) / geo.w.get(ia).copied().unwrap_or(T::of(1.0));
+                }
+                if let Some(y) = mm.get_mut(a).and_then(|row| row.get_mut(b)) {
+                    *y = x;
+                }
             }
         }
     }
