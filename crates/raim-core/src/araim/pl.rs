@@ -292,7 +292,7 @@ where
         let mut x = lo0;
         let (e0, fold) = self.eval_and_fold(lo0, scratch);
         let folded = match fold {
-            Some((n, constant)) => scratch.get(..n).map(|a| (&*a, constant)),
+            Some((n, constant)) => scratch.get(..n).map(|a| (a as &[Term], constant)),
             None => None,
         };
         let mut first = Some(e0);
