@@ -15,7 +15,7 @@ use crate::stats::dist::normal_q_inv;
 
 /// Convergence of the exact root (m).
 pub const EXACT_TOL_M: f64 = 1e-10;
-/// A Newton step this small is the last one (see `solve`).
+/// A Halley (or Newton) step this small is the last one (see `solve`).
 const LAST_STEP_M: f64 = 1e-6;
 /// Iteration cap of either search (never reached on valid input: the
 /// bisection halves a bracket of at most a few hundred metres).
@@ -73,7 +73,7 @@ const Q_CUT: f64 = 7.619_853_024_160_527e-24;
 /// together add at most FOLD_REL rhs, i.e. the root moves up by at most
 /// FOLD_REL rhs / |f'|, about FOLD_REL sigma / z (1e-13 m per metre of
 /// sigma). At 30 satellites with pairs about 450 of 500 terms fold, so
-/// the Newton iterations after the first touch only the ~40 that matter.
+/// the Halley iterations after the first touch only the ~40 that matter.
 const FOLD_REL: f64 = 1e-13;
 /// Distinct priors whose quantiles are cached per bracket.
 const CACHE: usize = 16;
@@ -261,7 +261,7 @@ where
     /// Both answers; None if the bracket cannot be formed (non-finite
     /// terms), which the caller reports as unavailable.
     ///
-    /// The exact root first (Newton on ln f from the lower end, safeguarded
+    /// The exact root first (Halley on ln f from the lower end, safeguarded
     /// by bisection). The ADD's bisection is then replayed against it
     /// without evaluating: since f decreases, f(mid) > rhs exactly when
     /// mid < root, except within `GUARD_M` of the root, where f is
@@ -322,11 +322,11 @@ where
             } else {
                 f64::NAN
             };
-            // Converged: the Newton correction is below the tolerance
+            // Converged: the step is below the tolerance
             // (checked before the safeguard, which would otherwise bisect
             // when rounding puts x a hair on the wrong side of the root).
             // Halley converges cubically, Newton on ln f (its fallback)
-            // quadratically: after a Newton step below
+            // quadratically: after a step below
             // `LAST_STEP_M` the error is about K step^2, with
             // K = |(ln f)'' / 2 (ln f)'| ~ 1 / (2 z sigma) per metre, which
             // is below 100 for any sigma above 5 mm at z > 1: under 1e-10 m
