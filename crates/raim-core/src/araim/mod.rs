@@ -32,6 +32,7 @@ pub mod modes;
 pub mod pca;
 pub mod pl;
 pub mod subset;
+pub mod tail;
 #[cfg(test)]
 pub(crate) mod tests;
 
@@ -226,6 +227,8 @@ pub struct Araim<T, const N: usize, const K: usize> {
     const_status: [Option<Deficient>; MAX_SYSTEMS],
     scratch: Base<T, N>,
     events: Vec<ModeEvents, K>,
+    /// The PL search's active terms (pl.rs, the fold).
+    pl_terms: [pl::Term; K],
     out: AraimOutput<T, K>,
     budget_share: f64,
 }
@@ -241,6 +244,7 @@ impl<T: Real, const N: usize, const K: usize> Default for Araim<T, N, K> {
             const_status: [None; MAX_SYSTEMS],
             scratch: Base::default(),
             events: Vec::new(),
+            pl_terms: [pl::Term::default(); K],
             out: AraimOutput::default(),
             budget_share: 1.0,
         }
@@ -430,6 +434,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         })?;
         self.s0 = self.base0.d;
         self.base0.d = zeros;
+        subset::pack(&self.geo, &self.s0, &mut self.base0);
         subset::coupling(&self.geo, &self.base0, &mut self.q0);
         let out = &mut self.out;
         for q in 0..3 {
@@ -492,6 +497,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
                 (self.const_bases.get_mut(j), self.const_status.get_mut(j))
             {
                 *st = subset::factor(&self.geo, removed, dropped, &self.s0, base).err();
+                subset::pack(&self.geo, &self.s0, base);
             }
         }
 
@@ -567,17 +573,11 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             }
             let extra = ev.sats & !removed;
             let result = match count {
-                0 => subset::downdate_coupled(
-                    &self.geo,
-                    &self.base0,
-                    extra,
-                    &self.s0,
-                    Some(&self.q0),
-                ),
+                0 => subset::downdate_coupled(&self.geo, &self.base0, extra, Some(&self.q0)),
                 1 => match self.const_status.get(single).copied().flatten() {
                     Some(d) => Err(d),
                     None => match self.const_bases.get(single) {
-                        Some(base) => subset::downdate(&self.geo, base, extra, &self.s0),
+                        Some(base) => subset::downdate(&self.geo, base, extra),
                         None => Err(Deficient {
                             column: 0,
                             pivot: 0.0,
@@ -585,7 +585,10 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
                     },
                 },
                 _ => subset::factor(&self.geo, removed, dropped, &self.s0, &mut self.scratch)
-                    .and_then(|()| subset::downdate(&self.geo, &self.scratch, extra, &self.s0)),
+                    .and_then(|()| {
+                        subset::pack(&self.geo, &self.s0, &mut self.scratch);
+                        subset::downdate(&self.geo, &self.scratch, extra)
+                    }),
             };
             let mode = match result {
                 Ok(stats) => FaultMode {
@@ -719,7 +722,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             } else {
                 &mut horizontal
             };
-            match eq.solve_cached(cfg.tol_pl_m, cache) {
+            match eq.solve_cached(cfg.tol_pl_m, cache, &mut self.pl_terms) {
                 Some(s) => {
                     if let (Some(e), Some(a)) = (exact.get_mut(q), add.get_mut(q)) {
                         *e = s.exact_m;

@@ -70,6 +70,47 @@ pub struct Base<T, const N: usize> {
     pub d: [[T; N]; 3],
     /// Satellites removed by this base.
     pub removed: u64,
+    /// Per satellite, what the downdate pass reads ([`pack`]).
+    pub pack: [SatPack<T>; N],
+}
+
+/// One satellite's inputs to the per-mode pass, side by side: the
+/// all-in-view gain rows s0, the base's d0 = S^(B) - S^(0), C_acc, b_nom
+/// and the residual.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SatPack<T> {
+    pub s: [T; 3],
+    pub d0: [T; 3],
+    pub c_acc: T,
+    pub b_nom: T,
+    pub y: T,
+}
+
+/// Fills `base.pack` from the geometry, `s0` and `base.d` (after
+/// [`factor`], and for the all-in-view base after its `d` is zeroed).
+pub fn pack<T: Real, const N: usize>(
+    geo: &Geometry<T, N>,
+    s0: &[[T; N]; 3],
+    base: &mut Base<T, N>,
+) {
+    let [se, sn, su] = s0;
+    let [de, dn, du] = &base.d;
+    let cols = se
+        .iter()
+        .zip(sn.iter())
+        .zip(su.iter())
+        .zip(de.iter().zip(dn.iter()).zip(du.iter()))
+        .zip(geo.c_acc.iter().zip(geo.b_nom.iter()).zip(geo.y.iter()));
+    for (pk, ((((&a, &b), &c), ((&d, &e), &f)), ((&ca, &bn), &y))) in base.pack.iter_mut().zip(cols)
+    {
+        *pk = SatPack {
+            s: [a, b, c],
+            d0: [d, e, f],
+            c_acc: ca,
+            b_nom: bn,
+            y,
+        };
+    }
 }
 
 impl<T: Real, const N: usize> Default for Base<T, N> {
@@ -78,6 +119,7 @@ impl<T: Real, const N: usize> Default for Base<T, N> {
             p: [[T::of(0.0); MAX_STATES]; MAX_STATES],
             d: [[T::of(0.0); N]; 3],
             removed: 0,
+            pack: [SatPack::default(); N],
         }
     }
 }
@@ -292,23 +334,22 @@ pub fn coupling<T: Real, const N: usize>(
 
 /// The statistics of the subset that removes the satellites `extra` (a
 /// bit mask, all kept by `base`) from `base`, by the rank-r downdate of
-/// the module doc. `s0` are the all-in-view position gain rows.
+/// the module doc (the all-in-view gain rows s0 from the base's [`pack`]).
 pub fn downdate<T: Real, const N: usize>(
     geo: &Geometry<T, N>,
     base: &Base<T, N>,
     extra: u64,
-    s0: &[[T; N]; 3],
 ) -> Result<SubsetStats<T>, Deficient> {
-    downdate_coupled(geo, base, extra, s0, None)
+    downdate_coupled(geo, base, extra, None)
 }
 
 /// [`downdate`], with the base's [`coupling`] matrix when it is at hand
-/// (the same numbers, summed in another order).
+/// (the same numbers, summed in another order). Reads the base's
+/// [`pack`] (so `s0` must be the one the pack was made with).
 pub fn downdate_coupled<T: Real, const N: usize>(
     geo: &Geometry<T, N>,
     base: &Base<T, N>,
     extra: u64,
-    s0: &[[T; N]; 3],
     coupling: Option<&[[T; N]; N]>,
 ) -> Result<SubsetStats<T>, Deficient> {
     let zero = T::of(0.0);
@@ -331,27 +372,52 @@ pub fn downdate_coupled<T: Real, const N: usize>(
             pivot: 0.0,
         });
     }
-    // V = P_B G_R^T (stored by removed row), M = W_R^-1 - G_R V.
+    // V = P_B G_R^T (stored by removed row), M = W_R^-1 - G_R V. With
+    // the coupling matrix both are read, not formed: the position rows of
+    // V are s0_q[i] / w_i (S0 = P0 G^T W) and g_a^T P0 g_b = Q[a][b] / w_b
+    // (only the position rows of V are used on that path).
     let mut v = [[zero; MAX_STATES]; MAX_EVENTS];
-    for (vr, &i) in v.iter_mut().zip(rows.iter()).take(r) {
-        let g = geo.g.get(i).copied().unwrap_or([zero; MAX_STATES]);
-        for (c, x) in vr.iter_mut().enumerate().take(m) {
-            let prow = base.p.get(c).copied().unwrap_or([zero; MAX_STATES]);
-            *x = dot(&prow, &g, m);
-        }
-    }
     let mut mm = [[zero; MAX_EVENTS]; MAX_EVENTS];
-    for a in 0..r {
-        let ia = rows.get(a).copied().unwrap_or(0);
-        let ga = geo.g.get(ia).copied().unwrap_or([zero; MAX_STATES]);
-        for b in 0..r {
-            let vb = v.get(b).copied().unwrap_or([zero; MAX_STATES]);
-            let mut x = -dot(&ga, &vb, m);
-            if a == b {
-                x += T::of(1.0) / geo.w.get(ia).copied().unwrap_or(T::of(1.0));
+    if let Some(cm) = coupling {
+        for (a, (vr, &ia)) in v.iter_mut().zip(rows.iter()).take(r).enumerate() {
+            let wa = geo.w.get(ia).copied().unwrap_or(T::of(1.0));
+            if let Some(pk) = base.pack.get(ia) {
+                for (x, &sq) in vr.iter_mut().zip(pk.s.iter()) {
+                    *x = sq / wa;
+                }
             }
-            if let Some(y) = mm.get_mut(a).and_then(|row| row.get_mut(b)) {
-                *y = x;
+            let qa = cm.get(ia);
+            if let Some(mrow) = mm.get_mut(a) {
+                for (b, (y, &ib)) in mrow.iter_mut().zip(rows.iter()).take(r).enumerate() {
+                    let wb = geo.w.get(ib).copied().unwrap_or(T::of(1.0));
+                    let mut x = -qa.and_then(|row| row.get(ib)).copied().unwrap_or(zero) / wb;
+                    if a == b {
+                        x += T::of(1.0) / wa;
+                    }
+                    *y = x;
+                }
+            }
+        }
+    } else {
+        for (vr, &i) in v.iter_mut().zip(rows.iter()).take(r) {
+            let g = geo.g.get(i).copied().unwrap_or([zero; MAX_STATES]);
+            for (c, x) in vr.iter_mut().enumerate().take(m) {
+                let prow = base.p.get(c).copied().unwrap_or([zero; MAX_STATES]);
+                *x = dot(&prow, &g, m);
+            }
+        }
+        for a in 0..r {
+            let ia = rows.get(a).copied().unwrap_or(0);
+            let ga = geo.g.get(ia).copied().unwrap_or([zero; MAX_STATES]);
+            for b in 0..r {
+                let vb = v.get(b).copied().unwrap_or([zero; MAX_STATES]);
+                let mut x = -dot(&ga, &vb, m);
+                if a == b {
+                    x += T::of(1.0) / geo.w.get(ia).copied().unwrap_or(T::of(1.0));
+                }
+                if let Some(y) = mm.get_mut(a).and_then(|row| row.get_mut(b)) {
+                    *y = x;
+                }
             }
         }
     }
@@ -436,75 +502,64 @@ pub fn downdate_coupled<T: Real, const N: usize>(
             *x = var.sqrt();
         }
     }
-    // One pass over the satellites for the three axes. Fixed trip counts
-    // (all MAX_EVENTS rows of V, all MAX_STATES columns; the padding is
-    // zero and adds exact zeros) and zipped iterators: no bounds checks.
-    let removed = base.removed | extra;
-    // The coupling rows of the removed satellites (padding: a zero row,
-    // whose coefficients are zero anyway).
+    // The coupling rows h_k[i] of the removed satellites: the base's
+    // coupling matrix when at hand, else v_k . g_i w_i here (r n m), zero
+    // at the satellites the base removes (so that there d = d0 = -s and
+    // the pass takes their removed-satellite terms s^2 C_acc and -s y,
+    // and |s + d| = 0, without a branch).
     let zero_row = [zero; N];
+    let mut formed = [[zero; N]; MAX_EVENTS];
     let mut qrows: [&[T; N]; MAX_EVENTS] = [&zero_row; MAX_EVENTS];
-    if let Some(cm) = coupling {
-        for (qr, &i) in qrows.iter_mut().zip(rows.iter()).take(r) {
-            if let Some(row) = cm.get(i) {
-                *qr = row;
+    match coupling {
+        Some(cm) => {
+            for (qr, &i) in qrows.iter_mut().zip(rows.iter()).take(r) {
+                if let Some(row) = cm.get(i) {
+                    *qr = row;
+                }
+            }
+        }
+        None => {
+            for (f, vk) in formed.iter_mut().zip(v.iter()).take(r) {
+                let sats = geo.g.iter().zip(geo.w.iter()).enumerate().take(n);
+                for ((i, (g, &w)), x) in sats.zip(f.iter_mut()) {
+                    if base.removed & bit(i) == 0 {
+                        *x = vk
+                            .iter()
+                            .zip(g.iter())
+                            .take(m)
+                            .fold(zero, |acc, (a, b)| acc + *a * *b)
+                            * w;
+                    }
+                }
+            }
+            for (qr, f) in qrows.iter_mut().zip(formed.iter()).take(r) {
+                *qr = f;
             }
         }
     }
-    let mut ss = [zero; 3];
-    let mut bias = [zero; 3];
-    let mut sep = [zero; 3];
-    let [s0e, s0n, s0u] = s0;
-    let [de, dn, du] = &base.d;
-    let s0cols = s0e.iter().zip(s0n.iter()).zip(s0u.iter());
-    let dcols = de.iter().zip(dn.iter()).zip(du.iter());
-    let rows = geo
-        .g
-        .iter()
-        .zip(geo.w.iter())
-        .zip(geo.c_acc.iter())
-        .zip(geo.b_nom.iter())
-        .zip(geo.y.iter());
-    for (i, ((((((g, &w), &cacc), &b), &y), ((&se, &sn), &su)), ((&d0e, &d0n), &d0u))) in
-        rows.zip(s0cols).zip(dcols).enumerate().take(n)
-    {
-        let s = [se, sn, su];
-        if removed & bit(i) != 0 {
-            for ((a, c), &sq) in ss.iter_mut().zip(sep.iter_mut()).zip(s.iter()) {
-                *a += sq * sq * cacc;
-                *c -= sq * y;
-            }
-            continue;
-        }
-        let mut h = [zero; MAX_EVENTS];
-        if coupling.is_some() {
-            for (hk, qr) in h.iter_mut().zip(qrows.iter()) {
-                *hk = qr.get(i).copied().unwrap_or(zero);
-            }
-        } else {
-            for (hk, vk) in h.iter_mut().zip(v.iter()) {
-                *hk = vk
-                    .iter()
-                    .zip(g.iter())
-                    .fold(zero, |acc, (x, y)| acc + *x * *y)
-                    * w;
+    // The kept satellites in the contiguous runs between the removed ones
+    // (sorted ascending), then the removed ones' own terms.
+    let mut acc = [[zero; 3]; 3];
+    let mut start = 0usize;
+    for &stop in rows.iter().take(r).chain(core::iter::once(&n)) {
+        if stop > start {
+            let seg = start..stop;
+            match r {
+                1 => run::<T, N, 1>(&base.pack, &qrows, &coef, seg, &mut acc),
+                2 => run::<T, N, 2>(&base.pack, &qrows, &coef, seg, &mut acc),
+                3 => run::<T, N, 3>(&base.pack, &qrows, &coef, seg, &mut acc),
+                _ => run::<T, N, MAX_EVENTS>(&base.pack, &qrows, &coef, seg, &mut acc),
             }
         }
-        let d0 = [d0e, d0n, d0u];
-        for ((((a, bq), c), (&dq0, cq)), &sq) in ss
-            .iter_mut()
-            .zip(bias.iter_mut())
-            .zip(sep.iter_mut())
-            .zip(d0.iter().zip(coef.iter()))
-            .zip(s.iter())
-        {
-            let dq = cq
-                .iter()
-                .zip(h.iter())
-                .fold(dq0, |acc, (ck, hk)| acc + *ck * *hk);
-            *a += dq * dq * cacc;
-            *bq += (sq + dq).abs() * b;
-            *c += dq * y;
+        start = stop + 1;
+    }
+    let [mut ss, bias, mut sep] = acc;
+    for &i in rows.iter().take(r) {
+        if let Some(pk) = base.pack.get(i) {
+            for ((a, c), &sq) in ss.iter_mut().zip(sep.iter_mut()).zip(pk.s.iter()) {
+                *a += sq * sq * pk.c_acc;
+                *c -= sq * pk.y;
+            }
         }
     }
     for q in 0..3 {
@@ -515,4 +570,52 @@ pub fn downdate_coupled<T: Real, const N: usize>(
     out.bias_m = bias;
     out.separation_m = sep;
     Ok(out)
+}
+
+/// The kept satellites `seg` of one mode: per axis q,
+/// d = d0_q + sum_k c_qk h_k (the change of the gain row), and
+/// sigma_ss^2 += d^2 C_acc, b += |s_q + d| b_nom, separation += d y,
+/// into `acc` = [sigma_ss^2, b, separation]. `R` removed rows, a
+/// constant, so the inner sum unrolls.
+#[inline]
+fn run<T: Real, const N: usize, const R: usize>(
+    pack: &[SatPack<T>; N],
+    qrows: &[&[T; N]; MAX_EVENTS],
+    coef: &[[T; MAX_EVENTS]; 3],
+    seg: core::ops::Range<usize>,
+    acc: &mut [[T; 3]; 3],
+) {
+    let zero = T::of(0.0);
+    let mut c = [[zero; R]; 3];
+    for (cq, src) in c.iter_mut().zip(coef.iter()) {
+        for (a, b) in cq.iter_mut().zip(src.iter()) {
+            *a = *b;
+        }
+    }
+    let [ss, bias, sep] = acc;
+    let Some(sats) = pack.get(seg.clone()) else {
+        return;
+    };
+    for (j, pk) in seg.zip(sats.iter()) {
+        let mut h = [zero; R];
+        for (hk, row) in h.iter_mut().zip(qrows.iter()) {
+            *hk = row.get(j).copied().unwrap_or(zero);
+        }
+        for (((((a, b), e), cq), &d0), &sq) in ss
+            .iter_mut()
+            .zip(bias.iter_mut())
+            .zip(sep.iter_mut())
+            .zip(c.iter())
+            .zip(pk.d0.iter())
+            .zip(pk.s.iter())
+        {
+            let d = cq
+                .iter()
+                .zip(h.iter())
+                .fold(d0, |x, (ck, hk)| x + *ck * *hk);
+            *a += d * d * pk.c_acc;
+            *b += (sq + d).abs() * pk.b_nom;
+            *e += d * pk.y;
+        }
+    }
 }
