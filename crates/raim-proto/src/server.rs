@@ -223,6 +223,10 @@ impl Server {
             Some(Command::Ranges(_) | Command::Linear(_)) => {
                 self.answer_epoch(seq, link, nmea_out, platform)
             }
+            Some(Command::Araim(
+                crate::araim_msg::AraimCommand::Epoch(_)
+                | crate::araim_msg::AraimCommand::Ranges(_),
+            )) => self.answer_araim_epoch(seq, link, platform),
             _ => self.answer_other(seq, link, platform),
         }
     }

@@ -383,49 +383,105 @@ impl Server {
         epoch: &Input<'_>,
         platform: &mut P,
     ) -> Result<AraimAnswer, WireError> {
-        let r = self.araim_epoch_answer(epoch, platform);
-        platform.on_epoch(match &r {
-            Ok(AraimAnswer::Result(res)) => Some(res.decision),
-            _ => None,
-        });
-        r
+        let Server {
+            araim,
+            status,
+            config,
+            ..
+        } = self;
+        epoch_answer(araim, status, config, epoch, platform)
     }
 
-    fn araim_epoch_answer<P: super::Platform>(
+    /// An ARAIM epoch request (`Araim(Epoch)` or `Araim(Ranges)`, in
+    /// `self.request`), answered from a reference into the request
+    /// (issue 10, the firmware's stack: the epoch is not moved out of the
+    /// server's request slot onto this frame, as `answer_other` moves the
+    /// other requests).
+    #[inline(never)]
+    pub(super) fn answer_araim_epoch<L: embedded_io::Write, M, P: super::Platform>(
         &mut self,
-        epoch: &Input<'_>,
+        seq: u32,
+        link: &mut L,
         platform: &mut P,
-    ) -> Result<AraimAnswer, WireError> {
-        #[cfg(feature = "araim")]
-        {
-            let Some(ism) = self.araim.ism.as_ref() else {
-                return Err(WireError::Araim(AraimWireError::NoIsm));
+    ) -> Result<(), super::IoError<L::Error, M>> {
+        let answer = {
+            let Server {
+                request,
+                araim,
+                status,
+                config,
+                ..
+            } = self;
+            let input = match request.as_ref().map(|r| &r.command) {
+                Some(crate::message::Command::Araim(AraimCommand::Epoch(e))) => Input::Linear(e),
+                Some(crate::message::Command::Araim(AraimCommand::Ranges(e))) => Input::Ranges(e),
+                // `on_byte` sends only ARAIM epochs here.
+                _ => return Ok(()),
             };
-            let (overflowed, declared) = match epoch {
-                Input::Linear(e) => (e.sats.overflowed(), e.sats.declared),
-                Input::Ranges(e) => (e.sats.overflowed(), e.sats.declared),
-            };
-            if overflowed {
-                return Err(WireError::TooManySatellites {
-                    have: declared,
-                    capacity: CAPACITY as u32,
-                });
-            }
-            self.status.epochs = self.status.epochs.wrapping_add(1);
-            let t0 = platform.now();
-            let r = match epoch {
-                Input::Linear(e) => self.araim.engine.run(ism, e),
-                Input::Ranges(e) => self.araim.engine.run_ranges(&self.config, ism, e),
-            };
-            let t1 = platform.now();
-            self.status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
-            r.map(AraimAnswer::Result)
+            epoch_answer(araim, status, config, &input, platform)
+        };
+        match &answer {
+            Ok(a) => self.send(link, Some(seq), super::BodyRef::Araim(a)),
+            Err(e) => self.send(link, Some(seq), super::BodyRef::Error(e)),
         }
-        #[cfg(not(feature = "araim"))]
-        {
-            let _ = (epoch, platform);
-            Err(WireError::Araim(AraimWireError::Disabled))
+    }
+}
+
+/// An ARAIM epoch on the server's ARAIM state, status and configuration
+/// (disjoint fields, so the epoch may be borrowed from the request slot);
+/// its decision (or its refusal, as `None`) drives the integrity-alarm
+/// output like a snapshot epoch's (`Platform::on_epoch`).
+fn epoch_answer<P: super::Platform>(
+    araim: &mut AraimState,
+    status: &mut crate::message::Status,
+    config: &Config,
+    epoch: &Input<'_>,
+    platform: &mut P,
+) -> Result<AraimAnswer, WireError> {
+    let r = epoch_answer_inner(araim, status, config, epoch, platform);
+    platform.on_epoch(match &r {
+        Ok(AraimAnswer::Result(res)) => Some(res.decision),
+        _ => None,
+    });
+    r
+}
+
+fn epoch_answer_inner<P: super::Platform>(
+    araim: &mut AraimState,
+    status: &mut crate::message::Status,
+    config: &Config,
+    epoch: &Input<'_>,
+    platform: &mut P,
+) -> Result<AraimAnswer, WireError> {
+    #[cfg(feature = "araim")]
+    {
+        let Some(ism) = araim.ism.as_ref() else {
+            return Err(WireError::Araim(AraimWireError::NoIsm));
+        };
+        let (overflowed, declared) = match epoch {
+            Input::Linear(e) => (e.sats.overflowed(), e.sats.declared),
+            Input::Ranges(e) => (e.sats.overflowed(), e.sats.declared),
+        };
+        if overflowed {
+            return Err(WireError::TooManySatellites {
+                have: declared,
+                capacity: CAPACITY as u32,
+            });
         }
+        status.epochs = status.epochs.wrapping_add(1);
+        let t0 = platform.now();
+        let r = match epoch {
+            Input::Linear(e) => araim.engine.run(ism, e),
+            Input::Ranges(e) => araim.engine.run_ranges(config, ism, e),
+        };
+        let t1 = platform.now();
+        status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
+        r.map(AraimAnswer::Result)
+    }
+    #[cfg(not(feature = "araim"))]
+    {
+        let _ = (araim, status, config, epoch, platform);
+        Err(WireError::Araim(AraimWireError::Disabled))
     }
 }
 
