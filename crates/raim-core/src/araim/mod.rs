@@ -229,6 +229,13 @@ pub struct Araim<T, const N: usize, const K: usize> {
     events: Vec<ModeEvents, K>,
     /// The PL search's active terms (pl.rs, the fold).
     pl_terms: [pl::Term; K],
+    /// The PL search's quantile memos (horizontal, vertical), kept across
+    /// epochs (pl.rs, `BracketCache`: each answers only for its own
+    /// right-hand side and mode count).
+    pl_quantiles: [pl::BracketCache; 2],
+    /// The false-alert multipliers' memo: (P_FA,H, P_FA,V, modes) and
+    /// Q^-1(P_FA,H / 4 n), Q^-1(P_FA,V / 2 n), None where undefined.
+    k_fa_memo: KfaMemo,
     out: AraimOutput<T, K>,
     budget_share: f64,
 }
@@ -245,6 +252,8 @@ impl<T: Real, const N: usize, const K: usize> Default for Araim<T, N, K> {
             scratch: Base::default(),
             events: Vec::new(),
             pl_terms: [pl::Term::default(); K],
+            pl_quantiles: [pl::BracketCache::new(0.0, 0); 2],
+            k_fa_memo: None,
             out: AraimOutput::default(),
             budget_share: 1.0,
         }
@@ -257,6 +266,28 @@ fn bit(i: usize) -> u64 {
     } else {
         0
     }
+}
+
+/// The memo of [`k_fa`]: its key (P_FA,H and P_FA,V bits, modes) and answer.
+type KfaMemo = Option<((u64, u64, usize), [Option<f64>; 2])>;
+
+/// Q^-1(P_FA,H / 4 n) and Q^-1(P_FA,V / 2 n) for n modes (SPEC
+/// ARAIM thresholds), memoised: the same configuration and mode count
+/// as the last epoch costs no quantile.
+fn k_fa(memo: &mut KfaMemo, cfg: &AraimConfig, n: usize) -> [Option<f64>; 2] {
+    let key = (cfg.pfa_hor.to_bits(), cfg.pfa_vert.to_bits(), n);
+    if let Some((k, v)) = *memo {
+        if k == key {
+            return v;
+        }
+    }
+    let nm = n as f64;
+    let v = [
+        normal_q_inv(cfg.pfa_hor / (4.0 * nm)).ok(),
+        normal_q_inv(cfg.pfa_vert / (2.0 * nm)).ok(),
+    ];
+    *memo = Some((key, v));
+    v
 }
 
 impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
@@ -547,9 +578,8 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         let k_upper = if with_pls {
             [zero; 3]
         } else {
-            let nm = self.events.len().max(1) as f64;
-            let kh = normal_q_inv(cfg.pfa_hor / (4.0 * nm)).unwrap_or(f64::INFINITY);
-            let kv = normal_q_inv(cfg.pfa_vert / (2.0 * nm)).unwrap_or(f64::INFINITY);
+            let [kh, kv] = k_fa(&mut self.k_fa_memo, cfg, self.events.len().max(1));
+            let (kh, kv) = (kh.unwrap_or(f64::INFINITY), kv.unwrap_or(f64::INFINITY));
             [T::of(kh), T::of(kh), T::of(kv)]
         };
         for ev in self.events.iter() {
@@ -635,9 +665,8 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
 
         // Step 4: thresholds and the solution-separation tests.
         if n_mon > 0 {
-            let nm = n_mon as f64;
-            let kh = normal_q_inv(cfg.pfa_hor / (4.0 * nm)).unwrap_or(f64::NAN);
-            let kv = normal_q_inv(cfg.pfa_vert / (2.0 * nm)).unwrap_or(f64::NAN);
+            let [kh, kv] = k_fa(&mut self.k_fa_memo, cfg, n_mon);
+            let (kh, kv) = (kh.unwrap_or(f64::NAN), kv.unwrap_or(f64::NAN));
             out.k_fa = [kh, kh, kv];
         }
         let k_fa = [T::of(out.k_fa[0]), T::of(out.k_fa[1]), T::of(out.k_fa[2])];
@@ -684,8 +713,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         // Step 5: protection levels.
         let factor = 1.0 - p_unmon / (cfg.phmi_vert + cfg.phmi_hor);
         // One bracket memo for east and north (same rhs and priors).
-        let mut horizontal = pl::BracketCache::new(0.0, 0);
-        let mut vertical = pl::BracketCache::new(0.0, 0);
+        let [horizontal, vertical] = &mut self.pl_quantiles;
         let mut exact = [0.0f64; 3];
         let mut add = [0.0f64; 3];
         for q in 0..3 {
@@ -718,9 +746,9 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
                 rhs,
             };
             let cache = if q == 2 {
-                &mut vertical
+                &mut *vertical
             } else {
-                &mut horizontal
+                &mut *horizontal
             };
             match eq.solve_cached(cfg.tol_pl_m, cache, &mut self.pl_terms) {
                 Some(s) => {

@@ -80,7 +80,12 @@ const CACHE: usize = 16;
 
 /// The two quantile memos of one right-hand side (the bracket's lower and
 /// upper ends). The east and north axes share one: same right-hand side,
-/// same priors, so the same quantiles.
+/// same priors, so the same quantiles. The fault-free term's quantiles
+/// (prior 2) are memoised with the modes'. The engine keeps its memos
+/// across epochs: a memo answers only for its own right-hand side and mode
+/// count (replaced otherwise), so a repeated epoch configuration costs no
+/// quantile at all.
+#[derive(Clone, Copy)]
 pub struct BracketCache {
     lo: QuantileCache,
     hi: QuantileCache,
@@ -98,6 +103,7 @@ impl BracketCache {
 
 /// A small memo of Q^-1(target / p) by p: the priors take few distinct
 /// values (products of the ISM's probabilities).
+#[derive(Clone, Copy)]
 struct QuantileCache {
     keys: [f64; CACHE],
     vals: [Option<f64>; CACHE],
@@ -240,9 +246,11 @@ where
             *cache = BracketCache::new(self.rhs, self.n_modes);
         }
         let ff = self.fault_free;
-        let mut lo = ff.offset_m + ff.sigma_m * normal_q_inv(self.rhs / ff.p).ok()?;
-        let mut hi = ff.offset_m + ff.sigma_m * normal_q_inv(share / ff.p).ok()?;
         let BracketCache { lo: k_lo, hi: k_hi } = cache;
+        // Q^-1(rhs / p_ff) and Q^-1(share / p_ff), through the memos (the
+        // same expressions; None where the quantile does not exist).
+        let mut lo = ff.offset_m + ff.sigma_m * k_lo.get(ff.p)?;
+        let mut hi = ff.offset_m + ff.sigma_m * k_hi.get(ff.p)?;
         for t in (self.modes)() {
             if let Some(k) = k_lo.get(t.p) {
                 lo = lo.max(t.offset_m + k * t.sigma_m);

@@ -161,21 +161,21 @@ pub fn factor<T: Real, const N: usize>(
     let zero = T::of(0.0);
     let m = geo.m.min(MAX_STATES);
     let active = |c: usize| c < m && dropped & (1u16 << c) == 0;
-    // Normal matrix over the active columns.
+    // Normal matrix, lower triangle (the only one the Cholesky reads),
+    // from the rows' structure: ENU then a one-hot clock column (`gdot`).
     let mut a = [[zero; MAX_STATES]; MAX_STATES];
-    for i in 0..geo.n.min(N) {
+    for (i, ((g, &w), &clk)) in geo
+        .g
+        .iter()
+        .zip(geo.w.iter())
+        .zip(geo.col.iter())
+        .enumerate()
+        .take(geo.n.min(N))
+    {
         if removed & bit(i) != 0 {
             continue;
         }
-        let (Some(g), Some(&w)) = (geo.g.get(i), geo.w.get(i)) else {
-            continue;
-        };
-        for (r, ar) in a.iter_mut().enumerate().take(m) {
-            let gr = g.get(r).copied().unwrap_or(zero) * w;
-            for (c, x) in ar.iter_mut().enumerate().take(m) {
-                *x += gr * g.get(c).copied().unwrap_or(zero);
-            }
-        }
+        normal_add(&mut a, g, w, clk);
     }
     // Cholesky A = L L^T in place (lower triangle), active columns only.
     let tol = rank_tolerance::<T>();
@@ -261,22 +261,70 @@ pub fn factor<T: Real, const N: usize>(
         }
     }
     base.removed = removed;
-    for (q, (drow, s0row)) in base.d.iter_mut().zip(s0.iter()).enumerate() {
-        let prow = base.p.get(q).copied().unwrap_or([zero; MAX_STATES]);
-        for i in 0..geo.n.min(N) {
+    for ((drow, s0row), prow) in base.d.iter_mut().zip(s0.iter()).zip(base.p.iter()) {
+        for (i, ((x, &s), ((g, &w), &clk))) in drow
+            .iter_mut()
+            .zip(s0row.iter())
+            .zip(geo.g.iter().zip(geo.w.iter()).zip(geo.col.iter()))
+            .enumerate()
+            .take(geo.n.min(N))
+        {
             let s_b = if removed & bit(i) != 0 {
                 zero
             } else {
-                let g = geo.g.get(i).copied().unwrap_or([zero; MAX_STATES]);
-                let w = geo.w.get(i).copied().unwrap_or(zero);
-                dot(&prow, &g, m) * w
+                gdot(prow, g, clk) * w
             };
-            if let (Some(x), Some(&s)) = (drow.get_mut(i), s0row.get(i)) {
-                *x = s_b - s;
-            }
+            *x = s_b - s;
         }
     }
     Ok(())
+}
+
+/// Adds w g g^T to the lower triangle of `a` for a geometry row g = (e, n,
+/// u, one-hot clock at `clk`): the entries the dense sum touches with a
+/// non-zero term, in the same order per entry (the zero terms add exact
+/// zeros), so the same values as the dense form.
+fn normal_add<T: Real>(
+    a: &mut [[T; MAX_STATES]; MAX_STATES],
+    g: &[T; MAX_STATES],
+    w: T,
+    clk: usize,
+) {
+    let [g0, g1, g2, ..] = *g;
+    let gc = g.get(clk).copied().unwrap_or(T::of(0.0));
+    let [a0, a1, a2, ..] = a;
+    a0[0] += (g0 * w) * g0;
+    a1[0] += (g1 * w) * g0;
+    a1[1] += (g1 * w) * g1;
+    a2[0] += (g2 * w) * g0;
+    a2[1] += (g2 * w) * g1;
+    a2[2] += (g2 * w) * g2;
+    if clk >= 3 {
+        if let Some(ac) = a.get_mut(clk) {
+            let gcw = gc * w;
+            let [c0, c1, c2, ..] = ac;
+            *c0 += gcw * g0;
+            *c1 += gcw * g1;
+            *c2 += gcw * g2;
+            if let Some(x) = ac.get_mut(clk) {
+                *x += gcw * gc;
+            }
+        }
+    }
+}
+
+/// p . g for a geometry row g = (e, n, u, one-hot clock at `clk`): the
+/// dense dot product's non-zero terms in its order (its other terms are
+/// exact zeros), so the same value as [`dot`] over the first m columns
+/// for clk < m.
+fn gdot<T: Real>(p: &[T; MAX_STATES], g: &[T; MAX_STATES], clk: usize) -> T {
+    let [p0, p1, p2, ..] = *p;
+    let [g0, g1, g2, ..] = *g;
+    let s = T::of(0.0) + p0 * g0 + p1 * g1 + p2 * g2;
+    match (p.get(clk), g.get(clk)) {
+        (Some(&pc), Some(&gc)) if clk >= 3 => s + pc * gc,
+        _ => s,
+    }
 }
 
 fn dot<T: Real>(a: &[T; MAX_STATES], b: &[T; MAX_STATES], m: usize) -> T {
@@ -292,12 +340,13 @@ pub fn gain_rows<T: Real, const N: usize>(
     p0: &[[T; MAX_STATES]; MAX_STATES],
     s0: &mut [[T; N]; 3],
 ) {
-    let zero = T::of(0.0);
-    for (q, row) in s0.iter_mut().enumerate() {
-        let prow = p0.get(q).copied().unwrap_or([zero; MAX_STATES]);
-        for (i, x) in row.iter_mut().enumerate().take(geo.n) {
-            let g = geo.g.get(i).copied().unwrap_or([zero; MAX_STATES]);
-            *x = dot(&prow, &g, geo.m) * geo.w.get(i).copied().unwrap_or(zero);
+    for (row, prow) in s0.iter_mut().zip(p0.iter()) {
+        for (x, ((g, &w), &clk)) in row
+            .iter_mut()
+            .zip(geo.g.iter().zip(geo.w.iter()).zip(geo.col.iter()))
+            .take(geo.n)
+        {
+            *x = gdot(prow, g, clk) * w;
         }
     }
 }
@@ -315,19 +364,23 @@ pub fn coupling<T: Real, const N: usize>(
 ) {
     let zero = T::of(0.0);
     let m = geo.m.min(MAX_STATES);
-    for (qrow, gj) in q.iter_mut().zip(geo.g.iter()).take(geo.n.min(N)) {
+    for ((qrow, gj), &cj) in q
+        .iter_mut()
+        .zip(geo.g.iter())
+        .zip(geo.col.iter())
+        .take(geo.n.min(N))
+    {
         // v = P_B g_j.
         let mut v = [zero; MAX_STATES];
         for (vc, prow) in v.iter_mut().zip(base.p.iter()).take(m) {
-            *vc = dot(prow, gj, m);
+            *vc = gdot(prow, gj, cj);
         }
-        for ((x, gi), &w) in qrow
+        for (x, ((gi, &w), &ci)) in qrow
             .iter_mut()
-            .zip(geo.g.iter())
-            .zip(geo.w.iter())
+            .zip(geo.g.iter().zip(geo.w.iter()).zip(geo.col.iter()))
             .take(geo.n.min(N))
         {
-            *x = dot(&v, gi, m) * w;
+            *x = gdot(&v, gi, ci) * w;
         }
     }
 }
