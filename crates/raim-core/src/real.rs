@@ -53,6 +53,8 @@ pub trait Real:
     fn exp_m(self) -> Self;
     /// atan2(self, x) through `libm`.
     fn atan2_m(self, x: Self) -> Self;
+    /// atan(self) through `libm`.
+    fn atan_m(self) -> Self;
     /// The square root of a squared range `r2` (m^2), in f64 whatever `T`:
     /// ranges are f64 quantities (the policy). In an f64 engine, `libm`'s
     /// correctly rounded sqrt; in an f32 engine (the M4F, where an f64 sqrt
@@ -103,6 +105,10 @@ impl Real for f64 {
         libm::atan2(self, x)
     }
     #[inline(always)]
+    fn atan_m(self) -> Self {
+        libm::atan(self)
+    }
+    #[inline(always)]
     fn range_sqrt(r2: f64) -> f64 {
         libm::sqrt(r2)
     }
@@ -146,6 +152,10 @@ impl Real for f32 {
     #[inline(always)]
     fn atan2_m(self, x: Self) -> Self {
         libm::atan2f(self, x)
+    }
+    #[inline(always)]
+    fn atan_m(self) -> Self {
+        libm::atanf(self)
     }
     #[inline]
     fn range_sqrt(r2: f64) -> f64 {

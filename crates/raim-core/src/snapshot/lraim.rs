@@ -22,6 +22,7 @@ pub struct Candidate<T: Real = f64> {
 
 /// The score of one satellite under a rule, from its whitened residual and
 /// S_ii. `None` when S_ii is below `min_s_ii` (unidentifiable).
+#[inline]
 pub fn score<T: Real>(rule: FiRule, residual: T, s_ii: T, min_s_ii: T) -> Option<Candidate<T>> {
     if !(s_ii >= min_s_ii) {
         return None;
