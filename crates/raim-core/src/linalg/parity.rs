@@ -452,6 +452,31 @@ mod tests {
         }
     }
 
+    /// A random whitened sky of `n` satellites and `clocks` clock columns
+    /// (elevations 5-90 deg, sigmas 0.3-3 m, unit-sigma noise) with a
+    /// 20-sigma fault on satellite `faulty`.
+    fn random_whitened_sky(
+        rng: &mut crate::testutil::Rng,
+        n: usize,
+        clocks: usize,
+        faulty: usize,
+    ) -> ([[f64; N]; MAX_STATES], [f64; N]) {
+        let mut h = [[0.0f64; N]; MAX_STATES];
+        let mut z = [0.0f64; N];
+        for i in 0..n {
+            let az = rng.uniform() * 2.0 * core::f64::consts::PI;
+            let el = (5.0 + 85.0 * rng.uniform()).to_radians();
+            let w = 1.0 / (0.3 + 2.7 * rng.uniform());
+            h[0][i] = -el.cos() * az.sin() * w;
+            h[1][i] = -el.cos() * az.cos() * w;
+            h[2][i] = -el.sin() * w;
+            h[3 + (i % clocks)][i] = w;
+            z[i] = rng.normal();
+        }
+        z[faulty] += 20.0;
+        (h, z)
+    }
+
     /// The fixed-size row loops (m = 4, 5) perform the general loop's
     /// operations in its order: the same bits for S_ii, residuals and
     /// gains, in f64 and f32, on 500 random skies each (n = 5..16, one or
@@ -482,19 +507,7 @@ mod tests {
             let n = 5 + trial % 12;
             let clocks = 1 + (trial / 12) % 2;
             let m = 3 + clocks;
-            let mut h = [[0.0f64; N]; MAX_STATES];
-            let mut z = [0.0f64; N];
-            for i in 0..n {
-                let az = rng.uniform() * 2.0 * core::f64::consts::PI;
-                let el = (5.0 + 85.0 * rng.uniform()).to_radians();
-                let w = 1.0 / (0.3 + 2.7 * rng.uniform());
-                h[0][i] = -el.cos() * az.sin() * w;
-                h[1][i] = -el.cos() * az.cos() * w;
-                h[2][i] = -el.sin() * w;
-                h[3 + (i % clocks)][i] = w;
-                z[i] = rng.normal();
-            }
-            z[trial % n] += 20.0;
+            let (h, z) = random_whitened_sky(&mut rng, n, clocks, trial % n);
             let hs = h.map(|c| c.map(|v| v as f32));
             let zs = z.map(|v| v as f32);
             checked[0] += usize::from(check(&h, &z, n, m));
@@ -537,19 +550,7 @@ mod tests {
             let n = 6 + trial % 11;
             let clocks = 1 + trial % 2;
             let m = 3 + clocks;
-            let mut h = [[0.0f64; N]; MAX_STATES];
-            let mut z = [0.0f64; N];
-            for i in 0..n {
-                let az = rng.uniform() * 2.0 * core::f64::consts::PI;
-                let el = (5.0 + 85.0 * rng.uniform()).to_radians();
-                let w = 1.0 / (0.3 + 2.7 * rng.uniform());
-                h[0][i] = -el.cos() * az.sin() * w;
-                h[1][i] = -el.cos() * az.cos() * w;
-                h[2][i] = -el.sin() * w;
-                h[3 + (i % clocks)][i] = w;
-                z[i] = rng.normal();
-            }
-            z[trial % n] += 20.0;
+            let (h, z) = random_whitened_sky(&mut rng, n, clocks, trial % n);
             let Ok(d) = Parity::<N, f64>::new(&h, &z, n, m) else {
                 continue;
             };
