@@ -27,3 +27,5 @@ echo "== the QEMU tests again with the whole host side in the firmware's precisi
 cargo test -p host-tests --release --features f32 qemu
 echo "== the core's own tests in the firmware's precision (Stat = f32; ~1 min to build, < 1 s to run)"
 cargo test -p raim-core --release --features f32 --lib
+echo "== the core's own tests without the optional reconstruction FDE (the 128 KiB flash build's core)"
+cargo test -p raim-core --release --no-default-features --lib

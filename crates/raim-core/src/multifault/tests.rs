@@ -604,13 +604,44 @@ fn bad_input_is_typed() {
         },
         ..Config::default()
     };
+    // Without the feature, the configuration is refused on `t_max` first
+    // (`reconstruction_is_refused_when_not_built`).
+    let want = if cfg!(feature = "multifault") {
+        "group_budget"
+    } else {
+        "t_max"
+    };
     assert!(matches!(
         bad_budget.validate(),
-        Err(crate::RaimError::OutOfRange {
-            field: "group_budget",
-            ..
-        })
+        Err(crate::RaimError::OutOfRange { field, .. }) if field == want
     ));
+}
+
+/// Built without the feature `multifault` (the 128 KiB flash build, issue
+/// 10): a configuration that selects the reconstruction FDE is refused by
+/// `Config::validate` and by the monitor with `OutOfRange { field: "t_max",
+/// max: 0 }`, and nothing falls back to the sequential FDE.
+#[test]
+#[cfg(not(feature = "multifault"))]
+fn reconstruction_is_refused_when_not_built() {
+    let sats = epoch_sats(&sky14(), 3, &[(3, 60.0)]);
+    let cfg = reconstruction(2);
+    let refused = |e: &crate::RaimError| {
+        matches!(
+            e,
+            crate::RaimError::OutOfRange {
+                field: "t_max",
+                max,
+                ..
+            } if *max == 0.0
+        )
+    };
+    let err = cfg.validate().unwrap_err();
+    assert!(refused(&err), "{err:?}");
+    let err = Raim::<N>::new()
+        .process(&cfg, &Epoch::linear(0.0, &sats))
+        .unwrap_err();
+    assert!(refused(&err), "{err:?}");
 }
 
 /// Linear observations: `sky` (az, el deg), one clock per system given,
@@ -668,6 +699,7 @@ fn reconstruction(t_max: u8) -> Config {
 /// on a 14-satellite two-constellation sky are excluded exactly (the set,
 /// its size, biases within 5 sigma of the truth), and the subset passes.
 #[test]
+#[cfg(feature = "multifault")]
 fn monitor_excludes_one_two_three_faults() {
     const BIAS_TOL_M: f64 = 5.0; // 5 sigma of a unit-sigma bias estimate
     let sky = sky14();
@@ -725,6 +757,7 @@ fn default_method_is_unchanged() {
 /// A group budget smaller than the covering: the report says so, and no
 /// exclusion is made on an incomplete uniqueness check.
 #[test]
+#[cfg(feature = "multifault")]
 fn budget_limit_is_reported_and_never_a_pick() {
     let sats = epoch_sats(&sky14(), 5, &[(3, 60.0), (8, -70.0)]);
     let cfg = Config {
@@ -752,6 +785,7 @@ fn budget_limit_is_reported_and_never_a_pick() {
 /// other (with the opposite bias). The reconstruction alarms `Ambiguous`
 /// naming both, never a silent pick (today's FDE does the same).
 #[test]
+#[cfg(feature = "multifault")]
 fn indistinguishable_sets_alarm_as_ambiguous() {
     let mut sky: Vec<(System, f64, f64)> = sky14()
         .into_iter()
