@@ -119,7 +119,17 @@ fn araim_seeds() {
     p_const[System::Galileo.index()] = Some(1e-4);
     let ism_cmd = |seq, sats: &[IsmSat]| frame(&RequestRef { seq, command: CommandRef::Araim(AraimCommandRef::Ism(IsmFrameRef { config: WireAraimConfig::default(), p_const, sats })) });
     let epoch_cmd = |seq, sats: &[LinearObservation]| frame(&RequestRef { seq, command: CommandRef::Araim(AraimCommandRef::Epoch { time_s: 1.0, sats }) });
+    let ranges = ranges12(&ids);
+    let mut ranges_faulted = ranges.clone();
+    ranges_faulted[3].pseudorange_m += 80.0;
+    let mut ranges_nan = ranges.clone();
+    ranges_nan[5].pseudorange_m = f64::NAN;
+    let ranges_cmd = |seq, sats: &[RangeObservation]| frame(&RequestRef { seq, command: CommandRef::Araim(AraimCommandRef::Ranges { time_s: 2.0, apriori_m: Some(RX_M), sats }) });
     let seeds: Vec<(&str, Vec<u8>)> = vec![
+        ("ranges12", ranges_cmd(1, &ranges)),
+        ("ranges12_faulted", ranges_cmd(1, &ranges_faulted)),
+        ("ranges12_nan", ranges_cmd(1, &ranges_nan)),
+        ("ranges12_no_apriori", frame(&RequestRef { seq: 1, command: CommandRef::Araim(AraimCommandRef::Ranges { time_s: 2.0, apriori_m: None, sats: &ranges }) })),
         ("epoch12", epoch_cmd(1, &epoch)),
         ("faulted12", epoch_cmd(1, &faulted)),
         ("ism_then_epoch", [ism_cmd(1, &ism), epoch_cmd(2, &epoch)].concat()),
@@ -129,4 +139,35 @@ fn araim_seeds() {
     for (name, bytes) in seeds {
         std::fs::write(dir.join(name), bytes).expect("write seed");
     }
+}
+
+/// A receiver on the ground (ECEF, m) for the pseudorange seeds.
+const RX_M: [f64; 3] = [-3_962_108.673, 3_381_309.574, 3_668_678.638];
+
+/// Pseudoranges of `ids` from satellites at GPS orbit radius spread over
+/// the sky above [`RX_M`], with a receiver clock per constellation
+/// (`AraimCommand::Ranges`, protocol 8).
+fn ranges12(ids: &[SatId]) -> Vec<RangeObservation> {
+    const ORBIT_RADIUS_M: f64 = 26_560_000.0;
+    let norm = RX_M.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let up = RX_M.map(|v| v / norm);
+    let east = {
+        let e = [-up[1], up[0], 0.0];
+        let n = (e[0] * e[0] + e[1] * e[1]).sqrt();
+        e.map(|v| v / n)
+    };
+    let north = [up[1] * east[2] - up[2] * east[1], up[2] * east[0] - up[0] * east[2], up[0] * east[1] - up[1] * east[0]];
+    ids.iter()
+        .enumerate()
+        .map(|(i, &id)| {
+            let az = i as f64 * 2.4;
+            let el = 0.2 + (i as f64 * 0.5) % 1.3;
+            let d: [f64; 3] = std::array::from_fn(|k| el.cos() * (az.sin() * east[k] + az.cos() * north[k]) + el.sin() * up[k]);
+            let b: f64 = RX_M.iter().zip(d.iter()).map(|(p, q)| p * q).sum();
+            let c = norm * norm - ORBIT_RADIUS_M * ORBIT_RADIUS_M;
+            let range = -b + (b * b - c).sqrt();
+            let clock = if id.system == System::Gps { 1234.5 } else { -987.0 };
+            RangeObservation { id, pseudorange_m: range + clock + 0.3 * ((i % 5) as f64 - 2.0), position_m: std::array::from_fn(|k| RX_M[k] + range * d[k]), sigma_m: None }
+        })
+        .collect()
 }
