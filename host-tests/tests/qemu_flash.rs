@@ -132,3 +132,24 @@ fn snapshot_build_refuses_the_reconstruction_fde() {
     }
     println!("{faulted} of the epochs had an exclusion");
 }
+
+/// Without the particle filter, every `PfConfigure` is answered
+/// `PfUnavailable`, a valid one and one with a particle count that no
+/// build has alike (the PF configuration checks are not linked into this
+/// build), and the configuration in force is unchanged.
+#[test]
+fn snapshot_build_answers_pf_configure_unavailable() {
+    use raim_proto::message::{CommandRef, ResponseBody};
+    use raim_proto::pf_msg::WirePfConfig;
+    let elf = raim_qemu::firmware_elf_snapshot().expect("snapshot firmware build");
+    let mut fw = raim_qemu::QemuSession::start(&elf).expect("qemu-system-arm with the firmware");
+    let before = fw.status().unwrap().config.crc32;
+    for pf in [WirePfConfig::gapf(100, 7), WirePfConfig::gapf(301, 7)] {
+        assert_eq!(
+            fw.call(CommandRef::PfConfigure(&pf)).unwrap(),
+            ResponseBody::Error(WireError::PfUnavailable),
+            "{pf:?}"
+        );
+    }
+    assert_eq!(fw.status().unwrap().config.crc32, before);
+}
