@@ -603,7 +603,9 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             }
             let extra = ev.sats & !removed;
             let result = match count {
-                0 => subset::downdate_coupled(&self.geo, &self.base0, extra, Some(&self.coupled)),
+                0 => {
+                    subset::downdate_coupled(&self.geo, &self.base0, extra, Some(&mut self.coupled))
+                }
                 1 => match self.const_status.get(single).copied().flatten() {
                     Some(d) => Err(d),
                     None => match self.const_bases.get(single) {

@@ -327,6 +327,14 @@ fn gdot<T: Real>(p: &[T; MAX_STATES], g: &[T; MAX_STATES], clk: usize) -> T {
     }
 }
 
+/// a . b over all `MAX_STATES` entries (for vectors that are zero beyond
+/// the epoch's m columns).
+fn full_dot<T: Real>(a: &[T; MAX_STATES], b: &[T; MAX_STATES]) -> T {
+    a.iter()
+        .zip(b.iter())
+        .fold(T::of(0.0), |acc, (x, y)| acc + *x * *y)
+}
+
 fn dot<T: Real>(a: &[T; MAX_STATES], b: &[T; MAX_STATES], m: usize) -> T {
     a.iter()
         .zip(b.iter())
@@ -352,17 +360,18 @@ pub fn gain_rows<T: Real, const N: usize>(
 }
 
 /// What the all-in-view base's downdates read instead of passing over
-/// the satellites (filled once per epoch by [`coupling`]):
+/// the satellites. [`coupling`] starts it once per epoch (the
+/// C_acc-weighted information A, the residuals); the rows of a removed
+/// satellite j are formed the first time a mode removes it
+/// ([`Coupling::row`]), so an epoch that stops at its first failing mode
+/// (FDE candidates, tests only) forms one or two rows, not n:
 ///
-/// - `q`: the coupling matrix Q[j][i] = g_j^T P0 g_i w_i for the
-///   satellites j, i of the epoch. The h_i of the module doc are its rows
-///   at the removed satellites, and V's position rows and M are read from
-///   it (n^2 m once per epoch).
-/// - `bg`: B g_i with B = P0 A P0, A = sum_i w_i^2 C_acc,i g_i g_i^T (the
-///   C_acc-weighted information, m x m): g_a^T B g_b = sum_i C_acc,i
-///   Q[a][i] Q[b][i], the Gram matrix of the removed rows' coupling rows
-///   under C_acc, which gives sigma_ss without a pass (see
-///   [`downdate_coupled`]).
+/// - `q[j]`: the coupling row Q[j][i] = g_j^T P0 g_i w_i (the h_i of the
+///   module doc; V's position rows and M are read from it), n m.
+/// - `bg[j]`: B g_j with B = P0 A P0, A = sum_i w_i^2 C_acc,i g_i g_i^T
+///   (m x m): g_a^T B g_b = sum_i C_acc,i Q[a][i] Q[b][i], the C_acc Gram
+///   matrix of the removed rows' coupling rows, which gives sigma_ss
+///   without a pass (see [`all_in_view`]), 2 m^2.
 /// - `res`: the all-in-view residuals y - G x^(0), which give the
 ///   separation without a pass.
 /// - `s`, `b_nom`, `biased`: the gain rows s0 and b_nom side by side for
@@ -372,6 +381,9 @@ pub fn gain_rows<T: Real, const N: usize>(
 pub struct Coupling<T, const N: usize> {
     pub q: [[T; N]; N],
     pub bg: [[T; MAX_STATES]; N],
+    /// Bit j: `q[j]` and `bg[j]` are formed for this epoch.
+    pub ready: u64,
+    pub a: [[T; MAX_STATES]; MAX_STATES],
     pub res: [T; N],
     pub s: [[T; N]; 3],
     pub b_nom: [T; N],
@@ -384,6 +396,8 @@ impl<T: Real, const N: usize> Default for Coupling<T, N> {
         Self {
             q: [[zero; N]; N],
             bg: [[zero; MAX_STATES]; N],
+            ready: 0,
+            a: [[zero; MAX_STATES]; MAX_STATES],
             res: [zero; N],
             s: [[zero; N]; 3],
             b_nom: [zero; N],
@@ -392,27 +406,27 @@ impl<T: Real, const N: usize> Default for Coupling<T, N> {
     }
 }
 
-/// Fills `cp` ([`Coupling`]) for the all-in-view base `base` (P0) and its
-/// gain rows `s0`: n^2 m for Q, m^3 + n m^2 for B g, n^2 for the
-/// residuals, once per epoch.
-pub fn coupling<T: Real, const N: usize>(
-    geo: &Geometry<T, N>,
-    base: &Base<T, N>,
-    s0: &[[T; N]; 3],
-    cp: &mut Coupling<T, N>,
-) {
-    let zero = T::of(0.0);
-    let m = geo.m.min(MAX_STATES);
-    let n = geo.n.min(N);
-    for ((qrow, gj), &cj) in
-        cp.q.iter_mut()
-            .zip(geo.g.iter())
-            .zip(geo.col.iter())
-            .take(n)
-    {
-        // v = P_B g_j.
+impl<T: Real, const N: usize> Coupling<T, N> {
+    /// Forms `q[j]` and `bg[j]` from the all-in-view P0 unless this epoch
+    /// already did.
+    pub fn row(&mut self, geo: &Geometry<T, N>, p0: &[[T; MAX_STATES]; MAX_STATES], j: usize) {
+        let zero = T::of(0.0);
+        if self.ready & bit(j) != 0 {
+            return;
+        }
+        let m = geo.m.min(MAX_STATES);
+        let n = geo.n.min(N);
+        let (Some(gj), Some(&cj), Some(qrow), Some(bgj)) = (
+            geo.g.get(j),
+            geo.col.get(j),
+            self.q.get_mut(j),
+            self.bg.get_mut(j),
+        ) else {
+            return;
+        };
+        // v = P0 g_j.
         let mut v = [zero; MAX_STATES];
-        for (vc, prow) in v.iter_mut().zip(base.p.iter()).take(m) {
+        for (vc, prow) in v.iter_mut().zip(p0.iter()).take(m) {
             *vc = gdot(prow, gj, cj);
         }
         for (x, ((gi, &w), &ci)) in qrow
@@ -422,9 +436,33 @@ pub fn coupling<T: Real, const N: usize>(
         {
             *x = gdot(&v, gi, ci) * w;
         }
+        // B g_j = P0 (A v), over the full width (P0, A and v are zero
+        // beyond m: exact zero terms, and the loops unroll).
+        let mut t = [zero; MAX_STATES];
+        for (tc, arow) in t.iter_mut().zip(self.a.iter()) {
+            *tc = full_dot(arow, &v);
+        }
+        for (x, prow) in bgj.iter_mut().zip(p0.iter()) {
+            *x = full_dot(prow, &t);
+        }
+        self.ready |= bit(j);
     }
-    // A = sum_i (w_i^2 C_acc,i) g_i g_i^T (lower triangle, then mirrored),
-    // B = P0 A P0, then B g_i.
+}
+
+/// Starts `cp` ([`Coupling`]) for the epoch: no row formed, A, the
+/// residuals y - G x^(0) with x^(0) = P0 G^T W y (2 n m + m^2), and the
+/// gain rows `s0` with b_nom for the b^(k) pass.
+pub fn coupling<T: Real, const N: usize>(
+    geo: &Geometry<T, N>,
+    base: &Base<T, N>,
+    s0: &[[T; N]; 3],
+    cp: &mut Coupling<T, N>,
+) {
+    let zero = T::of(0.0);
+    let m = geo.m.min(MAX_STATES);
+    let n = geo.n.min(N);
+    cp.ready = 0;
+    // A = sum_i (w_i^2 C_acc,i) g_i g_i^T (lower triangle, then mirrored).
     let mut a = [[zero; MAX_STATES]; MAX_STATES];
     for (((g, &w), &c), &clk) in geo
         .g
@@ -444,49 +482,40 @@ pub fn coupling<T: Real, const N: usize>(
             }
         }
     }
-    let mut pa = [[zero; MAX_STATES]; MAX_STATES];
-    for (parow, prow) in pa.iter_mut().zip(base.p.iter()).take(m) {
-        for (c, x) in parow.iter_mut().enumerate().take(m) {
-            *x = prow
-                .iter()
-                .zip(a.iter())
-                .take(m)
-                .fold(zero, |acc, (&p, arow)| {
-                    acc + p * arow.get(c).copied().unwrap_or(zero)
-                });
-        }
-    }
-    let mut b = [[zero; MAX_STATES]; MAX_STATES];
-    for (brow, parow) in b.iter_mut().zip(pa.iter()).take(m) {
-        for (c, x) in brow.iter_mut().enumerate().take(m) {
-            *x = parow
-                .iter()
-                .zip(base.p.iter())
-                .take(m)
-                .fold(zero, |acc, (&v, prow)| {
-                    acc + v * prow.get(c).copied().unwrap_or(zero)
-                });
-        }
-    }
-    for ((bgi, g), &clk) in cp
-        .bg
-        .iter_mut()
-        .zip(geo.g.iter())
+    cp.a = a;
+    // x^(0) = P0 (G^T W y), then the residuals.
+    let mut gty = [zero; MAX_STATES];
+    for (((g, &w), &y), &clk) in geo
+        .g
+        .iter()
+        .zip(geo.w.iter())
+        .zip(geo.y.iter())
         .zip(geo.col.iter())
         .take(n)
     {
-        for (x, brow) in bgi.iter_mut().zip(b.iter()).take(m) {
-            *x = gdot(brow, g, clk);
+        let wy = w * y;
+        let [g0, g1, g2, ..] = *g;
+        let [t0, t1, t2, ..] = &mut gty;
+        *t0 += g0 * wy;
+        *t1 += g1 * wy;
+        *t2 += g2 * wy;
+        if clk >= 3 {
+            if let (Some(t), Some(&gc)) = (gty.get_mut(clk), g.get(clk)) {
+                *t += gc * wy;
+            }
         }
     }
-    // Residuals y_j - g_j^T x^(0) = y_j - sum_i Q[j][i] y_i.
-    for (rj, (qrow, &yj)) in cp.res.iter_mut().zip(cp.q.iter().zip(geo.y.iter())).take(n) {
-        let fit = qrow
-            .iter()
-            .zip(geo.y.iter())
-            .take(n)
-            .fold(zero, |acc, (&q, &y)| acc + q * y);
-        *rj = yj - fit;
+    let mut x0 = [zero; MAX_STATES];
+    for (x, prow) in x0.iter_mut().zip(base.p.iter()).take(m) {
+        *x = dot(prow, &gty, m);
+    }
+    for (r, ((g, &y), &clk)) in cp
+        .res
+        .iter_mut()
+        .zip(geo.g.iter().zip(geo.y.iter()).zip(geo.col.iter()))
+        .take(n)
+    {
+        *r = y - gdot(&x0, g, clk);
     }
     cp.s = *s0;
     cp.b_nom = geo.b_nom;
@@ -511,7 +540,7 @@ pub fn downdate_coupled<T: Real, const N: usize>(
     geo: &Geometry<T, N>,
     base: &Base<T, N>,
     extra: u64,
-    coupling: Option<&Coupling<T, N>>,
+    coupling: Option<&mut Coupling<T, N>>,
 ) -> Result<SubsetStats<T>, Deficient> {
     // The coupling describes the all-in-view base only.
     if let Some(cp) = coupling.filter(|_| base.removed == 0) {
@@ -525,6 +554,10 @@ pub fn downdate_coupled<T: Real, const N: usize>(
             rest &= rest - 1;
             r += 1;
         }
+        for &j in rows.iter().take(r) {
+            cp.row(geo, &base.p, j);
+        }
+        let cp = &*cp;
         let [a, b, c, d] = rows;
         return match r {
             1 => all_in_view(geo, base, cp, [a]),
