@@ -410,10 +410,15 @@ impl<T: Real, const N: usize> Coupling<T, N> {
     /// Forms `q[j]` and `bg[j]` from the all-in-view P0 unless this epoch
     /// already did.
     pub fn row(&mut self, geo: &Geometry<T, N>, p0: &[[T; MAX_STATES]; MAX_STATES], j: usize) {
-        let zero = T::of(0.0);
-        if self.ready & bit(j) != 0 {
-            return;
+        if self.ready & bit(j) == 0 {
+            self.form_row(geo, p0, j);
         }
+    }
+
+    /// [`Self::row`]'s work, out of line (once per satellite and epoch).
+    #[inline(never)]
+    fn form_row(&mut self, geo: &Geometry<T, N>, p0: &[[T; MAX_STATES]; MAX_STATES], j: usize) {
+        let zero = T::of(0.0);
         let m = geo.m.min(MAX_STATES);
         let n = geo.n.min(N);
         let (Some(gj), Some(&cj), Some(qrow), Some(bgj)) = (
