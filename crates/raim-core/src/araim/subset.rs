@@ -13,7 +13,8 @@
 //! So sigma_q^(k)^2 = (P_k)_qq (since S W^-1 S^T = P), and the three
 //! position rows of S^(k) - S^(0), which give sigma_ss, b^(k) and the
 //! separation x^(k) - x^(0), are formed in O(r m n) without any new least
-//! squares. A singular M (removing R leaves the geometry rank-deficient)
+//! squares; on the all-in-view base, sigma_ss and the separation need no
+//! pass over the satellites at all (`all_in_view`). A singular M (removing R leaves the geometry rank-deficient)
 //! makes the mode unmonitorable. A mode that empties a constellation
 //! (by its constellation event or by removing all its satellites) uses
 //! that constellation's base, whose clock column is dropped.
@@ -366,12 +367,12 @@ pub fn gain_rows<T: Real, const N: usize>(
 /// ([`Coupling::row`]), so an epoch that stops at its first failing mode
 /// (FDE candidates, tests only) forms one or two rows, not n:
 ///
-/// - `q[j]`: the coupling row Q[j][i] = g_j^T P0 g_i w_i (the h_i of the
+/// - `q[j]`: the coupling row `Q[j][i] = g_j^T P0 g_i w_i` (the h_i of the
 ///   module doc; V's position rows and M are read from it), n m.
 /// - `bg[j]`: B g_j with B = P0 A P0, A = sum_i w_i^2 C_acc,i g_i g_i^T
-///   (m x m): g_a^T B g_b = sum_i C_acc,i Q[a][i] Q[b][i], the C_acc Gram
+///   (m x m): `g_a^T B g_b = sum_i C_acc,i Q[a][i] Q[b][i]`, the C_acc Gram
 ///   matrix of the removed rows' coupling rows, which gives sigma_ss
-///   without a pass (see [`all_in_view`]), 2 m^2.
+///   without a pass (see `all_in_view`), 2 m^2.
 /// - `res`: the all-in-view residuals y - G x^(0), which give the
 ///   separation without a pass.
 /// - `s`, `b_nom`, `biased`: the gain rows s0 and b_nom side by side for
@@ -538,9 +539,12 @@ pub fn downdate<T: Real, const N: usize>(
     downdate_coupled(geo, base, extra, None)
 }
 
-/// [`downdate`], with the base's [`coupling`] matrix when it is at hand
-/// (the same numbers, summed in another order). Reads the base's
-/// [`pack`] (so `s0` must be the one the pack was made with).
+/// [`downdate`], with the epoch's [`Coupling`] when the base is the
+/// all-in-view one: then `all_in_view` (sigma_ss and the separation in
+/// closed form, one pass for b^(k); the same quantities to rounding,
+/// checked against the dense reference). Otherwise the pass over the
+/// satellites, which reads the base's [`pack`] (so `s0` must be the one
+/// the pack was made with).
 pub fn downdate_coupled<T: Real, const N: usize>(
     geo: &Geometry<T, N>,
     base: &Base<T, N>,
