@@ -221,8 +221,8 @@ pub struct Araim<T, const N: usize, const K: usize> {
     geo: Geometry<T, N>,
     s0: [[T; N]; 3],
     base0: Base<T, N>,
-    /// The all-in-view base's coupling matrix (subset::coupling).
-    q0: [[T; N]; N],
+    /// What the all-in-view base's downdates read (subset::Coupling).
+    coupled: subset::Coupling<T, N>,
     const_bases: [Base<T, N>; MAX_SYSTEMS],
     const_status: [Option<Deficient>; MAX_SYSTEMS],
     scratch: Base<T, N>,
@@ -246,7 +246,7 @@ impl<T: Real, const N: usize, const K: usize> Default for Araim<T, N, K> {
             geo: Geometry::default(),
             s0: [[T::of(0.0); N]; 3],
             base0: Base::default(),
-            q0: [[T::of(0.0); N]; N],
+            coupled: subset::Coupling::default(),
             const_bases: [Base::default(); MAX_SYSTEMS],
             const_status: [None; MAX_SYSTEMS],
             scratch: Base::default(),
@@ -466,7 +466,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         self.s0 = self.base0.d;
         self.base0.d = zeros;
         subset::pack(&self.geo, &self.s0, &mut self.base0);
-        subset::coupling(&self.geo, &self.base0, &mut self.q0);
+        subset::coupling(&self.geo, &self.base0, &self.s0, &mut self.coupled);
         let out = &mut self.out;
         for q in 0..3 {
             let row = self.s0.get(q).copied().unwrap_or([zero; N]);
@@ -603,7 +603,9 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             }
             let extra = ev.sats & !removed;
             let result = match count {
-                0 => subset::downdate_coupled(&self.geo, &self.base0, extra, Some(&self.q0)),
+                0 => {
+                    subset::downdate_coupled(&self.geo, &self.base0, extra, Some(&mut self.coupled))
+                }
                 1 => match self.const_status.get(single).copied().flatten() {
                     Some(d) => Err(d),
                     None => match self.const_bases.get(single) {

@@ -13,7 +13,8 @@
 //! So sigma_q^(k)^2 = (P_k)_qq (since S W^-1 S^T = P), and the three
 //! position rows of S^(k) - S^(0), which give sigma_ss, b^(k) and the
 //! separation x^(k) - x^(0), are formed in O(r m n) without any new least
-//! squares. A singular M (removing R leaves the geometry rank-deficient)
+//! squares; on the all-in-view base, sigma_ss and the separation need no
+//! pass over the satellites at all (`all_in_view`). A singular M (removing R leaves the geometry rank-deficient)
 //! makes the mode unmonitorable. A mode that empties a constellation
 //! (by its constellation event or by removing all its satellites) uses
 //! that constellation's base, whose clock column is dropped.
@@ -327,6 +328,14 @@ fn gdot<T: Real>(p: &[T; MAX_STATES], g: &[T; MAX_STATES], clk: usize) -> T {
     }
 }
 
+/// a . b over all `MAX_STATES` entries (for vectors that are zero beyond
+/// the epoch's m columns).
+fn full_dot<T: Real>(a: &[T; MAX_STATES], b: &[T; MAX_STATES]) -> T {
+    a.iter()
+        .zip(b.iter())
+        .fold(T::of(0.0), |acc, (x, y)| acc + *x * *y)
+}
+
 fn dot<T: Real>(a: &[T; MAX_STATES], b: &[T; MAX_STATES], m: usize) -> T {
     a.iter()
         .zip(b.iter())
@@ -351,38 +360,172 @@ pub fn gain_rows<T: Real, const N: usize>(
     }
 }
 
-/// The coupling matrix of a base, Q[j][i] = g_j^T P_B g_i w_i for the
-/// satellites j, i of the epoch: the h_i of the module doc are its rows
-/// at the removed satellites, so a downdate with it reads h instead of
-/// forming r dot products of length m per satellite (n^2 m once per epoch
-/// against r m n per mode; with 465 modes on base 0 at 30 satellites, the
-/// per-mode pass is about a third of its former cost).
-pub fn coupling<T: Real, const N: usize>(
-    geo: &Geometry<T, N>,
-    base: &Base<T, N>,
-    q: &mut [[T; N]; N],
-) {
-    let zero = T::of(0.0);
-    let m = geo.m.min(MAX_STATES);
-    for ((qrow, gj), &cj) in q
-        .iter_mut()
-        .zip(geo.g.iter())
-        .zip(geo.col.iter())
-        .take(geo.n.min(N))
-    {
-        // v = P_B g_j.
+/// What the all-in-view base's downdates read instead of passing over
+/// the satellites. [`coupling`] starts it once per epoch (the
+/// C_acc-weighted information A, the residuals); the rows of a removed
+/// satellite j are formed the first time a mode removes it
+/// ([`Coupling::row`]), so an epoch that stops at its first failing mode
+/// (FDE candidates, tests only) forms one or two rows, not n:
+///
+/// - `q[j]`: the coupling row `Q[j][i] = g_j^T P0 g_i w_i` (the h_i of the
+///   module doc; V's position rows and M are read from it), n m.
+/// - `bg[j]`: B g_j with B = P0 A P0, A = sum_i w_i^2 C_acc,i g_i g_i^T
+///   (m x m): `g_a^T B g_b = sum_i C_acc,i Q[a][i] Q[b][i]`, the C_acc Gram
+///   matrix of the removed rows' coupling rows, which gives sigma_ss
+///   without a pass (see `all_in_view`), 2 m^2.
+/// - `res`: the all-in-view residuals y - G x^(0), which give the
+///   separation without a pass.
+/// - `s`, `b_nom`, `biased`: the gain rows s0 and b_nom side by side for
+///   the one pass left, b^(k); `biased` is false when every b_nom is
+///   exactly 0 (then every b^(k) is exactly 0 and the pass is skipped).
+#[derive(Debug, Clone, Copy)]
+pub struct Coupling<T, const N: usize> {
+    pub q: [[T; N]; N],
+    pub bg: [[T; MAX_STATES]; N],
+    /// Bit j: `q[j]` and `bg[j]` are formed for this epoch.
+    pub ready: u64,
+    pub a: [[T; MAX_STATES]; MAX_STATES],
+    pub res: [T; N],
+    pub s: [[T; N]; 3],
+    pub b_nom: [T; N],
+    pub biased: bool,
+}
+
+impl<T: Real, const N: usize> Default for Coupling<T, N> {
+    fn default() -> Self {
+        let zero = T::of(0.0);
+        Self {
+            q: [[zero; N]; N],
+            bg: [[zero; MAX_STATES]; N],
+            ready: 0,
+            a: [[zero; MAX_STATES]; MAX_STATES],
+            res: [zero; N],
+            s: [[zero; N]; 3],
+            b_nom: [zero; N],
+            biased: false,
+        }
+    }
+}
+
+impl<T: Real, const N: usize> Coupling<T, N> {
+    /// Forms `q[j]` and `bg[j]` from the all-in-view P0 unless this epoch
+    /// already did.
+    pub fn row(&mut self, geo: &Geometry<T, N>, p0: &[[T; MAX_STATES]; MAX_STATES], j: usize) {
+        if self.ready & bit(j) == 0 {
+            self.form_row(geo, p0, j);
+        }
+    }
+
+    /// [`Self::row`]'s work, out of line (once per satellite and epoch).
+    #[inline(never)]
+    fn form_row(&mut self, geo: &Geometry<T, N>, p0: &[[T; MAX_STATES]; MAX_STATES], j: usize) {
+        let zero = T::of(0.0);
+        let m = geo.m.min(MAX_STATES);
+        let n = geo.n.min(N);
+        let (Some(gj), Some(&cj), Some(qrow), Some(bgj)) = (
+            geo.g.get(j),
+            geo.col.get(j),
+            self.q.get_mut(j),
+            self.bg.get_mut(j),
+        ) else {
+            return;
+        };
+        // v = P0 g_j.
         let mut v = [zero; MAX_STATES];
-        for (vc, prow) in v.iter_mut().zip(base.p.iter()).take(m) {
+        for (vc, prow) in v.iter_mut().zip(p0.iter()).take(m) {
             *vc = gdot(prow, gj, cj);
         }
         for (x, ((gi, &w), &ci)) in qrow
             .iter_mut()
             .zip(geo.g.iter().zip(geo.w.iter()).zip(geo.col.iter()))
-            .take(geo.n.min(N))
+            .take(n)
         {
             *x = gdot(&v, gi, ci) * w;
         }
+        // B g_j = P0 (A v), over the full width (P0, A and v are zero
+        // beyond m: exact zero terms, and the loops unroll).
+        let mut t = [zero; MAX_STATES];
+        for (tc, arow) in t.iter_mut().zip(self.a.iter()) {
+            *tc = full_dot(arow, &v);
+        }
+        for (x, prow) in bgj.iter_mut().zip(p0.iter()) {
+            *x = full_dot(prow, &t);
+        }
+        self.ready |= bit(j);
     }
+}
+
+/// Starts `cp` ([`Coupling`]) for the epoch: no row formed, A, the
+/// residuals y - G x^(0) with x^(0) = P0 G^T W y (2 n m + m^2), and the
+/// gain rows `s0` with b_nom for the b^(k) pass.
+pub fn coupling<T: Real, const N: usize>(
+    geo: &Geometry<T, N>,
+    base: &Base<T, N>,
+    s0: &[[T; N]; 3],
+    cp: &mut Coupling<T, N>,
+) {
+    let zero = T::of(0.0);
+    let m = geo.m.min(MAX_STATES);
+    let n = geo.n.min(N);
+    cp.ready = 0;
+    // A = sum_i (w_i^2 C_acc,i) g_i g_i^T (lower triangle, then mirrored).
+    let mut a = [[zero; MAX_STATES]; MAX_STATES];
+    for (((g, &w), &c), &clk) in geo
+        .g
+        .iter()
+        .zip(geo.w.iter())
+        .zip(geo.c_acc.iter())
+        .zip(geo.col.iter())
+        .take(n)
+    {
+        normal_add(&mut a, g, w * w * c, clk);
+    }
+    for i in 0..m {
+        for j in (i + 1)..m {
+            let x = a.get(j).and_then(|r| r.get(i)).copied().unwrap_or(zero);
+            if let Some(y) = a.get_mut(i).and_then(|r| r.get_mut(j)) {
+                *y = x;
+            }
+        }
+    }
+    cp.a = a;
+    // x^(0) = P0 (G^T W y), then the residuals.
+    let mut gty = [zero; MAX_STATES];
+    for (((g, &w), &y), &clk) in geo
+        .g
+        .iter()
+        .zip(geo.w.iter())
+        .zip(geo.y.iter())
+        .zip(geo.col.iter())
+        .take(n)
+    {
+        let wy = w * y;
+        let [g0, g1, g2, ..] = *g;
+        let [t0, t1, t2, ..] = &mut gty;
+        *t0 += g0 * wy;
+        *t1 += g1 * wy;
+        *t2 += g2 * wy;
+        if clk >= 3 {
+            if let (Some(t), Some(&gc)) = (gty.get_mut(clk), g.get(clk)) {
+                *t += gc * wy;
+            }
+        }
+    }
+    let mut x0 = [zero; MAX_STATES];
+    for (x, prow) in x0.iter_mut().zip(base.p.iter()).take(m) {
+        *x = dot(prow, &gty, m);
+    }
+    for (r, ((g, &y), &clk)) in cp
+        .res
+        .iter_mut()
+        .zip(geo.g.iter().zip(geo.y.iter()).zip(geo.col.iter()))
+        .take(n)
+    {
+        *r = y - gdot(&x0, g, clk);
+    }
+    cp.s = *s0;
+    cp.b_nom = geo.b_nom;
+    cp.biased = geo.b_nom.iter().take(n).any(|&b| b != zero);
 }
 
 /// The statistics of the subset that removes the satellites `extra` (a
@@ -396,15 +539,46 @@ pub fn downdate<T: Real, const N: usize>(
     downdate_coupled(geo, base, extra, None)
 }
 
-/// [`downdate`], with the base's [`coupling`] matrix when it is at hand
-/// (the same numbers, summed in another order). Reads the base's
-/// [`pack`] (so `s0` must be the one the pack was made with).
+/// [`downdate`], with the epoch's [`Coupling`] when the base is the
+/// all-in-view one: then `all_in_view` (sigma_ss and the separation in
+/// closed form, one pass for b^(k); the same quantities to rounding,
+/// checked against the dense reference). Otherwise the pass over the
+/// satellites, which reads the base's [`pack`] (so `s0` must be the one
+/// the pack was made with).
 pub fn downdate_coupled<T: Real, const N: usize>(
     geo: &Geometry<T, N>,
     base: &Base<T, N>,
     extra: u64,
-    coupling: Option<&[[T; N]; N]>,
+    coupling: Option<&mut Coupling<T, N>>,
 ) -> Result<SubsetStats<T>, Deficient> {
+    // The coupling describes the all-in-view base only.
+    if let Some(cp) = coupling.filter(|_| base.removed == 0) {
+        let mut rows = [0usize; MAX_EVENTS];
+        let mut rest = extra & (u64::MAX >> (64 - geo.n.clamp(1, 64)));
+        let mut r = 0usize;
+        while rest != 0 {
+            if let Some(x) = rows.get_mut(r) {
+                *x = rest.trailing_zeros() as usize;
+            }
+            rest &= rest - 1;
+            r += 1;
+        }
+        for &j in rows.iter().take(r) {
+            cp.row(geo, &base.p, j);
+        }
+        let cp = &*cp;
+        let [a, b, c, d] = rows;
+        return match r {
+            1 => all_in_view(geo, base, cp, [a]),
+            2 => all_in_view(geo, base, cp, [a, b]),
+            3 => all_in_view(geo, base, cp, [a, b, c]),
+            4 => all_in_view(geo, base, cp, [a, b, c, d]),
+            _ => Err(Deficient {
+                column: 0,
+                pivot: 0.0,
+            }),
+        };
+    }
     let zero = T::of(0.0);
     let m = geo.m.min(MAX_STATES);
     let n = geo.n.min(N);
@@ -425,33 +599,10 @@ pub fn downdate_coupled<T: Real, const N: usize>(
             pivot: 0.0,
         });
     }
-    // V = P_B G_R^T (stored by removed row), M = W_R^-1 - G_R V. With
-    // the coupling matrix both are read, not formed: the position rows of
-    // V are s0_q[i] / w_i (S0 = P0 G^T W) and g_a^T P0 g_b = Q[a][b] / w_b
-    // (only the position rows of V are used on that path).
+    // V = P_B G_R^T (stored by removed row), M = W_R^-1 - G_R V.
     let mut v = [[zero; MAX_STATES]; MAX_EVENTS];
     let mut mm = [[zero; MAX_EVENTS]; MAX_EVENTS];
-    if let Some(cm) = coupling {
-        for (a, (vr, &ia)) in v.iter_mut().zip(rows.iter()).take(r).enumerate() {
-            let wa = geo.w.get(ia).copied().unwrap_or(T::of(1.0));
-            if let Some(pk) = base.pack.get(ia) {
-                for (x, &sq) in vr.iter_mut().zip(pk.s.iter()) {
-                    *x = sq / wa;
-                }
-            }
-            let qa = cm.get(ia);
-            if let Some(mrow) = mm.get_mut(a) {
-                for (b, (y, &ib)) in mrow.iter_mut().zip(rows.iter()).take(r).enumerate() {
-                    let wb = geo.w.get(ib).copied().unwrap_or(T::of(1.0));
-                    let mut x = -qa.and_then(|row| row.get(ib)).copied().unwrap_or(zero) / wb;
-                    if a == b {
-                        x += T::of(1.0) / wa;
-                    }
-                    *y = x;
-                }
-            }
-        }
-    } else {
+    {
         for (vr, &i) in v.iter_mut().zip(rows.iter()).take(r) {
             let g = geo.g.get(i).copied().unwrap_or([zero; MAX_STATES]);
             for (c, x) in vr.iter_mut().enumerate().take(m) {
@@ -555,40 +706,29 @@ pub fn downdate_coupled<T: Real, const N: usize>(
             *x = var.sqrt();
         }
     }
-    // The coupling rows h_k[i] of the removed satellites: the base's
-    // coupling matrix when at hand, else v_k . g_i w_i here (r n m), zero
+    // The coupling rows h_k[i] of the removed
+    // satellites are formed here as v_k . g_i w_i (r n m), zero
     // at the satellites the base removes (so that there d = d0 = -s and
     // the pass takes their removed-satellite terms s^2 C_acc and -s y,
     // and |s + d| = 0, without a branch).
     let zero_row = [zero; N];
     let mut formed = [[zero; N]; MAX_EVENTS];
     let mut qrows: [&[T; N]; MAX_EVENTS] = [&zero_row; MAX_EVENTS];
-    match coupling {
-        Some(cm) => {
-            for (qr, &i) in qrows.iter_mut().zip(rows.iter()).take(r) {
-                if let Some(row) = cm.get(i) {
-                    *qr = row;
-                }
+    for (f, vk) in formed.iter_mut().zip(v.iter()).take(r) {
+        let sats = geo.g.iter().zip(geo.w.iter()).enumerate().take(n);
+        for ((i, (g, &w)), x) in sats.zip(f.iter_mut()) {
+            if base.removed & bit(i) == 0 {
+                *x = vk
+                    .iter()
+                    .zip(g.iter())
+                    .take(m)
+                    .fold(zero, |acc, (a, b)| acc + *a * *b)
+                    * w;
             }
         }
-        None => {
-            for (f, vk) in formed.iter_mut().zip(v.iter()).take(r) {
-                let sats = geo.g.iter().zip(geo.w.iter()).enumerate().take(n);
-                for ((i, (g, &w)), x) in sats.zip(f.iter_mut()) {
-                    if base.removed & bit(i) == 0 {
-                        *x = vk
-                            .iter()
-                            .zip(g.iter())
-                            .take(m)
-                            .fold(zero, |acc, (a, b)| acc + *a * *b)
-                            * w;
-                    }
-                }
-            }
-            for (qr, f) in qrows.iter_mut().zip(formed.iter()).take(r) {
-                *qr = f;
-            }
-        }
+    }
+    for (qr, f) in qrows.iter_mut().zip(formed.iter()).take(r) {
+        *qr = f;
     }
     // The kept satellites in the contiguous runs between the removed ones
     // (sorted ascending), then the removed ones' own terms.
@@ -622,6 +762,250 @@ pub fn downdate_coupled<T: Real, const N: usize>(
     }
     out.bias_m = bias;
     out.separation_m = sep;
+    Ok(out)
+}
+
+/// The statistics of the subset that removes the satellites `rows`
+/// (ascending, `R` of them, a constant so that every loop below unrolls)
+/// from the all-in-view base, from the epoch's [`Coupling`] and without a
+/// pass over the satellites for sigma_ss and the separation.
+///
+/// V's position rows are s0_q[i] / w_i (S0 = P0 G^T W) and M = W_R^-1 -
+/// G_R P0 G_R^T has g_a^T P0 g_b = Q[a][b] / w_b; c_q = M^-1 V_q and
+/// sigma_q^2 = (P0)_qq + c_q . V_q (module doc). With d_i = (S_k - S_0)
+/// e_i:
+///
+/// - kept i: d_qi = sum_k c_qk Q[R_k][i]; removed i: d_i = -s_i. So
+///   sigma_ss,q^2 = sum_kept d_qi^2 C_acc,i + sum_R s_qi^2 C_acc,i, and
+///   sum_all_i (sum_k c_qk Q[R_k][i])^2 C_acc,i = c_q^T E c_q with
+///   E_ab = g_Ra^T B g_Rb ([`Coupling`]`::bg`): the kept sum is
+///   c_q^T E c_q minus the removed rows' terms of the same form (r^2 m
+///   per mode instead of r n per axis). The subtraction cancels about as
+///   much as forming M does already (relative eps h / (1 - h), h the
+///   removed rows' leverage); the kept sum, a sum of squares, is floored
+///   at 0 against that rounding.
+/// - separation: x^(k) - x^(0) = -V M^-1 r_R with r = y - G x^(0) the
+///   all-in-view residuals (the Woodbury form of removing rows), so
+///   sep_q = -c_q . r_R.
+/// - b^(k)_q = sum_kept |s_qi + d_qi| b_nom,i needs the satellites (the
+///   absolute value): one pass, r multiplies per satellite and axis, by
+///   the contiguous runs between the removed satellites; skipped when
+///   every b_nom is exactly 0 (then every term, so b^(k), is exactly 0).
+fn all_in_view<T: Real, const N: usize, const R: usize>(
+    geo: &Geometry<T, N>,
+    base: &Base<T, N>,
+    cp: &Coupling<T, N>,
+    rows: [usize; R],
+) -> Result<SubsetStats<T>, Deficient> {
+    let zero = T::of(0.0);
+    let one = T::of(1.0);
+    let n = geo.n.min(N);
+    // Per removed row a: w, C_acc, the residual, s_q, its Q row and the
+    // removed rows' Q block, E's row.
+    let mut w = [one; R];
+    let mut c_acc = [zero; R];
+    let mut res = [zero; R];
+    let mut v = [[zero; R]; 3];
+    let zero_row = [zero; N];
+    let mut qrows: [&[T; N]; R] = [&zero_row; R];
+    for (a, &ia) in rows.iter().enumerate() {
+        if let (Some(x), Some(y), Some(z), Some(qr)) = (
+            w.get_mut(a),
+            c_acc.get_mut(a),
+            res.get_mut(a),
+            qrows.get_mut(a),
+        ) {
+            *x = geo.w.get(ia).copied().unwrap_or(one);
+            *y = geo.c_acc.get(ia).copied().unwrap_or(zero);
+            *z = cp.res.get(ia).copied().unwrap_or(zero);
+            if let Some(row) = cp.q.get(ia) {
+                *qr = row;
+            }
+        }
+    }
+    let mut s = [[zero; R]; 3];
+    for ((sq, vq), srow) in s.iter_mut().zip(v.iter_mut()).zip(cp.s.iter()) {
+        for (((x, y), &ia), &wa) in sq
+            .iter_mut()
+            .zip(vq.iter_mut())
+            .zip(rows.iter())
+            .zip(w.iter())
+        {
+            *x = srow.get(ia).copied().unwrap_or(zero);
+            *y = *x / wa;
+        }
+    }
+    // Q[R_a][R_b] and M.
+    let mut qrr = [[zero; R]; R];
+    let mut mm = [[zero; R]; R];
+    for (a, ((qrow, mrow), qa)) in qrr
+        .iter_mut()
+        .zip(mm.iter_mut())
+        .zip(qrows.iter())
+        .enumerate()
+    {
+        let wa = w.get(a).copied().unwrap_or(one);
+        for (b, ((x, y), (&ib, &wb))) in qrow
+            .iter_mut()
+            .zip(mrow.iter_mut())
+            .zip(rows.iter().zip(w.iter()))
+            .enumerate()
+        {
+            *x = qa.get(ib).copied().unwrap_or(zero);
+            let mut m = -*x / wb;
+            if a == b {
+                m += one / wa;
+            }
+            *y = m;
+        }
+    }
+    // Cholesky of M, pivots relative to C_int of the removed row.
+    let tol = rank_tolerance::<T>();
+    let mut l = [[zero; R]; R];
+    for j in 0..R {
+        let ij = rows.get(j).copied().unwrap_or(0);
+        let scale = one / w.get(j).copied().unwrap_or(one);
+        let mut sum = mm.get(j).and_then(|x| x.get(j)).copied().unwrap_or(zero);
+        for k in 0..j {
+            let x = l.get(j).and_then(|x| x.get(k)).copied().unwrap_or(zero);
+            sum -= x * x;
+        }
+        if !(sum > tol * scale) {
+            return Err(Deficient {
+                column: ij,
+                pivot: (sum / scale).to_f64(),
+            });
+        }
+        let ljj = sum.sqrt();
+        if let Some(x) = l.get_mut(j).and_then(|x| x.get_mut(j)) {
+            *x = ljj;
+        }
+        for i in (j + 1)..R {
+            let mut sum = mm.get(i).and_then(|x| x.get(j)).copied().unwrap_or(zero);
+            for k in 0..j {
+                sum -= l.get(i).and_then(|x| x.get(k)).copied().unwrap_or(zero)
+                    * l.get(j).and_then(|x| x.get(k)).copied().unwrap_or(zero);
+            }
+            if let Some(x) = l.get_mut(i).and_then(|x| x.get_mut(j)) {
+                *x = sum / ljj;
+            }
+        }
+    }
+    // E_ab = g_Ra^T B g_Rb (symmetric).
+    let mut e = [[zero; R]; R];
+    for (a, &ia) in rows.iter().enumerate() {
+        let (Some(ga), Some(&ca)) = (geo.g.get(ia), geo.col.get(ia)) else {
+            continue;
+        };
+        for (b, &ib) in rows.iter().enumerate().take(a + 1) {
+            let x = cp.bg.get(ib).map_or(zero, |bg| gdot(bg, ga, ca));
+            if let Some(y) = e.get_mut(a).and_then(|row| row.get_mut(b)) {
+                *y = x;
+            }
+            if let Some(y) = e.get_mut(b).and_then(|row| row.get_mut(a)) {
+                *y = x;
+            }
+        }
+    }
+    let mut out = SubsetStats::default();
+    let mut coef = [[zero; R]; 3];
+    for (q, ((cq, vq), sq)) in coef.iter_mut().zip(v.iter()).zip(s.iter()).enumerate() {
+        // c_q = M^-1 V_q: L z = V_q, L^T c = z.
+        let mut z = [zero; R];
+        for i in 0..R {
+            let mut sum = vq.get(i).copied().unwrap_or(zero);
+            for k in 0..i {
+                sum -= l.get(i).and_then(|x| x.get(k)).copied().unwrap_or(zero)
+                    * z.get(k).copied().unwrap_or(zero);
+            }
+            let lii = l.get(i).and_then(|x| x.get(i)).copied().unwrap_or(one);
+            if let Some(x) = z.get_mut(i) {
+                *x = sum / lii;
+            }
+        }
+        for i in (0..R).rev() {
+            let mut sum = z.get(i).copied().unwrap_or(zero);
+            for k in (i + 1)..R {
+                sum -= l.get(k).and_then(|x| x.get(i)).copied().unwrap_or(zero)
+                    * cq.get(k).copied().unwrap_or(zero);
+            }
+            let lii = l.get(i).and_then(|x| x.get(i)).copied().unwrap_or(one);
+            if let Some(x) = cq.get_mut(i) {
+                *x = sum / lii;
+            }
+        }
+        let mut var = base
+            .p
+            .get(q)
+            .and_then(|x| x.get(q))
+            .copied()
+            .unwrap_or(zero);
+        for (&c, &vk) in cq.iter().zip(vq.iter()) {
+            var += c * vk;
+        }
+        // sigma_ss: c_q^T E c_q, minus the removed rows' own terms, plus
+        // theirs as removed rows (s^2 C_acc); the separation -c_q . r_R.
+        let mut quad = zero;
+        for (&ca, erow) in cq.iter().zip(e.iter()) {
+            let ec = erow
+                .iter()
+                .zip(cq.iter())
+                .fold(zero, |acc, (&x, &c)| acc + x * c);
+            quad += ca * ec;
+        }
+        let mut removed = zero;
+        let mut sep = zero;
+        for (j, (((&sj, &cj), &ca), &rj)) in sq
+            .iter()
+            .zip(cq.iter())
+            .zip(c_acc.iter())
+            .zip(res.iter())
+            .enumerate()
+        {
+            let dj = cq.iter().zip(qrr.iter()).fold(zero, |acc, (&c, qrow)| {
+                acc + c * qrow.get(j).copied().unwrap_or(zero)
+            });
+            quad -= dj * dj * ca;
+            removed += sj * sj * ca;
+            sep -= cj * rj;
+        }
+        let kept = if quad > zero { quad } else { zero };
+        if let (Some(a), Some(b), Some(c)) = (
+            out.sigma_m.get_mut(q),
+            out.sigma_ss_m.get_mut(q),
+            out.separation_m.get_mut(q),
+        ) {
+            *a = var.sqrt();
+            *b = (kept + removed).sqrt();
+            *c = sep;
+        }
+    }
+    if cp.biased {
+        // The kept satellites, by the runs between the removed ones.
+        let mut bias = [zero; 3];
+        let mut start = 0usize;
+        for stop in rows.iter().copied().chain(core::iter::once(n)) {
+            let stop = stop.min(N);
+            for j in start..stop {
+                let bn = cp.b_nom.get(j).copied().unwrap_or(zero);
+                let mut h = [zero; R];
+                for (hk, row) in h.iter_mut().zip(qrows.iter()) {
+                    *hk = row.get(j).copied().unwrap_or(zero);
+                }
+                for ((bq, cq), srow) in bias.iter_mut().zip(coef.iter()).zip(cp.s.iter()) {
+                    let t = cq
+                        .iter()
+                        .zip(h.iter())
+                        .fold(srow.get(j).copied().unwrap_or(zero), |x, (&c, &hk)| {
+                            x + c * hk
+                        });
+                    *bq += t.abs() * bn;
+                }
+            }
+            start = stop + 1;
+        }
+        out.bias_m = bias;
+    }
     Ok(out)
 }
 

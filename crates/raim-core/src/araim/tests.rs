@@ -535,6 +535,41 @@ mod brute_force {
             "{strict_total}/{modes_total}"
         );
     }
+
+    /// b_nom = 0 on every satellite (the downdates skip the b^(k) pass:
+    /// every b^(k) must be exactly 0) and on every other one (the pass
+    /// runs with zero terms), against the dense reference.
+    #[test]
+    fn skies_without_nominal_bias_match_dense_reference() {
+        let mut rng = crate::testutil::Rng::new(31);
+        let all = [System::Gps, System::Galileo];
+        let mut modes_total = 0;
+        for trial in 0..12 {
+            let n = 8 + (rng.uniform() * 20.0) as usize;
+            let p_const = if trial % 2 == 0 { 1e-4 } else { 1e-8 };
+            let mut sats = random_sky(&mut rng, n, &all, 1e-4);
+            let none = trial < 6;
+            for (i, s) in sats.iter_mut().enumerate() {
+                if none || i % 2 == 0 {
+                    s.b_nom_m = 0.0;
+                }
+            }
+            let ism = Ism::with(&all, p_const);
+            let (k, _) = check_epoch(&sats, &ism, &AraimConfig::default());
+            modes_total += k;
+            if none {
+                let mut engine = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+                let out = engine
+                    .process(&AraimConfig::default(), &ism, &sats)
+                    .unwrap();
+                assert_eq!(out.bias0_m, [0.0; 3]);
+                for mode in out.modes.iter() {
+                    assert_eq!(mode.stats.bias_m, [0.0; 3], "{mode:?}");
+                }
+            }
+        }
+        assert!(modes_total > 500, "{modes_total} modes");
+    }
 }
 
 /// The mode list and the unmonitored probability against an explicit
