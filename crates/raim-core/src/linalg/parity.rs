@@ -90,9 +90,9 @@ impl<const N: usize, T: Real> Parity<N, T> {
         p.n = n;
         p.m = m;
         p.utz = *z;
-        p.s_ii = [T::zero(); N];
-        p.residual = [T::zero(); N];
-        p.gain = [[T::zero(); N]; 3];
+        // `s_ii`, `residual` and `gain` are not cleared (issue 10, fourth
+        // pass): the row loops below write every row < n of each, and
+        // nothing reads a row >= n (the accessors end at n).
         p.qr.apply_ut(&mut p.utz);
         let mut rhs = [T::zero(); MAX_STATES];
         for (r, u) in rhs.iter_mut().zip(p.utz.iter()).take(m) {
