@@ -333,7 +333,6 @@ fn make_reflector<T: Real>(x: &mut [T], head: &[T]) -> (T, T, bool) {
 /// overflow or underflow.
 /// `head_norm` is the norm of the column's rows 0..k, so the full norm is
 /// hypot(head_norm, sigma).
-#[inline(never)]
 fn make_reflector_scaled<T: Real>(x: &mut [T], head_norm: T) -> (T, T, bool) {
     let sigma = norm(x.iter());
     let full_norm = hypot_nonneg(head_norm, sigma);
