@@ -280,7 +280,7 @@ pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimErro
         Observations::Linear { sats } => sats.iter().fold(true, |ok, s| {
             // A squared norm in range implies finite components.
             let norm2 = s.los_enu.iter().map(|v| v * v).sum::<f64>();
-            ok & s.residual_m.is_finite() & (norm2 >= 0.5) & (norm2 <= 1.5) & sigma_ok(s.sigma_m)
+            ok & s.residual_m.is_finite() & (0.5..=1.5).contains(&norm2) & sigma_ok(s.sigma_m)
         }),
     };
     match epoch.observations {
