@@ -268,7 +268,23 @@ pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimErro
         }
         Ok(())
     };
+    // One branch-free pass first for the linearised form (issue 10, fourth
+    // pass: the checks below, with an early return per value, were 6 % of a
+    // clean linearised epoch); only when it finds a bad value does the
+    // detailed pass run, which names the first offender exactly as before.
+    // Pseudorange epochs take the detailed pass directly (their cost is the
+    // f64 geometry; the device's flash has no room for a second copy).
+    let sigma_ok = |sigma: Option<f64>| sigma.is_none_or(|s| s.is_finite() & (s > 0.0));
+    let all_ok = match epoch.observations {
+        Observations::Ranges { .. } => false,
+        Observations::Linear { sats } => sats.iter().fold(true, |ok, s| {
+            // A squared norm in range implies finite components.
+            let norm2 = s.los_enu.iter().map(|v| v * v).sum::<f64>();
+            ok & s.residual_m.is_finite() & (0.5..=1.5).contains(&norm2) & sigma_ok(s.sigma_m)
+        }),
+    };
     match epoch.observations {
+        _ if all_ok => {}
         Observations::Ranges { sats, apriori_m } => {
             if let Some(a) = apriori_m {
                 for v in a {

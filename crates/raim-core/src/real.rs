@@ -34,6 +34,17 @@ pub trait Real:
     const NAME: &'static str;
     /// The machine epsilon.
     const EPS: Self;
+    /// The smallest positive normal number.
+    const MIN_POSITIVE: Self;
+    /// The largest finite number.
+    const MAX: Self;
+    /// Whether the Householder QR forms its column norms by one unscaled
+    /// pass (`linalg::qr::make_reflector`, issue 10 fourth pass): in f64.
+    /// The f32 engine (the M4F) keeps the scaled two-pass form bit for bit:
+    /// its flash margin has no room for a second reflector, and its f32
+    /// tests' tolerances sit within 1-2x of the rounding that a last-bit
+    /// change moves at random (docs/CORE.md, "Householder column norms").
+    const ONE_PASS_QR: bool;
     /// Converts from `f64`, rounding to nearest for `f32`.
     fn of(x: f64) -> Self;
     /// Widens (or passes) to `f64`.
@@ -68,6 +79,9 @@ pub trait Real:
 impl Real for f64 {
     const NAME: &'static str = "f64";
     const EPS: Self = f64::EPSILON;
+    const MIN_POSITIVE: Self = f64::MIN_POSITIVE;
+    const MAX: Self = f64::MAX;
+    const ONE_PASS_QR: bool = true;
     #[inline(always)]
     fn of(x: f64) -> Self {
         x
@@ -117,6 +131,9 @@ impl Real for f64 {
 impl Real for f32 {
     const NAME: &'static str = "f32";
     const EPS: Self = f32::EPSILON;
+    const MIN_POSITIVE: Self = f32::MIN_POSITIVE;
+    const MAX: Self = f32::MAX;
+    const ONE_PASS_QR: bool = false;
     #[inline(always)]
     fn of(x: f64) -> Self {
         x as f32

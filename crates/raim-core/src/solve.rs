@@ -687,7 +687,10 @@ impl<const N: usize, T: Real> Builder<N, T> {
                 capacity: N,
             });
         }
-        if !(sigma > 0.0) || !sigma.is_finite() {
+        // Positive and finite (NaN fails both comparisons): two comparisons
+        // (issue 10, fourth pass: `!(sigma > 0.0) || !sigma.is_finite()`
+        // compiled to a 28-instruction classification per satellite).
+        if !(sigma > 0.0 && sigma < f64::INFINITY) {
             return Err(RaimError::NonPositiveSigma {
                 index,
                 sigma_m: sigma,

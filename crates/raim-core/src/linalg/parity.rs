@@ -90,9 +90,9 @@ impl<const N: usize, T: Real> Parity<N, T> {
         p.n = n;
         p.m = m;
         p.utz = *z;
-        p.s_ii = [T::zero(); N];
-        p.residual = [T::zero(); N];
-        p.gain = [[T::zero(); N]; 3];
+        // `s_ii`, `residual` and `gain` are not cleared (issue 10, fourth
+        // pass): the row loops below write every row < n of each, and
+        // nothing reads a row >= n (the accessors end at n).
         p.qr.apply_ut(&mut p.utz);
         let mut rhs = [T::zero(); MAX_STATES];
         for (r, u) in rhs.iter_mut().zip(p.utz.iter()).take(m) {
@@ -122,14 +122,12 @@ impl<const N: usize, T: Real> Parity<N, T> {
         for (x, v) in dx.iter_mut().zip(self.dx.iter()) {
             *x = *v;
         }
-        let rows = self
-            .s_ii
-            .iter_mut()
-            .zip(self.residual.iter_mut())
-            .zip(z.iter())
-            .take(self.n)
-            .enumerate();
-        for (i, ((s, r), zi)) in rows {
+        // Issue 10 (fourth pass): a counted loop over rows whose body is
+        // straight-line code (every index below `n <= N`, so no access can
+        // fail and no store is conditional), which the compiler vectorises
+        // across rows; the operations per row are the same as before.
+        let n = self.n.min(N);
+        for i in 0..n {
             let mut hi = [T::zero(); M];
             for (dst, col) in hi.iter_mut().zip(h.iter()) {
                 *dst = col.get(i).copied().unwrap_or(T::zero());
@@ -156,8 +154,12 @@ impl<const N: usize, T: Real> Parity<N, T> {
                 }
             }
             let fitted = dot(hi.iter(), dx.iter());
-            *s = clamp_unit(T::one() - leverage);
-            *r = *zi - fitted;
+            if let Some(s) = self.s_ii.get_mut(i) {
+                *s = clamp_unit(T::one() - leverage);
+            }
+            if let (Some(r), Some(zi)) = (self.residual.get_mut(i), z.get(i)) {
+                *r = *zi - fitted;
+            }
             for (row, ak) in self.gain.iter_mut().zip(a.iter()) {
                 if let Some(v) = row.get_mut(i) {
                     *v = *ak;

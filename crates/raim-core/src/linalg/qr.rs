@@ -92,11 +92,11 @@ impl<const N: usize, T: Real> Householder<N, T> {
                     pivot: 0.0,
                 });
             };
-            let head_norm = norm(col.iter().take(k));
-            let Some(tail) = col.get_mut(k..n) else {
+            let (head, rest) = col.split_at_mut(k);
+            let Some(tail) = rest.get_mut(..n - k) else {
                 return Err(RaimError::TooFewSatellites { have: n, need: m });
             };
-            let (alpha, full_norm, ok) = make_reflector(tail, head_norm);
+            let (alpha, full_norm, ok) = make_reflector(tail, head);
             if !ok {
                 return Err(RaimError::RankDeficient {
                     column: k,
@@ -227,6 +227,9 @@ pub(crate) fn dot<'a, T: Real>(
     a.zip(b).fold(T::zero(), |acc, (x, y)| acc + *x * *y)
 }
 
+/// The scaled 2-norm (overflow- and underflow-safe, one or two divisions
+/// per element): the fallback of [`make_reflector`] outside the range of
+/// its unscaled sum of squares.
 fn norm<'a, T: Real>(it: impl Iterator<Item = &'a T>) -> T {
     // Scaled to avoid overflow on huge (ECEF-sized) entries.
     let mut scale = T::zero();
@@ -245,6 +248,23 @@ fn norm<'a, T: Real>(it: impl Iterator<Item = &'a T>) -> T {
     scale * ssq.sqrt()
 }
 
+/// sum x_i^2, unscaled, left to right.
+#[inline(always)]
+fn sum_sq<T: Real>(x: &[T]) -> T {
+    x.iter().fold(T::zero(), |acc, v| acc + *v * *v)
+}
+
+/// Whether an unscaled sum of squares can be used as it is: finite, at
+/// most `T::MAX / 8` (so that 2 sigma (sigma + |x0|) <= 4 sigma^2 stays
+/// finite), and at least `T::MIN_POSITIVE / T::EPS` (so that every term
+/// lost to underflow, each below `T::MIN_POSITIVE`, is below an epsilon of
+/// the sum). In f32 that is a column norm between 3.3e-16 and 6.5e18, in
+/// f64 between 1.0e-146 and 1.5e154.
+#[inline(always)]
+fn ssq_in_range<T: Real>(ssq: T) -> bool {
+    ssq >= T::MIN_POSITIVE / T::EPS && ssq <= T::MAX / T::of(8.0)
+}
+
 /// sqrt(a^2 + b^2) for a, b >= 0 without overflow: the larger times
 /// sqrt(1 + (smaller / larger)^2); exactly `b` when `a` is zero.
 fn hypot_nonneg<T: Real>(a: T, b: T) -> T {
@@ -257,14 +277,63 @@ fn hypot_nonneg<T: Real>(a: T, b: T) -> T {
 }
 
 /// Turn `x` (rows k..n of a column) into the unit Householder vector v with
-/// (I - 2 v v^T) x = alpha e1. `head_norm` is the norm of the column's rows
-/// 0..k (the entries of T1 already formed), so the column's full norm, the
-/// scale of the rank test, is hypot(head_norm, sigma): the reflections
-/// before k are orthogonal and leave it unchanged (issue 10: this replaces
-/// a third pass over rows 0..n per column; it is the same as that pass up
-/// to rounding, and enters only the rank test at [`RANK_TOLERANCE`]).
+/// (I - 2 v v^T) x = alpha e1 (SPEC §2). `head` is the column's rows 0..k
+/// (the entries of T1 already formed), so the column's full norm, the
+/// scale of the rank test, is that of head and x together: the reflections
+/// before k are orthogonal and leave it unchanged.
+///
+/// Issue 10 (fourth pass), in f64 ([`Real::ONE_PASS_QR`]): one unscaled
+/// pass of sum x_i^2 gives sigma = ||x||, the full norm
+/// sqrt(|head|^2 + sigma^2), and ||v|| comes in closed form,
+/// ||x - alpha e1||^2 = 2 sigma (sigma + |x0|) (alpha = -sign(x0) sigma),
+/// instead of two scaled passes with two divisions per element. The
+/// whitened GNSS rows are O(1/sigma_i): entries at most 1/sigma_i in
+/// magnitude (unit lines of sight and unit clock entries divided by the
+/// pseudorange sigma), so the sums are far inside [`ssq_in_range`] for any
+/// sigma between 1e-140 m and 1e140 m; outside that range (and for a zero
+/// column) the scaled two-pass form, [`make_reflector_scaled`], is used.
+/// Both give the same quantities up to rounding, and the rank test is the
+/// same test ([`rank_tolerance`] against the full norm). The f32 engine
+/// keeps the scaled form bit for bit (see [`Real::ONE_PASS_QR`]).
 /// Returns alpha, the column's norm and whether the pivot is usable.
-fn make_reflector<T: Real>(x: &mut [T], head_norm: T) -> (T, T, bool) {
+fn make_reflector<T: Real>(x: &mut [T], head: &[T]) -> (T, T, bool) {
+    if !T::ONE_PASS_QR {
+        return make_reflector_scaled(x, norm(head.iter()));
+    }
+    let ssq = sum_sq(x);
+    let total = sum_sq(head) + ssq;
+    if !(ssq_in_range(ssq) && total <= T::MAX / T::of(8.0)) {
+        return make_reflector_scaled(x, norm(head.iter()));
+    }
+    let sigma = ssq.sqrt();
+    let full_norm = total.sqrt();
+    let Some(x0) = x.first_mut() else {
+        return (T::zero(), full_norm, false);
+    };
+    let a0 = x0.abs();
+    let alpha = if *x0 >= T::zero() { -sigma } else { sigma };
+    if !(sigma > rank_tolerance::<T>() * full_norm) {
+        return (sigma, full_norm, false);
+    }
+    // v = x - alpha e1, then normalise by ||v|| in closed form.
+    *x0 -= alpha;
+    // A division per element, not a multiplication by 1 / ||v||: the same
+    // instruction count, and half an ulp per entry instead of up to one and
+    // a half (tried in f32: the slopes of the test
+    // `protection_levels_match_brute_force_worst_bias` moved 5x more).
+    let vnorm = (T::of(2.0) * sigma * (sigma + a0)).sqrt();
+    for v in x.iter_mut() {
+        *v /= vnorm;
+    }
+    (alpha, full_norm, true)
+}
+
+/// [`make_reflector`] by the scaled norms (two passes, a division per
+/// element): in f32, and in f64 for columns whose sum of squares would
+/// overflow or underflow.
+/// `head_norm` is the norm of the column's rows 0..k, so the full norm is
+/// hypot(head_norm, sigma).
+fn make_reflector_scaled<T: Real>(x: &mut [T], head_norm: T) -> (T, T, bool) {
     let sigma = norm(x.iter());
     let full_norm = hypot_nonneg(head_norm, sigma);
     let Some(x0) = x.first_mut() else {
@@ -358,6 +427,69 @@ mod tests {
         assert!((big - 5e200).abs() <= REL_TOL * 5e200, "{big}");
         let big32 = hypot_nonneg(3e30f32, 4e30);
         assert!((big32 / 5e30 - 1.0).abs() < 1e-6, "{big32}");
+    }
+
+    /// The unscaled one-pass reflector and the scaled two-pass fallback
+    /// (taken when the column's sum of squares would overflow or underflow)
+    /// agree up to rounding: the same matrix scaled by powers of two (exact)
+    /// into and out of the unscaled range gives T1 scaled by the same power
+    /// and the same unit Householder vectors, in f64 and f32; a dependent
+    /// column is still `RankDeficient` at every scale.
+    #[test]
+    fn reflector_fallback_agrees_with_the_unscaled_pass() {
+        fn check<T: Real>(exponents: &[i32], rel_tol: f64) {
+            let mut rng = crate::testutil::Rng::new(11);
+            let (n, m) = (9, 5);
+            let mut h = [[T::zero(); 12]; MAX_STATES];
+            for col in h.iter_mut().take(m) {
+                for v in col.iter_mut().take(n) {
+                    *v = T::of(rng.uniform() * 2.0 - 1.0);
+                }
+            }
+            let base = Householder::<12, T>::factor(&h, n, m).unwrap();
+            for &e in exponents {
+                let s = T::of(2f64.powi(e));
+                let mut hs = h;
+                for col in hs.iter_mut() {
+                    for v in col.iter_mut() {
+                        *v *= s;
+                    }
+                }
+                let big = T::MAX / T::of(8.0);
+                let tiny = T::MIN_POSITIVE / T::EPS;
+                let norm2 = sum_sq(&hs[0][..n]);
+                assert!(
+                    !(norm2 >= tiny && norm2 <= big),
+                    "2^{e} must take the fallback"
+                );
+                let q = Householder::<12, T>::factor(&hs, n, m).unwrap();
+                for j in 0..m {
+                    for i in 0..=j {
+                        let (a, b) = (q.t(i, j) / s, base.t(i, j));
+                        let err = (a - b).abs().to_f64();
+                        assert!(
+                            err <= rel_tol * base.t(j, j).abs().to_f64().max(1.0),
+                            "2^{e} T[{i}][{j}] {a:?} {b:?}"
+                        );
+                    }
+                    for i in j..n {
+                        let err = (q.a[j][i] - base.a[j][i]).abs().to_f64();
+                        assert!(err <= rel_tol, "2^{e} v[{j}][{i}]");
+                    }
+                }
+                let mut dep = hs;
+                dep[1] = dep[0];
+                assert!(matches!(
+                    Householder::<12, T>::factor(&dep, n, m),
+                    Err(RaimError::RankDeficient { column: 1, .. })
+                ));
+            }
+        }
+        // Dimensionless: a few tens of epsilons of the factors' magnitudes.
+        const REL_TOL_F64: f64 = 1e-13;
+        const REL_TOL_F32: f64 = 2e-5;
+        check::<f64>(&[520, -540, 1000, -1000], REL_TOL_F64);
+        check::<f32>(&[70, -60, 100, -100], REL_TOL_F32);
     }
 
     #[test]

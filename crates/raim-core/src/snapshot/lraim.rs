@@ -27,25 +27,46 @@ pub fn score<T: Real>(rule: FiRule, residual: T, s_ii: T, min_s_ii: T) -> Option
     if !(s_ii >= min_s_ii) {
         return None;
     }
+    Some(score_with(rule, residual, s_ii, log_term(rule, s_ii)))
+}
+
+/// The rule's logarithm of S_ii, the only transcendental part of its score
+/// (zero for the MLE; ln S_ii flat; ln(1 + kappa S_ii) Gaussian), computed
+/// apart so that a caller can take all of an epoch's logarithms in one
+/// tight loop (issue 10, fourth pass: [`crate::snapshot`]'s per-satellite
+/// output). [`score_with`] of it is [`score`] bit for bit.
+#[inline]
+pub fn log_term<T: Real>(rule: FiRule, s_ii: T) -> T {
+    match rule {
+        FiRule::Mle => T::zero(),
+        FiRule::LraimFlat => s_ii.ln_m(),
+        FiRule::LraimGaussian { kappa } => (T::of(kappa) * s_ii).ln_1p_m(),
+    }
+}
+
+/// [`score`] for an identifiable satellite (S_ii >= `min_s_ii`, checked
+/// by the caller), with the rule's [`log_term`] of S_ii given.
+#[inline(always)]
+pub fn score_with<T: Real>(rule: FiRule, residual: T, s_ii: T, log_term: T) -> Candidate<T> {
     let w2 = residual * residual / s_ii;
     let score = match rule {
         FiRule::Mle => w2,
         // 2 ln of the flat-prior marginal likelihood, up to a constant:
         // w^2 - ln S_ii (SPEC §4.2).
-        FiRule::LraimFlat => w2 - s_ii.ln_m(),
+        FiRule::LraimFlat => w2 - log_term,
         // Exact Gaussian prior b ~ N(0, kappa sigma^2):
         // w^2 kS/(1+kS) - ln(1+kS).
         FiRule::LraimGaussian { kappa } => {
             let ks = T::of(kappa) * s_ii;
-            w2 * ks / (T::one() + ks) - ks.ln_1p_m()
+            w2 * ks / (T::one() + ks) - log_term
         }
     };
-    Some(Candidate {
+    Candidate {
         row: 0,
         w: residual / s_ii.sqrt(),
         bias_sigma: residual / s_ii,
         score,
-    })
+    }
 }
 
 /// The best and the runner-up candidate of a parity solution under `rule`.

@@ -212,9 +212,19 @@ pub(crate) fn per_satellite<const N: usize, T: Real>(
         .zip(sol.ids.iter())
         .zip(sol.sigma_m.iter())
         .zip(sol.elevation_rad.iter());
+    // The rule's logarithms first, in a loop of their own (issue 10, fourth
+    // pass: inside the loop below, each `log1p` call spilled and reloaded
+    // its dozen live values); the scores from them are [`lraim::score`]'s
+    // bit for bit.
+    let mut logs = [T::zero(); N];
+    for (l, &s) in logs.iter_mut().zip(p.s_ii()) {
+        if s >= min_s_ii {
+            *l = lraim::log_term(cfg.rule, s);
+        }
+    }
     let mut ranking = lraim::Ranking::new();
-    for (row, ((((&r, &s), &id), &sigma), &el)) in rows.enumerate() {
-        let c = lraim::score(cfg.rule, r, s, min_s_ii);
+    for (row, (((((&r, &s), &id), &sigma), &el), &log)) in rows.zip(logs.iter()).enumerate() {
+        let c = (s >= min_s_ii).then(|| lraim::score_with(cfg.rule, r, s, log));
         if let (Some(mut c), true) = (c, rank) {
             c.row = row;
             ranking.offer(c);
