@@ -228,7 +228,7 @@ pub struct Araim<T, const N: usize, const K: usize> {
     scratch: Base<T, N>,
     events: Vec<ModeEvents, K>,
     /// The PL search's active terms (pl.rs, the fold).
-    pl_terms: [pl::Term; K],
+    pl_terms: [pl::Active; K],
     /// The PL search's quantile memos (horizontal, vertical), kept across
     /// epochs (pl.rs, `BracketCache`: each answers only for its own
     /// right-hand side and mode count).
@@ -251,7 +251,7 @@ impl<T: Real, const N: usize, const K: usize> Default for Araim<T, N, K> {
             const_status: [None; MAX_SYSTEMS],
             scratch: Base::default(),
             events: Vec::new(),
-            pl_terms: [pl::Term::default(); K],
+            pl_terms: [pl::Active::default(); K],
             pl_quantiles: [pl::BracketCache::new(0.0, 0); 2],
             k_fa_memo: None,
             out: AraimOutput::default(),
@@ -379,6 +379,9 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             }
             if let Some(x) = geo.w.get_mut(i) {
                 *x = T::of(1.0) / s.c_int_m2;
+            }
+            if let Some(x) = geo.c_int.get_mut(i) {
+                *x = s.c_int_m2;
             }
             if let Some(x) = geo.c_acc.get_mut(i) {
                 *x = s.c_acc_m2;

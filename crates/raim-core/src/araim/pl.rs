@@ -41,6 +41,56 @@ pub struct Equation<F> {
     pub rhs: f64,
 }
 
+/// A term as the search's later evaluations read it (`FOLD_REL`): the
+/// reciprocal of sigma formed once at the first evaluation, so that each
+/// later evaluation multiplies instead of dividing three times per term
+/// (z = (x - offset) / sigma, the slope p phi / sigma and f'' = slope z /
+/// sigma). The same size as a [`Term`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Active {
+    pub p: f64,
+    pub offset_m: f64,
+    /// 1 / sigma (1/m).
+    pub inv_sigma_per_m: f64,
+}
+
+impl Active {
+    /// A mode's value, slope and f'' contribution at `x`: p Q(z),
+    /// p phi(z) / sigma and p z phi(z) / sigma^2 with z = (x - offset) /
+    /// sigma; beyond `Z_CUT`, the bound p Q(Z_CUT) and no slope.
+    #[inline]
+    fn at(&self, x: f64) -> (f64, f64, f64) {
+        let z = (x - self.offset_m) * self.inv_sigma_per_m;
+        if z > Z_CUT {
+            return (self.p * Q_CUT, 0.0, 0.0);
+        }
+        self.at_z(z)
+    }
+
+    /// [`Self::at`] without the cut (the fault-free term).
+    #[inline]
+    fn at_uncut(&self, x: f64) -> (f64, f64, f64) {
+        self.at_z((x - self.offset_m) * self.inv_sigma_per_m)
+    }
+
+    #[inline]
+    fn at_z(&self, z: f64) -> (f64, f64, f64) {
+        let (q, pdf) = q_and_pdf(z);
+        let slope = self.p * pdf * self.inv_sigma_per_m;
+        (self.p * q, slope, slope * z * self.inv_sigma_per_m)
+    }
+}
+
+impl From<Term> for Active {
+    fn from(t: Term) -> Self {
+        Self {
+            p: t.p,
+            offset_m: t.offset_m,
+            inv_sigma_per_m: 1.0 / t.sigma_m,
+        }
+    }
+}
+
 /// The left side, its first and second derivatives at one x.
 #[derive(Debug, Clone, Copy)]
 struct Eval {
@@ -160,33 +210,21 @@ where
     /// The left side and its derivative at `x` (terms beyond `Z_CUT`
     /// bounded, see there): over every mode, or, once folded (`FOLD_REL`),
     /// over the active terms plus the folded constant.
-    fn eval(&self, x: f64, folded: Option<(&[Term], f64)>) -> Eval {
-        let t = self.fault_free;
-        let z = (x - t.offset_m) / t.sigma_m;
-        let (q, pdf) = q_and_pdf(z);
-        let mut e = Eval {
-            f: t.p * q,
-            d: -t.p * pdf / t.sigma_m,
-            dd: t.p * z * pdf / (t.sigma_m * t.sigma_m),
-        };
-        let mut add = |t: &Term| {
-            let z = (x - t.offset_m) / t.sigma_m;
-            if z > Z_CUT {
-                e.f += t.p * Q_CUT;
-                return;
-            }
-            let (q, pdf) = q_and_pdf(z);
-            let slope = t.p * pdf / t.sigma_m;
-            e.f += t.p * q;
-            e.d -= slope;
-            e.dd += slope * z / t.sigma_m;
+    fn eval(&self, x: f64, folded: Option<(&[Active], f64)>) -> Eval {
+        let (f, d, dd) = Active::from(self.fault_free).at_uncut(x);
+        let mut e = Eval { f, d: -d, dd };
+        let mut add = |t: &Active| {
+            let (f, d, dd) = t.at(x);
+            e.f += f;
+            e.d -= d;
+            e.dd += dd;
         };
         match folded {
             Some((active, constant)) => {
                 active.iter().for_each(&mut add);
                 e.f += constant;
             }
-            None => (self.modes)().for_each(|t| add(&t)),
+            None => (self.modes)().for_each(|t| add(&Active::from(t))),
         }
         e
     }
@@ -195,32 +233,23 @@ where
     /// and the fold (`FOLD_REL`): the terms that stay active are copied to
     /// `scratch`. Returns f, f' and (active count, folded constant), or
     /// None for the latter if `scratch` is too small (then nothing folds).
-    fn eval_and_fold(&self, x: f64, scratch: &mut [Term]) -> (Eval, Option<(usize, f64)>) {
-        let t = self.fault_free;
-        let z = (x - t.offset_m) / t.sigma_m;
-        let (q, pdf) = q_and_pdf(z);
-        let mut f = t.p * q;
-        let mut d = -t.p * pdf / t.sigma_m;
-        let mut dd = t.p * z * pdf / (t.sigma_m * t.sigma_m);
+    fn eval_and_fold(&self, x: f64, scratch: &mut [Active]) -> (Eval, Option<(usize, f64)>) {
+        let (mut f, d0, mut dd) = Active::from(self.fault_free).at_uncut(x);
+        let mut d = -d0;
         let limit = FOLD_REL * self.rhs / (self.n_modes as f64 + 1.0);
         let mut constant = 0.0;
         let mut n = 0usize;
         let mut fits = true;
         for t in (self.modes)() {
-            let z = (x - t.offset_m) / t.sigma_m;
-            let (v, slope) = if z > Z_CUT {
-                (t.p * Q_CUT, 0.0)
-            } else {
-                let (q, pdf) = q_and_pdf(z);
-                (t.p * q, t.p * pdf / t.sigma_m)
-            };
+            let a = Active::from(t);
+            let (v, slope, curv) = a.at(x);
             f += v;
             d -= slope;
-            dd += slope * z / t.sigma_m;
+            dd += curv;
             if v <= limit {
                 constant += v;
             } else if let Some(slot) = scratch.get_mut(n) {
-                *slot = t;
+                *slot = a;
                 n += 1;
             } else {
                 fits = false;
@@ -291,7 +320,7 @@ where
         &self,
         tol_pl_m: f64,
         cache: &mut BracketCache,
-        scratch: &mut [Term],
+        scratch: &mut [Active],
     ) -> Option<Solution> {
         const GUARD_M: f64 = 1e-6;
         let (lo0, hi0) = self.bracket_cached(cache)?;
@@ -300,7 +329,7 @@ where
         let mut x = lo0;
         let (e0, fold) = self.eval_and_fold(lo0, scratch);
         let folded = match fold {
-            Some((n, constant)) => scratch.get(..n).map(|a| (a as &[Term], constant)),
+            Some((n, constant)) => scratch.get(..n).map(|a| (a as &[Active], constant)),
             None => None,
         };
         let mut first = Some(e0);
@@ -414,7 +443,7 @@ mod tests {
             rhs: 1e-7,
         };
         let plain = eq.solve(0.01).unwrap();
-        let mut scratch = [Term::default(); 200];
+        let mut scratch = [Active::default(); 200];
         let mut cache = BracketCache::new(eq.rhs, eq.n_modes);
         let (lo, _) = eq.bracket().unwrap();
         let (_, fold) = eq.eval_and_fold(lo, &mut scratch);

@@ -41,6 +41,9 @@ pub struct Geometry<T, const N: usize> {
     pub g: [[T; MAX_STATES]; N],
     /// W = C_int^-1 (diagonal).
     pub w: [T; N],
+    /// C_int itself (W^-1: M's diagonal and V = S0 W^-1 in `all_in_view`
+    /// multiply by it instead of dividing by w).
+    pub c_int: [T; N],
     pub c_acc: [T; N],
     pub b_nom: [T; N],
     pub y: [T; N],
@@ -55,6 +58,7 @@ impl<T: Real, const N: usize> Default for Geometry<T, N> {
             m: 0,
             g: [[T::of(0.0); MAX_STATES]; N],
             w: [T::of(0.0); N],
+            c_int: [T::of(0.0); N],
             c_acc: [T::of(0.0); N],
             b_nom: [T::of(0.0); N],
             y: [T::of(0.0); N],
@@ -800,9 +804,9 @@ fn all_in_view<T: Real, const N: usize, const R: usize>(
     let zero = T::of(0.0);
     let one = T::of(1.0);
     let n = geo.n.min(N);
-    // Per removed row a: w, C_acc, the residual, s_q, its Q row and the
-    // removed rows' Q block, E's row.
-    let mut w = [one; R];
+    // Per removed row a: C_int (= 1/w), C_acc, the residual, s_q, its Q
+    // row and the removed rows' Q block, E's row.
+    let mut c_int = [one; R];
     let mut c_acc = [zero; R];
     let mut res = [zero; R];
     let mut v = [[zero; R]; 3];
@@ -810,12 +814,12 @@ fn all_in_view<T: Real, const N: usize, const R: usize>(
     let mut qrows: [&[T; N]; R] = [&zero_row; R];
     for (a, &ia) in rows.iter().enumerate() {
         if let (Some(x), Some(y), Some(z), Some(qr)) = (
-            w.get_mut(a),
+            c_int.get_mut(a),
             c_acc.get_mut(a),
             res.get_mut(a),
             qrows.get_mut(a),
         ) {
-            *x = geo.w.get(ia).copied().unwrap_or(one);
+            *x = geo.c_int.get(ia).copied().unwrap_or(one);
             *y = geo.c_acc.get(ia).copied().unwrap_or(zero);
             *z = cp.res.get(ia).copied().unwrap_or(zero);
             if let Some(row) = cp.q.get(ia) {
@@ -825,17 +829,18 @@ fn all_in_view<T: Real, const N: usize, const R: usize>(
     }
     let mut s = [[zero; R]; 3];
     for ((sq, vq), srow) in s.iter_mut().zip(v.iter_mut()).zip(cp.s.iter()) {
-        for (((x, y), &ia), &wa) in sq
+        for (((x, y), &ia), &ca) in sq
             .iter_mut()
             .zip(vq.iter_mut())
             .zip(rows.iter())
-            .zip(w.iter())
+            .zip(c_int.iter())
         {
             *x = srow.get(ia).copied().unwrap_or(zero);
-            *y = *x / wa;
+            *y = *x * ca;
         }
     }
-    // Q[R_a][R_b] and M.
+    // Q[R_a][R_b] and M = W_R^-1 - G_R P0 G_R^T (g_a^T P0 g_b = Q[a][b]
+    // C_int,b).
     let mut qrr = [[zero; R]; R];
     let mut mm = [[zero; R]; R];
     for (a, ((qrow, mrow), qa)) in qrr
@@ -844,27 +849,29 @@ fn all_in_view<T: Real, const N: usize, const R: usize>(
         .zip(qrows.iter())
         .enumerate()
     {
-        let wa = w.get(a).copied().unwrap_or(one);
-        for (b, ((x, y), (&ib, &wb))) in qrow
+        for (b, ((x, y), (&ib, &cb))) in qrow
             .iter_mut()
             .zip(mrow.iter_mut())
-            .zip(rows.iter().zip(w.iter()))
+            .zip(rows.iter().zip(c_int.iter()))
             .enumerate()
         {
             *x = qa.get(ib).copied().unwrap_or(zero);
-            let mut m = -*x / wb;
+            let mut m = -(*x * cb);
             if a == b {
-                m += one / wa;
+                m += cb;
             }
             *y = m;
         }
     }
-    // Cholesky of M, pivots relative to C_int of the removed row.
+    // Cholesky of M, pivots relative to C_int of the removed row; the
+    // reciprocals of the diagonal kept (`inv`), so that the solves below
+    // multiply (one division per removed row and mode).
     let tol = rank_tolerance::<T>();
     let mut l = [[zero; R]; R];
+    let mut inv = [one; R];
     for j in 0..R {
         let ij = rows.get(j).copied().unwrap_or(0);
-        let scale = one / w.get(j).copied().unwrap_or(one);
+        let scale = c_int.get(j).copied().unwrap_or(one);
         let mut sum = mm.get(j).and_then(|x| x.get(j)).copied().unwrap_or(zero);
         for k in 0..j {
             let x = l.get(j).and_then(|x| x.get(k)).copied().unwrap_or(zero);
@@ -877,8 +884,10 @@ fn all_in_view<T: Real, const N: usize, const R: usize>(
             });
         }
         let ljj = sum.sqrt();
-        if let Some(x) = l.get_mut(j).and_then(|x| x.get_mut(j)) {
+        let rj = one / ljj;
+        if let (Some(x), Some(y)) = (l.get_mut(j).and_then(|x| x.get_mut(j)), inv.get_mut(j)) {
             *x = ljj;
+            *y = rj;
         }
         for i in (j + 1)..R {
             let mut sum = mm.get(i).and_then(|x| x.get(j)).copied().unwrap_or(zero);
@@ -887,7 +896,7 @@ fn all_in_view<T: Real, const N: usize, const R: usize>(
                     * l.get(j).and_then(|x| x.get(k)).copied().unwrap_or(zero);
             }
             if let Some(x) = l.get_mut(i).and_then(|x| x.get_mut(j)) {
-                *x = sum / ljj;
+                *x = sum * rj;
             }
         }
     }
@@ -910,7 +919,8 @@ fn all_in_view<T: Real, const N: usize, const R: usize>(
     let mut out = SubsetStats::default();
     let mut coef = [[zero; R]; 3];
     for (q, ((cq, vq), sq)) in coef.iter_mut().zip(v.iter()).zip(s.iter()).enumerate() {
-        // c_q = M^-1 V_q: L z = V_q, L^T c = z.
+        // c_q = M^-1 V_q: L z = V_q, L^T c = z (times the reciprocal
+        // pivots).
         let mut z = [zero; R];
         for i in 0..R {
             let mut sum = vq.get(i).copied().unwrap_or(zero);
@@ -918,9 +928,8 @@ fn all_in_view<T: Real, const N: usize, const R: usize>(
                 sum -= l.get(i).and_then(|x| x.get(k)).copied().unwrap_or(zero)
                     * z.get(k).copied().unwrap_or(zero);
             }
-            let lii = l.get(i).and_then(|x| x.get(i)).copied().unwrap_or(one);
-            if let Some(x) = z.get_mut(i) {
-                *x = sum / lii;
+            if let (Some(x), Some(&r)) = (z.get_mut(i), inv.get(i)) {
+                *x = sum * r;
             }
         }
         for i in (0..R).rev() {
@@ -929,9 +938,8 @@ fn all_in_view<T: Real, const N: usize, const R: usize>(
                 sum -= l.get(k).and_then(|x| x.get(i)).copied().unwrap_or(zero)
                     * cq.get(k).copied().unwrap_or(zero);
             }
-            let lii = l.get(i).and_then(|x| x.get(i)).copied().unwrap_or(one);
-            if let Some(x) = cq.get_mut(i) {
-                *x = sum / lii;
+            if let (Some(x), Some(&r)) = (cq.get_mut(i), inv.get(i)) {
+                *x = sum * r;
             }
         }
         let mut var = base
