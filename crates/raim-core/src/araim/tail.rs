@@ -82,48 +82,119 @@ const Q: [f64; 5] = [
     7.297_515_550_839_662_05e-5,
 ];
 
-/// ln 2 in two parts (Cody-Waite): the high part has 32 significant bits,
-/// so k LN2_HI is exact for |k| < 2^20.
-const LN2_HI: f64 = 0.693_147_180_369_123_816_49;
-const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
-const INV_LN2: f64 = core::f64::consts::LOG2_E;
+/// ln 2 / 64 in two parts (Cody-Waite, fdlibm's split of ln 2 divided by
+/// 64, exactly): the high part has 32 significant bits, so k LN2_64_HI is
+/// exact for |k| < 2^20 (here |k| <= 68,800).
+const LN2_64_HI: f64 = 0.693_147_180_369_123_816_49 / 64.0;
+const LN2_64_LO: f64 = 1.908_214_929_270_587_7e-10 / 64.0;
+/// 64 / ln 2 (correctly rounded; it only picks k).
+const INV_LN2_64: f64 = 92.332_482_616_893_66;
 const ROUND_SHIFT: f64 = 6_755_399_441_055_744.0;
 
-/// The Remez coefficients of fdlibm's exp (R(r^2) = r (e^r + 1) / (e^r - 1)
-/// ~ 2 + P1 r^2 + ... + P5 r^10 on |r| <= ln 2 / 2, error below 2^-59).
-const P1: f64 = 1.666_666_666_666_660_190_37e-1;
-const P2: f64 = -2.777_777_777_701_559_338_42e-3;
-const P3: f64 = 6.613_756_321_437_934_361_17e-5;
-const P4: f64 = -1.653_390_220_546_525_153_90e-6;
-const P5: f64 = 4.138_136_797_057_238_460_39e-8;
+/// 2^(j/64), j = 0..63, as the correctly rounded value and the rounding
+/// remainder (2^(j/64) - hi, rounded): computed in 60-digit decimal
+/// arithmetic (Python's `decimal`, `Decimal(2) ** (Decimal(j) / 64)`),
+/// and checked by `exp_table_is_exact` against libm's exp2.
+const EXP2_64: [(f64, f64); 64] = [
+    (1.0, 0.0),
+    (1.0108892860517005, -1.5234778603368577e-17),
+    (1.0218971486541166, 5.109225028973444e-17),
+    (1.0330248790212284, 7.600838874027088e-18),
+    (1.0442737824274138, 8.551889705537965e-17),
+    (1.0556451783605572, 1.759325738772092e-18),
+    (1.0671404006768237, -7.899853966841582e-17),
+    (1.0787607977571199, -6.656660436056593e-17),
+    (1.0905077326652577, -3.046782079812471e-17),
+    (1.102382583307841, 5.2660368715706944e-17),
+    (1.1143867425958924, 1.0410278456845571e-16),
+    (1.1265216186082418, 5.165856758795457e-17),
+    (1.1387886347566916, 8.912812676025408e-17),
+    (1.1511892299529827, 3.250710218863827e-17),
+    (1.1637248587775775, 3.8292048369240935e-17),
+    (1.1763969916502812, 5.554203254218079e-17),
+    (1.189207115002721, 3.982015231465646e-17),
+    (1.202156731452703, 6.644981499252301e-17),
+    (1.215247359980469, -7.712630692681488e-17),
+    (1.22848053610687, -1.89878163130253e-17),
+    (1.241857812073484, 4.658027591836937e-17),
+    (1.255380757024691, -6.7113898212968784e-18),
+    (1.2690509571917332, 2.667932131342186e-18),
+    (1.2828700160787783, 1.713594918243561e-17),
+    (1.2968395546510096, 2.5382502794888315e-17),
+    (1.3109612115247644, -7.181536135519454e-17),
+    (1.3252366431597413, -2.8587312100388614e-17),
+    (1.339667524053303, 8.927282594831732e-17),
+    (1.3542555469368927, 7.70094837980299e-17),
+    (1.3690024229745905, 9.593797919118849e-17),
+    (1.383909881963832, -6.770511658794786e-17),
+    (1.3989796725383112, -9.614213209051323e-17),
+    (1.4142135623730951, -9.667293313452913e-17),
+    (1.42961333839197, -1.2031642489053655e-17),
+    (1.4451808069770467, -3.0237581349939873e-17),
+    (1.460917794180647, -5.600377186075216e-17),
+    (1.4768261459394993, -3.483994556892796e-17),
+    (1.4929077282912648, 1.4192920154284036e-17),
+    (1.5091644275934228, -1.016455327754295e-16),
+    (1.5255981507445384, -1.1024941712342561e-16),
+    (1.5422108254079407, 7.949834809697621e-17),
+    (1.559004400237837, 3.7812070533575275e-17),
+    (1.5759808451078865, -1.0136916471278304e-17),
+    (1.593142151342267, -1.0094406542311964e-16),
+    (1.6104903319492543, 2.4707192569797888e-17),
+    (1.6280274218573478, -6.712955084707084e-17),
+    (1.645755478153965, -1.0125679913674773e-16),
+    (1.6636765803267364, 5.8909926967131e-17),
+    (1.681792830507429, 8.199010020581497e-17),
+    (1.7001063537185235, -8.0237193703977e-18),
+    (1.718619298122478, -1.851380418263111e-17),
+    (1.7373338352737062, 3.164389299292957e-17),
+    (1.7562521603732995, 2.960140695448873e-17),
+    (1.7753764925265212, 6.429731796556572e-17),
+    (1.7947090750031072, 1.8227458427912087e-17),
+    (1.8142521755003989, -9.969531538920349e-17),
+    (1.8340080864093424, 3.283107224245627e-17),
+    (1.8539791250833855, 9.761887490727594e-17),
+    (1.8741676341103, -6.122763413004143e-17),
+    (1.8945759815869656, 3.4034035352165297e-17),
+    (1.9152065613971474, -1.0619946056195963e-16),
+    (1.9360617934922943, 1.0332385960676326e-16),
+    (1.9571441241754002, 8.960767791036668e-17),
+    (1.978456026387951, 4.0388753109278167e-17),
+];
 
-/// exp(x) for x <= 0 (the only arguments here), fdlibm's method written
-/// out without its range cases: x = k ln 2 + r with |r| <= ln 2 / 2 (k by
-/// the 1.5 * 2^52 shift, ln 2 in two parts), e^r = 1 + r + r c / (2 - c)
-/// with c = r - r^2 (P1 + ... + P5 r^8), then 2^k from the exponent bits
-/// (in two factors below 2^-1022, where the result is subnormal): no
-/// `scalbn` call, no branch on the range but the subnormal one. Within
-/// 1 ulp of `libm::exp` (the unit test). Below -745.2 it is 0; NaN
-/// stays NaN.
+/// exp(x) for x <= 0 (the only arguments here), table-driven and without
+/// a division (the fdlibm form's (r c) / (2 - c) was the longest step of
+/// the PL search's per-term work): x = (64 m + j) ln 2 / 64 + r with
+/// |r| <= ln 2 / 128 (k = 64 m + j by the 1.5 * 2^52 shift, ln 2 / 64 in
+/// two parts), e^r - 1 = r + r^2/2 + ... + r^6/720 (truncation below
+/// 3e-20 relative), then 2^(j/64) e^r = hi + (lo + hi (e^r - 1)) from the
+/// two-part table and 2^m from the exponent bits (in two factors below
+/// 2^-1022, where the result is subnormal). Within 1 ulp of
+/// `libm::exp` (the unit test). Below -745.2 it is 0; NaN stays NaN.
 #[inline]
 fn exp_neg(x: f64) -> f64 {
     if !(x >= -745.2) {
         return if x.is_nan() { x } else { 0.0 };
     }
-    let k = (x * INV_LN2 + ROUND_SHIFT) - ROUND_SHIFT;
-    let hi = x - k * LN2_HI;
-    let lo = k * LN2_LO;
-    let r = hi - lo;
-    let t = r * r;
-    let c = r - t * (P1 + t * (P2 + t * (P3 + t * (P4 + t * P5))));
-    let p = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi);
-    // k in [-1075, 1]: 2^k as one or two normal powers of two.
-    let ki = k as i64;
+    let kf = (x * INV_LN2_64 + ROUND_SHIFT) - ROUND_SHIFT;
+    let r = (x - kf * LN2_64_HI) - kf * LN2_64_LO;
+    let r2 = r * r;
+    let q = r + r2
+        * ((0.5 + r * (1.0 / 6.0)) + r2 * ((1.0 / 24.0 + r * (1.0 / 120.0)) + r2 * (1.0 / 720.0)));
+    let k = kf as i64;
+    let (hi, lo) = EXP2_64
+        .get((k & 63) as usize)
+        .copied()
+        .unwrap_or((1.0, 0.0));
+    let p = hi + (lo + hi * q);
+    // m = floor(k / 64) in [-1076, 0]: 2^m as one or two normal powers
+    // of two.
+    let m = k >> 6;
     let pow2 = |e: i64| f64::from_bits(((e + 1023) as u64) << 52);
-    if ki >= -1022 {
-        p * pow2(ki)
+    if m >= -1022 {
+        p * pow2(m)
     } else {
-        p * pow2(ki + 100) * pow2(-100)
+        p * pow2(m + 100) * pow2(-100)
     }
 }
 
@@ -297,6 +368,18 @@ mod tests {
         assert_eq!(exp_neg(-800.0), 0.0);
         assert!(exp_neg(f64::NAN).is_nan());
         std::println!("exp_neg: worst relative difference from libm {worst:e}");
+    }
+
+    /// The table's two parts against libm's exp2 (within 1 ulp for the
+    /// high part) and each other (the low part below half an ulp of the
+    /// high one).
+    #[test]
+    fn exp_table_is_exact() {
+        for (j, &(hi, lo)) in EXP2_64.iter().enumerate() {
+            let want = libm::exp2(j as f64 / 64.0);
+            assert!(rel(hi, want) <= 2.0 * U, "j {j}: {hi:e} vs {want:e}");
+            assert!(lo.abs() <= 0.5 * hi * 2.0 * U, "j {j}: lo {lo:e}");
+        }
     }
 
     #[test]
