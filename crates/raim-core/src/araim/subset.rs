@@ -863,37 +863,44 @@ fn all_in_view<T: Real, const N: usize, const R: usize>(
             *y = m;
         }
     }
-    // Cholesky of M, pivots relative to C_int of the removed row; the
-    // reciprocals of the diagonal kept (`inv`), so that the solves below
-    // multiply (one division per removed row and mode).
+    // M = L D L^T (L unit lower triangular), pivots d_j = the Cholesky
+    // pivots' squares, relative to C_int of the removed row; no square
+    // root, and the reciprocals 1/d_j kept (`inv`) so that the solves
+    // below multiply: one division per removed row and mode.
     let tol = rank_tolerance::<T>();
     let mut l = [[zero; R]; R];
+    let mut d = [zero; R];
     let mut inv = [one; R];
     for j in 0..R {
         let ij = rows.get(j).copied().unwrap_or(0);
         let scale = c_int.get(j).copied().unwrap_or(one);
-        let mut sum = mm.get(j).and_then(|x| x.get(j)).copied().unwrap_or(zero);
+        let lj = l.get(j).copied().unwrap_or([zero; R]);
+        // u_k = l_jk d_k (k < j).
+        let mut u = [zero; R];
+        let mut dj = mm.get(j).and_then(|x| x.get(j)).copied().unwrap_or(zero);
         for k in 0..j {
-            let x = l.get(j).and_then(|x| x.get(k)).copied().unwrap_or(zero);
-            sum -= x * x;
+            let ljk = lj.get(k).copied().unwrap_or(zero);
+            let uk = ljk * d.get(k).copied().unwrap_or(zero);
+            if let Some(x) = u.get_mut(k) {
+                *x = uk;
+            }
+            dj -= ljk * uk;
         }
-        if !(sum > tol * scale) {
+        if !(dj > tol * scale) {
             return Err(Deficient {
                 column: ij,
-                pivot: (sum / scale).to_f64(),
+                pivot: (dj / scale).to_f64(),
             });
         }
-        let ljj = sum.sqrt();
-        let rj = one / ljj;
-        if let (Some(x), Some(y)) = (l.get_mut(j).and_then(|x| x.get_mut(j)), inv.get_mut(j)) {
-            *x = ljj;
+        let rj = one / dj;
+        if let (Some(x), Some(y)) = (d.get_mut(j), inv.get_mut(j)) {
+            *x = dj;
             *y = rj;
         }
         for i in (j + 1)..R {
             let mut sum = mm.get(i).and_then(|x| x.get(j)).copied().unwrap_or(zero);
-            for k in 0..j {
-                sum -= l.get(i).and_then(|x| x.get(k)).copied().unwrap_or(zero)
-                    * l.get(j).and_then(|x| x.get(k)).copied().unwrap_or(zero);
+            for (k, &uk) in u.iter().enumerate().take(j) {
+                sum -= l.get(i).and_then(|x| x.get(k)).copied().unwrap_or(zero) * uk;
             }
             if let Some(x) = l.get_mut(i).and_then(|x| x.get_mut(j)) {
                 *x = sum * rj;
@@ -919,8 +926,8 @@ fn all_in_view<T: Real, const N: usize, const R: usize>(
     let mut out = SubsetStats::default();
     let mut coef = [[zero; R]; 3];
     for (q, ((cq, vq), sq)) in coef.iter_mut().zip(v.iter()).zip(s.iter()).enumerate() {
-        // c_q = M^-1 V_q: L z = V_q, L^T c = z (times the reciprocal
-        // pivots).
+        // c_q = M^-1 V_q: L z = V_q, then L^T c = D^-1 z (times the
+        // reciprocal pivots).
         let mut z = [zero; R];
         for i in 0..R {
             let mut sum = vq.get(i).copied().unwrap_or(zero);
@@ -928,18 +935,18 @@ fn all_in_view<T: Real, const N: usize, const R: usize>(
                 sum -= l.get(i).and_then(|x| x.get(k)).copied().unwrap_or(zero)
                     * z.get(k).copied().unwrap_or(zero);
             }
-            if let (Some(x), Some(&r)) = (z.get_mut(i), inv.get(i)) {
-                *x = sum * r;
+            if let Some(x) = z.get_mut(i) {
+                *x = sum;
             }
         }
         for i in (0..R).rev() {
-            let mut sum = z.get(i).copied().unwrap_or(zero);
+            let mut sum = z.get(i).copied().unwrap_or(zero) * inv.get(i).copied().unwrap_or(one);
             for k in (i + 1)..R {
                 sum -= l.get(k).and_then(|x| x.get(i)).copied().unwrap_or(zero)
                     * cq.get(k).copied().unwrap_or(zero);
             }
-            if let (Some(x), Some(&r)) = (cq.get_mut(i), inv.get(i)) {
-                *x = sum * r;
+            if let Some(x) = cq.get_mut(i) {
+                *x = sum;
             }
         }
         let mut var = base
