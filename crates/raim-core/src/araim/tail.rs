@@ -208,7 +208,7 @@ fn half_gauss(z: f64) -> f64 {
 }
 
 /// Q(z) and phi(z). NaN in, NaN out.
-#[inline]
+#[inline(always)]
 pub fn q_and_pdf(z: f64) -> (f64, f64) {
     let y = z.abs();
     if y < Z_SMALL {
