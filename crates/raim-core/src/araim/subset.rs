@@ -774,8 +774,9 @@ pub fn downdate_coupled<T: Real, const N: usize>(
 /// from the all-in-view base, from the epoch's [`Coupling`] and without a
 /// pass over the satellites for sigma_ss and the separation.
 ///
-/// V's position rows are s0_q[i] / w_i (S0 = P0 G^T W) and M = W_R^-1 -
-/// G_R P0 G_R^T has g_a^T P0 g_b = Q[a][b] / w_b; c_q = M^-1 V_q and
+/// V's position rows are s0_q[i] C_int,i (S0 = P0 G^T W, C_int = 1/w) and
+/// M = W_R^-1 - G_R P0 G_R^T has g_a^T P0 g_b = Q[a][b] C_int,b; M = L D
+/// L^T (no square root, one reciprocal per removed row); c_q = M^-1 V_q and
 /// sigma_q^2 = (P0)_qq + c_q . V_q (module doc). With d_i = (S_k - S_0)
 /// e_i:
 ///
