@@ -94,7 +94,8 @@ const ROUND_SHIFT: f64 = 6_755_399_441_055_744.0;
 /// 2^(j/64), j = 0..63, as the correctly rounded value and the rounding
 /// remainder (2^(j/64) - hi, rounded): computed in 60-digit decimal
 /// arithmetic (Python's `decimal`, `Decimal(2) ** (Decimal(j) / 64)`),
-/// and checked by `exp_table_is_exact` against libm's exp2.
+/// and checked by `exp_table_is_exact` against libm's exp2 (entry 32,
+/// sqrt 2, written as `SQRT_2`: the same value).
 const EXP2_64: [(f64, f64); 64] = [
     (1.0, 0.0),
     (1.0108892860517005, -1.5234778603368577e-17),
@@ -128,7 +129,7 @@ const EXP2_64: [(f64, f64); 64] = [
     (1.3690024229745905, 9.593797919118849e-17),
     (1.383909881963832, -6.770511658794786e-17),
     (1.3989796725383112, -9.614213209051323e-17),
-    (1.4142135623730951, -9.667293313452913e-17),
+    (core::f64::consts::SQRT_2, -9.667293313452913e-17),
     (1.42961333839197, -1.2031642489053655e-17),
     (1.4451808069770467, -3.0237581349939873e-17),
     (1.460917794180647, -5.600377186075216e-17),
