@@ -298,6 +298,16 @@ impl<'a, const N: usize, T: Real> SiblingModel<'a, N, T> {
 }
 
 /// The linearised form: one least-squares solve at the given point.
+///
+/// Issue 10 (fourth pass, round 2): the model is built in passes over the
+/// selected rows rather than one satellite at a time, so that the
+/// arithmetic passes are straight-line loops the compiler vectorises and
+/// the elevations' `atan` calls run in a loop of their own: (1) gather the
+/// selected satellites and their unit lines of sight in `T`; (2) the
+/// elevations and sigmas (a sibling's where given); (3) the sigma check, in
+/// row order, so that the first offender is named as before; (4) the
+/// weights and the whitened rows [-u, clock] / sigma and z / sigma. Each
+/// row's operations are those of `Builder::push`, so the bits are the same.
 #[inline(never)]
 fn solve_linear<const N: usize, T: Real>(
     cfg: &Config,
@@ -306,49 +316,138 @@ fn solve_linear<const N: usize, T: Real>(
     sibling: Option<&Solution<N, T>>,
     out: &mut Solution<N, T>,
 ) -> Result<(), RaimError> {
-    let mut b = Builder::<N, T>::new(
+    let (cols, clocks) = clock_columns(
         sats.iter()
             .zip(mask.iter())
             .filter(|(_, m)| **m)
             .map(|(s, _)| s.id.system),
     );
-    let mut sibling_model = SiblingModel::new(sibling);
-    for (i, s) in sats
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
+    let m = 3 + clocks;
+    // (1) The selected satellites in epoch order, and the unit line of
+    // sight in `T` (the same operations as in f64).
+    let mut h = [[T::zero(); N]; MAX_STATES];
+    let mut z = [T::zero(); N];
+    let mut residual_m = [0.0; N];
+    let mut given = [None; N];
+    let mut n = 0;
     {
-        // The unit line of sight, its elevation and the sigma model in `T`
-        // (the same operations as in f64).
-        let l = s.los_enu.map(T::of);
-        let norm = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
-        let u = [l[0] / norm, l[1] / norm, l[2] / norm];
-        // The elevation and sigma depend on the line of sight alone, so a
-        // sibling's are bit for bit what would be computed here.
-        let (el, sigma) = match sibling_model.get(i) {
+        let [he, hn, hu, ..] = &mut h;
+        let rows = out
+            .source
+            .iter_mut()
+            .zip(out.ids.iter_mut())
+            .zip(residual_m.iter_mut().zip(given.iter_mut()))
+            .zip(he.iter_mut().zip(hn.iter_mut()).zip(hu.iter_mut()));
+        let selected = sats
+            .iter()
+            .enumerate()
+            .zip(mask.iter())
+            .filter(|(_, m)| **m)
+            .map(|(s, _)| s);
+        for ((((src, id), (r, g)), ((e, nn), u)), (i, s)) in rows.zip(selected) {
+            let l = s.los_enu.map(T::of);
+            let norm = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+            *e = l[0] / norm;
+            *nn = l[1] / norm;
+            *u = l[2] / norm;
+            *src = i;
+            *id = s.id;
+            *r = s.residual_m;
+            *g = s.sigma_m;
+            n += 1;
+        }
+    }
+    // Rows n.. as a fresh builder leaves them (the storage is reused
+    // across epochs; nothing reads past `rows()`, but nothing stale stays).
+    for (((src, id), sg), el) in out
+        .source
+        .iter_mut()
+        .zip(out.ids.iter_mut())
+        .zip(out.sigma_m.iter_mut())
+        .zip(out.elevation_rad.iter_mut())
+        .skip(n)
+    {
+        (*src, *id, *sg, *el) = (0, SatId::default(), 0.0, 0.0);
+    }
+    // (2) The elevations and sigmas. They depend on the line of sight
+    // alone, so a sibling's are bit for bit what would be computed here.
+    let [he, hn, hu, ..] = &h;
+    let units = he.iter().zip(hn.iter()).zip(hu.iter()).take(n);
+    let model = out
+        .elevation_rad
+        .iter_mut()
+        .zip(out.sigma_m.iter_mut())
+        .zip(given.iter())
+        .zip(units);
+    let mut sibling_model = SiblingModel::new(sibling);
+    for ((((el, sigma), g), ((&e, &nn), &u)), &src) in model.zip(out.source.iter()) {
+        let from_sibling = match sibling {
+            Some(_) => sibling_model.get(src),
+            None => None,
+        };
+        (*el, *sigma) = match from_sibling {
             Some(v) => v,
             None => {
-                let el = crate::frames::elevation(u);
-                let sigma = match s.sigma_m {
-                    Some(v) => v,
-                    None => cfg.sigma_model.sigma(el).to_f64(),
+                let elev = crate::frames::elevation([e, nn, u]);
+                let sg = match g {
+                    Some(v) => *v,
+                    None => cfg.sigma_model.sigma(elev).to_f64(),
                 };
-                (el.to_f64(), sigma)
+                (elev.to_f64(), sg)
             }
         };
-        b.push(i, s.id, u, s.residual_m, sigma, el)?;
     }
-    b.parity_into(&mut out.parity)?;
+    // (3) Positive and finite (NaN fails both comparisons), checked in row
+    // order: one branch-free pass, and the first offender named only when
+    // it finds one.
+    let sigmas = out.sigma_m.get(..n).unwrap_or(&[]);
+    if !sigmas
+        .iter()
+        .fold(true, |ok, &s| ok & (s > 0.0) & (s <= f64::MAX))
+    {
+        for (&sigma_m, &index) in sigmas.iter().zip(out.source.iter()) {
+            if !(sigma_m > 0.0 && sigma_m < f64::INFINITY) {
+                return Err(RaimError::NonPositiveSigma { index, sigma_m });
+            }
+        }
+    }
+    // (4) The whitened rows: the weight 1 / sigma in `T`, -u / sigma, the
+    // clock entry, z / sigma (`Builder::push`'s operations).
+    let mut wt = [T::zero(); N];
+    for (w, &sg) in wt.iter_mut().zip(sigmas.iter()) {
+        *w = T::one() / T::of(sg);
+    }
+    for col in h.iter_mut().take(3) {
+        for (v, &w) in col.iter_mut().zip(wt.iter()).take(n) {
+            *v = -*v * w;
+        }
+    }
+    for ((zk, &r), &w) in z.iter_mut().zip(residual_m.iter()).zip(wt.iter()).take(n) {
+        *zk = T::of(r) * w;
+    }
+    // Column 3 + j is the clock of system `cols[j]`: the weight on its
+    // satellites' rows, zero elsewhere (the storage is fresh).
+    for (col, sys) in h.iter_mut().skip(3).zip(cols.iter()) {
+        let Some(sys) = sys else {
+            continue;
+        };
+        for ((v, id), &w) in col.iter_mut().zip(out.ids.iter()).zip(wt.iter()).take(n) {
+            if id.system == *sys {
+                *v = w;
+            }
+        }
+    }
+    out.parity.compute(&h, &z, n, m)?;
     let dx = out.parity.dx().map(T::to_f64);
     let mut clock_m = [None; MAX_SYSTEMS];
-    for (j, sys) in b.cols.iter().enumerate() {
+    for (j, sys) in cols.iter().enumerate() {
         if let (Some(sys), Some(v)) = (sys, dx.get(3 + j)) {
             if let Some(c) = clock_m.get_mut(sys.index()) {
                 *c = Some(*v);
             }
         }
     }
-    b.fill(out);
+    out.clocks = cols;
     out.position_ecef_m = None;
     out.geodetic = None;
     out.linearisation = None;
