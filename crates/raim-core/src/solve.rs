@@ -161,6 +161,11 @@ fn clock_columns(systems: impl Iterator<Item = System>) -> ([Option<System>; MAX
             *p = true;
         }
     }
+    clock_columns_of(&present)
+}
+
+/// [`clock_columns`] from the systems present, by `System::index`.
+fn clock_columns_of(present: &[bool; MAX_SYSTEMS]) -> ([Option<System>; MAX_SYSTEMS], usize) {
     let mut cols = [None; MAX_SYSTEMS];
     let mut k = 0;
     for (sys, _) in System::ALL.iter().zip(present.iter()).filter(|(_, p)| **p) {
@@ -316,13 +321,9 @@ fn solve_linear<const N: usize, T: Real>(
     sibling: Option<&Solution<N, T>>,
     out: &mut Solution<N, T>,
 ) -> Result<(), RaimError> {
-    let (cols, clocks) = clock_columns(
-        sats.iter()
-            .zip(mask.iter())
-            .filter(|(_, m)| **m)
-            .map(|(s, _)| s.id.system),
-    );
-    let m = 3 + clocks;
+    // The systems present among the selected satellites (their clock
+    // columns), noted in pass (1).
+    let mut present = [false; MAX_SYSTEMS];
     // (1) The selected satellites in epoch order, and the unit line of
     // sight in `T` (the same operations as in f64).
     let mut h = [[T::zero(); N]; MAX_STATES];
@@ -354,21 +355,23 @@ fn solve_linear<const N: usize, T: Real>(
             *id = s.id;
             *r = s.residual_m;
             *g = s.sigma_m;
+            if let Some(p) = present.get_mut(s.id.system.index()) {
+                *p = true;
+            }
             n += 1;
         }
     }
+    let (cols, clocks) = clock_columns_of(&present);
+    let m = 3 + clocks;
     // Rows n.. as a fresh builder leaves them (the storage is reused
     // across epochs; nothing reads past `rows()`, but nothing stale stays).
-    for (((src, id), sg), el) in out
-        .source
+    out.source.iter_mut().skip(n).for_each(|v| *v = 0);
+    out.ids
         .iter_mut()
-        .zip(out.ids.iter_mut())
-        .zip(out.sigma_m.iter_mut())
-        .zip(out.elevation_rad.iter_mut())
         .skip(n)
-    {
-        (*src, *id, *sg, *el) = (0, SatId::default(), 0.0, 0.0);
-    }
+        .for_each(|v| *v = SatId::default());
+    out.sigma_m.iter_mut().skip(n).for_each(|v| *v = 0.0);
+    out.elevation_rad.iter_mut().skip(n).for_each(|v| *v = 0.0);
     // (2) The elevations and sigmas. They depend on the line of sight
     // alone, so a sibling's are bit for bit what would be computed here.
     let [he, hn, hu, ..] = &h;
