@@ -84,6 +84,24 @@ impl<const N: usize, T: Real> Householder<N, T> {
         self.m = m;
         self.a = *h;
         self.diag = [T::zero(); MAX_STATES];
+        // The usual models (one or two constellations) with the column
+        // count fixed at compile time, where the column loop unrolls
+        // (issue 10, fourth pass round 2): the same steps, so the same
+        // bits. In the f64 (host) engine only, with the lanes: on the M4F
+        // each copy would cost flash.
+        if T::LANE_SUMS {
+            match m {
+                4 => return self.columns(4, n),
+                5 => return self.columns(5, n),
+                _ => {}
+            }
+        }
+        self.columns(m, n)
+    }
+
+    /// The Householder steps over columns 0..m of the copied matrix.
+    #[inline(always)]
+    fn columns(&mut self, m: usize, n: usize) -> Result<(), RaimError> {
         for k in 0..m {
             let (left, right) = self.a.split_at_mut(k + 1);
             let Some(col) = left.last_mut() else {
