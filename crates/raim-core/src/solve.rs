@@ -328,8 +328,8 @@ fn solve_linear<const N: usize, T: Real>(
     // sight in `T` (the same operations as in f64).
     let mut h = [[T::zero(); N]; MAX_STATES];
     let mut z = [T::zero(); N];
-    let mut residual_m = [0.0; N];
-    let mut given = [None; N];
+    // Whether the satellite carries its own sigma (then in `sigma_m`).
+    let mut given = [false; N];
     let mut n = 0;
     {
         let [he, hn, hu, ..] = &mut h;
@@ -337,7 +337,11 @@ fn solve_linear<const N: usize, T: Real>(
             .source
             .iter_mut()
             .zip(out.ids.iter_mut())
-            .zip(residual_m.iter_mut().zip(given.iter_mut()))
+            .zip(
+                z.iter_mut()
+                    .zip(given.iter_mut())
+                    .zip(out.sigma_m.iter_mut()),
+            )
             .zip(he.iter_mut().zip(hn.iter_mut()).zip(hu.iter_mut()));
         let selected = sats
             .iter()
@@ -345,7 +349,7 @@ fn solve_linear<const N: usize, T: Real>(
             .zip(mask.iter())
             .filter(|(_, m)| **m)
             .map(|(s, _)| s);
-        for ((((src, id), (r, g)), ((e, nn), u)), (i, s)) in rows.zip(selected) {
+        for ((((src, id), ((r, g), sg)), ((e, nn), u)), (i, s)) in rows.zip(selected) {
             let l = s.los_enu.map(T::of);
             let norm = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
             *e = l[0] / norm;
@@ -353,8 +357,12 @@ fn solve_linear<const N: usize, T: Real>(
             *u = l[2] / norm;
             *src = i;
             *id = s.id;
-            *r = s.residual_m;
-            *g = s.sigma_m;
+            // z in `T`, whitened in pass (4).
+            *r = T::of(s.residual_m);
+            (*g, *sg) = match s.sigma_m {
+                Some(v) => (true, v),
+                None => (false, 0.0),
+            };
             if let Some(p) = present.get_mut(s.id.system.index()) {
                 *p = true;
             }
@@ -392,9 +400,10 @@ fn solve_linear<const N: usize, T: Real>(
             Some(v) => v,
             None => {
                 let elev = crate::frames::elevation([e, nn, u]);
-                let sg = match g {
-                    Some(v) => *v,
-                    None => cfg.sigma_model.sigma(elev).to_f64(),
+                let sg = if *g {
+                    *sigma
+                } else {
+                    cfg.sigma_model.sigma(elev).to_f64()
                 };
                 (elev.to_f64(), sg)
             }
@@ -425,8 +434,8 @@ fn solve_linear<const N: usize, T: Real>(
             *v = -*v * w;
         }
     }
-    for ((zk, &r), &w) in z.iter_mut().zip(residual_m.iter()).zip(wt.iter()).take(n) {
-        *zk = T::of(r) * w;
+    for (zk, &w) in z.iter_mut().zip(wt.iter()).take(n) {
+        *zk = *zk * w;
     }
     // Column 3 + j is the clock of system `cols[j]`: the weight on its
     // satellites' rows, zero elsewhere (the storage is fresh).
