@@ -435,7 +435,7 @@ fn solve_linear<const N: usize, T: Real>(
         }
     }
     for (zk, &w) in z.iter_mut().zip(wt.iter()).take(n) {
-        *zk = *zk * w;
+        *zk *= w;
     }
     // Column 3 + j is the clock of system `cols[j]`: the weight on its
     // satellites' rows, zero elsewhere (the storage is fresh).
