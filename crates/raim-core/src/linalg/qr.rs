@@ -554,6 +554,75 @@ mod tests {
         check::<f32>(&[70, -60, 100, -100], REL_TOL_F32);
     }
 
+    /// [`dot_lanes`] against the left-to-right [`dot`], for every length
+    /// 0..=40 (every remainder mod 4) and unequal lengths (the shorter
+    /// decides): within a few epsilons of sum |a_i b_i| (both orders are
+    /// within n eps of it), and exactly equal on integers.
+    #[test]
+    fn lane_sums_agree_with_the_sequential_sum() {
+        // Dimensionless, relative to sum |a_i b_i|: 2 n eps covers both
+        // orders' rounding for n <= 40.
+        const REL_TOL: f64 = 80.0 * f64::EPSILON;
+        let mut rng = crate::testutil::Rng::new(5);
+        for len in 0..=40 {
+            let a: [f64; 40] = core::array::from_fn(|_| rng.uniform() * 2.0 - 1.0);
+            let b: [f64; 40] = core::array::from_fn(|_| rng.uniform() * 2.0 - 1.0);
+            let seq = dot(a[..len].iter(), b[..len].iter());
+            let abs: f64 = a[..len]
+                .iter()
+                .zip(&b[..len])
+                .map(|(x, y)| (x * y).abs())
+                .sum();
+            let lanes = dot_lanes(&a[..len], &b[..len]);
+            assert!((lanes - seq).abs() <= REL_TOL * abs, "len {len}");
+            for extra in [1, 3, 5] {
+                let longer = (len + extra).min(40);
+                assert_eq!(
+                    dot_lanes(&a[..len], &b[..longer]).to_bits(),
+                    lanes.to_bits(),
+                    "len {len} + {extra}"
+                );
+                assert_eq!(
+                    dot_lanes(&a[..longer], &b[..len]).to_bits(),
+                    lanes.to_bits()
+                );
+            }
+            let ia: [f64; 40] = core::array::from_fn(|i| (i as f64) - 7.0);
+            assert_eq!(
+                dot_lanes(&ia[..len], &ia[..len]),
+                dot(ia[..len].iter(), ia[..len].iter())
+            );
+        }
+    }
+
+    /// The factorisation with m = 4 and 5 fixed at compile time (the f64
+    /// engine's) is the general column loop's, bit for bit.
+    #[test]
+    fn fixed_column_counts_equal_the_general_loop() {
+        let mut rng = crate::testutil::Rng::new(17);
+        for (n, m) in [(6, 4), (9, 5), (16, 5), (12, 4)] {
+            let mut h = [[0.0f64; 16]; MAX_STATES];
+            for col in h.iter_mut().take(m) {
+                for v in col.iter_mut().take(n) {
+                    *v = rng.uniform() * 2.0 - 1.0;
+                }
+            }
+            let fixed = Householder::<16>::factor(&h, n, m).unwrap();
+            let mut general = Householder::<16>::empty();
+            general.n = n;
+            general.m = m;
+            general.a = h;
+            // A column count the compiler cannot see: the general loop.
+            general.columns(core::hint::black_box(m), n).unwrap();
+            for j in 0..MAX_STATES {
+                for i in 0..16 {
+                    assert_eq!(fixed.a[j][i].to_bits(), general.a[j][i].to_bits());
+                }
+                assert_eq!(fixed.diag[j].to_bits(), general.diag[j].to_bits());
+            }
+        }
+    }
+
     #[test]
     fn rejects_rank_deficiency() {
         let mut h = [[0.0; 8]; MAX_STATES];
