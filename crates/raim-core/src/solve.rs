@@ -313,6 +313,8 @@ impl<'a, const N: usize, T: Real> SiblingModel<'a, N, T> {
 /// row order, so that the first offender is named as before; (4) the
 /// weights and the whitened rows [-u, clock] / sigma and z / sigma. Each
 /// row's operations are those of `Builder::push`, so the bits are the same.
+/// In the f64 engine ([`Real::LANE_SUMS`]); the f32 engine keeps
+/// [`solve_linear_by_row`].
 #[inline(never)]
 fn solve_linear<const N: usize, T: Real>(
     cfg: &Config,
@@ -321,6 +323,9 @@ fn solve_linear<const N: usize, T: Real>(
     sibling: Option<&Solution<N, T>>,
     out: &mut Solution<N, T>,
 ) -> Result<(), RaimError> {
+    if !T::LANE_SUMS {
+        return solve_linear_by_row(cfg, sats, mask, sibling, out);
+    }
     // The systems present among the selected satellites (their clock
     // columns), noted in pass (1).
     let mut present = [false; MAX_SYSTEMS];
@@ -460,6 +465,70 @@ fn solve_linear<const N: usize, T: Real>(
         }
     }
     out.clocks = cols;
+    out.position_ecef_m = None;
+    out.geodetic = None;
+    out.linearisation = None;
+    out.correction_enu_m = [dx[0], dx[1], dx[2]];
+    out.clock_m = clock_m;
+    out.iterations = 1;
+    Ok(())
+}
+
+/// [`solve_linear`] one satellite at a time through `Builder::push`: the
+/// f32 engine's form (the M4F, where the passes' code would cost flash and
+/// nothing vectorises); the same results bit for bit (test
+/// `linear_passes_equal_the_row_builder`).
+#[inline(never)]
+fn solve_linear_by_row<const N: usize, T: Real>(
+    cfg: &Config,
+    sats: &[LinearObservation],
+    mask: &[bool; N],
+    sibling: Option<&Solution<N, T>>,
+    out: &mut Solution<N, T>,
+) -> Result<(), RaimError> {
+    let mut b = Builder::<N, T>::new(
+        sats.iter()
+            .zip(mask.iter())
+            .filter(|(_, m)| **m)
+            .map(|(s, _)| s.id.system),
+    );
+    let mut sibling_model = SiblingModel::new(sibling);
+    for (i, s) in sats
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
+    {
+        // The unit line of sight, its elevation and the sigma model in `T`
+        // (the same operations as in f64).
+        let l = s.los_enu.map(T::of);
+        let norm = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+        let u = [l[0] / norm, l[1] / norm, l[2] / norm];
+        // The elevation and sigma depend on the line of sight alone, so a
+        // sibling's are bit for bit what would be computed here.
+        let (el, sigma) = match sibling_model.get(i) {
+            Some(v) => v,
+            None => {
+                let el = crate::frames::elevation(u);
+                let sigma = match s.sigma_m {
+                    Some(v) => v,
+                    None => cfg.sigma_model.sigma(el).to_f64(),
+                };
+                (el.to_f64(), sigma)
+            }
+        };
+        b.push(i, s.id, u, s.residual_m, sigma, el)?;
+    }
+    b.parity_into(&mut out.parity)?;
+    let dx = out.parity.dx().map(T::to_f64);
+    let mut clock_m = [None; MAX_SYSTEMS];
+    for (j, sys) in b.cols.iter().enumerate() {
+        if let (Some(sys), Some(v)) = (sys, dx.get(3 + j)) {
+            if let Some(c) = clock_m.get_mut(sys.index()) {
+                *c = Some(*v);
+            }
+        }
+    }
+    b.fill(out);
     out.position_ecef_m = None;
     out.geodetic = None;
     out.linearisation = None;
