@@ -52,9 +52,10 @@ pub trait Real:
     /// is the same up to its last bits. The f32 engine (the M4F, which has
     /// no vector unit) keeps the left-to-right order bit for bit, as with
     /// [`Real::ONE_PASS_QR`]. The same engines also factor m = 4 and 5
-    /// columns with the count fixed at compile time (bit for bit; on the
-    /// M4F each copy would cost flash). docs/CORE.md, "Reductions in
-    /// lanes".
+    /// columns with the count fixed at compile time and build the
+    /// linearised model in passes (`solve::solve_linear`), both bit for
+    /// bit; on the M4F each copy would cost flash. docs/CORE.md,
+    /// "Reductions in lanes".
     const LANE_SUMS: bool;
     /// Converts from `f64`, rounding to nearest for `f32`.
     fn of(x: f64) -> Self;
