@@ -324,10 +324,7 @@ pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimErro
     // the same first pair as before.
     let mut seen = [[0u64; 4]; MAX_SYSTEMS];
     let mut repeated = false;
-    for i in 0..n {
-        let Some(id) = epoch.id(i) else {
-            continue;
-        };
+    let mut mark = |id: SatId| {
         let (word, bit) = (usize::from(id.prn >> 6), id.prn & 63);
         if let Some(w) = seen
             .get_mut(id.system.index())
@@ -336,6 +333,12 @@ pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimErro
             repeated |= *w & (1u64 << bit) != 0;
             *w |= 1u64 << bit;
         }
+    };
+    // Over the input form's own slice (issue 10, fourth pass round 2: not
+    // `epoch.id(i)`, which matched the form again for every satellite).
+    match epoch.observations {
+        Observations::Ranges { sats, .. } => sats.iter().for_each(|s| mark(s.id)),
+        Observations::Linear { sats } => sats.iter().for_each(|s| mark(s.id)),
     }
     if !repeated {
         return Ok(());

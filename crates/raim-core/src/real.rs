@@ -45,6 +45,18 @@ pub trait Real:
     /// tests' tolerances sit within 1-2x of the rounding that a last-bit
     /// change moves at random (docs/CORE.md, "Householder column norms").
     const ONE_PASS_QR: bool;
+    /// Whether the QR's hot reductions (the reflections' dot products and
+    /// the column sums of squares, `linalg::qr::dot_lanes`) are summed in
+    /// four interleaved partial sums, which the compiler vectorises, rather
+    /// than left to right (issue 10, fourth pass round 2): in f64. The sum
+    /// is the same up to its last bits. The f32 engine (the M4F, which has
+    /// no vector unit) keeps the left-to-right order bit for bit, as with
+    /// [`Real::ONE_PASS_QR`]. The same engines also factor m = 4 and 5
+    /// columns with the count fixed at compile time and build the
+    /// linearised model in passes (`solve::solve_linear`), both bit for
+    /// bit; on the M4F each copy would cost flash. docs/CORE.md,
+    /// "Reductions in lanes".
+    const LANE_SUMS: bool;
     /// Converts from `f64`, rounding to nearest for `f32`.
     fn of(x: f64) -> Self;
     /// Widens (or passes) to `f64`.
@@ -82,6 +94,7 @@ impl Real for f64 {
     const MIN_POSITIVE: Self = f64::MIN_POSITIVE;
     const MAX: Self = f64::MAX;
     const ONE_PASS_QR: bool = true;
+    const LANE_SUMS: bool = true;
     #[inline(always)]
     fn of(x: f64) -> Self {
         x
@@ -134,6 +147,7 @@ impl Real for f32 {
     const MIN_POSITIVE: Self = f32::MIN_POSITIVE;
     const MAX: Self = f32::MAX;
     const ONE_PASS_QR: bool = false;
+    const LANE_SUMS: bool = false;
     #[inline(always)]
     fn of(x: f64) -> Self {
         x as f32

@@ -161,6 +161,11 @@ fn clock_columns(systems: impl Iterator<Item = System>) -> ([Option<System>; MAX
             *p = true;
         }
     }
+    clock_columns_of(&present)
+}
+
+/// [`clock_columns`] from the systems present, by `System::index`.
+fn clock_columns_of(present: &[bool; MAX_SYSTEMS]) -> ([Option<System>; MAX_SYSTEMS], usize) {
     let mut cols = [None; MAX_SYSTEMS];
     let mut k = 0;
     for (sys, _) in System::ALL.iter().zip(present.iter()).filter(|(_, p)| **p) {
@@ -298,8 +303,183 @@ impl<'a, const N: usize, T: Real> SiblingModel<'a, N, T> {
 }
 
 /// The linearised form: one least-squares solve at the given point.
+///
+/// Issue 10 (fourth pass, round 2): the model is built in passes over the
+/// selected rows rather than one satellite at a time, so that the
+/// arithmetic passes are straight-line loops the compiler vectorises and
+/// the elevations' `atan` calls run in a loop of their own: (1) gather the
+/// selected satellites and their unit lines of sight in `T`; (2) the
+/// elevations and sigmas (a sibling's where given); (3) the sigma check, in
+/// row order, so that the first offender is named as before; (4) the
+/// weights and the whitened rows [-u, clock] / sigma and z / sigma. Each
+/// row's operations are those of `Builder::push`, so the bits are the same.
+/// In the f64 engine ([`Real::LANE_SUMS`]); the f32 engine keeps
+/// [`solve_linear_by_row`].
 #[inline(never)]
 fn solve_linear<const N: usize, T: Real>(
+    cfg: &Config,
+    sats: &[LinearObservation],
+    mask: &[bool; N],
+    sibling: Option<&Solution<N, T>>,
+    out: &mut Solution<N, T>,
+) -> Result<(), RaimError> {
+    if !T::LANE_SUMS {
+        return solve_linear_by_row(cfg, sats, mask, sibling, out);
+    }
+    // The systems present among the selected satellites (their clock
+    // columns), noted in pass (1).
+    let mut present = [false; MAX_SYSTEMS];
+    // (1) The selected satellites in epoch order, and the unit line of
+    // sight in `T` (the same operations as in f64).
+    let mut h = [[T::zero(); N]; MAX_STATES];
+    let mut z = [T::zero(); N];
+    // Whether the satellite carries its own sigma (then in `sigma_m`).
+    let mut given = [false; N];
+    let mut n = 0;
+    {
+        let [he, hn, hu, ..] = &mut h;
+        let rows = out
+            .source
+            .iter_mut()
+            .zip(out.ids.iter_mut())
+            .zip(
+                z.iter_mut()
+                    .zip(given.iter_mut())
+                    .zip(out.sigma_m.iter_mut()),
+            )
+            .zip(he.iter_mut().zip(hn.iter_mut()).zip(hu.iter_mut()));
+        let selected = sats
+            .iter()
+            .enumerate()
+            .zip(mask.iter())
+            .filter(|(_, m)| **m)
+            .map(|(s, _)| s);
+        for ((((src, id), ((r, g), sg)), ((e, nn), u)), (i, s)) in rows.zip(selected) {
+            let l = s.los_enu.map(T::of);
+            let norm = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+            *e = l[0] / norm;
+            *nn = l[1] / norm;
+            *u = l[2] / norm;
+            *src = i;
+            *id = s.id;
+            // z in `T`, whitened in pass (4).
+            *r = T::of(s.residual_m);
+            (*g, *sg) = match s.sigma_m {
+                Some(v) => (true, v),
+                None => (false, 0.0),
+            };
+            if let Some(p) = present.get_mut(s.id.system.index()) {
+                *p = true;
+            }
+            n += 1;
+        }
+    }
+    let (cols, clocks) = clock_columns_of(&present);
+    let m = 3 + clocks;
+    // Rows n.. as a fresh builder leaves them (the storage is reused
+    // across epochs; nothing reads past `rows()`, but nothing stale stays).
+    out.source.iter_mut().skip(n).for_each(|v| *v = 0);
+    out.ids
+        .iter_mut()
+        .skip(n)
+        .for_each(|v| *v = SatId::default());
+    out.sigma_m.iter_mut().skip(n).for_each(|v| *v = 0.0);
+    out.elevation_rad.iter_mut().skip(n).for_each(|v| *v = 0.0);
+    // (2) The elevations and sigmas. They depend on the line of sight
+    // alone, so a sibling's are bit for bit what would be computed here.
+    let [he, hn, hu, ..] = &h;
+    let units = he.iter().zip(hn.iter()).zip(hu.iter()).take(n);
+    let model = out
+        .elevation_rad
+        .iter_mut()
+        .zip(out.sigma_m.iter_mut())
+        .zip(given.iter())
+        .zip(units);
+    let mut sibling_model = SiblingModel::new(sibling);
+    for ((((el, sigma), g), ((&e, &nn), &u)), &src) in model.zip(out.source.iter()) {
+        let from_sibling = match sibling {
+            Some(_) => sibling_model.get(src),
+            None => None,
+        };
+        (*el, *sigma) = match from_sibling {
+            Some(v) => v,
+            None => {
+                let elev = crate::frames::elevation([e, nn, u]);
+                let sg = if *g {
+                    *sigma
+                } else {
+                    cfg.sigma_model.sigma(elev).to_f64()
+                };
+                (elev.to_f64(), sg)
+            }
+        };
+    }
+    // (3) Positive and finite (NaN fails both comparisons), checked in row
+    // order: one branch-free pass, and the first offender named only when
+    // it finds one.
+    let sigmas = out.sigma_m.get(..n).unwrap_or(&[]);
+    if !sigmas
+        .iter()
+        .fold(true, |ok, &s| ok & (s > 0.0) & (s <= f64::MAX))
+    {
+        for (&sigma_m, &index) in sigmas.iter().zip(out.source.iter()) {
+            if !(sigma_m > 0.0 && sigma_m < f64::INFINITY) {
+                return Err(RaimError::NonPositiveSigma { index, sigma_m });
+            }
+        }
+    }
+    // (4) The whitened rows: the weight 1 / sigma in `T`, -u / sigma, the
+    // clock entry, z / sigma (`Builder::push`'s operations).
+    let mut wt = [T::zero(); N];
+    for (w, &sg) in wt.iter_mut().zip(sigmas.iter()) {
+        *w = T::one() / T::of(sg);
+    }
+    for col in h.iter_mut().take(3) {
+        for (v, &w) in col.iter_mut().zip(wt.iter()).take(n) {
+            *v = -*v * w;
+        }
+    }
+    for (zk, &w) in z.iter_mut().zip(wt.iter()).take(n) {
+        *zk *= w;
+    }
+    // Column 3 + j is the clock of system `cols[j]`: the weight on its
+    // satellites' rows, zero elsewhere (the storage is fresh).
+    for (col, sys) in h.iter_mut().skip(3).zip(cols.iter()) {
+        let Some(sys) = sys else {
+            continue;
+        };
+        for ((v, id), &w) in col.iter_mut().zip(out.ids.iter()).zip(wt.iter()).take(n) {
+            if id.system == *sys {
+                *v = w;
+            }
+        }
+    }
+    out.parity.compute(&h, &z, n, m)?;
+    let dx = out.parity.dx().map(T::to_f64);
+    let mut clock_m = [None; MAX_SYSTEMS];
+    for (j, sys) in cols.iter().enumerate() {
+        if let (Some(sys), Some(v)) = (sys, dx.get(3 + j)) {
+            if let Some(c) = clock_m.get_mut(sys.index()) {
+                *c = Some(*v);
+            }
+        }
+    }
+    out.clocks = cols;
+    out.position_ecef_m = None;
+    out.geodetic = None;
+    out.linearisation = None;
+    out.correction_enu_m = [dx[0], dx[1], dx[2]];
+    out.clock_m = clock_m;
+    out.iterations = 1;
+    Ok(())
+}
+
+/// [`solve_linear`] one satellite at a time through `Builder::push`: the
+/// f32 engine's form (the M4F, where the passes' code would cost flash and
+/// nothing vectorises); the same results bit for bit (test
+/// `linear_passes_equal_the_row_builder`).
+#[inline(never)]
+fn solve_linear_by_row<const N: usize, T: Real>(
     cfg: &Config,
     sats: &[LinearObservation],
     mask: &[bool; N],

@@ -84,6 +84,24 @@ impl<const N: usize, T: Real> Householder<N, T> {
         self.m = m;
         self.a = *h;
         self.diag = [T::zero(); MAX_STATES];
+        // The usual models (one or two constellations) with the column
+        // count fixed at compile time, where the column loop unrolls
+        // (issue 10, fourth pass round 2): the same steps, so the same
+        // bits. In the f64 (host) engine only, with the lanes: on the M4F
+        // each copy would cost flash.
+        if T::LANE_SUMS {
+            match m {
+                4 => return self.columns(4, n),
+                5 => return self.columns(5, n),
+                _ => {}
+            }
+        }
+        self.columns(m, n)
+    }
+
+    /// The Householder steps over columns 0..m of the copied matrix.
+    #[inline(always)]
+    fn columns(&mut self, m: usize, n: usize) -> Result<(), RaimError> {
         for k in 0..m {
             let (left, right) = self.a.split_at_mut(k + 1);
             let Some(col) = left.last_mut() else {
@@ -248,10 +266,51 @@ fn norm<'a, T: Real>(it: impl Iterator<Item = &'a T>) -> T {
     scale * ssq.sqrt()
 }
 
-/// sum x_i^2, unscaled, left to right.
+/// sum x_i^2, unscaled: left to right, or in lanes ([`dot_lanes`]) where
+/// [`Real::LANE_SUMS`].
 #[inline(always)]
 fn sum_sq<T: Real>(x: &[T]) -> T {
+    if T::LANE_SUMS {
+        return dot_lanes(x, x);
+    }
     x.iter().fold(T::zero(), |acc, v| acc + *v * *v)
+}
+
+/// The number of interleaved partial sums of [`dot_lanes`].
+const LANES: usize = 4;
+
+/// sum a_i b_i over the shorter of the two slices, in [`LANES`] partial
+/// sums: term i goes to sum i mod 4 (for the first multiple of 4 terms),
+/// the sums are added pairwise, (s0 + s2) + (s1 + s3), then the remaining
+/// terms left to right. The same sum as [`dot`] up to rounding (each order
+/// is within n eps sum |a_i b_i| of the exact value), in a loop the
+/// compiler vectorises (issue 10, fourth pass round 2: the reflections'
+/// sequential sums were a fifth of a clean epoch's QR).
+#[inline(always)]
+pub(crate) fn dot_lanes<T: Real>(a: &[T], b: &[T]) -> T {
+    let (ca, ra) = a.as_chunks::<LANES>();
+    let (cb, rb) = b.as_chunks::<LANES>();
+    let mut acc = [T::zero(); LANES];
+    for (x, y) in ca.iter().zip(cb.iter()) {
+        for ((s, xi), yi) in acc.iter_mut().zip(x.iter()).zip(y.iter()) {
+            *s += *xi * *yi;
+        }
+    }
+    let [s0, s1, s2, s3] = acc;
+    let mut sum = (s0 + s2) + (s1 + s3);
+    // The tails: equal lengths (the callers' case) leave both remainders
+    // aligned; unequal lengths stop at the shorter chunked part.
+    let done = ca.len().min(cb.len()) * LANES;
+    if ca.len() == cb.len() {
+        for (x, y) in ra.iter().zip(rb.iter()) {
+            sum += *x * *y;
+        }
+    } else if let (Some(x), Some(y)) = (a.get(done..), b.get(done..)) {
+        for (x, y) in x.iter().zip(y.iter()) {
+            sum += *x * *y;
+        }
+    }
+    sum
 }
 
 /// Whether an unscaled sum of squares can be used as it is: finite, at
@@ -363,10 +422,13 @@ fn reflect<const N: usize, T: Real>(col: &[T; N], y: &mut [T; N], k: usize, n: u
     let (Some(v), Some(w)) = (col.get(k..n), y.get_mut(k..n)) else {
         return;
     };
-    let d = v
-        .iter()
-        .zip(w.iter())
-        .fold(T::zero(), |acc, (v, w)| acc + *v * *w);
+    let d = if T::LANE_SUMS {
+        dot_lanes(v, w)
+    } else {
+        v.iter()
+            .zip(w.iter())
+            .fold(T::zero(), |acc, (v, w)| acc + *v * *w)
+    };
     let f = d + d;
     for (v, w) in v.iter().zip(w.iter_mut()) {
         *w -= f * *v;
@@ -490,6 +552,75 @@ mod tests {
         const REL_TOL_F32: f64 = 2e-5;
         check::<f64>(&[520, -540, 1000, -1000], REL_TOL_F64);
         check::<f32>(&[70, -60, 100, -100], REL_TOL_F32);
+    }
+
+    /// [`dot_lanes`] against the left-to-right [`dot`], for every length
+    /// 0..=40 (every remainder mod 4) and unequal lengths (the shorter
+    /// decides): within a few epsilons of sum |a_i b_i| (both orders are
+    /// within n eps of it), and exactly equal on integers.
+    #[test]
+    fn lane_sums_agree_with_the_sequential_sum() {
+        // Dimensionless, relative to sum |a_i b_i|: 2 n eps covers both
+        // orders' rounding for n <= 40.
+        const REL_TOL: f64 = 80.0 * f64::EPSILON;
+        let mut rng = crate::testutil::Rng::new(5);
+        for len in 0..=40 {
+            let a: [f64; 40] = core::array::from_fn(|_| rng.uniform() * 2.0 - 1.0);
+            let b: [f64; 40] = core::array::from_fn(|_| rng.uniform() * 2.0 - 1.0);
+            let seq = dot(a[..len].iter(), b[..len].iter());
+            let abs: f64 = a[..len]
+                .iter()
+                .zip(&b[..len])
+                .map(|(x, y)| (x * y).abs())
+                .sum();
+            let lanes = dot_lanes(&a[..len], &b[..len]);
+            assert!((lanes - seq).abs() <= REL_TOL * abs, "len {len}");
+            for extra in [1, 3, 5] {
+                let longer = (len + extra).min(40);
+                assert_eq!(
+                    dot_lanes(&a[..len], &b[..longer]).to_bits(),
+                    lanes.to_bits(),
+                    "len {len} + {extra}"
+                );
+                assert_eq!(
+                    dot_lanes(&a[..longer], &b[..len]).to_bits(),
+                    lanes.to_bits()
+                );
+            }
+            let ia: [f64; 40] = core::array::from_fn(|i| (i as f64) - 7.0);
+            assert_eq!(
+                dot_lanes(&ia[..len], &ia[..len]),
+                dot(ia[..len].iter(), ia[..len].iter())
+            );
+        }
+    }
+
+    /// The factorisation with m = 4 and 5 fixed at compile time (the f64
+    /// engine's) is the general column loop's, bit for bit.
+    #[test]
+    fn fixed_column_counts_equal_the_general_loop() {
+        let mut rng = crate::testutil::Rng::new(17);
+        for (n, m) in [(6, 4), (9, 5), (16, 5), (12, 4)] {
+            let mut h = [[0.0f64; 16]; MAX_STATES];
+            for col in h.iter_mut().take(m) {
+                for v in col.iter_mut().take(n) {
+                    *v = rng.uniform() * 2.0 - 1.0;
+                }
+            }
+            let fixed = Householder::<16>::factor(&h, n, m).unwrap();
+            let mut general = Householder::<16>::empty();
+            general.n = n;
+            general.m = m;
+            general.a = h;
+            // A column count the compiler cannot see: the general loop.
+            general.columns(core::hint::black_box(m), n).unwrap();
+            for j in 0..MAX_STATES {
+                for i in 0..16 {
+                    assert_eq!(fixed.a[j][i].to_bits(), general.a[j][i].to_bits());
+                }
+                assert_eq!(fixed.diag[j].to_bits(), general.diag[j].to_bits());
+            }
+        }
     }
 
     #[test]

@@ -157,7 +157,10 @@ impl<const N: usize, T: Real> Snapshot<N, T> {
             (true, true, true) => Decision::Ok,
             (true, false, true) => Decision::Excluded,
         };
-        if passes {
+        // `per_satellite` marked every row used; only exclusions change that
+        // (issue 10, fourth pass round 2: the search per row, on every
+        // clean epoch, found nothing to change).
+        if passes && !outcome.exclusions.is_empty() {
             for s in out.satellites.iter_mut() {
                 s.used = !excluded(s.id);
             }

@@ -80,13 +80,16 @@ pub fn slope_levels_rows<T: Real>(
 /// 1-sigma position error along E, N, U in metres: sqrt of the diagonal of
 /// (H^T H)^-1 (whitened), i.e. sqrt(sum_i A_k,i^2).
 pub fn sigma_enu_m<const N: usize, T: Real>(parity: &Parity<N, T>) -> [f64; 3] {
+    // In four lanes where the precision sums so (`Real::LANE_SUMS`, f64:
+    // the same sum up to its last bits, vectorised), else left to right.
     let s = |axis: usize| {
-        parity
-            .gain(axis)
-            .iter()
-            .fold(T::zero(), |acc, a| acc + *a * *a)
-            .sqrt()
-            .to_f64()
+        let g = parity.gain(axis);
+        let ssq = if T::LANE_SUMS {
+            crate::linalg::qr::dot_lanes(g, g)
+        } else {
+            g.iter().fold(T::zero(), |acc, a| acc + *a * *a)
+        };
+        ssq.sqrt().to_f64()
     };
     [s(0), s(1), s(2)]
 }
