@@ -5,12 +5,9 @@ extern crate std;
 use super::*;
 use crate::frames::{ecef_to_geodetic, elevation_rad};
 use crate::monitor::Raim;
-use crate::testutil::{range_epoch, Rng};
+use crate::testutil::{range_epoch, Rng, CLOCKS_GE_M as CLOCK, RX_ECEF_M as RX};
 use nalgebra::{DMatrix, DVector};
 use std::vec::Vec;
-
-const RX: [f64; 3] = [-3_962_108.673, 3_381_309.574, 3_668_678.638];
-const CLOCK: [f64; 5] = [1234.5, -987.0, 0.0, 0.0, 0.0];
 
 fn sky12() -> Vec<(System, u8, f64, f64)> {
     (0..12)

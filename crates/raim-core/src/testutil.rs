@@ -75,6 +75,24 @@ pub fn linear_epoch(
         .collect()
 }
 
+/// A receiver on the ground (ECEF, m) for the pseudorange tests.
+pub const RX_ECEF_M: [f64; 3] = [-3_962_108.673, 3_381_309.574, 3_668_678.638];
+
+/// Receiver clocks by system index (GPS, Galileo; m) for [`range_epoch`].
+pub const CLOCKS_GE_M: [f64; 5] = [1234.5, -987.0, 0.0, 0.0, 0.0];
+
+/// Five GPS and three Galileo satellites (system, PRN, az, el in degrees).
+pub const SKY_GE8: [(System, u8, f64, f64); 8] = [
+    (System::Gps, 1, 10.0, 80.0),
+    (System::Gps, 5, 80.0, 30.0),
+    (System::Gps, 9, 170.0, 45.0),
+    (System::Gps, 12, 250.0, 20.0),
+    (System::Gps, 17, 320.0, 55.0),
+    (System::Galileo, 3, 40.0, 25.0),
+    (System::Galileo, 8, 200.0, 65.0),
+    (System::Galileo, 11, 290.0, 35.0),
+];
+
 /// Pseudorange observations for a receiver at `rx_ecef_m` with clock
 /// `clock_m[system]`, satellites placed at GPS orbit radius along az/el.
 pub fn range_epoch(

@@ -878,6 +878,21 @@ mod bad_input {
     }
 }
 
+/// The same satellites in f32 (the device's precision), rounded once.
+fn narrowed(sats: &[AraimSat<f64>]) -> std::vec::Vec<AraimSat<f32>> {
+    sats.iter()
+        .map(|s| AraimSat {
+            id: s.id,
+            g_enu: s.g_enu.map(|x| x as f32),
+            c_int_m2: s.c_int_m2 as f32,
+            c_acc_m2: s.c_acc_m2 as f32,
+            b_nom_m: s.b_nom_m as f32,
+            p_sat: s.p_sat,
+            residual_m: s.residual_m as f32,
+        })
+        .collect()
+}
+
 /// f32 against f64 on App. D and a 20-satellite random sky.
 #[test]
 fn f32_agrees_with_f64() {
@@ -892,18 +907,7 @@ fn f32_agrees_with_f64() {
     for sats in skies.iter() {
         let mut e64 = std::boxed::Box::new(Araim::<f64, 32, 256>::new());
         let mut e32 = std::boxed::Box::new(Araim::<f32, 32, 256>::new());
-        let s32: std::vec::Vec<AraimSat<f32>> = sats
-            .iter()
-            .map(|s| AraimSat {
-                id: s.id,
-                g_enu: s.g_enu.map(|x| x as f32),
-                c_int_m2: s.c_int_m2 as f32,
-                c_acc_m2: s.c_acc_m2 as f32,
-                b_nom_m: s.b_nom_m as f32,
-                p_sat: s.p_sat,
-                residual_m: s.residual_m as f32,
-            })
-            .collect();
+        let s32 = narrowed(sats);
         let ism = ge_ism(1e-4);
         let a = e64.process(&AraimConfig::default(), &ism, sats).unwrap();
         let b = e32.process(&AraimConfig::default(), &ism, &s32).unwrap();
@@ -952,18 +956,7 @@ fn f32_on_stressed_skies_is_conservative_where_it_differs() {
                 System::Gps
             };
         }
-        let s32: std::vec::Vec<AraimSat<f32>> = sats
-            .iter()
-            .map(|s| AraimSat {
-                id: s.id,
-                g_enu: s.g_enu.map(|x| x as f32),
-                c_int_m2: s.c_int_m2 as f32,
-                c_acc_m2: s.c_acc_m2 as f32,
-                b_nom_m: s.b_nom_m as f32,
-                p_sat: s.p_sat,
-                residual_m: s.residual_m as f32,
-            })
-            .collect();
+        let s32 = narrowed(&sats);
         let mut e64 = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
         let mut e32 = std::boxed::Box::new(Araim::<f32, 32, 1024>::new());
         let ism = ge_ism(1e-4);

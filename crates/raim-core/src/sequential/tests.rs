@@ -306,9 +306,7 @@ fn process_into_reused_storage_equals_a_fresh_monitor() {
 #[test]
 fn held_epochs_of_ranges_equal_the_snapshot_on_the_filtered_input() {
     use crate::config::Carry;
-    use crate::testutil::range_epoch;
-    const RX: [f64; 3] = [-3_962_108.673, 3_381_309.574, 3_668_678.638];
-    const CLOCK: [f64; 5] = [1234.5, -987.0, 0.0, 0.0, 0.0];
+    use crate::testutil::{range_epoch, CLOCKS_GE_M as CLOCK, RX_ECEF_M as RX};
     const HELD_EPOCHS: usize = 5;
     let sky: Vec<(System, u8, f64, f64)> = (0..14)
         .map(|i| {

@@ -7,7 +7,9 @@ use crate::measurement::{Epoch, LinearObservation, RangeObservation, SatId, Syst
 use crate::monitor::Raim;
 use crate::result::Decision;
 use crate::snapshot::fde::AlarmCause;
-use crate::testutil::{at_stat, linear_epoch, range_epoch, Rng, SKY8};
+use crate::testutil::{
+    at_stat, linear_epoch, range_epoch, Rng, CLOCKS_GE_M, RX_ECEF_M, SKY8, SKY_GE8,
+};
 use std::vec::Vec;
 
 fn cfg() -> Config {
@@ -182,18 +184,7 @@ fn protection_levels_match_brute_force_worst_bias() {
 /// clocks (GPS + Galileo) from noise-free pseudoranges.
 #[test]
 fn gauss_newton_recovers_position_and_clocks() {
-    let rx = [-3_962_108.673, 3_381_309.574, 3_668_678.638];
-    let clock = [1234.5, -987.0, 0.0, 0.0, 0.0];
-    let sky = [
-        (System::Gps, 1, 10.0, 80.0),
-        (System::Gps, 5, 80.0, 30.0),
-        (System::Gps, 9, 170.0, 45.0),
-        (System::Gps, 12, 250.0, 20.0),
-        (System::Gps, 17, 320.0, 55.0),
-        (System::Galileo, 3, 40.0, 25.0),
-        (System::Galileo, 8, 200.0, 65.0),
-        (System::Galileo, 11, 290.0, 35.0),
-    ];
+    let (rx, clock, sky) = (RX_ECEF_M, CLOCKS_GE_M, SKY_GE8);
     let sats = range_epoch(rx, &sky, &clock, 1.0, &mut Rng::new(1), &[]);
     // Remove the noise to test the solver alone.
     let clean: Vec<RangeObservation> = range_epoch(rx, &sky, &clock, 0.0, &mut Rng::new(1), &[])
@@ -403,19 +394,12 @@ fn a_reused_engine_equals_a_fresh_one() {
         .copied()
         .chain([(120.0, 70.0), (280.0, 65.0)])
         .collect();
-    let rx = [-3_962_108.673, 3_381_309.574, 3_668_678.638];
-    let clock = [1234.5, -987.0, 0.0, 0.0, 0.0];
-    let ranges_sky = [
-        (System::Gps, 1, 10.0, 80.0),
-        (System::Gps, 5, 80.0, 30.0),
-        (System::Gps, 9, 170.0, 45.0),
-        (System::Gps, 12, 250.0, 20.0),
-        (System::Gps, 17, 320.0, 55.0),
-        (System::Galileo, 3, 40.0, 25.0),
-        (System::Galileo, 8, 200.0, 65.0),
-        (System::Galileo, 11, 290.0, 35.0),
-        (System::Galileo, 19, 150.0, 15.0),
-    ];
+    let (rx, clock) = (RX_ECEF_M, CLOCKS_GE_M);
+    let ranges_sky: Vec<_> = SKY_GE8
+        .iter()
+        .copied()
+        .chain([(System::Galileo, 19, 150.0, 15.0)])
+        .collect();
     let gps_only: Vec<_> = ranges_sky
         .iter()
         .copied()
