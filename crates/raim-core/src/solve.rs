@@ -455,23 +455,30 @@ fn solve_linear<const N: usize, T: Real>(
         }
     }
     out.parity.compute(&h, &z, n, m)?;
+    out.clocks = cols;
+    finish_linear(out);
+    Ok(())
+}
+
+/// The linearised solution's outputs from its parity space: the ENU
+/// correction, each clock column's estimate by system, and no ECEF
+/// position (both linear forms; `out.clocks` already set).
+fn finish_linear<const N: usize, T: Real>(out: &mut Solution<N, T>) {
     let dx = out.parity.dx().map(T::to_f64);
     let mut clock_m = [None; MAX_SYSTEMS];
-    for (j, sys) in cols.iter().enumerate() {
+    for (j, sys) in out.clocks.iter().enumerate() {
         if let (Some(sys), Some(v)) = (sys, dx.get(3 + j)) {
             if let Some(c) = clock_m.get_mut(sys.index()) {
                 *c = Some(*v);
             }
         }
     }
-    out.clocks = cols;
     out.position_ecef_m = None;
     out.geodetic = None;
     out.linearisation = None;
     out.correction_enu_m = [dx[0], dx[1], dx[2]];
     out.clock_m = clock_m;
     out.iterations = 1;
-    Ok(())
 }
 
 /// [`solve_linear`] one satellite at a time through `Builder::push`: the
@@ -519,22 +526,8 @@ fn solve_linear_by_row<const N: usize, T: Real>(
         b.push(i, s.id, u, s.residual_m, sigma, el)?;
     }
     b.parity_into(&mut out.parity)?;
-    let dx = out.parity.dx().map(T::to_f64);
-    let mut clock_m = [None; MAX_SYSTEMS];
-    for (j, sys) in b.cols.iter().enumerate() {
-        if let (Some(sys), Some(v)) = (sys, dx.get(3 + j)) {
-            if let Some(c) = clock_m.get_mut(sys.index()) {
-                *c = Some(*v);
-            }
-        }
-    }
     b.fill(out);
-    out.position_ecef_m = None;
-    out.geodetic = None;
-    out.linearisation = None;
-    out.correction_enu_m = [dx[0], dx[1], dx[2]];
-    out.clock_m = clock_m;
-    out.iterations = 1;
+    finish_linear(out);
     Ok(())
 }
 
