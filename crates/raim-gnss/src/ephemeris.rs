@@ -185,41 +185,43 @@ impl Kepler {
     }
 }
 
+/// A circular, equatorial orbit with every correction zero: a closed form
+/// (tests here and in `ranging`).
+#[cfg(test)]
+pub(crate) fn circular(system: System, prn: u8) -> Kepler {
+    Kepler {
+        system,
+        prn,
+        toc_gps_s: 1000.0 * WEEK_S,
+        toe_sow_s: 0.0,
+        af0_s: 1e-4,
+        af1_s_s: 1e-11,
+        af2_s_s2: 0.0,
+        sqrt_a_m05: 5153.6,
+        e: 0.0,
+        i0_rad: 0.0,
+        omega0_rad: 0.0,
+        omega_rad: 0.0,
+        m0_rad: 0.0,
+        delta_n_rad_s: 0.0,
+        omega_dot_rad_s: 0.0,
+        idot_rad_s: 0.0,
+        cuc_rad: 0.0,
+        cus_rad: 0.0,
+        crc_m: 0.0,
+        crs_m: 0.0,
+        cic_rad: 0.0,
+        cis_rad: 0.0,
+        group_delay_s: 0.0,
+        group_delay_e5a_s: 0.0,
+        health: 0,
+        iod: 0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A circular, equatorial orbit with every correction zero: a closed form.
-    fn circular(system: System, prn: u8) -> Kepler {
-        Kepler {
-            system,
-            prn,
-            toc_gps_s: 1000.0 * WEEK_S,
-            toe_sow_s: 0.0,
-            af0_s: 1e-4,
-            af1_s_s: 1e-11,
-            af2_s_s2: 0.0,
-            sqrt_a_m05: 5153.6,
-            e: 0.0,
-            i0_rad: 0.0,
-            omega0_rad: 0.0,
-            omega_rad: 0.0,
-            m0_rad: 0.0,
-            delta_n_rad_s: 0.0,
-            omega_dot_rad_s: 0.0,
-            idot_rad_s: 0.0,
-            cuc_rad: 0.0,
-            cus_rad: 0.0,
-            crc_m: 0.0,
-            crs_m: 0.0,
-            cic_rad: 0.0,
-            cis_rad: 0.0,
-            group_delay_s: 0.0,
-            group_delay_e5a_s: 0.0,
-            health: 0,
-            iod: 0,
-        }
-    }
 
     /// Closed-form positions of a circular equatorial orbit: at t = toe the
     /// satellite is on the X axis at radius A; after tk it has moved by the

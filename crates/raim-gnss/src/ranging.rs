@@ -362,34 +362,17 @@ mod tests {
     /// of 2e7 m ranges).
     const TOL_M: f64 = 1e-6;
 
+    /// A circular orbit ([`crate::ephemeris::circular`]) with no clock
+    /// terms and the given group delays.
     fn kepler(system: System, group_delay_s: f64, group_delay_e5a_s: f64) -> Kepler {
         Kepler {
-            system,
-            prn: 1,
             toc_gps_s: 0.0,
-            toe_sow_s: 0.0,
             af0_s: 0.0,
             af1_s_s: 0.0,
-            af2_s_s2: 0.0,
             sqrt_a_m05: 5153.0,
-            e: 0.0,
-            i0_rad: 0.0,
-            omega0_rad: 0.0,
-            omega_rad: 0.0,
-            m0_rad: 0.0,
-            delta_n_rad_s: 0.0,
-            omega_dot_rad_s: 0.0,
-            idot_rad_s: 0.0,
-            cuc_rad: 0.0,
-            cus_rad: 0.0,
-            crc_m: 0.0,
-            crs_m: 0.0,
-            cic_rad: 0.0,
-            cis_rad: 0.0,
             group_delay_s,
             group_delay_e5a_s,
-            health: 0,
-            iod: 0,
+            ..crate::ephemeris::circular(system, 1)
         }
     }
 
