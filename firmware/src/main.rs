@@ -2,7 +2,7 @@
 //! requests on the link UART, runs the integrity monitor on each
 //! (`raim_core::Raim`), answers every frame with the result or a typed
 //! error, and writes NMEA 0183 for every solved epoch on the second UART.
-//! The protocol loop is `raim_proto::server::Server`; this crate adds the
+//! The protocol loop is `raim_server::Server`; this crate adds the
 //! board (UARTs, ticks), the receive ring (`link_rx`, by interrupt), the
 //! integrity-alarm output (`discrete`), logging and the fatal-error path.
 //! Wire protocol: docs/PROTOCOL.md.
@@ -22,8 +22,8 @@ use cortex_m::interrupt::InterruptNumber;
 use cortex_m::peripheral::NVIC;
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use raim_core::Decision;
-use raim_proto::server::{Platform, Server};
 use raim_proto::{ResetCause, Status, TestFault};
+use raim_server::{Platform, Server};
 
 #[cfg(feature = "board-stm32f4")]
 use defmt_rtt as _;
@@ -202,12 +202,10 @@ fn server() -> &'static mut Server {
 /// particles, so the zero contents are never used (host-tests/tests/
 /// qemu_pf.rs `a_zeroed_engine_restarted_equals_a_new_one`).
 #[cfg(feature = "pf")]
-fn pf_engines() -> raim_proto::server::PfEngines {
+fn pf_engines() -> raim_server::PfEngines {
     use core::mem::MaybeUninit;
     use core::ptr::addr_of_mut;
-    use raim_proto::server::{
-        EkfEngine, Ga100Engine, Ga300Engine, Pf100Engine, Pf300Engine, PfEngines,
-    };
+    use raim_server::{EkfEngine, Ga100Engine, Ga300Engine, Pf100Engine, Pf300Engine, PfEngines};
     static mut EKF: MaybeUninit<EkfEngine> = MaybeUninit::zeroed();
     static mut PF100: MaybeUninit<Pf100Engine> = MaybeUninit::zeroed();
     static mut PF300: MaybeUninit<Pf300Engine> = MaybeUninit::zeroed();

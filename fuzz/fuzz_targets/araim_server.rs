@@ -12,7 +12,7 @@ use raim_core::{SatId, System};
 use raim_proto::araim_msg::{AraimCommandRef, IsmFrameRef, IsmSat, WireAraimConfig};
 use raim_proto::frame::{encode, FrameReceiver};
 use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody};
-use raim_proto::server::{NoPlatform, Server};
+use raim_server::{NoPlatform, Server};
 use raim_proto::MAX_RESPONSE_FRAME;
 
 struct Sink(Vec<u8>);

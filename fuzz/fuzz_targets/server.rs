@@ -9,7 +9,7 @@
 use libfuzzer_sys::fuzz_target;
 use raim_proto::frame::{encode, FrameReceiver};
 use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody};
-use raim_proto::server::{NoPlatform, Server};
+use raim_server::{NoPlatform, Server};
 use raim_proto::MAX_RESPONSE_FRAME;
 
 struct Sink(Vec<u8>);

@@ -2,7 +2,7 @@
 //! builds a sequence of well-formed requests with valid CRCs (linearised
 //! epochs with faults and NaNs, configurations in and out of bounds,
 //! locks, status requests, garbage frames), feeds them to
-//! `raim_proto::server::Server` as the firmware does, and checks after
+//! `raim_server::Server` as the firmware does, and checks after
 //! every answer:
 //! - every frame gets exactly one answer, in order, with its sequence
 //!   number (garbage: one answer without one);
@@ -21,7 +21,7 @@ use raim_core::{AlertLimits, Config, FiRule, LinearObservation, Phase, SatId, Sy
 use raim_proto::frame::{encode, FrameReceiver};
 use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody};
 use raim_proto::result::WireResult;
-use raim_proto::server::{NoPlatform, Server};
+use raim_server::{NoPlatform, Server};
 use raim_proto::{config_fingerprint, ConfigId, WireError, MAX_RESPONSE_FRAME};
 
 /// At most this many steps per scenario.

@@ -18,9 +18,9 @@ use qemu_common::{range_epoch, Rng};
 use raim_core::pf::PfConfig;
 use raim_core::{RangeObservation, System};
 use raim_proto::message::{CommandRef, RequestRef, ResponseBody};
-use raim_proto::server::{NoPlatform, PfEngines, Server};
 use raim_proto::{PfKind, WirePfConfig};
 use raim_qemu::{Options, QemuSession};
+use raim_server::{NoPlatform, PfEngines, Server};
 
 const INSTRUCTIONS_PER_TICK: u64 = 40;
 const EPOCHS: usize = 6;

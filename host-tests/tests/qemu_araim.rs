@@ -142,10 +142,10 @@ fn qemu_araim_appendix_d_and_a_20_satellite_sky_match_the_host() {
         w.fde,
         WireFde::BudgetExceeded {
             candidates: m,
-            budget: raim_proto::server::araim::FDE_WORK_BUDGET / m,
+            budget: raim_server::araim::FDE_WORK_BUDGET / m,
         }
     );
-    assert!(m > raim_proto::server::araim::FDE_WORK_BUDGET / m);
+    assert!(m > raim_server::araim::FDE_WORK_BUDGET / m);
     assert_eq!(w.decision, Decision::Alarm);
     assert!(w.excluded.is_empty() && w.after_exclusion.is_none());
     assert!(t.fw.drain_nmea().is_empty(), "ARAIM writes no NMEA");

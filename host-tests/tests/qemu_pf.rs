@@ -1,11 +1,11 @@
 //! Particle-filter RAIM on the device (issue 14): the same seed and the
-//! same frames through the host's `raim_proto::server::Server` and through
+//! same frames through the host's `raim_server::Server` and through
 //! the firmware under QEMU (mps2-an386) give byte-identical answers
 //! (compared as the postcard bytes of the whole `Response`: sequence
 //! number, body, configuration fingerprint and lock state).
 //!
 //! Why bit-exact is expected: the PF engine is the same code on both sides
-//! (`server_pf`, f32 particle state, `PfRaim`); its random stream is
+//! (`raim_server`'s `pf`, f32 particle state, `PfRaim`); its random stream is
 //! integer xoshiro256++ with f64 ziggurat normals; f32 + - * / and sqrt
 //! are correctly rounded on the M4F's FPU and on x86-64 SSE; the f64 paths
 //! are correctly rounded soft-float on the M4F; the transcendental
@@ -26,8 +26,8 @@ use raim_core::pf::PfConfig;
 use raim_core::{RangeObservation, SatId, System};
 use raim_proto::frame::{encode, FrameReceiver};
 use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody};
-use raim_proto::server::{Ga100Engine, NoPlatform, PfEngines, Server};
 use raim_proto::{PfKind, WireError, WirePfConfig, MAX_RESPONSE_FRAME};
+use raim_server::{Ga100Engine, NoPlatform, PfEngines, Server};
 
 const ANSWER: Duration = Duration::from_secs(60);
 /// Stack budget of a firmware session that ran only PF requests: measured

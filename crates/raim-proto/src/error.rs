@@ -139,7 +139,7 @@ pub enum WireError {
 }
 
 /// A field name for the wire (truncated to 24 bytes).
-pub(crate) fn field_name(name: &str) -> FieldName {
+pub fn field_name(name: &str) -> FieldName {
     field(name)
 }
 

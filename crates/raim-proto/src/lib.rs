@@ -15,8 +15,9 @@
 //! - [`lock`]: the configuration lock and its CRC-32 fingerprint.
 //! - [`araim_msg`]: the ISM, the ARAIM epoch and result (issue 12).
 //! - [`nmea`]: RMC, GGA, GSA, GST and GBS sentences for a solved epoch.
-//! - [`server`]: the firmware's protocol loop, generic over `embedded_io`
-//!   UARTs, so that the host tests it without an emulator.
+//!
+//! The device's protocol loop, which answers these frames, is the
+//! `raim-server` crate.
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(
@@ -48,7 +49,6 @@ pub mod message;
 pub mod nmea;
 pub mod pf_msg;
 pub mod result;
-pub mod server;
 
 pub use alert::{AlarmOutput, AlertMonitor};
 pub use auth::{AuthConfigure, AuthKey};

@@ -132,6 +132,45 @@ pub enum Command {
     PfRanges(RangeEpoch),
 }
 
+impl Command {
+    /// The satellite count of a list in this request that held more than
+    /// [`CAPACITY`] satellites, if one did. The device server refuses such
+    /// a request as soon as it is decoded (`TooManySatellites`), so that no
+    /// consumer of a request sees a truncated list.
+    pub fn overflowed_list(&self) -> Option<u32> {
+        use crate::araim_msg::AraimCommand;
+        let (overflowed, declared) = match self {
+            Command::Ranges(e) | Command::PfRanges(e) => (e.sats.overflowed(), e.sats.declared),
+            Command::Linear(e) => (e.sats.overflowed(), e.sats.declared),
+            Command::Araim(AraimCommand::Epoch(e)) => (e.sats.overflowed(), e.sats.declared),
+            Command::Araim(AraimCommand::Ranges(e)) => (e.sats.overflowed(), e.sats.declared),
+            Command::Araim(AraimCommand::Ism(i) | AraimCommand::AuthIsm { ism: i, .. }) => {
+                (i.sats.overflowed(), i.sats.declared)
+            }
+            Command::Status
+            | Command::Configure(_)
+            | Command::Lock
+            | Command::TestFault(_)
+            | Command::AuthConfigure(_)
+            | Command::PfConfigure(_) => (false, 0),
+        };
+        overflowed.then_some(declared)
+    }
+
+    /// True for an epoch (snapshot, ARAIM or particle filter): its verdict,
+    /// or its refusal, drives the integrity-alarm output.
+    pub fn is_epoch(&self) -> bool {
+        use crate::araim_msg::AraimCommand;
+        matches!(
+            self,
+            Command::Ranges(_)
+                | Command::Linear(_)
+                | Command::PfRanges(_)
+                | Command::Araim(AraimCommand::Epoch(_) | AraimCommand::Ranges(_))
+        )
+    }
+}
+
 /// What a `TestFault` request does.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -22,7 +22,7 @@ use crate::frame::CRC32;
 pub const PF_SATS: usize = 12;
 
 /// The particle counts compiled into the PF engine (one monomorphised
-/// filter each, sharing one static storage; `server_pf`). A
+/// filter each, sharing one static storage; `raim_server`'s `pf`). A
 /// `PfConfigure` with another count is refused with
 /// `WireError::PfParticles`.
 pub const PF_PARTICLE_COUNTS: [u32; 2] = [100, 300];

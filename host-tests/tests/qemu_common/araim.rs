@@ -10,8 +10,8 @@ use raim_core::{LinearObservation, SatId, System};
 use raim_proto::araim_msg::{AraimCommandRef, IsmFrameRef, IsmSat, WireAraimConfig};
 use raim_proto::frame::FrameReceiver;
 use raim_proto::message::{CommandRef, Response};
-use raim_proto::server::{NoPlatform, Server};
 use raim_qemu::QemuSession;
+use raim_server::{NoPlatform, Server};
 use serde_json::Value;
 
 /// One ARAIM scenario: the ISM frame's content and an epoch.

@@ -19,10 +19,12 @@ use hmac::{Hmac, Mac};
 use sha2::Sha256;
 
 use super::Server;
-use crate::araim_msg::{AraimAnswer, AraimCommand, AraimWireError, IsmFrame, IsmFrameRef, IsmSat};
-use crate::auth::{AuthKey, Tag};
-use crate::error::WireError;
-use crate::message::{LinearEpoch, RangeEpoch, ResponseBody};
+use raim_proto::araim_msg::{
+    AraimAnswer, AraimCommand, AraimWireError, IsmFrame, IsmFrameRef, IsmSat,
+};
+use raim_proto::auth::{AuthKey, Tag};
+use raim_proto::error::WireError;
+use raim_proto::message::{LinearEpoch, RangeEpoch};
 
 /// An ARAIM epoch as it arrived: linearised, or pseudoranges. (Without the
 /// `araim` feature it is only refused, `Disabled`.)
@@ -31,7 +33,7 @@ enum Input<'a> {
     Linear(&'a LinearEpoch),
     Ranges(&'a RangeEpoch),
 }
-use crate::CAPACITY;
+use raim_proto::CAPACITY;
 
 /// Fault modes the device engine holds (per engine; the FDE scratch has as
 /// many). A mode list that needs more makes the epoch unavailable with
@@ -191,7 +193,7 @@ pub fn fingerprint(config: &Config, ism: Option<&IsmFrame>) -> u32 {
 pub fn fingerprint_all(
     config: &Config,
     ism: Option<&IsmFrame>,
-    pf: Option<&crate::pf_msg::WirePfConfig>,
+    pf: Option<&raim_proto::pf_msg::WirePfConfig>,
 ) -> u32 {
     let mut digest = feed(config, CRC32.digest());
     if let Some(i) = ism {
@@ -315,81 +317,13 @@ fn check_sat(index: usize, s: &IsmSat) -> Result<(), AraimError> {
 }
 
 impl Server {
-    /// Answers `Command::Araim`.
-    pub(super) fn araim<P: super::Platform>(
-        &mut self,
-        command: AraimCommand,
-        platform: &mut P,
-    ) -> ResponseBody {
-        let answer = match command {
-            #[cfg(not(feature = "araim"))]
-            AraimCommand::Ism(_) => Err(WireError::Araim(AraimWireError::Disabled)),
-            #[cfg(feature = "araim")]
-            AraimCommand::Ism(_) if self.config_id.locked => Err(WireError::Locked {
-                config_crc32: self.config_id.crc32,
-            }),
-            // ISM frames are not authenticated yet: a unit with a key
-            // refuses them rather than take unauthenticated integrity data.
-            #[cfg(feature = "araim")]
-            AraimCommand::Ism(_) if self.auth.is_some() => Err(WireError::AuthRequired),
-            #[cfg(feature = "araim")]
-            AraimCommand::Ism(frame) => self.take_ism(frame),
-            #[cfg(not(feature = "araim"))]
-            AraimCommand::AuthIsm { .. } => Err(WireError::Araim(AraimWireError::Disabled)),
-            #[cfg(feature = "araim")]
-            AraimCommand::AuthIsm { .. } if self.config_id.locked => Err(WireError::Locked {
-                config_crc32: self.config_id.crc32,
-            }),
-            #[cfg(feature = "araim")]
-            AraimCommand::AuthIsm { counter, ism, tag } => match self.auth {
-                None => Err(WireError::AuthNotProvisioned),
-                Some((key, last)) => {
-                    if !verify_ism(&key, counter, &ism, &tag) {
-                        Err(WireError::BadAuthTag { counter })
-                    } else if let Some(l) = last.filter(|&l| counter <= l) {
-                        Err(WireError::Replayed { counter, last: l })
-                    } else {
-                        let r = self.take_ism(ism);
-                        if r.is_ok() {
-                            self.auth = Some((key, Some(counter)));
-                        }
-                        r
-                    }
-                }
-            },
-            AraimCommand::Epoch(e) => self.araim_epoch(&Input::Linear(&e), platform),
-            AraimCommand::Ranges(e) => self.araim_epoch(&Input::Ranges(&e), platform),
-        };
-        match answer {
-            Ok(a) => ResponseBody::Araim(a),
-            Err(e) => ResponseBody::Error(e),
-        }
-    }
-
-    /// Checks an ISM frame and, if it passes, puts it in force.
-    #[cfg(feature = "araim")]
-    fn take_ism(&mut self, frame: IsmFrame) -> Result<AraimAnswer, WireError> {
+    /// Checks an ISM frame and, if it passes, puts it in force (the gate,
+    /// `gate.rs`, has passed it and updates the fingerprint).
+    pub(crate) fn take_ism(&mut self, frame: IsmFrame) -> Result<AraimAnswer, WireError> {
         check_ism(&frame)?;
         let satellites = u32::try_from(frame.sats.items.len()).unwrap_or(u32::MAX);
         self.araim.ism = Some(frame);
-        self.config_id.crc32 = self.fingerprint();
         Ok(AraimAnswer::IsmAccepted { satellites })
-    }
-
-    /// An ARAIM epoch; its decision (or its refusal, as `None`) drives the
-    /// integrity-alarm output like a snapshot epoch's (`Platform::on_epoch`).
-    fn araim_epoch<P: super::Platform>(
-        &mut self,
-        epoch: &Input<'_>,
-        platform: &mut P,
-    ) -> Result<AraimAnswer, WireError> {
-        let Server {
-            araim,
-            status,
-            config,
-            ..
-        } = self;
-        epoch_answer(araim, status, config, epoch, platform)
     }
 
     /// An ARAIM epoch request (`Araim(Epoch)` or `Araim(Ranges)`, in
@@ -413,9 +347,13 @@ impl Server {
                 ..
             } = self;
             let input = match request.as_ref().map(|r| &r.command) {
-                Some(crate::message::Command::Araim(AraimCommand::Epoch(e))) => Input::Linear(e),
-                Some(crate::message::Command::Araim(AraimCommand::Ranges(e))) => Input::Ranges(e),
-                // `on_byte` sends only ARAIM epochs here.
+                Some(raim_proto::message::Command::Araim(AraimCommand::Epoch(e))) => {
+                    Input::Linear(e)
+                }
+                Some(raim_proto::message::Command::Araim(AraimCommand::Ranges(e))) => {
+                    Input::Ranges(e)
+                }
+                // `dispatch` sends only ARAIM epochs here.
                 _ => return Ok(()),
             };
             epoch_answer(araim, status, config, &input, platform)
@@ -433,7 +371,7 @@ impl Server {
 /// output like a snapshot epoch's (`Platform::on_epoch`).
 fn epoch_answer<P: super::Platform>(
     araim: &mut AraimState,
-    status: &mut crate::message::Status,
+    status: &mut raim_proto::message::Status,
     config: &Config,
     epoch: &Input<'_>,
     platform: &mut P,
@@ -448,7 +386,7 @@ fn epoch_answer<P: super::Platform>(
 
 fn epoch_answer_inner<P: super::Platform>(
     araim: &mut AraimState,
-    status: &mut crate::message::Status,
+    status: &mut raim_proto::message::Status,
     config: &Config,
     epoch: &Input<'_>,
     platform: &mut P,
@@ -458,16 +396,6 @@ fn epoch_answer_inner<P: super::Platform>(
         let Some(ism) = araim.ism.as_ref() else {
             return Err(WireError::Araim(AraimWireError::NoIsm));
         };
-        let (overflowed, declared) = match epoch {
-            Input::Linear(e) => (e.sats.overflowed(), e.sats.declared),
-            Input::Ranges(e) => (e.sats.overflowed(), e.sats.declared),
-        };
-        if overflowed {
-            return Err(WireError::TooManySatellites {
-                have: declared,
-                capacity: CAPACITY as u32,
-            });
-        }
         status.epochs = status.epochs.wrapping_add(1);
         let t0 = platform.now();
         let r = match epoch {
@@ -493,14 +421,14 @@ mod engine {
     use raim_core::{Decision, Real};
 
     use super::{fde_budget, AraimWireError, IsmFrame, MAX_FDE_MODES, MAX_MODES};
-    use crate::araim_msg::{AraimSummary, WireAraimResult, WireFde};
-    use crate::error::WireError;
-    use crate::message::{LinearEpoch, RangeEpoch};
-    use crate::CAPACITY;
     use raim_core::frames::{enu_rotation, rotate, unrotate};
     use raim_core::measurement::MAX_SYSTEMS;
     use raim_core::solve::{solve_into, Solution};
     use raim_core::{Config, Epoch, LinearObservation};
+    use raim_proto::araim_msg::{AraimSummary, WireAraimResult, WireFde};
+    use raim_proto::error::WireError;
+    use raim_proto::message::{LinearEpoch, RangeEpoch};
+    use raim_proto::CAPACITY;
 
     /// The unit's ARAIM precision, on every build: `f32`, the M4F's FPU
     /// (docs/CORE.md "Precision": subset solutions and PLs are f32 on the
@@ -834,13 +762,13 @@ mod engine {
 mod tests {
     extern crate std;
     use super::*;
-    use crate::araim_msg::{AraimCommandRef, IsmFrameRef, WireAraimConfig, WireFde};
-    use crate::frame::{encode, FrameReceiver};
-    use crate::lock::config_fingerprint;
-    use crate::message::{CommandRef, RequestRef, Response};
-    use crate::MAX_RESPONSE_FRAME;
     use raim_core::measurement::MAX_SYSTEMS;
     use raim_core::{Decision, LinearObservation, SatId, System};
+    use raim_proto::araim_msg::{AraimCommandRef, IsmFrameRef, WireAraimConfig, WireFde};
+    use raim_proto::frame::{encode, FrameReceiver};
+    use raim_proto::lock::config_fingerprint;
+    use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody};
+    use raim_proto::MAX_RESPONSE_FRAME;
     use std::vec::Vec;
 
     #[derive(Default)]
@@ -871,7 +799,7 @@ mod tests {
     /// integrity-alarm output's input, issue 15).
     #[derive(Default)]
     struct Heard(Vec<Option<Decision>>);
-    impl crate::server::Platform for Heard {
+    impl crate::Platform for Heard {
         fn now(&mut self) -> u32 {
             0
         }
@@ -982,7 +910,7 @@ mod tests {
         (ism, obs)
     }
 
-    fn result(r: &Response) -> &crate::araim_msg::WireAraimResult {
+    fn result(r: &Response) -> &raim_proto::araim_msg::WireAraimResult {
         match &r.body {
             ResponseBody::Araim(AraimAnswer::Result(w)) => w,
             other => panic!("{other:?}"),
@@ -1018,7 +946,7 @@ mod tests {
         let frame = IsmFrame {
             config: WireAraimConfig::default(),
             p_const: gal(),
-            sats: crate::message::SatList {
+            sats: raim_proto::message::SatList {
                 items: ism.iter().copied().collect(),
                 declared: 20,
             },
@@ -1027,24 +955,24 @@ mod tests {
         let mut buf = [0u8; 4096];
         bytes.extend_from_slice(postcard::to_slice(&cfg, &mut buf).unwrap());
         bytes.extend_from_slice(postcard::to_slice(&frame, &mut buf).unwrap());
-        let with_ism = crate::frame::CRC32.checksum(&bytes);
+        let with_ism = raim_proto::frame::CRC32.checksum(&bytes);
         assert_eq!(r.config.crc32, with_ism);
         assert_ne!(with_ism, config_fingerprint(&cfg));
         assert_eq!(fingerprint(&cfg, None), config_fingerprint(&cfg));
         // All three parts in force: the CRC of the concatenated bytes,
         // computed here; and each absent part adds nothing (merge of the
         // ARAIM and PF branches: one fingerprint of what the unit runs).
-        let pf = crate::pf_msg::WirePfConfig::gapf(100, 7);
+        let pf = raim_proto::pf_msg::WirePfConfig::gapf(100, 7);
         let mut all = bytes.clone();
         all.extend_from_slice(postcard::to_slice(&pf, &mut buf).unwrap());
         assert_eq!(
             fingerprint_all(&cfg, Some(&frame), Some(&pf)),
-            crate::frame::CRC32.checksum(&all)
+            raim_proto::frame::CRC32.checksum(&all)
         );
         assert_eq!(fingerprint_all(&cfg, Some(&frame), None), with_ism);
         assert_eq!(
             fingerprint_all(&cfg, None, Some(&pf)),
-            crate::pf_msg::fingerprint(&cfg, Some(&pf))
+            raim_proto::pf_msg::fingerprint(&cfg, Some(&pf))
         );
         // Another configuration: the fingerprint covers it and the ISM.
         let terminal = Config::preset(raim_core::Phase::Terminal);
@@ -1146,7 +1074,7 @@ mod tests {
         );
         // A configuration tag over the same counter does not verify as an
         // ISM tag (separate domains).
-        let cfg_tag = crate::auth::tag(&key, 2, &Config::default());
+        let cfg_tag = raim_proto::auth::tag(&key, 2, &Config::default());
         assert_eq!(
             *error(&send(&mut l, signed(&key, 2, &ism, Some(cfg_tag)))),
             WireError::BadAuthTag { counter: 2 }
@@ -1154,10 +1082,10 @@ mod tests {
         assert_eq!(l.ask(CommandRef::Status).config.crc32, crc);
         assert_eq!(*result(&l.epoch(&obs)), clean);
         // The counter is shared with AuthConfigure.
-        let a3 = crate::auth::AuthConfigure {
+        let a3 = raim_proto::auth::AuthConfigure {
             counter: 3,
             config: Config::default(),
-            tag: crate::auth::tag(&key, 3, &Config::default()),
+            tag: raim_proto::auth::tag(&key, 3, &Config::default()),
         };
         assert_eq!(
             l.ask(CommandRef::AuthConfigure(&a3)).body,
@@ -1207,7 +1135,7 @@ mod tests {
         };
         let oor = |field: &str, index: u32, value: f64, min: f64, max: f64| {
             WireError::Araim(AraimWireError::OutOfRange {
-                field: crate::araim_msg::field(field),
+                field: raim_proto::error::field_name(field),
                 index,
                 value,
                 min,
@@ -1231,7 +1159,7 @@ mod tests {
                 with(&|v| v[3].sigma_ura_m = f64::NAN),
                 gal(),
                 WireError::NonFinite {
-                    field: crate::araim_msg::field("sigma_ura_m"),
+                    field: raim_proto::error::field_name("sigma_ura_m"),
                     index: 3,
                     value: f64::NAN
                 }
@@ -1260,7 +1188,7 @@ mod tests {
                 ism.clone(),
                 nan_const,
                 WireError::NonFinite {
-                    field: crate::araim_msg::field("p_const"),
+                    field: raim_proto::error::field_name("p_const"),
                     index: 1,
                     value: f64::NAN
                 }
@@ -1505,7 +1433,7 @@ mod tests {
         assert_eq!(r.fde, WireFde::NotTested);
         assert!(matches!(
             r.all_in_view.unavailable,
-            Some(crate::araim_msg::WireUnavailable::ModeCapacity { needed, capacity: 600 }) if needed > 600
+            Some(raim_proto::araim_msg::WireUnavailable::ModeCapacity { needed, capacity: 600 }) if needed > 600
         ));
     }
 
@@ -1550,9 +1478,9 @@ mod tests {
         assert_eq!(r.decision, Decision::Alarm);
         assert!(r.excluded.is_empty() && r.after_exclusion.is_none());
         assert_eq!(l.heard.0.last(), Some(&Some(Decision::Alarm)));
-        let mut monitor = crate::alert::AlertMonitor::new(10);
+        let mut monitor = raim_proto::alert::AlertMonitor::new(10);
         monitor.on_epoch(0, Some(r.decision));
-        assert_eq!(monitor.output(0), crate::alert::AlarmOutput::Alarm);
+        assert_eq!(monitor.output(0), raim_proto::alert::AlarmOutput::Alarm);
 
         // The unlimited core FDE on the same epoch: the pair.
         let mut sats = Vec::new();

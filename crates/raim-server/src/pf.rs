@@ -17,11 +17,11 @@
 use raim_core::pf::PfError;
 use raim_core::RangeObservation;
 
-use crate::error::{field_name, WireError};
-use crate::message::ResponseBody;
+use raim_proto::error::{field_name, WireError};
+use raim_proto::message::ResponseBody;
 #[cfg(feature = "pf")]
-use crate::pf_msg::{PfKind, PF_MAX_PARTICLES};
-use crate::pf_msg::{WirePfConfig, WirePfResult};
+use raim_proto::pf_msg::{PfKind, PF_MAX_PARTICLES};
+use raim_proto::pf_msg::{WirePfConfig, WirePfResult};
 
 use super::Server;
 
@@ -29,7 +29,7 @@ use super::Server;
 mod engine {
     use raim_core::pf::{Ekf, GaPf, PfRaim, SirPf};
 
-    use crate::pf_msg::{PF_PARTICLE_COUNTS, PF_SATS};
+    use raim_proto::pf_msg::{PF_PARTICLE_COUNTS, PF_SATS};
 
     /// The particle state's precision on host and device (docs/PF.md
     /// "Memory": 300 particles x 12 satellites fit 192 KiB only in f32).
@@ -105,7 +105,7 @@ impl PfUnit {
     /// Checks `c` and makes it the configuration in force, restarting the
     /// selected engine in place; on error nothing changes.
     #[cfg(feature = "pf")]
-    fn configure(&mut self, c: WirePfConfig) -> Result<(), WireError> {
+    pub(crate) fn configure(&mut self, c: WirePfConfig) -> Result<(), WireError> {
         check_particles(&c)?;
         c.config.validate().map_err(|e| map_error(e, &[]))?;
         self.restart(&c)?;
@@ -118,7 +118,7 @@ impl PfUnit {
     /// configuration checks are not linked: issue 10, the 128 KiB build's
     /// flash), and nothing changes.
     #[cfg(not(feature = "pf"))]
-    fn configure(&mut self, _c: WirePfConfig) -> Result<(), WireError> {
+    pub(crate) fn configure(&mut self, _c: WirePfConfig) -> Result<(), WireError> {
         Err(WireError::PfUnavailable)
     }
 
@@ -178,7 +178,7 @@ impl PfUnit {
 fn check_particles(c: &WirePfConfig) -> Result<(), WireError> {
     let ok = match c.kind {
         PfKind::Ekf => c.particles == 0,
-        PfKind::Pf | PfKind::Gapf => crate::pf_msg::PF_PARTICLE_COUNTS.contains(&c.particles),
+        PfKind::Pf | PfKind::Gapf => raim_proto::pf_msg::PF_PARTICLE_COUNTS.contains(&c.particles),
     };
     if ok {
         Ok(())
@@ -280,17 +280,6 @@ impl Server {
         super::araim::fingerprint_all(&self.config, self.araim.ism.as_ref(), self.pf_config())
     }
 
-    /// `PfConfigure` (the lock is checked by the caller).
-    pub(super) fn pf_configure(&mut self, c: WirePfConfig) -> ResponseBody {
-        match self.pf.configure(c) {
-            Ok(()) => {
-                self.config_id.crc32 = self.fingerprint();
-                ResponseBody::Configured
-            }
-            Err(e) => ResponseBody::Error(e),
-        }
-    }
-
     /// `PfRanges`: one epoch, timed like a snapshot epoch.
     pub(super) fn pf_epoch<P: super::Platform>(
         &mut self,
@@ -315,12 +304,12 @@ impl Server {
 mod tests {
     extern crate std;
     use super::*;
-    use crate::frame::{encode, FrameReceiver};
-    use crate::message::{CommandRef, RequestRef, Response};
-    use crate::server::NoPlatform;
-    use crate::{ConfigId, MAX_RESPONSE_FRAME};
+    use crate::NoPlatform;
     use raim_core::pf::{rng, GaPf, PfConfig, PfRaim};
     use raim_core::{Config, SatId, System};
+    use raim_proto::frame::{encode, FrameReceiver};
+    use raim_proto::message::{CommandRef, RequestRef, Response};
+    use raim_proto::{ConfigId, MAX_RESPONSE_FRAME};
     use std::boxed::Box;
     use std::vec::Vec;
 
@@ -675,8 +664,8 @@ mod tests {
             ],
         );
         let default = Config::default();
-        let fp0 = crate::config_fingerprint(&default);
-        let fp1 = crate::pf_msg::fingerprint(&default, Some(&c100));
+        let fp0 = raim_proto::config_fingerprint(&default);
+        let fp1 = raim_proto::pf_msg::fingerprint(&default, Some(&c100));
         assert_ne!(fp0, fp1);
         assert_eq!(
             resp[0].config,
@@ -750,8 +739,8 @@ mod tests {
 #[cfg(test)]
 mod decision_tests {
     use super::pf_decision;
-    use crate::pf_msg::WirePfResult;
     use raim_core::{Decision, SatId, System};
+    use raim_proto::pf_msg::WirePfResult;
 
     fn result(position: bool, alarm: bool, excluded: bool) -> WirePfResult {
         let g = SatId::new(System::Gps, 4);

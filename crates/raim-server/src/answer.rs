@@ -1,0 +1,164 @@
+//! Requests in, answers out: the decoder of a request payload, the
+//! encoder of an answer (from references into the server, so that no
+//! answer-sized value passes through the stack) and the NMEA writer.
+
+use embedded_io::Write;
+use serde::Serialize;
+
+use raim_proto::error::WireError;
+use raim_proto::frame::{encode, FrameError};
+use raim_proto::lock::ConfigId;
+use raim_proto::message::{Request, ResponseBody, Status};
+use raim_proto::nmea;
+use raim_proto::result::WireResult;
+use raim_proto::{CAPACITY, MAX_RESPONSE_FRAME, MAX_RESPONSE_PAYLOAD};
+
+use crate::IoError;
+
+/// The epoch's NMEA sentences. Its own frame (the sentences), not on the
+/// epoch's path. Sentences cannot exceed 82 characters with the
+/// formats used; if one ever did, none is written and the epoch's answer
+/// still goes out.
+#[inline(never)]
+pub(crate) fn write_nmea<M: Write>(wire: &WireResult, nmea_out: &mut M) -> Result<(), M::Error> {
+    if let Ok(sentences) = nmea::epoch_sentences(wire) {
+        for s in sentences.iter() {
+            nmea_out.write_all(s.as_bytes())?;
+        }
+        nmea_out.flush()?;
+    }
+    Ok(())
+}
+
+/// A request refused before it is acted on: undecodable, or carrying a
+/// satellite list longer than the capacity.
+pub(crate) struct Refusal {
+    /// The request's sequence number, when the payload starts with one.
+    pub(crate) seq: Option<u32>,
+    pub(crate) error: WireError,
+    /// The refused request was an epoch (its refusal drives the alarm
+    /// output, as an epoch answered with an error does).
+    pub(crate) epoch: bool,
+}
+
+/// Decode a request payload into `slot` and check it once: its sequence
+/// number, or the refusal. A list that overflowed the capacity is refused
+/// here (`TooManySatellites` with the declared count), so that nothing
+/// downstream sees a truncated list. Its own frame, not inlined: the
+/// decoder's temporaries are gone before the request is acted on.
+#[inline(never)]
+pub(crate) fn decode(payload: &[u8], slot: &mut Option<Request>) -> Result<u32, Refusal> {
+    *slot = None;
+    match postcard::from_bytes::<Request>(payload) {
+        Ok(r) => {
+            let seq = r.seq;
+            if let Some(declared) = r.command.overflowed_list() {
+                return Err(Refusal {
+                    seq: Some(seq),
+                    error: WireError::TooManySatellites {
+                        have: declared,
+                        capacity: CAPACITY as u32,
+                    },
+                    epoch: r.command.is_epoch(),
+                });
+            }
+            *slot = Some(r);
+            Ok(seq)
+        }
+        Err(_) => {
+            let seq = postcard::take_from_bytes::<u32>(payload)
+                .ok()
+                .map(|(s, _)| s);
+            let len = u32::try_from(payload.len()).unwrap_or(u32::MAX);
+            Err(Refusal {
+                seq,
+                error: WireError::from(FrameError::Undecodable { len }),
+                epoch: false,
+            })
+        }
+    }
+}
+
+/// The server's transmit buffers and counters, borrowed apart from the
+/// rest of the server so that an answer can be encoded from a reference
+/// into the server (`BodyRef::Result(&self.wire)`).
+pub(crate) struct Buffers<'a> {
+    pub(crate) scratch: &'a mut [u8; MAX_RESPONSE_PAYLOAD],
+    pub(crate) out: &'a mut [u8; MAX_RESPONSE_FRAME],
+    pub(crate) status: &'a mut Status,
+    pub(crate) config: ConfigId,
+}
+
+/// A [`ResponseBody`] by reference: encodes byte for byte as the
+/// `ResponseBody` of the same variant (postcard writes an enum as its
+/// variant index, then the payload; `&T` serializes as `T`; the variants
+/// are in the same order: test `body_ref_encodes_as_response_body`).
+#[derive(Serialize)]
+pub(crate) enum BodyRef<'a> {
+    Result(&'a WireResult),
+    Configured,
+    Status(&'a Status),
+    Error(&'a WireError),
+    LockEngaged,
+    Araim(&'a raim_proto::araim_msg::AraimAnswer),
+    PfResult(&'a raim_proto::pf_msg::WirePfResult),
+}
+
+impl<'a> From<&'a ResponseBody> for BodyRef<'a> {
+    fn from(b: &'a ResponseBody) -> Self {
+        match b {
+            ResponseBody::Result(r) => BodyRef::Result(r),
+            ResponseBody::Configured => BodyRef::Configured,
+            ResponseBody::Status(s) => BodyRef::Status(s),
+            ResponseBody::Error(e) => BodyRef::Error(e),
+            ResponseBody::LockEngaged => BodyRef::LockEngaged,
+            ResponseBody::Araim(a) => BodyRef::Araim(a),
+            ResponseBody::PfResult(p) => BodyRef::PfResult(p),
+        }
+    }
+}
+
+/// A [`Response`] by reference (same encoding, field for field).
+#[derive(Serialize)]
+pub(crate) struct ResponseRef<'a> {
+    pub(crate) seq: Option<u32>,
+    pub(crate) body: BodyRef<'a>,
+    pub(crate) config: ConfigId,
+}
+
+/// Encode and write one answer. Its own frame (the fallback answer), not
+/// on the epoch's path.
+#[inline(never)]
+pub(crate) fn send_answer<L: Write, M>(
+    buf: Buffers<'_>,
+    link: &mut L,
+    seq: Option<u32>,
+    body: BodyRef<'_>,
+) -> Result<(), IoError<L::Error, M>> {
+    if matches!(body, BodyRef::Error(_)) {
+        buf.status.errors = buf.status.errors.wrapping_add(1);
+    }
+    let config = buf.config;
+    let resp = ResponseRef { seq, body, config };
+    // The buffers hold the largest response (test
+    // `result::tests::largest_response_fits`); should encoding ever
+    // fail, a minimal error answer still goes out.
+    let frame = match encode(&resp, buf.scratch, buf.out) {
+        Ok(f) => f,
+        Err(_) => {
+            let fallback = ResponseRef {
+                seq,
+                config,
+                body: BodyRef::Error(&WireError::Overflow {
+                    capacity: MAX_RESPONSE_PAYLOAD as u32,
+                }),
+            };
+            match encode(&fallback, buf.scratch, buf.out) {
+                Ok(f) => f,
+                Err(_) => return Ok(()),
+            }
+        }
+    };
+    link.write_all(frame).map_err(IoError::Link)?;
+    link.flush().map_err(IoError::Link)
+}
