@@ -138,7 +138,7 @@ impl LinearObservation {
     /// (see [`check_az_el`]): the constructor for az/el that come from
     /// outside (a file, a wire message). The line of sight alone cannot show
     /// an elevation of 200° (it is the same unit vector as azimuth + 180°,
-    /// elevation -20°), so [`validate`] cannot catch it later.
+    /// elevation -20°), so `validate` cannot catch it later.
     pub fn try_from_az_el(
         id: SatId,
         index: usize,

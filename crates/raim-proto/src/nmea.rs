@@ -3,7 +3,7 @@
 //! fix sentences come first). Each sentence is at most 82 characters
 //! (`$` to `\n`), written with `core::fmt::Write` into a `heapless::String`,
 //! with the XOR checksum of the characters between `$` and `*`. Numbers are
-//! written by [`fixed`] in integer arithmetic, the same text as `format!`
+//! written by the private `fixed` module in integer arithmetic, the same text as `format!`
 //! would give, without linking `core::fmt`'s float formatting (issue 10:
 //! flash).
 //!

@@ -3,7 +3,7 @@
 //!
 //! - [`covering`]: the constraint groups, a covering design (exact table for
 //!   small n, an on-device construction for any n).
-//! - [`reconstruct`]: per group, e_F, its covariance and the seed's Q; per
+//! - [`reconstruct`](mod@reconstruct): per group, e_F, its covariance and the seed's Q; per
 //!   candidate set T, the whitened subset statistic RSS_T and the biases.
 //! - [`search`] (here): every group within the budget, every candidate set
 //!   of 1..t_max satellites they cover, the least and runner-up RSS_T per
