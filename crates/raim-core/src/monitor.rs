@@ -39,6 +39,7 @@ impl<const N: usize, T: Real> Default for Raim<N, T> {
 }
 
 impl<const N: usize, T: Real> Raim<N, T> {
+    /// An engine with no history (MCUSUM and PF state empty).
     pub fn new() -> Self {
         Raim {
             snapshot: Snapshot::new(),

@@ -135,10 +135,12 @@ impl<const N: usize, T: Real> Householder<N, T> {
         Ok(())
     }
 
+    /// Number of rows n of the factored matrix.
     pub fn rows(&self) -> usize {
         self.n
     }
 
+    /// Number of columns m of the factored matrix.
     pub fn cols(&self) -> usize {
         self.m
     }
