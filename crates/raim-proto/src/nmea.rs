@@ -100,7 +100,9 @@ pub fn civil_from_days(days: i64) -> (i64, u32, u32) {
 /// UTC of an epoch to the hundredth of a second.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Utc {
+    /// Days since 1970-01-01.
     pub days: i64,
+    /// Hundredths of a second since midnight.
     pub centiseconds_of_day: u32,
 }
 
