@@ -19,6 +19,7 @@
 //!   UARTs, so that the host tests it without an emulator.
 #![no_std]
 #![forbid(unsafe_code)]
+#![warn(missing_docs)]
 #![deny(
     clippy::unwrap_used,
     clippy::expect_used,

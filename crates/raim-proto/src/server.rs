@@ -109,11 +109,14 @@ impl Default for Server {
 /// Either UART failed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum IoError<L, M> {
+    /// The link UART's error.
     Link(L),
+    /// The NMEA UART's error.
     Nmea(M),
 }
 
 impl Server {
+    /// A server with the default configuration, unlocked, without a key or ISM.
     pub fn new() -> Self {
         Server {
             rx: FrameReceiver::new(),
@@ -170,6 +173,7 @@ impl Server {
         self.auth = Some((key, None));
     }
 
+    /// The counters for a `Status` answer, with the configuration in force.
     pub fn status(&self) -> Status {
         Status {
             config: self.config_id,
@@ -182,6 +186,7 @@ impl Server {
         self.config_id
     }
 
+    /// The snapshot configuration in force.
     pub fn config(&self) -> &Config {
         &self.config
     }
