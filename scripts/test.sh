@@ -11,6 +11,8 @@ echo "== fmt"
 cargo fmt --all -- --check
 echo "== clippy (host workspace)"
 cargo clippy --workspace --all-targets -- -D warnings
+echo "== docs (every rustdoc warning an error; missing_docs is warned in raim-core and raim-proto)"
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace
 echo "== no_std build of the core for Cortex-M4F"
 cargo build -p raim-core --target thumbv7em-none-eabihf --release
 cargo build -p raim-core --target thumbv7em-none-eabihf --release --features defmt
