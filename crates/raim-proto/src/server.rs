@@ -73,7 +73,7 @@ impl Platform for NoPlatform {
 /// The protocol state: receive buffer, engine, configuration, counters, the
 /// transmit buffers, and the last request, result and wire result (kept
 /// here rather than on the stack, issue 10). The firmware keeps it in a
-/// static (BENCHMARKS.md, "Issue 10: stack, second pass").
+/// static (docs/bench-history/firmware.md, "Issue 10: stack, second pass").
 pub struct Server {
     rx: FrameReceiver<MAX_REQUEST_FRAME>,
     raim: Raim<CAPACITY>,
