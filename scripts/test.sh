@@ -11,11 +11,14 @@ echo "== fmt"
 cargo fmt --all -- --check
 echo "== clippy (host workspace)"
 cargo clippy --workspace --all-targets -- -D warnings
+echo "== docs (every rustdoc warning an error; missing_docs is warned in raim-core and raim-proto)"
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace
 echo "== no_std build of the core for Cortex-M4F"
 cargo build -p raim-core --target thumbv7em-none-eabihf --release
 cargo build -p raim-core --target thumbv7em-none-eabihf --release --features defmt
-echo "== firmware (own workspace: QEMU mps2-an386 and STM32F4 builds, clippy, fmt)"
-(cd firmware && cargo fmt -- --check && cargo clippy --release -- -D warnings && cargo build --release \
+echo "== firmware (own workspace: QEMU mps2-an386 and STM32F4 builds, clippy, fmt, docs)"
+(cd firmware && cargo fmt -- --check && cargo clippy --release -- -D warnings \
+    && RUSTDOCFLAGS="-D warnings" cargo doc --release --no-deps && cargo build --release \
     && cargo build --release --no-default-features --features board-stm32f4 --target-dir target/stm32f4 \
     && cargo clippy --release --no-default-features --features board-qemu --target-dir target/snapshot -- -D warnings \
     && cargo build --release --no-default-features --features board-qemu --target-dir target/snapshot)

@@ -179,7 +179,7 @@ unsafe fn DefaultHandler(irqn: i16) {
 /// heap anywhere. Its own frame, not inlined: building the value passes
 /// through the stack (with ARAIM, ~0.7 MB at boot, before the stack is
 /// painted), and inlined into `main` that frame would stay reserved for the
-/// whole main loop (BENCHMARKS.md, "ARAIM on the device").
+/// whole main loop (docs/bench-history/araim.md, "ARAIM on the device").
 #[inline(never)]
 fn server() -> &'static mut Server {
     match cortex_m::singleton!(: Server = Server::new()) {

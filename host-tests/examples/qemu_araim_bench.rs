@@ -1,4 +1,4 @@
-//! ARAIM on the firmware under QEMU (BENCHMARKS.md, "ARAIM on the device"):
+//! ARAIM on the firmware under QEMU (BENCHMARKS.md, "ARAIM on the device (QEMU)"):
 //! guest instructions per ARAIM epoch (`-icount shift=0`, SysTick x 40,
 //! the second run of each epoch) and the stack high water by painting, for
 //! the ADD App. D epoch and the 20-satellite sky (clean, and 100 m faults

@@ -1,4 +1,4 @@
-//! Firmware measurements under QEMU (BENCHMARKS.md, "Firmware"):
+//! Firmware measurements under QEMU (BENCHMARKS.md, "The snapshot monitor on the device"):
 //! guest instructions per epoch for n = 8, 16, 32 satellites with
 //! `-icount shift=0` (one instruction per virtual ns; the firmware's SysTick
 //! runs at mps2-an386's 25 MHz, so one tick is 40 instructions), and the

@@ -1,5 +1,5 @@
-//! Particle-filter RAIM cost per epoch (issue 14; BENCHMARKS.md "Particle
-//! filter on the device"): guest instructions per epoch under
+//! Particle-filter RAIM cost per epoch (issue 14; BENCHMARKS.md "Particle-filter
+//! RAIM"): guest instructions per epoch under
 //! `qemu -icount shift=0` (one instruction per virtual ns; SysTick at
 //! mps2-an386's 25 MHz, so one tick is 40 instructions) and host wall-clock
 //! time through the host's `Server` (the same code, f32 state), for the

@@ -31,7 +31,7 @@ use raim_server::{Ga100Engine, NoPlatform, PfEngines, Server};
 
 const ANSWER: Duration = Duration::from_secs(60);
 /// Stack budget of a firmware session that ran only PF requests: measured
-/// 16,732 B (BENCHMARKS.md "Particle filter on the device"), with room.
+/// 16,732 B (BENCHMARKS.md "Particle-filter RAIM"), with room.
 const PF_STACK_BUDGET_BYTES: u32 = 24 * 1024;
 
 fn pf_config(kind: PfKind, particles: u32, seed: u64) -> WirePfConfig {

@@ -7,7 +7,7 @@
 //!
 //! CI runs 2,000 frames (~30-40 s). The full run (10^5 frames, 37 MB; 37 minutes on a loaded 2-core VM):
 //! `cargo test --release -p host-tests --test qemu_soak -- --ignored --nocapture`
-//! (output recorded in docs/qemu-soak.txt).
+//! (output recorded in runs/qemu-soak.txt).
 
 mod qemu_common;
 

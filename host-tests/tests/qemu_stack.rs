@@ -4,10 +4,10 @@
 //! (deterministic: same ELF, same input, same bytes), as a regression guard
 //! (issue 10). The issue's goal is 16 KiB; it is met since the second pass
 //! for the default FDE and since the third for the MCUSUM's alarm path and
-//! the reconstruction FDE (BENCHMARKS.md, "Issue 10: stack, second pass"
-//! and "third pass"), and the budgets below are the measured values rounded up
+//! the reconstruction FDE (docs/bench-history/firmware.md, "Issue 10: stack,
+//! second pass" and "third pass"), and the budgets below are the measured values rounded up
 //! to the next KiB: a change that deepens the stack fails here and has to
-//! update them (and BENCHMARKS.md) deliberately.
+//! update them (and BENCHMARKS.md "Firmware: flash, RAM, stack") deliberately.
 //!
 //! Selected by `cargo test -p host-tests qemu`.
 

@@ -59,6 +59,7 @@ pub struct McusumConfig {
     /// In-control average run length of the MCUSUM alone, epochs. The
     /// threshold h comes from the device table for the current dimension.
     pub arl0: f64,
+    /// What the MCUSUM state does when the satellite set changes.
     pub carry: Carry,
     /// How long a satellite excluded after an MCUSUM alarm stays excluded, s.
     pub hold_s: f64,
@@ -88,7 +89,10 @@ pub enum FiRule {
     /// argmax w_i^2 - ln S_ii: L-RAIM with a flat bias prior.
     LraimFlat,
     /// argmax w_i^2 kappa S_ii / (1 + kappa S_ii) - ln(1 + kappa S_ii).
-    LraimGaussian { kappa: f64 },
+    LraimGaussian {
+        /// The prior bias-to-noise variance ratio kappa (dimensionless).
+        kappa: f64,
+    },
 }
 
 impl Default for FiRule {
@@ -112,7 +116,12 @@ pub enum FdeMethod {
     /// fewest satellites (1..t_max, at most 3 and at most
     /// `max_exclusions`) whose exclusion explains the residuals, searching
     /// at most `group_budget` groups per epoch (docs/MULTIFAULT.md).
-    Reconstruction { t_max: u8, group_budget: u16 },
+    Reconstruction {
+        /// Largest fault count searched (1..=3).
+        t_max: u8,
+        /// Constraint groups searched per epoch at most.
+        group_budget: u16,
+    },
 }
 
 /// Horizontal and vertical alert limits; `None` means "not monitored".
@@ -120,7 +129,9 @@ pub enum FdeMethod {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct AlertLimits {
+    /// Horizontal alert limit HAL, m.
     pub hal_m: f64,
+    /// Vertical alert limit VAL, m (`None`: no vertical requirement).
     pub val_m: Option<f64>,
 }
 
@@ -138,6 +149,7 @@ pub enum Phase {
 }
 
 impl Phase {
+    /// The alert limits of the flight phase (SPEC §6).
     pub const fn alert_limits(self) -> AlertLimits {
         match self {
             Phase::EnRoute => AlertLimits {
@@ -155,6 +167,7 @@ impl Phase {
         }
     }
 
+    /// The time to alert of the flight phase, s.
     pub const fn time_to_alert_s(self) -> f64 {
         match self {
             Phase::EnRoute => 30.0,
@@ -173,8 +186,11 @@ pub struct Config {
     pub pfa: f64,
     /// Probability of missed detection for protection levels (SPEC §6).
     pub pmd: f64,
+    /// The identification rule (MLE or L-RAIM).
     pub rule: FiRule,
+    /// The alert limits the protection levels are held to.
     pub alert: AlertLimits,
+    /// How each satellite's sigma is formed.
     pub sigma_model: SigmaModel,
     /// Most satellites FDE may exclude in one epoch (SPEC §5).
     pub max_exclusions: u8,

@@ -20,8 +20,11 @@ use crate::snapshot::fde::MAX_EXCLUSIONS;
 /// An inclusive range `[min, max]` for one configuration field.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Bound {
+    /// Name of the `Config` field.
     pub field: &'static str,
+    /// Smallest value accepted.
     pub min: f64,
+    /// Largest value accepted.
     pub max: f64,
 }
 

@@ -10,37 +10,78 @@ use crate::measurement::System;
 pub enum RaimError {
     /// A NaN or infinite input value.
     NotFinite {
+        /// Name of the offending field.
         field: &'static str,
+        /// Index of the satellite (0 for a per-epoch field).
         index: usize,
+        /// The value received.
         value: f64,
     },
     /// The same satellite appears twice in one epoch.
     DuplicateSatellite {
+        /// The satellite's constellation.
         system: System,
+        /// The satellite's PRN.
         prn: u8,
+        /// Index of its first appearance in the epoch.
         first: usize,
+        /// Index of its second appearance.
         second: usize,
     },
     /// Fewer satellites than unknowns (+ the redundancy the operation needs).
-    TooFewSatellites { have: usize, need: usize },
+    TooFewSatellites {
+        /// Satellites in the epoch.
+        have: usize,
+        /// Satellites the operation needs.
+        need: usize,
+    },
     /// The geometry matrix lost rank: column `column` has a Householder
     /// pivot of `pivot` relative to its column norm.
-    RankDeficient { column: usize, pivot: f64 },
+    RankDeficient {
+        /// Index of the geometry column that lost rank.
+        column: usize,
+        /// Its Householder pivot relative to the column norm (dimensionless).
+        pivot: f64,
+    },
     /// A sigma that is zero or negative.
-    NonPositiveSigma { index: usize, sigma_m: f64 },
+    NonPositiveSigma {
+        /// Index of the satellite.
+        index: usize,
+        /// The sigma received, m.
+        sigma_m: f64,
+    },
     /// More satellites than the capacity `N` of the engine.
-    CapacityExceeded { have: usize, capacity: usize },
+    CapacityExceeded {
+        /// Satellites in the epoch.
+        have: usize,
+        /// The engine's capacity `N`.
+        capacity: usize,
+    },
     /// A value outside its documented range.
     OutOfRange {
+        /// Name of the offending field.
         field: &'static str,
+        /// The value received (in the field's unit).
         value: f64,
+        /// Smallest value accepted.
         min: f64,
+        /// Largest value accepted.
         max: f64,
     },
     /// Gauss-Newton did not converge.
-    NoConvergence { iterations: u32, step_m: f64 },
+    NoConvergence {
+        /// Gauss-Newton iterations run.
+        iterations: u32,
+        /// Length of the last position step, m.
+        step_m: f64,
+    },
     /// A chi-square degree of freedom outside 1..=max.
-    InvalidDof { dof: u32, max: u32 },
+    InvalidDof {
+        /// The degree of freedom asked for.
+        dof: u32,
+        /// The largest supported.
+        max: u32,
+    },
 }
 
 impl core::fmt::Display for RaimError {

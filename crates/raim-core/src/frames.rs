@@ -13,8 +13,11 @@ pub const WGS84_F: f64 = 1.0 / 298.257_223_563;
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Geodetic {
+    /// Geodetic latitude, rad.
     pub lat_rad: f64,
+    /// Longitude, rad (east positive).
     pub lon_rad: f64,
+    /// Height above the WGS-84 ellipsoid, m.
     pub height_m: f64,
 }
 

@@ -16,6 +16,7 @@
 //! and which run in the build's [`real::Stat`] precision). `monitor` is the thin entry that validates and dispatches.
 #![no_std]
 #![forbid(unsafe_code)]
+#![warn(missing_docs)]
 #![deny(
     clippy::unwrap_used,
     clippy::expect_used,

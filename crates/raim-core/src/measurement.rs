@@ -11,10 +11,15 @@ use crate::error::RaimError;
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum System {
     #[default]
+    /// GPS (G).
     Gps,
+    /// Galileo (E).
     Galileo,
+    /// BeiDou (C).
     Beidou,
+    /// GLONASS (R).
     Glonass,
+    /// QZSS (J).
     Qzss,
 }
 
@@ -73,11 +78,14 @@ impl System {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SatId {
+    /// The constellation.
     pub system: System,
+    /// The satellite number within it (PRN; slot for GLONASS).
     pub prn: u8,
 }
 
 impl SatId {
+    /// The satellite `prn` of `system`.
     pub const fn new(system: System, prn: u8) -> Self {
         SatId { system, prn }
     }
@@ -99,8 +107,11 @@ impl core::fmt::Display for SatId {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct RangeObservation {
+    /// The satellite.
     pub id: SatId,
+    /// Corrected pseudorange, m.
     pub pseudorange_m: f64,
+    /// Satellite ECEF position at transmission, in the frame of reception, m.
     pub position_m: [f64; 3],
     /// One-sigma ranging error. `None` selects the configured elevation model.
     pub sigma_m: Option<f64>,
@@ -113,9 +124,11 @@ pub struct RangeObservation {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LinearObservation {
+    /// The satellite.
     pub id: SatId,
     /// Unit line-of-sight vector receiver -> satellite, East/North/Up.
     pub los_enu: [f64; 3],
+    /// Pseudorange residual (measured - predicted), m.
     pub residual_m: f64,
     /// One-sigma ranging error. `None` selects the configured elevation model.
     pub sigma_m: Option<f64>,
@@ -138,7 +151,7 @@ impl LinearObservation {
     /// (see [`check_az_el`]): the constructor for az/el that come from
     /// outside (a file, a wire message). The line of sight alone cannot show
     /// an elevation of 200° (it is the same unit vector as azimuth + 180°,
-    /// elevation -20°), so [`validate`] cannot catch it later.
+    /// elevation -20°), so `validate` cannot catch it later.
     pub fn try_from_az_el(
         id: SatId,
         index: usize,
@@ -164,11 +177,16 @@ pub enum Observations<'a> {
     /// Pseudoranges with ECEF satellite positions; the core solves the
     /// position by Gauss-Newton from `apriori_m` (or the Earth's centre).
     Ranges {
+        /// The observations.
         sats: &'a [RangeObservation],
+        /// Where Gauss-Newton starts, ECEF m (`None`: the Earth's centre).
         apriori_m: Option<[f64; 3]>,
     },
     /// Already-linearised rows (the seeds' form).
-    Linear { sats: &'a [LinearObservation] },
+    Linear {
+        /// The rows.
+        sats: &'a [LinearObservation],
+    },
 }
 
 /// One epoch of input: the time comes in as an argument (sans-IO).
@@ -176,10 +194,12 @@ pub enum Observations<'a> {
 pub struct Epoch<'a> {
     /// Receiver time of the epoch, seconds (any consistent time scale).
     pub time_s: f64,
+    /// What was measured: pseudoranges or linearised rows.
     pub observations: Observations<'a>,
 }
 
 impl<'a> Epoch<'a> {
+    /// An epoch of pseudoranges at `time_s`, solved from `apriori_m` (ECEF, m).
     pub fn ranges(time_s: f64, sats: &'a [RangeObservation], apriori_m: Option<[f64; 3]>) -> Self {
         Epoch {
             time_s,
@@ -187,6 +207,7 @@ impl<'a> Epoch<'a> {
         }
     }
 
+    /// An epoch of linearised rows at `time_s`.
     pub fn linear(time_s: f64, sats: &'a [LinearObservation]) -> Self {
         Epoch {
             time_s,
@@ -202,6 +223,7 @@ impl<'a> Epoch<'a> {
         }
     }
 
+    /// True when the epoch has no satellite.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

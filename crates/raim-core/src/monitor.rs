@@ -39,6 +39,7 @@ impl<const N: usize, T: Real> Default for Raim<N, T> {
 }
 
 impl<const N: usize, T: Real> Raim<N, T> {
+    /// An engine with no history (MCUSUM and PF state empty).
     pub fn new() -> Self {
         Raim {
             snapshot: Snapshot::new(),
@@ -70,6 +71,57 @@ impl<const N: usize, T: Real> Raim<N, T> {
 
     /// Process one epoch: the snapshot test, identification, FDE and PLs;
     /// with `cfg.mcusum.enabled`, the MCUSUM beside it (SPEC §7.4).
+    ///
+    /// An 8-satellite GPS sky in the linearised form (azimuth, elevation and
+    /// the pseudorange residual of each satellite; sigmas from the default
+    /// elevation model), first clean, then with a 60 m step on G07:
+    ///
+    /// ```
+    /// use raim_core::{Config, Decision, Epoch, LinearObservation, Phase, Raim, SatId, System};
+    ///
+    /// // (PRN, azimuth deg, elevation deg, residual m): a spread sky, metre-level noise.
+    /// const SKY: [(u8, f64, f64, f64); 8] = [
+    ///     (2, 40.0, 72.0, 0.6),
+    ///     (5, 95.0, 35.0, -1.1),
+    ///     (7, 150.0, 55.0, 0.3),
+    ///     (12, 210.0, 20.0, 1.4),
+    ///     (15, 260.0, 48.0, -0.4),
+    ///     (19, 310.0, 15.0, -1.6),
+    ///     (24, 350.0, 30.0, 0.9),
+    ///     (29, 120.0, 10.0, -0.2),
+    /// ];
+    /// let sky = |step_on: u8, step_m: f64| {
+    ///     SKY.map(|(prn, az_deg, el_deg, residual_m)| {
+    ///         let bias_m = if prn == step_on { step_m } else { 0.0 };
+    ///         LinearObservation::from_az_el(
+    ///             SatId::new(System::Gps, prn),
+    ///             az_deg.to_radians(),
+    ///             el_deg.to_radians(),
+    ///             residual_m + bias_m,
+    ///         )
+    ///     })
+    /// };
+    ///
+    /// // Non-precision approach: HAL 556 m, Pfa 3.3e-7, Pmd 1e-3.
+    /// let cfg = Config::preset(Phase::Npa);
+    /// let mut raim: Raim = Raim::new();
+    ///
+    /// let clean = sky(0, 0.0);
+    /// let r = raim.process(&cfg, &Epoch::linear(0.0, &clean))?;
+    /// assert_eq!(r.decision, Decision::Ok);
+    /// assert!(r.test.statistic < r.test.threshold); // D^2 < T^2, dof n - m = 4
+    /// assert!(r.protection.hpl_m < cfg.alert.hal_m); // HPL within HAL
+    /// assert!(r.protection.vpl_m.is_finite());
+    ///
+    /// let faulty = sky(7, 60.0);
+    /// let r = raim.process(&cfg, &Epoch::linear(1.0, &faulty))?;
+    /// assert_eq!(r.decision, Decision::Excluded);
+    /// assert!(r.initial_test.statistic > r.initial_test.threshold);
+    /// assert_eq!(r.exclusions[0].id, SatId::new(System::Gps, 7));
+    /// assert!(r.test.statistic < r.test.threshold); // the subset passes
+    /// assert!(r.protection.hpl_m < cfg.alert.hal_m); // its HPL, 7 satellites
+    /// # Ok::<(), raim_core::RaimError>(())
+    /// ```
     pub fn process(
         &mut self,
         cfg: &Config,

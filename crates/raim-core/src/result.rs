@@ -34,10 +34,13 @@ pub enum Decision {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SatelliteResult {
+    /// The satellite.
     pub id: SatId,
     /// In the solution in force (not excluded).
     pub used: bool,
+    /// Pseudorange sigma used, m.
     pub sigma_m: f64,
+    /// Elevation of the satellite, rad.
     pub elevation_rad: f64,
     /// Diagonal of S (1 - leverage).
     pub s_ii: f64,
@@ -49,18 +52,22 @@ pub struct SatelliteResult {
     pub bias_m: f64,
     /// Identification score under the configured rule; NaN if unidentifiable.
     pub score: f64,
+    /// Whether a fault on this satellite can be identified (S_ii above the bound).
     pub identifiable: bool,
 }
 
 /// Everything the monitor says about one epoch.
 #[derive(Debug, Clone)]
 pub struct EpochResult<const N: usize> {
+    /// Epoch time, s.
     pub time_s: f64,
+    /// Ok, alarm, excluded or unavailable.
     pub decision: Decision,
     /// Why an alarm stands (None unless `decision == Alarm`).
     pub alarm_cause: Option<AlarmCause>,
     /// ECEF position of the solution in force (pseudorange input).
     pub position_ecef_m: Option<[f64; 3]>,
+    /// Geodetic position of the solution in force (pseudorange input).
     pub geodetic: Option<Geodetic>,
     /// ENU correction to the linearisation point (linear input), m.
     pub correction_enu_m: [f64; 3],
@@ -70,6 +77,7 @@ pub struct EpochResult<const N: usize> {
     pub initial_test: TestStatistic,
     /// The test of the solution in force.
     pub test: TestStatistic,
+    /// Per satellite, in input order.
     pub satellites: heapless::Vec<SatelliteResult, N>,
     /// The satellite the rule identified on the all-in-view solution when
     /// the test failed.
@@ -77,8 +85,11 @@ pub struct EpochResult<const N: usize> {
     /// Exclusion steps. They are in force only when `decision` is
     /// `Excluded` (or `Unavailable` after exclusion).
     pub exclusions: heapless::Vec<Exclusion, MAX_EXCLUSIONS>,
+    /// Protection levels of the solution in force.
     pub protection: ProtectionLevels,
+    /// Satellite with the largest horizontal slope.
     pub worst_h: Option<SatId>,
+    /// Satellite with the largest vertical slope.
     pub worst_v: Option<SatId>,
     /// 1-sigma ENU position error of the solution in force, m.
     pub sigma_enu_m: [f64; 3],
@@ -90,6 +101,7 @@ pub struct EpochResult<const N: usize> {
     pub exclusion_available: bool,
     /// PLs within the alert limits.
     pub pl_available: bool,
+    /// Gauss-Newton iterations of the all-in-view solve (0 for linear input).
     pub iterations: u32,
     /// The sequential test's state and decision; `None` when the MCUSUM is
     /// disabled (the result is then exactly the snapshot monitor's).

@@ -99,16 +99,21 @@ pub fn convergence_bound_m<T: Real>(convergence_m: f64) -> f64 {
 /// and the position, elevations and sigmas (f64: docs/CORE.md, "Precision").
 #[derive(Debug, Clone)]
 pub struct Solution<const N: usize, T: Real = Stat> {
+    /// The parity space of the weighted geometry.
     pub parity: Parity<N, T>,
     /// Row k of the model is the epoch's satellite `source[k]`.
     pub source: [usize; N],
+    /// Satellite of each row.
     pub ids: [SatId; N],
+    /// Sigma of each row, m.
     pub sigma_m: [f64; N],
+    /// Elevation of each row, rad.
     pub elevation_rad: [f64; N],
     /// Which system each clock column (state 3 + j) belongs to.
     pub clocks: [Option<System>; MAX_SYSTEMS],
     /// ECEF position (pseudorange input) after Gauss-Newton.
     pub position_ecef_m: Option<[f64; 3]>,
+    /// Geodetic position (pseudorange input).
     pub geodetic: Option<Geodetic>,
     /// The point whose local frame, elevations and sigmas the model uses
     /// (within [`RELINEARISE_M`] of the position; pseudorange input).
@@ -118,6 +123,7 @@ pub struct Solution<const N: usize, T: Real = Stat> {
     pub correction_enu_m: [f64; 3],
     /// Receiver clock bias per system, m, in `System::ALL` order.
     pub clock_m: [Option<f64>; MAX_SYSTEMS],
+    /// Gauss-Newton iterations run (0 for linear input).
     pub iterations: u32,
 }
 
@@ -140,6 +146,7 @@ impl<const N: usize, T: Real> Solution<N, T> {
         }
     }
 
+    /// Number of rows (satellites) in the model.
     pub fn rows(&self) -> usize {
         self.parity.rows()
     }
@@ -199,7 +206,9 @@ pub enum Start<'a, const N: usize, T: Real = Stat> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Fix {
+    /// Epoch time, s.
     pub time_s: f64,
+    /// ECEF position, m.
     pub position_ecef_m: [f64; 3],
     /// Receiver clock bias per system, m, in `System::ALL` order.
     pub clock_m: [Option<f64>; MAX_SYSTEMS],
@@ -536,8 +545,11 @@ fn solve_linear_by_row<const N: usize, T: Real>(
 /// computed in it and reused until the point moves by [`RELINEARISE_M`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Linearisation {
+    /// The linearisation point, ECEF m.
     pub point_ecef_m: [f64; 3],
+    /// Its geodetic coordinates.
     pub geodetic: Geodetic,
+    /// The ECEF-to-ENU rotation at the point.
     pub rotation: Matrix3<f64>,
 }
 

@@ -1,4 +1,4 @@
-//! Times at the I/O edge: a time of day "HH:MM[:SS]" relative to the day of
+//! Times at the I/O edge: a time of day `HH:MM[:SS]` relative to the day of
 //! the first epoch, or seconds from the first epoch ("+600"), to GPS seconds.
 
 use crate::error::GnssError;

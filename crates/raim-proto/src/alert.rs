@@ -54,6 +54,7 @@ pub struct AlertMonitor {
 }
 
 impl AlertMonitor {
+    /// An output asserted (no valid epoch yet), with the time-to-alert in ticks.
     pub const fn new(time_to_alert_ticks: u64) -> Self {
         AlertMonitor {
             time_to_alert_ticks,

@@ -25,6 +25,7 @@ use crate::CAPACITY;
 /// The ISM entry of one satellite (ADD ISM content; SPEC §9.1).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct IsmSat {
+    /// The satellite.
     pub id: SatId,
     /// sigma_URA: the integrity clock-and-ephemeris sigma (m), >= 0.
     pub sigma_ura_m: f64,
@@ -40,16 +41,27 @@ pub struct IsmSat {
 /// defaults there: LPV-200).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct WireAraimConfig {
+    /// Vertical integrity budget PHMI_VERT.
     pub phmi_vert: f64,
+    /// Horizontal integrity budget PHMI_HOR.
     pub phmi_hor: f64,
+    /// Vertical continuity budget P_FA_VERT.
     pub pfa_vert: f64,
+    /// Horizontal continuity budget P_FA_HOR.
     pub pfa_hor: f64,
+    /// Threshold on the probability of the unmonitored fault modes.
     pub p_thres: f64,
+    /// Prior at or above which a mode enters the EMT.
     pub p_emt: f64,
+    /// Vertical alert limit, m.
     pub val_m: f64,
+    /// Horizontal alert limit, m.
     pub hal_m: f64,
+    /// Bracket width of the ADD's PL bisection, m.
     pub tol_pl_m: f64,
+    /// Availability limit on the effective monitor threshold, m.
     pub emt_max_m: f64,
+    /// Availability limit on sigma_v,acc, m.
     pub sigma_acc_max_m: f64,
     /// The PL that feeds the availability: false = the ADD's bracket
     /// output (default), true = the exact root.
@@ -110,16 +122,22 @@ impl Default for WireAraimConfig {
 /// force as a whole, or not at all.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct IsmFrame {
+    /// The ARAIM allocation and alert limits.
     pub config: WireAraimConfig,
+    /// P_const per constellation (`System::index()`), `None` when not in use.
     pub p_const: [Option<f64>; MAX_SYSTEMS],
+    /// The per-satellite ISM entries.
     pub sats: SatList<IsmSat>,
 }
 
 /// The host's borrowed form of [`IsmFrame`] (same bytes).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct IsmFrameRef<'a> {
+    /// The ARAIM allocation and alert limits.
     pub config: WireAraimConfig,
+    /// P_const per constellation (`System::index()`), `None` when not in use.
     pub p_const: [Option<f64>; MAX_SYSTEMS],
+    /// The per-satellite ISM entries.
     pub sats: &'a [IsmSat],
 }
 
@@ -138,8 +156,11 @@ pub enum AraimCommand {
     /// a unit with a key, with a valid tag and a counter above every one
     /// accepted since boot (shared with `AuthConfigure`).
     AuthIsm {
+        /// Replay counter, above every one accepted since boot.
         counter: u64,
+        /// The ISM frame.
         ism: IsmFrame,
+        /// HMAC-SHA256 tag over the counter and the frame.
         tag: crate::auth::Tag,
     },
     /// One pseudorange epoch (the unit's normal input, as `Command::Ranges`)
@@ -155,19 +176,31 @@ pub enum AraimCommand {
 /// The host's borrowed form of [`AraimCommand`] (same bytes).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub enum AraimCommandRef<'a> {
+    /// [`AraimCommand::Ism`].
     Ism(IsmFrameRef<'a>),
+    /// [`AraimCommand::Epoch`], its fields inline.
     Epoch {
+        /// Epoch time, s.
         time_s: f64,
+        /// The linearised rows.
         sats: &'a [LinearObservation],
     },
+    /// [`AraimCommand::AuthIsm`].
     AuthIsm {
+        /// Replay counter.
         counter: u64,
+        /// The ISM frame.
         ism: IsmFrameRef<'a>,
+        /// HMAC-SHA256 tag.
         tag: crate::auth::Tag,
     },
+    /// [`AraimCommand::Ranges`], its fields inline.
     Ranges {
+        /// Epoch time, s.
         time_s: f64,
+        /// Where Gauss-Newton starts, ECEF m.
         apriori_m: Option<[f64; 3]>,
+        /// The pseudoranges and satellite positions.
         sats: &'a [RangeObservation],
     },
 }
@@ -176,10 +209,31 @@ pub enum AraimCommandRef<'a> {
 /// with fixed-width integers).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum WireUnavailable {
-    ModeCapacity { needed: u32, capacity: u32 },
-    TooManyEvents { p_exceed_at_max: f64 },
-    Unmonitored { p_unmon: f64, p_thres: f64 },
-    PlNotSolved { axis: u32 },
+    /// The mode list does not fit.
+    ModeCapacity {
+        /// Modes the epoch needs.
+        needed: u32,
+        /// Modes the engine holds.
+        capacity: u32,
+    },
+    /// P(more faults) cannot reach P_THRES within `MAX_EVENTS`.
+    TooManyEvents {
+        /// P(more than `MAX_EVENTS` events).
+        p_exceed_at_max: f64,
+    },
+    /// The unmonitored probability exceeds P_THRES.
+    Unmonitored {
+        /// The unmonitored probability.
+        p_unmon: f64,
+        /// P_THRES.
+        p_thres: f64,
+    },
+    /// The PL equation of an axis could not be bracketed.
+    PlNotSolved {
+        /// The axis (0 E, 1 N, 2 U).
+        axis: u32,
+    },
+    /// One or more availability limits fails (see `WireLimits`).
     Limits,
 }
 
@@ -211,9 +265,13 @@ impl From<Unavailable> for WireUnavailable {
 /// The availability limits, each true when met (`araim::Limits`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct WireLimits {
+    /// VPL <= VAL.
     pub vpl: bool,
+    /// HPL <= HAL.
     pub hpl: bool,
+    /// EMT <= EMT_max.
     pub emt: bool,
+    /// sigma_v,acc <= its maximum.
     pub sigma_acc: bool,
 }
 
@@ -234,6 +292,7 @@ impl From<Limits> for WireLimits {
 pub struct AraimSummary {
     /// Fault modes enumerated, and those solved and tested.
     pub modes: u32,
+    /// Fault modes solved and tested.
     pub monitored: u32,
     /// N_fault,max.
     pub max_faults: u32,
@@ -242,9 +301,11 @@ pub struct AraimSummary {
     /// The PLs that feed the availability (the configured `pl_exact`
     /// choice: ADD bracket output or exact root).
     pub vpl_m: f64,
+    /// Horizontal PL feeding the availability, m.
     pub hpl_m: f64,
     /// The exact roots of the PL equations.
     pub vpl_exact_m: f64,
+    /// Exact horizontal PL root, m.
     pub hpl_exact_m: f64,
     /// Effective monitor threshold (vertical).
     pub emt_m: f64,
@@ -252,12 +313,14 @@ pub struct AraimSummary {
     pub sigma_v_acc_m: f64,
     /// Every monitored mode passed its solution-separation test.
     pub detection_passed: bool,
+    /// Which availability limits are met.
     pub limits: WireLimits,
     /// `None` when ARAIM service is available.
     pub unavailable: Option<WireUnavailable>,
 }
 
 impl AraimSummary {
+    /// The summary of a core ARAIM output; `pl_exact` picks the exact roots for `vpl_m`/`hpl_m`.
     pub fn from_output<T: Real, const K: usize>(out: &AraimOutput<T, K>, pl_exact: bool) -> Self {
         let pl = if pl_exact { out.pl_exact } else { out.pl_add };
         AraimSummary {
@@ -287,9 +350,13 @@ impl AraimSummary {
 /// into the all-in-view mode list.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum WireFde {
+    /// The all-in-view test passed: nothing to exclude.
     NoFault,
+    /// A mode was excluded.
     Excluded {
+        /// Index of the excluded mode.
         mode: u32,
+        /// Excluded constellations, bit c = constellation index c.
         consts: u8,
     },
     /// No candidate subset (single-event, then multi-event) passes all
@@ -297,7 +364,9 @@ pub enum WireFde {
     NoCandidate,
     /// Two consistent candidates that do not nest: never a silent pick.
     Ambiguous {
+        /// The first candidate's mode index.
         first: u32,
+        /// The second candidate's mode index.
         second: u32,
     },
     /// The fault modes could not be enumerated (`ModeCapacity`,
@@ -309,6 +378,7 @@ pub enum WireFde {
     /// firmware's limit equals it (600), so there every failed test with
     /// enumerated modes gets an exclusion attempt.
     NotAttempted {
+        /// Fault modes enumerated.
         modes: u32,
     },
     /// The exclusion search would process more candidate subsets than the
@@ -317,7 +387,9 @@ pub enum WireFde {
     /// not started, `budget` the maximum for this epoch's mode count.
     /// Nothing excluded; the epoch is an `Alarm`. (Appended: protocol 8.)
     BudgetExceeded {
+        /// Candidates through the stage not started.
         candidates: u32,
+        /// The maximum for this epoch's mode count.
         budget: u32,
     },
 }
@@ -348,13 +420,16 @@ impl From<FdeDecision> for WireFde {
 /// One ARAIM epoch's result.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct WireAraimResult {
+    /// Epoch time, s.
     pub time_s: f64,
     /// The verdict for a user of the position: `Ok` (consistent,
     /// available), `Unavailable` (consistent or excluded, service not
     /// available), `Excluded` (a fault excluded and the subset available),
     /// `Alarm` (a test failed and nothing could be excluded).
     pub decision: Decision,
+    /// The all-in-view ARAIM run.
     pub all_in_view: AraimSummary,
+    /// The FDE outcome.
     pub fde: WireFde,
     /// The satellites excluded (those of an excluded constellation
     /// included), in epoch order; empty unless `fde` is `Excluded`.
@@ -392,8 +467,10 @@ pub enum AraimAnswer {
     /// The ISM frame was taken; `satellites` entries are in force. The
     /// response's `config.crc32` now covers it (docs/PROTOCOL.md).
     IsmAccepted {
+        /// ISM entries in force.
         satellites: u32,
     },
+    /// The epoch's result.
     Result(WireAraimResult),
 }
 
@@ -408,21 +485,39 @@ pub enum AraimWireError {
     /// An ARAIM epoch before any ISM was accepted since reset.
     NoIsm,
     /// A satellite of the epoch (`index`) has no entry in the ISM in force.
-    NotInIsm { id: SatId, index: u32 },
+    NotInIsm {
+        /// The satellite.
+        id: SatId,
+        /// Its index in the epoch.
+        index: u32,
+    },
     /// An ISM field out of its range (`index`: satellite or constellation
     /// index, 0 for configuration fields). Probabilities are in the open
     /// (0, 1).
     OutOfRange {
+        /// Name of the offending field.
         field: FieldName,
+        /// Satellite (or constellation) index, 0 for configuration fields.
         index: u32,
+        /// The value received (in the field's unit).
         value: f64,
+        /// Smallest value accepted.
         min: f64,
+        /// Largest value accepted.
         max: f64,
     },
     /// The ISM declares P_const for a constellation with no satellite entry.
-    EmptyConstellation { system: System },
+    EmptyConstellation {
+        /// The constellation.
+        system: System,
+    },
     /// A satellite (`index`) of a constellation without P_const.
-    MissingConstellationIsm { system: System, index: u32 },
+    MissingConstellationIsm {
+        /// The constellation.
+        system: System,
+        /// Index of the satellite in the epoch.
+        index: u32,
+    },
 }
 
 impl core::fmt::Display for AraimWireError {

@@ -22,8 +22,11 @@ const CONFIG_BYTES: usize = 256;
 /// An authenticated configuration (the payload of `Command::AuthConfigure`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AuthConfigure {
+    /// Replay counter, above every one accepted since boot.
     pub counter: u64,
+    /// The configuration.
     pub config: Config,
+    /// HMAC-SHA256 tag over the counter and the configuration.
     pub tag: Tag,
 }
 

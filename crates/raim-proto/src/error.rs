@@ -26,73 +26,107 @@ fn field(name: &str) -> FieldName {
 pub enum WireError {
     /// The envelope's CRC does not match its payload.
     BadCrc {
+        /// CRC-32 computed over the payload received.
         computed: u32,
+        /// CRC-32 the envelope carried.
         received: u32,
     },
     /// A chunk that is not valid COBS or not an envelope (`len` bytes), or
     /// whose payload is not a request (then the response carries the
     /// sequence number if it could be read).
     Undecodable {
+        /// Length of the chunk, bytes (delimiter included).
         len: u32,
     },
     /// A chunk longer than the receive buffer; skipped to the next delimiter.
     Overflow {
+        /// The receive buffer's size, bytes.
         capacity: u32,
     },
     /// The request's sequence number is not the one after the previous
     /// request's. Sent as a notice before the answer to `received`.
     SequenceGap {
+        /// The sequence number that was due.
         expected: u32,
+        /// The sequence number received.
         received: u32,
     },
     /// More satellites than the firmware's capacity.
     TooManySatellites {
+        /// Satellites in the epoch.
         have: u32,
+        /// The firmware's capacity.
         capacity: u32,
     },
     /// A NaN or infinite input (`field`, satellite `index`).
     NonFinite {
+        /// Name of the offending field.
         field: FieldName,
+        /// Index of the satellite (0 for a per-epoch field).
         index: u32,
+        /// The value received.
         value: f64,
     },
     /// The geometry lost rank (Householder pivot relative to its column).
     DegenerateGeometry {
+        /// Index of the geometry column that lost rank.
         column: u32,
+        /// Its pivot relative to the column norm (dimensionless).
         pivot: f64,
     },
+    /// Fewer satellites than the unknowns plus the redundancy needed.
     TooFewSatellites {
+        /// Satellites in the epoch.
         have: u32,
+        /// Satellites needed.
         need: u32,
     },
+    /// The same satellite appears twice in one epoch.
     DuplicateSatellite {
+        /// The satellite.
         id: SatId,
+        /// Index of its first appearance.
         first: u32,
+        /// Index of its second appearance.
         second: u32,
     },
+    /// A sigma that is zero or negative.
     NonPositiveSigma {
+        /// Index of the satellite.
         index: u32,
+        /// The sigma received, m.
         sigma_m: f64,
     },
     /// A configuration or input value outside its documented range.
     OutOfRange {
+        /// Name of the offending field.
         field: FieldName,
+        /// The value received (in the field's unit).
         value: f64,
+        /// Smallest value accepted.
         min: f64,
+        /// Largest value accepted.
         max: f64,
     },
+    /// Gauss-Newton did not converge.
     NoConvergence {
+        /// Iterations run.
         iterations: u32,
+        /// Length of the last position step, m.
         step_m: f64,
     },
+    /// A chi-square degree of freedom outside 1..=max.
     InvalidDof {
+        /// The degree of freedom asked for.
         dof: u32,
+        /// The largest supported.
         max: u32,
     },
     /// A `Configure` after `Lock` (or in a build with a compiled-in
     /// configuration): refused until reset. `config_crc32` is the
     /// fingerprint of the configuration that stays in force.
     Locked {
+        /// CRC-32 fingerprint of the configuration in force.
         config_crc32: u32,
     },
     /// A `TestFault` request to a build without test hooks.
@@ -103,12 +137,15 @@ pub enum WireError {
     AuthNotProvisioned,
     /// An `AuthConfigure` whose tag does not verify.
     BadAuthTag {
+        /// The counter of the refused frame.
         counter: u64,
     },
     /// An `AuthConfigure` whose counter is not above the last one accepted
     /// (a replayed or reordered frame).
     Replayed {
+        /// The counter of the refused frame.
         counter: u64,
+        /// The last counter accepted.
         last: u64,
     },
     /// ARAIM's own refusals (issue 12; `araim_msg::AraimWireError`).
@@ -122,18 +159,24 @@ pub enum WireError {
     /// capacity `max`, or not one of `raim_proto::pf_msg::PF_PARTICLE_COUNTS`
     /// (non-zero for the EKF). The previous PF configuration stays.
     PfParticles {
+        /// Particles asked for.
         requested: u32,
+        /// The largest count the build holds.
         max: u32,
     },
     /// A `PfConfigure` value outside its domain (`PfConfig::validate`), or
     /// a non-positive per-satellite sigma in a PF epoch.
     PfInvalidConfig {
+        /// Name of the offending field.
         field: FieldName,
+        /// The value received (in the field's unit).
         value: f64,
     },
     /// A PF epoch whose time does not follow the previous one's.
     TimeNotIncreasing {
+        /// The previous PF epoch's time, s.
         previous_s: f64,
+        /// This epoch's time, s.
         now_s: f64,
     },
 }

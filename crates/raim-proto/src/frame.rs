@@ -34,11 +34,22 @@ pub struct Envelope<'a> {
 pub enum FrameError {
     /// The chunk did not fit the receive buffer of `capacity` bytes; bytes
     /// up to the next delimiter are discarded.
-    Overflow { capacity: u32 },
+    Overflow {
+        /// The receive buffer's size, bytes.
+        capacity: u32,
+    },
     /// Not valid COBS, or not an envelope; `len` bytes including the delimiter.
-    Undecodable { len: u32 },
+    Undecodable {
+        /// Length of the chunk, bytes (delimiter included).
+        len: u32,
+    },
     /// The envelope decoded but its CRC does not match its payload.
-    BadCrc { computed: u32, received: u32 },
+    BadCrc {
+        /// CRC-32 computed over the payload.
+        computed: u32,
+        /// CRC-32 the envelope carried.
+        received: u32,
+    },
 }
 
 /// Encode one message as a complete frame (delimiter included) into `out`,
@@ -73,6 +84,7 @@ impl<const B: usize> Default for FrameReceiver<B> {
 }
 
 impl<const B: usize> FrameReceiver<B> {
+    /// An empty receiver.
     pub const fn new() -> Self {
         FrameReceiver {
             acc: CobsAccumulator::new(),

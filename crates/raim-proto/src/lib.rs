@@ -20,6 +20,7 @@
 //! `raim-server` crate.
 #![no_std]
 #![forbid(unsafe_code)]
+#![warn(missing_docs)]
 #![deny(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -67,19 +68,10 @@ pub use result::{WireMcusum, WireResult};
 pub const CAPACITY: usize = raim_core::DEFAULT_CAPACITY;
 
 /// Version of the frame layout and message types; reported by `Status`.
-/// Bump on any change of a serialized type (postcard is not self-describing).
-/// 3: `Lock`, `LockEngaged`, `WireError::Locked`, the `ConfigId` in every
-/// response and in `Status`, the reset count and cause in `Status`, the
-/// test-only `TestFault` (issue 15).
-/// 4: `Command::Araim`, `ResponseBody::Araim`, `WireError::Araim` (issue 12,
-/// appended; the earlier variants keep their indices).
-/// 5: the particle-filter messages `PfConfigure`, `PfRanges`, `PfResult`
-/// and their errors, appended to the enums (issue 14, `pf_msg`).
-/// 6: `Status` gains uart_overruns, rx_ring_overflows, alarm_output,
-/// alarm_pin_asserted and auth_provisioned (issue 15, appended).
-/// 7: `WireAraimResult` gains `n_star_vertical` (issue 13, appended).
-/// 8: `AraimCommand::Ranges` (ARAIM from a pseudorange epoch) and
-/// `WireAraimResult::position_ecef_m` (issue 12, appended).
+/// Bump on any change of a serialized type (postcard is not self-describing);
+/// new enum variants are appended so that the earlier ones keep their
+/// indices. The history of versions 1 to 8 is in CHANGELOG.md, "Wire
+/// protocol versions".
 pub const PROTOCOL_VERSION: u16 = 8;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.

@@ -28,6 +28,7 @@ use crate::CAPACITY;
 /// the count instead of "undecodable".
 #[derive(Debug, Clone, PartialEq)]
 pub struct SatList<T> {
+    /// The elements, at most [`CAPACITY`].
     pub items: heapless::Vec<T, CAPACITY>,
     /// Satellites in the frame; more than `items.len()` when it overflowed.
     pub declared: u32,
@@ -83,14 +84,18 @@ pub struct RangeEpoch {
     /// Epoch time, s. The NMEA writer reads it as UTC seconds since
     /// 1970-01-01 (docs/PROTOCOL.md).
     pub time_s: f64,
+    /// Where Gauss-Newton starts, ECEF m (`None`: the Earth's centre).
     pub apriori_m: Option<[f64; 3]>,
+    /// The satellites' pseudoranges and positions.
     pub sats: SatList<RangeObservation>,
 }
 
 /// One epoch in the seeds' linearised form (line of sight + residual).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LinearEpoch {
+    /// Epoch time, s.
     pub time_s: f64,
+    /// The satellites' lines of sight and residuals.
     pub sats: SatList<LinearObservation>,
 }
 
@@ -103,7 +108,9 @@ pub enum Command {
     /// kappa, sigma model, ...). Answered with `Configured` or an error
     /// (`OutOfRange`), in which case the previous configuration stays.
     Configure(Config),
+    /// One pseudorange epoch through the snapshot monitor. Answered `Result` or an error.
     Ranges(RangeEpoch),
+    /// One linearised epoch through the snapshot monitor. Answered `Result` or an error.
     Linear(LinearEpoch),
     /// Lock the configuration in force until reset: every later `Configure`
     /// is refused with `WireError::Locked`. Answered with `LockEngaged`
@@ -194,13 +201,25 @@ pub enum ResetCause {
     /// A reset the firmware did not record (external, debugger).
     Unrecorded,
     /// A panic; `line` is the source line of the panic location.
-    Panic { line: u32 },
+    Panic {
+        /// Source line of the panic.
+        line: u32,
+    },
     /// A hard fault at `pc`.
-    HardFault { pc: u32 },
+    HardFault {
+        /// Program counter of the fault.
+        pc: u32,
+    },
     /// The watchdog expired (a hung main loop); `pc` where it was.
-    Watchdog { pc: u32 },
+    Watchdog {
+        /// Program counter when it expired.
+        pc: u32,
+    },
     /// The stack reached its guard region (MPU) at `address`.
-    StackOverflow { address: u32 },
+    StackOverflow {
+        /// The address the stack reached.
+        address: u32,
+    },
 }
 
 /// A request frame's payload.
@@ -210,6 +229,7 @@ pub struct Request {
     /// `SequenceGap`. It is the first field so that the firmware can read it
     /// even when the rest of the payload does not decode.
     pub seq: u32,
+    /// What the firmware is asked to do.
     pub command: Command,
 }
 
@@ -219,25 +239,43 @@ pub struct Request {
 /// firmware's answer).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub enum CommandRef<'a> {
+    /// [`Command::Status`].
     Status,
+    /// [`Command::Configure`].
     Configure(&'a Config),
+    /// [`Command::Ranges`], its fields inline.
     Ranges {
+        /// Epoch time, s.
         time_s: f64,
+        /// Where Gauss-Newton starts, ECEF m.
         apriori_m: Option<[f64; 3]>,
+        /// The satellites (any number, to test the refusal above capacity).
         sats: &'a [RangeObservation],
     },
+    /// [`Command::Linear`], its fields inline.
     Linear {
+        /// Epoch time, s.
         time_s: f64,
+        /// The satellites (any number).
         sats: &'a [LinearObservation],
     },
+    /// [`Command::Lock`].
     Lock,
+    /// [`Command::TestFault`].
     TestFault(TestFault),
+    /// [`Command::AuthConfigure`].
     AuthConfigure(&'a crate::auth::AuthConfigure),
+    /// [`Command::Araim`].
     Araim(crate::araim_msg::AraimCommandRef<'a>),
+    /// [`Command::PfConfigure`].
     PfConfigure(&'a crate::pf_msg::WirePfConfig),
+    /// [`Command::PfRanges`], its fields inline.
     PfRanges {
+        /// Epoch time, s.
         time_s: f64,
+        /// Not used by the PF (it starts from its own fix), ECEF m.
         apriori_m: Option<[f64; 3]>,
+        /// The satellites (any number).
         sats: &'a [RangeObservation],
     },
 }
@@ -245,11 +283,14 @@ pub enum CommandRef<'a> {
 /// The host's borrowed form of [`Request`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct RequestRef<'a> {
+    /// Sequence number (see [`Request::seq`]).
     pub seq: u32,
+    /// What the firmware is asked to do.
     pub command: CommandRef<'a>,
 }
 
 impl<'a> RequestRef<'a> {
+    /// A pseudorange epoch request, borrowing its satellites.
     pub fn ranges(
         seq: u32,
         time_s: f64,
@@ -266,6 +307,7 @@ impl<'a> RequestRef<'a> {
         }
     }
 
+    /// A linearised epoch request, borrowing its satellites.
     pub fn linear(seq: u32, time_s: f64, sats: &'a [LinearObservation]) -> Self {
         RequestRef {
             seq,
@@ -278,6 +320,7 @@ impl<'a> RequestRef<'a> {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Status {
+    /// [`crate::PROTOCOL_VERSION`] of the firmware.
     pub protocol_version: u16,
     /// Satellite capacity of the engine.
     pub capacity: u16,
@@ -299,6 +342,7 @@ pub struct Status {
     pub config: ConfigId,
     /// Resets since power-on, and the cause of the last one.
     pub resets: u32,
+    /// The cause of the last reset.
     pub reset_cause: ResetCause,
     /// Link bytes lost in the UART since reset: times its receive register
     /// overran (a byte arrived before the previous one was read). 0 where
@@ -324,6 +368,7 @@ pub struct Status {
 pub struct Response {
     /// The request answered; `None` when the frame could not be read.
     pub seq: Option<u32>,
+    /// The answer.
     pub body: ResponseBody,
     /// The configuration in force when the answer was made (after a
     /// `Configure` it answers, the new one) and the lock state.
@@ -335,9 +380,13 @@ pub struct Response {
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum ResponseBody {
+    /// The answer to a `Ranges` or `Linear` epoch.
     Result(WireResult),
+    /// The answer to `Configure` or `PfConfigure`: the configuration is in force.
     Configured,
+    /// The answer to `Status`.
     Status(Status),
+    /// The request was refused, or a notice (`SequenceGap`).
     Error(WireError),
     /// The answer to `Lock`: the configuration is now locked until reset.
     LockEngaged,

@@ -3,7 +3,7 @@
 //! fix sentences come first). Each sentence is at most 82 characters
 //! (`$` to `\n`), written with `core::fmt::Write` into a `heapless::String`,
 //! with the XOR checksum of the characters between `$` and `*`. Numbers are
-//! written by [`fixed`] in integer arithmetic, the same text as `format!`
+//! written by the private `fixed` module in integer arithmetic, the same text as `format!`
 //! would give, without linking `core::fmt`'s float formatting (issue 10:
 //! flash).
 //!
@@ -100,7 +100,9 @@ pub fn civil_from_days(days: i64) -> (i64, u32, u32) {
 /// UTC of an epoch to the hundredth of a second.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Utc {
+    /// Days since 1970-01-01.
     pub days: i64,
+    /// Hundredths of a second since midnight.
     pub centiseconds_of_day: u32,
 }
 

@@ -49,10 +49,13 @@ pub enum PfKind {
 /// threshold, exclusion, collapse level). Taking it restarts the filter.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct WirePfConfig {
+    /// Which filter: EKF, SIR PF or GA-PF.
     pub kind: PfKind,
     /// One of [`PF_PARTICLE_COUNTS`] for `Pf`/`Gapf`; 0 for `Ekf`.
     pub particles: u32,
+    /// Seed of the filter's xoshiro256++ random stream.
     pub seed: u64,
+    /// The core's PF configuration.
     pub config: PfConfig,
 }
 
@@ -71,15 +74,18 @@ impl WirePfConfig {
 /// One PF epoch's answer: `raim_core::pf::PfOutput` on the wire.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct WirePfResult {
+    /// Epoch time, s.
     pub time_s: f64,
     /// The main filter's ECEF position; `None` when it collapsed this epoch
     /// (never a position from a collapsed filter).
     pub position_ecef_m: Option<[f64; 3]>,
     /// Clock bias per constellation (System::index), m.
     pub clock_m: [f64; MAX_SYSTEMS],
+    /// Clock drift, m/s.
     pub drift_m_s: f64,
     /// D_k = max_q max_j S_j^k(q) (seed 004 eq. 13); -inf before any LLR.
     pub decision: f64,
+    /// The alarm threshold on D_k.
     pub threshold: f64,
     /// D_k > threshold (or D_k is NaN).
     pub alarm: bool,
@@ -103,6 +109,7 @@ pub struct WirePfResult {
 }
 
 impl WirePfResult {
+    /// The wire form of a core PF output.
     pub fn from_output(o: &PfOutput<PF_SATS>) -> Self {
         WirePfResult {
             time_s: o.time_s,

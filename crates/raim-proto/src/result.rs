@@ -20,28 +20,51 @@ pub type WireMcusum = raim_core::McusumReport;
 /// One epoch's result. Field meanings are those of `raim_core::EpochResult`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct WireResult {
+    /// Epoch time, s.
     pub time_s: f64,
+    /// Ok, alarm, excluded or unavailable.
     pub decision: Decision,
+    /// Why an alarm stands (`None` unless the decision is `Alarm`).
     pub alarm_cause: Option<AlarmCause>,
+    /// ECEF position of the solution in force (pseudorange input), m.
     pub position_ecef_m: Option<[f64; 3]>,
+    /// Geodetic position of the solution in force (pseudorange input).
     pub geodetic: Option<Geodetic>,
+    /// ENU correction to the linearisation point (linear input), m.
     pub correction_enu_m: [f64; 3],
+    /// Receiver clock per system in `System::ALL` order, m.
     pub clock_m: [Option<f64>; MAX_SYSTEMS],
+    /// The all-in-view test.
     pub initial_test: TestStatistic,
+    /// The test of the solution in force.
     pub test: TestStatistic,
+    /// The satellite identified on the all-in-view solution when the test failed.
     pub identified: Option<SatId>,
+    /// Exclusion steps (in force when the decision is `Excluded`).
     pub exclusions: heapless::Vec<Exclusion, MAX_EXCLUSIONS>,
+    /// Horizontal protection level of the solution in force, m.
     pub hpl_m: f64,
+    /// Vertical protection level of the solution in force, m.
     pub vpl_m: f64,
+    /// Satellite with the largest horizontal slope.
     pub worst_h: Option<SatId>,
+    /// Satellite with the largest vertical slope.
     pub worst_v: Option<SatId>,
+    /// 1-sigma ENU position error of the solution in force, m.
     pub sigma_enu_m: [f64; 3],
+    /// Non-centrality lambda_md used for the PLs.
     pub lambda_md: f64,
+    /// n - m >= 1 in the solution in force.
     pub detection_available: bool,
+    /// n - m >= 2 in the solution in force.
     pub exclusion_available: bool,
+    /// PLs within the alert limits.
     pub pl_available: bool,
+    /// Gauss-Newton iterations of the all-in-view solve (0 for linear input).
     pub iterations: u32,
+    /// Per satellite, in input order.
     pub satellites: heapless::Vec<SatelliteResult, CAPACITY>,
+    /// The MCUSUM state, when the sequential monitor is on.
     pub mcusum: Option<WireMcusum>,
 }
 

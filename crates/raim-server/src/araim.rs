@@ -48,7 +48,7 @@ pub const MAX_MODES: usize = 600;
 /// by its tests only, with an early exit at a certain failure (branch
 /// araim, c4c9919), its cost is about one more all-in-view run plus the
 /// failing candidates' early exits. Measured under QEMU with the f32
-/// engine (BENCHMARKS.md "ARAIM on the device, f32"): 20 satellites / 22
+/// engine (docs/bench-history/araim.md "ARAIM on the device, f32"): 20 satellites / 22
 /// modes 2.7 M clean, 9.3-9.8 M with an exclusion; 24 satellites / 327
 /// modes 28.1 M clean, 55.1 M with an exclusion; 32 satellites / 563 modes
 /// 42.4 M clean, 93.3 M with an exclusion: under 5 % of the 2 s watchdog
@@ -69,7 +69,7 @@ pub const MAX_FDE_MODES: u32 = 600;
 /// search costs about (candidates x m) x c. The firmware's watchdog
 /// period is 2 s; at 168 MHz and an assumed 1.5 cycles per instruction it
 /// allows 224 M instructions per epoch. Measured under QEMU with the f32
-/// engines (BENCHMARKS.md, "ARAIM FDE work budget"): the costliest epochs
+/// engines (docs/bench-history/araim.md, "ARAIM FDE work budget"): the costliest epochs
 /// the budget admits are stage-2 searches at 326 monitored modes (24
 /// satellites, 106 k candidate-modes): 115-119 M guest instructions for a
 /// pair exclusion, 130 M for an `Ambiguous` alarm (10 m on two

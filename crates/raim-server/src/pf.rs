@@ -53,14 +53,20 @@ mod engine {
     /// answered `PfParticles` or `PfUnavailable`).
     #[derive(Default)]
     pub struct PfEngines {
+        /// The EKF engine, if the build has one.
         pub ekf: Option<&'static mut EkfEngine>,
+        /// The SIR PF at 100 particles, if the build has one.
         pub pf100: Option<&'static mut Pf100Engine>,
+        /// The SIR PF at 300 particles, if the build has one.
         pub pf300: Option<&'static mut Pf300Engine>,
+        /// The GA-PF at 100 particles, if the build has one.
         pub ga100: Option<&'static mut Ga100Engine>,
+        /// The GA-PF at 300 particles, if the build has one.
         pub ga300: Option<&'static mut Ga300Engine>,
     }
 
     impl PfEngines {
+        /// No engine attached.
         pub const NONE: PfEngines = PfEngines {
             ekf: None,
             pf100: None,
@@ -78,6 +84,7 @@ mod engine {
     pub struct PfEngines {}
 
     impl PfEngines {
+        /// No engine (the only value without the `pf` feature).
         pub const NONE: PfEngines = PfEngines {};
     }
 }

@@ -417,7 +417,7 @@ pub fn table_source() -> Result<String> {
     )?;
     writeln!(
         s,
-        "//! Each h solves ARL0(h, k, d) = 10^LOG10_ARL0[j] by the Fredholm integral"
+        "//! Each h solves ARL0(h, k, d) = 10^`LOG10_ARL0[j]` by the Fredholm integral"
     )?;
     writeln!(s, "//! equation (Gauss-Legendre Nystrom, {NODES_PER_PANEL} nodes per panel of width <= {PANEL_WIDTH}), rounded to 1e-4.")?;
     writeln!(s)?;

@@ -11,39 +11,74 @@ pub enum AraimError {
     /// A NaN or infinite value. `index` is the satellite (or constellation)
     /// index, 0 for configuration fields.
     NotFinite {
+        /// Name of the offending field.
         field: &'static str,
+        /// Satellite (or constellation) index, 0 for configuration fields.
         index: usize,
+        /// The value received.
         value: f64,
     },
     /// A value outside its documented range (bounds inclusive unless the
     /// field's doc says otherwise: probabilities are in the open (0, 1)).
     OutOfRange {
+        /// Name of the offending field.
         field: &'static str,
+        /// Satellite (or constellation) index, 0 for configuration fields.
         index: usize,
+        /// The value received (in the field's unit).
         value: f64,
+        /// Smallest value accepted.
         min: f64,
+        /// Largest value accepted.
         max: f64,
     },
     /// The same satellite appears twice in one epoch.
     DuplicateSatellite {
+        /// The satellite's constellation.
         system: System,
+        /// The satellite's PRN.
         prn: u8,
+        /// Index of its first appearance in the epoch.
         first: usize,
+        /// Index of its second appearance.
         second: usize,
     },
     /// More satellites than the capacity `N` of the engine (or than the
     /// 64 a mode's bit mask can hold).
-    CapacityExceeded { have: usize, capacity: usize },
+    CapacityExceeded {
+        /// Satellites in the epoch.
+        have: usize,
+        /// The capacity exceeded (`N`, or 64).
+        capacity: usize,
+    },
     /// A constellation that has an ISM entry (is declared in use) but no
     /// satellite in the epoch: its clock column would be unobservable.
-    EmptyConstellation { system: System },
+    EmptyConstellation {
+        /// The constellation with an ISM entry and no satellite.
+        system: System,
+    },
     /// A satellite of a constellation that has no ISM entry (no P_const).
-    MissingConstellationIsm { system: System, index: usize },
+    MissingConstellationIsm {
+        /// The constellation without an ISM entry.
+        system: System,
+        /// Index of the first satellite of it in the epoch.
+        index: usize,
+    },
     /// Fewer satellites than the all-in-view unknowns (3 + clocks).
-    TooFewSatellites { have: usize, need: usize },
+    TooFewSatellites {
+        /// Satellites in the epoch.
+        have: usize,
+        /// Unknowns of the all-in-view solution (3 + clocks).
+        need: usize,
+    },
     /// The all-in-view normal matrix is singular: column `column` has a
     /// Cholesky pivot of `pivot` relative to its diagonal.
-    RankDeficient { column: usize, pivot: f64 },
+    RankDeficient {
+        /// Index of the column whose pivot collapsed.
+        column: usize,
+        /// Its Cholesky pivot relative to the diagonal (dimensionless).
+        pivot: f64,
+    },
 }
 
 impl core::fmt::Display for AraimError {

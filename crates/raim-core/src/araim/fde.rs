@@ -71,12 +71,22 @@ pub enum FdeAlarm {
     /// tests.
     NoCandidate,
     /// Two consistent candidates (mode indices) that do not nest.
-    Ambiguous { first: usize, second: usize },
+    Ambiguous {
+        /// The first candidate's mode index.
+        first: usize,
+        /// The second candidate's mode index.
+        second: usize,
+    },
     /// The search would process more candidate subsets than the budget
     /// allows: `candidates` is the number through the stage that was not
     /// started (stage 1's, or stage 1's plus stage 2's), `budget` the
     /// maximum. Nothing was excluded.
-    BudgetExceeded { candidates: usize, budget: usize },
+    BudgetExceeded {
+        /// Candidates through the stage not started.
+        candidates: usize,
+        /// The maximum allowed.
+        budget: usize,
+    },
 }
 
 /// The work the FDE may do: the maximum number of candidate subsets it
@@ -85,6 +95,7 @@ pub enum FdeAlarm {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FdeBudget {
+    /// Largest number of exclusion candidates (subset ARAIM runs) per epoch.
     pub max_candidates: usize,
 }
 
@@ -107,10 +118,14 @@ pub enum FdeDecision {
     /// those of excluded constellations) and constellations `consts`. The
     /// scratch engine holds the subset's output (PLs, EMT, availability).
     Excluded {
+        /// Index of the excluded mode in the all-in-view output's modes.
         mode: usize,
+        /// Excluded satellites, bit i = input satellite i.
         sats: u64,
+        /// Excluded constellations, bit c = constellation index c.
         consts: u8,
     },
+    /// No exclusion restores integrity: the integrity alarm and its cause.
     Alarm(FdeAlarm),
 }
 

@@ -18,6 +18,7 @@ use crate::real::Real;
 /// entries. The clock column is implied by `id.system`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct AraimSat<T> {
+    /// The satellite.
     pub id: SatId,
     /// G row, east/north/up components (dimensionless).
     pub g_enu: [T; 3],
@@ -76,6 +77,7 @@ impl<T: Real> AraimSat<T> {
 /// `Some(P_const)` for each constellation in use and `None` otherwise.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Ism {
+    /// P_const per constellation (`System::index`), `None` when not in use.
     pub p_const: [Option<f64>; MAX_SYSTEMS],
 }
 

@@ -62,16 +62,25 @@ pub enum ModeStatus {
     /// The subset is rank-deficient (`column`: the geometry column, or for
     /// a downdate the satellite index, whose pivot `pivot` collapsed); its
     /// prior is added to the unmonitored probability.
-    Unmonitorable { column: usize, pivot: f64 },
+    Unmonitorable {
+        /// The geometry column (or, for a downdate, the satellite index) whose pivot collapsed.
+        column: usize,
+        /// The pivot relative to its column norm or diagonal.
+        pivot: f64,
+    },
 }
 
 /// One fault mode: its events and prior, its subset statistics, the
 /// thresholds T_k,q = K_fa,q sigma_ss,q and the outcome of its test.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct FaultMode<T> {
+    /// The satellites and constellations this mode assumes faulty, and its prior.
     pub events: ModeEvents,
+    /// Whether the subset was solved.
     pub status: ModeStatus,
+    /// sigma, bias, sigma_ss and separation of the subset solution per axis.
     pub stats: SubsetStats<T>,
+    /// Thresholds T_k,q = K_fa,q sigma_ss,q per axis E, N, U, m.
     pub threshold_m: [T; 3],
     /// |x_q^(k) - x_q^(0)| <= T_k,q on every axis (false for NaN, and for
     /// unmonitorable modes, which have no test).
@@ -83,15 +92,31 @@ pub struct FaultMode<T> {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Unavailable {
     /// The mode list needs `needed` entries; the engine holds `capacity`.
-    ModeCapacity { needed: usize, capacity: usize },
+    ModeCapacity {
+        /// Modes the epoch needs.
+        needed: usize,
+        /// Modes the engine holds (`K`).
+        capacity: usize,
+    },
     /// More than `MAX_EVENTS` simultaneous faults would have to be
     /// monitored to bring P(more faults) to P_THRES.
-    TooManyEvents { p_exceed_at_max: f64 },
+    TooManyEvents {
+        /// P(more than `MAX_EVENTS` events) at `MAX_EVENTS`.
+        p_exceed_at_max: f64,
+    },
     /// The unmonitored probability (beyond N_fault,max, plus the
     /// unmonitorable modes) exceeds P_THRES.
-    Unmonitored { p_unmon: f64, p_thres: f64 },
+    Unmonitored {
+        /// The unmonitored probability.
+        p_unmon: f64,
+        /// The allocation it exceeds, P_THRES.
+        p_thres: f64,
+    },
     /// The PL equation of `axis` (0 E, 1 N, 2 U) could not be bracketed.
-    PlNotSolved { axis: usize },
+    PlNotSolved {
+        /// The axis (0 E, 1 N, 2 U).
+        axis: usize,
+    },
     /// One or more of the LPV-200 limits fails (see `Limits`).
     Limits,
 }
@@ -100,9 +125,13 @@ pub enum Unavailable {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Limits {
+    /// VPL <= VAL.
     pub vpl: bool,
+    /// HPL <= HAL.
     pub hpl: bool,
+    /// EMT <= EMT_max.
     pub emt: bool,
+    /// sigma_v,acc <= its maximum.
     pub sigma_acc: bool,
 }
 
@@ -110,7 +139,9 @@ pub struct Limits {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ProtectionLevels {
+    /// Vertical protection level, m.
     pub vpl_m: f64,
+    /// Horizontal protection level, m.
     pub hpl_m: f64,
     /// The east and north roots (HPL = their root-sum-square).
     pub hpl_axes_m: [f64; 2],
@@ -119,6 +150,7 @@ pub struct ProtectionLevels {
 /// Everything one epoch produces.
 #[derive(Debug, Clone)]
 pub struct AraimOutput<T, const K: usize> {
+    /// The fault modes of the epoch, monitored or not.
     pub modes: Vec<FaultMode<T>, K>,
     /// Modes solved and tested (N_modes of K_fa).
     pub n_monitored: usize,
@@ -132,9 +164,13 @@ pub struct AraimOutput<T, const K: usize> {
     pub k_fa: [f64; 3],
     /// All in view: sigma_q^(0), b_q^(0) and the position correction S0 y.
     pub sigma0_m: [T; 3],
+    /// All-in-view nominal bias b_q^(0) per axis E, N, U, m.
     pub bias0_m: [T; 3],
+    /// All-in-view position correction S0 y, ENU, m.
     pub correction_enu_m: [T; 3],
+    /// Vertical accuracy sigma_v,acc of the all-in-view solution, m.
     pub sigma_v_acc_m: T,
+    /// Effective monitor threshold EMT, m.
     pub emt_m: T,
     /// The exact roots.
     pub pl_exact: ProtectionLevels,
@@ -142,6 +178,7 @@ pub struct AraimOutput<T, const K: usize> {
     pub pl_add: ProtectionLevels,
     /// Every monitored mode passed its solution-separation test.
     pub detection_passed: bool,
+    /// Which availability limits are met.
     pub limits: Limits,
     /// None when available.
     pub unavailable: Option<Unavailable>,
@@ -291,6 +328,7 @@ fn k_fa(memo: &mut KfaMemo, cfg: &AraimConfig, n: usize) -> [Option<f64>; 2] {
 }
 
 impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
+    /// An engine with empty outputs, ready for its first epoch.
     pub fn new() -> Self {
         Self::default()
     }

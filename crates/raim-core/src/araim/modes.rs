@@ -49,16 +49,27 @@ pub struct Enumeration {
 pub enum EnumerationLimit {
     /// More than `MAX_EVENTS` simultaneous events would be needed to bring
     /// the unmonitored probability to P_THRES.
-    TooManyEvents { p_exceed_at_max: f64 },
+    TooManyEvents {
+        /// P(more than `MAX_EVENTS` events) at `MAX_EVENTS`.
+        p_exceed_at_max: f64,
+    },
     /// The mode list does not fit the capacity `K`.
-    Capacity { needed: usize, capacity: usize },
+    Capacity {
+        /// Modes the epoch needs.
+        needed: usize,
+        /// Modes the list holds (`K`).
+        capacity: usize,
+    },
 }
 
 /// The events of one epoch: per satellite its P_sat and constellation
 /// index, and per constellation in use its index and P_const.
 pub struct Events<'a> {
+    /// P_sat per satellite.
     pub p_sat: &'a [f64],
+    /// Constellation index per satellite.
     pub sat_system: &'a [u8],
+    /// (constellation index, P_const) per constellation in use.
     pub p_const: &'a [(u8, f64)],
 }
 

@@ -24,20 +24,25 @@ const MAX_ITER: usize = 200;
 /// One term p Q((x - offset) / sigma) of the PL equation.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Term {
+    /// Weight p of the term (a probability).
     pub p: f64,
+    /// Offset (the mode's bias or threshold), m.
     pub offset_m: f64,
+    /// Standard deviation of the term, m.
     pub sigma_m: f64,
 }
 
 /// The PL equation of one axis: the fault-free term (weight 2), the
 /// monitored modes and the right-hand side.
 pub struct Equation<F> {
+    /// The fault-free term, counted twice (both tails).
     pub fault_free: Term,
     /// Returns an iterator over the modes' terms; called once per
     /// evaluation.
     pub modes: F,
     /// The number of modes (for the ADD's upper bound).
     pub n_modes: usize,
+    /// The right-hand side, the integrity budget of the axis.
     pub rhs: f64,
 }
 
@@ -48,7 +53,9 @@ pub struct Equation<F> {
 /// sigma). The same size as a [`Term`].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Active {
+    /// Weight p of the term (a probability).
     pub p: f64,
+    /// Offset of the term, m.
     pub offset_m: f64,
     /// 1 / sigma (1/m).
     pub inv_sigma_per_m: f64,

@@ -44,8 +44,11 @@ pub struct Geometry<T, const N: usize> {
     /// C_int itself (W^-1: M's diagonal and V = S0 W^-1 in `all_in_view`
     /// multiply by it instead of dividing by w).
     pub c_int: [T; N],
+    /// C_acc, the accuracy variance per satellite, m^2.
     pub c_acc: [T; N],
+    /// Nominal bias b_nom per satellite, m.
     pub b_nom: [T; N],
+    /// Linearised residual y per satellite, m.
     pub y: [T; N],
     /// Each satellite's clock column.
     pub col: [usize; N],
@@ -71,7 +74,9 @@ impl<T: Real, const N: usize> Default for Geometry<T, N> {
 /// rows of S^(B) - S^(0).
 #[derive(Debug, Clone, Copy)]
 pub struct Base<T, const N: usize> {
+    /// P_B = (G^T W G)^-1 of the subset, dropped columns zero.
     pub p: [[T; MAX_STATES]; MAX_STATES],
+    /// Position rows (E, N, U) of S^(B) - S^(0), per satellite.
     pub d: [[T; N]; 3],
     /// Satellites removed by this base.
     pub removed: u64,
@@ -84,10 +89,15 @@ pub struct Base<T, const N: usize> {
 /// and the residual.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct SatPack<T> {
+    /// All-in-view gain rows s0 (E, N, U).
     pub s: [T; 3],
+    /// The base's d0 = S^(B) - S^(0) rows (E, N, U).
     pub d0: [T; 3],
+    /// C_acc, m^2.
     pub c_acc: T,
+    /// b_nom, m.
     pub b_nom: T,
+    /// Residual y, m.
     pub y: T,
 }
 
@@ -132,16 +142,22 @@ impl<T: Real, const N: usize> Default for Base<T, N> {
 /// A singular subset: `column` had the relative pivot `pivot`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Deficient {
+    /// The column (or satellite) whose pivot collapsed.
     pub column: usize,
+    /// Its pivot relative to the column norm or diagonal.
     pub pivot: f64,
 }
 
 /// sigma, b, sigma_ss and the separation of one subset, per axis E, N, U.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SubsetStats<T> {
+    /// sigma_q^(k) from C_int per axis E, N, U, m.
     pub sigma_m: [T; 3],
+    /// Nominal bias b_q^(k) per axis, m.
     pub bias_m: [T; 3],
+    /// sigma_ss,q^(k) of the separation from all-in-view, per axis, m.
     pub sigma_ss_m: [T; 3],
+    /// Solution separation x_q^(k) - x_q^(0) per axis, m.
     pub separation_m: [T; 3],
 }
 
@@ -384,14 +400,21 @@ pub fn gain_rows<T: Real, const N: usize>(
 ///   exactly 0 (then every b^(k) is exactly 0 and the pass is skipped).
 #[derive(Debug, Clone, Copy)]
 pub struct Coupling<T, const N: usize> {
+    /// Coupling rows `Q[j][i] = g_j^T P0 g_i w_i`.
     pub q: [[T; N]; N],
+    /// B g_j per satellite j, B = P0 A P0.
     pub bg: [[T; MAX_STATES]; N],
     /// Bit j: `q[j]` and `bg[j]` are formed for this epoch.
     pub ready: u64,
+    /// A = sum_i w_i^2 C_acc,i g_i g_i^T (m x m).
     pub a: [[T; MAX_STATES]; MAX_STATES],
+    /// All-in-view residuals y - G x^(0), m.
     pub res: [T; N],
+    /// All-in-view gain rows s0 (E, N, U).
     pub s: [[T; N]; 3],
+    /// b_nom per satellite, m.
     pub b_nom: [T; N],
+    /// False when every b_nom is exactly 0 (the b^(k) pass is skipped).
     pub biased: bool,
 }
 

@@ -195,10 +195,12 @@ impl<const N: usize, T: Real> Parity<N, T> {
         }
     }
 
+    /// Number of measurement rows n.
     pub fn rows(&self) -> usize {
         self.n
     }
 
+    /// Number of states m (3 + clocks).
     pub fn states(&self) -> usize {
         self.m
     }

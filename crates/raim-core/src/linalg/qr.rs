@@ -135,10 +135,12 @@ impl<const N: usize, T: Real> Householder<N, T> {
         Ok(())
     }
 
+    /// Number of rows n of the factored matrix.
     pub fn rows(&self) -> usize {
         self.n
     }
 
+    /// Number of columns m of the factored matrix.
     pub fn cols(&self) -> usize {
         self.m
     }
@@ -158,7 +160,7 @@ impl<const N: usize, T: Real> Householder<N, T> {
         }
     }
 
-    /// T1[i][j] for i <= j < m, zero below the diagonal.
+    /// `T1[i][j]` for i <= j < m, zero below the diagonal.
     pub fn t(&self, i: usize, j: usize) -> T {
         if i > j || j >= self.m {
             T::zero()
@@ -196,7 +198,7 @@ impl<const N: usize, T: Real> Householder<N, T> {
     }
 
     /// Solve T1 x = y for the first m entries (column-oriented back
-    /// substitution: column j of T1 above the diagonal is stored in a[j][..j]).
+    /// substitution: column j of T1 above the diagonal is stored in `a[j][..j]`).
     pub fn solve_t(&self, y: &[T; MAX_STATES]) -> [T; MAX_STATES] {
         let mut x = *y;
         for j in (0..self.m).rev() {
@@ -221,7 +223,7 @@ impl<const N: usize, T: Real> Householder<N, T> {
     }
 
     /// Solve T1^T x = y (forward substitution: row i of T1^T is column i
-    /// of T1, stored in a[i][..i]).
+    /// of T1, stored in `a[i][..i]`).
     pub fn solve_tt(&self, y: &[T; MAX_STATES]) -> [T; MAX_STATES] {
         let mut x = [T::zero(); MAX_STATES];
         for (i, (col, &d)) in self.a.iter().zip(self.diag.iter()).take(self.m).enumerate() {

@@ -41,7 +41,10 @@ pub enum Design {
     /// An optimal design from the committed table.
     Exact(&'static [u64]),
     /// Unions of t of g interleaved parts.
-    Parts { parts: u8 },
+    Parts {
+        /// Number of parts g.
+        parts: u8,
+    },
 }
 
 /// The groups for n satellites, m states and t faults.
@@ -133,18 +136,22 @@ impl Covering {
         })
     }
 
+    /// Satellites n the design covers.
     pub fn satellites(&self) -> usize {
         usize::from(self.n)
     }
 
+    /// States m of the solution.
     pub fn states(&self) -> usize {
         usize::from(self.m)
     }
 
+    /// Fault count t the design covers.
     pub fn faults(&self) -> usize {
         usize::from(self.t)
     }
 
+    /// How the groups are formed.
     pub fn design(&self) -> Design {
         self.design
     }
@@ -157,6 +164,7 @@ impl Covering {
         }
     }
 
+    /// True when the design has no group.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

@@ -10,26 +10,53 @@ pub enum MultifaultError {
     /// `m` states: a candidate set needs t <= n - m - 1 (its subset
     /// statistic RSS_T has n - m - t >= 1 degrees of freedom, SPEC §8.4).
     TooManyFaults {
+        /// Faults asked for.
         t: usize,
+        /// Satellites in the epoch.
         n: usize,
+        /// States of the solution (3 + clocks).
         m: usize,
+        /// The largest fault count the geometry allows, n - m - 1.
         max: usize,
     },
     /// `t` is 0 or above the largest supported number of faults.
     FaultCountOutOfRange {
+        /// Name of the offending field.
         field: &'static str,
+        /// The fault count received.
         t: usize,
+        /// The largest supported fault count.
         max: usize,
     },
     /// The group budget per epoch is 0: nothing could be searched.
-    ZeroGroupBudget { field: &'static str },
+    ZeroGroupBudget {
+        /// Name of the zero budget field.
+        field: &'static str,
+    },
     /// More satellites than the engine's capacity (or the 64-bit set masks).
-    CapacityExceeded { have: usize, capacity: usize },
+    CapacityExceeded {
+        /// Satellites in the epoch.
+        have: usize,
+        /// The capacity exceeded (`N`, or 64).
+        capacity: usize,
+    },
     /// No group's constrained set has rank m in H: nothing is identifiable
     /// (every identifiable set lost all its satellites to rank swaps).
-    NoIdentifiableGroup { n: usize, groups: usize },
+    NoIdentifiableGroup {
+        /// Satellites in the epoch.
+        n: usize,
+        /// Constraint groups tried.
+        groups: usize,
+    },
     /// A group given by the caller names a satellite outside 0..n.
-    GroupOutOfRange { group: usize, mask: u64, n: usize },
+    GroupOutOfRange {
+        /// Index of the group.
+        group: usize,
+        /// Its satellite bit mask.
+        mask: u64,
+        /// Satellites in the epoch.
+        n: usize,
+    },
 }
 
 impl core::fmt::Display for MultifaultError {

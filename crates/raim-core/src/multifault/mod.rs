@@ -3,7 +3,7 @@
 //!
 //! - [`covering`]: the constraint groups, a covering design (exact table for
 //!   small n, an on-device construction for any n).
-//! - [`reconstruct`]: per group, e_F, its covariance and the seed's Q; per
+//! - [`reconstruct`](mod@reconstruct): per group, e_F, its covariance and the seed's Q; per
 //!   candidate set T, the whitened subset statistic RSS_T and the biases.
 //! - [`search`] (here): every group within the budget, every candidate set
 //!   of 1..t_max satellites they cover, the least and runner-up RSS_T per
@@ -39,7 +39,9 @@ use reconstruct::{fit_subset, reconstruct, GroupFit, ResidualModel, SubsetFit, W
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Level<T> {
+    /// The least RSS_T of the sets of this size.
     pub best: Option<SubsetFit<T>>,
+    /// The second least RSS_T of the same size.
     pub runner_up: Option<SubsetFit<T>>,
     /// Candidate sets evaluated at this size (each once, but for repairs
     /// and designs of more than 64 groups).
@@ -86,7 +88,9 @@ pub struct Search<T> {
     pub levels: [Level<T>; MAX_FAULTS],
     /// The largest fault count searched.
     pub t_max: usize,
+    /// Groups in the covering design.
     pub groups_total: usize,
+    /// Groups searched within the budget.
     pub groups_processed: usize,
     /// The group budget stopped the search before the last group.
     pub budget_limited: bool,
@@ -238,7 +242,9 @@ pub enum Verdict<T> {
     Exclude(SubsetFit<T>),
     /// The best set passes, but so does the runner-up at level pwe.
     Ambiguous {
+        /// The set with the least RSS_T.
         best: SubsetFit<T>,
+        /// The runner-up that also passes.
         runner_up: SubsetFit<T>,
     },
     /// The best set passes, but the group budget cut the search short, so
@@ -306,11 +312,13 @@ pub fn decide<T: Real>(
 pub struct FaultSet {
     /// How many satellites (1..=3); the first `count` entries below hold.
     pub count: u8,
+    /// The satellites of the set.
     pub satellites: [SatId; MAX_FAULTS],
     /// Bias estimates b_T, m, in the order of `satellites`.
     pub bias_m: [f64; MAX_FAULTS],
     /// RSS_T (chi-square units) and its dof n - m - |T|.
     pub rss: f64,
+    /// Degrees of freedom of RSS_T, n - m - |T|.
     pub dof: u32,
 }
 
@@ -326,7 +334,9 @@ pub struct MultifaultReport {
     pub best: Option<FaultSet>,
     /// The runner-up of the same size.
     pub runner_up: Option<FaultSet>,
+    /// Groups in the covering design.
     pub groups_total: u32,
+    /// Groups searched within the budget.
     pub groups_processed: u32,
     /// The group budget limited the search (then no exclusion is made
     /// while `require_unique_exclusion` holds).
@@ -334,6 +344,7 @@ pub struct MultifaultReport {
     /// Satellites moved into constrained sets for rank, and candidate sets
     /// evaluated directly to keep the search complete.
     pub swapped: u32,
+    /// Candidate sets evaluated directly to keep the search complete.
     pub repaired: u32,
     /// The seed's least Q over the groups, sigma^2 units.
     pub q_min: Option<f64>,
@@ -378,8 +389,11 @@ fn fault_set<T: Real, P: Real, const N: usize>(
 /// configured).
 #[derive(Debug, Clone)]
 pub struct Scratch<const N: usize, T: Real = Stat> {
+    /// The whitened residual model of the epoch.
     pub model: ResidualModel<T, N>,
+    /// Factorisation workspace of one group.
     pub ws: Workspace<T, N>,
+    /// One group's e_F, covariance and Q.
     pub group: GroupFit<T, N>,
     /// The re-solved subset before it becomes the solution in force.
     pub solution: Solution<N, T>,

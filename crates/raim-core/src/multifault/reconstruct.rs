@@ -134,6 +134,7 @@ impl<T: Real, const N: usize> ResidualModel<T, N> {
         Ok(())
     }
 
+    /// Number of satellites n in the model.
     pub fn n(&self) -> usize {
         self.n
     }
@@ -340,6 +341,7 @@ pub fn reconstruct<T: Real, const N: usize>(
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SubsetFit<T> {
+    /// The satellites of T as a bit set.
     pub set: SatSet,
     /// |T|.
     pub count: usize,

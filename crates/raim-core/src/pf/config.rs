@@ -13,11 +13,16 @@ pub enum Likelihood {
     Gaussian,
     /// Student-t with `nu` degrees of freedom and scale sigma (nu > 2 so
     /// the EKF baseline has a variance to use).
-    StudentT { nu: f64 },
+    StudentT {
+        /// Degrees of freedom nu (> 2).
+        nu: f64,
+    },
     /// (1 - eps) N(0, sigma^2) + eps N(0, (k sigma)^2): a Gaussian core
     /// with an outlier component, `outlier_prob` = eps, `outlier_scale` = k.
     Mixture {
+        /// eps, the outlier component's weight (a probability).
         outlier_prob: f64,
+        /// k, the outlier sigma over the core sigma (dimensionless).
         outlier_scale: f64,
     },
 }
@@ -57,7 +62,9 @@ pub struct ProcessModel {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct PfConfig {
+    /// The state's process noise.
     pub process: ProcessModel,
+    /// The measurement likelihood.
     pub likelihood: Likelihood,
     /// Ranging sigma when an observation carries none, m.
     pub sigma_m: f64,

@@ -10,28 +10,57 @@ use crate::measurement::SatId;
 pub enum PfError {
     /// A measurement or time field is NaN or infinite.
     NotFinite {
+        /// Name of the offending field.
         field: &'static str,
+        /// Index of the satellite (0 for the epoch time).
         index: usize,
+        /// The value received.
         value: f64,
     },
     /// The same satellite appears twice in one epoch.
-    DuplicateSatellite { id: SatId },
+    DuplicateSatellite {
+        /// The satellite that appears twice.
+        id: SatId,
+    },
     /// Fewer usable satellites than the FDI needs: each auxiliary filter
     /// (one satellite left out) must still see 3 + clocks + 1 satellites.
-    TooFewSatellites { have: usize, need: usize },
+    TooFewSatellites {
+        /// Usable satellites in the epoch.
+        have: usize,
+        /// Satellites the FDI needs.
+        need: usize,
+    },
     /// More satellites than the monitor's fixed capacity.
     Capacity {
+        /// Name of the capacity exceeded.
         field: &'static str,
+        /// The number asked for.
         have: usize,
+        /// The monitor's fixed capacity.
         max: usize,
     },
     /// A configuration value outside its domain.
-    InvalidConfig { field: &'static str, value: f64 },
+    InvalidConfig {
+        /// Name of the offending configuration field.
+        field: &'static str,
+        /// The value received (in the field's unit).
+        value: f64,
+    },
     /// Epoch times must increase strictly.
-    TimeNotIncreasing { previous_s: f64, now_s: f64 },
+    TimeNotIncreasing {
+        /// The previous epoch's time, s.
+        previous_s: f64,
+        /// This epoch's time, s.
+        now_s: f64,
+    },
     /// The first-epoch least-squares fix (the filters' reference point)
     /// did not converge.
-    NoInitialFix { iterations: u32, step_m: f64 },
+    NoInitialFix {
+        /// Gauss-Newton iterations run.
+        iterations: u32,
+        /// Length of the last position step, m.
+        step_m: f64,
+    },
 }
 
 impl core::fmt::Display for PfError {

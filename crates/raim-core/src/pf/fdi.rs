@@ -52,6 +52,7 @@ pub struct SatLlr {
 /// The monitor's answer for one epoch.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PfOutput<const S: usize> {
+    /// Epoch time, s.
     pub time_s: f64,
     /// The main filter's position; `None` when it collapsed this epoch.
     pub position_m: Option<[f64; 3]>,
@@ -61,7 +62,9 @@ pub struct PfOutput<const S: usize> {
     pub drift_m_s: f64,
     /// D_k (eq. 13); -inf before any LLR exists.
     pub decision: f64,
+    /// The alarm threshold on D_k.
     pub threshold: f64,
+    /// D_k above the threshold this epoch.
     pub alarm: bool,
     /// argmax_q of the windowed LLR at an alarm (eq. 14).
     pub isolated: Option<SatId>,
@@ -77,6 +80,7 @@ pub struct PfOutput<const S: usize> {
     pub aux_collapsed: usize,
     /// A receiver clock jump moved a clock reference.
     pub clock_jump: bool,
+    /// Per satellite, its accumulated LLR.
     pub llr: heapless::Vec<SatLlr, S>,
 }
 

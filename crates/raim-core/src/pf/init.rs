@@ -11,9 +11,13 @@ use super::model::{Reference, CLOCK0, DIM};
 /// One satellite for the fix: position, pseudorange, sigma, constellation.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct FixInput {
+    /// Satellite ECEF position, m.
     pub sat_m: [f64; 3],
+    /// Pseudorange, m.
     pub pseudorange_m: f64,
+    /// Pseudorange sigma, m.
     pub sigma_m: f64,
+    /// Constellation index (`System::index`).
     pub sys: usize,
 }
 

@@ -44,6 +44,7 @@ pub struct Reference {
 /// One satellite's measurement, reduced against the reference.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SatTerm<T> {
+    /// The satellite.
     pub id: SatId,
     /// Constellation index (the clock state used).
     pub sys: usize,

@@ -218,7 +218,9 @@ pub struct Step {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Held {
+    /// The satellite held out.
     pub id: SatId,
+    /// Epoch time of the exclusion, s.
     pub since_s: f64,
 }
 
@@ -251,6 +253,7 @@ impl<const N: usize, T: Real> Default for Mcusum<N, T> {
 }
 
 impl<const N: usize, T: Real> Mcusum<N, T> {
+    /// A detector with a zero state and nothing held.
     pub fn new() -> Self {
         Self::default()
     }
@@ -399,6 +402,7 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         &self.held
     }
 
+    /// True when `id` is held out after an MCUSUM alarm.
     pub fn is_held(&self, id: SatId) -> bool {
         self.held.iter().any(|h| h.id == id)
     }

@@ -25,11 +25,13 @@ use mcusum::{Mcusum, MAX_HELD};
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum AlarmSource {
     #[default]
+    /// No alarm.
     None,
     /// The all-in-view snapshot test (D^2 >= T^2).
     Snapshot,
     /// The MCUSUM (D_t >= h).
     Cusum,
+    /// The snapshot test and the MCUSUM together.
     Both,
 }
 
@@ -42,6 +44,7 @@ pub struct McusumReport {
     pub statistic: f64,
     /// The alarm threshold h for this epoch's dimension (NaN if none).
     pub threshold: f64,
+    /// The reference value k (sigma units).
     pub k: f64,
     /// C_t = ||S_(t-1) + y_t||.
     pub c: f64,
@@ -105,6 +108,7 @@ impl<const N: usize, T: Real> Default for Sequential<N, T> {
 }
 
 impl<const N: usize, T: Real> Sequential<N, T> {
+    /// A monitor with a zero MCUSUM state.
     pub fn new() -> Self {
         Sequential {
             mcusum: Mcusum::new(),

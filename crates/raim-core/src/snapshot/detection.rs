@@ -16,6 +16,7 @@ pub struct TestStatistic {
     pub statistic: f64,
     /// T^2 = chi2 quantile(1 - Pfa; dof).
     pub threshold: f64,
+    /// Degrees of freedom n - m.
     pub dof: u32,
 }
 

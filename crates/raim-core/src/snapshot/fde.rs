@@ -23,10 +23,13 @@ pub const MAX_EXCLUSIONS: usize = 4;
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Exclusion {
+    /// The excluded satellite.
     pub id: SatId,
     /// Index of the satellite in the epoch's input.
     pub index: usize,
+    /// The test before the exclusion.
     pub before: TestStatistic,
+    /// The test of the subset after it.
     pub after: TestStatistic,
     /// The identification rule's score of the excluded satellite.
     pub score: f64,
@@ -45,18 +48,31 @@ pub enum AlarmCause {
     Unidentifiable,
     /// Excluding the best or the runner-up candidate both give consistent
     /// subsets: the faulty satellite cannot be told apart.
-    Ambiguous { best: SatId, runner_up: SatId },
+    Ambiguous {
+        /// The best candidate.
+        best: SatId,
+        /// The runner-up.
+        runner_up: SatId,
+    },
     /// The configured number of exclusions is used up.
     MaxExclusions,
     /// The subset left after an exclusion cannot be solved (rank).
-    SubsetGeometry { excluded: SatId },
+    SubsetGeometry {
+        /// The satellite whose exclusion left a singular subset.
+        excluded: SatId,
+    },
     /// Reconstruction FDE (SPEC §8.4): no set of 1..t_max satellites
     /// explains the residuals.
     NoConsistentSet,
     /// Reconstruction FDE: a set explains the residuals, but the group
     /// budget stopped the search before all `groups`, so the uniqueness
     /// check is incomplete and nothing is excluded.
-    SearchIncomplete { groups: u32, budget: u32 },
+    SearchIncomplete {
+        /// Groups in the design.
+        groups: u32,
+        /// Groups searched.
+        budget: u32,
+    },
 }
 
 /// The outcome of FDE for one epoch.
@@ -64,7 +80,9 @@ pub enum AlarmCause {
 pub struct FdeOutcome<const N: usize, T: Real = Stat> {
     /// The solution in force: all-in-view, or the subset after exclusions.
     pub solution: Solution<N, T>,
+    /// The test of the solution in force.
     pub test: TestStatistic,
+    /// The exclusions made, in order.
     pub exclusions: heapless::Vec<Exclusion, MAX_EXCLUSIONS>,
     /// The satellite the rule picked first (on the all-in-view solution).
     pub identified: Option<SatId>,

@@ -44,6 +44,7 @@ impl<const N: usize, T: Real> Default for Snapshot<N, T> {
 }
 
 impl<const N: usize, T: Real> Snapshot<N, T> {
+    /// A snapshot engine with empty scratch.
     pub fn new() -> Self {
         Snapshot {
             thresholds: Thresholds::default(),

@@ -13,9 +13,11 @@ pub struct ProtectionLevels {
     /// HPL = max_i slope_H,i sqrt(lambda_md), m. Infinite when some
     /// satellite's fault would be undetectable (S_ii below the bound).
     pub hpl_m: f64,
+    /// VPL = max_i slope_V,i sqrt(lambda_md), m; infinite as HPL.
     pub vpl_m: f64,
     /// Row of the satellite with the largest horizontal slope.
     pub worst_h_row: Option<usize>,
+    /// Row of the satellite with the largest vertical slope.
     pub worst_v_row: Option<usize>,
 }
 

@@ -91,7 +91,7 @@ pub struct ReplayArgs {
     /// Skip the broadcast group delays (TGD/BGD).
     #[arg(long)]
     pub no_group_delay: bool,
-    /// First epoch: HH:MM[:SS] (GPS time of day) or +SECONDS from the first.
+    /// First epoch: `HH:MM[:SS]` (GPS time of day) or +SECONDS from the first.
     #[arg(long)]
     pub start: Option<String>,
     /// Last epoch (inclusive), same forms.
@@ -103,7 +103,7 @@ pub struct ReplayArgs {
     /// an optional ..END after the start time.
     #[arg(long = "fault", value_name = "SPEC")]
     pub faults: Vec<String>,
-    /// A TOML scenario file: a seed and [[fault]] tables (format and
+    /// A TOML scenario file: a seed and `[[fault]]` tables (format and
     /// example: docs/REPLAY.md, section "Scenario files").
     #[arg(long, value_name = "FILE")]
     pub scenario: Option<PathBuf>,

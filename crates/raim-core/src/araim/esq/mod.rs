@@ -38,17 +38,38 @@ use crate::stats::dist::normal_q;
 pub enum EsqError {
     /// The epoch has no protection level on the axis (ARAIM returned
     /// before step 5: unmonitored, mode capacity, PL not bracketed).
-    NoProtectionLevel { axis: usize },
+    NoProtectionLevel {
+        /// The axis asked for (0 E, 1 N, 2 U).
+        axis: usize,
+    },
     /// An axis index outside 0..3 (0 E, 1 N, 2 U).
-    BadAxis { axis: usize },
+    BadAxis {
+        /// The axis received.
+        axis: usize,
+    },
     /// Every P_k underflowed to zero: N* is 0/0.
     ZeroRisk,
     /// A non-finite or out-of-range quantity (field name and value).
-    NotFinite { field: &'static str, value: f64 },
+    NotFinite {
+        /// Name of the offending quantity.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+    },
     /// A window length or N* that is not positive and finite, or N* < 1.
-    OutOfRange { field: &'static str, value: f64 },
+    OutOfRange {
+        /// Name of the offending field.
+        field: &'static str,
+        /// Its value (s, or samples for N*).
+        value: f64,
+    },
     /// The epoch time went backwards (or repeated) in the stream.
-    NonMonotonicTime { previous_s: f64, now_s: f64 },
+    NonMonotonicTime {
+        /// The previous epoch's time, s.
+        previous_s: f64,
+        /// This epoch's time, s.
+        now_s: f64,
+    },
 }
 
 /// Which mode holds P_max.
@@ -58,7 +79,10 @@ pub enum WorstMode {
     /// The fault-free hypothesis (k = 0).
     FaultFree,
     /// `out.modes[index]`.
-    Mode { index: usize },
+    Mode {
+        /// Index into `out.modes`.
+        index: usize,
+    },
 }
 
 /// Claims 2-4 on one axis of one epoch.
@@ -75,6 +99,7 @@ pub struct EffectiveSamples {
     pub p_sigma: f64,
     /// P_max = max over k = 0.. of P_k.
     pub p_max: f64,
+    /// The hypothesis whose P_k is P_max.
     pub worst: WorstMode,
     /// N* = P_Sigma / P_max (>= 1).
     pub n_star: f64,
@@ -203,9 +228,11 @@ pub struct SeparationTest {
     pub ratio: f64,
     /// The separation and threshold of that mode and axis (m).
     pub separation_m: f64,
+    /// The threshold T_k,q of that mode and axis, m.
     pub threshold_m: f64,
     /// The mode index in `out.modes` and the axis, if any mode was tested.
     pub mode: Option<usize>,
+    /// The axis of the largest ratio (0 E, 1 N, 2 U).
     pub axis: usize,
     /// Every monitored mode passed (the ARAIM verdict).
     pub passed: bool,

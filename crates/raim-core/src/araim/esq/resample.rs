@@ -19,8 +19,11 @@ pub enum Sample {
     /// Evaluate the integrity test on this epoch: it is sample `index`
     /// (0-based) of the window opened at `window_start_s`.
     Emit {
+        /// Start of the window this sample belongs to, s.
         window_start_s: f64,
+        /// Sample index within the window (0-based).
         index: u32,
+        /// The sampling interval in force, s.
         interval_s: f64,
     },
     /// Skip the epoch (no solve).
@@ -60,6 +63,7 @@ impl Resampler {
         })
     }
 
+    /// The window length dT_e, s.
     pub fn window_s(&self) -> f64 {
         self.window_s
     }

@@ -79,27 +79,39 @@ impl Default for PcaConfig {
 pub enum PcaError {
     /// A configuration field out of range (name, value).
     BadConfig {
+        /// Name of the field.
         field: &'static str,
+        /// The value received.
         value: f64,
     },
     /// A non-finite input (field name, satellite index, value).
     NotFinite {
+        /// Name of the field.
         field: &'static str,
+        /// Index of the satellite.
         index: usize,
+        /// The value received.
         value: f64,
     },
     /// More satellites than the slots `N`.
     CapacityExceeded {
+        /// Satellites in the epoch.
         have: usize,
+        /// The slots `N`.
         capacity: usize,
     },
+    /// The same satellite appears twice in one epoch.
     DuplicateSatellite {
+        /// Index of its first appearance.
         first: usize,
+        /// Index of its second appearance.
         second: usize,
     },
     /// Fewer satellites than the unknowns (3 + one clock per constellation).
     TooFewSatellites {
+        /// Satellites in the epoch.
         have: usize,
+        /// Unknowns (3 + one clock per constellation).
         need: usize,
     },
     /// The all-in-view normal matrix is singular.
@@ -108,7 +120,9 @@ pub enum PcaError {
     SvdFailed,
     /// The epoch time did not advance.
     NonMonotonicTime {
+        /// The previous epoch's time, s.
         previous_s: f64,
+        /// This epoch's time, s.
         now_s: f64,
     },
 }
@@ -139,11 +153,14 @@ pub struct PcaTest<const N: usize> {
 /// One epoch's outcome: the test, or why there is none yet.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PcaOutcome<const N: usize> {
+    /// The window is full: the PCA test of this epoch.
     Tested(PcaTest<N>),
     /// Fewer than `W` epochs of history, or fewer than 2 satellites with
     /// a complete history.
     WarmingUp {
+        /// Epochs of history held.
         epochs: usize,
+        /// Satellites with a complete history.
         complete: usize,
     },
 }
@@ -255,6 +272,7 @@ where
         + nalgebra::allocator::Allocator<Const<N>>
         + nalgebra::allocator::Allocator<U1, Const<N>>,
 {
+    /// A monitor with an empty history.
     pub fn new() -> Self {
         Self::default()
     }
