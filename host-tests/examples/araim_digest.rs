@@ -66,7 +66,10 @@ impl Host {
         let responses: Vec<Response> = link
             .0
             .iter()
-            .filter_map(|&b| rx.push(b).map(|p| postcard::from_bytes(p.unwrap()).unwrap()))
+            .filter_map(|&b| {
+                rx.push(b)
+                    .map(|p| postcard::from_bytes(p.unwrap()).unwrap())
+            })
             .collect();
         assert_eq!(responses.len(), 1, "{what}");
         let r = &responses[0];
