@@ -78,6 +78,8 @@ pub trait Real:
     fn atan2_m(self, x: Self) -> Self;
     /// atan(self) through `libm`.
     fn atan_m(self) -> Self;
+    /// asin(self) through `libm`.
+    fn asin_m(self) -> Self;
     /// The square root of a squared range `r2` (m^2), in f64 whatever `T`:
     /// ranges are f64 quantities (the policy). In an f64 engine, `libm`'s
     /// correctly rounded sqrt; in an f32 engine (the M4F, where an f64 sqrt
@@ -136,6 +138,10 @@ impl Real for f64 {
         libm::atan(self)
     }
     #[inline(always)]
+    fn asin_m(self) -> Self {
+        libm::asin(self)
+    }
+    #[inline(always)]
     fn range_sqrt(r2: f64) -> f64 {
         libm::sqrt(r2)
     }
@@ -187,6 +193,10 @@ impl Real for f32 {
     #[inline(always)]
     fn atan_m(self) -> Self {
         libm::atanf(self)
+    }
+    #[inline(always)]
+    fn asin_m(self) -> Self {
+        libm::asinf(self)
     }
     #[inline]
     fn range_sqrt(r2: f64) -> f64 {

@@ -1,6 +1,7 @@
 //! Elevation-dependent ranging sigma (SPEC §1), DO-229 style:
 //! sigma^2 = sigma_ura^2 + sigma_iono(el)^2 + sigma_tropo(el)^2 + sigma_user(el)^2.
 
+use crate::araim::error_model::{iono_obliquity, multipath_sigma_m, tropo_sigma_m};
 use crate::real::Real;
 
 /// Parameters of the elevation model. Defaults are DO-229D's airborne
@@ -44,17 +45,10 @@ impl SigmaModel {
     pub fn sigma<T: Real>(&self, el_rad: T) -> T {
         let min_el = T::of(self.min_elevation_rad);
         let el = if el_rad > min_el { el_rad } else { min_el };
-        let s = el.sin_m();
-        // DO-229D A.4.2.4: tropospheric residual, 0.12 m at zenith.
-        let tropo = T::of(0.12) * T::of(1.001) / (T::of(0.002_001) + s * s).sqrt();
-        // DO-229D J.2.4: airborne multipath 0.13 + 0.53 exp(-el_deg / 10).
+        let tropo = tropo_sigma_m(el.sin_m());
         let el_deg = el * T::of(180.0) / T::of(core::f64::consts::PI);
-        let multipath = T::of(0.13) + T::of(0.53) * (-el_deg / T::of(10.0)).exp_m();
-        // Ionospheric obliquity factor, thin shell at 350 km (DO-229D A.4.4.10.4).
-        let re_ratio = T::of(6378.1363) / (T::of(6378.1363) + T::of(350.0));
-        let c = re_ratio * el.cos_m();
-        let obliquity = T::one() / (T::one() - c * c).sqrt();
-        let iono = T::of(self.iono_vertical_m) * obliquity;
+        let multipath = multipath_sigma_m(el_deg);
+        let iono = T::of(self.iono_vertical_m) * iono_obliquity(el);
         let (ura, noise) = (T::of(self.ura_m), T::of(self.noise_m));
         (ura * ura + iono * iono + tropo * tropo + multipath * multipath + noise * noise).sqrt()
     }
@@ -63,28 +57,6 @@ impl SigmaModel {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn matches_do229_terms_at_zenith_and_low_elevation() {
-        let m = SigmaModel {
-            ura_m: 0.0,
-            iono_vertical_m: 0.0,
-            noise_m: 0.0,
-            ..SigmaModel::default()
-        };
-        // Zenith: tropo 0.12*1.001/sqrt(1.002001) = 0.120000 m; multipath
-        // 0.13 + 0.53 e^-9 = 0.130066 m.
-        let z = m.sigma_m(core::f64::consts::FRAC_PI_2);
-        let expect = libm::sqrt(0.12f64.powi(2) + (0.13 + 0.53 * (-9.0f64).exp()).powi(2));
-        assert!((z - expect).abs() < 1e-4, "{z} vs {expect}");
-        // 5 deg: tropo 0.12*1.001/sqrt(0.002001+sin^2 5deg) = 1.2498 m,
-        // multipath 0.13+0.53e^-0.5 = 0.4515 m.
-        let low = m.sigma_m(5.0f64.to_radians());
-        let t = 0.12 * 1.001 / (0.002001 + 5.0f64.to_radians().sin().powi(2)).sqrt();
-        let mp = 0.13 + 0.53 * (-0.5f64).exp();
-        assert!((low - (t * t + mp * mp).sqrt()).abs() < 1e-12);
-        assert!(low > z);
-    }
 
     /// The bound behind `solve::RELINEARISE_M`: an elevation error of
     /// `RELINEARISE_EL_RAD` moves the sigma by less than 3e-4 relative, at

@@ -86,15 +86,6 @@ pub const MAX_FDE_MODES: u32 = 600;
 /// budget").
 pub const FDE_WORK_BUDGET: u32 = 110_000;
 
-/// The FDE budget for an all-in-view run with `monitored` modes.
-#[cfg_attr(not(feature = "araim"), allow(dead_code))]
-pub(crate) fn fde_budget(monitored: u32) -> raim_core::araim::fde::FdeBudget {
-    let per = FDE_WORK_BUDGET / monitored.max(1);
-    raim_core::araim::fde::FdeBudget {
-        max_candidates: usize::try_from(per).unwrap_or(usize::MAX),
-    }
-}
-
 /// CRC-32/ISO-HDLC, as `frame::CRC32`; a static so that a digest can
 /// borrow it.
 static CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
@@ -399,7 +390,7 @@ fn epoch_answer_inner<P: super::Platform>(
         status.epochs = status.epochs.wrapping_add(1);
         let t0 = platform.now();
         let r = match epoch {
-            Input::Linear(e) => araim.engine.run(ism, e),
+            Input::Linear(e) => araim.engine.run(config, ism, e),
             Input::Ranges(e) => araim.engine.run_ranges(config, ism, e),
         };
         let t1 = platform.now();
@@ -415,17 +406,16 @@ fn epoch_answer_inner<P: super::Platform>(
 
 #[cfg(feature = "araim")]
 mod engine {
-    use raim_core::araim::error_model::iono_free_factor_sq;
     use raim_core::araim::esq::effective_samples;
-    use raim_core::araim::{Araim, AraimConfig, AraimSat, FdeDecision, Ism, PlOutput, Unavailable};
-    use raim_core::{Decision, Real};
+    use raim_core::araim::{
+        AraimConfig, Exclusion, FdeLimits, Ism, Monitor, MonitorError, PlOutput, SatIsm,
+        SatelliteModels, Verdict,
+    };
+    use raim_core::SatId;
 
-    use super::{fde_budget, AraimWireError, IsmFrame, MAX_FDE_MODES, MAX_MODES};
-    use raim_core::frames::{enu_rotation, rotate, unrotate};
-    use raim_core::measurement::MAX_SYSTEMS;
-    use raim_core::solve::{solve_into, Solution};
-    use raim_core::{Config, Epoch, LinearObservation};
-    use raim_proto::araim_msg::{AraimSummary, WireAraimResult, WireFde};
+    use super::{AraimWireError, IsmFrame, FDE_WORK_BUDGET, MAX_FDE_MODES, MAX_MODES};
+    use raim_core::{Config, Epoch};
+    use raim_proto::araim_msg::{AraimSummary, IsmSat, WireAraimResult, WireFde};
     use raim_proto::error::WireError;
     use raim_proto::message::{LinearEpoch, RangeEpoch};
     use raim_proto::CAPACITY;
@@ -437,324 +427,139 @@ mod engine {
     /// own features (as the particle filter's `PfT`).
     pub type AraimT = f32;
 
-    type Engine = Araim<AraimT, CAPACITY, MAX_MODES>;
+    /// The core's ARAIM monitor: the engine, the FDE's scratch engine, the
+    /// epoch's satellites and, for a pseudorange epoch, its Gauss-Newton
+    /// solution and linearised form (static, so the main loop's stack
+    /// carries none of them).
+    pub(super) struct Engines(Monitor<AraimT, CAPACITY, MAX_MODES>);
 
-    /// The engine, the FDE's scratch engine, the epoch's satellites and,
-    /// for a pseudorange epoch, its Gauss-Newton solution and linearised
-    /// form (static, so the main loop's stack carries none of them).
-    pub(super) struct Engines {
-        main: Engine,
-        scratch: Engine,
-        sats: [AraimSat<AraimT>; CAPACITY],
-        solution: Solution<CAPACITY, AraimT>,
-        lin: [LinearObservation; CAPACITY],
+    /// The ISM frame's satellite entries, as the monitor joins them.
+    struct Entries<'a>(&'a [IsmSat]);
+
+    impl SatelliteModels for Entries<'_> {
+        fn ism(&self, id: SatId) -> Option<SatIsm> {
+            self.0.iter().find(|s| s.id == id).map(|s| SatIsm {
+                id: s.id,
+                sigma_ura_m: s.sigma_ura_m,
+                sigma_ure_m: s.sigma_ure_m,
+                b_nom_m: s.b_nom_m,
+                p_sat: s.p_sat,
+            })
+        }
+    }
+
+    /// The device's exclusion limits: `MAX_FDE_MODES` and the work budget
+    /// `FDE_WORK_BUDGET` (the watchdog).
+    fn limits() -> FdeLimits {
+        FdeLimits {
+            max_modes: usize::try_from(MAX_FDE_MODES).unwrap_or(usize::MAX),
+            work_candidate_modes: usize::try_from(FDE_WORK_BUDGET).unwrap_or(usize::MAX),
+        }
     }
 
     impl Engines {
         pub(super) fn new() -> Self {
-            Engines {
-                main: Engine::new(),
-                scratch: Engine::new(),
-                sats: [AraimSat::default(); CAPACITY],
-                solution: Solution::empty(),
-                lin: [LinearObservation::default(); CAPACITY],
-            }
+            Engines(Monitor::new())
         }
 
-        /// One linearised epoch: the satellites from the epoch and the ISM,
-        /// ARAIM all in view, FDE after a detection.
+        /// One linearised epoch: the core monitor with the ISM in force.
         pub(super) fn run(
             &mut self,
+            cfg: &Config,
             ism: &IsmFrame,
             epoch: &LinearEpoch,
         ) -> Result<WireAraimResult, WireError> {
-            let Engines {
-                main,
-                scratch,
-                sats,
-                ..
-            } = self;
-            evaluate(main, scratch, sats, ism, epoch.time_s, &epoch.sats.items).map(|r| r.0)
+            let e = Epoch::linear(epoch.time_s, &epoch.sats.items);
+            self.evaluate(cfg, ism, &e)
         }
 
-        /// One pseudorange epoch (`AraimCommand::Ranges`): Gauss-Newton all
-        /// in view with the snapshot configuration in force (`cfg`: its
-        /// iteration limit, convergence and, as weights, its sigma model;
-        /// ranges and residuals in f64, the steps in `AraimT`), then the
-        /// linearised epoch at that solution x0: per satellite the unit line
-        /// of sight in ENU at x0 and the residual
-        /// `pseudorange - |sat - x0| - clock(system)`, all in f64 (docs/CORE.md
-        /// "Precision"); the range model is the snapshot solver's. ARAIM and
-        /// FDE then run on it as on a linearised epoch, and the position in
-        /// force is x0 plus the ENU correction of the solution in force
-        /// (all in view, or the excluded subset's).
+        /// One pseudorange epoch (`AraimCommand::Ranges`): the core monitor
+        /// linearises it at its Gauss-Newton solution with the snapshot
+        /// configuration in force (`cfg`: its iteration limit, convergence
+        /// and, as weights, its sigma model; ranges and residuals in f64,
+        /// the steps in `AraimT`); the position in force is reported.
         pub(super) fn run_ranges(
             &mut self,
             cfg: &Config,
             ism: &IsmFrame,
             epoch: &RangeEpoch,
         ) -> Result<WireAraimResult, WireError> {
-            let Engines {
-                main,
-                scratch,
-                sats,
-                solution,
-                lin,
-            } = self;
-            let obs = &epoch.sats.items;
-            // The pseudorange inputs' checks before the solver (its own
-            // check is crate-private), typed with field and index; sigma,
-            // duplicates and the ISM are checked by `evaluate`.
-            let finite = |field: &'static str, index: usize, value: f64| {
-                if value.is_finite() {
-                    Ok(())
+            let e = Epoch::ranges(epoch.time_s, &epoch.sats.items, epoch.apriori_m);
+            self.evaluate(cfg, ism, &e)
+        }
+
+        fn evaluate(
+            &mut self,
+            cfg: &Config,
+            ism: &IsmFrame,
+            epoch: &Epoch<'_>,
+        ) -> Result<WireAraimResult, WireError> {
+            let araim_cfg = AraimConfig::from(ism.config);
+            let p_const = Ism {
+                p_const: ism.p_const,
+            };
+            let models = Entries(&ism.sats.items);
+            let monitor = &mut self.0;
+            let verdict = monitor
+                .epoch(cfg, &araim_cfg, &p_const, &models, epoch, limits())
+                .map_err(wire_error)?;
+            Ok(result(monitor, verdict, &araim_cfg, epoch.time_s))
+        }
+    }
+
+    /// The wire result of a verdict and the monitor's outputs.
+    fn result(
+        monitor: &Monitor<AraimT, CAPACITY, MAX_MODES>,
+        verdict: Verdict<CAPACITY>,
+        cfg: &AraimConfig,
+        time_s: f64,
+    ) -> WireAraimResult {
+        let pl_exact = cfg.pl_output == PlOutput::Exact;
+        let out = monitor.all_in_view();
+        let (fde, n_star_vertical) = match verdict.exclusion {
+            Exclusion::NotTested => (WireFde::NotTested, None),
+            Exclusion::NotAttempted { monitored } => (
+                WireFde::NotAttempted {
+                    modes: u32::try_from(monitored).unwrap_or(u32::MAX),
+                },
+                None,
+            ),
+            // Seed 003's N* (vertical, at the PL reported).
+            Exclusion::Fde(d) => {
+                let pl_kind = if pl_exact {
+                    PlOutput::Exact
                 } else {
-                    Err(WireError::from(raim_core::RaimError::NotFinite {
-                        field,
-                        index,
-                        value,
-                    }))
-                }
-            };
-            finite("time_s", 0, epoch.time_s)?;
-            for v in epoch.apriori_m.iter().flatten() {
-                finite("apriori_m", 0, *v)?;
-            }
-            for (i, o) in obs.iter().enumerate() {
-                finite("pseudorange_m", i, o.pseudorange_m)?;
-                for v in o.position_m {
-                    finite("position_m", i, v)?;
-                }
-            }
-            let mut mask = [false; CAPACITY];
-            for m in mask.iter_mut().take(obs.len()) {
-                *m = true;
-            }
-            let ep = Epoch::ranges(epoch.time_s, obs, epoch.apriori_m);
-            solve_into(cfg, &ep, &mask, solution)?;
-            let (Some(x0), Some(geo)) = (solution.position_ecef_m, solution.geodetic) else {
-                // A solution that ends off the Earth's surface has no local
-                // frame for the elevation model.
-                return Err(WireError::from(raim_core::RaimError::OutOfRange {
-                    field: "position_radius_m",
-                    value: libm::sqrt(
-                        solution
-                            .position_ecef_m
-                            .map(|p| p[0] * p[0] + p[1] * p[1] + p[2] * p[2])
-                            .unwrap_or(0.0),
-                    ),
-                    min: 5.0e6,
-                    max: f64::INFINITY,
-                }));
-            };
-            let rot = enu_rotation(&geo);
-            let mut n = 0;
-            for (o, slot) in obs.iter().zip(lin.iter_mut()) {
-                let d = [
-                    o.position_m[0] - x0[0],
-                    o.position_m[1] - x0[1],
-                    o.position_m[2] - x0[2],
-                ];
-                let range_m = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-                let u = rotate(&rot, [d[0] / range_m, d[1] / range_m, d[2] / range_m]);
-                let clock_m = solution
-                    .clock_m
-                    .get(o.id.system.index())
-                    .copied()
-                    .flatten()
-                    .unwrap_or(0.0);
-                *slot = LinearObservation {
-                    id: o.id,
-                    los_enu: u,
-                    residual_m: o.pseudorange_m - range_m - clock_m,
-                    sigma_m: o.sigma_m,
+                    PlOutput::AddBracket
                 };
-                n += 1;
-            }
-            let lin = lin.get(..n).unwrap_or(&[]);
-            let (mut result, correction) = evaluate(main, scratch, sats, ism, epoch.time_s, lin)?;
-            let shift = unrotate(&rot, correction.map(|c| c.to_f64()));
-            result.position_ecef_m = Some([x0[0] + shift[0], x0[1] + shift[1], x0[2] + shift[2]]);
-            Ok(result)
-        }
-    }
-
-    /// ARAIM all in view on the linearised satellites `obs` and the ISM,
-    /// FDE after a detection; the result and the ENU position correction
-    /// of the solution in force (the subset's after an exclusion).
-    fn evaluate(
-        main: &mut Engine,
-        scratch: &mut Engine,
-        buf: &mut [AraimSat<AraimT>; CAPACITY],
-        ism: &IsmFrame,
-        time_s: f64,
-        obs: &[LinearObservation],
-    ) -> Result<(WireAraimResult, [AraimT; 3]), WireError> {
-        let r = evaluate_result(main, scratch, buf, ism, time_s, obs)?;
-        let correction = if r.after_exclusion.is_some() {
-            scratch.output().correction_enu_m
-        } else {
-            main.output().correction_enu_m
-        };
-        Ok((r, correction))
-    }
-
-    fn evaluate_result(
-        main: &mut Engine,
-        scratch: &mut Engine,
-        buf: &mut [AraimSat<AraimT>; CAPACITY],
-        ism: &IsmFrame,
-        time_s: f64,
-        obs: &[LinearObservation],
-    ) -> Result<WireAraimResult, WireError> {
-        let mut p_const = [None; MAX_SYSTEMS];
-        let mut n = 0;
-        for (i, o) in obs.iter().enumerate() {
-            let Some(entry) = ism.sats.items.iter().find(|s| s.id == o.id) else {
-                return Err(WireError::Araim(AraimWireError::NotInIsm {
-                    id: o.id,
-                    index: u32::try_from(i).unwrap_or(u32::MAX),
-                }));
-            };
-            let j = o.id.system.index();
-            if let (Some(dst), Some(src)) = (p_const.get_mut(j), ism.p_const.get(j)) {
-                *dst = *src;
-            }
-            if let Some(s) = o.sigma_m {
-                if !(s > 0.0) || !s.is_finite() {
-                    return Err(WireError::NonPositiveSigma {
-                        index: u32::try_from(i).unwrap_or(u32::MAX),
-                        sigma_m: s,
-                    });
-                }
-            }
-            // The ADD's G row is minus the line of sight.
-            let g = o.los_enu.map(|v| AraimT::of(-v));
-            let nominal_m2 = match o.sigma_m {
-                // The host's own sigma of the tropo + airborne terms.
-                Some(s) => s * s,
-                None => nominal_variance_m2(&o.los_enu),
-            };
-            let (ura, ure) = (entry.sigma_ura_m, entry.sigma_ure_m);
-            let c_int_m2 = AraimT::of(ura * ura + nominal_m2);
-            let c_acc_m2 = AraimT::of(ure * ure + nominal_m2);
-            if let Some(slot) = buf.get_mut(i) {
-                *slot = AraimSat {
-                    id: o.id,
-                    g_enu: g,
-                    c_int_m2,
-                    c_acc_m2,
-                    b_nom_m: AraimT::of(entry.b_nom_m),
-                    p_sat: entry.p_sat,
-                    residual_m: AraimT::of(o.residual_m),
-                };
-                n += 1;
-            }
-        }
-        let sats = buf.get(..n).unwrap_or(&[]);
-        let cfg = AraimConfig::from(ism.config);
-        let ism = Ism { p_const };
-        let pl_exact = ism_pl_exact(&cfg);
-        let out = main.process(&cfg, &ism, sats)?;
-        let all_in_view = AraimSummary::from_output(out, pl_exact);
-        // Seed 003's N* (vertical, at the PL reported), issue 13.
-        let pl_kind = if pl_exact {
-            PlOutput::Exact
-        } else {
-            PlOutput::AddBracket
-        };
-        let n_star_vertical = effective_samples(out, 2, pl_kind).ok().map(|e| e.n_star);
-        // No test was run when the modes could not be enumerated.
-        let untested = matches!(
-            out.unavailable,
-            Some(Unavailable::ModeCapacity { .. } | Unavailable::TooManyEvents { .. })
-        );
-        if untested || (!out.detection_passed && all_in_view.monitored > MAX_FDE_MODES) {
-            let (decision, fde) = if untested {
-                (Decision::Unavailable, WireFde::NotTested)
-            } else {
                 (
-                    Decision::Alarm,
-                    WireFde::NotAttempted {
-                        modes: all_in_view.monitored,
-                    },
+                    d.into(),
+                    effective_samples(out, 2, pl_kind).ok().map(|e| e.n_star),
                 )
-            };
-            return Ok(WireAraimResult {
-                time_s,
-                decision,
-                all_in_view,
-                fde,
-                excluded: heapless::Vec::new(),
-                after_exclusion: None,
-                n_star_vertical: None,
-                position_ecef_m: None,
-            });
-        }
-        let (fde, after_exclusion) = if out.detection_passed {
-            (FdeDecision::NoFault, None)
-        } else {
-            // Within the work budget: the watchdog (FDE_WORK_BUDGET).
-            let d =
-                main.fde_within(&cfg, &ism, sats, scratch, fde_budget(all_in_view.monitored))?;
-            let after = match d {
-                FdeDecision::Excluded { .. } => {
-                    Some(AraimSummary::from_output(scratch.output(), pl_exact))
-                }
-                _ => None,
-            };
-            (d, after)
-        };
-        let mut excluded = heapless::Vec::new();
-        if let FdeDecision::Excluded { sats: mask, .. } = fde {
-            for (i, s) in sats.iter().enumerate() {
-                if i < 64 && mask & (1u64 << i) != 0 {
-                    // At most CAPACITY satellites: never full.
-                    let _ = excluded.push(s.id);
-                }
             }
-        }
-        let decision = match (&fde, &after_exclusion) {
-            (FdeDecision::NoFault, _) if all_in_view.available() => Decision::Ok,
-            (FdeDecision::NoFault, _) => Decision::Unavailable,
-            (FdeDecision::Excluded { .. }, Some(a)) if a.available() => Decision::Excluded,
-            (FdeDecision::Excluded { .. }, _) => Decision::Unavailable,
-            (FdeDecision::Alarm(_), _) => Decision::Alarm,
         };
-        Ok(WireAraimResult {
+        WireAraimResult {
             time_s,
-            decision,
-            all_in_view,
-            fde: fde.into(),
-            excluded,
-            after_exclusion,
+            decision: verdict.decision,
+            all_in_view: AraimSummary::from_output(out, pl_exact),
+            fde,
+            excluded: verdict.excluded,
+            after_exclusion: monitor
+                .after_exclusion()
+                .map(|o| AraimSummary::from_output(o, pl_exact)),
             n_star_vertical,
-            position_ecef_m: None,
-        })
+            position_ecef_m: verdict.position_ecef_m,
+        }
     }
 
-    /// The ADD's nominal variance sigma_tropo^2 + sigma_user^2 (m^2) of
-    /// `raim_core::araim::error_model::nominal_variance_m2`, at the
-    /// elevation of `los_enu` (sin el = |up| / |los|), evaluated in `f64`
-    /// through `libm` itself: the core's generic version reaches
-    /// `exp`/`asin`/`sin` through nalgebra's `RealField`, which a host
-    /// build with nalgebra's `std` feature (the workspace's) sends to the
-    /// platform's libm, so host and firmware would differ in the last bits.
-    /// Test `nominal_variance_is_the_cores`.
-    pub(super) fn nominal_variance_m2(los_enu: &[f64; 3]) -> f64 {
-        const DEG_RAD: f64 = core::f64::consts::PI / 180.0;
-        let [e, n, u] = *los_enu;
-        let el_rad = libm::asin(libm::fabs(u) / libm::sqrt(e * e + n * n + u * u));
-        let s = libm::sin(el_rad);
-        let tropo = 0.12 * 1.001 / libm::sqrt(0.002001 + s * s);
-        let el_deg = el_rad / DEG_RAD;
-        let mp = 0.13 + 0.53 * libm::exp(-el_deg / 10.0);
-        let noise = 0.15 + 0.43 * libm::exp(-el_deg / 6.9);
-        tropo * tropo + iono_free_factor_sq() * (mp * mp + noise * noise)
-    }
-
-    fn ism_pl_exact(cfg: &AraimConfig) -> bool {
-        cfg.pl_output == raim_core::araim::PlOutput::Exact
+    fn wire_error(e: MonitorError) -> WireError {
+        match e {
+            MonitorError::Araim(e) => e.into(),
+            MonitorError::Raim(e) => e.into(),
+            MonitorError::NotInIsm { id, index } => WireError::Araim(AraimWireError::NotInIsm {
+                id,
+                index: u32::try_from(index).unwrap_or(u32::MAX),
+            }),
+        }
     }
 }
 
@@ -1322,22 +1127,6 @@ mod tests {
         assert_eq!(st.errors, errors);
     }
 
-    /// The device's f64/libm evaluation of the ADD error model is the
-    /// core's `error_model` (to rounding) from 2 to 90 degrees.
-    #[test]
-    fn nominal_variance_is_the_cores() {
-        use raim_core::araim::error_model::{elevation_from_g, nominal_variance_m2};
-        for k in 0..=88 {
-            let el = (2.0 + k as f64).to_radians();
-            let az = (k as f64 * 37.0).to_radians();
-            let los = [el.cos() * az.sin(), el.cos() * az.cos(), el.sin()];
-            let ours = super::engine::nominal_variance_m2(&los);
-            let g = los.map(|v| -v);
-            let core = nominal_variance_m2::<f64>(elevation_from_g(&g));
-            assert!((ours - core).abs() <= 1e-13 * core, "{k}: {ours} {core}");
-        }
-    }
-
     /// A 100 m fault on one satellite of the 20-satellite sky is detected
     /// and that satellite (only) is excluded; the clean sky is Ok; the
     /// results match the core engine run directly on the same inputs.
@@ -1486,7 +1275,8 @@ mod tests {
         let mut sats = Vec::new();
         for o in &obs {
             let g = o.los_enu.map(|v| -v);
-            let nom = super::engine::nominal_variance_m2(&o.los_enu);
+            use raim_core::araim::error_model::{elevation_from_g, nominal_variance_m2};
+            let nom = nominal_variance_m2::<f64>(elevation_from_g(&o.los_enu));
             sats.push(raim_core::araim::AraimSat::<f64> {
                 id: o.id,
                 g_enu: g,

@@ -4,7 +4,10 @@
 use std::io::{BufRead, Write};
 
 use anyhow::{anyhow, bail, Context, Result};
-use raim_core::araim::{Araim, AraimConfig, AraimOutput, AraimSat, FdeDecision, Ism, ModeStatus};
+use raim_core::araim::{
+    AraimConfig, AraimOutput, AraimSat, Exclusion, FdeLimits, Ism, ModeStatus, Monitor,
+    MonitorError, Verdict,
+};
 use raim_core::{SatId, System};
 use serde_json::{json, Value};
 
@@ -136,22 +139,27 @@ fn mode_json(sats: &[AraimSat<f64>], out: &AraimOutput<f64, K>) -> Vec<Value> {
         .collect()
 }
 
+/// The exclusion outcome as printed: the FDE's decision, or why none ran.
+fn fde_text(e: &Exclusion) -> String {
+    match e {
+        Exclusion::Fde(d) => format!("{d:?}"),
+        other => format!("{other:?}"),
+    }
+}
+
 fn result_json(
     time_s: f64,
     sats: &[AraimSat<f64>],
     out: &AraimOutput<f64, K>,
-    fde: &FdeDecision,
+    verdict: &Verdict<N>,
     with_modes: bool,
 ) -> Value {
-    let excluded: Vec<String> = match fde {
-        FdeDecision::Excluded { sats: mask, .. } => sats
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| mask & (1u64 << i) != 0)
-            .map(|(_, s)| sat_name(s))
-            .collect(),
-        _ => Vec::new(),
-    };
+    let excluded: Vec<String> = verdict
+        .excluded
+        .iter()
+        .map(|id| format!("{}{:02}", id.system.letter(), id.prn))
+        .collect();
+    let fde = fde_text(&verdict.exclusion);
     let mut v = json!({
         "time_s": time_s,
         "available": out.available(),
@@ -164,7 +172,7 @@ fn result_json(
         "emt_m": out.emt_m, "sigma_v_acc_m": out.sigma_v_acc_m,
         "sigma_enu_m": out.sigma0_m, "correction_enu_m": out.correction_enu_m,
         "detection_passed": out.detection_passed,
-        "fde": format!("{fde:?}"), "excluded": excluded,
+        "fde": fde, "excluded": excluded,
     });
     if with_modes {
         v["mode_table"] = Value::Array(mode_json(sats, out));
@@ -179,8 +187,7 @@ pub fn run(args: &AraimArgs) -> Result<()> {
         )),
         None => Box::new(std::io::stdin().lock()),
     };
-    let mut engine = Box::new(Araim::<f64, N, K>::new());
-    let mut scratch = Box::new(Araim::<f64, N, K>::new());
+    let mut monitor = Box::new(Monitor::<f64, N, K>::new());
     let stdout = std::io::stdout();
     let mut w = stdout.lock();
     for (lineno, line) in reader.lines().enumerate() {
@@ -192,20 +199,17 @@ pub fn run(args: &AraimArgs) -> Result<()> {
             .with_context(|| format!("line {}: not JSON", lineno + 1))?;
         let (time_s, cfg, ism, sats) =
             parse_epoch(&v).with_context(|| format!("line {}", lineno + 1))?;
-        let result = engine
-            .process(&cfg, &ism, &sats)
-            .map(|_| ())
-            .and_then(|()| engine.fde(&cfg, &ism, &sats, &mut scratch));
-        match result {
-            Ok(fde) => {
-                let out = engine.output();
+        match monitor.given(&cfg, &ism, &sats, FdeLimits::UNLIMITED) {
+            Ok(verdict) => {
+                let out = monitor.all_in_view();
+                let fde = fde_text(&verdict.exclusion);
                 if args.json {
-                    let v = result_json(time_s, &sats, out, &fde, args.modes);
+                    let v = result_json(time_s, &sats, out, &verdict, args.modes);
                     writeln!(w, "{}", serde_json::to_string(&v)?)?;
                 } else {
                     writeln!(
                         w,
-                        "t={time_s:>10.1}s modes {:>4} VPL {:7.3} m HPL {:7.3} m EMT {:6.3} m sigma_v,acc {:5.3} m {} {fde:?}",
+                        "t={time_s:>10.1}s modes {:>4} VPL {:7.3} m HPL {:7.3} m EMT {:6.3} m sigma_v,acc {:5.3} m {} {fde}",
                         out.modes.len(),
                         out.pl_add.vpl_m,
                         out.pl_add.hpl_m,
@@ -215,13 +219,20 @@ pub fn run(args: &AraimArgs) -> Result<()> {
                     )?;
                 }
             }
-            Err(e) if args.json => writeln!(
-                w,
-                "{}",
-                serde_json::to_string(
-                    &json!({"time_s": time_s, "error": format!("{e:?}"), "detail": e.to_string()})
+            Err(e) if args.json => {
+                // The engine's own error, as before the monitor wrapped it.
+                let debug = match e {
+                    MonitorError::Araim(a) => format!("{a:?}"),
+                    other => format!("{other:?}"),
+                };
+                writeln!(
+                    w,
+                    "{}",
+                    serde_json::to_string(
+                        &json!({"time_s": time_s, "error": debug, "detail": e.to_string()})
+                    )?
                 )?
-            )?,
+            }
             Err(e) => writeln!(w, "t={time_s:>10.1}s ERROR {e}")?,
         }
     }

@@ -15,6 +15,9 @@
 //! - [`pl`]: the PL equation, exact and ADD bracket.
 //! - [`error_model`]: C_int and C_acc from the elevation.
 //! - [`ism`]: the ISM, the configuration and their range checks.
+//! - [`monitor`]: the whole epoch once ([`Monitor`]): the ISM join, the
+//!   error model, the linearisation of pseudoranges, FDE within its
+//!   budget, the decision and the excluded satellites.
 //!
 //! Capacity: `N` satellites (at most 64, the width of a mode's mask) and
 //! `K` fault modes. A mode list that does not fit `K` makes the epoch
@@ -29,6 +32,7 @@ pub mod esq;
 pub mod fde;
 pub mod ism;
 pub mod modes;
+pub mod monitor;
 pub mod pca;
 pub mod pl;
 pub mod subset;
@@ -37,9 +41,11 @@ pub mod tail;
 pub(crate) mod tests;
 
 pub use error::AraimError;
+pub use error_model::Curves;
 pub use fde::{FdeAlarm, FdeDecision};
 pub use ism::{AraimConfig, AraimSat, Ism, PlOutput};
 pub use modes::{ModeEvents, MAX_EVENTS};
+pub use monitor::{Exclusion, FdeLimits, Monitor, MonitorError, SatIsm, SatelliteModels, Verdict};
 pub use subset::SubsetStats;
 
 use crate::measurement::{MAX_STATES, MAX_SYSTEMS};

@@ -2,11 +2,14 @@
 //! corrected pseudoranges, with the same fault injection plus the
 //! constellation-wide fault of `raim_gnss::faults::constellation_bias`.
 //!
-//! Per epoch: the linearised ARAIM epoch at the all-in-view solution (the
-//! ADD elevation model for C_int/C_acc, the command's ISM), the ARAIM
-//! output, FDE after a detection, the protection levels of the position
-//! actually output (all in view, or the excluded subset's with the
-//! exclusion's added risk), and the position error against the reference.
+//! Per epoch, the core's ARAIM monitor (`raim_core::araim::Monitor`) on
+//! the pseudoranges: linearised at the all-in-view Gauss-Newton solution,
+//! the ADD elevation curves for C_int/C_acc (each satellite's iono-free
+//! pair and the residual ionosphere, `ReplayModels`), the command's ISM,
+//! the ARAIM output, FDE after a detection; then the protection levels of
+//! the position actually output (all in view, or the excluded subset's
+//! with the exclusion's added risk), and the position error against the
+//! reference.
 //! Text or JSON lines, a summary, and a plot (PLs and EMT over time against
 //! VAL/HAL, the vertical and horizontal Stanford diagrams).
 
@@ -16,9 +19,13 @@ use std::path::{Path, PathBuf};
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use plotters::prelude::*;
-use raim_core::araim::{error_model, Araim, AraimConfig, AraimSat, FdeAlarm, FdeDecision, Ism};
-use raim_core::frames::{ecef_to_geodetic, enu_rotation, rotate, unrotate};
-use raim_core::{RangeObservation, SatId, System};
+use raim_core::araim::error_model::iono_free_factor_sq;
+use raim_core::araim::{
+    AraimConfig, Curves, Exclusion, FdeAlarm, FdeDecision, FdeLimits, Ism, Monitor, MonitorError,
+    SatIsm, SatelliteModels,
+};
+use raim_core::frames::{ecef_to_geodetic, enu_rotation, unrotate};
+use raim_core::{Config, Decision, Epoch, RangeObservation, SatId, System};
 use raim_gnss::faults::{constellation_bias, FaultPlan};
 use raim_gnss::ranging::PreparedEpoch;
 use serde::Serialize;
@@ -30,14 +37,7 @@ pub const ARAIM_SATS: usize = super::REPLAY_CAPACITY;
 /// Fault modes per epoch (G+E+C with pairs: about 700).
 pub const ARAIM_MODES: usize = 4096;
 
-type Engine = Araim<f64, ARAIM_SATS, ARAIM_MODES>;
-
-/// Ionospheric shell height of the obliquity factor (m).
-const IONO_SHELL_M: f64 = 350_000.0;
-const EARTH_RADIUS_M: f64 = 6_371_000.0;
-/// Linearisation: relinearise until the correction is below this (m).
-const LIN_TOL_M: f64 = 1e-4;
-const LIN_MAX_ITER: usize = 6;
+type Engine = Monitor<f64, ARAIM_SATS, ARAIM_MODES>;
 
 #[derive(Debug, Clone, Args)]
 pub struct AraimReplayArgs {
@@ -172,7 +172,9 @@ pub struct AraimRecord {
     pub emt_m: f64,
     pub sigma_v_acc_m: f64,
     pub detection_passed: bool,
-    /// `no_fault`, `excluded`, `alarm_ambiguous`, `alarm_no_candidate`.
+    /// `no_fault`, `excluded`, `alarm_ambiguous`, `alarm_no_candidate`,
+    /// `alarm_budget_exceeded`, `alarm_not_attempted`, or `not_tested`
+    /// (the fault modes did not fit: no test, unavailable).
     pub fde: String,
     pub excluded: Vec<String>,
     /// The protection levels of the position output (all in view, or the
@@ -309,7 +311,8 @@ pub fn summarise(recs: &[AraimRecord]) -> AraimSummary {
         s.max_emt_m = s.max_emt_m.max(r.emt_m);
         match r.fde.as_str() {
             "excluded" => s.exclusions += 1,
-            "no_fault" => {}
+            // No test ran (the modes did not fit): unavailable, no alarm.
+            "no_fault" | "not_tested" => {}
             _ => s.alarms += 1,
         }
         match r.exclusion.as_deref() {
@@ -356,97 +359,45 @@ pub fn summarise(recs: &[AraimRecord]) -> AraimSummary {
     s
 }
 
-/// Obliquity of the thin-shell ionosphere at elevation `el_rad`.
-fn obliquity(el_rad: f64) -> f64 {
-    let c = EARTH_RADIUS_M * el_rad.cos() / (EARTH_RADIUS_M + IONO_SHELL_M);
-    1.0 / (1.0 - c * c).sqrt()
+/// The replay's satellite models: the command's ISM entries, the same for
+/// every satellite, and each satellite's curves: the ADD's, with the
+/// airborne term through its iono-free pair's noise factor when it is
+/// ranged with one (L1/L2: 2.98, B1I/B3I: 3.53; a single code or an
+/// L1/L5-type pair: the ADD's 2.59, docs/ARAIM.md "Iono-free replay"),
+/// plus the residual ionosphere of `--araim-iono-m`.
+struct ReplayModels<'a> {
+    args: &'a AraimReplayArgs,
+    epoch: &'a PreparedEpoch,
 }
 
-/// DO-229's airborne tropospheric sigma (m) at elevation `el_rad`: the
-/// tropo term of `error_model::nominal_variance_m2`, split off to rescale
-/// the airborne term alone.
-fn tropo_sigma_m(el_rad: f64) -> f64 {
-    let s = el_rad.sin();
-    0.12 * 1.001 / (0.002001 + s * s).sqrt()
-}
-
-/// The ADD nominal variance (m^2) at `el_rad` for a satellite ranged with
-/// `code`: the model as it is (L1/L5 iono-free multipath and noise curves,
-/// factor 2.59) for a single code and for an L1/L5-type pair; for another
-/// iono-free pair (L1/L2: 2.98, B1I/B3I: 3.53) the airborne term scaled by
-/// (its factor / 2.59)^2: the same per-frequency curves through that
-/// combination (docs/ARAIM.md "Iono-free replay").
-fn nominal_variance_m2(el_rad: f64, system: System, code: Option<&str>) -> f64 {
-    let v = error_model::nominal_variance_m2(el_rad);
-    match code.and_then(|c| raim_gnss::ranging::iono_free_noise_factor(system, c)) {
-        Some(k) => {
-            let t2 = tropo_sigma_m(el_rad).powi(2);
-            t2 + (v - t2) * (k * k / error_model::iono_free_factor_sq())
-        }
-        None => v,
-    }
-}
-
-/// The linearised ARAIM epoch at `x0` (ECEF): G rows (ENU, ADD sign),
-/// residuals, C_int/C_acc from the ADD model at the elevation seen from x0
-/// (with the noise factor of each satellite's iono-free pair, if any, from
-/// the prepared epoch `e`).
-fn linearise(
-    a: &AraimReplayArgs,
-    sats: &[RangeObservation],
-    x0: [f64; 3],
-    e: &PreparedEpoch,
-) -> Vec<AraimSat<f64>> {
-    let rot = enu_rotation(&ecef_to_geodetic(x0));
-    sats.iter()
-        .map(|s| {
-            let d = [
-                s.position_m[0] - x0[0],
-                s.position_m[1] - x0[1],
-                s.position_m[2] - x0[2],
-            ];
-            let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            let u = rotate(&rot, [d[0] / r, d[1] / r, d[2] / r]);
-            let el = u[2].clamp(-1.0, 1.0).asin();
-            let code = e
-                .sats
-                .iter()
-                .find(|p| p.obs.id == s.id)
-                .map(|p| p.code.as_str());
-            let v = nominal_variance_m2(el.max(0.0), s.id.system, code);
-            let mut c_int = a.araim_ura_m * a.araim_ura_m + v;
-            let mut c_acc = a.araim_ure_m * a.araim_ure_m + v;
-            let iono = a.araim_iono_m * obliquity(el);
-            c_int += iono * iono;
-            c_acc += iono * iono;
-            AraimSat {
-                id: s.id,
-                g_enu: [-u[0], -u[1], -u[2]],
-                c_int_m2: c_int,
-                c_acc_m2: c_acc,
-                b_nom_m: a.araim_b_nom_m,
-                p_sat: a.araim_p_sat,
-                residual_m: s.pseudorange_m - r,
-            }
+impl SatelliteModels for ReplayModels<'_> {
+    fn ism(&self, id: SatId) -> Option<SatIsm> {
+        let a = self.args;
+        Some(SatIsm {
+            id,
+            sigma_ura_m: a.araim_ura_m,
+            sigma_ure_m: a.araim_ure_m,
+            b_nom_m: a.araim_b_nom_m,
+            p_sat: a.araim_p_sat,
         })
-        .collect()
+    }
+
+    fn curves(&self, id: SatId) -> Curves {
+        let factor = self
+            .epoch
+            .sats
+            .iter()
+            .find(|p| p.obs.id == id)
+            .and_then(|p| raim_gnss::ranging::iono_free_noise_factor(id.system, &p.code));
+        Curves {
+            airborne_factor_sq: factor.map_or_else(iono_free_factor_sq, |k| k * k),
+            iono_vertical_m: self.args.araim_iono_m,
+        }
+    }
 }
 
 fn name(id: SatId) -> String {
     format!("{}{:02}", id.system.letter(), id.prn)
-}
-
-/// The ISM restricted to the constellations present in the epoch (an ISM
-/// entry without satellites is an error in the core).
-fn epoch_ism(ism: &Ism, sats: &[RangeObservation]) -> Ism {
-    let mut out = Ism::default();
-    for s in sats {
-        let j = s.id.system.index();
-        if let (Some(d), Some(p)) = (out.p_const.get_mut(j), ism.p_const.get(j)) {
-            *d = *p;
-        }
-    }
-    out
 }
 
 /// The (VPL, HPL) of an output when they were solved: available, or
@@ -462,37 +413,27 @@ fn solved_pls<const K: usize>(out: &raim_core::araim::AraimOutput<f64, K>) -> Op
     }
 }
 
-/// One epoch: relinearise at the all-in-view solution, process, FDE.
+/// One epoch through the core monitor; the position output.
+#[allow(clippy::too_many_arguments)]
 fn epoch(
     a: &AraimReplayArgs,
+    solver: &Config,
     cfg: &AraimConfig,
     ism: &Ism,
     e: &PreparedEpoch,
     sats: &[RangeObservation],
-    (engine, scratch): (&mut Engine, &mut Engine),
+    monitor: &mut Engine,
     rec: &mut AraimRecord,
 ) -> Result<Option<[f64; 3]>> {
-    let mut x0 = e
-        .reference_m
-        .ok_or_else(|| anyhow!("no linearisation point"))?;
-    let ism = epoch_ism(ism, sats);
-    let mut lin = linearise(a, sats, x0, e);
-    for _ in 0..LIN_MAX_ITER {
-        let out = engine
-            .process(cfg, &ism, &lin)
-            .map_err(|e| anyhow!("{e:?}"))?;
-        let corr = out.correction_enu_m;
-        let rot = enu_rotation(&ecef_to_geodetic(x0));
-        let d = unrotate(&rot, corr);
-        x0 = [x0[0] + d[0], x0[1] + d[1], x0[2] + d[2]];
-        lin = linearise(a, sats, x0, e);
-        if corr.iter().map(|c| c * c).sum::<f64>().sqrt() < LIN_TOL_M {
-            break;
-        }
-    }
-    let out = engine
-        .process(cfg, &ism, &lin)
-        .map_err(|e| anyhow!("{e:?}"))?;
+    let models = ReplayModels { args: a, epoch: e };
+    let ranges = Epoch::ranges(e.time_gps_s, sats, e.reference_m);
+    let verdict = monitor
+        .epoch(solver, cfg, ism, &models, &ranges, FdeLimits::UNLIMITED)
+        .map_err(|e| match e {
+            MonitorError::Araim(a) => anyhow!("{a:?}"),
+            other => anyhow!("{other:?}"),
+        })?;
+    let out = monitor.all_in_view();
     rec.modes = out.modes.len();
     rec.monitored = out.n_monitored;
     rec.max_faults = out.max_faults;
@@ -504,61 +445,43 @@ fn epoch(
     rec.emt_m = out.emt_m;
     rec.sigma_v_acc_m = out.sigma_v_acc_m;
     rec.detection_passed = out.detection_passed;
-    let all_in_view = {
-        let rot = enu_rotation(&ecef_to_geodetic(x0));
-        let d = unrotate(&rot, out.correction_enu_m);
-        [x0[0] + d[0], x0[1] + d[1], x0[2] + d[2]]
-    };
-    let unavailable = out.unavailable.map(|u| format!("{u:?}"));
-    let available = out.available();
-    let pls = solved_pls(out);
-    let fde = engine
-        .fde(cfg, &ism, &lin, scratch)
-        .map_err(|e| anyhow!("{e:?}"))?;
-    Ok(match fde {
-        FdeDecision::NoFault => {
-            rec.fde = "no_fault".into();
-            rec.vpl_m = pls.map(|p| p.0);
-            rec.hpl_m = pls.map(|p| p.1);
-            rec.available = available;
-            rec.unavailable = unavailable;
-            Some(all_in_view)
-        }
-        FdeDecision::Excluded { sats: mask, .. } => {
+    rec.available = matches!(verdict.decision, Decision::Ok | Decision::Excluded);
+    let in_force = monitor.in_force();
+    rec.unavailable = in_force.unavailable.map(|u| format!("{u:?}"));
+    let pls = solved_pls(in_force);
+    match verdict.exclusion {
+        Exclusion::Fde(FdeDecision::NoFault) => rec.fde = "no_fault".into(),
+        Exclusion::Fde(FdeDecision::Excluded { .. }) => {
             rec.fde = "excluded".into();
-            rec.excluded = lin
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| *i < 64 && mask & (1u64 << i) != 0)
-                .map(|(_, s)| name(s.id))
-                .collect();
-            let sub = scratch.output();
-            let pls = solved_pls(sub);
-            rec.vpl_m = pls.map(|p| p.0);
-            rec.hpl_m = pls.map(|p| p.1);
-            rec.available = sub.available();
-            rec.unavailable = sub.unavailable.map(|u| format!("{u:?}"));
-            // The subset's correction is relative to the same x0.
-            let rot = enu_rotation(&ecef_to_geodetic(x0));
-            let d = unrotate(&rot, sub.correction_enu_m);
-            Some([x0[0] + d[0], x0[1] + d[1], x0[2] + d[2]])
+            rec.excluded = verdict.excluded.iter().map(|id| name(*id)).collect();
         }
-        FdeDecision::Alarm(cause) => {
+        Exclusion::Fde(FdeDecision::Alarm(cause)) => {
             rec.fde = match cause {
                 FdeAlarm::Ambiguous { .. } => "alarm_ambiguous",
                 FdeAlarm::NoCandidate => "alarm_no_candidate",
                 FdeAlarm::BudgetExceeded { .. } => "alarm_budget_exceeded",
             }
             .into();
-            rec.available = false;
             rec.unavailable = Some("Alarm".into());
-            Some(all_in_view)
         }
-    })
+        // No test ran (the modes did not fit): no PL, unavailable.
+        Exclusion::NotTested => rec.fde = "not_tested".into(),
+        Exclusion::NotAttempted { .. } => {
+            rec.fde = "alarm_not_attempted".into();
+            rec.unavailable = Some("Alarm".into());
+        }
+    }
+    if matches!(rec.fde.as_str(), "no_fault" | "excluded") {
+        rec.vpl_m = pls.map(|p| p.0);
+        rec.hpl_m = pls.map(|p| p.1);
+    }
+    Ok(verdict.position_ecef_m)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn run_epochs(
     a: &AraimReplayArgs,
+    solver: &Config,
     cfg: &AraimConfig,
     ism: &Ism,
     epochs: &[PreparedEpoch],
@@ -566,8 +489,7 @@ fn run_epochs(
     const_faults: &[ConstFault],
     reference: Option<[f64; 3]>,
 ) -> Vec<AraimRecord> {
-    let mut engine: Box<Engine> = Box::default();
-    let mut scratch: Box<Engine> = Box::default();
+    let mut monitor: Box<Engine> = Box::default();
     let mut out = Vec::with_capacity(epochs.len());
     for e in epochs {
         let mut sats = e.observations();
@@ -591,7 +513,7 @@ fn run_epochs(
                 .collect(),
             ..AraimRecord::default()
         };
-        match epoch(a, cfg, ism, e, &sats, (&mut engine, &mut scratch), &mut rec) {
+        match epoch(a, solver, cfg, ism, e, &sats, &mut monitor, &mut rec) {
             Ok(p) => {
                 rec.position_ecef_m = p;
                 if let (Some(p), Some(rf)) = (p, reference) {
@@ -622,6 +544,7 @@ pub fn replay(args: &ReplayArgs) -> Result<(Vec<AraimRecord>, AraimSummary, Opti
         bail!("--araim and --pf are two different monitors: choose one");
     }
     let cfg = AraimConfig::default();
+    let solver = args.core_config();
     let systems = args.ranging()?.systems;
     let ism = a.ism(&systems)?;
     let (epochs, header, first) = prepare(args)?;
@@ -634,7 +557,16 @@ pub fn replay(args: &ReplayArgs) -> Result<(Vec<AraimRecord>, AraimSummary, Opti
     let reference = match args.reference {
         super::Reference::Header => header,
         super::Reference::CleanMean => {
-            let clean = run_epochs(a, &cfg, &ism, &epochs, &FaultPlan::default(), &[], None);
+            let clean = run_epochs(
+                a,
+                &solver,
+                &cfg,
+                &ism,
+                &epochs,
+                &FaultPlan::default(),
+                &[],
+                None,
+            );
             let ps: Vec<[f64; 3]> = clean
                 .iter()
                 .filter(|r| r.available)
@@ -644,7 +576,16 @@ pub fn replay(args: &ReplayArgs) -> Result<(Vec<AraimRecord>, AraimSummary, Opti
             (!ps.is_empty()).then(|| [0, 1, 2].map(|k| ps.iter().map(|p| p[k]).sum::<f64>() / n))
         }
     };
-    let recs = run_epochs(a, &cfg, &ism, &epochs, &plan, &const_faults, reference);
+    let recs = run_epochs(
+        a,
+        &solver,
+        &cfg,
+        &ism,
+        &epochs,
+        &plan,
+        &const_faults,
+        reference,
+    );
     let summary = summarise(&recs);
     Ok((recs, summary, reference))
 }
@@ -879,13 +820,5 @@ mod tests {
         ] {
             assert!(ConstFault::parse(bad, 0.0).is_err(), "{bad}");
         }
-    }
-
-    #[test]
-    fn obliquity_is_one_at_zenith_and_about_three_at_the_horizon() {
-        assert!((obliquity(core::f64::consts::FRAC_PI_2) - 1.0).abs() < 1e-12);
-        let h = obliquity(0.0);
-        // 1 / sqrt(1 - (6371 / 6721)^2) = 3.1398.
-        assert!((h - 3.1398).abs() < 1e-3, "{h}");
     }
 }
