@@ -502,8 +502,10 @@ fn solve_linear_by_row<const N: usize, T: Real>(
     let mut sibling_model = SiblingModel::new(sibling);
     for (i, s) in sats
         .iter()
+        .zip(mask.iter())
         .enumerate()
-        .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
+        .filter(|(_, (_, m))| **m)
+        .map(|(i, (s, _))| (i, s))
     {
         // The unit line of sight, its elevation and the sigma model in `T`
         // (the same operations as in f64).
@@ -633,8 +635,10 @@ fn gauss_newton<const N: usize, T: Real>(
     let converged_m = convergence_bound_m::<T>(cfg.convergence_m);
     let selected = || {
         sats.iter()
+            .zip(mask.iter())
             .enumerate()
-            .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
+            .filter(|(_, (_, m))| **m)
+            .map(|(i, (s, _))| (i, s))
     };
     // One builder for all iterations: its rows are the selected
     // satellites in order, and its per-row elevations and sigmas are the
@@ -741,8 +745,12 @@ fn gauss_newton<const N: usize, T: Real>(
                     s.sigma_m.unwrap_or(1.0),
                 ),
             };
+            // The builder's columns are those of the selected systems, so
+            // the system has one; a position in `cols` is < MAX_SYSTEMS,
+            // the length of `clock`.
             let col = clock_column(&cols, s.id.system).unwrap_or(0);
-            let z = s.pseudorange_m - range - clock.get(col).copied().unwrap_or(0.0);
+            #[allow(clippy::indexing_slicing)]
+            let z = s.pseudorange_m - range - clock[col];
             b.push(i, s.id, u, z, sigma, el)?;
         }
         cached = frame.is_some();
@@ -776,10 +784,9 @@ fn gauss_newton<const N: usize, T: Real>(
             }
             let dx = out.parity.dx().map(T::to_f64);
             let mut clock_m = [None; MAX_SYSTEMS];
-            for (j, sys) in cols.iter().enumerate() {
+            for ((sys, &c), &d) in cols.iter().zip(clock.iter()).zip(dx.iter().skip(3)) {
                 if let Some(sys) = sys {
-                    let v = clock.get(j).copied().unwrap_or(0.0)
-                        + dx.get(3 + j).copied().unwrap_or(0.0);
+                    let v = c + d;
                     if let Some(c) = clock_m.get_mut(sys.index()) {
                         *c = Some(v);
                     }
@@ -799,8 +806,8 @@ fn gauss_newton<const N: usize, T: Real>(
         for (xk, dk) in x.iter_mut().zip(step.iter()) {
             *xk += dk;
         }
-        for (j, c) in clock.iter_mut().enumerate() {
-            *c += dx.get(3 + j).copied().unwrap_or(0.0);
+        for (c, d) in clock.iter_mut().zip(dx.iter().skip(3)) {
+            *c += d;
         }
         last_step_m = step_m;
         last_full = full;
@@ -872,9 +879,12 @@ impl<const N: usize, T: Real> Builder<N, T> {
         // The weight in `T`; in f64 the same operations as before.
         let wt = T::one() / T::of(sigma);
         let clock = clock_column(&self.cols, id.system).map(|c| 3 + c);
+        let [u0, u1, u2] = u;
         for (j, col) in self.h.iter_mut().enumerate() {
             let v = match j {
-                0..=2 => -u.get(j).copied().unwrap_or(T::zero()) * wt,
+                0 => -u0 * wt,
+                1 => -u1 * wt,
+                2 => -u2 * wt,
                 _ if Some(j) == clock => wt,
                 _ => T::zero(),
             };

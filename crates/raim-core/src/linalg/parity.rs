@@ -130,7 +130,10 @@ impl<const N: usize, T: Real> Parity<N, T> {
         for i in 0..n {
             let mut hi = [T::zero(); M];
             for (dst, col) in hi.iter_mut().zip(h.iter()) {
-                *dst = col.get(i).copied().unwrap_or(T::zero());
+                // i < n = min(self.n, N), and a column has N rows.
+                #[allow(clippy::indexing_slicing)]
+                let v = col[i];
+                *dst = v;
             }
             // Forward substitution T1^T g = h_i (as `solve_tt`).
             let mut g = [T::zero(); M];
@@ -170,12 +173,15 @@ impl<const N: usize, T: Real> Parity<N, T> {
 
     /// The per-row quantities for any m (see [`Self::rows_fixed`]).
     fn rows_general(&mut self, h: &[[T; N]; MAX_STATES], z: &[T; N]) {
-        let (n, m) = (self.n, self.m);
+        let (n, m) = (self.n.min(N), self.m);
         let p = self;
         for i in 0..n {
             let mut hi = [T::zero(); MAX_STATES];
             for (dst, col) in hi.iter_mut().zip(h.iter()).take(m) {
-                *dst = col.get(i).copied().unwrap_or(T::zero());
+                // i < n = min(self.n, N), and a column has N rows.
+                #[allow(clippy::indexing_slicing)]
+                let v = col[i];
+                *dst = v;
             }
             let g = p.qr.solve_tt(&hi);
             let leverage = dot(g.iter().take(m), g.iter().take(m));

@@ -355,13 +355,13 @@ fn fault_set<T: Real, P: Real, const N: usize>(
     for (row, b) in rows.iter().take(k.min(MAX_FAULTS)).zip(fit.bias.iter()) {
         let row = usize::from(*row);
         let slot = usize::from(out.count);
-        if let (Some(id), Some(dst_id), Some(dst_b)) = (
+        if let (Some(id), Some(&sigma), Some(dst_id), Some(dst_b)) = (
             sol.ids.get(row),
+            sol.sigma_m.get(row),
             out.satellites.get_mut(slot),
             out.bias_m.get_mut(slot),
         ) {
             *dst_id = *id;
-            let sigma = sol.sigma_m.get(row).copied().unwrap_or(1.0);
             *dst_b = b.to_f64() * sigma;
             out.count += 1;
         }
@@ -682,12 +682,12 @@ pub fn run<const N: usize, P: Real>(
                 }
                 for (row, b) in rows.iter().take(k).zip(best.bias.iter()) {
                     let row = usize::from(*row);
-                    let (Some(id), Some(index)) = (sol.ids.get(row), sol.source.get(row)) else {
+                    let (Some(id), Some(index), Some(&sigma)) =
+                        (sol.ids.get(row), sol.source.get(row), sol.sigma_m.get(row))
+                    else {
                         continue;
                     };
-                    let sigma = sol.sigma_m.get(row).copied().unwrap_or(1.0);
-                    // Capacity MAX_EXCLUSIONS >= t_eff >= k.
-                    let _ = out.exclusions.push(Exclusion {
+                    let pushed = out.exclusions.push(Exclusion {
                         id: *id,
                         index: *index,
                         before,
@@ -695,6 +695,8 @@ pub fn run<const N: usize, P: Real>(
                         score: best.rss.to_f64(),
                         bias_m: b.to_f64() * sigma,
                     });
+                    // Cannot fill: capacity MAX_EXCLUSIONS >= t_eff >= k.
+                    debug_assert!(pushed.is_ok());
                 }
                 core::mem::swap(&mut out.solution, &mut scratch.solution);
                 out.test = after;

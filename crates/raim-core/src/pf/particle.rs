@@ -84,8 +84,11 @@ impl<T: Real, const P: usize, const GA: bool> ParticleFilter<T, P, GA> {
         // Crossover: floor(N_L / 2) random pairs (eqs. 5-6), each child
         // accepted against the better parent.
         for _ in 0..n_low / 2 {
-            let m = low.get(rng::index(rng, n_low)).copied().unwrap_or(0) as usize;
-            let n = low.get(rng::index(rng, n_low)).copied().unwrap_or(0) as usize;
+            // rng::index(_, n) < n for n >= 1, and here n_low >= 2.
+            #[allow(clippy::indexing_slicing)]
+            let m = low[rng::index(rng, n_low)] as usize;
+            #[allow(clippy::indexing_slicing)]
+            let n = low[rng::index(rng, n_low)] as usize;
             let a = T::of(rng::uniform(rng));
             let (Some(&xm), Some(&xn)) = (self.particles.get(m), self.particles.get(n)) else {
                 continue;

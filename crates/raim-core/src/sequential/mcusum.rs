@@ -303,8 +303,14 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         }
         let mut x = [T::zero(); N];
         for (xi, id) in x.iter_mut().zip(ids.iter()) {
-            if let Some(pos) = self.ids.iter().take(self.n).position(|o| o == id) {
-                *xi = self.v.get(pos).copied().unwrap_or(T::zero());
+            if let Some((_, &v)) = self
+                .ids
+                .iter()
+                .zip(self.v.iter())
+                .take(self.n)
+                .find(|(o, _)| *o == id)
+            {
+                *xi = v;
             }
         }
         parity.project(&x, out);
