@@ -263,7 +263,10 @@ pub fn reconstruct<T: Real, const N: usize>(
     out.variance = [T::zero(); N];
     out.q = T::zero();
     let mut l_row = [T::zero(); N];
-    for &j in sats.get(..count).unwrap_or(&[]) {
+    // count <= 64 = MAX_SATS, the bits of a u64 set.
+    #[allow(clippy::indexing_slicing)]
+    let sats = &sats[..count];
+    for &j in sats {
         let j = usize::from(j);
         if j >= model.n() {
             out.swapped |= 1u64 << j;

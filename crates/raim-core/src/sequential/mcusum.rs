@@ -113,8 +113,7 @@ fn norm<'a, T: Real>(v: impl Iterator<Item = &'a T>) -> T {
 /// [`K_VALUES`] and log10(ARL0) inside [`LOG10_ARL0`]'s range.
 pub fn check_settings(k: f64, arl0: f64) -> Result<(), RaimError> {
     k_index(k)?;
-    let lo = LOG10_ARL0.first().copied().unwrap_or(0.0);
-    let hi = LOG10_ARL0.last().copied().unwrap_or(0.0);
+    let [lo, .., hi] = LOG10_ARL0;
     let l = libm::log10(arl0);
     if !(l >= lo && l <= hi) {
         return Err(RaimError::OutOfRange {
@@ -128,14 +127,15 @@ pub fn check_settings(k: f64, arl0: f64) -> Result<(), RaimError> {
 }
 
 fn k_index(k: f64) -> Result<usize, RaimError> {
+    let [k_min, .., k_max] = K_VALUES;
     K_VALUES
         .iter()
         .position(|&kv| libm::fabs(kv - k) <= K_MATCH_TOL)
         .ok_or(RaimError::OutOfRange {
             field: "mcusum_k",
             value: k,
-            min: K_VALUES.first().copied().unwrap_or(0.0),
-            max: K_VALUES.last().copied().unwrap_or(0.0),
+            min: k_min,
+            max: k_max,
         })
 }
 
@@ -418,10 +418,12 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         if self.held.is_full() && !self.held.is_empty() {
             self.held.remove(0);
         }
-        let _ = self.held.push(Held {
+        let pushed = self.held.push(Held {
             id,
             since_s: time_s,
         });
+        // Cannot fill: a full list released its oldest hold above.
+        debug_assert!(pushed.is_ok());
     }
 
     /// Release holds whose satellite is not in the epoch (`present` says

@@ -13,7 +13,7 @@ use crate::error::RaimError;
 use crate::measurement::{Epoch, LinearObservation, Observations, RangeObservation, SatId};
 use crate::real::{Real, Stat};
 use crate::result::{Decision, EpochResult, SatelliteResult};
-use crate::snapshot::fde::{self, AlarmCause, Exclusion, FdeOutcome};
+use crate::snapshot::fde::{self, AlarmCause, Exclusion, FdeOutcome, MAX_EXCLUSIONS};
 use crate::snapshot::{protection, Snapshot};
 use crate::solve::{solve_into, Solution};
 use mcusum::{Mcusum, MAX_HELD};
@@ -306,18 +306,26 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         for i in 0..input.len() {
             let Some(id) = input.id(i) else { continue };
             if mcusum.is_held(id) && !result.satellites.iter().any(|s| s.id == id) {
-                let _ = result.satellites.push(SatelliteResult {
-                    id,
-                    used: false,
-                    sigma_m: f64::NAN,
-                    elevation_rad: f64::NAN,
-                    s_ii: f64::NAN,
-                    h_ii: f64::NAN,
-                    w: f64::NAN,
-                    bias_m: f64::NAN,
-                    score: f64::NAN,
-                    identifiable: false,
-                });
+                // A full list (N satellites) has no room for the rest of
+                // the held-out satellites: they stay held, unlisted.
+                if result
+                    .satellites
+                    .push(SatelliteResult {
+                        id,
+                        used: false,
+                        sigma_m: f64::NAN,
+                        elevation_rad: f64::NAN,
+                        s_ii: f64::NAN,
+                        h_ii: f64::NAN,
+                        w: f64::NAN,
+                        bias_m: f64::NAN,
+                        score: f64::NAN,
+                        identifiable: false,
+                    })
+                    .is_err()
+                {
+                    break;
+                }
             }
         }
         result.mcusum = Some(report);
@@ -406,7 +414,9 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             return Ok(());
         }
         let after = fde::test(cfg, &mut snap.thresholds, &sub)?;
-        let sigma = sol.sigma_m.get(cand.row).copied().unwrap_or(1.0);
+        // cand.row < N: `sol.ids.get(cand.row)` found its satellite above.
+        #[allow(clippy::indexing_slicing)]
+        let sigma = sol.sigma_m[cand.row];
         let nan = T::of(f64::NAN);
         let r_j = sol.parity.residuals().get(cand.row).copied().unwrap_or(nan);
         let s_jj = sol.parity.s_ii().get(cand.row).copied().unwrap_or(nan);
@@ -418,7 +428,15 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             score: cand.score.to_f64(),
             bias_m: (r_j / s_jj).to_f64() * sigma,
         };
-        let _ = result.exclusions.push(record);
+        // The snapshot FDE may have used every slot already: refused with
+        // the capacity rather than dropped.
+        result
+            .exclusions
+            .push(record)
+            .map_err(|_| RaimError::CapacityExceeded {
+                have: MAX_EXCLUSIONS + 1,
+                capacity: MAX_EXCLUSIONS,
+            })?;
         let dof = sub.parity.dof();
         let (_, lambda_md) = snap.thresholds.get(cfg.pfa, cfg.pmd, dof)?;
         let protection = protection::slope_levels(&sub.parity, lambda_md, cfg.min_s_ii);

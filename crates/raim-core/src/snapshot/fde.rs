@@ -444,8 +444,10 @@ pub fn run<const N: usize, T: Real>(
                 )? {
                     PairOutcome::Excluded(after, records) => {
                         for r in records {
-                            // Capacity MAX_EXCLUSIONS >= 2.
-                            let _ = out.exclusions.push(r);
+                            let pushed = out.exclusions.push(r);
+                            // Cannot fill: the pair goes into an empty list of
+                            // capacity MAX_EXCLUSIONS >= 2.
+                            debug_assert!(pushed.is_ok());
                         }
                         core::mem::swap(&mut out.solution, &mut out.scratch);
                         out.test = after;
