@@ -417,7 +417,9 @@ fn solve_linear<const N: usize, T: Real>(
     // (3) Positive and finite (NaN fails both comparisons), checked in row
     // order: one branch-free pass, and the first offender named only when
     // it finds one.
-    let sigmas = out.sigma_m.get(..n).unwrap_or(&[]);
+    // n <= N: pass (1) counts rows zipped with the N-row arrays.
+    #[allow(clippy::indexing_slicing)]
+    let sigmas = &out.sigma_m[..n];
     if !sigmas
         .iter()
         .fold(true, |ok, &s| ok & (s > 0.0) & (s <= f64::MAX))

@@ -215,8 +215,11 @@ impl<const N: usize, T: Real> Parity<N, T> {
     }
 
     /// The parity vector p = U2^T z (length n - m).
+    // m < n <= N once computed, 0 = m = n before: `compute` sets them
+    // only after `factor_from` accepted n <= N and m <= n.
+    #[allow(clippy::indexing_slicing)]
     pub fn p(&self) -> &[T] {
-        self.utz.get(self.m..self.n).unwrap_or(&[])
+        &self.utz[self.m..self.n]
     }
 
     /// Weighted sum of squared residuals, p^T p = ||S z||^2.
@@ -225,13 +228,17 @@ impl<const N: usize, T: Real> Parity<N, T> {
     }
 
     /// S_ii for the active rows.
+    // n <= N, as for `p`.
+    #[allow(clippy::indexing_slicing)]
     pub fn s_ii(&self) -> &[T] {
-        self.s_ii.get(..self.n).unwrap_or(&[])
+        &self.s_ii[..self.n]
     }
 
     /// Whitened residuals r = S z.
+    // n <= N, as for `p`.
+    #[allow(clippy::indexing_slicing)]
     pub fn residuals(&self) -> &[T] {
-        self.residual.get(..self.n).unwrap_or(&[])
+        &self.residual[..self.n]
     }
 
     /// Row `axis` (0 = E, 1 = N, 2 = U) of the position gain A.

@@ -117,7 +117,9 @@ impl<T: Real, const N: usize> ResidualModel<T, N> {
                 *v = P::one();
             }
             let k = parity.project(&e, &mut y);
-            let col = parity.lift(y.get(..k).unwrap_or(&[]));
+            // k <= y.len(): `project` writes at most that many entries.
+            #[allow(clippy::indexing_slicing)]
+            let col = parity.lift(&y[..k]);
             if let Some(v) = e.get_mut(j) {
                 *v = P::zero();
             }

@@ -507,7 +507,7 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         for (d, &v) in delta.iter_mut().zip(m.iter()) {
             *d = -v;
         }
-        self.reference.drift_m_s += m.get(DRIFT).map_or(0.0, |v| v.to_f64());
+        self.reference.drift_m_s += m[DRIFT].to_f64();
         for (p, &v) in self.reference.position_m.iter_mut().zip(m.iter()) {
             *p += v.to_f64();
         }
@@ -557,7 +557,7 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
             return false;
         }
         let mut x = self.main.mean();
-        let drift = x.get(DRIFT).copied().unwrap_or_else(T::zero);
+        let drift = x[DRIFT];
         for v in x.iter_mut().take(DRIFT).skip(CLOCK0) {
             *v += drift * T::of(dt_s);
         }

@@ -271,11 +271,10 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
 
     /// The accumulated vector v = U2 S_t in measurement space, with the
     /// satellite of each entry.
+    // n <= N: `store` sets it to at most N.
+    #[allow(clippy::indexing_slicing)]
     pub fn state(&self) -> (&[SatId], &[T]) {
-        (
-            self.ids.get(..self.n).unwrap_or(&[]),
-            self.v.get(..self.n).unwrap_or(&[]),
-        )
+        (&self.ids[..self.n], &self.v[..self.n])
     }
 
     /// D = ||S|| = ||v|| (U2 has orthonormal columns).
@@ -337,7 +336,9 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         let d = parity.dof();
         let mut s = [T::zero(); N];
         let carried = self.prior(ids, parity, carry, &mut s);
-        let sd = s.get_mut(..d).unwrap_or(&mut []);
+        // d = n - m < n <= N (a computed parity space).
+        #[allow(clippy::indexing_slicing)]
+        let sd = &mut s[..d];
         if d < self.last_dim && self.last_h > 0.0 && h < self.last_h {
             let scale = T::of(h / self.last_h);
             for x in sd.iter_mut() {
@@ -377,7 +378,9 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         let d = parity.dof();
         let mut s = [T::zero(); N];
         self.prior(ids, parity, carry, &mut s);
-        let sd = s.get(..d).unwrap_or(&[]);
+        // d = n - m < n <= N (a computed parity space).
+        #[allow(clippy::indexing_slicing)]
+        let sd = &s[..d];
         self.store(ids, parity, sd);
         self.last_dim = d;
         self.norm()
@@ -396,7 +399,9 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         parity: &Parity<N, T>,
         min_s_ii: f64,
     ) -> (Option<Candidate<T>>, Option<Candidate<T>>) {
-        let v = self.v.get(..self.n).unwrap_or(&[]);
+        // n <= N: `store` sets it to at most N.
+        #[allow(clippy::indexing_slicing)]
+        let v = &self.v[..self.n];
         lraim::rank_rows(FiRule::Mle, v, parity.s_ii(), T::of(min_s_ii))
     }
 

@@ -201,7 +201,13 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             }
         });
         src.iter_mut().skip(n).for_each(|v| *v = 0);
-        let e = Epoch::linear(time_s, buf.get(..n).unwrap_or(&[]));
+        let Some(kept) = buf.get(..n) else {
+            return Err(RaimError::CapacityExceeded {
+                have: n,
+                capacity: N,
+            });
+        };
+        let e = Epoch::linear(time_s, kept);
         let input = Epoch::linear(time_s, sats);
         Self::sequential_on(mcusum, snap, cfg, &e, src, &input, outcome, out)
     }
@@ -226,7 +232,13 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             }
         });
         src.iter_mut().skip(n).for_each(|v| *v = 0);
-        let e = Epoch::ranges(time_s, buf.get(..n).unwrap_or(&[]), apriori_m);
+        let Some(kept) = buf.get(..n) else {
+            return Err(RaimError::CapacityExceeded {
+                have: n,
+                capacity: N,
+            });
+        };
+        let e = Epoch::ranges(time_s, kept, apriori_m);
         let input = Epoch::ranges(time_s, sats, apriori_m);
         Self::sequential_on(mcusum, snap, cfg, &e, src, &input, outcome, out)
     }
@@ -250,12 +262,16 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         let mc = cfg.mcusum;
         snap.run(cfg, epoch, outcome, result)?;
         let sol = &outcome.solution;
-        let to_input = |k: usize| src.get(k).copied().unwrap_or(k);
+        // k < N: an exclusion's index is a satellite of `epoch`, which
+        // holds at most N (the monitor validated the input epoch).
+        #[allow(clippy::indexing_slicing)]
+        let to_input = |k: usize| src[k];
         for e in result.exclusions.iter_mut() {
             e.index = to_input(e.index);
         }
         let rows = sol.rows();
-        let ids = sol.ids.get(..rows).unwrap_or(&[]);
+        #[allow(clippy::indexing_slicing)] // rows <= N, a parity's rows
+        let ids = &sol.ids[..rows];
         let dim = sol.parity.dof();
         let snapshot_alarm = result.initial_test.alarm();
         let mut report = McusumReport {
@@ -407,7 +423,8 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             Err(e) => return Err(e),
         };
         mcusum.hold(id, epoch.time_s);
-        let sub_ids = sub.ids.get(..sub.rows()).unwrap_or(&[]);
+        #[allow(clippy::indexing_slicing)] // rows <= N, a parity's rows
+        let sub_ids = &sub.ids[..sub.rows()];
         report.after_exclusion = Some(mcusum.carry_to(sub_ids, &sub.parity, cfg.mcusum.carry));
         if snapshot_failed {
             // The snapshot alarm stands this epoch; the hold applies from the next.

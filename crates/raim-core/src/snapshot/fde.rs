@@ -210,7 +210,9 @@ fn best_pairs<const N: usize, T: Real>(
             *v = T::one();
         }
         let k_dims = parity.project(&e, &mut y);
-        let col = parity.lift(y.get(..k_dims).unwrap_or(&[]));
+        // k_dims <= y.len(): `project` writes at most that many entries.
+        #[allow(clippy::indexing_slicing)]
+        let col = parity.lift(&y[..k_dims]);
         if let Some(v) = e.get_mut(j) {
             *v = T::zero();
         }
