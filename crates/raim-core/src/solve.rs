@@ -739,16 +739,15 @@ fn gauss_newton<const N: usize, T: Real>(
     })
 }
 
-/// The satellites `mask` selects, with their index in `sats`, in order.
+/// The satellites `mask` selects, with their index in `sats`, in order (a
+/// satellite beyond the mask's N is not selected).
 fn selected<'a, const N: usize>(
     sats: &'a [RangeObservation],
     mask: &'a [bool; N],
 ) -> impl Iterator<Item = (usize, &'a RangeObservation)> + 'a {
     sats.iter()
-        .zip(mask.iter())
         .enumerate()
-        .filter(|(_, (_, m))| **m)
-        .map(|(i, (s, _))| (i, s))
+        .filter(|(i, _)| mask.get(*i) == Some(&true))
 }
 
 /// A sibling start's cache: each selected satellite's elevation and
