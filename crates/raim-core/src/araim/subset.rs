@@ -157,8 +157,10 @@ fn bit(i: usize) -> u64 {
 /// columns not in `dropped` (bit c = column c), into `base.p`; then fills
 /// `base.d` with S^(B) - `s0` (pass zeros for the all-in-view base).
 // In range: every row and column index below is < m = min(geo.m,
-// MAX_STATES), the matrices' order.
-#[allow(clippy::indexing_slicing)]
+// MAX_STATES), the matrices' order. The loops index as the Cholesky and
+// the triangular solves are written (and so compile to fewer
+// instructions than the iterator forms).
+#[allow(clippy::indexing_slicing, clippy::needless_range_loop)]
 pub fn factor<T: Real, const N: usize>(
     geo: &Geometry<T, N>,
     removed: u64,
@@ -194,7 +196,8 @@ pub fn factor<T: Real, const N: usize>(
         }
         let diag = a[j][j];
         let mut s = diag;
-        for &v in l[j].iter().take(j) {
+        for k in 0..j {
+            let v = l[j][k];
             s -= v * v;
         }
         if !(s > tol * diag) {
@@ -214,7 +217,9 @@ pub fn factor<T: Real, const N: usize>(
                 continue;
             }
             let mut s = a[i][j];
-            for (&lik, &ljk) in l[i].iter().zip(l[j].iter()).take(j) {
+            for k in 0..j {
+                let lik = l[i][k];
+                let ljk = l[j][k];
                 s -= lik * ljk;
             }
             l[i][j] = s / ljj;
@@ -243,8 +248,8 @@ pub fn factor<T: Real, const N: usize>(
                 continue;
             }
             let mut s = z[i];
-            for (lk, pk) in l.iter().zip(base.p.iter()).take(m).skip(i + 1) {
-                s -= lk[i] * pk[c];
+            for k in (i + 1)..m {
+                s -= l[k][i] * base.p[k][c];
             }
             let lii = l[i][i];
             base.p[i][c] = s / lii;
