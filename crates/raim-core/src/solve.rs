@@ -426,7 +426,9 @@ fn solve_linear<const N: usize, T: Real>(
     // (3) Positive and finite (NaN fails both comparisons), checked in row
     // order: one branch-free pass, and the first offender named only when
     // it finds one.
-    let sigmas = out.sigma_m.get(..n).unwrap_or(&[]);
+    // n <= N: pass (1) counts rows zipped with the N-row arrays.
+    #[allow(clippy::indexing_slicing)]
+    let sigmas = &out.sigma_m[..n];
     if !sigmas
         .iter()
         .fold(true, |ok, &s| ok & (s > 0.0) & (s <= f64::MAX))
@@ -511,8 +513,10 @@ fn solve_linear_by_row<const N: usize, T: Real>(
     let mut sibling_model = SiblingModel::new(sibling);
     for (i, s) in sats
         .iter()
+        .zip(mask.iter())
         .enumerate()
-        .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
+        .filter(|(_, (_, m))| **m)
+        .map(|(i, (s, _))| (i, s))
     {
         // The unit line of sight, its elevation and the sigma model in `T`
         // (the same operations as in f64).
@@ -643,15 +647,10 @@ fn gauss_newton<const N: usize, T: Real>(
     out: &mut Solution<N, T>,
 ) -> Result<(), RaimError> {
     let converged_m = convergence_bound_m::<T>(cfg.convergence_m);
-    let selected = || {
-        sats.iter()
-            .enumerate()
-            .filter(|(i, _)| mask.get(*i).copied().unwrap_or(false))
-    };
     // One builder for all iterations: its rows are the selected
     // satellites in order, and its per-row elevations and sigmas are the
     // cache, valid while `cached` (same linearisation, on the surface).
-    let mut b = Builder::<N, T>::new(selected().map(|(_, s)| s.id.system));
+    let mut b = Builder::<N, T>::new(selected(sats, mask).map(|(_, s)| s.id.system));
     let cols = b.cols;
     let mut cached = false;
     let mut lin: Option<Linearisation> = None;
@@ -663,17 +662,7 @@ fn gauss_newton<const N: usize, T: Real>(
         Start::Sibling(s) => {
             lin = s.linearisation;
             if lin.is_some() {
-                cached = true;
-                let mut sibling_model = SiblingModel::new(Some(s));
-                for (k, (i, _)) in selected().enumerate() {
-                    match (sibling_model.get(i), b.el.get_mut(k), b.sigma.get_mut(k)) {
-                        (Some((el, sigma)), Some(e), Some(g)) => {
-                            *e = el;
-                            *g = sigma;
-                        }
-                        _ => cached = false,
-                    }
-                }
+                cached = sibling_rows(&mut b, s, selected(sats, mask));
             }
             (
                 s.position_ecef_m.or(apriori_m).unwrap_or([0.0; 3]),
@@ -681,13 +670,7 @@ fn gauss_newton<const N: usize, T: Real>(
             )
         }
     };
-    // Clock per column, from the start's clock of each column's system.
-    let mut clock = [0.0; MAX_SYSTEMS];
-    for (c, sys) in clock.iter_mut().zip(cols.iter()) {
-        if let Some(v) = sys.and_then(|s| start_clock.get(s.index()).copied().flatten()) {
-            *c = v;
-        }
-    }
+    let mut clock = column_clocks(&cols, &start_clock);
     let mut last_step_m = f64::INFINITY;
     let mut last_full = false;
     let mut iterations = 0;
@@ -708,55 +691,15 @@ fn gauss_newton<const N: usize, T: Real>(
             rot = l.rotation.map(T::of);
         }
         let reuse = cached && frame.is_some();
-        b.n = 0;
-        for (k, (i, s)) in selected().enumerate() {
-            let d = [
-                s.position_m[0] - x[0],
-                s.position_m[1] - x[1],
-                s.position_m[2] - x[2],
-            ];
-            let range = T::range_sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-            if !(range > MIN_RANGE_M) {
-                return Err(RaimError::OutOfRange {
-                    field: "range_m",
-                    value: range,
-                    min: MIN_RANGE_M,
-                    max: f64::INFINITY,
-                });
-            }
-            // The unit line of sight in `T` (the policy: only the range
-            // and the residual need f64).
-            let r_t = T::of(range);
-            let u_ecef = [T::of(d[0]) / r_t, T::of(d[1]) / r_t, T::of(d[2]) / r_t];
-            // On the surface, use ENU so the model is final; near the
-            // centre, ECEF axes are as good as any (position columns
-            // are rotated back below) and the weights are unit.
-            let (u, el, sigma) = match &frame {
-                Some(_) => {
-                    let u = rotate(&rot, u_ecef);
-                    let (el, sigma) = match (reuse, b.el.get(k), b.sigma.get(k)) {
-                        (true, Some(&el), Some(&sigma)) => (el, sigma),
-                        _ => {
-                            let el = crate::frames::elevation(u);
-                            let sigma = match s.sigma_m {
-                                Some(v) => v,
-                                None => cfg.sigma_model.sigma(el).to_f64(),
-                            };
-                            (el.to_f64(), sigma)
-                        }
-                    };
-                    (u, el, sigma)
-                }
-                None => (
-                    u_ecef,
-                    core::f64::consts::FRAC_PI_2,
-                    s.sigma_m.unwrap_or(1.0),
-                ),
-            };
-            let col = clock_column(&cols, s.id.system).unwrap_or(0);
-            let z = s.pseudorange_m - range - clock.get(col).copied().unwrap_or(0.0);
-            b.push(i, s.id, u, z, sigma, el)?;
-        }
+        linearise(
+            cfg,
+            &mut b,
+            selected(sats, mask),
+            &x,
+            &clock,
+            frame.as_ref().map(|_| &rot),
+            reuse,
+        )?;
         cached = frame.is_some();
         let full = frame.is_some() && last_step_m * last_step_m < converged_m * PARITY_STEP_SCALE_M;
         // A step needs only the least-squares solution; the parity
@@ -786,33 +729,15 @@ fn gauss_newton<const N: usize, T: Real>(
             if !full {
                 b.parity_into(&mut out.parity)?;
             }
-            let dx = out.parity.dx().map(T::to_f64);
-            let mut clock_m = [None; MAX_SYSTEMS];
-            for (j, sys) in cols.iter().enumerate() {
-                if let Some(sys) = sys {
-                    let v = clock.get(j).copied().unwrap_or(0.0)
-                        + dx.get(3 + j).copied().unwrap_or(0.0);
-                    if let Some(c) = clock_m.get_mut(sys.index()) {
-                        *c = Some(v);
-                    }
-                }
-            }
-            b.fill(out);
             let x_ls = [x[0] + step[0], x[1] + step[1], x[2] + step[2]];
-            out.clocks = cols;
-            out.position_ecef_m = Some(x_ls);
-            out.geodetic = Some(l.geodetic_of(x_ls));
-            out.linearisation = Some(l);
-            out.correction_enu_m = [0.0; 3];
-            out.clock_m = clock_m;
-            out.iterations = iterations;
+            converged(&b, l, x_ls, &clock, iterations, out);
             return Ok(());
         }
         for (xk, dk) in x.iter_mut().zip(step.iter()) {
             *xk += dk;
         }
-        for (j, c) in clock.iter_mut().enumerate() {
-            *c += dx.get(3 + j).copied().unwrap_or(0.0);
+        for (c, d) in clock.iter_mut().zip(dx.iter().skip(3)) {
+            *c += d;
         }
         last_step_m = step_m;
         last_full = full;
@@ -824,6 +749,156 @@ fn gauss_newton<const N: usize, T: Real>(
         iterations,
         step_m: last_step_m,
     })
+}
+
+/// The satellites `mask` selects, with their index in `sats`, in order (a
+/// satellite beyond the mask's N is not selected).
+fn selected<'a, const N: usize>(
+    sats: &'a [RangeObservation],
+    mask: &'a [bool; N],
+) -> impl Iterator<Item = (usize, &'a RangeObservation)> + 'a {
+    sats.iter()
+        .enumerate()
+        .filter(|(i, _)| mask.get(*i) == Some(&true))
+}
+
+/// A sibling start's cache: each selected satellite's elevation and
+/// sigma from the sibling solution's rows (the same linearisation).
+/// Returns whether every satellite had one.
+fn sibling_rows<'a, const N: usize, T: Real>(
+    b: &mut Builder<N, T>,
+    sibling: &Solution<N, T>,
+    rows: impl Iterator<Item = (usize, &'a RangeObservation)>,
+) -> bool {
+    let mut cached = true;
+    let mut sibling_model = SiblingModel::new(Some(sibling));
+    for (k, (i, _)) in rows.enumerate() {
+        match (sibling_model.get(i), b.el.get_mut(k), b.sigma.get_mut(k)) {
+            (Some((el, sigma)), Some(e), Some(g)) => {
+                *e = el;
+                *g = sigma;
+            }
+            _ => cached = false,
+        }
+    }
+    cached
+}
+
+/// The clock of each column, from the start's clock of the column's
+/// system (0 where it has none).
+fn column_clocks(
+    cols: &[Option<System>; MAX_SYSTEMS],
+    start_clock: &[Option<f64>; MAX_SYSTEMS],
+) -> [f64; MAX_SYSTEMS] {
+    let mut clock = [0.0; MAX_SYSTEMS];
+    for (c, sys) in clock.iter_mut().zip(cols.iter()) {
+        if let Some(v) = sys.and_then(|s| start_clock.get(s.index()).copied().flatten()) {
+            *c = v;
+        }
+    }
+    clock
+}
+
+/// The linear model at x (SPEC §1): per selected satellite the row
+/// [-u^T, c^T] (u the unit line of sight, in ENU through `rot` on the
+/// surface, else ECEF with unit weight) and z = rho - |s - x| - clock, with
+/// its elevation and sigma (from the cache when `reuse`).
+fn linearise<'a, const N: usize, T: Real>(
+    cfg: &Config,
+    b: &mut Builder<N, T>,
+    rows: impl Iterator<Item = (usize, &'a RangeObservation)>,
+    x: &[f64; 3],
+    clock: &[f64; MAX_SYSTEMS],
+    rot: Option<&Matrix3<T>>,
+    reuse: bool,
+) -> Result<(), RaimError> {
+    let cols = b.cols;
+    b.n = 0;
+    for (k, (i, s)) in rows.enumerate() {
+        let d = [
+            s.position_m[0] - x[0],
+            s.position_m[1] - x[1],
+            s.position_m[2] - x[2],
+        ];
+        let range = T::range_sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if !(range > MIN_RANGE_M) {
+            return Err(RaimError::OutOfRange {
+                field: "range_m",
+                value: range,
+                min: MIN_RANGE_M,
+                max: f64::INFINITY,
+            });
+        }
+        // The unit line of sight in `T` (the policy: only the range and
+        // the residual need f64).
+        let r_t = T::of(range);
+        let u_ecef = [T::of(d[0]) / r_t, T::of(d[1]) / r_t, T::of(d[2]) / r_t];
+        // On the surface, use ENU so the model is final; near the centre,
+        // ECEF axes are as good as any (position columns are rotated back
+        // by the caller) and the weights are unit.
+        let (u, el, sigma) = match rot {
+            Some(rot) => {
+                let u = rotate(rot, u_ecef);
+                let (el, sigma) = match (reuse, b.el.get(k), b.sigma.get(k)) {
+                    (true, Some(&el), Some(&sigma)) => (el, sigma),
+                    _ => {
+                        let el = crate::frames::elevation(u);
+                        let sigma = match s.sigma_m {
+                            Some(v) => v,
+                            None => cfg.sigma_model.sigma(el).to_f64(),
+                        };
+                        (el.to_f64(), sigma)
+                    }
+                };
+                (u, el, sigma)
+            }
+            None => (
+                u_ecef,
+                core::f64::consts::FRAC_PI_2,
+                s.sigma_m.unwrap_or(1.0),
+            ),
+        };
+        // The builder's columns are those of the selected systems, so the
+        // system has one; a position in `cols` is < MAX_SYSTEMS, the
+        // length of `clock`.
+        let col = clock_column(&cols, s.id.system).unwrap_or(0);
+        #[allow(clippy::indexing_slicing)]
+        let z = s.pseudorange_m - range - clock[col];
+        b.push(i, s.id, u, z, sigma, el)?;
+    }
+    Ok(())
+}
+
+/// The converged solution (the model of this iteration, at x, with the
+/// parity quantities in `out.parity`): the least-squares position x_ls =
+/// x + dx, each column's clock plus its correction, the rows.
+fn converged<const N: usize, T: Real>(
+    b: &Builder<N, T>,
+    l: Linearisation,
+    x_ls: [f64; 3],
+    clock: &[f64; MAX_SYSTEMS],
+    iterations: u32,
+    out: &mut Solution<N, T>,
+) {
+    let cols = b.cols;
+    let dx = out.parity.dx().map(T::to_f64);
+    let mut clock_m = [None; MAX_SYSTEMS];
+    for ((sys, &c), &d) in cols.iter().zip(clock.iter()).zip(dx.iter().skip(3)) {
+        if let Some(sys) = sys {
+            let v = c + d;
+            if let Some(c) = clock_m.get_mut(sys.index()) {
+                *c = Some(v);
+            }
+        }
+    }
+    b.fill(out);
+    out.clocks = cols;
+    out.position_ecef_m = Some(x_ls);
+    out.geodetic = Some(l.geodetic_of(x_ls));
+    out.linearisation = Some(l);
+    out.correction_enu_m = [0.0; 3];
+    out.clock_m = clock_m;
+    out.iterations = iterations;
 }
 
 /// Accumulates whitened rows [-u, onehot] / sigma and z / sigma, in `T`
@@ -884,9 +959,12 @@ impl<const N: usize, T: Real> Builder<N, T> {
         // The weight in `T`; in f64 the same operations as before.
         let wt = T::one() / T::of(sigma);
         let clock = clock_column(&self.cols, id.system).map(|c| 3 + c);
+        let [u0, u1, u2] = u;
         for (j, col) in self.h.iter_mut().enumerate() {
             let v = match j {
-                0..=2 => -u.get(j).copied().unwrap_or(T::zero()) * wt,
+                0 => -u0 * wt,
+                1 => -u1 * wt,
+                2 => -u2 * wt,
                 _ if Some(j) == clock => wt,
                 _ => T::zero(),
             };

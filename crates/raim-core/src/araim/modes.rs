@@ -90,15 +90,10 @@ pub fn exceedance(events: &Events<'_>) -> [f64; MAX_EVENTS + 1] {
         for (t, qr) in tail.iter_mut().zip(q.iter()) {
             *t += qr * p;
         }
-        for j in (0..=MAX_EVENTS).rev() {
-            let prev = if j == 0 {
-                0.0
-            } else {
-                q.get(j - 1).copied().unwrap_or(0.0)
-            };
-            if let Some(qj) = q.get_mut(j) {
-                *qj = *qj * (1.0 - p) + prev * p;
-            }
+        // q_j <- q_j (1 - p) + q_{j-1} p (q_{-1} = 0), from the old q.
+        let old = q;
+        for (qj, prev) in q.iter_mut().zip(core::iter::once(0.0).chain(old)) {
+            *qj = *qj * (1.0 - p) + prev * p;
         }
     }
     tail
@@ -115,11 +110,10 @@ fn symmetric_sums(events: &Events<'_>) -> [[f64; MAX_EVENTS + 1]; MAX_SYSTEMS] {
     }
     for (&p, &s) in events.p_sat.iter().zip(events.sat_system.iter()) {
         if let Some(row) = e.get_mut(usize::from(s)) {
-            for j in (1..=MAX_EVENTS).rev() {
-                let prev = row.get(j - 1).copied().unwrap_or(0.0);
-                if let Some(x) = row.get_mut(j) {
-                    *x += prev * p;
-                }
+            // e_j <- e_j + e_{j-1} p (j >= 1), from the old row.
+            let old = *row;
+            for (x, prev) in row.iter_mut().skip(1).zip(old) {
+                *x += prev * p;
             }
         }
     }
@@ -165,19 +159,16 @@ pub fn enumerate<const K: usize>(
 ) -> Result<Enumeration, EnumerationLimit> {
     out.clear();
     let tail = exceedance(events);
-    let mut r = None;
-    for (k, t) in tail.iter().enumerate() {
-        if *t <= p_thres {
-            r = Some(k);
-            break;
-        }
-    }
-    let Some(r) = r else {
+    let Some((r, p_exceed)) = tail
+        .iter()
+        .copied()
+        .enumerate()
+        .find(|&(_, t)| t <= p_thres)
+    else {
         return Err(EnumerationLimit::TooManyEvents {
             p_exceed_at_max: tail.last().copied().unwrap_or(1.0),
         });
     };
-    let p_exceed = tail.get(r).copied().unwrap_or(1.0);
     let n = events.p_sat.len();
     let c = events.p_const.len();
     let total = n + c;
@@ -193,9 +184,9 @@ pub fn enumerate<const K: usize>(
             let mut consts = 0u8;
             let mut prior = 1.0f64;
             for &e in idx.iter().take(size) {
-                if e < n {
+                if let Some(&p) = events.p_sat.get(e) {
                     sats |= 1u64 << e;
-                    prior *= events.p_sat.get(e).copied().unwrap_or(1.0);
+                    prior *= p;
                 } else if let Some(&(sys, p)) = events.p_const.get(e - n) {
                     consts |= 1u8 << sys;
                     prior *= p;
@@ -213,12 +204,17 @@ pub fn enumerate<const K: usize>(
                     prior *= merge_factor(consts, r - size, &sums);
                 }
                 needed += 1;
-                // On overflow keep counting, so the cause says how many.
-                let _ = out.push(ModeEvents {
-                    sats,
-                    consts,
-                    prior,
-                });
+                // A full list refuses the mode and `needed` keeps counting,
+                // so the `needed > K` check below returns the Capacity error
+                // with how many were needed.
+                let refused = out
+                    .push(ModeEvents {
+                        sats,
+                        consts,
+                        prior,
+                    })
+                    .is_err();
+                debug_assert!(!refused || needed > K);
             }
             if !next_combination(&mut idx, size, total) {
                 break;

@@ -172,6 +172,11 @@ fn bit(i: usize) -> u64 {
 /// Factors the subset that keeps the satellites not in `removed` and the
 /// columns not in `dropped` (bit c = column c), into `base.p`; then fills
 /// `base.d` with S^(B) - `s0` (pass zeros for the all-in-view base).
+// In range: every row and column index below is < m = min(geo.m,
+// MAX_STATES), the matrices' order. The loops index as the Cholesky and
+// the triangular solves are written (and so compile to fewer
+// instructions than the iterator forms).
+#[allow(clippy::indexing_slicing, clippy::needless_range_loop)]
 pub fn factor<T: Real, const N: usize>(
     geo: &Geometry<T, N>,
     removed: u64,
@@ -205,10 +210,10 @@ pub fn factor<T: Real, const N: usize>(
         if !active(j) {
             continue;
         }
-        let diag = a.get(j).and_then(|r| r.get(j)).copied().unwrap_or(zero);
+        let diag = a[j][j];
         let mut s = diag;
         for k in 0..j {
-            let v = l.get(j).and_then(|r| r.get(k)).copied().unwrap_or(zero);
+            let v = l[j][k];
             s -= v * v;
         }
         if !(s > tol * diag) {
@@ -222,22 +227,18 @@ pub fn factor<T: Real, const N: usize>(
             });
         }
         let ljj = s.sqrt();
-        if let Some(x) = l.get_mut(j).and_then(|r| r.get_mut(j)) {
-            *x = ljj;
-        }
+        l[j][j] = ljj;
         for i in (j + 1)..m {
             if !active(i) {
                 continue;
             }
-            let mut s = a.get(i).and_then(|r| r.get(j)).copied().unwrap_or(zero);
+            let mut s = a[i][j];
             for k in 0..j {
-                let lik = l.get(i).and_then(|r| r.get(k)).copied().unwrap_or(zero);
-                let ljk = l.get(j).and_then(|r| r.get(k)).copied().unwrap_or(zero);
+                let lik = l[i][k];
+                let ljk = l[j][k];
                 s -= lik * ljk;
             }
-            if let Some(x) = l.get_mut(i).and_then(|r| r.get_mut(j)) {
-                *x = s / ljj;
-            }
+            l[i][j] = s / ljj;
         }
     }
     // P = A^-1, column by column: L z = e_c, L^T p = z.
@@ -253,32 +254,21 @@ pub fn factor<T: Real, const N: usize>(
             }
             let mut s = if i == c { T::of(1.0) } else { zero };
             for k in 0..i {
-                s -= l.get(i).and_then(|r| r.get(k)).copied().unwrap_or(zero)
-                    * z.get(k).copied().unwrap_or(zero);
+                s -= l[i][k] * z[k];
             }
-            let lii = l.get(i).and_then(|r| r.get(i)).copied().unwrap_or(zero);
-            if let Some(x) = z.get_mut(i) {
-                *x = s / lii;
-            }
+            let lii = l[i][i];
+            z[i] = s / lii;
         }
         for i in (0..m).rev() {
             if !active(i) {
                 continue;
             }
-            let mut s = z.get(i).copied().unwrap_or(zero);
+            let mut s = z[i];
             for k in (i + 1)..m {
-                s -= l.get(k).and_then(|r| r.get(i)).copied().unwrap_or(zero)
-                    * base
-                        .p
-                        .get(k)
-                        .and_then(|r| r.get(c))
-                        .copied()
-                        .unwrap_or(zero);
+                s -= l[k][i] * base.p[k][c];
             }
-            let lii = l.get(i).and_then(|r| r.get(i)).copied().unwrap_or(zero);
-            if let Some(x) = base.p.get_mut(i).and_then(|r| r.get_mut(c)) {
-                *x = s / lii;
-            }
+            let lii = l[i][i];
+            base.p[i][c] = s / lii;
         }
     }
     base.removed = removed;
@@ -312,7 +302,6 @@ fn normal_add<T: Real>(
     clk: usize,
 ) {
     let [g0, g1, g2, ..] = *g;
-    let gc = g.get(clk).copied().unwrap_or(T::of(0.0));
     let [a0, a1, a2, ..] = a;
     a0[0] += (g0 * w) * g0;
     a1[0] += (g1 * w) * g0;
@@ -321,7 +310,7 @@ fn normal_add<T: Real>(
     a2[1] += (g2 * w) * g1;
     a2[2] += (g2 * w) * g2;
     if clk >= 3 {
-        if let Some(ac) = a.get_mut(clk) {
+        if let (Some(ac), Some(&gc)) = (a.get_mut(clk), g.get(clk)) {
             let gcw = gc * w;
             let [c0, c1, c2, ..] = ac;
             *c0 += gcw * g0;
@@ -507,12 +496,12 @@ pub fn coupling<T: Real, const N: usize>(
     {
         normal_add(&mut a, g, w * w * c, clk);
     }
+    // i < j < m = min(geo.m, MAX_STATES), the order of A; the transpose
+    // reads a[j][i] and writes a[i][j].
+    #[allow(clippy::indexing_slicing, clippy::needless_range_loop)]
     for i in 0..m {
         for j in (i + 1)..m {
-            let x = a.get(j).and_then(|r| r.get(i)).copied().unwrap_or(zero);
-            if let Some(y) = a.get_mut(i).and_then(|r| r.get_mut(j)) {
-                *y = x;
-            }
+            a[i][j] = a[j][i];
         }
     }
     cp.a = a;
@@ -578,18 +567,20 @@ pub fn downdate_coupled<T: Real, const N: usize>(
     extra: u64,
     coupling: Option<&mut Coupling<T, N>>,
 ) -> Result<SubsetStats<T>, Deficient> {
+    let none = Deficient {
+        column: 0,
+        pivot: 0.0,
+    };
+    // Sizes checked once: every row below is < n <= N, every column < m
+    // <= MAX_STATES.
+    if geo.n == 0 || geo.n > N || geo.m > MAX_STATES {
+        return Err(none);
+    }
+    let Some((rows, r)) = removed_rows(extra, geo.n) else {
+        return Err(none);
+    };
     // The coupling describes the all-in-view base only.
     if let Some(cp) = coupling.filter(|_| base.removed == 0) {
-        let mut rows = [0usize; MAX_EVENTS];
-        let mut rest = extra & (u64::MAX >> (64 - geo.n.clamp(1, 64)));
-        let mut r = 0usize;
-        while rest != 0 {
-            if let Some(x) = rows.get_mut(r) {
-                *x = rest.trailing_zeros() as usize;
-            }
-            rest &= rest - 1;
-            r += 1;
-        }
         for &j in rows.iter().take(r) {
             cp.row(geo, &base.p, j);
         }
@@ -600,67 +591,104 @@ pub fn downdate_coupled<T: Real, const N: usize>(
             2 => all_in_view(geo, base, cp, [a, b]),
             3 => all_in_view(geo, base, cp, [a, b, c]),
             4 => all_in_view(geo, base, cp, [a, b, c, d]),
-            _ => Err(Deficient {
-                column: 0,
-                pivot: 0.0,
-            }),
+            _ => Err(none),
         };
     }
-    let zero = T::of(0.0);
-    let m = geo.m.min(MAX_STATES);
-    let n = geo.n.min(N);
-    // The removed rows.
+    downdate_pass(geo, base, &rows, r)
+}
+
+/// The satellites of `mask` below `n`, ascending, and their count; None
+/// when there are more than `MAX_EVENTS`.
+fn removed_rows(mask: u64, n: usize) -> Option<([usize; MAX_EVENTS], usize)> {
+    let below_n = if n >= 64 { u64::MAX } else { (1u64 << n) - 1 };
+    let mut rest = mask & below_n;
     let mut rows = [0usize; MAX_EVENTS];
     let mut r = 0usize;
-    for i in 0..n {
-        if extra & bit(i) != 0 {
-            if let Some(x) = rows.get_mut(r) {
-                *x = i;
-            }
-            r += 1;
-        }
+    while rest != 0 {
+        *rows.get_mut(r)? = rest.trailing_zeros() as usize;
+        rest &= rest - 1;
+        r += 1;
     }
-    if r > MAX_EVENTS {
-        return Err(Deficient {
-            column: 0,
-            pivot: 0.0,
-        });
+    Some((rows, r))
+}
+
+/// The rank-r downdate of any base with a pass over the satellites (SPEC
+/// §9.1, the ADD's step 3 for the mode that removes `rows[..r]` from
+/// `base`): the Woodbury blocks V and M ([`woodbury_blocks`]), M's
+/// Cholesky factor ([`cholesky_removed`]), c_q = M^-1 V_q and sigma_q
+/// ([`axis_coefficients`]), then sigma_ss, b^(k) and the separation by
+/// the pass ([`kept_pass`]).
+fn downdate_pass<T: Real, const N: usize>(
+    geo: &Geometry<T, N>,
+    base: &Base<T, N>,
+    rows: &[usize; MAX_EVENTS],
+    r: usize,
+) -> Result<SubsetStats<T>, Deficient> {
+    let (v, mm) = woodbury_blocks(geo, base, rows, r);
+    let l = cholesky_removed(geo, &mm, rows, r)?;
+    let mut out = SubsetStats::default();
+    let coef = axis_coefficients(base, &v, &l, r, &mut out.sigma_m);
+    let [ss, bias, sep] = kept_pass(geo, base, rows, r, &v, &coef);
+    for (o, a) in out.sigma_ss_m.iter_mut().zip(ss.iter()) {
+        *o = a.sqrt();
     }
-    // V = P_B G_R^T (stored by removed row), M = W_R^-1 - G_R V.
+    out.bias_m = bias;
+    out.separation_m = sep;
+    Ok(out)
+}
+
+/// V = P_B G_R^T (stored by removed row) and M = W_R^-1 - G_R V, the
+/// covariance of the removed residuals (module doc).
+// In range: rows[..r] < n <= N (`downdate_coupled`), and r <= MAX_EVENTS.
+#[allow(clippy::indexing_slicing)]
+fn woodbury_blocks<T: Real, const N: usize>(
+    geo: &Geometry<T, N>,
+    base: &Base<T, N>,
+    rows: &[usize; MAX_EVENTS],
+    r: usize,
+) -> ([[T; MAX_STATES]; MAX_EVENTS], [[T; MAX_EVENTS]; MAX_EVENTS]) {
+    let zero = T::of(0.0);
+    let m = geo.m;
     let mut v = [[zero; MAX_STATES]; MAX_EVENTS];
     let mut mm = [[zero; MAX_EVENTS]; MAX_EVENTS];
-    {
-        for (vr, &i) in v.iter_mut().zip(rows.iter()).take(r) {
-            let g = geo.g.get(i).copied().unwrap_or([zero; MAX_STATES]);
-            for (c, x) in vr.iter_mut().enumerate().take(m) {
-                let prow = base.p.get(c).copied().unwrap_or([zero; MAX_STATES]);
-                *x = dot(&prow, &g, m);
-            }
-        }
-        for a in 0..r {
-            let ia = rows.get(a).copied().unwrap_or(0);
-            let ga = geo.g.get(ia).copied().unwrap_or([zero; MAX_STATES]);
-            for b in 0..r {
-                let vb = v.get(b).copied().unwrap_or([zero; MAX_STATES]);
-                let mut x = -dot(&ga, &vb, m);
-                if a == b {
-                    x += T::of(1.0) / geo.w.get(ia).copied().unwrap_or(T::of(1.0));
-                }
-                if let Some(y) = mm.get_mut(a).and_then(|row| row.get_mut(b)) {
-                    *y = x;
-                }
-            }
+    for (vr, &i) in v.iter_mut().zip(rows.iter()).take(r) {
+        let g = &geo.g[i];
+        for (x, prow) in vr.iter_mut().zip(base.p.iter()).take(m) {
+            *x = dot(prow, g, m);
         }
     }
-    // Cholesky of M (r x r), pivots relative to C_int of the removed row.
+    for (a, (mrow, &ia)) in mm.iter_mut().zip(rows.iter()).enumerate().take(r) {
+        let ga = &geo.g[ia];
+        for (b, (y, vb)) in mrow.iter_mut().zip(v.iter()).enumerate().take(r) {
+            let mut x = -dot(ga, vb, m);
+            if a == b {
+                x += T::of(1.0) / geo.w[ia];
+            }
+            *y = x;
+        }
+    }
+    (v, mm)
+}
+
+/// M = L L^T (r x r), each pivot relative to C_int of its removed row: a
+/// pivot at or below [`rank_tolerance`] leaves the mode's geometry
+/// rank-deficient.
+// In range: j, k, i < r <= MAX_EVENTS, and rows[..r] < n <= N.
+#[allow(clippy::indexing_slicing)]
+fn cholesky_removed<T: Real, const N: usize>(
+    geo: &Geometry<T, N>,
+    mm: &[[T; MAX_EVENTS]; MAX_EVENTS],
+    rows: &[usize; MAX_EVENTS],
+    r: usize,
+) -> Result<[[T; MAX_EVENTS]; MAX_EVENTS], Deficient> {
+    let zero = T::of(0.0);
     let tol = rank_tolerance::<T>();
     let mut l = [[zero; MAX_EVENTS]; MAX_EVENTS];
     for j in 0..r {
-        let ij = rows.get(j).copied().unwrap_or(0);
-        let scale = T::of(1.0) / geo.w.get(ij).copied().unwrap_or(T::of(1.0));
-        let mut s = mm.get(j).and_then(|x| x.get(j)).copied().unwrap_or(zero);
-        for k in 0..j {
-            let x = l.get(j).and_then(|x| x.get(k)).copied().unwrap_or(zero);
+        let ij = rows[j];
+        let scale = T::of(1.0) / geo.w[ij];
+        let mut s = mm[j][j];
+        for &x in l[j].iter().take(j) {
             s -= x * x;
         }
         if !(s > tol * scale) {
@@ -670,74 +698,78 @@ pub fn downdate_coupled<T: Real, const N: usize>(
             });
         }
         let ljj = s.sqrt();
-        if let Some(x) = l.get_mut(j).and_then(|x| x.get_mut(j)) {
-            *x = ljj;
-        }
+        l[j][j] = ljj;
         for i in (j + 1)..r {
-            let mut s = mm.get(i).and_then(|x| x.get(j)).copied().unwrap_or(zero);
-            for k in 0..j {
-                s -= l.get(i).and_then(|x| x.get(k)).copied().unwrap_or(zero)
-                    * l.get(j).and_then(|x| x.get(k)).copied().unwrap_or(zero);
+            let mut s = mm[i][j];
+            for (&lik, &ljk) in l[i].iter().zip(l[j].iter()).take(j) {
+                s -= lik * ljk;
             }
-            if let Some(x) = l.get_mut(i).and_then(|x| x.get_mut(j)) {
-                *x = s / ljj;
-            }
+            l[i][j] = s / ljj;
         }
     }
-    // c_q = M^-1 V_q (V_q: the q-th components of the r columns of V).
+    Ok(l)
+}
+
+/// c_q = M^-1 V_q per axis q (V_q: the q-th components of the r columns
+/// of V; L z = V_q, then L^T c_q = z), and sigma_q = sqrt((P_B)_qq + c_q .
+/// V_q) into `sigma_m` (the module doc's (P_k)_qq).
+// In range: i, k < r <= MAX_EVENTS, and q < 3 <= MAX_STATES.
+#[allow(clippy::indexing_slicing)]
+fn axis_coefficients<T: Real, const N: usize>(
+    base: &Base<T, N>,
+    v: &[[T; MAX_STATES]; MAX_EVENTS],
+    l: &[[T; MAX_EVENTS]; MAX_EVENTS],
+    r: usize,
+    sigma_m: &mut [T; 3],
+) -> [[T; MAX_EVENTS]; 3] {
+    let zero = T::of(0.0);
     let mut coef = [[zero; MAX_EVENTS]; 3];
-    let mut out = SubsetStats::default();
-    for (q, cq) in coef.iter_mut().enumerate() {
+    for (q, (cq, sq)) in coef.iter_mut().zip(sigma_m.iter_mut()).enumerate() {
         let mut z = [zero; MAX_EVENTS];
         for i in 0..r {
-            let mut s = v.get(i).and_then(|x| x.get(q)).copied().unwrap_or(zero);
+            let mut s = v[i][q];
             for k in 0..i {
-                s -= l.get(i).and_then(|x| x.get(k)).copied().unwrap_or(zero)
-                    * z.get(k).copied().unwrap_or(zero);
+                s -= l[i][k] * z[k];
             }
-            let lii = l
-                .get(i)
-                .and_then(|x| x.get(i))
-                .copied()
-                .unwrap_or(T::of(1.0));
-            if let Some(x) = z.get_mut(i) {
-                *x = s / lii;
-            }
+            let lii = l[i][i];
+            z[i] = s / lii;
         }
         for i in (0..r).rev() {
-            let mut s = z.get(i).copied().unwrap_or(zero);
+            let mut s = z[i];
             for k in (i + 1)..r {
-                s -= l.get(k).and_then(|x| x.get(i)).copied().unwrap_or(zero)
-                    * cq.get(k).copied().unwrap_or(zero);
+                s -= l[k][i] * cq[k];
             }
-            let lii = l
-                .get(i)
-                .and_then(|x| x.get(i))
-                .copied()
-                .unwrap_or(T::of(1.0));
-            if let Some(x) = cq.get_mut(i) {
-                *x = s / lii;
-            }
+            let lii = l[i][i];
+            cq[i] = s / lii;
         }
-        let mut var = base
-            .p
-            .get(q)
-            .and_then(|x| x.get(q))
-            .copied()
-            .unwrap_or(zero);
+        let mut var = base.p[q][q];
         for k in 0..r {
-            var += cq.get(k).copied().unwrap_or(zero)
-                * v.get(k).and_then(|x| x.get(q)).copied().unwrap_or(zero);
+            var += cq[k] * v[k][q];
         }
-        if let Some(x) = out.sigma_m.get_mut(q) {
-            *x = var.sqrt();
-        }
+        *sq = var.sqrt();
     }
-    // The coupling rows h_k[i] of the removed
-    // satellites are formed here as v_k . g_i w_i (r n m), zero
-    // at the satellites the base removes (so that there d = d0 = -s and
-    // the pass takes their removed-satellite terms s^2 C_acc and -s y,
-    // and |s + d| = 0, without a branch).
+    coef
+}
+
+/// The pass over the satellites for sigma_ss^2, b^(k) and the separation
+/// of the mode ([`run`] on the contiguous runs of kept satellites between
+/// the removed ones, then the removed ones' own terms s^2 C_acc and
+/// -s y), as [sigma_ss^2, b, separation] per axis. The coupling rows
+/// h_k[i] of the removed satellites are formed here as v_k . g_i w_i (r n
+/// m), zero at the satellites the base removes (so that there d = d0 =
+/// -s and the pass takes their removed-satellite terms s^2 C_acc and -s
+/// y, and |s + d| = 0, without a branch).
+fn kept_pass<T: Real, const N: usize>(
+    geo: &Geometry<T, N>,
+    base: &Base<T, N>,
+    rows: &[usize; MAX_EVENTS],
+    r: usize,
+    v: &[[T; MAX_STATES]; MAX_EVENTS],
+    coef: &[[T; MAX_EVENTS]; 3],
+) -> [[T; 3]; 3] {
+    let zero = T::of(0.0);
+    let m = geo.m;
+    let n = geo.n;
     let zero_row = [zero; N];
     let mut formed = [[zero; N]; MAX_EVENTS];
     let mut qrows: [&[T; N]; MAX_EVENTS] = [&zero_row; MAX_EVENTS];
@@ -757,23 +789,21 @@ pub fn downdate_coupled<T: Real, const N: usize>(
     for (qr, f) in qrows.iter_mut().zip(formed.iter()).take(r) {
         *qr = f;
     }
-    // The kept satellites in the contiguous runs between the removed ones
-    // (sorted ascending), then the removed ones' own terms.
     let mut acc = [[zero; 3]; 3];
     let mut start = 0usize;
     for &stop in rows.iter().take(r).chain(core::iter::once(&n)) {
         if stop > start {
             let seg = start..stop;
             match r {
-                1 => run::<T, N, 1>(&base.pack, &qrows, &coef, seg, &mut acc),
-                2 => run::<T, N, 2>(&base.pack, &qrows, &coef, seg, &mut acc),
-                3 => run::<T, N, 3>(&base.pack, &qrows, &coef, seg, &mut acc),
-                _ => run::<T, N, MAX_EVENTS>(&base.pack, &qrows, &coef, seg, &mut acc),
+                1 => run::<T, N, 1>(&base.pack, &qrows, coef, seg, &mut acc),
+                2 => run::<T, N, 2>(&base.pack, &qrows, coef, seg, &mut acc),
+                3 => run::<T, N, 3>(&base.pack, &qrows, coef, seg, &mut acc),
+                _ => run::<T, N, MAX_EVENTS>(&base.pack, &qrows, coef, seg, &mut acc),
             }
         }
         start = stop + 1;
     }
-    let [mut ss, bias, mut sep] = acc;
+    let [ss, _, sep] = &mut acc;
     for &i in rows.iter().take(r) {
         if let Some(pk) = base.pack.get(i) {
             for ((a, c), &sq) in ss.iter_mut().zip(sep.iter_mut()).zip(pk.s.iter()) {
@@ -782,20 +812,268 @@ pub fn downdate_coupled<T: Real, const N: usize>(
             }
         }
     }
-    for q in 0..3 {
-        if let (Some(o), Some(a)) = (out.sigma_ss_m.get_mut(q), ss.get(q)) {
-            *o = a.sqrt();
+    acc
+}
+
+/// Per removed row a of the all-in-view base: C_int (= 1/w), C_acc, the
+/// all-in-view residual, its coupling row Q[R_a], and per axis q the gain
+/// s0_q and V's position row s0_q C_int.
+struct RemovedRows<'a, T, const N: usize, const R: usize> {
+    c_int: [T; R],
+    c_acc: [T; R],
+    res: [T; R],
+    qrows: [&'a [T; N]; R],
+    s: [[T; R]; 3],
+    v: [[T; R]; 3],
+}
+
+/// Gathers [`RemovedRows`] for `rows` from the geometry and the coupling.
+// In range: rows < n <= N (`downdate_coupled`).
+#[allow(clippy::indexing_slicing)]
+fn removed_rows_of<'a, T: Real, const N: usize, const R: usize>(
+    geo: &Geometry<T, N>,
+    cp: &'a Coupling<T, N>,
+    rows: &[usize; R],
+) -> RemovedRows<'a, T, N, R> {
+    let zero = T::of(0.0);
+    let c_int = rows.map(|i| geo.c_int[i]);
+    let mut s = [[zero; R]; 3];
+    let mut v = [[zero; R]; 3];
+    for ((sq, vq), srow) in s.iter_mut().zip(v.iter_mut()).zip(cp.s.iter()) {
+        for (((x, y), &ia), &ca) in sq
+            .iter_mut()
+            .zip(vq.iter_mut())
+            .zip(rows.iter())
+            .zip(c_int.iter())
+        {
+            *x = srow[ia];
+            *y = *x * ca;
         }
     }
-    out.bias_m = bias;
-    out.separation_m = sep;
-    Ok(out)
+    RemovedRows {
+        c_int,
+        c_acc: rows.map(|i| geo.c_acc[i]),
+        res: rows.map(|i| cp.res[i]),
+        qrows: rows.map(|i| &cp.q[i]),
+        s,
+        v,
+    }
+}
+
+/// Q[R_a][R_b], and M = W_R^-1 - G_R P0 G_R^T from it (g_a^T P0 g_b =
+/// Q[a][b] C_int,b).
+// In range: rows < n <= N, and a Q row has N entries.
+#[allow(clippy::indexing_slicing)]
+fn removed_block<T: Real, const N: usize, const R: usize>(
+    rr: &RemovedRows<'_, T, N, R>,
+    rows: &[usize; R],
+) -> ([[T; R]; R], [[T; R]; R]) {
+    let zero = T::of(0.0);
+    let mut qrr = [[zero; R]; R];
+    let mut mm = [[zero; R]; R];
+    for (a, ((qrow, mrow), qa)) in qrr
+        .iter_mut()
+        .zip(mm.iter_mut())
+        .zip(rr.qrows.iter())
+        .enumerate()
+    {
+        for (b, ((x, y), (&ib, &cb))) in qrow
+            .iter_mut()
+            .zip(mrow.iter_mut())
+            .zip(rows.iter().zip(rr.c_int.iter()))
+            .enumerate()
+        {
+            *x = qa[ib];
+            let mut m = -(*x * cb);
+            if a == b {
+                m += cb;
+            }
+            *y = m;
+        }
+    }
+    (qrr, mm)
+}
+
+/// M = L D L^T (L unit lower triangular), pivots d_j = the Cholesky
+/// pivots' squares, relative to C_int of the removed row; no square root,
+/// and the reciprocals 1/d_j returned (with L) so that the solves
+/// multiply: one division per removed row and mode.
+// In range: i, j, k < R, the arrays' length.
+#[allow(clippy::indexing_slicing)]
+fn ldl_removed<T: Real, const R: usize>(
+    mm: &[[T; R]; R],
+    rows: &[usize; R],
+    c_int: &[T; R],
+) -> Result<([[T; R]; R], [T; R]), Deficient> {
+    let zero = T::of(0.0);
+    let one = T::of(1.0);
+    let tol = rank_tolerance::<T>();
+    let mut l = [[zero; R]; R];
+    let mut d = [zero; R];
+    let mut inv = [one; R];
+    for j in 0..R {
+        let ij = rows[j];
+        let scale = c_int[j];
+        let lj = l[j];
+        // u_k = l_jk d_k (k < j).
+        let mut u = [zero; R];
+        let mut dj = mm[j][j];
+        for k in 0..j {
+            let ljk = lj[k];
+            let uk = ljk * d[k];
+            u[k] = uk;
+            dj -= ljk * uk;
+        }
+        if !(dj > tol * scale) {
+            return Err(Deficient {
+                column: ij,
+                pivot: (dj / scale).to_f64(),
+            });
+        }
+        let rj = one / dj;
+        d[j] = dj;
+        inv[j] = rj;
+        for i in (j + 1)..R {
+            let mut sum = mm[i][j];
+            for (k, &uk) in u.iter().enumerate().take(j) {
+                sum -= l[i][k] * uk;
+            }
+            l[i][j] = sum * rj;
+        }
+    }
+    Ok((l, inv))
+}
+
+/// E_ab = g_Ra^T B g_Rb (symmetric; [`Coupling`]`::bg`), the C_acc Gram
+/// matrix of the removed rows' coupling rows.
+// In range: rows < n <= N.
+#[allow(clippy::indexing_slicing)]
+fn gram_removed<T: Real, const N: usize, const R: usize>(
+    geo: &Geometry<T, N>,
+    cp: &Coupling<T, N>,
+    rows: &[usize; R],
+) -> [[T; R]; R] {
+    let mut e = [[T::of(0.0); R]; R];
+    for (a, &ia) in rows.iter().enumerate() {
+        let (ga, ca) = (&geo.g[ia], geo.col[ia]);
+        for (b, &ib) in rows.iter().enumerate().take(a + 1) {
+            let x = gdot(&cp.bg[ib], ga, ca);
+            e[a][b] = x;
+            e[b][a] = x;
+        }
+    }
+    e
+}
+
+/// c_q = M^-1 V_q from M = L D L^T: L z = V_q, then L^T c = D^-1 z (times
+/// the reciprocal pivots `inv`).
+// In range: i, k < R, the arrays' length.
+#[allow(clippy::indexing_slicing)]
+fn ldl_solve<T: Real, const R: usize>(l: &[[T; R]; R], inv: &[T; R], vq: &[T; R]) -> [T; R] {
+    let zero = T::of(0.0);
+    let mut z = [zero; R];
+    for i in 0..R {
+        let mut sum = vq[i];
+        for k in 0..i {
+            sum -= l[i][k] * z[k];
+        }
+        z[i] = sum;
+    }
+    let mut cq = [zero; R];
+    for i in (0..R).rev() {
+        let mut sum = z[i] * inv[i];
+        for k in (i + 1)..R {
+            sum -= l[k][i] * cq[k];
+        }
+        cq[i] = sum;
+    }
+    cq
+}
+
+/// sigma_ss,q^2 and the separation of one axis without a pass: c_q^T E
+/// c_q minus the removed rows' own terms of that form, floored at 0, plus
+/// their terms as removed rows (s^2 C_acc); the separation -c_q . r_R
+/// (`all_in_view`'s doc).
+// In range: j < R, the length of a Q_RR row.
+#[allow(clippy::indexing_slicing)]
+fn sigma_ss_sq_and_separation<T: Real, const N: usize, const R: usize>(
+    cq: &[T; R],
+    sq: &[T; R],
+    e: &[[T; R]; R],
+    qrr: &[[T; R]; R],
+    rr: &RemovedRows<'_, T, N, R>,
+) -> (T, T) {
+    let zero = T::of(0.0);
+    let mut quad = zero;
+    for (&ca, erow) in cq.iter().zip(e.iter()) {
+        let ec = erow
+            .iter()
+            .zip(cq.iter())
+            .fold(zero, |acc, (&x, &c)| acc + x * c);
+        quad += ca * ec;
+    }
+    let mut removed = zero;
+    let mut sep = zero;
+    for (j, (((&sj, &cj), &ca), &rj)) in sq
+        .iter()
+        .zip(cq.iter())
+        .zip(rr.c_acc.iter())
+        .zip(rr.res.iter())
+        .enumerate()
+    {
+        let dj = cq
+            .iter()
+            .zip(qrr.iter())
+            .fold(zero, |acc, (&c, qrow)| acc + c * qrow[j]);
+        quad -= dj * dj * ca;
+        removed += sj * sj * ca;
+        sep -= cj * rj;
+    }
+    let kept = if quad > zero { quad } else { zero };
+    (kept + removed, sep)
+}
+
+/// b^(k)_q = sum_kept |s_qi + d_qi| b_nom,i with d_qi = sum_k c_qk
+/// Q[R_k][i]: one pass over the kept satellites, by the runs between the
+/// removed ones (`rows` ascending).
+// In range: j < stop <= N, and a Q row and `cp.s`'s rows have N entries.
+#[allow(clippy::indexing_slicing)]
+fn bias_kept<T: Real, const N: usize, const R: usize>(
+    cp: &Coupling<T, N>,
+    rows: &[usize; R],
+    qrows: &[&[T; N]; R],
+    coef: &[[T; R]; 3],
+    n: usize,
+) -> [T; 3] {
+    let zero = T::of(0.0);
+    let mut bias = [zero; 3];
+    let mut start = 0usize;
+    for stop in rows.iter().copied().chain(core::iter::once(n)) {
+        let stop = stop.min(N);
+        for j in start..stop {
+            let bn = cp.b_nom[j];
+            let mut h = [zero; R];
+            for (hk, row) in h.iter_mut().zip(qrows.iter()) {
+                *hk = row[j];
+            }
+            for ((bq, cq), srow) in bias.iter_mut().zip(coef.iter()).zip(cp.s.iter()) {
+                let t = cq
+                    .iter()
+                    .zip(h.iter())
+                    .fold(srow[j], |x, (&c, &hk)| x + c * hk);
+                *bq += t.abs() * bn;
+            }
+        }
+        start = stop + 1;
+    }
+    bias
 }
 
 /// The statistics of the subset that removes the satellites `rows`
 /// (ascending, `R` of them, a constant so that every loop below unrolls)
 /// from the all-in-view base, from the epoch's [`Coupling`] and without a
-/// pass over the satellites for sigma_ss and the separation.
+/// pass over the satellites for sigma_ss and the separation (SPEC §9.1,
+/// the ADD's step 3 for one mode).
 ///
 /// V's position rows are s0_q[i] C_int,i (S0 = P0 G^T W, C_int = 1/w) and
 /// M = W_R^-1 - G_R P0 G_R^T has g_a^T P0 g_b = Q[a][b] C_int,b; M = L D
@@ -826,224 +1104,33 @@ fn all_in_view<T: Real, const N: usize, const R: usize>(
     rows: [usize; R],
 ) -> Result<SubsetStats<T>, Deficient> {
     let zero = T::of(0.0);
-    let one = T::of(1.0);
-    let n = geo.n.min(N);
-    // Per removed row a: C_int (= 1/w), C_acc, the residual, s_q, its Q
-    // row and the removed rows' Q block, E's row.
-    let mut c_int = [one; R];
-    let mut c_acc = [zero; R];
-    let mut res = [zero; R];
-    let mut v = [[zero; R]; 3];
-    let zero_row = [zero; N];
-    let mut qrows: [&[T; N]; R] = [&zero_row; R];
-    for (a, &ia) in rows.iter().enumerate() {
-        if let (Some(x), Some(y), Some(z), Some(qr)) = (
-            c_int.get_mut(a),
-            c_acc.get_mut(a),
-            res.get_mut(a),
-            qrows.get_mut(a),
-        ) {
-            *x = geo.c_int.get(ia).copied().unwrap_or(one);
-            *y = geo.c_acc.get(ia).copied().unwrap_or(zero);
-            *z = cp.res.get(ia).copied().unwrap_or(zero);
-            if let Some(row) = cp.q.get(ia) {
-                *qr = row;
-            }
-        }
-    }
-    let mut s = [[zero; R]; 3];
-    for ((sq, vq), srow) in s.iter_mut().zip(v.iter_mut()).zip(cp.s.iter()) {
-        for (((x, y), &ia), &ca) in sq
-            .iter_mut()
-            .zip(vq.iter_mut())
-            .zip(rows.iter())
-            .zip(c_int.iter())
-        {
-            *x = srow.get(ia).copied().unwrap_or(zero);
-            *y = *x * ca;
-        }
-    }
-    // Q[R_a][R_b] and M = W_R^-1 - G_R P0 G_R^T (g_a^T P0 g_b = Q[a][b]
-    // C_int,b).
-    let mut qrr = [[zero; R]; R];
-    let mut mm = [[zero; R]; R];
-    for (a, ((qrow, mrow), qa)) in qrr
-        .iter_mut()
-        .zip(mm.iter_mut())
-        .zip(qrows.iter())
-        .enumerate()
-    {
-        for (b, ((x, y), (&ib, &cb))) in qrow
-            .iter_mut()
-            .zip(mrow.iter_mut())
-            .zip(rows.iter().zip(c_int.iter()))
-            .enumerate()
-        {
-            *x = qa.get(ib).copied().unwrap_or(zero);
-            let mut m = -(*x * cb);
-            if a == b {
-                m += cb;
-            }
-            *y = m;
-        }
-    }
-    // M = L D L^T (L unit lower triangular), pivots d_j = the Cholesky
-    // pivots' squares, relative to C_int of the removed row; no square
-    // root, and the reciprocals 1/d_j kept (`inv`) so that the solves
-    // below multiply: one division per removed row and mode.
-    let tol = rank_tolerance::<T>();
-    let mut l = [[zero; R]; R];
-    let mut d = [zero; R];
-    let mut inv = [one; R];
-    for j in 0..R {
-        let ij = rows.get(j).copied().unwrap_or(0);
-        let scale = c_int.get(j).copied().unwrap_or(one);
-        let lj = l.get(j).copied().unwrap_or([zero; R]);
-        // u_k = l_jk d_k (k < j).
-        let mut u = [zero; R];
-        let mut dj = mm.get(j).and_then(|x| x.get(j)).copied().unwrap_or(zero);
-        for k in 0..j {
-            let ljk = lj.get(k).copied().unwrap_or(zero);
-            let uk = ljk * d.get(k).copied().unwrap_or(zero);
-            if let Some(x) = u.get_mut(k) {
-                *x = uk;
-            }
-            dj -= ljk * uk;
-        }
-        if !(dj > tol * scale) {
-            return Err(Deficient {
-                column: ij,
-                pivot: (dj / scale).to_f64(),
-            });
-        }
-        let rj = one / dj;
-        if let (Some(x), Some(y)) = (d.get_mut(j), inv.get_mut(j)) {
-            *x = dj;
-            *y = rj;
-        }
-        for i in (j + 1)..R {
-            let mut sum = mm.get(i).and_then(|x| x.get(j)).copied().unwrap_or(zero);
-            for (k, &uk) in u.iter().enumerate().take(j) {
-                sum -= l.get(i).and_then(|x| x.get(k)).copied().unwrap_or(zero) * uk;
-            }
-            if let Some(x) = l.get_mut(i).and_then(|x| x.get_mut(j)) {
-                *x = sum * rj;
-            }
-        }
-    }
-    // E_ab = g_Ra^T B g_Rb (symmetric).
-    let mut e = [[zero; R]; R];
-    for (a, &ia) in rows.iter().enumerate() {
-        let (Some(ga), Some(&ca)) = (geo.g.get(ia), geo.col.get(ia)) else {
-            continue;
-        };
-        for (b, &ib) in rows.iter().enumerate().take(a + 1) {
-            let x = cp.bg.get(ib).map_or(zero, |bg| gdot(bg, ga, ca));
-            if let Some(y) = e.get_mut(a).and_then(|row| row.get_mut(b)) {
-                *y = x;
-            }
-            if let Some(y) = e.get_mut(b).and_then(|row| row.get_mut(a)) {
-                *y = x;
-            }
-        }
-    }
+    let rr = removed_rows_of(geo, cp, &rows);
+    let (qrr, mm) = removed_block(&rr, &rows);
+    let (l, inv) = ldl_removed(&mm, &rows, &rr.c_int)?;
+    let e = gram_removed(geo, cp, &rows);
     let mut out = SubsetStats::default();
     let mut coef = [[zero; R]; 3];
-    for (q, ((cq, vq), sq)) in coef.iter_mut().zip(v.iter()).zip(s.iter()).enumerate() {
-        // c_q = M^-1 V_q: L z = V_q, then L^T c = D^-1 z (times the
-        // reciprocal pivots).
-        let mut z = [zero; R];
-        for i in 0..R {
-            let mut sum = vq.get(i).copied().unwrap_or(zero);
-            for k in 0..i {
-                sum -= l.get(i).and_then(|x| x.get(k)).copied().unwrap_or(zero)
-                    * z.get(k).copied().unwrap_or(zero);
-            }
-            if let Some(x) = z.get_mut(i) {
-                *x = sum;
-            }
-        }
-        for i in (0..R).rev() {
-            let mut sum = z.get(i).copied().unwrap_or(zero) * inv.get(i).copied().unwrap_or(one);
-            for k in (i + 1)..R {
-                sum -= l.get(k).and_then(|x| x.get(i)).copied().unwrap_or(zero)
-                    * cq.get(k).copied().unwrap_or(zero);
-            }
-            if let Some(x) = cq.get_mut(i) {
-                *x = sum;
-            }
-        }
-        let mut var = base
-            .p
-            .get(q)
-            .and_then(|x| x.get(q))
-            .copied()
-            .unwrap_or(zero);
+    let axes = coef
+        .iter_mut()
+        .zip(rr.v.iter().zip(rr.s.iter()))
+        .zip(base.p.iter())
+        .zip(out.sigma_m.iter_mut())
+        .zip(out.sigma_ss_m.iter_mut().zip(out.separation_m.iter_mut()));
+    for (q, ((((cq, (vq, sq)), prow), sigma), (sigma_ss, separation))) in axes.enumerate() {
+        *cq = ldl_solve(&l, &inv, vq);
+        // sigma_q^2 = (P0)_qq + c_q . V_q; q < 3 <= MAX_STATES.
+        #[allow(clippy::indexing_slicing)]
+        let mut var = prow[q];
         for (&c, &vk) in cq.iter().zip(vq.iter()) {
             var += c * vk;
         }
-        // sigma_ss: c_q^T E c_q, minus the removed rows' own terms, plus
-        // theirs as removed rows (s^2 C_acc); the separation -c_q . r_R.
-        let mut quad = zero;
-        for (&ca, erow) in cq.iter().zip(e.iter()) {
-            let ec = erow
-                .iter()
-                .zip(cq.iter())
-                .fold(zero, |acc, (&x, &c)| acc + x * c);
-            quad += ca * ec;
-        }
-        let mut removed = zero;
-        let mut sep = zero;
-        for (j, (((&sj, &cj), &ca), &rj)) in sq
-            .iter()
-            .zip(cq.iter())
-            .zip(c_acc.iter())
-            .zip(res.iter())
-            .enumerate()
-        {
-            let dj = cq.iter().zip(qrr.iter()).fold(zero, |acc, (&c, qrow)| {
-                acc + c * qrow.get(j).copied().unwrap_or(zero)
-            });
-            quad -= dj * dj * ca;
-            removed += sj * sj * ca;
-            sep -= cj * rj;
-        }
-        let kept = if quad > zero { quad } else { zero };
-        if let (Some(a), Some(b), Some(c)) = (
-            out.sigma_m.get_mut(q),
-            out.sigma_ss_m.get_mut(q),
-            out.separation_m.get_mut(q),
-        ) {
-            *a = var.sqrt();
-            *b = (kept + removed).sqrt();
-            *c = sep;
-        }
+        let (ss2, sep) = sigma_ss_sq_and_separation(cq, sq, &e, &qrr, &rr);
+        *sigma = var.sqrt();
+        *sigma_ss = ss2.sqrt();
+        *separation = sep;
     }
     if cp.biased {
-        // The kept satellites, by the runs between the removed ones.
-        let mut bias = [zero; 3];
-        let mut start = 0usize;
-        for stop in rows.iter().copied().chain(core::iter::once(n)) {
-            let stop = stop.min(N);
-            for j in start..stop {
-                let bn = cp.b_nom.get(j).copied().unwrap_or(zero);
-                let mut h = [zero; R];
-                for (hk, row) in h.iter_mut().zip(qrows.iter()) {
-                    *hk = row.get(j).copied().unwrap_or(zero);
-                }
-                for ((bq, cq), srow) in bias.iter_mut().zip(coef.iter()).zip(cp.s.iter()) {
-                    let t = cq
-                        .iter()
-                        .zip(h.iter())
-                        .fold(srow.get(j).copied().unwrap_or(zero), |x, (&c, &hk)| {
-                            x + c * hk
-                        });
-                    *bq += t.abs() * bn;
-                }
-            }
-            start = stop + 1;
-        }
-        out.bias_m = bias;
+        out.bias_m = bias_kept(cp, &rows, &rr.qrows, &coef, geo.n);
     }
     Ok(out)
 }
@@ -1075,7 +1162,11 @@ fn run<T: Real, const N: usize, const R: usize>(
     for (j, pk) in seg.zip(sats.iter()) {
         let mut h = [zero; R];
         for (hk, row) in h.iter_mut().zip(qrows.iter()) {
-            *hk = row.get(j).copied().unwrap_or(zero);
+            // j < seg.end <= N (`pack.get(seg)` succeeded), a Q row's length.
+            #[allow(clippy::indexing_slicing)]
+            {
+                *hk = row[j];
+            }
         }
         for (((((a, b), e), cq), &d0), &sq) in ss
             .iter_mut()

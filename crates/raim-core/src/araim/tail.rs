@@ -183,10 +183,9 @@ fn exp_neg(x: f64) -> f64 {
     let q = r + r2
         * ((0.5 + r * (1.0 / 6.0)) + r2 * ((1.0 / 24.0 + r * (1.0 / 120.0)) + r2 * (1.0 / 720.0)));
     let k = kf as i64;
-    let (hi, lo) = EXP2_64
-        .get((k & 63) as usize)
-        .copied()
-        .unwrap_or((1.0, 0.0));
+    // k & 63 < 64, the table's length.
+    #[allow(clippy::indexing_slicing)]
+    let (hi, lo) = EXP2_64[(k & 63) as usize];
     let p = hi + (lo + hi * q);
     // m = floor(k / 64) in [-1076, 0]: 2^m as one or two normal powers
     // of two.

@@ -130,7 +130,10 @@ impl<const N: usize, T: Real> Parity<N, T> {
         for i in 0..n {
             let mut hi = [T::zero(); M];
             for (dst, col) in hi.iter_mut().zip(h.iter()) {
-                *dst = col.get(i).copied().unwrap_or(T::zero());
+                // i < n = min(self.n, N), and a column has N rows.
+                #[allow(clippy::indexing_slicing)]
+                let v = col[i];
+                *dst = v;
             }
             // Forward substitution T1^T g = h_i (as `solve_tt`).
             let mut g = [T::zero(); M];
@@ -170,12 +173,15 @@ impl<const N: usize, T: Real> Parity<N, T> {
 
     /// The per-row quantities for any m (see [`Self::rows_fixed`]).
     fn rows_general(&mut self, h: &[[T; N]; MAX_STATES], z: &[T; N]) {
-        let (n, m) = (self.n, self.m);
+        let (n, m) = (self.n.min(N), self.m);
         let p = self;
         for i in 0..n {
             let mut hi = [T::zero(); MAX_STATES];
             for (dst, col) in hi.iter_mut().zip(h.iter()).take(m) {
-                *dst = col.get(i).copied().unwrap_or(T::zero());
+                // i < n = min(self.n, N), and a column has N rows.
+                #[allow(clippy::indexing_slicing)]
+                let v = col[i];
+                *dst = v;
             }
             let g = p.qr.solve_tt(&hi);
             let leverage = dot(g.iter().take(m), g.iter().take(m));
@@ -211,8 +217,11 @@ impl<const N: usize, T: Real> Parity<N, T> {
     }
 
     /// The parity vector p = U2^T z (length n - m).
+    // m < n <= N once computed, 0 = m = n before: `compute` sets them
+    // only after `factor_from` accepted n <= N and m <= n.
+    #[allow(clippy::indexing_slicing)]
     pub fn p(&self) -> &[T] {
-        self.utz.get(self.m..self.n).unwrap_or(&[])
+        &self.utz[self.m..self.n]
     }
 
     /// Weighted sum of squared residuals, p^T p = ||S z||^2.
@@ -221,13 +230,17 @@ impl<const N: usize, T: Real> Parity<N, T> {
     }
 
     /// S_ii for the active rows.
+    // n <= N, as for `p`.
+    #[allow(clippy::indexing_slicing)]
     pub fn s_ii(&self) -> &[T] {
-        self.s_ii.get(..self.n).unwrap_or(&[])
+        &self.s_ii[..self.n]
     }
 
     /// Whitened residuals r = S z.
+    // n <= N, as for `p`.
+    #[allow(clippy::indexing_slicing)]
     pub fn residuals(&self) -> &[T] {
-        self.residual.get(..self.n).unwrap_or(&[])
+        &self.residual[..self.n]
     }
 
     /// Row `axis` (0 = E, 1 = N, 2 = U) of the position gain A.

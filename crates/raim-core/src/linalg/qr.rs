@@ -161,17 +161,16 @@ impl<const N: usize, T: Real> Householder<N, T> {
     }
 
     /// `T1[i][j]` for i <= j < m, zero below the diagonal.
+    // In range: i <= j < m, and `factor_from` sets m only with
+    // m <= MAX_STATES (the columns, the diagonal) and m <= n <= N (the rows).
+    #[allow(clippy::indexing_slicing)]
     pub fn t(&self, i: usize, j: usize) -> T {
         if i > j || j >= self.m {
             T::zero()
         } else if i == j {
-            self.diag.get(i).copied().unwrap_or(T::zero())
+            self.diag[i]
         } else {
-            self.a
-                .get(j)
-                .and_then(|c| c.get(i))
-                .copied()
-                .unwrap_or(T::zero())
+            self.a[j][i]
         }
     }
 

@@ -235,7 +235,9 @@ pub fn members(set: SatSet) -> ([u8; MAX_SATS], usize) {
 /// lexicographically.
 pub fn for_each_subset(set: SatSet, t: usize, mut f: impl FnMut(SatSet)) {
     let (idx, k) = members(set);
-    let idx = idx.get(..k).unwrap_or(&[]);
+    // k <= 64 = MAX_SATS, the bits of a u64 set.
+    #[allow(clippy::indexing_slicing)]
+    let idx = &idx[..k];
     let bit = |i: &u8| 1u64 << *i;
     if t >= 1 {
         for a in idx {

@@ -27,7 +27,7 @@ use crate::config::Config;
 use crate::error::RaimError;
 use crate::measurement::{Epoch, SatId};
 use crate::real::{Real, Stat};
-use crate::snapshot::detection::Thresholds;
+use crate::snapshot::detection::{TestStatistic, Thresholds};
 use crate::snapshot::fde::{self, AlarmCause, Exclusion, FdeOutcome};
 use crate::solve::{solve_into, Solution};
 use crate::stats::dist;
@@ -182,7 +182,8 @@ pub fn search_where<T: Real, const N: usize>(
     // and is evaluated by the repair pass below, so it is skipped here.
     let mut earlier = [0 as SatSet; EARLIER];
     for (i, f) in covering.groups().enumerate().take(budget) {
-        let seen = earlier.get(..i.min(EARLIER)).unwrap_or(&[]);
+        #[allow(clippy::indexing_slicing)] // i.min(EARLIER) <= EARLIER, the length
+        let seen = &earlier[..i.min(EARLIER)];
         let first_cover = |set: SatSet| !seen.iter().any(|g| set & !g == 0);
         reconstruct(model, f, min_s_ii, ws, group);
         out.groups_processed += 1;
@@ -366,13 +367,13 @@ fn fault_set<T: Real, P: Real, const N: usize>(
     for (row, b) in rows.iter().take(k.min(MAX_FAULTS)).zip(fit.bias.iter()) {
         let row = usize::from(*row);
         let slot = usize::from(out.count);
-        if let (Some(id), Some(dst_id), Some(dst_b)) = (
+        if let (Some(id), Some(&sigma), Some(dst_id), Some(dst_b)) = (
             sol.ids.get(row),
+            sol.sigma_m.get(row),
             out.satellites.get_mut(slot),
             out.bias_m.get_mut(slot),
         ) {
             *dst_id = *id;
-            let sigma = sol.sigma_m.get(row).copied().unwrap_or(1.0);
             *dst_b = b.to_f64() * sigma;
             out.count += 1;
         }
@@ -502,6 +503,7 @@ pub fn run<const N: usize, P: Real>(
     out: &mut FdeOutcome<N, P>,
     scratch: &mut Scratch<N, P>,
 ) -> Result<Option<MultifaultReport>, RaimError> {
+    // Detection: the all-in-view test.
     let before = fde::test(cfg, thresholds, &out.solution)?;
     out.test = before;
     out.exclusions.clear();
@@ -515,19 +517,14 @@ pub fn run<const N: usize, P: Real>(
         out.cause = Some(AlarmCause::NoRedundancy);
         return Ok(None);
     }
-    let n = out.solution.rows();
-    let m = out.solution.parity.states();
-    // The most satellites this epoch may lose: t_max, the configured
-    // exclusion cap, and n - m - 1 (a subset statistic needs a dof).
-    let t_eff = usize::from(t_max)
-        .min(usize::from(cfg.max_exclusions))
-        .min(fde::MAX_EXCLUSIONS)
-        .min(dof - 1)
-        .min(MAX_FAULTS);
+    let t_eff = effective_t(cfg, t_max, dof);
     if t_eff == 0 {
         out.cause = Some(AlarmCause::MaxExclusions);
         return Ok(None);
     }
+    // SPEC §8.3 groups, §8.2 reconstruction in each, §8.4 candidates.
+    let n = out.solution.rows();
+    let m = out.solution.parity.states();
     let to_raim = |e: MultifaultError| match e {
         MultifaultError::CapacityExceeded { have, capacity } => {
             RaimError::CapacityExceeded { have, capacity }
@@ -573,11 +570,12 @@ pub fn run<const N: usize, P: Real>(
         repaired: s.repaired,
         q_min: s.q_min.map(|(q, _)| q.to_f64()),
     };
-    let id_of = |sol: &Solution<N, P>, set: SatSet| {
-        let (rows, _) = covering::members(set);
-        rows.first()
-            .and_then(|r| sol.ids.get(usize::from(*r)).copied())
+    let incomplete = AlarmCause::SearchIncomplete {
+        groups: s.groups_total as u32,
+        budget: u32::from(group_budget),
     };
+    // §8.4's decision, from the fewest satellites up: a candidate whose
+    // subset still fails after the re-solve sends the search on to more.
     let mut from = 1;
     loop {
         let verdict = decide(
@@ -592,10 +590,7 @@ pub fn run<const N: usize, P: Real>(
         match verdict {
             Verdict::NoConsistentSet => {
                 if s.budget_limited {
-                    out.cause = Some(AlarmCause::SearchIncomplete {
-                        groups: s.groups_total as u32,
-                        budget: u32::from(group_budget),
-                    });
+                    out.cause = Some(incomplete);
                 } else if out.cause.is_none() {
                     out.cause = Some(AlarmCause::NoConsistentSet);
                 }
@@ -607,28 +602,22 @@ pub fn run<const N: usize, P: Real>(
             Verdict::Ambiguous { best, runner_up } => {
                 report.best = Some(fault_set(&best, sol, dof));
                 report.runner_up = Some(fault_set(&runner_up, sol, dof));
-                let first_only = |a: SatSet, b: SatSet| if a & !b != 0 { a & !b } else { a };
-                let (Some(b), Some(r)) = (
-                    id_of(sol, first_only(best.set, runner_up.set)),
-                    id_of(sol, first_only(runner_up.set, best.set)),
-                ) else {
-                    out.cause = Some(AlarmCause::Unidentifiable);
-                    break;
-                };
-                out.identified = Some(b);
-                out.cause = Some(AlarmCause::Ambiguous {
-                    best: b,
-                    runner_up: r,
-                });
+                match ambiguity(sol, best.set, runner_up.set) {
+                    Some((b, r)) => {
+                        out.identified = Some(b);
+                        out.cause = Some(AlarmCause::Ambiguous {
+                            best: b,
+                            runner_up: r,
+                        });
+                    }
+                    None => out.cause = Some(AlarmCause::Unidentifiable),
+                }
                 break;
             }
             Verdict::Incomplete(best) => {
                 report.best = Some(fault_set(&best, sol, dof));
-                out.identified = id_of(sol, best.set);
-                out.cause = Some(AlarmCause::SearchIncomplete {
-                    groups: s.groups_total as u32,
-                    budget: u32::from(group_budget),
-                });
+                out.identified = first_id(sol, best.set);
+                out.cause = Some(incomplete);
                 break;
             }
             Verdict::Exclude(best) => {
@@ -645,77 +634,141 @@ pub fn run<const N: usize, P: Real>(
                         scratch,
                     )? {
                         report.runner_up = Some(fault_set(&alt, sol, dof));
-                        let only = |a: SatSet, b: SatSet| if a & !b != 0 { a & !b } else { a };
-                        out.identified = id_of(sol, best.set);
-                        out.cause = match (
-                            id_of(sol, only(best.set, alt.set)),
-                            id_of(sol, only(alt.set, best.set)),
-                        ) {
-                            (Some(b), Some(r)) => Some(AlarmCause::Ambiguous {
+                        out.identified = first_id(sol, best.set);
+                        out.cause = Some(match ambiguity(sol, best.set, alt.set) {
+                            Some((b, r)) => AlarmCause::Ambiguous {
                                 best: b,
                                 runner_up: r,
-                            }),
-                            _ => Some(AlarmCause::Unidentifiable),
-                        };
+                            },
+                            None => AlarmCause::Unidentifiable,
+                        });
                         break;
                     }
                 }
                 if let Some(level) = s.levels.get(best.count - 1) {
                     report.runner_up = level.runner_up.map(|r| fault_set(&r, sol, dof));
                 }
-                out.identified = id_of(sol, best.set);
-                let mut mask = [false; N];
-                for v in mask.iter_mut().take(epoch.len()) {
-                    *v = true;
-                }
-                let (rows, k) = covering::members(best.set);
-                for row in rows.iter().take(k) {
-                    if let Some(src) = sol.source.get(usize::from(*row)) {
-                        if let Some(v) = mask.get_mut(*src) {
-                            *v = false;
+                out.identified = first_id(sol, best.set);
+                match exclude_set(cfg, thresholds, epoch, &best, before, out, scratch)? {
+                    Excluded::Done => break,
+                    Excluded::Subset(cause) => {
+                        if cause.is_some() {
+                            out.cause = cause;
                         }
-                    }
-                }
-                match solve_into(cfg, epoch, &mask, &mut scratch.solution) {
-                    Ok(()) => {}
-                    Err(RaimError::RankDeficient { .. })
-                    | Err(RaimError::TooFewSatellites { .. }) => {
-                        let excluded = id_of(sol, best.set).unwrap_or_default();
-                        out.cause = Some(AlarmCause::SubsetGeometry { excluded });
                         from = best.count + 1;
-                        continue;
                     }
-                    Err(e) => return Err(e),
                 }
-                let after = fde::test(cfg, thresholds, &scratch.solution)?;
-                if after.alarm() {
-                    // The subset is not consistent after all (non-linear
-                    // model, or a lost clock column): try more satellites.
-                    from = best.count + 1;
-                    continue;
-                }
-                for (row, b) in rows.iter().take(k).zip(best.bias.iter()) {
-                    let row = usize::from(*row);
-                    let (Some(id), Some(index)) = (sol.ids.get(row), sol.source.get(row)) else {
-                        continue;
-                    };
-                    let sigma = sol.sigma_m.get(row).copied().unwrap_or(1.0);
-                    // Capacity MAX_EXCLUSIONS >= t_eff >= k.
-                    let _ = out.exclusions.push(Exclusion {
-                        id: *id,
-                        index: *index,
-                        before,
-                        after,
-                        score: best.rss.to_f64(),
-                        bias_m: b.to_f64() * sigma,
-                    });
-                }
-                core::mem::swap(&mut out.solution, &mut scratch.solution);
-                out.test = after;
-                out.cause = None;
-                break;
             }
         }
     }
     Ok(Some(report))
+}
+
+/// The most satellites this epoch may lose: t_max, the configured
+/// exclusion cap, and n - m - 1 (a subset statistic needs a dof).
+fn effective_t(cfg: &Config, t_max: u8, dof: usize) -> usize {
+    usize::from(t_max)
+        .min(usize::from(cfg.max_exclusions))
+        .min(fde::MAX_EXCLUSIONS)
+        .min(dof - 1)
+        .min(MAX_FAULTS)
+}
+
+/// The first satellite of `set` among `sol`'s rows.
+fn first_id<const N: usize, P: Real>(sol: &Solution<N, P>, set: SatSet) -> Option<SatId> {
+    let (rows, _) = covering::members(set);
+    rows.first()
+        .and_then(|r| sol.ids.get(usize::from(*r)).copied())
+}
+
+/// Two candidate sets explain the data: a satellite only in each (the
+/// set's first when it lies inside the other), for the `Ambiguous`
+/// cause; None when a row has no satellite.
+fn ambiguity<const N: usize, P: Real>(
+    sol: &Solution<N, P>,
+    best: SatSet,
+    other: SatSet,
+) -> Option<(SatId, SatId)> {
+    let only = |a: SatSet, b: SatSet| if a & !b != 0 { a & !b } else { a };
+    Some((
+        first_id(sol, only(best, other))?,
+        first_id(sol, only(other, best))?,
+    ))
+}
+
+/// What [`exclude_set`] did.
+enum Excluded {
+    /// The set is excluded: `out` holds the subset solution, its test and
+    /// the exclusion records.
+    Done,
+    /// The subset failed (rank-deficient with the cause to report, or
+    /// inconsistent with None): try more satellites.
+    Subset(Option<AlarmCause>),
+}
+
+/// Excludes the candidate set `best` (§8.4): re-solves without its
+/// satellites and re-tests; when the subset passes, records one
+/// exclusion per satellite with its bias b_T (sigma units times sigma)
+/// and swaps the subset solution into `out`.
+#[allow(clippy::too_many_arguments)] // the epoch, its outcome and the candidate
+fn exclude_set<const N: usize, P: Real>(
+    cfg: &Config,
+    thresholds: &mut Thresholds<N>,
+    epoch: &Epoch<'_>,
+    best: &SubsetFit<P>,
+    before: TestStatistic,
+    out: &mut FdeOutcome<N, P>,
+    scratch: &mut Scratch<N, P>,
+) -> Result<Excluded, RaimError> {
+    let sol = &out.solution;
+    let mut mask = [false; N];
+    for v in mask.iter_mut().take(epoch.len()) {
+        *v = true;
+    }
+    let (rows, k) = covering::members(best.set);
+    for row in rows.iter().take(k) {
+        if let Some(src) = sol.source.get(usize::from(*row)) {
+            if let Some(v) = mask.get_mut(*src) {
+                *v = false;
+            }
+        }
+    }
+    match solve_into(cfg, epoch, &mask, &mut scratch.solution) {
+        Ok(()) => {}
+        Err(RaimError::RankDeficient { .. }) | Err(RaimError::TooFewSatellites { .. }) => {
+            let excluded = first_id(sol, best.set).unwrap_or_default();
+            return Ok(Excluded::Subset(Some(AlarmCause::SubsetGeometry {
+                excluded,
+            })));
+        }
+        Err(e) => return Err(e),
+    }
+    let after = fde::test(cfg, thresholds, &scratch.solution)?;
+    if after.alarm() {
+        // The subset is not consistent after all (non-linear model, or a
+        // lost clock column): try more satellites.
+        return Ok(Excluded::Subset(None));
+    }
+    for (row, b) in rows.iter().take(k).zip(best.bias.iter()) {
+        let row = usize::from(*row);
+        let (Some(id), Some(index), Some(&sigma)) =
+            (sol.ids.get(row), sol.source.get(row), sol.sigma_m.get(row))
+        else {
+            continue;
+        };
+        let pushed = out.exclusions.push(Exclusion {
+            id: *id,
+            index: *index,
+            before,
+            after,
+            score: best.rss.to_f64(),
+            bias_m: b.to_f64() * sigma,
+        });
+        // Cannot fill: capacity MAX_EXCLUSIONS >= t_eff >= k.
+        debug_assert!(pushed.is_ok());
+    }
+    core::mem::swap(&mut out.solution, &mut scratch.solution);
+    out.test = after;
+    out.cause = None;
+    Ok(Excluded::Done)
 }

@@ -117,7 +117,9 @@ impl<T: Real, const N: usize> ResidualModel<T, N> {
                 *v = P::one();
             }
             let k = parity.project(&e, &mut y);
-            let col = parity.lift(y.get(..k).unwrap_or(&[]));
+            // k <= y.len(): `project` writes at most that many entries.
+            #[allow(clippy::indexing_slicing)]
+            let col = parity.lift(&y[..k]);
             if let Some(v) = e.get_mut(j) {
                 *v = P::zero();
             }
@@ -139,18 +141,19 @@ impl<T: Real, const N: usize> ResidualModel<T, N> {
         self.n
     }
 
-    /// S_ij (0 outside the model).
-    pub fn s(&self, i: usize, j: usize) -> T {
-        self.s
-            .get(i)
-            .and_then(|row| row.get(j))
-            .copied()
-            .unwrap_or(T::zero())
+    /// S_ij, for satellites i, j < [`Self::n`].
+    // In range: every caller passes satellites it checked against n(), and
+    // n <= N (`fill_from_parity` sets it to the parity's row count).
+    #[allow(clippy::indexing_slicing)]
+    fn s(&self, i: usize, j: usize) -> T {
+        self.s[i][j]
     }
 
-    /// r_i (0 outside the model).
-    pub fn residual(&self, i: usize) -> T {
-        self.r.get(i).copied().unwrap_or(T::zero())
+    /// r_i, for a satellite i < [`Self::n`].
+    // In range: as for `s`.
+    #[allow(clippy::indexing_slicing)]
+    fn residual(&self, i: usize) -> T {
+        self.r[i]
     }
 
     /// D^2 = ||r||^2, the all-in-view statistic.
@@ -208,19 +211,18 @@ impl<T: Real, const N: usize> Default for Workspace<T, N> {
     }
 }
 
+// In range: a, b < k, and k <= n <= N (one row per distinct satellite
+// j < n that `reconstruct` admits).
+#[allow(clippy::indexing_slicing)]
 impl<T: Real, const N: usize> Workspace<T, N> {
     fn l(&self, a: usize, b: usize) -> T {
-        self.l
-            .get(a)
-            .and_then(|row| row.get(b))
-            .copied()
-            .unwrap_or(T::zero())
+        self.l[a][b]
     }
 
     /// Solves L y = rhs in place over the first k rows.
     fn forward(&self, y: &mut [T; N]) {
         for a in 0..self.k {
-            let mut v = y.get(a).copied().unwrap_or(T::zero());
+            let mut v = y[a];
             for (b, yb) in y.iter().enumerate().take(a) {
                 v -= self.l(a, b) * *yb;
             }
@@ -233,9 +235,9 @@ impl<T: Real, const N: usize> Workspace<T, N> {
     /// Solves L^T x = y in place over the first k rows.
     fn backward(&self, y: &mut [T; N]) {
         for a in (0..self.k).rev() {
-            let mut v = y.get(a).copied().unwrap_or(T::zero());
-            for b in a + 1..self.k {
-                v -= self.l(b, a) * y.get(b).copied().unwrap_or(T::zero());
+            let mut v = y[a];
+            for (b, &yb) in y.iter().enumerate().take(self.k).skip(a + 1) {
+                v -= self.l(b, a) * yb;
             }
             if let Some(dst) = y.get_mut(a) {
                 *dst = v / self.l(a, a);
@@ -264,16 +266,22 @@ pub fn reconstruct<T: Real, const N: usize>(
     out.variance = [T::zero(); N];
     out.q = T::zero();
     let mut l_row = [T::zero(); N];
-    for &j in sats.get(..count).unwrap_or(&[]) {
+    // count <= 64 = MAX_SATS, the bits of a u64 set.
+    #[allow(clippy::indexing_slicing)]
+    let sats = &sats[..count];
+    for &j in sats {
         let j = usize::from(j);
+        if j >= model.n() {
+            out.swapped |= 1u64 << j;
+            continue;
+        }
         let s_jj = model.s(j, j);
-        if j >= model.n() || !(s_jj >= min_s_ii) {
+        if !(s_jj >= min_s_ii) {
             out.swapped |= 1u64 << j;
             continue;
         }
         // Row k of L: L[k, ..k] solves L l = S[idx, j]; pivot d = S_jj - |l|^2.
-        for (a, v) in l_row.iter_mut().enumerate().take(ws.k) {
-            let idx_a = ws.idx.get(a).copied().unwrap_or(0);
+        for (v, &idx_a) in l_row.iter_mut().zip(ws.idx.iter()).take(ws.k) {
             *v = model.s(idx_a, j);
         }
         ws.forward(&mut l_row);
@@ -303,15 +311,14 @@ pub fn reconstruct<T: Real, const N: usize>(
     }
     // e_F = S[F, F]^-1 r_F by two triangular solves.
     let mut e = [T::zero(); N];
-    for (a, v) in e.iter_mut().enumerate().take(ws.k) {
-        *v = model.residual(ws.idx.get(a).copied().unwrap_or(0));
+    for (v, &sat) in e.iter_mut().zip(ws.idx.iter()).take(ws.k) {
+        *v = model.residual(sat);
     }
     ws.forward(&mut e);
     ws.backward(&mut e);
     let mut total = T::zero();
     let mut largest = T::zero();
-    for (a, v) in e.iter().enumerate().take(ws.k) {
-        let sat = ws.idx.get(a).copied().unwrap_or(0);
+    for (v, &sat) in e.iter().zip(ws.idx.iter()).take(ws.k) {
         if let Some(dst) = out.error.get_mut(sat) {
             *dst = *v;
         }
@@ -323,14 +330,13 @@ pub fn reconstruct<T: Real, const N: usize>(
     }
     out.q = total - largest;
     // diag(S[F, F]^-1)_c = |L^-1 e_c|^2.
-    for c in 0..ws.k {
+    for (c, &sat) in ws.idx.iter().enumerate().take(ws.k) {
         let mut w = [T::zero(); N];
         if let Some(v) = w.get_mut(c) {
             *v = T::one();
         }
         ws.forward(&mut w);
         let var = w.iter().take(ws.k).fold(T::zero(), |acc, v| acc + *v * *v);
-        let sat = ws.idx.get(c).copied().unwrap_or(0);
         if let Some(dst) = out.variance.get_mut(sat) {
             *dst = var;
         }
@@ -364,9 +370,9 @@ pub fn fit_subset<T: Real, const N: usize>(
         return None;
     }
     let idx: [usize; MAX_FAULTS] = [
-        usize::from(*sats.first().unwrap_or(&0)),
-        usize::from(*sats.get(1).unwrap_or(&0)),
-        usize::from(*sats.get(2).unwrap_or(&0)),
+        usize::from(sats[0]),
+        usize::from(sats[1]),
+        usize::from(sats[2]),
     ];
     let tol = rank_tol::<T>();
     let zero = T::zero();

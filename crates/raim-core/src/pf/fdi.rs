@@ -212,18 +212,71 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         Ok(())
     }
 
-    /// Processes one epoch of corrected pseudoranges at `time_s`.
+    /// Processes one epoch of corrected pseudoranges at `time_s`: steps 1-7
+    /// of the module doc, one function each.
     pub fn process(
         &mut self,
         cfg: &PfConfig,
         time_s: f64,
         obs: &[RangeObservation],
     ) -> Result<PfOutput<S>, PfError> {
+        // 1.
         self.validate(cfg, time_s, obs)?;
         if cfg.readmit_s > 0.0 {
             self.excluded.retain(|(_, t)| time_s - *t < cfg.readmit_s);
         }
-        // The usable satellites: not excluded.
+        let used = self.usable(obs)?;
+        let dt_s = self.start_or_advance(cfg, time_s, &used)?;
+        self.time_s = Some(time_s);
+        // 2.
+        self.follow_satellites(&used);
+        // 3.
+        self.predict_all(cfg, dt_s);
+        let clock_jump = self.absorb_clock_jump(cfg, &used, dt_s);
+        let terms = self.reduce(cfg, &used);
+        // 4. The main filter.
+        let main_step = self.main.update(cfg, &terms, None, &mut self.rng);
+        let mut out = PfOutput {
+            time_s,
+            position_m: None,
+            clock_m: [0.0; MAX_SYSTEMS],
+            drift_m_s: 0.0,
+            decision: f64::NEG_INFINITY,
+            threshold: cfg.threshold,
+            alarm: false,
+            isolated: None,
+            excluded: None,
+            n_eff: main_step.n_eff,
+            used: used.len(),
+            main_collapsed: main_step.collapsed,
+            aux_collapsed: 0,
+            clock_jump,
+            llr: heapless::Vec::new(),
+        };
+        if main_step.collapsed {
+            // 5. Never a position from a collapsed filter: restart
+            // everything from the prior about the last reference.
+            self.main.init(cfg, &mut self.rng);
+            self.restart_auxiliaries();
+            out.clock_m = self.reference.clock_m;
+            return Ok(out);
+        }
+        // 4-5. The auxiliary filters and their LLRs.
+        self.update_auxiliaries(cfg, &terms, main_step.ln_predictive, &mut out);
+        // 6.
+        self.decide(cfg, time_s, &mut out)?;
+        // 7.
+        self.recentre(&mut out);
+        Ok(out)
+    }
+
+    /// Step 1's satellite count: the observations not excluded, refused
+    /// with `TooFewSatellites` below 3 + clocks + 1 (each auxiliary filter
+    /// must still see 3 + clocks satellites).
+    fn usable(
+        &self,
+        obs: &[RangeObservation],
+    ) -> Result<heapless::Vec<RangeObservation, S>, PfError> {
         let mut used: heapless::Vec<RangeObservation, S> = heapless::Vec::new();
         let mut systems = [false; MAX_SYSTEMS];
         for o in obs
@@ -248,41 +301,54 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
                 need,
             });
         }
-        let sigma = |o: &RangeObservation| o.sigma_m.unwrap_or(cfg.sigma_m);
+        Ok(used)
+    }
 
-        let mut inputs: heapless::Vec<FixInput, S> = heapless::Vec::new();
-        for o in used.iter() {
-            let _ = inputs.push(FixInput {
-                sat_m: o.position_m,
-                pseudorange_m: o.pseudorange_m,
-                sigma_m: sigma(o),
-                sys: o.id.system.index(),
-            });
-        }
-        // Initialise on the first epoch, else predict.
-        let dt_s = match self.time_s {
+    /// The reference on the first epoch (the least-squares fix, the main
+    /// filter from its prior), else the clock references advanced with the
+    /// reference drift (the state keeps only the offsets, small enough for
+    /// f32). Returns dt (0 on the first epoch).
+    fn start_or_advance(
+        &mut self,
+        cfg: &PfConfig,
+        time_s: f64,
+        used: &[RangeObservation],
+    ) -> Result<f64, PfError> {
+        match self.time_s {
             None => {
+                let mut inputs: heapless::Vec<FixInput, S> = heapless::Vec::new();
+                for o in used.iter() {
+                    let pushed = inputs.push(FixInput {
+                        sat_m: o.position_m,
+                        pseudorange_m: o.pseudorange_m,
+                        sigma_m: o.sigma_m.unwrap_or(cfg.sigma_m),
+                        sys: o.id.system.index(),
+                    });
+                    // Cannot fill: one input per used satellite, at most S.
+                    debug_assert!(pushed.is_ok());
+                }
                 self.reference = fix(&inputs, [0.0; 3])?;
                 self.main.init(cfg, &mut self.rng);
                 self.aux_id = [None; S];
                 for w in self.windows.iter_mut() {
                     w.clear();
                 }
-                0.0
+                Ok(0.0)
             }
             Some(prev) => {
                 let dt_s = time_s - prev;
-                // The clock references advance with the reference drift
-                // (the state keeps only the offsets, small enough for f32).
                 for c in self.reference.clock_m.iter_mut() {
                     *c += self.reference.drift_m_s * dt_s;
                 }
-                dt_s
+                Ok(dt_s)
             }
-        };
-        self.time_s = Some(time_s);
+        }
+    }
 
-        // Auxiliary filters follow the satellites in view.
+    /// Step 2: the auxiliary filter of a satellite that left view is
+    /// dropped; a satellite that entered gets one, a copy of the main
+    /// filter.
+    fn follow_satellites(&mut self, used: &[RangeObservation]) {
         for (id, w) in self.aux_id.iter_mut().zip(self.windows.iter_mut()) {
             if let Some(i) = *id {
                 if !used.iter().any(|o| o.id == i) {
@@ -307,8 +373,11 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
                 }
             }
         }
+    }
 
-        // Predict.
+    /// Step 3's prediction of every filter over dt (none on the first
+    /// epoch).
+    fn predict_all(&mut self, cfg: &PfConfig, dt_s: f64) {
         if dt_s > 0.0 {
             self.main.predict(cfg, dt_s, &mut self.rng);
             for (a, id) in self.aux.iter_mut().zip(self.aux_id.iter()) {
@@ -317,57 +386,55 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
                 }
             }
         }
+    }
 
-        // Reduce against the reference; absorb receiver clock jumps.
-        let clock_jump = self.absorb_clock_jump(cfg, &used, dt_s);
+    /// Step 3's reduction of each used measurement against the shared f64
+    /// reference.
+    fn reduce(&self, cfg: &PfConfig, used: &[RangeObservation]) -> heapless::Vec<SatTerm<T>, S> {
         let mut terms: heapless::Vec<SatTerm<T>, S> = heapless::Vec::new();
         for o in used.iter() {
-            let _ = terms.push(SatTerm::new(
+            let pushed = terms.push(SatTerm::new(
                 o.id,
                 o.pseudorange_m,
                 &o.position_m,
-                sigma(o),
+                o.sigma_m.unwrap_or(cfg.sigma_m),
                 &self.reference,
             ));
+            // Cannot fill: one term per used satellite, at most S.
+            debug_assert!(pushed.is_ok());
         }
+        terms
+    }
 
-        // Update the main filter and the auxiliary ones.
-        let main_step = self.main.update(cfg, &terms, None, &mut self.rng);
-        let mut out = PfOutput {
-            time_s,
-            position_m: None,
-            clock_m: [0.0; MAX_SYSTEMS],
-            drift_m_s: 0.0,
-            decision: f64::NEG_INFINITY,
-            threshold: cfg.threshold,
-            alarm: false,
-            isolated: None,
-            excluded: None,
-            n_eff: main_step.n_eff,
-            used: used.len(),
-            main_collapsed: main_step.collapsed,
-            aux_collapsed: 0,
-            clock_jump,
-            llr: heapless::Vec::new(),
-        };
-        if main_step.collapsed {
-            // Never a position from a collapsed filter: restart everything
-            // from the prior about the last reference.
-            self.main.init(cfg, &mut self.rng);
-            for ((a, id), w) in self
-                .aux
-                .iter_mut()
-                .zip(self.aux_id.iter())
-                .zip(self.windows.iter_mut())
-            {
-                w.clear();
-                if id.is_some() {
-                    a.copy_from(&self.main);
-                }
+    /// Every auxiliary filter restarts from the main one, every window
+    /// cleared (steps 5 and 6).
+    fn restart_auxiliaries(&mut self) {
+        for ((a, id), w) in self
+            .aux
+            .iter_mut()
+            .zip(self.aux_id.iter())
+            .zip(self.windows.iter_mut())
+        {
+            w.clear();
+            if id.is_some() {
+                a.copy_from(&self.main);
             }
-            out.clock_m = self.reference.clock_m;
-            return Ok(out);
         }
+    }
+
+    /// Steps 4-5 for the auxiliary filters: each updates without its
+    /// satellite q (a collapsed one restarts from the main filter), and
+    /// s_k(q) = ln p_q(y^{-q}) - ln p_A(y) - ln(c_norm sigma_q) (eq. 15,
+    /// the left-out satellite's density replaced by its expected value
+    /// under no fault; docs/PF.md, "the LLR") enters q's window and
+    /// `out.llr`.
+    fn update_auxiliaries(
+        &mut self,
+        cfg: &PfConfig,
+        terms: &[SatTerm<T>],
+        ln_predictive_main: f64,
+        out: &mut PfOutput<S>,
+    ) {
         // sqrt(2 pi e var_factor): E[-ln p(y_q)] = ln(c_norm sigma_q) for a
         // Gaussian of the law's variance.
         let c_norm = libm::sqrt(
@@ -383,27 +450,35 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
             let Some(q) = terms.iter().position(|t| t.id == id) else {
                 continue;
             };
-            let step = a.update(cfg, &terms, Some(q), &mut self.rng);
+            let step = a.update(cfg, terms, Some(q), &mut self.rng);
             if step.collapsed {
                 a.copy_from(&self.main);
                 w.clear();
                 out.aux_collapsed += 1;
                 continue;
             }
-            // eq. 15 with each filter's density of its own data, the
-            // left-out satellite's density replaced by its expected value
-            // under no fault (docs/PF.md, "the LLR").
             let sigma_q = terms.get(q).map_or(f64::NAN, |t| t.sigma.to_f64());
-            let s = step.ln_predictive - main_step.ln_predictive - libm::log(c_norm * sigma_q);
+            let s = step.ln_predictive - ln_predictive_main - libm::log(c_norm * sigma_q);
             w.push(s);
-            let _ = out.llr.push(SatLlr {
+            let pushed = out.llr.push(SatLlr {
                 id,
                 llr: s,
                 windowed: w.windowed_max(cfg.window),
             });
+            // Cannot fill: one entry per auxiliary filter, S of them.
+            debug_assert!(pushed.is_ok());
         }
+    }
 
-        // Decision (eq. 13) and isolation (eq. 14).
+    /// Step 6: D_k = max_q max_j S_j^k(q) against the threshold (eq. 13; a
+    /// NaN statistic alarms), the argmax isolated (eq. 14) and, with
+    /// `exclude`, excluded.
+    fn decide(
+        &mut self,
+        cfg: &PfConfig,
+        time_s: f64,
+        out: &mut PfOutput<S>,
+    ) -> Result<(), PfError> {
         let mut best: Option<SatLlr> = None;
         for l in out.llr.iter() {
             let better = match best {
@@ -420,19 +495,23 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
             if out.alarm {
                 out.isolated = Some(b.id);
                 if cfg.exclude {
-                    self.exclude(b.id, time_s);
+                    self.exclude(b.id, time_s)?;
                     out.excluded = Some(b.id);
                 }
             }
         }
+        Ok(())
+    }
 
-        // Recentre on the main estimate.
+    /// Step 7: the reference moves to the main estimate, every filter
+    /// shifts by minus it; the output takes the new reference.
+    fn recentre(&mut self, out: &mut PfOutput<S>) {
         let m = self.main.mean();
         let mut delta = [T::zero(); DIM];
         for (d, &v) in delta.iter_mut().zip(m.iter()) {
             *d = -v;
         }
-        self.reference.drift_m_s += m.get(DRIFT).map_or(0.0, |v| v.to_f64());
+        self.reference.drift_m_s += m[DRIFT].to_f64();
         for (p, &v) in self.reference.position_m.iter_mut().zip(m.iter()) {
             *p += v.to_f64();
         }
@@ -448,13 +527,20 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         out.position_m = Some(self.reference.position_m);
         out.clock_m = self.reference.clock_m;
         out.drift_m_s = self.reference.drift_m_s;
-        Ok(out)
     }
 
     /// Excludes `id`: its auxiliary filter becomes the main filter, the
-    /// others restart from it, all windows are cleared.
-    fn exclude(&mut self, id: SatId, time_s: f64) {
-        let _ = self.excluded.push((id, time_s));
+    /// others restart from it, all windows are cleared. Refused with
+    /// `Capacity` when S satellites are held excluded already (none has
+    /// reached `readmit_s`).
+    fn exclude(&mut self, id: SatId, time_s: f64) -> Result<(), PfError> {
+        if self.excluded.push((id, time_s)).is_err() {
+            return Err(PfError::Capacity {
+                field: "excluded",
+                have: S + 1,
+                max: S,
+            });
+        }
         if let Some(slot) = self.aux_id.iter().position(|s| *s == Some(id)) {
             if let Some(a) = self.aux.get(slot) {
                 self.main.copy_from(a);
@@ -463,17 +549,8 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
                 *s = None;
             }
         }
-        for ((a, id), w) in self
-            .aux
-            .iter_mut()
-            .zip(self.aux_id.iter())
-            .zip(self.windows.iter_mut())
-        {
-            w.clear();
-            if id.is_some() {
-                a.copy_from(&self.main);
-            }
-        }
+        self.restart_auxiliaries();
+        Ok(())
     }
 
     /// Per constellation, the median residual at the predicted main state;
@@ -484,7 +561,7 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
             return false;
         }
         let mut x = self.main.mean();
-        let drift = x.get(DRIFT).copied().unwrap_or_else(T::zero);
+        let drift = x[DRIFT];
         for v in x.iter_mut().take(DRIFT).skip(CLOCK0) {
             *v += drift * T::of(dt_s);
         }
@@ -495,7 +572,9 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
                 let t =
                     SatTerm::<f64>::new(o.id, o.pseudorange_m, &o.position_m, 1.0, &self.reference);
                 let xf: [f64; DIM] = x.map(|v| v.to_f64());
-                let _ = r.push(t.residual(&xf));
+                let pushed = r.push(t.residual(&xf));
+                // Cannot fill: at most the used satellites, S.
+                debug_assert!(pushed.is_ok());
             }
             if r.is_empty() {
                 continue;

@@ -7,6 +7,7 @@ use nalgebra::{SMatrix, SVector};
 
 use super::error::PfError;
 use super::model::{Reference, CLOCK0, DIM};
+use crate::measurement::MAX_SYSTEMS;
 
 /// One satellite for the fix: position, pseudorange, sigma, constellation.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -28,6 +29,15 @@ const CONVERGED_M: f64 = 1e-4;
 /// known); states without a measurement (clocks of absent constellations,
 /// the drift) are pinned by a unit prior at zero.
 pub fn fix(sats: &[FixInput], start: [f64; 3]) -> Result<Reference, PfError> {
+    // A clock state per constellation: CLOCK0 + sys < CLOCK0 + MAX_SYSTEMS
+    // <= DIM for every satellite below.
+    if let Some(s) = sats.iter().find(|s| s.sys >= MAX_SYSTEMS) {
+        return Err(PfError::Capacity {
+            field: "sys",
+            have: s.sys,
+            max: MAX_SYSTEMS - 1,
+        });
+    }
     let mut x = [0.0f64; DIM];
     let [x0, y0, z0] = start;
     x[0] = x0;
@@ -49,7 +59,9 @@ pub fn fix(sats: &[FixInput], start: [f64; 3]) -> Result<Reference, PfError> {
             h[1] = -d[1] / r;
             h[2] = -d[2] / r;
             let ci = CLOCK0 + s.sys;
-            let clock = x.get(ci).copied().unwrap_or(0.0);
+            // ci < CLOCK0 + MAX_SYSTEMS <= DIM (`sys` checked on entry).
+            #[allow(clippy::indexing_slicing)]
+            let clock = x[ci];
             if let Some(c) = h.get_mut(ci) {
                 *c = 1.0;
             }

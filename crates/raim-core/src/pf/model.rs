@@ -77,7 +77,9 @@ impl<T: Real> SatTerm<T> {
         ];
         let range = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         let sys = id.system.index();
-        let clock = r.clock_m.get(sys).copied().unwrap_or(0.0);
+        // System::index() < MAX_SYSTEMS (its match over System::ALL).
+        #[allow(clippy::indexing_slicing)]
+        let clock = r.clock_m[sys];
         SatTerm {
             id,
             sys,

@@ -80,12 +80,17 @@ impl<T: Real, const P: usize, const GA: bool> ParticleFilter<T, P, GA> {
                 }
             }
         }
-        let low = low.get(..n_low).unwrap_or(&[]);
+        // n_low <= P: it counts only the successful stores above.
+        #[allow(clippy::indexing_slicing)]
+        let low = &low[..n_low];
         // Crossover: floor(N_L / 2) random pairs (eqs. 5-6), each child
         // accepted against the better parent.
         for _ in 0..n_low / 2 {
-            let m = low.get(rng::index(rng, n_low)).copied().unwrap_or(0) as usize;
-            let n = low.get(rng::index(rng, n_low)).copied().unwrap_or(0) as usize;
+            // rng::index(_, n) < n for n >= 1, and here n_low >= 2.
+            #[allow(clippy::indexing_slicing)]
+            let m = low[rng::index(rng, n_low)] as usize;
+            #[allow(clippy::indexing_slicing)]
+            let n = low[rng::index(rng, n_low)] as usize;
             let a = T::of(rng::uniform(rng));
             let (Some(&xm), Some(&xn)) = (self.particles.get(m), self.particles.get(n)) else {
                 continue;
@@ -115,7 +120,7 @@ impl<T: Real, const P: usize, const GA: bool> ParticleFilter<T, P, GA> {
         let s = cfg.mutation_m;
         for &j in low {
             let j = j as usize;
-            let Some(&xj) = self.particles.get(j) else {
+            let (Some(&xj), Some(&lj)) = (self.particles.get(j), self.work.get(j)) else {
                 continue;
             };
             let mut c = xj;
@@ -126,7 +131,6 @@ impl<T: Real, const P: usize, const GA: bool> ParticleFilter<T, P, GA> {
                 }
             }
             let lc = ln_lik(lik, terms, skip, &c);
-            let lj = self.work.get(j).copied().unwrap_or_else(T::zero);
             if metropolis(lc, lj, rng) {
                 if let (Some(p), Some(w)) = (self.particles.get_mut(j), self.work.get_mut(j)) {
                     *p = c;
@@ -186,7 +190,8 @@ impl<T: Real, const P: usize, const GA: bool> Estimator<T> for ParticleFilter<T,
     ) -> Step {
         let lik = Lik::<T>::new(cfg);
         let n_terms = terms.len().min(MAX_PF_SATS);
-        let terms = terms.get(..n_terms).unwrap_or(&[]);
+        #[allow(clippy::indexing_slicing)] // n_terms <= terms.len()
+        let terms = &terms[..n_terms];
         let used = n_terms - usize::from(skip.is_some_and(|s| s < n_terms));
         let mut total = LogSumExp::<T>::default();
         // 1. likelihoods and the predictive density.

@@ -48,10 +48,9 @@ pub fn systematic_counts<T: Real>(weights: &[T], u0: f64, counts: &mut [u16]) {
 pub fn apply_counts<T: Copy>(particles: &mut [[T; DIM]], counts: &[u16]) {
     let n = particles.len().min(counts.len());
     let mut hole = 0usize;
-    for src in 0..n {
-        let k = counts.get(src).copied().unwrap_or(0);
+    for (src, &k) in counts.iter().enumerate().take(n) {
         for _ in 1..k {
-            while hole < n && counts.get(hole).copied().unwrap_or(1) != 0 {
+            while hole < n && counts.get(hole) != Some(&0) {
                 hole += 1;
             }
             if hole >= n {

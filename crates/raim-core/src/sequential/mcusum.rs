@@ -113,8 +113,7 @@ fn norm<'a, T: Real>(v: impl Iterator<Item = &'a T>) -> T {
 /// [`K_VALUES`] and log10(ARL0) inside [`LOG10_ARL0`]'s range.
 pub fn check_settings(k: f64, arl0: f64) -> Result<(), RaimError> {
     k_index(k)?;
-    let lo = LOG10_ARL0.first().copied().unwrap_or(0.0);
-    let hi = LOG10_ARL0.last().copied().unwrap_or(0.0);
+    let [lo, .., hi] = LOG10_ARL0;
     let l = libm::log10(arl0);
     if !(l >= lo && l <= hi) {
         return Err(RaimError::OutOfRange {
@@ -128,14 +127,15 @@ pub fn check_settings(k: f64, arl0: f64) -> Result<(), RaimError> {
 }
 
 fn k_index(k: f64) -> Result<usize, RaimError> {
+    let [k_min, .., k_max] = K_VALUES;
     K_VALUES
         .iter()
         .position(|&kv| libm::fabs(kv - k) <= K_MATCH_TOL)
         .ok_or(RaimError::OutOfRange {
             field: "mcusum_k",
             value: k,
-            min: K_VALUES.first().copied().unwrap_or(0.0),
-            max: K_VALUES.last().copied().unwrap_or(0.0),
+            min: k_min,
+            max: k_max,
         })
 }
 
@@ -274,11 +274,10 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
 
     /// The accumulated vector v = U2 S_t in measurement space, with the
     /// satellite of each entry.
+    // n <= N: `store` sets it to at most N.
+    #[allow(clippy::indexing_slicing)]
     pub fn state(&self) -> (&[SatId], &[T]) {
-        (
-            self.ids.get(..self.n).unwrap_or(&[]),
-            self.v.get(..self.n).unwrap_or(&[]),
-        )
+        (&self.ids[..self.n], &self.v[..self.n])
     }
 
     /// D = ||S|| = ||v|| (U2 has orthonormal columns).
@@ -306,8 +305,14 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         }
         let mut x = [T::zero(); N];
         for (xi, id) in x.iter_mut().zip(ids.iter()) {
-            if let Some(pos) = self.ids.iter().take(self.n).position(|o| o == id) {
-                *xi = self.v.get(pos).copied().unwrap_or(T::zero());
+            if let Some((_, &v)) = self
+                .ids
+                .iter()
+                .zip(self.v.iter())
+                .take(self.n)
+                .find(|(o, _)| *o == id)
+            {
+                *xi = v;
             }
         }
         parity.project(&x, out);
@@ -334,7 +339,9 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         let d = parity.dof();
         let mut s = [T::zero(); N];
         let carried = self.prior(ids, parity, carry, &mut s);
-        let sd = s.get_mut(..d).unwrap_or(&mut []);
+        // d = n - m < n <= N (a computed parity space).
+        #[allow(clippy::indexing_slicing)]
+        let sd = &mut s[..d];
         if d < self.last_dim && self.last_h > 0.0 && h < self.last_h {
             let scale = T::of(h / self.last_h);
             for x in sd.iter_mut() {
@@ -374,7 +381,9 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         let d = parity.dof();
         let mut s = [T::zero(); N];
         self.prior(ids, parity, carry, &mut s);
-        let sd = s.get(..d).unwrap_or(&[]);
+        // d = n - m < n <= N (a computed parity space).
+        #[allow(clippy::indexing_slicing)]
+        let sd = &s[..d];
         self.store(ids, parity, sd);
         self.last_dim = d;
         self.norm()
@@ -393,7 +402,9 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         parity: &Parity<N, T>,
         min_s_ii: f64,
     ) -> (Option<Candidate<T>>, Option<Candidate<T>>) {
-        let v = self.v.get(..self.n).unwrap_or(&[]);
+        // n <= N: `store` sets it to at most N.
+        #[allow(clippy::indexing_slicing)]
+        let v = &self.v[..self.n];
         lraim::rank_rows(FiRule::Mle, v, parity.s_ii(), T::of(min_s_ii))
     }
 
@@ -416,10 +427,12 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         if self.held.is_full() && !self.held.is_empty() {
             self.held.remove(0);
         }
-        let _ = self.held.push(Held {
+        let pushed = self.held.push(Held {
             id,
             since_s: time_s,
         });
+        // Cannot fill: a full list released its oldest hold above.
+        debug_assert!(pushed.is_ok());
     }
 
     /// Release holds whose satellite is not in the epoch (`present` says

@@ -13,7 +13,7 @@ use crate::error::RaimError;
 use crate::measurement::{Epoch, LinearObservation, Observations, RangeObservation, SatId};
 use crate::real::{Real, Stat};
 use crate::result::{Decision, EpochResult, SatelliteResult};
-use crate::snapshot::fde::{self, AlarmCause, Exclusion, FdeOutcome};
+use crate::snapshot::fde::{self, AlarmCause, Exclusion, FdeOutcome, MAX_EXCLUSIONS};
 use crate::snapshot::{protection, Snapshot};
 use crate::solve::{solve_into, Solution};
 use mcusum::{Mcusum, MAX_HELD};
@@ -205,7 +205,13 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             }
         });
         src.iter_mut().skip(n).for_each(|v| *v = 0);
-        let e = Epoch::linear(time_s, buf.get(..n).unwrap_or(&[]));
+        let Some(kept) = buf.get(..n) else {
+            return Err(RaimError::CapacityExceeded {
+                have: n,
+                capacity: N,
+            });
+        };
+        let e = Epoch::linear(time_s, kept);
         let input = Epoch::linear(time_s, sats);
         Self::sequential_on(mcusum, snap, cfg, &e, src, &input, outcome, out)
     }
@@ -230,7 +236,13 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             }
         });
         src.iter_mut().skip(n).for_each(|v| *v = 0);
-        let e = Epoch::ranges(time_s, buf.get(..n).unwrap_or(&[]), apriori_m);
+        let Some(kept) = buf.get(..n) else {
+            return Err(RaimError::CapacityExceeded {
+                have: n,
+                capacity: N,
+            });
+        };
+        let e = Epoch::ranges(time_s, kept, apriori_m);
         let input = Epoch::ranges(time_s, sats, apriori_m);
         Self::sequential_on(mcusum, snap, cfg, &e, src, &input, outcome, out)
     }
@@ -254,12 +266,16 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         let mc = cfg.mcusum;
         snap.run(cfg, epoch, outcome, result)?;
         let sol = &outcome.solution;
-        let to_input = |k: usize| src.get(k).copied().unwrap_or(k);
+        // k < N: an exclusion's index is a satellite of `epoch`, which
+        // holds at most N (the monitor validated the input epoch).
+        #[allow(clippy::indexing_slicing)]
+        let to_input = |k: usize| src[k];
         for e in result.exclusions.iter_mut() {
             e.index = to_input(e.index);
         }
         let rows = sol.rows();
-        let ids = sol.ids.get(..rows).unwrap_or(&[]);
+        #[allow(clippy::indexing_slicing)] // rows <= N, a parity's rows
+        let ids = &sol.ids[..rows];
         let dim = sol.parity.dof();
         let snapshot_alarm = result.initial_test.alarm();
         let mut report = McusumReport {
@@ -310,18 +326,26 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         for i in 0..input.len() {
             let Some(id) = input.id(i) else { continue };
             if mcusum.is_held(id) && !result.satellites.iter().any(|s| s.id == id) {
-                let _ = result.satellites.push(SatelliteResult {
-                    id,
-                    used: false,
-                    sigma_m: f64::NAN,
-                    elevation_rad: f64::NAN,
-                    s_ii: f64::NAN,
-                    h_ii: f64::NAN,
-                    w: f64::NAN,
-                    bias_m: f64::NAN,
-                    score: f64::NAN,
-                    identifiable: false,
-                });
+                // A full list (N satellites) has no room for the rest of
+                // the held-out satellites: they stay held, unlisted.
+                if result
+                    .satellites
+                    .push(SatelliteResult {
+                        id,
+                        used: false,
+                        sigma_m: f64::NAN,
+                        elevation_rad: f64::NAN,
+                        s_ii: f64::NAN,
+                        h_ii: f64::NAN,
+                        w: f64::NAN,
+                        bias_m: f64::NAN,
+                        score: f64::NAN,
+                        identifiable: false,
+                    })
+                    .is_err()
+                {
+                    break;
+                }
             }
         }
         result.mcusum = Some(report);
@@ -403,14 +427,17 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             Err(e) => return Err(e),
         };
         mcusum.hold(id, epoch.time_s);
-        let sub_ids = sub.ids.get(..sub.rows()).unwrap_or(&[]);
+        #[allow(clippy::indexing_slicing)] // rows <= N, a parity's rows
+        let sub_ids = &sub.ids[..sub.rows()];
         report.after_exclusion = Some(mcusum.carry_to(sub_ids, &sub.parity, cfg.mcusum.carry));
         if snapshot_failed {
             // The snapshot alarm stands this epoch; the hold applies from the next.
             return Ok(());
         }
         let after = fde::test(cfg, &mut snap.thresholds, &sub)?;
-        let sigma = sol.sigma_m.get(cand.row).copied().unwrap_or(1.0);
+        // cand.row < N: `sol.ids.get(cand.row)` found its satellite above.
+        #[allow(clippy::indexing_slicing)]
+        let sigma = sol.sigma_m[cand.row];
         let nan = T::of(f64::NAN);
         let r_j = sol.parity.residuals().get(cand.row).copied().unwrap_or(nan);
         let s_jj = sol.parity.s_ii().get(cand.row).copied().unwrap_or(nan);
@@ -422,7 +449,15 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             score: cand.score.to_f64(),
             bias_m: (r_j / s_jj).to_f64() * sigma,
         };
-        let _ = result.exclusions.push(record);
+        // The snapshot FDE may have used every slot already: refused with
+        // the capacity rather than dropped.
+        result
+            .exclusions
+            .push(record)
+            .map_err(|_| RaimError::CapacityExceeded {
+                have: MAX_EXCLUSIONS + 1,
+                capacity: MAX_EXCLUSIONS,
+            })?;
         let dof = sub.parity.dof();
         let (_, lambda_md) = snap.thresholds.get(cfg.pfa, cfg.pmd, dof)?;
         let protection = protection::slope_levels(&sub.parity, lambda_md, cfg.min_s_ii);

@@ -228,7 +228,9 @@ fn best_pairs<const N: usize, T: Real>(
             *v = T::one();
         }
         let k_dims = parity.project(&e, &mut y);
-        let col = parity.lift(y.get(..k_dims).unwrap_or(&[]));
+        // k_dims <= y.len(): `project` writes at most that many entries.
+        #[allow(clippy::indexing_slicing)]
+        let col = parity.lift(&y[..k_dims]);
         if let Some(v) = e.get_mut(j) {
             *v = T::zero();
         }
@@ -308,11 +310,13 @@ fn exclude_pair<const N: usize, T: Real>(
         return Ok(PairOutcome::NotFound);
     }
     let (j, k) = pair.rows;
-    let (Some(id_j), Some(id_k), Some(src_j), Some(src_k)) = (
+    let (Some(id_j), Some(id_k), Some(src_j), Some(src_k), Some(&sigma_j), Some(&sigma_k)) = (
         current.ids.get(j).copied(),
         current.ids.get(k).copied(),
         current.source.get(j).copied(),
         current.source.get(k).copied(),
+        current.sigma_m.get(j),
+        current.sigma_m.get(k),
     ) else {
         return Ok(PairOutcome::NotFound);
     };
@@ -322,7 +326,9 @@ fn exclude_pair<const N: usize, T: Real>(
             let (a, b) = alt.rows;
             let other = if a != j && a != k { a } else { b };
             let mine = if j != a && j != b { j } else { k };
-            let id = |row: usize| current.ids.get(row).copied().unwrap_or(id_j);
+            // A pair's rows are parity rows, < n <= N (`ids` has N).
+            #[allow(clippy::indexing_slicing)]
+            let id = |row: usize| current.ids[row];
             return Ok(PairOutcome::Ambiguous(AlarmCause::Ambiguous {
                 best: id(mine),
                 runner_up: id(other),
@@ -341,19 +347,19 @@ fn exclude_pair<const N: usize, T: Real>(
     if after.alarm() {
         return Ok(PairOutcome::NotFound);
     }
-    let record = |id: SatId, index: usize, row: usize, bias_sigma: T| Exclusion {
+    let record = |id: SatId, index: usize, sigma_m: f64, bias_sigma: T| Exclusion {
         id,
         index,
         before,
         after,
         score: f64::NAN,
-        bias_m: bias_sigma.to_f64() * current.sigma_m.get(row).copied().unwrap_or(1.0),
+        bias_m: bias_sigma.to_f64() * sigma_m,
     };
     Ok(PairOutcome::Excluded(
         after,
         [
-            record(id_j, src_j, j, pair.bias_sigma.0),
-            record(id_k, src_k, k, pair.bias_sigma.1),
+            record(id_j, src_j, sigma_j, pair.bias_sigma.0),
+            record(id_k, src_k, sigma_k, pair.bias_sigma.1),
         ],
     ))
 }
@@ -430,10 +436,11 @@ pub fn run<const N: usize, T: Real>(
             out.cause = Some(AlarmCause::MaxExclusions);
             break;
         }
-        let (Some(best), Some(best_id), Some(best_src)) = (
+        let (Some(best), Some(best_id), Some(best_src), Some(&sigma)) = (
             best,
             best.and_then(|b| id_of(b.row)),
             best.and_then(|b| src_of(b.row)),
+            best.and_then(|b| current.sigma_m.get(b.row)),
         ) else {
             out.cause = Some(AlarmCause::Unidentifiable);
             break;
@@ -457,8 +464,10 @@ pub fn run<const N: usize, T: Real>(
                 )? {
                     PairOutcome::Excluded(after, records) => {
                         for r in records {
-                            // Capacity MAX_EXCLUSIONS >= 2.
-                            let _ = out.exclusions.push(r);
+                            let pushed = out.exclusions.push(r);
+                            // Cannot fill: the pair goes into an empty list of
+                            // capacity MAX_EXCLUSIONS >= 2.
+                            debug_assert!(pushed.is_ok());
                         }
                         core::mem::swap(&mut out.solution, &mut out.scratch);
                         out.test = after;
@@ -507,7 +516,6 @@ pub fn run<const N: usize, T: Real>(
                 }
             }
         }
-        let sigma = current.sigma_m.get(best.row).copied().unwrap_or(1.0);
         let record = Exclusion {
             id: best_id,
             index: best_src,

@@ -186,10 +186,7 @@ impl<const N: usize, T: Real> Snapshot<N, T> {
         out.exclusion_available = dof >= 2;
         out.pl_available = pl_available;
         out.iterations = sol.iterations;
-        out.exclusions.clear();
-        for e in outcome.exclusions.iter() {
-            let _ = out.exclusions.push(*e);
-        }
+        out.exclusions.clone_from(&outcome.exclusions);
         out.mcusum = None;
         out.multifault = multifault;
         Ok(())
@@ -238,8 +235,7 @@ pub(crate) fn per_satellite<const N: usize, T: Real>(
         } else {
             (f64::NAN, f64::NAN)
         };
-        // Capacity N equals the solution's row capacity, so push cannot fail.
-        let _ = out.push(SatelliteResult {
+        let pushed = out.push(SatelliteResult {
             id,
             used: true,
             sigma_m: sigma,
@@ -251,6 +247,8 @@ pub(crate) fn per_satellite<const N: usize, T: Real>(
             score: c.map_or(f64::NAN, |c| c.score.to_f64()),
             identifiable: c.is_some(),
         });
+        // Cannot fill: capacity N equals the solution's row capacity.
+        debug_assert!(pushed.is_ok());
     }
     ranking.best
 }

@@ -150,7 +150,8 @@ fn axis_pl<T, const K: usize>(
         PlOutput::Exact => out.pl_exact,
     };
     let v = match axis {
-        0 | 1 => pl.hpl_axes_m.get(axis).copied().unwrap_or(0.0),
+        0 => pl.hpl_axes_m[0],
+        1 => pl.hpl_axes_m[1],
         2 => pl.vpl_m,
         _ => return Err(EsqError::BadAxis { axis }),
     };

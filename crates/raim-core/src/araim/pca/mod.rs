@@ -234,7 +234,9 @@ pub fn gain_rows<T: Real, const N: usize>(
         for (x, v) in g.iter_mut().zip(s.g_enu.iter()) {
             *x = *v;
         }
-        let c = col_of.get(s.id.system.index()).copied().unwrap_or(3);
+        // System::index() < MAX_SYSTEMS (its match over System::ALL).
+        #[allow(clippy::indexing_slicing)]
+        let c = col_of[s.id.system.index()];
         if let Some(x) = g.get_mut(c) {
             *x = T::of(1.0);
         }
@@ -507,16 +509,15 @@ where
             if let Some(g) = gain.get(q) {
                 for (slot, (m, c)) in map.iter().zip(complete.iter()).enumerate() {
                     if let (Some(i), true) = (m, *c) {
-                        if let Some(v) = s.get_mut(slot) {
-                            *v = g.get(*i).copied().unwrap_or(zero);
+                        if let (Some(v), Some(&gi)) = (s.get_mut(slot), g.get(*i)) {
+                            *v = gi;
                         }
                     }
                 }
             }
             let dx = s.dot(&e).to_f64();
             let mut var = 0.0;
-            for j in k..N {
-                let lam = p.values.get(j).copied().unwrap_or(0.0);
+            for (j, &lam) in p.values.iter().enumerate().skip(k) {
                 let proj = col(&p.v, j).dot(&s).to_f64();
                 var += lam * proj * proj;
             }
