@@ -27,8 +27,20 @@
 /// `f64`. nalgebra's `RealField` supplies the arithmetic and the elementary
 /// functions (through `libm` in no_std); this adds the conversions the
 /// policy needs at its edges.
+///
+/// The linear algebra's choice of kernels per precision (one-pass QR norms,
+/// summation in lanes) is not a precision question: it lives in
+/// [`crate::linalg::Kernels`], which every `Real` type implements.
 pub trait Real:
-    nalgebra::RealField + Copy + Default + PartialOrd + core::fmt::Debug + Send + Sync + 'static
+    nalgebra::RealField
+    + crate::linalg::Kernels
+    + Copy
+    + Default
+    + PartialOrd
+    + core::fmt::Debug
+    + Send
+    + Sync
+    + 'static
 {
     /// The name of the precision, for reports.
     const NAME: &'static str;
@@ -38,25 +50,6 @@ pub trait Real:
     const MIN_POSITIVE: Self;
     /// The largest finite number.
     const MAX: Self;
-    /// Whether the Householder QR forms its column norms by one unscaled
-    /// pass (`linalg::qr::make_reflector`, issue 10 fourth pass): in f64.
-    /// The f32 engine (the M4F) keeps the scaled two-pass form bit for bit:
-    /// its flash margin has no room for a second reflector, and its f32
-    /// tests' tolerances sit within 1-2x of the rounding that a last-bit
-    /// change moves at random (docs/CORE.md, "Householder column norms").
-    const ONE_PASS_QR: bool;
-    /// Whether the QR's hot reductions (the reflections' dot products and
-    /// the column sums of squares, `linalg::qr::dot_lanes`) are summed in
-    /// four interleaved partial sums, which the compiler vectorises, rather
-    /// than left to right (issue 10, fourth pass round 2): in f64. The sum
-    /// is the same up to its last bits. The f32 engine (the M4F, which has
-    /// no vector unit) keeps the left-to-right order bit for bit, as with
-    /// [`Real::ONE_PASS_QR`]. The same engines also factor m = 4 and 5
-    /// columns with the count fixed at compile time and build the
-    /// linearised model in passes (`solve::solve_linear`), both bit for
-    /// bit; on the M4F each copy would cost flash. docs/CORE.md,
-    /// "Reductions in lanes".
-    const LANE_SUMS: bool;
     /// Converts from `f64`, rounding to nearest for `f32`.
     fn of(x: f64) -> Self;
     /// Widens (or passes) to `f64`.
@@ -93,8 +86,6 @@ impl Real for f64 {
     const EPS: Self = f64::EPSILON;
     const MIN_POSITIVE: Self = f64::MIN_POSITIVE;
     const MAX: Self = f64::MAX;
-    const ONE_PASS_QR: bool = true;
-    const LANE_SUMS: bool = true;
     #[inline(always)]
     fn of(x: f64) -> Self {
         x
@@ -146,8 +137,6 @@ impl Real for f32 {
     const EPS: Self = f32::EPSILON;
     const MIN_POSITIVE: Self = f32::MIN_POSITIVE;
     const MAX: Self = f32::MAX;
-    const ONE_PASS_QR: bool = false;
-    const LANE_SUMS: bool = false;
     #[inline(always)]
     fn of(x: f64) -> Self {
         x as f32

@@ -313,7 +313,7 @@ impl<'a, const N: usize, T: Real> SiblingModel<'a, N, T> {
 /// row order, so that the first offender is named as before; (4) the
 /// weights and the whitened rows [-u, clock] / sigma and z / sigma. Each
 /// row's operations are those of `Builder::push`, so the bits are the same.
-/// In the f64 engine ([`Real::LANE_SUMS`]); the f32 engine keeps
+/// In the f64 engine ([`Kernels::LANE_SUMS`](crate::linalg::Kernels::LANE_SUMS)); the f32 engine keeps
 /// [`solve_linear_by_row`].
 #[inline(never)]
 fn solve_linear<const N: usize, T: Real>(
