@@ -4,15 +4,15 @@
 //! software call (20-60 instructions for + and x, hundreds for sqrt, ln,
 //! exp). So the core computes in `f64` only where `f32` cannot hold the
 //! quantity, and everything else is written once, generic over [`Real`],
-//! and run in the build's [`Stat`] precision:
+//! and run in the engine's precision `T` (`f32` on the device, `f64` on the
+//! host; [`Stat`], f64, is the default type parameter):
 //!
 //! - `f64` always: the range prediction and the residual formation
 //!   (ranges of 2e7 m at millimetre resolution; the f32 spacing there is
 //!   2 m), satellite and receiver ECEF positions, time, and the Gauss-Newton
 //!   state. A particle filter's state is stored as an offset from an `f64`
 //!   reference point, so it may be `T`.
-//! - [`Stat`] (`f32` with the `f32` feature, the M4F build; `f64` otherwise):
-//!   the unit lines of sight, the whitened geometry, the QR and parity
+//! - `T`: the unit lines of sight, the whitened geometry, the QR and parity
 //!   space, the test statistics, the identification scores, the
 //!   reconstructions, the ARAIM subset solutions and protection levels,
 //!   and the particle weights.
@@ -188,16 +188,18 @@ impl Real for f32 {
     }
 }
 
-/// The precision of the statistics path on this build: `f32` with the
-/// `f32` feature (the M4F firmware enables it: firmware/Cargo.toml),
-/// `f64` otherwise.
-#[cfg(feature = "f32")]
-pub type Stat = f32;
-/// The precision of the statistics path on this build: `f32` with the
-/// `f32` feature (the M4F firmware enables it: firmware/Cargo.toml),
-/// `f64` otherwise.
-#[cfg(not(feature = "f32"))]
+/// The default precision of the engines' statistics path (`Raim<N>` is
+/// `Raim<N, Stat>`): `f64`, the host's reference. Both precisions are
+/// always available as types (`Raim<N, f64>`, `Raim<N, f32>`); the device
+/// names its own (the protocol server's `raim_proto::DevicePrecision`,
+/// f32, the M4F's FPU), so no feature changes a type any dependent sees.
+#[cfg(not(all(test, feature = "test-f32")))]
 pub type Stat = f64;
+/// In this crate's own unit tests with the `test-f32` feature, the whole
+/// unit suite runs its default-precision engines in f32, the device's
+/// precision (`cargo test -p raim-core --features test-f32 --lib`).
+#[cfg(all(test, feature = "test-f32"))]
+pub type Stat = f32;
 
 #[cfg(test)]
 mod tests {

@@ -95,7 +95,7 @@ pub fn convergence_bound_m<T: Real>(convergence_m: f64) -> f64 {
 }
 
 /// One solved subset of an epoch's satellites: the parity quantities of its
-/// whitened ENU model (in precision `T`, the build's [`Stat`] by default),
+/// whitened ENU model (in precision `T`, [`Stat`] by default),
 /// and the position, elevations and sigmas (f64: docs/CORE.md, "Precision").
 #[derive(Debug, Clone)]
 pub struct Solution<const N: usize, T: Real = Stat> {
@@ -217,7 +217,7 @@ impl Fix {
 }
 
 /// Solve the subset `mask` (indexed like the epoch's satellites), cold, in
-/// the build's precision [`Stat`] (any precision: [`solve_into`]).
+/// the default precision [`Stat`] (f64; any precision: [`solve_into`]).
 pub fn solve<const N: usize>(
     cfg: &Config,
     epoch: &Epoch<'_>,

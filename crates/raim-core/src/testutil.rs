@@ -6,13 +6,14 @@ use std::vec::Vec;
 
 use crate::measurement::{LinearObservation, RangeObservation, SatId, System};
 
-/// A test's tolerance in the build's statistics precision ([`crate::Stat`]):
-/// `f64_tol` when `Stat` is f64 (the f64 tolerances are the ones the tests
-/// always had and never change), `f32_tol` with the `f32` feature (the M4F
-/// build, `cargo test -p raim-core --release --features f32 --lib`). Each
-/// caller names the constant and says why the f32 value is what it is.
+/// A test's tolerance in the test build's default precision
+/// ([`crate::Stat`]): `f64_tol` when `Stat` is f64 (the f64 tolerances are
+/// the ones the tests always had and never change), `f32_tol` with the
+/// `test-f32` feature (the device's precision, `cargo test -p raim-core
+/// --release --features test-f32 --lib`). Each caller names the constant
+/// and says why the f32 value is what it is.
 pub const fn at_stat(f64_tol: f64, f32_tol: f64) -> f64 {
-    if cfg!(feature = "f32") {
+    if cfg!(feature = "test-f32") {
         f32_tol
     } else {
         f64_tol

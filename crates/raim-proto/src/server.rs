@@ -22,7 +22,8 @@ use crate::message::{Command, Request, ResetCause, ResponseBody, Status, TestFau
 use crate::nmea;
 use crate::result::WireResult;
 use crate::{
-    CAPACITY, MAX_REQUEST_FRAME, MAX_RESPONSE_FRAME, MAX_RESPONSE_PAYLOAD, PROTOCOL_VERSION,
+    DevicePrecision, CAPACITY, MAX_REQUEST_FRAME, MAX_RESPONSE_FRAME, MAX_RESPONSE_PAYLOAD,
+    PROTOCOL_VERSION,
 };
 
 // Particle-filter RAIM (issue 14): a child module, so it reaches the
@@ -76,7 +77,7 @@ impl Platform for NoPlatform {
 /// static (BENCHMARKS.md, "Issue 10: stack, second pass").
 pub struct Server {
     rx: FrameReceiver<MAX_REQUEST_FRAME>,
-    raim: Raim<CAPACITY>,
+    raim: Raim<CAPACITY, DevicePrecision>,
     config: Config,
     expected_seq: Option<u32>,
     /// Fingerprint of `config` and the lock (issue 15; `lock`).
@@ -452,7 +453,7 @@ impl Server {
 /// its wire form into `wire`, or the typed error. The platform hears the
 /// verdict.
 fn run_epoch<P: Platform>(
-    raim: &mut Raim<CAPACITY>,
+    raim: &mut Raim<CAPACITY, DevicePrecision>,
     config: &Config,
     status: &mut Status,
     (result, wire): (&mut EpochResult<CAPACITY>, &mut WireResult),
@@ -709,7 +710,7 @@ mod tests {
         };
         assert_eq!(r1.exclusions[0].id, SatId::new(System::Gps, 2));
         // The same result as the core on the host, bit for bit.
-        let direct = Raim::<CAPACITY>::new()
+        let direct = Raim::<CAPACITY, DevicePrecision>::new()
             .process(&Config::default(), &Epoch::linear(1.0, &s1))
             .unwrap();
         assert_eq!(*r1, WireResult::from_result(&direct));
@@ -831,7 +832,7 @@ mod tests {
     /// the bytes are those of the owned `Response`, variant by variant.
     #[test]
     fn body_ref_encodes_as_response_body() {
-        let direct = Raim::<CAPACITY>::new()
+        let direct = Raim::<CAPACITY, DevicePrecision>::new()
             .process(&Config::default(), &Epoch::linear(1.0, &sky(50.0)))
             .unwrap();
         let mut server = Server::new();
@@ -926,7 +927,7 @@ mod tests {
         };
         assert_eq!(resp[5].config, id(fp_terminal, true));
         // The result is the locked (terminal) configuration's.
-        let direct = Raim::<CAPACITY>::new()
+        let direct = Raim::<CAPACITY, DevicePrecision>::new()
             .process(&terminal, &Epoch::linear(1.0, &s1))
             .unwrap();
         assert_eq!(*r, WireResult::from_result(&direct));

@@ -31,9 +31,10 @@ mod engine {
 
     use crate::pf_msg::{PF_PARTICLE_COUNTS, PF_SATS};
 
-    /// The particle state's precision on host and device (docs/PF.md
-    /// "Memory": 300 particles x 12 satellites fit 192 KiB only in f32).
-    pub type PfT = f32;
+    /// The particle state's precision on host and device: the device's
+    /// (docs/PF.md "Memory": 300 particles x 12 satellites fit 192 KiB only
+    /// in f32).
+    pub type PfT = crate::DevicePrecision;
 
     const _: () = assert!(PF_PARTICLE_COUNTS[0] == 100 && PF_PARTICLE_COUNTS[1] == 300);
 
@@ -457,7 +458,7 @@ mod tests {
     }
 
     /// The GA-PF through the wire answers exactly what the core's
-    /// `PfRaim<f32, GaPf<f32, 100>, 12>` answers for the same seed and
+    /// `PfRaim<DevicePrecision, GaPf<DevicePrecision, 100>, 12>` answers for the same seed and
     /// epochs, and on a 60 m step on G04 from epoch 6 it alarms, isolates
     /// and excludes G04 with no alarm before.
     #[test]
@@ -472,7 +473,11 @@ mod tests {
         cmds.extend(epochs.iter().enumerate().map(|(k, e)| ranges(k as f64, e)));
         let resp = exchange(&mut server, 0, &cmds);
         assert_eq!(resp[0].body, ResponseBody::Configured);
-        let mut core = Box::new(PfRaim::<f32, GaPf<f32, 100>, 12>::new(cfg.seed));
+        let mut core = Box::new(PfRaim::<
+            crate::DevicePrecision,
+            GaPf<crate::DevicePrecision, 100>,
+            12,
+        >::new(cfg.seed));
         let mut first_alarm = None;
         for (k, (r, e)) in resp[1..].iter().zip(&epochs).enumerate() {
             let want = core.process(&cfg.config, k as f64, e).unwrap();
@@ -617,7 +622,11 @@ mod tests {
         );
         // The refused epochs left the filter as it was: epoch 14 equals a
         // core monitor fed only the accepted epochs.
-        let mut core = Box::new(PfRaim::<f32, GaPf<f32, 100>, 12>::new(c100.seed));
+        let mut core = Box::new(PfRaim::<
+            crate::DevicePrecision,
+            GaPf<crate::DevicePrecision, 100>,
+            12,
+        >::new(c100.seed));
         core.process(&c100.config, 0.0, &good[0]).unwrap();
         let want = core.process(&c100.config, 1.0, &good[1]).unwrap();
         assert_eq!(res(14), WirePfResult::from_output(&want));

@@ -30,7 +30,7 @@ pub fn rank_tolerance<T: Real>() -> T {
 }
 
 /// The factorisation of an `n x m` matrix, column-major, in precision `T`
-/// (the build's [`crate::real::Stat`] on the statistics path; `f64` by
+/// (the engine's on the statistics path, f32 on the device; `f64` by
 /// default).
 #[derive(Debug, Clone)]
 pub struct Householder<const N: usize, T: Real = f64> {

@@ -502,12 +502,8 @@ mod engine {
     use raim_core::solve::{solve_into, Solution};
     use raim_core::{Config, Epoch, LinearObservation};
 
-    /// The unit's ARAIM precision, on every build: `f32`, the M4F's FPU
-    /// (docs/CORE.md "Precision": subset solutions and PLs are f32 on the
-    /// device). Fixed here rather than taken from the build's `Stat` so the
-    /// host `Server` reproduces the firmware bit for bit whatever the host's
-    /// own features (as the particle filter's `PfT`).
-    pub type AraimT = f32;
+    /// The unit's ARAIM precision: the device's.
+    pub type AraimT = crate::DevicePrecision;
 
     type Engine = Araim<AraimT, CAPACITY, MAX_MODES>;
 
