@@ -615,6 +615,27 @@ mod tests {
     use raim_core::{FiRule, LinearObservation, RangeObservation, SatId, System};
     use std::vec::Vec;
 
+    /// The stack of a test thread that builds large engines by value. In the
+    /// debug profile a constructor passes its value through a chain of frames,
+    /// each `new`/`Default` holding its fields' temporaries: about three times
+    /// the engine's size (measured on the debug test binary with `objdump -d`,
+    /// the frames' `sub $n, %rsp`), so a test that builds a few of them
+    /// overflows the 2 MiB default test thread. A constructor that builds in
+    /// place (a `const fn new` into a static) would need none of it.
+    pub(crate) const BIG_STACK_BYTES: usize = 32 << 20;
+
+    /// Runs `f` on a thread of [`BIG_STACK_BYTES`], passing its panic on.
+    pub(crate) fn on_big_stack<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+        std::thread::scope(|s| {
+            std::thread::Builder::new()
+                .stack_size(BIG_STACK_BYTES)
+                .spawn_scoped(s, f)
+                .expect("spawning a test thread")
+                .join()
+                .unwrap_or_else(|e| std::panic::resume_unwind(e))
+        })
+    }
+
     /// A byte sink for the tests.
     #[derive(Default)]
     struct Sink(Vec<u8>);
@@ -944,6 +965,10 @@ mod tests {
     /// the first frame, and refuses to boot with an invalid configuration.
     #[test]
     fn a_compiled_in_configuration_is_locked_from_boot() {
+        on_big_stack(a_compiled_in_configuration_is_locked_from_boot_body)
+    }
+
+    fn a_compiled_in_configuration_is_locked_from_boot_body() {
         let cfg = Config::preset(raim_core::Phase::EnRoute);
         let mut server = Server::new_locked(cfg).unwrap();
         let bytes = frame(&RequestRef {

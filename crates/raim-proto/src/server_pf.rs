@@ -463,6 +463,12 @@ mod tests {
     /// and excludes G04 with no alarm before.
     #[test]
     fn gapf_over_the_wire_equals_the_core_and_isolates_a_step() {
+        crate::server::tests::on_big_stack(
+            gapf_over_the_wire_equals_the_core_and_isolates_a_step_body,
+        )
+    }
+
+    fn gapf_over_the_wire_equals_the_core_and_isolates_a_step_body() {
         let mut server = pf_server();
         let cfg = pf_config(100);
         let mut noise = rng::seeded(3);
@@ -501,6 +507,10 @@ mod tests {
     /// reported without a position.
     #[test]
     fn bad_pf_input_gets_typed_errors() {
+        crate::server::tests::on_big_stack(bad_pf_input_gets_typed_errors_body)
+    }
+
+    fn bad_pf_input_gets_typed_errors_body() {
         let mut server = pf_server();
         let mut noise = rng::seeded(5);
         let good: Vec<Vec<RangeObservation>> =
@@ -667,6 +677,10 @@ mod tests {
     /// storage answers `PfUnavailable`.
     #[test]
     fn the_lock_and_fingerprint_cover_the_pf_configuration() {
+        crate::server::tests::on_big_stack(the_lock_and_fingerprint_cover_the_pf_configuration_body)
+    }
+
+    fn the_lock_and_fingerprint_cover_the_pf_configuration_body() {
         let mut server = pf_server();
         let c100 = pf_config(100);
         let c300 = pf_config(300);
