@@ -97,3 +97,5 @@ impl core::fmt::Display for AraimError {
         }
     }
 }
+
+impl core::error::Error for AraimError {}

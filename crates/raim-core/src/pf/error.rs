@@ -62,3 +62,5 @@ impl core::fmt::Display for PfError {
         }
     }
 }
+
+impl core::error::Error for PfError {}
