@@ -612,7 +612,7 @@ fn spawn_link_reader(mut link: UnixStream) -> Receiver<Result<Response, String>>
 }
 
 fn frame_error_text(e: FrameError) -> String {
-    format!("{e:?}")
+    e.to_string()
 }
 
 fn spawn_nmea_reader(sock: UnixStream) -> Receiver<String> {

@@ -148,7 +148,7 @@ impl AraimReplayArgs {
                 *slot = Some(p);
             }
         }
-        ism.validate().map_err(|e| anyhow!("ISM: {e:?}"))?;
+        ism.validate().map_err(|e| anyhow!("ISM: {e}"))?;
         Ok(ism)
     }
 }
@@ -480,7 +480,7 @@ fn epoch(
     for _ in 0..LIN_MAX_ITER {
         let out = engine
             .process(cfg, &ism, &lin)
-            .map_err(|e| anyhow!("{e:?}"))?;
+            .map_err(|e| anyhow!("ARAIM: {e}"))?;
         let corr = out.correction_enu_m;
         let rot = enu_rotation(&ecef_to_geodetic(x0));
         let d = unrotate(&rot, corr);
@@ -492,7 +492,7 @@ fn epoch(
     }
     let out = engine
         .process(cfg, &ism, &lin)
-        .map_err(|e| anyhow!("{e:?}"))?;
+        .map_err(|e| anyhow!("ARAIM: {e}"))?;
     rec.modes = out.modes.len();
     rec.monitored = out.n_monitored;
     rec.max_faults = out.max_faults;
@@ -514,7 +514,7 @@ fn epoch(
     let pls = solved_pls(out);
     let fde = engine
         .fde(cfg, &ism, &lin, scratch)
-        .map_err(|e| anyhow!("{e:?}"))?;
+        .map_err(|e| anyhow!("ARAIM: {e}"))?;
     Ok(match fde {
         FdeDecision::NoFault => {
             rec.fde = "no_fault".into();
