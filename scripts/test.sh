@@ -26,9 +26,9 @@ echo "== firmware (own workspace: QEMU mps2-an386 and STM32F4 builds, clippy, fm
 # host-tests/tests/qemu_flash.rs bounds to 128 KiB, issue 10)
 echo "== tests (including the firmware under QEMU: host-tests/tests/qemu_*.rs)"
 cargo test --workspace --release
-echo "== the QEMU tests again with the whole host side in the firmware's precision (raim-core/f32)"
-cargo test -p host-tests --release --features f32 qemu
-echo "== the core's own tests in the firmware's precision (Stat = f32; ~1 min to build, < 1 s to run)"
-cargo test -p raim-core --release --features f32 --lib
+# (the host's protocol server runs the device's precision, f32, in every
+# build: raim_proto::DevicePrecision; the QEMU tests above compare with it)
+echo "== the core's own unit tests in the device's precision (their default Stat = f32; ~1 min to build)"
+cargo test -p raim-core --release --features test-f32 --lib
 echo "== the core's own tests without the optional reconstruction FDE (the 128 KiB flash build's core)"
 cargo test -p raim-core --release --no-default-features --lib

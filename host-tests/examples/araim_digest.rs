@@ -18,7 +18,7 @@ use araim_common::{
 use raim_core::SatId;
 use raim_proto::frame::{encode, FrameReceiver};
 use raim_proto::message::{CommandRef, RequestRef, Response};
-use raim_proto::server::{NoPlatform, Server};
+use raim_server::{NoPlatform, Server};
 
 struct Sink(Vec<u8>);
 impl embedded_io::ErrorType for Sink {

@@ -5,13 +5,6 @@
 use raim_core::{LinearObservation, RangeObservation, SatId, System};
 use serde::Deserialize;
 
-/// The precision of the firmware's statistics path: it builds raim-core
-/// with the `f32` feature (firmware/Cargo.toml; test
-/// `firmware_builds_the_f32_core` in `tests/qemu_vectors.rs` keeps the two
-/// in step). The host references of the QEMU tests run
-/// `raim_core::Raim::<N, Device>`, whatever the host's own `Stat`.
-pub type Device = f32;
-
 #[derive(Debug, Clone, Deserialize)]
 pub struct EpochJson {
     pub time_s: f64,

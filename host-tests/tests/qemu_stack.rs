@@ -130,7 +130,7 @@ fn qemu_stack_high_water_of_an_mcusum_alarm_with_two_faults() {
     cfg.mcusum.enabled = true;
     let mut fw = session();
     fw.configure(&cfg).unwrap();
-    let mut host = Raim::<CAPACITY, host_tests::Device>::new();
+    let mut host = Raim::<CAPACITY, raim_proto::DevicePrecision>::new();
     let biased = SatId::new(System::Galileo, 10);
     let (mut alarm_at, mut worst_before, mut worst_alarm, mut worst_after) = (None, 0, 0, 0);
     for t in 0..MAX_EPOCHS_TO_ALARM + EPOCHS_AFTER_ALARM {
@@ -199,7 +199,7 @@ fn qemu_stack_high_water_of_the_reconstruction_fde_with_two_faults() {
         let epoch = Epoch::ranges(1.7e9, &sats, None);
         let r = fw.process(&epoch).unwrap().outcome.unwrap();
         let want = WireResult::from_result(
-            &Raim::<CAPACITY, host_tests::Device>::new()
+            &Raim::<CAPACITY, raim_proto::DevicePrecision>::new()
                 .process(&cfg, &epoch)
                 .unwrap(),
         );

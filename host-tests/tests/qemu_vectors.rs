@@ -145,7 +145,7 @@ fn qemu_mcusum_state_matches_a_persistent_host_engine() {
     let mut cfg = Config::default();
     cfg.mcusum.enabled = true;
     fw.configure(&cfg).unwrap();
-    let mut host = raim_core::Raim::<{ raim_proto::CAPACITY }, host_tests::Device>::new();
+    let mut host = raim_core::Raim::<{ raim_proto::CAPACITY }, raim_proto::DevicePrecision>::new();
     let mut with_report = 0;
     for e in host_tests::read_vector("snapshot_example.jsonl") {
         let sats = e.sats();
@@ -215,22 +215,4 @@ fn qemu_reconstruction_fde_matches_the_host_core() {
         (r.decision, x)
     });
     assert_eq!(got, Ok((Decision::Excluded, vec![2, 7, 11])));
-}
-
-/// The host references above run `Raim::<N, host_tests::Device>` (f32):
-/// the firmware must build the core with the `f32` feature, or the
-/// bit-exact comparisons would compare two precisions.
-#[test]
-fn firmware_builds_the_f32_core() {
-    let manifest = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../firmware/Cargo.toml"
-    ))
-    .unwrap();
-    let core = manifest
-        .lines()
-        .find(|l| l.trim_start().starts_with("raim-core"))
-        .expect("firmware depends on raim-core");
-    assert!(core.contains("\"f32\""), "{core}");
-    assert_eq!(<host_tests::Device as raim_core::Real>::NAME, "f32");
 }

@@ -44,7 +44,7 @@ fn firmware_matches_host_on_real_epochs() {
     let elf = raim_qemu::firmware_elf().expect("firmware build");
     let mut fw = raim_qemu::QemuSession::start(&elf).expect("qemu-system-arm with the firmware");
     fw.configure(&cfg).unwrap();
-    let mut host = Raim::<CAPACITY, host_tests::Device>::new();
+    let mut host = Raim::<CAPACITY, raim_proto::DevicePrecision>::new();
     let mut compared = 0;
     for e in obs.epochs.iter().filter(|e| inside(e.time_gps_s)) {
         let p = prepare_epoch(&nav, e, &opts, obs.approx_position_m);

@@ -135,3 +135,5 @@ impl core::fmt::Display for RaimError {
         }
     }
 }
+
+impl core::error::Error for RaimError {}

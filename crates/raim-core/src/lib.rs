@@ -13,7 +13,7 @@
 //! (QR, parity space), `stats` (distributions), `solve` (measurement model
 //! and Gauss-Newton), `measurement`, `frames`, `sigma`, `config`, `error`,
 //! `result`, and `real` (the precision policy: which quantities are `f64`
-//! and which run in the build's [`real::Stat`] precision). `monitor` is the thin entry that validates and dispatches.
+//! and which run in the engine's precision `T`, f32 on the device). `monitor` is the thin entry that validates and dispatches.
 #![no_std]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]

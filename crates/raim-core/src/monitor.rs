@@ -19,9 +19,9 @@ use crate::snapshot::Snapshot;
 /// buffers are N-sized, on the stack or, for the epoch's FDE outcome (the
 /// solution in force), in the monitor itself (scratch, reset at every
 /// epoch; issue 10: the firmware keeps the monitor in a static). `T` is the precision of the
-/// statistics path (docs/CORE.md, "Precision"): the build's [`Stat`] by
-/// default (f32 with the core's `f32` feature, the M4F firmware; f64
-/// otherwise); `Raim::<N, f32>` and `Raim::<N, f64>` can run side by side.
+/// statistics path (docs/CORE.md, "Precision"): [`Stat`] (f64) by default;
+/// the device runs `Raim::<N, f32>`, and `Raim::<N, f32>` and
+/// `Raim::<N, f64>` can run side by side.
 #[derive(Debug, Clone)]
 pub struct Raim<const N: usize = 32, T: Real = Stat> {
     snapshot: Snapshot<N, T>,

@@ -4,15 +4,15 @@
 //! software call (20-60 instructions for + and x, hundreds for sqrt, ln,
 //! exp). So the core computes in `f64` only where `f32` cannot hold the
 //! quantity, and everything else is written once, generic over [`Real`],
-//! and run in the build's [`Stat`] precision:
+//! and run in the engine's precision `T` (`f32` on the device, `f64` on the
+//! host; [`Stat`], f64, is the default type parameter):
 //!
 //! - `f64` always: the range prediction and the residual formation
 //!   (ranges of 2e7 m at millimetre resolution; the f32 spacing there is
 //!   2 m), satellite and receiver ECEF positions, time, and the Gauss-Newton
 //!   state. A particle filter's state is stored as an offset from an `f64`
 //!   reference point, so it may be `T`.
-//! - [`Stat`] (`f32` with the `f32` feature, the M4F build; `f64` otherwise):
-//!   the unit lines of sight, the whitened geometry, the QR and parity
+//! - `T`: the unit lines of sight, the whitened geometry, the QR and parity
 //!   space, the test statistics, the identification scores, the
 //!   reconstructions, the ARAIM subset solutions and protection levels,
 //!   and the particle weights.
@@ -27,8 +27,20 @@
 /// `f64`. nalgebra's `RealField` supplies the arithmetic and the elementary
 /// functions (through `libm` in no_std); this adds the conversions the
 /// policy needs at its edges.
+///
+/// The linear algebra's choice of kernels per precision (one-pass QR norms,
+/// summation in lanes) is not a precision question: it lives in
+/// [`crate::linalg::Kernels`], which every `Real` type implements.
 pub trait Real:
-    nalgebra::RealField + Copy + Default + PartialOrd + core::fmt::Debug + Send + Sync + 'static
+    nalgebra::RealField
+    + crate::linalg::Kernels
+    + Copy
+    + Default
+    + PartialOrd
+    + core::fmt::Debug
+    + Send
+    + Sync
+    + 'static
 {
     /// The name of the precision, for reports.
     const NAME: &'static str;
@@ -38,25 +50,6 @@ pub trait Real:
     const MIN_POSITIVE: Self;
     /// The largest finite number.
     const MAX: Self;
-    /// Whether the Householder QR forms its column norms by one unscaled
-    /// pass (`linalg::qr::make_reflector`, issue 10 fourth pass): in f64.
-    /// The f32 engine (the M4F) keeps the scaled two-pass form bit for bit:
-    /// its flash margin has no room for a second reflector, and its f32
-    /// tests' tolerances sit within 1-2x of the rounding that a last-bit
-    /// change moves at random (docs/CORE.md, "Householder column norms").
-    const ONE_PASS_QR: bool;
-    /// Whether the QR's hot reductions (the reflections' dot products and
-    /// the column sums of squares, `linalg::qr::dot_lanes`) are summed in
-    /// four interleaved partial sums, which the compiler vectorises, rather
-    /// than left to right (issue 10, fourth pass round 2): in f64. The sum
-    /// is the same up to its last bits. The f32 engine (the M4F, which has
-    /// no vector unit) keeps the left-to-right order bit for bit, as with
-    /// [`Real::ONE_PASS_QR`]. The same engines also factor m = 4 and 5
-    /// columns with the count fixed at compile time and build the
-    /// linearised model in passes (`solve::solve_linear`), both bit for
-    /// bit; on the M4F each copy would cost flash. docs/CORE.md,
-    /// "Reductions in lanes".
-    const LANE_SUMS: bool;
     /// Converts from `f64`, rounding to nearest for `f32`.
     fn of(x: f64) -> Self;
     /// Widens (or passes) to `f64`.
@@ -95,8 +88,6 @@ impl Real for f64 {
     const EPS: Self = f64::EPSILON;
     const MIN_POSITIVE: Self = f64::MIN_POSITIVE;
     const MAX: Self = f64::MAX;
-    const ONE_PASS_QR: bool = true;
-    const LANE_SUMS: bool = true;
     #[inline(always)]
     fn of(x: f64) -> Self {
         x
@@ -152,8 +143,6 @@ impl Real for f32 {
     const EPS: Self = f32::EPSILON;
     const MIN_POSITIVE: Self = f32::MIN_POSITIVE;
     const MAX: Self = f32::MAX;
-    const ONE_PASS_QR: bool = false;
-    const LANE_SUMS: bool = false;
     #[inline(always)]
     fn of(x: f64) -> Self {
         x as f32
@@ -209,16 +198,18 @@ impl Real for f32 {
     }
 }
 
-/// The precision of the statistics path on this build: `f32` with the
-/// `f32` feature (the M4F firmware enables it: firmware/Cargo.toml),
-/// `f64` otherwise.
-#[cfg(feature = "f32")]
-pub type Stat = f32;
-/// The precision of the statistics path on this build: `f32` with the
-/// `f32` feature (the M4F firmware enables it: firmware/Cargo.toml),
-/// `f64` otherwise.
-#[cfg(not(feature = "f32"))]
+/// The default precision of the engines' statistics path (`Raim<N>` is
+/// `Raim<N, Stat>`): `f64`, the host's reference. Both precisions are
+/// always available as types (`Raim<N, f64>`, `Raim<N, f32>`); the device
+/// names its own (the protocol server's `raim_proto::DevicePrecision`,
+/// f32, the M4F's FPU), so no feature changes a type any dependent sees.
+#[cfg(not(all(test, feature = "test-f32")))]
 pub type Stat = f64;
+/// In this crate's own unit tests with the `test-f32` feature, the whole
+/// unit suite runs its default-precision engines in f32, the device's
+/// precision (`cargo test -p raim-core --features test-f32 --lib`).
+#[cfg(all(test, feature = "test-f32"))]
+pub type Stat = f32;
 
 #[cfg(test)]
 mod tests {

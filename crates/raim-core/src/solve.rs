@@ -95,7 +95,7 @@ pub fn convergence_bound_m<T: Real>(convergence_m: f64) -> f64 {
 }
 
 /// One solved subset of an epoch's satellites: the parity quantities of its
-/// whitened ENU model (in precision `T`, the build's [`Stat`] by default),
+/// whitened ENU model (in precision `T`, [`Stat`] by default),
 /// and the position, elevations and sigmas (f64: docs/CORE.md, "Precision").
 #[derive(Debug, Clone)]
 pub struct Solution<const N: usize, T: Real = Stat> {
@@ -226,7 +226,7 @@ impl Fix {
 }
 
 /// Solve the subset `mask` (indexed like the epoch's satellites), cold, in
-/// the build's precision [`Stat`] (any precision: [`solve_into`]).
+/// the default precision [`Stat`] (f64; any precision: [`solve_into`]).
 pub fn solve<const N: usize>(
     cfg: &Config,
     epoch: &Epoch<'_>,
@@ -322,7 +322,7 @@ impl<'a, const N: usize, T: Real> SiblingModel<'a, N, T> {
 /// row order, so that the first offender is named as before; (4) the
 /// weights and the whitened rows [-u, clock] / sigma and z / sigma. Each
 /// row's operations are those of `Builder::push`, so the bits are the same.
-/// In the f64 engine ([`Real::LANE_SUMS`]); the f32 engine keeps
+/// In the f64 engine ([`Kernels::LANE_SUMS`](crate::linalg::Kernels::LANE_SUMS)); the f32 engine keeps
 /// [`solve_linear_by_row`].
 #[inline(never)]
 fn solve_linear<const N: usize, T: Real>(

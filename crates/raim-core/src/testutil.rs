@@ -6,17 +6,39 @@ use std::vec::Vec;
 
 use crate::measurement::{LinearObservation, RangeObservation, SatId, System};
 
-/// A test's tolerance in the build's statistics precision ([`crate::Stat`]):
-/// `f64_tol` when `Stat` is f64 (the f64 tolerances are the ones the tests
-/// always had and never change), `f32_tol` with the `f32` feature (the M4F
-/// build, `cargo test -p raim-core --release --features f32 --lib`). Each
-/// caller names the constant and says why the f32 value is what it is.
+/// A test's tolerance in the test build's default precision
+/// ([`crate::Stat`]): `f64_tol` when `Stat` is f64 (the f64 tolerances are
+/// the ones the tests always had and never change), `f32_tol` with the
+/// `test-f32` feature (the device's precision, `cargo test -p raim-core
+/// --release --features test-f32 --lib`). Each caller names the constant
+/// and says why the f32 value is what it is.
 pub const fn at_stat(f64_tol: f64, f32_tol: f64) -> f64 {
-    if cfg!(feature = "f32") {
+    if cfg!(feature = "test-f32") {
         f32_tol
     } else {
         f64_tol
     }
+}
+
+/// The stack of a test thread that builds large engines by value. In the
+/// debug profile a constructor passes its value through a chain of frames,
+/// each `new`/`Default` holding its fields' temporaries: about three times
+/// the engine's size (measured on the debug test binary with `objdump -d`,
+/// the frames' `sub $n, %rsp`), so a test that builds a few of them
+/// overflows the 2 MiB default test thread. A constructor that builds in
+/// place (a `const fn new` into a static) would need none of it.
+pub const BIG_STACK_BYTES: usize = 32 << 20;
+
+/// Runs `f` on a thread of [`BIG_STACK_BYTES`], passing its panic on.
+pub fn on_big_stack<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    std::thread::scope(|s| {
+        std::thread::Builder::new()
+            .stack_size(BIG_STACK_BYTES)
+            .spawn_scoped(s, f)
+            .expect("spawning a test thread")
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e))
+    })
 }
 
 /// xorshift64* with Box-Muller normals: deterministic, seedable.

@@ -478,6 +478,7 @@ pub enum AraimAnswer {
 /// errors ARAIM shares with the snapshot monitor (NaN, duplicate,
 /// capacity, too few, rank) use the existing `WireError` variants.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum AraimWireError {
     /// This build has no ARAIM engine (a firmware built without the
     /// `araim` feature).
@@ -551,6 +552,8 @@ impl core::fmt::Display for AraimWireError {
         }
     }
 }
+
+impl core::error::Error for AraimWireError {}
 
 pub(crate) fn field(name: &str) -> FieldName {
     let mut s = FieldName::new();

@@ -23,6 +23,7 @@ fn field(name: &str) -> FieldName {
 
 /// Why a frame got no result.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum WireError {
     /// The envelope's CRC does not match its payload.
     BadCrc {
@@ -349,6 +350,8 @@ impl core::fmt::Display for WireError {
         }
     }
 }
+
+impl core::error::Error for WireError {}
 
 #[cfg(test)]
 mod tests {

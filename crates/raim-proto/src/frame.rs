@@ -31,6 +31,7 @@ pub struct Envelope<'a> {
 /// A chunk between delimiters that is not a valid frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum FrameError {
     /// The chunk did not fit the receive buffer of `capacity` bytes; bytes
     /// up to the next delimiter are discarded.
@@ -51,6 +52,26 @@ pub enum FrameError {
         received: u32,
     },
 }
+
+impl core::fmt::Display for FrameError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            FrameError::Overflow { capacity } => write!(
+                f,
+                "frame longer than the {capacity}-byte receive buffer (skipped to the next delimiter)"
+            ),
+            FrameError::Undecodable { len } => {
+                write!(f, "a {len}-byte chunk is not a valid COBS envelope")
+            }
+            FrameError::BadCrc { computed, received } => write!(
+                f,
+                "CRC mismatch: computed {computed:#010x}, received {received:#010x}"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for FrameError {}
 
 /// Encode one message as a complete frame (delimiter included) into `out`,
 /// using `scratch` for the postcard payload.

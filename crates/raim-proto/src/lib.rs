@@ -67,6 +67,14 @@ pub use result::{WireMcusum, WireResult};
 /// the wire. The core's documented default.
 pub const CAPACITY: usize = raim_core::DEFAULT_CAPACITY;
 
+/// The device's precision: the statistics path of every engine the
+/// [`server`] runs (the snapshot monitor `Raim<CAPACITY, DevicePrecision>`,
+/// ARAIM and the particle filters), on the firmware and on the host alike,
+/// so that the host's `Server` reproduces the firmware bit for bit. `f32`:
+/// the Cortex-M4F's FPU is single precision, and every f64 operation there
+/// is a software call (docs/CORE.md, "Precision").
+pub type DevicePrecision = f32;
+
 /// Version of the frame layout and message types; reported by `Status`.
 /// Bump on any change of a serialized type (postcard is not self-describing);
 /// new enum variants are appended so that the earlier ones keep their

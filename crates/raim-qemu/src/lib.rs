@@ -31,6 +31,8 @@ use raim_proto::frame::{encode, FrameError, FrameReceiver};
 use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody, Status};
 use raim_proto::{ConfigId, WireError, WireResult, MAX_REQUEST_FRAME, MAX_RESPONSE_FRAME};
 
+pub mod tied;
+
 /// How long an answer may take (QEMU on a loaded 2-core machine; an epoch
 /// takes milliseconds).
 pub const ANSWER_TIMEOUT: Duration = Duration::from_secs(30);
@@ -321,8 +323,7 @@ impl QemuSession {
         cmd.stdin(Stdio::null())
             .stdout(std::fs::File::create(&log)?)
             .stderr(std::fs::File::create(dir.join("qemu.stderr"))?);
-        let mut child = cmd
-            .spawn()
+        let mut child = tied::spawn(cmd)
             .context("starting qemu-system-arm (apt-get install qemu-system-arm)")?;
         let deadline = Instant::now() + Duration::from_secs(20);
         let link = match connect(&s0, &mut child, deadline)
@@ -611,7 +612,7 @@ fn spawn_link_reader(mut link: UnixStream) -> Receiver<Result<Response, String>>
 }
 
 fn frame_error_text(e: FrameError) -> String {
-    format!("{e:?}")
+    e.to_string()
 }
 
 fn spawn_nmea_reader(sock: UnixStream) -> Receiver<String> {

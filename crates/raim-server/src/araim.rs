@@ -420,12 +420,8 @@ mod engine {
     use raim_proto::message::{LinearEpoch, RangeEpoch};
     use raim_proto::CAPACITY;
 
-    /// The unit's ARAIM precision, on every build: `f32`, the M4F's FPU
-    /// (docs/CORE.md "Precision": subset solutions and PLs are f32 on the
-    /// device). Fixed here rather than taken from the build's `Stat` so the
-    /// host `Server` reproduces the firmware bit for bit whatever the host's
-    /// own features (as the particle filter's `PfT`).
-    pub type AraimT = f32;
+    /// The unit's ARAIM precision: the device's.
+    pub type AraimT = raim_proto::DevicePrecision;
 
     /// The core's ARAIM monitor: the engine, the FDE's scratch engine, the
     /// epoch's satellites and, for a pseudorange epoch, its Gauss-Newton

@@ -42,7 +42,8 @@ use raim_proto::message::Response;
 use raim_proto::message::{Command, Request, ResetCause, ResponseBody, Status, TestFault};
 use raim_proto::result::WireResult;
 use raim_proto::{
-    CAPACITY, MAX_REQUEST_FRAME, MAX_RESPONSE_FRAME, MAX_RESPONSE_PAYLOAD, PROTOCOL_VERSION,
+    DevicePrecision, CAPACITY, MAX_REQUEST_FRAME, MAX_RESPONSE_FRAME, MAX_RESPONSE_PAYLOAD,
+    PROTOCOL_VERSION,
 };
 
 mod answer;
@@ -101,7 +102,7 @@ impl Platform for NoPlatform {
 /// static (BENCHMARKS.md, "Issue 10: stack, second pass").
 pub struct Server {
     rx: FrameReceiver<MAX_REQUEST_FRAME>,
-    raim: Raim<CAPACITY>,
+    raim: Raim<CAPACITY, DevicePrecision>,
     config: Config,
     expected_seq: Option<u32>,
     /// Fingerprint of `config` and the lock (issue 15; `lock`).
@@ -453,7 +454,7 @@ impl Server {
 /// its wire form into `wire`, or the typed error. The platform hears the
 /// verdict.
 fn run_epoch<P: Platform>(
-    raim: &mut Raim<CAPACITY>,
+    raim: &mut Raim<CAPACITY, DevicePrecision>,
     config: &Config,
     status: &mut Status,
     (result, wire): (&mut EpochResult<CAPACITY>, &mut WireResult),

@@ -31,9 +31,10 @@ mod engine {
 
     use raim_proto::pf_msg::{PF_PARTICLE_COUNTS, PF_SATS};
 
-    /// The particle state's precision on host and device (docs/PF.md
-    /// "Memory": 300 particles x 12 satellites fit 192 KiB only in f32).
-    pub type PfT = f32;
+    /// The particle state's precision on host and device: the device's
+    /// (docs/PF.md "Memory": 300 particles x 12 satellites fit 192 KiB only
+    /// in f32).
+    pub type PfT = raim_proto::DevicePrecision;
 
     const _: () = assert!(PF_PARTICLE_COUNTS[0] == 100 && PF_PARTICLE_COUNTS[1] == 300);
 
@@ -453,11 +454,15 @@ mod tests {
     }
 
     /// The GA-PF through the wire answers exactly what the core's
-    /// `PfRaim<f32, GaPf<f32, 100>, 12>` answers for the same seed and
+    /// `PfRaim<DevicePrecision, GaPf<DevicePrecision, 100>, 12>` answers for the same seed and
     /// epochs, and on a 60 m step on G04 from epoch 6 it alarms, isolates
     /// and excludes G04 with no alarm before.
     #[test]
     fn gapf_over_the_wire_equals_the_core_and_isolates_a_step() {
+        crate::tests::on_big_stack(gapf_over_the_wire_equals_the_core_and_isolates_a_step_body)
+    }
+
+    fn gapf_over_the_wire_equals_the_core_and_isolates_a_step_body() {
         let mut server = pf_server();
         let cfg = pf_config(100);
         let mut noise = rng::seeded(3);
@@ -468,7 +473,11 @@ mod tests {
         cmds.extend(epochs.iter().enumerate().map(|(k, e)| ranges(k as f64, e)));
         let resp = exchange(&mut server, 0, &cmds);
         assert_eq!(resp[0].body, ResponseBody::Configured);
-        let mut core = Box::new(PfRaim::<f32, GaPf<f32, 100>, 12>::new(cfg.seed));
+        let mut core = Box::new(PfRaim::<
+            raim_proto::DevicePrecision,
+            GaPf<raim_proto::DevicePrecision, 100>,
+            12,
+        >::new(cfg.seed));
         let mut first_alarm = None;
         for (k, (r, e)) in resp[1..].iter().zip(&epochs).enumerate() {
             let want = core.process(&cfg.config, k as f64, e).unwrap();
@@ -492,6 +501,10 @@ mod tests {
     /// reported without a position.
     #[test]
     fn bad_pf_input_gets_typed_errors() {
+        crate::tests::on_big_stack(bad_pf_input_gets_typed_errors_body)
+    }
+
+    fn bad_pf_input_gets_typed_errors_body() {
         let mut server = pf_server();
         let mut noise = rng::seeded(5);
         let good: Vec<Vec<RangeObservation>> =
@@ -613,7 +626,11 @@ mod tests {
         );
         // The refused epochs left the filter as it was: epoch 14 equals a
         // core monitor fed only the accepted epochs.
-        let mut core = Box::new(PfRaim::<f32, GaPf<f32, 100>, 12>::new(c100.seed));
+        let mut core = Box::new(PfRaim::<
+            raim_proto::DevicePrecision,
+            GaPf<raim_proto::DevicePrecision, 100>,
+            12,
+        >::new(c100.seed));
         core.process(&c100.config, 0.0, &good[0]).unwrap();
         let want = core.process(&c100.config, 1.0, &good[1]).unwrap();
         assert_eq!(res(14), WirePfResult::from_output(&want));
@@ -654,6 +671,10 @@ mod tests {
     /// storage answers `PfUnavailable`.
     #[test]
     fn the_lock_and_fingerprint_cover_the_pf_configuration() {
+        crate::tests::on_big_stack(the_lock_and_fingerprint_cover_the_pf_configuration_body)
+    }
+
+    fn the_lock_and_fingerprint_cover_the_pf_configuration_body() {
         let mut server = pf_server();
         let c100 = pf_config(100);
         let c300 = pf_config(300);

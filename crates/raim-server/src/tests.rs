@@ -8,6 +8,26 @@ use raim_proto::message::{CommandRef, RequestRef, Response};
 use serde::Serialize;
 use std::vec::Vec;
 
+/// The stack of a test thread that builds large engines by value. In the
+/// debug profile a constructor passes its value through a chain of frames,
+/// each `new`/`Default` holding its fields' temporaries: about three times
+/// the engine's size, so a test that builds a few of them overflows the
+/// 2 MiB default test thread. A constructor that builds in place (a
+/// `const fn new` into a static) would need none of it.
+pub(crate) const BIG_STACK_BYTES: usize = 32 << 20;
+
+/// Runs `f` on a thread of [`BIG_STACK_BYTES`], passing its panic on.
+pub(crate) fn on_big_stack<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    std::thread::scope(|s| {
+        std::thread::Builder::new()
+            .stack_size(BIG_STACK_BYTES)
+            .spawn_scoped(s, f)
+            .expect("spawning a test thread")
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e))
+    })
+}
+
 /// A byte sink for the tests.
 #[derive(Default)]
 struct Sink(Vec<u8>);
@@ -103,7 +123,7 @@ fn every_frame_is_answered_in_order_with_its_sequence_number() {
     };
     assert_eq!(r1.exclusions[0].id, SatId::new(System::Gps, 2));
     // The same result as the core on the host, bit for bit.
-    let direct = Raim::<CAPACITY>::new()
+    let direct = Raim::<CAPACITY, DevicePrecision>::new()
         .process(&Config::default(), &Epoch::linear(1.0, &s1))
         .unwrap();
     assert_eq!(*r1, WireResult::from_result(&direct));
@@ -225,7 +245,7 @@ fn typed_errors_for_each_kind_of_bad_frame() {
 /// the bytes are those of the owned `Response`, variant by variant.
 #[test]
 fn body_ref_encodes_as_response_body() {
-    let direct = Raim::<CAPACITY>::new()
+    let direct = Raim::<CAPACITY, DevicePrecision>::new()
         .process(&Config::default(), &Epoch::linear(1.0, &sky(50.0)))
         .unwrap();
     let mut server = Server::new();
@@ -320,7 +340,7 @@ fn a_locked_server_refuses_configure() {
     };
     assert_eq!(resp[5].config, id(fp_terminal, true));
     // The result is the locked (terminal) configuration's.
-    let direct = Raim::<CAPACITY>::new()
+    let direct = Raim::<CAPACITY, DevicePrecision>::new()
         .process(&terminal, &Epoch::linear(1.0, &s1))
         .unwrap();
     assert_eq!(*r, WireResult::from_result(&direct));

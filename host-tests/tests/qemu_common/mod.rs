@@ -30,9 +30,9 @@ pub fn session_on(machine: raim_qemu::Machine) -> QemuSession {
 }
 
 /// The host core's result for an epoch, in wire form, in the firmware's
-/// precision ([`host_tests::Device`]).
+/// precision ([`raim_proto::DevicePrecision`]).
 pub fn host_result(cfg: &Config, epoch: &Epoch<'_>) -> Result<WireResult, RaimError> {
-    Raim::<CAPACITY, host_tests::Device>::new()
+    Raim::<CAPACITY, raim_proto::DevicePrecision>::new()
         .process(cfg, epoch)
         .map(|r| WireResult::from_result(&r))
 }

@@ -132,3 +132,5 @@ impl core::fmt::Display for AraimError {
         }
     }
 }
+
+impl core::error::Error for AraimError {}

@@ -654,6 +654,10 @@ mod enumeration {
 
     #[test]
     fn small_skies_match_all_subsets() {
+        crate::testutil::on_big_stack(small_skies_match_all_subsets_body)
+    }
+
+    fn small_skies_match_all_subsets_body() {
         let mut rng = crate::testutil::Rng::new(7);
         let all = [System::Gps, System::Galileo, System::Beidou];
         let mut max_r = 0;

@@ -11,7 +11,7 @@ use crate::measurement::MAX_STATES;
 use crate::real::Real;
 
 /// Parity-space quantities of one (whitened) linear model, in precision
-/// `T` (`f64` by default; the build's [`crate::real::Stat`] on the device).
+/// `T` (`f64` by default; f32 on the device).
 #[derive(Debug, Clone)]
 pub struct Parity<const N: usize, T: Real = f64> {
     n: usize,

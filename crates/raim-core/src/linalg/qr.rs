@@ -30,7 +30,7 @@ pub fn rank_tolerance<T: Real>() -> T {
 }
 
 /// The factorisation of an `n x m` matrix, column-major, in precision `T`
-/// (the build's [`crate::real::Stat`] on the statistics path; `f64` by
+/// (the engine's on the statistics path, f32 on the device; `f64` by
 /// default).
 #[derive(Debug, Clone)]
 pub struct Householder<const N: usize, T: Real = f64> {
@@ -268,7 +268,7 @@ fn norm<'a, T: Real>(it: impl Iterator<Item = &'a T>) -> T {
 }
 
 /// sum x_i^2, unscaled: left to right, or in lanes ([`dot_lanes`]) where
-/// [`Real::LANE_SUMS`].
+/// [`Kernels::LANE_SUMS`](crate::linalg::Kernels::LANE_SUMS).
 #[inline(always)]
 fn sum_sq<T: Real>(x: &[T]) -> T {
     if T::LANE_SUMS {
@@ -342,7 +342,7 @@ fn hypot_nonneg<T: Real>(a: T, b: T) -> T {
 /// scale of the rank test, is that of head and x together: the reflections
 /// before k are orthogonal and leave it unchanged.
 ///
-/// Issue 10 (fourth pass), in f64 ([`Real::ONE_PASS_QR`]): one unscaled
+/// Issue 10 (fourth pass), in f64 ([`Kernels::ONE_PASS_QR`](crate::linalg::Kernels::ONE_PASS_QR)): one unscaled
 /// pass of sum x_i^2 gives sigma = ||x||, the full norm
 /// sqrt(|head|^2 + sigma^2), and ||v|| comes in closed form,
 /// ||x - alpha e1||^2 = 2 sigma (sigma + |x0|) (alpha = -sign(x0) sigma),
@@ -354,7 +354,7 @@ fn hypot_nonneg<T: Real>(a: T, b: T) -> T {
 /// column) the scaled two-pass form, [`make_reflector_scaled`], is used.
 /// Both give the same quantities up to rounding, and the rank test is the
 /// same test ([`rank_tolerance`] against the full norm). The f32 engine
-/// keeps the scaled form bit for bit (see [`Real::ONE_PASS_QR`]).
+/// keeps the scaled form bit for bit (see [`Kernels::ONE_PASS_QR`](crate::linalg::Kernels::ONE_PASS_QR)).
 /// Returns alpha, the column's norm and whether the pivot is usable.
 fn make_reflector<T: Real>(x: &mut [T], head: &[T]) -> (T, T, bool) {
     if !T::ONE_PASS_QR {

@@ -5,6 +5,7 @@
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub enum MultifaultError {
     /// `t` simultaneous faults cannot be searched with `n` satellites and
     /// `m` states: a candidate set needs t <= n - m - 1 (its subset
@@ -83,3 +84,5 @@ impl core::fmt::Display for MultifaultError {
         }
     }
 }
+
+impl core::error::Error for MultifaultError {}

@@ -382,7 +382,7 @@ fn fault_set<T: Real, P: Real, const N: usize>(
 }
 
 /// The scratch the reconstruction FDE needs (about 2 N^2 + 4 N values of
-/// [`Stat`] and one subset solution: ~21 KB at N = 32 in f64, ~11 KB in
+/// `T` and one subset solution: ~21 KB at N = 32 in f64, ~11 KB in
 /// f32). Scratch, not state: every field is overwritten before it is read
 /// in each epoch. The snapshot engine keeps one (issue 10: on the
 /// firmware's stack it took the reconstruction epoch to 22.7 KB; in the

@@ -91,3 +91,5 @@ impl core::fmt::Display for PfError {
         }
     }
 }
+
+impl core::error::Error for PfError {}

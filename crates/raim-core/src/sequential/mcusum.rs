@@ -457,7 +457,7 @@ mod tests {
 
     const N: usize = 16;
     /// Rounding tolerance of the Crosier step on O(10) f64 values (the
-    /// hand-computed tests call it at f64 whatever the build's precision).
+    /// hand-computed tests call it at f64 whatever the test build's precision).
     const ROUND_TOL: f64 = 1e-10;
     /// The transported prior norm against the dense f64 projector, relative
     /// to 1 + norm: 1e-9 in f64; in f32 the state is rotated and projected

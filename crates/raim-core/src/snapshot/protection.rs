@@ -82,7 +82,7 @@ pub fn slope_levels_rows<T: Real>(
 /// 1-sigma position error along E, N, U in metres: sqrt of the diagonal of
 /// (H^T H)^-1 (whitened), i.e. sqrt(sum_i A_k,i^2).
 pub fn sigma_enu_m<const N: usize, T: Real>(parity: &Parity<N, T>) -> [f64; 3] {
-    // In four lanes where the precision sums so (`Real::LANE_SUMS`, f64:
+    // In four lanes where the precision sums so (`linalg::Kernels::LANE_SUMS`, f64:
     // the same sum up to its last bits, vectorised), else left to right.
     let s = |axis: usize| {
         let g = parity.gain(axis);

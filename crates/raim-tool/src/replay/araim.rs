@@ -148,7 +148,7 @@ impl AraimReplayArgs {
                 *slot = Some(p);
             }
         }
-        ism.validate().map_err(|e| anyhow!("ISM: {e:?}"))?;
+        ism.validate().map_err(|e| anyhow!("ISM: {e}"))?;
         Ok(ism)
     }
 }
@@ -430,8 +430,8 @@ fn epoch(
     let verdict = monitor
         .epoch(solver, cfg, ism, &models, &ranges, FdeLimits::UNLIMITED)
         .map_err(|e| match e {
-            MonitorError::Araim(a) => anyhow!("{a:?}"),
-            other => anyhow!("{other:?}"),
+            MonitorError::Araim(a) => anyhow!("ARAIM: {a}"),
+            other => anyhow!("ARAIM: {other}"),
         })?;
     let out = monitor.all_in_view();
     rec.modes = out.modes.len();

@@ -256,11 +256,11 @@ pub fn rows(s: &Setup, args: &EsqArgs, with_pca: bool, with_snapshot: bool) -> R
             errors: Vec::new(),
         };
         match araim.process(&acfg, &ism, &sats) {
-            Err(e) => row.errors.push(format!("ARAIM: {e:?}")),
+            Err(e) => row.errors.push(format!("ARAIM: {e}")),
             Ok(a) => {
                 match esq::effective_samples(a, 2, PlOutput::AddBracket) {
                     Ok(v) => row.esq = Some(v),
-                    Err(e) => row.errors.push(format!("N*: {e:?}")),
+                    Err(e) => row.errors.push(format!("N*: {e}")),
                 }
                 let st = esq::statistic(a);
                 row.araim_ratio = st.ratio;
@@ -277,7 +277,7 @@ pub fn rows(s: &Setup, args: &EsqArgs, with_pca: bool, with_snapshot: bool) -> R
             match pca.process(&pcfg, e.time_gps_s, &sats) {
                 Ok(PcaOutcome::Tested(t)) => row.pca = Some(t),
                 Ok(PcaOutcome::WarmingUp { .. }) => {}
-                Err(e) => row.errors.push(format!("PCA: {e:?}")),
+                Err(e) => row.errors.push(format!("PCA: {e}")),
             }
         }
         if with_snapshot {
@@ -315,7 +315,7 @@ fn fmt_delay(d: Option<f64>) -> String {
 /// `--esq`: N*, dT_e, resampling, the separation test.
 fn run_esq(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Result<()> {
     let window = args.esq.esq_window_s;
-    let mut rs = Resampler::new(window).map_err(|e| anyhow!("--esq-window-s: {e:?}"))?;
+    let mut rs = Resampler::new(window).map_err(|e| anyhow!("--esq-window-s: {e}"))?;
     let mut emitted = vec![false; rows.len()];
     let mut dte = vec![f64::NAN; rows.len()];
     let mut windows = 0usize;
@@ -328,7 +328,7 @@ fn run_esq(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
             Sample::Skip
         } else {
             rs.offer(r.t_gps_s, n_star)
-                .map_err(|e| anyhow!("resampler: {e:?}"))?
+                .map_err(|e| anyhow!("resampler: {e}"))?
         };
         if opens && matches!(sample, Sample::Emit { .. }) {
             windows += 1;

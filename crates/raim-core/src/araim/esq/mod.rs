@@ -35,6 +35,7 @@ use crate::stats::dist::normal_q;
 /// Why N* (or the resampling) could not be formed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum EsqError {
     /// The epoch has no protection level on the axis (ARAIM returned
     /// before step 5: unmonitored, mode capacity, PL not bracketed).
@@ -71,6 +72,25 @@ pub enum EsqError {
         now_s: f64,
     },
 }
+
+impl core::fmt::Display for EsqError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            EsqError::NoProtectionLevel { axis } => {
+                write!(f, "the epoch has no protection level on axis {axis}")
+            }
+            EsqError::BadAxis { axis } => write!(f, "axis {axis} outside 0..3 (E, N, U)"),
+            EsqError::ZeroRisk => write!(f, "every mode's P_k underflowed to zero"),
+            EsqError::NotFinite { field, value } => write!(f, "non-finite {field}: {value}"),
+            EsqError::OutOfRange { field, value } => write!(f, "{field} = {value} is out of range"),
+            EsqError::NonMonotonicTime { previous_s, now_s } => {
+                write!(f, "time {now_s} s does not follow {previous_s} s")
+            }
+        }
+    }
+}
+
+impl core::error::Error for EsqError {}
 
 /// Which mode holds P_max.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

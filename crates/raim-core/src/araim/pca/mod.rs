@@ -76,6 +76,7 @@ impl Default for PcaConfig {
 /// Why an epoch could not be processed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum PcaError {
     /// A configuration field out of range (name, value).
     BadConfig {
@@ -126,6 +127,37 @@ pub enum PcaError {
         now_s: f64,
     },
 }
+
+impl core::fmt::Display for PcaError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            PcaError::BadConfig { field, value } => {
+                write!(f, "configuration {field} = {value} is out of range")
+            }
+            PcaError::NotFinite {
+                field,
+                index,
+                value,
+            } => write!(f, "non-finite {field} at index {index}: {value}"),
+            PcaError::CapacityExceeded { have, capacity } => {
+                write!(f, "{have} satellites exceed capacity {capacity}")
+            }
+            PcaError::DuplicateSatellite { first, second } => {
+                write!(f, "duplicate satellite at indices {first} and {second}")
+            }
+            PcaError::TooFewSatellites { have, need } => {
+                write!(f, "too few satellites: have {have}, need {need}")
+            }
+            PcaError::RankDeficient => write!(f, "the all-in-view normal matrix is singular"),
+            PcaError::SvdFailed => write!(f, "the SVD of the residual covariance did not converge"),
+            PcaError::NonMonotonicTime { previous_s, now_s } => {
+                write!(f, "time {now_s} s does not follow {previous_s} s")
+            }
+        }
+    }
+}
+
+impl core::error::Error for PcaError {}
 
 /// The test of one epoch.
 #[derive(Debug, Clone, Copy, PartialEq)]
