@@ -41,6 +41,14 @@ pub enum RaimError {
     NoConvergence { iterations: u32, step_m: f64 },
     /// A chi-square degree of freedom outside 1..=max.
     InvalidDof { dof: u32, max: u32 },
+    /// A per-satellite sigma outside the operational bound
+    /// `config_bounds::SIGMA_M` (satellite `index`).
+    SigmaOutOfRange {
+        index: usize,
+        sigma_m: f64,
+        min_m: f64,
+        max_m: f64,
+    },
 }
 
 impl core::fmt::Display for RaimError {
@@ -91,6 +99,15 @@ impl core::fmt::Display for RaimError {
             RaimError::InvalidDof { dof, max } => {
                 write!(f, "degrees of freedom {dof} outside 1..={max}")
             }
+            RaimError::SigmaOutOfRange {
+                index,
+                sigma_m,
+                min_m,
+                max_m,
+            } => write!(
+                f,
+                "sigma at index {index} is {sigma_m} m, outside [{min_m}, {max_m}] m"
+            ),
         }
     }
 }

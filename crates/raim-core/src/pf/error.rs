@@ -32,6 +32,21 @@ pub enum PfError {
     /// The first-epoch least-squares fix (the filters' reference point)
     /// did not converge.
     NoInitialFix { iterations: u32, step_m: f64 },
+    /// A configuration value outside its operational bound
+    /// (`config_bounds::pf`).
+    OutOfRange {
+        field: &'static str,
+        value: f64,
+        min: f64,
+        max: f64,
+    },
+    /// A per-satellite sigma outside `config_bounds::SIGMA_M`.
+    SigmaOutOfRange {
+        index: usize,
+        sigma_m: f64,
+        min_m: f64,
+        max_m: f64,
+    },
 }
 
 impl core::fmt::Display for PfError {
@@ -58,6 +73,21 @@ impl core::fmt::Display for PfError {
             PfError::NoInitialFix { iterations, step_m } => write!(
                 f,
                 "no initial fix after {iterations} iterations (last step {step_m} m)"
+            ),
+            PfError::OutOfRange {
+                field,
+                value,
+                min,
+                max,
+            } => write!(f, "configuration {field} = {value} outside [{min}, {max}]"),
+            PfError::SigmaOutOfRange {
+                index,
+                sigma_m,
+                min_m,
+                max_m,
+            } => write!(
+                f,
+                "sigma_m[{index}] = {sigma_m} m outside [{min_m}, {max_m}] m"
             ),
         }
     }

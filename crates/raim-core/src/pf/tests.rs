@@ -328,7 +328,7 @@ fn too_few_satellites_and_bad_input() {
     let bad_cfg = PfConfig { window: 0, ..c };
     assert!(matches!(
         m.process(&bad_cfg, 3.0, &epoch(8, 3, &mut noise, None)),
-        Err(PfError::InvalidConfig {
+        Err(PfError::OutOfRange {
             field: "window",
             ..
         })

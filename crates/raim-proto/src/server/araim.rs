@@ -273,45 +273,13 @@ pub fn check_ism(frame: &IsmFrame) -> Result<(), WireError> {
 }
 
 fn check_sat(index: usize, s: &IsmSat) -> Result<(), AraimError> {
-    for (field, v) in [
-        ("sigma_ura_m", s.sigma_ura_m),
-        ("sigma_ure_m", s.sigma_ure_m),
-        ("b_nom_m", s.b_nom_m),
-        ("p_sat", s.p_sat),
-    ] {
-        if !v.is_finite() {
-            return Err(AraimError::NotFinite {
-                field,
-                index,
-                value: v,
-            });
-        }
-    }
-    for (field, v) in [
-        ("sigma_ura_m", s.sigma_ura_m),
-        ("sigma_ure_m", s.sigma_ure_m),
-        ("b_nom_m", s.b_nom_m),
-    ] {
-        if v < 0.0 {
-            return Err(AraimError::OutOfRange {
-                field,
-                index,
-                value: v,
-                min: 0.0,
-                max: f64::INFINITY,
-            });
-        }
-    }
-    if !(s.p_sat > 0.0 && s.p_sat < 1.0) {
-        return Err(AraimError::OutOfRange {
-            field: "p_sat",
-            index,
-            value: s.p_sat,
-            min: 0.0,
-            max: 1.0,
-        });
-    }
-    Ok(())
+    raim_core::config_bounds::araim::check_ism_entry(
+        index,
+        s.sigma_ura_m,
+        s.sigma_ure_m,
+        s.b_nom_m,
+        s.p_sat,
+    )
 }
 
 impl Server {
@@ -699,6 +667,7 @@ mod engine {
                         sigma_m: s,
                     });
                 }
+                raim_core::measurement::check_sigma_bound(i, s)?;
             }
             // The ADD's G row is minus the line of sight.
             let g = o.los_enu.map(|v| AraimT::of(-v));
