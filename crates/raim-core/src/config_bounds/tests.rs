@@ -360,3 +360,13 @@ fn pfa_1e_300_is_refused_and_160_m_is_excluded() {
         );
     }
 }
+
+/// The initial result storage (what an epoch that never reached the PLs
+/// leaves) holds unbounded protection levels, never 0.
+#[test]
+fn empty_result_has_unbounded_pls() {
+    let r = crate::result::EpochResult::<16>::empty();
+    assert_eq!(r.protection.hpl_m, f64::INFINITY);
+    assert_eq!(r.protection.vpl_m, f64::INFINITY);
+    assert!(!r.pl_available);
+}

@@ -477,3 +477,71 @@ fn lowest_priors_still_list_every_single_event() {
         oor(P_SAT, 0, 1e-300)
     );
 }
+
+/// The Appendix D satellites (SPEC §9.1) with `residual_m` per satellite.
+fn appendix_d_with(residual_m: [f64; 10]) -> Vec<AraimSat<f64>> {
+    crate::araim::tests::appendix_d::ROWS
+        .iter()
+        .zip(residual_m)
+        .enumerate()
+        .map(|(i, (r, y))| AraimSat {
+            id: SatId::new(
+                if i < 5 { System::Gps } else { System::Galileo },
+                (i % 5 + 1) as u8,
+            ),
+            g_enu: r.g,
+            c_int_m2: r.c_int,
+            c_acc_m2: r.c_acc,
+            b_nom_m: 0.5,
+            p_sat: 1e-5,
+            residual_m: y,
+        })
+        .collect()
+}
+
+/// An epoch that stops before the PL equations reports +infinity, never 0:
+/// here a GPS-only sky whose constellation mode is unmonitorable with
+/// P_const 1e-4 > P_THRES (`Unmonitored`).
+#[test]
+fn an_unavailable_epoch_reports_unbounded_pls() {
+    let sats: Vec<AraimSat<f64>> = appendix_d_with([0.0; 10]).into_iter().take(5).collect();
+    let mut engine = Araim::<f64, 16, 256>::new();
+    let out = engine
+        .process(&AraimConfig::default(), &Ism::with(&[System::Gps], 1e-4), &sats)
+        .unwrap();
+    assert!(matches!(out.unavailable, Some(Unavailable::Unmonitored { .. })));
+    for pl in [out.pl_add, out.pl_exact] {
+        assert_eq!(pl, crate::araim::ProtectionLevels::UNBOUNDED);
+    }
+    assert_eq!(out.decision(), Decision::Unavailable);
+}
+
+/// The review's case: an epoch unavailable after an exclusion reported
+/// VPL/HPL 0.00. A ramp of 0-120 m on the Galileo satellites (not a common
+/// offset, which the Galileo clock would absorb) is explained only by the
+/// Galileo constellation's fault; the GPS-only subset left has its own
+/// constellation mode unmonitorable, so it is unavailable, and its PLs are
+/// +infinity.
+#[test]
+fn unavailable_after_an_exclusion_reports_unbounded_pls() {
+    let sats = appendix_d_with([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 30.0, 60.0, 90.0, 120.0]);
+    let ism = Ism::with(&[System::Gps, System::Galileo], 1e-4);
+    let cfg = AraimConfig::default();
+    let mut main = Araim::<f64, 16, 256>::new();
+    let mut scratch = Araim::<f64, 16, 256>::new();
+    assert!(!main.process(&cfg, &ism, &sats).unwrap().detection_passed);
+    let d = main.fde(&cfg, &ism, &sats, &mut scratch).unwrap();
+    let galileo = 1u8 << System::Galileo.index();
+    assert!(
+        matches!(d, crate::araim::FdeDecision::Excluded { consts, sats, .. } if consts == galileo && sats == 0b11111_00000),
+        "{d:?}"
+    );
+    let sub = scratch.output();
+    assert!(
+        matches!(sub.unavailable, Some(Unavailable::Unmonitored { .. })),
+        "{:?}",
+        sub.unavailable
+    );
+    assert_eq!(sub.pl_add, crate::araim::ProtectionLevels::UNBOUNDED);
+    assert_eq!(sub.pl_exact, crate::araim::ProtectionLevels::UNBOUNDED);
+}
