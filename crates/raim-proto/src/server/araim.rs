@@ -1195,6 +1195,7 @@ mod tests {
                 ..ism[0]
             })
             .collect();
+        use raim_core::config_bounds::araim::{B_NOM_M, P_SAT};
         let cases: Vec<(Vec<IsmSat>, [Option<f64>; MAX_SYSTEMS], WireError)> = std::vec![
             (
                 with(&|v| v[3].sigma_ura_m = f64::NAN),
@@ -1208,22 +1209,22 @@ mod tests {
             (
                 with(&|v| v[4].p_sat = 0.0),
                 gal(),
-                oor("p_sat", 4, 0.0, 0.0, 1.0)
+                oor("p_sat", 4, 0.0, P_SAT.min, P_SAT.max)
             ),
             (
                 with(&|v| v[5].p_sat = 1.0),
                 gal(),
-                oor("p_sat", 5, 1.0, 0.0, 1.0)
+                oor("p_sat", 5, 1.0, P_SAT.min, P_SAT.max)
             ),
             (
                 with(&|v| v[6].p_sat = 1.5),
                 gal(),
-                oor("p_sat", 6, 1.5, 0.0, 1.0)
+                oor("p_sat", 6, 1.5, P_SAT.min, P_SAT.max)
             ),
             (
                 with(&|v| v[7].b_nom_m = -0.1),
                 gal(),
-                oor("b_nom_m", 7, -0.1, 0.0, f64::INFINITY)
+                oor("b_nom_m", 7, -0.1, B_NOM_M.min, B_NOM_M.max)
             ),
             (
                 ism.clone(),
@@ -1336,6 +1337,22 @@ mod tests {
                 sigma_m: 0.0
             }
         );
+        // A host sigma outside the bound (1e30 m used to remove the
+        // satellite silently).
+        for v in [1e30, 1e-9] {
+            let mut huge_sigma = obs.clone();
+            huge_sigma[2].sigma_m = Some(v);
+            let r = l.epoch(&huge_sigma);
+            assert_eq!(
+                *error(&r),
+                WireError::SigmaOutOfRange {
+                    index: 2,
+                    sigma_m: v,
+                    min_m: raim_core::config_bounds::SIGMA_M.min,
+                    max_m: raim_core::config_bounds::SIGMA_M.max
+                }
+            );
+        }
         let r = l.epoch(&stranger);
         assert_eq!(
             *error(&r),

@@ -507,9 +507,16 @@ fn an_unavailable_epoch_reports_unbounded_pls() {
     let sats: Vec<AraimSat<f64>> = appendix_d_with([0.0; 10]).into_iter().take(5).collect();
     let mut engine = Araim::<f64, 16, 256>::new();
     let out = engine
-        .process(&AraimConfig::default(), &Ism::with(&[System::Gps], 1e-4), &sats)
+        .process(
+            &AraimConfig::default(),
+            &Ism::with(&[System::Gps], 1e-4),
+            &sats,
+        )
         .unwrap();
-    assert!(matches!(out.unavailable, Some(Unavailable::Unmonitored { .. })));
+    assert!(matches!(
+        out.unavailable,
+        Some(Unavailable::Unmonitored { .. })
+    ));
     for pl in [out.pl_add, out.pl_exact] {
         assert_eq!(pl, crate::araim::ProtectionLevels::UNBOUNDED);
     }
