@@ -1369,13 +1369,14 @@ mod tests {
                 capacity: 32
             }
         );
-        errors += 6;
+        // The six refused epochs above and the two out-of-bound sigmas.
+        errors += 6 + 2;
         // The good ISM stayed in force: the same answer as before.
         assert_eq!(*result(&l.epoch(&obs)), good);
         let ResponseBody::Status(st) = l.ask(CommandRef::Status).body else {
             panic!()
         };
-        // ISM + good epoch + cases + config + 5 epochs + epoch + status.
+        // ISM + good epoch + cases + config + 7 epochs + epoch + status.
         assert_eq!(st.frames, l.seq);
         assert_eq!(st.errors, errors);
     }
