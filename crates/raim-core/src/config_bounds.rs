@@ -29,9 +29,14 @@ pub struct Bound {
 }
 
 impl Bound {
+    /// True when `min <= value <= max` (false for NaN).
+    pub const fn contains(&self, value: f64) -> bool {
+        value >= self.min && value <= self.max
+    }
+
     /// `Ok` when `min <= value <= max`; NaN is refused.
     pub fn check(&self, value: f64) -> Result<(), RaimError> {
-        if value >= self.min && value <= self.max {
+        if self.contains(value) {
             Ok(())
         } else {
             Err(RaimError::OutOfRange {
@@ -152,6 +157,23 @@ pub const MIN_ELEVATION_RAD: Bound = Bound {
     min: 0.0,
     max: 10.0 * core::f64::consts::PI / 180.0,
 };
+/// A per-satellite ranging sigma given with an observation, m (the
+/// `sigma_m` of `RangeObservation` and `LinearObservation`, and the PF's
+/// and ARAIM's host sigmas). Floor 0.3 m: the elevation model's floor
+/// (0.36 m with every term at its bound, test
+/// `sigma_floors_keep_the_modelled_sigma_above_0_36_m`) rounded down; a
+/// smaller host sigma claims an accuracy no model here supports and
+/// shrinks every protection level with it. Ceiling 150 m: above the
+/// model's largest sigma (every term at its ceiling, at the horizon:
+/// 138 m, test `sigma_bound_brackets_the_elevation_model`); a larger
+/// sigma gives the satellite no weight, silently removing it from the
+/// solution while it still counts in the degrees of freedom.
+pub const SIGMA_M: Bound = Bound {
+    field: "sigma_m",
+    min: 0.3,
+    max: 150.0,
+};
+
 /// How long an MCUSUM exclusion is held, s (up to ~3 h).
 pub const HOLD_S: Bound = Bound {
     field: "hold_s",
@@ -204,10 +226,11 @@ pub fn check(cfg: &Config) -> Result<(), RaimError> {
     IONO_VERTICAL_M.check(s.iono_vertical_m)?;
     NOISE_M.check(s.noise_m)?;
     MIN_ELEVATION_RAD.check(s.min_elevation_rad)?;
-    if cfg.mcusum.enabled {
-        crate::sequential::mcusum::check_settings(cfg.mcusum.k, cfg.mcusum.arl0)?;
-        HOLD_S.check(cfg.mcusum.hold_s)?;
-    }
+    // Checked whether the MCUSUM runs or not: a disabled part is still
+    // part of the configuration the fingerprint covers, and enabling it
+    // later must not bring unchecked values into force.
+    crate::sequential::mcusum::check_settings(cfg.mcusum.k, cfg.mcusum.arl0)?;
+    HOLD_S.check(cfg.mcusum.hold_s)?;
     if let FdeMethod::Reconstruction {
         t_max,
         group_budget,
@@ -221,6 +244,9 @@ pub fn check(cfg: &Config) -> Result<(), RaimError> {
     }
     Ok(())
 }
+
+pub mod araim;
+pub mod pf;
 
 #[cfg(test)]
 mod tests;

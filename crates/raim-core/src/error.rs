@@ -82,6 +82,18 @@ pub enum RaimError {
         /// The largest supported.
         max: u32,
     },
+    /// A per-satellite sigma outside the operational bound
+    /// `config_bounds::SIGMA_M` (satellite `index`).
+    SigmaOutOfRange {
+        /// The satellite's index in the epoch.
+        index: usize,
+        /// The sigma given, m.
+        sigma_m: f64,
+        /// The bound's floor, m.
+        min_m: f64,
+        /// The bound's ceiling, m.
+        max_m: f64,
+    },
 }
 
 impl core::fmt::Display for RaimError {
@@ -132,6 +144,15 @@ impl core::fmt::Display for RaimError {
             RaimError::InvalidDof { dof, max } => {
                 write!(f, "degrees of freedom {dof} outside 1..={max}")
             }
+            RaimError::SigmaOutOfRange {
+                index,
+                sigma_m,
+                min_m,
+                max_m,
+            } => write!(
+                f,
+                "sigma at index {index} is {sigma_m} m, outside [{min_m}, {max_m}] m"
+            ),
         }
     }
 }

@@ -2,6 +2,7 @@
 //! the two input forms of an epoch (ranges + ECEF positions, or the
 //! linearised form the seeds print: line of sight + residual).
 
+use crate::config_bounds::SIGMA_M;
 use crate::error::RaimError;
 
 /// A GNSS constellation. Each constellation present adds one receiver clock
@@ -270,7 +271,25 @@ pub fn check_az_el(index: usize, az_rad: f64, el_rad: f64) -> Result<(), RaimErr
     Ok(())
 }
 
-/// Check an epoch's inputs: capacity, finiteness, sigma sign, duplicates.
+/// A host-given per-satellite sigma against its operational bound
+/// (`config_bounds::SIGMA_M`, docs/PROTOCOL.md "Configuration bounds"):
+/// `SigmaOutOfRange` with the satellite's index. Callers check finiteness
+/// and sign first (their own typed errors).
+pub fn check_sigma_bound(index: usize, sigma_m: f64) -> Result<(), RaimError> {
+    if SIGMA_M.contains(sigma_m) {
+        Ok(())
+    } else {
+        Err(RaimError::SigmaOutOfRange {
+            index,
+            sigma_m,
+            min_m: SIGMA_M.min,
+            max_m: SIGMA_M.max,
+        })
+    }
+}
+
+/// Check an epoch's inputs: capacity, finiteness, sigma sign and bound,
+/// duplicates.
 /// O(n^2) duplicate check; n <= N is small.
 pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimError> {
     finite("time_s", 0, epoch.time_s)?;
@@ -287,6 +306,7 @@ pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimErro
             if s <= 0.0 {
                 return Err(RaimError::NonPositiveSigma { index, sigma_m: s });
             }
+            check_sigma_bound(index, s)?;
         }
         Ok(())
     };
@@ -296,7 +316,7 @@ pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimErro
     // detailed pass run, which names the first offender exactly as before.
     // Pseudorange epochs take the detailed pass directly (their cost is the
     // f64 geometry; the device's flash has no room for a second copy).
-    let sigma_ok = |sigma: Option<f64>| sigma.is_none_or(|s| s.is_finite() & (s > 0.0));
+    let sigma_ok = |sigma: Option<f64>| sigma.is_none_or(|s| SIGMA_M.contains(s));
     let all_ok = match epoch.observations {
         Observations::Ranges { .. } => false,
         Observations::Linear { sats } => sats.iter().fold(true, |ok, s| {

@@ -131,7 +131,13 @@ impl<const N: usize> EpochResult<N> {
             satellites: heapless::Vec::new(),
             identified: None,
             exclusions: heapless::Vec::new(),
-            protection: ProtectionLevels::default(),
+            // Unbounded until computed: never a level of 0.
+            protection: ProtectionLevels {
+                hpl_m: f64::INFINITY,
+                vpl_m: f64::INFINITY,
+                worst_h_row: None,
+                worst_v_row: None,
+            },
             worst_h: None,
             worst_v: None,
             sigma_enu_m: [0.0; 3],

@@ -180,6 +180,14 @@ pub enum WireError {
         /// This epoch's time, s.
         now_s: f64,
     },
+    /// A per-satellite sigma outside its operational bound
+    /// (`raim_core::config_bounds::SIGMA_M`), in any epoch form.
+    SigmaOutOfRange {
+        index: u32,
+        sigma_m: f64,
+        min_m: f64,
+        max_m: f64,
+    },
 }
 
 /// A field name for the wire (truncated to 24 bytes).
@@ -254,6 +262,17 @@ impl From<RaimError> for WireError {
                 WireError::NoConvergence { iterations, step_m }
             }
             RaimError::InvalidDof { dof, max } => WireError::InvalidDof { dof, max },
+            RaimError::SigmaOutOfRange {
+                index,
+                sigma_m,
+                min_m,
+                max_m,
+            } => WireError::SigmaOutOfRange {
+                index: u32_of(index),
+                sigma_m,
+                min_m,
+                max_m,
+            },
         }
     }
 }
@@ -347,6 +366,15 @@ impl core::fmt::Display for WireError {
             WireError::TimeNotIncreasing { previous_s, now_s } => {
                 write!(f, "time {now_s} s does not follow {previous_s} s")
             }
+            WireError::SigmaOutOfRange {
+                index,
+                sigma_m,
+                min_m,
+                max_m,
+            } => write!(
+                f,
+                "sigma at index {index} is {sigma_m} m, outside [{min_m}, {max_m}] m"
+            ),
         }
     }
 }

@@ -97,8 +97,8 @@ impl WireResult {
             test: TestStatistic::default(),
             identified: None,
             exclusions: heapless::Vec::new(),
-            hpl_m: 0.0,
-            vpl_m: 0.0,
+            hpl_m: f64::INFINITY,
+            vpl_m: f64::INFINITY,
             worst_h: None,
             worst_v: None,
             sigma_enu_m: [0.0; 3],
@@ -174,6 +174,38 @@ mod tests {
     use crate::{frame, MAX_RESPONSE_FRAME, MAX_RESPONSE_PAYLOAD};
     use raim_core::snapshot::fde::AlarmCause;
     use raim_core::{Config, Epoch, LinearObservation, Raim, System};
+
+    /// An unbounded protection level is +infinity in the initial storage
+    /// and on the wire: postcard carries the f64 bit pattern, so +inf
+    /// decodes as +inf (never 0, never f64::MAX); so do the ARAIM summary's
+    /// levels and the sigma bound's error.
+    #[test]
+    fn unbounded_levels_travel_as_infinity() {
+        let w = WireResult::empty();
+        assert_eq!((w.hpl_m, w.vpl_m), (f64::INFINITY, f64::INFINITY));
+        let mut buf = [0u8; MAX_RESPONSE_PAYLOAD];
+        let bytes = postcard::to_slice(&w, &mut buf).unwrap().to_vec();
+        let back: WireResult = postcard::from_bytes(&bytes).unwrap();
+        assert_eq!((back.hpl_m, back.vpl_m), (f64::INFINITY, f64::INFINITY));
+        let e: crate::error::WireError = raim_core::RaimError::SigmaOutOfRange {
+            index: 3,
+            sigma_m: 1e30,
+            min_m: 0.3,
+            max_m: 150.0,
+        }
+        .into();
+        let bytes = postcard::to_slice(&e, &mut buf).unwrap().to_vec();
+        let back: crate::error::WireError = postcard::from_bytes(&bytes).unwrap();
+        assert_eq!(
+            back,
+            crate::error::WireError::SigmaOutOfRange {
+                index: 3,
+                sigma_m: 1e30,
+                min_m: 0.3,
+                max_m: 150.0
+            }
+        );
+    }
 
     /// The seeds' 8-satellite sky with a 50 m step on G02 (docs/CORE.md
     /// example): decodes back to the same bytes, and carries the exclusion.

@@ -266,45 +266,13 @@ pub fn check_ism(frame: &IsmFrame) -> Result<(), WireError> {
 }
 
 fn check_sat(index: usize, s: &IsmSat) -> Result<(), AraimError> {
-    for (field, v) in [
-        ("sigma_ura_m", s.sigma_ura_m),
-        ("sigma_ure_m", s.sigma_ure_m),
-        ("b_nom_m", s.b_nom_m),
-        ("p_sat", s.p_sat),
-    ] {
-        if !v.is_finite() {
-            return Err(AraimError::NotFinite {
-                field,
-                index,
-                value: v,
-            });
-        }
-    }
-    for (field, v) in [
-        ("sigma_ura_m", s.sigma_ura_m),
-        ("sigma_ure_m", s.sigma_ure_m),
-        ("b_nom_m", s.b_nom_m),
-    ] {
-        if v < 0.0 {
-            return Err(AraimError::OutOfRange {
-                field,
-                index,
-                value: v,
-                min: 0.0,
-                max: f64::INFINITY,
-            });
-        }
-    }
-    if !(s.p_sat > 0.0 && s.p_sat < 1.0) {
-        return Err(AraimError::OutOfRange {
-            field: "p_sat",
-            index,
-            value: s.p_sat,
-            min: 0.0,
-            max: 1.0,
-        });
-    }
-    Ok(())
+    raim_core::config_bounds::araim::check_ism_entry(
+        index,
+        s.sigma_ura_m,
+        s.sigma_ure_m,
+        s.b_nom_m,
+        s.p_sat,
+    )
 }
 
 impl Server {
@@ -955,6 +923,7 @@ mod tests {
                 ..ism[0]
             })
             .collect();
+        use raim_core::config_bounds::araim::{B_NOM_M, P_SAT};
         let cases: Vec<(Vec<IsmSat>, [Option<f64>; MAX_SYSTEMS], WireError)> = std::vec![
             (
                 with(&|v| v[3].sigma_ura_m = f64::NAN),
@@ -968,22 +937,22 @@ mod tests {
             (
                 with(&|v| v[4].p_sat = 0.0),
                 gal(),
-                oor("p_sat", 4, 0.0, 0.0, 1.0)
+                oor("p_sat", 4, 0.0, P_SAT.min, P_SAT.max)
             ),
             (
                 with(&|v| v[5].p_sat = 1.0),
                 gal(),
-                oor("p_sat", 5, 1.0, 0.0, 1.0)
+                oor("p_sat", 5, 1.0, P_SAT.min, P_SAT.max)
             ),
             (
                 with(&|v| v[6].p_sat = 1.5),
                 gal(),
-                oor("p_sat", 6, 1.5, 0.0, 1.0)
+                oor("p_sat", 6, 1.5, P_SAT.min, P_SAT.max)
             ),
             (
                 with(&|v| v[7].b_nom_m = -0.1),
                 gal(),
-                oor("b_nom_m", 7, -0.1, 0.0, f64::INFINITY)
+                oor("b_nom_m", 7, -0.1, B_NOM_M.min, B_NOM_M.max)
             ),
             (
                 ism.clone(),
@@ -1096,6 +1065,22 @@ mod tests {
                 sigma_m: 0.0
             }
         );
+        // A host sigma outside the bound (1e30 m used to remove the
+        // satellite silently).
+        for v in [1e30, 1e-9] {
+            let mut huge_sigma = obs.clone();
+            huge_sigma[2].sigma_m = Some(v);
+            let r = l.epoch(&huge_sigma);
+            assert_eq!(
+                *error(&r),
+                WireError::SigmaOutOfRange {
+                    index: 2,
+                    sigma_m: v,
+                    min_m: raim_core::config_bounds::SIGMA_M.min,
+                    max_m: raim_core::config_bounds::SIGMA_M.max
+                }
+            );
+        }
         let r = l.epoch(&stranger);
         assert_eq!(
             *error(&r),
@@ -1112,13 +1097,14 @@ mod tests {
                 capacity: 32
             }
         );
-        errors += 6;
+        // The six refused epochs above and the two out-of-bound sigmas.
+        errors += 6 + 2;
         // The good ISM stayed in force: the same answer as before.
         assert_eq!(*result(&l.epoch(&obs)), good);
         let ResponseBody::Status(st) = l.ask(CommandRef::Status).body else {
             panic!()
         };
-        // ISM + good epoch + cases + config + 5 epochs + epoch + status.
+        // ISM + good epoch + cases + config + 7 epochs + epoch + status.
         assert_eq!(st.frames, l.seq);
         assert_eq!(st.errors, errors);
     }

@@ -243,6 +243,28 @@ pub fn map_error(e: PfError, sats: &[RangeObservation]) -> WireError {
         PfError::NoInitialFix { iterations, step_m } => {
             WireError::NoConvergence { iterations, step_m }
         }
+        PfError::OutOfRange {
+            field,
+            value,
+            min,
+            max,
+        } => WireError::OutOfRange {
+            field: field_name(field),
+            value,
+            min,
+            max,
+        },
+        PfError::SigmaOutOfRange {
+            index,
+            sigma_m,
+            min_m,
+            max_m,
+        } => WireError::SigmaOutOfRange {
+            index: u32_of(index),
+            sigma_m,
+            min_m,
+            max_m,
+        },
     }
 }
 

@@ -70,6 +70,7 @@ pub struct ResultOut {
     pub initial_dof: u32,
     pub identified: Option<String>,
     pub excluded: Vec<ExclusionOut>,
+    /// Protection levels, m; +infinity (JSON `null`, text `inf`) when unbounded.
     pub hpl_m: f64,
     pub vpl_m: f64,
     pub sigma_enu_m: [f64; 3],
@@ -115,17 +116,6 @@ fn cause_name(c: AlarmCause) -> String {
     }
 }
 
-/// JSON numbers cannot be infinite: PLs that are unbounded print as 1e308.
-fn finite(v: f64) -> f64 {
-    if v.is_finite() {
-        v
-    } else if v > 0.0 {
-        f64::MAX
-    } else {
-        f64::NAN
-    }
-}
-
 pub fn result_out<const N: usize>(r: &EpochResult<N>) -> ResultOut {
     ResultOut {
         time_s: r.time_s,
@@ -156,8 +146,8 @@ pub fn result_out<const N: usize>(r: &EpochResult<N>) -> ResultOut {
                 bias_m: e.bias_m,
             })
             .collect(),
-        hpl_m: finite(r.protection.hpl_m),
-        vpl_m: finite(r.protection.vpl_m),
+        hpl_m: r.protection.hpl_m,
+        vpl_m: r.protection.vpl_m,
         sigma_enu_m: r.sigma_enu_m,
         pl_available: r.pl_available,
         detection_available: r.detection_available,
@@ -233,8 +223,8 @@ pub fn text_line<const N: usize>(r: &EpochResult<N>) -> String {
         r.alarm_cause
             .map(|c| format!("cause={} ", cause_name(c)))
             .unwrap_or_default(),
-        finite(r.protection.hpl_m),
-        finite(r.protection.vpl_m),
+        r.protection.hpl_m,
+        r.protection.vpl_m,
         cusum,
     )
 }

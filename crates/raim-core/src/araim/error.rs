@@ -18,8 +18,8 @@ pub enum AraimError {
         /// The value received.
         value: f64,
     },
-    /// A value outside its documented range (bounds inclusive unless the
-    /// field's doc says otherwise: probabilities are in the open (0, 1)).
+    /// A value outside its documented range (`config_bounds::araim`;
+    /// bounds inclusive, or the other field of a cross-field rule).
     OutOfRange {
         /// Name of the offending field.
         field: &'static str,

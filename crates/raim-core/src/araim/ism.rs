@@ -9,6 +9,7 @@
 //! `real.rs`); the geometry and the variances are `T`.
 
 use super::error::AraimError;
+use crate::config_bounds::araim as b;
 use crate::measurement::{SatId, System, MAX_SYSTEMS};
 use crate::real::Real;
 
@@ -43,7 +44,10 @@ impl<T: Real> AraimSat<T> {
         [-(c * az_rad.sin()), -(c * az_rad.cos()), -el_rad.sin()]
     }
 
-    /// Range-checks every field; `index` is the satellite's position in the
+    /// Range-checks every field against its operational bound
+    /// (`config_bounds::araim`, docs/PROTOCOL.md "Configuration bounds"):
+    /// finite first, then the unit geometry row, C_int and C_acc (C_acc <=
+    /// C_int), b_nom and P_sat. `index` is the satellite's position in the
     /// epoch, reported in the error.
     pub fn validate(&self, index: usize) -> Result<(), AraimError> {
         for (field, v) in [
@@ -58,18 +62,22 @@ impl<T: Real> AraimSat<T> {
             finite(field, index, v.to_f64())?;
         }
         finite("p_sat", index, self.p_sat)?;
-        positive("c_int_m2", index, self.c_int_m2.to_f64())?;
-        positive("c_acc_m2", index, self.c_acc_m2.to_f64())?;
-        if self.b_nom_m.to_f64() < 0.0 {
+        let [e, n, u] = self.g_enu.map(|v| v.to_f64());
+        b::G_NORM.check_araim(index, libm::sqrt(e * e + n * n + u * u))?;
+        let (c_int, c_acc) = (self.c_int_m2.to_f64(), self.c_acc_m2.to_f64());
+        b::C_INT_M2.check_araim(index, c_int)?;
+        b::C_ACC_M2.check_araim(index, c_acc)?;
+        if c_acc > c_int {
             return Err(AraimError::OutOfRange {
-                field: "b_nom_m",
+                field: "c_acc_m2",
                 index,
-                value: self.b_nom_m.to_f64(),
-                min: 0.0,
-                max: f64::INFINITY,
+                value: c_acc,
+                min: b::C_ACC_M2.min,
+                max: c_int,
             });
         }
-        probability("p_sat", index, self.p_sat)
+        b::B_NOM_M.check_araim(index, self.b_nom_m.to_f64())?;
+        b::P_SAT.check_araim(index, self.p_sat)
     }
 }
 
@@ -93,12 +101,13 @@ impl Ism {
         ism
     }
 
-    /// Range-checks every present P_const (finite, in (0, 1)).
+    /// Range-checks every present P_const (finite, within
+    /// `config_bounds::araim::P_CONST`).
     pub fn validate(&self) -> Result<(), AraimError> {
         for (j, p) in self.p_const.iter().enumerate() {
             if let Some(p) = *p {
                 finite("p_const", j, p)?;
-                probability("p_const", j, p)?;
+                b::P_CONST.check_araim(j, p)?;
             }
         }
         Ok(())
@@ -167,38 +176,26 @@ impl Default for AraimConfig {
 }
 
 impl AraimConfig {
-    /// Range-checks every field: probabilities in (0, 1), lengths finite
-    /// and positive, TOL_PL in (0, 10] m.
+    /// Range-checks every field against its operational bound
+    /// (`config_bounds::araim`, docs/PROTOCOL.md "Configuration bounds"),
+    /// then the cross-field rules: P_THRES below PHMI_VERT + PHMI_HOR (a
+    /// positive adjusted PHMI) and the EMT limit at most the VAL.
     pub fn validate(&self) -> Result<(), AraimError> {
-        for (field, p) in [
-            ("phmi_vert", self.phmi_vert),
-            ("phmi_hor", self.phmi_hor),
-            ("pfa_vert", self.pfa_vert),
-            ("pfa_hor", self.pfa_hor),
-            ("p_thres", self.p_thres),
-            ("p_emt", self.p_emt),
+        for (bound, v) in [
+            (b::PHMI_VERT, self.phmi_vert),
+            (b::PHMI_HOR, self.phmi_hor),
+            (b::PFA_VERT, self.pfa_vert),
+            (b::PFA_HOR, self.pfa_hor),
+            (b::P_THRES, self.p_thres),
+            (b::P_EMT, self.p_emt),
+            (b::VAL_M, self.val_m),
+            (b::HAL_M, self.hal_m),
+            (b::TOL_PL_M, self.tol_pl_m),
+            (b::EMT_MAX_M, self.emt_max_m),
+            (b::SIGMA_ACC_MAX_M, self.sigma_acc_max_m),
         ] {
-            finite(field, 0, p)?;
-            probability(field, 0, p)?;
-        }
-        for (field, v) in [
-            ("val_m", self.val_m),
-            ("hal_m", self.hal_m),
-            ("tol_pl_m", self.tol_pl_m),
-            ("emt_max_m", self.emt_max_m),
-            ("sigma_acc_max_m", self.sigma_acc_max_m),
-        ] {
-            finite(field, 0, v)?;
-            positive(field, 0, v)?;
-        }
-        if self.tol_pl_m > 10.0 {
-            return Err(AraimError::OutOfRange {
-                field: "tol_pl_m",
-                index: 0,
-                value: self.tol_pl_m,
-                min: 0.0,
-                max: 10.0,
-            });
+            finite(bound.field, 0, v)?;
+            bound.check_araim(0, v)?;
         }
         // The unmonitored budget must leave a positive adjusted PHMI.
         if !(self.p_thres < self.phmi_vert + self.phmi_hor) {
@@ -206,8 +203,17 @@ impl AraimConfig {
                 field: "p_thres",
                 index: 0,
                 value: self.p_thres,
-                min: 0.0,
+                min: b::P_THRES.min,
                 max: self.phmi_vert + self.phmi_hor,
+            });
+        }
+        if self.emt_max_m > self.val_m {
+            return Err(AraimError::OutOfRange {
+                field: "emt_max_m",
+                index: 0,
+                value: self.emt_max_m,
+                min: b::EMT_MAX_M.min,
+                max: self.val_m,
             });
         }
         Ok(())
@@ -222,34 +228,6 @@ pub(crate) fn finite(field: &'static str, index: usize, v: f64) -> Result<(), Ar
             field,
             index,
             value: v,
-        })
-    }
-}
-
-fn positive(field: &'static str, index: usize, v: f64) -> Result<(), AraimError> {
-    if v > 0.0 {
-        Ok(())
-    } else {
-        Err(AraimError::OutOfRange {
-            field,
-            index,
-            value: v,
-            min: 0.0,
-            max: f64::INFINITY,
-        })
-    }
-}
-
-fn probability(field: &'static str, index: usize, p: f64) -> Result<(), AraimError> {
-    if p > 0.0 && p < 1.0 {
-        Ok(())
-    } else {
-        Err(AraimError::OutOfRange {
-            field,
-            index,
-            value: p,
-            min: 0.0,
-            max: 1.0,
         })
     }
 }

@@ -141,8 +141,11 @@ pub struct Limits {
     pub sigma_acc: bool,
 }
 
-/// Protection levels, in metres.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+/// Protection levels, in metres. +infinity where no level was computed
+/// (the epoch stopped before step 5: enumeration limit, unmonitored
+/// probability, FDE candidate tests, a PL equation not bracketed): an
+/// unbounded level is never reported as 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ProtectionLevels {
     /// Vertical protection level, m.
@@ -151,6 +154,22 @@ pub struct ProtectionLevels {
     pub hpl_m: f64,
     /// The east and north roots (HPL = their root-sum-square).
     pub hpl_axes_m: [f64; 2],
+}
+
+impl ProtectionLevels {
+    /// No bound: every level +infinity.
+    pub const UNBOUNDED: Self = Self {
+        vpl_m: f64::INFINITY,
+        hpl_m: f64::INFINITY,
+        hpl_axes_m: [f64::INFINITY; 2],
+    };
+}
+
+impl Default for ProtectionLevels {
+    /// [`Self::UNBOUNDED`]: a level not computed bounds nothing.
+    fn default() -> Self {
+        Self::UNBOUNDED
+    }
 }
 
 /// Everything one epoch produces.

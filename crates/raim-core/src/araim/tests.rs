@@ -779,8 +779,8 @@ mod bad_input {
                     field: "p_sat",
                     index: 7,
                     value: bad,
-                    min: 0.0,
-                    max: 1.0
+                    min: crate::config_bounds::araim::P_SAT.min,
+                    max: crate::config_bounds::araim::P_SAT.max
                 }
             );
         }

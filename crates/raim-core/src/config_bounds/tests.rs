@@ -149,14 +149,117 @@ fn min_elevation_bound() {
 }
 
 #[test]
-fn hold_bound_applies_when_the_mcusum_runs() {
+fn hold_bound_applies_whether_the_mcusum_runs_or_not() {
     float_bound(HOLD_S, |c, v| {
         *c = c.split_false_alarm_budget(0.5);
         c.mcusum.hold_s = v;
     });
-    // Disabled, the MCUSUM settings are not used and not checked.
-    let c = with(|c, v| c.mcusum.hold_s = v, -1.0);
-    assert_eq!(c.validate(), Ok(()));
+    // Disabled, the MCUSUM settings are checked all the same.
+    float_bound(HOLD_S, |c, v| c.mcusum.hold_s = v);
+}
+
+/// A disabled MCUSUM with k = NaN, ARL0 = -1 or hold = infinity is
+/// refused, with the field: a disabled part is validated too.
+#[test]
+fn a_disabled_mcusum_is_validated() {
+    let c = Config::default();
+    assert!(!c.mcusum.enabled);
+    let mut bad = c;
+    bad.mcusum.k = f64::NAN;
+    assert!(matches!(
+        bad.validate(),
+        Err(RaimError::OutOfRange {
+            field: "mcusum_k",
+            ..
+        })
+    ));
+    let mut bad = c;
+    bad.mcusum.arl0 = -1.0;
+    assert!(matches!(
+        bad.validate(),
+        Err(RaimError::OutOfRange { field: "mcusum_arl0", value, .. }) if value == -1.0
+    ));
+    let mut bad = c;
+    bad.mcusum.hold_s = f64::INFINITY;
+    refused(HOLD_S, &bad, f64::INFINITY);
+}
+
+/// The per-satellite sigma bound brackets the elevation model: with every
+/// term at its floor the model stays above the bound's floor, with every
+/// term at its ceiling (at the horizon) below its ceiling.
+#[test]
+fn sigma_bound_brackets_the_elevation_model() {
+    let mut lo = Config::default().sigma_model;
+    lo.ura_m = URA_M.min;
+    lo.iono_vertical_m = IONO_VERTICAL_M.min;
+    lo.noise_m = NOISE_M.min;
+    lo.min_elevation_rad = MIN_ELEVATION_RAD.max;
+    let mut hi = lo;
+    hi.ura_m = URA_M.max;
+    hi.iono_vertical_m = IONO_VERTICAL_M.max;
+    hi.noise_m = NOISE_M.max;
+    hi.min_elevation_rad = MIN_ELEVATION_RAD.min;
+    for el_deg in [0.0f64, 2.0, 10.0, 45.0, 90.0] {
+        let el = el_deg.to_radians();
+        assert!(lo.sigma_m(el) >= SIGMA_M.min, "{el_deg}");
+        assert!(hi.sigma_m(el) <= SIGMA_M.max, "{el_deg}");
+    }
+    let top = hi.sigma_m(0.0);
+    std::println!("largest modelled sigma {top:.1} m");
+    assert!((137.0..139.0).contains(&top), "{top}");
+}
+
+/// A host sigma outside the bound is refused with the satellite's index,
+/// in both epoch forms; the ends are accepted. 1e30 used to remove the
+/// satellite silently, 1e-9 to shrink every protection level to ~0.
+#[test]
+fn per_satellite_sigma_is_bounded() {
+    let sky: Vec<(System, u8, f64, f64)> = crate::testutil::SKY8
+        .iter()
+        .enumerate()
+        .map(|(i, &(az, el))| (System::Gps, i as u8 + 1, az, el))
+        .collect();
+    let rx = crate::testutil::RX_ECEF_M;
+    let clock = [100.0, 0.0, 0.0, 0.0, 0.0];
+    let mut raim = Raim::<16>::new();
+    let cfg = Config::default();
+    for v in [SIGMA_M.min, SIGMA_M.max] {
+        let mut sats = range_epoch(rx, &sky, &clock, 1.0, &mut Rng::new(1), &[]);
+        sats[3].sigma_m = Some(v);
+        assert!(raim.process(&cfg, &Epoch::ranges(0.0, &sats, None)).is_ok());
+    }
+    for v in [1e30, 1e-9, SIGMA_M.max * 1.001, SIGMA_M.min * 0.999] {
+        let mut sats = range_epoch(rx, &sky, &clock, 1.0, &mut Rng::new(1), &[]);
+        sats[3].sigma_m = Some(v);
+        let want = RaimError::SigmaOutOfRange {
+            index: 3,
+            sigma_m: v,
+            min_m: SIGMA_M.min,
+            max_m: SIGMA_M.max,
+        };
+        assert_eq!(
+            raim.process(&cfg, &Epoch::ranges(0.0, &sats, None)).err(),
+            Some(want)
+        );
+        let lin: Vec<crate::measurement::LinearObservation> = sky
+            .iter()
+            .enumerate()
+            .map(|(i, &(sys, prn, az, el))| {
+                let mut o = crate::measurement::LinearObservation::from_az_el(
+                    SatId::new(sys, prn),
+                    f64::to_radians(az),
+                    f64::to_radians(el),
+                    0.0,
+                );
+                o.sigma_m = Some(if i == 3 { v } else { 1.0 });
+                o
+            })
+            .collect();
+        assert_eq!(
+            raim.process(&cfg, &Epoch::linear(0.0, &lin)).err(),
+            Some(want)
+        );
+    }
 }
 
 /// The floors keep every modelled sigma at or above 0.36 m (the claim of
@@ -256,4 +359,14 @@ fn pfa_1e_300_is_refused_and_160_m_is_excluded() {
             r.initial_test.statistic
         );
     }
+}
+
+/// The initial result storage (what an epoch that never reached the PLs
+/// leaves) holds unbounded protection levels, never 0.
+#[test]
+fn empty_result_has_unbounded_pls() {
+    let r = crate::result::EpochResult::<16>::empty();
+    assert_eq!(r.protection.hpl_m, f64::INFINITY);
+    assert_eq!(r.protection.vpl_m, f64::INFINITY);
+    assert!(!r.pl_available);
 }

@@ -123,85 +123,12 @@ impl Default for PfConfig {
     }
 }
 
-fn positive(field: &'static str, value: f64) -> Result<(), PfError> {
-    if value.is_finite() && value > 0.0 {
-        Ok(())
-    } else {
-        Err(PfError::InvalidConfig { field, value })
-    }
-}
-
-fn non_negative(field: &'static str, value: f64) -> Result<(), PfError> {
-    if value.is_finite() && value >= 0.0 {
-        Ok(())
-    } else {
-        Err(PfError::InvalidConfig { field, value })
-    }
-}
-
 impl PfConfig {
-    /// Checks every field's domain; the first bad one is reported.
+    /// Checks every field against its operational bound
+    /// (`config_bounds::pf`, docs/PROTOCOL.md "Configuration bounds"; the
+    /// threshold's bound depends on the law and the window); the first
+    /// offender is reported as `PfError::OutOfRange`.
     pub fn validate(&self) -> Result<(), PfError> {
-        non_negative(
-            "process.position_m_per_sqrt_s",
-            self.process.position_m_per_sqrt_s,
-        )?;
-        non_negative(
-            "process.clock_m_per_sqrt_s",
-            self.process.clock_m_per_sqrt_s,
-        )?;
-        non_negative(
-            "process.drift_m_s_per_sqrt_s",
-            self.process.drift_m_s_per_sqrt_s,
-        )?;
-        positive("sigma_m", self.sigma_m)?;
-        positive("init_position_m", self.init_position_m)?;
-        positive("init_clock_m", self.init_clock_m)?;
-        positive("init_drift_m_s", self.init_drift_m_s)?;
-        non_negative("mutation_m", self.mutation_m)?;
-        if self.window == 0 || self.window > MAX_WINDOW {
-            return Err(PfError::InvalidConfig {
-                field: "window",
-                value: self.window as f64,
-            });
-        }
-        if !self.threshold.is_finite() {
-            return Err(PfError::InvalidConfig {
-                field: "threshold",
-                value: self.threshold,
-            });
-        }
-        non_negative("clock_jump_m", self.clock_jump_m)?;
-        non_negative("readmit_s", self.readmit_s)?;
-        positive("collapse_sigma", self.collapse_sigma)?;
-        match self.likelihood {
-            Likelihood::Gaussian => {}
-            Likelihood::StudentT { nu } => {
-                if !(nu.is_finite() && nu > 2.0) {
-                    return Err(PfError::InvalidConfig {
-                        field: "likelihood.nu",
-                        value: nu,
-                    });
-                }
-            }
-            Likelihood::Mixture {
-                outlier_prob,
-                outlier_scale,
-            } => {
-                if !(outlier_prob.is_finite() && outlier_prob > 0.0 && outlier_prob < 1.0) {
-                    return Err(PfError::InvalidConfig {
-                        field: "likelihood.outlier_prob",
-                        value: outlier_prob,
-                    });
-                }
-                if !(outlier_scale.is_finite() && outlier_scale >= 1.0) {
-                    return Err(PfError::InvalidConfig {
-                        field: "likelihood.outlier_scale",
-                        value: outlier_scale,
-                    });
-                }
-            }
-        }
-        Ok(())
+        crate::config_bounds::pf::check(self)
     }
 }

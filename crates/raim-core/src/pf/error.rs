@@ -61,6 +61,30 @@ pub enum PfError {
         /// Length of the last position step, m.
         step_m: f64,
     },
+    /// A configuration value outside its operational bound
+    /// (`config_bounds::pf`).
+    OutOfRange {
+        /// The field.
+        field: &'static str,
+        /// The value given.
+        value: f64,
+        /// The bound's floor.
+        min: f64,
+        /// The bound's ceiling.
+        max: f64,
+    },
+    /// A per-satellite sigma outside the operational bound
+    /// `config_bounds::SIGMA_M` (satellite `index`).
+    SigmaOutOfRange {
+        /// The satellite's index in the epoch.
+        index: usize,
+        /// The sigma given, m.
+        sigma_m: f64,
+        /// The bound's floor, m.
+        min_m: f64,
+        /// The bound's ceiling, m.
+        max_m: f64,
+    },
 }
 
 impl core::fmt::Display for PfError {
@@ -87,6 +111,21 @@ impl core::fmt::Display for PfError {
             PfError::NoInitialFix { iterations, step_m } => write!(
                 f,
                 "no initial fix after {iterations} iterations (last step {step_m} m)"
+            ),
+            PfError::OutOfRange {
+                field,
+                value,
+                min,
+                max,
+            } => write!(f, "configuration {field} = {value} outside [{min}, {max}]"),
+            PfError::SigmaOutOfRange {
+                index,
+                sigma_m,
+                min_m,
+                max_m,
+            } => write!(
+                f,
+                "sigma_m[{index}] = {sigma_m} m outside [{min_m}, {max_m}] m"
             ),
         }
     }

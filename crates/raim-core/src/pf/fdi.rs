@@ -204,6 +204,15 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
                         value: s,
                     });
                 }
+                let b = crate::config_bounds::SIGMA_M;
+                if !b.contains(s) {
+                    return Err(PfError::SigmaOutOfRange {
+                        index: i,
+                        sigma_m: s,
+                        min_m: b.min,
+                        max_m: b.max,
+                    });
+                }
             }
             if obs.iter().take(i).any(|p| p.id == o.id) {
                 return Err(PfError::DuplicateSatellite { id: o.id });

@@ -315,6 +315,21 @@ fn too_few_satellites_and_bad_input() {
             ..
         })
     ));
+    // A host sigma outside the bound (1e30 m removed the satellite).
+    for v in [1e30, 1e-9] {
+        let mut wide = epoch(8, 3, &mut noise, None);
+        wide[5].sigma_m = Some(v);
+        assert_eq!(
+            m.process(&c, 3.0, &wide).err(),
+            Some(PfError::SigmaOutOfRange {
+                index: 5,
+                sigma_m: v,
+                min_m: crate::config_bounds::SIGMA_M.min,
+                max_m: crate::config_bounds::SIGMA_M.max,
+            })
+        );
+    }
+    assert_eq!(*m.reference(), r0);
     let mut dup = epoch(8, 3, &mut noise, None);
     dup[1].id = dup[0].id;
     assert!(matches!(
@@ -328,7 +343,7 @@ fn too_few_satellites_and_bad_input() {
     let bad_cfg = PfConfig { window: 0, ..c };
     assert!(matches!(
         m.process(&bad_cfg, 3.0, &epoch(8, 3, &mut noise, None)),
-        Err(PfError::InvalidConfig {
+        Err(PfError::OutOfRange {
             field: "window",
             ..
         })

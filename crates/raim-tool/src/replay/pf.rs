@@ -405,9 +405,12 @@ pub fn calibrate(
         bail!("--pf-calibrate {pfa}: expected a probability in (0, 1)");
     }
     let kind = args.pf.context("--pf-calibrate needs --pf")?;
+    // Without exclusion an alarm changes no state (only the record's
+    // flags, unused here): the highest threshold the bounds accept
+    // (raim_core::config_bounds::pf) keeps the run alarm-free below it.
     let free = PfConfig {
         exclude: false,
-        threshold: f64::MAX,
+        threshold: raim_core::config_bounds::pf::threshold_bound(&cfg.likelihood, cfg.window).max,
         ..*cfg
     };
     let mut d = Vec::new();
@@ -450,6 +453,10 @@ pub fn run(args: &ReplayArgs) -> Result<()> {
             1.0 - pfa
         )?;
         cfg.threshold = t;
+        // A calibrated threshold beyond the LLR-scale ceiling is refused,
+        // not run: no fault the snapshot monitor must detect could reach it.
+        cfg.validate()
+            .map_err(|e| anyhow!("calibrated threshold {t:.3} refused: {e}"))?;
     }
     let t0 = std::time::Instant::now();
     let recs = run_once(pf.choice(kind), &cfg, pf.pf_seed, &epochs, &plan, reference)?;

@@ -48,6 +48,7 @@ pub struct EpochRecord {
     pub error_h_m: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error_v_m: Option<f64>,
+    /// Protection levels, m; +infinity (JSON `null`, text `inf`) when unbounded.
     pub hpl_m: f64,
     pub vpl_m: f64,
     pub sigma_enu_m: [f64; 3],
@@ -59,15 +60,6 @@ pub struct EpochRecord {
     pub excluded_ids: Vec<SatId>,
     #[serde(skip)]
     pub faulted_ids: Vec<SatId>,
-}
-
-/// JSON cannot carry infinities: unbounded PLs print as f64::MAX.
-fn finite(v: f64) -> f64 {
-    if v.is_finite() {
-        v
-    } else {
-        f64::MAX
-    }
 }
 
 fn cause_name(c: AlarmCause) -> String {
@@ -139,8 +131,8 @@ impl EpochRecord {
             error_enu_m: err,
             error_h_m: err.map(|e| e[0].hypot(e[1])),
             error_v_m: err.map(|e| e[2].abs()),
-            hpl_m: finite(r.hpl_m),
-            vpl_m: finite(r.vpl_m),
+            hpl_m: r.hpl_m,
+            vpl_m: r.vpl_m,
             sigma_enu_m: r.sigma_enu_m,
             ambiguity: Vec::new(),
             excluded_ids: if r.decision == Decision::Excluded
@@ -183,8 +175,8 @@ impl EpochRecord {
             error_enu_m: None,
             error_h_m: None,
             error_v_m: None,
-            hpl_m: f64::MAX,
-            vpl_m: f64::MAX,
+            hpl_m: f64::INFINITY,
+            vpl_m: f64::INFINITY,
             sigma_enu_m: [f64::NAN; 3],
             ambiguity: Vec::new(),
             excluded_ids: Vec::new(),
