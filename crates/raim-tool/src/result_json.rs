@@ -42,7 +42,8 @@ pub struct McusumOut {
     pub alarm: bool,
     /// Which test alarmed: none | snapshot | cusum | both.
     pub source: &'static str,
-    pub identified: Option<String>,
+    /// The satellite the MCUSUM's identification picked (then held out).
+    pub candidate: Option<String>,
     pub held: Vec<String>,
     pub available: bool,
 }
@@ -62,14 +63,24 @@ pub struct ResultOut {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub height_m: Option<f64>,
     pub correction_enu_m: [f64; 3],
-    pub statistic: f64,
-    pub threshold: f64,
-    pub dof: u32,
+    /// All-in-view test: D^2, T^2 and dof.
     pub initial_statistic: f64,
     pub initial_threshold: f64,
     pub initial_dof: u32,
-    pub identified: Option<String>,
-    pub excluded: Vec<ExclusionOut>,
+    /// Test of the solution in force (after exclusions; equal to the
+    /// all-in-view test when nothing was excluded).
+    pub final_statistic: f64,
+    pub final_threshold: f64,
+    pub final_dof: u32,
+    /// The satellite the identification rule ranks first on the
+    /// all-in-view solution (null when that test passes). Not necessarily
+    /// excluded: a pair search can explain the residuals better.
+    pub candidate: Option<String>,
+    /// Satellites removed by FDE, in order.
+    pub excluded: Vec<String>,
+    /// Each exclusion's test before and after it.
+    pub exclusions: Vec<ExclusionOut>,
+    /// Protection levels, m; unbounded prints as null.
     pub hpl_m: f64,
     pub vpl_m: f64,
     pub sigma_enu_m: [f64; 3],
@@ -115,17 +126,6 @@ fn cause_name(c: AlarmCause) -> String {
     }
 }
 
-/// JSON numbers cannot be infinite: PLs that are unbounded print as 1e308.
-fn finite(v: f64) -> f64 {
-    if v.is_finite() {
-        v
-    } else if v > 0.0 {
-        f64::MAX
-    } else {
-        f64::NAN
-    }
-}
-
 pub fn result_out<const N: usize>(r: &EpochResult<N>) -> ResultOut {
     ResultOut {
         time_s: r.time_s,
@@ -136,14 +136,15 @@ pub fn result_out<const N: usize>(r: &EpochResult<N>) -> ResultOut {
         lon_deg: r.geodetic.map(|g| g.lon_rad.to_degrees()),
         height_m: r.geodetic.map(|g| g.height_m),
         correction_enu_m: r.correction_enu_m,
-        statistic: r.test.statistic,
-        threshold: r.test.threshold,
-        dof: r.test.dof,
         initial_statistic: r.initial_test.statistic,
         initial_threshold: r.initial_test.threshold,
         initial_dof: r.initial_test.dof,
-        identified: r.identified.map(|s| s.to_string()),
-        excluded: r
+        final_statistic: r.test.statistic,
+        final_threshold: r.test.threshold,
+        final_dof: r.test.dof,
+        candidate: r.identified.map(|s| s.to_string()),
+        excluded: r.exclusions.iter().map(|e| e.id.to_string()).collect(),
+        exclusions: r
             .exclusions
             .iter()
             .map(|e| ExclusionOut {
@@ -156,8 +157,8 @@ pub fn result_out<const N: usize>(r: &EpochResult<N>) -> ResultOut {
                 bias_m: e.bias_m,
             })
             .collect(),
-        hpl_m: finite(r.protection.hpl_m),
-        vpl_m: finite(r.protection.vpl_m),
+        hpl_m: r.protection.hpl_m,
+        vpl_m: r.protection.vpl_m,
         sigma_enu_m: r.sigma_enu_m,
         pl_available: r.pl_available,
         detection_available: r.detection_available,
@@ -189,7 +190,7 @@ pub fn result_out<const N: usize>(r: &EpochResult<N>) -> ResultOut {
                 AlarmSource::Cusum => "cusum",
                 AlarmSource::Both => "both",
             },
-            identified: m.identified.map(|s| s.to_string()),
+            candidate: m.identified.map(|s| s.to_string()),
             held: m.held.iter().flatten().map(|s| s.to_string()).collect(),
             available: m.available,
         }),
@@ -233,8 +234,8 @@ pub fn text_line<const N: usize>(r: &EpochResult<N>) -> String {
         r.alarm_cause
             .map(|c| format!("cause={} ", cause_name(c)))
             .unwrap_or_default(),
-        finite(r.protection.hpl_m),
-        finite(r.protection.vpl_m),
+        r.protection.hpl_m,
+        r.protection.vpl_m,
         cusum,
     )
 }

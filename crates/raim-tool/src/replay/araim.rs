@@ -41,7 +41,7 @@ const LIN_MAX_ITER: usize = 6;
 
 #[derive(Debug, Clone, Args)]
 pub struct AraimReplayArgs {
-    /// Run ARAIM (issue 12; docs/ARAIM.md) instead of the snapshot monitor, with the ADD elevation model for C_int and C_acc.
+    /// Run ARAIM (Advanced RAIM, docs/ARAIM.md) instead of the snapshot monitor, with the ADD elevation model for C_int and C_acc.
     #[arg(long)]
     pub araim: bool,
     /// ARAIM: sigma_URA for every satellite, m.
@@ -63,10 +63,10 @@ pub struct AraimReplayArgs {
     #[arg(long, default_value_t = 0.0)]
     pub araim_iono_m: f64,
     /// ARAIM: a constellation-wide fault, SYS:COMMON_M:E_M,N_M,U_M@START[..END]: a common range error plus the range change of a shift (E, N, U) of that constellation's solution (docs/ARAIM.md); repeatable.
-    #[arg(long = "araim-const-fault", value_name = "SPEC")]
+    #[arg(long = "araim-const-fault", value_name = "SPEC", allow_hyphen_values = true, help_heading = super::heading::FAULTS)]
     pub araim_const_faults: Vec<String>,
     /// ARAIM: VPL, HPL and EMT over time against VAL/HAL, and the vertical and horizontal Stanford diagrams, into this PNG.
-    #[arg(long)]
+    #[arg(long, value_name = "FILE", help_heading = super::heading::PLOTS)]
     pub araim_plot: Option<PathBuf>,
 }
 

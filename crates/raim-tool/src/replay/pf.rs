@@ -41,7 +41,7 @@ pub enum PfKind {
 
 #[derive(Debug, Clone, Args)]
 pub struct PfArgs {
-    /// Run the particle-filter RAIM (seed 004) instead of the snapshot monitor: ekf (EKF baseline), pf (plain SIR PF baseline) or gapf (genetic-resampling PF).
+    /// Run the particle-filter RAIM (Wang et al. 2014, docs/PF.md) instead of the snapshot monitor: ekf (EKF baseline), pf (plain SIR PF baseline) or gapf (genetic-resampling PF).
     #[arg(long, value_enum)]
     pub pf: Option<PfKind>,
     /// Particles per filter: 50, 100, 300 or 1000.
@@ -89,7 +89,7 @@ pub struct PfArgs {
     pub pf_no_exclude: bool,
     /// Plot D_k against the threshold, the per-satellite LLRs and the
     /// position error into this PNG.
-    #[arg(long)]
+    #[arg(long, value_name = "FILE", help_heading = super::heading::PLOTS)]
     pub pf_plot: Option<PathBuf>,
 }
 

@@ -22,6 +22,30 @@ fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow!("plot: {e}")
 }
 
+/// An output file's folder must exist: say so, naming the option and the
+/// folder, before any work (plotters would only report an `ImageError`
+/// after the run).
+pub(crate) fn check_folder(path: &Path, what: &str) -> Result<()> {
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if path.is_dir() {
+        return Err(anyhow!(
+            "{what} {}: is a directory; give a file name",
+            path.display()
+        ));
+    }
+    if !parent.is_dir() {
+        return Err(anyhow!(
+            "{what} {}: no such folder {} (create it first)",
+            path.display(),
+            parent.display()
+        ));
+    }
+    Ok(())
+}
+
 /// Where distributions install DejaVu Sans.
 const FONT_CANDIDATES: [&str; 3] = [
     "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
@@ -47,7 +71,14 @@ pub(super) fn register_font(path: Option<&Path>) -> Result<()> {
         .map_err(|_| anyhow!("{} is not a usable TrueType font", path.display()))
 }
 
-pub fn draw(out: &ReplayOutput, cfg: &Config, path: &Path, font: Option<&Path>) -> Result<()> {
+pub fn draw(
+    out: &ReplayOutput,
+    cfg: &Config,
+    path: &Path,
+    font: Option<&Path>,
+    title: &str,
+) -> Result<()> {
+    let _ = title;
     register_font(font)?;
     let root = BitMapBackend::new(path, (W, H)).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
@@ -56,13 +87,16 @@ pub fn draw(out: &ReplayOutput, cfg: &Config, path: &Path, font: Option<&Path>) 
     let t0 = recs.first().map_or(0.0, |r| r.time_gps_s);
     let mins = |t: f64| (t - t0) / 60.0;
     let t_max = recs.last().map_or(1.0, |r| mins(r.time_gps_s)).max(1.0);
-    let solved: Vec<_> = recs.iter().filter(|r| r.statistic.is_finite()).collect();
+    let solved: Vec<_> = recs
+        .iter()
+        .filter(|r| r.initial_statistic.is_finite())
+        .collect();
 
     // (1) statistic vs threshold.
     {
         let y_max = solved
             .iter()
-            .map(|r| r.statistic.sqrt().max(r.threshold.sqrt()))
+            .map(|r| r.initial_statistic.sqrt().max(r.initial_threshold.sqrt()))
             .fold(1.0f64, f64::max)
             * 1.1;
         let mut c = ChartBuilder::on(&panels[0])
@@ -80,7 +114,7 @@ pub fn draw(out: &ReplayOutput, cfg: &Config, path: &Path, font: Option<&Path>) 
         c.draw_series(LineSeries::new(
             solved
                 .iter()
-                .map(|r| (mins(r.time_gps_s), r.threshold.sqrt())),
+                .map(|r| (mins(r.time_gps_s), r.initial_threshold.sqrt())),
             &RED,
         ))
         .map_err(err)?
@@ -89,7 +123,7 @@ pub fn draw(out: &ReplayOutput, cfg: &Config, path: &Path, font: Option<&Path>) 
         c.draw_series(LineSeries::new(
             solved
                 .iter()
-                .map(|r| (mins(r.time_gps_s), r.statistic.sqrt().max(0.1))),
+                .map(|r| (mins(r.time_gps_s), r.initial_statistic.sqrt().max(0.1))),
             &BLUE,
         ))
         .map_err(err)?
@@ -97,7 +131,7 @@ pub fn draw(out: &ReplayOutput, cfg: &Config, path: &Path, font: Option<&Path>) 
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
         c.draw_series(solved.iter().filter(|r| r.decision == "excluded").map(|r| {
             Circle::new(
-                (mins(r.time_gps_s), r.statistic.sqrt().max(0.1)),
+                (mins(r.time_gps_s), r.initial_statistic.sqrt().max(0.1)),
                 4,
                 GREEN.filled(),
             )
@@ -107,7 +141,7 @@ pub fn draw(out: &ReplayOutput, cfg: &Config, path: &Path, font: Option<&Path>) 
         .legend(|(x, y)| Circle::new((x + 10, y), 4, GREEN.filled()));
         c.draw_series(solved.iter().filter(|r| r.decision == "alarm").map(|r| {
             Cross::new(
-                (mins(r.time_gps_s), r.statistic.sqrt().max(0.1)),
+                (mins(r.time_gps_s), r.initial_statistic.sqrt().max(0.1)),
                 6,
                 RED.stroke_width(2),
             )

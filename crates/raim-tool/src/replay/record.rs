@@ -26,14 +26,17 @@ pub struct EpochRecord {
     pub error: Option<String>,
     pub n_sats: usize,
     /// All-in-view D^2, T^2 and dof.
-    pub statistic: f64,
-    pub threshold: f64,
-    pub dof: u32,
+    pub initial_statistic: f64,
+    pub initial_threshold: f64,
+    pub initial_dof: u32,
     /// D^2, T^2 and dof of the solution in force.
     pub final_statistic: f64,
     pub final_threshold: f64,
     pub final_dof: u32,
-    pub identified: Option<String>,
+    /// The satellite the identification rule ranks first on the
+    /// all-in-view solution (null when that test passes); not necessarily
+    /// excluded.
+    pub candidate: Option<String>,
     /// Satellites excluded (in force for `excluded`; attempted otherwise).
     pub excluded: Vec<String>,
     pub excluded_bias_m: Vec<f64>,
@@ -48,6 +51,8 @@ pub struct EpochRecord {
     pub error_h_m: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error_v_m: Option<f64>,
+    /// Protection levels, m: infinite when unbounded (null in JSON, `inf`
+    /// in text).
     pub hpl_m: f64,
     pub vpl_m: f64,
     pub sigma_enu_m: [f64; 3],
@@ -59,15 +64,6 @@ pub struct EpochRecord {
     pub excluded_ids: Vec<SatId>,
     #[serde(skip)]
     pub faulted_ids: Vec<SatId>,
-}
-
-/// JSON cannot carry infinities: unbounded PLs print as f64::MAX.
-fn finite(v: f64) -> f64 {
-    if v.is_finite() {
-        v
-    } else {
-        f64::MAX
-    }
 }
 
 fn cause_name(c: AlarmCause) -> String {
@@ -125,13 +121,13 @@ impl EpochRecord {
             alarm_cause: r.alarm_cause.map(cause_name),
             error: None,
             n_sats,
-            statistic: r.initial_test.statistic,
-            threshold: r.initial_test.threshold,
-            dof: r.initial_test.dof,
+            initial_statistic: r.initial_test.statistic,
+            initial_threshold: r.initial_test.threshold,
+            initial_dof: r.initial_test.dof,
             final_statistic: r.test.statistic,
             final_threshold: r.test.threshold,
             final_dof: r.test.dof,
-            identified: r.identified.map(|s| s.to_string()),
+            candidate: r.identified.map(|s| s.to_string()),
             excluded: r.exclusions.iter().map(|e| e.id.to_string()).collect(),
             excluded_bias_m: r.exclusions.iter().map(|e| e.bias_m).collect(),
             faulted: faulted.iter().map(|(id, b)| (id.to_string(), *b)).collect(),
@@ -139,8 +135,8 @@ impl EpochRecord {
             error_enu_m: err,
             error_h_m: err.map(|e| e[0].hypot(e[1])),
             error_v_m: err.map(|e| e[2].abs()),
-            hpl_m: finite(r.hpl_m),
-            vpl_m: finite(r.vpl_m),
+            hpl_m: r.hpl_m,
+            vpl_m: r.vpl_m,
             sigma_enu_m: r.sigma_enu_m,
             ambiguity: Vec::new(),
             excluded_ids: if r.decision == Decision::Excluded
@@ -169,13 +165,13 @@ impl EpochRecord {
             alarm_cause: None,
             error: Some(e.to_string()),
             n_sats,
-            statistic: f64::NAN,
-            threshold: f64::NAN,
-            dof: 0,
+            initial_statistic: f64::NAN,
+            initial_threshold: f64::NAN,
+            initial_dof: 0,
             final_statistic: f64::NAN,
             final_threshold: f64::NAN,
             final_dof: 0,
-            identified: None,
+            candidate: None,
             excluded: Vec::new(),
             excluded_bias_m: Vec::new(),
             faulted: faulted.iter().map(|(id, b)| (id.to_string(), *b)).collect(),
@@ -183,8 +179,8 @@ impl EpochRecord {
             error_enu_m: None,
             error_h_m: None,
             error_v_m: None,
-            hpl_m: f64::MAX,
-            vpl_m: f64::MAX,
+            hpl_m: f64::INFINITY,
+            vpl_m: f64::INFINITY,
             sigma_enu_m: [f64::NAN; 3],
             ambiguity: Vec::new(),
             excluded_ids: Vec::new(),
@@ -229,9 +225,9 @@ impl EpochRecord {
                 self.tod,
                 self.decision.to_uppercase(),
                 self.n_sats,
-                self.statistic,
-                self.threshold,
-                self.dof,
+                self.initial_statistic,
+                self.initial_threshold,
+                self.initial_dof,
                 self.error_h_m.unwrap_or(f64::NAN),
                 self.error_v_m.unwrap_or(f64::NAN),
                 self.hpl_m,
