@@ -141,8 +141,9 @@ excluded satellites, alarm cause, HPL/VPL (m; inf when unbounded). JSON keys: do
   raim pci --az 0,45,100,160,220,280,330 --el 85,30,50,20,60,15,40
   raim pci --json < host-tests/vectors/snapshot_example.jsonl";
     pub const ARL: &str = "Examples:
-  raim arl --arl0 1e5
-  raim arl --h 8.5";
+  raim arl --dim 2 --k 1 --arl0 1e5
+  raim arl --dim 2 --k 1 --h 8.5
+  raim arl --seed001";
     pub const REPLAY: &str = "Examples:
   raim replay --obs 07590920.05o --nav 07590920.05n --systems G --fault step:G24:50@00:20:00 --plot replay.png
   raim replay --config docs/runs/replay_0759_g24_step50.toml --pos run.pos --kml run.kml

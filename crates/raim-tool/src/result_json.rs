@@ -212,6 +212,15 @@ pub fn error_out(line: Option<usize>, time_s: f64, e: &RaimError) -> ErrorOut {
     }
 }
 
+/// A protection level for the text line: metres, or `inf` when unbounded.
+fn pl_text(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:>8.1}m")
+    } else {
+        format!("{:>8}", "inf")
+    }
+}
+
 /// One readable line per epoch.
 pub fn text_line<const N: usize>(r: &EpochResult<N>) -> String {
     let excl: Vec<String> = r.exclusions.iter().map(|e| e.id.to_string()).collect();
@@ -220,7 +229,7 @@ pub fn text_line<const N: usize>(r: &EpochResult<N>) -> String {
         .map(|m| format!(" Dt={:.2} h={:.2}", m.statistic, m.threshold))
         .unwrap_or_default();
     format!(
-        "t={:>10.1}s {:<11} D2={:>9.2} T2={:>6.2} dof={} {}{} HPL={:>8.1}m VPL={:>8.1}m{}",
+        "t={:>10.1}s {:<11} D2={:>9.2} T2={:>6.2} dof={} {}{} HPL={} VPL={}{}",
         r.time_s,
         decision_name(r.decision).to_uppercase(),
         r.initial_test.statistic,
@@ -234,8 +243,8 @@ pub fn text_line<const N: usize>(r: &EpochResult<N>) -> String {
         r.alarm_cause
             .map(|c| format!("cause={} ", cause_name(c)))
             .unwrap_or_default(),
-        r.protection.hpl_m,
-        r.protection.vpl_m,
+        pl_text(r.protection.hpl_m),
+        pl_text(r.protection.vpl_m),
         cusum,
     )
 }

@@ -16,6 +16,7 @@ mod pca;
 pub mod pf;
 mod plot;
 pub mod record;
+pub mod stanford;
 pub mod summary;
 pub mod usage;
 
