@@ -603,7 +603,6 @@ pub fn plot(
         .margin(10)
         .x_label_area_size(45)
         .y_label_area_size(60)
-        .right_y_label_area_size(10)
         .build_cartesian_2d(ax.range(), dmin..dmax)
         .map_err(perr)?;
     c.configure_mesh()

@@ -218,7 +218,7 @@ pub fn draw<DB: DrawingBackend>(
             .map_err(err)?;
     }
     c.configure_series_labels()
-        .position(SeriesLabelPosition::LowerRight)
+        .position(SeriesLabelPosition::UpperRight)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .draw()
