@@ -796,7 +796,7 @@ pub fn draw(
             solved
                 .iter()
                 .filter(|r| r.fde == "excluded")
-                .map(|r| Circle::new((ax.x(r.time_gps_s), y_max * 0.72), 4, excl.filled())),
+                .map(|r| Circle::new((ax.x(r.time_gps_s), y_max * 0.62), 4, excl.filled())),
         )
         .map_err(perr)?
         .label("exclusion (satellites named where the set changes)")
@@ -814,14 +814,14 @@ pub fn draw(
         c.draw_series(
             names
                 .into_iter()
-                .map(|(x, n)| Text::new(n, (x, y_max * 0.70), font.clone())),
+                .map(|(x, n)| Text::new(n, (x, y_max * 0.60), font.clone())),
         )
         .map_err(perr)?;
         c.draw_series(
             solved
                 .iter()
                 .filter(|r| r.fde.starts_with("alarm"))
-                .map(|r| Cross::new((ax.x(r.time_gps_s), y_max * 0.64), 6, RED.stroke_width(2))),
+                .map(|r| Cross::new((ax.x(r.time_gps_s), y_max * 0.55), 6, RED.stroke_width(2))),
         )
         .map_err(perr)?
         .label("alarm")
