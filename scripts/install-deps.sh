@@ -3,7 +3,7 @@
 # shared by scripts/main-job.sh and scripts/test.sh (issue 16).
 #
 #   bash scripts/install-deps.sh main   # the main job: thumbv7em target, qemu-system-arm
-#   bash scripts/install-deps.sh test   # the tests: also clippy, rustfmt and gpsd
+#   bash scripts/install-deps.sh test   # the tests: also clippy, rustfmt, gpsd, rtklib and xmllint
 #
 # Debian/Ubuntu packages are installed with --no-install-recommends (plain
 # `apt-get install qemu-system-arm` also pulls the GTK/SDL front ends, about
@@ -30,6 +30,9 @@ fi
 pkgs=()
 command -v qemu-system-arm >/dev/null || pkgs+=(qemu-system-arm)
 if [ "$what" = test ] && ! [ -x /usr/sbin/gpsd ]; then pkgs+=(gpsd); fi
+# RTKLIB's pos2kml reads the replay's .pos, xmllint its KML/GPX (cli_tool.rs).
+if [ "$what" = test ] && ! command -v pos2kml >/dev/null; then pkgs+=(rtklib); fi
+if [ "$what" = test ] && ! command -v xmllint >/dev/null; then pkgs+=(libxml2-utils); fi
 if [ "${#pkgs[@]}" -gt 0 ]; then
     echo "install-deps: apt packages ${pkgs[*]} (--no-install-recommends)"
     SUDO=""; [ "$(id -u)" = 0 ] || SUDO="sudo"

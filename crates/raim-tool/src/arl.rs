@@ -491,7 +491,7 @@ pub struct ArlArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
-    /// Print seed 001 Table 2 beside our values (dim 2, k = 1).
+    /// Print the published ARL table of the MCUSUM RAIM paper (docs/MCRAIM.md, its Table 2) beside our values (dim 2, k = 1).
     #[arg(long)]
     pub seed001: bool,
     /// Write the device threshold table (Rust source) to --out or stdout.

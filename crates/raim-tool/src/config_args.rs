@@ -46,7 +46,7 @@ pub struct ConfigArgs {
     /// Allow an exclusion even when excluding the runner-up also passes.
     #[arg(long)]
     pub allow_ambiguous: bool,
-    /// Run the MCUSUM beside the snapshot test (SPEC §7); --pfa is then the
+    /// Run the MCUSUM beside the snapshot test (docs/MCRAIM.md); --pfa is then the
     /// total per-epoch budget, split by --mcusum-share.
     #[arg(long)]
     pub mcusum: bool,
@@ -63,8 +63,8 @@ pub struct ConfigArgs {
     /// How long an MCUSUM exclusion is held, s.
     #[arg(long, default_value_t = raim_core::config::DEFAULT_MCUSUM_HOLD_S)]
     pub mcusum_hold_s: f64,
-    /// FDE by error reconstruction over constraint groups (SPEC §8,
-    /// docs/MULTIFAULT.md) for up to this many simultaneous faults (1-3);
+    /// FDE by error reconstruction over constraint groups
+    /// (docs/MULTIFAULT.md) for up to this many simultaneous faults (1-3);
     /// also raises --max-exclusions to it. Default: today's FDE.
     #[arg(long)]
     pub multifault_t_max: Option<u8>,
@@ -110,5 +110,30 @@ impl ConfigArgs {
             }
         }
         c
+    }
+}
+
+impl ConfigArgs {
+    /// An option given on the command line (`given`) that the rest of the
+    /// configuration would ignore, as a usage message naming both.
+    pub fn ignored(&self, given: &dyn Fn(&str) -> bool) -> Option<String> {
+        for id in ["mcusum_k", "mcusum_share", "mcusum_reset", "mcusum_hold_s"] {
+            if given(id) && !self.mcusum {
+                return Some(format!(
+                    "'--{}' would be ignored: it needs --mcusum",
+                    id.replace('_', "-")
+                ));
+            }
+        }
+        if given("group_budget") && self.multifault_t_max.is_none() {
+            return Some("'--group-budget' would be ignored: it needs --multifault-t-max".into());
+        }
+        if given("kappa") && !matches!(self.rule, RuleArg::Lraim) {
+            return Some(
+                "'--kappa' would be ignored: it is the prior of --rule lraim, not of the rule given"
+                    .into(),
+            );
+        }
+        None
     }
 }

@@ -10,12 +10,13 @@ mod pci;
 mod qemu;
 mod replay;
 mod result_json;
+mod runfile;
 mod snapshot;
 
 use std::process::ExitCode;
 
 use anyhow::Result;
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use raim_core::stats::dist;
 
 use config_args::ConfigArgs;
@@ -56,8 +57,9 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Read epochs as JSON lines on stdin (docs/FORMATS.md); print one result per epoch.
+    #[command(after_help = examples::SNAPSHOT)]
     Snapshot {
-        #[command(flatten)]
+        #[command(flatten, next_help_heading = "Monitor (docs/CORE.md)")]
         config: ConfigArgs,
         /// Print one JSON object per line instead of text.
         #[arg(long)]
@@ -71,21 +73,28 @@ enum Command {
         keep_going: bool,
     },
     /// ARAIM (docs/ARAIM.md) on ARAIM epochs as JSON lines (docs/FORMATS.md).
+    #[command(after_help = examples::ARAIM)]
     Araim(araim_cmd::AraimArgs),
     /// Seeded Monte Carlo validation campaigns (false-alarm rate; single-fault identification).
+    #[command(after_help = examples::CAMPAIGN)]
     Campaign {
         #[command(subcommand)]
         which: campaign::CampaignCmd,
     },
     /// Probability of correct identification per satellite, MLE vs L-RAIM (exact and Monte Carlo), P_D, MDB.
+    #[command(after_help = examples::PCI)]
     Pci(pci::PciArgs),
-    /// MCUSUM average run lengths (SPEC §7.2): ARL0(h) / h(ARL0) by the integral equation, ARL1 by simulation, the device table.
+    /// MCUSUM average run lengths (docs/MCRAIM.md): ARL0(h) / h(ARL0) by the integral equation, ARL1 by simulation, the device table.
+    #[command(after_help = examples::ARL)]
     Arl(arl::ArlArgs),
     /// Replay RINEX data through the monitor with seeded faults (docs/REPLAY.md).
+    #[command(after_help = examples::REPLAY, args_override_self = true)]
     Replay(Box<replay::ReplayArgs>),
     /// Replay a JSON-lines epoch file through the firmware under QEMU; print decisions and NMEA (docs/PROTOCOL.md).
+    #[command(after_help = examples::QEMU)]
     Qemu(qemu::QemuArgs),
     /// The chi-square detection threshold; with --pmd, lambda and pbias too.
+    #[command(after_help = examples::THRESHOLD)]
     Threshold {
         /// Probability of false alarm per sample, e.g. 3.3333e-7.
         #[arg(long)]
@@ -94,18 +103,108 @@ enum Command {
         #[arg(long)]
         dof: u32,
         /// Probability of missed detection: also print the non-centrality
-        /// lambda and pbias = sqrt(lambda) (SPEC §6).
+        /// lambda and pbias = sqrt(lambda) (docs/CORE.md).
         #[arg(long)]
         pmd: Option<f64>,
         /// Print one JSON object instead of text (docs/FORMATS.md).
         #[arg(long)]
         json: bool,
     },
+    /// Print a shell completion script for raim (bash, zsh, fish, elvish, powershell).
+    #[command(after_help = examples::COMPLETIONS)]
+    Completions {
+        /// The shell to complete for.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the raim(1) man page (roff), from the same definitions as --help.
+    #[command(after_help = examples::MAN)]
+    Man,
+}
+
+/// The examples that end each subcommand's `--help`.
+mod examples {
+    pub const SNAPSHOT: &str = "Examples:
+  raim snapshot --input host-tests/vectors/snapshot_example.jsonl
+  raim snapshot --json --phase terminal < epochs.jsonl
+  raim snapshot --mcusum --multifault-t-max 2 --input epochs.jsonl
+
+Text columns: t (s), decision, D2 = all-in-view test statistic (chi-square, no unit), T2 = its threshold, dof,
+excluded satellites, alarm cause, HPL/VPL (m; inf when unbounded). JSON keys: docs/FORMATS.md.";
+    pub const ARAIM: &str = "Examples:
+  raim araim --input host-tests/vectors/add_v3_appendix_d.json
+  raim araim --json --input epochs.jsonl";
+    pub const CAMPAIGN: &str = "Examples:
+  raim campaign false-alarm --pfa 1e-3 --pfa 1e-5
+  raim campaign single-fault --json";
+    pub const PCI: &str = "Examples:
+  raim pci --az 0,45,100,160,220,280,330 --el 85,30,50,20,60,15,40
+  raim pci --json < host-tests/vectors/snapshot_example.jsonl";
+    pub const ARL: &str = "Examples:
+  raim arl --dim 2 --k 1 --arl0 1e5
+  raim arl --dim 2 --k 1 --h 8.5
+  raim arl --seed001";
+    pub const REPLAY: &str = "Examples:
+  raim replay --obs 07590920.05o --nav 07590920.05n --systems G --fault step:G24:50@00:20:00 --plot replay.png
+  raim replay --config docs/runs/replay_0759_g24_step50.toml --pos run.pos --kml run.kml
+  raim replay --obs esbc.rnx --nav esbc.nav --araim --araim-plot araim.png --mask-deg -5
+
+Text columns: time of day (GPS time), decision, n = satellites, D2 = all-in-view test statistic (chi-square,
+no unit), T2 = its threshold, dof = degrees of freedom, excl = excluded satellites, cause = why an alarm,
+errH/errV = horizontal/vertical position error against the reference (m), HPL/VPL = protection levels (m; inf
+when unbounded), fault = injected biases (m). Every column and JSON key: docs/FORMATS.md.";
+    pub const QEMU: &str = "Examples:
+  raim qemu --input host-tests/vectors/snapshot_example.jsonl
+  raim qemu --nmea --input epochs.jsonl";
+    pub const THRESHOLD: &str = "Examples:
+  raim threshold --pfa 3.3333e-7 --dof 4
+  raim threshold --pfa 1e-5 --dof 3 --pmd 1e-3 --json";
+    pub const COMPLETIONS: &str = "Examples:
+  raim completions bash > /etc/bash_completion.d/raim
+  raim completions zsh > ~/.zfunc/_raim";
+    pub const MAN: &str = "Examples:
+  raim man > raim.1 && man ./raim.1";
+}
+
+/// A usage error: printed as clap prints its own, exit 2.
+fn usage_error(sub: &str, msg: String) -> ExitCode {
+    let mut cmd = Cli::command();
+    let e = match cmd.find_subcommand_mut(sub) {
+        Some(c) => c.error(clap::error::ErrorKind::ArgumentConflict, msg),
+        None => cmd.error(clap::error::ErrorKind::ArgumentConflict, msg),
+    };
+    let _ = e.print();
+    ExitCode::from(outcome::EXIT_USAGE)
 }
 
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
-        Ok(c) => c,
+    // A run file (`raim replay --config run.toml`) becomes options placed
+    // before the command line's, which override them.
+    let argv = match runfile::expand(std::env::args_os().collect()) {
+        Ok(a) => a,
+        Err(e) => return outcome::fail(&e),
+    };
+    let parsed = Cli::command()
+        .try_get_matches_from(argv)
+        .and_then(|m| Cli::from_arg_matches(&m).map(|c| (c, m)));
+    let cli = match parsed {
+        Ok((c, m)) => {
+            let refused = match (&c.command, m.subcommand()) {
+                (Command::Replay(a), Some((_, sub))) => replay::usage::check(a, sub),
+                (Command::Snapshot { config, .. }, Some((_, sub))) => {
+                    let given = |id: &str| {
+                        sub.try_contains_id(id).unwrap_or(false)
+                            && sub.value_source(id) == Some(clap::parser::ValueSource::CommandLine)
+                    };
+                    config.ignored(&given)
+                }
+                _ => None,
+            };
+            if let (Some(msg), Some((name, _))) = (refused, m.subcommand()) {
+                return usage_error(name, msg);
+            }
+            c
+        }
         Err(e) => {
             // --help and --version print to stdout and succeed; usage
             // errors print to stderr and give 2.
@@ -151,7 +250,40 @@ fn run(command: Command) -> Result<Tally> {
         Command::Pci(args) => none(pci::run(&args)),
         Command::Arl(args) => none(arl::run(&args)),
         Command::Campaign { which } => none(campaign::run(&which)),
+        Command::Completions { shell } => none(completions(shell)),
+        Command::Man => none(man()),
     }
+}
+
+/// `raim completions SHELL`: the completion script on stdout.
+fn completions(shell: clap_complete::Shell) -> Result<()> {
+    let mut buf = Vec::new();
+    clap_complete::generate(shell, &mut Cli::command(), "raim", &mut buf);
+    crate::out!("{}", String::from_utf8_lossy(&buf))?;
+    Ok(())
+}
+
+/// `raim man`: the raim(1) page with every subcommand's options.
+fn man() -> Result<()> {
+    let cmd = Cli::command();
+    let mut buf = Vec::new();
+    clap_mangen::Man::new(cmd.clone()).render(&mut buf)?;
+    for sub in cmd.get_subcommands() {
+        if sub.get_name() == "help" {
+            continue;
+        }
+        let name = format!("raim {}", sub.get_name());
+        // Each subcommand as a section of the one page.
+        buf.extend_from_slice(format!(".SH \"{}\"\n", name.to_uppercase()).as_bytes());
+        let sub = sub.clone().bin_name(name);
+        let m = clap_mangen::Man::new(sub);
+        m.render_description_section(&mut buf)?;
+        m.render_options_section(&mut buf)?;
+        m.render_subcommands_section(&mut buf)?;
+        m.render_extra_section(&mut buf)?;
+    }
+    crate::out!("{}", String::from_utf8_lossy(&buf))?;
+    Ok(())
 }
 
 fn threshold(pfa: f64, dof: u32, pmd: Option<f64>, json: bool) -> Result<()> {

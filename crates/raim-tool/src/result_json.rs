@@ -42,7 +42,8 @@ pub struct McusumOut {
     pub alarm: bool,
     /// Which test alarmed: none | snapshot | cusum | both.
     pub source: &'static str,
-    pub identified: Option<String>,
+    /// The satellite the MCUSUM's identification picked (then held out).
+    pub candidate: Option<String>,
     pub held: Vec<String>,
     pub available: bool,
 }
@@ -62,15 +63,24 @@ pub struct ResultOut {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub height_m: Option<f64>,
     pub correction_enu_m: [f64; 3],
-    pub statistic: f64,
-    pub threshold: f64,
-    pub dof: u32,
+    /// All-in-view test: D^2, T^2 and dof.
     pub initial_statistic: f64,
     pub initial_threshold: f64,
     pub initial_dof: u32,
-    pub identified: Option<String>,
-    pub excluded: Vec<ExclusionOut>,
-    /// Protection levels, m; +infinity (JSON `null`, text `inf`) when unbounded.
+    /// Test of the solution in force (after exclusions; equal to the
+    /// all-in-view test when nothing was excluded).
+    pub final_statistic: f64,
+    pub final_threshold: f64,
+    pub final_dof: u32,
+    /// The satellite the identification rule ranks first on the
+    /// all-in-view solution (null when that test passes). Not necessarily
+    /// excluded: a pair search can explain the residuals better.
+    pub candidate: Option<String>,
+    /// Satellites removed by FDE, in order.
+    pub excluded: Vec<String>,
+    /// Each exclusion's test before and after it.
+    pub exclusions: Vec<ExclusionOut>,
+    /// Protection levels, m; unbounded prints as null.
     pub hpl_m: f64,
     pub vpl_m: f64,
     pub sigma_enu_m: [f64; 3],
@@ -126,14 +136,15 @@ pub fn result_out<const N: usize>(r: &EpochResult<N>) -> ResultOut {
         lon_deg: r.geodetic.map(|g| g.lon_rad.to_degrees()),
         height_m: r.geodetic.map(|g| g.height_m),
         correction_enu_m: r.correction_enu_m,
-        statistic: r.test.statistic,
-        threshold: r.test.threshold,
-        dof: r.test.dof,
         initial_statistic: r.initial_test.statistic,
         initial_threshold: r.initial_test.threshold,
         initial_dof: r.initial_test.dof,
-        identified: r.identified.map(|s| s.to_string()),
-        excluded: r
+        final_statistic: r.test.statistic,
+        final_threshold: r.test.threshold,
+        final_dof: r.test.dof,
+        candidate: r.identified.map(|s| s.to_string()),
+        excluded: r.exclusions.iter().map(|e| e.id.to_string()).collect(),
+        exclusions: r
             .exclusions
             .iter()
             .map(|e| ExclusionOut {
@@ -179,7 +190,7 @@ pub fn result_out<const N: usize>(r: &EpochResult<N>) -> ResultOut {
                 AlarmSource::Cusum => "cusum",
                 AlarmSource::Both => "both",
             },
-            identified: m.identified.map(|s| s.to_string()),
+            candidate: m.identified.map(|s| s.to_string()),
             held: m.held.iter().flatten().map(|s| s.to_string()).collect(),
             available: m.available,
         }),
@@ -201,6 +212,15 @@ pub fn error_out(line: Option<usize>, time_s: f64, e: &RaimError) -> ErrorOut {
     }
 }
 
+/// A protection level for the text line: metres, or `inf` when unbounded.
+fn pl_text(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:>8.1}m")
+    } else {
+        format!("{:>8}", "inf")
+    }
+}
+
 /// One readable line per epoch.
 pub fn text_line<const N: usize>(r: &EpochResult<N>) -> String {
     let excl: Vec<String> = r.exclusions.iter().map(|e| e.id.to_string()).collect();
@@ -209,7 +229,7 @@ pub fn text_line<const N: usize>(r: &EpochResult<N>) -> String {
         .map(|m| format!(" Dt={:.2} h={:.2}", m.statistic, m.threshold))
         .unwrap_or_default();
     format!(
-        "t={:>10.1}s {:<11} D2={:>9.2} T2={:>6.2} dof={} {}{} HPL={:>8.1}m VPL={:>8.1}m{}",
+        "t={:>10.1}s {:<11} D2={:>9.2} T2={:>6.2} dof={} {}{} HPL={} VPL={}{}",
         r.time_s,
         decision_name(r.decision).to_uppercase(),
         r.initial_test.statistic,
@@ -223,8 +243,8 @@ pub fn text_line<const N: usize>(r: &EpochResult<N>) -> String {
         r.alarm_cause
             .map(|c| format!("cause={} ", cause_name(c)))
             .unwrap_or_default(),
-        r.protection.hpl_m,
-        r.protection.vpl_m,
+        pl_text(r.protection.hpl_m),
+        pl_text(r.protection.vpl_m),
         cusum,
     )
 }

@@ -143,11 +143,11 @@ fn missing_file_is_an_error_not_a_panic() {
         "/nonexistent.05n",
     ]);
     assert!(!ok);
-    assert!(err.contains("file not found"), "{err}");
+    assert!(err.contains("/nonexistent.05o: no such file"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
 }
 
-/// `--plot` writes a PNG of the configured size (1600 x 1200).
+/// `--plot` writes a PNG of the configured size (1800 x 1900).
 #[test]
 fn plot_is_a_png() {
     let png = std::env::temp_dir().join(format!("raim-replay-plot-{}.png", std::process::id()));
@@ -167,7 +167,7 @@ fn plot_is_a_png() {
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
     // IHDR width and height, big-endian, at bytes 16..24.
-    assert_eq!(u32::from_be_bytes(bytes[16..20].try_into().unwrap()), 1600);
-    assert_eq!(u32::from_be_bytes(bytes[20..24].try_into().unwrap()), 1200);
+    assert_eq!(u32::from_be_bytes(bytes[16..20].try_into().unwrap()), 1800);
+    assert_eq!(u32::from_be_bytes(bytes[20..24].try_into().unwrap()), 1900);
     let _ = std::fs::remove_file(&png);
 }

@@ -208,8 +208,8 @@ fn azimuth_beyond_f64_is_refused_and_finite_azimuths_wrap() {
     let (ra, rb) = (&json_rows(&a.stdout)[0], &json_rows(&b.stdout)[0]);
     const TOL: f64 = 1e-9; // dimensionless statistic, one rounding of sin/cos
     let (da, db) = (
-        ra["statistic"].as_f64().unwrap(),
-        rb["statistic"].as_f64().unwrap(),
+        ra["final_statistic"].as_f64().unwrap(),
+        rb["final_statistic"].as_f64().unwrap(),
     );
     assert!((da - db).abs() < TOL, "{da} {db}");
 }

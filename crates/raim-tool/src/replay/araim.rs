@@ -41,7 +41,7 @@ type Engine = Monitor<f64, ARAIM_SATS, ARAIM_MODES>;
 
 #[derive(Debug, Clone, Args)]
 pub struct AraimReplayArgs {
-    /// Run ARAIM (issue 12; docs/ARAIM.md) instead of the snapshot monitor, with the ADD elevation model for C_int and C_acc.
+    /// Run ARAIM (Advanced RAIM, docs/ARAIM.md) instead of the snapshot monitor, with the ADD elevation model for C_int and C_acc.
     #[arg(long)]
     pub araim: bool,
     /// ARAIM: sigma_URA for every satellite, m.
@@ -63,10 +63,10 @@ pub struct AraimReplayArgs {
     #[arg(long, default_value_t = 0.0)]
     pub araim_iono_m: f64,
     /// ARAIM: a constellation-wide fault, SYS:COMMON_M:E_M,N_M,U_M@START[..END]: a common range error plus the range change of a shift (E, N, U) of that constellation's solution (docs/ARAIM.md); repeatable.
-    #[arg(long = "araim-const-fault", value_name = "SPEC")]
+    #[arg(long = "araim-const-fault", value_name = "SPEC", allow_hyphen_values = true, help_heading = super::heading::FAULTS)]
     pub araim_const_faults: Vec<String>,
     /// ARAIM: VPL, HPL and EMT over time against VAL/HAL, and the vertical and horizontal Stanford diagrams, into this PNG.
-    #[arg(long)]
+    #[arg(long, value_name = "FILE", help_heading = super::heading::PLOTS)]
     pub araim_plot: Option<PathBuf>,
 }
 
@@ -614,7 +614,13 @@ pub fn run(args: &ReplayArgs) -> Result<()> {
     }
     w.flush()?;
     if let Some(p) = &args.araim.araim_plot {
-        draw(&recs, &AraimConfig::default(), p, args.font.as_deref())?;
+        draw(
+            &recs,
+            &AraimConfig::default(),
+            p,
+            args.font.as_deref(),
+            &super::run_title(args),
+        )?;
     }
     Ok(())
 }
@@ -623,46 +629,55 @@ fn perr<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow!("plot: {e}")
 }
 
-/// Three panels: PLs and EMT over time with VAL/HAL and the errors, and
-/// the vertical and horizontal Stanford diagrams (error against PL).
+/// A title naming the file, the faults and the window, then three panels:
+/// PLs and the effective monitor threshold over GPS time against VAL/HAL
+/// with the errors, exclusions named by satellite; the vertical and
+/// horizontal Stanford diagrams (`super::stanford`).
 pub fn draw(
     recs: &[AraimRecord],
     cfg: &AraimConfig,
     path: &Path,
     font: Option<&Path>,
+    title: &str,
 ) -> Result<()> {
     super::plot::register_font(font)?;
-    let root = BitMapBackend::new(path, (1600, 1200)).into_drawing_area();
+    let root = BitMapBackend::new(path, (1800, 1400)).into_drawing_area();
     root.fill(&WHITE).map_err(perr)?;
-    let (top, bottom) = root.split_vertically(600);
+    let root = root
+        .titled(&format!("raim replay --araim: {title}"), ("sans-serif", 28))
+        .map_err(perr)?;
+    let (top, bottom) = root.split_vertically(650);
     let lower = bottom.split_evenly((1, 2));
-    let t0 = recs.first().map_or(0.0, |r| r.time_gps_s);
-    let mins = |t: f64| (t - t0) / 60.0;
-    let t_max = recs.last().map_or(1.0, |r| mins(r.time_gps_s)).max(1.0);
+    let ax = super::plot::TimeAxis::new(
+        recs.first().map_or(0.0, |r| r.time_gps_s),
+        recs.last().map_or(0.0, |r| r.time_gps_s),
+    );
     let solved: Vec<&AraimRecord> = recs.iter().filter(|r| r.error.is_none()).collect();
     let with_pl: Vec<(&AraimRecord, f64, f64)> = solved
         .iter()
         .filter_map(|r| r.output_pls().map(|(v, h)| (*r, v, h)))
-        .filter(|(_, v, h)| v.is_finite() && h.is_finite())
         .collect();
+    // Room above the alert limits for the legend and the exclusion labels.
     let y_max = with_pl
         .iter()
         .map(|(_, v, h)| v.max(*h))
+        .filter(|v| v.is_finite())
         .fold(cfg.hal_m.max(cfg.val_m), f64::max)
-        * 1.1;
+        * 2.4;
     {
         let mut c = ChartBuilder::on(&top)
             .caption(
-                "ARAIM: VPL, HPL, EMT and errors vs VAL/HAL",
+                "protection levels, effective monitor threshold and errors against VAL/HAL",
                 ("sans-serif", 24),
             )
             .margin(10)
-            .x_label_area_size(40)
+            .x_label_area_size(45)
             .y_label_area_size(60)
-            .build_cartesian_2d(0.0..t_max, 0.0..y_max)
+            .build_cartesian_2d(ax.range(), 0.0..y_max)
             .map_err(perr)?;
         c.configure_mesh()
-            .x_desc("minutes from start")
+            .x_desc(ax.desc.as_str())
+            .x_label_formatter(&super::plot::hhmm)
             .y_desc("m")
             .draw()
             .map_err(perr)?;
@@ -670,7 +685,10 @@ pub fn draw(
         let series: [(&str, RGBColor, Get); 2] = [("VPL", BLUE, |x| x.1), ("HPL", GREEN, |x| x.2)];
         for (label, color, get) in series {
             c.draw_series(LineSeries::new(
-                with_pl.iter().map(|x| (mins(x.0.time_gps_s), get(x))),
+                with_pl
+                    .iter()
+                    .filter(|x| get(x).is_finite())
+                    .map(|x| (ax.x(x.0.time_gps_s), get(x))),
                 &color,
             ))
             .map_err(perr)?
@@ -679,123 +697,96 @@ pub fn draw(
         }
         let emt = RGBColor(200, 120, 0);
         c.draw_series(LineSeries::new(
-            solved.iter().map(|r| (mins(r.time_gps_s), r.emt_m)),
+            solved.iter().map(|r| (ax.x(r.time_gps_s), r.emt_m)),
             &emt,
         ))
         .map_err(perr)?
-        .label("EMT")
+        .label("effective monitor threshold")
         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], emt));
         for (label, v, color) in [("VAL", cfg.val_m, RED), ("HAL", cfg.hal_m, MAGENTA)] {
             c.draw_series(LineSeries::new(
-                [(0.0, v), (t_max, v)],
+                [(ax.first_h, v), (ax.last_h, v)],
                 color.stroke_width(2),
             ))
             .map_err(perr)?
-            .label(label)
+            .label(format!("{label} {v:.0} m"))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
         }
         let ev = RGBColor(0, 0, 120);
         c.draw_series(
             solved
                 .iter()
-                .filter_map(|r| Some((mins(r.time_gps_s), r.error_v_m?)))
+                .filter_map(|r| Some((ax.x(r.time_gps_s), r.error_v_m?)))
                 .map(|p| Circle::new(p, 2, ev.filled())),
         )
         .map_err(perr)?
-        .label("|error V|")
+        .label("vertical error (absolute)")
         .legend(move |(x, y)| Circle::new((x + 10, y), 3, ev.filled()));
         let eh = RGBColor(0, 120, 0);
         c.draw_series(
             solved
                 .iter()
-                .filter_map(|r| Some((mins(r.time_gps_s), r.error_h_m?)))
+                .filter_map(|r| Some((ax.x(r.time_gps_s), r.error_h_m?)))
                 .map(|p| TriangleMarker::new(p, 3, eh.filled())),
         )
         .map_err(perr)?
-        .label("error H")
+        .label("horizontal error")
         .legend(move |(x, y)| TriangleMarker::new((x + 10, y), 3, eh.filled()));
+        let excl = RGBColor(255, 140, 0);
         c.draw_series(
             solved
                 .iter()
                 .filter(|r| r.fde == "excluded")
-                .map(|r| Circle::new((mins(r.time_gps_s), y_max * 0.97), 4, GREEN.filled())),
+                .map(|r| Circle::new((ax.x(r.time_gps_s), y_max * 0.62), 4, excl.filled())),
         )
         .map_err(perr)?
-        .label("exclusion")
-        .legend(|(x, y)| Circle::new((x + 10, y), 4, GREEN.filled()));
+        .label("exclusion (satellites named where the set changes)")
+        .legend(move |(x, y)| Circle::new((x + 10, y), 4, excl.filled()));
+        // The excluded satellites, written where the excluded set changes.
+        let mut last: Vec<String> = Vec::new();
+        let mut names = Vec::new();
+        for r in solved.iter().filter(|r| r.fde == "excluded") {
+            if r.excluded != last {
+                names.push((ax.x(r.time_gps_s), r.excluded.join("+")));
+                last.clone_from(&r.excluded);
+            }
+        }
+        let font = ("sans-serif", 18).into_font();
+        c.draw_series(
+            names
+                .into_iter()
+                .map(|(x, n)| Text::new(n, (x, y_max * 0.60), font.clone())),
+        )
+        .map_err(perr)?;
         c.draw_series(
             solved
                 .iter()
                 .filter(|r| r.fde.starts_with("alarm"))
-                .map(|r| Cross::new((mins(r.time_gps_s), y_max * 0.94), 6, RED.stroke_width(2))),
+                .map(|r| Cross::new((ax.x(r.time_gps_s), y_max * 0.55), 6, RED.stroke_width(2))),
         )
         .map_err(perr)?
         .label("alarm")
         .legend(|(x, y)| Cross::new((x + 10, y), 6, RED.stroke_width(2)));
         c.configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.8))
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .draw()
             .map_err(perr)?;
     }
-    for (panel, (title, limit, vertical)) in lower.iter().zip([
-        ("ARAIM Stanford diagram, vertical", cfg.val_m, true),
-        ("ARAIM Stanford diagram, horizontal", cfg.hal_m, false),
+    let refused = recs.len() - with_pl.len();
+    for (panel, (limit, axis)) in lower.iter().zip([
+        (cfg.val_m, super::stanford::Axis::Vertical),
+        (cfg.hal_m, super::stanford::Axis::Horizontal),
     ]) {
-        let pts: Vec<(f64, f64, bool)> = with_pl
+        let pts: Vec<(f64, f64)> = with_pl
             .iter()
-            .filter_map(|(r, v, h)| {
-                let e = if vertical { r.error_v_m? } else { r.error_h_m? };
-                Some((e, if vertical { *v } else { *h }, r.available))
+            .filter_map(|(r, v, h)| match axis {
+                super::stanford::Axis::Vertical => Some((r.error_v_m?, *v)),
+                super::stanford::Axis::Horizontal => Some((r.error_h_m?, *h)),
             })
             .collect();
-        let m = pts.iter().map(|p| p.0.max(p.1)).fold(limit, f64::max) * 1.1;
-        let mut c = ChartBuilder::on(panel)
-            .caption(title, ("sans-serif", 22))
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(0.0..m, 0.0..m)
-            .map_err(perr)?;
-        c.configure_mesh()
-            .x_desc("position error (m)")
-            .y_desc("protection level (m)")
-            .draw()
-            .map_err(perr)?;
-        c.draw_series(LineSeries::new([(0.0, 0.0), (m, m)], &BLACK))
-            .map_err(perr)?
-            .label("error = PL")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
-        c.draw_series(LineSeries::new(
-            [(0.0, limit), (m, limit)],
-            RED.stroke_width(2),
-        ))
-        .map_err(perr)?
-        .label(if vertical { "VAL" } else { "HAL" })
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
-        c.draw_series(
-            pts.iter()
-                .filter(|p| p.2)
-                .map(|p| Circle::new((p.0, p.1), 3, BLUE.filled())),
-        )
-        .map_err(perr)?
-        .label("available")
-        .legend(|(x, y)| Circle::new((x + 10, y), 3, BLUE.filled()));
-        c.draw_series(
-            pts.iter()
-                .filter(|p| !p.2)
-                .map(|p| Circle::new((p.0, p.1), 3, RGBColor(160, 160, 160).filled())),
-        )
-        .map_err(perr)?
-        .label("unavailable")
-        .legend(|(x, y)| Circle::new((x + 10, y), 3, RGBColor(160, 160, 160).filled()));
-        c.configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(perr)?;
+        super::stanford::draw(panel, &pts, axis, Some(limit), refused)?;
     }
     root.present().map_err(perr)?;
     Ok(())

@@ -48,10 +48,10 @@ const P_SAT: f64 = 1e-5;
 
 #[derive(Debug, Clone, Args)]
 pub struct EsqArgs {
-    /// Seed 003 claims 1-5 on ARAIM: N*, dT_e, the resampled separation test (docs/ESQ.md).
+    /// The effective sample quantity on ARAIM: N*, dT_e and the resampled separation test (US 10,436,912 claims 1-5; docs/ESQ.md).
     #[arg(long)]
     pub esq: bool,
-    /// Seed 003's constellation-fault monitor by PCA, beside ARAIM and the snapshot test (docs/ESQ.md).
+    /// The constellation-fault monitor by principal components (PCA), beside ARAIM and the snapshot test (docs/ESQ.md).
     #[arg(long)]
     pub pca: bool,
     /// The MCUSUM fed decorrelated samples: before/after false alarms and delays (docs/ESQ.md).
@@ -67,7 +67,7 @@ pub struct EsqArgs {
     #[arg(long, default_value = "3.9e-6")]
     pub pca_pfa: f64,
     /// An ephemeris-like fault: SYS:RADIAL_M@START, a radial orbit error on every satellite of SYS, projected on each line of sight.
-    #[arg(long, value_name = "SPEC")]
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true, help_heading = super::heading::FAULTS)]
     pub eph_fault: Vec<String>,
     /// P_const of every constellation in use (ADD: 1e-4; 1e-8 for a GPS-only sky, which otherwise has an unmonitorable constellation mode and no PL).
     #[arg(long, default_value = "1e-4")]
@@ -76,7 +76,7 @@ pub struct EsqArgs {
     #[arg(long)]
     pub esq_decimate_s: Option<f64>,
     /// Plot N*, dT_e and the separation test (--esq), or the PCA statistic (--pca), into this PNG.
-    #[arg(long)]
+    #[arg(long, value_name = "FILE", help_heading = super::heading::PLOTS)]
     pub esq_plot: Option<PathBuf>,
 }
 

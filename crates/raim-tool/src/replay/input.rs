@@ -7,46 +7,110 @@
 use std::io::{Read, Write};
 use std::path::Path;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use raim_gnss::{NavData, ObsData};
 
-/// The file's text, checking a `.gz` stream to its end. A missing file is
-/// left to the loader (its typed `FileNotFound`).
-fn text(path: &Path) -> Result<Option<Vec<u8>>> {
-    let Ok(raw) = std::fs::read(path) else {
-        return Ok(None);
-    };
+/// What a replay input file should be, for the messages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// RINEX observations (`--obs`).
+    Observation,
+    /// RINEX broadcast navigation (`--nav`).
+    Navigation,
+}
+
+impl Kind {
+    fn what(self) -> &'static str {
+        match self {
+            Kind::Observation => "a RINEX observation file (--obs)",
+            Kind::Navigation => "a RINEX navigation file (--nav)",
+        }
+    }
+}
+
+/// The file's bytes, decompressed when it ends in `.gz` (the stream
+/// checked to its end), after the checks that name the file and say what
+/// is wrong with it: no such file, a directory, empty, not RINEX, or the
+/// other kind of RINEX file.
+fn text(path: &Path, kind: Kind) -> Result<Vec<u8>> {
+    let shown = path.display();
+    let want = kind.what();
+    match std::fs::metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            bail!("{shown}: no such file (expected {want})")
+        }
+        Err(e) => bail!("{shown}: cannot read it: {e}"),
+        Ok(m) if m.is_dir() => bail!("{shown} is a directory, not {want}"),
+        Ok(_) => {}
+    }
+    let raw = std::fs::read(path).map_err(|e| anyhow::anyhow!("{shown}: cannot read it: {e}"))?;
+    if raw.is_empty() {
+        bail!("{shown} is empty (0 bytes): expected {want}");
+    }
     let gz = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
-    if !gz {
-        return Ok(Some(raw));
+    let out = if gz {
+        let mut out = Vec::new();
+        let mut dec = flate2::read::MultiGzDecoder::new(raw.as_slice());
+        if let Err(e) = dec.read_to_end(&mut out) {
+            let lines = out.iter().filter(|&&b| b == b'\n').count();
+            let what = if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                "truncated (the gzip stream ends early)"
+            } else {
+                "corrupt"
+            };
+            bail!(
+                "{}: file is {what}: {e}; {} compressed bytes, decompression stopped after {} bytes (line {})",
+                path.display(),
+                raw.len(),
+                out.len(),
+                lines + 1
+            );
+        }
+        if out.is_empty() {
+            bail!("{shown} decompresses to nothing: expected {want}");
+        }
+        out
+    } else {
+        raw
+    };
+    check_header(&out, kind).map_err(|why| anyhow::anyhow!("{shown} is not {want}: {why}"))?;
+    Ok(out)
+}
+
+/// The first line of a RINEX file is labelled `RINEX VERSION / TYPE` in
+/// columns 61-80, with the file type in column 21 (`O` observations; `N`,
+/// `G`, `H`, `L`, ... navigation).
+fn check_header(bytes: &[u8], kind: Kind) -> std::result::Result<(), String> {
+    let first = bytes.split(|&b| b == b'\n').next().unwrap_or(&[]);
+    let first = String::from_utf8_lossy(first);
+    let label = first.get(60..).unwrap_or("").trim_end();
+    if label != "RINEX VERSION / TYPE" {
+        let shown: String = first.trim_end().chars().take(60).collect();
+        return Err(format!(
+            "its first line does not end in the label 'RINEX VERSION / TYPE' (it reads \"{shown}\")"
+        ));
     }
-    let mut out = Vec::new();
-    let mut dec = flate2::read::MultiGzDecoder::new(raw.as_slice());
-    if let Err(e) = dec.read_to_end(&mut out) {
-        let lines = out.iter().filter(|&&b| b == b'\n').count();
-        let what = if e.kind() == std::io::ErrorKind::UnexpectedEof {
-            "truncated (the gzip stream ends early)"
-        } else {
-            "corrupt"
-        };
-        bail!(
-            "{}: file is {what}: {e}; {} compressed bytes, decompression stopped after {} bytes (line {})",
-            path.display(),
-            raw.len(),
-            out.len(),
-            lines + 1
-        );
+    let t = first.get(20..21).unwrap_or(" ");
+    match (kind, t) {
+        (Kind::Observation, "O") => Ok(()),
+        (Kind::Observation, t) => Err(format!(
+            "its header says file type '{t}' (navigation or other data); observations are type 'O'"
+        )),
+        (Kind::Navigation, "O") => Err(
+            "its header says file type 'O': an observation file, given where the navigation file goes"
+                .into(),
+        ),
+        (Kind::Navigation, _) => Ok(()),
     }
-    Ok(Some(out))
 }
 
 /// Load an observation file; warn on stderr about a partial last epoch.
 pub fn load_obs(path: &Path) -> Result<ObsData> {
-    let text = text(path)?;
-    let obs = ObsData::load(path)?;
-    if let Some(w) = text.as_deref().and_then(partial_last_epoch) {
+    let text = text(path, Kind::Observation)?;
+    let obs = ObsData::load(path).with_context(|| format!("reading {}", path.display()))?;
+    if let Some(w) = partial_last_epoch(&text) {
         let _ = writeln!(
             std::io::stderr(),
             "raim: warning: {}: {w}; its data may be partial",
@@ -58,8 +122,8 @@ pub fn load_obs(path: &Path) -> Result<ObsData> {
 
 /// Load a navigation file (gzip checked to its end first).
 pub fn load_nav(path: &Path) -> Result<NavData> {
-    text(path)?;
-    Ok(NavData::load(path)?)
+    text(path, Kind::Navigation)?;
+    NavData::load(path).with_context(|| format!("reading {}", path.display()))
 }
 
 /// Lines an epoch header announces after itself, or None when the line is
@@ -148,7 +212,7 @@ mod tests {
             "GEOP092I.24o.gz",
         ] {
             let p = Path::new(DATA).join(f);
-            let t = text(&p).unwrap().unwrap();
+            let t = text(&p, Kind::Observation).unwrap();
             assert_eq!(partial_last_epoch(&t), None, "{f}");
         }
     }

@@ -10,12 +10,15 @@ mod checks;
 mod decorrelate;
 mod engine;
 pub mod esq;
+mod export;
 mod input;
 mod pca;
 pub mod pf;
 mod plot;
 pub mod record;
+pub mod stanford;
 pub mod summary;
+pub mod usage;
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -64,104 +67,140 @@ pub enum Reference {
     Header,
 }
 
+/// `--help` headings of the replay's options; a run file's sections
+/// (docs/REPLAY.md, "Run files") are their first words, lower case.
+pub mod heading {
+    pub const SOURCES: &str = "Sources";
+    pub const MODELS: &str = "Models";
+    pub const FAULTS: &str = "Faults";
+    pub const SNAPSHOT: &str = "Monitors: snapshot RAIM (docs/CORE.md)";
+    pub const ARAIM: &str = "Monitors: ARAIM (docs/ARAIM.md)";
+    pub const PF: &str = "Monitors: particle filter (docs/PF.md)";
+    pub const ESQ: &str = "Monitors: effective sample quantity and PCA (docs/ESQ.md)";
+    pub const OUTPUTS: &str = "Outputs";
+    pub const PLOTS: &str = "Plots";
+}
+
 #[derive(Debug, Clone, Args)]
 pub struct ReplayArgs {
+    /// A run file (TOML) holding any of these options by section; options
+    /// on the command line override it (docs/REPLAY.md, "Run files").
+    #[arg(long = "config", id = "run_config", value_name = "FILE", help_heading = heading::SOURCES)]
+    pub run_config: Option<PathBuf>,
     /// RINEX observation file (2 or 3, optionally .gz).
-    #[arg(long)]
+    #[arg(long, value_name = "FILE", help_heading = heading::SOURCES)]
     pub obs: PathBuf,
     /// RINEX navigation file (broadcast ephemerides; optionally .gz).
-    #[arg(long)]
+    #[arg(long, value_name = "FILE", help_heading = heading::SOURCES)]
     pub nav: PathBuf,
     /// Systems to use, as RINEX letters (G, E, C, J).
-    #[arg(long, default_value = "GEC")]
+    #[arg(long, default_value = "GEC", help_heading = heading::SOURCES)]
     pub systems: String,
     /// Pseudorange code for a system, e.g. `--code C=C2I` (repeatable;
     /// defaults: G C1C/C1, E C1C/C1X/C1B, C C2I/C1I).
-    #[arg(long = "code", value_name = "SYS=CODE")]
+    #[arg(long = "code", value_name = "SYS=CODE", help_heading = heading::SOURCES)]
     pub codes: Vec<String>,
-    /// Elevation mask, degrees.
-    #[arg(long, default_value_t = 10.0)]
-    pub mask_deg: f64,
-    /// Skip the Klobuchar ionospheric correction.
-    #[arg(long)]
-    pub no_iono: bool,
-    /// Skip the Saastamoinen tropospheric correction.
-    #[arg(long)]
-    pub no_tropo: bool,
-    /// Skip the broadcast group delays (TGD/BGD).
-    #[arg(long)]
-    pub no_group_delay: bool,
-    /// First epoch: `HH:MM[:SS]` (GPS time of day) or +SECONDS from the first.
-    #[arg(long)]
+    /// First epoch: HH:MM[:SS] (GPS time of day) or +SECONDS from the first.
+    #[arg(long, help_heading = heading::SOURCES)]
     pub start: Option<String>,
     /// Last epoch (inclusive), same forms.
-    #[arg(long)]
+    #[arg(long, help_heading = heading::SOURCES)]
     pub end: Option<String>,
-    /// A fault (repeatable): step:G24:50@00:20:00, ramp:G24:0.1@00:20:00,
-    /// step:G15+G28:50@01:00:00, step:E:20@01:00 (whole constellation),
-    /// clock:300@00:30:00, noise:all:t3:1.0 (Student-t 3 dof, or laplace);
-    /// an optional ..END after the start time.
-    #[arg(long = "fault", value_name = "SPEC")]
-    pub faults: Vec<String>,
-    /// A TOML scenario file: a seed and `[[fault]]` tables (format and
-    /// example: docs/REPLAY.md, section "Scenario files").
-    #[arg(long, value_name = "FILE")]
-    pub scenario: Option<PathBuf>,
-    /// Seed of the injected noise (overrides the scenario's).
-    #[arg(long)]
-    pub seed: Option<u64>,
+    /// Elevation mask, degrees (may be negative, down to -90).
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true, help_heading = heading::MODELS)]
+    pub mask_deg: f64,
+    /// Skip the Klobuchar ionospheric correction.
+    #[arg(long, help_heading = heading::MODELS)]
+    pub no_iono: bool,
+    /// Skip the Saastamoinen tropospheric correction.
+    #[arg(long, help_heading = heading::MODELS)]
+    pub no_tropo: bool,
+    /// Skip the broadcast group delays (TGD/BGD).
+    #[arg(long, help_heading = heading::MODELS)]
+    pub no_group_delay: bool,
+    /// Sigma model: signal-in-space (URA) sigma, m.
+    #[arg(long, allow_negative_numbers = true, help_heading = heading::MODELS)]
+    pub ura_m: Option<f64>,
+    /// Sigma model: vertical residual ionosphere sigma, m.
+    #[arg(long, allow_negative_numbers = true, help_heading = heading::MODELS)]
+    pub iono_vertical_m: Option<f64>,
+    /// Sigma model: receiver noise sigma, m.
+    #[arg(long, allow_negative_numbers = true, help_heading = heading::MODELS)]
+    pub noise_m: Option<f64>,
     /// Where the position error is measured from: clean-mean (the mean
     /// position of the clean run's usable epochs) or header (the
     /// observation header's APPROX POSITION XYZ).
-    #[arg(long, value_enum, default_value_t = Reference::CleanMean)]
+    #[arg(long, value_enum, default_value_t = Reference::CleanMean, help_heading = heading::MODELS)]
     pub reference: Reference,
-    #[command(flatten)]
-    pub config: ConfigArgs,
-    /// Sigma model: signal-in-space (URA) sigma, m.
-    #[arg(long)]
-    pub ura_m: Option<f64>,
-    /// Sigma model: vertical residual ionosphere sigma, m.
-    #[arg(long)]
-    pub iono_vertical_m: Option<f64>,
-    /// Sigma model: receiver noise sigma, m.
-    #[arg(long)]
-    pub noise_m: Option<f64>,
-    /// One JSON object per epoch, then a final {"summary": ...} line.
-    #[arg(long)]
+    /// A fault (repeatable): step:G24:50@00:20:00, ramp:G24:0.1@00:20:00,
+    /// step:G15+G28:50@01:00:00, step:E:20@01:00 (whole constellation),
+    /// clock:300@00:30:00, noise:all:t3:1.0 (Student-t 3 dof, or laplace);
+    /// an optional ..END after the start time; the bias may be negative.
+    #[arg(long = "fault", value_name = "SPEC", allow_hyphen_values = true, help_heading = heading::FAULTS)]
+    pub faults: Vec<String>,
+    /// A TOML scenario file: a seed and [[fault]] tables (format and
+    /// example: docs/REPLAY.md, section "Scenario files").
+    #[arg(long, value_name = "FILE", help_heading = heading::FAULTS)]
+    pub scenario: Option<PathBuf>,
+    /// Seed of the injected noise (overrides the scenario's).
+    #[arg(long, help_heading = heading::FAULTS)]
+    pub seed: Option<u64>,
+    /// One JSON object per epoch, then a final {"summary": ...} line
+    /// (keys: docs/FORMATS.md).
+    #[arg(long, help_heading = heading::OUTPUTS)]
     pub json: bool,
     /// The monitor's NMEA 0183 output per epoch (RMC, GGA, GSA, GST, GBS;
     /// from the firmware's second UART with --target qemu): `only` the
     /// sentences (a stream for NMEA readers, no summary), or `with-text`
     /// after each epoch's text line.
-    #[arg(long, value_enum, value_name = "MODE")]
+    #[arg(long, value_enum, value_name = "MODE", help_heading = heading::OUTPUTS)]
     pub nmea: Option<NmeaMode>,
+    /// Write the NMEA stream to this file (beside any stdout output).
+    #[arg(long, value_name = "FILE", help_heading = heading::OUTPUTS)]
+    pub nmea_file: Option<PathBuf>,
+    /// Write an RTKLIB-compatible solution file (.pos), with the integrity
+    /// decision and protection levels as extra columns (docs/FORMATS.md).
+    #[arg(long, value_name = "FILE", help_heading = heading::OUTPUTS)]
+    pub pos: Option<PathBuf>,
+    /// Write one CSV row per epoch, with a header (docs/FORMATS.md).
+    #[arg(long, value_name = "FILE", help_heading = heading::OUTPUTS)]
+    pub csv: Option<PathBuf>,
+    /// Write a KML track, placemarks coloured by decision, excluded
+    /// satellites in each.
+    #[arg(long, value_name = "FILE", help_heading = heading::OUTPUTS)]
+    pub kml: Option<PathBuf>,
+    /// Write a GPX track; each point names its decision and exclusions.
+    #[arg(long, value_name = "FILE", help_heading = heading::OUTPUTS)]
+    pub gpx: Option<PathBuf>,
     /// Print only the summary table.
-    #[arg(long)]
+    #[arg(long, help_heading = heading::OUTPUTS)]
     pub quiet: bool,
-    /// Draw the statistic, exclusions, errors and PLs, and a Stanford
-    /// diagram, into this PNG.
-    #[arg(long)]
-    pub plot: Option<PathBuf>,
-    /// TrueType font for the plot (default: DejaVu Sans where installed).
-    #[arg(long)]
-    pub font: Option<PathBuf>,
-    /// Where the monitor runs: host (the core on this machine) or qemu (the
-    /// firmware under QEMU, mps2-an386; built on first use or taken from
-    /// $RAIM_FIRMWARE_ELF).
-    #[arg(long, value_enum, default_value_t = Target::Host)]
-    pub target: Target,
     /// Exit 0 even when some epochs were refused by the monitor (they are
     /// still in the output and counted on stderr).
-    #[arg(long)]
+    #[arg(long, help_heading = heading::OUTPUTS)]
     pub keep_going: bool,
-    /// Particle-filter RAIM (seed 004; docs/PF.md): --pf {ekf,pf,gapf}.
-    #[command(flatten)]
+    /// Draw the statistic, exclusions, errors and PLs, and the horizontal
+    /// and vertical Stanford diagrams, into this PNG.
+    #[arg(long, value_name = "FILE", help_heading = heading::PLOTS)]
+    pub plot: Option<PathBuf>,
+    /// TrueType font for the plots (default: DejaVu Sans where installed).
+    #[arg(long, value_name = "FILE", help_heading = heading::PLOTS)]
+    pub font: Option<PathBuf>,
+    #[command(flatten, next_help_heading = heading::SNAPSHOT)]
+    pub config: ConfigArgs,
+    /// Where the monitor runs: host (the core on this machine) or qemu (the
+    /// firmware under QEMU, mps2-an386; built on first use or taken from
+    /// $RAIM_FIRMWARE_ELF). Snapshot monitor only.
+    #[arg(long, value_enum, default_value_t = Target::Host, help_heading = heading::SNAPSHOT)]
+    pub target: Target,
+    /// Particle-filter RAIM (docs/PF.md): --pf {ekf,pf,gapf}.
+    #[command(flatten, next_help_heading = heading::PF)]
     pub pf: pf::PfArgs,
-    /// ARAIM (issue 12; docs/ARAIM.md): --araim and its options.
-    #[command(flatten)]
+    /// ARAIM (docs/ARAIM.md): --araim and its options.
+    #[command(flatten, next_help_heading = heading::ARAIM)]
     pub araim: araim::AraimReplayArgs,
-    /// Seed 003's ESQ and PCA (docs/ESQ.md): --esq, --pca, --esq-mcusum.
-    #[command(flatten)]
+    /// Effective sample quantity and PCA constellation monitor (docs/ESQ.md).
+    #[command(flatten, next_help_heading = heading::ESQ)]
     pub esq: esq::EsqArgs,
 }
 
@@ -454,6 +493,7 @@ pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
 /// `raim replay`: the output, and the count of epochs the monitor refused
 /// (a closed pipe is handled by the caller, crate::outcome).
 pub fn run(args: &ReplayArgs) -> Result<Tally> {
+    check_output_folders(args)?;
     if args.esq.any() {
         // Seed 003's own claims (docs/ESQ.md), built on its ARAIM modes:
         // their own per-epoch output; `--araim --esq` and `--araim --pca`
@@ -483,6 +523,56 @@ pub fn run(args: &ReplayArgs) -> Result<Tally> {
         }
     }
     Ok(tally)
+}
+
+/// Every output file's folder exists (checked before the run, which can
+/// take minutes).
+fn check_output_folders(args: &ReplayArgs) -> Result<()> {
+    let outputs = [
+        ("--plot", &args.plot),
+        ("--pf-plot", &args.pf.pf_plot),
+        ("--araim-plot", &args.araim.araim_plot),
+        ("--esq-plot", &args.esq.esq_plot),
+        ("--pos", &args.pos),
+        ("--csv", &args.csv),
+        ("--kml", &args.kml),
+        ("--gpx", &args.gpx),
+        ("--nmea-file", &args.nmea_file),
+    ];
+    for (what, p) in outputs {
+        if let Some(p) = p {
+            plot::check_folder(p, what)?;
+        }
+    }
+    Ok(())
+}
+
+/// A run's name for titles: the observation file, the faults, the window.
+pub fn run_title(args: &ReplayArgs) -> String {
+    let file = args.obs.file_name().map_or_else(
+        || args.obs.display().to_string(),
+        |f| f.to_string_lossy().into(),
+    );
+    let mut faults: Vec<String> = args.faults.clone();
+    if let Some(s) = &args.scenario {
+        faults.push(format!("scenario {}", s.display()));
+    }
+    faults.extend(args.esq.eph_fault.iter().map(|f| format!("eph:{f}")));
+    faults.extend(args.araim.araim_const_faults.iter().cloned());
+    let fault = if faults.is_empty() {
+        "no fault".to_string()
+    } else {
+        faults.join(" + ")
+    };
+    let window = match (&args.start, &args.end) {
+        (None, None) => "whole file".to_string(),
+        (a, b) => format!(
+            "{}..{}",
+            a.as_deref().unwrap_or("start"),
+            b.as_deref().unwrap_or("end")
+        ),
+    };
+    format!("{file}, {}, {fault}, {window}", args.systems)
 }
 
 fn write_outputs(args: &ReplayArgs, out: &ReplayOutput) -> Result<()> {
@@ -517,8 +607,24 @@ fn write_outputs(args: &ReplayArgs, out: &ReplayOutput) -> Result<()> {
         writeln!(w, "{}", out.summary.table())?;
     }
     w.flush()?;
+    let title = run_title(args);
+    if let Some(p) = &args.pos {
+        export::write_pos(p, &out.records, &[args.obs.as_path(), args.nav.as_path()])?;
+    }
+    if let Some(p) = &args.csv {
+        export::write_csv(p, &out.records)?;
+    }
+    if let Some(p) = &args.kml {
+        export::write_kml(p, &out.records, &title)?;
+    }
+    if let Some(p) = &args.gpx {
+        export::write_gpx(p, &out.records, &title)?;
+    }
+    if let Some(p) = &args.nmea_file {
+        export::write_nmea(p, &out.records)?;
+    }
     if let Some(p) = &args.plot {
-        plot::draw(out, &args.core_config(), p, args.font.as_deref())?;
+        plot::draw(out, &args.core_config(), p, args.font.as_deref(), &title)?;
     }
     Ok(())
 }

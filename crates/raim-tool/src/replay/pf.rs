@@ -41,7 +41,7 @@ pub enum PfKind {
 
 #[derive(Debug, Clone, Args)]
 pub struct PfArgs {
-    /// Run the particle-filter RAIM (seed 004) instead of the snapshot monitor: ekf (EKF baseline), pf (plain SIR PF baseline) or gapf (genetic-resampling PF).
+    /// Run the particle-filter RAIM (Wang et al. 2014, docs/PF.md) instead of the snapshot monitor: ekf (EKF baseline), pf (plain SIR PF baseline) or gapf (genetic-resampling PF).
     #[arg(long, value_enum)]
     pub pf: Option<PfKind>,
     /// Particles per filter: 50, 100, 300 or 1000.
@@ -89,8 +89,19 @@ pub struct PfArgs {
     pub pf_no_exclude: bool,
     /// Plot D_k against the threshold, the per-satellite LLRs and the
     /// position error into this PNG.
-    #[arg(long)]
+    #[arg(long, value_name = "FILE", help_heading = super::heading::PLOTS)]
     pub pf_plot: Option<PathBuf>,
+}
+
+impl PfKind {
+    /// The filter's plain name for captions.
+    pub fn name(self) -> &'static str {
+        match self {
+            PfKind::Ekf => "extended Kalman",
+            PfKind::Pf => "SIR particle",
+            PfKind::Gapf => "genetic-resampling particle",
+        }
+    }
 }
 
 impl PfArgs {
@@ -478,7 +489,7 @@ pub fn run(args: &ReplayArgs) -> Result<()> {
         writeln!(w, "{}", summary_row(&s))?;
     }
     if let Some(p) = &pf.pf_plot {
-        plot(&recs, &s, p, args.font.as_deref())?;
+        plot(&recs, &s, p, args.font.as_deref(), &super::run_title(args))?;
     }
     Ok(())
 }
@@ -542,40 +553,71 @@ fn perr<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow!("plot: {e}")
 }
 
-/// Two panels: D_k and every auxiliary filter's windowed LLR against the
-/// threshold; the 3D position error.
-pub fn plot(recs: &[PfRecord], s: &PfSummary, path: &Path, font: Option<&Path>) -> Result<()> {
+/// A title naming the file, the faults and the window, then two panels on
+/// GPS time: every auxiliary filter's windowed accumulated LLR (one legend
+/// entry per satellite) against the threshold, the fault onset marked, and
+/// the 3D position error. Values outside the drawn range are clipped to its
+/// edge, and the caption says so.
+pub fn plot(
+    recs: &[PfRecord],
+    s: &PfSummary,
+    path: &Path,
+    font: Option<&Path>,
+    title: &str,
+) -> Result<()> {
     super::plot::register_font(font)?;
-    let root = BitMapBackend::new(path, (1400, 900)).into_drawing_area();
+    let root = BitMapBackend::new(path, (1600, 1100)).into_drawing_area();
     root.fill(&WHITE).map_err(perr)?;
-    let (top, bottom) = root.split_vertically(500);
-    let n = recs.len() as f64;
-    let dmax = recs
-        .iter()
-        .flat_map(|r| r.llr.iter().map(|l| l.2))
-        .filter(|v| v.is_finite())
+    let root = root
+        .titled(&format!("raim replay --pf: {title}"), ("sans-serif", 26))
+        .map_err(perr)?;
+    let (top, bottom) = root.split_vertically(620);
+    let ax = super::plot::TimeAxis::new(
+        recs.first().map_or(0.0, |r| r.time_gps_s),
+        recs.last().map_or(0.0, |r| r.time_gps_s),
+    );
+    let all = || {
+        recs.iter()
+            .flat_map(|r| r.llr.iter().map(|l| l.2))
+            .filter(|v| v.is_finite())
+    };
+    let dmax = all()
         .fold(s.threshold * 1.5, f64::max)
         .min(s.threshold * 20.0);
-    let dmin = recs
-        .iter()
-        .flat_map(|r| r.llr.iter().map(|l| l.2))
-        .filter(|v| v.is_finite())
-        .fold(0.0, f64::min)
-        .max(-s.threshold * 5.0);
+    let dmin = all().fold(0.0, f64::min).max(-s.threshold * 5.0);
+    let clipped_low = all().filter(|&v| v < dmin).count();
+    let clipped_high = all().filter(|&v| v > dmax).count();
+    let mut note = String::new();
+    if clipped_low > 0 {
+        note.push_str(&format!(
+            "; {clipped_low} values below {dmin:.0} drawn at {dmin:.0}"
+        ));
+    }
+    if clipped_high > 0 {
+        note.push_str(&format!(
+            "; {clipped_high} values above {dmax:.0} drawn at {dmax:.0}"
+        ));
+    }
     let mut c = ChartBuilder::on(&top)
         .caption(
             format!(
-                "{:?} N={} windowed accumulated LLR per auxiliary filter vs threshold",
-                s.filter, s.particles
+                "{} filter, {} particles: windowed accumulated LLR per left-out satellite{note}",
+                s.filter.name(),
+                s.particles
             ),
             ("sans-serif", 20),
         )
         .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(50)
-        .build_cartesian_2d(0.0..n, dmin..dmax)
+        .x_label_area_size(45)
+        .y_label_area_size(60)
+        .build_cartesian_2d(ax.range(), dmin..dmax)
         .map_err(perr)?;
-    c.configure_mesh().x_desc("epoch").draw().map_err(perr)?;
+    c.configure_mesh()
+        .x_desc(ax.desc.as_str())
+        .x_label_formatter(&super::plot::hhmm)
+        .y_desc("windowed accumulated LLR")
+        .draw()
+        .map_err(perr)?;
     let mut names: Vec<String> = recs
         .iter()
         .flat_map(|r| r.llr.iter().map(|l| l.0.clone()))
@@ -590,43 +632,82 @@ pub fn plot(recs: &[PfRecord], s: &PfSummary, path: &Path, font: Option<&Path>) 
                 r.llr
                     .iter()
                     .find(|l| &l.0 == name)
-                    .map(|l| (r.epoch as f64, l.2.clamp(dmin, dmax)))
+                    .map(|l| (ax.x(r.time_gps_s), l.2.clamp(dmin, dmax)))
             })
             .collect();
         c.draw_series(LineSeries::new(pts, col.stroke_width(1)))
-            .map_err(perr)?;
+            .map_err(perr)?
+            .label(format!("without {name}"))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col));
     }
     c.draw_series(LineSeries::new(
-        [(0.0, s.threshold), (n, s.threshold)],
+        [(ax.first_h, s.threshold), (ax.last_h, s.threshold)],
         RED.stroke_width(2),
     ))
-    .map_err(perr)?;
-    if let Some(f) = s.fault_epoch {
+    .map_err(perr)?
+    .label(format!("decision threshold {:.1}", s.threshold))
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(2)));
+    if let Some(r) = s
+        .fault_epoch
+        .and_then(|f| recs.iter().find(|r| r.epoch == f))
+    {
+        let x = ax.x(r.time_gps_s);
         c.draw_series(LineSeries::new(
-            [(f as f64, dmin), (f as f64, dmax)],
+            [(x, dmin), (x, dmax)],
             BLACK.stroke_width(1),
         ))
-        .map_err(perr)?;
+        .map_err(perr)?
+        .label(format!(
+            "fault onset {} (epoch {})",
+            raim_gnss::time::time_of_day(r.time_gps_s),
+            r.epoch
+        ))
+        .legend(|(x, y)| PathElement::new(vec![(x, y - 6), (x, y + 6)], BLACK));
     }
+    c.configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(perr)?;
     let emax = recs
         .iter()
         .filter_map(|r| r.error_3d_m)
         .fold(1.0, f64::max)
         .min(200.0);
+    let clipped = recs
+        .iter()
+        .filter_map(|r| r.error_3d_m)
+        .filter(|&e| e > emax)
+        .count();
     let mut c = ChartBuilder::on(&bottom)
-        .caption("3D position error (m)", ("sans-serif", 20))
+        .caption(
+            if clipped > 0 {
+                format!("3D position error of the main filter ({clipped} epochs above {emax:.0} m drawn at {emax:.0} m)")
+            } else {
+                "3D position error of the main filter".to_string()
+            },
+            ("sans-serif", 20),
+        )
         .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(50)
-        .build_cartesian_2d(0.0..n, 0.0..emax)
+        .x_label_area_size(45)
+        .y_label_area_size(60)
+        .build_cartesian_2d(ax.range(), 0.0..emax)
         .map_err(perr)?;
-    c.configure_mesh().x_desc("epoch").draw().map_err(perr)?;
+    c.configure_mesh()
+        .x_desc(ax.desc.as_str())
+        .x_label_formatter(&super::plot::hhmm)
+        .y_desc("m")
+        .draw()
+        .map_err(perr)?;
     c.draw_series(LineSeries::new(
         recs.iter()
-            .filter_map(|r| r.error_3d_m.map(|e| (r.epoch as f64, e.min(emax)))),
+            .filter_map(|r| r.error_3d_m.map(|e| (ax.x(r.time_gps_s), e.min(emax)))),
         BLUE.stroke_width(1),
     ))
-    .map_err(perr)?;
+    .map_err(perr)?
+    .label("3D error")
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
     root.present().map_err(perr)?;
     Ok(())
 }

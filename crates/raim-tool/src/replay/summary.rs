@@ -76,9 +76,9 @@ pub fn summarise(records: &[EpochRecord], fault_start_gps_s: Option<f64>) -> Sum
     let mut ratio = Vec::new();
     let mut worst = f64::NAN;
     for r in records {
-        if r.faulted_ids.is_empty() && r.dof > 0 && r.statistic.is_finite() {
-            ratio.push(r.statistic / f64::from(r.dof));
-            worst = worst.max(r.statistic / r.threshold);
+        if r.faulted_ids.is_empty() && r.initial_dof > 0 && r.initial_statistic.is_finite() {
+            ratio.push(r.initial_statistic / f64::from(r.initial_dof));
+            worst = worst.max(r.initial_statistic / r.initial_threshold);
         }
         match r.decision.as_str() {
             "ok" => s.ok += 1,
@@ -208,9 +208,9 @@ mod tests {
         let mut r = EpochRecord::from_error(t, 8, &[], &"x");
         r.decision = decision.into();
         r.error = None;
-        r.statistic = 1.0;
-        r.threshold = 30.0;
-        r.dof = 2;
+        r.initial_statistic = 1.0;
+        r.initial_threshold = 30.0;
+        r.initial_dof = 2;
         r.excluded_ids = excluded.iter().map(|&p| g(p)).collect();
         r.faulted_ids = faulted.iter().map(|&(p, _)| g(p)).collect();
         r.faulted = faulted
