@@ -281,7 +281,7 @@ impl Server {
         };
         match outcome {
             Ok(()) => {
-                write_nmea(&self.wire, nmea_out).map_err(IoError::Nmea)?;
+                write_nmea(&self.wire, self.request.as_ref(), nmea_out).map_err(IoError::Nmea)?;
                 let Server {
                     scratch,
                     out,
@@ -474,19 +474,27 @@ fn run_epoch<P: Platform>(
     }
 }
 
-/// The epoch's NMEA sentences. Its own frame (the sentences), not on the
-/// epoch's path (issue 10). Sentences cannot exceed 82 characters with the
-/// formats used; if one ever did, none is written and the epoch's answer
-/// still goes out.
+/// The epoch's NMEA sentences, written one at a time as they are formed.
+/// Its own frame, not on the epoch's path (issue 10). The request is the
+/// epoch's (the satellites seen, for GSV and the DOPs).
 #[inline(never)]
-fn write_nmea<M: Write>(wire: &WireResult, nmea_out: &mut M) -> Result<(), M::Error> {
-    if let Ok(sentences) = nmea::epoch_sentences(wire) {
-        for s in sentences.iter() {
-            nmea_out.write_all(s.as_bytes())?;
-        }
-        nmea_out.flush()?;
-    }
-    Ok(())
+fn write_nmea<M: Write>(
+    wire: &WireResult,
+    request: Option<&Request>,
+    nmea_out: &mut M,
+) -> Result<(), M::Error> {
+    let epoch = match request.map(|r| &r.command) {
+        Some(Command::Ranges(e)) => Epoch::ranges(e.time_s, &e.sats.items, e.apriori_m),
+        Some(Command::Linear(e)) => Epoch::linear(e.time_s, &e.sats.items),
+        _ => return Ok(()),
+    };
+    nmea::write_epoch(
+        wire,
+        &nmea::Sky::new(&epoch),
+        nmea::GEOID_BUILT,
+        &mut |s: &nmea::Sentence| nmea_out.write_all(s.as_bytes()),
+    )?;
+    nmea_out.flush()
 }
 
 /// Decode a request payload into `slot`; its sequence number, or the
@@ -720,12 +728,21 @@ mod tests {
             (st.frames, st.epochs, st.errors, st.capacity),
             (3, 2, 0, 32)
         );
-        // Five sentences per solved epoch, in order.
+        // Nine sentences per solved epoch of 8 GPS satellites, in order.
         let kinds: Vec<&str> = nmea.lines().map(|l| &l[3..6]).collect();
-        assert_eq!(
-            kinds,
-            ["RMC", "GGA", "GSA", "GST", "GBS", "RMC", "GGA", "GSA", "GST", "GBS"]
-        );
+        let one = ["RMC", "VTG", "GGA", "GSA", "GSV", "GSV", "GST", "GBS", "ZDA"];
+        assert_eq!(kinds, [one, one].concat());
+        // The host's writer on the same epoch, byte for byte.
+        let want: String = nmea::epoch_sentences(
+            r1,
+            &nmea::Sky::new(&Epoch::linear(1.0, &s1)),
+            nmea::GEOID_BUILT,
+        )
+        .unwrap()
+        .iter()
+        .map(|s| s.as_str())
+        .collect();
+        assert!(nmea.ends_with(&want), "{nmea}");
     }
 
     #[test]
