@@ -733,7 +733,7 @@ mod tests {
         let one = ["RMC", "VTG", "GGA", "GSA", "GSV", "GSV", "GST", "GBS", "ZDA"];
         assert_eq!(kinds, [one, one].concat());
         // The host's writer on the same epoch, byte for byte.
-        let want: String = nmea::epoch_sentences(
+        let want: std::string::String = nmea::epoch_sentences(
             r1,
             &nmea::Sky::new(&Epoch::linear(1.0, &s1)),
             nmea::GEOID_BUILT,
