@@ -32,7 +32,9 @@
 //!   RMC's NMEA 4.1 navigational status carries the integrity decision:
 //!   `S` safe (ok / excluded), `C` caution (unavailable: PL above the alert
 //!   limit), `U` unsafe (alarm), `V` no position.
-//! - DOPs (GSA PDOP/HDOP/VDOP, GGA HDOP): of the geometry in use, the
+//! - DOPs (GSA PDOP/HDOP/VDOP, GGA HDOP) and GSV need feature `nmea-sky`
+//!   (flash: not in the 128 KiB firmware build, docs/FLASH.md). The DOPs
+//!   are those of the geometry in use, the
 //!   unweighted (G^T G)^-1 of the used satellites' ENU lines of sight with
 //!   one clock column per constellation used (SPEC §1's model without the
 //!   weights); empty when that matrix is singular or no position exists.
@@ -490,25 +492,43 @@ fn separation_m(g: &Geodetic, geoid: bool) -> Option<f64> {
     None
 }
 
+/// What a writer includes beyond the fixed sentences.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Options {
+    /// GGA altitude above mean sea level from the geoid model (feature
+    /// `geoid`); else the ellipsoidal height with a separation of 0.
+    pub geoid: bool,
+    /// GSV and the DOPs of GSA and GGA (feature `nmea-sky`); else no GSV and
+    /// empty DOP fields.
+    pub sky: bool,
+}
+
+/// Everything this build has: the firmware's and the host's writer.
+pub const BUILT: Options = Options {
+    geoid: cfg!(feature = "geoid"),
+    sky: cfg!(feature = "nmea-sky"),
+};
+
 /// Every sentence of one epoch, in the order RMC, VTG, GGA, GSA..., GSV...,
 /// GST, GBS, ZDA, handed to `emit` one at a time (the firmware writes each
-/// to its UART without holding them all). `geoid`: MSL altitude from the
-/// geoid model where it is built ([`GEOID_BUILT`]). A sentence that could
-/// not be formatted ([`TooLong`]: the field widths exclude it) is skipped.
+/// to its UART without holding them all). `opts` beyond [`BUILT`] are
+/// ignored. A sentence that could not be formatted ([`TooLong`]: the field
+/// widths exclude it) is skipped.
 pub fn write_epoch<E>(
     r: &WireResult,
     sky: &Sky,
-    geoid: bool,
+    opts: Options,
     emit: &mut dyn FnMut(&Sentence) -> Result<(), E>,
 ) -> Result<(), E> {
-    let dop = dops(r, sky);
+    let with_sky = BUILT.sky && opts.sky;
+    let dop = if with_sky { dops(r, sky) } else { None };
     let mut put = |s: Result<Sentence, TooLong>| match s {
         Ok(s) => emit(&s),
         Err(TooLong) => Ok(()),
     };
     put(rmc(r))?;
     put(vtg(r))?;
-    put(gga(r, dop, geoid))?;
+    put(gga(r, dop, BUILT.geoid && opts.geoid))?;
     for sys in System::ALL {
         let used = r
             .satellites
@@ -524,14 +544,16 @@ pub fn write_epoch<E>(
             put(gsa(r, dop, sys, part))?;
         }
     }
-    let fr = frame(r, sky);
-    for sys in System::ALL {
-        let n = (0..sky.len())
-            .filter(|&i| sky.id(i).is_some_and(|id| id.system == sys))
-            .count();
-        let parts = n.div_ceil(4);
-        for part in 0..parts {
-            put(gsv(sky, &fr, sys, n, part, parts))?;
+    if with_sky {
+        let fr = frame(r, sky);
+        for sys in System::ALL {
+            let n = (0..sky.len())
+                .filter(|&i| sky.id(i).is_some_and(|id| id.system == sys))
+                .count();
+            let parts = n.div_ceil(4);
+            for part in 0..parts {
+                put(gsv(sky, &fr, sys, n, part, parts))?;
+            }
         }
     }
     put(gst(r))?;
@@ -539,13 +561,10 @@ pub fn write_epoch<E>(
     put(zda(r))
 }
 
-/// Whether this build has the geoid model.
-pub const GEOID_BUILT: bool = cfg!(feature = "geoid");
-
 /// [`write_epoch`] collected (the host's form).
-pub fn epoch_sentences(r: &WireResult, sky: &Sky, geoid: bool) -> Result<Sentences, TooLong> {
+pub fn epoch_sentences(r: &WireResult, sky: &Sky, opts: Options) -> Result<Sentences, TooLong> {
     let mut out = Sentences::new();
-    write_epoch(r, sky, geoid, &mut |s: &Sentence| {
+    write_epoch(r, sky, opts, &mut |s: &Sentence| {
         out.push(s.clone()).map_err(|_| TooLong)
     })?;
     Ok(out)
@@ -726,13 +745,13 @@ fn gsv(
         b.write_char(',')?;
         if let Some(l) = sky.los_enu(i, fr) {
             let el_deg = libm::round(raim_core::frames::elevation_rad(l).to_degrees());
-            let az = libm::round(libm::atan2(l[0], l[1]).to_degrees());
-            let az_deg = if az < 0.0 { az + 360.0 } else { az } % 360.0;
+            // Whole degrees in [0, 360): atan2 is within [-180, 180].
+            let az_deg = (libm::round(libm::atan2(l[0], l[1]).to_degrees()) as i64).rem_euclid(360);
             if el_deg >= 0.0 {
                 fixed::uint(&mut b, el_deg as u64, 2)?;
             }
             b.write_char(',')?;
-            fixed::uint(&mut b, az_deg as u64, 3)?;
+            fixed::uint(&mut b, az_deg.unsigned_abs(), 3)?;
         } else {
             b.write_char(',')?;
         }
@@ -937,10 +956,16 @@ mod tests {
         (WireResult::from_result(&r), sats)
     }
 
+    /// This build's sentences without the geoid.
+    const NO_GEOID: Options = Options {
+        geoid: false,
+        sky: true,
+    };
+
     /// The sentences of `w` for the linear epoch `sats` (no geoid).
     fn sentences(w: &WireResult, sats: &[LinearObservation]) -> std::vec::Vec<String> {
         let e = Epoch::linear(w.time_s, sats);
-        let all = epoch_sentences(w, &Sky::new(&e), false).unwrap();
+        let all = epoch_sentences(w, &Sky::new(&e), NO_GEOID).unwrap();
         all.iter().map(|s| String::from(s.as_str())).collect()
     }
 
@@ -1285,7 +1310,7 @@ mod tests {
         let g = raim_core::frames::ecef_to_geodetic([-3976219.5082, 3382372.5671, 3652512.9849]);
         w.geodetic = Some(g);
         let e = Epoch::linear(w.time_s, &sats);
-        let all = epoch_sentences(&w, &Sky::new(&e), true).unwrap();
+        let all = epoch_sentences(&w, &Sky::new(&e), BUILT).unwrap();
         let gga: std::vec::Vec<String> = parse(&all[2]).0.split(',').map(String::from).collect();
         let n = geoid::separation_m(g.lat_rad, g.lon_rad).unwrap();
         let (alt, sep): (f64, f64) = (gga[9].parse().unwrap(), gga[11].parse().unwrap());

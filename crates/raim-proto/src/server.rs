@@ -491,7 +491,7 @@ fn write_nmea<M: Write>(
     nmea::write_epoch(
         wire,
         &nmea::Sky::new(&epoch),
-        nmea::GEOID_BUILT,
+        nmea::BUILT,
         &mut |s: &nmea::Sentence| nmea_out.write_all(s.as_bytes()),
     )?;
     nmea_out.flush()
@@ -736,7 +736,7 @@ mod tests {
         let want: std::string::String = nmea::epoch_sentences(
             r1,
             &nmea::Sky::new(&Epoch::linear(1.0, &s1)),
-            nmea::GEOID_BUILT,
+            nmea::BUILT,
         )
         .unwrap()
         .iter()

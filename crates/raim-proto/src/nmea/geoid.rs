@@ -41,7 +41,8 @@ pub fn separation_m(lat_rad: f64, lon_rad: f64) -> Option<f64> {
         return None;
     }
     let lat_deg = lat_rad.to_degrees().clamp(-90.0, 90.0);
-    let lon_deg = lon_rad.to_degrees().rem_euclid(360.0);
+    let lon = lon_rad.to_degrees();
+    let lon_deg = lon - 360.0 * libm::floor(lon / 360.0);
     // Row coordinate from the north pole, column from Greenwich.
     let y = (90.0 - lat_deg) / STEP_DEG;
     let x = lon_deg / STEP_DEG;
