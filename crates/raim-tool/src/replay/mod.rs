@@ -493,8 +493,9 @@ fn write_outputs(args: &ReplayArgs, out: &ReplayOutput) -> Result<()> {
             match args.nmea {
                 _ if args.json => writeln!(w, "{}", serde_json::to_string(r)?)?,
                 Some(NmeaMode::Only) => {
+                    // NMEA 0183 ends every sentence with CR LF.
                     for s in &r.nmea {
-                        writeln!(w, "{}", s.trim_end())?;
+                        write!(w, "{}\r\n", s.trim_end())?;
                     }
                 }
                 Some(NmeaMode::WithText) => {
