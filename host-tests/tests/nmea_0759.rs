@@ -1,7 +1,8 @@
 //! NMEA 0183 4.11 on a real epoch stream: GSI station 0759 (../shared/data)
 //! through the host's monitor and NMEA writer (the firmware's, with this
-//! build's geoid and sky sentences). Every sentence parses with the `nmea`
-//! crate and with pynmea2; GGA's altitude is above mean sea level, within
+//! build's geoid and sky sentences). Every sentence parses with pynmea2,
+//! and with the `nmea` crate but for GBS, which that crate cannot read in
+//! the standard's form (test comment); GGA's altitude is above mean sea level, within
 //! 1 m of RTKLIB's 34.041 m (geoid separation 36.478 m) at 00:00:00; and
 //! gpsd reports SKY with the satellites seen and used and the DOPs of the
 //! geometry, and a TPV altMSL equal to GGA's.
@@ -86,7 +87,19 @@ fn every_sentence_parses_with_the_nmea_crate_and_pynmea2() {
     let all: Vec<&String> = epochs.iter().flatten().collect();
     let mut kinds = std::collections::BTreeSet::new();
     for s in &all {
-        nmea::parse_str(s).unwrap_or_else(|e| panic!("nmea crate: {e:?} on {s}"));
+        if &s[3..6] == "GBS" {
+            // The nmea crate 0.8 reads GBS fields 2-3 (the latitude and
+            // longitude errors, m) as a position with hemisphere letters,
+            // so no GBS of the standard's form parses whole there (its own
+            // log test skips GBS). Its framing and checksum must pass, and
+            // the full parse must fail only there, in the error fields.
+            nmea::parse_nmea_sentence(s).unwrap_or_else(|e| panic!("nmea crate: {e:?} on {s}"));
+            let err = format!("{:?}", nmea::parse_str(s).unwrap_err());
+            let errors = fields(s)[2..].join(",");
+            assert!(err.contains(&errors), "{err} on {s}");
+        } else {
+            nmea::parse_str(s).unwrap_or_else(|e| panic!("nmea crate: {e:?} on {s}"));
+        }
         kinds.insert(s[3..6].to_string());
     }
     assert_eq!(

@@ -129,7 +129,7 @@ pub struct ReplayArgs {
     /// One JSON object per epoch, then a final {"summary": ...} line.
     #[arg(long)]
     pub json: bool,
-    /// The monitor's NMEA 0183 output per epoch (RMC, GGA, GSA, GST, GBS;
+    /// The monitor's NMEA 0183 output per epoch (RMC, VTG, GGA, GSA, GSV, GST, GBS, ZDA, CRLF-terminated;
     /// from the firmware's second UART with --target qemu): `only` the
     /// sentences (a stream for NMEA readers, no summary), or `with-text`
     /// after each epoch's text line.
