@@ -4,8 +4,10 @@
 //! and with the `nmea` crate but for GBS, which that crate cannot read in
 //! the standard's form (test comment); GGA's altitude is above mean sea level, within
 //! 1 m of RTKLIB's 34.041 m (geoid separation 36.478 m) at 00:00:00; and
-//! gpsd reports SKY with the satellites seen and used and the DOPs of the
-//! geometry, and a TPV altMSL equal to GGA's.
+//! gpsd reports SKY with the satellites seen (elevation, azimuth) and the
+//! DOPs of the geometry, and a TPV altMSL equal to GGA's. (gpsd 3.22 marks
+//! a GSV satellite used only with a C/N0 above zero, and 0759's RINEX has
+//! no signal strengths: its `uSat` stays 0, docs/PROTOCOL.md.)
 //!
 //!     cargo test --release -p host-tests --test nmea_0759 -- --nocapture
 //!

@@ -124,11 +124,15 @@ fn snapshot_build_refuses_the_reconstruction_fde() {
         faulted += usize::from(matches!(&want, Ok(r) if !r.exclusions.is_empty()));
         // The NMEA sentences (integer formatting on both sides) too.
         if let Ok(r) = &want {
-            let host_nmea: Vec<String> = raim_proto::nmea::epoch_sentences(r, &raim_proto::nmea::Sky::new(&epoch), SNAPSHOT_NMEA)
-                .unwrap()
-                .iter()
-                .map(|s| s.trim_end().to_string())
-                .collect();
+            let host_nmea: Vec<String> = raim_proto::nmea::epoch_sentences(
+                r,
+                &raim_proto::nmea::Sky::new(&epoch),
+                SNAPSHOT_NMEA,
+            )
+            .unwrap()
+            .iter()
+            .map(|s| s.trim_end().to_string())
+            .collect();
             assert_eq!(p.nmea, host_nmea, "epoch at {time_s} s");
         }
         assert_eq!(

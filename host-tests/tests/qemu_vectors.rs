@@ -123,11 +123,15 @@ fn compare(
                 wire_bytes(&host_r),
                 "{what}: firmware {fw_r:?}\nhost {host_r:?}"
             );
-            let host_nmea: Vec<String> = raim_proto::nmea::epoch_sentences(&host_r, &raim_proto::nmea::Sky::new(epoch), raim_proto::nmea::BUILT)
-                .unwrap()
-                .iter()
-                .map(|s| s.trim_end().to_string())
-                .collect();
+            let host_nmea: Vec<String> = raim_proto::nmea::epoch_sentences(
+                &host_r,
+                &raim_proto::nmea::Sky::new(epoch),
+                raim_proto::nmea::BUILT,
+            )
+            .unwrap()
+            .iter()
+            .map(|s| s.trim_end().to_string())
+            .collect();
             assert_eq!(p.nmea, host_nmea, "{what}");
         }
         (Err(fw_e), Err(host_e)) => assert_eq!(*fw_e, WireError::from(host_e), "{what}"),

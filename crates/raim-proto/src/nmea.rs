@@ -337,7 +337,10 @@ impl<'a> Sky<'a> {
 /// Where pseudorange lines of sight are seen from.
 enum Frame {
     /// The point and the sines and cosines of its latitude and longitude.
-    At { ecef_m: [f64; 3], trig: [f64; 4] },
+    At {
+        ecef_m: [f64; 3],
+        trig: [f64; 4],
+    },
     None,
 }
 
@@ -1009,14 +1012,20 @@ mod tests {
         assert_eq!(f[1], "000000.50");
         let [e, n, u] = w.sigma_enu_m;
         let close = |s: &str, v: f64| (s.parse::<f64>().unwrap() - v).abs() <= 0.0005;
-        assert!(close(&f[2], n) && close(&f[3], e) && close(&f[4], u), "{f:?}");
+        assert!(
+            close(&f[2], n) && close(&f[3], e) && close(&f[4], u),
+            "{f:?}"
+        );
         // The excluded satellite G02 is the most likely failed one; its bias
         // is the 50 m step within 5 sigma of the estimate's noise.
         assert_eq!(f[5], "02");
         let s = w.satellites[1];
         let sd = 1.0 / s.s_ii.sqrt();
         assert!(close(&f[8], sd), "{f:?}");
-        assert!((f[7].parse::<f64>().unwrap() - 50.0).abs() < 5.0 * sd, "{f:?}");
+        assert!(
+            (f[7].parse::<f64>().unwrap() - 50.0).abs() < 5.0 * sd,
+            "{f:?}"
+        );
         // A 50 m bias on this satellite is far above the detection
         // threshold: the test cannot miss it. GPS, L1 C/A.
         assert!(f[6].parse::<f64>().unwrap() < 1e-6, "{f:?}");
@@ -1025,10 +1034,7 @@ mod tests {
         // satellites, the DOPs of that geometry and system ID 1.
         assert!(all[0].contains(",A,S*"), "{}", all[0]);
         let gsa = find(&all, "GSA");
-        assert_eq!(
-            gsa[..15].join(","),
-            "GPGSA,A,3,01,03,04,05,06,07,08,,,,,"
-        );
+        assert_eq!(gsa[..15].join(","), "GPGSA,A,3,01,03,04,05,06,07,08,,,,,");
         assert_eq!(gsa[18], "1");
         let gga = find(&all, "GGA");
         assert_eq!(gga[7], "07");
@@ -1041,7 +1047,10 @@ mod tests {
         assert_eq!(gsv[4..12].join(","), "01,85,000,,02,30,045,");
         assert_eq!(gsv[20], "1");
         assert_eq!(find(&all, "VTG").join(","), "GPVTG,,T,,M,,N,,K,A");
-        assert_eq!(find(&all, "ZDA").join(","), "GPZDA,000000.50,29,02,2024,00,00");
+        assert_eq!(
+            find(&all, "ZDA").join(","),
+            "GPZDA,000000.50,29,02,2024,00,00"
+        );
     }
 
     /// The inverse of a small dense matrix by Gauss-Jordan elimination
@@ -1052,7 +1061,9 @@ mod tests {
             row.extend((0..n).map(|j| f64::from(u8::from(i == j))));
         }
         for c in 0..n {
-            let p = (c..n).max_by(|&x, &y| a[x][c].abs().total_cmp(&a[y][c].abs())).unwrap();
+            let p = (c..n)
+                .max_by(|&x, &y| a[x][c].abs().total_cmp(&a[y][c].abs()))
+                .unwrap();
             a.swap(c, p);
             let d = a[c][c];
             a[c].iter_mut().for_each(|v| *v /= d);
@@ -1073,11 +1084,15 @@ mod tests {
     #[test]
     fn multi_constellation_gsa_gsv_and_dops() {
         let mut sats = std::vec::Vec::new();
-        for (k, sys) in [System::Gps, System::Galileo, System::Beidou].iter().enumerate() {
+        for (k, sys) in [System::Gps, System::Galileo, System::Beidou]
+            .iter()
+            .enumerate()
+        {
             for j in 0..5 {
                 let az = (72.0 * j as f64 + 25.0 * k as f64).to_radians();
                 let el = (15.0 + 14.0 * j as f64 + 3.0 * k as f64).to_radians();
-                let mut o = LinearObservation::from_az_el(SatId::new(*sys, 3 + j as u8), az, el, 0.1);
+                let mut o =
+                    LinearObservation::from_az_el(SatId::new(*sys, 3 + j as u8), az, el, 0.1);
                 o.sigma_m = Some(1.0 + j as f64);
                 sats.push(o);
             }
@@ -1116,7 +1131,11 @@ mod tests {
             })
             .collect();
         let a = (0..6)
-            .map(|i| (0..6).map(|j| g.iter().map(|r| r[i] * r[j]).sum()).collect())
+            .map(|i| {
+                (0..6)
+                    .map(|j| g.iter().map(|r| r[i] * r[j]).sum())
+                    .collect()
+            })
             .collect();
         let q = inverse(a);
         let want = [
@@ -1127,7 +1146,10 @@ mod tests {
         let f = find(&all, "GSA");
         for (k, want) in want.iter().enumerate() {
             let got: f64 = f[15 + k].parse().unwrap();
-            assert!((got - want).abs() <= 0.005 + 1e-12, "DOP {k}: {got} vs {want}");
+            assert!(
+                (got - want).abs() <= 0.005 + 1e-12,
+                "DOP {k}: {got} vs {want}"
+            );
         }
         let d = dops(&w, &Sky::new(&Epoch::linear(0.0, &sats))).unwrap();
         assert!((d.pdop - want[0]).abs() < 1e-9 && (d.vdop - want[2]).abs() < 1e-9);
@@ -1207,7 +1229,10 @@ mod tests {
         let f = find(&all, "GBS");
         // Residuals of about 1 sigma: a bias that small is almost surely missed.
         assert!(f[6].parse::<f64>().unwrap() > 0.9, "{f:?}");
-        assert_eq!(find(&all, "RMC").join(","), "GPRMC,000000.50,V,,,,,,,290224,,,N,V");
+        assert_eq!(
+            find(&all, "RMC").join(","),
+            "GPRMC,000000.50,V,,,,,,,290224,,,N,V"
+        );
     }
 
     /// Only `Ok` and `Excluded` are a valid fix. `Unavailable` and `Alarm`
@@ -1298,7 +1323,10 @@ mod tests {
         });
         let all = sentences(&w, &sats);
         let rmc = find(&all, "RMC");
-        assert_eq!((rmc[2].as_str(), rmc[12].as_str(), rmc[13].as_str()), ("V", "N", "C"));
+        assert_eq!(
+            (rmc[2].as_str(), rmc[12].as_str(), rmc[13].as_str()),
+            ("V", "N", "C")
+        );
         assert_eq!(find(&all, "GGA")[6], "0");
     }
 
@@ -1314,6 +1342,9 @@ mod tests {
         let gga: std::vec::Vec<String> = parse(&all[2]).0.split(',').map(String::from).collect();
         let n = geoid::separation_m(g.lat_rad, g.lon_rad).unwrap();
         let (alt, sep): (f64, f64) = (gga[9].parse().unwrap(), gga[11].parse().unwrap());
-        assert!((sep - n).abs() <= 0.0005 && (alt + sep - g.height_m).abs() <= 0.001, "{gga:?}");
+        assert!(
+            (sep - n).abs() <= 0.0005 && (alt + sep - g.height_m).abs() <= 0.001,
+            "{gga:?}"
+        );
     }
 }

@@ -730,18 +730,17 @@ mod tests {
         );
         // Nine sentences per solved epoch of 8 GPS satellites, in order.
         let kinds: Vec<&str> = nmea.lines().map(|l| &l[3..6]).collect();
-        let one = ["RMC", "VTG", "GGA", "GSA", "GSV", "GSV", "GST", "GBS", "ZDA"];
+        let one = [
+            "RMC", "VTG", "GGA", "GSA", "GSV", "GSV", "GST", "GBS", "ZDA",
+        ];
         assert_eq!(kinds, [one, one].concat());
         // The host's writer on the same epoch, byte for byte.
-        let want: std::string::String = nmea::epoch_sentences(
-            r1,
-            &nmea::Sky::new(&Epoch::linear(1.0, &s1)),
-            nmea::BUILT,
-        )
-        .unwrap()
-        .iter()
-        .map(|s| s.as_str())
-        .collect();
+        let want: std::string::String =
+            nmea::epoch_sentences(r1, &nmea::Sky::new(&Epoch::linear(1.0, &s1)), nmea::BUILT)
+                .unwrap()
+                .iter()
+                .map(|s| s.as_str())
+                .collect();
         assert!(nmea.ends_with(&want), "{nmea}");
     }
 

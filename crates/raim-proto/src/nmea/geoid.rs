@@ -110,7 +110,9 @@ mod tests {
         let mut errs: Vec<f64> = (0..400)
             .map(|i| {
                 // A low-discrepancy scatter over the sphere.
-                let lat = (2.0 * ((i as f64 * 0.618_034) % 1.0) - 1.0).asin().to_degrees();
+                let lat = (2.0 * ((i as f64 * 0.618_034) % 1.0) - 1.0)
+                    .asin()
+                    .to_degrees();
                 let lon = (i as f64 * 0.754_877_666) % 1.0 * 360.0 - 180.0;
                 let got = separation_m(lat.to_radians(), lon.to_radians()).unwrap();
                 (got - synthesis_m(lat, lon)).abs()
