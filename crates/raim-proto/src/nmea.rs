@@ -5,14 +5,14 @@
 //! GBS to the fix by its time, so the fix sentences come first). Each
 //! sentence is at most 82 characters (`$` to `\r\n`), written with
 //! `core::fmt::Write` into a `heapless::String`, with the XOR checksum of the
-//! characters between `$` and `*`. Numbers are written by [`fixed`] in
+//! characters between `$` and `*`. Numbers are written by `fixed` in
 //! integer arithmetic, the same text as `format!` would give, without
 //! linking `core::fmt`'s float formatting (flash).
 //!
 //! Every epoch writes every sentence whatever its values: a number that
 //! does not fit its field's width with the field's decimals is written
 //! with fewer decimals, and a field that cannot show it at all (or a
-//! non-finite value) is left empty ([`num`]), so that no sentence exceeds
+//! non-finite value) is left empty (`num`), so that no sentence exceeds
 //! 82 characters.
 //!
 //! Field choices (docs/PROTOCOL.md):

@@ -16,7 +16,7 @@
 /// The grid (module doc).
 static GRID: &[u8] = include_bytes!("egm96_1deg.bin");
 
-/// Rows (latitudes 90..=-90) and columns (longitudes 0..=359) of [`GRID`].
+/// Rows (latitudes 90..=-90) and columns (longitudes 0..=359) of `GRID`.
 pub const ROWS: usize = 181;
 pub const COLS: usize = 360;
 
