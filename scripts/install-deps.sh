@@ -26,6 +26,14 @@ if [ "$what" = test ]; then
     done
 fi
 
+# Python packages of the tests: pynmea2 (host-tests/tests/nmea_0759.rs
+# parses the NMEA writer's sentences with it).
+if [ "$what" = test ] && ! python3 -c "import pynmea2" >/dev/null 2>&1; then
+    echo "install-deps: pip package pynmea2"
+    python3 -m pip install -q pynmea2 >/dev/null 2>&1 \
+        || python3 -m pip install -q --break-system-packages pynmea2
+fi
+
 # Debian packages, by the command each provides.
 pkgs=()
 command -v qemu-system-arm >/dev/null || pkgs+=(qemu-system-arm)

@@ -2,7 +2,7 @@
 # The main job: a real RINEX file (Esbjerg, ESBC, G+E+C) replayed with an
 # injected 30 m step on G15 from 01:00:00 GPST, through the firmware running
 # under QEMU (mps2-an386, Cortex-M4), printing each epoch's decision and the
-# firmware's NMEA (RMC, GGA, GSA, GST, GBS), then the summary table.
+# firmware's NMEA (RMC, VTG, GGA, GSA, GSV, GST, GBS, ZDA), then the summary table.
 # Installs what it lacks, quietly (scripts/install-deps.sh: the thumbv7em
 # target, qemu-system-arm without recommends).
 # Extra arguments go to `raim replay` (e.g. --start 00:55:00 --end 01:05:00).

@@ -44,11 +44,15 @@ fn qemu_netduinoplus2_answers_frames_bit_for_bit_with_nmea() {
                 (Ok(fw_r), Ok(host_r)) => {
                     assert_eq!(wire_bytes(fw_r), wire_bytes(host_r), "rule {k} epoch {i}");
                     // The same five sentences the host's writer makes.
-                    let want: Vec<String> = raim_proto::nmea::epoch_sentences(host_r)
-                        .unwrap()
-                        .iter()
-                        .map(|s| s.trim_end().to_string())
-                        .collect();
+                    let want: Vec<String> = raim_proto::nmea::epoch_sentences(
+                        host_r,
+                        &raim_proto::nmea::Sky::new(&epoch),
+                        raim_proto::nmea::BUILT,
+                    )
+                    .unwrap()
+                    .iter()
+                    .map(|s| s.trim_end().to_string())
+                    .collect();
                     assert_eq!(p.nmea, want, "rule {k} epoch {i}");
                 }
                 (Err(_), Err(_)) => assert!(p.nmea.is_empty()),

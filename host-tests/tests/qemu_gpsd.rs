@@ -124,7 +124,8 @@ fn qemu_gpsd_reads_our_gbs_and_gst() {
     let mut tpv_checked = 0;
     let mut gst_checked = 0;
     for e in &epochs {
-        let (gst, gbs) = (fields(&e[3]), fields(&e[4]));
+        let kind = |k: &str| fields(e.iter().find(|s| &s[3..6] == k).unwrap());
+        let (gst, gbs) = (kind("GST"), kind("GBS"));
         let hhmmss = &gbs[1];
         let iso = format!("T{}:{}:{}", &hhmmss[0..2], &hhmmss[2..4], &hhmmss[4..6]);
         let num = |s: &str| s.parse::<f64>().unwrap();

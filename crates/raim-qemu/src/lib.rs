@@ -515,7 +515,7 @@ impl QemuSession {
             other => bail!("epoch answered with {other:?}"),
         };
         let nmea = if outcome.is_ok() {
-            self.take_nmea(5, ANSWER_TIMEOUT)?
+            self.take_epoch_nmea(ANSWER_TIMEOUT)?
         } else {
             Vec::new()
         };
@@ -539,6 +539,27 @@ impl QemuSession {
             }
         }
         Ok(out)
+    }
+
+    /// The sentences of one epoch: up to and including its ZDA, the last
+    /// sentence the firmware writes for every solved epoch (their number
+    /// depends on the satellites seen).
+    pub fn take_epoch_nmea(&mut self, timeout: Duration) -> Result<Vec<String>> {
+        let deadline = Instant::now() + timeout;
+        let mut out = Vec::new();
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.nmea.recv_timeout(left) {
+                Ok(s) => {
+                    let last = s.get(3..6) == Some("ZDA");
+                    out.push(s);
+                    if last {
+                        return Ok(out);
+                    }
+                }
+                Err(_) => bail!("no ZDA after {} NMEA sentences: {out:?}", out.len()),
+            }
+        }
     }
 
     /// NMEA sentences already received and not yet taken.

@@ -5,29 +5,39 @@
 use embedded_io::Write;
 use serde::Serialize;
 
+use raim_core::Epoch;
 use raim_proto::error::WireError;
 use raim_proto::frame::{encode, FrameError};
 use raim_proto::lock::ConfigId;
-use raim_proto::message::{Request, ResponseBody, Status};
+use raim_proto::message::{Command, Request, ResponseBody, Status};
 use raim_proto::nmea;
 use raim_proto::result::WireResult;
 use raim_proto::{CAPACITY, MAX_RESPONSE_FRAME, MAX_RESPONSE_PAYLOAD};
 
 use crate::IoError;
 
-/// The epoch's NMEA sentences. Its own frame (the sentences), not on the
-/// epoch's path. Sentences cannot exceed 82 characters with the
-/// formats used; if one ever did, none is written and the epoch's answer
-/// still goes out.
+/// The epoch's NMEA sentences, written one at a time as they are formed.
+/// Its own frame, not on the epoch's path. The request is the epoch's (the
+/// satellites seen, for GSV and the DOPs); without one, the sentences of an
+/// epoch with no satellites.
 #[inline(never)]
-pub(crate) fn write_nmea<M: Write>(wire: &WireResult, nmea_out: &mut M) -> Result<(), M::Error> {
-    if let Ok(sentences) = nmea::epoch_sentences(wire) {
-        for s in sentences.iter() {
-            nmea_out.write_all(s.as_bytes())?;
-        }
-        nmea_out.flush()?;
-    }
-    Ok(())
+pub(crate) fn write_nmea<M: Write>(
+    wire: &WireResult,
+    request: Option<&Request>,
+    nmea_out: &mut M,
+) -> Result<(), M::Error> {
+    let epoch = match request.map(|r| &r.command) {
+        Some(Command::Ranges(e)) => Epoch::ranges(e.time_s, &e.sats.items, e.apriori_m),
+        Some(Command::Linear(e)) => Epoch::linear(e.time_s, &e.sats.items),
+        _ => Epoch::linear(wire.time_s, &[]),
+    };
+    nmea::write_epoch(
+        wire,
+        &nmea::Sky::new(&epoch),
+        nmea::BUILT,
+        &mut |s: &nmea::Sentence| nmea_out.write_all(s.as_bytes()),
+    )?;
+    nmea_out.flush()
 }
 
 /// A request refused before it is acted on: undecodable, or carrying a

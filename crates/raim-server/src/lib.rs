@@ -377,7 +377,8 @@ impl Server {
         };
         match outcome {
             Ok(()) => {
-                answer::write_nmea(&self.wire, nmea_out).map_err(IoError::Nmea)?;
+                answer::write_nmea(&self.wire, self.request.as_ref(), nmea_out)
+                    .map_err(IoError::Nmea)?;
                 let Server {
                     scratch,
                     out,

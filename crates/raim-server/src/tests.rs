@@ -134,12 +134,23 @@ fn every_frame_is_answered_in_order_with_its_sequence_number() {
         (st.frames, st.epochs, st.errors, st.capacity),
         (3, 2, 0, 32)
     );
-    // Five sentences per solved epoch, in order.
+    // Nine sentences per solved epoch of 8 GPS satellites, in order.
     let kinds: Vec<&str> = nmea.lines().map(|l| &l[3..6]).collect();
-    assert_eq!(
-        kinds,
-        ["RMC", "GGA", "GSA", "GST", "GBS", "RMC", "GGA", "GSA", "GST", "GBS"]
-    );
+    let one = [
+        "RMC", "VTG", "GGA", "GSA", "GSV", "GSV", "GST", "GBS", "ZDA",
+    ];
+    assert_eq!(kinds, [one, one].concat());
+    // The host's writer on the same epoch, byte for byte.
+    let want: std::string::String = raim_proto::nmea::epoch_sentences(
+        r1,
+        &raim_proto::nmea::Sky::new(&Epoch::linear(1.0, &s1)),
+        raim_proto::nmea::BUILT,
+    )
+    .unwrap()
+    .iter()
+    .map(|s| s.as_str())
+    .collect();
+    assert!(nmea.ends_with(&want), "{nmea}");
 }
 
 #[test]

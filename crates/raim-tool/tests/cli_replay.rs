@@ -113,18 +113,28 @@ fn scenario_file_equals_flags() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// NMEA (`--nmea only`): the monitor's five sentences per epoch (RMC, GGA,
-/// GSA, GST, GBS), nothing else; every checksum is the XOR of its body.
+/// NMEA (`--nmea only`): the monitor's NMEA 0183 4.11 sentences per epoch
+/// (RMC, VTG, GGA, GSA per constellation, GSV per constellation, GST, GBS,
+/// ZDA), each ended by CR LF, nothing else; every checksum is the XOR of
+/// its body.
 #[test]
 fn nmea_checksums() {
     let mut a = base();
     a.extend(["--nmea", "only"].map(String::from));
     let (ok, out, _) = raim(&a.iter().map(String::as_str).collect::<Vec<_>>());
     assert!(ok);
+    assert!(out.ends_with("\r\n") && !out.replace("\r\n", "").contains('\n'));
     let lines: Vec<&str> = out.lines().collect();
-    assert_eq!(lines.len(), 13 * 5);
-    for (k, kind) in ["RMC", "GGA", "GSA", "GST", "GBS"].iter().enumerate() {
-        assert_eq!(&lines[k][3..6], *kind, "{}", lines[k]);
+    let epochs: Vec<&[&str]> = lines.split_inclusive(|l| &l[3..6] == "ZDA").collect();
+    assert_eq!(epochs.len(), 13);
+    for e in &epochs {
+        let kinds: Vec<&str> = e.iter().map(|l| &l[3..6]).collect();
+        let gsv = kinds.iter().filter(|k| **k == "GSV").count();
+        let mut want = vec!["RMC", "VTG", "GGA", "GSA"];
+        want.extend(std::iter::repeat_n("GSV", gsv));
+        want.extend(["GST", "GBS", "ZDA"]);
+        assert!(gsv >= 1);
+        assert_eq!(kinds, want, "{e:?}");
     }
     for l in lines {
         let (body, cs) = l.trim_start_matches('$').split_once('*').unwrap();

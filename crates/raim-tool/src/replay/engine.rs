@@ -31,7 +31,7 @@ impl Engine {
     }
 
     /// One epoch: the result, or the monitor's typed error as text, and
-    /// the epoch's NMEA sentences (RMC, GGA, GSA, GST, GBS): the firmware's
+    /// the epoch's NMEA sentences (RMC to ZDA, without their CRLF): the firmware's
     /// own second-UART output under QEMU, the same writer on the host. A
     /// transport failure (QEMU gone, timeout) is an `Err` of the outer result.
     pub fn process(
@@ -43,8 +43,9 @@ impl Engine {
             Engine::Host(raim) => match raim.process(cfg, epoch) {
                 Ok(r) => {
                     let w = WireResult::from_result(&r);
-                    let nmea = raim_proto::nmea::epoch_sentences(&w)
-                        .map(|v| v.iter().map(|s| s.as_str().to_string()).collect())
+                    let sky = raim_proto::nmea::Sky::new(epoch);
+                    let nmea = raim_proto::nmea::epoch_sentences(&w, &sky, raim_proto::nmea::BUILT)
+                        .map(|v| v.iter().map(|s| s.trim_end().to_string()).collect())
                         .unwrap_or_default();
                     (Ok(w), nmea)
                 }

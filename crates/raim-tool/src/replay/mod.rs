@@ -149,7 +149,7 @@ pub struct ReplayArgs {
     /// (keys: docs/FORMATS.md).
     #[arg(long, help_heading = heading::OUTPUTS)]
     pub json: bool,
-    /// The monitor's NMEA 0183 output per epoch (RMC, GGA, GSA, GST, GBS;
+    /// The monitor's NMEA 0183 output per epoch (RMC, VTG, GGA, GSA, GSV, GST, GBS, ZDA, CRLF-terminated;
     /// from the firmware's second UART with --target qemu): `only` the
     /// sentences (a stream for NMEA readers, no summary), or `with-text`
     /// after each epoch's text line.
@@ -583,8 +583,9 @@ fn write_outputs(args: &ReplayArgs, out: &ReplayOutput) -> Result<()> {
             match args.nmea {
                 _ if args.json => writeln!(w, "{}", serde_json::to_string(r)?)?,
                 Some(NmeaMode::Only) => {
+                    // NMEA 0183 ends every sentence with CR LF.
                     for s in &r.nmea {
-                        writeln!(w, "{}", s.trim_end())?;
+                        write!(w, "{}\r\n", s.trim_end())?;
                     }
                 }
                 Some(NmeaMode::WithText) => {
