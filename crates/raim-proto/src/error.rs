@@ -89,24 +89,27 @@ pub enum WireError {
         dof: u32,
         max: u32,
     },
-    /// A `Configure` after `Lock` (or in a build with a compiled-in
-    /// configuration): refused until reset. `config_crc32` is the
-    /// fingerprint of the configuration that stays in force.
+    /// A change of configuration after `Lock`, or on a unit running its
+    /// provisioned configuration (locked from boot): refused until reset.
+    /// `fingerprint` is that of the configuration that stays in force.
     Locked {
-        config_crc32: u32,
+        fingerprint: crate::unit::Fingerprint,
     },
     /// A `TestFault` request to a build without test hooks.
     TestHooksDisabled,
-    /// A plain `Configure` to a unit with an authentication key.
+    /// A plain state-changing request (`Configure`, `Ism`, `PfConfigure`,
+    /// `Lock`, `HostSigmas`) to a unit with an authentication key.
     AuthRequired,
-    /// An `AuthConfigure` to a unit without a key.
+    /// An `Authenticated` request to a unit without a key.
     AuthNotProvisioned,
-    /// An `AuthConfigure` whose tag does not verify.
+    /// An `Authenticated` request whose tag does not verify under the
+    /// unit's key and this boot's nonce (a forged frame, or one recorded
+    /// before a reset).
     BadAuthTag {
         counter: u64,
     },
-    /// An `AuthConfigure` whose counter is not above the last one accepted
-    /// (a replayed or reordered frame).
+    /// An `Authenticated` request whose counter is not above the last one
+    /// accepted since boot (a replayed or reordered frame).
     Replayed {
         counter: u64,
         last: u64,
@@ -135,6 +138,23 @@ pub enum WireError {
     TimeNotIncreasing {
         previous_s: f64,
         now_s: f64,
+    },
+    /// An epoch to a unit with no configuration in force: none provisioned
+    /// (or a corrupt one, `provision`), and none taken at run time. The
+    /// epoch is unavailable; the alarm output is asserted.
+    Unconfigured {
+        provision: Option<crate::unit::ProvisionError>,
+    },
+    /// An `Authenticated` request with the counter at the top of its range
+    /// (`u64::MAX`): refused, so that a later change stays possible.
+    CounterExhausted {
+        counter: u64,
+    },
+    /// An epoch carrying a per-satellite sigma (satellite `index`) to a
+    /// unit configured to use only its own sigma model (`host_sigmas`
+    /// off in the unit configuration).
+    HostSigmaRefused {
+        index: u32,
     },
 }
 
@@ -273,12 +293,15 @@ impl core::fmt::Display for WireError {
             WireError::InvalidDof { dof, max } => {
                 write!(f, "degrees of freedom {dof} outside 1..={max}")
             }
-            WireError::Locked { config_crc32 } => write!(
+            WireError::Locked { fingerprint } => write!(
                 f,
-                "configuration locked until reset (in force: {config_crc32:#010x})"
+                "configuration locked until reset (in force: {})",
+                crate::unit::Hex(fingerprint)
             ),
             WireError::TestHooksDisabled => write!(f, "test hooks are disabled in this build"),
-            WireError::AuthRequired => write!(f, "configuration frames must be authenticated"),
+            WireError::AuthRequired => {
+                write!(f, "state-changing frames must be authenticated on this unit")
+            }
             WireError::AuthNotProvisioned => write!(f, "no authentication key provisioned"),
             WireError::BadAuthTag { counter } => {
                 write!(f, "authentication tag does not verify (counter {counter})")
@@ -286,7 +309,7 @@ impl core::fmt::Display for WireError {
             WireError::Replayed { counter, last } => {
                 write!(
                     f,
-                    "replayed configuration: counter {counter} <= last {last}"
+                    "replayed request: counter {counter} <= last {last}"
                 )
             }
             WireError::Araim(e) => write!(f, "ARAIM: {e}"),
@@ -303,6 +326,19 @@ impl core::fmt::Display for WireError {
             WireError::TimeNotIncreasing { previous_s, now_s } => {
                 write!(f, "time {now_s} s does not follow {previous_s} s")
             }
+            WireError::Unconfigured { provision: None } => {
+                write!(f, "unconfigured: no configuration provisioned or taken")
+            }
+            WireError::Unconfigured { provision: Some(e) } => {
+                write!(f, "unconfigured: the provisioned configuration is refused ({e:?})")
+            }
+            WireError::CounterExhausted { counter } => {
+                write!(f, "counter {counter} is at the top of its range")
+            }
+            WireError::HostSigmaRefused { index } => write!(
+                f,
+                "satellite at index {index} carries a sigma; this unit uses only its own sigma model"
+            ),
         }
     }
 }

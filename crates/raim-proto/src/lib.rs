@@ -49,18 +49,20 @@ pub mod message;
 pub mod nmea;
 pub mod pf_msg;
 pub mod result;
+pub mod unit;
 
 pub use alert::{AlarmOutput, AlertMonitor};
-pub use auth::{AuthConfigure, AuthKey};
+pub use auth::{AuthKey, Authenticated, AuthenticatedRef, Change, ChangeRef, Nonce};
 pub use error::WireError;
 pub use frame::{encode, FrameError, FrameReceiver};
-pub use lock::{config_fingerprint, ConfigId};
+pub use lock::{ConfigId, ConfigSource};
 pub use message::{
-    Command, LinearEpoch, RangeEpoch, Request, RequestRef, ResetCause, Response, ResponseBody,
-    SatList, Status, TestFault,
+    BootNotice, Command, LinearEpoch, RangeEpoch, Request, RequestRef, ResetCause, Response,
+    ResponseBody, SatList, Status, TestFault,
 };
 pub use pf_msg::{PfKind, WirePfConfig, WirePfResult};
 pub use result::{WireMcusum, WireResult};
+pub use unit::{Fingerprint, ProvisionError, UnitConfig, UnitConfigRef};
 
 /// Satellites per epoch: the firmware's `Raim::<CAPACITY>` and every list on
 /// the wire. The core's documented default.
@@ -80,7 +82,14 @@ pub const CAPACITY: usize = raim_core::DEFAULT_CAPACITY;
 /// 7: `WireAraimResult` gains `n_star_vertical` (issue 13, appended).
 /// 8: `AraimCommand::Ranges` (ARAIM from a pseudorange epoch) and
 /// `WireAraimResult::position_ecef_m` (issue 12, appended).
-pub const PROTOCOL_VERSION: u16 = 8;
+/// 9: the configuration authority: `Command::Authenticated` (a boot nonce
+/// and counter under HMAC, for every state-changing request) replaces
+/// `AuthConfigure` and `AraimCommand::AuthIsm`; `Command::HostSigmas`;
+/// `ResponseBody::Boot`; `ConfigId` carries a SHA-256 fingerprint and the
+/// configuration's source; `WireError::Unconfigured`, `CounterExhausted`,
+/// `HostSigmaRefused`; `Status` gains the nonce, `host_sigmas` and the
+/// provisioning error.
+pub const PROTOCOL_VERSION: u16 = 9;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes

@@ -39,6 +39,9 @@ pub(crate) struct Refusal {
     /// The refused request was an epoch (its refusal drives the alarm
     /// output, as an epoch answered with an error does).
     pub(crate) epoch: bool,
+    /// The time of a refused snapshot epoch, whose no-fix NMEA sentences
+    /// are written.
+    pub(crate) nmea_time_s: Option<f64>,
 }
 
 /// Decode a request payload into `slot` and check it once: its sequence
@@ -60,6 +63,7 @@ pub(crate) fn decode(payload: &[u8], slot: &mut Option<Request>) -> Result<u32, 
                         capacity: CAPACITY as u32,
                     },
                     epoch: r.command.is_epoch(),
+                    nmea_time_s: r.command.nmea_epoch_time_s(),
                 });
             }
             *slot = Some(r);
@@ -74,6 +78,7 @@ pub(crate) fn decode(payload: &[u8], slot: &mut Option<Request>) -> Result<u32, 
                 seq,
                 error: WireError::from(FrameError::Undecodable { len }),
                 epoch: false,
+                nmea_time_s: None,
             })
         }
     }
@@ -102,6 +107,7 @@ pub(crate) enum BodyRef<'a> {
     LockEngaged,
     Araim(&'a raim_proto::araim_msg::AraimAnswer),
     PfResult(&'a raim_proto::pf_msg::WirePfResult),
+    Boot(&'a raim_proto::message::BootNotice),
 }
 
 impl<'a> From<&'a ResponseBody> for BodyRef<'a> {
@@ -114,6 +120,7 @@ impl<'a> From<&'a ResponseBody> for BodyRef<'a> {
             ResponseBody::LockEngaged => BodyRef::LockEngaged,
             ResponseBody::Araim(a) => BodyRef::Araim(a),
             ResponseBody::PfResult(p) => BodyRef::PfResult(p),
+            ResponseBody::Boot(b) => BodyRef::Boot(b),
         }
     }
 }
