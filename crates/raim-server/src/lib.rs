@@ -388,13 +388,26 @@ impl Server {
         }
         match command {
             Command::Ranges(_) | Command::Linear(_) => {
-                return self.answer_epoch(seq, link, nmea_out, platform)
+                self.answer_epoch(seq, link, nmea_out, platform)
             }
             Command::Araim(AraimCommand::Epoch(_) | AraimCommand::Ranges(_)) => {
-                return self.answer_araim_epoch(seq, link, platform)
+                self.answer_araim_epoch(seq, link, platform)
             }
-            _ => {}
+            _ => self.answer_other(seq, link, platform),
         }
+    }
+
+    /// Every request but an epoch answered from the request slot: taken
+    /// out of the slot, in a frame of its own so that the request-sized
+    /// value is not on the stack of the epoch path.
+    #[inline(never)]
+    fn answer_other<L: Write, M, P: Platform>(
+        &mut self,
+        seq: u32,
+        link: &mut L,
+        platform: &mut P,
+    ) -> Result<(), IoError<L::Error, M>> {
+        use raim_proto::araim_msg::AraimCommand;
         let Some(request) = self.request.take() else {
             return Ok(());
         };
