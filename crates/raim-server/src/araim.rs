@@ -203,11 +203,11 @@ fn check_sat(index: usize, s: &IsmSat) -> Result<(), AraimError> {
 impl Server {
     /// Checks an ISM frame and, if it passes, puts it in force (the gate,
     /// `gate.rs`, has passed it and updates the fingerprint).
-    pub(crate) fn take_ism(&mut self, frame: IsmFrame) -> Result<AraimAnswer, WireError> {
-        check_ism(&frame)?;
+    pub(crate) fn take_ism(&mut self, frame: &IsmFrame) -> Result<u32, WireError> {
+        check_ism(frame)?;
         let satellites = u32::try_from(frame.sats.items.len()).unwrap_or(u32::MAX);
-        self.araim.ism = Some(frame);
-        Ok(AraimAnswer::IsmAccepted { satellites })
+        self.araim.ism = Some(frame.clone());
+        Ok(satellites)
     }
 
     /// An ARAIM epoch request (`Araim(Epoch)` or `Araim(Ranges)`, in

@@ -11,6 +11,7 @@
 //! changes are volatile, so a reset returns the unit to its provisioned
 //! configuration or to none.
 
+use raim_proto::araim_msg::AraimAnswer;
 use raim_proto::auth::{Authenticated, Change};
 use raim_proto::error::WireError;
 use raim_proto::lock::ConfigSource;
@@ -37,45 +38,62 @@ pub(crate) fn check_unit(unit: &UnitConfig) -> Result<(), UnitPart> {
     Ok(())
 }
 
+/// What a change that passed the gate answers (small: the answer's
+/// `ResponseBody` is built by the caller, whose frame holds one anyway).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Applied {
+    Configured,
+    IsmAccepted { satellites: u32 },
+    LockEngaged,
+}
+
+impl Applied {
+    /// The answer on the wire.
+    pub(crate) fn body(r: Result<Applied, WireError>) -> ResponseBody {
+        match r {
+            Ok(Applied::Configured) => ResponseBody::Configured,
+            Ok(Applied::IsmAccepted { satellites }) => {
+                ResponseBody::Araim(AraimAnswer::IsmAccepted { satellites })
+            }
+            Ok(Applied::LockEngaged) => ResponseBody::LockEngaged,
+            Err(e) => ResponseBody::Error(e),
+        }
+    }
+}
+
 impl Server {
     /// A plain state-changing request.
-    pub(crate) fn change_plain(&mut self, change: Change) -> ResponseBody {
+    pub(crate) fn change_plain(&mut self, change: &Change) -> Result<Applied, WireError> {
         self.change(None, change)
     }
 
     /// An authenticated state-changing request.
-    pub(crate) fn change_authenticated(&mut self, a: Authenticated) -> ResponseBody {
-        let Authenticated {
-            counter,
-            change,
-            tag,
-        } = a;
-        self.change(Some((counter, tag)), change)
+    pub(crate) fn change_authenticated(&mut self, a: &Authenticated) -> Result<Applied, WireError> {
+        self.change(Some((a.counter, &a.tag)), &a.change)
     }
 
     /// Passes `change` through the gate and, if every check holds, puts it
-    /// in force; the answer, or the first check that failed, typed. On a
-    /// refusal nothing changes.
+    /// in force; what it answers, or the first check that failed, typed.
+    /// On a refusal nothing changes.
+    #[inline(never)]
     fn change(
         &mut self,
-        signed: Option<(u64, raim_proto::auth::Tag)>,
-        change: Change,
-    ) -> ResponseBody {
-        let r = self.gate(signed, &change).and_then(|counter| {
-            let body = self.apply(change)?;
-            if let (Some(c), Some((key, _))) = (counter, self.auth) {
-                self.auth = Some((key, Some(c)));
-            }
-            Ok(body)
-        });
-        r.unwrap_or_else(ResponseBody::Error)
+        signed: Option<(u64, &raim_proto::auth::Tag)>,
+        change: &Change,
+    ) -> Result<Applied, WireError> {
+        let counter = self.gate(signed, change)?;
+        let applied = self.apply(change)?;
+        if let (Some(c), Some((key, _))) = (counter, self.auth) {
+            self.auth = Some((key, Some(c)));
+        }
+        Ok(applied)
     }
 
     /// The build, the lock and the authentication; the counter to record
     /// once the change is in force.
     fn gate(
         &self,
-        signed: Option<(u64, raim_proto::auth::Tag)>,
+        signed: Option<(u64, &raim_proto::auth::Tag)>,
         change: &Change,
     ) -> Result<Option<u64>, WireError> {
         if !cfg!(feature = "araim") && matches!(change, Change::Ism(_)) {
@@ -93,7 +111,7 @@ impl Server {
             (Some(_), None) => Err(WireError::AuthRequired),
             (None, Some(_)) => Err(WireError::AuthNotProvisioned),
             (Some((key, last)), Some((counter, tag))) => {
-                if !raim_proto::auth::verify(&key, &self.nonce, counter, change, &tag) {
+                if !raim_proto::auth::verify(&key, &self.nonce, counter, change, tag) {
                     return Err(WireError::BadAuthTag { counter });
                 }
                 if counter == u64::MAX {
@@ -109,29 +127,31 @@ impl Server {
 
     /// The part's own checks, then the part in force and the fingerprint
     /// updated (it covers every part in force).
-    fn apply(&mut self, change: Change) -> Result<ResponseBody, WireError> {
-        let body = match change {
+    fn apply(&mut self, change: &Change) -> Result<Applied, WireError> {
+        let applied = match change {
             Change::Configure(c) => {
                 c.validate()?;
-                self.config = Some(c);
-                ResponseBody::Configured
+                self.config = Some(*c);
+                Applied::Configured
             }
-            Change::Ism(frame) => ResponseBody::Araim(self.take_ism(frame)?),
+            Change::Ism(frame) => Applied::IsmAccepted {
+                satellites: self.take_ism(frame)?,
+            },
             Change::Pf(c) => {
-                self.pf.configure(c)?;
-                ResponseBody::Configured
+                self.pf.configure(*c)?;
+                Applied::Configured
             }
             Change::HostSigmas(on) => {
-                self.host_sigmas = on;
-                ResponseBody::Configured
+                self.host_sigmas = *on;
+                Applied::Configured
             }
             Change::Lock => {
                 self.config_id.locked = true;
-                return Ok(ResponseBody::LockEngaged);
+                return Ok(Applied::LockEngaged);
             }
         };
         self.config_id.source = ConfigSource::Runtime;
         self.config_id.fingerprint = self.fingerprint();
-        Ok(body)
+        Ok(applied)
     }
 }

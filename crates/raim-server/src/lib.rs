@@ -50,6 +50,7 @@ mod answer;
 mod gate;
 
 use answer::{send_answer, BodyRef, Buffers};
+use gate::Applied;
 use raim_proto::auth::Change;
 
 // Particle-filter RAIM (issue 14): a child module, so it reaches the
@@ -266,10 +267,7 @@ impl Server {
     /// `Configure(config)` (the bench's set-up, for host tests and tools;
     /// the firmware never calls it).
     pub fn take_runtime_config(&mut self, config: Config) -> Result<(), WireError> {
-        match self.change_plain(Change::Configure(config)) {
-            ResponseBody::Error(e) => Err(e),
-            _ => Ok(()),
-        }
+        self.change_plain(&Change::Configure(config)).map(|_| ())
     }
 
     /// This boot's nonce.
@@ -417,12 +415,14 @@ impl Server {
                 let _ = platform.test_fault(f);
                 ResponseBody::Error(WireError::TestHooksDisabled)
             }
-            Command::Lock => self.change_plain(Change::Lock),
-            Command::Configure(c) => self.change_plain(Change::Configure(c)),
-            Command::Araim(AraimCommand::Ism(frame)) => self.change_plain(Change::Ism(frame)),
-            Command::PfConfigure(c) => self.change_plain(Change::Pf(c)),
-            Command::HostSigmas(on) => self.change_plain(Change::HostSigmas(on)),
-            Command::Authenticated(a) => self.change_authenticated(a),
+            Command::Lock => Applied::body(self.change_plain(&Change::Lock)),
+            Command::Configure(c) => Applied::body(self.change_plain(&Change::Configure(c))),
+            Command::Araim(AraimCommand::Ism(frame)) => {
+                Applied::body(self.change_plain(&Change::Ism(frame)))
+            }
+            Command::PfConfigure(c) => Applied::body(self.change_plain(&Change::Pf(c))),
+            Command::HostSigmas(on) => Applied::body(self.change_plain(&Change::HostSigmas(on))),
+            Command::Authenticated(a) => Applied::body(self.change_authenticated(&a)),
             Command::PfRanges(e) => self.pf_epoch(e.time_s, &e.sats.items, platform),
             // Answered from the request slot above.
             Command::Ranges(_)
