@@ -15,6 +15,7 @@ mod fault;
 mod guard;
 mod key;
 mod link_rx;
+mod provision;
 mod stack;
 mod watchdog;
 
@@ -100,9 +101,10 @@ fn main() -> ! {
     let server = server();
     #[cfg(feature = "pf")]
     server.attach_pf(pf_engines());
-    // With a key provisioned in flash (`key`), only authenticated
-    // configurations are taken.
-    if let Some(k) = key::provisioned() {
+    // With a key provisioned in flash (`key`), only authenticated changes
+    // are taken.
+    let key = key::provisioned();
+    if let Some(k) = key {
         server.set_auth_key(k);
     }
     let Some((mut link, rx_port, mut nmea, alarm_pin)) = board::parts() else {
@@ -116,6 +118,12 @@ fn main() -> ! {
         reset,
         discrete: discrete::Discrete::new(alarm_pin),
     };
+    // The provisioned configuration, if its seal verifies and every part
+    // passes its checks, runs locked; otherwise the unit is Unconfigured.
+    // No default is ever put in force.
+    let provisioned = raim_proto::unit::open(provision::section(), key.as_ref());
+    let entropy = provision::entropy(platform.ticks.now());
+    server.boot(provisioned, reset.0, &entropy);
     watchdog::start();
     stack::paint();
     guard::enable();
@@ -124,6 +132,8 @@ fn main() -> ! {
         raim_proto::CAPACITY,
         raim_proto::PROTOCOL_VERSION
     );
+    // The boot notice: the first frame after every reset.
+    let _ = server.send_boot_notice::<_, core::convert::Infallible, _>(&mut link, &mut platform);
     // SAFETY: the ring and its interrupt side are set up (`link_rx::init`);
     // the handlers (`DefaultHandler`, `SysTick`) share only atomics and the
     // critical-section-guarded receive side with this loop.

@@ -12,8 +12,8 @@ use raim_core::{SatId, System};
 use raim_proto::araim_msg::{AraimCommandRef, IsmFrameRef, IsmSat, WireAraimConfig};
 use raim_proto::frame::{encode, FrameReceiver};
 use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody};
-use raim_server::{NoPlatform, Server};
 use raim_proto::MAX_RESPONSE_FRAME;
+use raim_server::{NoPlatform, Server};
 
 struct Sink(Vec<u8>);
 impl embedded_io::ErrorType for Sink {
@@ -33,7 +33,14 @@ impl embedded_io::Write for Sink {
 fn ism_frame() -> Vec<u8> {
     let sats: Vec<IsmSat> = (0..12u8)
         .map(|i| IsmSat {
-            id: SatId::new(if i % 2 == 0 { System::Gps } else { System::Galileo }, i / 2 + 1),
+            id: SatId::new(
+                if i % 2 == 0 {
+                    System::Gps
+                } else {
+                    System::Galileo
+                },
+                i / 2 + 1,
+            ),
             sigma_ura_m: 0.75,
             sigma_ure_m: 0.5,
             b_nom_m: 0.5,
@@ -45,7 +52,11 @@ fn ism_frame() -> Vec<u8> {
     p_const[System::Galileo.index()] = Some(1e-4);
     let req = RequestRef {
         seq: 0,
-        command: CommandRef::Araim(AraimCommandRef::Ism(IsmFrameRef { config: WireAraimConfig::default(), p_const, sats: &sats })),
+        command: CommandRef::Araim(AraimCommandRef::Ism(IsmFrameRef {
+            config: WireAraimConfig::default(),
+            p_const,
+            sats: &sats,
+        })),
     };
     let mut scratch = vec![0u8; 4096];
     let mut out = vec![0u8; 4096];
@@ -57,7 +68,16 @@ fuzz_target!(|data: &[u8]| {
     let (mut link, mut nmea) = (Sink(Vec::new()), Sink(Vec::new()));
     let mut scratch = [0u8; 256];
     let mut out = [0u8; 256];
-    let status = encode(&RequestRef { seq: 0xABCD, command: CommandRef::Status }, &mut scratch, &mut out).unwrap().to_vec();
+    let status = encode(
+        &RequestRef {
+            seq: 0xABCD,
+            command: CommandRef::Status,
+        },
+        &mut scratch,
+        &mut out,
+    )
+    .unwrap()
+    .to_vec();
     for &b in ism_frame().iter().chain(data).chain(&[0u8]).chain(&status) {
         let _ = server.on_byte(b, &mut link, &mut nmea, &mut NoPlatform);
     }
@@ -65,7 +85,10 @@ fuzz_target!(|data: &[u8]| {
     let mut last = None;
     for &b in &link.0 {
         if let Some(p) = rx.push(b) {
-            last = Some(postcard::from_bytes::<Response>(p.expect("the firmware's own frames are valid")).expect("decodable"));
+            last = Some(
+                postcard::from_bytes::<Response>(p.expect("the firmware's own frames are valid"))
+                    .expect("decodable"),
+            );
         }
     }
     let last = last.expect("an answer");

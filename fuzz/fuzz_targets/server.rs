@@ -9,8 +9,8 @@
 use libfuzzer_sys::fuzz_target;
 use raim_proto::frame::{encode, FrameReceiver};
 use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody};
-use raim_server::{NoPlatform, Server};
 use raim_proto::MAX_RESPONSE_FRAME;
+use raim_server::{NoPlatform, Server};
 
 struct Sink(Vec<u8>);
 impl embedded_io::ErrorType for Sink {

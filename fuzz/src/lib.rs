@@ -21,8 +21,9 @@ use raim_core::{AlertLimits, Config, FiRule, LinearObservation, Phase, SatId, Sy
 use raim_proto::frame::{encode, FrameReceiver};
 use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody};
 use raim_proto::result::WireResult;
+use raim_proto::unit::{UnitConfig, UnitConfigRef, PROVISION_BYTES};
+use raim_proto::{ConfigId, ConfigSource, WireError, MAX_RESPONSE_FRAME};
 use raim_server::{NoPlatform, Server};
-use raim_proto::{config_fingerprint, ConfigId, WireError, MAX_RESPONSE_FRAME};
 
 /// At most this many steps per scenario.
 pub const MAX_STEPS: usize = 8;
@@ -58,20 +59,88 @@ pub enum Step {
     Status,
     /// Non-zero bytes and a delimiter: one frame that is not a request.
     Garbage(Vec<u8>),
+    /// A reset (watchdog, panic, power glitch): the unit boots again from
+    /// its flash, and says so first (the boot notice).
+    Reset,
 }
 
-/// A sequence of requests.
+/// What the unit's flash holds in its provisioned-configuration section.
+#[derive(Debug, Clone, Copy, Arbitrary)]
+pub enum Provision {
+    /// Erased: the unit boots Unconfigured.
+    None,
+    /// A sealed configuration (a preset phase, host sigmas on or off).
+    Valid { phase: u8, host_sigmas: bool },
+    /// A sealed configuration with one byte of the section flipped.
+    Corrupt { phase: u8, byte: u16, flip: u8 },
+}
+
+/// A provisioning state and a sequence of requests.
 #[derive(Debug)]
-pub struct Scenario(pub Vec<Step>);
+pub struct Scenario {
+    pub provision: Provision,
+    pub steps: Vec<Step>,
+}
 
 impl<'a> Arbitrary<'a> for Scenario {
     fn arbitrary(u: &mut Unstructured<'a>) -> arbitrary::Result<Self> {
+        let provision = Provision::arbitrary(u)?;
         let mut steps = Vec::new();
         while steps.len() < MAX_STEPS && !u.is_empty() {
             steps.push(Step::arbitrary(u)?);
         }
-        Ok(Scenario(steps))
+        Ok(Scenario { provision, steps })
     }
+}
+
+/// The provisioned configuration of a scenario, and its sealed section.
+fn provisioned(p: Provision) -> (Option<UnitConfig>, Box<[u8; PROVISION_BYTES]>) {
+    let mut blob = Box::new([0xFFu8; PROVISION_BYTES]);
+    let unit = |phase: u8, host_sigmas| UnitConfig {
+        snapshot: Some(Config::preset(
+            [Phase::EnRoute, Phase::Terminal, Phase::Npa][usize::from(phase % 3)],
+        )),
+        araim: None,
+        pf: None,
+        host_sigmas,
+    };
+    match p {
+        Provision::None => (None, blob),
+        Provision::Valid { phase, host_sigmas } => {
+            let u = unit(phase, host_sigmas);
+            let _ = raim_proto::unit::seal(&u, None, &mut blob);
+            (Some(u), blob)
+        }
+        Provision::Corrupt { phase, byte, flip } => {
+            let u = unit(phase, false);
+            let _ = raim_proto::unit::seal(&u, None, &mut blob);
+            // Within the sealed bytes (header 12, payload, seal 32).
+            let len = u32::from_le_bytes([blob[8], blob[9], blob[10], blob[11]]) as usize;
+            let i = usize::from(byte) % (12 + len + 32);
+            blob[i] ^= flip.max(1);
+            // A flip that still opened would be a broken seal: the run
+            // checks that it never does.
+            (None, blob)
+        }
+    }
+}
+
+/// A platform that has been reset `0` times (a watchdog reset).
+struct Rebooted(u32);
+impl raim_server::Platform for Rebooted {
+    fn now(&mut self) -> u32 {
+        0
+    }
+    fn reset_record(&mut self) -> (u32, raim_proto::ResetCause) {
+        (self.0, raim_proto::ResetCause::Watchdog { pc: 0 })
+    }
+}
+
+/// A unit booting from `section`, as the firmware does.
+fn boot(section: &[u8; PROVISION_BYTES], resets: u32) -> Box<Server> {
+    let mut server = Box::new(Server::new());
+    server.boot(raim_proto::unit::open(section, None), resets, &[7; 32]);
+    server
 }
 
 /// What the scenarios covered (for the run's record).
@@ -216,17 +285,75 @@ fn check_result(r: &WireResult, cfg: &Config) -> Result<(), String> {
     Ok(())
 }
 
-/// Run a scenario through a fresh server; `Err` names the broken invariant.
+/// Run a scenario through a unit booted from the scenario's provisioned
+/// section; `Err` names the broken invariant. The invariants, besides the
+/// answers' own: `Ok` only under the provisioned configuration or one
+/// taken at run time since the last reset, whose fingerprint the answer
+/// carries; after every reset the configuration in force is the
+/// provisioned one or none; every frame after the boot notice is answered.
 pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
-    let mut server = Box::new(Server::new());
-    let mut in_force = Config::default();
-    let mut locked = false;
+    let (provision, section) = provisioned(scenario.provision);
+    let mut resets = 0u32;
+    let mut server = boot(&section, resets);
+    let after_boot = |server: &Server,
+                      provision: &Option<UnitConfig>|
+     -> Result<(Option<Config>, bool, bool), String> {
+        let id = server.config_id();
+        match provision {
+            Some(u) => {
+                if id.source != ConfigSource::Provisioned
+                    || !id.locked
+                    || id.fingerprint != u.fingerprint()
+                {
+                    return Err(format!("booted with {id:?}, provisioned {u:?}"));
+                }
+                Ok((u.snapshot, true, u.host_sigmas))
+            }
+            None => {
+                if id.source != ConfigSource::Unconfigured || id.locked {
+                    return Err(format!("booted with {id:?}, nothing provisioned"));
+                }
+                Ok((None, false, true))
+            }
+        }
+    };
+    let (mut in_force, mut locked, mut host_sigmas) = after_boot(&server, &provision)?;
+    let mut source = server.config_id().source;
     let (mut link, mut nmea) = (Sink(Vec::new()), Sink(Vec::new()));
     let mut rx = Box::new(FrameReceiver::<MAX_RESPONSE_FRAME>::new());
     let mut scratch = vec![0u8; 8192];
     let mut out = vec![0u8; 8192];
     let mut next_seq = 0u32;
-    for step in &scenario.0 {
+    for step in &scenario.steps {
+        if matches!(step, Step::Reset) {
+            resets += 1;
+            server = boot(&section, resets);
+            (in_force, locked, host_sigmas) = after_boot(&server, &provision)?;
+            source = server.config_id().source;
+            // The boot notice comes first, unasked.
+            link.0.clear();
+            server
+                .send_boot_notice::<_, core::convert::Infallible, _>(
+                    &mut link,
+                    &mut Rebooted(resets),
+                )
+                .map_err(|e| format!("boot notice: {e:?}"))?;
+            let mut notices: Vec<Response> = Vec::new();
+            for &b in &link.0 {
+                if let Some(Ok(p)) = rx.push(b) {
+                    notices.push(postcard::from_bytes(p).map_err(|e| format!("{e}"))?);
+                }
+            }
+            match notices.as_slice() {
+                [Response {
+                    seq: None,
+                    body: ResponseBody::Boot(b),
+                    ..
+                }] if b.resets == resets && b.config == server.config_id() => {}
+                other => return Err(format!("after reset {resets}: {other:?}")),
+            }
+            continue;
+        }
         let seq = next_seq;
         if !matches!(step, Step::Garbage(_)) {
             next_seq += 1;
@@ -297,9 +424,17 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                     raim_core::Decision::Alarm => tally.alarm += 1,
                     raim_core::Decision::Unavailable => tally.unavailable += 1,
                 }
-                check_result(r, &in_force).map_err(|e| format!("step {seq}: {e}"))?;
+                let Some(cfg) = in_force.as_ref() else {
+                    return Err(format!(
+                        "step {seq}: a result with no configuration in force"
+                    ));
+                };
+                check_result(r, cfg).map_err(|e| format!("step {seq}: {e}"))?;
             }
-            (Step::Epoch { .. }, ResponseBody::Error(_)) => {
+            (Step::Epoch { .. }, ResponseBody::Error(e)) => {
+                if in_force.is_none() && !matches!(e, WireError::Unconfigured { .. }) {
+                    return Err(format!("step {seq}: unconfigured, answered {e:?}"));
+                }
                 tally.epochs += 1;
                 tally.epoch_errors += 1;
             }
@@ -311,7 +446,8 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                 if c.validate().is_err() {
                     return Err(format!("step {seq}: an invalid configuration taken: {c:?}"));
                 }
-                in_force = c;
+                in_force = Some(c);
+                source = ConfigSource::Runtime;
                 tally.configured += 1;
             }
             (Step::Configure { .. }, ResponseBody::Error(WireError::Locked { .. })) if locked => {
@@ -320,14 +456,22 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
             (Step::Configure { .. }, ResponseBody::Error(_)) if !locked => {
                 tally.refused_configs += 1;
             }
-            (Step::Lock, ResponseBody::LockEngaged) => locked = true,
+            (Step::Lock, ResponseBody::LockEngaged) if !locked => locked = true,
+            (Step::Lock, ResponseBody::Error(WireError::Locked { .. })) if locked => {}
             (Step::Status, ResponseBody::Status(_)) => {}
             (Step::Garbage(_), ResponseBody::Error(_)) => {}
             (s, b) => return Err(format!("step {seq}: {s:?} answered {b:?}")),
         }
         let id = ConfigId {
-            crc32: config_fingerprint(&in_force),
+            fingerprint: UnitConfigRef {
+                snapshot: in_force.as_ref(),
+                araim: None,
+                pf: None,
+                host_sigmas,
+            }
+            .fingerprint(),
             locked,
+            source,
         };
         if answer.config != id {
             return Err(format!(

@@ -70,9 +70,21 @@ fn report(name: &str, elf: &Path) -> u64 {
 fn snapshot_build_fits_128_kib_of_flash() {
     let snapshot = raim_qemu::firmware_elf_snapshot().expect("snapshot firmware build");
     let total = report("QEMU, no default features", &snapshot);
+    // The provisioned-configuration section is the installation's data, in
+    // a region of its own (on the STM32F4 a flash sector of its own), not
+    // code: the 128 KiB bound is on everything else (docs/FLASH.md).
+    let (sections, _) = flash_sections(&snapshot);
+    let provision: u64 = sections
+        .iter()
+        .filter(|(n, _)| n == ".raim_config")
+        .map(|(_, b)| b)
+        .sum();
+    assert_eq!(provision, raim_proto::unit::PROVISION_BYTES as u64);
+    let code = total - provision;
+    println!("without .raim_config: {code} B");
     assert!(
-        total <= SNAPSHOT_FLASH_BUDGET_B,
-        "{total} B of flash > {SNAPSHOT_FLASH_BUDGET_B} B (issue 10)"
+        code <= SNAPSHOT_FLASH_BUDGET_B,
+        "{code} B of flash > {SNAPSHOT_FLASH_BUDGET_B} B"
     );
     // Recorded, not bounded by issue 10: the full QEMU build and the
     // STM32F4 build (both within their parts' flash: the linker checks).
@@ -112,10 +124,13 @@ fn snapshot_build_refuses_the_reconstruction_fde() {
         "{refused:?}"
     );
     let cfg = Config::default();
-    assert_eq!(
-        fw.status().unwrap().config.crc32,
-        raim_proto::config_fingerprint(&cfg)
-    );
+    let bench = raim_proto::UnitConfigRef {
+        snapshot: Some(&cfg),
+        araim: None,
+        pf: None,
+        host_sigmas: true,
+    };
+    assert_eq!(fw.status().unwrap().config.fingerprint, bench.fingerprint());
     let mut faulted = 0;
     for (time_s, sats, apriori) in range_vectors(8).iter() {
         let epoch = Epoch::ranges(*time_s, sats, *apriori);
@@ -154,7 +169,7 @@ fn snapshot_build_answers_pf_configure_unavailable() {
     use raim_proto::pf_msg::WirePfConfig;
     let elf = raim_qemu::firmware_elf_snapshot().expect("snapshot firmware build");
     let mut fw = raim_qemu::QemuSession::start(&elf).expect("qemu-system-arm with the firmware");
-    let before = fw.status().unwrap().config.crc32;
+    let before = fw.status().unwrap().config.fingerprint;
     for pf in [WirePfConfig::gapf(100, 7), WirePfConfig::gapf(301, 7)] {
         assert_eq!(
             fw.call(CommandRef::PfConfigure(&pf)).unwrap(),
@@ -162,5 +177,5 @@ fn snapshot_build_answers_pf_configure_unavailable() {
             "{pf:?}"
         );
     }
-    assert_eq!(fw.status().unwrap().config.crc32, before);
+    assert_eq!(fw.status().unwrap().config.fingerprint, before);
 }

@@ -152,17 +152,6 @@ pub enum AraimCommand {
     /// One linearised epoch through ARAIM (and its FDE after a detection).
     /// Answered `AraimAnswer::Result` or a typed error.
     Epoch(LinearEpoch),
-    /// An authenticated `Ism` (`server::araim::ism_tag`): accepted only by
-    /// a unit with a key, with a valid tag and a counter above every one
-    /// accepted since boot (shared with `AuthConfigure`).
-    AuthIsm {
-        /// Replay counter, above every one accepted since boot.
-        counter: u64,
-        /// The ISM frame.
-        ism: IsmFrame,
-        /// HMAC-SHA256 tag over the counter and the frame.
-        tag: crate::auth::Tag,
-    },
     /// One pseudorange epoch (the unit's normal input, as `Command::Ranges`)
     /// through ARAIM (protocol 8): the unit linearises it at its
     /// all-in-view Gauss-Newton solution (ranges and residuals in f64),
@@ -184,15 +173,6 @@ pub enum AraimCommandRef<'a> {
         time_s: f64,
         /// The linearised rows.
         sats: &'a [LinearObservation],
-    },
-    /// [`AraimCommand::AuthIsm`].
-    AuthIsm {
-        /// Replay counter.
-        counter: u64,
-        /// The ISM frame.
-        ism: IsmFrameRef<'a>,
-        /// HMAC-SHA256 tag.
-        tag: crate::auth::Tag,
     },
     /// [`AraimCommand::Ranges`], its fields inline.
     Ranges {
@@ -688,16 +668,16 @@ mod tests {
         let sats = ism_sats(CAPACITY as u8);
         let req = RequestRef {
             seq: u32::MAX,
-            command: CommandRef::Araim(AraimCommandRef::AuthIsm {
+            command: CommandRef::Authenticated(crate::auth::AuthenticatedRef {
                 counter: u64::MAX,
-                ism: IsmFrameRef {
+                change: crate::auth::ChangeRef::Ism(IsmFrameRef {
                     config: WireAraimConfig {
                         pl_exact: true,
                         ..WireAraimConfig::default()
                     },
                     p_const: [Some(0.5); MAX_SYSTEMS],
                     sats: &sats,
-                },
+                }),
                 tag: [0xFF; 32],
             }),
         };

@@ -1,55 +1,140 @@
-//! Authenticated configuration frames (issue 15), an option: with a key
-//! provisioned (`Server::with_auth_key`), a configuration is accepted only
-//! as `AuthConfigure { counter, config, tag }` where
-//! `tag = HMAC-SHA256(key, "raim-configure-v1" || counter (u64 LE) ||
-//! postcard(config))` and `counter` is above every counter accepted since
-//! boot, so that a recorded frame cannot be replayed. Plain `Configure` is
-//! then refused. The `hmac` and `sha2` crates (RustCrypto, no_std).
+//! Authenticated state-changing requests. On a unit with a provisioned key
+//! every request that changes what the unit runs, or locks it, must come as
+//! [`Authenticated`] `{ counter, change, tag }` where
+//!
+//! `tag = HMAC-SHA256(key, "raim-change-v2" || nonce || counter (u64 LE) ||
+//! postcard(change))`.
+//!
+//! - `nonce` is the unit's boot nonce (16 bytes), announced in its boot
+//!   notice and in every `Status`, new at every reset: a frame recorded
+//!   before a reset does not verify after it.
+//! - `counter` must be above every counter accepted since boot (no replay
+//!   within a boot), and below `u64::MAX` (a counter at the top of its range
+//!   would leave no room for the next change, so it is refused).
+//!
+//! The `hmac` and `sha2` crates (RustCrypto, no_std).
 
 use hmac::{Hmac, Mac};
 use raim_core::Config;
 use serde::{Deserialize, Serialize};
 use sha2::Sha256;
 
+use crate::araim_msg::{IsmFrame, IsmFrameRef};
+use crate::pf_msg::WirePfConfig;
+
 /// A provisioned key.
 pub type AuthKey = [u8; 32];
 /// An HMAC-SHA256 tag.
 pub type Tag = [u8; 32];
+/// The unit's boot nonce.
+pub type Nonce = [u8; 16];
 
-const DOMAIN: &[u8] = b"raim-configure-v1";
-const CONFIG_BYTES: usize = 256;
+const DOMAIN: &[u8] = b"raim-change-v2";
 
-/// An authenticated configuration (the payload of `Command::AuthConfigure`).
+/// What an authenticated request changes.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct AuthConfigure {
-    /// Replay counter, above every one accepted since boot.
+pub enum Change {
+    /// Replace the snapshot configuration (as `Command::Configure`).
+    Configure(Config),
+    /// Replace the ISM and ARAIM configuration (as `AraimCommand::Ism`).
+    Ism(IsmFrame),
+    /// Replace the particle-filter configuration (as `PfConfigure`).
+    Pf(WirePfConfig),
+    /// Lock what is in force until reset (as `Command::Lock`).
+    Lock,
+    /// Whether epoch frames' per-satellite sigmas are used (as
+    /// `Command::HostSigmas`).
+    HostSigmas(bool),
+}
+
+/// The host's borrowed form of [`Change`] (same bytes).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub enum ChangeRef<'a> {
+    Configure(&'a Config),
+    Ism(IsmFrameRef<'a>),
+    Pf(&'a WirePfConfig),
+    Lock,
+    HostSigmas(bool),
+}
+
+/// An authenticated change (the payload of `Command::Authenticated`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Authenticated {
     pub counter: u64,
-    /// The configuration.
-    pub config: Config,
-    /// HMAC-SHA256 tag over the counter and the configuration.
+    pub change: Change,
     pub tag: Tag,
 }
 
-fn mac(key: &AuthKey, counter: u64, cfg: &Config) -> Option<Hmac<Sha256>> {
-    let mut buf = [0u8; CONFIG_BYTES];
-    let bytes = postcard::to_slice(cfg, &mut buf).ok()?;
-    let mut m = <Hmac<Sha256> as Mac>::new_from_slice(key).ok()?;
-    m.update(DOMAIN);
-    m.update(&counter.to_le_bytes());
-    m.update(bytes);
-    Some(m)
+/// The host's borrowed form of [`Authenticated`] (same bytes).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct AuthenticatedRef<'a> {
+    pub counter: u64,
+    pub change: ChangeRef<'a>,
+    pub tag: Tag,
 }
 
-/// The tag of `(counter, cfg)` under `key` (the host side).
-pub fn tag(key: &AuthKey, counter: u64, cfg: &Config) -> Tag {
-    mac(key, counter, cfg)
+/// A postcard flavor that feeds an HMAC (no buffer).
+struct MacFlavor(Hmac<Sha256>);
+
+impl postcard::ser_flavors::Flavor for MacFlavor {
+    type Output = Hmac<Sha256>;
+    fn try_extend(&mut self, data: &[u8]) -> postcard::Result<()> {
+        self.0.update(data);
+        Ok(())
+    }
+    fn try_push(&mut self, data: u8) -> postcard::Result<()> {
+        self.0.update(&[data]);
+        Ok(())
+    }
+    fn finalize(self) -> postcard::Result<Self::Output> {
+        Ok(self.0)
+    }
+}
+
+fn mac<T: Serialize>(
+    key: &AuthKey,
+    nonce: &Nonce,
+    counter: u64,
+    change: &T,
+) -> Option<Hmac<Sha256>> {
+    let mut m = <Hmac<Sha256> as Mac>::new_from_slice(key).ok()?;
+    m.update(DOMAIN);
+    m.update(nonce);
+    m.update(&counter.to_le_bytes());
+    postcard::serialize_with_flavor(change, MacFlavor(m)).ok()
+}
+
+/// The tag of `(nonce, counter, change)` under `key` (the host side;
+/// `change` is a [`Change`] or a [`ChangeRef`], which encode alike).
+pub fn tag<T: Serialize>(key: &AuthKey, nonce: &Nonce, counter: u64, change: &T) -> Tag {
+    mac(key, nonce, counter, change)
         .map(|m| m.finalize().into_bytes().into())
         .unwrap_or([0; 32])
 }
 
 /// Constant-time check of `tag` (the unit side).
-pub fn verify(key: &AuthKey, counter: u64, cfg: &Config, tag: &Tag) -> bool {
-    mac(key, counter, cfg).is_some_and(|m| m.verify_slice(tag).is_ok())
+pub fn verify(key: &AuthKey, nonce: &Nonce, counter: u64, change: &Change, tag: &Tag) -> bool {
+    mac(key, nonce, counter, change).is_some_and(|m| m.verify_slice(tag).is_ok())
+}
+
+/// The unit's boot nonce from its key (or none) and what differs between
+/// boots: the reset count and the platform's entropy. SHA-256 of them,
+/// first 16 bytes; a new value at every reset whenever the reset count or
+/// the entropy changes.
+pub fn boot_nonce(key: Option<&AuthKey>, resets: u32, entropy: &[u8; 32]) -> Nonce {
+    use sha2::Digest;
+    let mut h = Sha256::new();
+    h.update(b"raim-boot-nonce-v1");
+    if let Some(k) = key {
+        h.update(k);
+    }
+    h.update(resets.to_le_bytes());
+    h.update(entropy);
+    let d: [u8; 32] = h.finalize().into();
+    let mut n = [0u8; 16];
+    n.copy_from_slice(d.get(..16).unwrap_or(&[0; 16]));
+    n
 }
 
 #[cfg(test)]
@@ -72,13 +157,30 @@ mod tests {
     }
 
     #[test]
-    fn tag_binds_key_counter_and_config() {
+    fn tag_binds_key_nonce_counter_and_change() {
         let key = [7u8; 32];
+        let nonce = [1u8; 16];
         let c = Config::default();
-        let t = tag(&key, 5, &c);
-        assert!(verify(&key, 5, &c, &t));
-        assert!(!verify(&key, 6, &c, &t));
-        assert!(!verify(&[8u8; 32], 5, &c, &t));
-        assert!(!verify(&key, 5, &Config { pfa: 1e-6, ..c }, &t));
+        let change = Change::Configure(c);
+        let t = tag(&key, &nonce, 5, &ChangeRef::Configure(&c));
+        assert!(verify(&key, &nonce, 5, &change, &t));
+        assert!(!verify(&key, &[2u8; 16], 5, &change, &t));
+        assert!(!verify(&key, &nonce, 6, &change, &t));
+        assert!(!verify(&[8u8; 32], &nonce, 5, &change, &t));
+        let other = Change::Configure(Config { pfa: 1e-6, ..c });
+        assert!(!verify(&key, &nonce, 5, &other, &t));
+        assert!(!verify(&key, &nonce, 5, &Change::Lock, &t));
+        let lock = tag(&key, &nonce, 5, &ChangeRef::Lock);
+        assert!(verify(&key, &nonce, 5, &Change::Lock, &lock));
+    }
+
+    #[test]
+    fn boot_nonce_changes_with_resets_entropy_and_key() {
+        let e = [9u8; 32];
+        let n0 = boot_nonce(None, 0, &e);
+        assert_ne!(n0, boot_nonce(None, 1, &e));
+        assert_ne!(n0, boot_nonce(None, 0, &[8u8; 32]));
+        assert_ne!(n0, boot_nonce(Some(&[1; 32]), 0, &e));
+        assert_eq!(n0, boot_nonce(None, 0, &e));
     }
 }

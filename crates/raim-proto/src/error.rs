@@ -123,26 +123,29 @@ pub enum WireError {
         /// The largest supported.
         max: u32,
     },
-    /// A `Configure` after `Lock` (or in a build with a compiled-in
-    /// configuration): refused until reset. `config_crc32` is the
-    /// fingerprint of the configuration that stays in force.
+    /// A change of configuration after `Lock`, or on a unit running its
+    /// provisioned configuration (locked from boot): refused until reset.
+    /// `fingerprint` is that of the configuration that stays in force.
     Locked {
-        /// CRC-32 fingerprint of the configuration in force.
-        config_crc32: u32,
+        /// Fingerprint of the configuration in force.
+        fingerprint: crate::unit::Fingerprint,
     },
     /// A `TestFault` request to a build without test hooks.
     TestHooksDisabled,
-    /// A plain `Configure` to a unit with an authentication key.
+    /// A plain state-changing request (`Configure`, `Ism`, `PfConfigure`,
+    /// `Lock`, `HostSigmas`) to a unit with an authentication key.
     AuthRequired,
-    /// An `AuthConfigure` to a unit without a key.
+    /// An `Authenticated` request to a unit without a key.
     AuthNotProvisioned,
-    /// An `AuthConfigure` whose tag does not verify.
+    /// An `Authenticated` request whose tag does not verify under the
+    /// unit's key and this boot's nonce (a forged frame, or one recorded
+    /// before a reset).
     BadAuthTag {
         /// The counter of the refused frame.
         counter: u64,
     },
-    /// An `AuthConfigure` whose counter is not above the last one accepted
-    /// (a replayed or reordered frame).
+    /// An `Authenticated` request whose counter is not above the last one
+    /// accepted since boot (a replayed or reordered frame).
     Replayed {
         /// The counter of the refused frame.
         counter: u64,
@@ -188,6 +191,19 @@ pub enum WireError {
         min_m: f64,
         max_m: f64,
     },
+    /// An epoch to a unit with no configuration in force: none provisioned
+    /// (or a corrupt one, `provision`), and none taken at run time. The
+    /// epoch is unavailable; the alarm output is asserted.
+    Unconfigured {
+        provision: Option<crate::unit::ProvisionError>,
+    },
+    /// An `Authenticated` request with the counter at the top of its range
+    /// (`u64::MAX`): refused, so that a later change stays possible.
+    CounterExhausted { counter: u64 },
+    /// An epoch carrying a per-satellite sigma (satellite `index`) to a
+    /// unit configured to use only its own sigma model (`host_sigmas`
+    /// off in the unit configuration).
+    HostSigmaRefused { index: u32 },
 }
 
 /// A field name for the wire (truncated to 24 bytes).
@@ -336,12 +352,15 @@ impl core::fmt::Display for WireError {
             WireError::InvalidDof { dof, max } => {
                 write!(f, "degrees of freedom {dof} outside 1..={max}")
             }
-            WireError::Locked { config_crc32 } => write!(
+            WireError::Locked { fingerprint } => write!(
                 f,
-                "configuration locked until reset (in force: {config_crc32:#010x})"
+                "configuration locked until reset (in force: {})",
+                crate::unit::Hex(fingerprint)
             ),
             WireError::TestHooksDisabled => write!(f, "test hooks are disabled in this build"),
-            WireError::AuthRequired => write!(f, "configuration frames must be authenticated"),
+            WireError::AuthRequired => {
+                write!(f, "state-changing frames must be authenticated on this unit")
+            }
             WireError::AuthNotProvisioned => write!(f, "no authentication key provisioned"),
             WireError::BadAuthTag { counter } => {
                 write!(f, "authentication tag does not verify (counter {counter})")
@@ -349,7 +368,7 @@ impl core::fmt::Display for WireError {
             WireError::Replayed { counter, last } => {
                 write!(
                     f,
-                    "replayed configuration: counter {counter} <= last {last}"
+                    "replayed request: counter {counter} <= last {last}"
                 )
             }
             WireError::Araim(e) => write!(f, "ARAIM: {e}"),
@@ -374,6 +393,19 @@ impl core::fmt::Display for WireError {
             } => write!(
                 f,
                 "sigma at index {index} is {sigma_m} m, outside [{min_m}, {max_m}] m"
+            ),
+            WireError::Unconfigured { provision: None } => {
+                write!(f, "unconfigured: no configuration provisioned or taken")
+            }
+            WireError::Unconfigured { provision: Some(e) } => {
+                write!(f, "unconfigured: the provisioned configuration is refused ({e:?})")
+            }
+            WireError::CounterExhausted { counter } => {
+                write!(f, "counter {counter} is at the top of its range")
+            }
+            WireError::HostSigmaRefused { index } => write!(
+                f,
+                "satellite at index {index} carries a sigma; this unit uses only its own sigma model"
             ),
         }
     }

@@ -50,18 +50,20 @@ pub mod message;
 pub mod nmea;
 pub mod pf_msg;
 pub mod result;
+pub mod unit;
 
 pub use alert::{AlarmOutput, AlertMonitor};
-pub use auth::{AuthConfigure, AuthKey};
+pub use auth::{AuthKey, Authenticated, AuthenticatedRef, Change, ChangeRef, Nonce};
 pub use error::WireError;
 pub use frame::{encode, FrameError, FrameReceiver};
-pub use lock::{config_fingerprint, ConfigId};
+pub use lock::{ConfigId, ConfigSource};
 pub use message::{
-    Command, LinearEpoch, RangeEpoch, Request, RequestRef, ResetCause, Response, ResponseBody,
-    SatList, Status, TestFault,
+    BootNotice, Command, LinearEpoch, RangeEpoch, Request, RequestRef, ResetCause, Response,
+    ResponseBody, SatList, Status, TestFault,
 };
 pub use pf_msg::{PfKind, WirePfConfig, WirePfResult};
 pub use result::{WireMcusum, WireResult};
+pub use unit::{Fingerprint, ProvisionError, UnitConfig, UnitConfigRef};
 
 /// Satellites per epoch: the firmware's `Raim::<CAPACITY>` and every list on
 /// the wire. The core's documented default.
@@ -78,9 +80,11 @@ pub type DevicePrecision = f32;
 /// Version of the frame layout and message types; reported by `Status`.
 /// Bump on any change of a serialized type (postcard is not self-describing);
 /// new enum variants are appended so that the earlier ones keep their
-/// indices. The history of versions 1 to 8 is in CHANGELOG.md, "Wire
-/// protocol versions".
-pub const PROTOCOL_VERSION: u16 = 8;
+/// indices. The history of the versions is in CHANGELOG.md, "Wire protocol
+/// versions"; 9 is the configuration authority (`Command::Authenticated`
+/// with a boot nonce, `HostSigmas`, `ResponseBody::Boot`, `ConfigId` with a
+/// SHA-256 fingerprint and the configuration's source).
+pub const PROTOCOL_VERSION: u16 = 9;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes

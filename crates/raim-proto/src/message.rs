@@ -121,10 +121,10 @@ pub enum Command {
     /// whose platform enables it (the QEMU board); elsewhere answered
     /// `WireError::TestHooksDisabled`.
     TestFault(TestFault),
-    /// An authenticated `Configure` (`auth`): accepted only by a unit with
-    /// a provisioned key, with a valid tag and a counter above every one
-    /// accepted since boot.
-    AuthConfigure(crate::auth::AuthConfigure),
+    /// An authenticated change (`auth`): `Configure`, `Ism`, `PfConfigure`,
+    /// `Lock` or `HostSigmas`, with a counter and an HMAC tag under the
+    /// unit's key and boot nonce. The only form a keyed unit takes.
+    Authenticated(crate::auth::Authenticated),
     /// ARAIM (issue 12): an ISM frame or an ARAIM epoch (`araim_msg`).
     Araim(crate::araim_msg::AraimCommand),
     /// Particle-filter RAIM (issue 14, `pf_msg`): take a PF configuration
@@ -137,6 +137,9 @@ pub enum Command {
     /// is not used: the PF initialises from its own first fix). Answered
     /// `PfResult` or an error.
     PfRanges(RangeEpoch),
+    /// Whether the per-satellite sigmas of epoch frames are used (the unit
+    /// configuration's `host_sigmas`). Answered `Configured`.
+    HostSigmas(bool),
 }
 
 impl Command {
@@ -151,17 +154,30 @@ impl Command {
             Command::Linear(e) => (e.sats.overflowed(), e.sats.declared),
             Command::Araim(AraimCommand::Epoch(e)) => (e.sats.overflowed(), e.sats.declared),
             Command::Araim(AraimCommand::Ranges(e)) => (e.sats.overflowed(), e.sats.declared),
-            Command::Araim(AraimCommand::Ism(i) | AraimCommand::AuthIsm { ism: i, .. }) => {
-                (i.sats.overflowed(), i.sats.declared)
-            }
+            Command::Araim(AraimCommand::Ism(i))
+            | Command::Authenticated(crate::auth::Authenticated {
+                change: crate::auth::Change::Ism(i),
+                ..
+            }) => (i.sats.overflowed(), i.sats.declared),
             Command::Status
             | Command::Configure(_)
             | Command::Lock
             | Command::TestFault(_)
-            | Command::AuthConfigure(_)
-            | Command::PfConfigure(_) => (false, 0),
+            | Command::Authenticated(_)
+            | Command::PfConfigure(_)
+            | Command::HostSigmas(_) => (false, 0),
         };
         overflowed.then_some(declared)
+    }
+
+    /// The time of a snapshot epoch (`Ranges`, `Linear`: the epochs whose
+    /// sentences the NMEA port carries), `None` for every other request.
+    pub fn nmea_epoch_time_s(&self) -> Option<f64> {
+        match self {
+            Command::Ranges(e) => Some(e.time_s),
+            Command::Linear(e) => Some(e.time_s),
+            _ => None,
+        }
     }
 
     /// True for an epoch (snapshot, ARAIM or particle filter): its verdict,
@@ -263,8 +279,8 @@ pub enum CommandRef<'a> {
     Lock,
     /// [`Command::TestFault`].
     TestFault(TestFault),
-    /// [`Command::AuthConfigure`].
-    AuthConfigure(&'a crate::auth::AuthConfigure),
+    /// [`Command::Authenticated`].
+    Authenticated(crate::auth::AuthenticatedRef<'a>),
     /// [`Command::Araim`].
     Araim(crate::araim_msg::AraimCommandRef<'a>),
     /// [`Command::PfConfigure`].
@@ -278,6 +294,7 @@ pub enum CommandRef<'a> {
         /// The satellites (any number).
         sats: &'a [RangeObservation],
     },
+    HostSigmas(bool),
 }
 
 /// The host's borrowed form of [`Request`].
@@ -358,9 +375,35 @@ pub struct Status {
     /// The output pin as read back from the hardware: true when it is at
     /// its alarm level. Must agree with `alarm_output.asserted()`.
     pub alarm_pin_asserted: bool,
-    /// True when the unit holds an authentication key for `AuthConfigure`
-    /// (then a plain `Configure` is refused).
+    /// True when the unit holds an authentication key: every
+    /// state-changing request must then be `Authenticated`.
     pub auth_provisioned: bool,
+    /// This boot's nonce, which an `Authenticated` tag covers.
+    pub boot_nonce: crate::auth::Nonce,
+    /// Whether epoch frames' per-satellite sigmas are used.
+    pub host_sigmas: bool,
+    /// Why the provisioned configuration was refused at boot, if it was.
+    pub provision_error: Option<crate::unit::ProvisionError>,
+}
+
+/// The first frame a unit sends after any reset, unasked (`seq: None`):
+/// the host learns that answers to frames sent before it may be missing,
+/// what the unit now runs, and the nonce its authenticated requests must
+/// carry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BootNotice {
+    pub protocol_version: u16,
+    /// Resets since power-on, and the cause of this one.
+    pub resets: u32,
+    pub reset_cause: ResetCause,
+    /// The configuration now in force (provisioned, or none).
+    pub config: ConfigId,
+    /// Why the provisioned configuration was refused, if it was.
+    pub provision_error: Option<crate::unit::ProvisionError>,
+    pub auth_provisioned: bool,
+    /// This boot's nonce.
+    pub boot_nonce: crate::auth::Nonce,
 }
 
 /// A response frame's payload.
@@ -394,6 +437,8 @@ pub enum ResponseBody {
     Araim(crate::araim_msg::AraimAnswer),
     /// The answer to a `PfRanges` epoch (issue 14).
     PfResult(crate::pf_msg::WirePfResult),
+    /// Unasked, after every reset.
+    Boot(BootNotice),
 }
 
 #[cfg(test)]

@@ -11,10 +11,8 @@
 
 use raim_core::measurement::MAX_SYSTEMS;
 use raim_core::pf::{PfConfig, PfOutput, SatLlr};
-use raim_core::{Config, SatId};
+use raim_core::SatId;
 use serde::{Deserialize, Serialize};
-
-use crate::frame::CRC32;
 
 /// Satellites per PF epoch: the main filter plus one auxiliary filter per
 /// satellite are fixed arrays of this many. The 6 to 12 satellites;
@@ -139,106 +137,5 @@ impl WirePfResult {
                 Some(b) if !(l.windowed > b.windowed) => Some(b),
                 _ => Some(l),
             })
-    }
-}
-
-/// Larger than the postcard encoding of a `Config` (~140 bytes) and of a
-/// `WirePfConfig` (~130 bytes).
-const FINGERPRINT_BYTES: usize = 256;
-
-/// The configuration fingerprint (docs/PROTOCOL.md "Lock and fingerprint")
-/// when a PF configuration is in force: CRC-32/ISO-HDLC over
-/// `postcard(cfg) ++ postcard(pf)`. Without one it is
-/// `lock::config_fingerprint(cfg)` (the CRC of `postcard(cfg)` alone), so
-/// the fingerprints of units that never took a PF configuration do not
-/// change. 0 if an encoding did not fit (test `fingerprints_fit`).
-pub fn fingerprint(cfg: &Config, pf: Option<&WirePfConfig>) -> u32 {
-    let Some(pf) = pf else {
-        return crate::lock::config_fingerprint(cfg);
-    };
-    let mut a = [0u8; FINGERPRINT_BYTES];
-    let mut b = [0u8; FINGERPRINT_BYTES];
-    match (
-        postcard::to_slice(cfg, &mut a),
-        postcard::to_slice(pf, &mut b),
-    ) {
-        (Ok(a), Ok(b)) => {
-            let mut d = CRC32.digest();
-            d.update(a);
-            d.update(b);
-            d.finalize()
-        }
-        _ => 0,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    extern crate std;
-    use super::*;
-    use raim_core::pf::Likelihood;
-
-    #[test]
-    fn fingerprints_fit_and_cover_the_pf_configuration() {
-        let cfg = Config::default();
-        let pf = WirePfConfig {
-            kind: PfKind::Gapf,
-            particles: u32::MAX,
-            seed: u64::MAX,
-            config: PfConfig {
-                likelihood: Likelihood::Mixture {
-                    outlier_prob: 0.1,
-                    outlier_scale: 10.0,
-                },
-                window: usize::MAX,
-                ..PfConfig::default()
-            },
-        };
-        let mut buf = [0u8; FINGERPRINT_BYTES];
-        let n = postcard::to_slice(&pf, &mut buf).unwrap().len();
-        assert!(n + 64 <= FINGERPRINT_BYTES, "{n}");
-        // Without a PF configuration: the snapshot fingerprint unchanged.
-        assert_eq!(
-            fingerprint(&cfg, None),
-            crate::lock::config_fingerprint(&cfg)
-        );
-        // Independently: the CRC of the concatenated encodings.
-        let mut all = std::vec::Vec::new();
-        let mut a = [0u8; FINGERPRINT_BYTES];
-        all.extend_from_slice(postcard::to_slice(&cfg, &mut a).unwrap());
-        all.extend_from_slice(postcard::to_slice(&pf, &mut a).unwrap());
-        assert_eq!(fingerprint(&cfg, Some(&pf)), CRC32.checksum(&all));
-        // Every PF field moves it.
-        let base = WirePfConfig::gapf(100, 1);
-        let fp = fingerprint(&cfg, Some(&base));
-        let variants = [
-            WirePfConfig {
-                kind: PfKind::Pf,
-                ..base
-            },
-            WirePfConfig {
-                particles: 300,
-                ..base
-            },
-            WirePfConfig { seed: 2, ..base },
-            WirePfConfig {
-                config: PfConfig {
-                    threshold: 21.0,
-                    ..base.config
-                },
-                ..base
-            },
-            WirePfConfig {
-                config: PfConfig {
-                    window: 11,
-                    ..base.config
-                },
-                ..base
-            },
-        ];
-        for (i, v) in variants.iter().enumerate() {
-            assert_ne!(fingerprint(&cfg, Some(v)), fp, "variant {i}");
-        }
-        assert_ne!(fp, fingerprint(&cfg, None));
     }
 }

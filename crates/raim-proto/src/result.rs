@@ -325,8 +325,9 @@ mod tests {
             seq: Some(u32::MAX),
             body: ResponseBody::Result(w),
             config: crate::ConfigId {
-                crc32: u32::MAX,
+                fingerprint: [0xFF; 16],
                 locked: true,
+                source: crate::ConfigSource::Runtime,
             },
         };
         let mut scratch = [0u8; MAX_RESPONSE_PAYLOAD];

@@ -29,7 +29,11 @@ use anyhow::{anyhow, bail, Context, Result};
 use raim_core::{Config, Epoch, Observations};
 use raim_proto::frame::{encode, FrameError, FrameReceiver};
 use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody, Status};
-use raim_proto::{ConfigId, WireError, WireResult, MAX_REQUEST_FRAME, MAX_RESPONSE_FRAME};
+use raim_proto::unit::{UnitConfig, PROVISION_BYTES};
+use raim_proto::{
+    BootNotice, ConfigId, ConfigSource, WireError, WireResult, MAX_REQUEST_FRAME,
+    MAX_RESPONSE_FRAME,
+};
 
 pub mod tied;
 
@@ -105,6 +109,41 @@ pub fn provision_key(elf: &Path, key: &raim_proto::AuthKey) -> Result<PathBuf> {
     let hex: String = key.iter().take(4).map(|b| format!("{b:02x}")).collect();
     let out = elf.with_extension(format!("key-{hex}"));
     std::fs::write(&out, bytes)?;
+    Ok(out)
+}
+
+/// A copy of the firmware ELF `elf` with `unit` sealed into its
+/// `.raim_config` section (firmware/src/provision.rs): the installation
+/// step. The seal is an HMAC under `key` when the unit has one (it must be
+/// the key of its `.raim_key`), SHA-256 otherwise. Written next to `elf` as
+/// `<name>.<tag>`.
+pub fn provision_config(
+    elf: &Path,
+    unit: &UnitConfig,
+    key: Option<&raim_proto::AuthKey>,
+    tag: &str,
+) -> Result<PathBuf> {
+    let mut blob = [0u8; PROVISION_BYTES];
+    raim_proto::unit::seal(unit, key, &mut blob)
+        .map_err(|e| anyhow!("sealing the unit configuration: {e:?}"))?;
+    write_section(elf, ".raim_config", &blob, tag)
+}
+
+/// A copy of `elf` with the bytes of section `name` replaced by `bytes`
+/// (same size), written as `<elf>.<tag>`.
+pub fn write_section(elf: &Path, name: &str, bytes: &[u8], tag: &str) -> Result<PathBuf> {
+    let mut image = std::fs::read(elf).with_context(|| format!("reading {}", elf.display()))?;
+    let (offset, size) = elf32_section(&image, name)
+        .with_context(|| format!("no {name} section in {}", elf.display()))?;
+    if size != bytes.len() {
+        bail!("{name} is {size} bytes, the data {}", bytes.len());
+    }
+    image
+        .get_mut(offset..offset + size)
+        .with_context(|| format!("{name} outside the file"))?
+        .copy_from_slice(bytes);
+    let out = elf.with_extension(tag);
+    std::fs::write(&out, image)?;
     Ok(out)
 }
 
@@ -231,6 +270,10 @@ pub struct Options {
     /// The machine (default mps2-an386); the ELF must be its build
     /// (`firmware_elf_for`).
     pub machine: Machine,
+    /// Leave an unconfigured, unkeyed unit as it booted. By default the
+    /// session sets such a unit up as a bench host would, with a runtime
+    /// `Configure(Config::default())` right after its boot notice.
+    pub raw: bool,
 }
 
 /// One epoch's answer.
@@ -256,6 +299,8 @@ pub struct QemuSession {
     log: PathBuf,
     /// The configuration fingerprint and lock state of the last answer.
     last_config: Option<ConfigId>,
+    /// Every boot notice received, in order (one per boot of the unit).
+    boots: Vec<BootNotice>,
 }
 
 static SESSION_COUNTER: AtomicU32 = AtomicU32::new(0);
@@ -349,11 +394,40 @@ impl QemuSession {
             dir,
             log,
             last_config: None,
+            boots: Vec::new(),
         };
+        session.wait_boot(ANSWER_TIMEOUT)?;
         if opts.machine == Machine::NetduinoPlus2 {
             session.sync()?;
         }
+        let booted = session.boots.last().copied();
+        let bench = booted.is_some_and(|b| {
+            !opts.raw && !b.auth_provisioned && b.config.source == ConfigSource::Unconfigured
+        });
+        if bench {
+            session.configure(&Config::default())?;
+        }
         Ok(session)
+    }
+
+    /// Wait for the unit's next boot notice (the first frame after every
+    /// reset); frames before it are dropped.
+    pub fn wait_boot(&mut self, timeout: Duration) -> Result<BootNotice> {
+        let n = self.boots.len();
+        let deadline = Instant::now() + timeout;
+        while self.boots.len() == n {
+            let left = deadline.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                bail!("no boot notice within {timeout:?}");
+            }
+            let _ = self.recv(left);
+        }
+        self.boots.last().copied().context("no boot notice")
+    }
+
+    /// The boot notices received so far, oldest first.
+    pub fn boots(&self) -> &[BootNotice] {
+        &self.boots
     }
 
     /// Wait until the firmware answers. QEMU's STM32 USART model drops the
@@ -419,8 +493,28 @@ impl QemuSession {
         Ok(seq)
     }
 
-    /// The next response frame.
+    /// The next response frame (boot notices are kept, `boots`, and
+    /// skipped).
     pub fn recv(&mut self, timeout: Duration) -> Result<Response> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            let r = self.recv_any(left)?;
+            match r.body {
+                ResponseBody::Boot(b) => {
+                    self.last_config = Some(r.config);
+                    self.boots.push(b);
+                    if left.is_zero() {
+                        bail!("no answer from the firmware within {timeout:?}");
+                    }
+                }
+                _ => return Ok(r),
+            }
+        }
+    }
+
+    /// The next response frame, boot notices included.
+    fn recv_any(&mut self, timeout: Duration) -> Result<Response> {
         match self.responses.recv_timeout(timeout) {
             Ok(Ok(r)) => Ok(r),
             Ok(Err(e)) => Err(anyhow!("bad response frame from the firmware: {e}")),
@@ -514,10 +608,13 @@ impl QemuSession {
             ResponseBody::Error(e) => Err(e),
             other => bail!("epoch answered with {other:?}"),
         };
+        // Every epoch writes its sentences, a refused one its no-fix
+        // sentences.
         let nmea = if outcome.is_ok() {
             self.take_epoch_nmea(ANSWER_TIMEOUT)?
         } else {
-            Vec::new()
+            self.take_epoch_nmea(Duration::from_secs(5))
+                .unwrap_or_default()
         };
         Ok(Processed {
             seq,
@@ -560,6 +657,20 @@ impl QemuSession {
                 Err(_) => bail!("no ZDA after {} NMEA sentences: {out:?}", out.len()),
             }
         }
+    }
+
+    /// Up to `count` NMEA sentences, waiting at most `timeout`.
+    pub fn take_nmea_upto(&mut self, count: usize, timeout: Duration) -> Vec<String> {
+        let deadline = Instant::now() + timeout;
+        let mut out = Vec::with_capacity(count);
+        while out.len() < count {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.nmea.recv_timeout(left) {
+                Ok(s) => out.push(s),
+                Err(_) => break,
+            }
+        }
+        out
     }
 
     /// NMEA sentences already received and not yet taken.

@@ -49,6 +49,9 @@ pub(crate) struct Refusal {
     /// The refused request was an epoch (its refusal drives the alarm
     /// output, as an epoch answered with an error does).
     pub(crate) epoch: bool,
+    /// The time of a refused snapshot epoch, whose no-fix NMEA sentences
+    /// are written.
+    pub(crate) nmea_time_s: Option<f64>,
 }
 
 /// Decode a request payload into `slot` and check it once: its sequence
@@ -70,6 +73,7 @@ pub(crate) fn decode(payload: &[u8], slot: &mut Option<Request>) -> Result<u32, 
                         capacity: CAPACITY as u32,
                     },
                     epoch: r.command.is_epoch(),
+                    nmea_time_s: r.command.nmea_epoch_time_s(),
                 });
             }
             *slot = Some(r);
@@ -84,6 +88,7 @@ pub(crate) fn decode(payload: &[u8], slot: &mut Option<Request>) -> Result<u32, 
                 seq,
                 error: WireError::from(FrameError::Undecodable { len }),
                 epoch: false,
+                nmea_time_s: None,
             })
         }
     }
@@ -112,6 +117,7 @@ pub(crate) enum BodyRef<'a> {
     LockEngaged,
     Araim(&'a raim_proto::araim_msg::AraimAnswer),
     PfResult(&'a raim_proto::pf_msg::WirePfResult),
+    Boot(&'a raim_proto::message::BootNotice),
 }
 
 impl<'a> From<&'a ResponseBody> for BodyRef<'a> {
@@ -124,6 +130,7 @@ impl<'a> From<&'a ResponseBody> for BodyRef<'a> {
             ResponseBody::LockEngaged => BodyRef::LockEngaged,
             ResponseBody::Araim(a) => BodyRef::Araim(a),
             ResponseBody::PfResult(p) => BodyRef::PfResult(p),
+            ResponseBody::Boot(b) => BodyRef::Boot(b),
         }
     }
 }

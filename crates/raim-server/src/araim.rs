@@ -15,14 +15,8 @@
 use raim_core::araim::{AraimConfig, AraimError, Ism};
 use raim_core::Config;
 
-use hmac::{Hmac, Mac};
-use sha2::Sha256;
-
 use super::Server;
-use raim_proto::araim_msg::{
-    AraimAnswer, AraimCommand, AraimWireError, IsmFrame, IsmFrameRef, IsmSat,
-};
-use raim_proto::auth::{AuthKey, Tag};
+use raim_proto::araim_msg::{AraimAnswer, AraimCommand, AraimWireError, IsmFrame, IsmSat};
 use raim_proto::error::WireError;
 use raim_proto::message::{LinearEpoch, RangeEpoch};
 
@@ -85,116 +79,6 @@ pub const MAX_FDE_MODES: u32 = 600;
 /// measured sweep would cost more per candidate (docs/ARAIM.md, "FDE work
 /// budget").
 pub const FDE_WORK_BUDGET: u32 = 110_000;
-
-/// CRC-32/ISO-HDLC, as `frame::CRC32`; a static so that a digest can
-/// borrow it.
-static CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
-
-/// A postcard output that feeds a CRC digest (no buffer).
-struct CrcFlavor(crc::Digest<'static, u32>);
-
-impl postcard::ser_flavors::Flavor for CrcFlavor {
-    type Output = crc::Digest<'static, u32>;
-    fn try_extend(&mut self, data: &[u8]) -> postcard::Result<()> {
-        self.0.update(data);
-        Ok(())
-    }
-    fn try_push(&mut self, data: u8) -> postcard::Result<()> {
-        self.0.update(&[data]);
-        Ok(())
-    }
-    fn finalize(self) -> postcard::Result<Self::Output> {
-        Ok(self.0)
-    }
-}
-
-/// The digest after `postcard(v)`. The flavor never fails, so neither
-/// does serializing plain data.
-fn feed<T: serde::Serialize>(
-    v: &T,
-    digest: crc::Digest<'static, u32>,
-) -> crc::Digest<'static, u32> {
-    let mut ser = postcard::Serializer {
-        output: CrcFlavor(digest),
-    };
-    let _ = v.serialize(&mut ser);
-    ser.output.0
-}
-
-/// A postcard output that feeds an HMAC (no buffer).
-struct MacFlavor(Hmac<Sha256>);
-
-impl postcard::ser_flavors::Flavor for MacFlavor {
-    type Output = Hmac<Sha256>;
-    fn try_extend(&mut self, data: &[u8]) -> postcard::Result<()> {
-        self.0.update(data);
-        Ok(())
-    }
-    fn try_push(&mut self, data: u8) -> postcard::Result<()> {
-        self.0.update(&[data]);
-        Ok(())
-    }
-    fn finalize(self) -> postcard::Result<Self::Output> {
-        Ok(self.0)
-    }
-}
-
-/// Domain of the ISM tags (distinct from `auth`'s configuration tags, so a
-/// tag of one can never verify as the other).
-const ISM_DOMAIN: &[u8] = b"raim-ism-v1";
-
-/// `HMAC-SHA256(key, "raim-ism-v1" || counter (u64 LE) || postcard(ism))`;
-/// `ism` is an `IsmFrame` or an `IsmFrameRef` (same bytes).
-fn ism_mac<T: serde::Serialize>(key: &AuthKey, counter: u64, ism: &T) -> Option<Hmac<Sha256>> {
-    let mut m = <Hmac<Sha256> as Mac>::new_from_slice(key).ok()?;
-    m.update(ISM_DOMAIN);
-    m.update(&counter.to_le_bytes());
-    let mut ser = postcard::Serializer {
-        output: MacFlavor(m),
-    };
-    ism.serialize(&mut ser).ok()?;
-    Some(ser.output.0)
-}
-
-/// The tag of an authenticated ISM frame (the host side).
-pub fn ism_tag(key: &AuthKey, counter: u64, ism: &IsmFrameRef<'_>) -> Tag {
-    ism_mac(key, counter, ism)
-        .map(|m| m.finalize().into_bytes().into())
-        .unwrap_or([0; 32])
-}
-
-/// Constant-time check of an ISM frame's tag (the unit side).
-pub fn verify_ism(key: &AuthKey, counter: u64, ism: &IsmFrame, tag: &Tag) -> bool {
-    ism_mac(key, counter, ism).is_some_and(|m| m.verify_slice(tag).is_ok())
-}
-
-/// The fingerprint of what is in force: CRC-32/ISO-HDLC of
-/// `postcard(config)`, followed by `postcard(ism)` when an ISM is in
-/// force. Without an ISM it equals `config_fingerprint(config)`.
-pub fn fingerprint(config: &Config, ism: Option<&IsmFrame>) -> u32 {
-    fingerprint_all(config, ism, None)
-}
-
-/// The fingerprint of everything in force on the unit: CRC-32/ISO-HDLC of
-/// `postcard(config)`, then `postcard(ism)` when an ISM is in force, then
-/// `postcard(pf)` when a particle-filter configuration is. Each absent part
-/// adds no bytes, so it reduces to [`fingerprint`] without a PF
-/// configuration, to `pf_msg::fingerprint` without an ISM, and to
-/// `config_fingerprint` with neither.
-pub fn fingerprint_all(
-    config: &Config,
-    ism: Option<&IsmFrame>,
-    pf: Option<&raim_proto::pf_msg::WirePfConfig>,
-) -> u32 {
-    let mut digest = feed(config, CRC32.digest());
-    if let Some(i) = ism {
-        digest = feed(i, digest);
-    }
-    if let Some(p) = pf {
-        digest = feed(p, digest);
-    }
-    digest.finalize()
-}
 
 /// The ARAIM part of the server: the ISM in force and, with the `araim`
 /// feature, the engine, its FDE scratch and the epoch's satellites.
@@ -278,11 +162,11 @@ fn check_sat(index: usize, s: &IsmSat) -> Result<(), AraimError> {
 impl Server {
     /// Checks an ISM frame and, if it passes, puts it in force (the gate,
     /// `gate.rs`, has passed it and updates the fingerprint).
-    pub(crate) fn take_ism(&mut self, frame: IsmFrame) -> Result<AraimAnswer, WireError> {
-        check_ism(&frame)?;
+    pub(crate) fn take_ism(&mut self, frame: &IsmFrame) -> Result<u32, WireError> {
+        check_ism(frame)?;
         let satellites = u32::try_from(frame.sats.items.len()).unwrap_or(u32::MAX);
-        self.araim.ism = Some(frame);
-        Ok(AraimAnswer::IsmAccepted { satellites })
+        self.araim.ism = Some(frame.clone());
+        Ok(satellites)
     }
 
     /// An ARAIM epoch request (`Araim(Epoch)` or `Araim(Ranges)`, in
@@ -315,7 +199,7 @@ impl Server {
                 // `dispatch` sends only ARAIM epochs here.
                 _ => return Ok(()),
             };
-            epoch_answer(araim, status, config, &input, platform)
+            epoch_answer(araim, status, config.as_ref(), &input, platform)
         };
         match &answer {
             Ok(a) => self.send(link, Some(seq), super::BodyRef::Araim(a)),
@@ -331,7 +215,7 @@ impl Server {
 fn epoch_answer<P: super::Platform>(
     araim: &mut AraimState,
     status: &mut raim_proto::message::Status,
-    config: &Config,
+    config: Option<&Config>,
     epoch: &Input<'_>,
     platform: &mut P,
 ) -> Result<AraimAnswer, WireError> {
@@ -346,7 +230,7 @@ fn epoch_answer<P: super::Platform>(
 fn epoch_answer_inner<P: super::Platform>(
     araim: &mut AraimState,
     status: &mut raim_proto::message::Status,
-    config: &Config,
+    config: Option<&Config>,
     epoch: &Input<'_>,
     platform: &mut P,
 ) -> Result<AraimAnswer, WireError> {
@@ -357,9 +241,12 @@ fn epoch_answer_inner<P: super::Platform>(
         };
         status.epochs = status.epochs.wrapping_add(1);
         let t0 = platform.now();
-        let r = match epoch {
-            Input::Linear(e) => araim.engine.run(config, ism, e),
-            Input::Ranges(e) => araim.engine.run_ranges(config, ism, e),
+        // Both forms run with the snapshot configuration in force (the
+        // solver's settings and sigma model); none in force: Unconfigured.
+        let r = match (epoch, config) {
+            (_, None) => Err(WireError::Unconfigured { provision: None }),
+            (Input::Linear(e), Some(c)) => araim.engine.run(c, ism, e),
+            (Input::Ranges(e), Some(c)) => araim.engine.run_ranges(c, ism, e),
         };
         let t1 = platform.now();
         status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
@@ -535,7 +422,6 @@ mod tests {
     use raim_core::{Decision, LinearObservation, SatId, System};
     use raim_proto::araim_msg::{AraimCommandRef, IsmFrameRef, WireAraimConfig, WireFde};
     use raim_proto::frame::{encode, FrameReceiver};
-    use raim_proto::lock::config_fingerprint;
     use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody};
     use raim_proto::MAX_RESPONSE_FRAME;
     use std::vec::Vec;
@@ -579,8 +465,10 @@ mod tests {
 
     impl Link {
         fn new() -> Self {
+            let mut server = std::boxed::Box::new(Server::new());
+            server.take_runtime_config(Config::default()).unwrap();
             Link {
-                server: std::boxed::Box::new(Server::new()),
+                server,
                 seq: 0,
                 heard: Heard::default(),
             }
@@ -691,198 +579,6 @@ mod tests {
             ResponseBody::Error(e) => e,
             other => panic!("{other:?}"),
         }
-    }
-
-    /// No ISM at reset; an ISM is taken and its fingerprint is the CRC of
-    /// the configuration's and the ISM's bytes (computed here from the
-    /// encoded bytes, independently of the server's streaming CRC);
-    /// `Configure` keeps the ISM; after `Lock` an ISM frame is refused and
-    /// the ISM in force stays; a reset forgets it.
-    #[test]
-    fn ism_lifecycle_lock_and_fingerprint() {
-        let (ism, obs) = sky20(usize::MAX, 0.0);
-        let mut l = Link::new();
-        assert_eq!(
-            *error(&l.epoch(&obs)),
-            WireError::Araim(AraimWireError::NoIsm)
-        );
-        let cfg = Config::default();
-        let r = l.ism(&ism, gal());
-        assert_eq!(
-            r.body,
-            ResponseBody::Araim(AraimAnswer::IsmAccepted { satellites: 20 })
-        );
-        let frame = IsmFrame {
-            config: WireAraimConfig::default(),
-            p_const: gal(),
-            sats: raim_proto::message::SatList {
-                items: ism.iter().copied().collect(),
-                declared: 20,
-            },
-        };
-        let mut bytes = Vec::new();
-        let mut buf = [0u8; 4096];
-        bytes.extend_from_slice(postcard::to_slice(&cfg, &mut buf).unwrap());
-        bytes.extend_from_slice(postcard::to_slice(&frame, &mut buf).unwrap());
-        let with_ism = raim_proto::frame::CRC32.checksum(&bytes);
-        assert_eq!(r.config.crc32, with_ism);
-        assert_ne!(with_ism, config_fingerprint(&cfg));
-        assert_eq!(fingerprint(&cfg, None), config_fingerprint(&cfg));
-        // All three parts in force: the CRC of the concatenated bytes,
-        // computed here; and each absent part adds nothing (merge of the
-        // ARAIM and PF branches: one fingerprint of what the unit runs).
-        let pf = raim_proto::pf_msg::WirePfConfig::gapf(100, 7);
-        let mut all = bytes.clone();
-        all.extend_from_slice(postcard::to_slice(&pf, &mut buf).unwrap());
-        assert_eq!(
-            fingerprint_all(&cfg, Some(&frame), Some(&pf)),
-            raim_proto::frame::CRC32.checksum(&all)
-        );
-        assert_eq!(fingerprint_all(&cfg, Some(&frame), None), with_ism);
-        assert_eq!(
-            fingerprint_all(&cfg, None, Some(&pf)),
-            raim_proto::pf_msg::fingerprint(&cfg, Some(&pf))
-        );
-        // Another configuration: the fingerprint covers it and the ISM.
-        let terminal = Config::preset(raim_core::Phase::Terminal);
-        let r = l.ask(CommandRef::Configure(&terminal));
-        assert_eq!(r.body, ResponseBody::Configured);
-        assert_eq!(r.config.crc32, fingerprint(&terminal, Some(&frame)));
-        let clean = result(&l.epoch(&obs)).clone();
-        assert_eq!(clean.decision, Decision::Ok);
-        // Locked: a new ISM is refused; the one in force stays.
-        assert_eq!(l.ask(CommandRef::Lock).body, ResponseBody::LockEngaged);
-        let mut other = ism.clone();
-        other[0].p_sat = 1e-4;
-        let r = l.ism(&other, gal());
-        assert_eq!(
-            *error(&r),
-            WireError::Locked {
-                config_crc32: fingerprint(&terminal, Some(&frame))
-            }
-        );
-        assert_eq!(*result(&l.epoch(&obs)), clean);
-        // A reset (a new server) has no ISM.
-        let mut fresh = Link::new();
-        assert_eq!(
-            *error(&fresh.epoch(&obs)),
-            WireError::Araim(AraimWireError::NoIsm)
-        );
-    }
-
-    /// With a key: a plain ISM frame is refused; an authenticated one is
-    /// taken with a fresh counter; a replay, a forged tag, a tag made for
-    /// other ISM bytes are refused and the ISM in force stays; the counter
-    /// is shared with `AuthConfigure`; after `Lock` even a valid one is
-    /// refused. Without a key, authenticated ISM frames are refused.
-    #[test]
-    fn authenticated_ism_refuses_replay_and_forgery() {
-        let key = [0x5Au8; 32];
-        let (ism, obs) = sky20(usize::MAX, 0.0);
-        fn frame(sats: &[IsmSat]) -> IsmFrameRef<'_> {
-            IsmFrameRef {
-                config: WireAraimConfig::default(),
-                p_const: gal(),
-                sats,
-            }
-        }
-        fn signed<'a>(
-            key: &AuthKey,
-            counter: u64,
-            sats: &'a [IsmSat],
-            tag: Option<Tag>,
-        ) -> (u64, IsmFrameRef<'a>, Tag) {
-            let f = frame(sats);
-            (counter, f, tag.unwrap_or_else(|| ism_tag(key, counter, &f)))
-        }
-        let send = |l: &mut Link, (counter, ism, tag): (u64, IsmFrameRef<'_>, Tag)| {
-            l.ask(CommandRef::Araim(AraimCommandRef::AuthIsm {
-                counter,
-                ism,
-                tag,
-            }))
-        };
-        let mut l = Link {
-            server: std::boxed::Box::new(Server::with_auth_key(key)),
-            seq: 0,
-            heard: Heard::default(),
-        };
-        assert_eq!(*error(&l.ism(&ism, gal())), WireError::AuthRequired);
-        // The tag is the HMAC of the domain, the counter and the frame's
-        // bytes, computed here from the encoded bytes.
-        let mut buf = [0u8; 4096];
-        let bytes = postcard::to_slice(&frame(&ism), &mut buf).unwrap();
-        let mut m = <Hmac<Sha256> as Mac>::new_from_slice(&key).unwrap();
-        m.update(b"raim-ism-v1");
-        m.update(&1u64.to_le_bytes());
-        m.update(bytes);
-        let want: Tag = m.finalize().into_bytes().into();
-        assert_eq!(signed(&key, 1, &ism, None).2, want);
-        let r = send(&mut l, signed(&key, 1, &ism, None));
-        assert_eq!(
-            r.body,
-            ResponseBody::Araim(AraimAnswer::IsmAccepted { satellites: 20 })
-        );
-        let crc = r.config.crc32;
-        let clean = result(&l.epoch(&obs)).clone();
-        // Replayed: the same frame again.
-        assert_eq!(
-            *error(&send(&mut l, signed(&key, 1, &ism, None))),
-            WireError::Replayed {
-                counter: 1,
-                last: 1
-            }
-        );
-        // Forged: the tag of other bytes (P_sat changed after signing).
-        let mut changed = ism.clone();
-        changed[0].p_sat = 1e-4;
-        let wrong_tag = ism_tag(&key, 2, &frame(&ism));
-        assert_eq!(
-            *error(&send(&mut l, signed(&key, 2, &changed, Some(wrong_tag)))),
-            WireError::BadAuthTag { counter: 2 }
-        );
-        // A configuration tag over the same counter does not verify as an
-        // ISM tag (separate domains).
-        let cfg_tag = raim_proto::auth::tag(&key, 2, &Config::default());
-        assert_eq!(
-            *error(&send(&mut l, signed(&key, 2, &ism, Some(cfg_tag)))),
-            WireError::BadAuthTag { counter: 2 }
-        );
-        assert_eq!(l.ask(CommandRef::Status).config.crc32, crc);
-        assert_eq!(*result(&l.epoch(&obs)), clean);
-        // The counter is shared with AuthConfigure.
-        let a3 = raim_proto::auth::AuthConfigure {
-            counter: 3,
-            config: Config::default(),
-            tag: raim_proto::auth::tag(&key, 3, &Config::default()),
-        };
-        assert_eq!(
-            l.ask(CommandRef::AuthConfigure(&a3)).body,
-            ResponseBody::Configured
-        );
-        assert_eq!(
-            *error(&send(&mut l, signed(&key, 3, &changed, None))),
-            WireError::Replayed {
-                counter: 3,
-                last: 3
-            }
-        );
-        let r = send(&mut l, signed(&key, 4, &changed, None));
-        assert!(matches!(
-            r.body,
-            ResponseBody::Araim(AraimAnswer::IsmAccepted { .. })
-        ));
-        assert_ne!(r.config.crc32, crc);
-        assert_eq!(l.ask(CommandRef::Lock).body, ResponseBody::LockEngaged);
-        assert!(matches!(
-            error(&send(&mut l, signed(&key, 5, &ism, None))),
-            WireError::Locked { .. }
-        ));
-        let mut plain = Link::new();
-        assert_eq!(
-            *error(&send(&mut plain, signed(&key, 1, &ism, None))),
-            WireError::AuthNotProvisioned
-        );
     }
 
     /// The issue's bad inputs, over the wire: each is a typed error with

@@ -1,94 +1,125 @@
 //! The one gate every state-changing request passes, in this order: the
-//! part exists in this build, the lock, the authentication (the tag, then
-//! the counter against replay), then the part's own checks. Only then is
-//! the part put in force, and the fingerprint follows what is in force.
+//! part exists in this build, the lock, the authentication (the tag under
+//! the key and this boot's nonce, the counter's range, then the counter
+//! against replay), then the part's own checks. Only then is the part put
+//! in force, and the fingerprint follows what is in force.
+//!
+//! The rule (docs/SAFETY.md "Configuration authority"): a provisioned unit
+//! runs its provisioned configuration, locked, from boot, and takes no
+//! change until reset; an unprovisioned unit takes runtime changes (bench
+//! use), authenticated when it holds a key, until it is locked; runtime
+//! changes are volatile, so a reset returns the unit to its provisioned
+//! configuration or to none.
 
-use raim_core::Config;
-#[cfg(not(feature = "araim"))]
-use raim_proto::araim_msg::AraimWireError;
-use raim_proto::araim_msg::IsmFrame;
-use raim_proto::auth::Tag;
+use raim_proto::araim_msg::AraimAnswer;
+use raim_proto::auth::{Authenticated, Change};
 use raim_proto::error::WireError;
+use raim_proto::lock::ConfigSource;
 use raim_proto::message::ResponseBody;
-use raim_proto::pf_msg::WirePfConfig;
+use raim_proto::unit::{UnitConfig, UnitPart};
 
 use crate::Server;
 
-/// A part of the unit's configuration that a request replaces.
-pub(crate) enum Change {
-    /// The snapshot configuration (`Configure`, `AuthConfigure`).
-    Configure(Config),
-    /// The ISM and ARAIM configuration (`Ism`, `AuthIsm`).
-    Ism(IsmFrame),
-    /// The particle-filter configuration (`PfConfigure`).
-    Pf(WirePfConfig),
-}
-
-/// The authentication a request carries: its counter and HMAC tag.
-pub(crate) struct Signed {
-    counter: u64,
-    tag: Tag,
-}
-
-impl Signed {
-    pub(crate) fn configure(a: &raim_proto::auth::AuthConfigure) -> Self {
-        Signed {
-            counter: a.counter,
-            tag: a.tag,
-        }
+/// Every part of a unit configuration checked, as the gate checks a
+/// runtime change of that part; the first part that fails.
+pub(crate) fn check_unit(unit: &UnitConfig) -> Result<(), UnitPart> {
+    if let Some(c) = &unit.snapshot {
+        c.validate().map_err(|_| UnitPart::Snapshot)?;
     }
-    pub(crate) fn ism(counter: u64, _ism: &IsmFrame, tag: Tag) -> Self {
-        Signed { counter, tag }
+    if let Some(i) = &unit.araim {
+        if !cfg!(feature = "araim") {
+            return Err(UnitPart::Araim);
+        }
+        crate::araim::check_ism(i).map_err(|_| UnitPart::Araim)?;
+    }
+    if let Some(p) = &unit.pf {
+        crate::pf::check(p).map_err(|_| UnitPart::Pf)?;
+    }
+    Ok(())
+}
+
+/// What a change that passed the gate answers (small: the answer's
+/// `ResponseBody` is built by the caller, whose frame holds one anyway).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Applied {
+    Configured,
+    IsmAccepted { satellites: u32 },
+    LockEngaged,
+}
+
+impl Applied {
+    /// The answer on the wire.
+    pub(crate) fn body(r: Result<Applied, WireError>) -> ResponseBody {
+        match r {
+            Ok(Applied::Configured) => ResponseBody::Configured,
+            Ok(Applied::IsmAccepted { satellites }) => {
+                ResponseBody::Araim(AraimAnswer::IsmAccepted { satellites })
+            }
+            Ok(Applied::LockEngaged) => ResponseBody::LockEngaged,
+            Err(e) => ResponseBody::Error(e),
+        }
     }
 }
 
 impl Server {
-    /// Passes `change` through the gate and, if every check holds, puts it
-    /// in force; the answer, or the first check that failed, typed. On a
-    /// refusal nothing changes.
-    pub(crate) fn change(&mut self, signed: Option<Signed>, change: Change) -> ResponseBody {
-        let r = self.gate(signed.as_ref(), &change).and_then(|counter| {
-            let body = self.apply(change)?;
-            if let (Some(c), Some((key, _))) = (counter, self.auth) {
-                self.auth = Some((key, Some(c)));
-            }
-            Ok(body)
-        });
-        r.unwrap_or_else(ResponseBody::Error)
+    /// A plain state-changing request.
+    pub(crate) fn change_plain(&mut self, change: &Change) -> Result<Applied, WireError> {
+        self.change(None, change)
     }
 
-    /// The lock and the authentication; the counter to record once the
-    /// change is in force.
-    fn gate(&self, signed: Option<&Signed>, change: &Change) -> Result<Option<u64>, WireError> {
-        #[cfg(not(feature = "araim"))]
-        if matches!(change, Change::Ism(_)) {
-            return Err(WireError::Araim(AraimWireError::Disabled));
+    /// An authenticated state-changing request.
+    pub(crate) fn change_authenticated(&mut self, a: &Authenticated) -> Result<Applied, WireError> {
+        self.change(Some((a.counter, &a.tag)), &a.change)
+    }
+
+    /// Passes `change` through the gate and, if every check holds, puts it
+    /// in force; what it answers, or the first check that failed, typed.
+    /// On a refusal nothing changes.
+    #[inline(never)]
+    fn change(
+        &mut self,
+        signed: Option<(u64, &raim_proto::auth::Tag)>,
+        change: &Change,
+    ) -> Result<Applied, WireError> {
+        let counter = self.gate(signed, change)?;
+        let applied = self.apply(change)?;
+        if let (Some(c), Some((key, _))) = (counter, self.auth) {
+            self.auth = Some((key, Some(c)));
+        }
+        Ok(applied)
+    }
+
+    /// The build, the lock and the authentication; the counter to record
+    /// once the change is in force.
+    fn gate(
+        &self,
+        signed: Option<(u64, &raim_proto::auth::Tag)>,
+        change: &Change,
+    ) -> Result<Option<u64>, WireError> {
+        if !cfg!(feature = "araim") && matches!(change, Change::Ism(_)) {
+            return Err(WireError::Araim(
+                raim_proto::araim_msg::AraimWireError::Disabled,
+            ));
         }
         if self.config_id.locked {
             return Err(WireError::Locked {
-                config_crc32: self.config_id.crc32,
+                fingerprint: self.config_id.fingerprint,
             });
         }
         match (self.auth, signed) {
             (None, None) => Ok(None),
             (Some(_), None) => Err(WireError::AuthRequired),
             (None, Some(_)) => Err(WireError::AuthNotProvisioned),
-            (Some((key, last)), Some(s)) => {
-                let genuine = match change {
-                    Change::Configure(c) => raim_proto::auth::verify(&key, s.counter, c, &s.tag),
-                    Change::Ism(i) => crate::araim::verify_ism(&key, s.counter, i, &s.tag),
-                    // No authenticated form of `PfConfigure` exists.
-                    Change::Pf(_) => false,
-                };
-                if !genuine {
-                    return Err(WireError::BadAuthTag { counter: s.counter });
+            (Some((key, last)), Some((counter, tag))) => {
+                if !raim_proto::auth::verify(&key, &self.nonce, counter, change, tag) {
+                    return Err(WireError::BadAuthTag { counter });
+                }
+                if counter == u64::MAX {
+                    return Err(WireError::CounterExhausted { counter });
                 }
                 match last {
-                    Some(l) if s.counter <= l => Err(WireError::Replayed {
-                        counter: s.counter,
-                        last: l,
-                    }),
-                    _ => Ok(Some(s.counter)),
+                    Some(l) if counter <= l => Err(WireError::Replayed { counter, last: l }),
+                    _ => Ok(Some(counter)),
                 }
             }
         }
@@ -96,20 +127,31 @@ impl Server {
 
     /// The part's own checks, then the part in force and the fingerprint
     /// updated (it covers every part in force).
-    fn apply(&mut self, change: Change) -> Result<ResponseBody, WireError> {
-        let body = match change {
+    fn apply(&mut self, change: &Change) -> Result<Applied, WireError> {
+        let applied = match change {
             Change::Configure(c) => {
                 c.validate()?;
-                self.config = c;
-                ResponseBody::Configured
+                self.config = Some(*c);
+                Applied::Configured
             }
-            Change::Ism(frame) => ResponseBody::Araim(self.take_ism(frame)?),
+            Change::Ism(frame) => Applied::IsmAccepted {
+                satellites: self.take_ism(frame)?,
+            },
             Change::Pf(c) => {
-                self.pf.configure(c)?;
-                ResponseBody::Configured
+                self.pf.configure(*c)?;
+                Applied::Configured
+            }
+            Change::HostSigmas(on) => {
+                self.host_sigmas = *on;
+                Applied::Configured
+            }
+            Change::Lock => {
+                self.config_id.locked = true;
+                return Ok(Applied::LockEngaged);
             }
         };
-        self.config_id.crc32 = self.fingerprint();
-        Ok(body)
+        self.config_id.source = ConfigSource::Runtime;
+        self.config_id.fingerprint = self.fingerprint();
+        Ok(applied)
     }
 }

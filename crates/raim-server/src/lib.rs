@@ -36,11 +36,12 @@ use raim_core::{Config, Epoch, EpochResult, Raim};
 
 use raim_proto::error::WireError;
 use raim_proto::frame::FrameReceiver;
-use raim_proto::lock::{config_fingerprint, ConfigId};
+use raim_proto::lock::{ConfigId, ConfigSource};
 #[cfg(doc)]
 use raim_proto::message::Response;
 use raim_proto::message::{Command, Request, ResetCause, ResponseBody, Status, TestFault};
 use raim_proto::result::WireResult;
+use raim_proto::unit::{ProvisionError, UnitConfig, UnitConfigRef};
 use raim_proto::{
     DevicePrecision, CAPACITY, MAX_REQUEST_FRAME, MAX_RESPONSE_FRAME, MAX_RESPONSE_PAYLOAD,
     PROTOCOL_VERSION,
@@ -50,7 +51,8 @@ mod answer;
 mod gate;
 
 use answer::{send_answer, BodyRef, Buffers};
-use gate::Change;
+use gate::Applied;
+use raim_proto::auth::Change;
 
 // Particle-filter RAIM (issue 14): a child module, so it reaches the
 // server's fields while its code stays out of this file.
@@ -103,12 +105,21 @@ impl Platform for NoPlatform {
 pub struct Server {
     rx: FrameReceiver<MAX_REQUEST_FRAME>,
     raim: Raim<CAPACITY, DevicePrecision>,
-    config: Config,
+    /// The snapshot configuration in force; `None` until one is
+    /// provisioned or taken (snapshot epochs are then `Unconfigured`).
+    config: Option<Config>,
+    /// Whether epoch frames' per-satellite sigmas are used.
+    host_sigmas: bool,
     expected_seq: Option<u32>,
-    /// Fingerprint of `config` and the lock (issue 15; `lock`).
+    /// Fingerprint of the unit configuration in force, its source and the
+    /// lock (`lock`).
     config_id: ConfigId,
     /// The authentication key and the last counter accepted (`auth`).
     auth: Option<(raim_proto::auth::AuthKey, Option<u64>)>,
+    /// This boot's nonce (`auth::boot_nonce`).
+    nonce: raim_proto::auth::Nonce,
+    /// Why the provisioned configuration was refused at boot, if it was.
+    provision_error: Option<ProvisionError>,
     status: Status,
     /// The ISM in force and the ARAIM engines (issue 12; `server/araim.rs`).
     araim: araim::AraimState,
@@ -140,17 +151,20 @@ pub enum IoError<L, M> {
 }
 
 impl Server {
+    /// An unconfigured, unkeyed server: every epoch is answered
+    /// `Unconfigured` until a configuration is taken ([`Server::boot`]
+    /// with a provisioned one, or a runtime `Configure`).
     pub fn new() -> Self {
-        Server {
+        let mut s = Server {
             rx: FrameReceiver::new(),
             raim: Raim::new(),
-            config: Config::default(),
+            config: None,
+            host_sigmas: true,
             expected_seq: None,
-            config_id: ConfigId {
-                crc32: config_fingerprint(&Config::default()),
-                locked: false,
-            },
+            config_id: ConfigId::default(),
             auth: None,
+            nonce: [0; 16],
+            provision_error: None,
             status: Status {
                 protocol_version: PROTOCOL_VERSION,
                 capacity: CAPACITY as u16,
@@ -163,42 +177,132 @@ impl Server {
             result: EpochResult::empty(),
             wire: WireResult::empty(),
             pf: PfUnit::EMPTY,
-        }
-    }
-
-    /// A server that boots with `config` locked in (a build whose
-    /// configuration is compiled in): `Configure` is refused from the first
-    /// frame. The configuration must pass `Config::validate`.
-    pub fn new_locked(config: Config) -> Result<Self, raim_core::RaimError> {
-        config.validate()?;
-        let mut s = Server::new();
-        s.config = config;
-        s.config_id = ConfigId {
-            crc32: config_fingerprint(&config),
-            locked: true,
         };
-        Ok(s)
-    }
-
-    /// A server that accepts configurations only authenticated with `key`
-    /// (`auth`): plain `Configure` is refused with `AuthRequired`.
-    pub fn with_auth_key(key: raim_proto::auth::AuthKey) -> Self {
-        let mut s = Server::new();
-        s.auth = Some((key, None));
+        s.config_id.fingerprint = s.fingerprint();
         s
     }
 
-    /// Make this server take only configurations authenticated with
-    /// `key` from now on, as `with_auth_key` (the firmware provisions its
-    /// static server in place at boot, without a second server on the
-    /// stack).
+    /// A server that accepts only authenticated changes under `key`
+    /// (`auth`), with the boot nonce of `(resets, entropy)`.
+    pub fn with_auth_key(key: raim_proto::auth::AuthKey) -> Self {
+        let mut s = Server::new();
+        s.set_auth_key(key);
+        s
+    }
+
+    /// Make this server take only changes authenticated with `key` from
+    /// now on, as `with_auth_key` (the firmware sets up its static server
+    /// in place at boot, without a second server on the stack). Call
+    /// before [`Server::boot`], which derives the nonce from the key.
     pub fn set_auth_key(&mut self, key: raim_proto::auth::AuthKey) {
         self.auth = Some((key, None));
+    }
+
+    /// The boot sequence: the boot nonce from the key, the reset count and
+    /// the platform's `entropy`, then the provisioned configuration, if
+    /// any. A provisioned configuration whose seal verified (`provisioned`
+    /// is what `unit::open` gave) and whose every part passes its checks
+    /// is put in force, locked. Anything else leaves the unit
+    /// unconfigured, with the reason kept for the boot notice and
+    /// `Status`; no default is ever put in force.
+    pub fn boot(
+        &mut self,
+        provisioned: Result<Option<UnitConfig>, ProvisionError>,
+        resets: u32,
+        entropy: &[u8; 32],
+    ) {
+        self.nonce =
+            raim_proto::auth::boot_nonce(self.auth.as_ref().map(|(k, _)| k), resets, entropy);
+        match provisioned {
+            Ok(Some(unit)) => {
+                if let Err(e) = self.provision(unit) {
+                    self.provision_error = Some(e);
+                }
+            }
+            Ok(None) => {}
+            Err(e) => self.provision_error = Some(e),
+        }
+        self.config_id.fingerprint = self.fingerprint();
+    }
+
+    /// Puts a provisioned unit configuration in force, locked, if every
+    /// part passes its checks (all or nothing).
+    pub fn provision(&mut self, unit: UnitConfig) -> Result<(), ProvisionError> {
+        if let Err(part) = gate::check_unit(&unit) {
+            return Err(ProvisionError::InvalidPart(part));
+        }
+        let UnitConfig {
+            snapshot,
+            araim,
+            pf,
+            host_sigmas,
+        } = unit;
+        if let Some(p) = pf {
+            self.pf
+                .configure(p)
+                .map_err(|_| ProvisionError::InvalidPart(raim_proto::unit::UnitPart::Pf))?;
+        }
+        self.config = snapshot;
+        self.araim.ism = araim;
+        self.host_sigmas = host_sigmas;
+        self.config_id = ConfigId {
+            fingerprint: self.fingerprint(),
+            locked: true,
+            source: ConfigSource::Provisioned,
+        };
+        Ok(())
+    }
+
+    /// The fingerprint of everything in force (`unit::UnitConfigRef`).
+    pub fn fingerprint(&self) -> raim_proto::Fingerprint {
+        UnitConfigRef {
+            snapshot: self.config.as_ref(),
+            araim: self.araim.ism.as_ref(),
+            pf: self.pf.config(),
+            host_sigmas: self.host_sigmas,
+        }
+        .fingerprint()
+    }
+
+    /// Takes `config` at run time, through the gate, as if a host had sent
+    /// `Configure(config)` (the bench's set-up, for host tests and tools;
+    /// the firmware never calls it).
+    pub fn take_runtime_config(&mut self, config: Config) -> Result<(), WireError> {
+        self.change_plain(&Change::Configure(config)).map(|_| ())
+    }
+
+    /// This boot's nonce.
+    pub fn nonce(&self) -> raim_proto::auth::Nonce {
+        self.nonce
+    }
+
+    /// Sends the boot notice (unasked, `seq: None`): the first frame after
+    /// every reset.
+    pub fn send_boot_notice<L: Write, M, P: Platform>(
+        &mut self,
+        link: &mut L,
+        platform: &mut P,
+    ) -> Result<(), IoError<L::Error, M>> {
+        let (resets, reset_cause) = platform.reset_record();
+        let notice = raim_proto::BootNotice {
+            protocol_version: PROTOCOL_VERSION,
+            resets,
+            reset_cause,
+            config: self.config_id,
+            provision_error: self.provision_error,
+            auth_provisioned: self.auth.is_some(),
+            boot_nonce: self.nonce,
+        };
+        self.send(link, None, BodyRef::Boot(&notice))
     }
 
     pub fn status(&self) -> Status {
         Status {
             config: self.config_id,
+            boot_nonce: self.nonce,
+            host_sigmas: self.host_sigmas,
+            provision_error: self.provision_error,
+            auth_provisioned: self.auth.is_some(),
             ..self.status
         }
     }
@@ -208,8 +312,9 @@ impl Server {
         self.config_id
     }
 
-    pub fn config(&self) -> &Config {
-        &self.config
+    /// The snapshot configuration in force, if any.
+    pub fn config(&self) -> Option<&Config> {
+        self.config.as_ref()
     }
 
     /// Feed one received byte; writes the answers (and NMEA) when it
@@ -234,6 +339,7 @@ impl Server {
                 seq: None,
                 error: WireError::from(e),
                 epoch: false,
+                nmea_time_s: None,
             }),
             Some(Ok(payload)) => answer::decode(payload, &mut self.request),
         };
@@ -249,6 +355,11 @@ impl Server {
                 }
                 if refusal.epoch {
                     platform.on_epoch(None);
+                }
+                if let Some(time_s) = refusal.nmea_time_s {
+                    self.wire = WireResult::empty();
+                    self.wire.time_s = time_s;
+                    answer::write_nmea(&self.wire, None, nmea_out).map_err(IoError::Nmea)?;
                 }
                 self.send(link, refusal.seq, BodyRef::Error(&refusal.error))
             }
@@ -269,6 +380,11 @@ impl Server {
         let Some(command) = self.request.as_ref().map(|r| &r.command) else {
             return Ok(());
         };
+        if command.is_epoch() {
+            if let Err(e) = self.admit_epoch(command) {
+                return self.refuse_epoch(seq, e, link, nmea_out, platform);
+            }
+        }
         match command {
             Command::Ranges(_) | Command::Linear(_) => {
                 self.answer_epoch(seq, link, nmea_out, platform)
@@ -300,21 +416,14 @@ impl Server {
                 let _ = platform.test_fault(f);
                 ResponseBody::Error(WireError::TestHooksDisabled)
             }
-            Command::Lock => {
-                self.config_id.locked = true;
-                ResponseBody::LockEngaged
+            Command::Lock => Applied::body(self.change_plain(&Change::Lock)),
+            Command::Configure(c) => Applied::body(self.change_plain(&Change::Configure(c))),
+            Command::Araim(AraimCommand::Ism(frame)) => {
+                Applied::body(self.change_plain(&Change::Ism(frame)))
             }
-            Command::Configure(c) => self.change(None, Change::Configure(c)),
-            Command::AuthConfigure(a) => {
-                let signed = gate::Signed::configure(&a);
-                self.change(Some(signed), Change::Configure(a.config))
-            }
-            Command::Araim(AraimCommand::Ism(frame)) => self.change(None, Change::Ism(frame)),
-            Command::Araim(AraimCommand::AuthIsm { counter, ism, tag }) => {
-                let signed = gate::Signed::ism(counter, &ism, tag);
-                self.change(Some(signed), Change::Ism(ism))
-            }
-            Command::PfConfigure(c) => self.change(None, Change::Pf(c)),
+            Command::PfConfigure(c) => Applied::body(self.change_plain(&Change::Pf(c))),
+            Command::HostSigmas(on) => Applied::body(self.change_plain(&Change::HostSigmas(on))),
+            Command::Authenticated(a) => Applied::body(self.change_authenticated(&a)),
             Command::PfRanges(e) => self.pf_epoch(e.time_s, &e.sats.items, platform),
             // Answered from the request slot above.
             Command::Ranges(_)
@@ -322,6 +431,70 @@ impl Server {
             | Command::Araim(AraimCommand::Epoch(_) | AraimCommand::Ranges(_)) => return Ok(()),
         };
         self.send(link, Some(seq), BodyRef::from(&body))
+    }
+
+    /// The checks every epoch passes before its engine runs: a
+    /// configuration is in force for it, and its satellites carry no sigma
+    /// unless the unit configuration takes host sigmas.
+    fn admit_epoch(&self, command: &Command) -> Result<(), WireError> {
+        use raim_proto::araim_msg::AraimCommand;
+        let unconfigured = WireError::Unconfigured {
+            provision: self.provision_error,
+        };
+        let nothing_in_force = self.config_id.source == ConfigSource::Unconfigured;
+        let (needs_snapshot, first_sigma) = match command {
+            Command::Ranges(e) => (true, e.sats.items.iter().position(|s| s.sigma_m.is_some())),
+            Command::Linear(e) => (true, e.sats.items.iter().position(|s| s.sigma_m.is_some())),
+            Command::Araim(AraimCommand::Ranges(e)) => {
+                (true, e.sats.items.iter().position(|s| s.sigma_m.is_some()))
+            }
+            Command::Araim(AraimCommand::Epoch(e)) => {
+                (true, e.sats.items.iter().position(|s| s.sigma_m.is_some()))
+            }
+            Command::PfRanges(e) => (false, e.sats.items.iter().position(|s| s.sigma_m.is_some())),
+            _ => return Ok(()),
+        };
+        if nothing_in_force || (needs_snapshot && self.config.is_none()) {
+            return Err(unconfigured);
+        }
+        match first_sigma {
+            Some(i) if !self.host_sigmas => Err(WireError::HostSigmaRefused {
+                index: u32::try_from(i).unwrap_or(u32::MAX),
+            }),
+            _ => Ok(()),
+        }
+    }
+
+    /// An epoch refused before its engine ran: the alarm output hears it,
+    /// the NMEA port gets the epoch's no-fix sentences, and the host the
+    /// typed error.
+    fn refuse_epoch<L: Write, M: Write, P: Platform>(
+        &mut self,
+        seq: u32,
+        e: WireError,
+        link: &mut L,
+        nmea_out: &mut M,
+        platform: &mut P,
+    ) -> Result<(), IoError<L::Error, M::Error>> {
+        platform.on_epoch(None);
+        self.write_no_fix(nmea_out).map_err(IoError::Nmea)?;
+        self.request = None;
+        self.send(link, Some(seq), BodyRef::Error(&e))
+    }
+
+    /// The no-fix NMEA sentences of the epoch in the request slot (its
+    /// time, no position, status void).
+    fn write_no_fix<M: Write>(&mut self, nmea_out: &mut M) -> Result<(), M::Error> {
+        let Some(time_s) = self
+            .request
+            .as_ref()
+            .and_then(|r| r.command.nmea_epoch_time_s())
+        else {
+            return Ok(());
+        };
+        self.wire = WireResult::empty();
+        self.wire.time_s = time_s;
+        answer::write_nmea(&self.wire, self.request.as_ref(), nmea_out)
     }
 
     /// `Status`, with the platform's fields filled in.
@@ -343,11 +516,14 @@ impl Server {
         nmea_out: &mut M,
         platform: &mut P,
     ) -> Result<(), IoError<L::Error, M::Error>> {
+        let Some(config) = self.config else {
+            // `admit_epoch` refused it already.
+            return Ok(());
+        };
         let outcome = {
             let Server {
                 request,
                 raim,
-                config,
                 status,
                 result,
                 wire,
@@ -357,7 +533,7 @@ impl Server {
             match request.as_ref().map(|r| &r.command) {
                 Some(Command::Ranges(e)) => run_epoch(
                     raim,
-                    config,
+                    &config,
                     status,
                     slots,
                     &Epoch::ranges(e.time_s, &e.sats.items, e.apriori_m),
@@ -365,7 +541,7 @@ impl Server {
                 ),
                 Some(Command::Linear(e)) => run_epoch(
                     raim,
-                    config,
+                    &config,
                     status,
                     slots,
                     &Epoch::linear(e.time_s, &e.sats.items),
@@ -399,7 +575,10 @@ impl Server {
                     BodyRef::Result(wire),
                 )
             }
-            Err(e) => self.send(link, Some(seq), BodyRef::Error(&e)),
+            Err(e) => {
+                self.write_no_fix(nmea_out).map_err(IoError::Nmea)?;
+                self.send(link, Some(seq), BodyRef::Error(&e))
+            }
         }
     }
 

@@ -114,8 +114,7 @@ impl PfUnit {
     /// selected engine in place; on error nothing changes.
     #[cfg(feature = "pf")]
     pub(crate) fn configure(&mut self, c: WirePfConfig) -> Result<(), WireError> {
-        check_particles(&c)?;
-        c.config.validate().map_err(|e| map_error(e, &[]))?;
+        check(&c)?;
         self.restart(&c)?;
         self.config = Some(c);
         Ok(())
@@ -178,6 +177,21 @@ impl PfUnit {
             let _ = (c, time_s, sats, &self.engines);
             Err(WireError::PfUnavailable)
         }
+    }
+}
+
+/// Every check of a PF configuration: the engine exists in this build, the
+/// particle count is compiled in, and `PfConfig::validate`.
+pub(crate) fn check(c: &WirePfConfig) -> Result<(), WireError> {
+    #[cfg(feature = "pf")]
+    {
+        check_particles(c)?;
+        c.config.validate().map_err(|e| map_error(e, &[]))
+    }
+    #[cfg(not(feature = "pf"))]
+    {
+        let _ = c;
+        Err(WireError::PfUnavailable)
     }
 }
 
@@ -296,18 +310,12 @@ impl Server {
             config: None,
             engines,
         };
-        self.config_id.crc32 = self.fingerprint();
+        self.config_id.fingerprint = self.fingerprint();
     }
 
     /// The PF configuration in force, if any.
     pub fn pf_config(&self) -> Option<&WirePfConfig> {
         self.pf.config()
-    }
-
-    /// The fingerprint of everything in force: the snapshot configuration,
-    /// the ISM and the PF configuration (`server::araim::fingerprint_all`).
-    pub(super) fn fingerprint(&self) -> u32 {
-        super::araim::fingerprint_all(&self.config, self.araim.ism.as_ref(), self.pf_config())
     }
 
     /// `PfRanges`: one epoch, timed like a snapshot epoch.
@@ -339,7 +347,7 @@ mod tests {
     use raim_core::{Config, SatId, System};
     use raim_proto::frame::{encode, FrameReceiver};
     use raim_proto::message::{CommandRef, RequestRef, Response};
-    use raim_proto::{ConfigId, MAX_RESPONSE_FRAME};
+    use raim_proto::MAX_RESPONSE_FRAME;
     use std::boxed::Box;
     use std::vec::Vec;
 
@@ -457,6 +465,7 @@ mod tests {
             Some(Box::leak(Box::new(t)))
         }
         let mut s = Server::new();
+        s.take_runtime_config(Config::default()).unwrap();
         s.attach_pf(PfEngines {
             ekf: leak(PfRaim::new(0)),
             pf100: leak(PfRaim::new(0)),
@@ -685,102 +694,6 @@ mod tests {
                 assert_eq!(r.position_ecef_m.is_none(), r.main_collapsed, "{i}");
             }
         }
-    }
-
-    /// The lock covers the PF configuration: its fingerprint joins the
-    /// configuration id, a locked unit refuses `PfConfigure` with `Locked`
-    /// and keeps running the PF configuration in force; a server without PF
-    /// storage answers `PfUnavailable`.
-    #[test]
-    fn the_lock_and_fingerprint_cover_the_pf_configuration() {
-        crate::tests::on_big_stack(the_lock_and_fingerprint_cover_the_pf_configuration_body)
-    }
-
-    fn the_lock_and_fingerprint_cover_the_pf_configuration_body() {
-        let mut server = pf_server();
-        let c100 = pf_config(100);
-        let c300 = pf_config(300);
-        let mut noise = rng::seeded(8);
-        let e0 = epoch(8, 0, &mut noise, None);
-        let resp = exchange(
-            &mut server,
-            0,
-            &[
-                CommandRef::Status,
-                CommandRef::PfConfigure(&c100),
-                CommandRef::Lock,
-                CommandRef::PfConfigure(&c300),
-                ranges(0.0, &e0),
-            ],
-        );
-        let default = Config::default();
-        let fp0 = raim_proto::config_fingerprint(&default);
-        let fp1 = raim_proto::pf_msg::fingerprint(&default, Some(&c100));
-        assert_ne!(fp0, fp1);
-        assert_eq!(
-            resp[0].config,
-            ConfigId {
-                crc32: fp0,
-                locked: false
-            }
-        );
-        assert_eq!(
-            resp[1].config,
-            ConfigId {
-                crc32: fp1,
-                locked: false
-            }
-        );
-        assert_eq!(resp[2].body, ResponseBody::LockEngaged);
-        assert_eq!(
-            resp[3].body,
-            ResponseBody::Error(WireError::Locked { config_crc32: fp1 })
-        );
-        assert!(matches!(resp[4].body, ResponseBody::PfResult(_)));
-        assert_eq!(
-            resp[4].config,
-            ConfigId {
-                crc32: fp1,
-                locked: true
-            }
-        );
-        assert_eq!(server.pf_config(), Some(&c100));
-        // Without storage.
-        let resp = exchange(
-            &mut Server::new(),
-            0,
-            &[CommandRef::PfConfigure(&c100), ranges(0.0, &e0)],
-        );
-        assert_eq!(resp[0].body, ResponseBody::Error(WireError::PfUnavailable));
-        assert_eq!(
-            resp[1].body,
-            ResponseBody::Error(WireError::PfNotConfigured)
-        );
-        // A build with the GA-PF 100 only: the others are unavailable.
-        let mut only = Server::new();
-        only.attach_pf(PfEngines {
-            ga100: Some(Box::leak(Box::new(PfRaim::new(0)))),
-            ..PfEngines::NONE
-        });
-        let resp = exchange(
-            &mut only,
-            0,
-            &[
-                CommandRef::PfConfigure(&c300),
-                CommandRef::PfConfigure(&c100),
-            ],
-        );
-        assert_eq!(resp[0].body, ResponseBody::Error(WireError::PfUnavailable));
-        assert_eq!(resp[1].body, ResponseBody::Configured);
-        // Reconfiguring the same filter restarts it in place: the answers
-        // repeat bit for bit.
-        let mut server = pf_server();
-        let run = |s: &mut Server, seq0| {
-            exchange(s, seq0, &[CommandRef::PfConfigure(&c300), ranges(0.0, &e0)])
-        };
-        let a = run(&mut server, 0);
-        let b = run(&mut server, 2);
-        assert_eq!(a[1].body, b[1].body);
     }
 }
 

@@ -1,0 +1,40 @@
+//! The provisioned unit configuration: its own output section,
+//! `.raim_config` (`raim_proto::unit::PROVISION_BYTES`, after `.raim_key`
+//! in `memory.x` / `memory-stm32f4.x`). The image ships it erased (0xFF):
+//! such a unit boots Unconfigured. Installation writes the sealed
+//! configuration into the image it programs (`raim provision`, or
+//! `raim_qemu::provision_config` for an ELF); the seal is an HMAC under the
+//! unit's key when it has one, SHA-256 otherwise, so a corrupt or forged
+//! section is refused at boot and the unit stays Unconfigured.
+
+use raim_proto::unit::PROVISION_BYTES;
+
+/// The section; erased flash is all ones.
+#[link_section = ".raim_config"]
+#[used]
+static CONFIG: [u8; PROVISION_BYTES] = [0xFF; PROVISION_BYTES];
+
+/// The section as programmed. `black_box`: the build's erased value must
+/// not be folded in, since installation changes the bytes after linking.
+pub fn section() -> &'static [u8; PROVISION_BYTES] {
+    core::hint::black_box(&CONFIG)
+}
+
+/// SRAM left as it powered up (NOLOAD, never written): on silicon its
+/// power-on state differs from part to part and boot to boot, and it feeds
+/// the boot nonce. QEMU powers up with zeros; there the nonce changes with
+/// the reset count only (docs/SAFETY.md "Boot nonce").
+#[link_section = ".uninit.raim_noise"]
+static mut NOISE: core::mem::MaybeUninit<[u8; 32]> = core::mem::MaybeUninit::uninit();
+
+/// The entropy of this boot: the power-on SRAM noise and the SysTick count
+/// after the set-up so far.
+pub fn entropy(ticks: u32) -> [u8; 32] {
+    // SAFETY: a plain read of 32 bytes of RAM owned by this module; any bit
+    // pattern is a value. Never written, so it keeps its power-on state.
+    let mut e = unsafe { core::ptr::read_volatile(core::ptr::addr_of!(NOISE).cast::<[u8; 32]>()) };
+    for (b, t) in e.iter_mut().zip(ticks.to_le_bytes()) {
+        *b ^= t;
+    }
+    e
+}

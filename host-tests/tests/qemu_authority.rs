@@ -1,0 +1,407 @@
+//! The unit's configuration authority under QEMU (docs/SAFETY.md
+//! "Configuration authority", docs/PROTOCOL.md): each attack of the
+//! threat-model table tried as a hostile host or a power glitch would, and
+//! the unit shown refusing it or staying safe.
+//!
+//! - An unprovisioned unit boots Unconfigured: every epoch is refused
+//!   (`Unconfigured`), the alarm output is asserted, the NMEA says no fix,
+//!   and a reset returns it there whatever was taken at run time.
+//! - A provisioned unit runs its configuration locked from boot, refuses
+//!   every change, and boots into the same configuration (same
+//!   fingerprint, still locked) after a watchdog reset and a panic.
+//! - A corrupt or forged provisioned section leaves the unit Unconfigured.
+//! - On a keyed unit every change, `Lock` included, must be authenticated
+//!   under this boot's nonce: a frame recorded before a reset is refused
+//!   after it, and a counter at the top of its range is refused.
+//! - Out-of-bounds settings (ISM, Pfa, PF threshold, per-satellite sigmas,
+//!   disabled parts) are refused over the wire.
+//!
+//! mps2-an386 runs them all (it has the test hooks that hang and panic
+//! the unit); netduinoplus2, the real board's build, runs the boot-time
+//! ones (it has no test hooks: a reset cannot be commanded there).
+
+mod qemu_common;
+
+use std::time::Duration;
+
+use qemu_common::{host_result, range_vectors, wire_bytes};
+use raim_core::{Config, Epoch, Phase};
+use raim_proto::alert::AlarmOutput;
+use raim_proto::auth::{tag, AuthenticatedRef, ChangeRef};
+use raim_proto::message::{CommandRef, ResponseBody};
+use raim_proto::unit::{UnitConfig, PROVISION_BYTES};
+use raim_proto::{ConfigSource, ProvisionError, ResetCause, TestFault, WireError};
+use raim_qemu::{Machine, Options, QemuSession};
+
+const KEY: [u8; 32] = *b"unit 0042 key, never on the link";
+
+/// The watchdog fires 2 s after the last feed (firmware/src/watchdog.rs).
+const WATCHDOG_S: f64 = 2.0;
+
+fn elf(machine: Machine) -> std::path::PathBuf {
+    raim_qemu::firmware_elf_for(machine).expect("firmware build")
+}
+
+fn start(elf: &std::path::Path, machine: Machine) -> QemuSession {
+    QemuSession::start_with(
+        elf,
+        &Options {
+            machine,
+            raw: true,
+            ..Options::default()
+        },
+    )
+    .expect("qemu-system-arm with the firmware")
+}
+
+/// The installation's configuration: terminal-area alert limits (HAL 40 m,
+/// VAL 50 m), the unit's own sigma model only.
+fn installed() -> UnitConfig {
+    UnitConfig {
+        snapshot: Some(Config {
+            alert: raim_core::AlertLimits {
+                hal_m: 40.0,
+                val_m: Some(50.0),
+            },
+            ..Config::preset(Phase::Terminal)
+        }),
+        araim: None,
+        pf: None,
+        host_sigmas: false,
+    }
+}
+
+/// Hang the unit (test hook) and wait for the watchdog reset's boot notice.
+fn hang_and_reboot(fw: &mut QemuSession) -> raim_proto::BootNotice {
+    fw.send(CommandRef::TestFault(TestFault::Hang)).unwrap();
+    fw.wait_boot(Duration::from_secs_f64(10.0 * WATCHDOG_S))
+        .unwrap()
+}
+
+fn epochs() -> Vec<(f64, Vec<raim_core::RangeObservation>, Option<[f64; 3]>)> {
+    range_vectors(23).into_iter().take(3).collect()
+}
+
+/// Finding 2 (unprovisioned): no default ever claims integrity, before or
+/// after a reset, and what a bench host took at run time is gone after it.
+#[test]
+fn qemu_unprovisioned_unit_is_unconfigured_and_a_reset_returns_it_there() {
+    let elf = elf(Machine::Mps2An386);
+    let mut fw = start(&elf, Machine::Mps2An386);
+    let boot = fw.boots()[0];
+    assert_eq!(boot.config.source, ConfigSource::Unconfigured);
+    assert!(!boot.config.locked);
+    assert_eq!(boot.provision_error, None);
+    assert_eq!((boot.resets, boot.reset_cause), (0, ResetCause::PowerOn));
+    let unconfigured = |fw: &mut QemuSession| {
+        for (t, sats, apriori) in epochs() {
+            let p = fw.process(&Epoch::ranges(t, &sats, apriori)).unwrap();
+            assert_eq!(
+                p.outcome.unwrap_err(),
+                WireError::Unconfigured { provision: None }
+            );
+            let rmc = p.nmea.iter().find(|s| s.contains("RMC,")).expect("RMC");
+            assert_eq!(rmc.split(',').nth(2), Some("V"), "{rmc}");
+        }
+        let st = fw.status().unwrap();
+        assert!(
+            st.alarm_output.asserted() && st.alarm_pin_asserted,
+            "{st:?}"
+        );
+        assert_eq!(st.config.source, ConfigSource::Unconfigured);
+    };
+    unconfigured(&mut fw);
+    // A bench host configures and locks; the unit answers under it.
+    fw.configure(&Config::preset(Phase::EnRoute)).unwrap();
+    fw.lock().unwrap();
+    let (t, sats, apriori) = &epochs()[0];
+    assert!(fw
+        .process(&Epoch::ranges(*t, sats, *apriori))
+        .unwrap()
+        .outcome
+        .is_ok());
+    // The reset: the notice first, then Unconfigured again, unlocked.
+    let boot = hang_and_reboot(&mut fw);
+    assert_eq!(boot.resets, 1);
+    assert!(matches!(boot.reset_cause, ResetCause::Watchdog { .. }));
+    assert_eq!(boot.config.source, ConfigSource::Unconfigured);
+    assert!(!boot.config.locked);
+    unconfigured(&mut fw);
+}
+
+/// Findings 2 and 3 (provisioned): the installed configuration runs locked
+/// from boot, the same after a watchdog reset and a panic, and a corrupt
+/// section leaves the unit Unconfigured.
+#[test]
+fn qemu_provisioned_unit_keeps_its_locked_configuration_across_resets() {
+    let unit = installed();
+    let base = elf(Machine::Mps2An386);
+    let img = raim_qemu::provision_config(&base, &unit, None, "provisioned").unwrap();
+    let mut fw = start(&img, Machine::Mps2An386);
+    let check_boot = |b: raim_proto::BootNotice| {
+        assert_eq!(b.config.source, ConfigSource::Provisioned, "{b:?}");
+        assert!(b.config.locked);
+        assert_eq!(b.config.fingerprint, unit.fingerprint());
+        assert_eq!(b.provision_error, None);
+    };
+    check_boot(fw.boots()[0]);
+    let snapshot = unit.snapshot.unwrap();
+    let in_service = |fw: &mut QemuSession| {
+        for (t, sats, apriori) in epochs() {
+            // Host sigmas are off in this installation: the unit's model.
+            let sats: Vec<_> = sats
+                .into_iter()
+                .map(|s| raim_core::RangeObservation { sigma_m: None, ..s })
+                .collect();
+            let epoch = Epoch::ranges(t, &sats, apriori);
+            let p = fw.process(&epoch).unwrap();
+            let want = host_result(&snapshot, &epoch).map(|r| wire_bytes(&r));
+            assert_eq!(
+                p.outcome.map(|r| wire_bytes(&r)).map_err(|_| ()),
+                want.map_err(|_| ())
+            );
+            assert_eq!(fw.last_config().unwrap().fingerprint, unit.fingerprint());
+        }
+        // Every change is refused: configure, lock, host sigmas.
+        let locked = WireError::Locked {
+            fingerprint: unit.fingerprint(),
+        };
+        assert_eq!(
+            fw.try_configure(&Config::default()).unwrap(),
+            Err(locked.clone())
+        );
+        assert_eq!(
+            fw.call(CommandRef::HostSigmas(true)).unwrap(),
+            ResponseBody::Error(locked.clone())
+        );
+        assert_eq!(
+            fw.call(CommandRef::Lock).unwrap(),
+            ResponseBody::Error(locked)
+        );
+    };
+    in_service(&mut fw);
+    // A host sigma is refused, typed, with the satellite's index.
+    let (t, sats, apriori) = &epochs()[0];
+    let p = fw.process(&Epoch::ranges(*t, sats, *apriori)).unwrap();
+    assert!(matches!(p.outcome, Err(WireError::HostSigmaRefused { .. })));
+    let boot = hang_and_reboot(&mut fw);
+    check_boot(boot);
+    in_service(&mut fw);
+    fw.send(CommandRef::TestFault(TestFault::Panic)).unwrap();
+    let boot = fw.wait_boot(Duration::from_secs(10)).unwrap();
+    assert!(matches!(boot.reset_cause, ResetCause::Panic { .. }));
+    check_boot(boot);
+    in_service(&mut fw);
+    drop(fw);
+
+    // One corrupt byte anywhere in the sealed form: Unconfigured.
+    let mut blob = [0u8; PROVISION_BYTES];
+    raim_proto::unit::seal(&unit, None, &mut blob).unwrap();
+    blob[40] ^= 0x01;
+    let bad = raim_qemu::write_section(&base, ".raim_config", &blob, "corrupt").unwrap();
+    let mut fw = start(&bad, Machine::Mps2An386);
+    let b = fw.boots()[0];
+    assert_eq!(b.config.source, ConfigSource::Unconfigured);
+    assert_eq!(b.provision_error, Some(ProvisionError::BadSeal));
+    let p = fw.process(&Epoch::ranges(*t, sats, *apriori)).unwrap();
+    assert_eq!(
+        p.outcome.unwrap_err(),
+        WireError::Unconfigured {
+            provision: Some(ProvisionError::BadSeal)
+        }
+    );
+    for f in [img, bad] {
+        let _ = std::fs::remove_file(f);
+    }
+}
+
+/// Finding 4: on a keyed unit every change, `Lock` included, is
+/// authenticated under the boot nonce; a recorded frame does not survive a
+/// reset; the top counter is refused; a forged provisioning seal (SHA-256
+/// where the key's HMAC is due) is refused.
+#[test]
+fn qemu_keyed_unit_authenticates_every_change_and_no_frame_survives_a_reset() {
+    let base = elf(Machine::Mps2An386);
+    let keyed = raim_qemu::provision_key(&base, &KEY).unwrap();
+    let mut fw = start(&keyed, Machine::Mps2An386);
+    let boot = fw.boots()[0];
+    assert!(boot.auth_provisioned);
+    assert_eq!(boot.config.source, ConfigSource::Unconfigured);
+    let nonce = boot.boot_nonce;
+    assert_eq!(fw.status().unwrap().boot_nonce, nonce);
+    let terminal = Config::preset(Phase::Terminal);
+    fn signed(
+        nonce: [u8; 16],
+        counter: u64,
+        change: ChangeRef<'_>,
+    ) -> (u64, ChangeRef<'_>, [u8; 32]) {
+        let t = tag(&KEY, &nonce, counter, &change);
+        (counter, change, t)
+    }
+    fn send(
+        fw: &mut QemuSession,
+        (counter, change, tag): (u64, ChangeRef<'_>, [u8; 32]),
+    ) -> ResponseBody {
+        fw.call(CommandRef::Authenticated(AuthenticatedRef {
+            counter,
+            change,
+            tag,
+        }))
+        .unwrap()
+    }
+    // Plain changes, Lock included, are refused.
+    assert_eq!(
+        fw.try_configure(&terminal).unwrap(),
+        Err(WireError::AuthRequired)
+    );
+    assert_eq!(
+        fw.call(CommandRef::Lock).unwrap(),
+        ResponseBody::Error(WireError::AuthRequired)
+    );
+    // Authenticated under this boot's nonce: taken.
+    let a1 = signed(nonce, 1, ChangeRef::Configure(&terminal));
+    let (_, recorded) = fw
+        .frame(CommandRef::Authenticated(AuthenticatedRef {
+            counter: a1.0,
+            change: a1.1,
+            tag: a1.2,
+        }))
+        .unwrap();
+    fw.send_raw(&recorded).unwrap();
+    let r = fw.recv(raim_qemu::ANSWER_TIMEOUT).unwrap();
+    assert_eq!(r.body, ResponseBody::Configured);
+    assert_eq!(r.config.source, ConfigSource::Runtime);
+    // A tag under another nonce (a frame made for an earlier boot).
+    let mut old = nonce;
+    old[0] ^= 1;
+    assert_eq!(
+        send(&mut fw, signed(old, 2, ChangeRef::Configure(&terminal))),
+        ResponseBody::Error(WireError::BadAuthTag { counter: 2 })
+    );
+    // The top of the counter's range.
+    assert_eq!(
+        send(
+            &mut fw,
+            signed(nonce, u64::MAX, ChangeRef::Configure(&terminal))
+        ),
+        ResponseBody::Error(WireError::CounterExhausted { counter: u64::MAX })
+    );
+    // After the reset: a new nonce, the recorded frame refused, the unit
+    // Unconfigured (runtime changes are volatile).
+    let boot = hang_and_reboot(&mut fw);
+    assert_ne!(boot.boot_nonce, nonce);
+    assert_eq!(boot.config.source, ConfigSource::Unconfigured);
+    fw.send_raw(&recorded).unwrap();
+    let bodies: Vec<ResponseBody> = (0..2)
+        .map(|_| fw.recv(raim_qemu::ANSWER_TIMEOUT).unwrap().body)
+        .filter(|b| !matches!(b, ResponseBody::Error(WireError::SequenceGap { .. })))
+        .collect();
+    assert!(
+        bodies.contains(&ResponseBody::Error(WireError::BadAuthTag { counter: 1 })),
+        "{bodies:?}"
+    );
+    // Authenticated under the new nonce: configure, then lock.
+    let n2 = boot.boot_nonce;
+    assert_eq!(
+        send(&mut fw, signed(n2, 1, ChangeRef::Configure(&terminal))),
+        ResponseBody::Configured
+    );
+    assert_eq!(
+        send(&mut fw, signed(n2, 2, ChangeRef::Lock)),
+        ResponseBody::LockEngaged
+    );
+    assert!(matches!(
+        send(
+            &mut fw,
+            signed(n2, 3, ChangeRef::Configure(&Config::default()))
+        ),
+        ResponseBody::Error(WireError::Locked { .. })
+    ));
+    drop(fw);
+    // A configuration sealed with SHA-256 on a keyed unit: its seal must
+    // be the key's HMAC, so it is refused and the unit stays Unconfigured.
+    let forged = raim_qemu::provision_config(&keyed, &installed(), None, "forged").unwrap();
+    let fw = start(&forged, Machine::Mps2An386);
+    let b = fw.boots()[0];
+    assert_eq!(b.config.source, ConfigSource::Unconfigured);
+    assert_eq!(b.provision_error, Some(ProvisionError::BadSeal));
+    drop(fw);
+    // Sealed with the key: runs locked.
+    let good = raim_qemu::provision_config(&keyed, &installed(), Some(&KEY), "sealed").unwrap();
+    let fw = start(&good, Machine::Mps2An386);
+    let b = fw.boots()[0];
+    assert_eq!(b.config.source, ConfigSource::Provisioned);
+    assert_eq!(b.config.fingerprint, installed().fingerprint());
+    for f in [keyed, forged, good] {
+        let _ = std::fs::remove_file(f);
+    }
+}
+
+/// Findings 1, 5, 6 and 7: settings outside their operational bounds are
+/// refused over the wire, typed, and nothing changes.
+#[test]
+fn qemu_out_of_bounds_settings_are_refused() {
+    let mut fw = start(&elf(Machine::Mps2An386), Machine::Mps2An386);
+    let refused = |b: &ResponseBody| matches!(b, ResponseBody::Error(_));
+    // Pfa 1e-300 and a disabled MCUSUM with NaN k.
+    let mut nan_k = Config::default();
+    nan_k.mcusum.enabled = false;
+    nan_k.mcusum.k = f64::NAN;
+    for cfg in [
+        Config {
+            pfa: 1e-300,
+            ..Config::default()
+        },
+        nan_k,
+    ] {
+        let r = fw.call(CommandRef::Configure(&cfg)).unwrap();
+        assert!(refused(&r), "{cfg:?}: {r:?}");
+    }
+    assert_eq!(
+        fw.status().unwrap().config.source,
+        ConfigSource::Unconfigured
+    );
+    // A per-satellite sigma of 1e30 m.
+    fw.configure(&Config::default()).unwrap();
+    let (t, sats, apriori) = &epochs()[0];
+    let mut huge = sats.clone();
+    huge[0].sigma_m = Some(1e30);
+    let p = fw.process(&Epoch::ranges(*t, &huge, *apriori)).unwrap();
+    assert!(p.outcome.is_err(), "{:?}", p.outcome);
+    // The particle filter's threshold of 1e300.
+    let mut pf = raim_proto::pf_msg::WirePfConfig::gapf(100, 1);
+    pf.config.threshold = 1e300;
+    let r = fw.call(CommandRef::PfConfigure(&pf)).unwrap();
+    assert!(refused(&r), "{r:?}");
+}
+
+/// The boot-time authority on the real board's build (netduinoplus2, no
+/// test hooks): unprovisioned it is Unconfigured with the alarm asserted;
+/// provisioned it runs its configuration locked.
+#[test]
+fn qemu_netduinoplus2_boots_unconfigured_or_provisioned_and_locked() {
+    let base = elf(Machine::NetduinoPlus2);
+    let mut fw = start(&base, Machine::NetduinoPlus2);
+    assert_eq!(fw.boots()[0].config.source, ConfigSource::Unconfigured);
+    let (t, sats, apriori) = &epochs()[0];
+    let p = fw.process(&Epoch::ranges(*t, sats, *apriori)).unwrap();
+    assert_eq!(
+        p.outcome.unwrap_err(),
+        WireError::Unconfigured { provision: None }
+    );
+    let st = fw.status().unwrap();
+    assert_ne!(st.alarm_output, AlarmOutput::Clear);
+    drop(fw);
+    let unit = installed();
+    let img = raim_qemu::provision_config(&base, &unit, None, "provisioned").unwrap();
+    let mut fw = start(&img, Machine::NetduinoPlus2);
+    let b = fw.boots()[0];
+    assert_eq!(b.config.source, ConfigSource::Provisioned);
+    assert!(b.config.locked);
+    assert_eq!(b.config.fingerprint, unit.fingerprint());
+    assert!(matches!(
+        fw.try_configure(&Config::default()).unwrap(),
+        Err(WireError::Locked { .. })
+    ));
+    let _ = std::fs::remove_file(img);
+}
