@@ -51,26 +51,37 @@ pub enum Change {
 /// The host's borrowed form of [`Change`] (same bytes).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub enum ChangeRef<'a> {
+    /// [`Change::Configure`].
     Configure(&'a Config),
+    /// [`Change::Ism`].
     Ism(IsmFrameRef<'a>),
+    /// [`Change::Pf`].
     Pf(&'a WirePfConfig),
+    /// [`Change::Lock`].
     Lock,
+    /// [`Change::HostSigmas`].
     HostSigmas(bool),
 }
 
 /// An authenticated change (the payload of `Command::Authenticated`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Authenticated {
+    /// Above every counter accepted since boot, below `u64::MAX`.
     pub counter: u64,
+    /// What the request changes.
     pub change: Change,
+    /// HMAC-SHA256 over the nonce, the counter and the change ([`tag`]).
     pub tag: Tag,
 }
 
 /// The host's borrowed form of [`Authenticated`] (same bytes).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct AuthenticatedRef<'a> {
+    /// [`Authenticated::counter`].
     pub counter: u64,
+    /// [`Authenticated::change`].
     pub change: ChangeRef<'a>,
+    /// [`Authenticated::tag`].
     pub tag: Tag,
 }
 

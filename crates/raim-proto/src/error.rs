@@ -186,24 +186,35 @@ pub enum WireError {
     /// A per-satellite sigma outside its operational bound
     /// (`raim_core::config_bounds::SIGMA_M`), in any epoch form.
     SigmaOutOfRange {
+        /// The satellite's index in the epoch.
         index: u32,
+        /// The sigma given, m.
         sigma_m: f64,
+        /// The bound's floor, m.
         min_m: f64,
+        /// The bound's ceiling, m.
         max_m: f64,
     },
     /// An epoch to a unit with no configuration in force: none provisioned
     /// (or a corrupt one, `provision`), and none taken at run time. The
     /// epoch is unavailable; the alarm output is asserted.
     Unconfigured {
+        /// Why the provisioned configuration was refused, if one was.
         provision: Option<crate::unit::ProvisionError>,
     },
     /// An `Authenticated` request with the counter at the top of its range
     /// (`u64::MAX`): refused, so that a later change stays possible.
-    CounterExhausted { counter: u64 },
+    CounterExhausted {
+        /// The counter refused.
+        counter: u64,
+    },
     /// An epoch carrying a per-satellite sigma (satellite `index`) to a
     /// unit configured to use only its own sigma model (`host_sigmas`
     /// off in the unit configuration).
-    HostSigmaRefused { index: u32 },
+    HostSigmaRefused {
+        /// The satellite's index in the epoch.
+        index: u32,
+    },
 }
 
 /// A field name for the wire (truncated to 24 bytes).

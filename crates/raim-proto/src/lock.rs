@@ -36,5 +36,6 @@ pub struct ConfigId {
     pub fingerprint: Fingerprint,
     /// Changes are refused until reset.
     pub locked: bool,
+    /// Where the configuration in force came from.
     pub source: ConfigSource,
 }

@@ -294,6 +294,7 @@ pub enum CommandRef<'a> {
         /// The satellites (any number).
         sats: &'a [RangeObservation],
     },
+    /// [`Command::HostSigmas`].
     HostSigmas(bool),
 }
 
@@ -393,14 +394,17 @@ pub struct Status {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct BootNotice {
+    /// [`crate::PROTOCOL_VERSION`] of the unit.
     pub protocol_version: u16,
     /// Resets since power-on, and the cause of this one.
     pub resets: u32,
+    /// The cause of this boot's reset.
     pub reset_cause: ResetCause,
     /// The configuration now in force (provisioned, or none).
     pub config: ConfigId,
     /// Why the provisioned configuration was refused, if it was.
     pub provision_error: Option<crate::unit::ProvisionError>,
+    /// True when the unit holds an authentication key.
     pub auth_provisioned: bool,
     /// This boot's nonce.
     pub boot_nonce: crate::auth::Nonce,

@@ -288,6 +288,7 @@ fn talker(r: &WireResult) -> &'static str {
 /// caller knows them.
 #[derive(Clone, Copy)]
 pub struct Sky<'a> {
+    /// The epoch whose satellites were seen.
     pub epoch: &'a Epoch<'a>,
     /// C/N0 (dB-Hz) of the epoch's satellites in its order; shorter (or
     /// empty) when unknown, and a non-finite entry is unknown too.
@@ -375,8 +376,11 @@ fn frame(r: &WireResult, sky: &Sky) -> Frame {
 /// Dilutions of precision of the geometry in use.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Dops {
+    /// Position dilution of precision.
     pub pdop: f64,
+    /// Horizontal dilution of precision.
     pub hdop: f64,
+    /// Vertical dilution of precision.
     pub vdop: f64,
 }
 

@@ -67,9 +67,13 @@ pub struct UnitConfig {
 /// (`Option<&T>` and `&T` serialize as `Option<T>` and `T`).
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct UnitConfigRef<'a> {
+    /// [`UnitConfig::snapshot`].
     pub snapshot: Option<&'a Config>,
+    /// [`UnitConfig::araim`].
     pub araim: Option<&'a IsmFrame>,
+    /// [`UnitConfig::pf`].
     pub pf: Option<&'a WirePfConfig>,
+    /// [`UnitConfig::host_sigmas`].
     pub host_sigmas: bool,
 }
 
@@ -144,7 +148,12 @@ pub enum ProvisionError {
     /// The section does not start with the magic word.
     BadMagic,
     /// The length does not fit the section.
-    BadLength { len: u32, max: u32 },
+    BadLength {
+        /// The length the section gives, bytes.
+        len: u32,
+        /// The largest that fits, bytes.
+        max: u32,
+    },
     /// The seal (HMAC on a keyed unit, SHA-256 otherwise) does not match.
     BadSeal,
     /// The payload is not a unit configuration.
@@ -160,8 +169,11 @@ pub enum ProvisionError {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum UnitPart {
+    /// The snapshot configuration.
     Snapshot,
+    /// The ISM and ARAIM configuration.
     Araim,
+    /// The particle-filter configuration.
     Pf,
 }
 

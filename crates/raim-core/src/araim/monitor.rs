@@ -48,6 +48,7 @@ use crate::solve::{solve_into, Solution};
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SatIsm {
+    /// The satellite.
     pub id: SatId,
     /// sigma_URA (m), for C_int.
     pub sigma_ura_m: f64,
@@ -121,7 +122,10 @@ pub enum Exclusion {
     NotTested,
     /// The test failed with more monitored modes than
     /// [`FdeLimits::max_modes`]: no exclusion attempted, an `Alarm`.
-    NotAttempted { monitored: usize },
+    NotAttempted {
+        /// The monitored modes of the failed test.
+        monitored: usize,
+    },
     /// The FDE's outcome (`NoFault` when the test passed).
     Fde(FdeDecision),
 }
@@ -134,6 +138,7 @@ pub struct Verdict<const N: usize> {
     /// excluded and the subset available), `Alarm` (a test failed and
     /// nothing was excluded).
     pub decision: Decision,
+    /// What the fault detection and exclusion did.
     pub exclusion: Exclusion,
     /// The satellites excluded, in epoch order (empty unless excluded).
     pub excluded: Vec<SatId, N>,
@@ -152,7 +157,12 @@ pub enum MonitorError {
     /// non-positive input, or the Gauss-Newton solution of pseudoranges.
     Raim(RaimError),
     /// The satellite at `index` has no ISM entry.
-    NotInIsm { id: SatId, index: usize },
+    NotInIsm {
+        /// The satellite.
+        id: SatId,
+        /// Its index in the epoch.
+        index: usize,
+    },
 }
 
 impl From<AraimError> for MonitorError {
@@ -269,6 +279,7 @@ impl<T: Real, const N: usize, const K: usize> Default for Monitor<T, N, K> {
 }
 
 impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
+    /// A monitor with empty engines (the first epoch fills them).
     pub fn new() -> Self {
         Monitor {
             main: Araim::new(),

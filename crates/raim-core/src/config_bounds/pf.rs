@@ -65,11 +65,13 @@ pub const POSITION_M_PER_SQRT_S: Bound = Bound {
     min: 0.0,
     max: 1e3,
 };
+/// The clock process noise, m/sqrt(s).
 pub const CLOCK_M_PER_SQRT_S: Bound = Bound {
     field: "process.clock_m_per_sqrt_s",
     min: 0.0,
     max: 1e3,
 };
+/// The clock drift process noise, (m/s)/sqrt(s).
 pub const DRIFT_M_S_PER_SQRT_S: Bound = Bound {
     field: "process.drift_m_s_per_sqrt_s",
     min: 0.0,
@@ -88,11 +90,13 @@ pub const INIT_POSITION_M: Bound = Bound {
     min: 1e-3,
     max: 1e5,
 };
+/// The initial clock spread, m.
 pub const INIT_CLOCK_M: Bound = Bound {
     field: "init_clock_m",
     min: 1e-3,
     max: 1e5,
 };
+/// The initial drift spread, m/s.
 pub const INIT_DRIFT_M_S: Bound = Bound {
     field: "init_drift_m_s",
     min: 1e-3,

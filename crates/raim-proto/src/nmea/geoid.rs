@@ -18,6 +18,7 @@ static GRID: &[u8] = include_bytes!("egm96_1deg.bin");
 
 /// Rows (latitudes 90..=-90) and columns (longitudes 0..=359) of `GRID`.
 pub const ROWS: usize = 181;
+/// Columns of the grid (one per degree of longitude).
 pub const COLS: usize = 360;
 
 /// Grid step, degrees.
