@@ -70,7 +70,7 @@ pub use unit::{Fingerprint, ProvisionError, UnitConfig, UnitConfigRef};
 pub const CAPACITY: usize = raim_core::DEFAULT_CAPACITY;
 
 /// The device's precision: the statistics path of every engine the
-/// [`server`] runs (the snapshot monitor `Raim<CAPACITY, DevicePrecision>`,
+/// device server (`raim-server`) runs (the snapshot monitor `Raim<CAPACITY, DevicePrecision>`,
 /// ARAIM and the particle filters), on the firmware and on the host alike,
 /// so that the host's `Server` reproduces the firmware bit for bit. `f32`:
 /// the Cortex-M4F's FPU is single precision, and every f64 operation there

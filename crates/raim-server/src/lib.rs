@@ -321,7 +321,7 @@ impl Server {
     /// completes a frame.
     ///
     /// The request is decoded once, into the server's own `request` slot,
-    /// and checked once (`answer::decode`); [`Server::dispatch`] then
+    /// and checked once (`answer::decode`); `Server::dispatch` then
     /// answers it. Epochs are answered from references into that slot with
     /// the wire result written in place, and answers are encoded from
     /// references (`answer::ResponseRef`): no request-, result- or

@@ -100,7 +100,7 @@ pub struct ReplayArgs {
     /// defaults: G C1C/C1, E C1C/C1X/C1B, C C2I/C1I).
     #[arg(long = "code", value_name = "SYS=CODE", help_heading = heading::SOURCES)]
     pub codes: Vec<String>,
-    /// First epoch: HH:MM[:SS] (GPS time of day) or +SECONDS from the first.
+    /// First epoch: HH:MM or HH:MM:SS (GPS time of day) or +SECONDS from the first.
     #[arg(long, help_heading = heading::SOURCES)]
     pub start: Option<String>,
     /// Last epoch (inclusive), same forms.
@@ -138,7 +138,7 @@ pub struct ReplayArgs {
     /// an optional ..END after the start time; the bias may be negative.
     #[arg(long = "fault", value_name = "SPEC", allow_hyphen_values = true, help_heading = heading::FAULTS)]
     pub faults: Vec<String>,
-    /// A TOML scenario file: a seed and [[fault]] tables (format and
+    /// A TOML scenario file: a seed and fault tables (TOML arrays of tables named fault) (format and
     /// example: docs/REPLAY.md, section "Scenario files").
     #[arg(long, value_name = "FILE", help_heading = heading::FAULTS)]
     pub scenario: Option<PathBuf>,
