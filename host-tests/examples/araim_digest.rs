@@ -99,8 +99,12 @@ impl Host {
 }
 
 fn main() {
+    let mut server = Box::new(Server::new());
+    server
+        .take_runtime_config(raim_core::Config::default())
+        .expect("the default configuration");
     let mut h = Host {
-        server: Box::new(Server::new()),
+        server,
         seq: 0,
         digest: 0xcbf2_9ce4_8422_2325,
         answers: 0,

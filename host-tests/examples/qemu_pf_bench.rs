@@ -64,6 +64,8 @@ fn main() -> anyhow::Result<()> {
         Some(Box::leak(Box::new(t)))
     }
     let mut host = Server::new();
+    host.take_runtime_config(raim_core::Config::default())
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
     host.attach_pf(PfEngines {
         ekf: leak(raim_core::pf::PfRaim::new(0)),
         pf100: leak(raim_core::pf::PfRaim::new(0)),

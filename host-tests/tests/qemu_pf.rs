@@ -124,6 +124,10 @@ fn host_server() -> Server {
         ga100: leak(PfRaim::new(0)),
         ga300: leak(PfRaim::new(0)),
     });
+    // As the session set the firmware up: a bench host's runtime
+    // `Configure(Config::default())`.
+    s.take_runtime_config(raim_core::Config::default())
+        .expect("the default configuration");
     s
 }
 

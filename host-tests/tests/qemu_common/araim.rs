@@ -178,10 +178,12 @@ pub struct Twin {
 
 impl Twin {
     pub fn new(fw: QemuSession) -> Self {
-        Twin {
-            fw,
-            host: Box::new(Server::new()),
-        }
+        // The host reference set up as the session set the firmware up
+        // (a bench host's runtime `Configure(Config::default())`).
+        let mut host = Box::new(Server::new());
+        host.take_runtime_config(raim_core::Config::default())
+            .expect("the default configuration");
+        Twin { fw, host }
     }
 
     /// The host server's answers to `bytes`.
