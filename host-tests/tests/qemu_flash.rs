@@ -18,8 +18,10 @@ use raim_core::{Config, Epoch, FdeMethod};
 use raim_proto::WireError;
 use std::path::Path;
 
-/// Issue 10's flash budget for the build without the optional engines, B.
-const SNAPSHOT_FLASH_BUDGET_B: u64 = 128 * 1024;
+/// The flash budget of the build without the optional engines, B, without
+/// the provisioned-configuration section (docs/FLASH.md: 128 KiB was the
+/// goal; the configuration authority took it to 140 KiB).
+const SNAPSHOT_FLASH_BUDGET_B: u64 = 140 * 1024;
 
 /// The NMEA writer of the snapshot build: no geoid, no GSV or DOPs (the
 /// firmware's features `geoid` and `nmea-sky` are off there).

@@ -396,14 +396,23 @@ impl QemuSession {
             last_config: None,
             boots: Vec::new(),
         };
-        session.wait_boot(ANSWER_TIMEOUT)?;
         if opts.machine == Machine::NetduinoPlus2 {
+            // Under QEMU's STM32 model the boot notice has not been seen
+            // to arrive (docs/SAFETY.md); the unit's state is read from
+            // `Status` instead.
+            let _ = session.wait_boot(Duration::from_secs(3));
             session.sync()?;
+        } else {
+            session.wait_boot(ANSWER_TIMEOUT)?;
         }
-        let booted = session.boots.last().copied();
-        let bench = booted.is_some_and(|b| {
-            !opts.raw && !b.auth_provisioned && b.config.source == ConfigSource::Unconfigured
-        });
+        let bench = if opts.raw {
+            false
+        } else if let Some(b) = session.boots.last().copied() {
+            !b.auth_provisioned && b.config.source == ConfigSource::Unconfigured
+        } else {
+            let s = session.status()?;
+            !s.auth_provisioned && s.config.source == ConfigSource::Unconfigured
+        };
         if bench {
             session.configure(&Config::default())?;
         }

@@ -7,6 +7,7 @@ mod config_args;
 mod epoch_json;
 mod outcome;
 mod pci;
+mod provision_cmd;
 mod qemu;
 mod replay;
 mod result_json;
@@ -120,10 +121,16 @@ enum Command {
     /// Print the raim(1) man page (roff), from the same definitions as --help.
     #[command(after_help = examples::MAN)]
     Man,
+    /// Seal a unit configuration into a firmware image: the installation step (docs/PROTOCOL.md "Configuration authority").
+    #[command(after_help = examples::PROVISION)]
+    Provision(provision_cmd::ProvisionArgs),
 }
 
 /// The examples that end each subcommand's `--help`.
 mod examples {
+    pub const PROVISION: &str = "Examples:
+  raim provision --config unit.toml -o unit.elf firmware/target/thumbv7em-none-eabihf/release/raim-firmware
+  raim provision --config unit.toml --key $(cat unit42.key) -o unit42.elf raim-firmware";
     pub const SNAPSHOT: &str = "Examples:
   raim snapshot --input host-tests/vectors/snapshot_example.jsonl
   raim snapshot --json --phase terminal < epochs.jsonl
@@ -252,6 +259,7 @@ fn run(command: Command) -> Result<Tally> {
         Command::Campaign { which } => none(campaign::run(&which)),
         Command::Completions { shell } => none(completions(shell)),
         Command::Man => none(man()),
+        Command::Provision(args) => none(provision_cmd::run(&args)),
     }
 }
 
