@@ -121,9 +121,7 @@ fn main() -> ! {
     // The provisioned configuration, if its seal verifies and every part
     // passes its checks, runs locked; otherwise the unit is Unconfigured.
     // No default is ever put in force.
-    let provisioned = raim_proto::unit::open(provision::section(), key.as_ref());
-    let entropy = provision::entropy(platform.ticks.now());
-    server.boot(provisioned, reset.0, &entropy);
+    boot(server, key.as_ref(), reset.0, platform.ticks.now());
     watchdog::start();
     stack::paint();
     guard::enable();
@@ -160,6 +158,15 @@ fn main() -> ! {
             }
         });
     }
+}
+
+/// The boot sequence's configuration step, in a frame of its own so that
+/// the decoded unit configuration (with an ISM, ~1.5 KB) is not reserved on
+/// `main`'s frame for the whole main loop.
+#[inline(never)]
+fn boot(server: &mut Server, key: Option<&raim_proto::AuthKey>, resets: u32, ticks: u32) {
+    let provisioned = raim_proto::unit::open(provision::section(), key);
+    server.boot(provisioned, resets, &provision::entropy(ticks));
 }
 
 /// SysTick's wrap (every 2^24 core ticks): extends the tick counter and

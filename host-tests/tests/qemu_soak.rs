@@ -137,11 +137,11 @@ fn soak(frames: u32, seed: u64) -> Summary {
         }
     };
     assert!(fw.is_running(), "qemu exited");
-    // One answer per chunk the firmware saw (+1: the closing status; +1:
-    // the configure request of this session).
+    // One answer per chunk the firmware saw (+1: the closing status; +2:
+    // the session's bench configuration and this test's configure request).
     assert_eq!(
         status.frames as usize,
-        chunk_answers + 2,
+        chunk_answers + 3,
         "answers vs. the firmware's frame counter"
     );
     // Every frame is answered or reported missing, and not both.

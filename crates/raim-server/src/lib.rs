@@ -461,7 +461,7 @@ impl Server {
             Some(i) if !self.host_sigmas => Err(WireError::HostSigmaRefused {
                 index: u32::try_from(i).unwrap_or(u32::MAX),
             }),
-            _ => Ok(()),
+            _ => araim_sigma_bounds(command),
         }
     }
 
@@ -628,6 +628,32 @@ impl Server {
             body,
         )
     }
+}
+
+/// The per-satellite sigma bound (`raim_core::config_bounds::SIGMA_M`) on
+/// an ARAIM epoch's host sigmas, checked at admission as the snapshot and
+/// PF engines check theirs.
+fn araim_sigma_bounds(command: &Command) -> Result<(), WireError> {
+    use raim_proto::araim_msg::AraimCommand;
+    let bound = raim_core::config_bounds::SIGMA_M;
+    let sigmas: &mut dyn Iterator<Item = Option<f64>> = match command {
+        Command::Araim(AraimCommand::Epoch(e)) => &mut e.sats.items.iter().map(|s| s.sigma_m),
+        Command::Araim(AraimCommand::Ranges(e)) => &mut e.sats.items.iter().map(|s| s.sigma_m),
+        _ => return Ok(()),
+    };
+    for (i, s) in sigmas.enumerate() {
+        if let Some(sigma_m) = s {
+            if bound.check(sigma_m).is_err() {
+                return Err(WireError::SigmaOutOfRange {
+                    index: u32::try_from(i).unwrap_or(u32::MAX),
+                    sigma_m,
+                    min_m: bound.min,
+                    max_m: bound.max,
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// One epoch through the engine; the result written into `result` and

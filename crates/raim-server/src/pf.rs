@@ -621,7 +621,7 @@ mod tests {
             }
         );
         assert!(
-            matches!(err(4), WireError::PfInvalidConfig { ref field, value } if field.as_str() == "window" && value == 0.0)
+            matches!(err(4), WireError::OutOfRange { ref field, value, .. } if field.as_str() == "window" && value == 0.0)
         );
         assert_eq!(err(5), WireError::PfNotConfigured);
         assert_eq!(resp[6].body, ResponseBody::Configured);

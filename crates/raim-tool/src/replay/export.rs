@@ -348,12 +348,13 @@ pub fn write_gpx(path: &Path, recs: &[EpochRecord], title: &str) -> Result<()> {
     Ok(())
 }
 
-/// The NMEA stream, one sentence a line.
+/// The NMEA stream, one sentence a line, each ended CR LF as NMEA 0183
+/// requires (the same bytes as `--nmea only`).
 pub fn write_nmea(path: &Path, recs: &[EpochRecord]) -> Result<()> {
     let mut w = create(path, "--nmea-file")?;
     for r in recs {
         for s in &r.nmea {
-            writeln!(w, "{}", s.trim_end())?;
+            write!(w, "{}\r\n", s.trim_end())?;
         }
     }
     w.flush()?;
