@@ -155,13 +155,25 @@ impl Server {
     /// `Unconfigured` until a configuration is taken ([`Server::boot`]
     /// with a provisioned one, or a runtime `Configure`).
     pub fn new() -> Self {
-        let mut s = Server {
+        // Built in one expression (no copy of the server on the way: the
+        // firmware builds it into its static).
+        Server {
             rx: FrameReceiver::new(),
             raim: Raim::new(),
             config: None,
             host_sigmas: true,
             expected_seq: None,
-            config_id: ConfigId::default(),
+            config_id: ConfigId {
+                fingerprint: UnitConfigRef {
+                    snapshot: None,
+                    araim: None,
+                    pf: None,
+                    host_sigmas: true,
+                }
+                .fingerprint(),
+                locked: false,
+                source: ConfigSource::Unconfigured,
+            },
             auth: None,
             nonce: [0; 16],
             provision_error: None,
@@ -177,9 +189,7 @@ impl Server {
             result: EpochResult::empty(),
             wire: WireResult::empty(),
             pf: PfUnit::EMPTY,
-        };
-        s.config_id.fingerprint = s.fingerprint();
-        s
+        }
     }
 
     /// A server that accepts only authenticated changes under `key`
@@ -642,7 +652,9 @@ fn araim_sigma_bounds(command: &Command) -> Result<(), WireError> {
         _ => return Ok(()),
     };
     for (i, s) in sigmas.enumerate() {
-        if let Some(sigma_m) = s {
+        // A non-positive or non-finite sigma is the engine's own typed
+        // error (`NonPositiveSigma`, `NonFinite`).
+        if let Some(sigma_m) = s.filter(|v| v.is_finite() && *v > 0.0) {
             if bound.check(sigma_m).is_err() {
                 return Err(WireError::SigmaOutOfRange {
                     index: u32::try_from(i).unwrap_or(u32::MAX),
