@@ -143,12 +143,12 @@ fn every_frame_is_answered_in_order_with_its_sequence_number() {
         (st.frames, st.epochs, st.errors, st.capacity),
         (3, 2, 0, 32)
     );
-    // Nine sentences per solved epoch of 8 GPS satellites, in order.
+    // Each solved epoch's sentences, from RMC to ZDA (GSV only in a build
+    // with raim-proto's `nmea-sky`), twice.
     let kinds: Vec<&str> = nmea.lines().map(|l| &l[3..6]).collect();
-    let one = [
-        "RMC", "VTG", "GGA", "GSA", "GSV", "GSV", "GST", "GBS", "ZDA",
-    ];
-    assert_eq!(kinds, [one, one].concat());
+    assert_eq!(kinds.iter().filter(|k| **k == "RMC").count(), 2);
+    assert_eq!(kinds.first(), Some(&"RMC"));
+    assert_eq!(kinds.last(), Some(&"ZDA"));
     // The host's writer on the same epoch, byte for byte.
     let want: std::string::String = raim_proto::nmea::epoch_sentences(
         r1,
