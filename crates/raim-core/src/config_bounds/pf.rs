@@ -12,7 +12,9 @@
 //! predicts y_q exactly), a bias of delta sigmas on satellite q adds to
 //! that satellite's LLR, per epoch (docs/PF.md "the LLR"),
 //!
-//!     s(delta) = -ln f(delta) - ln sqrt(2 pi e v),
+//! ```text
+//! s(delta) = -ln f(delta) - ln sqrt(2 pi e v),
+//! ```
 //!
 //! with f the configured law at unit scale and v its variance factor:
 //! (delta^2 - 1) / 2 for the Gaussian, only logarithmic in delta for the
