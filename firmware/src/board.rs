@@ -316,7 +316,7 @@ impl Ticks {
     }
 }
 
-/// The integrity-alarm discrete output (issue 15) of the QEMU board,
+/// The integrity-alarm discrete output of the QEMU board,
 /// behind embedded-hal 1.0's `OutputPin` and `StatefulOutputPin` (the
 /// STM32F4's is the HAL's PD12). Active low on both boards: the pin is
 /// driven high only while integrity is assured, so a unit that stops,

@@ -1,4 +1,4 @@
-//! The integrity-alarm discrete output (issue 15): drives the board's
+//! The integrity-alarm discrete output: drives the board's
 //! `AlarmPin` (embedded-hal `OutputPin`, active low) from
 //! `raim_proto::alert::AlertMonitor`: asserted until the first valid
 //! epoch, on every `Alarm`, `Unavailable` or errored epoch, and when no

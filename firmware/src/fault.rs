@@ -1,4 +1,4 @@
-//! Fail loud and recover (issue 15): a panic, a hard fault, a stack
+//! Fail loud and recover: a panic, a hard fault, a stack
 //! overflow (`guard`) or a watchdog expiry records its cause (a code and a value: the PC, or the panic's
 //! source line) in a RAM record that a reset does not clear (the
 //! `.uninit` section of cortex-m-rt, NOLOAD), then resets the unit. At boot

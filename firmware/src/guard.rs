@@ -1,4 +1,4 @@
-//! The stack guard (issue 15): an MPU region with no access between the
+//! The stack guard: an MPU region with no access between the
 //! statics and the stack, so that an overflow faults instead of running
 //! the stack down into the static server state (configuration, MCUSUM
 //! state, threshold cache). Both boards (Cortex-M4 PMSAv7 MPU).

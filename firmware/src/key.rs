@@ -1,6 +1,6 @@
 //! The unit's key for authenticated configuration (`AuthConfigure`,
 //! raim-proto `auth`, HMAC-SHA256), provisioned per unit into flash
-//! (issue 15, docs/SAFETY.md "Key provisioning").
+//! (docs/SAFETY.md "Key provisioning").
 //!
 //! The key has its own output section, `.raim_key` (32 bytes, placed after
 //! `.rodata` by `memory.x` / `memory-stm32f4.x`). The firmware image ships

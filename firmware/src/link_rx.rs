@@ -1,4 +1,4 @@
-//! No byte lost (issue 15): the link UART's receive interrupt moves bytes
+//! No byte lost: the link UART's receive interrupt moves bytes
 //! into a lock-free single-producer single-consumer ring
 //! (`heapless::spsc`), and the main loop takes them out and runs the
 //! protocol on them. While an epoch is computed or an answer is sent, the

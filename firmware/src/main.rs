@@ -205,7 +205,7 @@ fn server() -> &'static mut Server {
     }
 }
 
-/// The particle-filter engines (issue 14), each in its own zero-filled
+/// The particle-filter engines, each in its own zero-filled
 /// static (`.bss`: no flash image, never built on the stack), handed to
 /// the server for good. Called once, from `main`.
 ///
@@ -243,11 +243,11 @@ fn pf_engines() -> raim_server::PfEngines {
     }
 }
 
-/// Fail loud (issue 15): log, record the cause, reset.
+/// Fail loud: log, record the cause, reset.
 ///
 /// The log carries the location and the message when it is a literal;
 /// a message with run-time arguments (core's bounds checks, say) is not
-/// formatted, so that `core::fmt` stays out of the flash (issue 10: it
+/// formatted, so that `core::fmt` stays out of the flash (it
 /// was ~1.7 KB for this one call); the location finds it in the source.
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {

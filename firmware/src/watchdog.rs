@@ -1,4 +1,4 @@
-//! The watchdog (issue 15), fed by the main loop: while it waits for bytes
+//! The watchdog, fed by the main loop: while it waits for bytes
 //! and after every byte it handles. An epoch that hangs stops the feeding;
 //! the watchdog then fires and the unit records `Watchdog` and resets
 //! (`fault`). Timeout 2 s, above the worst-case epoch (hundreds of ms at

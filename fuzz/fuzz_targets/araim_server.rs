@@ -1,4 +1,4 @@
-//! Fuzz ARAIM in the protocol server (issue 12): a valid ISM frame is put
+//! Fuzz ARAIM in the protocol server: a valid ISM frame is put
 //! in force first, so that ARAIM epochs in the input reach the engine and
 //! its FDE; then arbitrary bytes (ISM frames, ARAIM epochs, anything), then
 //! a valid status request. Must never panic, and the status must still be

@@ -1,4 +1,4 @@
-//! Structured fuzzing of the protocol server (issue 15): `arbitrary`
+//! Structured fuzzing of the protocol server: `arbitrary`
 //! builds a sequence of well-formed requests with valid CRCs (linearised
 //! epochs with faults and NaNs, configurations in and out of bounds,
 //! locks, status requests, garbage frames), feeds them to

@@ -1,4 +1,4 @@
-//! The f32/f64 equivalence suite, full form (issue 10): every replay case
+//! The f32/f64 equivalence suite, full form: every replay case
 //! over its whole file, the committed vectors, and a seeded Monte Carlo of
 //! `EPOCHS` epochs (default 10^6), each through `Raim::<N, f32>` and
 //! `Raim::<N, f64>`. Prints the Markdown report committed in

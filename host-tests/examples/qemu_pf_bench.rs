@@ -1,4 +1,4 @@
-//! Particle-filter RAIM cost per epoch (issue 14; BENCHMARKS.md "Particle-filter
+//! Particle-filter RAIM cost per epoch (BENCHMARKS.md "Particle-filter
 //! RAIM"): guest instructions per epoch under
 //! `qemu -icount shift=0` (one instruction per virtual ns; SysTick at
 //! mps2-an386's 25 MHz, so one tick is 40 instructions) and host wall-clock

@@ -1,7 +1,7 @@
 //! How fast bytes and frames reach the firmware through QEMU's UART models.
 //! 1. Delimiters (ignored by the firmware) then a status request, timed:
 //!    the raw byte rate into the link UART.
-//! 2. Issue 15: frames streamed back to back without waiting for answers
+//! 2. Frames streamed back to back without waiting for answers
 //!    (the firmware receives by interrupt into its ring), every answer
 //!    collected and checked in order: `Status` requests (smallest frames),
 //!    and linearised 8-satellite epochs; per machine (mps2-an386 and the

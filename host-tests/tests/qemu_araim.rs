@@ -1,4 +1,4 @@
-//! ARAIM (issue 12) in the firmware under QEMU (mps2-an386): ISM frames and
+//! ARAIM in the firmware under QEMU (mps2-an386): ISM frames and
 //! ARAIM epochs are answered byte for byte as the host's `Server` answers
 //! the same frames (the same `raim_proto`/`raim_core` code at the build's
 //! `raim_core::Stat`; why bit-exactness holds across x86-64 and the M4F:
@@ -68,7 +68,7 @@ fn qemu_araim_appendix_d_and_a_20_satellite_sky_match_the_host() {
     );
     assert!((a.vpl_exact_m - num("vpl_root_m")).abs() <= 0.01, "{a:?}");
     assert_eq!((w.decision, w.fde), (Decision::Ok, WireFde::NoFault));
-    // Seed 003's N* on the device (issue 13): App. D's vertical N* from
+    // Seed 003's N* on the device: App. D's vertical N* from
     // the f64 core, docs/ESQ.md (P_Sigma checked there against the
     // allocated risk at the PL root), within the f32 engine's spread.
     let n_star = w.n_star_vertical.expect("N* on App. D");

@@ -1,4 +1,4 @@
-//! Issue 15: the real-board build (`board-stm32f4`, on stm32f4xx-hal) under
+//! The real-board build (`board-stm32f4`, on stm32f4xx-hal) under
 //! QEMU's `netduinoplus2` (an STM32F405), through the same runner as the
 //! QEMU board (`raim_qemu::Machine`): frames and their answers, results bit
 //! for bit as the host core's, the NMEA sentences, and a stream of frames

@@ -1,4 +1,4 @@
-//! Issue 15: the firmware fails loud and recovers. Under QEMU (mps2-an386)
+//! The firmware fails loud and recovers. Under QEMU (mps2-an386)
 //! a hung main loop (the test-only `TestFault::Hang`) is reset by the CMSDK
 //! watchdog, a panic (`TestFault::Panic`) resets the unit, and the next
 //! `Status` reports the reset count and cause, a stack overflow

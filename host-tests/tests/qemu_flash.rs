@@ -1,4 +1,4 @@
-//! Issue 10: the firmware's flash. The QEMU board's build without the
+//! The firmware's flash. The QEMU board's build without the
 //! optional engines (`--no-default-features --features board-qemu`: the
 //! snapshot monitor, MCUSUM, protocol, NMEA and safety code; no ARAIM, no
 //! particle filter, no reconstruction FDE) stays within 128 KiB, read from
@@ -88,7 +88,7 @@ fn snapshot_build_fits_128_kib_of_flash() {
         code <= SNAPSHOT_FLASH_BUDGET_B,
         "{code} B of flash > {SNAPSHOT_FLASH_BUDGET_B} B"
     );
-    // Recorded, not bounded by issue 10: the full QEMU build and the
+    // Recorded, not bounded: the full QEMU build and the
     // STM32F4 build (both within their parts' flash: the linker checks).
     report(
         "QEMU, default features (araim, pf, multifault)",

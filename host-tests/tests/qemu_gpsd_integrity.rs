@@ -1,4 +1,4 @@
-//! Issue 15: an `Unavailable` or `Alarm` epoch is never a fix for an NMEA
+//! An `Unavailable` or `Alarm` epoch is never a fix for an NMEA
 //! client. The firmware's NMEA under QEMU is served to Debian's gpsd; for
 //! the epochs the monitor did not clear, gpsd must report no fix (TPV mode
 //! <= 1), while the cleared epochs around them are 3D fixes (mode 3).

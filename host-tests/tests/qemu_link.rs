@@ -1,4 +1,4 @@
-//! Issue 15, under QEMU (mps2-an386, and netduinoplus2 for the stream):
+//! Under QEMU (mps2-an386, and netduinoplus2 for the stream):
 //! - no byte lost: the host streams 1,000 frames back to back without
 //!   waiting for answers; the firmware receives them by interrupt into its
 //!   ring (`firmware/src/link_rx.rs`) and answers every one, in order, bit

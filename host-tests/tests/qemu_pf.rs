@@ -1,4 +1,4 @@
-//! Particle-filter RAIM on the device (issue 14): the same seed and the
+//! Particle-filter RAIM on the device: the same seed and the
 //! same frames through the host's `raim_server::Server` and through
 //! the firmware under QEMU (mps2-an386) give byte-identical answers
 //! (compared as the postcard bytes of the whole `Response`: sequence

@@ -1,12 +1,9 @@
 //! The firmware's stack high water for the deepest epochs we know (the
 //! default FDE, the MCUSUM's alarm and hold path, the reconstruction FDE,
 //! all at N = 32 with two faults), measured by stack painting under QEMU
-//! (deterministic: same ELF, same input, same bytes), as a regression guard
-//! (issue 10). The issue's goal is 16 KiB; it is met since the second pass
-//! for the default FDE and since the third for the MCUSUM's alarm path and
-//! the reconstruction FDE (docs/bench-history/firmware.md, "Issue 10: stack,
-//! second pass" and "third pass"), and the budgets below are the measured values rounded up
-//! to the next KiB: a change that deepens the stack fails here and has to
+//! (deterministic: same ELF, same input, same bytes), as a regression guard.
+//! The goal is 16 KiB (docs/bench-history/firmware.md has the history), and
+//! the budgets below are the measured values rounded up to the next KiB: a change that deepens the stack fails here and has to
 //! update them (and BENCHMARKS.md "Firmware: flash, RAM, stack") deliberately.
 //!
 //! Selected by `cargo test -p host-tests qemu`.
@@ -41,25 +38,13 @@ fn two_fault_epoch() -> Vec<RangeObservation> {
     )
 }
 
-/// Snapshot monitor (MCUSUM off): measured 39,164 B at 8733e78, and
-/// 41,684 B after the merge of issues 11, 12, 14 and 15 (70219f3): the
-/// firmware's main-loop frame grew from 7.8 KB to 10.4 KB (the request with
-/// `AuthConfigure` and the larger `Config` decoded on its stack).
-/// With the f32 engine on the device (issue 10, branch budget): 35,572 B;
-/// the budget kept 1.2 KB of margin. 37,060 B on the merge with ARAIM
-/// and the PF in the firmware (LTO inlining, as above). The goal (16 KiB) needs the decoded
-/// request, the server's result copies and the engines' outcome in static
-/// storage (BENCHMARKS.md, issue 10).
-/// Second pass (the request, the results and the FDE outcome in the
-/// server's and the monitor's static storage): 13,476 B.
+/// Snapshot monitor (MCUSUM off), with the request, the results and the
+/// FDE outcome in the server's and the monitor's static storage: measured
+/// 13,476 B (BENCHMARKS.md; the history is in docs/bench-history/).
 const STACK_BUDGET_SNAPSHOT_B: u32 = 14 * 1024;
 /// MCUSUM on (the sequential path's frames on top), an epoch in which the
-/// CUSUM itself does not alarm: measured 50,036 B at 8733e78. An epoch whose
-/// CUSUM alarms also enters `after_cusum_alarm` (a 19.2 KB frame) and is
-/// not covered here. 52,852 B after the same merge.
-/// 44,892 B with the f32 engine (branch budget); 46,380 B on the merge
-/// with ARAIM and the PF in the firmware. Second pass: 13,908 B (the
-/// sequential path no longer holds a solution or a result).
+/// CUSUM itself does not alarm: measured 13,908 B. An epoch whose CUSUM
+/// alarms is bounded by [`STACK_BUDGET_MCUSUM_ALARM_B`].
 const STACK_BUDGET_MCUSUM_B: u32 = 14 * 1024;
 
 #[test]
@@ -83,18 +68,16 @@ fn qemu_stack_high_water_of_a_32_satellite_two_fault_epoch() {
     }
 }
 
-/// The MCUSUM's alarm path (issue 10, third pass): an epoch whose CUSUM
+/// The MCUSUM's alarm path: an epoch whose CUSUM
 /// alarms (identification from the accumulated vector, the subset solve and
 /// test, the hold) and the epochs after it (the held satellite filtered out
-/// of the input first, `without_held_ranges`). Measured 13,604 B up to and
-/// including the alarm epoch; after the held epochs 15,700 B with the
-/// filtered copy of the input on the stack, 13,764 B with it in the
-/// sequential engine's storage (third pass).
+/// of the input first, `without_held_ranges`, into the sequential engine's
+/// storage). Measured 13,604 B up to and including the alarm epoch, and
+/// 13,764 B after the held epochs.
 const STACK_BUDGET_MCUSUM_ALARM_B: u32 = 14 * 1024;
 /// The reconstruction FDE (`FdeMethod::Reconstruction`, t_max 3) with two
-/// faults, MCUSUM off and on: 22,676 B with the reconstruction's scratch
-/// on the stack (`run_with_own_scratch`); 11,028 B and 11,460 B with it
-/// in the snapshot engine's storage (third pass).
+/// faults, MCUSUM off and on, with the reconstruction's scratch in the
+/// snapshot engine's storage: measured 11,028 B and 11,460 B.
 const STACK_BUDGET_RECONSTRUCTION_B: u32 = 12 * 1024;
 
 /// The persistent bias of the CUSUM scenario (m, sigma 1 m): too small for
@@ -223,12 +206,10 @@ fn qemu_stack_high_water_of_the_reconstruction_fde_with_two_faults() {
     }
 }
 
-/// An ARAIM session (issue 12 asks that it be measured; issue 10's goal
-/// applies to it too): the ISM, then the 20-satellite sky with 100 m on
+/// An ARAIM session (the 16 KiB goal applies to it too): the ISM, then the 20-satellite sky with 100 m on
 /// satellite 0 (all-in-view ARAIM, detection, FDE with the exclusion's
 /// subset), the deepest of `qemu_araim_bench`'s sessions (15,620 B, no
-/// deeper with 24 or 32 satellites). Measured 15,620 B (third pass;
-/// 20,356 B before the second pass's changes to the server).
+/// deeper with 24 or 32 satellites). Measured 15,620 B.
 const STACK_BUDGET_ARAIM_B: u32 = 16 * 1024;
 
 #[test]

@@ -1,4 +1,4 @@
-//! ARAIM epochs (issue 12): ADD v3.0 Appendix D (10 satellites, 12 modes),
+//! ARAIM epochs: ADD v3.0 Appendix D (10 satellites, 12 modes),
 //! and 30 satellites G15 + E15 with P_sat 1e-4 (satellite pairs) at
 //! P_const 1e-8 and 1e-4 (satellite + constellation modes).
 //! Each case also with 30 m on its first satellite, then FDE (`+fde`).

@@ -1,4 +1,4 @@
-//! Seed 003's own claims (issue 13, docs/ESQ.md): the cost of N* per epoch
+//! Seed 003's own claims (docs/ESQ.md): the cost of N* per epoch
 //! (P_k of every mode at the PL, P_Sigma, P_max; the ARAIM solve itself is
 //! not included: it is the ARAIM bench), and of one PCA epoch (window
 //! covariance, SVD, test) for W = 60 and N = 12, 20, 32 satellites.

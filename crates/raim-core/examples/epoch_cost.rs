@@ -1,5 +1,4 @@
-//! One epoch repeated, for instruction counts under valgrind (BENCHMARKS.md,
-//! issue 10): `cargo build --release -p raim-core --example epoch_cost`, then
+//! One epoch repeated, for instruction counts under valgrind (BENCHMARKS.md): `cargo build --release -p raim-core --example epoch_cost`, then
 //! `valgrind --tool=callgrind --callgrind-out-file=/dev/null
 //! target/release/examples/epoch_cost FORM N FAULT_M REPS [warm]` with FORM
 //! `linear` (the criterion bench's sky: golden-angle spiral, unit sigma) or

@@ -5,7 +5,7 @@
 //! reconstruction FDE; the f64 and the f32 engine), printed with
 //! `Debug` (shortest round-trip floats: equal text is equal bits) into a
 //! file, with its FNV-1a digest. Two builds whose digests agree give the
-//! same results bit for bit (issue 10: the speed work was checked this way
+//! same results bit for bit (the speed work was checked this way
 //! against the commit before it, BENCHMARKS.md):
 //! `cargo run --release -p raim-core --example result_digest [FILE]`.
 use raim_core::config::FiRule;

@@ -1,4 +1,4 @@
-//! Operational bounds of the configuration (issue 15, docs/PROTOCOL.md
+//! Operational bounds of the configuration (docs/PROTOCOL.md
 //! "Configuration bounds").
 //!
 //! `Config::validate` checks every field against these ranges, so that every

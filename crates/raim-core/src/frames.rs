@@ -49,7 +49,7 @@ pub fn ecef_to_geodetic_from(ecef_m: [f64; 3], lat0_rad: f64) -> Geodetic {
 /// fixed point for heights below 10 km. A start for
 /// [`ecef_to_geodetic_from`] that needs one or two iterations instead of
 /// ten: 2 square roots and 1 atan2 instead of ~40 calls, which matters on
-/// the M4F where each f64 call is a software routine (issue 10).
+/// the M4F where each f64 call is a software routine.
 pub fn bowring_latitude_rad(ecef_m: [f64; 3]) -> f64 {
     let [x, y, z] = ecef_m;
     let a = WGS84_A_M;
@@ -148,7 +148,7 @@ pub fn elevation_rad(enu: [f64; 3]) -> f64 {
 const ELEVATION_ATAN_MAX_RATIO: f64 = 16_777_216.0;
 
 /// [`elevation_rad`] in the precision `T`: atan2(up, |horizontal|), by
-/// `atan(up / horizontal)` where that is the same bits (issue 10: the
+/// `atan(up / horizontal)` where that is the same bits (the
 /// `atan2` wrapper's special-case tests were ~3 % of a clean linearised
 /// epoch); at the zenith, a non-finite or NaN input, `atan2` itself.
 pub fn elevation<T: crate::real::Real>(enu: [T; 3]) -> T {

@@ -310,7 +310,7 @@ pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimErro
         }
         Ok(())
     };
-    // One branch-free pass first for the linearised form (issue 10, fourth
+    // One branch-free pass first for the linearised form (fourth
     // pass: the checks below, with an early return per value, were 6 % of a
     // clean linearised epoch); only when it finds a bad value does the
     // detailed pass run, which names the first offender exactly as before.
@@ -360,7 +360,7 @@ pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimErro
             }
         }
     }
-    // One pass over a bitmap of the (system, PRN) pairs seen (issue 10:
+    // One pass over a bitmap of the (system, PRN) pairs seen (
     // the pairwise comparison cost O(n^2) on every epoch); only when it
     // finds a repeat does the pairwise search below run, so the error names
     // the same first pair as before.
@@ -376,7 +376,7 @@ pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimErro
             *w |= 1u64 << bit;
         }
     };
-    // Over the input form's own slice (issue 10, fourth pass round 2: not
+    // Over the input form's own slice (not
     // `epoch.id(i)`, which matched the form again for every satellite).
     match epoch.observations {
         Observations::Ranges { sats, .. } => sats.iter().for_each(|s| mark(s.id)),

@@ -18,7 +18,7 @@ use crate::snapshot::Snapshot;
 /// The integrity monitor. `N` is the satellite capacity (default 32); all
 /// buffers are N-sized, on the stack or, for the epoch's FDE outcome (the
 /// solution in force), in the monitor itself (scratch, reset at every
-/// epoch; issue 10: the firmware keeps the monitor in a static). `T` is the precision of the
+/// epoch: the firmware keeps the monitor in a static). `T` is the precision of the
 /// statistics path (docs/CORE.md, "Precision"): [`Stat`] (f64) by default;
 /// the device runs `Raim::<N, f32>`, and `Raim::<N, f32>` and
 /// `Raim::<N, f64>` can run side by side.
@@ -27,7 +27,7 @@ pub struct Raim<const N: usize = 32, T: Real = Stat> {
     snapshot: Snapshot<N, T>,
     sequential: Sequential<N, T>,
     /// Scratch, not state: the epoch's FDE outcome (the solution in force),
-    /// kept here rather than on the stack (issue 10) and reset at every
+    /// kept here rather than on the stack and reset at every
     /// epoch, so no result depends on an earlier epoch through it.
     outcome: FdeOutcome<N, T>,
 }
@@ -135,7 +135,7 @@ impl<const N: usize, T: Real> Raim<N, T> {
     /// [`Raim::process`] with the result written into `out` (every field;
     /// on an error `out` is unspecified and the error is returned). For a
     /// caller that keeps the result in its own storage (the firmware's
-    /// static server): no result-sized value on the stack (issue 10).
+    /// static server): no result-sized value on the stack.
     pub fn process_into(
         &mut self,
         cfg: &Config,

@@ -277,7 +277,7 @@ pub fn solve_from<const N: usize, T: Real>(
 /// the same epoch has them (same line of sight, same model), for indices
 /// asked in increasing order: a cursor over the sibling's rows, which
 /// `Builder` fills in increasing epoch order, so a subset's lookups cost
-/// O(n) in all instead of a search per row (issue 10). A row the cursor
+/// O(n) in all instead of a search per row. A row the cursor
 /// does not find where expected is searched for in full, so the answer
 /// never depends on that order.
 struct SiblingModel<'a, const N: usize, T: Real> {
@@ -313,7 +313,7 @@ impl<'a, const N: usize, T: Real> SiblingModel<'a, N, T> {
 
 /// The linearised form: one least-squares solve at the given point.
 ///
-/// Issue 10 (fourth pass, round 2): the model is built in passes over the
+/// : the model is built in passes over the
 /// selected rows rather than one satellite at a time, so that the
 /// arithmetic passes are straight-line loops the compiler vectorises and
 /// the elevations' `atan` calls run in a loop of their own: (1) gather the
@@ -948,7 +948,7 @@ impl<const N: usize, T: Real> Builder<N, T> {
             });
         }
         // Positive and finite (NaN fails both comparisons): two comparisons
-        // (issue 10, fourth pass: `!(sigma > 0.0) || !sigma.is_finite()`
+        // (`!(sigma > 0.0) || !sigma.is_finite()`
         // compiled to a 28-instruction classification per satellite).
         if !(sigma > 0.0 && sigma < f64::INFINITY) {
             return Err(RaimError::NonPositiveSigma {

@@ -1,4 +1,4 @@
-//! "Do the work once" (issue 10): the reused linearisation, the sibling
+//! "Do the work once": the reused linearisation, the sibling
 //! start of FDE subsets and the warm start, each against an independent
 //! reference (a model built from scratch at the solution, or a cold solve).
 extern crate std;

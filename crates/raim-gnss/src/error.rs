@@ -13,7 +13,7 @@ pub enum GnssError {
         path: PathBuf,
         expected: &'static str,
     },
-    /// A corrupt epoch record (issue 15), caught before the `rinex` crate
+    /// A corrupt epoch record, caught before the `rinex` crate
     /// (which panics on some) sees it. `line` counts from 1.
     #[error("{path}:{line}: bad epoch record: {detail}")]
     BadEpoch {

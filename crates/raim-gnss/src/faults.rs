@@ -357,7 +357,7 @@ impl Scenario {
     }
 }
 
-/// A constellation-wide fault (issue 12, ARAIM; the ADD's constellation
+/// A constellation-wide fault (ARAIM; the ADD's constellation
 /// fault mode): every satellite of `system` in `sats` gets the range error
 ///
 ///   b_i = common_m - u_i . shift_ecef_m,
@@ -583,7 +583,7 @@ mod tests {
     }
 }
 
-/// An ephemeris-like fault seen by one receiver (ESQ/PCA tests, issue 13):
+/// An ephemeris-like fault seen by one receiver (ESQ/PCA tests):
 /// the broadcast orbit of a satellite at `sat_m` (ECEF) is wrong by
 /// `radial_m` along its radial direction, so its range to the receiver at
 /// `receiver_m` is off by the projection of that error on the line of

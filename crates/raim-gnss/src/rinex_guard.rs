@@ -1,4 +1,4 @@
-//! A guard in front of the `rinex` crate for corrupt files (issue 15).
+//! A guard in front of the `rinex` crate for corrupt files.
 //!
 //! The `rinex` crate (0.24) panics on some corrupt records instead of
 //! returning an error: a RINEX 2 observation file whose later epoch has

@@ -73,7 +73,7 @@ pub struct ObsData {
 impl ObsData {
     /// Load an observation file. A corrupt epoch record is refused with
     /// `GnssError::BadEpoch` naming the line, and a panic inside the
-    /// `rinex` crate becomes `GnssError::Parse` (issue 15, `rinex_guard`).
+    /// `rinex` crate becomes `GnssError::Parse` (`rinex_guard`).
     pub fn load(path: &Path) -> Result<Self, GnssError> {
         if !path.is_file() {
             return Err(GnssError::FileNotFound(path.to_path_buf()));
@@ -142,7 +142,7 @@ pub struct NavData {
 
 /// The health word of a navigation record. A missing, negative,
 /// non-integer, NaN or too large value is unhealthy (`u32::MAX`), never
-/// healthy (issue 15: `NaN as u32` and `0.5 as u32` are 0, "healthy").
+/// healthy (`NaN as u32` and `0.5 as u32` are 0, "healthy").
 pub fn health_word(v: Option<f64>) -> u32 {
     match v {
         Some(h) if h >= 0.0 && h <= f64::from(u32::MAX) && h.fract() == 0.0 => h as u32,
@@ -163,7 +163,7 @@ pub fn max_ephemeris_age_s(system: System) -> f64 {
 
 impl NavData {
     /// Load a navigation file; a panic inside the `rinex` crate becomes
-    /// `GnssError::Parse` (issue 15, `rinex_guard`).
+    /// `GnssError::Parse` (`rinex_guard`).
     pub fn load(path: &Path) -> Result<Self, GnssError> {
         crate::rinex_guard::no_panic(path, || Self::load_unguarded(path))
     }

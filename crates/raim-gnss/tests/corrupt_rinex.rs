@@ -1,4 +1,4 @@
-//! Issue 15: a corrupt RINEX file never crashes the host. A RINEX 2
+//! A corrupt RINEX file never crashes the host. A RINEX 2
 //! observation file whose third epoch has month 13 (tests/data/month13.05o,
 //! synthetic) is refused with a typed error naming the line; the same file
 //! without the corruption (month13_control.05o) loads.

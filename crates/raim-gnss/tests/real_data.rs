@@ -1,5 +1,5 @@
 //! Checks on the real files of ../shared/data (read-only, never copied):
-//! end-to-end position accuracy against the published figures of issue 5,
+//! end-to-end position accuracy against published figures (docs/DATA.md),
 //! and the orbit evaluation against independent properties of the
 //! broadcast data (continuity between consecutive ephemerides, GEO
 //! satellites standing still over the equator).
@@ -42,7 +42,7 @@ const TOL_0759_M: f64 = 0.10;
 
 /// 0759 first epoch, 8 GPS satellites, C1, unit weights: 1.76 m from the
 /// header position with Klobuchar + Saastamoinen + TGD, 0.84 m with a 10
-/// degree mask (7 satellites), 18.5 m without iono and tropo (issue 5).
+/// degree mask (7 satellites), 18.5 m without iono and tropo.
 #[test]
 fn gsi_0759_first_epoch_matches_published_errors() {
     let obs = ObsData::load(&data("07590920.05o")).unwrap();
@@ -216,7 +216,7 @@ fn missing_file_is_a_typed_error() {
 
 /// GEOP (phone) with the CORD nav file: satellites the phone tracks but
 /// the nav file has no ephemeris for (G11, G24, E11, E25) are dropped as
-/// `NoEphemeris`, never used with a wrong or stale orbit (issue 5).
+/// `NoEphemeris`, never used with a wrong or stale orbit.
 #[test]
 fn geop_satellites_without_ephemeris_are_dropped() {
     use raim_gnss::ranging::Rejection;

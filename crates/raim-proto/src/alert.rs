@@ -1,4 +1,4 @@
-//! The integrity-alarm discrete output (issue 15), sans-IO: what the
+//! The integrity-alarm discrete output, sans-IO: what the
 //! output should show, from the decisions of the epochs and the time since
 //! the last valid one. The firmware drives a pin from it (`Platform`
 //! hooks, `firmware/src/discrete.rs`) and reports it in `Status`.

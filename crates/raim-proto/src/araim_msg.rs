@@ -1,4 +1,4 @@
-//! ARAIM on the wire (issue 12; docs/PROTOCOL.md "ARAIM"): the integrity
+//! ARAIM on the wire (docs/PROTOCOL.md "ARAIM"): the integrity
 //! support message (ISM) with the ARAIM configuration, the ARAIM epoch, its
 //! result and its typed errors.
 //!
@@ -421,7 +421,7 @@ pub struct WireAraimResult {
     /// vertical axis of the all-in-view run, at the PL the result reports
     /// (`raim_core::araim::esq::effective_samples`, SPEC §9.2; docs/ESQ.md);
     /// `None` when it is undefined (no PL, modes not enumerated). The host
-    /// divides its window by it for dT_e (issue 13).
+    /// divides its window by it for dT_e.
     pub n_star_vertical: Option<f64>,
     /// The ECEF position in force (m) for a pseudorange epoch
     /// (`AraimCommand::Ranges`): the linearisation point plus the ARAIM

@@ -152,9 +152,9 @@ pub enum WireError {
         /// The last counter accepted.
         last: u64,
     },
-    /// ARAIM's own refusals (issue 12; `araim_msg::AraimWireError`).
+    /// ARAIM's own refusals (`araim_msg::AraimWireError`).
     Araim(crate::araim_msg::AraimWireError),
-    /// A `PfRanges` epoch before any `PfConfigure` was taken (issue 14).
+    /// A `PfRanges` epoch before any `PfConfigure` was taken.
     PfNotConfigured,
     /// A PF request to a build without the particle-filter engine (or
     /// without its static storage attached).

@@ -13,7 +13,7 @@
 //! - [`error`]: the typed errors of a response.
 //! - [`alert`]: the integrity-alarm discrete output's state machine.
 //! - [`lock`]: the configuration lock and its CRC-32 fingerprint.
-//! - [`araim_msg`]: the ISM, the ARAIM epoch and result (issue 12).
+//! - [`araim_msg`]: the ISM, the ARAIM epoch and result.
 //! - [`nmea`]: RMC, GGA, GSA, GST and GBS sentences for a solved epoch.
 //!
 //! The device's protocol loop, which answers these frames, is the

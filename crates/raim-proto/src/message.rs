@@ -116,7 +116,7 @@ pub enum Command {
     /// is refused with `WireError::Locked`. Answered with `LockEngaged`
     /// (also when already locked).
     Lock,
-    /// Test-only (issue 15): make the unit hang or panic, to test the
+    /// Test-only: make the unit hang or panic, to test the
     /// watchdog and the fault record under QEMU. Honoured only by a build
     /// whose platform enables it (the QEMU board); elsewhere answered
     /// `WireError::TestHooksDisabled`.
@@ -125,9 +125,9 @@ pub enum Command {
     /// `Lock` or `HostSigmas`, with a counter and an HMAC tag under the
     /// unit's key and boot nonce. The only form a keyed unit takes.
     Authenticated(crate::auth::Authenticated),
-    /// ARAIM (issue 12): an ISM frame or an ARAIM epoch (`araim_msg`).
+    /// ARAIM: an ISM frame or an ARAIM epoch (`araim_msg`).
     Araim(crate::araim_msg::AraimCommand),
-    /// Particle-filter RAIM (issue 14, `pf_msg`): take a PF configuration
+    /// Particle-filter RAIM (`pf_msg`): take a PF configuration
     /// (filter, particle count, seed, `PfConfig`) and restart the filter.
     /// Answered `Configured`, or an error (`PfParticles`,
     /// `PfInvalidConfig`, `Locked`, `PfUnavailable`) with the previous PF
@@ -206,7 +206,7 @@ pub enum TestFault {
     StackOverflow,
 }
 
-/// Why the unit last reset (issue 15), from a record in RAM that a reset
+/// Why the unit last reset, from a record in RAM that a reset
 /// does not clear.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -437,9 +437,9 @@ pub enum ResponseBody {
     Error(WireError),
     /// The answer to `Lock`: the configuration is now locked until reset.
     LockEngaged,
-    /// The answer to `Command::Araim` (issue 12; `araim_msg`).
+    /// The answer to `Command::Araim` (`araim_msg`).
     Araim(crate::araim_msg::AraimAnswer),
-    /// The answer to a `PfRanges` epoch (issue 14).
+    /// The answer to a `PfRanges` epoch.
     PfResult(crate::pf_msg::WirePfResult),
     /// Unasked, after every reset.
     Boot(BootNotice),

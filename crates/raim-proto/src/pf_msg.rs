@@ -1,4 +1,4 @@
-//! Particle-filter RAIM on the wire (issue 14; docs/PROTOCOL.md "Particle
+//! Particle-filter RAIM on the wire (docs/PROTOCOL.md "Particle
 //! filter"): the configuration a `PfConfigure` carries, the per-epoch
 //! answer to a `PfRanges` epoch, the compiled capacities, and the
 //! configuration fingerprint that covers both the snapshot and the PF

@@ -114,7 +114,7 @@ impl WireResult {
 
     /// Overwrite every field with the wire form of `r` (as
     /// [`WireResult::from_result`], without a result-sized value on the
-    /// stack: issue 10, the firmware's stack).
+    /// stack, for the firmware's stack budget).
     pub fn set_from_result<const N: usize>(&mut self, r: &EpochResult<N>) {
         self.satellites.clear();
         for s in r.satellites.iter() {

@@ -239,7 +239,7 @@ pub fn firmware_elf_for(machine: Machine) -> Result<PathBuf> {
 /// The QEMU board's build without the default `araim`, `pf` and
 /// `multifault` features (`--no-default-features --features board-qemu`,
 /// into `firmware/target/snapshot`, as scripts/test.sh builds it): the
-/// configuration whose flash issue 10 bounds to 128 KiB
+/// configuration whose flash docs/FLASH.md bounds
 /// (host-tests/tests/qemu_flash.rs). `$RAIM_FIRMWARE_ELF_SNAPSHOT` if set.
 pub fn firmware_elf_snapshot() -> Result<PathBuf> {
     if let Some(p) = std::env::var_os("RAIM_FIRMWARE_ELF_SNAPSHOT") {

@@ -1,4 +1,4 @@
-//! ARAIM in the protocol server (issue 12; docs/PROTOCOL.md "ARAIM"): the
+//! ARAIM in the protocol server (docs/PROTOCOL.md "ARAIM"): the
 //! ISM in force, its validation, the ARAIM engine and its FDE scratch,
 //! all in the (static) server, so that the main loop's stack carries no
 //! ARAIM buffer.
@@ -38,46 +38,26 @@ pub const MAX_MODES: usize = 600;
 
 /// Exclusion is attempted when the failed all-in-view run has at most
 /// this many monitored modes; above it the epoch would be an alarm
-/// (`WireFde::NotAttempted`). Since the core's FDE checks each candidate
-/// by its tests only, with an early exit at a certain failure (branch
-/// araim, c4c9919), its cost is about one more all-in-view run plus the
-/// failing candidates' early exits. Measured under QEMU with the f32
-/// engine (docs/bench-history/araim.md "ARAIM on the device, f32"): 20 satellites / 22
-/// modes 2.7 M clean, 9.3-9.8 M with an exclusion; 24 satellites / 327
-/// modes 28.1 M clean, 55.1 M with an exclusion; 32 satellites / 563 modes
-/// 42.4 M clean, 93.3 M with an exclusion: under 5 % of the 2 s watchdog
-/// period at `-icount shift=0`, about 0.8 s at 168 MHz if every
-/// instruction took 1.5 cycles. So the limit is now the engine's mode
-/// capacity: exclusion is attempted whenever the modes fit (it was 64
-/// while FDE re-ran a full ARAIM epoch per candidate, 140 M for 22 modes).
-/// Those figures are stage 1's; the multi-event stage 2 costs about the
-/// square of the mode count and is bounded by `FDE_WORK_BUDGET`.
+/// (`WireFde::NotAttempted`). It equals the engine's mode capacity: the
+/// core's FDE checks each candidate by its tests with an early exit at a
+/// certain failure, so stage 1 costs about one more all-in-view run plus
+/// the failing candidates' exits, and the multi-event stage 2 is bounded by
+/// [`FDE_WORK_BUDGET`]. The measured costs are in BENCHMARKS.md and
+/// docs/ARAIM.md, "FDE work budget".
 pub const MAX_FDE_MODES: u32 = 600;
 
 /// The FDE's work budget, in candidate-modes: the search may process at
 /// most `FDE_WORK_BUDGET / m` candidate subsets when the all-in-view run
 /// has `m` monitored modes (`raim_core::araim::fde::FdeBudget`); beyond
 /// it the epoch is an `Alarm`, `WireFde::BudgetExceeded`, decided before
-/// the stage that would overrun is started. Why per mode: a candidate is
-/// a subset processed as an epoch of its own with about `m` modes, so a
-/// search costs about (candidates x m) x c. The firmware's watchdog
-/// period is 2 s; at 168 MHz and an assumed 1.5 cycles per instruction it
-/// allows 224 M instructions per epoch. Measured under QEMU with the f32
-/// engines (docs/bench-history/araim.md, "ARAIM FDE work budget"): the costliest epochs
-/// the budget admits are stage-2 searches at 326 monitored modes (24
-/// satellites, 106 k candidate-modes): 115-119 M guest instructions for a
-/// pair exclusion, 130 M for an `Ambiguous` alarm (10 m on two
-/// satellites: more candidates pass all their tests, no early exit);
-/// scaled by (331/326)^2 to the largest mode count admitted to stage 2
-/// (331), ~134 M: ~1.2 s at 1.5 cycles per instruction, 60 % of the
-/// period (a margin of 1.67; 1.6 s even at 2 cycles per instruction).
-/// Stage 1 is admitted at every mode count up to the capacity (at most
-/// ~36 single events x 600 modes = 22 k; 563 modes: 95 M). The 563-mode
-/// stage 2 (32 satellites), 347 M or ~3.1 s, is `BudgetExceeded` after
-/// its stage 1 (67 M). The budget counts candidates, not tests: an epoch
-/// where far more candidates pass all their own tests than in the
-/// measured sweep would cost more per candidate (docs/ARAIM.md, "FDE work
-/// budget").
+/// the stage that would overrun is started. Per mode, because a candidate
+/// is a subset processed as an epoch of its own with about `m` modes, so a
+/// search costs about (candidates x m) x c. The value keeps the costliest
+/// admitted epoch within the watchdog margin that docs/SAFETY.md derives
+/// (measured instruction counts: docs/ARAIM.md, "FDE work budget"). The
+/// budget counts candidates, not tests: an epoch where far more candidates
+/// pass all their own tests than in the measured sweep would cost more per
+/// candidate.
 pub const FDE_WORK_BUDGET: u32 = 110_000;
 
 /// The ARAIM part of the server: the ISM in force and, with the `araim`
@@ -171,7 +151,7 @@ impl Server {
 
     /// An ARAIM epoch request (`Araim(Epoch)` or `Araim(Ranges)`, in
     /// `self.request`), answered from a reference into the request
-    /// (issue 10, the firmware's stack: the epoch is not moved out of the
+    /// (the firmware's stack: the epoch is not moved out of the
     /// server's request slot onto this frame, as `answer_other` moves the
     /// other requests).
     #[inline(never)]
@@ -451,7 +431,7 @@ mod tests {
     }
 
     /// A platform that records each verdict the server reports to it (the
-    /// integrity-alarm output's input, issue 15).
+    /// integrity-alarm output's input).
     #[derive(Default)]
     struct Heard(Vec<Option<Decision>>);
     impl crate::Platform for Heard {
@@ -837,7 +817,7 @@ mod tests {
         assert!(excluded >= 10, "{excluded} of 20 excluded");
     }
 
-    /// Issue 15 with issue 12: every ARAIM epoch's verdict reaches the
+    /// Every ARAIM epoch's verdict reaches the
     /// integrity-alarm output (`Platform::on_epoch`) exactly as it goes on
     /// the wire (an ARAIM alarm asserts the discrete), a refused epoch as
     /// `None` (an epoch error), and an ISM frame is no epoch.

@@ -54,7 +54,7 @@ use answer::{send_answer, BodyRef, Buffers};
 use gate::Applied;
 use raim_proto::auth::Change;
 
-// Particle-filter RAIM (issue 14): a child module, so it reaches the
+// Particle-filter RAIM: a child module, so it reaches the
 // server's fields while its code stays out of this file.
 mod pf;
 pub use pf::{map_error as pf_error, PfEngines, PfUnit};
@@ -71,7 +71,7 @@ pub trait Platform {
     fn stack_high_water_bytes(&mut self) -> u32 {
         0
     }
-    /// Resets since power-on and the cause of the last one (issue 15).
+    /// Resets since power-on and the cause of the last one.
     fn reset_record(&mut self) -> (u32, ResetCause) {
         (0, ResetCause::PowerOn)
     }
@@ -100,8 +100,8 @@ impl Platform for NoPlatform {
 
 /// The protocol state: receive buffer, engine, configuration, counters, the
 /// transmit buffers, and the last request, result and wire result (kept
-/// here rather than on the stack, issue 10). The firmware keeps it in a
-/// static (BENCHMARKS.md, "Issue 10: stack, second pass").
+/// here rather than on the stack). The firmware keeps it in a
+/// static (docs/bench-history/firmware.md, the stack work).
 pub struct Server {
     rx: FrameReceiver<MAX_REQUEST_FRAME>,
     raim: Raim<CAPACITY, DevicePrecision>,
@@ -121,15 +121,15 @@ pub struct Server {
     /// Why the provisioned configuration was refused at boot, if it was.
     provision_error: Option<ProvisionError>,
     status: Status,
-    /// The ISM in force and the ARAIM engines (issue 12; `server/araim.rs`).
+    /// The ISM in force and the ARAIM engines (`server/araim.rs`).
     araim: araim::AraimState,
     scratch: [u8; MAX_RESPONSE_PAYLOAD],
     out: [u8; MAX_RESPONSE_FRAME],
     /// The last request decoded (`on_byte`): decoded here rather than on
-    /// the stack (issue 10).
+    /// the stack.
     request: Option<Request>,
     /// The last epoch's result (`Raim::process_into`) and its wire form,
-    /// both written in place (issue 10).
+    /// both written in place.
     result: EpochResult<CAPACITY>,
     wire: WireResult,
     /// The PF configuration and the engines lent by the owner

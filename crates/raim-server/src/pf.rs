@@ -1,4 +1,4 @@
-//! The particle-filter side of the protocol loop (issue 14; a child module
+//! The particle-filter side of the protocol loop (a child module
 //! of `server`, so that `Server`'s own file only dispatches to it).
 //!
 //! The PF state (main filter + one auxiliary filter per satellite, each of
@@ -122,8 +122,8 @@ impl PfUnit {
 
     /// Without the `pf` feature no engine exists to configure: every
     /// `PfConfigure` is answered `PfUnavailable`, valid or not (the
-    /// configuration checks are not linked: issue 10, the 128 KiB build's
-    /// flash), and nothing changes.
+    /// configuration checks are not linked, to keep the snapshot build's
+    /// flash small), and nothing changes.
     #[cfg(not(feature = "pf"))]
     pub(crate) fn configure(&mut self, _c: WirePfConfig) -> Result<(), WireError> {
         Err(WireError::PfUnavailable)
@@ -282,7 +282,7 @@ pub fn map_error(e: PfError, sats: &[RangeObservation]) -> WireError {
     }
 }
 
-/// The integrity-alarm output's reading of a PF epoch (issue 15's discrete
+/// The integrity-alarm output's reading of a PF epoch (the discrete
 /// output; docs/SAFETY.md): no position (a collapsed filter) is
 /// `Unavailable`; an alarm this epoch is `Alarm`, even when the isolated
 /// satellite was excluded in the same epoch (the position of that epoch
@@ -302,7 +302,7 @@ fn pf_decision(r: &WirePfResult) -> raim_core::Decision {
 }
 
 impl Server {
-    /// Lends the server the PF engines for good (issue 14): from then on
+    /// Lends the server the PF engines for good: from then on
     /// it answers `PfConfigure` and `PfRanges` for them; without them they
     /// are answered `PfUnavailable`. Any PF configuration is dropped.
     pub fn attach_pf(&mut self, engines: PfEngines) {

@@ -267,7 +267,7 @@ fn typed_errors_for_each_kind_of_bad_frame() {
     assert_eq!((st.frames, st.errors), (8, 8));
 }
 
-/// Issue 10: the answers are encoded from references (`ResponseRef`);
+/// The answers are encoded from references (`ResponseRef`);
 /// the bytes are those of the owned `Response`, variant by variant.
 #[test]
 fn body_ref_encodes_as_response_body() {
@@ -320,7 +320,7 @@ fn body_ref_encodes_as_response_body() {
     }
 }
 
-/// Issue 15: `Status` carries the platform's reset count and cause; a
+/// `Status` carries the platform's reset count and cause; a
 /// test fault on a platform without test hooks is refused, typed.
 #[test]
 fn status_reports_the_reset_record_and_test_hooks_are_off_by_default() {
@@ -374,7 +374,7 @@ fn status_reports_the_reset_record_and_test_hooks_are_off_by_default() {
     assert_eq!((st.resets, st.reset_cause), (0, ResetCause::PowerOn));
 }
 
-/// Issue 15: the platform hears every epoch's verdict (typed errors as
+/// The platform hears every epoch's verdict (typed errors as
 /// `None`, too-many-satellites included) and fills its Status fields;
 /// Status tells whether a key is provisioned.
 #[test]

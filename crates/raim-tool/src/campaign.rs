@@ -1,5 +1,5 @@
 //! `raim campaign`: seeded Monte Carlo validation of the whole monitor
-//! (`raim_core::Raim::process` on linearised epochs), issue 7.
+//! (`raim_core::Raim::process` on linearised epochs).
 //!
 //! * `false-alarm`: fault-free epochs on random geometries; the all-in-view
 //!   chi-square test (SPEC §3) must alarm at the rate Pfa, within 3 standard

@@ -340,7 +340,7 @@ mod tests {
         Cli::command().debug_assert();
     }
 
-    /// Issue 16: every option of every subcommand has a description, and
+    /// Every option of every subcommand has a description, and
     /// the descriptions are one paragraph (so `-h` and `--help` give the
     /// same one layout everywhere).
     #[test]

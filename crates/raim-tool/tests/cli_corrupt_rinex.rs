@@ -1,4 +1,4 @@
-//! Issue 15: a corrupt RINEX file never crashes the `raim` tool. A RINEX 2
+//! A corrupt RINEX file never crashes the `raim` tool. A RINEX 2
 //! observation file whose third epoch has month 13 (raim-gnss's test file)
 //! is refused with an error naming the file and the line, a failure exit
 //! status, and no panic (the `rinex` crate alone panics on it:

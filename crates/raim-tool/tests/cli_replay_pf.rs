@@ -121,7 +121,7 @@ fn station_0759_step_detected_and_isolated() {
 }
 
 /// `--pf` refuses a fault that matches no epoch, as the snapshot replay
-/// does (issue 16): G99 is never in view, so the run is an error naming
+/// does: G99 is never in view, so the run is an error naming
 /// the spec, with no panic, instead of a silent fault-free run.
 #[test]
 fn fault_matching_nothing_is_refused_under_pf_too() {

@@ -1,4 +1,4 @@
-//! Issue 16: the `raim` binary as a user scripting it relies on it. One
+//! The `raim` binary as a user scripting it relies on it. One
 //! test per point of the issue: the exit code, the message, and that no
 //! Rust panic or backtrace reaches the user (every run has RUST_BACKTRACE=1
 //! set, so a backtrace would show if an error or panic path printed one).

@@ -97,7 +97,7 @@ fn main() {
     araim_seeds();
 }
 
-/// Seeds of `araim_server` (issue 12): ARAIM epochs over the ISM the target
+/// Seeds of `araim_server`: ARAIM epochs over the ISM the target
 /// puts in force (GPS and Galileo 1-6), a fault, ISM frames good and bad.
 fn araim_seeds() {
     use raim_proto::araim_msg::{AraimCommandRef, IsmFrameRef, IsmSat, WireAraimConfig};

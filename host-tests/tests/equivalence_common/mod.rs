@@ -1,4 +1,4 @@
-//! The f32/f64 equivalence suite (issue 10, docs/CORE.md "Precision";
+//! The f32/f64 equivalence suite (docs/CORE.md "Precision";
 //! results in docs/F32_EQUIVALENCE.md): the same epochs through
 //! `Raim::<N, f32>` (the firmware's precision) and `Raim::<N, f64>` (the
 //! host's), side by side in one process. Decisions, alarm causes, the

@@ -1,4 +1,4 @@
-//! ARAIM over the wire (issue 12), shared by `qemu_araim.rs` and the
+//! ARAIM over the wire, shared by `qemu_araim.rs` and the
 //! `qemu_araim_bench` example: the App. D vector and a 20-satellite sky as
 //! ISM + linearised epochs, and a twin that sends every request to the
 //! firmware under QEMU and to a host `Server` and checks that the two

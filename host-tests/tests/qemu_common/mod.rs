@@ -14,7 +14,7 @@ pub fn session() -> QemuSession {
     QemuSession::start(elf).expect("qemu-system-arm with the firmware")
 }
 
-/// A session on `machine` with its firmware build (issue 15: the QEMU
+/// A session on `machine` with its firmware build (the QEMU
 /// tests that the machine supports run on both boards).
 #[allow(dead_code)]
 pub fn session_on(machine: raim_qemu::Machine) -> QemuSession {

@@ -1,4 +1,4 @@
-//! The multiple-fault Monte Carlo (issue 11, SPEC §8.4): seeded random
+//! The multiple-fault Monte Carlo (SPEC §8.4): seeded random
 //! geometries (n = 8..20, 1-3 constellations), 1, 2 or 3 simultaneous
 //! faults of random size and sign, each draw run through today's FDE
 //! (`FdeMethod::Sequential`: single exclusion + closed-form pair search)

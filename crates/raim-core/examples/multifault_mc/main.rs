@@ -1,4 +1,4 @@
-//! The multiple-fault Monte Carlo (issue 11, docs/MULTIFAULT.md): today's
+//! The multiple-fault Monte Carlo (docs/MULTIFAULT.md): today's
 //! FDE against the reconstruction on the same seeded draws.
 //!
 //!     cargo run --release -p raim-core --example multifault_mc -- 30000 11 1000

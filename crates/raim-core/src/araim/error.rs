@@ -1,4 +1,4 @@
-//! Typed rejections of an ARAIM epoch (issue 12). Every variant carries the
+//! Typed rejections of an ARAIM epoch. Every variant carries the
 //! offending values and, where it applies, the field name and the
 //! satellite index, so nothing is lost silently.
 

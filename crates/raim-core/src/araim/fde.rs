@@ -1,4 +1,4 @@
-//! ARAIM exclusion (issue 12), after a failed solution-separation test.
+//! ARAIM exclusion, after a failed solution-separation test.
 //!
 //! Candidates, in two stages: first the single-event modes (each
 //! satellite, each constellation); then, only when none of those is

@@ -1,5 +1,5 @@
 //! The integrity support message (ISM) and the ARAIM configuration
-//! (SPEC §9.1, issue 12), with their range checks.
+//! (SPEC §9.1), with their range checks.
 //!
 //! Per satellite: the geometry row, C_int and C_acc (from sigma_URA,
 //! sigma_URE and the elevation model of `error_model`, or given directly),

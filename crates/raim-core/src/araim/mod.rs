@@ -1,5 +1,5 @@
 //! ARAIM: multiple-hypothesis solution separation per the WG-C ARAIM
-//! Algorithm Description Document baseline (SPEC §9.1, seed 003, issue 12).
+//! Algorithm Description Document baseline (SPEC §9.1, seed 003).
 //!
 //! One call per epoch, [`Araim::process`], on the linearised form: per
 //! satellite the ENU part of its geometry row (the clock column is implied

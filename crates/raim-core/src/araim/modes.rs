@@ -1,4 +1,4 @@
-//! Fault-mode enumeration (SPEC §9.1 step 1, issue 12).
+//! Fault-mode enumeration (SPEC §9.1 step 1).
 //!
 //! Events are each satellite fault (P_sat,i) and each constellation fault
 //! (P_const,j), independent. N_fault,max = r is the smallest count with

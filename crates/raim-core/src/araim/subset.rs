@@ -1,4 +1,4 @@
-//! Subset solutions from one factorisation (SPEC §9.1 steps 2-3, issue 12).
+//! Subset solutions from one factorisation (SPEC §9.1 steps 2-3).
 //!
 //! The all-in-view weighted least squares is factored once (Cholesky of
 //! the normal matrix, inverted: P0 = (G^T W G)^-1, at most 8 x 8), and

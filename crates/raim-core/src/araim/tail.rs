@@ -1,5 +1,5 @@
 //! The normal tail Q(z) = P(Z > z) and the density phi(z) from one `exp`
-//! (issue 12's host speed: the PL search evaluates both for every mode,
+//! (for speed: the PL search evaluates both for every mode,
 //! and `libm::erfc` alone calls `exp` twice).
 //!
 //! Q(|z|) = exp(-z^2 / 2) R(|z|) with W. J. Cody's rational Chebyshev

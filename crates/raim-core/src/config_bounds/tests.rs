@@ -290,7 +290,7 @@ fn sigma_floors_keep_the_modelled_sigma_above_0_36_m() {
     assert!((z - zenith).abs() < SIGMA_TOL_M, "{z} vs {zenith}");
 }
 
-/// Issue 15: one `Configure` with Pfa = 1e-300 made a 160 m step on one of
+/// One `Configure` with Pfa = 1e-300 made a 160 m step on one of
 /// 8 satellites pass. The default configuration excludes it; Pfa = 1e-300
 /// is refused; and the all-in-view statistic of that epoch is indeed below
 /// the 1e-300 threshold (the chi-square quantile, computed independently

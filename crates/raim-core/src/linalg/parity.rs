@@ -90,7 +90,7 @@ impl<const N: usize, T: Real> Parity<N, T> {
         p.n = n;
         p.m = m;
         p.utz = *z;
-        // `s_ii`, `residual` and `gain` are not cleared (issue 10, fourth
+        // `s_ii`, `residual` and `gain` are not cleared (fourth
         // pass): the row loops below write every row < n of each, and
         // nothing reads a row >= n (the accessors end at n).
         p.qr.apply_ut(&mut p.utz);
@@ -100,8 +100,8 @@ impl<const N: usize, T: Real> Parity<N, T> {
         }
         p.dx = p.qr.solve_t(&rhs);
         // The per-row solves with the state count fixed at compile time for
-        // the usual models (one or two constellations: issue 10, a third
-        // of a clean epoch's instructions were these loops' overhead); the
+        // the usual models (one or two constellations, where the
+        // loops' overhead is a large share of a clean epoch); the
         // same operations in the same order, so the same bits.
         match m {
             4 => p.rows_fixed::<4>(h, z),
@@ -122,7 +122,7 @@ impl<const N: usize, T: Real> Parity<N, T> {
         for (x, v) in dx.iter_mut().zip(self.dx.iter()) {
             *x = *v;
         }
-        // Issue 10 (fourth pass): a counted loop over rows whose body is
+        // : a counted loop over rows whose body is
         // straight-line code (every index below `n <= N`, so no access can
         // fail and no store is conditional), which the compiler vectorises
         // across rows; the operations per row are the same as before.

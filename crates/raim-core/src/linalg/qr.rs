@@ -86,7 +86,7 @@ impl<const N: usize, T: Real> Householder<N, T> {
         self.diag = [T::zero(); MAX_STATES];
         // The usual models (one or two constellations) with the column
         // count fixed at compile time, where the column loop unrolls
-        // (issue 10, fourth pass round 2): the same steps, so the same
+        // : the same steps, so the same
         // bits. In the f64 (host) engine only, with the lanes: on the M4F
         // each copy would cost flash.
         if T::LANE_SUMS {
@@ -176,7 +176,7 @@ impl<const N: usize, T: Real> Householder<N, T> {
 
     /// The first `M` columns of T1, dense: `(t, d)` with `t[j][i]` =
     /// T1[i][j] for i < j (zero elsewhere) and `d` its diagonal. For
-    /// the fixed-size row loops of [`crate::linalg::parity`] (issue 10),
+    /// the fixed-size row loops of [`crate::linalg::parity`],
     /// which perform [`Self::solve_tt`]'s and [`Self::solve_t`]'s
     /// operations in the same order on these copies.
     pub(crate) fn triangle<const M: usize>(&self) -> ([[T; M]; M], [T; M]) {
@@ -285,7 +285,7 @@ const LANES: usize = 4;
 /// the sums are added pairwise, (s0 + s2) + (s1 + s3), then the remaining
 /// terms left to right. The same sum as [`dot`] up to rounding (each order
 /// is within n eps sum |a_i b_i| of the exact value), in a loop the
-/// compiler vectorises (issue 10, fourth pass round 2: the reflections'
+/// compiler vectorises (the reflections'
 /// sequential sums were a fifth of a clean epoch's QR).
 #[inline(always)]
 pub(crate) fn dot_lanes<T: Real>(a: &[T], b: &[T]) -> T {
@@ -342,7 +342,7 @@ fn hypot_nonneg<T: Real>(a: T, b: T) -> T {
 /// scale of the rank test, is that of head and x together: the reflections
 /// before k are orthogonal and leave it unchanged.
 ///
-/// Issue 10 (fourth pass), in f64 ([`Kernels::ONE_PASS_QR`](crate::linalg::Kernels::ONE_PASS_QR)): one unscaled
+/// In f64 ([`Kernels::ONE_PASS_QR`](crate::linalg::Kernels::ONE_PASS_QR)): one unscaled
 /// pass of sum x_i^2 gives sigma = ||x||, the full norm
 /// sqrt(|head|^2 + sigma^2), and ||v|| comes in closed form,
 /// ||x - alpha e1||^2 = 2 sigma (sigma + |x0|) (alpha = -sign(x0) sigma),
@@ -418,7 +418,7 @@ fn make_reflector_scaled<T: Real>(x: &mut [T], head_norm: T) -> (T, T, bool) {
 /// y[k..n] <- (I - 2 v v^T) y[k..n] with v stored in col[k..n].
 #[inline(always)]
 fn reflect<const N: usize, T: Real>(col: &[T; N], y: &mut [T; N], k: usize, n: usize) {
-    // On the slices k..n directly (issue 10: `take(n).skip(k)` over the
+    // On the slices k..n directly (`take(n).skip(k)` over the
     // whole buffer cost a third more instructions); the same operations.
     let (Some(v), Some(w)) = (col.get(k..n), y.get_mut(k..n)) else {
         return;

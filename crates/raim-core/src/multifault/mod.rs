@@ -384,7 +384,7 @@ fn fault_set<T: Real, P: Real, const N: usize>(
 /// The scratch the reconstruction FDE needs (about 2 N^2 + 4 N values of
 /// `T` and one subset solution: ~21 KB at N = 32 in f64, ~11 KB in
 /// f32). Scratch, not state: every field is overwritten before it is read
-/// in each epoch. The snapshot engine keeps one (issue 10: on the
+/// in each epoch. The snapshot engine keeps one (on the
 /// firmware's stack it took the reconstruction epoch to 22.7 KB; in the
 /// engine's own storage it costs static RAM instead, whichever FDE is
 /// configured).

@@ -39,7 +39,7 @@ const H_UNITS_PER_ONE: f64 = 1e4;
 
 /// The device table's h in units of 1e-4, the rounding of the generated
 /// table (`mcusum_table::H`): half the flash of the f64 table (5,040 B
-/// instead of 10,080 B on the firmware, issue 10), and read back exactly:
+/// instead of 10,080 B on the firmware), and read back exactly:
 /// `n / 1e4` is the f64 nearest to the decimal `n * 1e-4`, which is what the
 /// table's literal parses to (the test `integer_table_reads_back_bit_for_bit`).
 /// Converted at compile time; `H` itself is not linked.

@@ -81,7 +81,7 @@ pub struct Sequential<const N: usize, T: Real = Stat> {
 
 /// Scratch, not state: the input of an epoch with the held satellites left
 /// out (one of the two arrays, the first `n` entries), and the input index
-/// of each kept satellite. Here rather than on the stack (issue 10: the
+/// of each kept satellite. Here rather than on the stack (the
 /// epochs after an MCUSUM exclusion were the firmware's deepest, 15.7 KB at
 /// N = 32, of which 2 KB was this copy).
 #[derive(Debug, Clone)]
@@ -131,7 +131,7 @@ impl<const N: usize, T: Real> Sequential<N, T> {
 
     /// [`Sequential::process`] with the result written into `out` and the
     /// FDE outcome (the solution in force) in caller storage, which is
-    /// reset here (issue 10: nothing result- or solution-sized on the
+    /// reset here (nothing result- or solution-sized on the
     /// stack; the monitor keeps both in its own state).
     pub(crate) fn process_into(
         &mut self,

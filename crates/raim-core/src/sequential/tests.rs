@@ -259,7 +259,7 @@ fn mcusum_refuses_ambiguous_identification() {
     assert!(alarms >= 2, "{alarms}");
 }
 
-/// Issue 10: `Raim::process_into` writes every field of a reused result,
+/// `Raim::process_into` writes every field of a reused result,
 /// and the FDE scratch the monitor keeps between epochs carries nothing
 /// over: a monitor that has run faulted, alarmed and failed epochs (with
 /// the MCUSUM on and off) answers each snapshot epoch exactly as a fresh
@@ -295,7 +295,7 @@ fn process_into_reused_storage_equals_a_fresh_monitor() {
     }
 }
 
-/// Issue 10 (third pass): the epochs after an MCUSUM exclusion run on a
+/// : the epochs after an MCUSUM exclusion run on a
 /// copy of the input without the held satellite, kept in the engine's
 /// storage. With pseudoranges, 60 m on satellite 11 every epoch (the
 /// snapshot's) and 3 m on satellite 4 (the CUSUM's): after the CUSUM

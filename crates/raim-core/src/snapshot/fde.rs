@@ -91,13 +91,13 @@ pub struct FdeOutcome<const N: usize, T: Real = Stat> {
     /// Scratch, not state: the subset solution FDE works on (accepted ones
     /// are swapped into `solution`). Kept here, beside the solution in
     /// force, so that an epoch neither zero-fills nor carries a
-    /// solution-sized value on its stack (issue 10). Every solve writes
+    /// solution-sized value on its stack. Every solve writes
     /// every field it is later read through, so nothing in it depends on
     /// an earlier epoch.
     pub(crate) scratch: Solution<N, T>,
     /// The rule's best candidate on `solution` when the caller has ranked
     /// it already (the snapshot engine, from the per-satellite output it
-    /// scores anyway: issue 10); taken, and cleared, by [`run`].
+    /// scores anyway); taken, and cleared, by [`run`].
     pub(crate) first_best: Option<Option<Candidate<T>>>,
 }
 
@@ -138,7 +138,7 @@ fn strongest_alternative<const N: usize, T: Real>(
 }
 
 /// `strongest_alternative` on residuals and S_ii. Fails safe on NaN
-/// (issue 15): a row whose S_ii is NaN is kept, and a NaN w_j^2 counts as
+///: a row whose S_ii is NaN is kept, and a NaN w_j^2 counts as
 /// +inf, an alternative that explains everything and so cannot be rejected.
 /// (A NaN compared false and the row used to be passed over.)
 fn strongest_alternative_rows<T: Real>(
@@ -173,7 +173,7 @@ fn strongest_alternative_rows<T: Real>(
 /// whose subset statistic is `alternative_statistic`, is rejected only when
 /// that statistic reaches the pwe threshold. Written so that NaN is *not*
 /// a rejection: an alternative that cannot be evaluated leaves the
-/// exclusion ambiguous (issue 15: `statistic < threshold` was false on NaN,
+/// exclusion ambiguous (`statistic < threshold` was false on NaN,
 /// and the exclusion stood).
 fn alternative_rejected(alternative_statistic: f64, threshold: f64) -> bool {
     alternative_statistic >= threshold
@@ -268,7 +268,7 @@ fn insert_pair<T: Real>(best: &mut [Option<PairFit<T>>; 2], fit: PairFit<T>) {
 }
 
 /// Whether pair statistic `a` ranks before `b` (smaller fits better). A NaN
-/// ranks before every number (issue 15): a pair that cannot be evaluated
+/// ranks before every number: a pair that cannot be evaluated
 /// takes the best slot whatever the order of the rows, where it fails the
 /// subset test, so the closed-form pair exclusion is not used and the
 /// greedy path goes on with its own checks. It can never drop out of the
@@ -366,8 +366,8 @@ fn exclude_pair<const N: usize, T: Real>(
 
 impl<const N: usize, T: Real> FdeOutcome<N, T> {
     /// Back to [`FdeOutcome::empty`]'s verdict, in place (an outcome kept
-    /// in an engine's state and reused every epoch, issue 10). The two
-    /// solutions' storage is kept, not zero-filled (issue 10: that was a
+    /// in an engine's state and reused every epoch). The two
+    /// solutions' storage is kept, not zero-filled (that was a
     /// fifth of a clean linearised epoch's instructions): the epoch's solve
     /// overwrites every field of the solution it fills (`solve::solve_from`;
     /// test `a_reused_engine_equals_a_fresh_one`).
@@ -650,7 +650,7 @@ mod tests {
     }
 }
 
-/// Issue 15: the uniqueness checks and the pair ranking fail safe on NaN.
+/// The uniqueness checks and the pair ranking fail safe on NaN.
 #[cfg(test)]
 mod nan_tests {
     extern crate std;

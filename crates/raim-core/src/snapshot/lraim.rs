@@ -33,7 +33,7 @@ pub fn score<T: Real>(rule: FiRule, residual: T, s_ii: T, min_s_ii: T) -> Option
 /// The rule's logarithm of S_ii, the only transcendental part of its score
 /// (zero for the MLE; ln S_ii flat; ln(1 + kappa S_ii) Gaussian), computed
 /// apart so that a caller can take all of an epoch's logarithms in one
-/// tight loop (issue 10, fourth pass: [`crate::snapshot`]'s per-satellite
+/// tight loop ([`crate::snapshot`]'s per-satellite
 /// output). [`score_with`] of it is [`score`] bit for bit.
 #[inline]
 pub fn log_term<T: Real>(rule: FiRule, s_ii: T) -> T {
@@ -100,7 +100,7 @@ pub fn rank_rows<T: Real>(
 
 /// The running best and runner-up of a ranking, fed candidates in row
 /// order: [`rank_rows`]'s update, shared with the per-satellite output,
-/// which scores every row anyway (issue 10: FDE's first ranking, on the
+/// which scores every row anyway (FDE's first ranking, on the
 /// all-in-view solution, is taken from there instead of scoring again).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Ranking<T: Real> {
@@ -134,7 +134,7 @@ impl<T: Real> Ranking<T> {
 
 /// Whether score `a` ranks strictly above `b`. A NaN score (a satellite
 /// whose residual cannot be evaluated) ranks above every number, so it is
-/// identified first whatever its position in the list (issue 15: `<=` on a
+/// identified first whatever its position in the list (`<=` on a
 /// NaN made the ranking depend on the order of the rows). Between two NaNs
 /// the earlier row stays.
 fn outranks<T: Real>(a: T, b: T) -> bool {

@@ -32,7 +32,7 @@ pub struct Snapshot<const N: usize, T: Real = Stat> {
     warm_start: bool,
     last_fix: Option<Fix>,
     /// The reconstruction FDE's scratch (not state), here rather than on
-    /// the stack (issue 10).
+    /// the stack.
     multifault: crate::multifault::Scratch<N, T>,
     _precision: core::marker::PhantomData<T>,
 }
@@ -100,7 +100,7 @@ impl<const N: usize, T: Real> Snapshot<N, T> {
     /// solution in force is left in `outcome.solution`, which must be
     /// `FdeOutcome::empty()` on entry. Caller storage: nothing solution- or
     /// result-sized is on this frame or returned by value, for the
-    /// firmware's stack (issue 10).
+    /// firmware's stack.
     pub(crate) fn run(
         &mut self,
         cfg: &Config,
@@ -159,7 +159,7 @@ impl<const N: usize, T: Real> Snapshot<N, T> {
             (true, false, true) => Decision::Excluded,
         };
         // `per_satellite` marked every row used; only exclusions change that
-        // (issue 10, fourth pass round 2: the search per row, on every
+        // (the search per row, on every
         // clean epoch, found nothing to change).
         if passes && !outcome.exclusions.is_empty() {
             for s in out.satellites.iter_mut() {
@@ -213,7 +213,7 @@ pub(crate) fn per_satellite<const N: usize, T: Real>(
         .zip(sol.ids.iter())
         .zip(sol.sigma_m.iter())
         .zip(sol.elevation_rad.iter());
-    // The rule's logarithms first, in a loop of their own (issue 10, fourth
+    // The rule's logarithms first, in a loop of their own (fourth
     // pass: inside the loop below, each `log1p` call spilled and reloaded
     // its dozen live values); the scores from them are [`lraim::score`]'s
     // bit for bit.

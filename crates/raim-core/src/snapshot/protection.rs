@@ -39,7 +39,7 @@ pub fn slope_levels<const N: usize, T: Real>(
 
 /// `slope_levels` on the gain rows E, N, U and S_ii. A slope that is NaN
 /// (a NaN gain or S_ii) counts as infinite: the largest-slope search must
-/// never skip a satellite whose slope it cannot evaluate (issue 15; a NaN
+/// never skip a satellite whose slope it cannot evaluate (a NaN
 /// compares false and used to be passed over, leaving a finite PL).
 /// The slopes are computed and compared in `T`; the PLs, slope times
 /// sqrt(lambda_md), in f64.

@@ -379,7 +379,7 @@ fn alarm_without_exclusion_capability() {
 }
 
 /// An engine reused across epochs gives, bit for bit, what a fresh engine
-/// gives on each epoch (issue 10: the outcome's two solutions are no
+/// gives on each epoch (the outcome's two solutions are no
 /// longer zero-filled between epochs, so every solve must overwrite every
 /// field it is read through). The epochs alternate sizes (10, 8, 9 rows),
 /// forms (linearised, pseudoranges with GPS + Galileo and with GPS alone),
@@ -446,7 +446,7 @@ fn a_reused_engine_equals_a_fresh_one() {
     }
 }
 
-/// FDE's first ranking comes from the per-satellite output (issue 10):
+/// FDE's first ranking comes from the per-satellite output:
 /// for every rule, on 300 noisy 8- and 10-satellite epochs with 0-2
 /// faults, it is bit for bit `lraim::rank`'s best, and `None` when not
 /// asked for.

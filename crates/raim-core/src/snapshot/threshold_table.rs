@@ -1,4 +1,4 @@
-//! Precomputed thresholds for the configurations in use (issue 10, "cheap
+//! Precomputed thresholds for the configurations in use ("cheap
 //! cold thresholds"): the chi-square quantile T^2 at 1 - Pfa and the
 //! protection-level non-centrality lambda_md (SPEC §3, §6) for dof
 //! 1..=[`TABLE_DOF`], at the presets' Pfa 3.3333e-7, at half of it (the

@@ -1,5 +1,5 @@
 //! Decimal text of integers and of f64 values with a fixed number of
-//! decimals, in integer arithmetic, for the NMEA writer (issue 10, flash).
+//! decimals, in integer arithmetic, for the NMEA writer (flash).
 //!
 //! Why not `core::fmt`: its float formatting (Grisu with a Dragon4
 //! fallback, big-number tables) is ~12 KB of the firmware's flash, and

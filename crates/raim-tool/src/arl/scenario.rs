@@ -1,4 +1,4 @@
-//! The MCRAIM comparison scenario (issue 6, SPEC §7.3-7.4): a moving
+//! The MCRAIM comparison scenario (SPEC §7.3-7.4): a moving
 //! 8-12 satellite GPS + Galileo sky with satellites rising and setting, a
 //! 10 m step or a 0.05 m/s ramp on one satellite, and four schemes at the
 //! same in-control ARL0 A (epochs):
@@ -20,7 +20,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal, Uniform};
 
 /// Snapshot Pfa that stands for "snapshot test off" in the MCUSUM-only
-/// schemes: the smallest the core accepts (`config_bounds::PFA`, issue 15;
+/// schemes: the smallest the core accepts (`config_bounds::PFA`;
 /// was 1e-12, which a monitor must no longer accept).
 const SNAPSHOT_OFF_PFA: f64 = raim_core::config_bounds::PFA.min;
 /// Elevation mask, rad (5 deg).

@@ -1,6 +1,6 @@
 //! `raim pci`: probability of correct identification per satellite for MLE
 //! and L-RAIM fault identification, exact (d <= 3) and Monte Carlo, with the
-//! detection probability and the minimal detectable bias (SPEC §4.3, issue 7).
+//! detection probability and the minimal detectable bias (SPEC §4.3).
 //!
 //! Model: H = [-LOS(ENU), 1] (one clock per constellation), sigma = 1, so
 //! biases are in sigma units. P_CI is unconditional (the rule is applied to

@@ -1,4 +1,4 @@
-//! `raim replay --araim`: ARAIM (issue 12, docs/ARAIM.md) on the replay's
+//! `raim replay --araim`: ARAIM (docs/ARAIM.md) on the replay's
 //! corrected pseudoranges, with the same fault injection plus the
 //! constellation-wide fault of `raim_gnss::faults::constellation_bias`.
 //!

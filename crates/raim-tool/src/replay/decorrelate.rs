@@ -1,5 +1,5 @@
 //! `raim replay --esq-mcusum`: the MCUSUM (SPEC §7) fed samples that are
-//! not time-correlated (issue 13; docs/ESQ.md).
+//! not time-correlated (docs/ESQ.md).
 //!
 //! docs/MCRAIM.md records that the MCUSUM false-alarms on the clean real
 //! files: its ARL0 assumes white parity vectors, and the real errors are

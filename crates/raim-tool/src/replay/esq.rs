@@ -1,4 +1,4 @@
-//! `raim replay --esq` and `--pca` (seed 003's own claims, issue 13;
+//! `raim replay --esq` and `--pca` (seed 003's own claims;
 //! docs/ESQ.md): the ARAIM engine run on the replay's corrected
 //! pseudoranges, with
 //!

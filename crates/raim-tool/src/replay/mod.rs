@@ -402,7 +402,7 @@ fn mean_position(records: &[EpochRecord]) -> Option<[f64; 3]> {
 
 /// The whole replay, without printing (used by the tests too).
 /// The fault plan, refused when a fault touches no epoch of the window
-/// (issue 16); a fault that touches only part of its target is a warning on
+///; a fault that touches only part of its target is a warning on
 /// stderr. Shared by the snapshot replay and `--pf`.
 fn checked_fault_plan(
     args: &ReplayArgs,

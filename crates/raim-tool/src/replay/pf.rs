@@ -28,7 +28,7 @@ pub const PF_CAPACITY: usize = 32;
 /// The filter: `ekf` (extended Kalman filter baseline), `pf` (plain SIR
 /// particle filter baseline), `gapf` (genetic-resampling particle filter,
 /// seed 004's method). Plain comments on the variants: value docs would
-/// switch `--help` to clap's long layout (issue 16's one layout).
+/// switch `--help` to clap's long layout (one help layout for every subcommand).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize)]
 pub enum PfKind {
     // Extended Kalman filter baseline.
