@@ -170,12 +170,17 @@ impl Command {
         overflowed.then_some(declared)
     }
 
-    /// The time of a snapshot epoch (`Ranges`, `Linear`: the epochs whose
-    /// sentences the NMEA port carries), `None` for every other request.
+    /// The time of an epoch (snapshot, ARAIM or particle filter: every
+    /// epoch writes its NMEA sentences, a refused one its no-fix
+    /// sentences, so that the port never keeps an earlier epoch's fix),
+    /// `None` for every other request.
     pub fn nmea_epoch_time_s(&self) -> Option<f64> {
+        use crate::araim_msg::AraimCommand;
         match self {
-            Command::Ranges(e) => Some(e.time_s),
+            Command::Ranges(e) | Command::PfRanges(e) => Some(e.time_s),
             Command::Linear(e) => Some(e.time_s),
+            Command::Araim(AraimCommand::Ranges(e)) => Some(e.time_s),
+            Command::Araim(AraimCommand::Epoch(e)) => Some(e.time_s),
             _ => None,
         }
     }

@@ -147,6 +147,109 @@ impl WireResult {
         self.mcusum = r.mcusum;
     }
 
+    /// Every field back to [`WireResult::empty`]'s value, in place (no
+    /// result-sized value on the stack).
+    pub fn reset(&mut self) {
+        self.time_s = 0.0;
+        self.decision = Decision::Unavailable;
+        self.alarm_cause = None;
+        self.position_ecef_m = None;
+        self.geodetic = None;
+        self.correction_enu_m = [0.0; 3];
+        self.clock_m = [None; MAX_SYSTEMS];
+        self.initial_test = TestStatistic::default();
+        self.test = TestStatistic::default();
+        self.identified = None;
+        self.exclusions.clear();
+        self.hpl_m = f64::INFINITY;
+        self.vpl_m = f64::INFINITY;
+        self.worst_h = None;
+        self.worst_v = None;
+        self.sigma_enu_m = [0.0; 3];
+        self.lambda_md = 0.0;
+        self.detection_available = false;
+        self.exclusion_available = false;
+        self.pl_available = false;
+        self.iterations = 0;
+        self.satellites.clear();
+        self.mcusum = None;
+    }
+
+    /// Overwrite every field with what an ARAIM epoch's answer says, for
+    /// the NMEA writer: the verdict, the position in force (a pseudorange
+    /// epoch's; none for a linearised one), the PLs in force, and the
+    /// epoch's satellites `ids` (in input order), each used unless ARAIM
+    /// excluded it. What ARAIM does not compute (per-satellite statistics,
+    /// the ENU sigmas, the snapshot tests) is NaN or absent, so the
+    /// sentences leave those fields empty rather than show a number ARAIM
+    /// never produced. An excluded satellite is named in GBS with empty
+    /// statistics.
+    pub fn set_from_araim(
+        &mut self,
+        r: &crate::araim_msg::WireAraimResult,
+        ids: impl IntoIterator<Item = SatId>,
+    ) {
+        let in_force = r.in_force();
+        self.reset();
+        self.time_s = r.time_s;
+        self.decision = r.decision;
+        self.position_ecef_m = r.position_ecef_m;
+        self.geodetic = r.position_ecef_m.map(raim_core::frames::ecef_to_geodetic);
+        self.hpl_m = in_force.hpl_m;
+        self.vpl_m = in_force.vpl_m;
+        self.sigma_enu_m = [f64::NAN; 3];
+        self.pl_available = in_force.unavailable.is_none();
+        for (index, id) in ids.into_iter().enumerate() {
+            let excluded = r.excluded.contains(&id);
+            // Both lists hold at most CAPACITY entries: the epoch was
+            // decoded into a list of that capacity.
+            if self
+                .satellites
+                .push(unknown_satellite(id, !excluded))
+                .is_err()
+            {
+                break;
+            }
+            if excluded && self.exclusions.len() < MAX_EXCLUSIONS {
+                let _ = self.exclusions.push(unknown_exclusion(id, index));
+            }
+        }
+    }
+
+    /// Overwrite every field with what a particle-filter epoch's answer
+    /// says, for the NMEA writer: `decision` (the server's reading of the
+    /// epoch, the one that drives the alarm output), the filter's position,
+    /// and the epoch's satellites `ids`, each used unless the filter
+    /// excluded it this epoch. The filters compute no protection level, so
+    /// both are +infinity; their per-satellite statistics are NaN, and the
+    /// sentences leave those fields empty.
+    pub fn set_from_pf(
+        &mut self,
+        r: &crate::pf_msg::WirePfResult,
+        decision: Decision,
+        ids: impl IntoIterator<Item = SatId>,
+    ) {
+        self.reset();
+        self.time_s = r.time_s;
+        self.decision = decision;
+        self.position_ecef_m = r.position_ecef_m;
+        self.geodetic = r.position_ecef_m.map(raim_core::frames::ecef_to_geodetic);
+        self.sigma_enu_m = [f64::NAN; 3];
+        for (index, id) in ids.into_iter().enumerate() {
+            let excluded = r.excluded == Some(id);
+            if self
+                .satellites
+                .push(unknown_satellite(id, !excluded))
+                .is_err()
+            {
+                break;
+            }
+            if excluded {
+                let _ = self.exclusions.push(unknown_exclusion(id, index));
+            }
+        }
+    }
+
     /// The satellite most likely to be faulty: the identified one if the
     /// test failed, else the best-scoring identifiable satellite under the
     /// configured rule (SPEC §4). Used for NMEA GBS field 5.
@@ -166,6 +269,38 @@ impl WireResult {
     }
 }
 
+/// A satellite of an ARAIM or particle-filter epoch: its identity and
+/// whether the solution in force uses it; the snapshot statistics, which
+/// those methods do not compute, NaN (empty in NMEA).
+fn unknown_satellite(id: SatId, used: bool) -> SatelliteResult {
+    let nan = f64::NAN;
+    SatelliteResult {
+        id,
+        used,
+        sigma_m: nan,
+        elevation_rad: nan,
+        s_ii: nan,
+        h_ii: nan,
+        w: nan,
+        bias_m: nan,
+        score: nan,
+        identifiable: false,
+    }
+}
+
+/// An exclusion by ARAIM or a particle filter: the satellite and its index
+/// in the epoch, without the snapshot test's statistics.
+fn unknown_exclusion(id: SatId, index: usize) -> Exclusion {
+    Exclusion {
+        id,
+        index,
+        before: TestStatistic::default(),
+        after: TestStatistic::default(),
+        score: f64::NAN,
+        bias_m: f64::NAN,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     extern crate std;
@@ -174,6 +309,30 @@ mod tests {
     use crate::{frame, MAX_RESPONSE_FRAME, MAX_RESPONSE_PAYLOAD};
     use raim_core::snapshot::fde::AlarmCause;
     use raim_core::{Config, Epoch, LinearObservation, Raim, System};
+
+    /// `reset` restores every field of a filled result to `empty`'s value
+    /// (a field added later and forgotten there fails here).
+    #[test]
+    fn reset_is_empty() {
+        let sats: std::vec::Vec<LinearObservation> = (1..=8u8)
+            .map(|prn| {
+                let az = f64::from(prn) * 0.7;
+                LinearObservation::from_az_el(
+                    SatId::new(System::Gps, prn),
+                    az,
+                    0.2 + 0.1 * f64::from(prn),
+                    if prn == 3 { 80.0 } else { 0.5 },
+                )
+            })
+            .collect();
+        let r = Raim::<8>::new()
+            .process(&Config::default(), &Epoch::linear(5.0, &sats))
+            .unwrap();
+        let mut w = WireResult::from_result(&r);
+        assert_ne!(w, WireResult::empty());
+        w.reset();
+        assert_eq!(w, WireResult::empty());
+    }
 
     /// An unbounded protection level is +infinity in the initial storage
     /// and on the wire: postcard carries the f64 bit pattern, so +inf

@@ -26,9 +26,24 @@ pub(crate) fn write_nmea<M: Write>(
     request: Option<&Request>,
     nmea_out: &mut M,
 ) -> Result<(), M::Error> {
-    let epoch = match request.map(|r| &r.command) {
-        Some(Command::Ranges(e)) => Epoch::ranges(e.time_s, &e.sats.items, e.apriori_m),
-        Some(Command::Linear(e)) => Epoch::linear(e.time_s, &e.sats.items),
+    write_nmea_for(wire, request.map(|r| &r.command), nmea_out)
+}
+
+/// [`write_nmea`] for an epoch command taken out of the request slot.
+#[inline(never)]
+pub(crate) fn write_nmea_for<M: Write>(
+    wire: &WireResult,
+    command: Option<&Command>,
+    nmea_out: &mut M,
+) -> Result<(), M::Error> {
+    use raim_proto::araim_msg::AraimCommand;
+    let epoch = match command {
+        Some(
+            Command::Ranges(e) | Command::PfRanges(e) | Command::Araim(AraimCommand::Ranges(e)),
+        ) => Epoch::ranges(e.time_s, &e.sats.items, e.apriori_m),
+        Some(Command::Linear(e) | Command::Araim(AraimCommand::Epoch(e))) => {
+            Epoch::linear(e.time_s, &e.sats.items)
+        }
         _ => Epoch::linear(wire.time_s, &[]),
     };
     nmea::write_epoch(

@@ -155,12 +155,17 @@ impl Server {
     /// server's request slot onto this frame, as `answer_other` moves the
     /// other requests).
     #[inline(never)]
-    pub(super) fn answer_araim_epoch<L: embedded_io::Write, M, P: super::Platform>(
+    pub(super) fn answer_araim_epoch<
+        L: embedded_io::Write,
+        M: embedded_io::Write,
+        P: super::Platform,
+    >(
         &mut self,
         seq: u32,
         link: &mut L,
+        nmea_out: &mut M,
         platform: &mut P,
-    ) -> Result<(), super::IoError<L::Error, M>> {
+    ) -> Result<(), super::IoError<L::Error, M::Error>> {
         let answer = {
             let Server {
                 request,
@@ -181,10 +186,39 @@ impl Server {
             };
             epoch_answer(araim, status, config.as_ref(), &input, platform)
         };
+        self.write_araim_nmea(&answer, nmea_out)
+            .map_err(super::IoError::Nmea)?;
         match &answer {
             Ok(a) => self.send(link, Some(seq), super::BodyRef::Araim(a)),
             Err(e) => self.send(link, Some(seq), super::BodyRef::Error(e)),
         }
+    }
+
+    /// The NMEA sentences of an ARAIM epoch, as every epoch writes them:
+    /// its verdict, position and PLs in force, with the excluded
+    /// satellites not used ([`WireResult::set_from_araim`]); a refused
+    /// epoch's no-fix sentences.
+    ///
+    /// [`WireResult::set_from_araim`]: raim_proto::result::WireResult::set_from_araim
+    fn write_araim_nmea<M: embedded_io::Write>(
+        &mut self,
+        answer: &Result<AraimAnswer, WireError>,
+        nmea_out: &mut M,
+    ) -> Result<(), M::Error> {
+        let Ok(AraimAnswer::Result(r)) = answer else {
+            return self.write_no_fix(nmea_out);
+        };
+        let Server { request, wire, .. } = self;
+        match request.as_ref().map(|q| &q.command) {
+            Some(raim_proto::message::Command::Araim(AraimCommand::Epoch(e))) => {
+                wire.set_from_araim(r, e.sats.items.iter().map(|s| s.id));
+            }
+            Some(raim_proto::message::Command::Araim(AraimCommand::Ranges(e))) => {
+                wire.set_from_araim(r, e.sats.items.iter().map(|s| s.id));
+            }
+            _ => return Ok(()),
+        }
+        super::answer::write_nmea(&self.wire, self.request.as_ref(), nmea_out)
     }
 }
 
@@ -428,6 +462,8 @@ mod tests {
         seq: u32,
         /// What the platform heard (`Platform::on_epoch`), per request.
         heard: Heard,
+        /// What the NMEA port carried for the last request.
+        nmea: std::string::String,
     }
 
     /// A platform that records each verdict the server reports to it (the
@@ -451,6 +487,7 @@ mod tests {
                 server,
                 seq: 0,
                 heard: Heard::default(),
+                nmea: std::string::String::new(),
             }
         }
         fn ask(&mut self, command: CommandRef<'_>) -> Response {
@@ -473,7 +510,7 @@ mod tests {
                     .on_byte(b, &mut link, &mut nmea, &mut self.heard)
                     .unwrap();
             }
-            assert!(nmea.0.is_empty(), "ARAIM writes no NMEA");
+            self.nmea = std::string::String::from_utf8(nmea.0).unwrap();
             let mut rx = FrameReceiver::<MAX_RESPONSE_FRAME>::new();
             let resp: Vec<Response> = link
                 .0
@@ -963,6 +1000,95 @@ mod tests {
         assert_eq!(r.excluded.as_slice(), &[obs[0].id]);
     }
 
+    /// The pseudorange form of a linearised sky seen from `x` (ECEF, m):
+    /// each satellite 2e7 m + 1e5 m x index away along its line of sight,
+    /// with a clock of 1234.5 m (GPS) or 1240.25 m (others) and the
+    /// residual added to the range.
+    fn as_ranges(obs: &[LinearObservation], x: [f64; 3]) -> Vec<raim_core::RangeObservation> {
+        let rot = raim_core::frames::enu_rotation(&raim_core::frames::ecef_to_geodetic(x));
+        obs.iter()
+            .enumerate()
+            .map(|(i, o)| {
+                let rho = 2.0e7 + 1.0e5 * i as f64;
+                let u = raim_core::frames::unrotate(&rot, o.los_enu);
+                let clock = if o.id.system == System::Gps {
+                    1234.5
+                } else {
+                    1240.25
+                };
+                raim_core::RangeObservation {
+                    id: o.id,
+                    pseudorange_m: rho + clock + o.residual_m,
+                    position_m: [x[0] + rho * u[0], x[1] + rho * u[1], x[2] + rho * u[2]],
+                    sigma_m: None,
+                }
+            })
+            .collect()
+    }
+
+    /// Every ARAIM epoch writes its NMEA sentences (an earlier epoch's fix
+    /// never stays the last word on the port): a clean pseudorange epoch
+    /// a valid fix; a faulted one its verdict, with the excluded satellite
+    /// out of GSA and named in GBS; a refused epoch its no-fix sentences;
+    /// an ISM frame none. Every sentence within 82 characters, CRLF.
+    #[test]
+    fn every_araim_epoch_writes_its_nmea() {
+        let x = [3_582_105.0, 532_589.0, 5_232_755.0];
+        let field = |nmea: &str, kind: &str, i: usize| -> std::string::String {
+            let line = nmea.lines().find(|l| l.get(3..6) == Some(kind)).unwrap();
+            line.split(['*', ',']).nth(i).unwrap().into()
+        };
+        let mut l = Link::new();
+        let (ism, clean) = sky(20, usize::MAX, 0.0);
+        l.ism(&ism, gal());
+        assert!(l.nmea.is_empty(), "an ISM frame is no epoch");
+        for (faulty, fault_m) in [(usize::MAX, 0.0), (5, 100.0)] {
+            let (_, obs) = sky(20, faulty, fault_m);
+            let ranges = as_ranges(&obs, x);
+            let r = result(&l.ask(CommandRef::Araim(AraimCommandRef::Ranges {
+                time_s: 1.7e9,
+                apriori_m: None,
+                sats: &ranges,
+            })))
+            .clone();
+            let nmea = l.nmea.clone();
+            for line in nmea.split_inclusive('\n') {
+                assert!(line.ends_with("\r\n") && line.len() <= 82, "{line:?}");
+            }
+            let usable = matches!(r.decision, Decision::Ok | Decision::Excluded);
+            assert_eq!(
+                field(&nmea, "RMC", 2),
+                if usable { "A" } else { "V" },
+                "{nmea}"
+            );
+            assert!(!field(&nmea, "RMC", 3).is_empty(), "a position: {nmea}");
+            let gsa_ids: Vec<std::string::String> = nmea
+                .lines()
+                .filter(|l| l.get(3..6) == Some("GSA"))
+                .flat_map(|l| l.split(',').skip(3).take(12).map(Into::into))
+                .filter(|f: &std::string::String| !f.is_empty())
+                .collect();
+            if faulty == usize::MAX {
+                assert_eq!(r.decision, Decision::Ok);
+                assert_eq!(gsa_ids.len(), 20, "{nmea}");
+            } else {
+                assert_eq!(r.excluded.as_slice(), &[obs[faulty].id]);
+                assert_eq!(gsa_ids.len(), 19, "{nmea}");
+                let svid = std::format!("{:02}", raim_proto::nmea::nmea_svid(obs[faulty].id));
+                assert_eq!(field(&nmea, "GBS", 5), svid, "{nmea}");
+            }
+        }
+        let mut nan = as_ranges(&clean, x);
+        nan[2].position_m[1] = f64::NAN;
+        l.ask(CommandRef::Araim(AraimCommandRef::Ranges {
+            time_s: 1.7e9 + 1.0,
+            apriori_m: None,
+            sats: &nan,
+        }));
+        assert_eq!(field(&l.nmea, "RMC", 2), "V", "{}", l.nmea);
+        assert!(field(&l.nmea, "RMC", 3).is_empty(), "{}", l.nmea);
+    }
+
     /// A pseudorange epoch (protocol 8) against the same sky sent
     /// linearised at the truth: the device-side Gauss-Newton and
     /// linearisation change nothing that matters (same decision, FDE and
@@ -975,26 +1101,7 @@ mod tests {
         const PL_TOL_M: f64 = 1e-3;
         let x = [3_582_105.0, 532_589.0, 5_232_755.0];
         let rot = raim_core::frames::enu_rotation(&raim_core::frames::ecef_to_geodetic(x));
-        let to_ranges = |obs: &[LinearObservation]| -> Vec<raim_core::RangeObservation> {
-            obs.iter()
-                .enumerate()
-                .map(|(i, o)| {
-                    let rho = 2.0e7 + 1.0e5 * i as f64;
-                    let u = raim_core::frames::unrotate(&rot, o.los_enu);
-                    let clock = if o.id.system == System::Gps {
-                        1234.5
-                    } else {
-                        1240.25
-                    };
-                    raim_core::RangeObservation {
-                        id: o.id,
-                        pseudorange_m: rho + clock + o.residual_m,
-                        position_m: [x[0] + rho * u[0], x[1] + rho * u[1], x[2] + rho * u[2]],
-                        sigma_m: None,
-                    }
-                })
-                .collect()
-        };
+        let to_ranges = |obs: &[LinearObservation]| as_ranges(obs, x);
         for (faulty, fault_m) in [(usize::MAX, 0.0), (5, 100.0)] {
             let (ism, obs) = sky(20, faulty, fault_m);
             let mut l = Link::new();

@@ -367,7 +367,7 @@ impl Server {
                     platform.on_epoch(None);
                 }
                 if let Some(time_s) = refusal.nmea_time_s {
-                    self.wire = WireResult::empty();
+                    self.wire.reset();
                     self.wire.time_s = time_s;
                     answer::write_nmea(&self.wire, None, nmea_out).map_err(IoError::Nmea)?;
                 }
@@ -400,9 +400,9 @@ impl Server {
                 self.answer_epoch(seq, link, nmea_out, platform)
             }
             Command::Araim(AraimCommand::Epoch(_) | AraimCommand::Ranges(_)) => {
-                self.answer_araim_epoch(seq, link, platform)
+                self.answer_araim_epoch(seq, link, nmea_out, platform)
             }
-            _ => self.answer_other(seq, link, platform),
+            _ => self.answer_other(seq, link, nmea_out, platform),
         }
     }
 
@@ -410,12 +410,13 @@ impl Server {
     /// out of the slot, in a frame of its own so that the request-sized
     /// value is not on the stack of the epoch path.
     #[inline(never)]
-    fn answer_other<L: Write, M, P: Platform>(
+    fn answer_other<L: Write, M: Write, P: Platform>(
         &mut self,
         seq: u32,
         link: &mut L,
+        nmea_out: &mut M,
         platform: &mut P,
-    ) -> Result<(), IoError<L::Error, M>> {
+    ) -> Result<(), IoError<L::Error, M::Error>> {
         use raim_proto::araim_msg::AraimCommand;
         let Some(request) = self.request.take() else {
             return Ok(());
@@ -434,7 +435,12 @@ impl Server {
             Command::PfConfigure(c) => Applied::body(self.change_plain(&Change::Pf(c))),
             Command::HostSigmas(on) => Applied::body(self.change_plain(&Change::HostSigmas(on))),
             Command::Authenticated(a) => Applied::body(self.change_authenticated(&a)),
-            Command::PfRanges(e) => self.pf_epoch(e.time_s, &e.sats.items, platform),
+            Command::PfRanges(ref e) => {
+                let body = self.pf_epoch(e.time_s, &e.sats.items, platform);
+                self.write_pf_nmea(&body, &request.command, nmea_out)
+                    .map_err(IoError::Nmea)?;
+                body
+            }
             // Answered from the request slot above.
             Command::Ranges(_)
             | Command::Linear(_)
@@ -494,7 +500,7 @@ impl Server {
 
     /// The no-fix NMEA sentences of the epoch in the request slot (its
     /// time, no position, status void).
-    fn write_no_fix<M: Write>(&mut self, nmea_out: &mut M) -> Result<(), M::Error> {
+    pub(crate) fn write_no_fix<M: Write>(&mut self, nmea_out: &mut M) -> Result<(), M::Error> {
         let Some(time_s) = self
             .request
             .as_ref()
@@ -502,9 +508,36 @@ impl Server {
         else {
             return Ok(());
         };
-        self.wire = WireResult::empty();
+        self.wire.reset();
         self.wire.time_s = time_s;
         answer::write_nmea(&self.wire, self.request.as_ref(), nmea_out)
+    }
+
+    /// The NMEA sentences of a particle-filter epoch (`command`, taken out
+    /// of the request slot), as every epoch writes them: the filter's
+    /// position under the decision that drives the alarm output
+    /// ([`WireResult::set_from_pf`]); a refused epoch's no-fix sentences.
+    fn write_pf_nmea<M: Write>(
+        &mut self,
+        body: &ResponseBody,
+        command: &Command,
+        nmea_out: &mut M,
+    ) -> Result<(), M::Error> {
+        let Command::PfRanges(e) = command else {
+            return Ok(());
+        };
+        match body {
+            ResponseBody::PfResult(r) => {
+                let decision = pf::pf_decision(r);
+                self.wire
+                    .set_from_pf(r, decision, e.sats.items.iter().map(|s| s.id));
+            }
+            _ => {
+                self.wire.reset();
+                self.wire.time_s = e.time_s;
+            }
+        }
+        answer::write_nmea_for(&self.wire, Some(command), nmea_out)
     }
 
     /// `Status`, with the platform's fields filled in.

@@ -288,7 +288,7 @@ pub fn map_error(e: PfError, sats: &[RangeObservation]) -> WireError {
 /// satellite was excluded in the same epoch (the position of that epoch
 /// came from the filter that included it); an exclusion without an alarm
 /// is `Excluded`; otherwise `Ok`.
-fn pf_decision(r: &WirePfResult) -> raim_core::Decision {
+pub(crate) fn pf_decision(r: &WirePfResult) -> raim_core::Decision {
     use raim_core::Decision;
     if r.position_ecef_m.is_none() {
         Decision::Unavailable
@@ -449,7 +449,15 @@ mod tests {
                     .unwrap();
             }
         }
-        assert!(nmea.0.is_empty(), "no NMEA for PF epochs");
+        // Every PF epoch, answered or refused, writes its sentences (one
+        // RMC each); no other request writes any.
+        let epochs = commands
+            .iter()
+            .filter(|c| matches!(c, CommandRef::PfRanges { .. }))
+            .count();
+        let nmea = std::string::String::from_utf8(nmea.0).unwrap();
+        let rmc = nmea.lines().filter(|l| l.get(3..6) == Some("RMC")).count();
+        assert_eq!(rmc, epochs, "{nmea}");
         let mut rx = FrameReceiver::<MAX_RESPONSE_FRAME>::new();
         link.0
             .iter()

@@ -174,6 +174,8 @@ impl embedded_io::Write for Sink {
 pub struct Twin {
     pub fw: QemuSession,
     pub host: Box<Server>,
+    /// The host server's NMEA port since the last [`Twin::check_nmea`].
+    pub host_nmea: Vec<u8>,
 }
 
 impl Twin {
@@ -183,7 +185,11 @@ impl Twin {
         let mut host = Box::new(Server::new());
         host.take_runtime_config(raim_core::Config::default())
             .expect("the default configuration");
-        Twin { fw, host }
+        Twin {
+            fw,
+            host,
+            host_nmea: Vec::new(),
+        }
     }
 
     /// The host server's answers to `bytes`.
@@ -194,7 +200,7 @@ impl Twin {
                 .on_byte(b, &mut link, &mut nmea, &mut NoPlatform)
                 .unwrap();
         }
-        assert!(nmea.0.is_empty(), "ARAIM answers write no NMEA");
+        self.host_nmea.extend_from_slice(&nmea.0);
         let mut rx = Box::new(FrameReceiver::<{ raim_proto::MAX_RESPONSE_FRAME }>::new());
         link.0
             .iter()
@@ -203,6 +209,25 @@ impl Twin {
                     .map(|p| postcard::from_bytes(p.unwrap()).unwrap())
             })
             .collect()
+    }
+
+    /// The firmware's NMEA sentences since the last check are the host
+    /// server's, sentence for sentence (every ARAIM epoch writes its
+    /// sentences); returns how many.
+    pub fn check_nmea(&mut self) -> usize {
+        let host = String::from_utf8(std::mem::take(&mut self.host_nmea)).unwrap();
+        let host: Vec<&str> = host.lines().map(str::trim_end).collect();
+        // The NMEA UART is read by its own thread: wait (boundedly) for it
+        // to catch up with the answers already received.
+        let mut fw = self.fw.drain_nmea();
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(5);
+        while fw.len() < host.len() && std::time::Instant::now() < deadline {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+            fw.extend(self.fw.drain_nmea());
+        }
+        let fw: Vec<&str> = fw.iter().map(|s| s.trim_end()).collect();
+        assert_eq!(fw, host);
+        fw.len()
     }
 
     /// Sends `command` to both; the firmware's answer must be the host's,
