@@ -1100,7 +1100,6 @@ mod tests {
         /// The PL agreement of the two forms (m).
         const PL_TOL_M: f64 = 1e-3;
         let x = [3_582_105.0, 532_589.0, 5_232_755.0];
-        let rot = raim_core::frames::enu_rotation(&raim_core::frames::ecef_to_geodetic(x));
         let to_ranges = |obs: &[LinearObservation]| as_ranges(obs, x);
         for (faulty, fault_m) in [(usize::MAX, 0.0), (5, 100.0)] {
             let (ism, obs) = sky(20, faulty, fault_m);
