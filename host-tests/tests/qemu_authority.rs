@@ -382,6 +382,10 @@ fn qemu_out_of_bounds_settings_are_refused() {
 fn qemu_netduinoplus2_boots_unconfigured_or_provisioned_and_locked() {
     let base = elf(Machine::NetduinoPlus2);
     let mut fw = start(&base, Machine::NetduinoPlus2);
+    // The boot notice is the first frame, on this machine too.
+    let notice = fw.boots().first().copied().unwrap();
+    assert_eq!(notice.config.source, ConfigSource::Unconfigured);
+    assert_eq!(notice.resets, 0);
     assert_eq!(
         fw.status().unwrap().config.source,
         ConfigSource::Unconfigured
@@ -398,6 +402,10 @@ fn qemu_netduinoplus2_boots_unconfigured_or_provisioned_and_locked() {
     let unit = installed();
     let img = raim_qemu::provision_config(&base, &unit, None, "provisioned").unwrap();
     let mut fw = start(&img, Machine::NetduinoPlus2);
+    let notice = fw.boots().first().copied().unwrap();
+    assert_eq!(notice.config.source, ConfigSource::Provisioned);
+    assert!(notice.config.locked);
+    assert_eq!(notice.config.fingerprint, unit.fingerprint());
     let b = fw.status().unwrap();
     assert_eq!(b.config.source, ConfigSource::Provisioned);
     assert!(b.config.locked);

@@ -396,14 +396,12 @@ impl QemuSession {
             last_config: None,
             boots: Vec::new(),
         };
+        session.wait_boot(ANSWER_TIMEOUT)?;
         if opts.machine == Machine::NetduinoPlus2 {
-            // Under QEMU's STM32 model the boot notice has not been seen
-            // to arrive (docs/SAFETY.md); the unit's state is read from
-            // `Status` instead.
-            let _ = session.wait_boot(Duration::from_secs(3));
+            // The STM32 USART model drops bytes that arrive before the
+            // firmware listens: make sure the link is up before the first
+            // request.
             session.sync()?;
-        } else {
-            session.wait_boot(ANSWER_TIMEOUT)?;
         }
         let bench = if opts.raw {
             false
