@@ -12,6 +12,7 @@ pub mod ephemeris;
 pub mod error;
 pub mod faults;
 pub mod geometry;
+pub mod glonass;
 pub mod iono;
 pub mod ranging;
 pub mod rinex_guard;
