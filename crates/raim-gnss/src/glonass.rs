@@ -57,6 +57,22 @@ pub const RK4_STEP_S: f64 = 60.0;
 /// margin for a missing message (the loader's age limit is 30 min).
 pub const MAX_PROPAGATION_S: f64 = 3_600.0;
 
+/// Global average broadcast signal-in-space range error of GPS (LNAV), m
+/// (Montenbruck, Steigenberger, Hauschild 2015, "Broadcast versus precise
+/// ephemerides: a multi-GNSS perspective", GPS Solutions 19:321-333,
+/// 12 months of 2013/2014).
+pub const SISRE_GPS_M: f64 = 0.7;
+/// The same study's GLONASS value, m.
+pub const SISRE_GLONASS_M: f64 = 1.9;
+
+/// A GLONASS URA from a GPS one, scaled by the published SISRE ratio
+/// (1.9 m / 0.7 m): the GLONASS broadcast orbits and clocks are that much
+/// less accurate, and a sigma model sized for GPS would under-weight the
+/// residuals of GLONASS satellites (SPEC §3: sigma_URA per satellite).
+pub fn glonass_ura_m(gps_ura_m: f64) -> f64 {
+    gps_ura_m * SISRE_GLONASS_M / SISRE_GPS_M
+}
+
 /// L1 FDMA nominal carrier, Hz (ICD 5.1 §3.3.1.4).
 pub const F_L1_BASE_HZ: f64 = 1_602.0e6;
 /// L1 channel spacing, Hz.
