@@ -291,7 +291,11 @@ fn glonass_records_are_on_gps_time_and_plausible() {
     let first = &nav.glonass[&r01][0];
     // 2020-06-24 = GPS week 2111 day 3.
     let want = 2111.0 * 604_800.0 + 3.0 * 86_400.0 + 23.0 * 3600.0 + 15.0 * 60.0 + 18.0;
-    assert!((first.tb_gps_s - want).abs() < 1e-6, "{}", first.tb_gps_s - want);
+    assert!(
+        (first.tb_gps_s - want).abs() < 1e-6,
+        "{}",
+        first.tb_gps_s - want
+    );
     assert_eq!(first.frequency_channel, 1);
     assert!((first.tau_n_s + 6.355904042721e-05).abs() < 1e-15);
     assert!(nav.glonass.len() >= 20, "{}", nav.glonass.len());
