@@ -10,9 +10,12 @@
 //!   centrifugal and Coriolis terms, the broadcast luni-solar acceleration
 //!   held constant) are integrated from t_b to t by RK4 with a fixed step
 //!   ([`RK4_STEP_S`]), the last step shortened to land on t:
-//!   dv_x/dt = -mu x / r^3 - 3/2 J2 mu a_e^2 x / r^5 (1 - 5 z^2 / r^2)
-//!   + omega^2 x + 2 omega v_y + a_x (and y with -2 omega v_x;
-//!   z: -mu z / r^3 - 3/2 J2 mu a_e^2 z / r^5 (3 - 5 z^2 / r^2) + a_z).
+//!
+//!   ```text
+//!   dvx/dt = -mu x/r^3 - 3/2 J2 mu ae^2 x/r^5 (1 - 5 z^2/r^2) + w^2 x + 2 w vy + ax
+//!   dvy/dt = -mu y/r^3 - 3/2 J2 mu ae^2 y/r^5 (1 - 5 z^2/r^2) + w^2 y - 2 w vx + ay
+//!   dvz/dt = -mu z/r^3 - 3/2 J2 mu ae^2 z/r^5 (3 - 5 z^2/r^2) + az
+//!   ```
 //! - **Clock.** dt_sv(t) = -tau_n + gamma_n (t - t_b) (ICD §4.4; RINEX
 //!   stores -tau_n as the clock bias and +gamma_n as the drift). tau_n
 //!   already contains the relativistic effects, so no eccentricity term is
@@ -563,7 +566,7 @@ mod tests {
     #[test]
     fn channel_frequencies() {
         assert_eq!(l1_hz(0), 1_602.0e6);
-        assert_eq!(l1_hz(-7), 1_598.0625e6);
+        assert_eq!(l1_hz(-7), 1_598.062_5e6);
         assert_eq!(l2_hz(6), 1_248.625e6);
         for k in -7..=6 {
             assert!((l2_hz(k) / l1_hz(k) - 7.0 / 9.0).abs() < 1e-15);
