@@ -404,6 +404,22 @@ mod tests {
         }
     }
 
+    /// GLONASS codes take the satellite's FDMA carrier for the iono
+    /// scaling (1602 MHz + k x 562.5 kHz, L2 1246 MHz + k x 437.5 kHz);
+    /// the iono-free noise factor of L1/L2 is the channel-free 7/9 ratio's.
+    #[test]
+    fn glonass_carriers_follow_the_channel() {
+        assert_eq!(carrier_hz(System::Glonass, "C1C", Some(-7)), 1_598.062_5e6);
+        assert_eq!(carrier_hz(System::Glonass, "C1C", Some(6)), 1_605.375e6);
+        assert_eq!(carrier_hz(System::Glonass, "C2C", Some(1)), 1_246.437_5e6);
+        // GPS is unchanged by a channel argument.
+        assert_eq!(carrier_hz(System::Gps, "C1C", None), F_L1_HZ);
+        let g = (9.0f64 / 7.0).powi(2);
+        let want = (g * g + 1.0).sqrt() / (g - 1.0);
+        let got = iono_free_noise_factor(System::Glonass, "C1C+C2C").unwrap();
+        assert!((got - want).abs() < 1e-12, "{got} {want}");
+    }
+
     /// The noise factors against their published values: 2.59 (L1/L5,
     /// the ADD's, `error_model::iono_free_factor_sq`), 2.98 (L1/L2), 3.53
     /// (B1I/B3I); a single code has none.
