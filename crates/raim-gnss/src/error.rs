@@ -21,7 +21,7 @@ pub enum GnssError {
         line: usize,
         detail: String,
     },
-    #[error("unknown system letter '{0}' (use G, E, C, J)")]
+    #[error("unknown system letter '{0}' (use G, R, E, C, J)")]
     UnknownSystem(char),
     #[error("bad satellite '{0}' (expected e.g. G24)")]
     BadSatellite(String),

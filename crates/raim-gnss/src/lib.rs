@@ -3,7 +3,8 @@
 //! It turns recorded receiver data (RINEX 2/3 observation + broadcast
 //! navigation files) into the core's input (`raim_core::RangeObservation`,
 //! SPEC §1 and §11): broadcast orbits and clocks for GPS, Galileo and
-//! BeiDou (GEO included), the Earth-rotation correction, Klobuchar and
+//! BeiDou (GEO included) and GLONASS (state vectors integrated by RK4,
+//! `glonass`), the Earth-rotation correction, Klobuchar and
 //! Saastamoinen, group delays and an elevation mask. It also injects
 //! deterministic, seeded faults (steps, ramps, constellation biases, clock
 //! jumps, heavy-tailed noise) for replay tests (docs/REPLAY.md).
@@ -12,6 +13,7 @@ pub mod ephemeris;
 pub mod error;
 pub mod faults;
 pub mod geometry;
+pub mod glonass;
 pub mod iono;
 pub mod ranging;
 pub mod rinex_guard;

@@ -12,8 +12,9 @@ use raim_core::{Config, Epoch, RangeObservation, SatId, System};
 
 use crate::ephemeris::{Kepler, C_M_S, WEEK_S};
 use crate::geometry::{az_el, distance_m, rotate_earth};
+use crate::glonass::{l1_hz, l2_hz, F_L1_BASE_HZ, F_L2_BASE_HZ};
 use crate::iono::{scale_to_frequency, F_B1I_HZ, F_L1_HZ};
-use crate::rinex_io::{CodeObs, NavData, ObsEpoch};
+use crate::rinex_io::{Broadcast, CodeObs, NavData, ObsEpoch};
 use crate::tropo::saastamoinen_m;
 
 /// Capacity used for the bootstrap position solve.
@@ -32,10 +33,17 @@ pub struct RangingOptions {
     pub iono: bool,
     pub tropo: bool,
     pub group_delay: bool,
+    /// The sigma model of GLONASS satellites (SPEC §3's model with its own
+    /// URA, [`crate::glonass::glonass_ura_m`]): each gets an explicit
+    /// `sigma_m` = this model at its elevation. None: the core's model, as
+    /// for every other system.
+    pub glonass_sigma: Option<raim_core::sigma::SigmaModel>,
 }
 
 /// Carrier frequency (Hz) of a RINEX 3 code's band digit, per system; None
-/// for a band this crate does not know.
+/// for a band this crate does not know. GLONASS FDMA: the channel-0
+/// carriers (L2/L1 = 7/9 for every channel, so the iono-free combination
+/// does not depend on the channel).
 pub fn band_hz(system: System, code: &str) -> Option<f64> {
     let band = code.get(1..2)?;
     Some(match (system, band) {
@@ -47,6 +55,8 @@ pub fn band_hz(system: System, code: &str) -> Option<f64> {
         (System::Galileo, "6") => 1_278.75e6,
         (System::Beidou, "2") | (System::Beidou, "1") => F_B1I_HZ,
         (System::Beidou, "6") => 1_268.52e6,
+        (System::Glonass, "1") => F_L1_BASE_HZ,
+        (System::Glonass, "2") => F_L2_BASE_HZ,
         _ => return None,
     })
 }
@@ -76,9 +86,17 @@ pub fn iono_free_noise_factor(system: System, code: &str) -> Option<f64> {
 ///   dt - BGD(E1,E5b) = dt' - BGD(E1,E5a) solved for the E1/E5a clock dt');
 ///   E1 + E5b none.
 /// - BeiDou (clock of B3I): B1I + B3I gets c g / (g - 1) TGD1.
+/// - GLONASS (`k` None): none (tau_n refers to L1; the L1/L2 delay
+///   Delta tau_n is not in RINEX 3 navigation files).
 ///
 /// The first code must be the higher frequency. None if a band is unknown.
-fn iono_free(system: System, code: &str, p1: f64, p2: f64, k: &Kepler) -> Option<(f64, f64)> {
+fn iono_free(
+    system: System,
+    code: &str,
+    p1: f64,
+    p2: f64,
+    k: Option<&Kepler>,
+) -> Option<(f64, f64)> {
     let (a, b) = split_pair(code)?;
     let (f1, f2) = (band_hz(system, a)?, band_hz(system, b)?);
     let g = (f1 / f2).powi(2);
@@ -86,9 +104,9 @@ fn iono_free(system: System, code: &str, p1: f64, p2: f64, k: &Kepler) -> Option
         return None;
     }
     let p = (g * p1 - p2) / (g - 1.0);
-    let delay_s = match (system, b.get(1..2)) {
-        (System::Galileo, Some("5")) => k.group_delay_s - k.group_delay_e5a_s,
-        (System::Beidou, Some("6")) => g / (g - 1.0) * k.group_delay_s,
+    let delay_s = match (system, b.get(1..2), k) {
+        (System::Galileo, Some("5"), Some(k)) => k.group_delay_s - k.group_delay_e5a_s,
+        (System::Beidou, Some("6"), Some(k)) => g / (g - 1.0) * k.group_delay_s,
         _ => 0.0,
     };
     Some((p, C_M_S * delay_s))
@@ -96,7 +114,7 @@ fn iono_free(system: System, code: &str, p1: f64, p2: f64, k: &Kepler) -> Option
 
 /// Default code preferences: GPS and QZSS L1 C/A (RINEX 3 "C1C", RINEX 2
 /// "C1"), Galileo E1 (C1C pilot+data as Septentrio logs it, C1X, C1B),
-/// BeiDou B1I (C2I in RINEX 3.02+, C1I in 3.01).
+/// BeiDou B1I (C2I in RINEX 3.02+, C1I in 3.01), GLONASS L1 C/A (C1C, C1).
 pub fn default_codes() -> BTreeMap<System, Vec<String>> {
     let v = |c: &[&str]| c.iter().map(|s| s.to_string()).collect::<Vec<_>>();
     BTreeMap::from([
@@ -104,6 +122,7 @@ pub fn default_codes() -> BTreeMap<System, Vec<String>> {
         (System::Galileo, v(&["C1C", "C1X", "C1B"])),
         (System::Beidou, v(&["C2I", "C1I"])),
         (System::Qzss, v(&["C1C", "C1"])),
+        (System::Glonass, v(&["C1C", "C1"])),
     ])
 }
 
@@ -116,6 +135,7 @@ impl Default for RangingOptions {
             iono: true,
             tropo: true,
             group_delay: true,
+            glonass_sigma: None,
         }
     }
 }
@@ -165,9 +185,12 @@ impl PreparedEpoch {
     }
 }
 
-/// Carrier frequency of a code, for the ionospheric scaling.
-fn carrier_hz(system: System, code: &str) -> f64 {
+/// Carrier frequency of a code, for the ionospheric scaling; GLONASS by
+/// the satellite's frequency channel `k`.
+fn carrier_hz(system: System, code: &str, k: Option<i8>) -> f64 {
     match (system, code.get(1..2)) {
+        (System::Glonass, Some("2")) => l2_hz(k.unwrap_or(0)),
+        (System::Glonass, _) => l1_hz(k.unwrap_or(0)),
         (System::Beidou, Some("2")) | (System::Beidou, Some("1")) if code.ends_with('I') => {
             F_B1I_HZ
         }
@@ -200,7 +223,7 @@ fn pick_code(codes: &[String], have: &[CodeObs]) -> Option<(String, f64, Option<
 /// Satellite position (ECEF at transmit time, not yet rotated) and clock,
 /// from the receiver time tag and the pseudorange: the transmit time in
 /// GPS time is t_rx - P/c - dt_sv (exact whatever the receiver clock).
-fn transmit_state(k: &Kepler, t_rx_gps_s: f64, pseudorange_m: f64) -> ([f64; 3], f64) {
+fn transmit_state(k: &Broadcast<'_>, t_rx_gps_s: f64, pseudorange_m: f64) -> ([f64; 3], f64) {
     let t_sv = t_rx_gps_s - pseudorange_m / C_M_S;
     let dts = k.state(t_sv).clock_s;
     let st = k.state(t_sv - dts);
@@ -228,7 +251,7 @@ fn build(
             rejected.push((id, Rejection::NoCode));
             continue;
         };
-        let Some(k) = nav.select(id, epoch.time_gps_s) else {
+        let Some(k) = nav.select_broadcast(id, epoch.time_gps_s) else {
             rejected.push((id, Rejection::NoEphemeris));
             continue;
         };
@@ -236,7 +259,7 @@ fn build(
         // An iono-free pair: the combination, its group delay, no
         // Klobuchar (the combination removes the first-order ionosphere).
         let pair = match p2 {
-            Some(p2) => match iono_free(id.system, &code_name, p1, p2, k) {
+            Some(p2) => match iono_free(id.system, &code_name, p1, p2, k.kepler()) {
                 Some(v) => Some(v),
                 None => {
                     rejected.push((id, Rejection::NoCode));
@@ -246,7 +269,7 @@ fn build(
             None => None,
         };
         let p = pair.map(|v| v.0).unwrap_or(p1);
-        let (pos_tx, clock_s) = transmit_state(k, epoch.time_gps_s, p);
+        let (pos_tx, clock_s) = transmit_state(&k, epoch.time_gps_s, p);
         let transit_s = match rx_m {
             Some(rx) => {
                 // Two fixed-point steps: the rotation moves the satellite by
@@ -261,7 +284,7 @@ fn build(
             Some((_, d)) if opts.group_delay => d,
             Some(_) => 0.0,
             None if opts.group_delay && group_delay_applies(id.system, &code_name) => {
-                C_M_S * k.group_delay_s
+                C_M_S * k.kepler().map_or(0.0, |k| k.group_delay_s)
             }
             None => 0.0,
         };
@@ -279,7 +302,8 @@ fn build(
                 if let Some(kb) = &nav.klobuchar {
                     let tow = epoch.time_gps_s.rem_euclid(WEEK_S);
                     let l1 = kb.delay_l1_m(g.lat_rad, g.lon_rad, az, el, tow);
-                    iono_m = scale_to_frequency(l1, carrier_hz(id.system, &code_name));
+                    let f_hz = carrier_hz(id.system, &code_name, k.frequency_channel());
+                    iono_m = scale_to_frequency(l1, f_hz);
                 }
             }
             if opts.tropo {
@@ -288,12 +312,16 @@ fn build(
         }
         let sat_clock_m = C_M_S * clock_s;
         let corrected = p + sat_clock_m - group_delay_m - iono_m - tropo_m;
+        let sigma_m = match (id.system, &opts.glonass_sigma, rx_m.is_some() && full) {
+            (System::Glonass, Some(model), true) => Some(model.sigma_m(el)),
+            _ => None,
+        };
         sats.push(PreparedSat {
             obs: RangeObservation {
                 id,
                 pseudorange_m: corrected,
                 position_m: pos,
-                sigma_m: None,
+                sigma_m,
             },
             code: code_name,
             raw_pseudorange_m: p,
@@ -376,6 +404,22 @@ mod tests {
         }
     }
 
+    /// GLONASS codes take the satellite's FDMA carrier for the iono
+    /// scaling (1602 MHz + k x 562.5 kHz, L2 1246 MHz + k x 437.5 kHz);
+    /// the iono-free noise factor of L1/L2 is the channel-free 7/9 ratio's.
+    #[test]
+    fn glonass_carriers_follow_the_channel() {
+        assert_eq!(carrier_hz(System::Glonass, "C1C", Some(-7)), 1_598.062_5e6);
+        assert_eq!(carrier_hz(System::Glonass, "C1C", Some(6)), 1_605.375e6);
+        assert_eq!(carrier_hz(System::Glonass, "C2C", Some(1)), 1_246.437_5e6);
+        // GPS is unchanged by a channel argument.
+        assert_eq!(carrier_hz(System::Gps, "C1C", None), F_L1_HZ);
+        let g = (9.0f64 / 7.0).powi(2);
+        let want = (g * g + 1.0).sqrt() / (g - 1.0);
+        let got = iono_free_noise_factor(System::Glonass, "C1C+C2C").unwrap();
+        assert!((got - want).abs() < 1e-12, "{got} {want}");
+    }
+
     /// The noise factors against their published values: 2.59 (L1/L5,
     /// the ADD's, `error_model::iono_free_factor_sq`), 2.98 (L1/L2), 3.53
     /// (B1I/B3I); a single code has none.
@@ -414,7 +458,7 @@ mod tests {
         let t_if_b = (g_b * t1 - t5b) / (g_b - 1.0);
         let p1 = range_m + iono(f1) + c * t1;
         let p5a = range_m + iono(f5a) + c * t5a;
-        let (p, delay_m) = iono_free(System::Galileo, "C1C+C5Q", p1, p5a, &k).unwrap();
+        let (p, delay_m) = iono_free(System::Galileo, "C1C+C5Q", p1, p5a, Some(&k)).unwrap();
         // corrected = P + c dt_inav - group delay, dt_inav = -T_IF(E1,E5b).
         let corrected = p - c * t_if_b - delay_m;
         assert!(
@@ -434,7 +478,7 @@ mod tests {
             "C1W+C2W",
             range_m + iono(f1) + c * t1,
             range_m + iono(f2) + c * t2,
-            &kepler(System::Gps, 0.0, 0.0),
+            Some(&kepler(System::Gps, 0.0, 0.0)),
         )
         .unwrap();
         assert_eq!(delay_m, 0.0);
@@ -446,7 +490,7 @@ mod tests {
             "C2I+C6I",
             range_m + iono(fb1) + c * tb1,
             range_m + iono(fb3) + c * tb3,
-            &kepler(System::Beidou, tb1 - tb3, 0.0),
+            Some(&kepler(System::Beidou, tb1 - tb3, 0.0)),
         )
         .unwrap();
         let corrected = p - c * tb3 - delay_m;

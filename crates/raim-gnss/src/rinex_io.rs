@@ -11,6 +11,7 @@ use rinex::prelude::{Constellation, Observable, Rinex, TimeScale};
 
 use crate::ephemeris::Kepler;
 use crate::error::GnssError;
+use crate::glonass::{GlonassEphemeris, GlonassIcdFields};
 use crate::iono::Klobuchar;
 
 /// Open a RINEX file: gzip by its `.gz` suffix. `Rinex::from_file` panics
@@ -132,12 +133,81 @@ impl ObsData {
     }
 }
 
-/// A navigation file: Keplerian ephemerides per satellite and the GPS
-/// Klobuchar coefficients of the header.
+/// A navigation file: Keplerian ephemerides per satellite, GLONASS state
+/// vectors per slot, and the GPS Klobuchar coefficients of the header.
 #[derive(Debug, Clone, Default)]
 pub struct NavData {
     pub ephemerides: BTreeMap<SatId, Vec<Kepler>>,
+    /// GLONASS FDMA ephemerides per slot, in t_b order.
+    pub glonass: BTreeMap<SatId, Vec<GlonassEphemeris>>,
     pub klobuchar: Option<Klobuchar>,
+}
+
+/// The broadcast ephemeris selected for one satellite: Keplerian elements
+/// (GPS, Galileo, BeiDou, QZSS) or a GLONASS state vector.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Broadcast<'a> {
+    Kepler(&'a Kepler),
+    Glonass(&'a GlonassEphemeris),
+}
+
+impl Broadcast<'_> {
+    /// Position (WGS-84, Earth-fixed frame of the instant) and clock at GPS
+    /// time `t_gps_s`.
+    pub fn state(&self, t_gps_s: f64) -> crate::ephemeris::SatState {
+        match self {
+            Broadcast::Kepler(k) => k.state(t_gps_s),
+            Broadcast::Glonass(g) => g.state(t_gps_s),
+        }
+    }
+
+    /// The Keplerian ephemeris, if this is one (its group delays).
+    pub fn kepler(&self) -> Option<&Kepler> {
+        match self {
+            Broadcast::Kepler(k) => Some(k),
+            Broadcast::Glonass(_) => None,
+        }
+    }
+
+    /// The GLONASS frequency channel, if this is a GLONASS ephemeris.
+    pub fn frequency_channel(&self) -> Option<i8> {
+        match self {
+            Broadcast::Kepler(_) => None,
+            Broadcast::Glonass(g) => Some(g.frequency_channel),
+        }
+    }
+}
+
+/// A GLONASS record of a RINEX 2/3 navigation file: the epoch is t_b in
+/// UTC (RINEX 3 §A; the `rinex` crate reads it on the UTC scale), the
+/// clock bias -tau_n, the drift +gamma_n, the state vector in km, km/s and
+/// km/s^2. None (the record is skipped) when a field is missing or out of
+/// the ICD's range.
+fn glonass_record(
+    prn: u8,
+    tb_gps_s: f64,
+    eph: &rinex::navigation::Ephemeris,
+) -> Option<GlonassEphemeris> {
+    let get = |f: &str| eph.get_orbit_f64(f);
+    let health = health_word(get("health"));
+    let f = GlonassIcdFields {
+        slot: prn,
+        frequency_channel: eph.glonass_freq_channel()?,
+        tb_gps_s,
+        x_km: get("satPosX")?,
+        y_km: get("satPosY")?,
+        z_km: get("satPosZ")?,
+        vx_km_s: get("velX")?,
+        vy_km_s: get("velY")?,
+        vz_km_s: get("velZ")?,
+        ax_km_s2: get("accelX").unwrap_or(0.0),
+        ay_km_s2: get("accelY").unwrap_or(0.0),
+        az_km_s2: get("accelZ").unwrap_or(0.0),
+        tau_n_s: -eph.clock_bias,
+        gamma_n: eph.clock_drift,
+        unhealthy: health != 0,
+    };
+    GlonassEphemeris::from_icd(&f).ok()
 }
 
 /// The health word of a navigation record. A missing, negative,
@@ -151,7 +221,8 @@ pub fn health_word(v: Option<f64>) -> u32 {
 }
 
 /// Largest |t - toe| at which a broadcast ephemeris is used, s (the
-/// classic single-point choices: GPS 2 h, Galileo 4 h, BeiDou 6 h).
+/// classic single-point choices: GPS 2 h, Galileo 4 h, BeiDou 6 h,
+/// GLONASS 30 min, the spacing of its t_b).
 pub fn max_ephemeris_age_s(system: System) -> f64 {
     match system {
         System::Gps | System::Qzss => 7_200.0,
@@ -187,11 +258,19 @@ impl NavData {
             })
             .filter(|k| k.beta[0] > 0.0);
         let mut ephemerides: BTreeMap<SatId, Vec<Kepler>> = BTreeMap::new();
+        let mut glonass: BTreeMap<SatId, Vec<GlonassEphemeris>> = BTreeMap::new();
         for (key, eph) in r.nav_ephemeris_frames_iter() {
             let Some(system) = system_of(key.sv.constellation) else {
                 continue;
             };
             if system == System::Glonass {
+                let tb_gps_s = key.epoch.to_time_scale(TimeScale::GPST).to_gpst_seconds();
+                if let Some(g) = glonass_record(key.sv.prn, tb_gps_s, eph) {
+                    glonass
+                        .entry(SatId::new(system, key.sv.prn))
+                        .or_default()
+                        .push(g);
+                }
                 continue;
             }
             let get = |f: &str| eph.get_orbit_f64(f);
@@ -268,8 +347,14 @@ impl NavData {
         for v in ephemerides.values_mut() {
             v.sort_by(|a, b| a.toc_gps_s.total_cmp(&b.toc_gps_s));
         }
+        for v in glonass.values_mut() {
+            v.sort_by(|a, b| a.tb_gps_s.total_cmp(&b.tb_gps_s));
+            // Mixed files repeat a message once per contributing station.
+            v.dedup_by(|a, b| a == b);
+        }
         Ok(NavData {
             ephemerides,
+            glonass,
             klobuchar,
         })
     }
@@ -286,6 +371,29 @@ impl NavData {
             .filter(|(age, _)| *age <= max_age)
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .map(|(_, k)| k)
+    }
+
+    /// The healthy GLONASS ephemeris of `id` whose t_b is closest to
+    /// `t_gps_s`, within [`max_ephemeris_age_s`] (30 min: t_b comes every
+    /// 30 min and the ICD fits each for +-15 min).
+    pub fn select_glonass(&self, id: SatId, t_gps_s: f64) -> Option<&GlonassEphemeris> {
+        let max_age = max_ephemeris_age_s(System::Glonass);
+        self.glonass
+            .get(&id)?
+            .iter()
+            .filter(|g| g.health == 0)
+            .map(|g| (g.age_s(t_gps_s).abs(), g))
+            .filter(|(age, _)| *age <= max_age)
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, g)| g)
+    }
+
+    /// The broadcast ephemeris of `id` at `t_gps_s`, whatever its kind.
+    pub fn select_broadcast(&self, id: SatId, t_gps_s: f64) -> Option<Broadcast<'_>> {
+        match id.system {
+            System::Glonass => self.select_glonass(id, t_gps_s).map(Broadcast::Glonass),
+            _ => self.select(id, t_gps_s).map(Broadcast::Kepler),
+        }
     }
 }
 

@@ -26,7 +26,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use raim_core::snapshot::fde::AlarmCause;
-use raim_core::{Config, Epoch, Raim, System};
+use raim_core::{Config, Epoch, Raim};
 use raim_gnss::faults::{FaultPlan, Scenario};
 use raim_gnss::parse_system;
 use raim_gnss::ranging::{default_codes, prepare_epoch, PreparedEpoch, RangingOptions};
@@ -93,11 +93,11 @@ pub struct ReplayArgs {
     /// RINEX navigation file (broadcast ephemerides; optionally .gz).
     #[arg(long, value_name = "FILE", help_heading = heading::SOURCES)]
     pub nav: PathBuf,
-    /// Systems to use, as RINEX letters (G, E, C, J).
+    /// Systems to use, as RINEX letters (G, R, E, C, J).
     #[arg(long, default_value = "GEC", help_heading = heading::SOURCES)]
     pub systems: String,
     /// Pseudorange code for a system, e.g. `--code C=C2I` (repeatable;
-    /// defaults: G C1C/C1, E C1C/C1X/C1B, C C2I/C1I).
+    /// defaults: G C1C/C1, R C1C/C1, E C1C/C1X/C1B, C C2I/C1I).
     #[arg(long = "code", value_name = "SYS=CODE", help_heading = heading::SOURCES)]
     pub codes: Vec<String>,
     /// First epoch: HH:MM or HH:MM:SS (GPS time of day) or +SECONDS from the first.
@@ -121,6 +121,11 @@ pub struct ReplayArgs {
     /// Sigma model: signal-in-space (URA) sigma, m.
     #[arg(long, allow_negative_numbers = true, help_heading = heading::MODELS)]
     pub ura_m: Option<f64>,
+    /// Sigma model of GLONASS satellites: their URA, m (default: the URA
+    /// x 1.9 / 0.7, the published GLONASS / GPS broadcast SISRE ratio,
+    /// docs/GLONASS.md).
+    #[arg(long, allow_negative_numbers = true, help_heading = heading::MODELS)]
+    pub glonass_ura_m: Option<f64>,
     /// Sigma model: vertical residual ionosphere sigma, m.
     #[arg(long, allow_negative_numbers = true, help_heading = heading::MODELS)]
     pub iono_vertical_m: Option<f64>,
@@ -218,9 +223,6 @@ impl ReplayArgs {
             .chars()
             .map(parse_system)
             .collect::<Result<Vec<_>, _>>()?;
-        if systems.contains(&System::Glonass) {
-            bail!("GLONASS broadcast orbits are not modelled; use G, E, C, J");
-        }
         let mut codes = default_codes();
         for c in &self.codes {
             let (sys, code) = c
@@ -232,7 +234,20 @@ impl ReplayArgs {
         if !(-90.0..=90.0).contains(&self.mask_deg) {
             bail!("--mask-deg {} is outside [-90, 90]", self.mask_deg);
         }
+        let glonass_sigma = systems.contains(&raim_core::System::Glonass).then(|| {
+            let mut m = self.core_config().sigma_model;
+            m.ura_m = self
+                .glonass_ura_m
+                .unwrap_or_else(|| raim_gnss::glonass::glonass_ura_m(m.ura_m));
+            m
+        });
+        if let Some(m) = &glonass_sigma {
+            if !(m.ura_m.is_finite() && m.ura_m > 0.0) {
+                bail!("--glonass-ura-m {} is not a positive length", m.ura_m);
+            }
+        }
         Ok(RangingOptions {
+            glonass_sigma,
             systems,
             codes,
             elevation_mask_rad: self.mask_deg.to_radians(),
