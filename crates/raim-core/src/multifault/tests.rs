@@ -240,7 +240,10 @@ fn seed_002_reconstruction_is_linear_and_amplifies_noise() {
             for i in 0..7 {
                 let lin = a * e1.error[i] + b * e2.error[i];
                 let scale = e1.error[i].abs() + e2.error[i].abs() + 1.0;
-                assert!((e12.error[i] - lin).abs() < LINEAR_TOL * scale, "group {f:b} row {i}");
+                assert!(
+                    (e12.error[i] - lin).abs() < LINEAR_TOL * scale,
+                    "group {f:b} row {i}"
+                );
             }
         }
         let (m, count) = members(f);
@@ -259,7 +262,10 @@ fn seed_002_reconstruction_is_linear_and_amplifies_noise() {
         }
         std::println!(
             "group {{{}}}: sigma(e_i) / sigma = {}",
-            idx.iter().map(|i| std::format!("{}", i + 1)).collect::<Vec<_>>().join(","),
+            idx.iter()
+                .map(|i| std::format!("{}", i + 1))
+                .collect::<Vec<_>>()
+                .join(","),
             idx.iter()
                 .zip(&sd)
                 .map(|(i, v)| std::format!("e_{} {v:.1}", i + 1))
@@ -272,7 +278,11 @@ fn seed_002_reconstruction_is_linear_and_amplifies_noise() {
             assert!((sd[1] - 14.1).abs() < PRINT_TOL, "e_6: {}", sd[1]);
         }
         if f == SEED_GROUPS[1] {
-            assert!(sd.iter().all(|v| (21.0 - PRINT_TOL..38.0 + PRINT_TOL).contains(v)), "{sd:?}");
+            assert!(
+                sd.iter()
+                    .all(|v| (21.0 - PRINT_TOL..38.0 + PRINT_TOL).contains(v)),
+                "{sd:?}"
+            );
         }
     }
 }
