@@ -208,19 +208,40 @@ pub fn run(b: &Budget, epochs: u64, seed: u64, threads: u64) -> Result<Tally, St
     Ok(total)
 }
 
-/// Clopper-Pearson 95 % interval of k / n.
+/// Clopper-Pearson 95 % interval of k / n: the p at which
+/// P(X >= k | p) = 0.025 and P(X <= k | p) = 0.025, X ~ Binomial(n, p),
+/// by bisection on log p with the binomial CDF (statrs' inverse Beta CDF
+/// does not converge for n ~ 1e7).
 pub fn interval(k: u64, n: u64) -> (f64, f64) {
-    use statrs::distribution::{Beta, ContinuousCDF};
-    let (kf, nf) = (k as f64, n as f64);
+    use statrs::distribution::{Binomial, DiscreteCDF};
+    const ALPHA_HALF: f64 = 0.025;
+    const STEPS: usize = 200;
+    // Solve g(p) = target for g increasing in p, over log p in [1e-300, 1].
+    let solve = |g: &dyn Fn(f64) -> f64, target: f64| {
+        let (mut lo, mut hi) = (-690.0_f64, 0.0_f64);
+        for _ in 0..STEPS {
+            let mid = 0.5 * (lo + hi);
+            if g(mid.exp()) < target {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        (0.5 * (lo + hi)).exp()
+    };
+    let cdf = |x: u64, p: f64| Binomial::new(p.min(1.0), n).map_or(f64::NAN, |b| b.cdf(x));
+    // P(X >= k | p) = 1 - cdf(k - 1) increases with p.
     let lo = if k == 0 {
         0.0
     } else {
-        Beta::new(kf, nf - kf + 1.0).map_or(f64::NAN, |d| d.inverse_cdf(0.025))
+        solve(&|p| 1.0 - cdf(k - 1, p), ALPHA_HALF)
     };
+    // P(X > k | p) = 1 - cdf(k) increases with p; the upper end has
+    // cdf(k) = 0.025.
     let hi = if k == n {
         1.0
     } else {
-        Beta::new(kf + 1.0, nf - kf).map_or(f64::NAN, |d| d.inverse_cdf(0.975))
+        solve(&|p| 1.0 - cdf(k, p), 1.0 - ALPHA_HALF)
     };
     (lo, hi)
 }

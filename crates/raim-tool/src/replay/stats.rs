@@ -31,7 +31,7 @@ pub fn clopper_pearson(k: usize, n: usize, conf: f64) -> (f64, f64) {
 /// order statistics x_(l) and x_(u) with P(x_(l) <= xi_q <= x_(u)) >= conf,
 /// from Binomial(n, q), each side at (1 - conf) / 2. None where the sample
 /// is too small for that side (e.g. the upper side of a 95th percentile
-/// needs n >= 59).
+/// needs n >= 72: 1 - 0.95^n >= 0.975).
 pub fn quantile_ci(sorted: &[f64], q: f64, conf: f64) -> (Option<f64>, Option<f64>, Option<f64>) {
     let n = sorted.len();
     if n == 0 {
@@ -96,7 +96,7 @@ mod tests {
         // Median of 1..100, rank 50; the 95 % order-statistic interval is
         // (x_40, x_61) (Binomial(100, 0.5): cdf(39) = 0.018, cdf(60) = 0.982).
         assert_eq!((e, l, h), (Some(50.0), Some(40.0), Some(61.0)));
-        // 95th percentile of 20 values: no upper bound (needs n >= 59).
+        // 95th percentile of 20 values: no upper bound (needs n >= 72).
         let (_, _, h) = quantile_ci(&v[..20], 0.95, 0.95);
         assert_eq!(h, None);
     }
