@@ -203,7 +203,10 @@ pub struct Config {
     /// Probability of wrong exclusion that the uniqueness check allows: an
     /// exclusion stands only if every other single-satellite explanation is
     /// rejected, i.e. its subset statistic D^2 - w_j^2 reaches the
-    /// chi-square quantile at 1 - pwe with dof - 1 (docs/CORE.md). Default 1e-3.
+    /// chi-square quantile at 1 - pwe with dof - 1 (docs/CORE.md); the
+    /// multiple-fault search applies the same level to every other set
+    /// (SPEC §8.4). Its share of the conditional integrity budget
+    /// (`crate::budget::Budget::pwe`, docs/BUDGET.md). Default 1e-3.
     pub pwe: f64,
     /// Gauss-Newton stops when the position step is below this, m.
     pub convergence_m: f64,
@@ -222,19 +225,25 @@ impl Default for Config {
 }
 
 impl Config {
-    /// A configuration for a flight phase: Pfa 3.3333e-7 per sample
-    /// (1e-5 / h over ~30 independent samples), Pmd 1e-3.
+    /// A configuration for a flight phase, from the default budget
+    /// (`crate::budget`, docs/BUDGET.md): Pfa 3.3333e-7 per sample
+    /// (1e-5 / h over ~30 independent samples), all of it to the snapshot
+    /// test; the conditional integrity budget under a fault, 2e-3, split
+    /// into Pmd 1e-3 (protection levels) and pwe 1e-3 (uniqueness checks).
     pub fn preset(phase: Phase) -> Self {
+        use crate::budget::{
+            DEFAULT_P_FA_TOTAL, DEFAULT_P_MD_TOTAL, DEFAULT_WRONG_EXCLUSION_SHARE,
+        };
         Config {
-            pfa: 3.3333e-7,
-            pmd: 1e-3,
+            pfa: DEFAULT_P_FA_TOTAL,
+            pmd: DEFAULT_P_MD_TOTAL * (1.0 - DEFAULT_WRONG_EXCLUSION_SHARE),
             rule: FiRule::default(),
             alert: phase.alert_limits(),
             sigma_model: SigmaModel::default(),
             max_exclusions: 2,
             min_s_ii: DEFAULT_MIN_S_II,
             require_unique_exclusion: true,
-            pwe: 1e-3,
+            pwe: DEFAULT_P_MD_TOTAL * DEFAULT_WRONG_EXCLUSION_SHARE,
             convergence_m: 1e-4,
             max_iterations: 20,
             mcusum: McusumConfig::default(),

@@ -37,6 +37,7 @@
 )]
 
 pub mod araim;
+pub mod budget;
 pub mod config;
 pub mod config_bounds;
 pub mod error;

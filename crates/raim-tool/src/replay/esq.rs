@@ -75,6 +75,15 @@ pub struct EsqArgs {
     /// Decimation interval of --esq-mcusum, s (default: the measured correlation time).
     #[arg(long)]
     pub esq_decimate_s: Option<f64>,
+    /// The PCA threshold's empirical-null scale c: alarm when max_q |dx_q| / T_q > c (1: the nominal Gaussian null; docs/ESQ.md fits c on clean ESBC).
+    #[arg(long, default_value_t = 1.0)]
+    pub pca_null_scale: f64,
+    /// With --esq: repeat the run with the fault's onset shifted by N stratified uniform offsets over the window T (and so over the epoch), and report detection probability and delays with confidence intervals.
+    #[arg(long, value_name = "N")]
+    pub esq_onset_sweep: Option<usize>,
+    /// Seed of the --esq-onset-sweep offsets.
+    #[arg(long, default_value_t = 1)]
+    pub esq_onset_seed: u64,
     /// Plot N*, dT_e and the separation test (--esq), or the PCA statistic (--pca), into this PNG.
     #[arg(long, value_name = "FILE", help_heading = super::heading::PLOTS)]
     pub esq_plot: Option<PathBuf>,
@@ -312,19 +321,28 @@ fn fmt_delay(d: Option<f64>) -> String {
     d.map_or("never".into(), |d| format!("{d:.0} s"))
 }
 
-/// `--esq`: N*, dT_e, resampling, the separation test.
-fn run_esq(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Result<()> {
-    let window = args.esq.esq_window_s;
-    let mut rs = Resampler::new(window).map_err(|e| anyhow!("--esq-window-s: {e}"))?;
+/// The resampler's decisions over a run.
+struct Schedule {
+    /// The epoch is evaluated.
+    emitted: Vec<bool>,
+    /// dT_e in force at the epoch, s.
+    dte: Vec<f64>,
+    /// Windows opened with an emitted sample.
+    windows: usize,
+}
+
+/// Runs the resampler (window `window_s`) over the rows: N* is taken at
+/// the epoch opening each window; an epoch with no N* at a window opening
+/// is evaluated, and the window waits for the next epoch with a PL.
+fn schedule(rows: &[Row], window_s: f64) -> Result<Schedule> {
+    let mut rs = Resampler::new(window_s).map_err(|e| anyhow!("--esq-window-s: {e}"))?;
     let mut emitted = vec![false; rows.len()];
     let mut dte = vec![f64::NAN; rows.len()];
     let mut windows = 0usize;
-    for (i, r) in rows.iter().enumerate() {
+    for ((r, em), d) in rows.iter().zip(emitted.iter_mut()).zip(dte.iter_mut()) {
         let opens = rs.opens_window(r.t_gps_s);
         let n_star = r.esq.map(|e| e.n_star);
         let sample = if opens && n_star.is_none() {
-            // No N* at a window opening (no PL): this epoch is evaluated
-            // and the window waits for the next epoch with a PL.
             Sample::Skip
         } else {
             rs.offer(r.t_gps_s, n_star)
@@ -333,8 +351,110 @@ fn run_esq(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
         if opens && matches!(sample, Sample::Emit { .. }) {
             windows += 1;
         }
-        emitted[i] = matches!(sample, Sample::Emit { .. }) || (opens && n_star.is_none());
-        dte[i] = rs.interval_s();
+        *em = matches!(sample, Sample::Emit { .. }) || (opens && n_star.is_none());
+        *d = rs.interval_s();
+    }
+    Ok(Schedule {
+        emitted,
+        dte,
+        windows,
+    })
+}
+
+/// Delay from `onset` to the first emitted epoch (every epoch when
+/// `emitted` is None) at or after it on which ARAIM alarmed, s.
+fn first_alarm(rows: &[Row], emitted: Option<&[bool]>, onset: f64) -> Option<f64> {
+    rows.iter()
+        .enumerate()
+        .filter(|(_, r)| r.t_gps_s >= onset - 1e-3)
+        .find(|(i, r)| r.araim_alarm && emitted.is_none_or(|e| e.get(*i).copied().unwrap_or(false)))
+        .map(|(_, r)| r.t_gps_s - onset)
+}
+
+/// `--esq --esq-onset-sweep N`: the fault's onset moved by N stratified
+/// uniform offsets over the window T, (j + u_j) T / N with u_j ~ U[0, 1)
+/// seeded; T is a multiple of the epoch interval, so the onsets are also
+/// uniform over the epoch. Per onset, the first ARAIM alarm on every epoch
+/// and on the resampled epochs; then the detection probability
+/// (Clopper-Pearson 95 %) and the delays' median and 95th percentile
+/// (distribution-free 95 % intervals from the order statistics), measured
+/// from the true onset.
+fn run_sweep(args: &ReplayArgs, n: usize, w: &mut impl Write) -> Result<()> {
+    use rand::{Rng, SeedableRng};
+    if n == 0 {
+        bail!("--esq-onset-sweep needs at least one onset");
+    }
+    let mut s = setup(args)?;
+    let t0 = s
+        .onset_gps_s
+        .context("--esq-onset-sweep needs a satellite fault (--fault or --eph-fault)")?;
+    let window = args.esq.esq_window_s;
+    let starts: Vec<f64> = s.plan.faults.iter().map(|f| f.start_gps_s).collect();
+    let eph_starts: Vec<f64> = s.eph.iter().map(|f| f.start_gps_s).collect();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(args.esq.esq_onset_seed);
+    let mut every = Vec::with_capacity(n);
+    let mut sampled = Vec::with_capacity(n);
+    for j in 0..n {
+        let u: f64 = rng.random();
+        let off = (j as f64 + u) * window / n as f64;
+        for (f, t) in s.plan.faults.iter_mut().zip(&starts) {
+            f.start_gps_s = t + off;
+        }
+        for (f, t) in s.eph.iter_mut().zip(&eph_starts) {
+            f.start_gps_s = t + off;
+        }
+        s.onset_gps_s = Some(t0 + off);
+        let rows = rows(&s, &args.esq, false, false)?;
+        let sch = schedule(&rows, window)?;
+        let a = first_alarm(&rows, None, t0 + off);
+        let b = first_alarm(&rows, Some(&sch.emitted), t0 + off);
+        if !args.quiet {
+            writeln!(
+                w,
+                "onset {} (+{off:6.1} s): first alarm every epoch {}, effective samples {}",
+                raim_gnss::time::time_of_day(t0 + off),
+                fmt_delay(a),
+                fmt_delay(b)
+            )?;
+        }
+        every.push(a);
+        sampled.push(b);
+    }
+    writeln!(
+        w,
+        "ESQ onset sweep: {n} onsets over T {window:.0} s (seed {}), delays from the true onset",
+        args.esq.esq_onset_seed
+    )?;
+    for (name, d) in [("every epoch", &every), ("effective samples", &sampled)] {
+        let mut det: Vec<f64> = d.iter().flatten().copied().collect();
+        det.sort_by(f64::total_cmp);
+        let (lo, hi) = super::stats::clopper_pearson(det.len(), n, 0.95);
+        let q = |p: f64| {
+            let (e, l, h) = super::stats::quantile_ci(&det, p, 0.95);
+            let f = |x: Option<f64>| x.map_or("-".into(), |x| format!("{x:.0}"));
+            format!("{} s [{}, {}]", f(e), f(l), f(h))
+        };
+        writeln!(
+            w,
+            "  {name:18} detected {}/{n} = {:.3} [{lo:.3}, {hi:.3}] | delay median {} | p95 {}",
+            det.len(),
+            det.len() as f64 / n as f64,
+            q(0.5),
+            q(0.95)
+        )?;
+    }
+    Ok(())
+}
+
+/// `--esq`: N*, dT_e, resampling, the separation test.
+fn run_esq(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Result<()> {
+    let window = args.esq.esq_window_s;
+    let Schedule {
+        emitted,
+        dte,
+        windows,
+    } = schedule(rows, window)?;
+    for (i, r) in rows.iter().enumerate() {
         if !args.quiet && !args.json {
             writeln!(
                 w,
@@ -382,16 +502,9 @@ fn run_esq(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
     };
     let all_alarm = |r: &Row| r.araim_alarm;
     let d_all = first_after(rows, s.onset_gps_s, all_alarm);
-    let d_esq = {
-        let t0 = s.onset_gps_s;
-        t0.and_then(|t0| {
-            rows.iter()
-                .zip(&emitted)
-                .filter(|(r, _)| r.t_gps_s >= t0 - 1e-3)
-                .find(|(r, e)| **e && r.araim_alarm)
-                .map(|(r, _)| r.t_gps_s - t0)
-        })
-    };
+    let d_esq = s
+        .onset_gps_s
+        .and_then(|t0| first_alarm(rows, Some(&emitted), t0));
     let faulted_alarmed = rows.iter().filter(|r| r.faulted && r.araim_alarm).count();
     let faulted_alarmed_emitted = rows
         .iter()
@@ -536,7 +649,12 @@ pub fn run(args: &ReplayArgs) -> Result<()> {
     if args.esq.esq_mcusum {
         super::decorrelate::run(args, &mut w)?;
     }
-    if args.esq.esq || args.esq.pca {
+    if args.esq.esq_onset_sweep.is_some() && !args.esq.esq {
+        bail!("--esq-onset-sweep needs --esq");
+    }
+    if let (true, Some(n)) = (args.esq.esq, args.esq.esq_onset_sweep) {
+        run_sweep(args, n, &mut w)?;
+    } else if args.esq.esq || args.esq.pca {
         let s = setup(args)?;
         let rows = rows(&s, &args.esq, args.esq.pca, args.esq.pca)?;
         if args.esq.esq {

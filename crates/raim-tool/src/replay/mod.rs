@@ -17,6 +17,7 @@ pub mod pf;
 mod plot;
 pub mod record;
 pub mod stanford;
+pub mod stats;
 pub mod summary;
 pub mod usage;
 

@@ -12,8 +12,12 @@ use std::path::Path;
 use anyhow::{anyhow, Result};
 use plotters::prelude::*;
 
-use super::esq::{false_alarms, first_after, Row, Setup};
+use super::esq::{false_alarms, first_after, Row, Setup, PCA_SLOTS};
 use super::ReplayArgs;
+use raim_core::araim::pca::PcaTest;
+
+/// Q^-1(0.005): the 99th percentile of |u| for u ~ N(0, 1).
+const Z_0_005: f64 = 2.575_829_303_549;
 
 /// Whether a method alarmed on an epoch.
 type Hit = dyn Fn(&Row) -> bool;
@@ -35,7 +39,7 @@ pub fn run(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
                     t.n_complete,
                     t.k,
                     t.ratio,
-                    verdict(t.fault)
+                    verdict(!(t.ratio <= args.esq.pca_null_scale))
                 ),
                 None => "warming up                    ".into(),
             };
@@ -61,7 +65,13 @@ pub fn run(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
             )?;
         }
     }
-    let pca_hit = |r: &Row| r.pca.is_some_and(|t| t.fault);
+    let scale = args.esq.pca_null_scale;
+    if !(scale.is_finite() && scale > 0.0) {
+        anyhow::bail!("--pca-null-scale {scale}: must be finite and positive");
+    }
+    // The alarm at threshold c T_q: the statistic max_q |dx_q| / T_q above c
+    // (NaN alarms, as in the core's test).
+    let pca_hit = move |r: &Row| r.pca.is_some_and(|t| !(t.ratio <= scale));
     let tested = rows.iter().filter(|r| r.pca.is_some()).count();
     let ks: Vec<usize> = rows.iter().filter_map(|r| r.pca.map(|t| t.k)).collect();
     let k_min = ks.iter().copied().min().unwrap_or(0);
@@ -103,6 +113,47 @@ pub fn run(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
         w,
         "  PCA ratio: max before onset {clean_max:.2}, max in the first 5 faulted epochs {onset_max:.2}"
     )?;
+    // The false-alarm count against the allocation: clean tested epochs,
+    // the binomial 99 % bound at p_fa; and the empirical null: the
+    // standardized separations u = dx_q / sigma_q on the clean tested
+    // epochs (N(0, 1) per axis under the nominal null), their 99th
+    // percentile of |u| over Q^-1(0.005) as a Gaussian scale fitted on
+    // this file.
+    let clean: Vec<&PcaTest<PCA_SLOTS>> = rows
+        .iter()
+        .filter(|r| !r.faulted)
+        .filter_map(|r| r.pca.as_ref())
+        .collect();
+    let fa = rows.iter().filter(|r| !r.faulted && pca_hit(r)).count();
+    let bound = super::stats::binomial_bound_99(clean.len(), args.esq.pca_pfa);
+    writeln!(
+        w,
+        "  PCA false alarms against the allocation: {fa} in {} clean tested epochs at p_fa {:e}, threshold {scale} x nominal; binomial 99 % bound {bound}: {}",
+        clean.len(),
+        args.esq.pca_pfa,
+        if fa as u64 <= bound { "within" } else { "OUTSIDE" }
+    )?;
+    let mut u: Vec<f64> = clean
+        .iter()
+        .filter(|t| t.k < t.n_complete)
+        .flat_map(|t| {
+            t.separation_m
+                .iter()
+                .zip(t.sigma_m.iter())
+                .filter(|(_, s)| **s > 0.0)
+                .map(|(d, s)| (d / s).abs())
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    u.sort_by(f64::total_cmp);
+    if let (Some(q99), Some(max)) = (super::stats::quantile_ci(&u, 0.99, 0.95).0, u.last()) {
+        writeln!(
+            w,
+            "  PCA standardized separations |dx_q / sigma_q| on clean epochs: {} values, 99th percentile {q99:.3}, max {max:.3}; fitted Gaussian scale {:.3}",
+            u.len(),
+            q99 / Z_0_005
+        )?;
+    }
     let refused = rows.iter().filter(|r| !r.errors.is_empty()).count();
     if refused > 0 {
         writeln!(w, "  epochs with a refusal (listed per epoch): {refused}")?;
