@@ -859,11 +859,18 @@ fn linearise<'a, const N: usize, T: Real>(
             ),
         };
         // The builder's columns are those of the selected systems, so the
-        // system has one; a position in `cols` is < MAX_SYSTEMS, the
-        // length of `clock`.
-        let col = clock_column(&cols, s.id.system).unwrap_or(0);
-        #[allow(clippy::indexing_slicing)]
-        let z = s.pseudorange_m - range - clock[col];
+        // system has one; a system without a column would have no clock
+        // term in its row (`push`), and none is subtracted here either.
+        let clock_m = cols
+            .iter()
+            .zip(clock.iter())
+            .find(|(c, _)| **c == Some(s.id.system))
+            .map(|(_, v)| *v);
+        debug_assert!(clock_m.is_some(), "every selected system has a column");
+        let z = match clock_m {
+            Some(c) => s.pseudorange_m - range - c,
+            None => s.pseudorange_m - range,
+        };
         b.push(i, s.id, u, z, sigma, el)?;
     }
     Ok(())

@@ -898,6 +898,16 @@ impl<T: Real, const N: usize> ModeBases<'_, T, N> {
         coupled: &mut subset::Coupling<T, N>,
         scratch: &mut Base<T, N>,
     ) -> Result<SubsetStats<T>, Deficient> {
+        let mut consts = ev.consts;
+        for (j, &cs) in layout.sats.iter().enumerate() {
+            if cs != 0 && cs & ev.sats == cs {
+                consts |= 1u8 << j;
+            }
+        }
+        if consts == 0 {
+            // Satellites only (most modes): the all-in-view base.
+            return subset::downdate_coupled(self.geo, self.base0, ev.sats, Some(coupled));
+        }
         let mut removed = 0u64;
         let mut dropped = 0u16;
         let mut base = ModeBase::AllInView;
@@ -907,8 +917,7 @@ impl<T: Real, const N: usize> ModeBases<'_, T, N> {
             .zip(layout.clock_column.iter())
             .zip(self.const_bases.iter().zip(self.const_status.iter()));
         for (j, ((&cs, &col), (const_base, status))) in per_system.enumerate() {
-            let emptied = cs != 0 && cs & ev.sats == cs;
-            if ev.consts & (1u8 << j) != 0 || emptied {
+            if consts & (1u8 << j) != 0 {
                 removed |= cs;
                 dropped |= col;
                 base = match base {
@@ -979,14 +988,12 @@ enum Axis {
 impl Axis {
     const ALL: [Axis; 3] = [Axis::East, Axis::North, Axis::Up];
 
-    /// This axis's component of a per-axis triple.
+    /// This axis's component of a per-axis triple (E, N, U order).
+    // In range: the discriminants are 0, 1 and 2, so the index needs (and
+    // compiles to) no check.
+    #[allow(clippy::indexing_slicing)]
     fn of<T: Copy>(self, v: &[T; 3]) -> T {
-        let [east, north, up] = *v;
-        match self {
-            Axis::East => east,
-            Axis::North => north,
-            Axis::Up => up,
-        }
+        v[self as usize]
     }
 }
 

@@ -735,11 +735,15 @@ fn exclude_set<const N: usize, P: Real>(
     }
     match solve_into(cfg, epoch, &mask, &mut scratch.solution) {
         Ok(()) => {}
-        Err(RaimError::RankDeficient { .. }) | Err(RaimError::TooFewSatellites { .. }) => {
-            let excluded = first_id(sol, best.set).unwrap_or_default();
-            return Ok(Excluded::Subset(Some(AlarmCause::SubsetGeometry {
-                excluded,
-            })));
+        Err(e @ (RaimError::RankDeficient { .. } | RaimError::TooFewSatellites { .. })) => {
+            // The set is a non-empty covering of the solution's rows, so it
+            // names a satellite; without one the geometry error stands.
+            return match first_id(sol, best.set) {
+                Some(excluded) => Ok(Excluded::Subset(Some(AlarmCause::SubsetGeometry {
+                    excluded,
+                }))),
+                None => Err(e),
+            };
         }
         Err(e) => return Err(e),
     }
