@@ -72,6 +72,32 @@ impl System {
             System::Qzss => 4,
         }
     }
+
+    /// This system's entry of a per-system table (in [`System::ALL`]
+    /// order): the table has one entry per system, so there is no index
+    /// to check.
+    pub fn entry<T>(self, table: &[T; MAX_SYSTEMS]) -> &T {
+        let [gps, galileo, beidou, glonass, qzss] = table;
+        match self {
+            System::Gps => gps,
+            System::Galileo => galileo,
+            System::Beidou => beidou,
+            System::Glonass => glonass,
+            System::Qzss => qzss,
+        }
+    }
+
+    /// [`System::entry`], mutable.
+    pub fn entry_mut<T>(self, table: &mut [T; MAX_SYSTEMS]) -> &mut T {
+        let [gps, galileo, beidou, glonass, qzss] = table;
+        match self {
+            System::Gps => gps,
+            System::Galileo => galileo,
+            System::Beidou => beidou,
+            System::Glonass => glonass,
+            System::Qzss => qzss,
+        }
+    }
 }
 
 /// A satellite's identity: constellation and PRN (slot number for GLONASS).

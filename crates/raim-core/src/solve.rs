@@ -652,24 +652,14 @@ fn gauss_newton<const N: usize, T: Real>(
     // cache, valid while `cached` (same linearisation, on the surface).
     let mut b = Builder::<N, T>::new(selected(sats, mask).map(|(_, s)| s.id.system));
     let cols = b.cols;
-    let mut cached = false;
-    let mut lin: Option<Linearisation> = None;
     // The ECEF-to-ENU rotation of `lin` in `T`, for the lines of sight.
     let mut rot = Matrix3::<T>::identity();
-    let (mut x, start_clock) = match start {
-        Start::Cold => (apriori_m.unwrap_or([0.0; 3]), [None; MAX_SYSTEMS]),
-        Start::Fix(f) => (f.position_ecef_m, f.clock_m),
-        Start::Sibling(s) => {
-            lin = s.linearisation;
-            if lin.is_some() {
-                cached = sibling_rows(&mut b, s, selected(sats, mask));
-            }
-            (
-                s.position_ecef_m.or(apriori_m).unwrap_or([0.0; 3]),
-                s.clock_m,
-            )
-        }
-    };
+    let StartPoint {
+        mut x,
+        clock_m: start_clock,
+        mut lin,
+        mut cached,
+    } = starting_point(start, apriori_m, &mut b, sats, mask);
     let mut clock = column_clocks(&cols, &start_clock);
     let mut last_step_m = f64::INFINITY;
     let mut last_full = false;
@@ -710,20 +700,8 @@ fn gauss_newton<const N: usize, T: Real>(
         } else {
             b.least_squares()?.map(T::to_f64)
         };
-        let step_local = [dx[0], dx[1], dx[2]];
-        let step = match &frame {
-            Some(l) => unrotate(&l.rotation, step_local),
-            None => step_local,
-        };
-        let step_m = libm::sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2]);
-        // Converged: the step is below the bound, or (an engine in a
-        // precision coarser than f64, on a weak geometry) two consecutive
-        // parity iterations have stalled at the rounding floor.
-        let stalled = T::EPS.to_f64() > f64::EPSILON
-            && full
-            && last_full
-            && step_m < STALL_MAX_M
-            && !(step_m < STALL_RATIO * last_step_m);
+        let (step, step_m) = position_step(frame.as_ref(), &dx);
+        let stalled = stalled::<T>(full && last_full, step_m, last_step_m);
         if let (Some(l), true) = (frame, step_m < converged_m || stalled) {
             // Converged: this iteration's model, at x, is the solution.
             if !full {
@@ -749,6 +727,76 @@ fn gauss_newton<const N: usize, T: Real>(
         iterations,
         step_m: last_step_m,
     })
+}
+
+/// Where Gauss-Newton starts: the position, the clocks by system, and the
+/// linearisation in force with whether the builder's per-row elevations
+/// and sigmas are valid for it (`cached`).
+struct StartPoint {
+    x: [f64; 3],
+    clock_m: [Option<f64>; MAX_SYSTEMS],
+    lin: Option<Linearisation>,
+    cached: bool,
+}
+
+/// The [`StartPoint`] of `start`: a cold start at the a-priori position
+/// (or the Earth's centre) with no clocks, a fix's position and clocks,
+/// or a sibling's, whose linearisation and rows `b` takes over
+/// ([`sibling_rows`]).
+fn starting_point<const N: usize, T: Real>(
+    start: Start<'_, N, T>,
+    apriori_m: Option<[f64; 3]>,
+    b: &mut Builder<N, T>,
+    sats: &[RangeObservation],
+    mask: &[bool; N],
+) -> StartPoint {
+    match start {
+        Start::Cold => StartPoint {
+            x: apriori_m.unwrap_or([0.0; 3]),
+            clock_m: [None; MAX_SYSTEMS],
+            lin: None,
+            cached: false,
+        },
+        Start::Fix(f) => StartPoint {
+            x: f.position_ecef_m,
+            clock_m: f.clock_m,
+            lin: None,
+            cached: false,
+        },
+        Start::Sibling(s) => {
+            let lin = s.linearisation;
+            let cached = lin.is_some() && sibling_rows(b, s, selected(sats, mask));
+            StartPoint {
+                x: s.position_ecef_m.or(apriori_m).unwrap_or([0.0; 3]),
+                clock_m: s.clock_m,
+                lin,
+                cached,
+            }
+        }
+    }
+}
+
+/// The position part of the state step `dx` in ECEF (rotated back from
+/// ENU when the iteration runs in a local frame), and its length, m.
+fn position_step(frame: Option<&Linearisation>, dx: &[f64; MAX_STATES]) -> ([f64; 3], f64) {
+    let [e, n, u, ..] = *dx;
+    let step = match frame {
+        Some(l) => unrotate(&l.rotation, [e, n, u]),
+        None => [e, n, u],
+    };
+    let step_m = libm::sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2]);
+    (step, step_m)
+}
+
+/// Gauss-Newton has stalled at the rounding floor: in a precision coarser
+/// than f64 (on a weak geometry), two consecutive parity iterations
+/// (`both_parity`) whose step, below [`STALL_MAX_M`], no longer shrinks by
+/// [`STALL_RATIO`]. Counted as converged.
+fn stalled<T: Real>(both_parity: bool, step_m: f64, last_step_m: f64) -> bool {
+    T::EPS.to_f64() > f64::EPSILON
+        && both_parity
+        && step_m < STALL_MAX_M
+        && !(step_m < STALL_RATIO * last_step_m)
 }
 
 /// The satellites `mask` selects, with their index in `sats`, in order (a
@@ -859,11 +907,18 @@ fn linearise<'a, const N: usize, T: Real>(
             ),
         };
         // The builder's columns are those of the selected systems, so the
-        // system has one; a position in `cols` is < MAX_SYSTEMS, the
-        // length of `clock`.
-        let col = clock_column(&cols, s.id.system).unwrap_or(0);
-        #[allow(clippy::indexing_slicing)]
-        let z = s.pseudorange_m - range - clock[col];
+        // system has one; a system without a column would have no clock
+        // term in its row (`push`), and none is subtracted here either.
+        let clock_m = cols
+            .iter()
+            .zip(clock.iter())
+            .find(|(c, _)| **c == Some(s.id.system))
+            .map(|(_, v)| *v);
+        debug_assert!(clock_m.is_some(), "every selected system has a column");
+        let z = match clock_m {
+            Some(c) => s.pseudorange_m - range - c,
+            None => s.pseudorange_m - range,
+        };
         b.push(i, s.id, u, z, sigma, el)?;
     }
     Ok(())

@@ -153,6 +153,15 @@ enum Stage {
     Multi,
 }
 
+/// A consistent candidate: its mode's index and constellation events, and
+/// the satellites it removes.
+#[derive(Clone, Copy)]
+struct Candidate {
+    mode: usize,
+    consts: u8,
+    removed: u64,
+}
+
 /// The consistent candidates of one stage, folded as they come (no list:
 /// a stage may hold up to K of them). A candidate contained in all the
 /// others is the one whose removed set equals their intersection.
@@ -166,11 +175,14 @@ struct Found {
     /// The intersection of all the removed sets.
     meet: u64,
     /// The candidate with the fewest removed satellites (the first such).
-    smallest: Option<(usize, u64)>,
+    smallest: Option<Candidate>,
 }
 
 impl Found {
-    fn add(&mut self, k: usize, removed: u64) {
+    fn add(&mut self, candidate: Candidate) {
+        let Candidate {
+            mode: k, removed, ..
+        } = candidate;
         match self.first {
             None => {
                 self.first = Some((k, removed));
@@ -188,19 +200,19 @@ impl Found {
         }
         if self
             .smallest
-            .is_none_or(|(_, s)| removed.count_ones() < s.count_ones())
+            .is_none_or(|s| removed.count_ones() < s.removed.count_ones())
         {
-            self.smallest = Some((k, removed));
+            self.smallest = Some(candidate);
         }
     }
 
     /// The candidate to exclude, or the alarm.
-    fn decide(&self) -> Result<(usize, u64), FdeAlarm> {
+    fn decide(&self) -> Result<Candidate, FdeAlarm> {
         let Some((k0, _)) = self.first else {
             return Err(FdeAlarm::NoCandidate);
         };
         match self.smallest {
-            Some((k, removed)) if removed == self.meet => Ok((k, removed)),
+            Some(c) if c.removed == self.meet => Ok(c),
             _ => Err(FdeAlarm::Ambiguous {
                 first: k0,
                 second: self.clash.or(self.second).unwrap_or(k0),
@@ -280,26 +292,37 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
                 }
                 let removed = removed_sats(sats, ev.sats, ev.consts);
                 if self.consistent(cfg, ism, sats, removed, &mut subset, scratch, None)? {
-                    found.add(k, removed);
+                    found.add(Candidate {
+                        mode: k,
+                        consts: ev.consts,
+                        removed,
+                    });
                 }
             }
             if found.first.is_some() {
                 break;
             }
         }
-        let (k, removed) = match found.decide() {
+        let chosen = match found.decide() {
             Ok(c) => c,
             Err(alarm) => return Ok(FdeDecision::Alarm(alarm)),
         };
         // Leave the chosen subset's output in the scratch engine, its PLs
         // with the exclusion risk: 1 / N_ex of the budget (module doc).
         let share = 1.0 / n_ex.max(1) as f64;
-        self.consistent(cfg, ism, sats, removed, &mut subset, scratch, Some(share))?;
-        let consts = self.out.modes.get(k).map(|m| m.events.consts).unwrap_or(0);
+        self.consistent(
+            cfg,
+            ism,
+            sats,
+            chosen.removed,
+            &mut subset,
+            scratch,
+            Some(share),
+        )?;
         Ok(FdeDecision::Excluded {
-            mode: k,
-            sats: removed,
-            consts,
+            mode: chosen.mode,
+            sats: chosen.removed,
+            consts: chosen.consts,
         })
     }
 

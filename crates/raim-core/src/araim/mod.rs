@@ -48,9 +48,10 @@ pub use modes::{ModeEvents, MAX_EVENTS};
 pub use monitor::{Exclusion, FdeLimits, Monitor, MonitorError, SatIsm, SatelliteModels, Verdict};
 pub use subset::SubsetStats;
 
-use crate::measurement::{MAX_STATES, MAX_SYSTEMS};
+use crate::measurement::{System, MAX_SYSTEMS};
 use crate::real::Real;
 use crate::stats::dist::normal_q_inv;
+use core::ops::ControlFlow;
 use heapless::Vec;
 use modes::{EnumerationLimit, Events};
 use subset::{Base, Deficient, Geometry};
@@ -359,13 +360,15 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
     }
 
     /// Validates the inputs (every ISM and configuration field, NaN,
-    /// duplicates, capacity, constellations) and builds the geometry.
+    /// duplicates, capacity, constellations) and builds the geometry: after
+    /// it, `sats.len() = geo.n <= min(N, MAX_SATS)` and every constellation
+    /// of the ISM has a satellite and one clock column.
     fn load(
         &mut self,
         cfg: &AraimConfig,
         ism: &Ism,
         sats: &[AraimSat<T>],
-    ) -> Result<(), AraimError> {
+    ) -> Result<Constellations, AraimError> {
         cfg.validate()?;
         ism.validate()?;
         let capacity = N.min(MAX_SATS);
@@ -377,13 +380,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         }
         for (i, s) in sats.iter().enumerate() {
             s.validate(i)?;
-            if ism
-                .p_const
-                .get(s.id.system.index())
-                .copied()
-                .flatten()
-                .is_none()
-            {
+            if s.id.system.entry(&ism.p_const).is_none() {
                 return Err(AraimError::MissingConstellationIsm {
                     system: s.id.system,
                     index: i,
@@ -400,19 +397,23 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         }
         // One clock column per constellation in use, in System::ALL order.
         let mut col_of = [0usize; MAX_SYSTEMS];
+        let mut layout = Constellations {
+            sats: [0; MAX_SYSTEMS],
+            clock_column: [0; MAX_SYSTEMS],
+        };
         let mut m = 3;
-        for (j, p) in ism.p_const.iter().enumerate() {
+        for (((&system, p), col), dropped) in System::ALL
+            .iter()
+            .zip(ism.p_const.iter())
+            .zip(col_of.iter_mut())
+            .zip(layout.clock_column.iter_mut())
+        {
             if p.is_some() {
-                let system = crate::measurement::System::ALL
-                    .get(j)
-                    .copied()
-                    .unwrap_or_default();
-                if !sats.iter().any(|s| s.id.system.index() == j) {
+                if !sats.iter().any(|s| s.id.system == system) {
                     return Err(AraimError::EmptyConstellation { system });
                 }
-                if let Some(c) = col_of.get_mut(j) {
-                    *c = m;
-                }
+                *col = m;
+                *dropped = 1u16 << m;
                 m += 1;
             }
         }
@@ -422,41 +423,35 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
                 need: m,
             });
         }
-        let zero = T::of(0.0);
+        let (zero, one) = (T::of(0.0), T::of(1.0));
         let geo = &mut self.geo;
         geo.n = sats.len();
         geo.m = m;
-        for (i, s) in sats.iter().enumerate() {
-            let col = col_of.get(s.id.system.index()).copied().unwrap_or(3);
-            if let Some(g) = geo.g.get_mut(i) {
-                *g = [zero; MAX_STATES];
-                for (x, v) in g.iter_mut().zip(s.g_enu.iter()) {
-                    *x = *v;
-                }
-                if let Some(x) = g.get_mut(col) {
-                    *x = T::of(1.0);
-                }
+        let rows = geo
+            .g
+            .iter_mut()
+            .zip(geo.col.iter_mut())
+            .zip(geo.w.iter_mut().zip(geo.c_int.iter_mut()))
+            .zip(geo.c_acc.iter_mut().zip(geo.b_nom.iter_mut()))
+            .zip(geo.y.iter_mut());
+        for (i, (((((g, col), (w, c_int)), (c_acc, b_nom)), y), s)) in rows.zip(sats).enumerate() {
+            let clock = *s.id.system.entry(&col_of);
+            // G row: ENU, then the one-hot clock column of its constellation.
+            for (c, x) in g.iter_mut().enumerate() {
+                *x = if c == clock { one } else { zero };
             }
-            if let Some(x) = geo.col.get_mut(i) {
-                *x = col;
+            for (x, v) in g.iter_mut().zip(s.g_enu.iter()) {
+                *x = *v;
             }
-            if let Some(x) = geo.w.get_mut(i) {
-                *x = T::of(1.0) / s.c_int_m2;
-            }
-            if let Some(x) = geo.c_int.get_mut(i) {
-                *x = s.c_int_m2;
-            }
-            if let Some(x) = geo.c_acc.get_mut(i) {
-                *x = s.c_acc_m2;
-            }
-            if let Some(x) = geo.b_nom.get_mut(i) {
-                *x = s.b_nom_m;
-            }
-            if let Some(x) = geo.y.get_mut(i) {
-                *x = s.residual_m;
-            }
+            *col = clock;
+            *w = one / s.c_int_m2;
+            *c_int = s.c_int_m2;
+            *c_acc = s.c_acc_m2;
+            *b_nom = s.b_nom_m;
+            *y = s.residual_m;
+            *s.id.system.entry_mut(&mut layout.sats) |= bit(i);
         }
-        Ok(())
+        Ok(layout)
     }
 
     /// Processes one epoch (SPEC §9.1 steps 1-6).
@@ -505,6 +500,12 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         self.process_impl(cfg, ism, sats, 1.0, false)
     }
 
+    /// The epoch in the ADD's order: the all-in-view solution and the
+    /// constellation bases (step 2), the modes (step 1), their subsets
+    /// (step 3), the tests and EMT (steps 4 and 6), then, unless the
+    /// unmonitored probability already denies service, the protection
+    /// levels (step 5) and the availability limits. Each step that ends
+    /// the epoch early leaves its cause in `out.unavailable`.
     fn process_impl(
         &mut self,
         cfg: &AraimConfig,
@@ -514,15 +515,50 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         with_pls: bool,
     ) -> Result<&AraimOutput<T, K>, AraimError> {
         self.budget_share = budget_share;
-        self.load(cfg, ism, sats)?;
-        let zero = T::of(0.0);
-        let n = self.geo.n;
+        let layout = self.load(cfg, ism, sats)?;
         // In place: `AraimOutput::default()` would build and copy the
         // whole K-mode list.
         self.out.reset();
+        self.all_in_view()?;
+        self.constellation_bases(ism, &layout);
+        let Some(p_exceed) = self.fault_modes(cfg, ism, sats) else {
+            return Ok(&self.out);
+        };
+        if self
+            .subset_modes(cfg, &layout, p_exceed, with_pls)
+            .is_break()
+        {
+            return Ok(&self.out);
+        }
+        self.separation_tests(cfg);
+        let p_unmon = self.out.p_unmon;
+        if p_unmon > cfg.p_thres {
+            self.out.unavailable = Some(Unavailable::Unmonitored {
+                p_unmon,
+                p_thres: cfg.p_thres,
+            });
+            return Ok(&self.out);
+        }
+        if !with_pls {
+            self.out.unavailable = Some(Unavailable::PlNotSolved { axis: 0 });
+            return Ok(&self.out);
+        }
+        if let Err(axis) = self.protection_levels(cfg, budget_share) {
+            self.out.unavailable = Some(Unavailable::PlNotSolved { axis });
+            return Ok(&self.out);
+        }
+        self.availability(cfg);
+        Ok(&self.out)
+    }
 
-        // Step 2: all in view.
-        let zeros = [[zero; N]; 3];
+    /// Step 2, all in view: P0 = (G^T W G)^-1 and S^(0) = P0 G^T W
+    /// (`subset::factor`), then per axis q sigma_q^(0) = sqrt((P0)_qq)
+    /// (= sqrt(sum_i S_qi^2 C_int,ii)), b_q^(0) = sum_i |S_qi| b_nom,i and
+    /// the correction sum_i S_qi y_i; and step 6's sigma_v,acc =
+    /// sqrt(sum_i S_3i^2 C_acc,ii). Fills what every mode's downdate reads
+    /// (the all-in-view base, its packed rows and coupling).
+    fn all_in_view(&mut self) -> Result<(), AraimError> {
+        let zeros = [[T::of(0.0); N]; 3];
         subset::factor(&self.geo, 0, 0, &zeros, &mut self.base0).map_err(|d| {
             AraimError::RankDeficient {
                 column: d.column,
@@ -533,93 +569,84 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         self.base0.d = zeros;
         subset::pack(&self.geo, &self.s0, &mut self.base0);
         subset::coupling(&self.geo, &self.base0, &self.s0, &mut self.coupled);
+        let geo = &self.geo;
         let out = &mut self.out;
-        for q in 0..3 {
-            let row = self.s0.get(q).copied().unwrap_or([zero; N]);
-            let var = self
-                .base0
-                .p
-                .get(q)
-                .and_then(|r| r.get(q))
-                .copied()
-                .unwrap_or(zero);
-            let mut b = zero;
-            let mut x = zero;
-            for (i, s) in row.iter().enumerate().take(n) {
-                b += s.abs() * self.geo.b_nom.get(i).copied().unwrap_or(zero);
-                x += *s * self.geo.y.get(i).copied().unwrap_or(zero);
-            }
-            if let (Some(a), Some(bb), Some(c)) = (
-                out.sigma0_m.get_mut(q),
-                out.bias0_m.get_mut(q),
-                out.correction_enu_m.get_mut(q),
-            ) {
-                *a = var.sqrt();
-                *bb = b;
-                *c = x;
-            }
+        // MAX_STATES >= 3: the position block of P0 is its first three rows.
+        let [p_e, p_n, p_u, ..] = &self.base0.p;
+        let variance = [p_e[0], p_n[1], p_u[2]];
+        let axes = self
+            .s0
+            .iter()
+            .zip(variance)
+            .zip(out.sigma0_m.iter_mut())
+            .zip(out.bias0_m.iter_mut().zip(out.correction_enu_m.iter_mut()));
+        for (((row, var), sigma), (bias, correction)) in axes {
+            *sigma = var.sqrt();
+            (*bias, *correction) = nominal_bias_and_correction(geo, row);
         }
-        let mut acc = zero;
-        if let Some(row) = self.s0.get(2) {
-            for (i, s) in row.iter().enumerate().take(n) {
-                acc += *s * *s * self.geo.c_acc.get(i).copied().unwrap_or(zero);
-            }
-        }
-        out.sigma_v_acc_m = acc.sqrt();
+        let [_, _, s_up] = &self.s0;
+        out.sigma_v_acc_m = accuracy_sigma(geo, s_up);
+        Ok(())
+    }
 
-        // Constellation bases: clock column dropped.
-        let mut const_sats = [0u64; MAX_SYSTEMS];
-        for (i, s) in sats.iter().enumerate() {
-            if let Some(x) = const_sats.get_mut(s.id.system.index()) {
-                *x |= bit(i);
-            }
-        }
-        let mut const_cols = [0u16; MAX_SYSTEMS];
-        for (j, p) in ism.p_const.iter().enumerate() {
+    /// Step 3's constellation bases: per constellation of the ISM, the
+    /// subset without its satellites and its clock column, factored once;
+    /// every mode that removes that constellation downdates it. A singular
+    /// base is kept as its [`Deficient`] (those modes are unmonitorable).
+    fn constellation_bases(&mut self, ism: &Ism, layout: &Constellations) {
+        let per_system = ism
+            .p_const
+            .iter()
+            .zip(layout.sats.iter().zip(layout.clock_column.iter()))
+            .zip(
+                self.const_bases
+                    .iter_mut()
+                    .zip(self.const_status.iter_mut()),
+            );
+        for ((p, (&removed, &dropped)), (base, status)) in per_system {
             if p.is_none() {
                 continue;
             }
-            let removed = const_sats.get(j).copied().unwrap_or(0);
-            let col = sats
-                .iter()
-                .zip(self.geo.col.iter())
-                .find(|(s, _)| s.id.system.index() == j)
-                .map(|(_, c)| *c)
-                .unwrap_or(0);
-            let dropped = 1u16 << col;
-            if let Some(x) = const_cols.get_mut(j) {
-                *x = dropped;
-            }
-            if let (Some(base), Some(st)) =
-                (self.const_bases.get_mut(j), self.const_status.get_mut(j))
-            {
-                *st = subset::factor(&self.geo, removed, dropped, &self.s0, base).err();
-                subset::pack(&self.geo, &self.s0, base);
-            }
+            *status = subset::factor(&self.geo, removed, dropped, &self.s0, base).err();
+            subset::pack(&self.geo, &self.s0, base);
         }
+    }
 
-        // Step 1: the fault modes.
+    /// Step 1, the fault modes: every combination of at most N_fault,max
+    /// satellite and constellation events, N_fault,max the smallest r with
+    /// P(more than r events) <= P_THRES (`modes::enumerate`), into
+    /// `self.events`. Returns P(more than N_fault,max events); None, with
+    /// the cause in `out.unavailable`, when the list cannot be built.
+    fn fault_modes(&mut self, cfg: &AraimConfig, ism: &Ism, sats: &[AraimSat<T>]) -> Option<f64> {
+        // `load` bounds sats.len() by MAX_SATS: the zips below keep them all.
         let mut p_sat = [0.0f64; MAX_SATS];
         let mut sat_system = [0u8; MAX_SATS];
-        for (i, s) in sats.iter().enumerate() {
-            if let (Some(p), Some(sys)) = (p_sat.get_mut(i), sat_system.get_mut(i)) {
-                *p = s.p_sat;
-                *sys = s.id.system.index() as u8;
-            }
+        for ((p, sys), s) in p_sat.iter_mut().zip(sat_system.iter_mut()).zip(sats) {
+            *p = s.p_sat;
+            *sys = s.id.system.index() as u8;
         }
         let mut p_const: Vec<(u8, f64), MAX_SYSTEMS> = Vec::new();
         for (j, p) in ism.p_const.iter().enumerate() {
             if let Some(p) = *p {
-                let _ = p_const.push((j as u8, p));
+                let pushed = p_const.push((j as u8, p));
+                debug_assert!(pushed.is_ok(), "one entry per system: MAX_SYSTEMS");
             }
         }
+        let n = sats.len().min(MAX_SATS);
+        let (p_sat, _) = p_sat.split_at(n);
+        let (sat_system, _) = sat_system.split_at(n);
         let events = Events {
-            p_sat: p_sat.get(..n).unwrap_or(&[]),
-            sat_system: sat_system.get(..n).unwrap_or(&[]),
+            p_sat,
+            sat_system,
             p_const: &p_const,
         };
-        let enumeration = match modes::enumerate(&events, cfg.p_thres, &mut self.events) {
-            Ok(e) => e,
+        let out = &mut self.out;
+        match modes::enumerate(&events, cfg.p_thres, &mut self.events) {
+            Ok(enumeration) => {
+                out.max_faults = enumeration.max_faults;
+                out.p_exceed = enumeration.p_exceed;
+                Some(enumeration.p_exceed)
+            }
             Err(limit) => {
                 out.unavailable = Some(match limit {
                     EnumerationLimit::TooManyEvents { p_exceed_at_max } => {
@@ -629,18 +656,30 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
                         Unavailable::ModeCapacity { needed, capacity }
                     }
                 });
-                return Ok(&self.out);
+                None
             }
-        };
-        out.max_faults = enumeration.max_faults;
-        out.p_exceed = enumeration.p_exceed;
+        }
+    }
 
-        // Step 3: per mode, from its base.
-        let mut p_unmon = enumeration.p_exceed;
-        // Tests only (FDE candidates): a mode whose separation exceeds the
-        // threshold at K_fa for *all* the enumerated modes (>= the
-        // monitored ones, so that K_fa is at least the true one) fails its
-        // test whatever the rest: the subset is inconsistent, stop there.
+    /// Step 3 for every mode: its subset statistics (sigma^(k), b^(k),
+    /// sigma_ss^(k) and the separation) by a downdate of its base
+    /// ([`ModeBases::subset`]); an unmonitorable mode adds its prior to
+    /// P_unmon = P(more than N_fault,max events) + those priors. Fills
+    /// `out.modes`, `out.p_unmon` and `out.n_monitored`.
+    ///
+    /// Tests only (FDE candidates, `!with_pls`): a mode whose separation
+    /// exceeds the threshold at K_fa for *all* the enumerated modes (>=
+    /// the monitored ones, so that K_fa is at least the true one) fails its
+    /// test whatever the rest: the subset is inconsistent, and the epoch
+    /// stops there (`Break`, marked `PlNotSolved { axis: 0 }`).
+    fn subset_modes(
+        &mut self,
+        cfg: &AraimConfig,
+        layout: &Constellations,
+        p_exceed: f64,
+        with_pls: bool,
+    ) -> ControlFlow<()> {
+        let zero = T::of(0.0);
         let k_upper = if with_pls {
             [zero; 3]
         } else {
@@ -648,47 +687,17 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             let (kh, kv) = (kh.unwrap_or(f64::INFINITY), kv.unwrap_or(f64::INFINITY));
             [T::of(kh), T::of(kh), T::of(kv)]
         };
+        let bases = ModeBases {
+            geo: &self.geo,
+            s0: &self.s0,
+            base0: &self.base0,
+            const_bases: &self.const_bases,
+            const_status: &self.const_status,
+        };
+        let out = &mut self.out;
+        let mut p_unmon = p_exceed;
         for ev in self.events.iter() {
-            let mut consts = ev.consts;
-            for (j, &cs) in const_sats.iter().enumerate() {
-                if cs != 0 && cs & ev.sats == cs {
-                    consts |= 1u8 << j;
-                }
-            }
-            let mut removed = 0u64;
-            let mut dropped = 0u16;
-            let mut count = 0;
-            let mut single = 0usize;
-            for j in 0..MAX_SYSTEMS {
-                if consts & (1u8 << j) != 0 {
-                    removed |= const_sats.get(j).copied().unwrap_or(0);
-                    dropped |= const_cols.get(j).copied().unwrap_or(0);
-                    count += 1;
-                    single = j;
-                }
-            }
-            let extra = ev.sats & !removed;
-            let result = match count {
-                0 => {
-                    subset::downdate_coupled(&self.geo, &self.base0, extra, Some(&mut self.coupled))
-                }
-                1 => match self.const_status.get(single).copied().flatten() {
-                    Some(d) => Err(d),
-                    None => match self.const_bases.get(single) {
-                        Some(base) => subset::downdate(&self.geo, base, extra),
-                        None => Err(Deficient {
-                            column: 0,
-                            pivot: 0.0,
-                        }),
-                    },
-                },
-                _ => subset::factor(&self.geo, removed, dropped, &self.s0, &mut self.scratch)
-                    .and_then(|()| {
-                        subset::pack(&self.geo, &self.s0, &mut self.scratch);
-                        subset::downdate(&self.geo, &self.scratch, extra)
-                    }),
-            };
-            let mode = match result {
+            let mode = match bases.subset(layout, ev, &mut self.coupled, &mut self.scratch) {
                 Ok(stats) => FaultMode {
                     events: *ev,
                     status: ModeStatus::Monitored,
@@ -710,83 +719,85 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             };
             let certain_failure = !with_pls
                 && mode.status == ModeStatus::Monitored
-                && (0..3).any(|q| {
-                    let sep = mode.stats.separation_m.get(q).copied().unwrap_or(zero);
-                    let ss = mode.stats.sigma_ss_m.get(q).copied().unwrap_or(zero);
-                    sep.abs() > k_upper.get(q).copied().unwrap_or(zero) * ss
+                && mode
+                    .stats
+                    .separation_m
+                    .iter()
+                    .zip(mode.stats.sigma_ss_m.iter())
+                    .zip(k_upper.iter())
+                    .any(|((sep, ss), k)| sep.abs() > *k * *ss);
+            if out.modes.push(mode).is_err() {
+                // `events` and `modes` share the capacity K, so this is
+                // unreachable; were it reached, the epoch has no service
+                // rather than a shortened mode list.
+                debug_assert!(false, "events and modes share the capacity K");
+                out.unavailable = Some(Unavailable::ModeCapacity {
+                    needed: self.events.len(),
+                    capacity: K,
                 });
-            // Cannot fail: `events` and `modes` share the capacity K.
-            let _ = out.modes.push(mode);
+                return ControlFlow::Break(());
+            }
             if certain_failure {
                 out.detection_passed = false;
                 out.unavailable = Some(Unavailable::PlNotSolved { axis: 0 });
-                return Ok(&self.out);
+                return ControlFlow::Break(());
             }
         }
         out.p_unmon = p_unmon;
-        let n_mon = out
+        out.n_monitored = out
             .modes
             .iter()
             .filter(|m| m.status == ModeStatus::Monitored)
             .count();
-        out.n_monitored = n_mon;
+        ControlFlow::Continue(())
+    }
 
-        // Step 4: thresholds and the solution-separation tests.
-        if n_mon > 0 {
-            let [kh, kv] = k_fa(&mut self.k_fa_memo, cfg, n_mon);
+    /// Step 4: K_fa,q = Q^-1(P_FA_HOR / (4 N_modes)) for q = E, N and
+    /// Q^-1(P_FA_VERT / (2 N_modes)) for U, the thresholds T_k,q = K_fa,q
+    /// sigma_ss,q^(k) and the tests |x_q^(k) - x_q^(0)| <= T_k,q
+    /// ([`FaultMode::test`]); step 6: EMT = max T_k,3 over the modes with
+    /// p_k >= P_EMT.
+    fn separation_tests(&mut self, cfg: &AraimConfig) {
+        let out = &mut self.out;
+        if out.n_monitored > 0 {
+            let [kh, kv] = k_fa(&mut self.k_fa_memo, cfg, out.n_monitored);
             let (kh, kv) = (kh.unwrap_or(f64::NAN), kv.unwrap_or(f64::NAN));
             out.k_fa = [kh, kh, kv];
         }
-        let k_fa = [T::of(out.k_fa[0]), T::of(out.k_fa[1]), T::of(out.k_fa[2])];
+        let k_fa = out.k_fa.map(T::of);
         let mut all_passed = true;
-        let mut emt = zero;
+        let mut emt = T::of(0.0);
         for mode in out.modes.iter_mut() {
             if mode.status != ModeStatus::Monitored {
                 continue;
             }
-            let mut passed = true;
-            for q in 0..3 {
-                let k = k_fa.get(q).copied().unwrap_or(zero);
-                let t = k * mode.stats.sigma_ss_m.get(q).copied().unwrap_or(zero);
-                if let Some(x) = mode.threshold_m.get_mut(q) {
-                    *x = t;
-                }
-                let sep = mode.stats.separation_m.get(q).copied().unwrap_or(zero);
-                if !(sep.abs() <= t) {
-                    passed = false;
-                }
-            }
-            mode.passed = passed;
-            all_passed &= passed;
-            // Step 6: EMT over the modes with p_k >= P_EMT.
-            if mode.events.prior >= cfg.p_emt && mode.threshold_m[2] > emt {
-                emt = mode.threshold_m[2];
+            all_passed &= mode.test(&k_fa);
+            let [_, _, t_up] = mode.threshold_m;
+            if mode.events.prior >= cfg.p_emt && t_up > emt {
+                emt = t_up;
             }
         }
         out.detection_passed = all_passed;
         out.emt_m = emt;
+    }
 
-        if p_unmon > cfg.p_thres {
-            out.unavailable = Some(Unavailable::Unmonitored {
-                p_unmon,
-                p_thres: cfg.p_thres,
-            });
-            return Ok(&self.out);
-        }
-        if !with_pls {
-            out.unavailable = Some(Unavailable::PlNotSolved { axis: 0 });
-            return Ok(&self.out);
-        }
-
-        // Step 5: protection levels.
-        let factor = 1.0 - p_unmon / (cfg.phmi_vert + cfg.phmi_hor);
+    /// Step 5: per axis the PL equation 2 Q((PL - b_q^(0)) / sigma_q^(0))
+    /// plus sum_k p_k Q((PL - T_k,q - b_q^(k)) / sigma_q^(k)) = rhs_q, with
+    /// rhs = PHMI_VERT (1 - P_unmon / (PHMI_VERT + PHMI_HOR)) for U and
+    /// PHMI_HOR / 2 times the same factor for E and N, scaled by
+    /// `budget_share`; HPL = sqrt(HPL_E^2 + HPL_N^2). Fills `out.pl_exact`
+    /// and `out.pl_add`, or returns the axis whose equation could not be
+    /// bracketed.
+    fn protection_levels(&mut self, cfg: &AraimConfig, budget_share: f64) -> Result<(), usize> {
+        let out = &mut self.out;
+        let factor = 1.0 - out.p_unmon / (cfg.phmi_vert + cfg.phmi_hor);
         // One bracket memo for east and north (same rhs and priors).
         let [horizontal, vertical] = &mut self.pl_quantiles;
         let mut exact = [0.0f64; 3];
         let mut add = [0.0f64; 3];
-        for q in 0..3 {
+        for ((axis, exact_m), add_m) in Axis::ALL.iter().zip(exact.iter_mut()).zip(add.iter_mut()) {
             let rhs = budget_share
-                * if q == 2 {
+                * if *axis == Axis::Up {
                     cfg.phmi_vert * factor
                 } else {
                     0.5 * cfg.phmi_hor * factor
@@ -795,8 +806,8 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             let eq = pl::Equation {
                 fault_free: pl::Term {
                     p: 2.0,
-                    offset_m: out.bias0_m.get(q).copied().unwrap_or(zero).to_f64(),
-                    sigma_m: out.sigma0_m.get(q).copied().unwrap_or(zero).to_f64(),
+                    offset_m: axis.of(&out.bias0_m).to_f64(),
+                    sigma_m: axis.of(&out.sigma0_m).to_f64(),
                 },
                 modes: || {
                     modes
@@ -804,45 +815,33 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
                         .filter(|m| m.status == ModeStatus::Monitored)
                         .map(move |m| pl::Term {
                             p: m.events.prior,
-                            offset_m: (m.threshold_m.get(q).copied().unwrap_or(zero)
-                                + m.stats.bias_m.get(q).copied().unwrap_or(zero))
-                            .to_f64(),
-                            sigma_m: m.stats.sigma_m.get(q).copied().unwrap_or(zero).to_f64(),
+                            offset_m: (axis.of(&m.threshold_m) + axis.of(&m.stats.bias_m)).to_f64(),
+                            sigma_m: axis.of(&m.stats.sigma_m).to_f64(),
                         })
                 },
-                n_modes: n_mon,
+                n_modes: out.n_monitored,
                 rhs,
             };
-            let cache = if q == 2 {
+            let cache = if *axis == Axis::Up {
                 &mut *vertical
             } else {
                 &mut *horizontal
             };
-            match eq.solve_cached(cfg.tol_pl_m, cache, &mut self.pl_terms) {
-                Some(s) => {
-                    if let (Some(e), Some(a)) = (exact.get_mut(q), add.get_mut(q)) {
-                        *e = s.exact_m;
-                        *a = s.add_m;
-                    }
-                }
-                None => {
-                    out.unavailable = Some(Unavailable::PlNotSolved { axis: q });
-                    return Ok(&self.out);
-                }
-            }
+            let s = eq
+                .solve_cached(cfg.tol_pl_m, cache, &mut self.pl_terms)
+                .ok_or(*axis as usize)?;
+            *exact_m = s.exact_m;
+            *add_m = s.add_m;
         }
-        let [e0, e1, e2] = exact;
-        let [a0, a1, a2] = add;
-        out.pl_exact = ProtectionLevels {
-            vpl_m: e2,
-            hpl_m: libm::hypot(e0, e1),
-            hpl_axes_m: [e0, e1],
-        };
-        out.pl_add = ProtectionLevels {
-            vpl_m: a2,
-            hpl_m: libm::hypot(a0, a1),
-            hpl_axes_m: [a0, a1],
-        };
+        out.pl_exact = ProtectionLevels::from_axes(exact);
+        out.pl_add = ProtectionLevels::from_axes(add);
+        Ok(())
+    }
+
+    /// The LPV-200 availability limits on the configured PL output: VPL <=
+    /// VAL, HPL <= HAL, EMT <= EMT_max, sigma_v,acc <= its maximum.
+    fn availability(&mut self, cfg: &AraimConfig) {
+        let out = &mut self.out;
         let pl = match cfg.pl_output {
             PlOutput::AddBracket => out.pl_add,
             PlOutput::Exact => out.pl_exact,
@@ -850,13 +849,180 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         out.limits = Limits {
             vpl: pl.vpl_m <= cfg.val_m,
             hpl: pl.hpl_m <= cfg.hal_m,
-            emt: emt.to_f64() <= cfg.emt_max_m,
+            emt: out.emt_m.to_f64() <= cfg.emt_max_m,
             sigma_acc: out.sigma_v_acc_m.to_f64() <= cfg.sigma_acc_max_m,
         };
         let l = out.limits;
         if !(l.vpl && l.hpl && l.emt && l.sigma_acc) {
             out.unavailable = Some(Unavailable::Limits);
         }
-        Ok(&self.out)
     }
+}
+
+/// Per constellation (in [`System::ALL`] order), what its events remove:
+/// its satellites (bit i = satellite i) and its clock column (bit c =
+/// column c; 0 for a constellation not in the ISM).
+struct Constellations {
+    sats: [u64; MAX_SYSTEMS],
+    clock_column: [u16; MAX_SYSTEMS],
+}
+
+/// The factorisations a mode's subset is downdated from.
+struct ModeBases<'a, T, const N: usize> {
+    geo: &'a Geometry<T, N>,
+    s0: &'a [[T; N]; 3],
+    base0: &'a Base<T, N>,
+    const_bases: &'a [Base<T, N>; MAX_SYSTEMS],
+    const_status: &'a [Option<Deficient>; MAX_SYSTEMS],
+}
+
+/// Which base a mode's subset is downdated from.
+enum ModeBase<'a, T, const N: usize> {
+    /// No constellation removed: the all-in-view base.
+    AllInView,
+    /// One constellation removed: its base, or why it is singular.
+    Constellation(&'a Base<T, N>, Option<Deficient>),
+    /// Several constellations removed: a base factored for the mode.
+    Refactor,
+}
+
+impl<T: Real, const N: usize> ModeBases<'_, T, N> {
+    /// Step 3 for one mode: the constellations it removes are its
+    /// constellation events plus any constellation all of whose satellites
+    /// it removes; the remaining satellites are a Woodbury downdate of
+    /// that base (subset.rs). `Err` for a singular subset.
+    fn subset(
+        &self,
+        layout: &Constellations,
+        ev: &ModeEvents,
+        coupled: &mut subset::Coupling<T, N>,
+        scratch: &mut Base<T, N>,
+    ) -> Result<SubsetStats<T>, Deficient> {
+        let mut consts = ev.consts;
+        for (j, &cs) in layout.sats.iter().enumerate() {
+            if cs != 0 && cs & ev.sats == cs {
+                consts |= 1u8 << j;
+            }
+        }
+        if consts == 0 {
+            // Satellites only (most modes): the all-in-view base.
+            return subset::downdate_coupled(self.geo, self.base0, ev.sats, Some(coupled));
+        }
+        let mut removed = 0u64;
+        let mut dropped = 0u16;
+        let mut base = ModeBase::AllInView;
+        let per_system = layout
+            .sats
+            .iter()
+            .zip(layout.clock_column.iter())
+            .zip(self.const_bases.iter().zip(self.const_status.iter()));
+        for (j, ((&cs, &col), (const_base, status))) in per_system.enumerate() {
+            if consts & (1u8 << j) != 0 {
+                removed |= cs;
+                dropped |= col;
+                base = match base {
+                    ModeBase::AllInView => ModeBase::Constellation(const_base, *status),
+                    _ => ModeBase::Refactor,
+                };
+            }
+        }
+        let extra = ev.sats & !removed;
+        match base {
+            ModeBase::AllInView => {
+                subset::downdate_coupled(self.geo, self.base0, extra, Some(coupled))
+            }
+            ModeBase::Constellation(_, Some(d)) => Err(d),
+            ModeBase::Constellation(b, None) => subset::downdate(self.geo, b, extra),
+            ModeBase::Refactor => subset::factor(self.geo, removed, dropped, self.s0, scratch)
+                .and_then(|()| {
+                    subset::pack(self.geo, self.s0, scratch);
+                    subset::downdate(self.geo, scratch, extra)
+                }),
+        }
+    }
+}
+
+impl<T: Real> FaultMode<T> {
+    /// Step 4 for one monitored mode: T_k,q = K_fa,q sigma_ss,q^(k) into
+    /// `threshold_m`, and the test |x_q^(k) - x_q^(0)| <= T_k,q on every
+    /// axis (false for NaN) into `passed`, which it returns.
+    fn test(&mut self, k_fa: &[T; 3]) -> bool {
+        let mut passed = true;
+        let axes = self.threshold_m.iter_mut().zip(k_fa.iter()).zip(
+            self.stats
+                .sigma_ss_m
+                .iter()
+                .zip(self.stats.separation_m.iter()),
+        );
+        for ((t, &k), (&sigma_ss, &sep)) in axes {
+            *t = k * sigma_ss;
+            if !(sep.abs() <= *t) {
+                passed = false;
+            }
+        }
+        self.passed = passed;
+        passed
+    }
+}
+
+impl ProtectionLevels {
+    /// VPL from the up root, HPL = sqrt(HPL_E^2 + HPL_N^2) from the east
+    /// and north roots.
+    fn from_axes([east_m, north_m, up_m]: [f64; 3]) -> Self {
+        Self {
+            vpl_m: up_m,
+            hpl_m: libm::hypot(east_m, north_m),
+            hpl_axes_m: [east_m, north_m],
+        }
+    }
+}
+
+/// A position axis of the ENU frame (SPEC §9.1: q = 1, 2, 3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Axis {
+    East,
+    North,
+    Up,
+}
+
+impl Axis {
+    const ALL: [Axis; 3] = [Axis::East, Axis::North, Axis::Up];
+
+    /// This axis's component of a per-axis triple (E, N, U order).
+    // In range: the discriminants are 0, 1 and 2, so the index needs (and
+    // compiles to) no check.
+    #[allow(clippy::indexing_slicing)]
+    fn of<T: Copy>(self, v: &[T; 3]) -> T {
+        v[self as usize]
+    }
+}
+
+/// Step 2's b_q^(0) = sum_i |S_qi| b_nom,i and the position correction
+/// sum_i S_qi y_i, for one row of S^(0) (its first `geo.n` entries).
+fn nominal_bias_and_correction<T: Real, const N: usize>(
+    geo: &Geometry<T, N>,
+    row: &[T; N],
+) -> (T, T) {
+    let mut b = T::of(0.0);
+    let mut x = T::of(0.0);
+    for ((s, b_nom), y) in row
+        .iter()
+        .zip(geo.b_nom.iter())
+        .zip(geo.y.iter())
+        .take(geo.n)
+    {
+        b += s.abs() * *b_nom;
+        x += *s * *y;
+    }
+    (b, x)
+}
+
+/// Step 6's sigma_v,acc = sqrt(sum_i S_3i^2 C_acc,ii), from the up row of
+/// S^(0) (its first `geo.n` entries).
+fn accuracy_sigma<T: Real, const N: usize>(geo: &Geometry<T, N>, s_up: &[T; N]) -> T {
+    let mut acc = T::of(0.0);
+    for (s, c_acc) in s_up.iter().zip(geo.c_acc.iter()).take(geo.n) {
+        acc += *s * *s * *c_acc;
+    }
+    acc.sqrt()
 }

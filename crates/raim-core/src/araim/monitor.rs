@@ -447,16 +447,21 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
             ];
             let range_m = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             let u = rotate(&rot, [d[0] / range_m, d[1] / range_m, d[2] / range_m]);
-            let clock_m = solution
-                .clock_m
-                .get(o.id.system.index())
-                .copied()
-                .flatten()
-                .unwrap_or(0.0);
+            // Every satellite was in the solution, so its system has a
+            // clock; a system without one would have no clock term.
+            let clock_m = *o.id.system.entry(&solution.clock_m);
+            debug_assert!(
+                clock_m.is_some(),
+                "every system in the solution has a clock"
+            );
+            let residual_m = match clock_m {
+                Some(c) => o.pseudorange_m - range_m - c,
+                None => o.pseudorange_m - range_m,
+            };
             *slot = LinearObservation {
                 id: o.id,
                 los_enu: u,
-                residual_m: o.pseudorange_m - range_m - clock_m,
+                residual_m,
                 sigma_m: o.sigma_m,
             };
         }

@@ -503,61 +503,19 @@ pub fn run<const N: usize, P: Real>(
     out: &mut FdeOutcome<N, P>,
     scratch: &mut Scratch<N, P>,
 ) -> Result<Option<MultifaultReport>, RaimError> {
-    // Detection: the all-in-view test.
-    let before = fde::test(cfg, thresholds, &out.solution)?;
-    out.test = before;
-    out.exclusions.clear();
-    out.identified = None;
-    out.cause = None;
-    if !before.alarm() {
+    let Some(before) = detect(cfg, thresholds, out)? else {
         return Ok(None);
-    }
-    let dof = out.solution.parity.dof();
-    if dof < 2 {
-        out.cause = Some(AlarmCause::NoRedundancy);
-        return Ok(None);
-    }
-    let t_eff = effective_t(cfg, t_max, dof);
-    if t_eff == 0 {
-        out.cause = Some(AlarmCause::MaxExclusions);
-        return Ok(None);
-    }
-    // SPEC §8.3 groups, §8.2 reconstruction in each, §8.4 candidates.
-    let n = out.solution.rows();
-    let m = out.solution.parity.states();
-    let to_raim = |e: MultifaultError| match e {
-        MultifaultError::CapacityExceeded { have, capacity } => {
-            RaimError::CapacityExceeded { have, capacity }
-        }
-        _ => RaimError::OutOfRange {
-            field: "t_max",
-            value: f64::from(t_max),
-            min: 1.0,
-            max: MAX_FAULTS as f64,
-        },
     };
-    let covering = Covering::new(n, m, t_eff).map_err(to_raim)?;
-    scratch
-        .model
-        .fill_from_parity(&out.solution.parity)
-        .map_err(to_raim)?;
-    let found = search(
-        &scratch.model,
-        &covering,
-        t_eff,
-        usize::from(group_budget),
-        P::of(cfg.min_s_ii),
-        &mut scratch.ws,
-        &mut scratch.group,
-        |_, _| {},
-    );
-    let s = match found {
-        Ok(s) => s,
-        Err(MultifaultError::NoIdentifiableGroup { .. }) => {
-            out.cause = Some(AlarmCause::Unidentifiable);
-            return Ok(None);
-        }
-        Err(e) => return Err(to_raim(e)),
+    let Some((dof, t_eff)) = redundancy(cfg, t_max, out) else {
+        return Ok(None);
+    };
+    let to_raim = |e: MultifaultError| multifault_error(e, t_max);
+    let covering =
+        Covering::new(out.solution.rows(), out.solution.parity.states(), t_eff).map_err(to_raim)?;
+    let Some(s) =
+        search_groups(cfg, &covering, t_eff, group_budget, out, scratch).map_err(to_raim)?
+    else {
+        return Ok(None);
     };
     let mut report = MultifaultReport {
         t_searched: t_eff as u8,
@@ -602,16 +560,11 @@ pub fn run<const N: usize, P: Real>(
             Verdict::Ambiguous { best, runner_up } => {
                 report.best = Some(fault_set(&best, sol, dof));
                 report.runner_up = Some(fault_set(&runner_up, sol, dof));
-                match ambiguity(sol, best.set, runner_up.set) {
-                    Some((b, r)) => {
-                        out.identified = Some(b);
-                        out.cause = Some(AlarmCause::Ambiguous {
-                            best: b,
-                            runner_up: r,
-                        });
-                    }
-                    None => out.cause = Some(AlarmCause::Unidentifiable),
+                let (identified, cause) = ambiguous_cause(sol, best.set, runner_up.set);
+                if identified.is_some() {
+                    out.identified = identified;
                 }
+                out.cause = Some(cause);
                 break;
             }
             Verdict::Incomplete(best) => {
@@ -622,46 +575,192 @@ pub fn run<const N: usize, P: Real>(
             }
             Verdict::Exclude(best) => {
                 report.best = Some(fault_set(&best, sol, dof));
-                if cfg.require_unique_exclusion && best.count < t_eff {
-                    // Larger sets always fit at least as well; one that
-                    // does not contain `best` and is consistent at level
-                    // pwe is another explanation of the data.
-                    if let Some(alt) = larger_alternative(
-                        cfg,
-                        &s_args(&covering, t_eff, group_budget),
-                        best,
-                        dof,
-                        scratch,
-                    )? {
-                        report.runner_up = Some(fault_set(&alt, sol, dof));
-                        out.identified = first_id(sol, best.set);
-                        out.cause = Some(match ambiguity(sol, best.set, alt.set) {
-                            Some((b, r)) => AlarmCause::Ambiguous {
-                                best: b,
-                                runner_up: r,
-                            },
-                            None => AlarmCause::Unidentifiable,
-                        });
-                        break;
-                    }
-                }
-                if let Some(level) = s.levels.get(best.count - 1) {
-                    report.runner_up = level.runner_up.map(|r| fault_set(&r, sol, dof));
-                }
-                out.identified = first_id(sol, best.set);
-                match exclude_set(cfg, thresholds, epoch, &best, before, out, scratch)? {
-                    Excluded::Done => break,
-                    Excluded::Subset(cause) => {
-                        if cause.is_some() {
-                            out.cause = cause;
-                        }
-                        from = best.count + 1;
-                    }
+                let search = s_args(&covering, t_eff, group_budget);
+                let step = Candidate {
+                    best,
+                    before,
+                    dof,
+                    t_eff,
+                    levels: &s.levels,
+                };
+                match step.exclude(cfg, &search, thresholds, epoch, out, scratch, &mut report)? {
+                    Some(next) => from = next,
+                    None => break,
                 }
             }
         }
     }
     Ok(Some(report))
+}
+
+/// Detection (SPEC §8.4): the all-in-view test into `out`, whose
+/// exclusions, identification and cause are cleared. The test when it
+/// alarms; None when it passes.
+#[cfg(feature = "multifault")]
+fn detect<const N: usize, P: Real>(
+    cfg: &Config,
+    thresholds: &mut Thresholds<N>,
+    out: &mut FdeOutcome<N, P>,
+) -> Result<Option<TestStatistic>, RaimError> {
+    let before = fde::test(cfg, thresholds, &out.solution)?;
+    out.test = before;
+    out.exclusions.clear();
+    out.identified = None;
+    out.cause = None;
+    Ok(before.alarm().then_some(before))
+}
+
+/// The redundancy the search needs: the parity dof (n - m) at least 2 and
+/// the effective fault count ([`effective_t`]) at least 1, returned as
+/// (dof, t); None, with the alarm cause in `out`, otherwise.
+#[cfg(feature = "multifault")]
+fn redundancy<const N: usize, P: Real>(
+    cfg: &Config,
+    t_max: u8,
+    out: &mut FdeOutcome<N, P>,
+) -> Option<(usize, usize)> {
+    let dof = out.solution.parity.dof();
+    if dof < 2 {
+        out.cause = Some(AlarmCause::NoRedundancy);
+        return None;
+    }
+    let t_eff = effective_t(cfg, t_max, dof);
+    if t_eff == 0 {
+        out.cause = Some(AlarmCause::MaxExclusions);
+        return None;
+    }
+    Some((dof, t_eff))
+}
+
+/// The search's errors as the epoch's: a capacity stays one, anything
+/// else is the configured `t_max` out of its range.
+#[cfg(feature = "multifault")]
+fn multifault_error(e: MultifaultError, t_max: u8) -> RaimError {
+    match e {
+        MultifaultError::CapacityExceeded { have, capacity } => {
+            RaimError::CapacityExceeded { have, capacity }
+        }
+        _ => RaimError::OutOfRange {
+            field: "t_max",
+            value: f64::from(t_max),
+            min: 1.0,
+            max: MAX_FAULTS as f64,
+        },
+    }
+}
+
+/// The groups of SPEC §8.3 over the solution's residual model, the
+/// reconstruction of §8.2 in each and §8.4's candidate sets of 1..t
+/// satellites ([`search`]). None, with `Unidentifiable` in `out`, when no
+/// group can be identified.
+#[cfg(feature = "multifault")]
+fn search_groups<const N: usize, P: Real>(
+    cfg: &Config,
+    covering: &Covering,
+    t_eff: usize,
+    group_budget: u16,
+    out: &mut FdeOutcome<N, P>,
+    scratch: &mut Scratch<N, P>,
+) -> Result<Option<Search<P>>, MultifaultError> {
+    scratch.model.fill_from_parity(&out.solution.parity)?;
+    let found = search(
+        &scratch.model,
+        covering,
+        t_eff,
+        usize::from(group_budget),
+        P::of(cfg.min_s_ii),
+        &mut scratch.ws,
+        &mut scratch.group,
+        |_, _| {},
+    );
+    match found {
+        Ok(s) => Ok(Some(s)),
+        Err(MultifaultError::NoIdentifiableGroup { .. }) => {
+            out.cause = Some(AlarmCause::Unidentifiable);
+            Ok(None)
+        }
+        Err(e) => Err(e),
+    }
+}
+
+/// Two sets explain the data: the satellite to name (the best set's own)
+/// and the `Ambiguous` cause, or `Unidentifiable` when a set names no
+/// satellite.
+fn ambiguous_cause<const N: usize, P: Real>(
+    sol: &Solution<N, P>,
+    best: SatSet,
+    other: SatSet,
+) -> (Option<SatId>, AlarmCause) {
+    match ambiguity(sol, best, other) {
+        Some((b, r)) => (
+            Some(b),
+            AlarmCause::Ambiguous {
+                best: b,
+                runner_up: r,
+            },
+        ),
+        None => (None, AlarmCause::Unidentifiable),
+    }
+}
+
+/// A consistent candidate set of §8.4's decision, with what its exclusion
+/// reads: the all-in-view test, the dof, the fault count searched and the
+/// search's levels.
+#[cfg(feature = "multifault")]
+struct Candidate<'a, P> {
+    best: SubsetFit<P>,
+    before: TestStatistic,
+    dof: usize,
+    t_eff: usize,
+    levels: &'a [Level<P>; MAX_FAULTS],
+}
+
+#[cfg(feature = "multifault")]
+impl<P: Real> Candidate<'_, P> {
+    /// §8.4's exclusion of the candidate: with a unique exclusion
+    /// required, a larger consistent set that does not contain it is an
+    /// `Ambiguous` alarm; otherwise the runner-up of its level is
+    /// reported, the set excluded, the subset re-solved and re-tested
+    /// ([`exclude_set`]). None when the decision is final; the next fault
+    /// count to search from when the subset still fails.
+    #[allow(clippy::too_many_arguments)] // the epoch, its outcome and the report
+    fn exclude<const N: usize>(
+        &self,
+        cfg: &Config,
+        search: &SearchArgs<'_>,
+        thresholds: &mut Thresholds<N>,
+        epoch: &Epoch<'_>,
+        out: &mut FdeOutcome<N, P>,
+        scratch: &mut Scratch<N, P>,
+        report: &mut MultifaultReport,
+    ) -> Result<Option<usize>, RaimError> {
+        let best = self.best;
+        let sol = &out.solution;
+        if cfg.require_unique_exclusion && best.count < self.t_eff {
+            // Larger sets always fit at least as well; one that does not
+            // contain `best` and is consistent at level pwe is another
+            // explanation of the data.
+            if let Some(alt) = larger_alternative(cfg, search, best, self.dof, scratch)? {
+                report.runner_up = Some(fault_set(&alt, sol, self.dof));
+                out.identified = first_id(sol, best.set);
+                out.cause = Some(ambiguous_cause(sol, best.set, alt.set).1);
+                return Ok(None);
+            }
+        }
+        if let Some(level) = self.levels.get(best.count - 1) {
+            report.runner_up = level.runner_up.map(|r| fault_set(&r, sol, self.dof));
+        }
+        out.identified = first_id(sol, best.set);
+        match exclude_set(cfg, thresholds, epoch, &best, self.before, out, scratch)? {
+            Excluded::Done => Ok(None),
+            Excluded::Subset(cause) => {
+                if cause.is_some() {
+                    out.cause = cause;
+                }
+                Ok(Some(best.count + 1))
+            }
+        }
+    }
 }
 
 /// The most satellites this epoch may lose: t_max, the configured
@@ -735,11 +834,15 @@ fn exclude_set<const N: usize, P: Real>(
     }
     match solve_into(cfg, epoch, &mask, &mut scratch.solution) {
         Ok(()) => {}
-        Err(RaimError::RankDeficient { .. }) | Err(RaimError::TooFewSatellites { .. }) => {
-            let excluded = first_id(sol, best.set).unwrap_or_default();
-            return Ok(Excluded::Subset(Some(AlarmCause::SubsetGeometry {
-                excluded,
-            })));
+        Err(e @ (RaimError::RankDeficient { .. } | RaimError::TooFewSatellites { .. })) => {
+            // The set is a non-empty covering of the solution's rows, so it
+            // names a satellite; without one the geometry error stands.
+            return match first_id(sol, best.set) {
+                Some(excluded) => Ok(Excluded::Subset(Some(AlarmCause::SubsetGeometry {
+                    excluded,
+                }))),
+                None => Err(e),
+            };
         }
         Err(e) => return Err(e),
     }
