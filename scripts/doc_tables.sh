@@ -5,12 +5,12 @@
 # and is rewritten from the output of the commands below; nothing between
 # markers is typed by hand.
 #
-#   bash scripts/doc_tables.sh           # short mode: rewrite the short tables (about 1 min)
+#   bash scripts/doc_tables.sh           # short mode: rewrite the short tables (about 1-2 min of CPU once built)
 #   bash scripts/doc_tables.sh --check   # short mode, but compare with the committed docs; exit 1 on a difference (CI)
 #   bash scripts/doc_tables.sh --long    # also the long Monte Carlo tables (about 15 min of CPU)
 #
 # Short (deterministic; replays of the shared real data and one unit test):
-#   pca-clean, pca-faults, esq-onsets (docs/ESQ.md), multifault-amplification (docs/MULTIFAULT.md).
+#   esq-nstar, esq-cost, pca-clean, pca-faults, esq-onsets (docs/ESQ.md), multifault-amplification (docs/MULTIFAULT.md).
 # Long (seeded Monte Carlo; rerun by hand, not in CI):
 #   multifault-mc (docs/MULTIFAULT.md), budget-mc (docs/BUDGET.md).
 set -euo pipefail
@@ -55,6 +55,57 @@ put() {
 
 # field LABEL TEXT: the word after LABEL in TEXT.
 field() { sed -n "s/.*$1 \([^ ;,]*\).*/\1/p" <<<"$2" | head -1; }
+
+# --- ESQ: N*, the evaluations saved, and the delay with onsets on a window opening.
+esq() { "$R" replay "$@" $G --esq --quiet; }
+f=$TMP/esq-nstar
+{
+  echo "| file | N\\* (min / median / max) | ARAIM evaluations: every epoch -> effective | saved |"
+  echo "| --- | --- | --- | --- |"
+  nstar() { # label, args...
+    local label=$1; shift
+    local out s1 s2
+    # shellcheck disable=SC2086
+    out=$(esq "$@")
+    s1=$(grep "^ESQ summary" <<<"$out")
+    s2=$(grep "^  solves" <<<"$out")
+    echo "| $label | $(field min "$s1") / $(field median "$s1") / $(field max "$s1") | $(field "every epoch" "$s2") -> $(field "effective samples" "$s2") ($(sed -n 's/.*saved; \([0-9.]*\) per window.*/\1/p' <<<"$s2") per window) | $(sed -n 's/.*(\([0-9.]*\) % saved.*/\1/p' <<<"$s2") % |"
+  }
+  # shellcheck disable=SC2086
+  nstar "ESBC (G+E+C), T 300 s" $E
+  # shellcheck disable=SC2086
+  nstar "ESBC, T 600 s" $E --esq-window-s 600
+  # shellcheck disable=SC2086
+  nstar "ESBC, T 120 s" $E --esq-window-s 120
+  # shellcheck disable=SC2086
+  nstar "0759 (GPS), T 300 s" $O
+} >"$f"
+put "$DOCS/ESQ.md" esq-nstar "$f"
+f=$TMP/esq-cost
+{
+  echo "| run | first alarm, every epoch | first alarm, effective samples | faulted epochs alarmed / evaluated (missed by skipping) |"
+  echo "| --- | --- | --- | --- |"
+  cost() { # label, args...
+    local label=$1; shift
+    local l
+    # shellcheck disable=SC2086
+    l=$(grep "after onset" <<<"$(esq "$@")")
+    echo "| $label | $(sed -n 's/.*first alarm every epoch \([^,]*\),.*/\1/p' <<<"$l") | $(sed -n 's/.*effective samples \([^;]*\);.*/\1/p' <<<"$l") | $(field "alarmed" "$l") / $(field "evaluated" "$l") ($(sed -n 's/.*missed by skipping \([0-9]*\)).*/\1/p' <<<"$l")) |"
+  }
+  # shellcheck disable=SC2086
+  cost "ESBC step 10 m G15" $E --fault step:G15:10@01:00:00
+  # shellcheck disable=SC2086
+  cost "ESBC step 5 m G15" $E --fault step:G15:5@01:00:00
+  # shellcheck disable=SC2086
+  cost "ESBC ramp 0.01 m/s G15" $E --fault ramp:G15:0.01@01:00:00
+  # shellcheck disable=SC2086
+  cost "ESBC ramp 0.05 m/s G15" $E --fault ramp:G15:0.05@01:00:00
+  # shellcheck disable=SC2086
+  cost "0759 step 10 m G24" $O --fault step:G24:10@00:20:00
+  # shellcheck disable=SC2086
+  cost "0759 ramp 0.01 m/s G24" $O --fault ramp:G24:0.01@00:20:00
+} >"$f"
+put "$DOCS/ESQ.md" esq-cost "$f"
 
 # --- PCA on the clean files: the nominal null, and the empirical null fitted on ESBC.
 pca() { "$R" replay "$@" $G --pca --quiet; }

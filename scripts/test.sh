@@ -28,7 +28,7 @@ echo "== tests (including the firmware under QEMU: host-tests/tests/qemu_*.rs)"
 cargo test --workspace --release
 # (the host's protocol server runs the device's precision, f32, in every
 # build: raim_proto::DevicePrecision; the QEMU tests above compare with it)
-echo "== generated doc tables (docs/ESQ.md, docs/MULTIFAULT.md, docs/BUDGET.md) match the code (about 1 min)"
+echo "== generated doc tables (docs/ESQ.md, docs/MULTIFAULT.md, docs/BUDGET.md) match the code (about 1-2 min)"
 bash scripts/doc_tables.sh --check
 echo "== the core's own unit tests in the device's precision (their default Stat = f32; ~1 min to build)"
 cargo test -p raim-core --release --features test-f32 --lib

@@ -144,3 +144,93 @@ fn mcusum_on_decorrelated_samples_esbc_clean() {
     let after = count("after :");
     assert!(before > 0 && after <= before, "{out}");
 }
+
+/// `--esq-onset-sweep`: the onsets are stratified over the window T (one
+/// per T / N slot, in order), every onset's delay is measured from the
+/// true onset, the resampled stream is never earlier than the every-epoch
+/// one, and the summary counts every onset.
+#[test]
+fn onset_sweep_spreads_onsets_over_the_window() {
+    const N: usize = 10;
+    const WINDOW_S: f64 = 300.0;
+    const EPOCH_S: f64 = 30.0;
+    let out = raim(&esbc(&[
+        "--esq",
+        "--end",
+        "01:30:00",
+        "--fault",
+        "step:G15:10@01:00:00",
+        "--esq-onset-sweep",
+        "10",
+    ]));
+    let rows: Vec<(f64, f64, f64)> = out
+        .lines()
+        .filter(|l| l.starts_with("onset "))
+        .map(|l| {
+            let num = |after: &str| -> f64 {
+                let rest = &l[l.find(after).unwrap() + after.len()..];
+                let tok: String = rest
+                    .trim_start()
+                    .chars()
+                    .take_while(|c| c.is_ascii_digit() || *c == '.')
+                    .collect();
+                tok.parse().unwrap_or(f64::NAN)
+            };
+            (num("(+"), num("every epoch"), num("effective samples"))
+        })
+        .collect();
+    assert_eq!(rows.len(), N, "{out}");
+    for (j, (off, every, sampled)) in rows.iter().enumerate() {
+        let slot = WINDOW_S / N as f64;
+        assert!(
+            *off >= j as f64 * slot - TIME_TOL_S && *off < (j + 1) as f64 * slot + TIME_TOL_S,
+            "onset {j} at +{off} s"
+        );
+        // A 10 m step on G15 is caught by the first epoch at or after the
+        // onset (docs/ESQ.md), so the every-epoch delay is the wait for it.
+        assert!(*every >= 0.0 && *every < EPOCH_S + TIME_TOL_S, "{every}");
+        assert!(sampled >= every, "{sampled} < {every}");
+    }
+    assert!(out.contains("every epoch        detected 10/10"), "{out}");
+    assert!(out.contains("effective samples  detected 10/10"), "{out}");
+}
+
+/// The PCA's false alarms are compared with the binomial bound of its
+/// allocation, and `--pca-null-scale` raises the threshold: the clean
+/// ESBC stretch alarms at the nominal threshold and not at 2x.
+#[test]
+fn pca_null_scale_raises_the_threshold() {
+    let run = |scale: &str| {
+        raim(&esbc(&[
+            "--pca",
+            "--quiet",
+            "--end",
+            "01:00:00",
+            "--pca-null-scale",
+            scale,
+        ]))
+    };
+    let count = |out: &str| -> usize {
+        let l = out
+            .lines()
+            .find(|l| l.contains("against the allocation"))
+            .unwrap_or_else(|| panic!("{out}"));
+        let rest = &l[l.find("allocation: ").unwrap() + 12..];
+        rest.split_whitespace().next().unwrap().parse().unwrap()
+    };
+    let nominal = run("1");
+    let doubled = run("2");
+    let max_ratio: f64 = nominal
+        .lines()
+        .find_map(|l| l.split("max before onset ").nth(1))
+        .and_then(|r| r.split(',').next())
+        .and_then(|r| r.trim().parse().ok())
+        .unwrap();
+    // The count at scale c is the number of tested epochs whose ratio
+    // exceeds c: none at 2 when the largest ratio is below 2.
+    assert!(count(&nominal) >= count(&doubled));
+    if max_ratio < 2.0 {
+        assert_eq!(count(&doubled), 0, "{doubled}");
+    }
+    assert!(nominal.contains("binomial 99 % bound 0"), "{nominal}");
+}

@@ -19,6 +19,12 @@ use raim_core::araim::pca::PcaTest;
 /// Q^-1(0.005): the 99th percentile of |u| for u ~ N(0, 1).
 const Z_0_005: f64 = 2.575_829_303_549;
 
+/// The PCA alarm at threshold `scale` x T_q: the ratio above it, or NaN
+/// (as in the core's test, a NaN alarms).
+fn exceeds(ratio: f64, scale: f64) -> bool {
+    ratio.is_nan() || ratio > scale
+}
+
 /// Whether a method alarmed on an epoch.
 type Hit = dyn Fn(&Row) -> bool;
 
@@ -39,7 +45,7 @@ pub fn run(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
                     t.n_complete,
                     t.k,
                     t.ratio,
-                    verdict(alarms(t.ratio, args.esq.pca_null_scale))
+                    verdict(exceeds(t.ratio, args.esq.pca_null_scale))
                 ),
                 None => "warming up                    ".into(),
             };
@@ -71,7 +77,7 @@ pub fn run(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
     }
     // The alarm at threshold c T_q: the statistic max_q |dx_q| / T_q above c
     // (NaN alarms, as in the core's test).
-    let pca_hit = move |r: &Row| r.pca.is_some_and(|t| alarms(t.ratio, scale));
+    let pca_hit = move |r: &Row| r.pca.is_some_and(|t| exceeds(t.ratio, scale));
     let tested = rows.iter().filter(|r| r.pca.is_some()).count();
     let ks: Vec<usize> = rows.iter().filter_map(|r| r.pca.map(|t| t.k)).collect();
     let k_min = ks.iter().copied().min().unwrap_or(0);
@@ -230,13 +236,4 @@ fn plot(rows: &[Row], path: &Path, font: Option<&Path>) -> Result<()> {
     c.draw_series(LineSeries::new(nc, &BLACK)).map_err(err)?;
     root.present().map_err(err)?;
     Ok(())
-}
-
-/// The PCA test at scale `c`: the ratio above `c` alarms, and so does a NaN
-/// ratio (fail safe, as in the core's test).
-fn alarms(ratio: f64, c: f64) -> bool {
-    !matches!(
-        ratio.partial_cmp(&c),
-        Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
-    )
 }
