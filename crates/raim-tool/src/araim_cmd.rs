@@ -139,11 +139,24 @@ fn mode_json(sats: &[AraimSat<f64>], out: &AraimOutput<f64, K>) -> Vec<Value> {
         .collect()
 }
 
-/// The exclusion outcome as printed: the FDE's decision, or why none ran.
+/// The exclusion outcome as printed: the FDE's decision, or why none ran
+/// (the names of `raim replay --araim`'s `fde`, with the mode indices).
 fn fde_text(e: &Exclusion) -> String {
+    use raim_core::araim::{FdeAlarm, FdeDecision};
     match e {
-        Exclusion::Fde(d) => format!("{d:?}"),
-        other => format!("{other:?}"),
+        Exclusion::Fde(FdeDecision::NoFault) => "no_fault".into(),
+        Exclusion::Fde(FdeDecision::Excluded { mode, .. }) => format!("excluded (mode {mode})"),
+        Exclusion::Fde(FdeDecision::Alarm(FdeAlarm::NoCandidate)) => "alarm_no_candidate".into(),
+        Exclusion::Fde(FdeDecision::Alarm(FdeAlarm::Ambiguous { first, second })) => {
+            format!("alarm_ambiguous (modes {first} and {second})")
+        }
+        Exclusion::Fde(FdeDecision::Alarm(FdeAlarm::BudgetExceeded { candidates, budget })) => {
+            format!("alarm_budget_exceeded ({candidates} candidates, budget {budget})")
+        }
+        Exclusion::NotTested => "not_tested".into(),
+        Exclusion::NotAttempted { monitored } => {
+            format!("alarm_not_attempted ({monitored} monitored modes)")
+        }
     }
 }
 
@@ -163,7 +176,7 @@ fn result_json(
     let mut v = json!({
         "time_s": time_s,
         "available": out.available(),
-        "unavailable": out.unavailable.map(|u| format!("{u:?}")),
+        "unavailable": out.unavailable.map(|u| crate::replay::araim::unavailable_name(&u.into())),
         "modes": out.modes.len(), "monitored": out.n_monitored,
         "max_faults": out.max_faults, "p_unmon": out.p_unmon, "k_fa": out.k_fa,
         "vpl_m": out.pl_add.vpl_m, "hpl_m": out.pl_add.hpl_m,

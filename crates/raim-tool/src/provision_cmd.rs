@@ -57,8 +57,12 @@ pub fn run(a: &ProvisionArgs) -> Result<()> {
     }
     let key = a.key.as_deref().map(parse_key).transpose()?;
     let mut blob = [0u8; PROVISION_BYTES];
-    raim_proto::unit::seal(&unit, key.as_ref(), &mut blob)
-        .map_err(|e| anyhow!("sealing {}: {e:?}", a.config.display()))?;
+    raim_proto::unit::seal(&unit, key.as_ref(), &mut blob).map_err(|_| {
+        anyhow!(
+            "sealing {}: the configuration does not fit the {PROVISION_BYTES}-byte section",
+            a.config.display()
+        )
+    })?;
     let staged = a.out.with_extension("staging");
     let mut image = a.elf.clone();
     if let Some(k) = key {

@@ -155,7 +155,7 @@ fn text_line(time_s: f64, p: &Processed) -> String {
                 s.push_str(&format!(" excluded={}", excluded.join(",")));
             }
             if let Some(c) = &r.alarm_cause {
-                s.push_str(&format!(" cause={c:?}"));
+                s.push_str(&format!(" cause={}", crate::replay::record::cause_name(*c)));
             }
             s
         }

@@ -114,11 +114,7 @@ fn ignored_combinations_are_refused_naming_both_options() {
             &["--pf", "ekf", "--target", "qemu"],
             ["--pf", "--target qemu"],
         ),
-        (
-            &["--araim", "--target", "qemu"],
-            ["--araim", "--target qemu"],
-        ),
-        (&["--araim", "--nmea", "only"], ["--nmea", "--araim"]),
+        (&["--esq", "--target", "qemu"], ["--esq", "--target qemu"]),
         (&["--pf", "ekf", "--nmea", "only"], ["--nmea", "--pf"]),
         (&["--esq", "--pf", "gapf"], ["--esq", "--pf"]),
         (&["--araim", "--pf", "ekf"], ["--araim", "--pf"]),
@@ -325,6 +321,68 @@ fn formats_md_documents_every_key() {
     }
     assert!(doc.contains("Unix time"), "time_s's origin");
     assert!(doc.contains("NMEA date"), "the NMEA date's calendar");
+    // The text columns of `snapshot` and `replay`.
+    for col in [
+        "`D2=`",
+        "`T2=`",
+        "`dof=`",
+        "`errH=`/`errV=`",
+        "`HPL=`/`VPL=`",
+    ] {
+        assert!(doc.contains(col), "text column {col} not in FORMATS.md");
+    }
+}
+
+/// `time_s` is Unix time for the NMEA date (FORMATS.md, "Time"): an epoch
+/// at `time_s: 100` is dated 1 January 1970 by the firmware's RMC, one at
+/// Unix 1112400000 (2005-04-02 00:00:00 UTC) 2 April 2005.
+#[test]
+fn qemu_nmea_date_is_the_unix_date_of_time_s() {
+    let first = example_lines().remove(0);
+    for (t, date) in [("100", "010170"), ("1112400000", "020405")] {
+        let line = first.replacen("\"time_s\": 0", &format!("\"time_s\": {t}"), 1);
+        let f = tmp(&format!("date-{t}.jsonl"));
+        std::fs::write(&f, &line).expect("write");
+        let r = raim(
+            &["qemu", "--input", f.to_str().expect("utf8"), "--json"],
+            "",
+        );
+        assert_eq!(r.code, 0, "{}", r.stderr);
+        let row = &json_rows(&r.stdout)[0];
+        let nmea: Vec<&str> = row["nmea"]
+            .as_array()
+            .expect("nmea")
+            .iter()
+            .filter_map(|s| s.as_str())
+            .collect();
+        let rmc = nmea
+            .iter()
+            .find(|s| s.get(3..6) == Some("RMC"))
+            .expect("RMC");
+        assert_eq!(rmc.split(',').nth(9), Some(date), "{rmc}");
+    }
+}
+
+/// `raim araim` prints the FDE outcome and the unavailability in words,
+/// never a Rust Debug form (`NoFault`, `Limits`, `{ axis: 2 }`).
+#[test]
+fn araim_prints_words_not_debug_text() {
+    for json in [false, true] {
+        let mut a = vec![
+            "araim",
+            "--input",
+            "host-tests/vectors/add_v3_appendix_d.json",
+        ];
+        if json {
+            a.push("--json");
+        }
+        let r = raim(&a, "");
+        assert_eq!(r.code, 0, "{}", r.stderr);
+        assert!(r.stdout.contains("no_fault"), "{}", r.stdout);
+        for debug in ["NoFault", "Some(", " { ", "Limits"] {
+            assert!(!r.stdout.contains(debug), "{debug}: {}", r.stdout);
+        }
+    }
 }
 
 // ---- Messages for people.
@@ -646,6 +704,8 @@ fn solution_files_are_standard() {
     let stream = replay(&["--fault", "step:G24:50@00:20:00", "--nmea", "only"]);
     assert_eq!(std::fs::read_to_string(&nmea).expect("nmea"), stream.stdout);
 
+    // Both tools are required (scripts/install-deps.sh installs them), as
+    // gpsd is for the NMEA tests: a missing tool fails, never skips.
     match tool("xmllint") {
         Some(x) => {
             let out = Command::new(x)
@@ -658,7 +718,9 @@ fn solution_files_are_standard() {
                 String::from_utf8_lossy(&out.stderr)
             );
         }
-        None => eprintln!("skipped: xmllint not installed (apt package libxml2-utils)"),
+        None => panic!(
+            "xmllint not installed (apt package libxml2-utils; scripts/install-deps.sh test)"
+        ),
     }
     match tool("pos2kml") {
         Some(p) => {
@@ -679,6 +741,8 @@ fn solution_files_are_standard() {
                 "pos2kml read too few"
             );
         }
-        None => eprintln!("skipped: pos2kml not installed (Debian package rtklib)"),
+        None => {
+            panic!("pos2kml not installed (Debian package rtklib; scripts/install-deps.sh test)")
+        }
     }
 }

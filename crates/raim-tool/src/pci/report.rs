@@ -162,13 +162,14 @@ impl PciReport {
         let mut o = String::new();
         let _ = writeln!(
             o,
-            "n={} m={} d={} Pfa={:e} T^2={:.4} design={:?} kappa={} Pmd={:e} (MDB) {}",
+            "n={} m={} d={} Pfa={:e} T^2={:.4} design={} kappa={} Pmd={:e} (MDB) {}",
             self.n,
             self.m,
             self.dof,
             self.pfa,
             self.threshold_chi2,
-            self.design,
+            clap::ValueEnum::to_possible_value(&self.design)
+                .map_or_else(String::new, |v| v.get_name().to_string()),
             self.kappa,
             self.pmd,
             match &self.monte_carlo {

@@ -20,17 +20,25 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use plotters::prelude::*;
 use raim_core::araim::error_model::iono_free_factor_sq;
+use raim_core::araim::esq::effective_samples;
 use raim_core::araim::{
-    AraimConfig, Curves, Exclusion, FdeAlarm, FdeDecision, FdeLimits, Ism, Monitor, MonitorError,
-    SatIsm, SatelliteModels,
+    AraimConfig, Curves, Exclusion, FdeLimits, Ism, Monitor, MonitorError, PlOutput, SatIsm,
+    SatelliteModels,
 };
 use raim_core::frames::{ecef_to_geodetic, enu_rotation, unrotate};
 use raim_core::{Config, Decision, Epoch, RangeObservation, SatId, System};
 use raim_gnss::faults::{constellation_bias, FaultPlan};
 use raim_gnss::ranging::PreparedEpoch;
+use raim_proto::araim_msg::{
+    AraimAnswer, AraimCommandRef, AraimSummary as WireSummary, IsmFrameRef, IsmSat,
+    WireAraimConfig, WireAraimResult, WireFde, WireUnavailable,
+};
+use raim_proto::message::{CommandRef, ResponseBody};
+use raim_proto::result::WireResult;
+use raim_qemu::QemuSession;
 use serde::Serialize;
 
-use super::{checked_fault_plan, prepare, record::error_enu, ReplayArgs};
+use super::{checked_fault_plan, prepare, record::error_enu, NmeaMode, ReplayArgs, Target};
 
 /// Satellites per epoch (ESBC G+E+C at a 10 degree mask has up to ~30).
 pub const ARAIM_SATS: usize = super::REPLAY_CAPACITY;
@@ -194,6 +202,10 @@ pub struct AraimRecord {
     pub error: Option<String>,
     #[serde(skip)]
     pub position_ecef_m: Option<[f64; 3]>,
+    /// The epoch's NMEA sentences (without CRLF): the firmware's own under
+    /// QEMU, the same writer on the host.
+    #[serde(skip)]
+    pub nmea: Vec<String>,
 }
 
 impl AraimRecord {
@@ -400,22 +412,153 @@ fn name(id: SatId) -> String {
     format!("{}{:02}", id.system.letter(), id.prn)
 }
 
-/// The (VPL, HPL) of an output when they were solved: available, or
-/// unavailable for the limits only. A structural cause (`Unmonitored`,
-/// `PlNotSolved`, `ModeCapacity`, `TooManyEvents`) leaves no PL (the
-/// output's fields are 0 then, which is not a bound).
-fn solved_pls<const K: usize>(out: &raim_core::araim::AraimOutput<f64, K>) -> Option<(f64, f64)> {
-    match out.unavailable {
-        None | Some(raim_core::araim::Unavailable::Limits) => {
-            Some((out.pl_add.vpl_m, out.pl_add.hpl_m))
+/// Where the ARAIM epochs run: the core's monitor on the host (f64, the
+/// replay's own satellite models, no FDE limit), or the firmware under
+/// QEMU (the device's precision, its ISM entries with the ADD elevation
+/// curves, its FDE limits), given the same pseudoranges as
+/// `AraimCommand::Ranges` after one `Ism` frame. Both answer in the wire
+/// form, from which the records are built, so the two targets' records,
+/// summaries, plots and NMEA come from the same code (docs/REPLAY.md,
+/// "ARAIM on the device").
+pub enum AraimEngine {
+    Host(Box<Engine>),
+    Qemu(Box<QemuSession>),
+}
+
+/// The device's ISM entries: one per satellite of the run, with the
+/// command's sigma_URA, sigma_URE, b_nom and P_sat, and P_const for the
+/// constellations that have entries (a constellation without one is a
+/// typed refusal of the frame).
+fn device_ism(
+    a: &AraimReplayArgs,
+    ism: &Ism,
+    epochs: &[PreparedEpoch],
+) -> Result<(
+    Vec<IsmSat>,
+    [Option<f64>; raim_core::measurement::MAX_SYSTEMS],
+)> {
+    let mut ids: Vec<SatId> = epochs
+        .iter()
+        .flat_map(|e| e.sats.iter().map(|s| s.obs.id))
+        .collect();
+    ids.sort_by_key(|id| (id.system.index(), id.prn));
+    ids.dedup();
+    if ids.len() > raim_proto::CAPACITY {
+        bail!(
+            "--araim --target qemu: the run has {} satellites, more than the {} ISM entries the device holds (narrow --systems or the --start/--end window)",
+            ids.len(),
+            raim_proto::CAPACITY
+        );
+    }
+    let mut p_const = [None; raim_core::measurement::MAX_SYSTEMS];
+    for id in &ids {
+        if let (Some(slot), Some(p)) = (
+            p_const.get_mut(id.system.index()),
+            ism.p_const.get(id.system.index()).copied().flatten(),
+        ) {
+            *slot = Some(p);
         }
-        Some(_) => None,
+    }
+    let sats = ids
+        .into_iter()
+        .map(|id| IsmSat {
+            id,
+            sigma_ura_m: a.araim_ura_m,
+            sigma_ure_m: a.araim_ure_m,
+            b_nom_m: a.araim_b_nom_m,
+            p_sat: a.araim_p_sat,
+        })
+        .collect();
+    Ok((sats, p_const))
+}
+
+impl AraimEngine {
+    /// A fresh engine: on QEMU, the firmware configured with the solver's
+    /// configuration and sent the run's ISM frame.
+    fn start(
+        target: Target,
+        a: &AraimReplayArgs,
+        solver: &Config,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        epochs: &[PreparedEpoch],
+    ) -> Result<Self> {
+        Ok(match target {
+            Target::Host => AraimEngine::Host(Box::default()),
+            Target::Qemu => {
+                let (sats, p_const) = device_ism(a, ism, epochs)?;
+                let elf = raim_qemu::firmware_elf()?;
+                let mut s = QemuSession::start(&elf)?;
+                s.configure(solver)?;
+                let frame = IsmFrameRef {
+                    config: WireAraimConfig::from(*cfg),
+                    p_const,
+                    sats: &sats,
+                };
+                match s.call(CommandRef::Araim(AraimCommandRef::Ism(frame)))? {
+                    ResponseBody::Araim(AraimAnswer::IsmAccepted { .. }) => {}
+                    ResponseBody::Error(e) => bail!("the firmware refused the ISM frame: {e}"),
+                    _ => bail!(
+                        "the firmware answered the ISM frame with something else than IsmAccepted"
+                    ),
+                }
+                AraimEngine::Qemu(Box::new(s))
+            }
+        })
+    }
+
+    /// One epoch: the wire result or the refusal as text, and the NMEA
+    /// sentences (`nmea`: wanted on the host; the firmware writes them
+    /// anyway). A transport failure is the outer error.
+    #[allow(clippy::too_many_arguments)]
+    fn epoch(
+        &mut self,
+        a: &AraimReplayArgs,
+        solver: &Config,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        e: &PreparedEpoch,
+        sats: &[RangeObservation],
+        nmea: bool,
+    ) -> Result<(Result<WireAraimResult, String>, Vec<String>)> {
+        // The protocol's epoch time is UTC Unix seconds (the NMEA date).
+        let unix_s = raim_gnss::time::unix_utc_s(e.time_gps_s);
+        match self {
+            AraimEngine::Host(monitor) => {
+                let r = host_epoch(a, solver, cfg, ism, e, sats, monitor, unix_s);
+                let sentences = if nmea {
+                    host_nmea(r.as_ref().ok(), unix_s, sats, e.reference_m)
+                } else {
+                    Vec::new()
+                };
+                Ok((r, sentences))
+            }
+            AraimEngine::Qemu(s) => {
+                let body = s.call(CommandRef::Araim(AraimCommandRef::Ranges {
+                    time_s: unix_s,
+                    apriori_m: e.reference_m,
+                    sats,
+                }))?;
+                let r = match body {
+                    ResponseBody::Araim(AraimAnswer::Result(w)) => Ok(w),
+                    ResponseBody::Error(err) => Err(format!("ARAIM: {err}")),
+                    _ => bail!(
+                        "the firmware answered an ARAIM epoch with something else than a result"
+                    ),
+                };
+                // Every epoch writes its sentences (a refused one its
+                // no-fix sentences), ending with ZDA.
+                let sentences = s.take_epoch_nmea(raim_qemu::ANSWER_TIMEOUT)?;
+                Ok((r, sentences))
+            }
+        }
     }
 }
 
-/// One epoch through the core monitor; the position output.
+/// One epoch through the host's core monitor, in the wire form the
+/// firmware answers with (`raim-server`'s ARAIM answer, field for field).
 #[allow(clippy::too_many_arguments)]
-fn epoch(
+fn host_epoch(
     a: &AraimReplayArgs,
     solver: &Config,
     cfg: &AraimConfig,
@@ -423,63 +566,150 @@ fn epoch(
     e: &PreparedEpoch,
     sats: &[RangeObservation],
     monitor: &mut Engine,
-    rec: &mut AraimRecord,
-) -> Result<Option<[f64; 3]>> {
+    unix_s: f64,
+) -> Result<WireAraimResult, String> {
     let models = ReplayModels { args: a, epoch: e };
     let ranges = Epoch::ranges(e.time_gps_s, sats, e.reference_m);
     let verdict = monitor
         .epoch(solver, cfg, ism, &models, &ranges, FdeLimits::UNLIMITED)
         .map_err(|e| match e {
-            MonitorError::Araim(a) => anyhow!("ARAIM: {a}"),
-            other => anyhow!("ARAIM: {other}"),
+            MonitorError::Araim(a) => format!("ARAIM: {a}"),
+            other => format!("ARAIM: {other}"),
         })?;
+    let pl_exact = cfg.pl_output == PlOutput::Exact;
     let out = monitor.all_in_view();
-    rec.modes = out.modes.len();
-    rec.monitored = out.n_monitored;
-    rec.max_faults = out.max_faults;
-    rec.p_unmon = out.p_unmon;
-    rec.vpl_all_m = out.pl_add.vpl_m;
-    rec.hpl_all_m = out.pl_add.hpl_m;
-    rec.vpl_all_exact_m = out.pl_exact.vpl_m;
-    rec.hpl_all_exact_m = out.pl_exact.hpl_m;
-    rec.emt_m = out.emt_m;
-    rec.sigma_v_acc_m = out.sigma_v_acc_m;
-    rec.detection_passed = out.detection_passed;
-    rec.available = matches!(verdict.decision, Decision::Ok | Decision::Excluded);
-    let in_force = monitor.in_force();
-    rec.unavailable = in_force.unavailable.map(|u| format!("{u:?}"));
-    let pls = solved_pls(in_force);
-    match verdict.exclusion {
-        Exclusion::Fde(FdeDecision::NoFault) => rec.fde = "no_fault".into(),
-        Exclusion::Fde(FdeDecision::Excluded { .. }) => {
+    let (fde, n_star_vertical) = match verdict.exclusion {
+        Exclusion::NotTested => (WireFde::NotTested, None),
+        Exclusion::NotAttempted { monitored } => (
+            WireFde::NotAttempted {
+                modes: u32::try_from(monitored).unwrap_or(u32::MAX),
+            },
+            None,
+        ),
+        Exclusion::Fde(d) => (
+            d.into(),
+            effective_samples(out, 2, cfg.pl_output)
+                .ok()
+                .map(|e| e.n_star),
+        ),
+    };
+    let mut w = WireAraimResult {
+        time_s: unix_s,
+        decision: verdict.decision,
+        all_in_view: WireSummary::from_output(out, pl_exact),
+        fde,
+        excluded: Default::default(),
+        after_exclusion: monitor
+            .after_exclusion()
+            .map(|o| WireSummary::from_output(o, pl_exact)),
+        n_star_vertical,
+        position_ecef_m: verdict.position_ecef_m,
+    };
+    for id in verdict.excluded.iter() {
+        w.excluded.push(*id).map_err(|_| {
+            format!(
+                "ARAIM: more than {} satellites excluded",
+                raim_proto::CAPACITY
+            )
+        })?;
+    }
+    Ok(w)
+}
+
+/// The NMEA sentences of an ARAIM epoch as the firmware writes them
+/// (`raim-server`: `WireResult::set_from_araim`, then the epoch writer), or
+/// a refused epoch's no-fix sentences.
+fn host_nmea(
+    r: Option<&WireAraimResult>,
+    unix_s: f64,
+    sats: &[RangeObservation],
+    apriori_m: Option<[f64; 3]>,
+) -> Vec<String> {
+    let mut wire = WireResult::empty();
+    match r {
+        Some(r) => wire.set_from_araim(r, sats.iter().map(|s| s.id)),
+        None => wire.time_s = unix_s,
+    }
+    let epoch = Epoch::ranges(unix_s, sats, apriori_m);
+    let sky = raim_proto::nmea::Sky::new(&epoch);
+    raim_proto::nmea::epoch_sentences(&wire, &sky, raim_proto::nmea::BUILT)
+        .map(|v| v.iter().map(|s| s.trim_end().to_string()).collect())
+        .unwrap_or_default()
+}
+
+/// A structural cause of unavailability in words (`WireUnavailable`).
+pub fn unavailable_name(u: &WireUnavailable) -> String {
+    match u {
+        WireUnavailable::ModeCapacity { needed, capacity } => {
+            format!("mode_capacity: {needed} modes needed, {capacity} held")
+        }
+        WireUnavailable::TooManyEvents { p_exceed_at_max } => {
+            format!("too_many_events: P(more events) {p_exceed_at_max:.3e}")
+        }
+        WireUnavailable::Unmonitored { p_unmon, p_thres } => {
+            format!("unmonitored: p_unmon {p_unmon:.3e} > P_THRES {p_thres:.3e}")
+        }
+        WireUnavailable::PlNotSolved { axis } => {
+            let name = ["east", "north", "up"]
+                .get(*axis as usize)
+                .copied()
+                .unwrap_or("?");
+            format!("pl_not_solved: the {name} protection level has no root")
+        }
+        WireUnavailable::Limits => "limits".into(),
+    }
+}
+
+/// The record's monitor fields from the wire result (either target).
+fn fill(rec: &mut AraimRecord, w: &WireAraimResult) {
+    let a = &w.all_in_view;
+    rec.modes = a.modes as usize;
+    rec.monitored = a.monitored as usize;
+    rec.max_faults = a.max_faults as usize;
+    rec.p_unmon = a.p_unmon;
+    rec.vpl_all_m = a.vpl_m;
+    rec.hpl_all_m = a.hpl_m;
+    rec.vpl_all_exact_m = a.vpl_exact_m;
+    rec.hpl_all_exact_m = a.hpl_exact_m;
+    rec.emt_m = a.emt_m;
+    rec.sigma_v_acc_m = a.sigma_v_acc_m;
+    rec.detection_passed = a.detection_passed;
+    rec.available = matches!(w.decision, Decision::Ok | Decision::Excluded);
+    let in_force = w.in_force();
+    rec.unavailable = in_force.unavailable.as_ref().map(unavailable_name);
+    // The PLs in force when they were solved: available, or unavailable
+    // for the limits only. A structural cause leaves no PL (the fields
+    // are 0 then, which is not a bound).
+    let pls = match in_force.unavailable {
+        None | Some(WireUnavailable::Limits) => Some((in_force.vpl_m, in_force.hpl_m)),
+        Some(_) => None,
+    };
+    let alarm = |rec: &mut AraimRecord, fde: &str| {
+        rec.fde = fde.into();
+        rec.unavailable = Some("alarm".into());
+    };
+    match w.fde {
+        WireFde::NoFault => rec.fde = "no_fault".into(),
+        WireFde::Excluded { .. } => {
             rec.fde = "excluded".into();
-            rec.excluded = verdict.excluded.iter().map(|id| name(*id)).collect();
+            rec.excluded = w.excluded.iter().map(|id| name(*id)).collect();
         }
-        Exclusion::Fde(FdeDecision::Alarm(cause)) => {
-            rec.fde = match cause {
-                FdeAlarm::Ambiguous { .. } => "alarm_ambiguous",
-                FdeAlarm::NoCandidate => "alarm_no_candidate",
-                FdeAlarm::BudgetExceeded { .. } => "alarm_budget_exceeded",
-            }
-            .into();
-            rec.unavailable = Some("Alarm".into());
-        }
+        WireFde::Ambiguous { .. } => alarm(rec, "alarm_ambiguous"),
+        WireFde::NoCandidate => alarm(rec, "alarm_no_candidate"),
+        WireFde::BudgetExceeded { .. } => alarm(rec, "alarm_budget_exceeded"),
         // No test ran (the modes did not fit): no PL, unavailable.
-        Exclusion::NotTested => rec.fde = "not_tested".into(),
-        Exclusion::NotAttempted { .. } => {
-            rec.fde = "alarm_not_attempted".into();
-            rec.unavailable = Some("Alarm".into());
-        }
+        WireFde::NotTested => rec.fde = "not_tested".into(),
+        WireFde::NotAttempted { .. } => alarm(rec, "alarm_not_attempted"),
     }
     if matches!(rec.fde.as_str(), "no_fault" | "excluded") {
         rec.vpl_m = pls.map(|p| p.0);
         rec.hpl_m = pls.map(|p| p.1);
     }
-    Ok(verdict.position_ecef_m)
 }
 
 #[allow(clippy::too_many_arguments)]
 fn run_epochs(
+    engine: &mut AraimEngine,
     a: &AraimReplayArgs,
     solver: &Config,
     cfg: &AraimConfig,
@@ -488,8 +718,8 @@ fn run_epochs(
     plan: &FaultPlan,
     const_faults: &[ConstFault],
     reference: Option<[f64; 3]>,
-) -> Vec<AraimRecord> {
-    let mut monitor: Box<Engine> = Box::default();
+    nmea: bool,
+) -> Result<Vec<AraimRecord>> {
     let mut out = Vec::with_capacity(epochs.len());
     for e in epochs {
         let mut sats = e.observations();
@@ -513,8 +743,12 @@ fn run_epochs(
                 .collect(),
             ..AraimRecord::default()
         };
-        match epoch(a, solver, cfg, ism, e, &sats, &mut monitor, &mut rec) {
-            Ok(p) => {
+        let (result, sentences) = engine.epoch(a, solver, cfg, ism, e, &sats, nmea)?;
+        rec.nmea = sentences;
+        match result {
+            Ok(w) => {
+                fill(&mut rec, &w);
+                let p = w.position_ecef_m;
                 rec.position_ecef_m = p;
                 if let (Some(p), Some(rf)) = (p, reference) {
                     let err = error_enu(p, rf);
@@ -530,11 +764,11 @@ fn run_epochs(
                     rec.exclusion = Some(if all { "correct" } else { "wrong" }.into());
                 }
             }
-            Err(err) => rec.error = Some(err.to_string()),
+            Err(err) => rec.error = Some(err),
         }
         out.push(rec);
     }
-    out
+    Ok(out)
 }
 
 /// The whole ARAIM replay, without printing (used by the tests too).
@@ -554,10 +788,23 @@ pub fn replay(args: &ReplayArgs) -> Result<(Vec<AraimRecord>, AraimSummary, Opti
         .iter()
         .map(|s| ConstFault::parse(s, first))
         .collect::<Result<Vec<_>>>()?;
+    let nmea = args.nmea.is_some() || args.nmea_file.is_some();
+    if args.target == Target::Qemu {
+        for c in args.codes.iter().filter(|c| c.contains('+')) {
+            let _ = writeln!(
+                std::io::stderr(),
+                "raim: warning: --code {c}: the device's error model takes the ADD's \
+                 dual-frequency factor for every satellite, not this pair's own \
+                 (docs/REPLAY.md, \"ARAIM on the device\")"
+            );
+        }
+    }
+    let mut engine = AraimEngine::start(args.target, a, &solver, &cfg, &ism, &epochs)?;
     let reference = match args.reference {
         super::Reference::Header => header,
         super::Reference::CleanMean => {
             let clean = run_epochs(
+                &mut engine,
                 a,
                 &solver,
                 &cfg,
@@ -566,7 +813,8 @@ pub fn replay(args: &ReplayArgs) -> Result<(Vec<AraimRecord>, AraimSummary, Opti
                 &FaultPlan::default(),
                 &[],
                 None,
-            );
+                false,
+            )?;
             let ps: Vec<[f64; 3]> = clean
                 .iter()
                 .filter(|r| r.available)
@@ -577,6 +825,7 @@ pub fn replay(args: &ReplayArgs) -> Result<(Vec<AraimRecord>, AraimSummary, Opti
         }
     };
     let recs = run_epochs(
+        &mut engine,
         a,
         &solver,
         &cfg,
@@ -585,7 +834,8 @@ pub fn replay(args: &ReplayArgs) -> Result<(Vec<AraimRecord>, AraimSummary, Opti
         &plan,
         &const_faults,
         reference,
-    );
+        nmea,
+    )?;
     let summary = summarise(&recs);
     Ok((recs, summary, reference))
 }
@@ -596,10 +846,21 @@ pub fn run(args: &ReplayArgs) -> Result<()> {
     let mut w = stdout.lock();
     if !args.quiet {
         for r in &recs {
-            if args.json {
-                writeln!(w, "{}", serde_json::to_string(r)?)?;
-            } else {
-                writeln!(w, "{}", r.text_line())?;
+            match args.nmea {
+                _ if args.json => writeln!(w, "{}", serde_json::to_string(r)?)?,
+                Some(NmeaMode::Only) => {
+                    // NMEA 0183 ends every sentence with CR LF.
+                    for s in &r.nmea {
+                        write!(w, "{s}\r\n")?;
+                    }
+                }
+                Some(NmeaMode::WithText) => {
+                    writeln!(w, "{}", r.text_line())?;
+                    for s in &r.nmea {
+                        writeln!(w, "    {s}")?;
+                    }
+                }
+                None => writeln!(w, "{}", r.text_line())?,
             }
         }
     }
@@ -609,10 +870,13 @@ pub fn run(args: &ReplayArgs) -> Result<()> {
             "{}",
             serde_json::json!({ "araim_summary": summary, "reference_ecef_m": reference })
         )?;
-    } else {
+    } else if args.nmea != Some(NmeaMode::Only) {
         writeln!(w, "{}", summary.table())?;
     }
     w.flush()?;
+    if let Some(p) = &args.nmea_file {
+        super::export::write_nmea(p, recs.iter().flat_map(|r| &r.nmea))?;
+    }
     if let Some(p) = &args.araim.araim_plot {
         draw(
             &recs,

@@ -552,7 +552,14 @@ fn run_esq(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
         )?;
     }
     if let Some(p) = &args.esq.esq_plot {
-        plot_esq(rows, &dte, &emitted, p, args.font.as_deref())?;
+        plot_esq(
+            rows,
+            &dte,
+            &emitted,
+            p,
+            args.font.as_deref(),
+            &super::run_title(args),
+        )?;
     }
     Ok(())
 }
@@ -561,83 +568,151 @@ fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow!("plot: {e}")
 }
 
+/// The legend of a panel, upper right on a light background.
+fn legend<'a, DB: DrawingBackend + 'a>(
+    c: &mut ChartContext<
+        'a,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    c.configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)
+}
+
+/// A title naming the file, the faults and the window; three panels on
+/// GPS time: N*, dT_e in force, and the ARAIM solution-separation ratio at
+/// every epoch against the effective samples the schedule emits, each with
+/// its legend.
 fn plot_esq(
     rows: &[Row],
     dte: &[f64],
     emitted: &[bool],
     path: &Path,
     font: Option<&Path>,
+    title: &str,
 ) -> Result<()> {
     super::plot::register_font(font)?;
-    let root = BitMapBackend::new(path, (1400, 1200)).into_drawing_area();
+    let root = BitMapBackend::new(path, (1400, 1250)).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
+    let root = root
+        .titled(&format!("raim replay --esq: {title}"), ("sans-serif", 26))
+        .map_err(err)?;
     let panels = root.split_evenly((3, 1));
-    let t0 = rows.first().map_or(0.0, |r| r.t_gps_s);
-    let mins = |t: f64| (t - t0) / 60.0;
-    let t_max = rows.last().map_or(1.0, |r| mins(r.t_gps_s)).max(1.0);
+    let ax = super::plot::TimeAxis::new(
+        rows.first().map_or(0.0, |r| r.t_gps_s),
+        rows.last().map_or(0.0, |r| r.t_gps_s),
+    );
     let ns: Vec<(f64, f64)> = rows
         .iter()
-        .filter_map(|r| r.esq.map(|e| (mins(r.t_gps_s), e.n_star)))
+        .filter_map(|r| r.esq.map(|e| (ax.x(r.t_gps_s), e.n_star)))
         .collect();
-    let n_max = ns.iter().map(|p| p.1).fold(1.0, f64::max) * 1.1;
+    let n_max = ns.iter().map(|p| p.1).fold(1.0, f64::max) * 1.3;
     let mut c = ChartBuilder::on(&panels[0])
-        .caption("N* = P_Sigma / P_max (vertical)", ("sans-serif", 22))
+        .caption(
+            "effective sample quantity N* = P_Sigma / P_max (vertical)",
+            ("sans-serif", 22),
+        )
         .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(50)
-        .build_cartesian_2d(0.0..t_max, 0.0..n_max)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(ax.range(), 0.0..n_max)
         .map_err(err)?;
-    c.configure_mesh().x_desc("minutes").draw().map_err(err)?;
-    c.draw_series(LineSeries::new(ns, &BLUE)).map_err(err)?;
+    c.configure_mesh()
+        .x_desc(ax.desc.as_str())
+        .x_label_formatter(&super::plot::hhmm)
+        .y_desc("N*")
+        .draw()
+        .map_err(err)?;
+    c.draw_series(LineSeries::new(ns, &BLUE))
+        .map_err(err)?
+        .label("N*")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
+    legend(&mut c)?;
     let d: Vec<(f64, f64)> = rows
         .iter()
         .zip(dte)
         .filter(|(_, d)| d.is_finite())
-        .map(|(r, d)| (mins(r.t_gps_s), *d))
+        .map(|(r, d)| (ax.x(r.t_gps_s), *d))
         .collect();
-    let d_max = d.iter().map(|p| p.1).fold(1.0, f64::max) * 1.1;
+    let d_max = d.iter().map(|p| p.1).fold(1.0, f64::max) * 1.3;
     let mut c = ChartBuilder::on(&panels[1])
-        .caption("dT_e = T / N* in force (s)", ("sans-serif", 22))
+        .caption(
+            "effective sample interval dT_e = T / N* in force",
+            ("sans-serif", 22),
+        )
         .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(50)
-        .build_cartesian_2d(0.0..t_max, 0.0..d_max)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(ax.range(), 0.0..d_max)
         .map_err(err)?;
-    c.configure_mesh().x_desc("minutes").draw().map_err(err)?;
-    c.draw_series(LineSeries::new(d, &RED)).map_err(err)?;
+    c.configure_mesh()
+        .x_desc(ax.desc.as_str())
+        .x_label_formatter(&super::plot::hhmm)
+        .y_desc("s")
+        .draw()
+        .map_err(err)?;
+    c.draw_series(LineSeries::new(d, &RED))
+        .map_err(err)?
+        .label("dT_e")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
+    legend(&mut c)?;
     let r_max = rows
         .iter()
         .map(|r| r.araim_ratio)
         .filter(|r| r.is_finite())
         .fold(1.5, f64::max)
-        * 1.1;
+        * 1.3;
     let mut c = ChartBuilder::on(&panels[2])
         .caption(
-            "ARAIM max |x(k) - x(0)| / T_k: every epoch (grey), effective samples (blue); threshold 1",
+            "ARAIM solution separation: max over modes |x(k) - x(0)| / T_k",
             ("sans-serif", 22),
         )
         .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(50)
-        .build_cartesian_2d(0.0..t_max, 0.0..r_max)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(ax.range(), 0.0..r_max)
         .map_err(err)?;
-    c.configure_mesh().x_desc("minutes").draw().map_err(err)?;
+    c.configure_mesh()
+        .x_desc(ax.desc.as_str())
+        .x_label_formatter(&super::plot::hhmm)
+        .y_desc("ratio")
+        .draw()
+        .map_err(err)?;
+    let grey = RGBColor(170, 170, 170);
     c.draw_series(LineSeries::new(
         rows.iter()
             .filter(|r| r.araim_ratio.is_finite())
-            .map(|r| (mins(r.t_gps_s), r.araim_ratio)),
-        &RGBColor(170, 170, 170),
+            .map(|r| (ax.x(r.t_gps_s), r.araim_ratio)),
+        &grey,
     ))
-    .map_err(err)?;
+    .map_err(err)?
+    .label("every epoch")
+    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey));
     c.draw_series(
         rows.iter()
             .zip(emitted)
             .filter(|(r, e)| **e && r.araim_ratio.is_finite())
-            .map(|(r, _)| Circle::new((mins(r.t_gps_s), r.araim_ratio), 3, BLUE.filled())),
+            .map(|(r, _)| Circle::new((ax.x(r.t_gps_s), r.araim_ratio), 3, BLUE.filled())),
     )
-    .map_err(err)?;
-    c.draw_series(LineSeries::new([(0.0, 1.0), (t_max, 1.0)], &RED))
-        .map_err(err)?;
+    .map_err(err)?
+    .label("effective samples (emitted)")
+    .legend(|(x, y)| Circle::new((x + 10, y), 3, BLUE.filled()));
+    c.draw_series(LineSeries::new(
+        [(ax.first_h, 1.0), (ax.range().end, 1.0)],
+        RED.stroke_width(2),
+    ))
+    .map_err(err)?
+    .label("threshold (ratio 1)")
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
+    legend(&mut c)?;
     root.present().map_err(err)?;
     Ok(())
 }

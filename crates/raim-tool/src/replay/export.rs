@@ -350,12 +350,10 @@ pub fn write_gpx(path: &Path, recs: &[EpochRecord], title: &str) -> Result<()> {
 
 /// The NMEA stream, one sentence a line, each ended CR LF as NMEA 0183
 /// requires (the same bytes as `--nmea only`).
-pub fn write_nmea(path: &Path, recs: &[EpochRecord]) -> Result<()> {
+pub fn write_nmea<'a>(path: &Path, sentences: impl IntoIterator<Item = &'a String>) -> Result<()> {
     let mut w = create(path, "--nmea-file")?;
-    for r in recs {
-        for s in &r.nmea {
-            write!(w, "{}\r\n", s.trim_end())?;
-        }
+    for s in sentences {
+        write!(w, "{}\r\n", s.trim_end())?;
     }
     w.flush()?;
     Ok(())

@@ -156,9 +156,9 @@ pub struct ReplayArgs {
     #[arg(long, help_heading = heading::OUTPUTS)]
     pub json: bool,
     /// The monitor's NMEA 0183 output per epoch (RMC, VTG, GGA, GSA, GSV, GST, GBS, ZDA, CRLF-terminated;
-    /// from the firmware's second UART with --target qemu): `only` the
-    /// sentences (a stream for NMEA readers, no summary), or `with-text`
-    /// after each epoch's text line.
+    /// from the firmware's second UART with --target qemu; also with
+    /// --araim): `only` the sentences (a stream for NMEA readers, no
+    /// summary), or `with-text` after each epoch's text line.
     #[arg(long, value_enum, value_name = "MODE", help_heading = heading::OUTPUTS)]
     pub nmea: Option<NmeaMode>,
     /// Write the NMEA stream to this file (beside any stdout output).
@@ -196,7 +196,8 @@ pub struct ReplayArgs {
     pub config: ConfigArgs,
     /// Where the monitor runs: host (the core on this machine) or qemu (the
     /// firmware under QEMU, mps2-an386; built on first use or taken from
-    /// $RAIM_FIRMWARE_ELF). Snapshot monitor only.
+    /// $RAIM_FIRMWARE_ELF). The snapshot monitor and --araim (the
+    /// device's ARAIM, in its precision: docs/REPLAY.md).
     #[arg(long, value_enum, default_value_t = Target::Host, help_heading = heading::SNAPSHOT)]
     pub target: Target,
     /// Particle-filter RAIM (docs/PF.md): --pf {ekf,pf,gapf}.
@@ -638,7 +639,7 @@ fn write_outputs(args: &ReplayArgs, out: &ReplayOutput) -> Result<()> {
         export::write_gpx(p, &out.records, &title)?;
     }
     if let Some(p) = &args.nmea_file {
-        export::write_nmea(p, &out.records)?;
+        export::write_nmea(p, out.records.iter().flat_map(|r| &r.nmea))?;
     }
     if let Some(p) = &args.plot {
         plot::draw(out, &args.core_config(), p, args.font.as_deref(), &title)?;

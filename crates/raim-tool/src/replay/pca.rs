@@ -165,7 +165,7 @@ pub fn run(args: &ReplayArgs, s: &Setup, rows: &[Row], w: &mut impl Write) -> Re
         writeln!(w, "  epochs with a refusal (listed per epoch): {refused}")?;
     }
     if let Some(p) = &args.esq.esq_plot {
-        plot(rows, p, args.font.as_deref())?;
+        plot(rows, p, args.font.as_deref(), &super::run_title(args))?;
     }
     Ok(())
 }
@@ -174,66 +174,112 @@ fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow!("plot: {e}")
 }
 
-fn plot(rows: &[Row], path: &Path, font: Option<&Path>) -> Result<()> {
+/// A title naming the file, the faults and the window; two panels on GPS
+/// time: the PCA statistic (log scale) against its threshold, alarms
+/// marked, and the number of components k of the satellites with a
+/// complete window, each with its legend.
+fn plot(rows: &[Row], path: &Path, font: Option<&Path>, title: &str) -> Result<()> {
     super::plot::register_font(font)?;
-    let root = BitMapBackend::new(path, (1400, 900)).into_drawing_area();
+    let root = BitMapBackend::new(path, (1400, 950)).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
+    let root = root
+        .titled(&format!("raim replay --pca: {title}"), ("sans-serif", 26))
+        .map_err(err)?;
     let panels = root.split_evenly((2, 1));
-    let t0 = rows.first().map_or(0.0, |r| r.t_gps_s);
-    let mins = |t: f64| (t - t0) / 60.0;
-    let t_max = rows.last().map_or(1.0, |r| mins(r.t_gps_s)).max(1.0);
+    let ax = super::plot::TimeAxis::new(
+        rows.first().map_or(0.0, |r| r.t_gps_s),
+        rows.last().map_or(0.0, |r| r.t_gps_s),
+    );
     let pts: Vec<(f64, f64)> = rows
         .iter()
-        .filter_map(|r| r.pca.map(|t| (mins(r.t_gps_s), t.ratio)))
+        .filter_map(|r| r.pca.map(|t| (ax.x(r.t_gps_s), t.ratio)))
         .filter(|p| p.1.is_finite())
         .collect();
-    let y_max = pts.iter().map(|p| p.1).fold(1.5, f64::max) * 1.1;
+    let y_max = pts.iter().map(|p| p.1).fold(1.5, f64::max) * 3.0;
+    let floor = 0.011;
     let mut c = ChartBuilder::on(&panels[0])
         .caption(
-            "PCA: max_q |dx_q| / T_q (blue; alarms red) against the threshold 1",
+            "PCA constellation statistic max_q |dx_q| / T_q (values below 0.011 drawn at 0.011)",
             ("sans-serif", 22),
         )
         .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(50)
-        .build_cartesian_2d(0.0..t_max, (0.01f64..y_max).log_scale())
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(ax.range(), (0.01f64..y_max).log_scale())
         .map_err(err)?;
-    c.configure_mesh().x_desc("minutes").draw().map_err(err)?;
+    c.configure_mesh()
+        .x_desc(ax.desc.as_str())
+        .x_label_formatter(&super::plot::hhmm)
+        .y_desc("ratio (log)")
+        .draw()
+        .map_err(err)?;
     c.draw_series(LineSeries::new(
-        pts.iter().map(|&(x, y)| (x, y.max(0.011))),
+        pts.iter().map(|&(x, y)| (x, y.max(floor))),
         &BLUE,
     ))
-    .map_err(err)?;
+    .map_err(err)?
+    .label("statistic / threshold")
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
     c.draw_series(
         pts.iter()
             .filter(|p| p.1 > 1.0)
             .map(|&(x, y)| Circle::new((x, y), 3, RED.filled())),
     )
-    .map_err(err)?;
-    c.draw_series(LineSeries::new([(0.0, 1.0), (t_max, 1.0)], &RED))
+    .map_err(err)?
+    .label("alarm (ratio > 1)")
+    .legend(|(x, y)| Circle::new((x + 10, y), 3, RED.filled()));
+    c.draw_series(LineSeries::new(
+        [(ax.first_h, 1.0), (ax.range().end, 1.0)],
+        RED.stroke_width(2),
+    ))
+    .map_err(err)?
+    .label("threshold (ratio 1)")
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
+    c.configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
         .map_err(err)?;
     let ks: Vec<(f64, f64)> = rows
         .iter()
-        .filter_map(|r| r.pca.map(|t| (mins(r.t_gps_s), t.k as f64)))
+        .filter_map(|r| r.pca.map(|t| (ax.x(r.t_gps_s), t.k as f64)))
         .collect();
     let nc: Vec<(f64, f64)> = rows
         .iter()
-        .filter_map(|r| r.pca.map(|t| (mins(r.t_gps_s), t.n_complete as f64)))
+        .filter_map(|r| r.pca.map(|t| (ax.x(r.t_gps_s), t.n_complete as f64)))
         .collect();
-    let n_max = nc.iter().map(|p| p.1).fold(2.0, f64::max) + 1.0;
+    let n_max = nc.iter().map(|p| p.1).fold(2.0, f64::max) * 1.4 + 1.0;
     let mut c = ChartBuilder::on(&panels[1])
         .caption(
-            "k (blue) of n_c satellites with a complete window (black)",
+            "principal components kept and satellites with a complete window",
             ("sans-serif", 22),
         )
         .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(50)
-        .build_cartesian_2d(0.0..t_max, 0.0..n_max)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(ax.range(), 0.0..n_max)
         .map_err(err)?;
-    c.configure_mesh().x_desc("minutes").draw().map_err(err)?;
-    c.draw_series(LineSeries::new(ks, &BLUE)).map_err(err)?;
-    c.draw_series(LineSeries::new(nc, &BLACK)).map_err(err)?;
+    c.configure_mesh()
+        .x_desc(ax.desc.as_str())
+        .x_label_formatter(&super::plot::hhmm)
+        .y_desc("count")
+        .draw()
+        .map_err(err)?;
+    c.draw_series(LineSeries::new(ks, &BLUE))
+        .map_err(err)?
+        .label("k (components)")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
+    c.draw_series(LineSeries::new(nc, &BLACK))
+        .map_err(err)?
+        .label("n_c (satellites, complete window)")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+    c.configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)?;
     root.present().map_err(err)?;
     Ok(())
 }

@@ -529,8 +529,10 @@ pub fn summary_header() -> String {
 pub fn summary_row(s: &PfSummary) -> String {
     let o = |v: Option<usize>| v.map_or("-".to_string(), |v| v.to_string());
     format!(
-        "| {:?} | {} | {:.2} | {:.1} | {:.2} | {} | {} | {} | {} | {:.2} | {} | {:.2} |",
-        s.filter,
+        "| {} | {} | {:.2} | {:.1} | {:.2} | {} | {} | {} | {} | {:.2} | {} | {:.2} |",
+        s.filter
+            .to_possible_value()
+            .map_or_else(String::new, |v| v.get_name().to_string()),
         if s.particles == 0 {
             "-".to_string()
         } else {

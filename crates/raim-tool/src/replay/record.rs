@@ -66,7 +66,7 @@ pub struct EpochRecord {
     pub faulted_ids: Vec<SatId>,
 }
 
-fn cause_name(c: AlarmCause) -> String {
+pub fn cause_name(c: AlarmCause) -> String {
     match c {
         AlarmCause::NoRedundancy => "no_redundancy".into(),
         AlarmCause::Unidentifiable => "unidentifiable".into(),

@@ -5,8 +5,9 @@
 //! `--pf` or the ESQ/PCA studies (`--esq`, `--pca`, `--esq-mcusum`). Each
 //! monitor's own options (the flattened argument groups) only mean
 //! something with it, and the per-epoch outputs that only the snapshot
-//! monitor produces (NMEA, `.pos`, CSV, KML, GPX, `--plot`) are refused
-//! with the others. Only options given on the command line count: a
+//! monitor produces (`.pos`, CSV, KML, GPX, `--plot`; NMEA also with
+//! `--araim`) are refused with the others. The firmware runs the snapshot
+//! monitor and ARAIM (`--target qemu`). Only options given on the command line count: a
 //! default, or a value taken from a `--config` run file, never conflicts.
 
 use clap::parser::ValueSource;
@@ -97,23 +98,31 @@ pub fn check(args: &ReplayArgs, m: &ArgMatches) -> Option<String> {
              engine, not the particle filter; run them separately"
         ));
     }
-    if monitor != Monitor::Snapshot && args.target == Target::Qemu {
+    if !matches!(monitor, Monitor::Snapshot | Monitor::Araim) && args.target == Target::Qemu {
         return Some(format!(
             "'{mon}' cannot be used with '--target qemu': the firmware runs the snapshot \
-             monitor; {mon} runs on the host only"
+             monitor and ARAIM; {mon} runs on the host only"
         ));
     }
+    if monitor == Monitor::Araim && args.target == Target::Qemu && given("araim_iono_m") {
+        return Some(
+            "'--araim-iono-m' cannot be used with '--target qemu': the device's error \
+             model is its ISM with the ADD elevation curves, without a residual \
+             ionosphere term"
+                .into(),
+        );
+    }
     if monitor != Monitor::Snapshot {
-        for id in [
-            "nmea",
-            "nmea_file",
-            "pos",
-            "csv",
-            "kml",
-            "gpx",
-            "plot",
-            "keep_going",
-        ] {
+        // ARAIM epochs write NMEA (on the device as on the host).
+        let nmea: &[&str] = if monitor == Monitor::Araim {
+            &[]
+        } else {
+            &["nmea", "nmea_file"]
+        };
+        for &id in nmea
+            .iter()
+            .chain(&["pos", "csv", "kml", "gpx", "plot", "keep_going"])
+        {
             if given(id) {
                 let hint = match (id, monitor) {
                     ("plot", Monitor::Araim) => " (use --araim-plot)",
