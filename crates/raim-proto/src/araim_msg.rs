@@ -438,6 +438,61 @@ impl WireAraimResult {
     pub fn in_force(&self) -> &AraimSummary {
         self.after_exclusion.as_ref().unwrap_or(&self.all_in_view)
     }
+
+    /// The wire form of an ARAIM monitor's epoch (`Monitor::epoch`'s
+    /// verdict and the runs it keeps), in either precision: the device's
+    /// server and the host's replay build their answers here, so both
+    /// say the same thing of the same run. The PLs reported are the
+    /// configured `pl_output`'s; N* is seed 003's vertical effective sample
+    /// quantity at that PL (SPEC §9.2), for an epoch whose FDE ran.
+    /// `TooManySatellites` when the verdict excludes more satellites than
+    /// the wire carries (an engine larger than `CAPACITY`).
+    pub fn from_verdict<T: Real, const N: usize, const K: usize>(
+        monitor: &raim_core::araim::Monitor<T, N, K>,
+        verdict: &raim_core::araim::Verdict<N>,
+        cfg: &AraimConfig,
+        time_s: f64,
+    ) -> Result<Self, WireError> {
+        use raim_core::araim::Exclusion;
+        let pl_exact = cfg.pl_output == PlOutput::Exact;
+        let out = monitor.all_in_view();
+        let (fde, n_star_vertical) = match verdict.exclusion {
+            Exclusion::NotTested => (WireFde::NotTested, None),
+            Exclusion::NotAttempted { monitored } => (
+                WireFde::NotAttempted {
+                    modes: u32::try_from(monitored).unwrap_or(u32::MAX),
+                },
+                None,
+            ),
+            Exclusion::Fde(d) => (
+                d.into(),
+                raim_core::araim::esq::effective_samples(out, 2, cfg.pl_output)
+                    .ok()
+                    .map(|e| e.n_star),
+            ),
+        };
+        let mut excluded = heapless::Vec::new();
+        for id in verdict.excluded.iter() {
+            excluded
+                .push(*id)
+                .map_err(|_| WireError::TooManySatellites {
+                    have: u32::try_from(verdict.excluded.len()).unwrap_or(u32::MAX),
+                    capacity: CAPACITY as u32,
+                })?;
+        }
+        Ok(WireAraimResult {
+            time_s,
+            decision: verdict.decision,
+            all_in_view: AraimSummary::from_output(out, pl_exact),
+            fde,
+            excluded,
+            after_exclusion: monitor
+                .after_exclusion()
+                .map(|o| AraimSummary::from_output(o, pl_exact)),
+            n_star_vertical,
+            position_ecef_m: verdict.position_ecef_m,
+        })
+    }
 }
 
 /// The payload of `ResponseBody::Araim` (unboxed, as `ResponseBody`).

@@ -275,16 +275,14 @@ fn epoch_answer_inner<P: super::Platform>(
 
 #[cfg(feature = "araim")]
 mod engine {
-    use raim_core::araim::esq::effective_samples;
     use raim_core::araim::{
-        AraimConfig, Exclusion, FdeLimits, Ism, Monitor, MonitorError, PlOutput, SatIsm,
-        SatelliteModels, Verdict,
+        AraimConfig, FdeLimits, Ism, Monitor, MonitorError, SatIsm, SatelliteModels,
     };
     use raim_core::SatId;
 
     use super::{AraimWireError, IsmFrame, FDE_WORK_BUDGET, MAX_FDE_MODES, MAX_MODES};
     use raim_core::{Config, Epoch};
-    use raim_proto::araim_msg::{AraimSummary, IsmSat, WireAraimResult, WireFde};
+    use raim_proto::araim_msg::{IsmSat, WireAraimResult};
     use raim_proto::error::WireError;
     use raim_proto::message::{LinearEpoch, RangeEpoch};
     use raim_proto::CAPACITY;
@@ -368,51 +366,7 @@ mod engine {
             let verdict = monitor
                 .epoch(cfg, &araim_cfg, &p_const, &models, epoch, limits())
                 .map_err(wire_error)?;
-            Ok(result(monitor, verdict, &araim_cfg, epoch.time_s))
-        }
-    }
-
-    /// The wire result of a verdict and the monitor's outputs.
-    fn result(
-        monitor: &Monitor<AraimT, CAPACITY, MAX_MODES>,
-        verdict: Verdict<CAPACITY>,
-        cfg: &AraimConfig,
-        time_s: f64,
-    ) -> WireAraimResult {
-        let pl_exact = cfg.pl_output == PlOutput::Exact;
-        let out = monitor.all_in_view();
-        let (fde, n_star_vertical) = match verdict.exclusion {
-            Exclusion::NotTested => (WireFde::NotTested, None),
-            Exclusion::NotAttempted { monitored } => (
-                WireFde::NotAttempted {
-                    modes: u32::try_from(monitored).unwrap_or(u32::MAX),
-                },
-                None,
-            ),
-            // Seed 003's N* (vertical, at the PL reported).
-            Exclusion::Fde(d) => {
-                let pl_kind = if pl_exact {
-                    PlOutput::Exact
-                } else {
-                    PlOutput::AddBracket
-                };
-                (
-                    d.into(),
-                    effective_samples(out, 2, pl_kind).ok().map(|e| e.n_star),
-                )
-            }
-        };
-        WireAraimResult {
-            time_s,
-            decision: verdict.decision,
-            all_in_view: AraimSummary::from_output(out, pl_exact),
-            fde,
-            excluded: verdict.excluded,
-            after_exclusion: monitor
-                .after_exclusion()
-                .map(|o| AraimSummary::from_output(o, pl_exact)),
-            n_star_vertical,
-            position_ecef_m: verdict.position_ecef_m,
+            WireAraimResult::from_verdict(monitor, &verdict, &araim_cfg, epoch.time_s)
         }
     }
 

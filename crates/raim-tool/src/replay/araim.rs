@@ -20,18 +20,16 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use plotters::prelude::*;
 use raim_core::araim::error_model::iono_free_factor_sq;
-use raim_core::araim::esq::effective_samples;
 use raim_core::araim::{
-    AraimConfig, Curves, Exclusion, FdeLimits, Ism, Monitor, MonitorError, PlOutput, SatIsm,
-    SatelliteModels,
+    AraimConfig, Curves, FdeLimits, Ism, Monitor, MonitorError, SatIsm, SatelliteModels,
 };
 use raim_core::frames::{ecef_to_geodetic, enu_rotation, unrotate};
 use raim_core::{Config, Decision, Epoch, RangeObservation, SatId, System};
 use raim_gnss::faults::{constellation_bias, FaultPlan};
 use raim_gnss::ranging::PreparedEpoch;
 use raim_proto::araim_msg::{
-    AraimAnswer, AraimCommandRef, AraimSummary as WireSummary, IsmFrameRef, IsmSat,
-    WireAraimConfig, WireAraimResult, WireFde, WireUnavailable,
+    AraimAnswer, AraimCommandRef, IsmFrameRef, IsmSat, WireAraimConfig, WireAraimResult, WireFde,
+    WireUnavailable,
 };
 use raim_proto::message::{CommandRef, ResponseBody};
 use raim_proto::result::WireResult;
@@ -576,44 +574,7 @@ fn host_epoch(
             MonitorError::Araim(a) => format!("ARAIM: {a}"),
             other => format!("ARAIM: {other}"),
         })?;
-    let pl_exact = cfg.pl_output == PlOutput::Exact;
-    let out = monitor.all_in_view();
-    let (fde, n_star_vertical) = match verdict.exclusion {
-        Exclusion::NotTested => (WireFde::NotTested, None),
-        Exclusion::NotAttempted { monitored } => (
-            WireFde::NotAttempted {
-                modes: u32::try_from(monitored).unwrap_or(u32::MAX),
-            },
-            None,
-        ),
-        Exclusion::Fde(d) => (
-            d.into(),
-            effective_samples(out, 2, cfg.pl_output)
-                .ok()
-                .map(|e| e.n_star),
-        ),
-    };
-    let mut w = WireAraimResult {
-        time_s: unix_s,
-        decision: verdict.decision,
-        all_in_view: WireSummary::from_output(out, pl_exact),
-        fde,
-        excluded: Default::default(),
-        after_exclusion: monitor
-            .after_exclusion()
-            .map(|o| WireSummary::from_output(o, pl_exact)),
-        n_star_vertical,
-        position_ecef_m: verdict.position_ecef_m,
-    };
-    for id in verdict.excluded.iter() {
-        w.excluded.push(*id).map_err(|_| {
-            format!(
-                "ARAIM: more than {} satellites excluded",
-                raim_proto::CAPACITY
-            )
-        })?;
-    }
-    Ok(w)
+    WireAraimResult::from_verdict(monitor, &verdict, cfg, unix_s).map_err(|e| format!("ARAIM: {e}"))
 }
 
 /// The NMEA sentences of an ARAIM epoch as the firmware writes them
