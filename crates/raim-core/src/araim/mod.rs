@@ -48,7 +48,7 @@ pub use modes::{ModeEvents, MAX_EVENTS};
 pub use monitor::{Exclusion, FdeLimits, Monitor, MonitorError, SatIsm, SatelliteModels, Verdict};
 pub use subset::SubsetStats;
 
-use crate::measurement::{System, MAX_SYSTEMS};
+use crate::measurement::{System, MAX_STATES, MAX_SYSTEMS};
 use crate::real::Real;
 use crate::stats::dist::normal_q_inv;
 use core::ops::ControlFlow;
@@ -437,11 +437,15 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         for (i, (((((g, col), (w, c_int)), (c_acc, b_nom)), y), s)) in rows.zip(sats).enumerate() {
             let clock = *s.id.system.entry(&col_of);
             // G row: ENU, then the one-hot clock column of its constellation.
-            for (c, x) in g.iter_mut().enumerate() {
-                *x = if c == clock { one } else { zero };
-            }
+            *g = [zero; MAX_STATES];
             for (x, v) in g.iter_mut().zip(s.g_enu.iter()) {
                 *x = *v;
+            }
+            // In range: a clock column is 3 + the number of constellations
+            // before it, < 3 + MAX_SYSTEMS = MAX_STATES.
+            #[allow(clippy::indexing_slicing)]
+            {
+                g[clock] = one;
             }
             *col = clock;
             *w = one / s.c_int_m2;
