@@ -17,7 +17,6 @@ mod key;
 mod link_rx;
 mod provision;
 mod stack;
-mod watchdog;
 
 use cortex_m::interrupt::InterruptNumber;
 use cortex_m::peripheral::NVIC;
@@ -26,17 +25,21 @@ use raim_core::Decision;
 use raim_proto::{ResetCause, Status, TestFault};
 use raim_server::{Platform, Server};
 
+use board::{Board, Parts, Watchdog};
+
 #[cfg(feature = "board-stm32f4")]
 use defmt_rtt as _;
 #[cfg(feature = "board-qemu")]
 use defmt_semihosting as _;
 
-struct Board {
+/// What the server asks of the board (`raim_server::Platform`), from the
+/// board's parts.
+struct Unit<B: Board> {
     ticks: board::Ticks,
     /// Resets since power-on and the last cause (`fault::boot`).
     reset: (u32, ResetCause),
     /// The integrity-alarm discrete output.
-    discrete: discrete::BoardDiscrete,
+    discrete: discrete::Discrete<B::Alarm>,
 }
 
 /// An interrupt line by number, for the NVIC (no device crate).
@@ -44,14 +47,14 @@ struct Board {
 struct Irq(u16);
 
 // SAFETY: the numbers used are interrupt lines of the board
-// (`board::LINK_RX_IRQ`, or the one `DefaultHandler` was entered for).
+// (`Board::LINK_RX_IRQ`, or the one `DefaultHandler` was entered for).
 unsafe impl InterruptNumber for Irq {
     fn number(self) -> u16 {
         self.0
     }
 }
 
-impl Platform for Board {
+impl<B: Board> Platform for Unit<B> {
     const TICK_MASK: u32 = 0x00FF_FFFF;
     fn now(&mut self) -> u32 {
         self.ticks.now()
@@ -94,10 +97,28 @@ impl Platform for Board {
 
 #[entry]
 fn main() -> ! {
-    let reset = fault::boot();
     let Some(core) = cortex_m::Peripherals::take() else {
         board::halt()
     };
+    let Some(parts) = board::Active::take() else {
+        board::halt()
+    };
+    run::<board::Active>(core, parts)
+}
+
+/// The application on board `B`: the boot sequence, then the main loop.
+/// Interrupts are masked on entry (`Board::take`).
+fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts: Parts<B>) -> ! {
+    let Parts {
+        mut link,
+        link_rx,
+        mut nmea,
+        alarm,
+        mut watchdog,
+        core_hz,
+        reset,
+    } = parts;
+    let reset = fault::boot(reset);
     let server = server();
     #[cfg(feature = "pf")]
     server.attach_pf(pf_engines());
@@ -107,28 +128,26 @@ fn main() -> ! {
     if let Some(k) = key {
         server.set_auth_key(k);
     }
-    let Some((mut link, rx_port, mut nmea, alarm_pin)) = board::parts() else {
+    let Some(mut rx) = link_rx::init(link_rx) else {
         board::halt()
     };
-    let Some(mut rx) = link_rx::init(rx_port) else {
-        board::halt()
-    };
-    let mut platform = Board {
+    let mut platform = Unit::<B> {
         ticks: board::Ticks::new(core.SYST),
         reset,
-        discrete: discrete::Discrete::new(alarm_pin),
+        discrete: discrete::Discrete::new(alarm, core_hz),
     };
     // The provisioned configuration, if its seal verifies and every part
     // passes its checks, runs locked; otherwise the unit is Unconfigured.
     // No default is ever put in force.
     boot(server, key.as_ref(), reset.0, platform.ticks.now());
-    watchdog::start();
+    watchdog.start();
     stack::paint();
-    guard::enable();
+    guard::enable(&mut core.MPU);
     defmt::info!(
-        "raim firmware up: capacity {=usize}, protocol {=u16}",
+        "raim firmware up: capacity {=usize}, protocol {=u16}, core {=u32} Hz",
         raim_proto::CAPACITY,
-        raim_proto::PROTOCOL_VERSION
+        raim_proto::PROTOCOL_VERSION,
+        core_hz
     );
     // The boot notice: the first frame after every reset.
     let _ = server.send_boot_notice::<_, core::convert::Infallible, _>(&mut link, &mut platform);
@@ -136,14 +155,15 @@ fn main() -> ! {
     // the handlers (`DefaultHandler`, `SysTick`) share only atomics and the
     // critical-section-guarded receive side with this loop.
     unsafe {
-        NVIC::unmask(Irq(board::LINK_RX_IRQ));
+        NVIC::unmask(Irq(B::LINK_RX_IRQ));
         cortex_m::interrupt::enable();
     }
     loop {
         while let Some(b) = rx.next() {
-            // The UARTs' error type is Infallible.
+            // A UART error is the board's to count (`link_rx`); the
+            // server's state is the same whether or not the answer went out.
             let _ = server.on_byte(b, &mut link, &mut nmea, &mut platform);
-            watchdog::feed();
+            watchdog.feed();
         }
         let now = platform.ticks.now64();
         platform.discrete.update(now);
@@ -153,7 +173,7 @@ fn main() -> ! {
         // handler runs once they are unmasked).
         cortex_m::interrupt::free(|cs| {
             if !rx.pump(cs) {
-                watchdog::feed();
+                watchdog.feed();
                 cortex_m::asm::wfi();
             }
         });
@@ -182,7 +202,7 @@ fn SysTick() {
 /// should one fire, it is masked again.
 #[exception]
 unsafe fn DefaultHandler(irqn: i16) {
-    if irqn == board::LINK_RX_IRQ as i16 {
+    if irqn == <board::Active as Board>::LINK_RX_IRQ as i16 {
         link_rx::on_irq();
     } else if let Ok(line) = u16::try_from(irqn) {
         NVIC::mask(Irq(line));
