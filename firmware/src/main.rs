@@ -213,21 +213,26 @@ unsafe fn DefaultHandler(irqn: i16) {
 }
 
 /// The server (receive buffer, engines, transmit buffers) in a static; no
-/// heap anywhere. Its own frame, not inlined: building the value passes
-/// through the stack (with ARAIM, ~0.7 MB at boot, before the stack is
-/// painted), and inlined into `main` that frame would stay reserved for the
-/// whole main loop (docs/bench-history/araim.md, "ARAIM on the device").
-#[inline(never)]
+/// heap anywhere. Initialised at compile time by its `const fn`
+/// constructor: the value is in the image (`.data`, copied from flash by
+/// cortex-m-rt before `main`), so it is never built on the stack (a
+/// run-time `Server::new()` passes through a stack temporary: 94 KB on the
+/// STM32F4 build, more than its stack). Called once, from `run`.
 fn server() -> &'static mut Server {
-    match cortex_m::singleton!(: Server = Server::new()) {
-        Some(s) => s,
-        None => board::halt(),
+    use core::sync::atomic::{AtomicBool, Ordering};
+    static TAKEN: AtomicBool = AtomicBool::new(false);
+    static mut SERVER: Server = Server::new();
+    if TAKEN.swap(true, Ordering::AcqRel) {
+        board::halt()
     }
+    // SAFETY: reached once (`TAKEN`), so this is the only reference to
+    // SERVER ever made; no interrupt handler touches it.
+    unsafe { &mut *core::ptr::addr_of_mut!(SERVER) }
 }
 
-/// The particle-filter engines, each in its own zero-filled
-/// static (`.bss`: no flash image, never built on the stack), handed to
-/// the server for good. Called once, from `main`.
+/// The particle-filter engines of the QEMU board, each in its own
+/// zero-filled static (`.bss`: no flash image, never built on the stack),
+/// handed to the server for good. Called once, from `run`.
 ///
 /// All-zero bytes are a valid value of every engine: its fields are `f32`
 /// and `f64` arrays, integers, `Option<f64>` (its tag is 0 or 1, both
@@ -238,7 +243,7 @@ fn server() -> &'static mut Server {
 /// `PfConfigure` before its first epoch, and the first epoch overwrites the
 /// particles, so the zero contents are never used (host-tests/tests/
 /// qemu_pf.rs `a_zeroed_engine_restarted_equals_a_new_one`).
-#[cfg(feature = "pf")]
+#[cfg(all(feature = "pf", feature = "board-qemu"))]
 fn pf_engines() -> raim_server::PfEngines {
     use core::mem::MaybeUninit;
     use core::ptr::addr_of_mut;
@@ -249,7 +254,7 @@ fn pf_engines() -> raim_server::PfEngines {
     static mut GA100: MaybeUninit<Ga100Engine> = MaybeUninit::zeroed();
     static mut GA300: MaybeUninit<Ga300Engine> = MaybeUninit::zeroed();
     // SAFETY: zero is a valid value of each engine (above); this function
-    // runs once (from `main`, which never returns), so each `&'static mut`
+    // runs once (from `run`, which never returns), so each `&'static mut`
     // is the only reference to its static ever made; no interrupt handler
     // touches them.
     unsafe {
@@ -259,6 +264,34 @@ fn pf_engines() -> raim_server::PfEngines {
             pf300: Some((*addr_of_mut!(PF300)).assume_init_mut()),
             ga100: Some((*addr_of_mut!(GA100)).assume_init_mut()),
             ga300: Some((*addr_of_mut!(GA300)).assume_init_mut()),
+        }
+    }
+}
+
+/// The STM32F4's particle-filter engine: the GA-PF at 100 particles
+/// (59 KB), in the core-coupled memory (`.ccmram`, memory-stm32f4.x; only
+/// the core reaches it and nothing here uses DMA). The section is NOLOAD,
+/// so the static is zero-filled here, in place, before the reference is
+/// made; zero is a valid engine (the QEMU board's `pf_engines` says why)
+/// and the server restarts it before its first epoch. The other engines
+/// are left out: their `PfConfigure` is answered `PfUnavailable`.
+#[cfg(all(feature = "pf", feature = "board-stm32f4"))]
+fn pf_engines() -> raim_server::PfEngines {
+    use core::mem::MaybeUninit;
+    use core::ptr::addr_of_mut;
+    use raim_server::{Ga100Engine, PfEngines};
+    #[link_section = ".ccmram.raim_ga100"]
+    static mut GA100: MaybeUninit<Ga100Engine> = MaybeUninit::uninit();
+    // SAFETY: called once (from `run`, which never returns), so this is
+    // the only reference to GA100 ever made; `write_bytes` fills the whole
+    // static with zeros (a valid engine) before `assume_init_mut`; no
+    // interrupt handler touches it.
+    unsafe {
+        let ga100 = addr_of_mut!(GA100);
+        ga100.write_bytes(0, 1);
+        PfEngines {
+            ga100: Some((*ga100).assume_init_mut()),
+            ..PfEngines::NONE
         }
     }
 }

@@ -86,6 +86,11 @@ pub struct SatId {
 }
 
 impl SatId {
+    /// The derived `Default` (GPS, PRN 0), for `const fn` constructors.
+    pub const DEFAULT: Self = SatId {
+        system: System::Gps,
+        prn: 0,
+    };
     /// The satellite `prn` of `system`.
     pub const fn new(system: System, prn: u8) -> Self {
         SatId { system, prn }
@@ -136,6 +141,13 @@ pub struct LinearObservation {
 }
 
 impl LinearObservation {
+    /// The derived `Default`, for `const fn` constructors.
+    pub const DEFAULT: Self = LinearObservation {
+        id: SatId::DEFAULT,
+        los_enu: [0.0; 3],
+        residual_m: 0.0,
+        sigma_m: None,
+    };
     /// Build from azimuth (clockwise from north) and elevation, in radians.
     pub fn from_az_el(id: SatId, az_rad: f64, el_rad: f64, residual_m: f64) -> Self {
         let (sa, ca) = (libm::sin(az_rad), libm::cos(az_rad));
@@ -519,4 +531,14 @@ mod tests {
             }
         }
     }
+}
+
+impl RangeObservation {
+    /// The derived `Default`, for `const fn` constructors.
+    pub const DEFAULT: Self = RangeObservation {
+        id: SatId::DEFAULT,
+        pseudorange_m: 0.0,
+        position_m: [0.0; 3],
+        sigma_m: None,
+    };
 }

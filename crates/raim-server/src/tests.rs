@@ -457,3 +457,17 @@ fn the_platform_hears_every_epoch_verdict_and_fills_status() {
     };
     assert!(st.auth_provisioned);
 }
+
+/// The written-out fingerprint of the unconfigured unit is the computed one.
+#[test]
+fn unconfigured_fingerprint_is_computed() {
+    let computed = UnitConfigRef {
+        snapshot: None,
+        araim: None,
+        pf: None,
+        host_sigmas: true,
+    }
+    .fingerprint();
+    assert_eq!(crate::UNCONFIGURED_FINGERPRINT, computed);
+    assert_eq!(std::boxed::Box::new(Server::new()).status().config.fingerprint, computed);
+}
