@@ -30,5 +30,7 @@ for build in "QEMU mps2-an386, default:firmware/target/$ELF" \
     # the statics (firmware/src/guard.rs).
     python3 -c "s=int('$sheap',16); t=int('$top',16); g=(s+1023)//1024*1024; print(f'  stack {t-g-1024} B (statics end 0x{s:08x}, guard 0x{g:08x}-0x{g+1024:08x}, top 0x{t:08x})')"
     echo "  biggest items:"
-    llvm-nm -S --size-sort -C "$elf" | tail -8 | awk '{sz=strtonum("0x"$2); $1=""; $2=""; printf "    %8d B %s\n", sz, $0}'
+    llvm-nm -S --size-sort -C "$elf" | tail -8 | while read -r _ size kind name; do
+        printf "    %8d B %s %s\n" "$((16#$size))" "$kind" "$name"
+    done
 done

@@ -125,7 +125,7 @@ fn assert_stack_headroom(high_water: u32) {
             .address()
     };
     let guard_bytes = 1024;
-    let statics_end = (sym("__sheap") + guard_bytes - 1) / guard_bytes * guard_bytes;
+    let statics_end = sym("__sheap").div_ceil(guard_bytes) * guard_bytes;
     let stack_bytes = (sym("_stack_start") - statics_end - guard_bytes) as u32;
     println!("STM32F4 stack {stack_bytes} B, high water {high_water} B");
     assert!(

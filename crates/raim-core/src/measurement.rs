@@ -123,6 +123,16 @@ pub struct RangeObservation {
     pub sigma_m: Option<f64>,
 }
 
+impl RangeObservation {
+    /// The derived `Default`, for `const fn` constructors.
+    pub const DEFAULT: Self = RangeObservation {
+        id: SatId::DEFAULT,
+        pseudorange_m: 0.0,
+        position_m: [0.0; 3],
+        sigma_m: None,
+    };
+}
+
 /// The linearised form used by the seeds' tables: the unit line of sight from
 /// receiver to satellite in local ENU, and the measurement residual
 /// z_i = rho_i - rho_hat_i(x0) (SPEC §1).
@@ -531,14 +541,4 @@ mod tests {
             }
         }
     }
-}
-
-impl RangeObservation {
-    /// The derived `Default`, for `const fn` constructors.
-    pub const DEFAULT: Self = RangeObservation {
-        id: SatId::DEFAULT,
-        pseudorange_m: 0.0,
-        position_m: [0.0; 3],
-        sigma_m: None,
-    };
 }

@@ -469,5 +469,6 @@ fn unconfigured_fingerprint_is_computed() {
     }
     .fingerprint();
     assert_eq!(crate::UNCONFIGURED_FINGERPRINT, computed);
-    assert_eq!(std::boxed::Box::new(Server::new()).status().config.fingerprint, computed);
+    let server = std::boxed::Box::new(Server::new());
+    assert_eq!(server.status().config.fingerprint, computed);
 }
