@@ -141,6 +141,9 @@ fn assert_stack_headroom(high_water: u32) {
 #[test]
 fn netduinoplus2_pf_60_m_step_alarm_isolation_exclusion() {
     let mut fw = session_on(Machine::NetduinoPlus2);
+    // The runner waited for the boot notice: one, of a power-on boot.
+    assert_eq!(fw.boots().len(), 1, "{:?}", fw.boots());
+    assert_eq!(fw.boots()[0].reset_cause, raim_proto::ResetCause::PowerOn);
     let mut host = Box::new(raim_server::Server::new());
     host.attach_pf(raim_server::PfEngines {
         ga100: Some(Box::leak(Box::new(raim_core::pf::PfRaim::new(0)))),

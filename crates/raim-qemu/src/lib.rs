@@ -397,14 +397,13 @@ impl QemuSession {
             last_config: None,
             boots: Vec::new(),
         };
+        // The boot notice, on both machines. On netduinoplus2 the runner
+        // then also sends `Status` until one is answered: QEMU's STM32
+        // USART model drops bytes that arrive before the firmware enables
+        // its receiver (docs/SAFETY.md).
+        session.wait_boot(ANSWER_TIMEOUT)?;
         if opts.machine == Machine::NetduinoPlus2 {
-            // Under QEMU's STM32 model the boot notice has not been seen
-            // to arrive (docs/SAFETY.md); the unit's state is read from
-            // `Status` instead.
-            let _ = session.wait_boot(Duration::from_secs(3));
             session.sync()?;
-        } else {
-            session.wait_boot(ANSWER_TIMEOUT)?;
         }
         let bench = if opts.raw {
             false
