@@ -15,12 +15,12 @@ mod araim_common;
 mod qemu_common;
 
 use araim_common::{appendix_d, epoch_command, sky, Twin};
-use qemu_common::{range_epoch, session_on, Rng};
+use qemu_common::{range_epoch, session_on, wire_bytes, Rng};
 use raim_core::pf::PfConfig;
-use raim_core::{Decision, RangeObservation, SatId, System};
+use raim_core::{Config, Decision, Epoch, FdeMethod, Raim, RangeObservation, SatId, System};
 use raim_proto::araim_msg::{AraimAnswer, WireAraimResult, WireFde, WireUnavailable};
 use raim_proto::message::{CommandRef, Response, ResponseBody};
-use raim_proto::{PfKind, WireError, WirePfConfig};
+use raim_proto::{PfKind, WireError, WirePfConfig, WireResult, CAPACITY};
 use raim_qemu::Machine;
 
 /// The build's ARAIM capacities (raim-server `ram-192k`: `ARAIM_SATS`,
@@ -259,4 +259,43 @@ fn pf_host_answer(server: &mut raim_server::Server, seq: u32, command: CommandRe
         .collect();
     assert_eq!(answers.len(), 1, "{answers:?}");
     answers.pop().unwrap()
+}
+
+/// The reconstruction FDE (multi-fault, t_max 3) on the STM32F4 build: 32
+/// satellites (G+E) with 60 m on index 2 and -70 m on index 9, both
+/// excluded, bit for bit as the host core at the device precision.
+#[test]
+fn netduinoplus2_multifault_excludes_two_faults_as_the_host() {
+    let sky: Vec<(f64, f64)> = (0..32)
+        .map(|i| ((i as f64 * 137.5) % 360.0, 10.0 + (i as f64 * 29.0) % 75.0))
+        .collect();
+    let sats = range_epoch(
+        &sky,
+        &[System::Gps, System::Galileo],
+        &mut Rng::new(32),
+        &[(2, 60.0), (9, -70.0)],
+    );
+    let cfg = Config {
+        fde_method: FdeMethod::Reconstruction {
+            t_max: 3,
+            group_budget: 1000,
+        },
+        max_exclusions: 3,
+        ..Config::default()
+    };
+    let mut fw = session_on(Machine::NetduinoPlus2);
+    fw.configure(&cfg).unwrap();
+    let epoch = Epoch::ranges(1.7e9, &sats, None);
+    let r = fw.process(&epoch).unwrap().outcome.unwrap();
+    let mut host = Box::new(Raim::<CAPACITY, raim_proto::DevicePrecision>::new());
+    let want = WireResult::from_result(&host.process(&cfg, &epoch).unwrap());
+    assert_eq!(wire_bytes(&r), wire_bytes(&want), "firmware vs host");
+    assert_eq!(r.decision, Decision::Excluded);
+    assert_eq!(r.exclusions.len(), 2);
+    let st = fw.status().unwrap();
+    println!(
+        "netduinoplus2 multi-fault: stack high water {} B",
+        st.stack_high_water_bytes
+    );
+    assert_stack_headroom(st.stack_high_water_bytes);
 }
