@@ -3,8 +3,8 @@
 //! fatal stop). One implementation per board feature:
 //!
 //! - `board-qemu` (default, CI): QEMU's `mps2-an386`, a Cortex-M4 with CMSDK
-//!   APB UARTs and watchdog, on a small register layer ([`mps2`]).
-//! - `board-stm32f4`: an STM32F405/407 on `stm32f4xx-hal` ([`stm32f4`]).
+//!   APB UARTs and watchdog, on a small register layer (`mps2.rs`).
+//! - `board-stm32f4`: an STM32F405/407 on `stm32f4xx-hal` (`stm32f4.rs`).
 //!
 //! A board hands over, once ([`Board::take`]): the link UART's transmit
 //! side and the NMEA UART (`embedded_io::Write`), the link's receive side
