@@ -358,6 +358,18 @@ mod engine {
         }
     }
 
+    /// The excluded satellites in the wire's list, which holds them all:
+    /// `ARAIM_SATS <= CAPACITY`, asserted at compile time, so no push can
+    /// fail.
+    fn wire_ids(ids: &[SatId]) -> heapless::Vec<SatId, { raim_proto::CAPACITY }> {
+        let mut out = heapless::Vec::new();
+        for &id in ids {
+            let pushed = out.push(id);
+            debug_assert!(pushed.is_ok(), "ARAIM_SATS <= CAPACITY");
+        }
+        out
+    }
+
     /// The wire result of a verdict and the monitor's outputs.
     fn result(
         monitor: &Monitor<AraimT, ARAIM_SATS, MAX_MODES>,
@@ -393,9 +405,7 @@ mod engine {
             decision: verdict.decision,
             all_in_view: AraimSummary::from_output(out, pl_exact),
             fde,
-            // The engine's satellites fit the wire's list (`ARAIM_SATS <=
-            // CAPACITY`, asserted at compile time).
-            excluded: verdict.excluded.iter().copied().collect(),
+            excluded: wire_ids(&verdict.excluded),
             after_exclusion: monitor
                 .after_exclusion()
                 .map(|o| AraimSummary::from_output(o, pl_exact)),
