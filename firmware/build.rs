@@ -7,12 +7,25 @@ use std::path::PathBuf;
 
 fn main() {
     let out = PathBuf::from(std::env::var_os("OUT_DIR").expect("OUT_DIR"));
-    let layout = if std::env::var_os("CARGO_FEATURE_BOARD_STM32F4").is_some() {
+    let stm32f4 = std::env::var_os("CARGO_FEATURE_BOARD_STM32F4").is_some();
+    let layout = if stm32f4 {
         "../memory-stm32f4.x"
     } else {
         "../memory.x"
     };
-    std::fs::copy(layout, out.join("memory.x")).unwrap_or_else(|e| panic!("copying {layout}: {e}"));
+    let mut text =
+        std::fs::read_to_string(layout).unwrap_or_else(|e| panic!("reading {layout}: {e}"));
+    if stm32f4 && std::env::var_os("CARGO_FEATURE_QEMU_NETDUINOPLUS2").is_some() {
+        // QEMU's netduinoplus2 maps 192 KiB of SRAM at 0x20000000 and no
+        // CCM: the CCM region's 64 KiB go above the part's 128 KiB of SRAM.
+        let (hw, qemu) = (
+            "CCMRAM : ORIGIN = 0x10000000, LENGTH = 64K",
+            "CCMRAM : ORIGIN = 0x20020000, LENGTH = 64K",
+        );
+        assert_eq!(text.matches(hw).count(), 1, "{layout}: one `{hw}`");
+        text = text.replace(hw, qemu);
+    }
+    std::fs::write(out.join("memory.x"), text).unwrap_or_else(|e| panic!("memory.x: {e}"));
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rerun-if-changed={layout}");
     println!("cargo:rerun-if-changed=build.rs");

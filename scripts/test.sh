@@ -19,7 +19,8 @@ cargo build -p raim-core --target thumbv7em-none-eabihf --release --features def
 echo "== firmware (own workspace: QEMU mps2-an386 and STM32F4 builds, clippy, fmt, docs)"
 (cd firmware && cargo fmt -- --check && cargo clippy --release -- -D warnings \
     && RUSTDOCFLAGS="-D warnings" cargo doc --release --no-deps && cargo build --release \
-    && cargo build --release --no-default-features --features board-stm32f4 --target-dir target/stm32f4 \
+    && cargo build --release --no-default-features --features board-stm32f4 --target-dir target/stm32f4-hw \
+    && cargo build --release --no-default-features --features board-stm32f4,qemu-netduinoplus2 --target-dir target/stm32f4 \
     && cargo clippy --release --no-default-features --features board-qemu --target-dir target/snapshot -- -D warnings \
     && cargo build --release --no-default-features --features board-qemu --target-dir target/snapshot)
 # (the last: the QEMU build without araim/pf/multifault, whose flash

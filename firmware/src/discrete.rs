@@ -12,8 +12,6 @@ use embedded_hal::digital::{OutputPin, StatefulOutputPin};
 use raim_core::Decision;
 use raim_proto::alert::{AlarmOutput, AlertMonitor};
 
-use crate::board::{AlarmPin, CORE_HZ};
-
 include!(concat!(env!("OUT_DIR"), "/settings.rs"));
 
 /// The main loop checks the time at least once per SysTick wrap (2^24
@@ -21,8 +19,11 @@ include!(concat!(env!("OUT_DIR"), "/settings.rs"));
 /// it is asserted by the time-to-alert at the latest.
 const CHECK_PERIOD_TICKS: u64 = 1 << 24;
 
-/// The monitor's time-to-alert in ticks: the setting less one check period.
-pub const TIME_TO_ALERT_TICKS: u64 = TIME_TO_ALERT_S as u64 * CORE_HZ as u64 - CHECK_PERIOD_TICKS;
+/// The monitor's time-to-alert in ticks of a `core_hz` clock: the setting
+/// less one check period.
+pub fn time_to_alert_ticks(core_hz: u32) -> u64 {
+    (u64::from(TIME_TO_ALERT_S) * u64::from(core_hz)).saturating_sub(CHECK_PERIOD_TICKS)
+}
 
 pub struct Discrete<P> {
     monitor: AlertMonitor,
@@ -30,9 +31,11 @@ pub struct Discrete<P> {
 }
 
 impl<P: OutputPin + StatefulOutputPin> Discrete<P> {
-    pub fn new(pin: P) -> Self {
+    /// The output on `pin`, with the time-to-alert counted in ticks of a
+    /// `core_hz` clock.
+    pub fn new(pin: P, core_hz: u32) -> Self {
         let mut d = Discrete {
-            monitor: AlertMonitor::new(TIME_TO_ALERT_TICKS),
+            monitor: AlertMonitor::new(time_to_alert_ticks(core_hz)),
             pin,
         };
         d.update(0);
@@ -63,6 +66,3 @@ impl<P: OutputPin + StatefulOutputPin> Discrete<P> {
         self.pin.is_set_low().unwrap_or(true)
     }
 }
-
-/// The firmware's pin.
-pub type BoardDiscrete = Discrete<AlarmPin>;

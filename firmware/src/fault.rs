@@ -10,6 +10,8 @@ use core::ptr::{addr_of, addr_of_mut, read_volatile, write_volatile};
 
 use raim_proto::ResetCause;
 
+use crate::board::HardwareReset;
+
 const MAGIC: u32 = 0x5241_494D; // "RAIM"
 const CODE_NONE: u32 = 0;
 pub const CODE_PANIC: u32 = 1;
@@ -62,14 +64,20 @@ fn write(r: Record) {
 
 /// At boot: the resets since power-on and the last reset's cause; arms
 /// the record so that a reset nobody records shows as `Unrecorded`.
-pub fn boot() -> (u32, ResetCause) {
+///
+/// `hw` is what the board's reset-cause register says: a power-on reset
+/// starts the count again whatever RAM holds; a watchdog reset that no
+/// handler recorded (the STM32F4's IWDG has no early interrupt) is a
+/// `Watchdog` reset at an unknown PC (0).
+pub fn boot(hw: HardwareReset) -> (u32, ResetCause) {
     let r = read();
-    let (resets, cause) = if r.valid() {
+    let (resets, cause) = if r.valid() && hw != HardwareReset::PowerOn {
         let cause = match r.code {
             CODE_PANIC => ResetCause::Panic { line: r.value },
             CODE_HARD_FAULT => ResetCause::HardFault { pc: r.value },
             CODE_WATCHDOG => ResetCause::Watchdog { pc: r.value },
             CODE_STACK_OVERFLOW => ResetCause::StackOverflow { address: r.value },
+            _ if hw == HardwareReset::Watchdog => ResetCause::Watchdog { pc: 0 },
             _ => ResetCause::Unrecorded,
         };
         (r.resets.wrapping_add(1), cause)

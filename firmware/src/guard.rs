@@ -13,7 +13,9 @@
 //! the guard ([`hit`]), records `StackOverflow { address: frame }` and
 //! resets (`fault`), without logging (which could run deeper).
 
-use core::ptr::{addr_of, write_volatile};
+use core::ptr::addr_of;
+
+use cortex_m::peripheral::MPU;
 
 /// Size of the guard region, bytes: room for the HardFault entry and its
 /// handler, which run inside it.
@@ -34,10 +36,6 @@ pub fn end() -> usize {
     base() + GUARD_BYTES
 }
 
-const MPU_CTRL: usize = 0xE000_ED94;
-const MPU_RNR: usize = 0xE000_ED98;
-const MPU_RBAR: usize = 0xE000_ED9C;
-const MPU_RASR: usize = 0xE000_EDA0;
 const CTRL_ENABLE: u32 = 1 << 0;
 const CTRL_PRIVDEFENA: u32 = 1 << 2;
 const RASR_XN: u32 = 1 << 28;
@@ -46,15 +44,16 @@ const RASR_SIZE_1K: u32 = 9 << 1;
 const RASR_ENABLE: u32 = 1 << 0;
 
 /// Program MPU region 0 as the guard and enable the MPU (the default map
-/// stays for everything else, PRIVDEFENA).
-pub fn enable() {
-    // SAFETY: the architecture's MPU registers; region 0 covers 1 KiB
-    // between the statics and the stack that nothing uses.
+/// stays for everything else, PRIVDEFENA). The MPU is the core's
+/// (`cortex_m::Peripherals`), owned by `main` and lent here once.
+pub fn enable(mpu: &mut MPU) {
+    // SAFETY: the architecture's MPU registers (ARMv7-M B3.5); region 0
+    // covers 1 KiB between the statics and the stack that nothing uses.
     unsafe {
-        write_volatile(MPU_RNR as *mut u32, 0);
-        write_volatile(MPU_RBAR as *mut u32, base() as u32);
-        write_volatile(MPU_RASR as *mut u32, RASR_XN | RASR_SIZE_1K | RASR_ENABLE);
-        write_volatile(MPU_CTRL as *mut u32, CTRL_ENABLE | CTRL_PRIVDEFENA);
+        mpu.rnr.write(0);
+        mpu.rbar.write(base() as u32);
+        mpu.rasr.write(RASR_XN | RASR_SIZE_1K | RASR_ENABLE);
+        mpu.ctrl.write(CTRL_ENABLE | CTRL_PRIVDEFENA);
     }
     cortex_m::asm::dsb();
     cortex_m::asm::isb();

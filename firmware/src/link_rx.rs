@@ -15,7 +15,8 @@
 //!
 //! The interrupt reaches `on_irq` through cortex-m-rt's `DefaultHandler`,
 //! which receives the IRQ number (`main.rs`): no device crate and no
-//! hand-written vector table.
+//! hand-written vector table. The port is the active board's
+//! ([`crate::board::Board::LinkRx`]).
 
 use core::cell::RefCell;
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
@@ -23,7 +24,7 @@ use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use cortex_m::interrupt::{CriticalSection, Mutex};
 use heapless::spsc::{Consumer, Producer, Queue};
 
-use crate::board::RxPort;
+use crate::board::{LinkRxPort, RxPort};
 
 /// Ring size; it holds `RING_SLOTS - 1` bytes: 4 KiB, the bytes of 355 ms
 /// at 115200 baud, above the longest epoch at the real board's 16 MHz

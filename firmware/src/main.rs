@@ -17,7 +17,6 @@ mod key;
 mod link_rx;
 mod provision;
 mod stack;
-mod watchdog;
 
 use cortex_m::interrupt::InterruptNumber;
 use cortex_m::peripheral::NVIC;
@@ -26,17 +25,21 @@ use raim_core::Decision;
 use raim_proto::{ResetCause, Status, TestFault};
 use raim_server::{Platform, Server};
 
+use board::{Board, Parts, Watchdog};
+
 #[cfg(feature = "board-stm32f4")]
 use defmt_rtt as _;
 #[cfg(feature = "board-qemu")]
 use defmt_semihosting as _;
 
-struct Board {
+/// What the server asks of the board (`raim_server::Platform`), from the
+/// board's parts.
+struct Unit<B: Board> {
     ticks: board::Ticks,
     /// Resets since power-on and the last cause (`fault::boot`).
     reset: (u32, ResetCause),
     /// The integrity-alarm discrete output.
-    discrete: discrete::BoardDiscrete,
+    discrete: discrete::Discrete<B::Alarm>,
 }
 
 /// An interrupt line by number, for the NVIC (no device crate).
@@ -44,14 +47,14 @@ struct Board {
 struct Irq(u16);
 
 // SAFETY: the numbers used are interrupt lines of the board
-// (`board::LINK_RX_IRQ`, or the one `DefaultHandler` was entered for).
+// (`Board::LINK_RX_IRQ`, or the one `DefaultHandler` was entered for).
 unsafe impl InterruptNumber for Irq {
     fn number(self) -> u16 {
         self.0
     }
 }
 
-impl Platform for Board {
+impl<B: Board> Platform for Unit<B> {
     const TICK_MASK: u32 = 0x00FF_FFFF;
     fn now(&mut self) -> u32 {
         self.ticks.now()
@@ -94,10 +97,28 @@ impl Platform for Board {
 
 #[entry]
 fn main() -> ! {
-    let reset = fault::boot();
     let Some(core) = cortex_m::Peripherals::take() else {
         board::halt()
     };
+    let Some(parts) = board::Active::take() else {
+        board::halt()
+    };
+    run::<board::Active>(core, parts)
+}
+
+/// The application on board `B`: the boot sequence, then the main loop.
+/// Interrupts are masked on entry (`Board::take`).
+fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts: Parts<B>) -> ! {
+    let Parts {
+        mut link,
+        link_rx,
+        mut nmea,
+        alarm,
+        mut watchdog,
+        core_hz,
+        reset,
+    } = parts;
+    let reset = fault::boot(reset);
     let server = server();
     #[cfg(feature = "pf")]
     server.attach_pf(pf_engines());
@@ -107,28 +128,26 @@ fn main() -> ! {
     if let Some(k) = key {
         server.set_auth_key(k);
     }
-    let Some((mut link, rx_port, mut nmea, alarm_pin)) = board::parts() else {
+    let Some(mut rx) = link_rx::init(link_rx) else {
         board::halt()
     };
-    let Some(mut rx) = link_rx::init(rx_port) else {
-        board::halt()
-    };
-    let mut platform = Board {
+    let mut platform = Unit::<B> {
         ticks: board::Ticks::new(core.SYST),
         reset,
-        discrete: discrete::Discrete::new(alarm_pin),
+        discrete: discrete::Discrete::new(alarm, core_hz),
     };
     // The provisioned configuration, if its seal verifies and every part
     // passes its checks, runs locked; otherwise the unit is Unconfigured.
     // No default is ever put in force.
     boot(server, key.as_ref(), reset.0, platform.ticks.now());
-    watchdog::start();
+    watchdog.start();
     stack::paint();
-    guard::enable();
+    guard::enable(&mut core.MPU);
     defmt::info!(
-        "raim firmware up: capacity {=usize}, protocol {=u16}",
+        "raim firmware up: capacity {=usize}, protocol {=u16}, core {=u32} Hz",
         raim_proto::CAPACITY,
-        raim_proto::PROTOCOL_VERSION
+        raim_proto::PROTOCOL_VERSION,
+        core_hz
     );
     // The boot notice: the first frame after every reset.
     let _ = server.send_boot_notice::<_, core::convert::Infallible, _>(&mut link, &mut platform);
@@ -136,14 +155,15 @@ fn main() -> ! {
     // the handlers (`DefaultHandler`, `SysTick`) share only atomics and the
     // critical-section-guarded receive side with this loop.
     unsafe {
-        NVIC::unmask(Irq(board::LINK_RX_IRQ));
+        NVIC::unmask(Irq(B::LINK_RX_IRQ));
         cortex_m::interrupt::enable();
     }
     loop {
         while let Some(b) = rx.next() {
-            // The UARTs' error type is Infallible.
+            // A UART error is the board's to count (`link_rx`); the
+            // server's state is the same whether or not the answer went out.
             let _ = server.on_byte(b, &mut link, &mut nmea, &mut platform);
-            watchdog::feed();
+            watchdog.feed();
         }
         let now = platform.ticks.now64();
         platform.discrete.update(now);
@@ -153,7 +173,7 @@ fn main() -> ! {
         // handler runs once they are unmasked).
         cortex_m::interrupt::free(|cs| {
             if !rx.pump(cs) {
-                watchdog::feed();
+                watchdog.feed();
                 cortex_m::asm::wfi();
             }
         });
@@ -182,7 +202,7 @@ fn SysTick() {
 /// should one fire, it is masked again.
 #[exception]
 unsafe fn DefaultHandler(irqn: i16) {
-    if irqn == board::LINK_RX_IRQ as i16 {
+    if irqn == <board::Active as Board>::LINK_RX_IRQ as i16 {
         link_rx::on_irq();
     } else if let Ok(line) = u16::try_from(irqn) {
         NVIC::mask(Irq(line));
@@ -193,21 +213,26 @@ unsafe fn DefaultHandler(irqn: i16) {
 }
 
 /// The server (receive buffer, engines, transmit buffers) in a static; no
-/// heap anywhere. Its own frame, not inlined: building the value passes
-/// through the stack (with ARAIM, ~0.7 MB at boot, before the stack is
-/// painted), and inlined into `main` that frame would stay reserved for the
-/// whole main loop (docs/bench-history/araim.md, "ARAIM on the device").
-#[inline(never)]
+/// heap anywhere. Initialised at compile time by its `const fn`
+/// constructor: the value is in the image (`.data`, copied from flash by
+/// cortex-m-rt before `main`), so it is never built on the stack (a
+/// run-time `Server::new()` passes through a stack temporary: 94 KB on the
+/// STM32F4 build, more than its stack). Called once, from `run`.
 fn server() -> &'static mut Server {
-    match cortex_m::singleton!(: Server = Server::new()) {
-        Some(s) => s,
-        None => board::halt(),
+    use core::sync::atomic::{AtomicBool, Ordering};
+    static TAKEN: AtomicBool = AtomicBool::new(false);
+    static mut SERVER: Server = Server::new();
+    if TAKEN.swap(true, Ordering::AcqRel) {
+        board::halt()
     }
+    // SAFETY: reached once (`TAKEN`), so this is the only reference to
+    // SERVER ever made; no interrupt handler touches it.
+    unsafe { &mut *core::ptr::addr_of_mut!(SERVER) }
 }
 
-/// The particle-filter engines, each in its own zero-filled
-/// static (`.bss`: no flash image, never built on the stack), handed to
-/// the server for good. Called once, from `main`.
+/// The particle-filter engines of the QEMU board, each in its own
+/// zero-filled static (`.bss`: no flash image, never built on the stack),
+/// handed to the server for good. Called once, from `run`.
 ///
 /// All-zero bytes are a valid value of every engine: its fields are `f32`
 /// and `f64` arrays, integers, `Option<f64>` (its tag is 0 or 1, both
@@ -218,7 +243,7 @@ fn server() -> &'static mut Server {
 /// `PfConfigure` before its first epoch, and the first epoch overwrites the
 /// particles, so the zero contents are never used (host-tests/tests/
 /// qemu_pf.rs `a_zeroed_engine_restarted_equals_a_new_one`).
-#[cfg(feature = "pf")]
+#[cfg(all(feature = "pf", feature = "board-qemu"))]
 fn pf_engines() -> raim_server::PfEngines {
     use core::mem::MaybeUninit;
     use core::ptr::addr_of_mut;
@@ -229,7 +254,7 @@ fn pf_engines() -> raim_server::PfEngines {
     static mut GA100: MaybeUninit<Ga100Engine> = MaybeUninit::zeroed();
     static mut GA300: MaybeUninit<Ga300Engine> = MaybeUninit::zeroed();
     // SAFETY: zero is a valid value of each engine (above); this function
-    // runs once (from `main`, which never returns), so each `&'static mut`
+    // runs once (from `run`, which never returns), so each `&'static mut`
     // is the only reference to its static ever made; no interrupt handler
     // touches them.
     unsafe {
@@ -239,6 +264,34 @@ fn pf_engines() -> raim_server::PfEngines {
             pf300: Some((*addr_of_mut!(PF300)).assume_init_mut()),
             ga100: Some((*addr_of_mut!(GA100)).assume_init_mut()),
             ga300: Some((*addr_of_mut!(GA300)).assume_init_mut()),
+        }
+    }
+}
+
+/// The STM32F4's particle-filter engine: the GA-PF at 100 particles
+/// (59 KB), in the core-coupled memory (`.ccmram`, memory-stm32f4.x; only
+/// the core reaches it and nothing here uses DMA). The section is NOLOAD,
+/// so the static is zero-filled here, in place, before the reference is
+/// made; zero is a valid engine (the QEMU board's `pf_engines` says why)
+/// and the server restarts it before its first epoch. The other engines
+/// are left out: their `PfConfigure` is answered `PfUnavailable`.
+#[cfg(all(feature = "pf", feature = "board-stm32f4"))]
+fn pf_engines() -> raim_server::PfEngines {
+    use core::mem::MaybeUninit;
+    use core::ptr::addr_of_mut;
+    use raim_server::{Ga100Engine, PfEngines};
+    #[link_section = ".ccmram.raim_ga100"]
+    static mut GA100: MaybeUninit<Ga100Engine> = MaybeUninit::uninit();
+    // SAFETY: called once (from `run`, which never returns), so this is
+    // the only reference to GA100 ever made; `write_bytes` fills the whole
+    // static with zeros (a valid engine) before `assume_init_mut`; no
+    // interrupt handler touches it.
+    unsafe {
+        let ga100 = addr_of_mut!(GA100);
+        ga100.write_bytes(0, 1);
+        PfEngines {
+            ga100: Some((*ga100).assume_init_mut()),
+            ..PfEngines::NONE
         }
     }
 }

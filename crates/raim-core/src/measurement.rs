@@ -112,6 +112,11 @@ pub struct SatId {
 }
 
 impl SatId {
+    /// The derived `Default` (GPS, PRN 0), for `const fn` constructors.
+    pub const DEFAULT: Self = SatId {
+        system: System::Gps,
+        prn: 0,
+    };
     /// The satellite `prn` of `system`.
     pub const fn new(system: System, prn: u8) -> Self {
         SatId { system, prn }
@@ -144,6 +149,16 @@ pub struct RangeObservation {
     pub sigma_m: Option<f64>,
 }
 
+impl RangeObservation {
+    /// The derived `Default`, for `const fn` constructors.
+    pub const DEFAULT: Self = RangeObservation {
+        id: SatId::DEFAULT,
+        pseudorange_m: 0.0,
+        position_m: [0.0; 3],
+        sigma_m: None,
+    };
+}
+
 /// The linearised form used by the seeds' tables: the unit line of sight from
 /// receiver to satellite in local ENU, and the measurement residual
 /// z_i = rho_i - rho_hat_i(x0) (SPEC §1).
@@ -162,6 +177,13 @@ pub struct LinearObservation {
 }
 
 impl LinearObservation {
+    /// The derived `Default`, for `const fn` constructors.
+    pub const DEFAULT: Self = LinearObservation {
+        id: SatId::DEFAULT,
+        los_enu: [0.0; 3],
+        residual_m: 0.0,
+        sigma_m: None,
+    };
     /// Build from azimuth (clockwise from north) and elevation, in radians.
     pub fn from_az_el(id: SatId, az_rad: f64, el_rad: f64, residual_m: f64) -> Self {
         let (sa, ca) = (libm::sin(az_rad), libm::cos(az_rad));

@@ -40,7 +40,7 @@ impl<const N: usize, T: Real> Default for Raim<N, T> {
 
 impl<const N: usize, T: Real> Raim<N, T> {
     /// An engine with no history (MCUSUM and PF state empty).
-    pub fn new() -> Self {
+    pub const fn new() -> Self {
         Raim {
             snapshot: Snapshot::new(),
             sequential: Sequential::new(),

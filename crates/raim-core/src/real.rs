@@ -50,6 +50,9 @@ pub trait Real:
     const MIN_POSITIVE: Self;
     /// The largest finite number.
     const MAX: Self;
+    /// Zero, for `const fn` constructors (the initial value of engine
+    /// storage built in place in a static).
+    const ZERO: Self;
     /// Converts from `f64`, rounding to nearest for `f32`.
     fn of(x: f64) -> Self;
     /// Widens (or passes) to `f64`.
@@ -84,6 +87,7 @@ pub trait Real:
 }
 
 impl Real for f64 {
+    const ZERO: Self = 0.0;
     const NAME: &'static str = "f64";
     const EPS: Self = f64::EPSILON;
     const MIN_POSITIVE: Self = f64::MIN_POSITIVE;
@@ -139,6 +143,7 @@ impl Real for f64 {
 }
 
 impl Real for f32 {
+    const ZERO: Self = 0.0;
     const NAME: &'static str = "f32";
     const EPS: Self = f32::EPSILON;
     const MIN_POSITIVE: Self = f32::MIN_POSITIVE;

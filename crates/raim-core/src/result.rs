@@ -117,7 +117,7 @@ impl<const N: usize> EpochResult<N> {
     /// as a fix), which [`crate::Raim::process_into`] overwrites in full. A
     /// caller that keeps the result in its own storage (the firmware's
     /// static server) builds one once and reuses it.
-    pub fn empty() -> Self {
+    pub const fn empty() -> Self {
         EpochResult {
             time_s: 0.0,
             decision: Decision::Unavailable,
@@ -126,8 +126,8 @@ impl<const N: usize> EpochResult<N> {
             geodetic: None,
             correction_enu_m: [0.0; 3],
             clock_m: [None; MAX_SYSTEMS],
-            initial_test: TestStatistic::default(),
-            test: TestStatistic::default(),
+            initial_test: TestStatistic::ZERO,
+            test: TestStatistic::ZERO,
             satellites: heapless::Vec::new(),
             identified: None,
             exclusions: heapless::Vec::new(),

@@ -129,11 +129,11 @@ pub struct Solution<const N: usize, T: Real = Stat> {
 
 impl<const N: usize, T: Real> Solution<N, T> {
     /// An empty solution, to be filled by [`solve_into`].
-    pub fn empty() -> Self {
+    pub const fn empty() -> Self {
         Solution {
             parity: Parity::empty(),
             source: [0; N],
-            ids: [SatId::default(); N],
+            ids: [SatId::DEFAULT; N],
             sigma_m: [0.0; N],
             elevation_rad: [0.0; N],
             clocks: [None; MAX_SYSTEMS],

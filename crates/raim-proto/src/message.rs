@@ -18,7 +18,7 @@ use serde::ser::Serializer;
 use serde::{Deserialize, Serialize};
 
 use crate::error::WireError;
-use crate::lock::ConfigId;
+use crate::lock::{ConfigId, ConfigSource};
 use crate::result::WireResult;
 use crate::CAPACITY;
 
@@ -392,6 +392,37 @@ pub struct Status {
     pub provision_error: Option<crate::unit::ProvisionError>,
 }
 
+impl Status {
+    /// The derived `Default` (every counter 0, power-on, unconfigured and
+    /// unlocked, the alarm output asserted for want of a valid epoch), for
+    /// `const fn` constructors (the device server is built in place in a
+    /// static).
+    pub const ZERO: Status = Status {
+        protocol_version: 0,
+        capacity: 0,
+        frames: 0,
+        errors: 0,
+        epochs: 0,
+        stack_high_water_bytes: 0,
+        last_epoch_ticks: 0,
+        config: ConfigId {
+            fingerprint: [0; 16],
+            locked: false,
+            source: ConfigSource::Unconfigured,
+        },
+        resets: 0,
+        reset_cause: ResetCause::PowerOn,
+        uart_overruns: 0,
+        rx_ring_overflows: 0,
+        alarm_output: crate::alert::AlarmOutput::NoValidEpoch,
+        alarm_pin_asserted: false,
+        auth_provisioned: false,
+        boot_nonce: [0; 16],
+        host_sigmas: false,
+        provision_error: None,
+    };
+}
+
 /// The first frame a unit sends after any reset, unasked (`seq: None`):
 /// the host learns that answers to frames sent before it may be missing,
 /// what the unit now runs, and the nonce its authenticated requests must
@@ -574,5 +605,16 @@ mod tests {
             let mut buf = [0u8; 8192];
             to_slice(t, &mut buf).unwrap().to_vec()
         }
+    }
+}
+
+#[cfg(test)]
+mod status_zero {
+    use super::Status;
+
+    /// The `const` initial status is the derived `Default`, field for field.
+    #[test]
+    fn status_zero_is_the_default() {
+        assert_eq!(Status::ZERO, Status::default());
     }
 }

@@ -84,7 +84,7 @@ impl WireResult {
     /// overwritten in full by [`WireResult::set_from_result`]: the server
     /// keeps one `WireResult` in its own (static) storage and fills it in
     /// place.
-    pub fn empty() -> Self {
+    pub const fn empty() -> Self {
         WireResult {
             time_s: 0.0,
             decision: Decision::Unavailable,
@@ -93,8 +93,8 @@ impl WireResult {
             geodetic: None,
             correction_enu_m: [0.0; 3],
             clock_m: [None; MAX_SYSTEMS],
-            initial_test: TestStatistic::default(),
-            test: TestStatistic::default(),
+            initial_test: TestStatistic::ZERO,
+            test: TestStatistic::ZERO,
             identified: None,
             exclusions: heapless::Vec::new(),
             hpl_m: f64::INFINITY,

@@ -212,7 +212,8 @@ impl Machine {
 
 /// The firmware ELF for `machine`: for mps2-an386 as `firmware_elf`; for
 /// netduinoplus2 `$RAIM_FIRMWARE_ELF_STM32F4` if set, else the STM32F4
-/// build (`--features board-stm32f4`, into `firmware/target/stm32f4`, as
+/// build for QEMU's model (`--features board-stm32f4,qemu-netduinoplus2`:
+/// its CCM region where QEMU maps RAM; into `firmware/target/stm32f4`, as
 /// scripts/test.sh builds it).
 pub fn firmware_elf_for(machine: Machine) -> Result<PathBuf> {
     match machine {
@@ -226,7 +227,7 @@ pub fn firmware_elf_for(machine: Machine) -> Result<PathBuf> {
                     "--quiet",
                     "--no-default-features",
                     "--features",
-                    "board-stm32f4",
+                    "board-stm32f4,qemu-netduinoplus2",
                     "--target-dir",
                     "target/stm32f4",
                 ])?;
@@ -396,11 +397,12 @@ impl QemuSession {
             last_config: None,
             boots: Vec::new(),
         };
+        // The boot notice, on both machines. On netduinoplus2 the runner
+        // then also sends `Status` until one is answered: QEMU's STM32
+        // USART model drops bytes that arrive before the firmware enables
+        // its receiver (docs/SAFETY.md).
         session.wait_boot(ANSWER_TIMEOUT)?;
         if opts.machine == Machine::NetduinoPlus2 {
-            // The STM32 USART model drops bytes that arrive before the
-            // firmware listens: make sure the link is up before the first
-            // request.
             session.sync()?;
         }
         let bench = if opts.raw {

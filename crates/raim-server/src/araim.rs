@@ -33,8 +33,29 @@ use raim_proto::CAPACITY;
 /// many). A mode list that needs more makes the epoch unavailable with
 /// `ModeCapacity`, never truncated. At P_sat 1e-5 and P_const 1e-4: 20
 /// satellites need 22 modes (single faults), 24 need 327 (pairs), 32 need
-/// 563 (BENCHMARKS.md). The engines take ~280 KB of static RAM.
+/// 563 (BENCHMARKS.md). The engines take ~280 KB of static RAM (f32,
+/// 32 satellites: 160 B per mode per engine).
+#[cfg(not(feature = "ram-192k"))]
 pub const MAX_MODES: usize = 600;
+/// Fault modes the device engine holds, sized for a part with 192 KiB of
+/// RAM (the STM32F405/407, docs/FLASH.md): at P_sat 1e-5 and P_const 1e-8
+/// n satellites need n + 2 modes (24 satellites: 26), at P_const 1e-4 up
+/// to 22 satellites need 24; a sky that needs more (24 satellites at
+/// P_const 1e-4: 327) is unavailable with `ModeCapacity`, never truncated.
+#[cfg(feature = "ram-192k")]
+pub const MAX_MODES: usize = 48;
+
+/// Satellites the device's ARAIM engine takes: the wire's capacity, or 24
+/// on a part with 192 KiB of RAM (each satellite costs ~1.6 KB across the
+/// two engines). An epoch with more is refused with the typed capacity
+/// error (`AraimError::CapacityExceeded`), never truncated.
+#[cfg(not(feature = "ram-192k"))]
+pub const ARAIM_SATS: usize = CAPACITY;
+/// Satellites the device's ARAIM engine takes on a part with 192 KiB of
+/// RAM.
+#[cfg(feature = "ram-192k")]
+pub const ARAIM_SATS: usize = 24;
+const _: () = assert!(ARAIM_SATS <= CAPACITY);
 
 /// Exclusion is attempted when the failed all-in-view run has at most
 /// this many monitored modes; above it the epoch would be an alarm
@@ -44,7 +65,7 @@ pub const MAX_MODES: usize = 600;
 /// the failing candidates' exits, and the multi-event stage 2 is bounded by
 /// [`FDE_WORK_BUDGET`]. The measured costs are in BENCHMARKS.md and
 /// docs/ARAIM.md, "FDE work budget".
-pub const MAX_FDE_MODES: u32 = 600;
+pub const MAX_FDE_MODES: u32 = MAX_MODES as u32;
 
 /// The FDE's work budget, in candidate-modes: the search may process at
 /// most `FDE_WORK_BUDGET / m` candidate subsets when the all-in-view run
@@ -71,7 +92,7 @@ pub(super) struct AraimState {
 }
 
 impl AraimState {
-    pub(super) fn new() -> Self {
+    pub(super) const fn new() -> Self {
         AraimState {
             ism: None,
             #[cfg(feature = "araim")]
@@ -280,12 +301,11 @@ mod engine {
     };
     use raim_core::SatId;
 
-    use super::{AraimWireError, IsmFrame, FDE_WORK_BUDGET, MAX_FDE_MODES, MAX_MODES};
+    use super::{AraimWireError, IsmFrame, ARAIM_SATS, FDE_WORK_BUDGET, MAX_FDE_MODES, MAX_MODES};
     use raim_core::{Config, Epoch};
     use raim_proto::araim_msg::{IsmSat, WireAraimResult};
     use raim_proto::error::WireError;
     use raim_proto::message::{LinearEpoch, RangeEpoch};
-    use raim_proto::CAPACITY;
 
     /// The unit's ARAIM precision: the device's.
     pub type AraimT = raim_proto::DevicePrecision;
@@ -294,7 +314,7 @@ mod engine {
     /// epoch's satellites and, for a pseudorange epoch, its Gauss-Newton
     /// solution and linearised form (static, so the main loop's stack
     /// carries none of them).
-    pub(super) struct Engines(Monitor<AraimT, CAPACITY, MAX_MODES>);
+    pub(super) struct Engines(Monitor<AraimT, ARAIM_SATS, MAX_MODES>);
 
     /// The ISM frame's satellite entries, as the monitor joins them.
     struct Entries<'a>(&'a [IsmSat]);
@@ -321,7 +341,7 @@ mod engine {
     }
 
     impl Engines {
-        pub(super) fn new() -> Self {
+        pub(super) const fn new() -> Self {
             Engines(Monitor::new())
         }
 

@@ -150,13 +150,22 @@ pub enum IoError<L, M> {
     Nmea(M),
 }
 
+/// The fingerprint of the unconfigured unit (no snapshot, ARAIM or PF
+/// configuration, host sigmas on): `UnitConfigRef::fingerprint` of it, a
+/// SHA-256 that `const fn` cannot compute, written out so that
+/// [`Server::new`] is `const`; the test `unconfigured_fingerprint_is_computed`
+/// recomputes it.
+const UNCONFIGURED_FINGERPRINT: raim_proto::unit::Fingerprint = [
+    35, 142, 158, 206, 228, 58, 219, 236, 61, 5, 248, 126, 104, 77, 144, 90,
+];
+
 impl Server {
     /// An unconfigured, unkeyed server: every epoch is answered
     /// `Unconfigured` until a configuration is taken ([`Server::boot`]
     /// with a provisioned one, or a runtime `Configure`).
-    pub fn new() -> Self {
-        // Built in one expression (no copy of the server on the way: the
-        // firmware builds it into its static).
+    pub const fn new() -> Self {
+        // `const`: the firmware's server is a static initialised at
+        // compile time (`.bss`/`.data`), never built on the stack.
         Server {
             rx: FrameReceiver::new(),
             raim: Raim::new(),
@@ -164,13 +173,7 @@ impl Server {
             host_sigmas: true,
             expected_seq: None,
             config_id: ConfigId {
-                fingerprint: UnitConfigRef {
-                    snapshot: None,
-                    araim: None,
-                    pf: None,
-                    host_sigmas: true,
-                }
-                .fingerprint(),
+                fingerprint: UNCONFIGURED_FINGERPRINT,
                 locked: false,
                 source: ConfigSource::Unconfigured,
             },
@@ -180,7 +183,7 @@ impl Server {
             status: Status {
                 protocol_version: PROTOCOL_VERSION,
                 capacity: CAPACITY as u16,
-                ..Status::default()
+                ..Status::ZERO
             },
             araim: araim::AraimState::new(),
             scratch: [0; MAX_RESPONSE_PAYLOAD],

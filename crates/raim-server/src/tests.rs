@@ -457,3 +457,18 @@ fn the_platform_hears_every_epoch_verdict_and_fills_status() {
     };
     assert!(st.auth_provisioned);
 }
+
+/// The written-out fingerprint of the unconfigured unit is the computed one.
+#[test]
+fn unconfigured_fingerprint_is_computed() {
+    let computed = UnitConfigRef {
+        snapshot: None,
+        araim: None,
+        pf: None,
+        host_sigmas: true,
+    }
+    .fingerprint();
+    assert_eq!(crate::UNCONFIGURED_FINGERPRINT, computed);
+    let server = std::boxed::Box::new(Server::new());
+    assert_eq!(server.status().config.fingerprint, computed);
+}

@@ -37,6 +37,16 @@ pub struct AraimSat<T> {
 }
 
 impl<T: Real> AraimSat<T> {
+    /// All zero (the derived `Default`), for `const fn` constructors.
+    pub const ZERO: Self = AraimSat {
+        id: SatId::DEFAULT,
+        g_enu: [T::ZERO; 3],
+        c_int_m2: T::ZERO,
+        c_acc_m2: T::ZERO,
+        b_nom_m: T::ZERO,
+        p_sat: 0.0,
+        residual_m: T::ZERO,
+    };
     /// The geometry row for an azimuth and elevation (radians), with the
     /// ADD's sign: `-[cos el sin az, cos el cos az, sin el]`.
     pub fn g_from_az_el(az_rad: T, el_rad: T) -> [T; 3] {

@@ -212,7 +212,14 @@ pub struct AraimOutput<T, const K: usize> {
 
 impl<T: Real, const K: usize> Default for AraimOutput<T, K> {
     fn default() -> Self {
-        let z = T::of(0.0);
+        Self::empty()
+    }
+}
+
+impl<T: Real, const K: usize> AraimOutput<T, K> {
+    /// No epoch evaluated yet (the derived-`Default` values).
+    pub const fn empty() -> Self {
+        let z = T::ZERO;
         Self {
             modes: Vec::new(),
             n_monitored: 0,
@@ -225,10 +232,10 @@ impl<T: Real, const K: usize> Default for AraimOutput<T, K> {
             correction_enu_m: [z; 3],
             sigma_v_acc_m: z,
             emt_m: z,
-            pl_exact: ProtectionLevels::default(),
-            pl_add: ProtectionLevels::default(),
+            pl_exact: ProtectionLevels::UNBOUNDED,
+            pl_add: ProtectionLevels::UNBOUNDED,
             detection_passed: false,
-            limits: Limits::default(),
+            limits: Limits::NONE,
             unavailable: None,
         }
     }
@@ -305,21 +312,7 @@ pub struct Araim<T, const N: usize, const K: usize> {
 
 impl<T: Real, const N: usize, const K: usize> Default for Araim<T, N, K> {
     fn default() -> Self {
-        Self {
-            geo: Geometry::default(),
-            s0: [[T::of(0.0); N]; 3],
-            base0: Base::default(),
-            coupled: subset::Coupling::default(),
-            const_bases: [Base::default(); MAX_SYSTEMS],
-            const_status: [None; MAX_SYSTEMS],
-            scratch: Base::default(),
-            events: Vec::new(),
-            pl_terms: [pl::Active::default(); K],
-            pl_quantiles: [pl::BracketCache::new(0.0, 0); 2],
-            k_fa_memo: None,
-            out: AraimOutput::default(),
-            budget_share: 1.0,
-        }
+        Self::new()
     }
 }
 
@@ -354,9 +347,24 @@ fn k_fa(memo: &mut KfaMemo, cfg: &AraimConfig, n: usize) -> [Option<f64>; 2] {
 }
 
 impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
-    /// An engine with empty outputs, ready for its first epoch.
-    pub fn new() -> Self {
-        Self::default()
+    /// An engine with empty outputs, ready for its first epoch (`const`:
+    /// a device builds it in place in a static).
+    pub const fn new() -> Self {
+        Self {
+            geo: Geometry::empty(),
+            s0: [[T::ZERO; N]; 3],
+            base0: Base::empty(),
+            coupled: subset::Coupling::empty(),
+            const_bases: [Base::empty(); MAX_SYSTEMS],
+            const_status: [None; MAX_SYSTEMS],
+            scratch: Base::empty(),
+            events: Vec::new(),
+            pl_terms: [pl::Active::ZERO; K],
+            pl_quantiles: [pl::BracketCache::new(0.0, 0); 2],
+            k_fa_memo: None,
+            out: AraimOutput::empty(),
+            budget_share: 1.0,
+        }
     }
 
     /// Validates the inputs (every ISM and configuration field, NaN,
@@ -1029,4 +1037,14 @@ fn accuracy_sigma<T: Real, const N: usize>(geo: &Geometry<T, N>, s_up: &[T; N]) 
         acc += *s * *s * *c_acc;
     }
     acc.sqrt()
+}
+
+impl Limits {
+    /// No limit met (the derived `Default`), for `const fn` constructors.
+    pub const NONE: Self = Limits {
+        vpl: false,
+        hpl: false,
+        emt: false,
+        sigma_acc: false,
+    };
 }

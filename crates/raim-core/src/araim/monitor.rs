@@ -280,15 +280,15 @@ impl<T: Real, const N: usize, const K: usize> Default for Monitor<T, N, K> {
 
 impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
     /// A monitor with empty engines (the first epoch fills them).
-    pub fn new() -> Self {
+    pub const fn new() -> Self {
         Monitor {
             main: Araim::new(),
             scratch: Araim::new(),
-            sats: [AraimSat::default(); N],
+            sats: [AraimSat::ZERO; N],
             n_sats: 0,
             excluded: false,
             solution: Solution::empty(),
-            lin: [LinearObservation::default(); N],
+            lin: [LinearObservation::DEFAULT; N],
         }
     }
 

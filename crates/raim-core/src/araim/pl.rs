@@ -62,6 +62,12 @@ pub struct Active {
 }
 
 impl Active {
+    /// All zero (the derived `Default`), for `const fn` constructors.
+    pub const ZERO: Self = Active {
+        p: 0.0,
+        offset_m: 0.0,
+        inv_sigma_per_m: 0.0,
+    };
     /// A mode's value, slope and f'' contribution at `x`: p Q(z),
     /// p phi(z) / sigma and p z phi(z) / sigma^2 with z = (x - offset) /
     /// sigma; beyond `Z_CUT`, the bound p Q(Z_CUT) and no slope.
@@ -150,7 +156,7 @@ pub struct BracketCache {
 
 impl BracketCache {
     /// Empty memos for `rhs` and `n_modes`.
-    pub fn new(rhs: f64, n_modes: usize) -> Self {
+    pub const fn new(rhs: f64, n_modes: usize) -> Self {
         Self {
             lo: QuantileCache::new(rhs),
             hi: QuantileCache::new(rhs / (n_modes as f64 + 1.0)),
@@ -172,7 +178,7 @@ struct QuantileCache {
 }
 
 impl QuantileCache {
-    fn new(target: f64) -> Self {
+    const fn new(target: f64) -> Self {
         Self {
             keys: [0.0; CACHE],
             vals: [None; CACHE],

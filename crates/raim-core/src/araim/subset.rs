@@ -56,15 +56,22 @@ pub struct Geometry<T, const N: usize> {
 
 impl<T: Real, const N: usize> Default for Geometry<T, N> {
     fn default() -> Self {
+        Self::empty()
+    }
+}
+
+impl<T: Real, const N: usize> Geometry<T, N> {
+    /// No satellite loaded.
+    pub const fn empty() -> Self {
         Self {
             n: 0,
             m: 0,
-            g: [[T::of(0.0); MAX_STATES]; N],
-            w: [T::of(0.0); N],
-            c_int: [T::of(0.0); N],
-            c_acc: [T::of(0.0); N],
-            b_nom: [T::of(0.0); N],
-            y: [T::of(0.0); N],
+            g: [[T::ZERO; MAX_STATES]; N],
+            w: [T::ZERO; N],
+            c_int: [T::ZERO; N],
+            c_acc: [T::ZERO; N],
+            b_nom: [T::ZERO; N],
+            y: [T::ZERO; N],
             col: [0; N],
         }
     }
@@ -130,13 +137,31 @@ pub fn pack<T: Real, const N: usize>(
 
 impl<T: Real, const N: usize> Default for Base<T, N> {
     fn default() -> Self {
+        Self::empty()
+    }
+}
+
+impl<T: Real, const N: usize> Base<T, N> {
+    /// An empty base.
+    pub const fn empty() -> Self {
         Self {
-            p: [[T::of(0.0); MAX_STATES]; MAX_STATES],
-            d: [[T::of(0.0); N]; 3],
+            p: [[T::ZERO; MAX_STATES]; MAX_STATES],
+            d: [[T::ZERO; N]; 3],
             removed: 0,
-            pack: [SatPack::default(); N],
+            pack: [SatPack::ZERO; N],
         }
     }
+}
+
+impl<T: Real> SatPack<T> {
+    /// All zero (the derived `Default`), for `const fn` constructors.
+    pub const ZERO: Self = SatPack {
+        s: [T::ZERO; 3],
+        d0: [T::ZERO; 3],
+        c_acc: T::ZERO,
+        b_nom: T::ZERO,
+        y: T::ZERO,
+    };
 }
 
 /// A singular subset: `column` had the relative pivot `pivot`.
@@ -409,7 +434,14 @@ pub struct Coupling<T, const N: usize> {
 
 impl<T: Real, const N: usize> Default for Coupling<T, N> {
     fn default() -> Self {
-        let zero = T::of(0.0);
+        Self::empty()
+    }
+}
+
+impl<T: Real, const N: usize> Coupling<T, N> {
+    /// Nothing formed yet.
+    pub const fn empty() -> Self {
+        let zero = T::ZERO;
         Self {
             q: [[zero; N]; N],
             bg: [[zero; MAX_STATES]; N],

@@ -44,16 +44,16 @@ fn clamp_unit<T: Real>(v: T) -> T {
 
 impl<const N: usize, T: Real> Parity<N, T> {
     /// An empty parity (0 x 0), to be filled by [`Self::compute`].
-    pub fn empty() -> Self {
+    pub const fn empty() -> Self {
         Parity {
             n: 0,
             m: 0,
             qr: Householder::empty(),
-            utz: [T::zero(); N],
-            s_ii: [T::zero(); N],
-            residual: [T::zero(); N],
-            gain: [[T::zero(); N]; 3],
-            dx: [T::zero(); MAX_STATES],
+            utz: [T::ZERO; N],
+            s_ii: [T::ZERO; N],
+            residual: [T::ZERO; N],
+            gain: [[T::ZERO; N]; 3],
+            dx: [T::ZERO; MAX_STATES],
         }
     }
 

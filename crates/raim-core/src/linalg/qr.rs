@@ -45,12 +45,12 @@ pub struct Householder<const N: usize, T: Real = f64> {
 
 impl<const N: usize, T: Real> Householder<N, T> {
     /// An empty factorisation (0 x 0), to be filled by [`Self::factor_from`].
-    pub fn empty() -> Self {
+    pub const fn empty() -> Self {
         Householder {
             n: 0,
             m: 0,
-            a: [[T::zero(); N]; MAX_STATES],
-            diag: [T::zero(); MAX_STATES],
+            a: [[T::ZERO; N]; MAX_STATES],
+            diag: [T::ZERO; MAX_STATES],
         }
     }
 

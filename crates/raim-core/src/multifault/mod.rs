@@ -402,10 +402,17 @@ pub struct Scratch<const N: usize, T: Real = Stat> {
 
 impl<const N: usize, T: Real> Default for Scratch<N, T> {
     fn default() -> Self {
+        Self::empty()
+    }
+}
+
+impl<const N: usize, T: Real> Scratch<N, T> {
+    /// Empty scratch, to be filled by each search.
+    pub const fn empty() -> Self {
         Scratch {
-            model: ResidualModel::default(),
-            ws: Workspace::default(),
-            group: GroupFit::default(),
+            model: ResidualModel::empty(),
+            ws: Workspace::empty(),
+            group: GroupFit::empty(),
             solution: Solution::empty(),
         }
     }

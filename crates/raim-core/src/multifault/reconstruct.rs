@@ -58,12 +58,12 @@ impl<T: Real, const N: usize> Default for ResidualModel<T, N> {
 
 impl<T: Real, const N: usize> ResidualModel<T, N> {
     /// An empty model (n = 0), to be filled.
-    pub fn empty() -> Self {
+    pub const fn empty() -> Self {
         ResidualModel {
             n: 0,
-            s: [[T::zero(); N]; N],
-            r: [T::zero(); N],
-            d2: T::zero(),
+            s: [[T::ZERO; N]; N],
+            r: [T::ZERO; N],
+            d2: T::ZERO,
         }
     }
 
@@ -181,12 +181,19 @@ pub struct GroupFit<T, const N: usize> {
 
 impl<T: Real, const N: usize> Default for GroupFit<T, N> {
     fn default() -> Self {
+        Self::empty()
+    }
+}
+
+impl<T: Real, const N: usize> GroupFit<T, N> {
+    /// An empty fit, to be filled.
+    pub const fn empty() -> Self {
         GroupFit {
             identifiable: 0,
             swapped: 0,
-            error: [T::zero(); N],
-            variance: [T::zero(); N],
-            q: T::zero(),
+            error: [T::ZERO; N],
+            variance: [T::ZERO; N],
+            q: T::ZERO,
         }
     }
 }
@@ -203,8 +210,15 @@ pub struct Workspace<T, const N: usize> {
 
 impl<T: Real, const N: usize> Default for Workspace<T, N> {
     fn default() -> Self {
+        Self::empty()
+    }
+}
+
+impl<T: Real, const N: usize> Workspace<T, N> {
+    /// An empty workspace.
+    pub const fn empty() -> Self {
         Workspace {
-            l: [[T::zero(); N]; N],
+            l: [[T::ZERO; N]; N],
             idx: [0; N],
             k: 0,
         }

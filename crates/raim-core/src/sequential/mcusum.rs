@@ -241,9 +241,16 @@ pub struct Mcusum<const N: usize, T: Real = Stat> {
 
 impl<const N: usize, T: Real> Default for Mcusum<N, T> {
     fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize, T: Real> Mcusum<N, T> {
+    /// A detector with a zero state and nothing held.
+    pub const fn new() -> Self {
         Mcusum {
-            v: [T::zero(); N],
-            ids: [SatId::default(); N],
+            v: [T::ZERO; N],
+            ids: [SatId::DEFAULT; N],
             n: 0,
             last_dim: 0,
             last_h: f64::NAN,
@@ -253,11 +260,6 @@ impl<const N: usize, T: Real> Default for Mcusum<N, T> {
 }
 
 impl<const N: usize, T: Real> Mcusum<N, T> {
-    /// A detector with a zero state and nothing held.
-    pub fn new() -> Self {
-        Self::default()
-    }
-
     /// Restart the CUSUM at S = 0 (the holds are kept).
     pub fn reset(&mut self) {
         self.n = 0;

@@ -92,10 +92,10 @@ struct HeldOut<const N: usize> {
 }
 
 impl<const N: usize> HeldOut<N> {
-    fn new() -> Self {
+    const fn new() -> Self {
         HeldOut {
-            ranges: [RangeObservation::default(); N],
-            linear: [LinearObservation::default(); N],
+            ranges: [RangeObservation::DEFAULT; N],
+            linear: [LinearObservation::DEFAULT; N],
             src: [0; N],
         }
     }
@@ -109,7 +109,7 @@ impl<const N: usize, T: Real> Default for Sequential<N, T> {
 
 impl<const N: usize, T: Real> Sequential<N, T> {
     /// A monitor with a zero MCUSUM state.
-    pub fn new() -> Self {
+    pub const fn new() -> Self {
         Sequential {
             mcusum: Mcusum::new(),
             held_out: HeldOut::new(),

@@ -21,6 +21,13 @@ pub struct TestStatistic {
 }
 
 impl TestStatistic {
+    /// The zero statistic (the derived `Default`), for `const fn`
+    /// constructors.
+    pub const ZERO: Self = TestStatistic {
+        statistic: 0.0,
+        threshold: 0.0,
+        dof: 0,
+    };
     /// Alarm if D^2 >= T^2.
     pub fn alarm(&self) -> bool {
         !(self.statistic < self.threshold)
@@ -48,6 +55,13 @@ pub struct Thresholds<const N: usize> {
 
 impl<const N: usize> Default for Thresholds<N> {
     fn default() -> Self {
+        Self::empty()
+    }
+}
+
+impl<const N: usize> Thresholds<N> {
+    /// No threshold computed yet (NaN: never a valid threshold).
+    pub const fn empty() -> Self {
         Thresholds {
             pfa: f64::NAN,
             pmd: f64::NAN,

@@ -381,10 +381,10 @@ impl<const N: usize, T: Real> FdeOutcome<N, T> {
 
     /// An empty outcome whose `solution` is to be filled by
     /// [`crate::solve::solve_into`] before [`run`].
-    pub fn empty() -> Self {
+    pub const fn empty() -> Self {
         FdeOutcome {
             solution: Solution::empty(),
-            test: TestStatistic::default(),
+            test: TestStatistic::ZERO,
             exclusions: heapless::Vec::new(),
             identified: None,
             cause: None,

@@ -45,12 +45,12 @@ impl<const N: usize, T: Real> Default for Snapshot<N, T> {
 
 impl<const N: usize, T: Real> Snapshot<N, T> {
     /// A snapshot engine with empty scratch.
-    pub fn new() -> Self {
+    pub const fn new() -> Self {
         Snapshot {
-            thresholds: Thresholds::default(),
+            thresholds: Thresholds::empty(),
             warm_start: false,
             last_fix: None,
-            multifault: crate::multifault::Scratch::default(),
+            multifault: crate::multifault::Scratch::empty(),
             _precision: core::marker::PhantomData,
         }
     }
