@@ -216,7 +216,7 @@ mod tests {
             WirePfConfig { seed: 2, ..base },
             WirePfConfig {
                 config: PfConfig {
-                    threshold: 21.0,
+                    pfa: 2e-3,
                     ..base.config
                 },
                 ..base

@@ -108,6 +108,15 @@ impl PfUnit {
     fn configure(&mut self, c: WirePfConfig) -> Result<(), WireError> {
         check_particles(&c)?;
         c.config.validate().map_err(|e| map_error(e, &[]))?;
+        // The threshold comes from the calibrated table at the configured
+        // Pfa: a configuration the table does not cover is refused here.
+        let kind = match c.kind {
+            PfKind::Ekf => "ekf",
+            PfKind::Pf => "pf",
+            PfKind::Gapf => "gapf",
+        };
+        raim_core::pf::threshold::lookup(kind, c.particles as usize, &c.config)
+            .map_err(|e| map_error(e, &[]))?;
         self.restart(&c)?;
         self.config = Some(c);
         Ok(())
@@ -226,6 +235,10 @@ pub fn map_error(e: PfError, sats: &[RangeObservation]) -> WireError {
             capacity: u32_of(max),
         },
         PfError::InvalidConfig { field, value } => WireError::PfInvalidConfig {
+            field: field_name(field),
+            value,
+        },
+        PfError::NotCalibrated { field, value } => WireError::PfInvalidConfig {
             field: field_name(field),
             value,
         },
@@ -385,7 +398,7 @@ mod tests {
                 sigma_m: SIGMA_M,
                 mutation_m: 0.5,
                 window: 8,
-                threshold: 15.0,
+                pfa: 1e-3,
                 ..PfConfig::default()
             },
         }

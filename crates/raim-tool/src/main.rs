@@ -7,6 +7,7 @@ mod config_args;
 mod epoch_json;
 mod outcome;
 mod pci;
+mod pf_table;
 mod qemu;
 mod replay;
 mod result_json;
@@ -81,6 +82,8 @@ enum Command {
     Pci(pci::PciArgs),
     /// MCUSUM average run lengths (SPEC §7.2): ARL0(h) / h(ARL0) by the integral equation, ARL1 by simulation, the device table.
     Arl(arl::ArlArgs),
+    /// The particle-filter RAIM's threshold table from an allocated false-alarm probability (docs/PF.md "Thresholds").
+    PfTable(pf_table::PfTableArgs),
     /// Replay RINEX data through the monitor with seeded faults (docs/REPLAY.md).
     Replay(Box<replay::ReplayArgs>),
     /// Replay a JSON-lines epoch file through the firmware under QEMU; print decisions and NMEA (docs/PROTOCOL.md).
@@ -150,6 +153,7 @@ fn run(command: Command) -> Result<Tally> {
         Command::Replay(args) => replay::run(&args),
         Command::Pci(args) => none(pci::run(&args)),
         Command::Arl(args) => none(arl::run(&args)),
+        Command::PfTable(args) => none(pf_table::run(&args)),
         Command::Campaign { which } => none(campaign::run(&which)),
     }
 }

@@ -27,6 +27,11 @@ pub enum PfError {
     },
     /// A configuration value outside its domain.
     InvalidConfig { field: &'static str, value: f64 },
+    /// No calibrated threshold covers this configuration: `field` names
+    /// what the table lacks (the model profile, the window, the likelihood,
+    /// the filter and particle count, or a false-alarm probability below
+    /// the smallest certified node) and `value` the configured value.
+    NotCalibrated { field: &'static str, value: f64 },
     /// Epoch times must increase strictly.
     TimeNotIncreasing { previous_s: f64, now_s: f64 },
     /// The first-epoch least-squares fix (the filters' reference point)
@@ -51,6 +56,9 @@ impl core::fmt::Display for PfError {
             }
             PfError::InvalidConfig { field, value } => {
                 write!(f, "configuration {field} = {value} is out of range")
+            }
+            PfError::NotCalibrated { field, value } => {
+                write!(f, "no calibrated PF threshold for {field} = {value}")
             }
             PfError::TimeNotIncreasing { previous_s, now_s } => {
                 write!(f, "time {now_s} s does not follow {previous_s} s")

@@ -92,7 +92,7 @@ fn cfg() -> PfConfig {
         init_drift_m_s: 1.0,
         mutation_m: 0.5,
         window: 8,
-        threshold: 15.0,
+        pfa: 1e-3,
         ..PfConfig::default()
     }
 }
