@@ -298,7 +298,7 @@ struct RunOut {
 
 fn simulate<E: Estimator<f32>>(job: &Job, profile: &Profile, run: usize) -> Result<RunOut> {
     let seed = job_seed(job, run);
-    let mut r = rng::seeded(seed ^ 0x5eed_0f_da7a);
+    let mut r = rng::seeded(seed ^ 0x005e_ed0f_da7a);
     let n = profile.gps_sats + profile.galileo_sats;
     let sats = sky(n, &mut r);
     let ids: Vec<SatId> = (0..n)
