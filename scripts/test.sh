@@ -28,6 +28,8 @@ echo "== tests (including the firmware under QEMU: host-tests/tests/qemu_*.rs)"
 cargo test --workspace --release
 # (the host's protocol server runs the device's precision, f32, in every
 # build: raim_proto::DevicePrecision; the QEMU tests above compare with it)
+echo "== docs/PF.md's generated tables reproduce (short mode; the long mode: bash scripts/pf-tables.sh --long)"
+bash scripts/pf-tables.sh --check
 echo "== the core's own unit tests in the device's precision (their default Stat = f32; ~1 min to build)"
 cargo test -p raim-core --release --features test-f32 --lib
 echo "== the core's own tests without the optional reconstruction FDE (the 128 KiB flash build's core)"
