@@ -11,9 +11,8 @@
 //! noise, the prior spreads and the GA mutation step, with the epoch
 //! interval and the sky of the simulation. The table therefore has one row
 //! per (model profile, filter, particle count, likelihood), one column per
-//! window in [`WINDOWS`](super::threshold_table::WINDOWS) and, in each, one
-//! threshold per false-alarm node in
-//! [`LOG10_PFA`](super::threshold_table::LOG10_PFA).
+//! window in [`WINDOWS`] and, in each, one threshold per false-alarm node
+//! in [`LOG10_PFA`].
 //!
 //! Each threshold is the order statistic of the block maxima of D_k
 //! (blocks of U epochs) that bounds the block exceedance probability by
