@@ -414,7 +414,9 @@ fn simulate<E: Estimator<f32>>(job: &Job, profile: &Profile, run: usize) -> Resu
             }
         })
         .collect();
-    let cfg = profile.config(job.likelihood, 1, 0.5);
+    // The run's threshold is +inf (`process_at`): `pfa` only has to pass
+    // the configuration's bound.
+    let cfg = profile.config(job.likelihood, 1, PfConfig::default().pfa);
     let cfg = PfConfig {
         exclude: false,
         ..cfg
