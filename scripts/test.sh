@@ -31,6 +31,8 @@ cargo test --workspace --release
 # build: raim_proto::DevicePrecision; the QEMU tests above compare with it)
 echo "== generated doc tables (docs/ESQ.md, docs/MULTIFAULT.md, docs/BUDGET.md) match the code (about 1-2 min)"
 bash scripts/doc_tables.sh --check
+echo "== docs/PF.md's generated tables reproduce (short mode; the long mode: bash scripts/pf-tables.sh --long)"
+bash scripts/pf-tables.sh --check
 echo "== the core's own unit tests in the device's precision (their default Stat = f32; ~1 min to build)"
 cargo test -p raim-core --release --features test-f32 --lib
 echo "== the core's own tests without the optional reconstruction FDE (the 128 KiB flash build's core)"

@@ -368,11 +368,16 @@ fn qemu_out_of_bounds_settings_are_refused() {
     huge[0].sigma_m = Some(1e30);
     let p = fw.process(&Epoch::ranges(*t, &huge, *apriori)).unwrap();
     assert!(p.outcome.is_err(), "{:?}", p.outcome);
-    // The particle filter's threshold of 1e300.
-    let mut pf = raim_proto::pf_msg::WirePfConfig::gapf(100, 1);
-    pf.config.threshold = 1e300;
-    let r = fw.call(CommandRef::PfConfigure(&pf)).unwrap();
-    assert!(refused(&r), "{r:?}");
+    // The particle filter's threshold is no wire field: it comes from the
+    // calibrated table at the configured false-alarm probability, which is
+    // bounded. A Pfa of 1e-300 (the old threshold of 1e300's counterpart:
+    // a filter that never alarms) and one of 0.5 are refused.
+    for pfa in [1e-300, 0.5] {
+        let mut pf = raim_proto::pf_msg::WirePfConfig::gapf(100, 1);
+        pf.config.pfa = pfa;
+        let r = fw.call(CommandRef::PfConfigure(&pf)).unwrap();
+        assert!(refused(&r), "pfa {pfa}: {r:?}");
+    }
 }
 
 /// The boot-time authority on the real board's build (netduinoplus2, no

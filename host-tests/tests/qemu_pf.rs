@@ -43,7 +43,7 @@ fn pf_config(kind: PfKind, particles: u32, seed: u64) -> WirePfConfig {
             sigma_m: 3.0,
             mutation_m: 0.5,
             window: 8,
-            threshold: 15.0,
+            pfa: 1e-3,
             ..PfConfig::default()
         },
     }

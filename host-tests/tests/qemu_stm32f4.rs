@@ -159,7 +159,7 @@ fn netduinoplus2_pf_60_m_step_alarm_isolation_exclusion() {
             sigma_m: 3.0,
             mutation_m: 0.5,
             window: 8,
-            threshold: 15.0,
+            pfa: 1e-3,
             ..PfConfig::default()
         },
     };

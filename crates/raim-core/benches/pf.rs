@@ -56,7 +56,6 @@ fn epoch(n: usize, k: usize, state: &mut u64) -> Vec<RangeObservation> {
 fn bench_one<T: Real, E: Estimator<T>>(c: &mut Criterion, name: &str, n: usize) {
     let cfg = PfConfig {
         sigma_m: 3.0,
-        threshold: 1e9,
         ..PfConfig::default()
     };
     let mut state = 0x2545_f491_4f6c_dd1d_u64;

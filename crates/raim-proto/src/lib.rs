@@ -81,10 +81,10 @@ pub type DevicePrecision = f32;
 /// Bump on any change of a serialized type (postcard is not self-describing);
 /// new enum variants are appended so that the earlier ones keep their
 /// indices. The history of the versions is in CHANGELOG.md, "Wire protocol
-/// versions"; 9 is the configuration authority (`Command::Authenticated`
-/// with a boot nonce, `HostSigmas`, `ResponseBody::Boot`, `ConfigId` with a
-/// SHA-256 fingerprint and the configuration's source).
-pub const PROTOCOL_VERSION: u16 = 9;
+/// versions"; 10 is the particle filter's allocated false-alarm
+/// probability (`PfConfig::pfa` in place of a threshold) and the N_eff
+/// before the genetic step in `WirePfResult`.
+pub const PROTOCOL_VERSION: u16 = 10;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes

@@ -91,8 +91,14 @@ pub struct WirePfResult {
     pub isolated: Option<SatId>,
     /// The satellite excluded this epoch (with `exclude`).
     pub excluded: Option<SatId>,
-    /// The main filter's effective sample size (eq. 16; 0 for the EKF).
+    /// The main filter's effective sample size (eq. 16) of the weights
+    /// entering resampling: after the genetic step for the GA-PF; 0 for
+    /// the EKF.
     pub n_eff: f64,
+    /// The main filter's effective sample size of the likelihood weights,
+    /// before the genetic step (equal to `n_eff` for the SIR filter; 0 for
+    /// the EKF): the GA step raises `n_eff` partly by construction.
+    pub n_eff_before_ga: f64,
     /// Satellites the main filter used.
     pub used: u32,
     /// The main filter collapsed and was reinitialised this epoch.
@@ -120,6 +126,7 @@ impl WirePfResult {
             isolated: o.isolated,
             excluded: o.excluded,
             n_eff: o.n_eff,
+            n_eff_before_ga: o.n_eff_before_ga,
             used: u32::try_from(o.used).unwrap_or(u32::MAX),
             main_collapsed: o.main_collapsed,
             aux_collapsed: u32::try_from(o.aux_collapsed).unwrap_or(u32::MAX),

@@ -186,7 +186,20 @@ pub(crate) fn check(c: &WirePfConfig) -> Result<(), WireError> {
     #[cfg(feature = "pf")]
     {
         check_particles(c)?;
-        c.config.validate().map_err(|e| map_error(e, &[]))
+        c.config.validate().map_err(|e| map_error(e, &[]))?;
+        // The threshold comes from the calibrated table at the configured
+        // Pfa, inside the detectability ceiling: a configuration the table
+        // does not cover is refused here.
+        let kind = match c.kind {
+            PfKind::Ekf => "ekf",
+            PfKind::Pf => "pf",
+            PfKind::Gapf => "gapf",
+        };
+        let threshold = raim_core::pf::threshold::lookup(kind, c.particles as usize, &c.config)
+            .map_err(|e| map_error(e, &[]))?;
+        raim_core::config_bounds::pf::threshold_bound(&c.config.likelihood, c.config.window)
+            .check_pf(threshold)
+            .map_err(|e| map_error(e, &[]))
     }
     #[cfg(not(feature = "pf"))]
     {
@@ -248,6 +261,10 @@ pub fn map_error(e: PfError, sats: &[RangeObservation]) -> WireError {
             capacity: u32_of(max),
         },
         PfError::InvalidConfig { field, value } => WireError::PfInvalidConfig {
+            field: field_name(field),
+            value,
+        },
+        PfError::NotCalibrated { field, value } => WireError::PfInvalidConfig {
             field: field_name(field),
             value,
         },
@@ -412,7 +429,7 @@ mod tests {
                 sigma_m: SIGMA_M,
                 mutation_m: 0.5,
                 window: 8,
-                threshold: 15.0,
+                pfa: 1e-3,
                 ..PfConfig::default()
             },
         }
@@ -726,6 +743,7 @@ mod decision_tests {
             isolated: alarm.then_some(g),
             excluded: excluded.then_some(g),
             n_eff: 0.0,
+            n_eff_before_ga: 0.0,
             used: 8,
             main_collapsed: !position,
             aux_collapsed: 0,

@@ -7,6 +7,7 @@ mod config_args;
 mod epoch_json;
 mod outcome;
 mod pci;
+mod pf_table;
 mod provision_cmd;
 mod qemu;
 mod replay;
@@ -88,6 +89,9 @@ enum Command {
     /// MCUSUM average run lengths (docs/MCRAIM.md): ARL0(h) / h(ARL0) by the integral equation, ARL1 by simulation, the device table.
     #[command(after_help = examples::ARL)]
     Arl(arl::ArlArgs),
+    /// The particle-filter RAIM's threshold table from an allocated false-alarm probability (docs/PF.md "Thresholds").
+    #[command(after_help = examples::PF_TABLE)]
+    PfTable(pf_table::PfTableArgs),
     /// Replay RINEX data through the monitor with seeded faults (docs/REPLAY.md).
     #[command(after_help = examples::REPLAY, args_override_self = true)]
     Replay(Box<replay::ReplayArgs>),
@@ -160,6 +164,9 @@ Text columns: time of day (GPS time), decision, n = satellites, D2 = all-in-view
 no unit), T2 = its threshold, dof = degrees of freedom, excl = excluded satellites, cause = why an alarm,
 errH/errV = horizontal/vertical position error against the reference (m), HPL/VPL = protection levels (m; inf
 when unbounded), fault = injected biases (m). Every column and JSON key: docs/FORMATS.md.";
+    pub const PF_TABLE: &str = "Examples:
+  raim pf-table --out crates/raim-core/src/pf/threshold_table.rs
+  raim pf-table --only gapf --epochs 2000";
     pub const QEMU: &str = "Examples:
   raim qemu --input host-tests/vectors/snapshot_example.jsonl
   raim qemu --nmea --input epochs.jsonl";
@@ -256,6 +263,7 @@ fn run(command: Command) -> Result<Tally> {
         Command::Replay(args) => replay::run(&args),
         Command::Pci(args) => none(pci::run(&args)),
         Command::Arl(args) => none(arl::run(&args)),
+        Command::PfTable(args) => none(pf_table::run(&args)),
         Command::Campaign { which } => none(campaign::run(&which)),
         Command::Completions { shell } => none(completions(shell)),
         Command::Man => none(man()),

@@ -486,6 +486,7 @@ fn help_is_grouped_with_examples_and_plain_names() {
         "campaign",
         "pci",
         "arl",
+        "pf-table",
         "replay",
         "qemu",
         "threshold",

@@ -8,9 +8,13 @@
 //! # The decision threshold
 //!
 //! The threshold lambda is compared with the windowed accumulated LLR
-//! (seed 004 eq. 13). Its scale: in an ideal filter (the main filter
-//! predicts y_q exactly), a bias of delta sigmas on satellite q adds to
-//! that satellite's LLR, per epoch (docs/PF.md "the LLR"),
+//! (seed 004 eq. 13). It is not configured: it is looked up in the
+//! calibrated table at the allocated `pfa` (`pf::threshold`), whose bound
+//! is the snapshot monitor's (`super::PFA`, 1e-9..1e-2). The looked-up
+//! threshold is then checked against [`threshold_bound`]. Its scale: in
+//! an ideal filter (the main filter predicts y_q exactly), a bias of
+//! delta sigmas on satellite q adds to that satellite's LLR, per epoch
+//! (docs/PF.md "the LLR"),
 //!
 //! ```text
 //! s(delta) = -ln f(delta) - ln sqrt(2 pi e v),
@@ -110,6 +114,12 @@ pub const MUTATION_M: Bound = Bound {
     min: 0.0,
     max: 1e3,
 };
+/// False-alarm probability per epoch allocated to the PF monitor: the
+/// snapshot monitor's bound (`super::PFA`).
+pub const PFA: Bound = Bound {
+    field: "pfa",
+    ..super::PFA
+};
 /// Decision window U, epochs.
 pub const WINDOW: Bound = Bound {
     field: "window",
@@ -195,8 +205,9 @@ pub fn threshold_bound(law: &Likelihood, window: usize) -> Bound {
     }
 }
 
-/// Every field of `cfg` against its bound (the law's first, since the
-/// threshold's bound depends on it); the first offender is returned.
+/// Every field of `cfg` against its bound; the first offender is returned.
+/// The threshold is not a field: [`threshold_bound`] checks the calibrated
+/// one (`PfRaim::process`).
 pub fn check(cfg: &PfConfig) -> Result<(), PfError> {
     let p = &cfg.process;
     POSITION_M_PER_SQRT_S.check_pf(p.position_m_per_sqrt_s)?;
@@ -208,6 +219,7 @@ pub fn check(cfg: &PfConfig) -> Result<(), PfError> {
     INIT_DRIFT_M_S.check_pf(cfg.init_drift_m_s)?;
     MUTATION_M.check_pf(cfg.mutation_m)?;
     WINDOW.check_pf(cfg.window as f64)?;
+    PFA.check_pf(cfg.pfa)?;
     READMIT_S.check_pf(cfg.readmit_s)?;
     CLOCK_JUMP_M.check_pf(cfg.clock_jump_m)?;
     COLLAPSE_SIGMA.check_pf(cfg.collapse_sigma)?;
@@ -222,7 +234,7 @@ pub fn check(cfg: &PfConfig) -> Result<(), PfError> {
             OUTLIER_SCALE.check_pf(outlier_scale)?;
         }
     }
-    threshold_bound(&cfg.likelihood, cfg.window).check_pf(cfg.threshold)
+    Ok(())
 }
 
 #[cfg(test)]

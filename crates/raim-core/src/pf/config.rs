@@ -79,8 +79,11 @@ pub struct PfConfig {
     /// Window U of the decision function (seed 004 eq. 13), epochs
     /// (1..=[`MAX_WINDOW`]).
     pub window: usize,
-    /// Decision threshold lambda on the windowed accumulated LLR (eq. 13).
-    pub threshold: f64,
+    /// False-alarm probability per epoch allocated to this monitor: the
+    /// decision threshold lambda of eq. 13 is looked up in the calibrated
+    /// table for the filter, particle count, window, likelihood and model
+    /// profile (`pf::threshold`, docs/PF.md "Thresholds"), never set by hand.
+    pub pfa: f64,
     /// Exclude the isolated satellite and restart the filters from its
     /// auxiliary filter (seed 004 step 7).
     pub exclude: bool,
@@ -108,13 +111,13 @@ impl Default for PfConfig {
                 drift_m_s_per_sqrt_s: 0.1,
             },
             likelihood: Likelihood::Gaussian,
-            sigma_m: 5.0,
+            sigma_m: 3.0,
             init_position_m: 10.0,
             init_clock_m: 10.0,
             init_drift_m_s: 1.0,
-            mutation_m: 1.0,
-            window: 10,
-            threshold: 20.0,
+            mutation_m: 0.5,
+            window: 8,
+            pfa: 1e-3,
             exclude: true,
             readmit_s: 0.0,
             clock_jump_m: 1000.0,

@@ -72,6 +72,7 @@ impl<T: Real> Ekf<T> {
 
 impl<T: Real> Estimator<T> for Ekf<T> {
     const KIND: &'static str = "ekf";
+    const PARTICLES: usize = 0;
 
     fn blank() -> Self {
         Ekf {
@@ -113,11 +114,13 @@ impl<T: Real> Estimator<T> for Ekf<T> {
             Some(l) if l.is_finite() && self.x.iter().all(|v| v.is_finite()) => Step {
                 ln_predictive: l,
                 n_eff: 0.0,
+                n_eff_before_ga: 0.0,
                 collapsed: false,
             },
             other => Step {
                 ln_predictive: other.unwrap_or(f64::NAN),
                 n_eff: 0.0,
+                n_eff_before_ga: 0.0,
                 collapsed: true,
             },
         }

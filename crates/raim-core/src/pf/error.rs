@@ -46,6 +46,16 @@ pub enum PfError {
         /// The value received (in the field's unit).
         value: f64,
     },
+    /// No calibrated threshold covers this configuration: the table lacks
+    /// the model profile, the window, the likelihood, the filter and
+    /// particle count, or the false-alarm probability is below the
+    /// smallest certified node.
+    NotCalibrated {
+        /// What the table lacks.
+        field: &'static str,
+        /// The configured value.
+        value: f64,
+    },
     /// Epoch times must increase strictly.
     TimeNotIncreasing {
         /// The previous epoch's time, s.
@@ -104,6 +114,9 @@ impl core::fmt::Display for PfError {
             }
             PfError::InvalidConfig { field, value } => {
                 write!(f, "configuration {field} = {value} is out of range")
+            }
+            PfError::NotCalibrated { field, value } => {
+                write!(f, "no calibrated PF threshold for {field} = {value}")
             }
             PfError::TimeNotIncreasing { previous_s, now_s } => {
                 write!(f, "time {now_s} s does not follow {previous_s} s")

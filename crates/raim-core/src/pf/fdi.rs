@@ -35,6 +35,7 @@ use super::init::{fix, FixInput};
 use super::llr::LlrWindow;
 use super::model::{Estimator, Reference, SatTerm, CLOCK0, DIM, DRIFT};
 use super::rng::{self, PfRng};
+use super::threshold;
 
 /// One auxiliary filter's line in the output.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -70,8 +71,12 @@ pub struct PfOutput<const S: usize> {
     pub isolated: Option<SatId>,
     /// The satellite excluded this epoch (with `exclude`).
     pub excluded: Option<SatId>,
-    /// The main filter's N_eff (0 for the EKF).
+    /// The main filter's N_eff of the weights entering resampling (after
+    /// the genetic step for the GA-PF; 0 for the EKF).
     pub n_eff: f64,
+    /// The main filter's N_eff before the genetic step (the likelihood
+    /// weights; equal to `n_eff` for the SIR filter, 0 for the EKF).
+    pub n_eff_before_ga: f64,
     /// Satellites used by the main filter.
     pub used: usize,
     /// The main filter collapsed and was reinitialised.
@@ -221,14 +226,43 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         Ok(())
     }
 
-    /// Processes one epoch of corrected pseudoranges at `time_s`: steps 1-7
-    /// of the module doc, one function each.
+    /// Processes one epoch of corrected pseudoranges at `time_s`, with the
+    /// decision threshold of eq. 13 looked up in the calibrated table for
+    /// this filter, particle count and `cfg` at the allocated `cfg.pfa`
+    /// ([`threshold::lookup`]); a configuration the table does not cover
+    /// is refused with `PfError::NotCalibrated`, and a threshold above the
+    /// detectability ceiling (`config_bounds::pf::threshold_bound`) with
+    /// `PfError::OutOfRange`; nothing changes then.
     pub fn process(
         &mut self,
         cfg: &PfConfig,
         time_s: f64,
         obs: &[RangeObservation],
     ) -> Result<PfOutput<S>, PfError> {
+        cfg.validate()?;
+        let threshold = threshold::lookup(E::KIND, E::PARTICLES, cfg)?;
+        crate::config_bounds::pf::threshold_bound(&cfg.likelihood, cfg.window)
+            .check_pf(threshold)?;
+        self.process_at(cfg, threshold, time_s, obs)
+    }
+
+    /// [`PfRaim::process`] at an explicit decision threshold (steps 1-7 of
+    /// the module doc, one function each): for the calibration of the
+    /// table itself (fault-free runs, threshold +inf) and for experiments;
+    /// an integrity output takes `process`.
+    pub fn process_at(
+        &mut self,
+        cfg: &PfConfig,
+        threshold: f64,
+        time_s: f64,
+        obs: &[RangeObservation],
+    ) -> Result<PfOutput<S>, PfError> {
+        if threshold.is_nan() {
+            return Err(PfError::InvalidConfig {
+                field: "threshold",
+                value: threshold,
+            });
+        }
         // 1.
         self.validate(cfg, time_s, obs)?;
         if cfg.readmit_s > 0.0 {
@@ -251,11 +285,12 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
             clock_m: [0.0; MAX_SYSTEMS],
             drift_m_s: 0.0,
             decision: f64::NEG_INFINITY,
-            threshold: cfg.threshold,
+            threshold,
             alarm: false,
             isolated: None,
             excluded: None,
             n_eff: main_step.n_eff,
+            n_eff_before_ga: main_step.n_eff_before_ga,
             used: used.len(),
             main_collapsed: main_step.collapsed,
             aux_collapsed: 0,
@@ -273,7 +308,7 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         // 4-5. The auxiliary filters and their LLRs.
         self.update_auxiliaries(cfg, &terms, main_step.ln_predictive, &mut out);
         // 6.
-        self.decide(cfg, time_s, &mut out)?;
+        self.decide(cfg, threshold, time_s, &mut out)?;
         // 7.
         self.recentre(&mut out);
         Ok(out)
@@ -479,12 +514,13 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         }
     }
 
-    /// Step 6: D_k = max_q max_j S_j^k(q) against the threshold (eq. 13; a
+    /// Step 6: D_k = max_q max_j S_j^k(q) against `threshold` (eq. 13; a
     /// NaN statistic alarms), the argmax isolated (eq. 14) and, with
     /// `exclude`, excluded.
     fn decide(
         &mut self,
         cfg: &PfConfig,
+        threshold: f64,
         time_s: f64,
         out: &mut PfOutput<S>,
     ) -> Result<(), PfError> {
@@ -500,7 +536,7 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         }
         if let Some(b) = best {
             out.decision = b.windowed;
-            out.alarm = !(b.windowed <= cfg.threshold);
+            out.alarm = !(b.windowed <= threshold);
             if out.alarm {
                 out.isolated = Some(b.id);
                 if cfg.exclude {

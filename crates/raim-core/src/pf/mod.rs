@@ -10,7 +10,8 @@
 //! Modules: `config` (process model, likelihood, test), `model` (state,
 //! measurement function, likelihoods, the [`Estimator`] trait), `rng`,
 //! `resample` (systematic + genetic operators), `particle` (SIR / GA-PF),
-//! `ekf`, `init` (first fix), `llr` (eqs. 10, 13), `fdi` (Fig. 1: the
+//! `ekf`, `init` (first fix), `threshold` + `threshold_table` (the
+//! calibrated decision thresholds), `llr` (eqs. 10, 13), `fdi` (Fig. 1: the
 //! monitor), `error`. docs/PF.md has the experiment and the memory table.
 
 pub mod config;
@@ -25,6 +26,8 @@ pub mod resample;
 pub mod rng;
 #[cfg(test)]
 mod tests;
+pub mod threshold;
+pub mod threshold_table;
 
 pub use config::{Likelihood, PfConfig, ProcessModel};
 pub use ekf::Ekf;

@@ -229,8 +229,14 @@ pub struct Step {
     /// eqs. 11-12, before the weights are normalised).
     pub ln_predictive: f64,
     /// Effective sample size of the weights used for resampling (seed 004
-    /// eq. 16); the EKF reports 0.
+    /// eq. 16): after the genetic step for the GA-PF; the EKF reports 0.
     pub n_eff: f64,
+    /// Effective sample size of the likelihood weights before the genetic
+    /// step (equal to `n_eff` for the SIR filter; 0 for the EKF). The GA
+    /// step replaces accepted particles' weights by their (higher)
+    /// likelihoods, so `n_eff` rises partly by construction; this one does
+    /// not.
+    pub n_eff_before_ga: f64,
     /// The update failed (non-finite or hopeless likelihood): the filter
     /// must be reinitialised and its output discarded.
     pub collapsed: bool,
@@ -241,6 +247,9 @@ pub struct Step {
 pub trait Estimator<T: Real>: Sized {
     /// The method's name for reports ("ekf", "pf", "gapf").
     const KIND: &'static str;
+    /// Particles per filter (0 for the EKF): with `KIND`, the row of the
+    /// calibrated threshold table.
+    const PARTICLES: usize;
     /// An empty filter (call [`Estimator::init`] before use).
     fn blank() -> Self;
     /// Draws the prior about the zero offset (seed 004 step 1).

@@ -51,6 +51,24 @@ fn ln_lik<T: Real>(lik: &Lik<T>, terms: &[SatTerm<T>], skip: Option<usize>, x: &
     l
 }
 
+/// N_eff = (sum w)^2 / sum w^2 of the weights exp(l_i - max), computed in
+/// f64 from log-weights whose maximum is `max` (seed 004 eq. 16).
+fn n_eff_of_log_weights<T: Real>(log_w: &[T], max: T) -> f64 {
+    let mut s1 = 0.0f64;
+    let mut s2 = 0.0f64;
+    let m = max.to_f64();
+    for &l in log_w {
+        let w = libm::exp(l.to_f64() - m);
+        s1 += w;
+        s2 += w * w;
+    }
+    if s2 > 0.0 {
+        s1 * s1 / s2
+    } else {
+        0.0
+    }
+}
+
 impl<T: Real, const P: usize, const GA: bool> ParticleFilter<T, P, GA> {
     /// The particles (for tests and memory accounting).
     pub fn particles(&self) -> &[[T; DIM]; P] {
@@ -143,6 +161,7 @@ impl<T: Real, const P: usize, const GA: bool> ParticleFilter<T, P, GA> {
 
 impl<T: Real, const P: usize, const GA: bool> Estimator<T> for ParticleFilter<T, P, GA> {
     const KIND: &'static str = if GA { "gapf" } else { "pf" };
+    const PARTICLES: usize = P;
 
     fn blank() -> Self {
         ParticleFilter {
@@ -218,9 +237,12 @@ impl<T: Real, const P: usize, const GA: bool> Estimator<T> for ParticleFilter<T,
             return Step {
                 ln_predictive: ln_pred,
                 n_eff: 0.0,
+                n_eff_before_ga: 0.0,
                 collapsed: true,
             };
         }
+        // N_eff of the likelihood weights before the genetic step (eq. 16).
+        let n_eff_before_ga = n_eff_of_log_weights(&self.work, best);
         // 2. genetic operators on the low-weight set.
         if GA {
             self.genetic(cfg, &lik, terms, skip, rng);
@@ -253,6 +275,7 @@ impl<T: Real, const P: usize, const GA: bool> Estimator<T> for ParticleFilter<T,
         Step {
             ln_predictive: ln_pred,
             n_eff: 1.0 / sum2.to_f64(),
+            n_eff_before_ga,
             collapsed: false,
         }
     }

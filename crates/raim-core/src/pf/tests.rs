@@ -92,7 +92,7 @@ fn cfg() -> PfConfig {
         init_drift_m_s: 1.0,
         mutation_m: 0.5,
         window: 8,
-        threshold: 15.0,
+        pfa: 1e-3,
         ..PfConfig::default()
     }
 }
@@ -150,8 +150,8 @@ fn step_fault_detected_and_isolated_by_all_three() {
     let g4 = Some(SatId::new(System::Gps, 4));
     let runs = [
         ("ekf", scenario::<f64, Ekf<f64>>(1, 60, 40, 40.0)),
-        ("pf", scenario::<f64, SirPf<f64, 200>>(1, 60, 40, 40.0)),
-        ("gapf", scenario::<f64, GaPf<f64, 200>>(1, 60, 40, 40.0)),
+        ("pf", scenario::<f64, SirPf<f64, 300>>(1, 60, 40, 40.0)),
+        ("gapf", scenario::<f64, GaPf<f64, 300>>(1, 60, 40, 40.0)),
     ];
     for (name, (first, iso, fa, rms)) in runs {
         std::println!("{name}: alarm {first:?} isolated {iso:?} false alarms {fa} rms {rms:.2} m");
@@ -170,7 +170,7 @@ fn step_fault_detected_and_isolated_by_all_three() {
 fn same_seed_same_output() {
     let run = |seed| {
         let c = cfg();
-        let mut m = std::boxed::Box::new(PfRaim::<f64, GaPf<f64, 64>, 12>::new(seed));
+        let mut m = std::boxed::Box::new(PfRaim::<f64, GaPf<f64, 100>, 12>::new(seed));
         let mut noise = rng::seeded(99);
         let mut v = std::vec::Vec::new();
         for k in 0..15 {
@@ -195,7 +195,7 @@ fn same_seed_same_output() {
 #[test]
 fn restart_equals_new() {
     let c = cfg();
-    let fresh = |m: &mut PfRaim<f32, GaPf<f32, 64>, 12>| {
+    let fresh = |m: &mut PfRaim<f32, GaPf<f32, 100>, 12>| {
         let mut noise = rng::seeded(77);
         (0..8)
             .map(|k| {
@@ -206,7 +206,7 @@ fn restart_equals_new() {
             })
             .collect::<std::vec::Vec<_>>()
     };
-    let mut used = std::boxed::Box::new(PfRaim::<f32, GaPf<f32, 64>, 12>::new(9));
+    let mut used = std::boxed::Box::new(PfRaim::<f32, GaPf<f32, 100>, 12>::new(9));
     let mut noise = rng::seeded(4);
     for k in 0..6 {
         let faulty = (k >= 2).then_some((3, 500.0));
@@ -216,7 +216,7 @@ fn restart_equals_new() {
     assert!(!used.excluded().is_empty());
     used.restart(5);
     assert!(used.excluded().is_empty());
-    let mut new = std::boxed::Box::new(PfRaim::<f32, GaPf<f32, 64>, 12>::new(5));
+    let mut new = std::boxed::Box::new(PfRaim::<f32, GaPf<f32, 100>, 12>::new(5));
     assert_eq!(fresh(&mut used), fresh(&mut new));
 }
 
@@ -267,7 +267,7 @@ fn f32_state_matches_f64() {
 #[test]
 fn collapse_is_reported_and_reinitialised() {
     let c = cfg();
-    let mut m = std::boxed::Box::new(PfRaim::<f64, GaPf<f64, 64>, 12>::new(3));
+    let mut m = std::boxed::Box::new(PfRaim::<f64, GaPf<f64, 100>, 12>::new(3));
     let mut noise = rng::seeded(4);
     for k in 0..5 {
         m.process(&c, k as f64, &epoch(8, k, &mut noise, None))
@@ -291,7 +291,7 @@ fn collapse_is_reported_and_reinitialised() {
 #[test]
 fn too_few_satellites_and_bad_input() {
     let c = cfg();
-    let mut m = std::boxed::Box::new(PfRaim::<f64, SirPf<f64, 64>, 12>::new(3));
+    let mut m = std::boxed::Box::new(PfRaim::<f64, SirPf<f64, 100>, 12>::new(3));
     let mut noise = rng::seeded(4);
     let four = epoch(4, 0, &mut noise, None);
     assert_eq!(

@@ -2,9 +2,9 @@
 //! (raim_core::pf, docs/PF.md) on the replay's corrected pseudoranges,
 //! with the same fault injection. Per epoch: position error, N_eff, the
 //! decision statistic D_k against the threshold, alarm, isolation and
-//! exclusion; a summary in the shape of seed 004 Table 1; optionally the
-//! threshold calibrated on fault-free runs for a stated false-alarm rate,
-//! and a plot of the LLRs and the position error.
+//! exclusion; a summary in the shape of seed 004 Table 1 (with N_eff
+//! before and after the genetic step); the threshold from the calibrated
+//! table at the allocated Pfa (`raim_core::pf::threshold`); a plot of the LLRs and the position error.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -68,16 +68,18 @@ pub struct PfArgs {
     /// Window U of the decision function (eq. 13), epochs.
     #[arg(long, default_value_t = 10)]
     pub pf_window: usize,
-    /// Decision threshold on the windowed accumulated LLR.
-    #[arg(long, default_value_t = 30.0)]
-    pub pf_threshold: f64,
-    /// Calibrate the threshold first: the (1 - PFA) quantile of D_k over
-    /// fault-free runs (seeds pf_seed+1000..), per epoch.
+    /// False-alarm probability per epoch allocated to the PF monitor: the threshold is the calibrated table's (docs/PF.md "Thresholds").
+    #[arg(long, default_value_t = 1e-3)]
+    pub pf_pfa: f64,
+    /// Experiments only: this decision threshold instead of the table's (not an allocation).
     #[arg(long)]
-    pub pf_calibrate: Option<f64>,
-    /// Fault-free runs for the calibration.
-    #[arg(long, default_value_t = 3)]
-    pub pf_calibration_runs: u64,
+    pub pf_threshold: Option<f64>,
+    /// Run this many filter seeds (pf_seed, pf_seed+1, ...) and print the aggregate: false alarms against the allocation's binomial 99 % bound, detections, delays, wrong isolations, RMSE (docs/PF.md "Verification").
+    #[arg(long, default_value_t = 1)]
+    pub pf_seeds: u64,
+    /// With --pf-seeds: shift the satellite faults' onset of seed i by S (i + 0.5) / N seconds, spreading onsets uniformly over S.
+    #[arg(long, default_value_t = 0.0)]
+    pub pf_onset_spread_s: f64,
     /// Readmit an excluded satellite after this many seconds (0: never).
     #[arg(long, default_value_t = 0.0)]
     pub pf_readmit_s: f64,
@@ -94,6 +96,16 @@ pub struct PfArgs {
 }
 
 impl PfKind {
+    /// The filter's name in the calibrated threshold table
+    /// (`Estimator::KIND`).
+    pub fn table_kind(self) -> &'static str {
+        match self {
+            PfKind::Ekf => "ekf",
+            PfKind::Pf => "pf",
+            PfKind::Gapf => "gapf",
+        }
+    }
+
     /// The filter's plain name for captions.
     pub fn name(self) -> &'static str {
         match self {
@@ -105,11 +117,21 @@ impl PfKind {
 }
 
 impl PfArgs {
+    /// The particle count of the table row (0 for the EKF).
+    pub fn table_particles(&self, kind: PfKind) -> usize {
+        if kind == PfKind::Ekf {
+            0
+        } else {
+            self.particles
+        }
+    }
+
     pub fn choice(&self, kind: PfKind) -> FilterChoice {
         FilterChoice {
             kind,
             particles: self.particles,
             f32_state: self.pf_f32,
+            threshold: self.pf_threshold,
         }
     }
 
@@ -141,7 +163,7 @@ impl PfArgs {
             init_drift_m_s: 2.0,
             mutation_m: 0.5 * self.pf_sigma_m,
             window: self.pf_window,
-            threshold: self.pf_threshold,
+            pfa: self.pf_pfa,
             exclude: !self.pf_no_exclude,
             readmit_s: self.pf_readmit_s,
             ..PfConfig::default()
@@ -162,6 +184,8 @@ pub struct PfRecord {
     pub error_3d_m: Option<f64>,
     pub error_h_m: Option<f64>,
     pub n_eff: f64,
+    /// N_eff before the genetic step (the GA-PF; = n_eff for the PF).
+    pub n_eff_before_ga: f64,
     pub decision: Option<f64>,
     pub threshold: f64,
     pub alarm: bool,
@@ -185,8 +209,11 @@ pub struct PfSummary {
     pub epochs: usize,
     /// 3D position RMSE over epochs with a position (eq. 17), m.
     pub rmse_3d_m: f64,
-    /// Mean N_eff of the main filter (eq. 16); 0 for the EKF.
+    /// Mean N_eff of the main filter (eq. 16) after the genetic step; 0
+    /// for the EKF.
     pub mean_n_eff: f64,
+    /// Mean N_eff of the main filter before the genetic step.
+    pub mean_n_eff_before_ga: f64,
     pub threshold: f64,
     pub fault_epoch: Option<usize>,
     pub first_alarm_epoch: Option<usize>,
@@ -222,6 +249,7 @@ fn load(args: &ReplayArgs) -> Result<Prepared> {
 
 fn run_typed<T: Real, E: Estimator<T>>(
     cfg: &PfConfig,
+    threshold: Option<f64>,
     seed: u64,
     epochs: &[PreparedEpoch],
     plan: &FaultPlan,
@@ -246,8 +274,9 @@ fn run_typed<T: Real, E: Estimator<T>>(
             error_3d_m: None,
             error_h_m: None,
             n_eff: 0.0,
+            n_eff_before_ga: 0.0,
             decision: None,
-            threshold: cfg.threshold,
+            threshold: f64::NAN,
             alarm: false,
             isolated: None,
             excluded: None,
@@ -258,7 +287,11 @@ fn run_typed<T: Real, E: Estimator<T>>(
             llr: Vec::new(),
             error: None,
         };
-        match m.process(cfg, e.time_gps_s, &sats) {
+        let o = match threshold {
+            Some(t) => m.process_at(cfg, t, e.time_gps_s, &sats),
+            None => m.process(cfg, e.time_gps_s, &sats),
+        };
+        match o {
             Ok(o) => fill(&mut rec, &o, reference),
             Err(err) => rec.error = Some(err.to_string()),
         }
@@ -275,6 +308,8 @@ fn fill(rec: &mut PfRecord, o: &PfOutput<PF_CAPACITY>, reference: Option<[f64; 3
         rec.error_h_m = Some(e[0].hypot(e[1]));
     }
     rec.n_eff = o.n_eff;
+    rec.n_eff_before_ga = o.n_eff_before_ga;
+    rec.threshold = o.threshold;
     rec.decision = o.decision.is_finite().then_some(o.decision);
     rec.alarm = o.alarm;
     rec.isolated = o.isolated.map(|s| s.to_string());
@@ -297,6 +332,9 @@ pub struct FilterChoice {
     pub particles: usize,
     /// f32 particle state (the device precision) instead of f64.
     pub f32_state: bool,
+    /// An explicit decision threshold (experiments); `None`: the
+    /// calibrated table's at the configured Pfa.
+    pub threshold: Option<f64>,
 }
 
 /// One run of the chosen filter.
@@ -312,34 +350,37 @@ pub fn run_once(
         kind,
         particles,
         f32_state,
+        threshold,
     } = choice;
     macro_rules! pick {
         ($t:ty) => {
             match (kind, particles) {
-                (PfKind::Ekf, _) => run_typed::<$t, Ekf<$t>>(cfg, seed, epochs, plan, reference),
+                (PfKind::Ekf, _) => {
+                    run_typed::<$t, Ekf<$t>>(cfg, threshold, seed, epochs, plan, reference)
+                }
                 (PfKind::Pf, 50) => {
-                    run_typed::<$t, SirPf<$t, 50>>(cfg, seed, epochs, plan, reference)
+                    run_typed::<$t, SirPf<$t, 50>>(cfg, threshold, seed, epochs, plan, reference)
                 }
                 (PfKind::Pf, 100) => {
-                    run_typed::<$t, SirPf<$t, 100>>(cfg, seed, epochs, plan, reference)
+                    run_typed::<$t, SirPf<$t, 100>>(cfg, threshold, seed, epochs, plan, reference)
                 }
                 (PfKind::Pf, 300) => {
-                    run_typed::<$t, SirPf<$t, 300>>(cfg, seed, epochs, plan, reference)
+                    run_typed::<$t, SirPf<$t, 300>>(cfg, threshold, seed, epochs, plan, reference)
                 }
                 (PfKind::Pf, 1000) => {
-                    run_typed::<$t, SirPf<$t, 1000>>(cfg, seed, epochs, plan, reference)
+                    run_typed::<$t, SirPf<$t, 1000>>(cfg, threshold, seed, epochs, plan, reference)
                 }
                 (PfKind::Gapf, 50) => {
-                    run_typed::<$t, GaPf<$t, 50>>(cfg, seed, epochs, plan, reference)
+                    run_typed::<$t, GaPf<$t, 50>>(cfg, threshold, seed, epochs, plan, reference)
                 }
                 (PfKind::Gapf, 100) => {
-                    run_typed::<$t, GaPf<$t, 100>>(cfg, seed, epochs, plan, reference)
+                    run_typed::<$t, GaPf<$t, 100>>(cfg, threshold, seed, epochs, plan, reference)
                 }
                 (PfKind::Gapf, 300) => {
-                    run_typed::<$t, GaPf<$t, 300>>(cfg, seed, epochs, plan, reference)
+                    run_typed::<$t, GaPf<$t, 300>>(cfg, threshold, seed, epochs, plan, reference)
                 }
                 (PfKind::Gapf, 1000) => {
-                    run_typed::<$t, GaPf<$t, 1000>>(cfg, seed, epochs, plan, reference)
+                    run_typed::<$t, GaPf<$t, 1000>>(cfg, threshold, seed, epochs, plan, reference)
                 }
                 (_, n) => bail!("--particles {n}: supported counts are 50, 100, 300, 1000"),
             }
@@ -362,7 +403,6 @@ pub fn summarise(
     kind: PfKind,
     particles: usize,
     seed: u64,
-    threshold: f64,
     recs: &[PfRecord],
     host_ms_per_epoch: f64,
 ) -> PfSummary {
@@ -373,7 +413,13 @@ pub fn summarise(
     let with_pos = recs
         .iter()
         .filter(|r| r.error.is_none() && !r.main_collapsed);
-    let neffs: Vec<f64> = with_pos.map(|r| r.n_eff).collect();
+    let neffs: Vec<f64> = with_pos.clone().map(|r| r.n_eff).collect();
+    let neffs_before: Vec<f64> = with_pos.map(|r| r.n_eff_before_ga).collect();
+    let threshold = recs
+        .iter()
+        .map(|r| r.threshold)
+        .find(|t| !t.is_nan())
+        .unwrap_or(f64::NAN);
     let first = fault_epoch.and_then(|f| recs.iter().find(|r| r.epoch >= f && r.alarm));
     PfSummary {
         filter: kind,
@@ -382,6 +428,7 @@ pub fn summarise(
         epochs: recs.len(),
         rmse_3d_m: rmse,
         mean_n_eff: neffs.iter().sum::<f64>() / neffs.len().max(1) as f64,
+        mean_n_eff_before_ga: neffs_before.iter().sum::<f64>() / neffs_before.len().max(1) as f64,
         threshold,
         fault_epoch,
         first_alarm_epoch: first.map(|r| r.epoch),
@@ -398,76 +445,33 @@ pub fn summarise(
     }
 }
 
-/// The (1 - pfa) empirical quantile of the per-epoch D_k over `runs`
-/// fault-free runs without exclusion (an upper order statistic). The
-/// plan's satellite faults are removed; its noise and clock faults (the
-/// environment, not a fault to detect) are kept.
-pub fn calibrate(
-    args: &PfArgs,
-    cfg: &PfConfig,
-    pfa: f64,
-    epochs: &[PreparedEpoch],
-    plan: &FaultPlan,
-    reference: Option<[f64; 3]>,
-) -> Result<(f64, usize)> {
-    let mut clean = plan.clone();
-    clean.faults.retain(|f| !f.is_satellite_fault());
-    if !(pfa > 0.0 && pfa < 1.0) {
-        bail!("--pf-calibrate {pfa}: expected a probability in (0, 1)");
-    }
-    let kind = args.pf.context("--pf-calibrate needs --pf")?;
-    // Without exclusion an alarm changes no state (only the record's
-    // flags, unused here): the highest threshold the bounds accept
-    // (raim_core::config_bounds::pf) keeps the run alarm-free below it.
-    let free = PfConfig {
-        exclude: false,
-        threshold: raim_core::config_bounds::pf::threshold_bound(&cfg.likelihood, cfg.window).max,
-        ..*cfg
-    };
-    let mut d = Vec::new();
-    for r in 0..args.pf_calibration_runs.max(1) {
-        let recs = run_once(
-            args.choice(kind),
-            &free,
-            args.pf_seed + 1000 + r,
-            epochs,
-            &clean,
-            reference,
-        )?;
-        d.extend(recs.iter().filter_map(|r| r.decision));
-        if kind == PfKind::Ekf {
-            break; // deterministic: one run is all runs
-        }
-    }
-    if d.is_empty() {
-        bail!("calibration: no decision statistic was produced");
-    }
-    d.sort_by(|a, b| a.total_cmp(b));
-    let k = ((1.0 - pfa) * d.len() as f64).ceil() as usize;
-    let t = d[k.min(d.len() - 1)];
-    Ok((t, d.len()))
-}
-
 /// `raim replay --pf ...`: runs, prints records (text or JSON) and the summary.
 pub fn run(args: &ReplayArgs) -> Result<()> {
     let pf = &args.pf;
     let kind = pf.pf.context("--pf not given")?;
-    let mut cfg = pf.config()?;
+    let cfg = pf.config()?;
+    if pf.pf_threshold.is_none() {
+        // The monitor would refuse every epoch: say so before loading.
+        let t = raim_core::pf::threshold::lookup(kind.table_kind(), pf.table_particles(kind), &cfg)
+            .map_err(|e| anyhow!("pf configuration refused: {e}"))?;
+        raim_core::config_bounds::pf::threshold_bound(&cfg.likelihood, cfg.window)
+            .check_pf(t)
+            .map_err(|e| {
+                anyhow!("pf configuration refused: the calibrated threshold is above the detectability ceiling ({e})")
+            })?;
+    }
     let (epochs, plan, reference) = load(args)?;
     let stdout = std::io::stdout();
     let mut w = stdout.lock();
-    if let Some(pfa) = pf.pf_calibrate {
-        let (t, n) = calibrate(pf, &cfg, pfa, &epochs, &plan, reference)?;
-        writeln!(
-            w,
-            "# calibrated threshold {t:.3}: the {:.4} quantile of D_k over {n} fault-free epochs",
-            1.0 - pfa
-        )?;
-        cfg.threshold = t;
-        // A calibrated threshold beyond the LLR-scale ceiling is refused,
-        // not run: no fault the snapshot monitor must detect could reach it.
-        cfg.validate()
-            .map_err(|e| anyhow!("calibrated threshold {t:.3} refused: {e}"))?;
+    if pf.pf_seeds > 1 {
+        let v = verify(pf, kind, &cfg, &epochs, &plan, reference)?;
+        if args.json {
+            writeln!(w, "{}", serde_json::json!({ "pf_verification": v }))?;
+        } else {
+            writeln!(w, "{}", verification_header())?;
+            writeln!(w, "{}", verification_row(&v))?;
+        }
+        return Ok(());
     }
     let t0 = std::time::Instant::now();
     let recs = run_once(pf.choice(kind), &cfg, pf.pf_seed, &epochs, &plan, reference)?;
@@ -481,7 +485,7 @@ pub fn run(args: &ReplayArgs) -> Result<()> {
             }
         }
     }
-    let s = summarise(kind, pf.particles, pf.pf_seed, cfg.threshold, &recs, ms);
+    let s = summarise(kind, pf.particles, pf.pf_seed, &recs, ms);
     if args.json {
         writeln!(w, "{}", serde_json::json!({ "pf_summary": s }))?;
     } else {
@@ -521,15 +525,15 @@ fn text_line(r: &PfRecord) -> String {
 }
 
 pub fn summary_header() -> String {
-    "| filter | N | RMSE 3D (m) | mean N_eff | threshold | fault at | alarm at | isolated | false alarms before | max D before | collapses | ms/epoch |\n\
-     | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+    "| filter | N | RMSE 3D (m) | mean N_eff before GA | mean N_eff after GA | threshold | fault at | alarm at | isolated | false alarms before | max D before | collapses | ms/epoch |\n\
+     | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
         .to_string()
 }
 
 pub fn summary_row(s: &PfSummary) -> String {
     let o = |v: Option<usize>| v.map_or("-".to_string(), |v| v.to_string());
     format!(
-        "| {} | {} | {:.2} | {:.1} | {:.2} | {} | {} | {} | {} | {:.2} | {} | {:.2} |",
+        "| {} | {} | {:.2} | {:.1} | {:.1} | {:.2} | {} | {} | {} | {} | {:.2} | {} | {:.2} |",
         s.filter
             .to_possible_value()
             .map_or_else(String::new, |v| v.get_name().to_string()),
@@ -539,6 +543,7 @@ pub fn summary_row(s: &PfSummary) -> String {
             s.particles.to_string()
         },
         s.rmse_3d_m,
+        s.mean_n_eff_before_ga,
         s.mean_n_eff,
         s.threshold,
         o(s.fault_epoch),
@@ -712,4 +717,214 @@ pub fn plot(
     .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
     root.present().map_err(perr)?;
     Ok(())
+}
+
+/// The multi-seed verification of one configuration (`--pf-seeds`).
+#[derive(Debug, Clone, Serialize)]
+pub struct PfVerification {
+    pub filter: PfKind,
+    pub particles: usize,
+    pub window: usize,
+    pub pfa: f64,
+    pub threshold: f64,
+    pub seeds: u64,
+    /// Fault-free epochs with a decision (before the onset, or all).
+    pub clean_epochs: usize,
+    pub false_alarms: usize,
+    /// The largest false-alarm count the allocation allows at 99 %: the
+    /// smallest k with P(Bin(clean_epochs, pfa) <= k) >= 0.99.
+    pub false_alarm_bound_99: usize,
+    /// Runs with a satellite fault.
+    pub faulted_runs: usize,
+    pub detected: usize,
+    /// Wilson 95 % interval of the detection probability.
+    pub detection_ci95: (f64, f64),
+    /// Detection delay, epochs: median and 95th percentile.
+    pub delay_median_epochs: Option<f64>,
+    pub delay_p95_epochs: Option<f64>,
+    /// Detections whose isolated satellite is not the faulted one.
+    pub wrong_isolations: usize,
+    pub wrong_isolation_ci95: (f64, f64),
+    /// 3D RMSE over the seeds: mean and the 2.5-97.5 % range of the runs.
+    pub rmse_mean_m: f64,
+    pub rmse_p025_m: f64,
+    pub rmse_p975_m: f64,
+    pub mean_n_eff_before_ga: f64,
+    pub mean_n_eff: f64,
+    pub collapses: usize,
+    pub errors: usize,
+}
+
+/// Wilson score interval (95 %) of k successes in n trials.
+pub fn wilson95(k: usize, n: usize) -> (f64, f64) {
+    if n == 0 {
+        return (0.0, 1.0);
+    }
+    let z = 1.959_964f64;
+    let n_f = n as f64;
+    let p = k as f64 / n_f;
+    let d = 1.0 + z * z / n_f;
+    let c = (p + z * z / (2.0 * n_f)) / d;
+    let h = z * (p * (1.0 - p) / n_f + z * z / (4.0 * n_f * n_f)).sqrt() / d;
+    ((c - h).max(0.0), (c + h).min(1.0))
+}
+
+/// The smallest k with P(Bin(n, p) <= k) >= q.
+pub fn binomial_upper(n: usize, p: f64, q: f64) -> usize {
+    let mut k = 0;
+    while k < n && crate::pf_table::binomial_cdf(k, n, p) < q {
+        k += 1;
+    }
+    k
+}
+
+fn quantile(sorted: &[f64], q: f64) -> Option<f64> {
+    if sorted.is_empty() {
+        return None;
+    }
+    let i = ((sorted.len() - 1) as f64 * q).round() as usize;
+    sorted.get(i).copied()
+}
+
+/// Runs `pf.pf_seeds` seeds; the satellite faults of seed i start
+/// `pf_onset_spread_s (i + 0.5) / N` later.
+pub fn verify(
+    pf: &PfArgs,
+    kind: PfKind,
+    cfg: &PfConfig,
+    epochs: &[PreparedEpoch],
+    plan: &FaultPlan,
+    reference: Option<[f64; 3]>,
+) -> Result<PfVerification> {
+    let n = pf.pf_seeds;
+    let mut v = PfVerification {
+        filter: kind,
+        particles: if kind == PfKind::Ekf { 0 } else { pf.particles },
+        window: cfg.window,
+        pfa: cfg.pfa,
+        threshold: f64::NAN,
+        seeds: n,
+        clean_epochs: 0,
+        false_alarms: 0,
+        false_alarm_bound_99: 0,
+        faulted_runs: 0,
+        detected: 0,
+        detection_ci95: (0.0, 1.0),
+        delay_median_epochs: None,
+        delay_p95_epochs: None,
+        wrong_isolations: 0,
+        wrong_isolation_ci95: (0.0, 1.0),
+        rmse_mean_m: 0.0,
+        rmse_p025_m: 0.0,
+        rmse_p975_m: 0.0,
+        mean_n_eff_before_ga: 0.0,
+        mean_n_eff: 0.0,
+        collapses: 0,
+        errors: 0,
+    };
+    let (mut delays, mut rmses) = (Vec::new(), Vec::new());
+    for i in 0..n {
+        let mut p = plan.clone();
+        let shift = pf.pf_onset_spread_s * (i as f64 + 0.5) / n as f64;
+        for f in p.faults.iter_mut().filter(|f| f.is_satellite_fault()) {
+            f.start_gps_s += shift;
+            if let Some(e) = f.end_gps_s.as_mut() {
+                *e += shift;
+            }
+        }
+        let seed = pf.pf_seed + i;
+        let recs = run_once(pf.choice(kind), cfg, seed, epochs, &p, reference)?;
+        let s = summarise(kind, pf.particles, seed, &recs, 0.0);
+        if v.threshold.is_nan() {
+            v.threshold = s.threshold;
+        }
+        let onset = s.fault_epoch.unwrap_or(recs.len());
+        v.clean_epochs += recs
+            .iter()
+            .take(onset)
+            .filter(|r| r.decision.is_some())
+            .count();
+        v.false_alarms += s.false_alarms_before_fault;
+        if let Some(f) = s.fault_epoch {
+            v.faulted_runs += 1;
+            if let Some(a) = s.first_alarm_epoch {
+                v.detected += 1;
+                delays.push((a - f) as f64);
+                let faulted: Vec<&str> = recs
+                    .get(a)
+                    .map(|r| {
+                        r.faulted
+                            .iter()
+                            .filter_map(|x| x.split(':').next())
+                            .collect()
+                    })
+                    .unwrap_or_default();
+                if !s
+                    .isolated
+                    .as_deref()
+                    .is_some_and(|id| faulted.contains(&id))
+                {
+                    v.wrong_isolations += 1;
+                }
+            }
+        }
+        rmses.push(s.rmse_3d_m);
+        v.mean_n_eff_before_ga += s.mean_n_eff_before_ga / n as f64;
+        v.mean_n_eff += s.mean_n_eff / n as f64;
+        v.collapses += s.collapses;
+        v.errors += s.errors;
+    }
+    v.false_alarm_bound_99 = binomial_upper(v.clean_epochs, cfg.pfa, 0.99);
+    v.detection_ci95 = wilson95(v.detected, v.faulted_runs);
+    v.wrong_isolation_ci95 = wilson95(v.wrong_isolations, v.detected);
+    delays.sort_by(|a, b| a.total_cmp(b));
+    v.delay_median_epochs = quantile(&delays, 0.5);
+    v.delay_p95_epochs = quantile(&delays, 0.95);
+    rmses.sort_by(|a, b| a.total_cmp(b));
+    v.rmse_mean_m = rmses.iter().sum::<f64>() / rmses.len().max(1) as f64;
+    v.rmse_p025_m = quantile(&rmses, 0.025).unwrap_or(f64::NAN);
+    v.rmse_p975_m = quantile(&rmses, 0.975).unwrap_or(f64::NAN);
+    Ok(v)
+}
+
+pub fn verification_header() -> String {
+    "| filter | N | U | threshold | seeds | false alarms / clean epochs | 99 % bound | detected (95 % CI) | delay median / p95 (epochs) | wrong isolations (95 % CI) | RMSE mean [2.5-97.5 %] (m) | N_eff before / after GA | collapses |\n\
+     | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+        .to_string()
+}
+
+pub fn verification_row(v: &PfVerification) -> String {
+    let o = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.0}"));
+    let pass = if v.false_alarms <= v.false_alarm_bound_99 {
+        "within"
+    } else {
+        "EXCEEDS"
+    };
+    format!(
+        "| {:?} | {} | {} | {:.2} | {} | {} / {} | {} ({pass}) | {}/{} ({:.2}-{:.2}) | {} / {} | {}/{} ({:.2}-{:.2}) | {:.2} [{:.2}-{:.2}] | {:.1} / {:.1} | {} |",
+        v.filter,
+        if v.particles == 0 { "-".to_string() } else { v.particles.to_string() },
+        v.window,
+        v.threshold,
+        v.seeds,
+        v.false_alarms,
+        v.clean_epochs,
+        v.false_alarm_bound_99,
+        v.detected,
+        v.faulted_runs,
+        v.detection_ci95.0,
+        v.detection_ci95.1,
+        o(v.delay_median_epochs),
+        o(v.delay_p95_epochs),
+        v.wrong_isolations,
+        v.detected,
+        v.wrong_isolation_ci95.0,
+        v.wrong_isolation_ci95.1,
+        v.rmse_mean_m,
+        v.rmse_p025_m,
+        v.rmse_p975_m,
+        v.mean_n_eff_before_ga,
+        v.mean_n_eff,
+        v.collapses,
+    )
 }

@@ -184,8 +184,10 @@ pub fn check(args: &ReplayArgs, m: &ArgMatches) -> Option<String> {
     if let Some(m) = args.config.ignored(&given) {
         return Some(m);
     }
-    if given("pf_calibration_runs") && args.pf.pf_calibrate.is_none() {
-        return Some("'--pf-calibration-runs' would be ignored: it needs --pf-calibrate".into());
+    if given("pf_onset_spread_s") && args.pf.pf_seeds < 2 {
+        return Some(
+            "'--pf-onset-spread-s' would be ignored: it needs --pf-seeds 2 or more".into(),
+        );
     }
     None
 }

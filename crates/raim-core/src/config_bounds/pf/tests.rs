@@ -1,6 +1,6 @@
 //! The PF bounds: each field's ends accepted and just outside refused, the
-//! threshold's ceiling from the LLR's scale, and the review's values
-//! refused.
+//! threshold's ceiling from the LLR's scale, the calibrated table inside
+//! it, and the review's values refused.
 extern crate std;
 use super::*;
 
@@ -15,12 +15,8 @@ fn oor(b: Bound, value: f64) -> PfError {
 
 fn float_bound(b: Bound, set: fn(&mut PfConfig, f64)) {
     assert!(b.min < b.max, "{}", b.field);
-    // Threshold 0: inside the bound of every law and window.
     let with = |v: f64| {
-        let mut c = PfConfig {
-            threshold: 0.0,
-            ..PfConfig::default()
-        };
+        let mut c = PfConfig::default();
         set(&mut c, v);
         c.validate()
     };
@@ -66,6 +62,7 @@ fn every_field_is_bounded() {
     float_bound(READMIT_S, |c, v| c.readmit_s = v);
     float_bound(CLOCK_JUMP_M, |c, v| c.clock_jump_m = v);
     float_bound(COLLAPSE_SIGMA, |c, v| c.collapse_sigma = v);
+    float_bound(PFA, |c, v| c.pfa = v);
     float_bound(NU, |c, v| c.likelihood = Likelihood::StudentT { nu: v });
     float_bound(OUTLIER_PROB, |c, v| {
         c.likelihood = Likelihood::Mixture {
@@ -97,15 +94,7 @@ fn every_field_is_bounded() {
     ] {
         for window in [1usize, 10, MAX_WINDOW] {
             let b = threshold_bound(&law, window);
-            let with = |t: f64| {
-                PfConfig {
-                    likelihood: law,
-                    window,
-                    threshold: t,
-                    ..PfConfig::default()
-                }
-                .validate()
-            };
+            let with = |t: f64| b.check_pf(t);
             assert!(b.max > 0.0, "{law:?} {window}: {}", b.max);
             assert_eq!(with(b.max), Ok(()));
             assert_eq!(with(b.min), Ok(()));
@@ -145,16 +134,62 @@ fn threshold_ceiling_follows_the_llr_scale() {
     assert!(llr_per_epoch(&Likelihood::StudentT { nu: 3.0 }, 1e6) < 0.1 * g);
 }
 
+/// The calibrated table against the detectability ceiling: a certified
+/// threshold above it is one no DETECT_SIGMA fault can reach, so
+/// `PfRaim::process` refuses that configuration (`OutOfRange`, the
+/// threshold's bound). Every row of the default profile (the device's
+/// configuration) and the Gaussian 300-particle and EKF rows of the other
+/// profiles at U >= 5 are inside; the refused entries are printed.
+#[test]
+fn the_calibrated_table_against_the_bound() {
+    use crate::pf::threshold_table::{PROFILES, ROWS, WINDOWS};
+    let mut refused = 0usize;
+    for r in ROWS.iter() {
+        let name = PROFILES.get(r.profile).map_or("?", |p| p.name);
+        for (t, &window) in r.threshold.iter().zip(WINDOWS.iter()) {
+            let b = threshold_bound(&r.likelihood, window);
+            for &v in t.iter().filter(|v| v.is_finite()) {
+                if b.check_pf(v).is_err() {
+                    refused += 1;
+                    std::println!(
+                        "refused: {name} {} {} {:?} U = {window}: {v:.2} > {:.2}",
+                        r.kind,
+                        r.particles,
+                        r.likelihood,
+                        b.max
+                    );
+                }
+                let must_pass = r.profile == 0
+                    || (r.likelihood == Likelihood::Gaussian
+                        && window >= 5
+                        && (r.kind == "ekf" || r.particles == 300)
+                        && name != "geodetic_30s");
+                if must_pass {
+                    assert_eq!(
+                        b.check_pf(v),
+                        Ok(()),
+                        "{name} {} {} U = {window}",
+                        r.kind,
+                        r.particles
+                    );
+                }
+            }
+        }
+    }
+    std::println!("{refused} certified entries above the ceiling");
+}
+
 /// The review's values: a threshold of 1e300 (a 160 m fault never
-/// alarms) and sigmas far outside the model.
+/// alarms), a Pfa of 1e-300 and sigmas far outside the model.
 #[test]
 fn the_review_values_are_refused() {
+    let b = threshold_bound(&Likelihood::Gaussian, 10);
+    assert_eq!(b.check_pf(1e300), Err(oor(b, 1e300)));
     let c = PfConfig {
-        threshold: 1e300,
+        pfa: 1e-300,
         ..PfConfig::default()
     };
-    let b = threshold_bound(&Likelihood::Gaussian, 10);
-    assert_eq!(c.validate(), Err(oor(b, 1e300)));
+    assert_eq!(c.validate(), Err(oor(PFA, 1e-300)));
     for s in [1e-30, 1e30] {
         let c = PfConfig {
             sigma_m: s,
