@@ -47,6 +47,8 @@ const WEEK_MS: i64 = 604_800_000;
 const GST_WEEK0_GPS: i64 = 1024;
 /// GPS week of the BeiDou week 0 (BDT starts 2006-01-01 = GPS week 1356).
 const BDT_WEEK0_GPS: i64 = 1356;
+/// The `Counts::ignored` key of epochs that hold GLONASS MSM only.
+pub const GLONASS_ALONE: &str = "GLONASS-only MSM epoch (GLONASS time and orbits not modelled)";
 /// Largest RTCM 3 frame: 3 header bytes, 1023 payload bytes, 3 CRC bytes.
 const MAX_FRAME: usize = 1029;
 
@@ -649,6 +651,13 @@ impl Rtcm3 {
         out: &mut Vec<Item>,
     ) {
         let Some(tow_ms) = tow_ms else {
+            let alone = self.open.is_none();
+            // A satellite already waiting: the waiting data was an epoch
+            // of its own (GLONASS alone, its multiple-message bit set).
+            if alone && obs.iter().any(|(id, _)| self.glonass_wait.contains_key(id)) {
+                self.glonass_wait.clear();
+                self.ignore(GLONASS_ALONE.into());
+            }
             let target = match self.open.as_mut() {
                 Some(o) => &mut o.sats,
                 None => &mut self.glonass_wait,
@@ -656,7 +665,12 @@ impl Rtcm3 {
             for (id, o) in obs {
                 target.entry(id).or_default().push(o);
             }
-            if !more && self.open.is_some() {
+            if !more && alone {
+                // The epoch's last message, and no GPS-timed message in
+                // it: an epoch of GLONASS alone, which has no GPS time here.
+                self.glonass_wait.clear();
+                self.ignore(GLONASS_ALONE.into());
+            } else if !more {
                 self.close(out);
             }
             return;
@@ -842,6 +856,10 @@ impl Decoder for Rtcm3 {
         self.counts.truncated_tail_bytes += self.buf.len() as u64;
         self.buf.clear();
         self.close(out);
+        if !self.glonass_wait.is_empty() {
+            self.glonass_wait.clear();
+            self.ignore(GLONASS_ALONE.into());
+        }
     }
 
     fn counts(&self) -> &Counts {

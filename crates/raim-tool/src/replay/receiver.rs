@@ -178,6 +178,11 @@ pub fn load_file(format: Format, path: &Path) -> Result<Recording> {
                 format.ephemeris_messages()
             );
         }
+        if let Some(k) = c.ignored.get(raim_recv::rtcm::GLONASS_ALONE) {
+            bail!(
+                "{shown}: only GLONASS observations ({k} epochs of GLONASS MSM): GLONASS orbits and time are not modelled, so nothing can be solved ({c})"
+            );
+        }
         bail!("{shown}: no observation epochs ({c})");
     }
     if rec.nav.ephemerides.is_empty() {
