@@ -204,7 +204,7 @@ impl Rtcm3 {
                         s.gnss_satellite_rough_range_integer_ms.map(|i| {
                             (
                                 s.satellite_id,
-                                f64::from(i) + s.gnss_satellite_rough_range_mod1ms_ms,
+                                fx(i) + s.gnss_satellite_rough_range_mod1ms_ms,
                             )
                         })
                     })
@@ -391,7 +391,7 @@ impl Rtcm3 {
                             id,
                             CodeObs {
                                 code: code.into(),
-                                value_m: l1 + f64::from(d),
+                                value_m: l1 + fx(d),
                             },
                         ));
                     }
@@ -410,33 +410,33 @@ impl Rtcm3 {
                     System::Gps,
                     m.gps_satellite_id,
                     &KeplerFields {
-                        toc_s: f64::from(m.toc_s),
-                        toe_s: f64::from(m.toe_s),
-                        af0: f64::from(m.af0_s),
-                        af1: f64::from(m.af1_s_s),
-                        af2: f64::from(m.af2_s_s2),
-                        sqrt_a: f64::from(m.sqrt_a_sqrt_m),
-                        e: f64::from(m.eccentricity),
-                        i0_sc: f64::from(m.i0_sc),
-                        omega0_sc: f64::from(m.omega0_sc),
-                        omega_sc: f64::from(m.omega_sc),
-                        m0_sc: f64::from(m.m0_sc),
-                        delta_n_sc: f64::from(m.delta_n_sc_s),
-                        omega_dot_sc: f64::from(m.omegadot_sc_s),
-                        idot_sc: f64::from(m.idot_sc_s),
-                        cuc: f64::from(m.cuc_rad),
-                        cus: f64::from(m.cus_rad),
-                        crc: f64::from(m.crc_m),
-                        crs: f64::from(m.crs_m),
-                        cic: f64::from(m.cic_rad),
-                        cis: f64::from(m.cis_rad),
-                        tgd: f64::from(m.tgd_s),
+                        toc_s: fx(m.toc_s),
+                        toe_s: fx(m.toe_s),
+                        af0: fx(m.af0_s),
+                        af1: fx(m.af1_s_s),
+                        af2: fx(m.af2_s_s2),
+                        sqrt_a: fx(m.sqrt_a_sqrt_m),
+                        e: fx(m.eccentricity),
+                        i0_sc: fx(m.i0_sc),
+                        omega0_sc: fx(m.omega0_sc),
+                        omega_sc: fx(m.omega_sc),
+                        m0_sc: fx(m.m0_sc),
+                        delta_n_sc: fx(m.delta_n_sc_s),
+                        omega_dot_sc: fx(m.omegadot_sc_s),
+                        idot_sc: fx(m.idot_sc_s),
+                        cuc: fx(m.cuc_rad),
+                        cus: fx(m.cus_rad),
+                        crc: fx(m.crc_m),
+                        crs: fx(m.crs_m),
+                        cic: fx(m.cic_rad),
+                        cis: fx(m.cis_rad),
+                        tgd: fx(m.tgd_s),
                         tgd2: 0.0,
                         health: u32::from(m.sv_health_ind),
                         iod: u32::from(m.iode),
                     },
                 );
-                self.ephemeris(k, week, f64::from(m.toc_s), out);
+                self.ephemeris(k, week, fx(m.toc_s), out);
             }
             Message::Msg1044(m) => {
                 let week = latest_week(i64::from(m.qzss_week_number), 1024, self.now_week);
@@ -444,33 +444,33 @@ impl Rtcm3 {
                     System::Qzss,
                     m.qzss_satellite_id,
                     &KeplerFields {
-                        toc_s: f64::from(m.toc_s),
-                        toe_s: f64::from(m.toe_s),
-                        af0: f64::from(m.af0_s),
-                        af1: f64::from(m.af1_s_s),
-                        af2: f64::from(m.af2_s_s2),
-                        sqrt_a: f64::from(m.sqrt_a_sqrt_m),
-                        e: f64::from(m.eccentricity),
-                        i0_sc: f64::from(m.i0_sc),
-                        omega0_sc: f64::from(m.omega0_sc),
-                        omega_sc: f64::from(m.omega_sc),
-                        m0_sc: f64::from(m.m0_sc),
-                        delta_n_sc: f64::from(m.delta_n_sc_s),
-                        omega_dot_sc: f64::from(m.omegadot_sc_s),
-                        idot_sc: f64::from(m.idot_sc_s),
-                        cuc: f64::from(m.cuc_rad),
-                        cus: f64::from(m.cus_rad),
-                        crc: f64::from(m.crc_m),
-                        crs: f64::from(m.crs_m),
-                        cic: f64::from(m.cic_rad),
-                        cis: f64::from(m.cis_rad),
-                        tgd: f64::from(m.tgd_s),
+                        toc_s: fx(m.toc_s),
+                        toe_s: fx(m.toe_s),
+                        af0: fx(m.af0_s),
+                        af1: fx(m.af1_s_s),
+                        af2: fx(m.af2_s_s2),
+                        sqrt_a: fx(m.sqrt_a_sqrt_m),
+                        e: fx(m.eccentricity),
+                        i0_sc: fx(m.i0_sc),
+                        omega0_sc: fx(m.omega0_sc),
+                        omega_sc: fx(m.omega_sc),
+                        m0_sc: fx(m.m0_sc),
+                        delta_n_sc: fx(m.delta_n_sc_s),
+                        omega_dot_sc: fx(m.omegadot_sc_s),
+                        idot_sc: fx(m.idot_sc_s),
+                        cuc: fx(m.cuc_rad),
+                        cus: fx(m.cus_rad),
+                        crc: fx(m.crc_m),
+                        crs: fx(m.crs_m),
+                        cic: fx(m.cic_rad),
+                        cis: fx(m.cis_rad),
+                        tgd: fx(m.tgd_s),
                         tgd2: 0.0,
                         health: u32::from(m.sv_health_ind),
                         iod: u32::from(m.iode),
                     },
                 );
-                self.ephemeris(k, week, f64::from(m.toc_s), out);
+                self.ephemeris(k, week, fx(m.toc_s), out);
             }
             Message::Msg1045(m) => {
                 let week = latest_week(
@@ -478,31 +478,31 @@ impl Rtcm3 {
                     4096,
                     self.now_week - GST_WEEK0_GPS,
                 ) + GST_WEEK0_GPS;
-                let bgd = f64::from(m.bgd_e1_e5a_s);
+                let bgd = fx(m.bgd_e1_e5a_s);
                 let k = kepler(
                     System::Galileo,
                     m.gal_satellite_id,
                     &KeplerFields {
-                        toc_s: f64::from(m.toc_s),
-                        toe_s: f64::from(m.toe_s),
-                        af0: f64::from(m.af0_s),
-                        af1: f64::from(m.af1_s_s),
-                        af2: f64::from(m.af2_s_s2),
-                        sqrt_a: f64::from(m.sqrt_a_sqrt_m),
-                        e: f64::from(m.eccentricity),
-                        i0_sc: f64::from(m.i0_sc),
-                        omega0_sc: f64::from(m.omega0_sc),
-                        omega_sc: f64::from(m.omega_sc),
-                        m0_sc: f64::from(m.m0_sc),
-                        delta_n_sc: f64::from(m.delta_n_sc_s),
-                        omega_dot_sc: f64::from(m.omegadot_sc_s),
-                        idot_sc: f64::from(m.idot_sc_s),
-                        cuc: f64::from(m.cuc_rad),
-                        cus: f64::from(m.cus_rad),
-                        crc: f64::from(m.crc_m),
-                        crs: f64::from(m.crs_m),
-                        cic: f64::from(m.cic_rad),
-                        cis: f64::from(m.cis_rad),
+                        toc_s: fx(m.toc_s),
+                        toe_s: fx(m.toe_s),
+                        af0: fx(m.af0_s),
+                        af1: fx(m.af1_s_s),
+                        af2: fx(m.af2_s_s2),
+                        sqrt_a: fx(m.sqrt_a_sqrt_m),
+                        e: fx(m.eccentricity),
+                        i0_sc: fx(m.i0_sc),
+                        omega0_sc: fx(m.omega0_sc),
+                        omega_sc: fx(m.omega_sc),
+                        m0_sc: fx(m.m0_sc),
+                        delta_n_sc: fx(m.delta_n_sc_s),
+                        omega_dot_sc: fx(m.omegadot_sc_s),
+                        idot_sc: fx(m.idot_sc_s),
+                        cuc: fx(m.cuc_rad),
+                        cus: fx(m.cus_rad),
+                        crc: fx(m.crc_m),
+                        crs: fx(m.crs_m),
+                        cic: fx(m.cic_rad),
+                        cis: fx(m.cis_rad),
                         // F/NAV's clock is the E1/E5a combination's: BGD(E1,E5a)
                         // for E1 alone, none for the E1/E5a pair.
                         tgd: bgd,
@@ -512,7 +512,7 @@ impl Rtcm3 {
                         iod: u32::from(m.iodnav),
                     },
                 );
-                self.ephemeris(k, week, f64::from(m.toc_s), out);
+                self.ephemeris(k, week, fx(m.toc_s), out);
             }
             Message::Msg1046(m) => {
                 let week = latest_week(
@@ -524,28 +524,28 @@ impl Rtcm3 {
                     System::Galileo,
                     m.gal_satellite_id,
                     &KeplerFields {
-                        toc_s: f64::from(m.toc_s),
-                        toe_s: f64::from(m.toe_s),
-                        af0: f64::from(m.af0_s),
-                        af1: f64::from(m.af1_s_s),
-                        af2: f64::from(m.af2_s_s2),
-                        sqrt_a: f64::from(m.sqrt_a_sqrt_m),
-                        e: f64::from(m.eccentricity),
-                        i0_sc: f64::from(m.i0_sc),
-                        omega0_sc: f64::from(m.omega0_sc),
-                        omega_sc: f64::from(m.omega_sc),
-                        m0_sc: f64::from(m.m0_sc),
-                        delta_n_sc: f64::from(m.delta_n_sc_s),
-                        omega_dot_sc: f64::from(m.omegadot_sc_s),
-                        idot_sc: f64::from(m.idot_sc_s),
-                        cuc: f64::from(m.cuc_rad),
-                        cus: f64::from(m.cus_rad),
-                        crc: f64::from(m.crc_m),
-                        crs: f64::from(m.crs_m),
-                        cic: f64::from(m.cic_rad),
-                        cis: f64::from(m.cis_rad),
-                        tgd: f64::from(m.bgd_e1_e5b_s),
-                        tgd2: f64::from(m.bgd_e1_e5a_s),
+                        toc_s: fx(m.toc_s),
+                        toe_s: fx(m.toe_s),
+                        af0: fx(m.af0_s),
+                        af1: fx(m.af1_s_s),
+                        af2: fx(m.af2_s_s2),
+                        sqrt_a: fx(m.sqrt_a_sqrt_m),
+                        e: fx(m.eccentricity),
+                        i0_sc: fx(m.i0_sc),
+                        omega0_sc: fx(m.omega0_sc),
+                        omega_sc: fx(m.omega_sc),
+                        m0_sc: fx(m.m0_sc),
+                        delta_n_sc: fx(m.delta_n_sc_s),
+                        omega_dot_sc: fx(m.omegadot_sc_s),
+                        idot_sc: fx(m.idot_sc_s),
+                        cuc: fx(m.cuc_rad),
+                        cus: fx(m.cus_rad),
+                        crc: fx(m.crc_m),
+                        crs: fx(m.crs_m),
+                        cic: fx(m.cic_rad),
+                        cis: fx(m.cis_rad),
+                        tgd: fx(m.bgd_e1_e5b_s),
+                        tgd2: fx(m.bgd_e1_e5a_s),
                         health: u32::from(m.e1_b_sig_health_ind)
                             | (u32::from(m.e1_b_data_validity_flag) << 2)
                             | (u32::from(m.e5b_sig_health_ind) << 3)
@@ -553,7 +553,7 @@ impl Rtcm3 {
                         iod: u32::from(m.iodnav),
                     },
                 );
-                self.ephemeris(k, week, f64::from(m.toc_s), out);
+                self.ephemeris(k, week, fx(m.toc_s), out);
             }
             Message::Msg1042(m) => {
                 let week = latest_week(
@@ -565,34 +565,34 @@ impl Rtcm3 {
                     System::Beidou,
                     m.bds_satellite_id,
                     &KeplerFields {
-                        toc_s: f64::from(m.toc_s),
-                        toe_s: f64::from(m.toe_s),
-                        af0: f64::from(m.a0_s),
-                        af1: f64::from(m.a1_s_s),
-                        af2: f64::from(m.a2_s_s2),
-                        sqrt_a: f64::from(m.sqrt_a_sqrt_m),
-                        e: f64::from(m.eccentricity),
-                        i0_sc: f64::from(m.i0_sc),
-                        omega0_sc: f64::from(m.omega0_sc),
-                        omega_sc: f64::from(m.omega_sc),
-                        m0_sc: f64::from(m.m0_sc),
-                        delta_n_sc: f64::from(m.delta_n_sc_s),
-                        omega_dot_sc: f64::from(m.omegadot_sc_s),
-                        idot_sc: f64::from(m.idot_sc_s),
-                        cuc: f64::from(m.cuc_rad),
-                        cus: f64::from(m.cus_rad),
-                        crc: f64::from(m.crc_m),
-                        crs: f64::from(m.crs_m),
-                        cic: f64::from(m.cic_rad),
-                        cis: f64::from(m.cis_rad),
-                        tgd: f64::from(m.tgd1_s),
+                        toc_s: fx(m.toc_s),
+                        toe_s: fx(m.toe_s),
+                        af0: fx(m.a0_s),
+                        af1: fx(m.a1_s_s),
+                        af2: fx(m.a2_s_s2),
+                        sqrt_a: fx(m.sqrt_a_sqrt_m),
+                        e: fx(m.eccentricity),
+                        i0_sc: fx(m.i0_sc),
+                        omega0_sc: fx(m.omega0_sc),
+                        omega_sc: fx(m.omega_sc),
+                        m0_sc: fx(m.m0_sc),
+                        delta_n_sc: fx(m.delta_n_sc_s),
+                        omega_dot_sc: fx(m.omegadot_sc_s),
+                        idot_sc: fx(m.idot_sc_s),
+                        cuc: fx(m.cuc_rad),
+                        cus: fx(m.cus_rad),
+                        crc: fx(m.crc_m),
+                        crs: fx(m.crs_m),
+                        cic: fx(m.cic_rad),
+                        cis: fx(m.cis_rad),
+                        tgd: fx(m.tgd1_s),
                         tgd2: 0.0,
                         health: u32::from(m.sv_health_flag),
                         iod: u32::from(m.aode),
                     },
                 );
                 // BDT seconds of week to GPS: + 14 s.
-                self.ephemeris(k, week, f64::from(m.toc_s) - BDT_MINUS_GPST_S, out);
+                self.ephemeris(k, week, fx(m.toc_s) - BDT_MINUS_GPST_S, out);
             }
             Message::Msg1020(m) => {
                 self.counts.ephemerides += 1;
@@ -608,12 +608,12 @@ impl Rtcm3 {
                         m.zn_first_deriv_km_s,
                     ],
                     acceleration_km_s2: [
-                        f64::from(m.xn_second_deriv_km_s2),
-                        f64::from(m.yn_second_deriv_km_s2),
-                        f64::from(m.zn_second_deriv_km_s2),
+                        fx(m.xn_second_deriv_km_s2),
+                        fx(m.yn_second_deriv_km_s2),
+                        fx(m.zn_second_deriv_km_s2),
                     ],
                     tau_n_s: m.tau_n_s,
-                    gamma_n: f64::from(m.gamma_n),
+                    gamma_n: fx(m.gamma_n),
                     health: m.glo_eph_health_flag,
                 }));
             }
@@ -773,6 +773,12 @@ impl Rtcm3 {
             out.push(Item::Epoch(absolute(base, o)));
         }
     }
+}
+
+/// A field of any numeric width as f64 (the crate's fields are f32 or f64
+/// by their resolution).
+fn fx<T: Into<f64>>(x: T) -> f64 {
+    x.into()
 }
 
 fn absolute(base_week: i64, o: Open) -> ObsEpoch {

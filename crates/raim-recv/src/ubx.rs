@@ -281,7 +281,7 @@ impl Ubx {
                 continue;
             };
             let pr = meas.pr_mes();
-            if !pr_valid || !(pr.is_finite() && pr > 1e6) {
+            if !(pr_valid && pr.is_finite() && pr > 1e6) {
                 continue;
             }
             e.sats
