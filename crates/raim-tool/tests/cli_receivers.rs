@@ -149,6 +149,22 @@ fn lea4t_clean() {
     );
     // Position error against the clean mean: metres, not kilometres.
     assert!(s["error_h_max_m"].as_f64().unwrap() < 5.0, "{s}");
+    // The first solution against the receiver's own fix of that second
+    // (its first $GPRMC in the log, 35 52.37449 N 138 23.38721 E): within
+    // ABS_TOL_M, so the decoded ephemerides place it absolutely too.
+    const ABS_TOL_M: f64 = 10.0;
+    let first: serde_json::Value = serde_json::from_str(out.lines().next().unwrap()).unwrap();
+    let p: Vec<f64> = first["position_ecef_m"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let g = raim_core::frames::ecef_to_geodetic([p[0], p[1], p[2]]);
+    let (lat, lon) = ((35.0 + 52.37449 / 60.0f64).to_radians(), (138.0 + 23.38721 / 60.0f64).to_radians());
+    let north_m = (g.lat_rad - lat) * 6.371e6;
+    let east_m = (g.lon_rad - lon) * 6.371e6 * lat.cos();
+    assert!(north_m.hypot(east_m) < ABS_TOL_M, "{north_m} {east_m}");
 }
 
 /// A 50 m step on G05 from 60 s after the start: excluded at all 182
