@@ -14,7 +14,7 @@ pub enum Spec {
     Serial { path: String, baud: u32 },
 }
 
-/// How long one serial read waits before the stream is polled again.
+/// How long one serial or TCP read waits before the stream is polled again.
 const SERIAL_POLL: Duration = Duration::from_millis(200);
 
 /// Why a source could not be opened or read.
@@ -71,8 +71,8 @@ impl Spec {
         }
     }
 
-    /// Open it. A serial read that times out returns
-    /// `ErrorKind::TimedOut` (the caller polls again); the end of a TCP
+    /// Open it. A serial or TCP read that times out returns
+    /// `ErrorKind::TimedOut` or `WouldBlock` (the caller polls again); the end of a TCP
     /// stream or a file reads 0 bytes.
     pub fn open(&self) -> Result<Box<dyn Read + Send>, SourceError> {
         let err = |detail: String| SourceError::Open {
@@ -82,7 +82,11 @@ impl Spec {
         Ok(match self {
             Spec::File(p) => Box::new(std::fs::File::open(p).map_err(|e| err(e.to_string()))?),
             Spec::Tcp(a) => {
-                Box::new(std::net::TcpStream::connect(a).map_err(|e| err(e.to_string()))?)
+                let s = std::net::TcpStream::connect(a).map_err(|e| err(e.to_string()))?;
+                // Reads wake up to let the caller see Ctrl-C and its timeouts.
+                s.set_read_timeout(Some(SERIAL_POLL))
+                    .map_err(|e| err(e.to_string()))?;
+                Box::new(s)
             }
             Spec::Serial { path, baud } => Box::new(
                 serialport::new(path, *baud)

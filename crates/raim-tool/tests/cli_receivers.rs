@@ -161,7 +161,10 @@ fn lea4t_clean() {
         .map(|v| v.as_f64().unwrap())
         .collect();
     let g = raim_core::frames::ecef_to_geodetic([p[0], p[1], p[2]]);
-    let (lat, lon) = ((35.0 + 52.37449 / 60.0f64).to_radians(), (138.0 + 23.38721 / 60.0f64).to_radians());
+    let (lat, lon) = (
+        (35.0 + 52.37449 / 60.0f64).to_radians(),
+        (138.0 + 23.38721 / 60.0f64).to_radians(),
+    );
     let north_m = (g.lat_rad - lat) * 6.371e6;
     let east_m = (g.lon_rad - lon) * 6.371e6 * lat.cos();
     assert!(north_m.hypot(east_m) < ABS_TOL_M, "{north_m} {east_m}");
@@ -479,6 +482,44 @@ fn live_stream_without_ephemerides_times_out() {
     assert_eq!(code, Some(1), "{err}");
     assert!(err.contains("no ephemeris after 1 s"), "{err}");
     assert!(err.contains("1019"), "{err}");
+}
+
+/// Ctrl-C (SIGINT) on a live source that stays open: the run stops
+/// cleanly, prints the reader's counts and the summary, exit 0.
+#[test]
+fn live_source_stops_on_ctrl_c() {
+    let bytes = std::fs::read(lea4t()).unwrap();
+    let head = bytes[..60_000].to_vec();
+    let addr = serve(
+        head,
+        4096,
+        Duration::from_millis(1),
+        Duration::from_secs(30),
+    );
+    let child = Command::new(env!("CARGO_BIN_EXE_raim"))
+        .args([
+            "replay",
+            "--ubx",
+            &format!("tcp://{addr}"),
+            "--json",
+            "--keep-going",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn raim");
+    std::thread::sleep(Duration::from_secs(2));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(killed.success());
+    let out = child.wait_with_output().expect("wait");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(err.contains("stopped (Ctrl-C)"), "{err}");
+    let s = summary(&String::from_utf8_lossy(&out.stdout));
+    assert!(n(&s, "epochs") > 0, "{s}");
 }
 
 #[test]
