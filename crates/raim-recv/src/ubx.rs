@@ -348,3 +348,128 @@ impl Decoder for Ubx {
         0
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn decode(bytes: &[u8]) -> (Vec<Item>, Counts) {
+        let mut d = Ubx::default();
+        let mut out = Vec::new();
+        d.push(bytes, &mut out);
+        d.finish(&mut out);
+        (out, d.counts().clone())
+    }
+
+    /// One RXM-RAWX measurement (32 bytes, the M8 protocol's layout).
+    fn rawx_meas(pr_m: f64, gnss: u8, sv: u8, sig: u8, trk: u8) -> Vec<u8> {
+        let mut m = Vec::new();
+        m.extend_from_slice(&pr_m.to_le_bytes());
+        m.extend_from_slice(&0f64.to_le_bytes());
+        m.extend_from_slice(&0f32.to_le_bytes());
+        m.extend_from_slice(&[gnss, sv, sig, 0]);
+        m.extend_from_slice(&0u16.to_le_bytes());
+        m.extend_from_slice(&[40, 0, 0, 0, trk, 0]);
+        m
+    }
+
+    /// RXM-RAWX through the `ublox` crate: the week and receiver time give
+    /// the epoch's GPS time; a GPS L1 C/A and a Galileo E5a measurement with
+    /// a valid pseudorange are kept under their RINEX codes, one without
+    /// (trkStat bit 0 clear) is dropped.
+    #[test]
+    fn rawx_measurements() {
+        let mut p = Vec::new();
+        p.extend_from_slice(&345_600.5f64.to_le_bytes());
+        p.extend_from_slice(&2300u16.to_le_bytes());
+        p.extend_from_slice(&[18, 3, 0, 1, 0, 0]);
+        p.extend(rawx_meas(2.1e7, 0, 5, 0, 1));
+        p.extend(rawx_meas(2.4e7, 2, 11, 3, 1));
+        p.extend(rawx_meas(2.2e7, 0, 7, 0, 0));
+        let (out, c) = decode(&frame(0x02, 0x15, &p));
+        assert_eq!((c.frames, c.undecodable, c.epochs), (1, 0, 1));
+        let Some(Item::Epoch(e)) = out.first() else {
+            panic!("{out:?}")
+        };
+        assert!((e.time_gps_s - (2300.0 * WEEK_S + 345_600.5)).abs() < 1e-9);
+        assert_eq!(e.sats.len(), 2);
+        assert_eq!(e.sats[&SatId::new(System::Gps, 5)][0].code, "C1C");
+        assert_eq!(e.sats[&SatId::new(System::Galileo, 11)][0].code, "C5I");
+    }
+
+    /// RXM-SFRBX: GPS LNAV words of 30 bits (24 data bits above 6 parity
+    /// bits) reach the LNAV decoder: subframe 4 page 18 gives Klobuchar.
+    /// A subframe before any epoch's week is counted, not decoded.
+    #[test]
+    fn sfrbx_subframes() {
+        let mut w = [0u32; 10];
+        w[0] = 0x8B << 16;
+        w[1] = 4 << 2;
+        // Word 3: data ID 01, SV ID 56, alpha0 = 3.
+        w[2] = (1 << 22) | (56 << 16) | (3 << 8);
+        let mut p = vec![0u8, 5, 0, 0, 10, 0, 2, 0];
+        for x in w {
+            p.extend_from_slice(&(x << 6).to_le_bytes());
+        }
+        let sfrbx = frame(0x02, 0x13, &p);
+        let (_, c) = decode(&sfrbx);
+        assert_eq!(c.ignored.get("subframe before the first epoch"), Some(&1));
+        let mut raw = Vec::new();
+        raw.extend_from_slice(&1_000i32.to_le_bytes());
+        raw.extend_from_slice(&2300i16.to_le_bytes());
+        raw.extend_from_slice(&[0, 0]);
+        let mut bytes = frame(0x02, 0x10, &raw);
+        bytes.extend_from_slice(&sfrbx);
+        let (out, c) = decode(&bytes);
+        assert_eq!(c.undecodable, 0);
+        let kb = out.iter().find_map(|i| match i {
+            Item::Klobuchar(k) => Some(*k),
+            _ => None,
+        });
+        let kb = kb.expect("Klobuchar from page 18");
+        assert!((kb.alpha[0] - 3.0 * 2f64.powi(-30)).abs() < 1e-20);
+    }
+
+    /// RXM-RAW: a measurement below mesQI 4 is dropped; a wrong length is
+    /// undecodable; a bad checksum, garbage and an unknown class are skipped
+    /// and counted; a cut frame at the end is counted as such.
+    #[test]
+    fn raw_and_damage() {
+        let mut p = Vec::new();
+        p.extend_from_slice(&5_000i32.to_le_bytes());
+        p.extend_from_slice(&1481i16.to_le_bytes());
+        p.extend_from_slice(&[2, 0]);
+        for (sv, qi) in [(3u8, 7i8), (4, 3)] {
+            p.extend_from_slice(&0f64.to_le_bytes());
+            p.extend_from_slice(&2.3e7f64.to_le_bytes());
+            p.extend_from_slice(&0f32.to_le_bytes());
+            p.extend_from_slice(&[sv, qi as u8, 40, 0]);
+        }
+        let good = frame(0x02, 0x10, &p);
+        let mut bad = good.clone();
+        let k = bad.len() - 1;
+        bad[k] ^= 1;
+        let mut bytes = b"xyz".to_vec();
+        bytes.extend_from_slice(&bad);
+        bytes.extend_from_slice(&frame(0x02, 0x10, &p[..10]));
+        bytes.extend_from_slice(&frame(0x0A, 0x04, &[1, 2]));
+        bytes.extend_from_slice(&good);
+        bytes.extend_from_slice(&good[..20]);
+        let (out, c) = decode(&bytes);
+        assert_eq!(c.bad_checksum, 1);
+        assert_eq!(c.undecodable, 1);
+        assert_eq!(c.ignored.get("UBX 0x0A 0x04"), Some(&1));
+        assert_eq!(c.truncated_tail_bytes, 20);
+        assert!(c.garbage_bytes >= 3);
+        let epochs: Vec<&ObsEpoch> = out
+            .iter()
+            .filter_map(|i| match i {
+                Item::Epoch(e) => Some(e),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(epochs.len(), 1);
+        assert_eq!(epochs[0].sats.len(), 1);
+        assert!(epochs[0].sats.contains_key(&SatId::new(System::Gps, 3)));
+    }
+}
