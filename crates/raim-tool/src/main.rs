@@ -5,6 +5,7 @@ mod arl;
 mod campaign;
 mod config_args;
 mod epoch_json;
+mod link;
 mod outcome;
 mod pci;
 mod pf_table;
@@ -125,6 +126,9 @@ enum Command {
     /// Print the raim(1) man page (roff), from the same definitions as --help.
     #[command(after_help = examples::MAN)]
     Man,
+    /// Talk to a unit over a serial port: Status, Configure, Lock (docs/RECEIVERS.md).
+    #[command(after_help = examples::LINK)]
+    Link(link::LinkArgs),
     /// Seal a unit configuration into a firmware image: the installation step (docs/PROTOCOL.md "Configuration authority").
     #[command(after_help = examples::PROVISION)]
     Provision(provision_cmd::ProvisionArgs),
@@ -132,6 +136,9 @@ enum Command {
 
 /// The examples that end each subcommand's `--help`.
 mod examples {
+    pub const LINK: &str = "Examples:
+  raim link --port /dev/ttyUSB0 status
+  raim link --port /dev/pts/3 configure lock status --pfa 1e-5";
     pub const PROVISION: &str = "Examples:
   raim provision --config unit.toml -o unit.elf firmware/target/thumbv7em-none-eabihf/release/raim-firmware
   raim provision --config unit.toml --key $(cat unit42.key) -o unit42.elf raim-firmware";
@@ -260,6 +267,7 @@ fn run(command: Command) -> Result<Tally> {
         } => none(threshold(pfa, dof, pmd, json)),
         Command::Araim(args) => none(araim_cmd::run(&args)),
         Command::Qemu(args) => qemu::run(&args),
+        Command::Link(args) => none(link::run(&args)),
         Command::Replay(args) => replay::run(&args),
         Command::Pci(args) => none(pci::run(&args)),
         Command::Arl(args) => none(arl::run(&args)),

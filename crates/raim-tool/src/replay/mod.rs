@@ -15,6 +15,7 @@ mod input;
 mod pca;
 pub mod pf;
 mod plot;
+pub mod receiver;
 pub mod record;
 pub mod stanford;
 pub mod stats;
@@ -89,11 +90,25 @@ pub struct ReplayArgs {
     #[arg(long = "config", id = "run_config", value_name = "FILE", help_heading = heading::SOURCES)]
     pub run_config: Option<PathBuf>,
     /// RINEX observation file (2 or 3, optionally .gz).
-    #[arg(long, value_name = "FILE", help_heading = heading::SOURCES)]
-    pub obs: PathBuf,
+    #[arg(long, value_name = "FILE", required_unless_present_any = ["rtcm3", "ubx"], help_heading = heading::SOURCES)]
+    pub obs: Option<PathBuf>,
     /// RINEX navigation file (broadcast ephemerides; optionally .gz).
-    #[arg(long, value_name = "FILE", help_heading = heading::SOURCES)]
-    pub nav: PathBuf,
+    #[arg(long, value_name = "FILE", required_unless_present_any = ["rtcm3", "ubx"], help_heading = heading::SOURCES)]
+    pub nav: Option<PathBuf>,
+    /// An RTCM 3 stream instead of RINEX: a FILE, tcp://HOST:PORT or
+    /// serial:PATH:BAUD (docs/RECEIVERS.md). A file is read whole (its
+    /// ephemerides serve every epoch); a live source prints each decision
+    /// as it arrives and stops at the end of the stream or on Ctrl-C.
+    #[arg(long, value_name = "SRC", conflicts_with_all = ["obs", "nav", "ubx"], help_heading = heading::SOURCES)]
+    pub rtcm3: Option<String>,
+    /// A u-blox UBX stream instead of RINEX (RXM-RAWX/SFRBX or the legacy
+    /// RXM-RAW/SFRB): FILE, tcp://HOST:PORT or serial:PATH:BAUD.
+    #[arg(long, value_name = "SRC", conflicts_with_all = ["obs", "nav"], help_heading = heading::SOURCES)]
+    pub ubx: Option<String>,
+    /// A live source that has sent no ephemeris after this many seconds is
+    /// given up, with a message saying so.
+    #[arg(long, value_name = "S", default_value_t = 300.0, help_heading = heading::SOURCES)]
+    pub ephemeris_timeout_s: f64,
     /// Systems to use, as RINEX letters (G, R, E, C, J).
     #[arg(long, default_value = "GEC", help_heading = heading::SOURCES)]
     pub systems: String,
@@ -274,14 +289,55 @@ impl ReplayArgs {
     }
 }
 
+/// The prepared epochs of a replay and what the monitor's configuration
+/// needs to know about them.
+struct Prepared {
+    epochs: Vec<PreparedEpoch>,
+    /// The header's approximate position (RINEX) or the station position
+    /// (RTCM 1005/1006).
+    header: Option<[f64; 3]>,
+    first: f64,
+    /// A receiver stream with single-frequency ranges and no ionospheric
+    /// model: the residual-ionosphere sigma is doubled (`receiver`).
+    iono_inflate: bool,
+    /// What the source is called in messages.
+    source_name: String,
+}
+
 /// Load, prepare and select the epochs; reject a `--start`/`--end` window
 /// that is reversed or selects nothing.
 fn prepare(args: &ReplayArgs) -> Result<(Vec<PreparedEpoch>, Option<[f64; 3]>, f64)> {
-    let obs = input::load_obs(&args.obs)?;
-    let nav = input::load_nav(&args.nav)?;
+    let p = prepare_full(args)?;
+    Ok((p.epochs, p.header, p.first))
+}
+
+fn prepare_full(args: &ReplayArgs) -> Result<Prepared> {
+    let mut opts = args.ranging()?;
+    let stream = receiver::source(args)?;
+    let (obs, nav, source_name) = match (&stream, &args.obs, &args.nav) {
+        (Some((format, spec)), _, _) => {
+            let raim_recv::source::Spec::File(path) = spec else {
+                bail!(
+                    "{} is a live source: it is run epoch by epoch (the snapshot monitor only)",
+                    spec.name()
+                );
+            };
+            let rec = receiver::load_file(*format, path)?;
+            if args.codes.is_empty() {
+                opts.codes = receiver::receiver_codes();
+            }
+            (rec.obs, rec.nav, spec.name())
+        }
+        (None, Some(o), Some(n)) => (
+            input::load_obs(o)?,
+            input::load_nav(n)?,
+            o.display().to_string(),
+        ),
+        _ => bail!("give --obs and --nav, or --rtcm3 SRC, or --ubx SRC"),
+    };
     let (first, last) = match (obs.epochs.first(), obs.epochs.last()) {
         (Some(a), Some(b)) => (a.time_gps_s, b.time_gps_s),
-        _ => bail!("no epochs in the observation file {}", args.obs.display()),
+        _ => bail!("no epochs in the observation file {source_name}"),
     };
     let start = args
         .start
@@ -301,12 +357,14 @@ fn prepare(args: &ReplayArgs) -> Result<(Vec<PreparedEpoch>, Option<[f64; 3]>, f
             args.end.as_deref().unwrap_or(""),
         ),
     )?;
-    let opts = args.ranging()?;
-    let epochs: Vec<PreparedEpoch> = obs
+    let selected: Vec<&raim_gnss::ObsEpoch> = obs
         .epochs
         .iter()
         .filter(|e| start.is_none_or(|s| e.time_gps_s >= s - 0.5))
         .filter(|e| end.is_none_or(|s| e.time_gps_s <= s + 0.5))
+        .collect();
+    let mut epochs: Vec<PreparedEpoch> = selected
+        .iter()
         .map(|e| prepare_epoch(&nav, e, &opts, obs.approx_position_m))
         .collect();
     if epochs.is_empty() {
@@ -316,7 +374,30 @@ fn prepare(args: &ReplayArgs) -> Result<(Vec<PreparedEpoch>, Option<[f64; 3]>, f
             raim_gnss::time::time_of_day(last)
         );
     }
-    Ok((epochs, obs.approx_position_m, first))
+    if epochs.iter().all(|e| e.sats.is_empty()) {
+        bail!(
+            "{source_name}: no epoch has a usable satellite: {}",
+            checks::why_nothing(&selected, &nav, &epochs, &opts)
+        );
+    }
+    let mut iono_inflate = false;
+    if stream.is_some() {
+        let model = args.core_config().sigma_model;
+        for e in &mut epochs {
+            receiver::set_sigmas(e, &model);
+        }
+        let mut probe = args.core_config();
+        let before = probe.sigma_model.iono_vertical_m;
+        receiver::adjust_config(&mut probe, args, &nav, &epochs);
+        iono_inflate = probe.sigma_model.iono_vertical_m != before;
+    }
+    Ok(Prepared {
+        epochs,
+        header: obs.approx_position_m,
+        first,
+        iono_inflate,
+        source_name,
+    })
 }
 
 /// The plan, with each fault's label (its spec as written) for the checks.
@@ -443,10 +524,25 @@ fn checked_fault_plan(
 }
 
 pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
-    let cfg = args.core_config();
+    let mut cfg = args.core_config();
     cfg.validate()
         .map_err(|e| anyhow::anyhow!("configuration: {e}"))?;
-    let (epochs, header, first) = prepare(args)?;
+    let p = prepare_full(args)?;
+    if p.iono_inflate {
+        cfg.sigma_model.iono_vertical_m *= receiver::NO_MODEL_IONO_FACTOR;
+    }
+    if args.reference == Reference::Header && p.header.is_none() {
+        let what = if args.obs.is_some() {
+            "its header has no APPROX POSITION XYZ (absent or zero)"
+        } else {
+            "the stream has no station position (RTCM 1005/1006)"
+        };
+        bail!(
+            "--reference header: {}: {what}; use --reference clean-mean (the mean of the clean run)",
+            p.source_name
+        );
+    }
+    let (epochs, header, first) = (p.epochs, p.header, p.first);
     let plan = checked_fault_plan(args, first, &epochs)?;
     let show = std::io::stderr().is_terminal();
     let total = if plan.is_empty() {
@@ -511,6 +607,11 @@ pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
 /// (a closed pipe is handled by the caller, crate::outcome).
 pub fn run(args: &ReplayArgs) -> Result<Tally> {
     check_output_folders(args)?;
+    if let Some((format, spec)) = receiver::source(args)? {
+        if spec.is_live() {
+            return receiver::run_live(args, format, &spec);
+        }
+    }
     if args.esq.any() {
         // Seed 003's own claims (docs/ESQ.md), built on its ARAIM modes:
         // their own per-epoch output; `--araim --esq` and `--araim --pca`
@@ -566,10 +667,14 @@ fn check_output_folders(args: &ReplayArgs) -> Result<()> {
 
 /// A run's name for titles: the observation file, the faults, the window.
 pub fn run_title(args: &ReplayArgs) -> String {
-    let file = args.obs.file_name().map_or_else(
-        || args.obs.display().to_string(),
-        |f| f.to_string_lossy().into(),
-    );
+    let src = args
+        .obs
+        .clone()
+        .or_else(|| args.rtcm3.as_ref().or(args.ubx.as_ref()).map(PathBuf::from))
+        .unwrap_or_default();
+    let file = src
+        .file_name()
+        .map_or_else(|| src.display().to_string(), |f| f.to_string_lossy().into());
     let mut faults: Vec<String> = args.faults.clone();
     if let Some(s) = &args.scenario {
         faults.push(format!("scenario {}", s.display()));
@@ -627,7 +732,14 @@ fn write_outputs(args: &ReplayArgs, out: &ReplayOutput) -> Result<()> {
     w.flush()?;
     let title = run_title(args);
     if let Some(p) = &args.pos {
-        export::write_pos(p, &out.records, &[args.obs.as_path(), args.nav.as_path()])?;
+        let inputs: Vec<PathBuf> = [&args.obs, &args.nav]
+            .into_iter()
+            .flatten()
+            .cloned()
+            .chain(args.rtcm3.iter().chain(&args.ubx).map(PathBuf::from))
+            .collect();
+        let inputs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
+        export::write_pos(p, &out.records, &inputs)?;
     }
     if let Some(p) = &args.csv {
         export::write_csv(p, &out.records)?;

@@ -1,0 +1,243 @@
+//! raim-recv: receiver streams as replay sources, on the host.
+//!
+//! A receiver's binary stream (RTCM 3 from a reference station or a
+//! receiver, u-blox UBX) is read from a file, a TCP connection or a serial
+//! port ([`source`]), framed and decoded ([`rtcm`], [`ubx`]) into the same
+//! types the RINEX reader gives (`raim_gnss::ObsEpoch`, `Kepler`
+//! ephemerides, Klobuchar coefficients), so that the replay runs them
+//! through the same corrections and monitors. Every frame that fails its
+//! checksum, every byte between frames and every message type not used is
+//! counted ([`Counts`]); a cut last message ends the stream cleanly.
+//! docs/RECEIVERS.md describes the formats, the sources and the choices.
+
+pub mod lnav;
+pub mod rtcm;
+pub mod source;
+pub mod ubx;
+
+use std::collections::BTreeMap;
+use std::io::Read;
+use std::path::PathBuf;
+
+use raim_core::SatId;
+use raim_gnss::ephemeris::Kepler;
+use raim_gnss::iono::Klobuchar;
+use raim_gnss::{NavData, ObsData, ObsEpoch};
+use serde::Serialize;
+
+/// The stream formats.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Format {
+    /// RTCM 3.x.
+    Rtcm3,
+    /// u-blox UBX.
+    Ubx,
+}
+
+impl Format {
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Rtcm3 => "RTCM 3",
+            Format::Ubx => "UBX",
+        }
+    }
+
+    /// The messages that carry ephemerides, for "no ephemeris" messages.
+    pub fn ephemeris_messages(self) -> &'static str {
+        match self {
+            Format::Rtcm3 => "RTCM 1019/1042/1044/1045/1046",
+            Format::Ubx => "UBX RXM-SFRB or RXM-SFRBX GPS subframes 1-3",
+        }
+    }
+
+    /// A fresh decoder for this format.
+    pub fn decoder(self) -> Box<dyn Decoder + Send> {
+        match self {
+            Format::Rtcm3 => Box::new(rtcm::Rtcm3::default()),
+            Format::Ubx => Box::new(ubx::Ubx::default()),
+        }
+    }
+}
+
+/// A GLONASS broadcast ephemeris as RTCM 1020 carries it (ICD GLONASS
+/// 2008 §4.4: PZ-90 state vector at tb, lunisolar acceleration, clock).
+/// Decoded and kept; the orbit is not integrated here.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct GlonassEphemeris {
+    pub slot: u8,
+    /// Frequency channel k (-7..+6).
+    pub frequency_channel: i16,
+    /// tb, minutes of the Moscow day.
+    pub tb_min: u32,
+    /// tk, seconds of the Moscow day.
+    pub tk_s: u32,
+    pub position_km: [f64; 3],
+    pub velocity_km_s: [f64; 3],
+    pub acceleration_km_s2: [f64; 3],
+    pub tau_n_s: f64,
+    pub gamma_n: f64,
+    pub health: u8,
+}
+
+/// One decoded item, in stream order.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Item {
+    /// A complete observation epoch (absolute GPS time).
+    Epoch(ObsEpoch),
+    /// A broadcast ephemeris (toc in absolute GPS time).
+    Ephemeris(Kepler),
+    /// GPS Klobuchar coefficients (LNAV subframe 4 page 18).
+    Klobuchar(Klobuchar),
+    /// The station's antenna reference point, ECEF, m (RTCM 1005/1006).
+    Station([f64; 3]),
+    /// A GLONASS ephemeris (RTCM 1020).
+    Glonass(GlonassEphemeris),
+}
+
+/// What a decoder read and what it skipped.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Counts {
+    /// Bytes read.
+    pub bytes: u64,
+    /// Frames whose checksum (CRC-24Q, Fletcher) holds.
+    pub frames: u64,
+    /// Frame-like headers whose checksum fails (skipped).
+    pub bad_checksum: u64,
+    /// Bytes outside any good frame (skipped).
+    pub garbage_bytes: u64,
+    /// Bytes of a last frame cut by the end of the stream.
+    pub truncated_tail_bytes: u64,
+    /// Good frames whose contents could not be decoded.
+    pub undecodable: u64,
+    /// Frames read but not used, by message type.
+    pub ignored: BTreeMap<String, u64>,
+    /// Observation epochs.
+    pub epochs: u64,
+    /// Ephemerides decoded.
+    pub ephemerides: u64,
+}
+
+impl std::fmt::Display for Counts {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} bytes, {} frames, {} epochs, {} ephemerides; skipped: {} bad checksums, {} bytes between frames, {} undecodable, {} bytes of a cut last frame",
+            self.bytes,
+            self.frames,
+            self.epochs,
+            self.ephemerides,
+            self.bad_checksum,
+            self.garbage_bytes,
+            self.undecodable,
+            self.truncated_tail_bytes
+        )?;
+        if !self.ignored.is_empty() {
+            let list: Vec<String> = self
+                .ignored
+                .iter()
+                .map(|(k, v)| format!("{k} x{v}"))
+                .collect();
+            write!(f, "; not used: {}", list.join(", "))?;
+        }
+        Ok(())
+    }
+}
+
+/// A stream decoder: bytes in, items out.
+pub trait Decoder {
+    /// Decode what `bytes` completes; a partial frame waits for more.
+    fn push(&mut self, bytes: &[u8], out: &mut Vec<Item>);
+    /// The end of the stream: a partial last frame is counted and dropped.
+    fn finish(&mut self, out: &mut Vec<Item>);
+    fn counts(&self) -> &Counts;
+    /// Epochs held until the stream's week is known (RTCM before its
+    /// first ephemeris).
+    fn waiting_epochs(&self) -> usize;
+}
+
+/// Add an ephemeris to `nav` unless the same one (toe, toc, issue of data)
+/// is there already; each satellite's list stays sorted by toc.
+pub fn add_ephemeris(nav: &mut NavData, k: Kepler) {
+    let list = nav
+        .ephemerides
+        .entry(SatId::new(k.system, k.prn))
+        .or_default();
+    let same =
+        |o: &Kepler| o.toe_sow_s == k.toe_sow_s && o.toc_gps_s == k.toc_gps_s && o.iod == k.iod;
+    if !list.iter().any(same) {
+        list.push(k);
+        list.sort_by(|a, b| a.toc_gps_s.total_cmp(&b.toc_gps_s));
+    }
+}
+
+/// A whole recording, decoded.
+#[derive(Debug, Clone)]
+pub struct Recording {
+    pub format: Format,
+    /// The epochs; `approx_position_m` is the station position (RTCM
+    /// 1005/1006) when the stream has one.
+    pub obs: ObsData,
+    /// Every ephemeris in the stream, and Klobuchar when broadcast.
+    pub nav: NavData,
+    pub glonass: Vec<GlonassEphemeris>,
+    pub counts: Counts,
+}
+
+/// Apply one item to the growing recording.
+pub fn apply(
+    item: Item,
+    obs: &mut ObsData,
+    nav: &mut NavData,
+    glonass: &mut Vec<GlonassEphemeris>,
+) {
+    match item {
+        Item::Epoch(e) => obs.epochs.push(e),
+        Item::Ephemeris(k) => add_ephemeris(nav, k),
+        Item::Klobuchar(kb) => nav.klobuchar = Some(kb),
+        Item::Station(p) => obs.approx_position_m = Some(p),
+        Item::Glonass(g) => glonass.push(g),
+    }
+}
+
+/// Read a whole stream to its end and decode it.
+pub fn read_all(
+    format: Format,
+    mut reader: impl Read,
+    name: PathBuf,
+) -> std::io::Result<Recording> {
+    let mut dec = format.decoder();
+    let mut obs = ObsData {
+        path: name,
+        approx_position_m: None,
+        epochs: Vec::new(),
+    };
+    let mut nav = NavData::default();
+    let mut glonass = Vec::new();
+    let mut items = Vec::new();
+    let mut chunk = vec![0u8; 1 << 16];
+    loop {
+        let n = match reader.read(&mut chunk) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        dec.push(chunk.get(..n).unwrap_or(&[]), &mut items);
+        for it in items.drain(..) {
+            apply(it, &mut obs, &mut nav, &mut glonass);
+        }
+    }
+    dec.finish(&mut items);
+    for it in items.drain(..) {
+        apply(it, &mut obs, &mut nav, &mut glonass);
+    }
+    obs.epochs
+        .sort_by(|a, b| a.time_gps_s.total_cmp(&b.time_gps_s));
+    Ok(Recording {
+        format,
+        obs,
+        nav,
+        glonass,
+        counts: dec.counts().clone(),
+    })
+}

@@ -1,0 +1,891 @@
+//! RTCM 3 (RTCM 10403.x) to observation epochs and broadcast ephemerides.
+//!
+//! The `rtcm-rs` crate checks each frame (preamble 0xD3, 10-bit length,
+//! CRC-24Q) and decodes its message; this module finds the frames in a
+//! byte stream, counts what it skips, and turns the messages into the
+//! `raim-gnss` types:
+//! - MSM4-MSM7 (GPS 1074-1077, GLONASS 1084-1087, Galileo 1094-1097, QZSS
+//!   1114-1117, BeiDou 1124-1127): pseudorange = (rough range + fine range)
+//!   x c / 1000 (RTCM 10403.3 §3.5.16, DF397 + DF398 + DF400/DF405), one
+//!   RINEX 3 code per signal ("C" + band + attribute: C1C, C2W, C2I, ...).
+//!   The epoch is complete at the message whose multiple-message bit
+//!   (DF393) is 0, or when the time changes.
+//! - Legacy GPS 1002/1004: L1 = DF011 + DF014 x 299,792.458 m, L2 = L1 +
+//!   DF017. 1001/1003 carry no ambiguity (the range modulo one
+//!   light-millisecond) and GLONASS 1009-1012 need GLONASS orbits: decoded
+//!   and counted, not used.
+//! - Ephemerides 1019 (GPS), 1042 (BeiDou), 1044 (QZSS), 1045 (Galileo
+//!   F/NAV), 1046 (Galileo I/NAV) to [`Kepler`]; 1020 (GLONASS) to
+//!   [`crate::GlonassEphemeris`].
+//! - Station 1005/1006: the antenna reference point, ECEF.
+//!
+//! RTCM epoch times are seconds of the week (BeiDou: of the BDT week, GPS
+//! = BDT + 14 s) and ephemeris weeks are modulo 1024 (GPS, QZSS), 4096
+//! (Galileo) or 8192 (BeiDou). The stream's own weeks are counted from its
+//! first epoch (one more at each wrap of the time of week), and the whole
+//! stream is placed in absolute GPS time by its first ephemeris: the 10-bit
+//! week is taken as the latest one not after this computer's clock, and the
+//! epoch nearest that ephemeris' toe fixes the week of the epochs. Epochs
+//! before the first ephemeris wait for it.
+
+use std::collections::BTreeMap;
+
+use raim_core::{SatId, System};
+use raim_gnss::ephemeris::{Kepler, BDT_MINUS_GPST_S, WEEK_S};
+use raim_gnss::rinex_io::CodeObs;
+use raim_gnss::ObsEpoch;
+use rtcm_rs::msg::message::Message;
+use rtcm_rs::MessageFrame;
+
+use crate::{Counts, Decoder, GlonassEphemeris, Item};
+
+/// One light-millisecond, m (RTCM DF011/DF014 unit and the MSM range unit).
+pub const LIGHT_MS_M: f64 = 299_792.458;
+/// Milliseconds in a week.
+const WEEK_MS: i64 = 604_800_000;
+/// GPS week of the Galileo week 0 (GST starts 1999-08-22 = GPS week 1024).
+const GST_WEEK0_GPS: i64 = 1024;
+/// GPS week of the BeiDou week 0 (BDT starts 2006-01-01 = GPS week 1356).
+const BDT_WEEK0_GPS: i64 = 1356;
+/// The `Counts::ignored` key of epochs that hold GLONASS MSM only.
+pub const GLONASS_ALONE: &str = "GLONASS-only MSM epoch (GLONASS time and orbits not modelled)";
+/// Largest RTCM 3 frame: 3 header bytes, 1023 payload bytes, 3 CRC bytes.
+const MAX_FRAME: usize = 1029;
+
+/// The GPS week now by this computer's clock (the latest week a stream's
+/// modulo-1024 week can be).
+pub fn gps_week_now() -> i64 {
+    let unix_s = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs_f64())
+        .unwrap_or(0.0);
+    // GPS epoch 1980-01-06 is Unix 315964800; leap seconds (< 1 min) do not
+    // move the week by more than a minute.
+    ((unix_s - 315_964_800.0) / WEEK_S).floor() as i64
+}
+
+/// The latest full week congruent to `week_mod` modulo `modulus` and not
+/// after `now_week` (a week number ahead of the clock is a past rollover).
+pub fn latest_week(week_mod: i64, modulus: i64, now_week: i64) -> i64 {
+    let mut w = now_week - (now_week - week_mod).rem_euclid(modulus);
+    if w < 0 {
+        w = week_mod;
+    }
+    w
+}
+
+/// An ephemeris as broadcast: weeks and times not yet anchored.
+#[derive(Debug, Clone, Copy)]
+struct PendingEph {
+    k: Kepler,
+    /// Full GPS week of the ephemeris' week field (BeiDou/Galileo converted).
+    week_gps: i64,
+    /// toc in seconds of that week in the GPS scale.
+    toc_gps_sow_s: f64,
+}
+
+/// An epoch being assembled: stream-relative week, GPS time of week (ms).
+#[derive(Debug, Default)]
+struct Open {
+    rel_week: i64,
+    tow_ms: i64,
+    sats: BTreeMap<SatId, Vec<CodeObs>>,
+}
+
+/// The RTCM 3 decoder (see the module documentation).
+#[derive(Debug)]
+pub struct Rtcm3 {
+    buf: Vec<u8>,
+    counts: Counts,
+    now_week: i64,
+    /// Stream-relative week of the latest epoch and its time of week.
+    last: Option<(i64, i64)>,
+    open: Option<Open>,
+    /// GLONASS MSM data waiting for the epoch it belongs to.
+    glonass_wait: BTreeMap<SatId, Vec<CodeObs>>,
+    /// Week of the stream's relative week 0, once anchored.
+    base_week: Option<i64>,
+    /// Epochs (relative week, tow ms, data) before the anchor.
+    waiting: Vec<Open>,
+    pending_eph: Vec<PendingEph>,
+}
+
+impl Default for Rtcm3 {
+    fn default() -> Self {
+        Self::new(gps_week_now())
+    }
+}
+
+impl Rtcm3 {
+    /// A decoder that resolves 10-bit weeks against `now_week`.
+    pub fn new(now_week: i64) -> Self {
+        Rtcm3 {
+            buf: Vec::new(),
+            counts: Counts::default(),
+            now_week,
+            last: None,
+            open: None,
+            glonass_wait: BTreeMap::new(),
+            base_week: None,
+            waiting: Vec::new(),
+            pending_eph: Vec::new(),
+        }
+    }
+
+    fn frames(&mut self, out: &mut Vec<Item>, at_end: bool) {
+        let mut i = 0;
+        let buf = std::mem::take(&mut self.buf);
+        while i < buf.len() {
+            let Some(b) = buf.get(i..) else { break };
+            if b.first() != Some(&0xD3) {
+                self.counts.garbage_bytes += 1;
+                i += 1;
+                continue;
+            }
+            match MessageFrame::new(b) {
+                Ok(f) => {
+                    self.counts.frames += 1;
+                    let len = f.frame_len();
+                    let number = f.message_number();
+                    let msg = f.get_message();
+                    self.message(number, msg, out);
+                    i += len.max(1);
+                }
+                Err(rtcm_rs::rtcm_error::RtcmError::Incomplete) => {
+                    if at_end {
+                        self.counts.truncated_tail_bytes += b.len() as u64;
+                        i = buf.len();
+                    }
+                    break;
+                }
+                Err(_) => {
+                    // A header that looks like a frame (6 reserved bits 0,
+                    // the whole frame present) whose CRC fails is a bad
+                    // frame; anything else is a stray 0xD3.
+                    let plausible = b.get(1).is_some_and(|h| h & 0xFC == 0) && b.len() >= 6 && {
+                        let n = ((usize::from(b[1] & 3)) << 8) | usize::from(b[2]);
+                        b.len() >= n + 6
+                    };
+                    if plausible {
+                        self.counts.bad_checksum += 1;
+                    }
+                    self.counts.garbage_bytes += 1;
+                    i += 1;
+                }
+            }
+        }
+        self.buf = buf.get(i..).map(<[u8]>::to_vec).unwrap_or_default();
+        // A buffer that cannot hold a frame start any more is garbage.
+        if self.buf.len() > 4 * MAX_FRAME {
+            let drop = self.buf.len() - MAX_FRAME;
+            self.counts.garbage_bytes += drop as u64;
+            self.buf.drain(..drop);
+        }
+    }
+
+    fn ignore(&mut self, what: String) {
+        *self.counts.ignored.entry(what).or_default() += 1;
+    }
+
+    fn message(&mut self, number: Option<u16>, msg: Message, out: &mut Vec<Item>) {
+        let n = number.unwrap_or(0);
+        macro_rules! msm {
+            ($m:expr, $time:expr, $sys:expr, $fine:ident) => {{
+                msm!($m, $time, $sys, $fine, None)
+            }};
+            ($m:expr, $time:expr, $sys:expr, $fine:ident, $alt:expr) => {{
+                let time = $time;
+                let m = &$m;
+                let rough: BTreeMap<u8, f64> = m
+                    .data_segment
+                    .satellite_data
+                    .iter()
+                    .filter_map(|s| {
+                        s.gnss_satellite_rough_range_integer_ms.map(|i| {
+                            (
+                                s.satellite_id,
+                                fx(i) + s.gnss_satellite_rough_range_mod1ms_ms,
+                            )
+                        })
+                    })
+                    .collect();
+                let mut obs: Vec<(SatId, CodeObs)> = Vec::new();
+                for sig in m.data_segment.signal_data.iter() {
+                    let (Some(r), Some(fine)) = (rough.get(&sig.satellite_id), sig.$fine) else {
+                        continue;
+                    };
+                    let code = format!("C{}{}", sig.signal_id.band(), sig.signal_id.attribute());
+                    obs.push((
+                        SatId::new($sys, sig.satellite_id),
+                        CodeObs {
+                            code,
+                            value_m: (r + fine) * LIGHT_MS_M,
+                        },
+                    ));
+                }
+                self.msm(time, $alt, obs, m.msm_multiple_message_flag == 1, out);
+            }};
+        }
+        let gps = |ms: u32| Some(i64::from(ms));
+        let bds = |ms: u32| Some(i64::from(ms) - (BDT_MINUS_GPST_S * 1000.0) as i64);
+        let bds_as_gps = |ms: u32| i64::from(ms);
+        match msg {
+            Message::Msg1074(m) => msm!(
+                m,
+                gps(m.gps_epoch_time_ms),
+                System::Gps,
+                gnss_signal_fine_pseudorange_ms
+            ),
+            Message::Msg1075(m) => msm!(
+                m,
+                gps(m.gps_epoch_time_ms),
+                System::Gps,
+                gnss_signal_fine_pseudorange_ms
+            ),
+            Message::Msg1076(m) => msm!(
+                m,
+                gps(m.gps_epoch_time_ms),
+                System::Gps,
+                gnss_signal_fine_pseudorange_ext_ms
+            ),
+            Message::Msg1077(m) => msm!(
+                m,
+                gps(m.gps_epoch_time_ms),
+                System::Gps,
+                gnss_signal_fine_pseudorange_ext_ms
+            ),
+            Message::Msg1084(m) => msm!(m, None, System::Glonass, gnss_signal_fine_pseudorange_ms),
+            Message::Msg1085(m) => msm!(m, None, System::Glonass, gnss_signal_fine_pseudorange_ms),
+            Message::Msg1086(m) => msm!(
+                m,
+                None,
+                System::Glonass,
+                gnss_signal_fine_pseudorange_ext_ms
+            ),
+            Message::Msg1087(m) => msm!(
+                m,
+                None,
+                System::Glonass,
+                gnss_signal_fine_pseudorange_ext_ms
+            ),
+            Message::Msg1094(m) => msm!(
+                m,
+                gps(m.gal_epoch_time_ms),
+                System::Galileo,
+                gnss_signal_fine_pseudorange_ms
+            ),
+            Message::Msg1095(m) => msm!(
+                m,
+                gps(m.gal_epoch_time_ms),
+                System::Galileo,
+                gnss_signal_fine_pseudorange_ms
+            ),
+            Message::Msg1096(m) => msm!(
+                m,
+                gps(m.gal_epoch_time_ms),
+                System::Galileo,
+                gnss_signal_fine_pseudorange_ext_ms
+            ),
+            Message::Msg1097(m) => msm!(
+                m,
+                gps(m.gal_epoch_time_ms),
+                System::Galileo,
+                gnss_signal_fine_pseudorange_ext_ms
+            ),
+            Message::Msg1114(m) => msm!(
+                m,
+                gps(m.qzss_epoch_time_ms),
+                System::Qzss,
+                gnss_signal_fine_pseudorange_ms
+            ),
+            Message::Msg1115(m) => msm!(
+                m,
+                gps(m.qzss_epoch_time_ms),
+                System::Qzss,
+                gnss_signal_fine_pseudorange_ms
+            ),
+            Message::Msg1116(m) => msm!(
+                m,
+                gps(m.qzss_epoch_time_ms),
+                System::Qzss,
+                gnss_signal_fine_pseudorange_ext_ms
+            ),
+            Message::Msg1117(m) => msm!(
+                m,
+                gps(m.qzss_epoch_time_ms),
+                System::Qzss,
+                gnss_signal_fine_pseudorange_ext_ms
+            ),
+            Message::Msg1124(m) => msm!(
+                m,
+                bds(m.bds_epoch_time_ms),
+                System::Beidou,
+                gnss_signal_fine_pseudorange_ms,
+                Some(bds_as_gps(m.bds_epoch_time_ms))
+            ),
+            Message::Msg1125(m) => msm!(
+                m,
+                bds(m.bds_epoch_time_ms),
+                System::Beidou,
+                gnss_signal_fine_pseudorange_ms,
+                Some(bds_as_gps(m.bds_epoch_time_ms))
+            ),
+            Message::Msg1126(m) => msm!(
+                m,
+                bds(m.bds_epoch_time_ms),
+                System::Beidou,
+                gnss_signal_fine_pseudorange_ext_ms,
+                Some(bds_as_gps(m.bds_epoch_time_ms))
+            ),
+            Message::Msg1127(m) => msm!(
+                m,
+                bds(m.bds_epoch_time_ms),
+                System::Beidou,
+                gnss_signal_fine_pseudorange_ext_ms,
+                Some(bds_as_gps(m.bds_epoch_time_ms))
+            ),
+            Message::Msg1002(m) => {
+                let mut obs = Vec::new();
+                for s in m.satellites.iter() {
+                    if let (Some(p), amb) = (s.l1_pseudorange_m, s.l1_pseudorange_amb_m) {
+                        let code = if s.gps_l1_code_ind == 0 { "C1C" } else { "C1W" };
+                        obs.push((
+                            SatId::new(System::Gps, s.gps_satellite_id),
+                            CodeObs {
+                                code: code.into(),
+                                value_m: p + amb,
+                            },
+                        ));
+                    }
+                }
+                self.msm(
+                    gps(m.gps_epoch_time_ms),
+                    None,
+                    obs,
+                    m.synchronous_gnss_msg_flag == 1,
+                    out,
+                );
+            }
+            Message::Msg1004(m) => {
+                let mut obs = Vec::new();
+                for s in m.satellites.iter() {
+                    let (Some(p), amb) = (s.l1_pseudorange_m, s.l1_pseudorange_amb_m) else {
+                        continue;
+                    };
+                    let id = SatId::new(System::Gps, s.gps_satellite_id);
+                    let l1 = p + amb;
+                    let code = if s.gps_l1_code_ind == 0 { "C1C" } else { "C1W" };
+                    obs.push((
+                        id,
+                        CodeObs {
+                            code: code.into(),
+                            value_m: l1,
+                        },
+                    ));
+                    if let Some(d) = s.l2_l1_pseudorange_diff_m {
+                        let code = ["C2X", "C2P", "C2D", "C2W"]
+                            .get(usize::from(s.gps_l2_code_ind))
+                            .copied()
+                            .unwrap_or("C2W");
+                        obs.push((
+                            id,
+                            CodeObs {
+                                code: code.into(),
+                                value_m: l1 + fx(d),
+                            },
+                        ));
+                    }
+                }
+                self.msm(
+                    gps(m.gps_epoch_time_ms),
+                    None,
+                    obs,
+                    m.synchronous_gnss_msg_flag == 1,
+                    out,
+                );
+            }
+            Message::Msg1019(m) => {
+                let week = latest_week(i64::from(m.gps_week_number), 1024, self.now_week);
+                let k = kepler(
+                    System::Gps,
+                    m.gps_satellite_id,
+                    &KeplerFields {
+                        toc_s: fx(m.toc_s),
+                        toe_s: fx(m.toe_s),
+                        af0: fx(m.af0_s),
+                        af1: fx(m.af1_s_s),
+                        af2: fx(m.af2_s_s2),
+                        sqrt_a: fx(m.sqrt_a_sqrt_m),
+                        e: fx(m.eccentricity),
+                        i0_sc: fx(m.i0_sc),
+                        omega0_sc: fx(m.omega0_sc),
+                        omega_sc: fx(m.omega_sc),
+                        m0_sc: fx(m.m0_sc),
+                        delta_n_sc: fx(m.delta_n_sc_s),
+                        omega_dot_sc: fx(m.omegadot_sc_s),
+                        idot_sc: fx(m.idot_sc_s),
+                        cuc: fx(m.cuc_rad),
+                        cus: fx(m.cus_rad),
+                        crc: fx(m.crc_m),
+                        crs: fx(m.crs_m),
+                        cic: fx(m.cic_rad),
+                        cis: fx(m.cis_rad),
+                        tgd: fx(m.tgd_s),
+                        tgd2: 0.0,
+                        health: u32::from(m.sv_health_ind),
+                        iod: u32::from(m.iode),
+                    },
+                );
+                self.ephemeris(k, week, fx(m.toc_s), out);
+            }
+            Message::Msg1044(m) => {
+                let week = latest_week(i64::from(m.qzss_week_number), 1024, self.now_week);
+                let k = kepler(
+                    System::Qzss,
+                    m.qzss_satellite_id,
+                    &KeplerFields {
+                        toc_s: fx(m.toc_s),
+                        toe_s: fx(m.toe_s),
+                        af0: fx(m.af0_s),
+                        af1: fx(m.af1_s_s),
+                        af2: fx(m.af2_s_s2),
+                        sqrt_a: fx(m.sqrt_a_sqrt_m),
+                        e: fx(m.eccentricity),
+                        i0_sc: fx(m.i0_sc),
+                        omega0_sc: fx(m.omega0_sc),
+                        omega_sc: fx(m.omega_sc),
+                        m0_sc: fx(m.m0_sc),
+                        delta_n_sc: fx(m.delta_n_sc_s),
+                        omega_dot_sc: fx(m.omegadot_sc_s),
+                        idot_sc: fx(m.idot_sc_s),
+                        cuc: fx(m.cuc_rad),
+                        cus: fx(m.cus_rad),
+                        crc: fx(m.crc_m),
+                        crs: fx(m.crs_m),
+                        cic: fx(m.cic_rad),
+                        cis: fx(m.cis_rad),
+                        tgd: fx(m.tgd_s),
+                        tgd2: 0.0,
+                        health: u32::from(m.sv_health_ind),
+                        iod: u32::from(m.iode),
+                    },
+                );
+                self.ephemeris(k, week, fx(m.toc_s), out);
+            }
+            Message::Msg1045(m) => {
+                let week = latest_week(
+                    i64::from(m.gal_week_number),
+                    4096,
+                    self.now_week - GST_WEEK0_GPS,
+                ) + GST_WEEK0_GPS;
+                let bgd = fx(m.bgd_e1_e5a_s);
+                let k = kepler(
+                    System::Galileo,
+                    m.gal_satellite_id,
+                    &KeplerFields {
+                        toc_s: fx(m.toc_s),
+                        toe_s: fx(m.toe_s),
+                        af0: fx(m.af0_s),
+                        af1: fx(m.af1_s_s),
+                        af2: fx(m.af2_s_s2),
+                        sqrt_a: fx(m.sqrt_a_sqrt_m),
+                        e: fx(m.eccentricity),
+                        i0_sc: fx(m.i0_sc),
+                        omega0_sc: fx(m.omega0_sc),
+                        omega_sc: fx(m.omega_sc),
+                        m0_sc: fx(m.m0_sc),
+                        delta_n_sc: fx(m.delta_n_sc_s),
+                        omega_dot_sc: fx(m.omegadot_sc_s),
+                        idot_sc: fx(m.idot_sc_s),
+                        cuc: fx(m.cuc_rad),
+                        cus: fx(m.cus_rad),
+                        crc: fx(m.crc_m),
+                        crs: fx(m.crs_m),
+                        cic: fx(m.cic_rad),
+                        cis: fx(m.cis_rad),
+                        // F/NAV's clock is the E1/E5a combination's: BGD(E1,E5a)
+                        // for E1 alone, none for the E1/E5a pair.
+                        tgd: bgd,
+                        tgd2: bgd,
+                        health: u32::from(m.e5a_sig_health_ind)
+                            | (u32::from(m.e5a_data_validity_flag) << 2),
+                        iod: u32::from(m.iodnav),
+                    },
+                );
+                self.ephemeris(k, week, fx(m.toc_s), out);
+            }
+            Message::Msg1046(m) => {
+                let week = latest_week(
+                    i64::from(m.gal_week_number),
+                    4096,
+                    self.now_week - GST_WEEK0_GPS,
+                ) + GST_WEEK0_GPS;
+                let k = kepler(
+                    System::Galileo,
+                    m.gal_satellite_id,
+                    &KeplerFields {
+                        toc_s: fx(m.toc_s),
+                        toe_s: fx(m.toe_s),
+                        af0: fx(m.af0_s),
+                        af1: fx(m.af1_s_s),
+                        af2: fx(m.af2_s_s2),
+                        sqrt_a: fx(m.sqrt_a_sqrt_m),
+                        e: fx(m.eccentricity),
+                        i0_sc: fx(m.i0_sc),
+                        omega0_sc: fx(m.omega0_sc),
+                        omega_sc: fx(m.omega_sc),
+                        m0_sc: fx(m.m0_sc),
+                        delta_n_sc: fx(m.delta_n_sc_s),
+                        omega_dot_sc: fx(m.omegadot_sc_s),
+                        idot_sc: fx(m.idot_sc_s),
+                        cuc: fx(m.cuc_rad),
+                        cus: fx(m.cus_rad),
+                        crc: fx(m.crc_m),
+                        crs: fx(m.crs_m),
+                        cic: fx(m.cic_rad),
+                        cis: fx(m.cis_rad),
+                        tgd: fx(m.bgd_e1_e5b_s),
+                        tgd2: fx(m.bgd_e1_e5a_s),
+                        health: u32::from(m.e1_b_sig_health_ind)
+                            | (u32::from(m.e1_b_data_validity_flag) << 2)
+                            | (u32::from(m.e5b_sig_health_ind) << 3)
+                            | (u32::from(m.e5b_data_validity_flag) << 5),
+                        iod: u32::from(m.iodnav),
+                    },
+                );
+                self.ephemeris(k, week, fx(m.toc_s), out);
+            }
+            Message::Msg1042(m) => {
+                let week = latest_week(
+                    i64::from(m.bds_week_number),
+                    8192,
+                    self.now_week - BDT_WEEK0_GPS,
+                ) + BDT_WEEK0_GPS;
+                let k = kepler(
+                    System::Beidou,
+                    m.bds_satellite_id,
+                    &KeplerFields {
+                        toc_s: fx(m.toc_s),
+                        toe_s: fx(m.toe_s),
+                        af0: fx(m.a0_s),
+                        af1: fx(m.a1_s_s),
+                        af2: fx(m.a2_s_s2),
+                        sqrt_a: fx(m.sqrt_a_sqrt_m),
+                        e: fx(m.eccentricity),
+                        i0_sc: fx(m.i0_sc),
+                        omega0_sc: fx(m.omega0_sc),
+                        omega_sc: fx(m.omega_sc),
+                        m0_sc: fx(m.m0_sc),
+                        delta_n_sc: fx(m.delta_n_sc_s),
+                        omega_dot_sc: fx(m.omegadot_sc_s),
+                        idot_sc: fx(m.idot_sc_s),
+                        cuc: fx(m.cuc_rad),
+                        cus: fx(m.cus_rad),
+                        crc: fx(m.crc_m),
+                        crs: fx(m.crs_m),
+                        cic: fx(m.cic_rad),
+                        cis: fx(m.cis_rad),
+                        tgd: fx(m.tgd1_s),
+                        tgd2: 0.0,
+                        health: u32::from(m.sv_health_flag),
+                        iod: u32::from(m.aode),
+                    },
+                );
+                // BDT seconds of week to GPS: + 14 s.
+                self.ephemeris(k, week, fx(m.toc_s) - BDT_MINUS_GPST_S, out);
+            }
+            Message::Msg1020(m) => {
+                self.counts.ephemerides += 1;
+                out.push(Item::Glonass(GlonassEphemeris {
+                    slot: m.glo_satellite_id,
+                    frequency_channel: i16::from(m.glo_satellite_freq_chan_number) - 7,
+                    tb_min: u32::from(m.tb_min) * 15,
+                    tk_s: u32::from(m.tk_h) * 3600 + u32::from(m.tk_min) * 60 + u32::from(m.tk_s),
+                    position_km: [m.xn_km, m.yn_km, m.zn_km],
+                    velocity_km_s: [
+                        m.xn_first_deriv_km_s,
+                        m.yn_first_deriv_km_s,
+                        m.zn_first_deriv_km_s,
+                    ],
+                    acceleration_km_s2: [
+                        fx(m.xn_second_deriv_km_s2),
+                        fx(m.yn_second_deriv_km_s2),
+                        fx(m.zn_second_deriv_km_s2),
+                    ],
+                    tau_n_s: m.tau_n_s,
+                    gamma_n: fx(m.gamma_n),
+                    health: m.glo_eph_health_flag,
+                }));
+            }
+            Message::Msg1005(m) => out.push(Item::Station([
+                m.antenna_ref_point_ecef_x_m,
+                m.antenna_ref_point_ecef_y_m,
+                m.antenna_ref_point_ecef_z_m,
+            ])),
+            Message::Msg1006(m) => out.push(Item::Station([
+                m.antenna_ref_point_ecef_x_m,
+                m.antenna_ref_point_ecef_y_m,
+                m.antenna_ref_point_ecef_z_m,
+            ])),
+            Message::Corrupt => self.counts.undecodable += 1,
+            Message::Msg1001(_) | Message::Msg1003(_) => {
+                self.ignore(format!("{n} (GPS L1/L2 without the millisecond ambiguity)"))
+            }
+            Message::Msg1009(_)
+            | Message::Msg1010(_)
+            | Message::Msg1011(_)
+            | Message::Msg1012(_) => self.ignore(format!("{n} (GLONASS legacy observations)")),
+            _ => self.ignore(format!("{n}")),
+        }
+    }
+
+    /// Add MSM (or legacy) data of one system at GPS time of week `tow_ms`
+    /// (None: GLONASS, whose time needs the leap seconds: joins the epoch
+    /// open at that point); `more` is the multiple-message bit.
+    fn msm(
+        &mut self,
+        tow_ms: Option<i64>,
+        alt_tow_ms: Option<i64>,
+        obs: Vec<(SatId, CodeObs)>,
+        more: bool,
+        out: &mut Vec<Item>,
+    ) {
+        let Some(tow_ms) = tow_ms else {
+            let alone = self.open.is_none();
+            // A satellite already waiting: the waiting data was an epoch
+            // of its own (GLONASS alone, its multiple-message bit set).
+            if alone && obs.iter().any(|(id, _)| self.glonass_wait.contains_key(id)) {
+                self.glonass_wait.clear();
+                self.ignore(GLONASS_ALONE.into());
+            }
+            let target = match self.open.as_mut() {
+                Some(o) => &mut o.sats,
+                None => &mut self.glonass_wait,
+            };
+            for (id, o) in obs {
+                target.entry(id).or_default().push(o);
+            }
+            if !more && alone {
+                // The epoch's last message, and no GPS-timed message in
+                // it: an epoch of GLONASS alone, which has no GPS time here.
+                self.glonass_wait.clear();
+                self.ignore(GLONASS_ALONE.into());
+            } else if !more {
+                self.close(out);
+            }
+            return;
+        };
+        let mut tow_ms = tow_ms.rem_euclid(WEEK_MS);
+        // BeiDou MSM written before RTCM 3.2 settled on BDT carry GPS time:
+        // the same epoch as the open one under either time tag.
+        if let (Some(o), Some(alt)) = (self.open.as_ref(), alt_tow_ms) {
+            if o.tow_ms == alt.rem_euclid(WEEK_MS) {
+                tow_ms = o.tow_ms;
+            }
+        }
+        if self.open.as_ref().is_some_and(|o| o.tow_ms != tow_ms) {
+            self.close(out);
+        }
+        if self.open.is_none() {
+            let rel_week = match self.last {
+                Some((w, t)) if tow_ms < t - WEEK_MS / 2 => w + 1,
+                Some((w, _)) => w,
+                None => 0,
+            };
+            self.last = Some((rel_week, tow_ms));
+            let mut o = Open {
+                rel_week,
+                tow_ms,
+                sats: BTreeMap::new(),
+            };
+            o.sats.append(&mut self.glonass_wait);
+            self.open = Some(o);
+        }
+        if let Some(o) = self.open.as_mut() {
+            for (id, c) in obs {
+                o.sats.entry(id).or_default().push(c);
+            }
+        }
+        if !more {
+            self.close(out);
+        }
+    }
+
+    fn close(&mut self, out: &mut Vec<Item>) {
+        if let Some(o) = self.open.take() {
+            self.counts.epochs += 1;
+            match self.base_week {
+                Some(b) => out.push(Item::Epoch(absolute(b, o))),
+                None => self.waiting.push(o),
+            }
+            self.try_anchor(out);
+        }
+    }
+
+    fn ephemeris(&mut self, k: Kepler, week_gps: i64, toc_gps_sow_s: f64, out: &mut Vec<Item>) {
+        self.counts.ephemerides += 1;
+        self.pending_eph.push(PendingEph {
+            k,
+            week_gps,
+            toc_gps_sow_s,
+        });
+        self.try_anchor(out);
+    }
+
+    /// Fix the stream's week from the first ephemeris and the latest epoch,
+    /// then release what waited.
+    fn try_anchor(&mut self, out: &mut Vec<Item>) {
+        if self.base_week.is_none() {
+            let (Some(first), Some((rel, tow_ms))) = (self.pending_eph.first(), self.last) else {
+                return;
+            };
+            let toe_gps_s = first.week_gps as f64 * WEEK_S + first.k.toe_sow_s
+                - if first.k.system == System::Beidou {
+                    BDT_MINUS_GPST_S
+                } else {
+                    0.0
+                };
+            let tow_s = tow_ms as f64 / 1000.0;
+            let w = [first.week_gps - 1, first.week_gps, first.week_gps + 1]
+                .into_iter()
+                .min_by(|a, b| {
+                    let da = (*a as f64 * WEEK_S + tow_s - toe_gps_s).abs();
+                    let db = (*b as f64 * WEEK_S + tow_s - toe_gps_s).abs();
+                    da.total_cmp(&db)
+                })
+                .unwrap_or(first.week_gps);
+            self.base_week = Some(w - rel);
+        }
+        let Some(base) = self.base_week else { return };
+        for mut p in self.pending_eph.drain(..) {
+            // toc within half a week of toe.
+            let toe = p.week_gps as f64 * WEEK_S + p.k.toe_sow_s;
+            let mut toc = p.week_gps as f64 * WEEK_S + p.toc_gps_sow_s;
+            if toc - toe > WEEK_S / 2.0 {
+                toc -= WEEK_S;
+            } else if toe - toc > WEEK_S / 2.0 {
+                toc += WEEK_S;
+            }
+            p.k.toc_gps_s = toc;
+            out.push(Item::Ephemeris(p.k));
+        }
+        for o in self.waiting.drain(..) {
+            out.push(Item::Epoch(absolute(base, o)));
+        }
+    }
+}
+
+/// A field of any numeric width as f64 (the crate's fields are f32 or f64
+/// by their resolution).
+fn fx<T: Into<f64>>(x: T) -> f64 {
+    x.into()
+}
+
+fn absolute(base_week: i64, o: Open) -> ObsEpoch {
+    ObsEpoch {
+        time_gps_s: (base_week + o.rel_week) as f64 * WEEK_S + o.tow_ms as f64 / 1000.0,
+        sats: o.sats,
+    }
+}
+
+/// The broadcast fields common to the Keplerian messages (angles in
+/// semicircles as sent).
+struct KeplerFields {
+    toc_s: f64,
+    toe_s: f64,
+    af0: f64,
+    af1: f64,
+    af2: f64,
+    sqrt_a: f64,
+    e: f64,
+    i0_sc: f64,
+    omega0_sc: f64,
+    omega_sc: f64,
+    m0_sc: f64,
+    delta_n_sc: f64,
+    omega_dot_sc: f64,
+    idot_sc: f64,
+    cuc: f64,
+    cus: f64,
+    crc: f64,
+    crs: f64,
+    cic: f64,
+    cis: f64,
+    tgd: f64,
+    tgd2: f64,
+    health: u32,
+    iod: u32,
+}
+
+fn kepler(system: System, prn: u8, f: &KeplerFields) -> Kepler {
+    let pi = std::f64::consts::PI;
+    let _ = f.toc_s;
+    Kepler {
+        system,
+        prn,
+        toc_gps_s: 0.0,
+        toe_sow_s: f.toe_s,
+        af0_s: f.af0,
+        af1_s_s: f.af1,
+        af2_s_s2: f.af2,
+        sqrt_a_m05: f.sqrt_a,
+        e: f.e,
+        i0_rad: f.i0_sc * pi,
+        omega0_rad: f.omega0_sc * pi,
+        omega_rad: f.omega_sc * pi,
+        m0_rad: f.m0_sc * pi,
+        delta_n_rad_s: f.delta_n_sc * pi,
+        omega_dot_rad_s: f.omega_dot_sc * pi,
+        idot_rad_s: f.idot_sc * pi,
+        cuc_rad: f.cuc,
+        cus_rad: f.cus,
+        crc_m: f.crc,
+        crs_m: f.crs,
+        cic_rad: f.cic,
+        cis_rad: f.cis,
+        group_delay_s: f.tgd,
+        group_delay_e5a_s: f.tgd2,
+        health: f.health,
+        iod: f.iod,
+    }
+}
+
+impl Decoder for Rtcm3 {
+    fn push(&mut self, bytes: &[u8], out: &mut Vec<Item>) {
+        self.counts.bytes += bytes.len() as u64;
+        self.buf.extend_from_slice(bytes);
+        self.frames(out, false);
+    }
+
+    fn finish(&mut self, out: &mut Vec<Item>) {
+        self.frames(out, true);
+        self.counts.truncated_tail_bytes += self.buf.len() as u64;
+        self.buf.clear();
+        self.close(out);
+        if !self.glonass_wait.is_empty() {
+            self.glonass_wait.clear();
+            self.ignore(GLONASS_ALONE.into());
+        }
+    }
+
+    fn counts(&self) -> &Counts {
+        &self.counts
+    }
+
+    fn waiting_epochs(&self) -> usize {
+        self.waiting.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ten_bit_weeks_are_the_latest_not_after_the_clock() {
+        // 2026 (week ~2400): week 685 mod 1024 is 1709 (2012), not 2733.
+        assert_eq!(latest_week(685, 1024, 2400), 1709);
+        assert_eq!(latest_week(352, 1024, 2400), 2400);
+        assert_eq!(latest_week(353, 1024, 2400), 1377);
+    }
+}

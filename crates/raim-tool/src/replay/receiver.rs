@@ -1,0 +1,391 @@
+//! Receiver streams as replay sources (`--rtcm3 SRC`, `--ubx SRC`;
+//! docs/RECEIVERS.md): a file is decoded whole into the same observation
+//! and navigation data a RINEX pair gives; a live source (TCP, serial) is
+//! run epoch by epoch as it arrives.
+//!
+//! Ionosphere: a receiver stream has no ionospheric model unless it
+//! carries the GPS LNAV subframe 4 page 18 (UBX). So:
+//! - where a satellite has two frequencies, the iono-free combination is
+//!   used (the default codes below prefer pairs), and its sigma is the
+//!   sigma model's with no ionospheric term and the noise and multipath
+//!   terms amplified by the combination's factor (2.98 for L1/L2,
+//!   `raim_gnss::ranging::iono_free_noise_factor`);
+//! - a single-frequency satellite with no Klobuchar coefficients is
+//!   uncorrected, and its residual-ionosphere sigma is doubled: Klobuchar
+//!   is designed to remove at least 50 % of the delay (IS-GPS-200
+//!   20.3.3.5.2.5), so the uncorrected delay is at most twice the
+//!   corrected model's residual.
+
+use std::collections::BTreeMap;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Result};
+use raim_core::araim::error_model::{multipath_sigma_m, tropo_sigma_m};
+use raim_core::sigma::SigmaModel;
+use raim_core::{Config, Epoch, System};
+use raim_gnss::faults::FaultPlan;
+use raim_gnss::ranging::{iono_free_noise_factor, prepare_epoch, PreparedEpoch, RangingOptions};
+use raim_gnss::{NavData, ObsData};
+use raim_recv::source::Spec;
+use raim_recv::{Format, Item, Recording};
+
+use super::engine::Engine;
+use super::record::EpochRecord;
+use super::{NmeaMode, ReplayArgs};
+
+/// Factor on the residual-ionosphere sigma when no ionospheric model is
+/// broadcast: Klobuchar's design goal is a >= 50 % RMS reduction, so the
+/// uncorrected delay's sigma is at most 1 / (1 - 0.5) times the residual's.
+pub const NO_MODEL_IONO_FACTOR: f64 = 2.0;
+
+/// The stream the arguments name, if any.
+pub fn source(args: &ReplayArgs) -> Result<Option<(Format, Spec)>> {
+    Ok(match (&args.rtcm3, &args.ubx) {
+        (Some(s), _) => Some((Format::Rtcm3, Spec::parse(s)?)),
+        (None, Some(s)) => Some((Format::Ubx, Spec::parse(s)?)),
+        (None, None) => None,
+    })
+}
+
+/// Code preferences for receiver streams: iono-free pairs first (the
+/// stream has no ionospheric model), then the single codes of RINEX.
+pub fn receiver_codes() -> BTreeMap<System, Vec<String>> {
+    let v = |c: &[&str]| c.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    BTreeMap::from([
+        (
+            System::Gps,
+            v(&[
+                "C1C+C2W", "C1C+C2L", "C1C+C2X", "C1C+C2S", "C1C+C5Q", "C1C+C5X", "C1C", "C1W",
+            ]),
+        ),
+        (
+            System::Galileo,
+            v(&[
+                "C1C+C5Q", "C1X+C5X", "C1C+C7Q", "C1X+C7X", "C1C", "C1X", "C1B",
+            ]),
+        ),
+        (System::Beidou, v(&["C2I+C6I", "C2I+C7I", "C2I", "C1I"])),
+        (
+            System::Qzss,
+            v(&["C1C+C2L", "C1C+C2X", "C1C+C2S", "C1C+C5Q", "C1C"]),
+        ),
+    ])
+}
+
+/// The sigma of an iono-free combination with noise factor `factor` at
+/// elevation `el_rad`: the sigma model's terms with no ionosphere, the
+/// receiver noise and multipath amplified (they are independent on the two
+/// frequencies; SPEC §1 sigma model, DO-229D J.2.4 terms).
+pub fn iono_free_sigma_m(model: &SigmaModel, el_rad: f64, factor: f64) -> f64 {
+    let el = el_rad.max(model.min_elevation_rad);
+    let tropo = tropo_sigma_m(el.sin());
+    let mp = multipath_sigma_m(el.to_degrees());
+    (model.ura_m.powi(2)
+        + tropo * tropo
+        + factor * factor * (mp * mp + model.noise_m * model.noise_m))
+        .sqrt()
+}
+
+/// Set each iono-free observation's own sigma (see the module docs).
+pub fn set_sigmas(epoch: &mut PreparedEpoch, model: &SigmaModel) {
+    for s in &mut epoch.sats {
+        if let Some(f) = iono_free_noise_factor(s.obs.id.system, &s.code) {
+            s.obs.sigma_m = Some(iono_free_sigma_m(model, s.elevation_rad, f));
+        }
+    }
+}
+
+/// The monitor's configuration for a stream: the residual-ionosphere sigma
+/// doubled when single-frequency satellites are used with no Klobuchar
+/// model (unless `--iono-vertical-m` was given).
+pub fn adjust_config(cfg: &mut Config, args: &ReplayArgs, nav: &NavData, epochs: &[PreparedEpoch]) {
+    let single_uncorrected = nav.klobuchar.is_none()
+        && epochs
+            .iter()
+            .flat_map(|e| &e.sats)
+            .any(|s| !s.code.contains('+'));
+    if single_uncorrected && args.iono_vertical_m.is_none() {
+        cfg.sigma_model.iono_vertical_m *= NO_MODEL_IONO_FACTOR;
+    }
+}
+
+/// What a file looks like, for the messages: RTCM 3, UBX, RINEX or other.
+fn sniff(bytes: &[u8]) -> &'static str {
+    let head = bytes.get(..bytes.len().min(4096)).unwrap_or(&[]);
+    let first_line = head.split(|&b| b == b'\n').next().unwrap_or(&[]);
+    if String::from_utf8_lossy(first_line).contains("RINEX VERSION / TYPE") {
+        return "a RINEX file (use --obs and --nav)";
+    }
+    let ubx = Format::Ubx.decoder();
+    let rtcm = Format::Rtcm3.decoder();
+    let frames = |mut d: Box<dyn raim_recv::Decoder + Send>| {
+        let mut out = Vec::new();
+        d.push(head, &mut out);
+        d.counts().frames
+    };
+    if frames(ubx) > 0 {
+        return "a u-blox UBX stream (use --ubx)";
+    }
+    if frames(rtcm) > 0 {
+        return "an RTCM 3 stream (use --rtcm3)";
+    }
+    if head.starts_with(b"$") {
+        return "NMEA text (positions, not ranges)";
+    }
+    "neither RINEX, RTCM 3 nor UBX"
+}
+
+/// Decode a stream file whole, with the checks that say what is wrong: no
+/// such file, a directory, empty, no frame of this format (and what the
+/// file seems to be), no epoch, no ephemeris.
+pub fn load_file(format: Format, path: &Path) -> Result<Recording> {
+    let shown = path.display();
+    let want = match format {
+        Format::Rtcm3 => "an RTCM 3 stream (--rtcm3)",
+        Format::Ubx => "a u-blox UBX stream (--ubx)",
+    };
+    match std::fs::metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            bail!("{shown}: no such file (expected {want})")
+        }
+        Err(e) => bail!("{shown}: cannot read it: {e}"),
+        Ok(m) if m.is_dir() => bail!("{shown} is a directory, not {want}"),
+        Ok(_) => {}
+    }
+    let bytes = std::fs::read(path).map_err(|e| anyhow::anyhow!("{shown}: cannot read it: {e}"))?;
+    if bytes.is_empty() {
+        bail!("{shown} is empty (0 bytes): expected {want}");
+    }
+    let rec = raim_recv::read_all(format, bytes.as_slice(), PathBuf::from(path))?;
+    let c = &rec.counts;
+    if c.frames == 0 {
+        bail!(
+            "{shown} is not {want}: no valid {} frame in its {} bytes; it looks like {}",
+            format.name(),
+            c.bytes,
+            sniff(&bytes)
+        );
+    }
+    if rec.obs.epochs.is_empty() {
+        if format == Format::Rtcm3 && c.epochs > 0 {
+            bail!(
+                "{shown}: {} observation epochs but no ephemeris to date them ({} carry none): {c}",
+                c.epochs,
+                format.ephemeris_messages()
+            );
+        }
+        if let Some(k) = c.ignored.get(raim_recv::rtcm::GLONASS_ALONE) {
+            bail!(
+                "{shown}: only GLONASS observations ({k} epochs of GLONASS MSM): GLONASS orbits and time are not modelled, so nothing can be solved ({c})"
+            );
+        }
+        bail!("{shown}: no observation epochs ({c})");
+    }
+    if rec.nav.ephemerides.is_empty() {
+        let glo = if rec.glonass.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " ({} GLONASS ephemerides, whose orbits this replay does not model)",
+                rec.glonass.len()
+            )
+        };
+        bail!(
+            "{shown}: {} epochs but no ephemeris of a modelled system{glo}: the stream has no {} ({c})",
+            rec.obs.epochs.len(),
+            format.ephemeris_messages()
+        );
+    }
+    let _ = writeln!(std::io::stderr(), "raim: {shown}: {c}");
+    if c.truncated_tail_bytes > 0 {
+        let _ = writeln!(
+            std::io::stderr(),
+            "raim: note: {shown} ends inside a frame ({} bytes cut); that frame is dropped",
+            c.truncated_tail_bytes
+        );
+    }
+    Ok(rec)
+}
+
+/// A live stream: decode as bytes come, prepare, run and print each epoch
+/// at once; stop at the end of the stream or on Ctrl-C (then the counts
+/// and the summary). Ephemerides are those received so far.
+pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate::outcome::Tally> {
+    let mut reader = spec.open()?;
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let s = stop.clone();
+        // A second handler cannot be installed; then Ctrl-C ends the
+        // process the ordinary way.
+        let _ = ctrlc::set_handler(move || s.store(true, Ordering::SeqCst));
+    }
+    let mut cfg = args.core_config();
+    cfg.validate()
+        .map_err(|e| anyhow::anyhow!("configuration: {e}"))?;
+    let mut opts: RangingOptions = args.ranging()?;
+    if args.codes.is_empty() {
+        opts.codes = receiver_codes();
+    }
+    let mut engine = Engine::start(args.target, &cfg)?;
+    let mut dec = format.decoder();
+    let mut obs = ObsData {
+        path: PathBuf::from(spec.name()),
+        approx_position_m: None,
+        epochs: Vec::new(),
+    };
+    let mut nav = NavData::default();
+    let mut glonass = Vec::new();
+    let mut plan: Option<FaultPlan> = None;
+    let mut records: Vec<EpochRecord> = Vec::new();
+    let mut tally = crate::outcome::Tally::default();
+    let started = Instant::now();
+    let mut items = Vec::new();
+    let mut chunk = vec![0u8; 4096];
+    let mut iono_set = false;
+    let stdout = std::io::stdout();
+    let mut ended_by = "end of stream";
+    loop {
+        if stop.load(Ordering::SeqCst) {
+            ended_by = "Ctrl-C";
+            break;
+        }
+        let n = match reader.read(&mut chunk) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::TimedOut
+                        | std::io::ErrorKind::WouldBlock
+                        | std::io::ErrorKind::Interrupted
+                ) =>
+            {
+                0
+            }
+            Err(e) => bail!("{}: {e}", spec.name()),
+        };
+        dec.push(chunk.get(..n).unwrap_or(&[]), &mut items);
+        let mut epochs = Vec::new();
+        for it in items.drain(..) {
+            match it {
+                Item::Epoch(e) => epochs.push(e),
+                other => raim_recv::apply(other, &mut obs, &mut nav, &mut glonass),
+            }
+        }
+        if nav.ephemerides.is_empty()
+            && started.elapsed() > Duration::from_secs_f64(args.ephemeris_timeout_s.max(0.0))
+        {
+            bail!(
+                "{}: no ephemeris after {:.0} s of stream ({} epochs{}): a {} stream needs {} to be solved ({})",
+                spec.name(),
+                args.ephemeris_timeout_s,
+                dec.counts().epochs,
+                if glonass.is_empty() {
+                    String::new()
+                } else {
+                    format!(", {} GLONASS ephemerides, not modelled", glonass.len())
+                },
+                format.name(),
+                format.ephemeris_messages(),
+                dec.counts()
+            );
+        }
+        for e in epochs {
+            if plan.is_none() {
+                plan = Some(super::fault_plan(args, e.time_gps_s)?.0);
+            }
+            let mut p = prepare_epoch(&nav, &e, &opts, obs.approx_position_m);
+            if !iono_set && !p.sats.is_empty() {
+                let one = [p.clone()];
+                adjust_config(&mut cfg, args, &nav, &one);
+                iono_set = true;
+            }
+            set_sigmas(&mut p, &cfg.sigma_model);
+            let mut sats = p.observations();
+            let injected = plan
+                .as_ref()
+                .map(|pl| pl.apply(p.time_gps_s, &mut sats))
+                .unwrap_or_default();
+            let wire = Epoch::ranges(
+                raim_gnss::time::unix_utc_s(p.time_gps_s),
+                &sats,
+                p.reference_m,
+            );
+            let (outcome, nmea) = engine.process(&cfg, &wire)?;
+            let mut rec = match outcome {
+                Ok(r) => {
+                    tally.answered();
+                    EpochRecord::from_result(
+                        &r,
+                        p.time_gps_s,
+                        sats.len(),
+                        &injected.faulted,
+                        obs.approx_position_m,
+                    )
+                }
+                Err(err) => {
+                    let t = raim_gnss::time::time_of_day(p.time_gps_s);
+                    let why = if nav.ephemerides.is_empty() {
+                        format!("{err} (no ephemeris received yet)")
+                    } else {
+                        err.clone()
+                    };
+                    tally.refuse(|| format!("{t} {why}"));
+                    EpochRecord::from_error(p.time_gps_s, sats.len(), &injected.faulted, &why)
+                }
+            };
+            rec.nmea = nmea;
+            let mut w = stdout.lock();
+            if !args.quiet {
+                match args.nmea {
+                    _ if args.json => writeln!(w, "{}", serde_json::to_string(&rec)?)?,
+                    Some(NmeaMode::Only) => {
+                        for s in &rec.nmea {
+                            write!(w, "{}\r\n", s.trim_end())?;
+                        }
+                    }
+                    Some(NmeaMode::WithText) => {
+                        writeln!(w, "{}", rec.text_line())?;
+                        for s in &rec.nmea {
+                            writeln!(w, "    {}", s.trim_end())?;
+                        }
+                    }
+                    None => writeln!(w, "{}", rec.text_line())?,
+                }
+            }
+            w.flush()?;
+            records.push(rec);
+        }
+    }
+    dec.finish(&mut items);
+    let _ = writeln!(
+        std::io::stderr(),
+        "raim: {} stopped ({ended_by}): {}",
+        spec.name(),
+        dec.counts()
+    );
+    let summary = super::summary::summarise(&records, None);
+    let mut w = stdout.lock();
+    if args.json {
+        writeln!(
+            w,
+            "{}",
+            serde_json::json!({ "summary": summary, "reference_ecef_m": obs.approx_position_m })
+        )?;
+    } else if args.nmea != Some(NmeaMode::Only) {
+        writeln!(w, "{}", summary.table())?;
+    }
+    if records.is_empty() && nav.ephemerides.is_empty() {
+        bail!(
+            "{}: the stream ended with no epoch solved: no ephemeris ({}) in {}",
+            spec.name(),
+            format.ephemeris_messages(),
+            dec.counts()
+        );
+    }
+    Ok(tally)
+}
