@@ -698,6 +698,10 @@ fn solution_files_are_standard() {
     assert!(csv_text.lines().all(|l| l.split(',').count() == cols));
     let kml_text = std::fs::read_to_string(&kml).expect("kml");
     assert_eq!(kml_text.matches("<Point>").count(), 120);
+    // The `kml` crate's parser (the OGC KML 2.2 element model) reads it,
+    // and finds the 120 points.
+    let parsed: kml::Kml = kml_text.parse().expect("the kml crate parses the KML");
+    assert_eq!(count_points(&parsed), 120);
     assert!(kml_text.contains("excluded: G24"));
     assert!(kml_text.contains("<styleUrl>#excluded</styleUrl>"));
     let gpx_text = std::fs::read_to_string(&gpx).expect("gpx");
@@ -745,5 +749,20 @@ fn solution_files_are_standard() {
         None => {
             panic!("pos2kml not installed (Debian package rtklib; scripts/install-deps.sh test)")
         }
+    }
+}
+
+/// The `Point` geometries anywhere in a parsed KML tree.
+fn count_points(k: &kml::Kml) -> usize {
+    match k {
+        kml::Kml::KmlDocument(d) => d.elements.iter().map(count_points).sum(),
+        kml::Kml::Document { elements, .. } => elements.iter().map(count_points).sum(),
+        kml::Kml::Folder(f) => f.elements.iter().map(count_points).sum(),
+        kml::Kml::Placemark(p) => p.geometry.as_ref().map_or(0, |g| match g {
+            kml::types::Geometry::Point(_) => 1,
+            _ => 0,
+        }),
+        kml::Kml::Point(_) => 1,
+        _ => 0,
     }
 }
