@@ -302,7 +302,7 @@ fn linear_passes_equal_the_row_builder() {
         assert_eq!(bits(p.p()), bits(q.p()));
         assert_eq!(bits(p.dx()), bits(q.dx()));
         for axis in 0..3 {
-            assert_eq!(bits(p.gain(axis)), bits(q.gain(axis)));
+            assert_eq!(bits(p.gains()[axis]), bits(q.gains()[axis]));
         }
         assert_eq!(a.source, b.source);
         assert_eq!(a.ids, b.ids);

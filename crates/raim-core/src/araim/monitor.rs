@@ -338,7 +338,10 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
         self.n_sats = 0;
         self.excluded = false;
         let (x0, rot) = self.linearise(solver, epoch, sats)?;
-        let lin = self.lin.get(..sats.len()).unwrap_or(&[]);
+        let lin = self
+            .lin
+            .get(..sats.len())
+            .ok_or(capacity::<N>(sats.len()))?;
         let ism = join(&mut self.sats, ism, models, lin)?;
         self.n_sats = lin.len();
         let mut verdict = self.decide(cfg, &ism, limits)?;
@@ -363,11 +366,7 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
         self.n_sats = 0;
         self.excluded = false;
         if sats.len() > N {
-            return Err(AraimError::CapacityExceeded {
-                have: sats.len(),
-                capacity: N.min(super::MAX_SATS),
-            }
-            .into());
+            return Err(capacity::<N>(sats.len()));
         }
         for (slot, s) in self.sats.iter_mut().zip(sats) {
             *slot = *s;
@@ -395,7 +394,10 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
 
     /// The last epoch's satellites as the engine saw them (joined).
     pub fn satellites(&self) -> &[AraimSat<T>] {
-        self.sats.get(..self.n_sats).unwrap_or(&[])
+        // n_sats <= N: it is set only after `join` or `given` checked the
+        // count against N (and reset to 0 before either runs).
+        #[allow(clippy::indexing_slicing)]
+        &self.sats[..self.n_sats]
     }
 
     /// Step 3: Gauss-Newton all in view, then the linearised epoch at its
@@ -475,7 +477,10 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
         ism: &Ism,
         limits: FdeLimits,
     ) -> Result<Verdict<N>, MonitorError> {
-        let sats = self.sats.get(..self.n_sats).unwrap_or(&[]);
+        let sats = self
+            .sats
+            .get(..self.n_sats)
+            .ok_or(capacity::<N>(self.n_sats))?;
         let out = self.main.process(cfg, ism, sats)?;
         let mut verdict = Verdict {
             decision: Decision::Unavailable,
@@ -560,6 +565,15 @@ fn check_ranges(
 /// Steps 1 and 2: the satellites of `obs` with their ISM entries and
 /// C_int/C_acc into `out`, and the ISM's P_const restricted to the
 /// constellations present.
+/// The refusal of `have` satellites by an `N`-satellite monitor.
+fn capacity<const N: usize>(have: usize) -> MonitorError {
+    AraimError::CapacityExceeded {
+        have,
+        capacity: N.min(super::MAX_SATS),
+    }
+    .into()
+}
+
 fn join<T: Real, M: SatelliteModels + ?Sized, const N: usize>(
     out: &mut [AraimSat<T>; N],
     ism: &Ism,
@@ -567,11 +581,7 @@ fn join<T: Real, M: SatelliteModels + ?Sized, const N: usize>(
     obs: &[LinearObservation],
 ) -> Result<Ism, MonitorError> {
     if obs.len() > N {
-        return Err(AraimError::CapacityExceeded {
-            have: obs.len(),
-            capacity: N.min(super::MAX_SATS),
-        }
-        .into());
+        return Err(capacity::<N>(obs.len()));
     }
     let mut p_const = [None; MAX_SYSTEMS];
     for (i, (o, slot)) in obs.iter().zip(out.iter_mut()).enumerate() {

@@ -243,12 +243,12 @@ impl<const N: usize, T: Real> Parity<N, T> {
         &self.residual[..self.n]
     }
 
-    /// Row `axis` (0 = E, 1 = N, 2 = U) of the position gain A.
-    pub fn gain(&self, axis: usize) -> &[T] {
-        self.gain
-            .get(axis)
-            .and_then(|r| r.get(..self.n))
-            .unwrap_or(&[])
+    /// The rows E, N, U of the position gain A (each of length n).
+    // n <= N, as for `p`.
+    #[allow(clippy::indexing_slicing)]
+    pub fn gains(&self) -> [&[T]; 3] {
+        let [e, n, u] = &self.gain;
+        [&e[..self.n], &n[..self.n], &u[..self.n]]
     }
 
     /// Least-squares state correction dx (first m entries meaningful).
@@ -415,7 +415,7 @@ mod tests {
             // Gain rows reproduce the least-squares position: A z = dx.
             let x = hth.try_inverse().unwrap() * h.transpose() * &z;
             for k in 0..3 {
-                let ax: f64 = p.gain(k).iter().zip(z.iter()).map(|(a, b)| a * b).sum();
+                let ax: f64 = p.gains()[k].iter().zip(z.iter()).map(|(a, b)| a * b).sum();
                 prop_assert!((ax - x[k]).abs() < 1e-7 * (1.0 + x.amax()));
                 prop_assert!((p.dx()[k] - x[k]).abs() < 1e-7 * (1.0 + x.amax()));
             }
@@ -514,7 +514,11 @@ mod tests {
                 "r, n {n} m {m}"
             );
             for axis in 0..3 {
-                assert_eq!(bits(fast.gain(axis)), bits(slow.gain(axis)), "gain {axis}");
+                assert_eq!(
+                    bits(fast.gains()[axis]),
+                    bits(slow.gains()[axis]),
+                    "gain {axis}"
+                );
             }
             true
         }
@@ -587,8 +591,8 @@ mod tests {
                 }
             }
             for axis in 0..3 {
-                let scale = d.gain(axis).iter().fold(0.0f64, |a, v| a.max(v.abs()));
-                for (gd, gs) in d.gain(axis).iter().zip(s.gain(axis)) {
+                let scale = d.gains()[axis].iter().fold(0.0f64, |a, v| a.max(v.abs()));
+                for (gd, gs) in d.gains()[axis].iter().zip(s.gains()[axis]) {
                     worst[3] = worst[3].max((gd - *gs as f64).abs() / scale);
                 }
             }

@@ -29,12 +29,7 @@ pub fn slope_levels<const N: usize, T: Real>(
     lambda_md: f64,
     min_s_ii: f64,
 ) -> ProtectionLevels {
-    slope_levels_rows(
-        [parity.gain(0), parity.gain(1), parity.gain(2)],
-        parity.s_ii(),
-        lambda_md,
-        min_s_ii,
-    )
+    slope_levels_rows(parity.gains(), parity.s_ii(), lambda_md, min_s_ii)
 }
 
 /// `slope_levels` on the gain rows E, N, U and S_ii. A slope that is NaN
@@ -84,8 +79,7 @@ pub fn slope_levels_rows<T: Real>(
 pub fn sigma_enu_m<const N: usize, T: Real>(parity: &Parity<N, T>) -> [f64; 3] {
     // In four lanes where the precision sums so (`linalg::Kernels::LANE_SUMS`, f64:
     // the same sum up to its last bits, vectorised), else left to right.
-    let s = |axis: usize| {
-        let g = parity.gain(axis);
+    let s = |g: &[T]| {
         let ssq = if T::LANE_SUMS {
             crate::linalg::qr::dot_lanes(g, g)
         } else {
@@ -93,7 +87,7 @@ pub fn sigma_enu_m<const N: usize, T: Real>(parity: &Parity<N, T>) -> [f64; 3] {
         };
         ssq.sqrt().to_f64()
     };
-    [s(0), s(1), s(2)]
+    parity.gains().map(s)
 }
 
 #[cfg(test)]
