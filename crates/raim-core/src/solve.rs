@@ -313,17 +313,17 @@ impl<'a, const N: usize, T: Real> SiblingModel<'a, N, T> {
 
 /// The linearised form: one least-squares solve at the given point.
 ///
-/// : the model is built in passes over the
-/// selected rows rather than one satellite at a time, so that the
-/// arithmetic passes are straight-line loops the compiler vectorises and
-/// the elevations' `atan` calls run in a loop of their own: (1) gather the
-/// selected satellites and their unit lines of sight in `T`; (2) the
-/// elevations and sigmas (a sibling's where given); (3) the sigma check, in
-/// row order, so that the first offender is named as before; (4) the
-/// weights and the whitened rows [-u, clock] / sigma and z / sigma. Each
-/// row's operations are those of `Builder::push`, so the bits are the same.
-/// In the f64 engine ([`Kernels::LANE_SUMS`](crate::linalg::Kernels::LANE_SUMS)); the f32 engine keeps
-/// [`solve_linear_by_row`].
+/// The model is built in passes over the selected rows rather than one
+/// satellite at a time, so that the arithmetic passes are straight-line
+/// loops the compiler vectorises and the elevations' `atan` calls run in a
+/// loop of their own: (1) [`gather`] the selected satellites and their
+/// unit lines of sight in `T`; (2) [`elevations_and_sigmas`] (a sibling's
+/// where given); (3) [`check_sigmas`], in row order, so that the first
+/// offender is named; (4) [`whiten`]: the weights and the whitened rows
+/// [-u, clock] / sigma and z / sigma. Each row's operations are those of
+/// `Builder::push`, so the bits are the same. In the f64 engine
+/// ([`Kernels::LANE_SUMS`](crate::linalg::Kernels::LANE_SUMS)); the f32
+/// engine keeps [`solve_linear_by_row`].
 #[inline(never)]
 fn solve_linear<const N: usize, T: Real>(
     cfg: &Config,
@@ -335,54 +335,11 @@ fn solve_linear<const N: usize, T: Real>(
     if !T::LANE_SUMS {
         return solve_linear_by_row(cfg, sats, mask, sibling, out);
     }
-    // The systems present among the selected satellites (their clock
-    // columns), noted in pass (1).
-    let mut present = [false; MAX_SYSTEMS];
-    // (1) The selected satellites in epoch order, and the unit line of
-    // sight in `T` (the same operations as in f64).
     let mut h = [[T::zero(); N]; MAX_STATES];
     let mut z = [T::zero(); N];
     // Whether the satellite carries its own sigma (then in `sigma_m`).
     let mut given = [false; N];
-    let mut n = 0;
-    {
-        let [he, hn, hu, ..] = &mut h;
-        let rows = out
-            .source
-            .iter_mut()
-            .zip(out.ids.iter_mut())
-            .zip(
-                z.iter_mut()
-                    .zip(given.iter_mut())
-                    .zip(out.sigma_m.iter_mut()),
-            )
-            .zip(he.iter_mut().zip(hn.iter_mut()).zip(hu.iter_mut()));
-        let selected = sats
-            .iter()
-            .enumerate()
-            .zip(mask.iter())
-            .filter(|(_, m)| **m)
-            .map(|(s, _)| s);
-        for ((((src, id), ((r, g), sg)), ((e, nn), u)), (i, s)) in rows.zip(selected) {
-            let l = s.los_enu.map(T::of);
-            let norm = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
-            *e = l[0] / norm;
-            *nn = l[1] / norm;
-            *u = l[2] / norm;
-            *src = i;
-            *id = s.id;
-            // z in `T`, whitened in pass (4).
-            *r = T::of(s.residual_m);
-            (*g, *sg) = match s.sigma_m {
-                Some(v) => (true, v),
-                None => (false, 0.0),
-            };
-            if let Some(p) = present.get_mut(s.id.system.index()) {
-                *p = true;
-            }
-            n += 1;
-        }
-    }
+    let (n, present) = gather(sats, mask, out, &mut h, &mut z, &mut given);
     let (cols, clocks) = clock_columns_of(&present);
     let m = 3 + clocks;
     // Rows n.. as a fresh builder leaves them (the storage is reused
@@ -394,9 +351,86 @@ fn solve_linear<const N: usize, T: Real>(
         .for_each(|v| *v = SatId::default());
     out.sigma_m.iter_mut().skip(n).for_each(|v| *v = 0.0);
     out.elevation_rad.iter_mut().skip(n).for_each(|v| *v = 0.0);
-    // (2) The elevations and sigmas. They depend on the line of sight
-    // alone, so a sibling's are bit for bit what would be computed here.
-    let [he, hn, hu, ..] = &h;
+    elevations_and_sigmas(cfg, sibling, out, &h, &given, n);
+    // n <= N: `gather` counts rows zipped with the N-row arrays.
+    #[allow(clippy::indexing_slicing)]
+    let sigmas = &out.sigma_m[..n];
+    check_sigmas(sigmas, &out.source)?;
+    whiten(sigmas, &out.ids, &cols, &mut h, &mut z, n);
+    out.parity.compute(&h, &z, n, m)?;
+    out.clocks = cols;
+    finish_linear(out);
+    Ok(())
+}
+
+/// Pass (1) of [`solve_linear`]: the selected satellites in epoch order
+/// into `out`'s source, ID and (given) sigma rows, their unit lines of
+/// sight in `T` into `h`'s first three columns (the same operations as in
+/// f64) and their residuals into `z` (whitened in pass (4)). Returns the
+/// row count and the systems present (their clock columns).
+#[inline(always)]
+fn gather<const N: usize, T: Real>(
+    sats: &[LinearObservation],
+    mask: &[bool; N],
+    out: &mut Solution<N, T>,
+    h: &mut [[T; N]; MAX_STATES],
+    z: &mut [T; N],
+    given: &mut [bool; N],
+) -> (usize, [bool; MAX_SYSTEMS]) {
+    let mut present = [false; MAX_SYSTEMS];
+    let mut n = 0;
+    let [he, hn, hu, ..] = h;
+    let rows = out
+        .source
+        .iter_mut()
+        .zip(out.ids.iter_mut())
+        .zip(
+            z.iter_mut()
+                .zip(given.iter_mut())
+                .zip(out.sigma_m.iter_mut()),
+        )
+        .zip(he.iter_mut().zip(hn.iter_mut()).zip(hu.iter_mut()));
+    let selected = sats
+        .iter()
+        .enumerate()
+        .zip(mask.iter())
+        .filter(|(_, m)| **m)
+        .map(|(s, _)| s);
+    for ((((src, id), ((r, g), sg)), ((e, nn), u)), (i, s)) in rows.zip(selected) {
+        let l = s.los_enu.map(T::of);
+        let norm = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+        *e = l[0] / norm;
+        *nn = l[1] / norm;
+        *u = l[2] / norm;
+        *src = i;
+        *id = s.id;
+        *r = T::of(s.residual_m);
+        (*g, *sg) = match s.sigma_m {
+            Some(v) => (true, v),
+            None => (false, 0.0),
+        };
+        if let Some(p) = present.get_mut(s.id.system.index()) {
+            *p = true;
+        }
+        n += 1;
+    }
+    (n, present)
+}
+
+/// Pass (2) of [`solve_linear`]: each row's elevation and sigma (its own
+/// where `given`, else the configuration's model). They depend on the line
+/// of sight alone, so a sibling's are bit for bit what would be computed
+/// here, and are taken from it.
+#[inline(always)]
+fn elevations_and_sigmas<const N: usize, T: Real>(
+    cfg: &Config,
+    sibling: Option<&Solution<N, T>>,
+    out: &mut Solution<N, T>,
+    h: &[[T; N]; MAX_STATES],
+    given: &[bool; N],
+    n: usize,
+) {
+    let [he, hn, hu, ..] = h;
     let units = he.iter().zip(hn.iter()).zip(hu.iter()).take(n);
     let model = out
         .elevation_rad
@@ -423,24 +457,40 @@ fn solve_linear<const N: usize, T: Real>(
             }
         };
     }
-    // (3) Positive and finite (NaN fails both comparisons), checked in row
-    // order: one branch-free pass, and the first offender named only when
-    // it finds one.
-    // n <= N: pass (1) counts rows zipped with the N-row arrays.
-    #[allow(clippy::indexing_slicing)]
-    let sigmas = &out.sigma_m[..n];
+}
+
+/// Pass (3) of [`solve_linear`]: every sigma positive and finite (NaN
+/// fails both comparisons), in one branch-free pass; the first offender in
+/// row order is named (by its epoch index in `source`) only when there is
+/// one.
+#[inline(always)]
+fn check_sigmas(sigmas: &[f64], source: &[usize]) -> Result<(), RaimError> {
     if !sigmas
         .iter()
         .fold(true, |ok, &s| ok & (s > 0.0) & (s <= f64::MAX))
     {
-        for (&sigma_m, &index) in sigmas.iter().zip(out.source.iter()) {
+        for (&sigma_m, &index) in sigmas.iter().zip(source.iter()) {
             if !(sigma_m > 0.0 && sigma_m < f64::INFINITY) {
                 return Err(RaimError::NonPositiveSigma { index, sigma_m });
             }
         }
     }
-    // (4) The whitened rows: the weight 1 / sigma in `T`, -u / sigma, the
-    // clock entry, z / sigma (`Builder::push`'s operations).
+    Ok(())
+}
+
+/// Pass (4) of [`solve_linear`]: the weight 1 / sigma in `T`, the rows
+/// -u / sigma, z / sigma, and column 3 + j, the clock of system `cols[j]`:
+/// the weight on its satellites' rows, zero elsewhere (the storage is
+/// fresh). These are `Builder::push`'s operations.
+#[inline(always)]
+fn whiten<const N: usize, T: Real>(
+    sigmas: &[f64],
+    ids: &[SatId; N],
+    cols: &[Option<System>; MAX_SYSTEMS],
+    h: &mut [[T; N]; MAX_STATES],
+    z: &mut [T; N],
+    n: usize,
+) {
     let mut wt = [T::zero(); N];
     for (w, &sg) in wt.iter_mut().zip(sigmas.iter()) {
         *w = T::one() / T::of(sg);
@@ -453,22 +503,16 @@ fn solve_linear<const N: usize, T: Real>(
     for (zk, &w) in z.iter_mut().zip(wt.iter()).take(n) {
         *zk *= w;
     }
-    // Column 3 + j is the clock of system `cols[j]`: the weight on its
-    // satellites' rows, zero elsewhere (the storage is fresh).
     for (col, sys) in h.iter_mut().skip(3).zip(cols.iter()) {
         let Some(sys) = sys else {
             continue;
         };
-        for ((v, id), &w) in col.iter_mut().zip(out.ids.iter()).zip(wt.iter()).take(n) {
+        for ((v, id), &w) in col.iter_mut().zip(ids.iter()).zip(wt.iter()).take(n) {
             if id.system == *sys {
                 *v = w;
             }
         }
     }
-    out.parity.compute(&h, &z, n, m)?;
-    out.clocks = cols;
-    finish_linear(out);
-    Ok(())
 }
 
 /// The linearised solution's outputs from its parity space: the ENU
