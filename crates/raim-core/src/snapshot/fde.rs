@@ -445,42 +445,14 @@ pub fn run<const N: usize, T: Real>(
             out.cause = Some(AlarmCause::Unidentifiable);
             break;
         };
-        if out.exclusions.is_empty() && max_excl >= 2 && current.parity.dof() >= 3 {
-            // The subset without `best` has statistic D^2 - w_best^2 (see
-            // the uniqueness check below). If even that fails, one
-            // exclusion is not enough: before excluding greedily, look for
-            // the pair that explains the all-in-view residuals (SPEC §8.4,
-            // t = 2), in closed form.
-            let (t2_single, _) = thresholds.get(cfg.pfa, cfg.pmd, current.parity.dof() - 1)?;
-            if !(test_now.statistic - (best.w * best.w).to_f64() < t2_single) {
-                match exclude_pair(
-                    cfg,
-                    thresholds,
-                    epoch,
-                    &mask,
-                    current,
-                    test_now,
-                    &mut out.scratch,
-                )? {
-                    PairOutcome::Excluded(after, records) => {
-                        for r in records {
-                            let pushed = out.exclusions.push(r);
-                            // Cannot fill: the pair goes into an empty list of
-                            // capacity MAX_EXCLUSIONS >= 2.
-                            debug_assert!(pushed.is_ok());
-                        }
-                        core::mem::swap(&mut out.solution, &mut out.scratch);
-                        out.test = after;
-                        break;
-                    }
-                    PairOutcome::Ambiguous(cause) if cfg.require_unique_exclusion => {
-                        out.cause = Some(cause);
-                        break;
-                    }
-                    PairOutcome::Ambiguous(_) | PairOutcome::NotFound => {}
-                }
-            }
+        if out.exclusions.is_empty()
+            && max_excl >= 2
+            && current.parity.dof() >= 3
+            && pair_first(cfg, thresholds, epoch, &mask, test_now, best.w, out)?
+        {
+            break;
         }
+        let current = &out.solution;
         let next_mask = without(&mask, best_src);
         match solve_from(
             cfg,
@@ -498,22 +470,9 @@ pub fn run<const N: usize, T: Real>(
         };
         let after = test(cfg, thresholds, &out.scratch)?;
         if !after.alarm() && cfg.require_unique_exclusion {
-            // Excluding row j lowers the weighted SSE by exactly w_j^2
-            // (r_j^2 / S_jj) when the state keeps its dimension, so every
-            // alternative's subset statistic is known without a solve. The
-            // most consistent alternative is the other satellite of largest
-            // w_j^2; if its subset is consistent at level pwe, the fault
-            // cannot be attributed safely.
-            if let Some(alt) = strongest_alternative(&current.parity, best.row, cfg.min_s_ii) {
-                let dof_alt = current.parity.dof() - 1;
-                let threshold = thresholds.wrong_exclusion(cfg.pwe, dof_alt)?;
-                if !alternative_rejected(test_now.statistic - alt.1, threshold) {
-                    out.cause = Some(AlarmCause::Ambiguous {
-                        best: best_id,
-                        runner_up: id_of(alt.0).unwrap_or(best_id),
-                    });
-                    break;
-                }
+            if let Some(cause) = ambiguity(cfg, thresholds, current, test_now, best.row, best_id)? {
+                out.cause = Some(cause);
+                break;
             }
         }
         let record = Exclusion {
@@ -537,6 +496,83 @@ pub fn run<const N: usize, T: Real>(
         out.cause = None;
     }
     Ok(())
+}
+
+/// SPEC §8.4 with t = 2, before the first greedy exclusion: the subset
+/// without the best-ranked row has statistic D^2 - w_best^2 (see
+/// [`ambiguity`]); if even that fails, one exclusion is not enough, so
+/// look for the pair that explains the all-in-view residuals, in closed
+/// form. Returns whether FDE stops here: the pair was excluded (`out`
+/// holds its subset and test), or it was ambiguous and the configuration
+/// requires a unique exclusion (`out.cause`).
+fn pair_first<const N: usize, T: Real>(
+    cfg: &Config,
+    thresholds: &mut Thresholds<N>,
+    epoch: &Epoch<'_>,
+    mask: &[bool; N],
+    test_now: TestStatistic,
+    best_w: T,
+    out: &mut FdeOutcome<N, T>,
+) -> Result<bool, RaimError> {
+    let (t2_single, _) = thresholds.get(cfg.pfa, cfg.pmd, out.solution.parity.dof() - 1)?;
+    if test_now.statistic - (best_w * best_w).to_f64() < t2_single {
+        return Ok(false);
+    }
+    match exclude_pair(
+        cfg,
+        thresholds,
+        epoch,
+        mask,
+        &out.solution,
+        test_now,
+        &mut out.scratch,
+    )? {
+        PairOutcome::Excluded(after, records) => {
+            for r in records {
+                let pushed = out.exclusions.push(r);
+                // Cannot fill: the pair goes into an empty list of
+                // capacity MAX_EXCLUSIONS >= 2.
+                debug_assert!(pushed.is_ok());
+            }
+            core::mem::swap(&mut out.solution, &mut out.scratch);
+            out.test = after;
+            Ok(true)
+        }
+        PairOutcome::Ambiguous(cause) if cfg.require_unique_exclusion => {
+            out.cause = Some(cause);
+            Ok(true)
+        }
+        PairOutcome::Ambiguous(_) | PairOutcome::NotFound => Ok(false),
+    }
+}
+
+/// The uniqueness check of an exclusion whose subset passed (SPEC §8.4):
+/// excluding row j lowers the weighted SSE by exactly w_j^2 (r_j^2 / S_jj)
+/// when the state keeps its dimension, so every alternative's subset
+/// statistic is known without a solve. The most consistent alternative is
+/// the other row of largest w_j^2; if its subset is consistent at level
+/// pwe, the fault cannot be attributed safely: `Some(Ambiguous)`.
+fn ambiguity<const N: usize, T: Real>(
+    cfg: &Config,
+    thresholds: &mut Thresholds<N>,
+    current: &Solution<N, T>,
+    test_now: TestStatistic,
+    best_row: usize,
+    best_id: SatId,
+) -> Result<Option<AlarmCause>, RaimError> {
+    let Some((alt_row, alt_w2)) = strongest_alternative(&current.parity, best_row, cfg.min_s_ii)
+    else {
+        return Ok(None);
+    };
+    let dof_alt = current.parity.dof() - 1;
+    let threshold = thresholds.wrong_exclusion(cfg.pwe, dof_alt)?;
+    if alternative_rejected(test_now.statistic - alt_w2, threshold) {
+        return Ok(None);
+    }
+    Ok(Some(AlarmCause::Ambiguous {
+        best: best_id,
+        runner_up: current.ids.get(alt_row).copied().unwrap_or(best_id),
+    }))
 }
 
 #[cfg(test)]
