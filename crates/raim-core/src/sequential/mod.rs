@@ -13,7 +13,9 @@ use crate::error::RaimError;
 use crate::measurement::{Epoch, LinearObservation, Observations, RangeObservation, SatId};
 use crate::real::{Real, Stat};
 use crate::result::{Decision, EpochResult, SatelliteResult};
+use crate::snapshot::detection::TestStatistic;
 use crate::snapshot::fde::{self, AlarmCause, Exclusion, FdeOutcome, MAX_EXCLUSIONS};
+use crate::snapshot::lraim::Candidate;
 use crate::snapshot::{protection, Snapshot};
 use crate::solve::{solve_into, Solution};
 use mcusum::{Mcusum, MAX_HELD};
@@ -372,10 +374,6 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         result: &mut EpochResult<N>,
         report: &mut McusumReport,
     ) -> Result<(), RaimError> {
-        let (best, second) = mcusum.identify(&sol.parity, cfg.min_s_ii);
-        let best = best.and_then(|b| Some((b, *sol.ids.get(b.row)?, *sol.source.get(b.row)?)));
-        report.identified = best.map(|(_, id, _)| id);
-        let runner_up = second.and_then(|s| Some((s, *sol.ids.get(s.row)?)));
         let snapshot_failed = result.decision == Decision::Alarm;
         let stand = |result: &mut EpochResult<N>, cause: AlarmCause| {
             result.decision = Decision::Alarm;
@@ -383,31 +381,14 @@ impl<const N: usize, T: Real> Sequential<N, T> {
                 result.alarm_cause = Some(cause);
             }
         };
-        let Some((cand, id, fidx)) = best else {
-            stand(result, AlarmCause::Unidentifiable);
-            mcusum.reset();
-            return Ok(());
-        };
-        if sol.parity.dof() < 2 {
-            stand(result, AlarmCause::NoRedundancy);
-            mcusum.reset();
-            return Ok(());
-        }
-        if let Some((s2, id2)) = runner_up {
-            if !(s2.score < T::of(mcusum::AMBIGUITY_RATIO) * cand.score) {
-                // Two fault directions explain the accumulated vector about
-                // equally well: alarm rather than guess (as FDE does).
-                stand(
-                    result,
-                    AlarmCause::Ambiguous {
-                        best: id,
-                        runner_up: id2,
-                    },
-                );
+        let (cand, id, fidx) = match exclusion_candidate(mcusum, cfg, sol, report) {
+            Ok(c) => c,
+            Err(cause) => {
+                stand(result, cause);
                 mcusum.reset();
                 return Ok(());
             }
-        }
+        };
         let mut mask = [false; N];
         for (r, &k) in sol.source.iter().enumerate().take(sol.rows()) {
             if r != cand.row {
@@ -458,37 +439,85 @@ impl<const N: usize, T: Real> Sequential<N, T> {
                 have: MAX_EXCLUSIONS + 1,
                 capacity: MAX_EXCLUSIONS,
             })?;
-        let dof = sub.parity.dof();
-        let (_, lambda_md) = snap.thresholds.get(cfg.pfa, cfg.pmd, dof)?;
-        let protection = protection::slope_levels(&sub.parity, lambda_md, cfg.min_s_ii);
-        let pl_available = protection.hpl_m <= cfg.alert.hal_m
-            && cfg.alert.val_m.is_none_or(|val| protection.vpl_m <= val);
-        let id_at = |row: Option<usize>| row.and_then(|r| sub.ids.get(r).copied());
-        result.decision = match (!after.alarm(), pl_available) {
-            (false, _) => Decision::Alarm,
-            (true, false) => Decision::Unavailable,
-            (true, true) => Decision::Excluded,
-        };
-        result.alarm_cause = None;
-        result.position_ecef_m = sub.position_ecef_m;
-        result.geodetic = sub.geodetic;
-        result.correction_enu_m = sub.correction_enu_m;
-        result.clock_m = sub.clock_m;
-        result.test = after;
-        result.worst_h = id_at(protection.worst_h_row);
-        result.worst_v = id_at(protection.worst_v_row);
-        result.protection = protection;
-        result.sigma_enu_m = protection::sigma_enu_m(&sub.parity);
-        result.lambda_md = lambda_md;
-        result.detection_available = dof >= 1;
-        result.exclusion_available = dof >= 2;
-        result.pl_available = pl_available;
-        let in_sub = |sid: SatId| sub.ids.iter().take(sub.rows()).any(|&x| x == sid);
-        for s in result.satellites.iter_mut() {
-            s.used = in_sub(s.id);
-        }
-        Ok(())
+        publish_subset(cfg, snap, &sub, after, result)
     }
+}
+
+/// The MCUSUM's exclusion candidate after its alarm (SPEC §7.4): the
+/// best-identified row with its satellite and input index, noted in
+/// `report`. Refused with the alarm's cause when nothing is identifiable,
+/// when the geometry has no redundancy left (dof < 2), or when the
+/// runner-up's score is within `mcusum::AMBIGUITY_RATIO` of the best's (two
+/// fault directions explain the accumulated vector about equally well:
+/// alarm rather than guess, as FDE does).
+fn exclusion_candidate<const N: usize, T: Real>(
+    mcusum: &Mcusum<N, T>,
+    cfg: &Config,
+    sol: &Solution<N, T>,
+    report: &mut McusumReport,
+) -> Result<(Candidate<T>, SatId, usize), AlarmCause> {
+    let (best, second) = mcusum.identify(&sol.parity, cfg.min_s_ii);
+    let best = best.and_then(|b| Some((b, *sol.ids.get(b.row)?, *sol.source.get(b.row)?)));
+    report.identified = best.map(|(_, id, _)| id);
+    let runner_up = second.and_then(|s| Some((s, *sol.ids.get(s.row)?)));
+    let Some((cand, id, fidx)) = best else {
+        return Err(AlarmCause::Unidentifiable);
+    };
+    if sol.parity.dof() < 2 {
+        return Err(AlarmCause::NoRedundancy);
+    }
+    if let Some((s2, id2)) = runner_up {
+        if !(s2.score < T::of(mcusum::AMBIGUITY_RATIO) * cand.score) {
+            return Err(AlarmCause::Ambiguous {
+                best: id,
+                runner_up: id2,
+            });
+        }
+    }
+    Ok((cand, id, fidx))
+}
+
+/// The epoch's result from the subset without the MCUSUM's satellite,
+/// whose test `after` passed or not: the decision (Excluded, Unavailable
+/// when the subset's PLs exceed the alert limits, Alarm when it still
+/// fails), its position, clocks, PLs (SPEC §9) and the satellites used.
+fn publish_subset<const N: usize, T: Real>(
+    cfg: &Config,
+    snap: &mut Snapshot<N, T>,
+    sub: &Solution<N, T>,
+    after: TestStatistic,
+    result: &mut EpochResult<N>,
+) -> Result<(), RaimError> {
+    let dof = sub.parity.dof();
+    let (_, lambda_md) = snap.thresholds.get(cfg.pfa, cfg.pmd, dof)?;
+    let protection = protection::slope_levels(&sub.parity, lambda_md, cfg.min_s_ii);
+    let pl_available = protection.hpl_m <= cfg.alert.hal_m
+        && cfg.alert.val_m.is_none_or(|val| protection.vpl_m <= val);
+    let id_at = |row: Option<usize>| row.and_then(|r| sub.ids.get(r).copied());
+    result.decision = match (!after.alarm(), pl_available) {
+        (false, _) => Decision::Alarm,
+        (true, false) => Decision::Unavailable,
+        (true, true) => Decision::Excluded,
+    };
+    result.alarm_cause = None;
+    result.position_ecef_m = sub.position_ecef_m;
+    result.geodetic = sub.geodetic;
+    result.correction_enu_m = sub.correction_enu_m;
+    result.clock_m = sub.clock_m;
+    result.test = after;
+    result.worst_h = id_at(protection.worst_h_row);
+    result.worst_v = id_at(protection.worst_v_row);
+    result.protection = protection;
+    result.sigma_enu_m = protection::sigma_enu_m(&sub.parity);
+    result.lambda_md = lambda_md;
+    result.detection_available = dof >= 1;
+    result.exclusion_available = dof >= 2;
+    result.pl_available = pl_available;
+    let in_sub = |sid: SatId| sub.ids.iter().take(sub.rows()).any(|&x| x == sid);
+    for s in result.satellites.iter_mut() {
+        s.used = in_sub(s.id);
+    }
+    Ok(())
 }
 
 /// Calls `keep(k, i)` for the k-th input satellite i that `mcusum` does not
