@@ -38,7 +38,7 @@ pub const WINDOWS: [usize; 7] = [1, 2, 5, 8, 10, 15, 20];
 /// their prior).
 pub const WARMUP: usize = 30;
 /// Runs (independent skies and seeds) per row.
-pub const RUNS: usize = 10;
+pub const RUNS: usize = 40;
 /// Confidence that the per-epoch false-alarm rate is at most the node's
 /// Pfa.
 pub const CONFIDENCE: f64 = 0.95;

@@ -50,8 +50,12 @@ impl<T: Real> AraimSat<T> {
     /// The geometry row for an azimuth and elevation (radians), with the
     /// ADD's sign: `-[cos el sin az, cos el cos az, sin el]`.
     pub fn g_from_az_el(az_rad: T, el_rad: T) -> [T; 3] {
-        let c = el_rad.cos();
-        [-(c * az_rad.sin()), -(c * az_rad.cos()), -el_rad.sin()]
+        let c = el_rad.cos_m();
+        [
+            -(c * az_rad.sin_m()),
+            -(c * az_rad.cos_m()),
+            -el_rad.sin_m(),
+        ]
     }
 
     /// Range-checks every field against its operational bound

@@ -50,7 +50,7 @@ impl<T: Real> Ekf<T> {
         *p -= k * ph.transpose();
         *p = (*p + p.transpose()) * T::of(0.5);
         let two_pi = T::of(2.0 * core::f64::consts::PI);
-        Some(-T::of(0.5) * (nu * nu / s + (two_pi * s).ln()))
+        Some(-T::of(0.5) * (nu * nu / s + (two_pi * s).ln_m()))
     }
 
     fn run(

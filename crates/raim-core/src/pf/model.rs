@@ -209,13 +209,13 @@ impl<T: Real> Lik<T> {
         match self.kind {
             LikKind::Gaussian => self.c_gauss - half * u2 - t.ln_sigma,
             LikKind::StudentT => {
-                self.c_t - t.ln_sigma - self.half_nu1 * (T::one() + u2 / self.nu).ln()
+                self.c_t - t.ln_sigma - self.half_nu1 * (T::one() + u2 / self.nu).ln_m()
             }
             LikKind::Mixture => {
                 let a = self.ln_core - half * u2;
                 let b = self.ln_tail - half * u2 * self.inv_k2;
                 let (hi, lo) = if a > b { (a, b) } else { (b, a) };
-                self.c_gauss - t.ln_sigma + hi + (lo - hi).exp().ln_1p()
+                self.c_gauss - t.ln_sigma + hi + (lo - hi).exp_m().ln_1p_m()
             }
         }
     }
@@ -330,10 +330,10 @@ impl<T: Real> LogSumExp<T> {
             self.sum = T::one();
             self.any = true;
         } else if v > self.max {
-            self.sum = self.sum * (self.max - v).exp() + T::one();
+            self.sum = self.sum * (self.max - v).exp_m() + T::one();
             self.max = v;
         } else if v.is_finite() || v < self.max {
-            self.sum += (v - self.max).exp();
+            self.sum += (v - self.max).exp_m();
         } else {
             // NaN: propagate.
             self.max = v;

@@ -256,7 +256,7 @@ impl<T: Real, const P: usize, const GA: bool> Estimator<T> for ParticleFilter<T,
         }
         let mut sum = T::zero();
         for v in self.work.iter_mut() {
-            *v = (*v - m).exp();
+            *v = (*v - m).exp_m();
             sum += *v;
         }
         let mut sum2 = T::zero();

@@ -5,7 +5,7 @@
 //! `cargo test`) and `pf_table_regenerates_identically` (`--ignored`) check
 //! that the tool still produces these numbers.
 //! Seeded Monte Carlo on nominal data simulated from each profile's own
-//! models: 10 runs of random skies per row, 30 warm-up epochs each;
+//! models: 40 runs of random skies per row, 30 warm-up epochs each;
 //! f32 particle state (the device precision); per window U, block maxima
 //! of D_k over blocks of U epochs; each threshold bounds the per-epoch
 //! false-alarm rate by Pfa with 95 % confidence (binomial order
@@ -75,204 +75,204 @@ pub const PROFILES: [Profile; 3] = [
 /// threshold[window index][Pfa index].
 #[rustfmt::skip]
 pub const ROWS: [Row; 20] = [
-    // default ekf 0 Likelihood::Gaussian: 20000 epochs x 10 runs; mean N_eff before GA 0.0, after 0.0; collapses 0
+    // default ekf 0 Likelihood::Gaussian: 20000 epochs x 40 runs; mean N_eff before GA 0.0, after 0.0; collapses 0
     Row { profile: 0, kind: "ekf", particles: 0, likelihood: Likelihood::Gaussian, threshold: [
-        [4.8579, 5.9831, 7.1500], // U = 1
-        [6.6092, 7.8018, 9.0692], // U = 2
-        [9.5503, 11.1141, 12.9366], // U = 5
-        [11.5678, 13.2433, 15.9684], // U = 8
-        [12.6977, 14.4309, 16.8982], // U = 10
-        [15.2856, 17.5783, 19.5062], // U = 15
-        [17.4282, 19.2617, 21.6024], // U = 20
+        [4.8280, 5.9370, 7.0490], // U = 1
+        [6.5314, 7.6815, 8.8834], // U = 2
+        [9.3974, 10.7943, 12.2546], // U = 5
+        [11.3551, 12.8476, 14.3680], // U = 8
+        [12.4462, 14.0109, 15.6365], // U = 10
+        [14.9172, 16.6014, 18.6814], // U = 15
+        [17.1122, 18.8155, 20.7152], // U = 20
     ] },
-    // default pf 100 Likelihood::Gaussian: 3000 epochs x 10 runs; mean N_eff before GA 30.0, after 30.0; collapses 1
+    // default pf 100 Likelihood::Gaussian: 3000 epochs x 40 runs; mean N_eff before GA 29.6, after 29.6; collapses 1
     Row { profile: 0, kind: "pf", particles: 100, likelihood: Likelihood::Gaussian, threshold: [
-        [6.5680, 9.0779, 17.0721], // U = 1
-        [10.8961, 15.9324, 39.0391], // U = 2
-        [23.8805, 38.6307, 191.2283], // U = 5
-        [36.6655, 73.3959, 294.7970], // U = 8
-        [47.7964, 88.3692, 351.6797], // U = 10
-        [75.1304, 283.1287, f64::NAN], // U = 15
-        [102.6909, 502.5275, f64::NAN], // U = 20
+        [7.7493, 15.8294, 38.0013], // U = 1
+        [14.3016, 32.7171, 83.4089], // U = 2
+        [33.5756, 83.9462, 229.2119], // U = 5
+        [54.6215, 147.8053, 388.8749], // U = 8
+        [67.5923, 192.6558, 490.4675], // U = 10
+        [105.4705, 296.8910, 820.1748], // U = 15
+        [154.7312, 461.9324, 1281.0700], // U = 20
     ] },
-    // default pf 300 Likelihood::Gaussian: 3000 epochs x 10 runs; mean N_eff before GA 87.0, after 87.0; collapses 0
+    // default pf 300 Likelihood::Gaussian: 3000 epochs x 40 runs; mean N_eff before GA 88.1, after 88.1; collapses 0
     Row { profile: 0, kind: "pf", particles: 300, likelihood: Likelihood::Gaussian, threshold: [
-        [5.3371, 6.6008, 7.9136], // U = 1
-        [7.5074, 8.8960, 10.3620], // U = 2
-        [11.5883, 14.1682, 20.2835], // U = 5
-        [15.7389, 18.8534, 24.9550], // U = 8
-        [17.7873, 20.7936, 27.2049], // U = 10
-        [23.5124, 27.5291, f64::NAN], // U = 15
-        [29.1084, 32.7477, f64::NAN], // U = 20
+        [5.2241, 6.4430, 7.6206], // U = 1
+        [7.2469, 8.6448, 10.1014], // U = 2
+        [11.3302, 13.8398, 16.5313], // U = 5
+        [14.7141, 18.5274, 24.6394], // U = 8
+        [16.9181, 21.7316, 28.0390], // U = 10
+        [21.5804, 29.4456, 52.5524], // U = 15
+        [26.5799, 37.3233, 68.9401], // U = 20
     ] },
-    // default gapf 100 Likelihood::Gaussian: 3000 epochs x 10 runs; mean N_eff before GA 29.4, after 31.3; collapses 0
+    // default gapf 100 Likelihood::Gaussian: 3000 epochs x 40 runs; mean N_eff before GA 29.7, after 31.6; collapses 2
     Row { profile: 0, kind: "gapf", particles: 100, likelihood: Likelihood::Gaussian, threshold: [
-        [7.2654, 10.6620, 15.4639], // U = 1
-        [13.1192, 21.0748, 34.0599], // U = 2
-        [31.0600, 54.8065, 90.7923], // U = 5
-        [48.5626, 98.3682, 144.8856], // U = 8
-        [63.9997, 119.4429, 161.0243], // U = 10
-        [99.1598, 212.4505, f64::NAN], // U = 15
-        [140.3322, 297.6685, f64::NAN], // U = 20
+        [6.6911, 9.4604, 14.6649], // U = 1
+        [10.7877, 17.7941, 32.3056], // U = 2
+        [22.6718, 44.4303, 85.1831], // U = 5
+        [35.6867, 71.2926, 139.3213], // U = 8
+        [43.8043, 85.8342, 180.0503], // U = 10
+        [66.6871, 143.2820, 266.9569], // U = 15
+        [94.3474, 222.7916, 416.5410], // U = 20
     ] },
-    // default gapf 300 Likelihood::Gaussian: 3000 epochs x 10 runs; mean N_eff before GA 88.9, after 95.3; collapses 0
+    // default gapf 300 Likelihood::Gaussian: 3000 epochs x 40 runs; mean N_eff before GA 87.2, after 93.3; collapses 0
     Row { profile: 0, kind: "gapf", particles: 300, likelihood: Likelihood::Gaussian, threshold: [
-        [5.2790, 6.3886, 7.8466], // U = 1
-        [7.2949, 8.8087, 10.4936], // U = 2
-        [11.1735, 13.8900, 16.3148], // U = 5
-        [14.1271, 16.3148, 17.9834], // U = 8
-        [15.7146, 18.6322, 20.3523], // U = 10
-        [19.0932, 21.9151, f64::NAN], // U = 15
-        [22.8315, 26.3317, f64::NAN], // U = 20
+        [5.2357, 6.4382, 7.7792], // U = 1
+        [7.2811, 8.7978, 10.5450], // U = 2
+        [11.3767, 13.6006, 16.4356], // U = 5
+        [14.5220, 17.8523, 24.0884], // U = 8
+        [16.4027, 19.5555, 26.7997], // U = 10
+        [20.8656, 25.9116, 41.1602], // U = 15
+        [24.7511, 32.2885, 61.3144], // U = 20
     ] },
-    // phone_1hz ekf 0 Likelihood::Gaussian: 20000 epochs x 10 runs; mean N_eff before GA 0.0, after 0.0; collapses 0
+    // phone_1hz ekf 0 Likelihood::Gaussian: 20000 epochs x 40 runs; mean N_eff before GA 0.0, after 0.0; collapses 0
     Row { profile: 1, kind: "ekf", particles: 0, likelihood: Likelihood::Gaussian, threshold: [
-        [5.1817, 6.2479, 7.5221], // U = 1
-        [6.8932, 8.1835, 9.5531], // U = 2
-        [9.9314, 11.3692, 13.0263], // U = 5
-        [11.9429, 13.5255, 15.3506], // U = 8
-        [13.0962, 14.9436, 16.6252], // U = 10
-        [15.6523, 17.2764, 19.2701], // U = 15
-        [17.6316, 20.1090, 21.9319], // U = 20
+        [5.1878, 6.2708, 7.4403], // U = 1
+        [6.8938, 8.1003, 9.3158], // U = 2
+        [9.8334, 11.1058, 12.6903], // U = 5
+        [11.8117, 13.3025, 14.7321], // U = 8
+        [12.9547, 14.5436, 16.2299], // U = 10
+        [15.4232, 17.2206, 18.9108], // U = 15
+        [17.5086, 19.5240, 21.3073], // U = 20
     ] },
-    // phone_1hz pf 100 Likelihood::Gaussian: 3000 epochs x 10 runs; mean N_eff before GA 17.9, after 17.9; collapses 7
+    // phone_1hz pf 100 Likelihood::Gaussian: 3000 epochs x 40 runs; mean N_eff before GA 17.1, after 17.1; collapses 537
     Row { profile: 1, kind: "pf", particles: 100, likelihood: Likelihood::Gaussian, threshold: [
-        [420.2957, 3463.5067, 11282.1641], // U = 1
-        [1211.0651, 7394.3652, 24706.9524], // U = 2
-        [4351.5638, 19387.8291, 76173.1656], // U = 5
-        [8535.8727, 32059.0931, 125000.8462], // U = 8
-        [12294.0809, 41490.9503, 154753.6446], // U = 10
-        [19425.5150, 92595.7504, f64::NAN], // U = 15
-        [27667.6819, 173158.5070, f64::NAN], // U = 20
+        [25878.0361, 45007.0650, 53353.8222], // U = 1
+        [54572.2081, 91394.0078, 108210.9610], // U = 2
+        [147973.8963, 233672.4944, 274664.3197], // U = 5
+        [252669.6175, 393505.6963, 437071.7293], // U = 8
+        [329164.9140, 486102.5729, 547011.0162], // U = 10
+        [529019.8833, 741120.7247, 806259.1409], // U = 15
+        [750440.3554, 971529.3315, 1110865.3518], // U = 20
     ] },
-    // phone_1hz pf 300 Likelihood::Gaussian: 3000 epochs x 10 runs; mean N_eff before GA 51.7, after 51.7; collapses 0
+    // phone_1hz pf 300 Likelihood::Gaussian: 3000 epochs x 40 runs; mean N_eff before GA 50.8, after 50.8; collapses 4
     Row { profile: 1, kind: "pf", particles: 300, likelihood: Likelihood::Gaussian, threshold: [
-        [6.1337, 7.4796, 9.3346], // U = 1
-        [8.8082, 10.9996, 14.1695], // U = 2
-        [14.9509, 19.6206, 27.4317], // U = 5
-        [20.9213, 25.7026, 40.6572], // U = 8
-        [23.9581, 29.5324, 46.8802], // U = 10
-        [30.2533, 40.3595, f64::NAN], // U = 15
-        [39.4791, 67.3564, f64::NAN], // U = 20
+        [6.0230, 7.3989, 9.0246], // U = 1
+        [8.7611, 10.9718, 13.5627], // U = 2
+        [15.2494, 19.9011, 26.8385], // U = 5
+        [20.8115, 29.0924, 44.5655], // U = 8
+        [24.2713, 33.5355, 51.9132], // U = 10
+        [32.4331, 50.3980, 72.5620], // U = 15
+        [41.3097, 62.4705, 88.0898], // U = 20
     ] },
-    // phone_1hz gapf 100 Likelihood::Gaussian: 3000 epochs x 10 runs; mean N_eff before GA 16.4, after 17.8; collapses 37
+    // phone_1hz gapf 100 Likelihood::Gaussian: 3000 epochs x 40 runs; mean N_eff before GA 16.4, after 17.8; collapses 1185
     Row { profile: 1, kind: "gapf", particles: 100, likelihood: Likelihood::Gaussian, threshold: [
-        [26572.5430, 39876.2760, 51201.8434], // U = 1
-        [55795.4376, 81599.6903, 104813.4832], // U = 2
-        [148887.5194, 226703.2956, 276764.4981], // U = 5
-        [253831.3478, 379522.5287, 443467.2713], // U = 8
-        [317132.5129, 474574.7874, 551295.0907], // U = 10
-        [527217.4293, 752049.1357, f64::NAN], // U = 15
-        [746694.9600, 1026483.0474, f64::NAN], // U = 20
+        [27371.3013, 42597.9984, 49643.7986], // U = 1
+        [57326.0450, 87611.6918, 100260.5166], // U = 2
+        [154407.8394, 224466.9160, 256497.2635], // U = 5
+        [264597.9021, 363982.9675, 410596.8787], // U = 8
+        [323440.0339, 453008.0124, 509399.9797], // U = 10
+        [495975.8487, 681263.7142, 761249.3220], // U = 15
+        [657131.2482, 904622.0700, 1023102.4840], // U = 20
     ] },
-    // phone_1hz gapf 300 Likelihood::Gaussian: 3000 epochs x 10 runs; mean N_eff before GA 50.1, after 54.9; collapses 0
+    // phone_1hz gapf 300 Likelihood::Gaussian: 3000 epochs x 40 runs; mean N_eff before GA 49.8, after 54.6; collapses 1
     Row { profile: 1, kind: "gapf", particles: 300, likelihood: Likelihood::Gaussian, threshold: [
-        [5.8596, 7.0762, 9.0339], // U = 1
-        [8.3142, 10.1356, 13.8266], // U = 2
-        [13.9814, 20.2380, 31.4006], // U = 5
-        [19.0069, 27.6076, 38.8186], // U = 8
-        [21.7033, 31.9822, 42.0962], // U = 10
-        [30.6141, 46.6654, f64::NAN], // U = 15
-        [36.8511, 50.4481, f64::NAN], // U = 20
+        [6.0020, 7.5528, 10.1100], // U = 1
+        [8.6901, 10.9469, 17.3830], // U = 2
+        [14.8925, 21.5569, 37.7473], // U = 5
+        [20.7209, 30.2044, 99.5110], // U = 8
+        [23.8390, 37.6943, 150.4202], // U = 10
+        [32.2093, 52.7774, 255.4653], // U = 15
+        [39.7747, 66.0745, 340.5017], // U = 20
     ] },
-    // phone_1hz ekf 0 Likelihood::StudentT { nu: 3.0 }: 20000 epochs x 10 runs; mean N_eff before GA 0.0, after 0.0; collapses 0
+    // phone_1hz ekf 0 Likelihood::StudentT { nu: 3.0 }: 20000 epochs x 40 runs; mean N_eff before GA 0.0, after 0.0; collapses 0
     Row { profile: 1, kind: "ekf", particles: 0, likelihood: Likelihood::StudentT { nu: 3.0 }, threshold: [
-        [28.2900, 62.7971, 140.1089], // U = 1
-        [61.1964, 127.6860, 296.7333], // U = 2
-        [131.8433, 299.3363, 617.5539], // U = 5
-        [178.5678, 419.8717, 1038.5062], // U = 8
-        [219.5647, 463.6501, 1162.4731], // U = 10
-        [304.0426, 628.3810, 1788.9197], // U = 15
-        [355.6786, 957.0609, 1985.6391], // U = 20
+        [27.7363, 60.9318, 135.2127], // U = 1
+        [60.3096, 131.2239, 298.7942], // U = 2
+        [129.7980, 289.3459, 630.7336], // U = 5
+        [182.6774, 412.0952, 837.1633], // U = 8
+        [218.9003, 479.7845, 1116.5435], // U = 10
+        [293.3835, 643.0026, 1480.3801], // U = 15
+        [362.0865, 745.5416, 1881.6257], // U = 20
     ] },
-    // phone_1hz pf 100 Likelihood::StudentT { nu: 3.0 }: 3000 epochs x 10 runs; mean N_eff before GA 23.8, after 23.8; collapses 0
+    // phone_1hz pf 100 Likelihood::StudentT { nu: 3.0 }: 3000 epochs x 40 runs; mean N_eff before GA 23.3, after 23.3; collapses 0
     Row { profile: 1, kind: "pf", particles: 100, likelihood: Likelihood::StudentT { nu: 3.0 }, threshold: [
-        [13.8881, 120.9804, 149.3063], // U = 1
-        [32.0211, 256.1287, 300.6025], // U = 2
-        [103.9398, 684.0152, 754.6563], // U = 5
-        [192.6661, 1148.2221, 1205.7368], // U = 8
-        [261.5884, 1454.5123, 1504.8772], // U = 10
-        [774.9196, 2215.4006, f64::NAN], // U = 15
-        [1411.4503, 2977.0695, f64::NAN], // U = 20
+        [9.9240, 50.4213, 118.3043], // U = 1
+        [16.2717, 105.3588, 239.5852], // U = 2
+        [37.6769, 280.9769, 612.0993], // U = 5
+        [59.1170, 503.4388, 1004.5824], // U = 8
+        [74.7037, 682.2434, 1256.9405], // U = 10
+        [109.6178, 1151.3765, 1982.9998], // U = 15
+        [157.0341, 1666.6289, 2846.8341], // U = 20
     ] },
-    // phone_1hz pf 300 Likelihood::StudentT { nu: 3.0 }: 3000 epochs x 10 runs; mean N_eff before GA 64.8, after 64.8; collapses 0
+    // phone_1hz pf 300 Likelihood::StudentT { nu: 3.0 }: 3000 epochs x 40 runs; mean N_eff before GA 64.8, after 64.8; collapses 0
     Row { profile: 1, kind: "pf", particles: 300, likelihood: Likelihood::StudentT { nu: 3.0 }, threshold: [
-        [7.7665, 9.5623, 11.7385], // U = 1
-        [10.5043, 12.7272, 15.3036], // U = 2
-        [15.4325, 20.1271, 24.7391], // U = 5
-        [19.1410, 25.9986, 35.6257], // U = 8
-        [22.3053, 30.2760, 39.3645], // U = 10
-        [27.9722, 40.5416, f64::NAN], // U = 15
-        [34.7514, 52.6669, f64::NAN], // U = 20
+        [7.6374, 9.3010, 10.9536], // U = 1
+        [10.2897, 12.1049, 14.8052], // U = 2
+        [15.4159, 18.4629, 27.5267], // U = 5
+        [18.7642, 22.8201, 44.0536], // U = 8
+        [21.3262, 27.2240, 47.6975], // U = 10
+        [26.1767, 36.7401, 84.7150], // U = 15
+        [31.0921, 49.7064, 123.7848], // U = 20
     ] },
-    // phone_1hz gapf 100 Likelihood::StudentT { nu: 3.0 }: 3000 epochs x 10 runs; mean N_eff before GA 22.2, after 24.1; collapses 0
+    // phone_1hz gapf 100 Likelihood::StudentT { nu: 3.0 }: 3000 epochs x 40 runs; mean N_eff before GA 22.4, after 24.4; collapses 0
     Row { profile: 1, kind: "gapf", particles: 100, likelihood: Likelihood::StudentT { nu: 3.0 }, threshold: [
-        [10.8181, 22.2360, 43.9200], // U = 1
-        [19.1595, 48.4291, 91.8689], // U = 2
-        [51.6088, 124.3953, 260.4487], // U = 5
-        [91.8420, 212.2324, 419.9095], // U = 8
-        [116.6684, 337.0663, 515.8579], // U = 10
-        [184.7717, 562.8510, f64::NAN], // U = 15
-        [299.8845, 946.3363, f64::NAN], // U = 20
+        [11.1718, 45.2993, 98.2138], // U = 1
+        [20.4794, 94.5259, 196.7794], // U = 2
+        [50.3375, 252.1756, 523.7699], // U = 5
+        [84.8109, 414.0384, 857.3762], // U = 8
+        [110.7384, 542.8741, 1094.5441], // U = 10
+        [166.3901, 893.6034, 1665.4819], // U = 15
+        [228.4489, 1168.7021, 2449.0368], // U = 20
     ] },
-    // phone_1hz gapf 300 Likelihood::StudentT { nu: 3.0 }: 3000 epochs x 10 runs; mean N_eff before GA 62.3, after 68.3; collapses 0
+    // phone_1hz gapf 300 Likelihood::StudentT { nu: 3.0 }: 3000 epochs x 40 runs; mean N_eff before GA 63.0, after 69.1; collapses 0
     Row { profile: 1, kind: "gapf", particles: 300, likelihood: Likelihood::StudentT { nu: 3.0 }, threshold: [
-        [7.6346, 9.3123, 11.0133], // U = 1
-        [10.2816, 12.2468, 14.9293], // U = 2
-        [15.9188, 19.6366, 24.6479], // U = 5
-        [20.0302, 25.6958, 32.8490], // U = 8
-        [23.0219, 31.6233, 35.7680], // U = 10
-        [30.6628, 39.5622, f64::NAN], // U = 15
-        [35.7373, 45.7303, f64::NAN], // U = 20
+        [7.5387, 9.1745, 10.7623], // U = 1
+        [10.1849, 11.9754, 14.0372], // U = 2
+        [15.0884, 18.1358, 22.9105], // U = 5
+        [18.8751, 22.9281, 32.3395], // U = 8
+        [20.8398, 27.7265, 35.9200], // U = 10
+        [27.0257, 36.4649, 50.2676], // U = 15
+        [31.1604, 47.0418, 71.5394], // U = 20
     ] },
-    // geodetic_30s ekf 0 Likelihood::Gaussian: 20000 epochs x 10 runs; mean N_eff before GA 0.0, after 0.0; collapses 0
+    // geodetic_30s ekf 0 Likelihood::Gaussian: 20000 epochs x 40 runs; mean N_eff before GA 0.0, after 0.0; collapses 0
     Row { profile: 2, kind: "ekf", particles: 0, likelihood: Likelihood::Gaussian, threshold: [
-        [4.8169, 5.9375, 7.0514], // U = 1
-        [6.5558, 7.7660, 8.9184], // U = 2
-        [9.5195, 11.0817, 12.4785], // U = 5
-        [11.6635, 13.1077, 15.1145], // U = 8
-        [12.8448, 14.5202, 16.2157], // U = 10
-        [15.1807, 17.0946, 19.4595], // U = 15
-        [17.3930, 19.7301, 21.6255], // U = 20
+        [4.8215, 5.9195, 7.0045], // U = 1
+        [6.5136, 7.7111, 8.8930], // U = 2
+        [9.5064, 10.8339, 12.0950], // U = 5
+        [11.4701, 12.8990, 14.5930], // U = 8
+        [12.6116, 14.3061, 15.7857], // U = 10
+        [15.0823, 16.8991, 19.2549], // U = 15
+        [17.2467, 19.2603, 21.0580], // U = 20
     ] },
-    // geodetic_30s pf 100 Likelihood::Gaussian: 3000 epochs x 10 runs; mean N_eff before GA 2.4, after 2.4; collapses 20705
+    // geodetic_30s pf 100 Likelihood::Gaussian: 3000 epochs x 40 runs; mean N_eff before GA 2.3, after 2.3; collapses 83281
     Row { profile: 2, kind: "pf", particles: 100, likelihood: Likelihood::Gaussian, threshold: [
-        [20216.2135, 30518.0348, 37008.7158], // U = 1
-        [33323.6500, 47692.0215, 58923.9898], // U = 2
-        [55867.3064, 83423.4145, 100514.5222], // U = 5
-        [74084.3867, 100050.7640, 136122.1078], // U = 8
-        [83826.6602, 111395.8483, 136168.0601], // U = 10
-        [91555.4527, 136470.0830, f64::NAN], // U = 15
-        [95774.1202, 154084.2859, f64::NAN], // U = 20
+        [22636.2874, 32336.3197, 37509.9413], // U = 1
+        [36691.2911, 50893.1988, 60936.7946], // U = 2
+        [61219.9527, 84880.5726, 114407.8741], // U = 5
+        [76527.7142, 111481.1549, 134579.8581], // U = 8
+        [82043.6803, 119073.2413, 143621.1926], // U = 10
+        [94668.1106, 131716.9948, 156988.1825], // U = 15
+        [110505.8460, 136470.0157, 178742.6205], // U = 20
     ] },
-    // geodetic_30s pf 300 Likelihood::Gaussian: 3000 epochs x 10 runs; mean N_eff before GA 4.8, after 4.8; collapses 11837
+    // geodetic_30s pf 300 Likelihood::Gaussian: 3000 epochs x 40 runs; mean N_eff before GA 4.1, after 4.1; collapses 54834
     Row { profile: 2, kind: "pf", particles: 300, likelihood: Likelihood::Gaussian, threshold: [
-        [22130.9219, 33464.6439, 37783.1454], // U = 1
-        [39796.7995, 55474.3221, 66204.0420], // U = 2
-        [68467.5060, 100846.9423, 131275.9574], // U = 5
-        [91440.9546, 131280.8565, 159799.4593], // U = 8
-        [100302.3456, 140831.6409, 176730.6195], // U = 10
-        [126813.7617, 149872.4847, f64::NAN], // U = 15
-        [132146.0722, 159805.8853, f64::NAN], // U = 20
+        [26447.9671, 34615.7533, 38071.4041], // U = 1
+        [44056.2436, 57003.8452, 66987.0811], // U = 2
+        [77289.0160, 106201.8631, 125221.3441], // U = 5
+        [96784.4545, 130347.3165, 150223.4000], // U = 8
+        [108539.7357, 138887.1815, 181399.4666], // U = 10
+        [121908.3861, 153128.3007, 224465.1062], // U = 15
+        [133674.8687, 165228.1578, 237720.3662], // U = 20
     ] },
-    // geodetic_30s gapf 100 Likelihood::Gaussian: 3000 epochs x 10 runs; mean N_eff before GA 2.3, after 2.6; collapses 18951
+    // geodetic_30s gapf 100 Likelihood::Gaussian: 3000 epochs x 40 runs; mean N_eff before GA 2.2, after 2.4; collapses 76799
     Row { profile: 2, kind: "gapf", particles: 100, likelihood: Likelihood::Gaussian, threshold: [
-        [22905.1621, 32363.1641, 36969.8917], // U = 1
-        [38444.5981, 53711.4380, 61971.8995], // U = 2
-        [66962.1171, 93861.1841, 116900.6896], // U = 5
-        [80832.7101, 107918.9501, 137564.0885], // U = 8
-        [92694.3252, 122543.7657, 145267.3363], // U = 10
-        [109313.3455, 145267.3363, f64::NAN], // U = 15
-        [113897.1949, 148578.3380, f64::NAN], // U = 20
+        [23933.7969, 33132.1468, 37994.4870], // U = 1
+        [39655.2114, 53092.6459, 63845.0443], // U = 2
+        [65318.4143, 94464.9604, 117169.0796], // U = 5
+        [84913.9427, 111412.5763, 142250.3739], // U = 8
+        [90295.7067, 123375.0493, 153494.4120], // U = 10
+        [104229.4239, 135863.6617, 172476.5587], // U = 15
+        [109194.4601, 146099.3264, 179362.2170], // U = 20
     ] },
-    // geodetic_30s gapf 300 Likelihood::Gaussian: 3000 epochs x 10 runs; mean N_eff before GA 3.4, after 3.9; collapses 13774
+    // geodetic_30s gapf 300 Likelihood::Gaussian: 3000 epochs x 40 runs; mean N_eff before GA 3.7, after 4.3; collapses 50464
     Row { profile: 2, kind: "gapf", particles: 300, likelihood: Likelihood::Gaussian, threshold: [
-        [28245.5973, 35435.5940, 38840.7189], // U = 1
-        [45607.2418, 60135.4937, 65867.1182], // U = 2
-        [83967.9835, 116231.4409, 138019.7856], // U = 5
-        [104250.2036, 142069.9825, 179948.2771], // U = 8
-        [114805.3708, 156373.8765, 208047.5490], // U = 10
-        [138451.1298, 186162.8380, f64::NAN], // U = 15
-        [149030.6172, 206086.2761, f64::NAN], // U = 20
+        [27544.4699, 34873.3552, 38351.8181], // U = 1
+        [44571.0538, 56981.7219, 65647.7895], // U = 2
+        [77607.1657, 104474.4063, 128795.8427], // U = 5
+        [99454.8843, 130840.2804, 160492.2402], // U = 8
+        [108205.7272, 140709.5145, 183113.8393], // U = 10
+        [126951.4928, 171448.7202, 208334.2768], // U = 15
+        [136795.1847, 184146.4833, 214912.8780], // U = 20
     ] },
 ];
