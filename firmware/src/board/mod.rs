@@ -90,8 +90,12 @@ pub struct Parts<B: Board> {
     pub alarm: B::Alarm,
     /// The watchdog, not yet started.
     pub watchdog: B::Watchdog,
-    /// The core clock, Hz (SysTick counts at it).
+    /// The core clock actually running, Hz (SysTick counts at it).
     pub core_hz: u32,
+    /// True when the board runs on a fallback clock because its intended
+    /// one did not start (the STM32F4 on its HSI when the HSE or the PLL
+    /// timed out); reported in `Status`.
+    pub clock_fallback: bool,
     /// What reset the part.
     pub reset: HardwareReset,
 }

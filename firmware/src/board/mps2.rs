@@ -58,6 +58,7 @@ impl Board for Mps2An386 {
             alarm: AlarmPin::new(),
             watchdog: CmsdkWatchdog(Regs(WDOG)),
             core_hz: CORE_HZ,
+            clock_fallback: false,
             reset: HardwareReset::Other,
         })
     }
