@@ -149,10 +149,11 @@ fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts:
     stack::paint();
     guard::enable(&mut core.MPU);
     defmt::info!(
-        "raim firmware up: capacity {=usize}, protocol {=u16}, core {=u32} Hz",
+        "raim firmware up: capacity {=usize}, protocol {=u16}, core {=u32} Hz, watchdog {=u32} ms",
         raim_proto::CAPACITY,
         raim_proto::PROTOCOL_VERSION,
-        core_hz
+        core_hz,
+        watchdog.timeout_ms()
     );
     // The boot notice: the first frame after every reset.
     let _ = server.send_boot_notice::<_, core::convert::Infallible, _>(&mut link, &mut platform);

@@ -56,9 +56,11 @@ pub trait LinkRxPort {
 /// epoch that hangs stops the feeding; the watchdog then resets the unit
 /// (docs/SAFETY.md "Watchdog").
 pub trait Watchdog {
-    /// The nominal timeout, ms.
-    const TIMEOUT_MS: u32;
-    /// Starts it with [`Self::TIMEOUT_MS`]; it cannot be stopped again.
+    /// The nominal timeout, ms: the board's choice for the clock it runs
+    /// at, so that the costliest epoch takes under half the shortest
+    /// timeout (docs/SAFETY.md "Watchdog margin").
+    fn timeout_ms(&self) -> u32;
+    /// Starts it with [`Self::timeout_ms`]; it cannot be stopped again.
     fn start(&mut self);
     /// Restarts its countdown.
     fn feed(&mut self);

@@ -208,7 +208,14 @@ impl Board for Stm32f4 {
             link_rx: RxPort(link_rx),
             nmea: Uart(nmea),
             alarm,
-            watchdog: Iwdg(IndependentWatchdog::new(dp.IWDG)),
+            watchdog: Iwdg {
+                iwdg: IndependentWatchdog::new(dp.IWDG),
+                timeout_ms: if clock == ClockStart::Pll {
+                    IWDG_TIMEOUT_PLL_MS
+                } else {
+                    IWDG_TIMEOUT_HSI_MS
+                },
+            },
             core_hz,
             clock_fallback: clock != ClockStart::Pll,
             reset,
@@ -284,16 +291,36 @@ impl LinkRxPort for RxPort {
     }
 }
 
+/// The IWDG's nominal timeout at 168 MHz. The HAL programs prescaler /256
+/// and reload 624: 625 x 256 / f_LSI, 3.40 s at the LSI's datasheet
+/// maximum of 47 kHz, 5.0 s at its nominal 32 kHz, 9.41 s at its minimum
+/// of 17 kHz. Half the shortest, less the longest blocking answer and NMEA
+/// burst at 115200 baud (0.45 s), leaves 26.2 M guest instructions at 8
+/// cycles each (5 flash wait states, every line missing the ART), above
+/// the costliest measured epoch (docs/SAFETY.md "Watchdog margin").
+pub const IWDG_TIMEOUT_PLL_MS: u32 = 5_000;
+/// The IWDG's nominal timeout on the 16 MHz HSI fallback: prescaler /256,
+/// reload 1874, 10.2 s at 47 kHz (28.2 s at 17 kHz), leaving 24.8 M
+/// instructions at 3 cycles each (0 wait states); at the 168 MHz timeout
+/// the costliest epoch would take 3.3 s, over half of 3.40 s.
+pub const IWDG_TIMEOUT_HSI_MS: u32 = 15_000;
+
 /// The independent watchdog, through the HAL (LSI clock, nominally
-/// 32 kHz; its datasheet range and the margin it leaves: docs/SAFETY.md).
-pub struct Iwdg(IndependentWatchdog);
+/// 32 kHz), with the timeout for the clock the core runs at: set once the
+/// clock is known.
+pub struct Iwdg {
+    iwdg: IndependentWatchdog,
+    timeout_ms: u32,
+}
 
 impl Watchdog for Iwdg {
-    const TIMEOUT_MS: u32 = 2_000;
+    fn timeout_ms(&self) -> u32 {
+        self.timeout_ms
+    }
     fn start(&mut self) {
-        self.0.start(Self::TIMEOUT_MS.millis());
+        self.iwdg.start(self.timeout_ms.millis());
     }
     fn feed(&mut self) {
-        self.0.feed();
+        self.iwdg.feed();
     }
 }
