@@ -118,7 +118,8 @@ pub trait Board: Sized {
     const LINK_RX_IRQ: u16;
     /// The board's peripherals, set up (clocks, pins, UARTs at 115200 8N1),
     /// with interrupts masked (PRIMASK) until the application has set up
-    /// the receive ring. `None` if called twice.
+    /// the receive ring. `None` if called twice, or if the
+    /// board cannot start (the STM32F4: its clock unknown); `main` then halts.
     fn take() -> Option<Parts<Self>>;
 }
 

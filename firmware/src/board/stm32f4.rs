@@ -58,11 +58,12 @@ const REGISTER_BUDGET_US: u32 = 10;
 
 /// Loop iterations that last at least `budget_us` on the HSI: one
 /// iteration takes at least one cycle (a volatile read, a test and a
-/// branch take more), at most [`HSI_MAX_HZ`]. An iteration takes at most
-/// ~10 cycles (an APB/AHB read and the loop), so the wait never lasts
-/// more than ~12 x `budget_us` at the HSI's slowest (-8 %).
+/// branch take more) of at most 1 / [`HSI_MAX_HZ`]. An iteration takes at
+/// most ~10 cycles (an AHB read and the loop), so a wait that runs out
+/// lasts at most ~11 x `budget_us` at the HSI's slowest (-8 %): 0.23 s
+/// for the HSE.
 const fn iterations(budget_us: u32) -> u32 {
-    (HSI_MAX_HZ / 1_000_000) * budget_us
+    (HSI_MAX_HZ as u64 * budget_us as u64 / 1_000_000) as u32
 }
 
 /// Spins until `ready` or `budget` iterations have passed; true if ready.
@@ -99,12 +100,14 @@ pub enum ClockStart {
 /// then find HSERDY and PLLRDY already set, and the `Rcc` it returns
 /// carries the clocks the USARTs' baud rates are computed from. If a wait
 /// runs out, the part stays on (or returns to) the HSI at 16 MHz with 0
-/// wait states, the HSE and the PLL off ([`hsi_fallback`]).
-fn start_clocks(rcc: pac::RCC, flash: &pac::FLASH) -> (Rcc, ClockStart) {
+/// wait states, the HSE and the PLL off ([`hsi_fallback`]). `None` when
+/// the clock the core runs on is unknown (SWS shows neither the PLL nor,
+/// after the way back, the HSI).
+fn start_clocks(rcc: pac::RCC, flash: &pac::FLASH) -> Option<(Rcc, ClockStart)> {
     let rcc = rcc.constrain();
     let outcome = start_pll(&rcc, flash);
     if outcome != ClockStart::Pll {
-        return (hsi_fallback(rcc), outcome);
+        return Some((hsi_fallback(rcc)?, outcome));
     }
     let config = rcc::Config::hse(HSE_HZ.Hz())
         .sysclk(PLL_SYSCLK_HZ.Hz())
@@ -114,9 +117,9 @@ fn start_clocks(rcc: pac::RCC, flash: &pac::FLASH) -> (Rcc, ClockStart) {
     if !wait_until(iterations(REGISTER_BUDGET_US), || {
         rcc.cfgr().read().sws().is_pll()
     }) {
-        return (hsi_fallback(rcc), ClockStart::SwitchTimeout);
+        return Some((hsi_fallback(rcc)?, ClockStart::SwitchTimeout));
     }
-    (rcc, ClockStart::Pll)
+    Some((rcc, ClockStart::Pll))
 }
 
 /// HSE on, PLL configured and locked, flash latency at 5 wait states with
@@ -165,17 +168,19 @@ fn start_pll(rcc: &pac::RCC, flash: &pac::FLASH) -> ClockStart {
 /// Back to the HSI: SYSCLK on the HSI (waited for within its budget; the
 /// PLL cannot be stopped while it drives the core), the PLL and the HSE
 /// off, then the HAL's `Config::hsi()` (prescalers 1, flash at 0 wait
-/// states, ART on), which waits on no ready bit.
-fn hsi_fallback(rcc: Rcc) -> Rcc {
+/// states, ART on), which waits on no ready bit. `None` if SWS does not
+/// show the HSI: the core may still run fast, so the wait states are left
+/// as they are and the board does not start.
+fn hsi_fallback(rcc: Rcc) -> Option<Rcc> {
     rcc.cfgr().modify(|_, w| w.sw().hsi());
-    let on_hsi = wait_until(iterations(REGISTER_BUDGET_US), || {
+    if !wait_until(iterations(REGISTER_BUDGET_US), || {
         rcc.cfgr().read().sws().is_hsi()
-    });
-    if on_hsi {
-        rcc.cr().modify(|_, w| w.pllon().clear_bit());
-        rcc.cr().modify(|_, w| w.hseon().clear_bit());
+    }) {
+        return None;
     }
-    rcc.freeze(rcc::Config::hsi())
+    rcc.cr().modify(|_, w| w.pllon().clear_bit());
+    rcc.cr().modify(|_, w| w.hseon().clear_bit());
+    Some(rcc.freeze(rcc::Config::hsi()))
 }
 
 impl Board for Stm32f4 {
@@ -191,7 +196,7 @@ impl Board for Stm32f4 {
         cortex_m::interrupt::disable();
         let dp = pac::Peripherals::take()?;
         let reset = reset_cause(&dp.RCC);
-        let (mut rcc, clock) = start_clocks(dp.RCC, &dp.FLASH);
+        let (mut rcc, clock) = start_clocks(dp.RCC, &dp.FLASH)?;
         let core_hz = rcc.clocks.hclk().raw();
         defmt::info!("clock: {} at {=u32} Hz", clock, core_hz);
         let gpioa = dp.GPIOA.split(&mut rcc);
