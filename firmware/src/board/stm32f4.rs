@@ -42,6 +42,12 @@ const PCLK2_HZ: u32 = 84_000_000;
 const PLL_M: u8 = 4;
 const PLL_N: u16 = 168;
 const PLL_Q: u8 = 7;
+const _: () = {
+    let vco_hz = HSE_HZ / PLL_M as u32 * PLL_N as u32;
+    assert!(vco_hz / 2 == PLL_SYSCLK_HZ);
+    assert!(vco_hz / PLL_Q as u32 == 48_000_000);
+    assert!(PLL_SYSCLK_HZ / PCLK1_HZ == 4 && PLL_SYSCLK_HZ / PCLK2_HZ == 2);
+};
 /// The HSI's frequency at its datasheet maximum (16 MHz + 4.5 %, the
 /// factory-calibrated accuracy over -40..105 °C, STM32F405/407 datasheet
 /// "HSI oscillator characteristics"): the fastest the wait loops can spin.
