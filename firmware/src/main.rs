@@ -40,6 +40,8 @@ struct Unit<B: Board> {
     reset: (u32, ResetCause),
     /// The integrity-alarm discrete output.
     discrete: discrete::Discrete<B::Alarm>,
+    /// The core clock running, Hz, and whether it is the board's fallback.
+    clock: (u32, bool),
 }
 
 /// An interrupt line by number, for the NVIC (no device crate).
@@ -73,6 +75,7 @@ impl<B: Board> Platform for Unit<B> {
         (status.uart_overruns, status.rx_ring_overflows) = link_rx::counters();
         status.alarm_output = self.discrete.update(self.ticks.now64());
         status.alarm_pin_asserted = self.discrete.pin_asserted();
+        (status.core_clock_hz, status.clock_fallback) = self.clock;
     }
     /// Test hooks exist on the QEMU board only (CI); the real board's
     /// build answers `TestHooksDisabled`.
@@ -116,6 +119,7 @@ fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts:
         alarm,
         mut watchdog,
         core_hz,
+        clock_fallback,
         reset,
     } = parts;
     let reset = fault::boot(reset);
@@ -135,6 +139,7 @@ fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts:
         ticks: board::Ticks::new(core.SYST),
         reset,
         discrete: discrete::Discrete::new(alarm, core_hz),
+        clock: (core_hz, clock_fallback),
     };
     // The provisioned configuration, if its seal verifies and every part
     // passes its checks, runs locked; otherwise the unit is Unconfigured.
@@ -144,10 +149,11 @@ fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts:
     stack::paint();
     guard::enable(&mut core.MPU);
     defmt::info!(
-        "raim firmware up: capacity {=usize}, protocol {=u16}, core {=u32} Hz",
+        "raim firmware up: capacity {=usize}, protocol {=u16}, core {=u32} Hz, watchdog {=u32} ms",
         raim_proto::CAPACITY,
         raim_proto::PROTOCOL_VERSION,
-        core_hz
+        core_hz,
+        watchdog.timeout_ms()
     );
     // The boot notice: the first frame after every reset.
     let _ = server.send_boot_notice::<_, core::convert::Infallible, _>(&mut link, &mut platform);

@@ -35,7 +35,7 @@ use raim_qemu::{Machine, Options, QemuSession};
 
 const KEY: [u8; 32] = *b"unit 0042 key, never on the link";
 
-/// The watchdog fires 2 s after the last feed (the boards' `Watchdog::TIMEOUT_MS`, firmware/src/board/).
+/// The watchdog fires 2 s after the last feed (mps2-an386's `WATCHDOG_TIMEOUT_MS`, firmware/src/board/mps2.rs).
 const WATCHDOG_S: f64 = 2.0;
 
 fn elf(machine: Machine) -> std::path::PathBuf {

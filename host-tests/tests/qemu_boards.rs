@@ -4,8 +4,9 @@
 //! for bit as the host core's, the NMEA sentences, and a stream of frames
 //! sent back to back. (Its streaming test is in qemu_link.rs, with the QEMU
 //! board's.) QEMU does not model this machine's GPIO, RCC or IWDG, so the
-//! alarm pin, the clock set-up and the watchdog are tested on mps2-an386
-//! only.
+//! alarm pin and the watchdog are tested on mps2-an386 only; its RCC reads
+//! 0, so the clock set-up always takes its HSI fallback here, which the
+//! `Status` clock fields show.
 
 mod qemu_common;
 
@@ -13,6 +14,24 @@ use qemu_common::{host_result, range_vectors, session_on, wire_bytes};
 use raim_core::{Config, Epoch, FiRule, Phase};
 use raim_proto::{ConfigSource, UnitConfigRef, PROTOCOL_VERSION};
 use raim_qemu::Machine;
+
+/// The clock each board reports in `Status`: mps2-an386 its fixed 25 MHz;
+/// the STM32F4 build, whose HSE never becomes ready under QEMU (the RCC
+/// is unimplemented there and reads 0), the 16 MHz HSI, flagged as the
+/// fallback, after its bounded wait ran out (and it still answers).
+#[test]
+fn qemu_boards_report_the_core_clock_they_run_at() {
+    let mut mps2 = session_on(Machine::Mps2An386);
+    let st = mps2.status().unwrap();
+    assert_eq!((st.core_clock_hz, st.clock_fallback), (25_000_000, false));
+    drop(mps2);
+    let mut f4 = session_on(Machine::NetduinoPlus2);
+    let st = f4.status().unwrap();
+    assert_eq!((st.core_clock_hz, st.clock_fallback), (16_000_000, true));
+    // The host's server has no board: no clock.
+    let host = raim_server::Server::new().status();
+    assert_eq!((host.core_clock_hz, host.clock_fallback), (0, false));
+}
 
 #[test]
 fn qemu_netduinoplus2_answers_frames_bit_for_bit_with_nmea() {

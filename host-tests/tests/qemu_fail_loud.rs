@@ -15,7 +15,7 @@ use raim_core::{Config, Epoch, Phase};
 use raim_proto::message::CommandRef;
 use raim_proto::{ConfigSource, ResetCause, TestFault};
 
-/// The watchdog fires 2 s after the last feed (the boards' `Watchdog::TIMEOUT_MS`, firmware/src/board/).
+/// The watchdog fires 2 s after the last feed (mps2-an386's `WATCHDOG_TIMEOUT_MS`, firmware/src/board/mps2.rs).
 const WATCHDOG_S: f64 = 2.0;
 
 #[test]

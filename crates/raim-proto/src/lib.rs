@@ -81,10 +81,9 @@ pub type DevicePrecision = f32;
 /// Bump on any change of a serialized type (postcard is not self-describing);
 /// new enum variants are appended so that the earlier ones keep their
 /// indices. The history of the versions is in CHANGELOG.md, "Wire protocol
-/// versions"; 10 is the particle filter's allocated false-alarm
-/// probability (`PfConfig::pfa` in place of a threshold) and the N_eff
-/// before the genetic step in `WirePfResult`.
-pub const PROTOCOL_VERSION: u16 = 10;
+/// versions"; 11 is the core clock in `Status` (`core_clock_hz`,
+/// `clock_fallback`).
+pub const PROTOCOL_VERSION: u16 = 11;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes

@@ -390,6 +390,13 @@ pub struct Status {
     pub host_sigmas: bool,
     /// Why the provisioned configuration was refused at boot, if it was.
     pub provision_error: Option<crate::unit::ProvisionError>,
+    /// The core clock the unit runs at, Hz (SysTick and the time-to-alert
+    /// count at it); 0 from a server with no board (the host's).
+    pub core_clock_hz: u32,
+    /// True when that clock is the board's fallback: the STM32F4 on its
+    /// 16 MHz HSI because the HSE or the PLL did not become ready within
+    /// its bounded wait (docs/SAFETY.md "Clocks").
+    pub clock_fallback: bool,
 }
 
 impl Status {
@@ -420,6 +427,8 @@ impl Status {
         boot_nonce: [0; 16],
         host_sigmas: false,
         provision_error: None,
+        core_clock_hz: 0,
+        clock_fallback: false,
     };
 }
 

@@ -56,9 +56,11 @@ pub trait LinkRxPort {
 /// epoch that hangs stops the feeding; the watchdog then resets the unit
 /// (docs/SAFETY.md "Watchdog").
 pub trait Watchdog {
-    /// The nominal timeout, ms.
-    const TIMEOUT_MS: u32;
-    /// Starts it with [`Self::TIMEOUT_MS`]; it cannot be stopped again.
+    /// The nominal timeout, ms: the board's choice for the clock it runs
+    /// at, so that the costliest epoch takes under half the shortest
+    /// timeout (docs/SAFETY.md "Watchdog margin").
+    fn timeout_ms(&self) -> u32;
+    /// Starts it with [`Self::timeout_ms`]; it cannot be stopped again.
     fn start(&mut self);
     /// Restarts its countdown.
     fn feed(&mut self);
@@ -90,8 +92,12 @@ pub struct Parts<B: Board> {
     pub alarm: B::Alarm,
     /// The watchdog, not yet started.
     pub watchdog: B::Watchdog,
-    /// The core clock, Hz (SysTick counts at it).
+    /// The core clock actually running, Hz (SysTick counts at it).
     pub core_hz: u32,
+    /// True when the board runs on a fallback clock because its intended
+    /// one did not start (the STM32F4 on its HSI when the HSE or the PLL
+    /// timed out); reported in `Status`.
+    pub clock_fallback: bool,
     /// What reset the part.
     pub reset: HardwareReset,
 }
@@ -112,7 +118,8 @@ pub trait Board: Sized {
     const LINK_RX_IRQ: u16;
     /// The board's peripherals, set up (clocks, pins, UARTs at 115200 8N1),
     /// with interrupts masked (PRIMASK) until the application has set up
-    /// the receive ring. `None` if called twice.
+    /// the receive ring. `None` if called twice, or if the
+    /// board cannot start (the STM32F4: its clock unknown); `main` then halts.
     fn take() -> Option<Parts<Self>>;
 }
 

@@ -58,6 +58,7 @@ impl Board for Mps2An386 {
             alarm: AlarmPin::new(),
             watchdog: CmsdkWatchdog(Regs(WDOG)),
             core_hz: CORE_HZ,
+            clock_fallback: false,
             reset: HardwareReset::Other,
         })
     }
@@ -166,10 +167,16 @@ const WDOG_UNLOCK_KEY: u32 = 0x1ACC_E551;
 const WDOG_CTRL_INTEN: u32 = 1 << 0;
 const WDOG_CTRL_RESEN: u32 = 1 << 1;
 
+/// 2 s: the CMSDK watchdog counts the 25 MHz core clock, which has no
+/// tolerance to speak of under QEMU.
+const WATCHDOG_TIMEOUT_MS: u32 = 2_000;
+
 impl Watchdog for CmsdkWatchdog {
-    const TIMEOUT_MS: u32 = 2_000;
+    fn timeout_ms(&self) -> u32 {
+        WATCHDOG_TIMEOUT_MS
+    }
     fn start(&mut self) {
-        let load = CORE_HZ / 1_000 * Self::TIMEOUT_MS;
+        let load = CORE_HZ / 1_000 * WATCHDOG_TIMEOUT_MS;
         self.0.write(WDOG_LOCK, WDOG_UNLOCK_KEY);
         self.0.write(WDOG_LOAD, load);
         self.0.write(WDOG_CTRL, WDOG_CTRL_INTEN | WDOG_CTRL_RESEN);

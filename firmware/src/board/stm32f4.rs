@@ -5,13 +5,19 @@
 //!
 //! USART2 (PA2/PA3) is the link, USART3 TX (PB10) the NMEA output, both
 //! 115200 8N1; PD12 (the green LED of an STM32F4-Discovery) the alarm pin.
-//! The core runs at the 16 MHz HSI the part resets to: `constrain`
-//! configures nothing, so nothing waits for a ready bit (QEMU's
-//! netduinoplus2, an STM32F405, does not model the RCC; docs/SAFETY.md).
+//!
+//! The core runs at 168 MHz from the 8 MHz HSE through the main PLL
+//! ([`start_clocks`]), every ready-bit wait bounded by an iteration budget;
+//! if a wait runs out the part stays on the 16 MHz HSI it resets to, and
+//! says so ([`Parts::clock_fallback`], `Status.clock_fallback`). QEMU's
+//! netduinoplus2 (an STM32F405) leaves the RCC unimplemented (its registers
+//! read 0), so there HSERDY never sets and the fallback is the path CI runs
+//! (docs/SAFETY.md "Clocks").
 
 use stm32f4xx_hal::gpio::{Output, PushPull, PD12};
 use stm32f4xx_hal::pac;
 use stm32f4xx_hal::prelude::*;
+use stm32f4xx_hal::rcc::{self, Rcc};
 use stm32f4xx_hal::serial::{self, RxISR, RxListen, Serial};
 use stm32f4xx_hal::watchdog::IndependentWatchdog;
 
@@ -20,8 +26,168 @@ use super::{Board, HardwareReset, LinkRxPort, Parts, Watchdog};
 /// The board.
 pub struct Stm32f4;
 
-/// The 16 MHz HSI the part resets to.
-const CORE_HZ: u32 = 16_000_000;
+/// The HSE crystal: 8 MHz on the STM32F4-Discovery.
+const HSE_HZ: u32 = 8_000_000;
+/// The core clock from the PLL: the part's maximum (STM32F405/407
+/// datasheet, f_HCLK max 168 MHz).
+const PLL_SYSCLK_HZ: u32 = 168_000_000;
+/// APB1 (USART2, USART3) at its 42 MHz maximum, APB2 at its 84 MHz.
+const PCLK1_HZ: u32 = 42_000_000;
+const PCLK2_HZ: u32 = 84_000_000;
+/// The main PLL for 168 MHz from 8 MHz (RM0090 §7.3.2): VCO input
+/// 8 MHz / M = 2 MHz (the jitter-minimising input), VCO 2 MHz x N =
+/// 336 MHz, SYSCLK = VCO / 2, the 48 MHz domain VCO / Q = 48 MHz. The
+/// values `stm32f4xx-hal`'s `freeze` derives for the same request (it
+/// writes them again, unchanged, while the PLL already runs).
+const PLL_M: u8 = 4;
+const PLL_N: u16 = 168;
+const PLL_Q: u8 = 7;
+const _: () = {
+    let vco_hz = HSE_HZ / PLL_M as u32 * PLL_N as u32;
+    assert!(vco_hz / 2 == PLL_SYSCLK_HZ);
+    assert!(vco_hz / PLL_Q as u32 == 48_000_000);
+    assert!(PLL_SYSCLK_HZ / PCLK1_HZ == 4 && PLL_SYSCLK_HZ / PCLK2_HZ == 2);
+};
+/// The HSI's frequency at its datasheet maximum (16 MHz + 4.5 %, the
+/// factory-calibrated accuracy over -40..105 °C, STM32F405/407 datasheet
+/// "HSI oscillator characteristics"): the fastest the wait loops can spin.
+const HSI_MAX_HZ: u32 = 16_720_000;
+/// Time granted to the HSE crystal to start: 10 x its 2 ms typical start-up
+/// (datasheet "HSE 4-26 MHz oscillator characteristics", t_SU(HSE)).
+const HSE_START_BUDGET_US: u32 = 20_000;
+/// Time granted to the PLL to lock: 3 x its 300 us maximum lock time
+/// (datasheet "Main PLL characteristics", t_LOCK at VCO 432 MHz).
+const PLL_LOCK_BUDGET_US: u32 = 900;
+/// Time granted to a register write to show (the flash latency read-back,
+/// the clock switch's SWS): a few AHB cycles on the part; 10 us.
+const REGISTER_BUDGET_US: u32 = 10;
+
+/// Loop iterations that last at least `budget_us` on the HSI: one
+/// iteration takes at least one cycle (a volatile read, a test and a
+/// branch take more) of at most 1 / [`HSI_MAX_HZ`]. An iteration takes at
+/// most ~10 cycles (an AHB read and the loop), so a wait that runs out
+/// lasts at most ~11 x `budget_us` at the HSI's slowest (-8 %): 0.23 s
+/// for the HSE.
+const fn iterations(budget_us: u32) -> u32 {
+    (HSI_MAX_HZ as u64 * budget_us as u64 / 1_000_000) as u32
+}
+
+/// Spins until `ready` or `budget` iterations have passed; true if ready.
+fn wait_until(budget: u32, mut ready: impl FnMut() -> bool) -> bool {
+    for _ in 0..budget {
+        if ready() {
+            return true;
+        }
+    }
+    ready()
+}
+
+/// Which clock drives the core, and why.
+#[derive(Clone, Copy, PartialEq, Eq, defmt::Format)]
+pub enum ClockStart {
+    /// 168 MHz from the HSE through the PLL.
+    Pll,
+    /// The flash latency did not read back: stayed on the HSI.
+    FlashLatency,
+    /// HSERDY did not set within its budget: stayed on the HSI.
+    HseTimeout,
+    /// PLLRDY did not set within its budget: stayed on the HSI.
+    PllTimeout,
+    /// SWS did not show the PLL after the switch: back on the HSI.
+    SwitchTimeout,
+}
+
+/// The clock tree: 168 MHz from the HSE through the PLL, flash at 5 wait
+/// states with the ART accelerator (prefetch, instruction and data
+/// caches), APB1 at 42 MHz, APB2 at 84 MHz (RM0090 §3.5.1, §7.2), every
+/// ready bit waited on for a bounded number of iterations. The HSE and the
+/// PLL are brought up here, with bounded waits, before `stm32f4xx-hal`'s
+/// `freeze` is asked for the same configuration: its own (unbounded) waits
+/// then find HSERDY and PLLRDY already set, and the `Rcc` it returns
+/// carries the clocks the USARTs' baud rates are computed from. If a wait
+/// runs out, the part stays on (or returns to) the HSI at 16 MHz with 0
+/// wait states, the HSE and the PLL off ([`hsi_fallback`]). `None` when
+/// the clock the core runs on is unknown (SWS shows neither the PLL nor,
+/// after the way back, the HSI).
+fn start_clocks(rcc: pac::RCC, flash: &pac::FLASH) -> Option<(Rcc, ClockStart)> {
+    let rcc = rcc.constrain();
+    let outcome = start_pll(&rcc, flash);
+    if outcome != ClockStart::Pll {
+        return Some((hsi_fallback(rcc)?, outcome));
+    }
+    let config = rcc::Config::hse(HSE_HZ.Hz())
+        .sysclk(PLL_SYSCLK_HZ.Hz())
+        .pclk1(PCLK1_HZ.Hz())
+        .pclk2(PCLK2_HZ.Hz());
+    let rcc = rcc.freeze(config);
+    if !wait_until(iterations(REGISTER_BUDGET_US), || {
+        rcc.cfgr().read().sws().is_pll()
+    }) {
+        return Some((hsi_fallback(rcc)?, ClockStart::SwitchTimeout));
+    }
+    Some((rcc, ClockStart::Pll))
+}
+
+/// HSE on, PLL configured and locked, flash latency at 5 wait states with
+/// the ART on, each within its budget; SYSCLK still on the HSI.
+fn start_pll(rcc: &pac::RCC, flash: &pac::FLASH) -> ClockStart {
+    rcc.cr().modify(|_, w| w.hseon().set_bit());
+    if !wait_until(iterations(HSE_START_BUDGET_US), || {
+        rcc.cr().read().hserdy().bit_is_set()
+    }) {
+        return ClockStart::HseTimeout;
+    }
+    rcc.pllcfgr().write(|w| {
+        w.pllsrc().hse();
+        w.pllp().div2();
+        // SAFETY: M in 2..=63, N in 50..=432, Q in 2..=15 (RM0090 §7.3.2).
+        unsafe {
+            w.pllm().bits(PLL_M);
+            w.plln().bits(PLL_N);
+            w.pllq().bits(PLL_Q)
+        }
+    });
+    rcc.cr().modify(|_, w| w.pllon().set_bit());
+    if !wait_until(iterations(PLL_LOCK_BUDGET_US), || {
+        rcc.cr().read().pllrdy().bit_is_set()
+    }) {
+        return ClockStart::PllTimeout;
+    }
+    // The wait states before the faster clock, read back before the switch
+    // (RM0090 §3.5.1, "Increasing the CPU frequency").
+    flash.acr().modify(|_, w| {
+        // 5 wait states at 168 MHz and 2.7-3.6 V (RM0090 Table 10:
+        // 150 < HCLK <= 168 MHz).
+        w.latency().ws5();
+        w.prften().set_bit();
+        w.icen().set_bit();
+        w.dcen().set_bit()
+    });
+    if !wait_until(iterations(REGISTER_BUDGET_US), || {
+        flash.acr().read().latency().is_ws5()
+    }) {
+        return ClockStart::FlashLatency;
+    }
+    ClockStart::Pll
+}
+
+/// Back to the HSI: SYSCLK on the HSI (waited for within its budget; the
+/// PLL cannot be stopped while it drives the core), the PLL and the HSE
+/// off, then the HAL's `Config::hsi()` (prescalers 1, flash at 0 wait
+/// states, ART on), which waits on no ready bit. `None` if SWS does not
+/// show the HSI: the core may still run fast, so the wait states are left
+/// as they are and the board does not start.
+fn hsi_fallback(rcc: Rcc) -> Option<Rcc> {
+    rcc.cfgr().modify(|_, w| w.sw().hsi());
+    if !wait_until(iterations(REGISTER_BUDGET_US), || {
+        rcc.cfgr().read().sws().is_hsi()
+    }) {
+        return None;
+    }
+    rcc.cr().modify(|_, w| w.pllon().clear_bit());
+    rcc.cr().modify(|_, w| w.hseon().clear_bit());
+    Some(rcc.freeze(rcc::Config::hsi()))
+}
 
 impl Board for Stm32f4 {
     type Link = Uart<pac::USART2>;
@@ -36,7 +202,9 @@ impl Board for Stm32f4 {
         cortex_m::interrupt::disable();
         let dp = pac::Peripherals::take()?;
         let reset = reset_cause(&dp.RCC);
-        let mut rcc = dp.RCC.constrain();
+        let (mut rcc, clock) = start_clocks(dp.RCC, &dp.FLASH)?;
+        let core_hz = rcc.clocks.hclk().raw();
+        defmt::info!("clock: {} at {=u32} Hz", clock, core_hz);
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpiob = dp.GPIOB.split(&mut rcc);
         let gpiod = dp.GPIOD.split(&mut rcc);
@@ -51,8 +219,16 @@ impl Board for Stm32f4 {
             link_rx: RxPort(link_rx),
             nmea: Uart(nmea),
             alarm,
-            watchdog: Iwdg(IndependentWatchdog::new(dp.IWDG)),
-            core_hz: CORE_HZ,
+            watchdog: Iwdg {
+                iwdg: IndependentWatchdog::new(dp.IWDG),
+                timeout_ms: if clock == ClockStart::Pll {
+                    IWDG_TIMEOUT_PLL_MS
+                } else {
+                    IWDG_TIMEOUT_HSI_MS
+                },
+            },
+            core_hz,
+            clock_fallback: clock != ClockStart::Pll,
             reset,
         })
     }
@@ -126,16 +302,36 @@ impl LinkRxPort for RxPort {
     }
 }
 
+/// The IWDG's nominal timeout at 168 MHz. The HAL programs prescaler /256
+/// and reload 624: 625 x 256 / f_LSI, 3.40 s at the LSI's datasheet
+/// maximum of 47 kHz, 5.0 s at its nominal 32 kHz, 9.41 s at its minimum
+/// of 17 kHz. Half the shortest, less the longest blocking answer and NMEA
+/// burst at 115200 baud (0.45 s), leaves 26.2 M guest instructions at 8
+/// cycles each (5 flash wait states, every line missing the ART), above
+/// the costliest measured epoch (docs/SAFETY.md "Watchdog margin").
+pub const IWDG_TIMEOUT_PLL_MS: u32 = 5_000;
+/// The IWDG's nominal timeout on the 16 MHz HSI fallback: prescaler /256,
+/// reload 1874, 10.2 s at 47 kHz (28.2 s at 17 kHz), leaving 24.8 M
+/// instructions at 3 cycles each (0 wait states); at the 168 MHz timeout
+/// the costliest epoch would take 3.3 s, over half of 3.40 s.
+pub const IWDG_TIMEOUT_HSI_MS: u32 = 15_000;
+
 /// The independent watchdog, through the HAL (LSI clock, nominally
-/// 32 kHz; its datasheet range and the margin it leaves: docs/SAFETY.md).
-pub struct Iwdg(IndependentWatchdog);
+/// 32 kHz), with the timeout for the clock the core runs at: set once the
+/// clock is known.
+pub struct Iwdg {
+    iwdg: IndependentWatchdog,
+    timeout_ms: u32,
+}
 
 impl Watchdog for Iwdg {
-    const TIMEOUT_MS: u32 = 2_000;
+    fn timeout_ms(&self) -> u32 {
+        self.timeout_ms
+    }
     fn start(&mut self) {
-        self.0.start(Self::TIMEOUT_MS.millis());
+        self.iwdg.start(self.timeout_ms.millis());
     }
     fn feed(&mut self) {
-        self.0.feed();
+        self.iwdg.feed();
     }
 }
