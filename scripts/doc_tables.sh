@@ -1,18 +1,20 @@
 #!/usr/bin/env bash
-# The generated tables of docs/ESQ.md, docs/MULTIFAULT.md and docs/BUDGET.md.
+# The generated tables of docs/ESQ.md, docs/MULTIFAULT.md, docs/BUDGET.md and the
+# memory table of docs/PF.md (its other blocks: scripts/pf-tables.sh).
 # Each table sits between two marker comments
 #   <!-- BEGIN generated: NAME -->  ...  <!-- END generated: NAME -->
 # and is rewritten from the output of the commands below; nothing between
 # markers is typed by hand.
 #
-#   bash scripts/doc_tables.sh           # short mode: rewrite the short tables (about 1-2 min of CPU once built)
+#   bash scripts/doc_tables.sh           # short mode: rewrite the short tables (about 25 s of CPU once built;
+#                                        # the first run also builds raim-core's release unit tests)
 #   bash scripts/doc_tables.sh --check   # short mode, but compare with the committed docs; exit 1 on a difference (CI)
 #   bash scripts/doc_tables.sh --long    # also the long Monte Carlo tables (about 15 min of CPU)
 #
-# Short (deterministic; replays of the shared real data and one run of five unit tests):
+# Short (deterministic; replays of the shared real data and one run of seven unit tests):
 #   esq-key-numbers, esq-app-d, esq-nstar, esq-cost, esq-onsets, mcusum-rho, mcusum-decimation,
 #   clean-false-alarms, pca-clean, pca-faults, pca-synthetic, pca-test-numbers (docs/ESQ.md),
-#   multifault-amplification (docs/MULTIFAULT.md), pf-memory (docs/PF.md, that block only).
+#   multifault-group-counts, multifault-amplification (docs/MULTIFAULT.md), pf-memory (docs/PF.md, that block only).
 # Long (seeded Monte Carlo; rerun by hand, not in CI):
 #   multifault-mc (docs/MULTIFAULT.md), budget-mc (docs/BUDGET.md).
 set -euo pipefail
@@ -203,9 +205,9 @@ CORE=$TMP/core-tests
 cargo test -q -p raim-core --release --lib -- --nocapture --test-threads 1 \
   every_p_k_matches_an_independent_normal_tail clean_stream_false_alarms_stay_near_the_budget \
   galileo_wide_common_bias_is_invisible_and_harmless synthetic_constellation_faults_table \
-  seed_002_reconstruction_is_linear pf::tests::memory_matches_formula 2>/dev/null \
+  seed_002_reconstruction_is_linear group_counts_against_seed_002 pf::tests::memory_matches_formula 2>/dev/null \
   | sed 's/^\.*//' >"$CORE" # the quiet runner's progress dots precede the printed lines
-grep -q "test result: ok. 6 passed" "$CORE" || { echo "core tests: expected 6 to pass" >&2; cat "$CORE" >&2; exit 1; }
+grep -q "test result: ok. 7 passed" "$CORE" || { echo "core tests: expected 7 to pass" >&2; cat "$CORE" >&2; exit 1; }
 
 f=$TMP/esq-app-d
 {
@@ -397,6 +399,25 @@ f=$TMP/esq-key-numbers
   echo "| PCA, nominal threshold, clean ESBC: false alarms / tested epochs / 99 % bound; empirical scale c | $(col "$TMP/pca-clean" ESBC 3) / $(col "$TMP/pca-clean" ESBC 2) / $(col "$TMP/pca-clean" ESBC 4); c = $C | pca-clean |"
 } >"$f"
 put "$DOCS/ESQ.md" esq-key-numbers "$f"
+
+# --- Seed 002's group counts against ours (m = 4), in bold where ours are fewer.
+f=$TMP/multifault-group-counts
+{
+  echo "| n | t = 1 seed / ours / parts | t = 2 seed / ours / parts | t = 3 seed / ours / parts |"
+  echo "| --- | --- | --- | --- |"
+  awk -F'|' '/^ *[0-9]+ \|.*\/.*\/.*\/.*\|/ {
+    gsub(/ /, "", $1); row = "| " $1
+    for (i = 2; i <= 4; i++) {
+      split($i, v, "/"); for (j = 1; j <= 3; j++) gsub(/ /, "", v[j])
+      if (v[1] == "-") { row = row " | -"; continue }
+      ours = (v[2] + 0 < v[1] + 0) ? "**" v[2] "**" : v[2]
+      row = row " | " v[1] " / " ours " / " v[3]
+    }
+    print row " |"
+  }' "$CORE"
+} >"$f"
+[ "$(wc -l <"$f")" -eq 9 ] || { echo "multifault-group-counts: expected n = 6..12" >&2; cat "$f" >&2; exit 1; }
+put "$DOCS/MULTIFAULT.md" multifault-group-counts "$f"
 
 # --- Seed 002: the reconstruction's noise amplification sqrt(diag S[F,F]^-1).
 f=$TMP/multifault-amplification
