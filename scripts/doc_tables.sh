@@ -291,9 +291,9 @@ f=$TMP/mcusum-rho
   # shellcheck disable=SC2086
   rho "GEOP (G+E, default sigma)" $P
   # shellcheck disable=SC2086
-  rho "GMSD7 (RTCM 3)" $RT
+  rho "GMSD7 (RTCM 3; clean-mean position)" $RT
   # shellcheck disable=SC2086
-  rho "LEA-4T (UBX)" $UB
+  rho "LEA-4T (UBX; clean-mean position)" $UB
 } >"$f"
 put "$DOCS/ESQ.md" mcusum-rho "$f"
 
@@ -313,15 +313,21 @@ f=$TMP/mcusum-decimation
     [ -z "$spec" ] && kind=clean
     # shellcheck disable=SC2086
     a=$(mc "$@" $spec)
-    # shellcheck disable=SC2086
-    b=$(mc "$@" $spec --esq-decimate-s "$dte")
+    if [ "$dte" = - ]; then
+      b=""
+    else
+      # shellcheck disable=SC2086
+      b=$(mc "$@" $spec --esq-decimate-s "$dte")
+    fi
     eng() { grep "^  $1 *:" <<<"$2"; }
     local m1 m2 s1 s2
     m1=$(sed -n 's/.*(M = \([0-9]*\):.*/\1/p' <<<"$a")
     m2=$(sed -n 's/.*(M = \([0-9]*\):.*/\1/p' <<<"$b")
     s1=$(sed -n 's/^  after : \([0-9]*\) samples.*/\1/p' <<<"$a")
     s2=$(sed -n 's/^  after : \([0-9]*\) samples.*/\1/p' <<<"$b")
-    echo "| $label | $(cell "$(eng before "$a")" $kind) | $(cell "$(eng after "$a")" $kind) / $(cell "$(eng split "$a")" $kind) (M = $m1, $s1 samples) | $(cell "$(eng after "$b")" $kind) / $(cell "$(eng split "$b")" $kind) ($dte s, M = $m2, $s2 samples) |"
+    local third="- (the stream is shorter than T = 300 s)"
+    [ -n "$b" ] && third="$(cell "$(eng after "$b")" $kind) / $(cell "$(eng split "$b")" $kind) ($dte s, M = $m2, $s2 samples)"
+    echo "| $label | $(cell "$(eng before "$a")" $kind) | $(cell "$(eng after "$a")" $kind) / $(cell "$(eng split "$a")" $kind) (M = $m1, $s1 samples) | $third |"
   }
   for spec in "" "--fault step:G15:5@01:00:00" "--fault step:G15:10@01:00:00" "--fault ramp:G15:0.01@01:00:00"; do
     label="ESBC ${spec#--fault }"
@@ -335,6 +341,10 @@ f=$TMP/mcusum-decimation
     # shellcheck disable=SC2086
     dec "$label" 300 "$spec" $O_RAW $G
   done
+  # shellcheck disable=SC2086
+  dec "GMSD7 (RTCM 3) clean" - "" $RT
+  # shellcheck disable=SC2086
+  dec "LEA-4T (UBX) clean" - "" $UB
 } >"$f"
 put "$DOCS/ESQ.md" mcusum-decimation "$f"
 
