@@ -93,6 +93,11 @@ fn gmsd7_clean() {
     assert_eq!(n(&s, "alarms"), 0);
     assert_eq!(n(&s, "false_alarms"), 0);
     assert_eq!(n(&s, "false_exclusions"), 0);
+    // Against the allocation: the 241 tested clean epochs, none with a
+    // false event, and Bin(241, 3.3333e-7) puts 0 within its 99 % bound.
+    assert_eq!(n(&s, "clean_tested"), 241, "{s}");
+    assert_eq!(n(&s, "clean_false_events"), 0, "{s}");
+    assert_eq!(n(&s, "false_event_bound_99"), 0, "{s}");
     // The counts of the reader, and the cut last frame.
     assert!(err.contains("257 epochs, 31 ephemerides"), "{err}");
     assert!(err.contains("ends inside a frame (302 bytes cut)"), "{err}");

@@ -63,7 +63,7 @@ fn whitened_residuals(s: &Setup, k: usize) -> Vec<(SatId, f64)> {
     let mut g = DMatrix::<f64>::zeros(n, m);
     let mut y = DVector::<f64>::zeros(n);
     for (i, a) in sats.iter().enumerate() {
-        let w = 1.0 / s.cfg.sigma_model.sigma_m(e.sats[i].elevation_rad);
+        let w = 1.0 / s.sigma_m(e.sats[i].elevation_rad, &obs[i]);
         for c in 0..3 {
             g[(i, c)] = a.g_enu[c] * w;
         }

@@ -32,7 +32,7 @@ use raim_core::{Config, Decision, Epoch, Raim, RangeObservation, System};
 use raim_gnss::faults::{ephemeris_radial_error_m, FaultPlan};
 use raim_gnss::ranging::PreparedEpoch;
 
-use super::{checked_fault_plan, prepare, ReplayArgs, REPLAY_CAPACITY};
+use super::{checked_fault_plan, prepare_full, ReplayArgs, REPLAY_CAPACITY};
 
 /// ARAIM capacity for replays: satellites, fault modes.
 pub const ARAIM_SATS: usize = 64;
@@ -137,9 +137,15 @@ pub struct Setup {
 }
 
 pub fn setup(args: &ReplayArgs) -> Result<Setup> {
-    let cfg = args.core_config();
+    let mut cfg = args.core_config();
     cfg.validate().map_err(|e| anyhow!("configuration: {e}"))?;
-    let (epochs, header, first) = prepare(args)?;
+    let p = prepare_full(args)?;
+    // A single-frequency receiver stream without an ionospheric model: the
+    // residual-ionosphere sigma doubled, as in the snapshot replay.
+    if p.iono_inflate {
+        cfg.sigma_model.iono_vertical_m *= super::receiver::NO_MODEL_IONO_FACTOR;
+    }
+    let (epochs, header, first) = (p.epochs, p.header, p.first);
     let plan = checked_fault_plan(args, first, &epochs)?;
     let eph = args
         .esq
@@ -147,7 +153,28 @@ pub fn setup(args: &ReplayArgs) -> Result<Setup> {
         .iter()
         .map(|s| parse_eph(s, first))
         .collect::<Result<Vec<_>>>()?;
-    let receiver_m = header.context("the observation header has no APPROX POSITION XYZ")?;
+    // The linearisation point: the header's position, or, for a stream
+    // without one (no RTCM 1005/1006, a UBX log), the mean position of the
+    // clean snapshot run, as `--reference clean-mean` takes it.
+    let receiver_m = match header {
+        Some(h) => h,
+        None => {
+            let clean = super::run_core(
+                super::Target::Host,
+                &cfg,
+                &epochs,
+                &FaultPlan::default(),
+                None,
+                None,
+            )?;
+            super::mean_position(&clean).with_context(|| {
+                format!(
+                    "{}: no station position and no usable clean epoch to take a mean position from",
+                    p.source_name
+                )
+            })?
+        }
+    };
     let onset = plan
         .faults
         .iter()
@@ -183,6 +210,14 @@ impl Setup {
         sats
     }
 
+    /// A satellite's one-sigma range error, m: its own (an iono-free
+    /// combination of a receiver stream) or the sigma model's at its
+    /// elevation, as the snapshot monitor takes it.
+    pub fn sigma_m(&self, elevation_rad: f64, o: &RangeObservation) -> f64 {
+        o.sigma_m
+            .unwrap_or_else(|| self.cfg.sigma_model.sigma_m(elevation_rad))
+    }
+
     /// The ARAIM satellites and ISM of one epoch (module doc).
     pub fn araim_inputs(
         &self,
@@ -198,7 +233,7 @@ impl Setup {
                 if !systems.contains(&o.id.system) {
                     systems.push(o.id.system);
                 }
-                let c_acc = self.cfg.sigma_model.sigma_m(p.elevation_rad).powi(2);
+                let c_acc = self.sigma_m(p.elevation_rad, o).powi(2);
                 let d = [0, 1, 2].map(|k| o.position_m[k] - self.receiver_m[k]);
                 let range = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
                 AraimSat {

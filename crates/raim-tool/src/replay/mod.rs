@@ -595,7 +595,7 @@ pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
         .filter(|f| f.is_satellite_fault())
         .map(|f| f.start_gps_s)
         .fold(None, |a: Option<f64>, s| Some(a.map_or(s, |a| a.min(s))));
-    let summary = summary::summarise(&records, fault_start);
+    let summary = summary::summarise(&records, fault_start, args.config.pfa);
     Ok(ReplayOutput {
         records,
         summary,

@@ -368,7 +368,7 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
         spec.name(),
         dec.counts()
     );
-    let summary = super::summary::summarise(&records, None);
+    let summary = super::summary::summarise(&records, None, args.config.pfa);
     let mut w = stdout.lock();
     if args.json {
         writeln!(

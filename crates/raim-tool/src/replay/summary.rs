@@ -49,6 +49,19 @@ pub struct Summary {
     pub clean_d2_per_dof_mean: f64,
     /// Largest D^2/T^2 over those epochs (an alarm is >= 1).
     pub clean_d2_over_t2_max: f64,
+    /// Epochs without an injected fault that the monitor tested (every
+    /// decision but a core error): the trials of the false-alarm count.
+    pub clean_tested: usize,
+    /// Of those, the epochs with an alarm or an exclusion in force: each is
+    /// a false event against the per-epoch false-alarm allocation.
+    pub clean_false_events: usize,
+    /// The total false-alarm allocation per epoch (`--pfa`; with `--mcusum`
+    /// the snapshot test's and the MCUSUM's shares together).
+    pub pfa_per_epoch: f64,
+    /// The binomial 99 % bound of `clean_false_events` under
+    /// `pfa_per_epoch`: the least b with P(Bin(clean_tested, pfa) <= b) >=
+    /// 0.99, assuming independent epochs.
+    pub false_event_bound_99: u64,
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -65,10 +78,16 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// Summarise `records`; `fault_start_gps_s` is the earliest start of a
-/// satellite fault (for the detection delay).
-pub fn summarise(records: &[EpochRecord], fault_start_gps_s: Option<f64>) -> Summary {
+/// satellite fault (for the detection delay), `pfa_per_epoch` the total
+/// false-alarm allocation the clean epochs' events are held to.
+pub fn summarise(
+    records: &[EpochRecord],
+    fault_start_gps_s: Option<f64>,
+    pfa_per_epoch: f64,
+) -> Summary {
     let mut s = Summary {
         epochs: records.len(),
+        pfa_per_epoch,
         ..Default::default()
     };
     let mut eh = Vec::new();
@@ -103,8 +122,13 @@ pub fn summarise(records: &[EpochRecord], fault_start_gps_s: Option<f64>) -> Sum
             s.wrong_exclusions += 1;
         }
         if r.faulted_ids.is_empty() {
-            s.false_alarms += usize::from(r.decision == "alarm");
+            let alarm = r.decision == "alarm";
+            s.false_alarms += usize::from(alarm);
             s.false_exclusions += usize::from(!excluded.is_empty());
+            if r.decision != "error" {
+                s.clean_tested += 1;
+                s.clean_false_events += usize::from(alarm || !excluded.is_empty());
+            }
             continue;
         }
         s.faulted_epochs += 1;
@@ -131,6 +155,7 @@ pub fn summarise(records: &[EpochRecord], fault_start_gps_s: Option<f64>) -> Sum
             s.bias_at_detection_m = r.faulted.first().map(|(_, b)| *b);
         }
     }
+    s.false_event_bound_99 = super::stats::binomial_bound_99(s.clean_tested, pfa_per_epoch);
     s.clean_d2_per_dof_mean = ratio.iter().sum::<f64>() / ratio.len().max(1) as f64;
     s.clean_d2_over_t2_max = worst;
     s.error_h_median_m = median(eh.clone());
@@ -182,6 +207,21 @@ impl Summary {
             (
                 "fault-free max D2/T2",
                 format!("{:.3}", self.clean_d2_over_t2_max),
+            ),
+            (
+                "clean false events / 99 % bound",
+                format!(
+                    "{} in {} tested clean epochs / {} (binomial, Pfa {:e} per epoch): {}",
+                    self.clean_false_events,
+                    self.clean_tested,
+                    self.false_event_bound_99,
+                    self.pfa_per_epoch,
+                    if self.clean_false_events as u64 <= self.false_event_bound_99 {
+                        "within"
+                    } else {
+                        "above"
+                    }
+                ),
             ),
         ];
         let mut out = String::new();
@@ -235,7 +275,7 @@ mod tests {
             rec(120.0, "excluded", &[24], &[(24, 11.0)], 4.0), // correct
             rec(150.0, "excluded", &[24], &[(24, 14.0), (11, 14.0)], 20.0), // partial, error > HPL
         ];
-        let s = summarise(&recs, Some(60.0));
+        let s = summarise(&recs, Some(60.0), 1e-2);
         assert_eq!(
             (s.epochs, s.solved, s.ok, s.excluded, s.alarms),
             (6, 5, 2, 3, 1)
@@ -246,6 +286,12 @@ mod tests {
         );
         assert_eq!((s.wrong_exclusions, s.missed_detections), (1, 1));
         assert_eq!((s.false_alarms, s.false_exclusions), (0, 1));
+        // Two clean epochs tested, one with an exclusion; Bin(2, 1e-2):
+        // P(X <= 0) = 0.9801 < 0.99 <= P(X <= 1), so the bound is 1.
+        assert_eq!(
+            (s.clean_tested, s.clean_false_events, s.false_event_bound_99),
+            (2, 1, 1)
+        );
         assert_eq!(
             (s.detection_delay_s, s.bias_at_detection_m),
             (Some(30.0), Some(8.0))
