@@ -48,12 +48,8 @@ rows() { # seeds, spread_s, then replay args
   local f k n out
   for f in "${FILTERS[@]}"; do
     read -r k n <<<"$f"
-    # The EKF draws nothing: on a clean run its seeds would repeat one run
-    # (and multiply one run's false alarms), so it runs once there.
-    local s=$seeds
-    [ "$k" = ekf ] && [ "$spread" = 0 ] && s=1
     if out=$("$R" replay "$@" --pf "$k" --particles "${n/#0/100}" --pf-pfa $PFA \
-      --pf-seeds "$s" --pf-onset-spread-s "$spread" --quiet 2>&1); then
+      --pf-seeds "$seeds" --pf-onset-spread-s "$spread" --quiet 2>&1); then
       echo "$out" | grep '^| [A-Z]'
     else
       local why
