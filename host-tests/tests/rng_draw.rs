@@ -155,7 +155,7 @@ fn a_healthy_rng_gives_eight_words_after_the_discarded_first() {
     assert_eq!((m.enables, m.enabled), (1, false));
     assert!(!m.read_while_disabled);
     // Slow words within the budget are waited for.
-    let mut slow = Model::new(&vec![Event::Word(BUDGET_READS - 2); 9]);
+    let mut slow = Model::new(&[Event::Word(BUDGET_READS - 2); 9]);
     assert_eq!(draw(&mut slow, BUDGET_READS).unwrap().to_vec(), expected(0));
 }
 
@@ -181,7 +181,7 @@ fn a_seed_error_discards_the_draw_and_restarts_it() {
 
 #[test]
 fn repeated_seed_errors_give_none_after_the_allowed_restarts() {
-    let mut m = Model::new(&vec![Event::SeedError; 16]);
+    let mut m = Model::new(&[Event::SeedError; 16]);
     assert_eq!(draw(&mut m, BUDGET_READS), None);
     assert_eq!((m.enables, m.enabled), (SEED_RESTARTS + 1, false));
     assert_eq!(m.words_read, 0);
