@@ -177,6 +177,14 @@ fn a_seed_error_discards_the_draw_and_restarts_it() {
     let got = draw(&mut m, BUDGET_READS).unwrap();
     assert_eq!(got.to_vec(), expected(5));
     assert_eq!(m.enables, 2);
+    // On the last word, where no later status read would see the flag.
+    let mut events = vec![Event::Word(0); WORDS];
+    events.push(Event::SeedErrorDuringRead);
+    events.extend(vec![Event::Word(0); 9]);
+    let mut m = Model::new(&events);
+    let got = draw(&mut m, BUDGET_READS).unwrap();
+    assert_eq!(got.to_vec(), expected(WORDS + 1));
+    assert_eq!(m.enables, 2);
 }
 
 #[test]
