@@ -121,6 +121,7 @@ fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts:
         core_hz,
         clock_fallback,
         reset,
+        hardware_entropy,
     } = parts;
     let reset = fault::boot(reset);
     let server = server();
@@ -144,7 +145,8 @@ fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts:
     // The provisioned configuration, if its seal verifies and every part
     // passes its checks, runs locked; otherwise the unit is Unconfigured.
     // No default is ever put in force.
-    boot(server, key.as_ref(), reset.0, platform.ticks.now());
+    let entropy = provision::entropy(platform.ticks.now(), hardware_entropy.as_ref());
+    boot(server, key.as_ref(), reset.0, &entropy);
     watchdog.start();
     stack::paint();
     guard::enable(&mut core.MPU);
@@ -190,9 +192,14 @@ fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts:
 /// the decoded unit configuration (with an ISM, ~1.5 KB) is not reserved on
 /// `main`'s frame for the whole main loop.
 #[inline(never)]
-fn boot(server: &mut Server, key: Option<&raim_proto::AuthKey>, resets: u32, ticks: u32) {
+fn boot(
+    server: &mut Server,
+    key: Option<&raim_proto::AuthKey>,
+    resets: u32,
+    entropy: &raim_proto::auth::BootEntropy,
+) {
     let provisioned = raim_proto::unit::open(provision::section(), key);
-    server.boot(provisioned, resets, &provision::entropy(ticks));
+    server.boot(provisioned, resets, entropy);
 }
 
 /// SysTick's wrap (every 2^24 core ticks): extends the tick counter and

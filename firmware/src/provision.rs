@@ -7,6 +7,7 @@
 //! unit's key when it has one, SHA-256 otherwise, so a corrupt or forged
 //! section is refused at boot and the unit stays Unconfigured.
 
+use raim_proto::auth::BootEntropy;
 use raim_proto::unit::PROVISION_BYTES;
 
 /// The section; erased flash is all ones.
@@ -22,19 +23,31 @@ pub fn section() -> &'static [u8; PROVISION_BYTES] {
 
 /// SRAM left as it powered up (NOLOAD, never written): on silicon its
 /// power-on state differs from part to part and boot to boot, and it feeds
-/// the boot nonce. QEMU powers up with zeros; there the nonce changes with
-/// the reset count only (docs/SAFETY.md "Boot nonce").
+/// the boot nonce. QEMU powers up with zeros (docs/SAFETY.md "Boot nonce").
 #[link_section = ".uninit.raim_noise"]
 static mut NOISE: core::mem::MaybeUninit<[u8; 32]> = core::mem::MaybeUninit::uninit();
 
-/// The entropy of this boot: the power-on SRAM noise and the SysTick count
-/// after the set-up so far.
-pub fn entropy(ticks: u32) -> [u8; 32] {
+/// The entropy of this boot: the power-on SRAM noise, the SysTick count
+/// after the set-up so far and, when the board has one that worked, its
+/// hardware random source's 32 bytes (`Parts::hardware_entropy`), all
+/// XORed together: the result is at least as unpredictable as the most
+/// unpredictable of them. The boot nonce is SHA-256 of it with the key
+/// and the reset count (`raim_proto::auth::boot_nonce`). Without hardware
+/// entropy, under QEMU, it changes with the reset count only.
+pub fn entropy(ticks: u32, hardware: Option<&[u8; 32]>) -> BootEntropy {
     // SAFETY: a plain read of 32 bytes of RAM owned by this module; any bit
     // pattern is a value. Never written, so it keeps its power-on state.
     let mut e = unsafe { core::ptr::read_volatile(core::ptr::addr_of!(NOISE).cast::<[u8; 32]>()) };
     for (b, t) in e.iter_mut().zip(ticks.to_le_bytes()) {
         *b ^= t;
     }
-    e
+    if let Some(h) = hardware {
+        for (b, r) in e.iter_mut().zip(h) {
+            *b ^= r;
+        }
+    }
+    BootEntropy {
+        bytes: e,
+        hardware: hardware.is_some(),
+    }
 }

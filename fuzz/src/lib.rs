@@ -139,7 +139,11 @@ impl raim_server::Platform for Rebooted {
 /// A unit booting from `section`, as the firmware does.
 fn boot(section: &[u8; PROVISION_BYTES], resets: u32) -> Box<Server> {
     let mut server = Box::new(Server::new());
-    server.boot(raim_proto::unit::open(section, None), resets, &[7; 32]);
+    let entropy = raim_proto::auth::BootEntropy {
+        bytes: [7; 32],
+        hardware: false,
+    };
+    server.boot(raim_proto::unit::open(section, None), resets, &entropy);
     server
 }
 

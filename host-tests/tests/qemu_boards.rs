@@ -33,6 +33,45 @@ fn qemu_boards_report_the_core_clock_they_run_at() {
     assert_eq!((host.core_clock_hz, host.clock_fallback), (0, false));
 }
 
+/// Neither QEMU machine gives the boot nonce hardware entropy:
+/// mps2-an386 has no RNG; netduinoplus2 does not model the STM32F4's (nor
+/// the PLL that clocks it, which never locks there), so the firmware's
+/// bounded start of it gives up and the unit says so. Under `-icount` two
+/// power-ons of the same image boot alike, and their nonces coincide: the
+/// replay across power cycles that `hardware_entropy: false` warns of
+/// (docs/SAFETY.md "Boot nonce"). The host's server reports the source it
+/// was booted with.
+#[test]
+fn qemu_boards_say_their_boot_nonce_had_no_hardware_entropy() {
+    for machine in [Machine::Mps2An386, Machine::NetduinoPlus2] {
+        let elf = raim_qemu::firmware_elf_for(machine).unwrap();
+        let opts = raim_qemu::Options {
+            machine,
+            icount: true,
+            ..raim_qemu::Options::default()
+        };
+        let nonces: Vec<_> = (0..2)
+            .map(|_| {
+                let mut fw = raim_qemu::QemuSession::start_with(&elf, &opts).unwrap();
+                let st = fw.status().unwrap();
+                assert!(!st.hardware_entropy, "{machine:?}");
+                assert_eq!(st.resets, 0, "{machine:?}");
+                st.boot_nonce
+            })
+            .collect();
+        assert_eq!(nonces[0], nonces[1], "{machine:?}");
+    }
+    let host = raim_server::Server::new().status();
+    assert!(!host.hardware_entropy);
+    let mut booted = Box::new(raim_server::Server::new());
+    let entropy = raim_proto::auth::BootEntropy {
+        bytes: [3; 32],
+        hardware: true,
+    };
+    booted.boot(Ok(None), 0, &entropy);
+    assert!(booted.status().hardware_entropy);
+}
+
 #[test]
 fn qemu_netduinoplus2_answers_frames_bit_for_bit_with_nmea() {
     let mut fw = session_on(Machine::NetduinoPlus2);

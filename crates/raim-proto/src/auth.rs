@@ -129,6 +129,18 @@ pub fn verify(key: &AuthKey, nonce: &Nonce, counter: u64, change: &Change, tag: 
     mac(key, nonce, counter, change).is_some_and(|m| m.verify_slice(tag).is_ok())
 }
 
+/// What a platform gives its boot nonce: 32 bytes that should differ from
+/// boot to boot, and whether a hardware random source (the STM32F4's RNG)
+/// went into them. Without one, the bytes may repeat across power cycles
+/// (QEMU's zeroed SRAM), and so may the nonce (docs/SAFETY.md "Boot nonce").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BootEntropy {
+    /// The bytes, hashed into the nonce ([`boot_nonce`]).
+    pub bytes: [u8; 32],
+    /// True when a hardware random source's output is in `bytes`.
+    pub hardware: bool,
+}
+
 /// The unit's boot nonce from its key (or none) and what differs between
 /// boots: the reset count and the platform's entropy. SHA-256 of them,
 /// first 16 bytes; a new value at every reset whenever the reset count or

@@ -82,7 +82,7 @@ pub type DevicePrecision = f32;
 /// new enum variants are appended so that the earlier ones keep their
 /// indices. The history of the versions is in CHANGELOG.md, "Wire protocol
 /// versions"; 11 is the core clock in `Status` (`core_clock_hz`,
-/// `clock_fallback`).
+/// `clock_fallback`) and the boot nonce's source (`hardware_entropy`).
 pub const PROTOCOL_VERSION: u16 = 11;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.

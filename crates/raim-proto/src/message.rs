@@ -397,6 +397,13 @@ pub struct Status {
     /// 16 MHz HSI because the HSE or the PLL did not become ready within
     /// its bounded wait (docs/SAFETY.md "Clocks").
     pub clock_fallback: bool,
+    /// True when this boot's nonce had hardware entropy in it (the
+    /// STM32F4's RNG, read without error). False means the nonce comes
+    /// from the key, the reset count and whatever else the platform had
+    /// (power-on SRAM, SysTick), which under QEMU repeats across power
+    /// cycles: frames recorded in an earlier power-on could then verify
+    /// again (docs/SAFETY.md "Boot nonce").
+    pub hardware_entropy: bool,
 }
 
 impl Status {
@@ -429,6 +436,7 @@ impl Status {
         provision_error: None,
         core_clock_hz: 0,
         clock_fallback: false,
+        hardware_entropy: false,
     };
 }
 

@@ -118,6 +118,8 @@ pub struct Server {
     auth: Option<(raim_proto::auth::AuthKey, Option<u64>)>,
     /// This boot's nonce (`auth::boot_nonce`).
     nonce: raim_proto::auth::Nonce,
+    /// Whether hardware entropy went into it (`auth::BootEntropy`).
+    hardware_entropy: bool,
     /// Why the provisioned configuration was refused at boot, if it was.
     provision_error: Option<ProvisionError>,
     status: Status,
@@ -179,6 +181,7 @@ impl Server {
             },
             auth: None,
             nonce: [0; 16],
+            hardware_entropy: false,
             provision_error: None,
             status: Status {
                 protocol_version: PROTOCOL_VERSION,
@@ -212,7 +215,8 @@ impl Server {
     }
 
     /// The boot sequence: the boot nonce from the key, the reset count and
-    /// the platform's `entropy`, then the provisioned configuration, if
+    /// the platform's `entropy` (whose source `Status.hardware_entropy`
+    /// then reports), then the provisioned configuration, if
     /// any. A provisioned configuration whose seal verified (`provisioned`
     /// is what `unit::open` gave) and whose every part passes its checks
     /// is put in force, locked. Anything else leaves the unit
@@ -222,10 +226,14 @@ impl Server {
         &mut self,
         provisioned: Result<Option<UnitConfig>, ProvisionError>,
         resets: u32,
-        entropy: &[u8; 32],
+        entropy: &raim_proto::auth::BootEntropy,
     ) {
-        self.nonce =
-            raim_proto::auth::boot_nonce(self.auth.as_ref().map(|(k, _)| k), resets, entropy);
+        self.nonce = raim_proto::auth::boot_nonce(
+            self.auth.as_ref().map(|(k, _)| k),
+            resets,
+            &entropy.bytes,
+        );
+        self.hardware_entropy = entropy.hardware;
         match provisioned {
             Ok(Some(unit)) => {
                 if let Err(e) = self.provision(unit) {
@@ -313,6 +321,7 @@ impl Server {
         Status {
             config: self.config_id,
             boot_nonce: self.nonce,
+            hardware_entropy: self.hardware_entropy,
             host_sigmas: self.host_sigmas,
             provision_error: self.provision_error,
             auth_provisioned: self.auth.is_some(),

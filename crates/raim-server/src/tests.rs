@@ -472,3 +472,23 @@ fn unconfigured_fingerprint_is_computed() {
     let server = std::boxed::Box::new(Server::new());
     assert_eq!(server.status().config.fingerprint, computed);
 }
+
+/// `Status.hardware_entropy` reports the source the boot was given, and a
+/// server that never booted has had none; the nonce follows the bytes.
+#[test]
+fn status_reports_whether_the_boot_nonce_had_hardware_entropy() {
+    use raim_proto::auth::BootEntropy;
+    let unbooted = std::boxed::Box::new(Server::new());
+    assert!(!unbooted.status().hardware_entropy);
+    let mut nonces = std::vec::Vec::new();
+    for (bytes, hardware) in [([0; 32], false), ([0; 32], true), ([9; 32], true)] {
+        let mut s = std::boxed::Box::new(Server::new());
+        s.boot(Ok(None), 0, &BootEntropy { bytes, hardware });
+        assert_eq!(s.status().hardware_entropy, hardware);
+        assert_eq!(s.status().boot_nonce, s.nonce());
+        nonces.push(s.nonce());
+    }
+    // The flag is reported, not hashed: the same bytes give the same nonce.
+    assert_eq!(nonces[0], nonces[1]);
+    assert_ne!(nonces[1], nonces[2]);
+}

@@ -10,8 +10,8 @@
 //! side and the NMEA UART (`embedded_io::Write`), the link's receive side
 //! for its interrupt ([`LinkRxPort`], driven by `link_rx`), the
 //! integrity-alarm output (embedded-hal `OutputPin`), the watchdog
-//! ([`Watchdog`]), the core clock in Hz and what the hardware says reset
-//! the part ([`HardwareReset`]). The MPU and SysTick are the core's
+//! ([`Watchdog`]), the core clock in Hz, what the hardware says reset
+//! the part ([`HardwareReset`]) and its hardware entropy, if any. The MPU and SysTick are the core's
 //! (`cortex_m::Peripherals`), the same on every board.
 
 use core::sync::atomic::{AtomicU32, Ordering};
@@ -22,6 +22,8 @@ use embedded_hal::digital::{OutputPin, StatefulOutputPin};
 
 #[cfg(feature = "board-qemu")]
 pub mod mps2;
+#[cfg(feature = "board-stm32f4")]
+mod rng_draw;
 #[cfg(feature = "board-stm32f4")]
 pub mod stm32f4;
 
@@ -100,6 +102,11 @@ pub struct Parts<B: Board> {
     pub clock_fallback: bool,
     /// What reset the part.
     pub reset: HardwareReset,
+    /// 32 bytes from the board's hardware random source, read without
+    /// error at start-up, for the boot nonce; `None` when the board has
+    /// none (mps2-an386) or it failed or timed out (the STM32F4's RNG;
+    /// always under QEMU's netduinoplus2, which does not model it).
+    pub hardware_entropy: Option<[u8; 32]>,
 }
 
 /// A board: its peripherals' types and how to take them.

@@ -59,6 +59,8 @@ impl Board for Mps2An386 {
             watchdog: CmsdkWatchdog(Regs(WDOG)),
             core_hz: CORE_HZ,
             clock_fallback: false,
+            // The AN386 image has no random number generator.
+            hardware_entropy: None,
             reset: HardwareReset::Other,
         })
     }

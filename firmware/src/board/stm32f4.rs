@@ -13,6 +13,12 @@
 //! netduinoplus2 (an STM32F405) leaves the RCC unimplemented (its registers
 //! read 0), so there HSERDY never sets and the fallback is the path CI runs
 //! (docs/SAFETY.md "Clocks").
+//!
+//! The boot entropy's hardware part is the RNG, clocked by the main PLL's
+//! 48 MHz output (PLL48CLK): [`hardware_entropy`], the draw itself in
+//! `rng_draw`. QEMU's netduinoplus2 does not model the RNG (its registers
+//! read 0, DRDY never sets) and its PLL never locks, so there the boot has
+//! no hardware entropy, which `Status.hardware_entropy` shows.
 
 use stm32f4xx_hal::gpio::{Output, PushPull, PD12};
 use stm32f4xx_hal::pac;
@@ -21,6 +27,7 @@ use stm32f4xx_hal::rcc::{self, Rcc};
 use stm32f4xx_hal::serial::{self, RxISR, RxListen, Serial};
 use stm32f4xx_hal::watchdog::IndependentWatchdog;
 
+use super::rng_draw::{self, RngRegs};
 use super::{Board, HardwareReset, LinkRxPort, Parts, Watchdog};
 
 /// The board.
@@ -69,7 +76,96 @@ const REGISTER_BUDGET_US: u32 = 10;
 /// lasts at most ~11 x `budget_us` at the HSI's slowest (-8 %): 0.23 s
 /// for the HSE.
 const fn iterations(budget_us: u32) -> u32 {
-    (HSI_MAX_HZ as u64 * budget_us as u64 / 1_000_000) as u32
+    iterations_at(HSI_MAX_HZ, budget_us)
+}
+
+/// Loop iterations that last at least `budget_us` on a core clock of at
+/// most `core_max_hz` (one iteration, at least one cycle).
+const fn iterations_at(core_max_hz: u32, budget_us: u32) -> u32 {
+    (core_max_hz as u64 * budget_us as u64 / 1_000_000) as u32
+}
+
+/// The main PLL from the HSI for PLL48CLK alone, on the HSI fallback
+/// (RM0090 §7.3.2): VCO input 16 MHz / M = 2 MHz, VCO x N = 336 MHz,
+/// PLL48CLK = VCO / Q = 48 MHz (the RNG's clock); its P output (168 MHz)
+/// drives nothing, SYSCLK stays on the HSI.
+const PLL_M_HSI: u8 = 8;
+const HSI_HZ: u32 = 16_000_000;
+const _: () = {
+    let vco_hz = HSI_HZ / PLL_M_HSI as u32 * PLL_N as u32;
+    assert!(vco_hz / PLL_Q as u32 == 48_000_000);
+};
+/// Time granted to the RNG for one word: 120 x the 40 PLL48CLK periods
+/// (0.83 us at 48 MHz) it takes to make one (RM0090 §24.3.1).
+const RNG_WORD_BUDGET_US: u32 = 100;
+
+/// The RNG's registers (RM0090 §24.4) for the draw.
+struct Rng<'a>(&'a pac::RNG);
+
+impl RngRegs for Rng<'_> {
+    fn status(&mut self) -> u32 {
+        self.0.sr().read().bits()
+    }
+    fn data(&mut self) -> u32 {
+        self.0.dr().read().bits()
+    }
+    fn set_enabled(&mut self, on: bool) {
+        self.0.cr().modify(|_, w| w.rngen().bit(on));
+    }
+    fn clear_errors(&mut self) {
+        self.0.sr().modify(|_, w| {
+            w.seis().clear();
+            w.ceis().clear()
+        });
+    }
+}
+
+/// 32 bytes from the RNG, or `None` if it could not give them without
+/// error within its budget (`rng_draw::draw`). Its clock, PLL48CLK: on the
+/// PLL path the main PLL already makes 48 MHz (`PLL_Q` from the HSE); on
+/// the HSI fallback the PLL, off, is started from the HSI for it
+/// ([`PLL_M_HSI`]) with a bounded wait on PLLRDY, and stopped again after
+/// the draw. The RNG and its bus clock are switched off afterwards.
+fn hardware_entropy(rcc: &Rcc, rng: &pac::RNG, clock: ClockStart) -> Option<[u8; 32]> {
+    let core_max_hz = if clock == ClockStart::Pll {
+        PLL_SYSCLK_HZ
+    } else {
+        if rcc.cr().read().pllon().bit_is_set() {
+            return None;
+        }
+        rcc.pllcfgr().write(|w| {
+            w.pllsrc().hsi();
+            w.pllp().div2();
+            // SAFETY: M in 2..=63, N in 50..=432, Q in 2..=15 (RM0090 §7.3.2).
+            unsafe {
+                w.pllm().bits(PLL_M_HSI);
+                w.plln().bits(PLL_N);
+                w.pllq().bits(PLL_Q)
+            }
+        });
+        rcc.cr().modify(|_, w| w.pllon().set_bit());
+        HSI_MAX_HZ
+    };
+    let locked = wait_until(iterations_at(core_max_hz, PLL_LOCK_BUDGET_US), || {
+        rcc.cr().read().pllrdy().bit_is_set()
+    });
+    let drawn = if locked {
+        rcc.ahb2enr().modify(|_, w| w.rngen().set_bit());
+        // The enable reaches the peripheral before its first access.
+        cortex_m::asm::dsb();
+        let drawn = rng_draw::draw(
+            &mut Rng(rng),
+            iterations_at(core_max_hz, RNG_WORD_BUDGET_US),
+        );
+        rcc.ahb2enr().modify(|_, w| w.rngen().clear_bit());
+        drawn
+    } else {
+        None
+    };
+    if clock != ClockStart::Pll {
+        rcc.cr().modify(|_, w| w.pllon().clear_bit());
+    }
+    drawn
 }
 
 /// Spins until `ready` or `budget` iterations have passed; true if ready.
@@ -205,6 +301,8 @@ impl Board for Stm32f4 {
         let (mut rcc, clock) = start_clocks(dp.RCC, &dp.FLASH)?;
         let core_hz = rcc.clocks.hclk().raw();
         defmt::info!("clock: {} at {=u32} Hz", clock, core_hz);
+        let hardware_entropy = hardware_entropy(&rcc, &dp.RNG, clock);
+        defmt::info!("hardware entropy: {=bool}", hardware_entropy.is_some());
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpiob = dp.GPIOB.split(&mut rcc);
         let gpiod = dp.GPIOD.split(&mut rcc);
@@ -230,6 +328,7 @@ impl Board for Stm32f4 {
             core_hz,
             clock_fallback: clock != ClockStart::Pll,
             reset,
+            hardware_entropy,
         })
     }
 }
