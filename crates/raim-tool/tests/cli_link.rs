@@ -1,0 +1,104 @@
+//! `raim link` against the firmware under QEMU through a pty (QEMU's
+//! `-serial pty` on the link UART, as a serial port on a bench would be):
+//! Status, Configure, Lock and Status answered in order; a second
+//! `raim link` process's Configure is refused because the lock holds, and
+//! exits non-zero.
+
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
+
+/// How long QEMU may take to name its pty.
+const PTY_TIMEOUT: Duration = Duration::from_secs(30);
+
+/// QEMU, killed when the test ends however it ends.
+struct Qemu(Child);
+
+impl Drop for Qemu {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn raim(args: &[&str]) -> (Option<i32>, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_raim"))
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("spawn raim");
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+#[test]
+fn link_over_a_pty_to_qemu() {
+    let elf = raim_qemu::firmware_elf().expect("firmware build");
+    let mut child = Command::new("qemu-system-arm")
+        .args(["-machine", "mps2-an386", "-cpu", "cortex-m4"])
+        .args(["-nographic", "-monitor", "none"])
+        .args(["-semihosting-config", "enable=on,target=native"])
+        .args(["-serial", "pty", "-serial", "null", "-kernel"])
+        .arg(&elf)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("qemu-system-arm");
+    let stdout = child.stdout.take().expect("QEMU's stdout");
+    let _qemu = Qemu(child);
+    // "char device redirected to /dev/pts/N (label serial0)" on QEMU's
+    // stdout (with the semihosting bytes), read on a thread so that a
+    // silent QEMU fails the test instead of hanging it; the thread drains
+    // the rest so that QEMU never blocks on a full pipe.
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let mut r = BufReader::new(stdout);
+        let mut line = Vec::new();
+        while r.read_until(b'\n', &mut line).is_ok_and(|n| n > 0) {
+            let l = String::from_utf8_lossy(&line);
+            if let Some(p) = l.split_whitespace().find(|w| w.starts_with("/dev/pts/")) {
+                let _ = tx.send(p.to_string());
+            }
+            line.clear();
+        }
+    });
+    let pty = rx.recv_timeout(PTY_TIMEOUT).expect("QEMU names its pty");
+
+    let (code, out, err) = raim(&[
+        "link",
+        "--port",
+        &pty,
+        "status",
+        "configure",
+        "lock",
+        "status",
+    ]);
+    assert_eq!(code, Some(0), "{out}{err}");
+    let answers: Vec<&str> = out
+        .lines()
+        .filter(|l| !l.starts_with("notice") && !l.starts_with("boot"))
+        .collect();
+    assert_eq!(answers.len(), 4, "{out}");
+    assert!(
+        answers[0].starts_with("Status: Status(") && answers[0].contains("locked: false"),
+        "{out}"
+    );
+    assert!(answers[1].starts_with("Configure: Configured"), "{out}");
+    assert!(answers[2].starts_with("Lock: LockEngaged"), "{out}");
+    assert!(
+        answers[3].starts_with("Status: Status(") && answers[3].contains("locked: true"),
+        "{out}"
+    );
+
+    let (code, out, err) = raim(&["link", "--port", &pty, "configure"]);
+    assert_eq!(code, Some(1), "{out}{err}");
+    assert!(
+        err.contains("Configure refused") && err.contains("Locked"),
+        "{out}{err}"
+    );
+}
