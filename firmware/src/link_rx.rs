@@ -19,12 +19,13 @@
 //! ([`crate::board::Board::LinkRx`]).
 
 use core::cell::RefCell;
-use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use core::sync::atomic::{AtomicU32, Ordering};
 
 use cortex_m::interrupt::{CriticalSection, Mutex};
 use heapless::spsc::{Consumer, Producer, Queue};
 
 use crate::board::{LinkRxPort, RxPort};
+use crate::statics::ConstStaticCell;
 
 /// Ring size; it holds `RING_SLOTS - 1` bytes: 4 KiB, the bytes of 355 ms
 /// at 115200 baud, above the longest epoch at the real board's 16 MHz
@@ -52,16 +53,9 @@ pub struct LinkRx {
 /// Set up the ring; call once, with interrupts masked, before they are
 /// enabled. `None` if called twice.
 pub fn init(port: RxPort) -> Option<LinkRx> {
-    static TAKEN: AtomicBool = AtomicBool::new(false);
-    // A const-initialised static: the 4 KiB ring is never built on the
-    // stack (`cortex_m::singleton!` would build it there first).
-    static mut QUEUE: Queue<u8, RING_SLOTS> = Queue::new();
-    if TAKEN.swap(true, Ordering::AcqRel) {
-        return None;
-    }
-    // SAFETY: reached once (`TAKEN`), so this is the only reference to
-    // QUEUE; it is split into its two 'static ends at once.
-    let queue = unsafe { &mut *core::ptr::addr_of_mut!(QUEUE) };
+    // The 4 KiB ring in the firmware's static pattern (`statics.rs`).
+    static QUEUE: ConstStaticCell<Queue<u8, RING_SLOTS>> = ConstStaticCell::new(Queue::new());
+    let queue = QUEUE.try_take()?;
     let (producer, consumer) = queue.split();
     cortex_m::interrupt::free(|cs| {
         RX.borrow(cs).replace(Some(Rx {

@@ -17,6 +17,7 @@ mod key;
 mod link_rx;
 mod provision;
 mod stack;
+mod statics;
 
 use cortex_m::interrupt::InterruptNumber;
 use cortex_m::peripheral::NVIC;
@@ -26,6 +27,7 @@ use raim_proto::{ResetCause, Status, TestFault};
 use raim_server::{Platform, Server};
 
 use board::{Board, Parts, Watchdog};
+use statics::ConstStaticCell;
 
 #[cfg(feature = "board-stm32f4")]
 use defmt_rtt as _;
@@ -100,6 +102,11 @@ impl<B: Board> Platform for Unit<B> {
 
 #[entry]
 fn main() -> ! {
+    // SAFETY: first thing in `main`: nothing references `.ccmram` yet.
+    #[cfg(feature = "board-stm32f4")]
+    unsafe {
+        statics::zero_ccm()
+    };
     let Some(core) = cortex_m::Peripherals::take() else {
         board::halt()
     };
@@ -225,87 +232,53 @@ unsafe fn DefaultHandler(irqn: i16) {
     }
 }
 
-/// The server (receive buffer, engines, transmit buffers) in a static; no
-/// heap anywhere. Initialised at compile time by its `const fn`
-/// constructor: the value is in the image (`.data`, copied from flash by
-/// cortex-m-rt before `main`), so it is never built on the stack (a
-/// run-time `Server::new()` passes through a stack temporary: 94 KB on the
-/// STM32F4 build, more than its stack). Called once, from `run`.
+/// The server (receive buffer, engines, transmit buffers) in a static
+/// (`statics.rs`): its `const fn` constructor's value is in the image, so
+/// it is never built on the stack (a run-time `Server::new()` passes
+/// through a stack temporary: 94 KB on the STM32F4 build, more than its
+/// stack). Called once, from `run`.
 fn server() -> &'static mut Server {
-    use core::sync::atomic::{AtomicBool, Ordering};
-    static TAKEN: AtomicBool = AtomicBool::new(false);
-    static mut SERVER: Server = Server::new();
-    if TAKEN.swap(true, Ordering::AcqRel) {
-        board::halt()
-    }
-    // SAFETY: reached once (`TAKEN`), so this is the only reference to
-    // SERVER ever made; no interrupt handler touches it.
-    unsafe { &mut *core::ptr::addr_of_mut!(SERVER) }
+    static SERVER: ConstStaticCell<Server> = ConstStaticCell::new(Server::new());
+    statics::take(&SERVER)
 }
 
-/// The particle-filter engines of the QEMU board, each in its own
-/// zero-filled static (`.bss`: no flash image, never built on the stack),
-/// handed to the server for good. Called once, from `run`.
-///
-/// All-zero bytes are a valid value of every engine: its fields are `f32`
-/// and `f64` arrays, integers, `Option<f64>` (its tag is 0 or 1, both
-/// valid), `Option<SatId>` (`System` has a variant with discriminant 0, so
-/// zero is a valid `SatId` whatever the niche), `heapless::Vec` (length
-/// 0) and the generator's `[u64; 4]`. The server restarts an engine
+/// The particle-filter engines of the QEMU board, each in its own static
+/// (`statics.rs`) initialised with the engine's all-zero `EMPTY` value
+/// (`.bss`), handed to the server for good. The server restarts an engine
 /// (`PfRaim::restart`: fresh history, reseeded generator) at every
-/// `PfConfigure` before its first epoch, and the first epoch overwrites the
-/// particles, so the zero contents are never used (host-tests/tests/
-/// qemu_pf.rs `a_zeroed_engine_restarted_equals_a_new_one`).
+/// `PfConfigure` before its first epoch. Called once, from `run`.
 #[cfg(all(feature = "pf", feature = "board-qemu"))]
 fn pf_engines() -> raim_server::PfEngines {
-    use core::mem::MaybeUninit;
-    use core::ptr::addr_of_mut;
     use raim_server::{EkfEngine, Ga100Engine, Ga300Engine, Pf100Engine, Pf300Engine, PfEngines};
-    static mut EKF: MaybeUninit<EkfEngine> = MaybeUninit::zeroed();
-    static mut PF100: MaybeUninit<Pf100Engine> = MaybeUninit::zeroed();
-    static mut PF300: MaybeUninit<Pf300Engine> = MaybeUninit::zeroed();
-    static mut GA100: MaybeUninit<Ga100Engine> = MaybeUninit::zeroed();
-    static mut GA300: MaybeUninit<Ga300Engine> = MaybeUninit::zeroed();
-    // SAFETY: zero is a valid value of each engine (above); this function
-    // runs once (from `run`, which never returns), so each `&'static mut`
-    // is the only reference to its static ever made; no interrupt handler
-    // touches them.
-    unsafe {
-        PfEngines {
-            ekf: Some((*addr_of_mut!(EKF)).assume_init_mut()),
-            pf100: Some((*addr_of_mut!(PF100)).assume_init_mut()),
-            pf300: Some((*addr_of_mut!(PF300)).assume_init_mut()),
-            ga100: Some((*addr_of_mut!(GA100)).assume_init_mut()),
-            ga300: Some((*addr_of_mut!(GA300)).assume_init_mut()),
-        }
+    static EKF: ConstStaticCell<EkfEngine> = ConstStaticCell::new(EkfEngine::EMPTY);
+    static PF100: ConstStaticCell<Pf100Engine> = ConstStaticCell::new(Pf100Engine::EMPTY);
+    static PF300: ConstStaticCell<Pf300Engine> = ConstStaticCell::new(Pf300Engine::EMPTY);
+    static GA100: ConstStaticCell<Ga100Engine> = ConstStaticCell::new(Ga100Engine::EMPTY);
+    static GA300: ConstStaticCell<Ga300Engine> = ConstStaticCell::new(Ga300Engine::EMPTY);
+    PfEngines {
+        ekf: Some(statics::take(&EKF)),
+        pf100: Some(statics::take(&PF100)),
+        pf300: Some(statics::take(&PF300)),
+        ga100: Some(statics::take(&GA100)),
+        ga300: Some(statics::take(&GA300)),
     }
 }
 
 /// The STM32F4's particle-filter engine: the GA-PF at 100 particles
 /// (59 KB), in the core-coupled memory (`.ccmram`, memory-stm32f4.x; only
-/// the core reaches it and nothing here uses DMA). The section is NOLOAD,
-/// so the static is zero-filled here, in place, before the reference is
-/// made; zero is a valid engine (the QEMU board's `pf_engines` says why)
-/// and the server restarts it before its first epoch. The other engines
-/// are left out: their `PfConfigure` is answered `PfUnavailable`.
+/// the core reaches it and nothing here uses DMA), in the same pattern as
+/// every other static: `main` zero-fills the section first
+/// (`statics::zero_ccm`), and the engine's `EMPTY` value is all zero. The
+/// other engines are left out: their `PfConfigure` is answered
+/// `PfUnavailable`.
 #[cfg(all(feature = "pf", feature = "board-stm32f4"))]
 fn pf_engines() -> raim_server::PfEngines {
-    use core::mem::MaybeUninit;
-    use core::ptr::addr_of_mut;
     use raim_server::{Ga100Engine, PfEngines};
     #[link_section = ".ccmram.raim_ga100"]
-    static mut GA100: MaybeUninit<Ga100Engine> = MaybeUninit::uninit();
-    // SAFETY: called once (from `run`, which never returns), so this is
-    // the only reference to GA100 ever made; `write_bytes` fills the whole
-    // static with zeros (a valid engine) before `assume_init_mut`; no
-    // interrupt handler touches it.
-    unsafe {
-        let ga100 = addr_of_mut!(GA100);
-        ga100.write_bytes(0, 1);
-        PfEngines {
-            ga100: Some((*ga100).assume_init_mut()),
-            ..PfEngines::NONE
-        }
+    static GA100: ConstStaticCell<Ga100Engine> = ConstStaticCell::new(Ga100Engine::EMPTY);
+    PfEngines {
+        ga100: Some(statics::take(&GA100)),
+        ..PfEngines::NONE
     }
 }
 

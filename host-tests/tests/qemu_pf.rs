@@ -131,23 +131,60 @@ fn host_server() -> Server {
     s
 }
 
-/// The firmware's engines are zero-filled statics (`firmware/src/main.rs`
-/// `pf_engines`) that the server restarts before use: a zeroed engine,
-/// restarted, answers bit for bit like a new one.
+/// The firmware's engines are statics initialised with `PfRaim::EMPTY`
+/// (`firmware/src/main.rs` `pf_engines`) that the server restarts before
+/// use: the empty engine, restarted, answers bit for bit like a new one.
 #[test]
-fn a_zeroed_engine_restarted_equals_a_new_one() {
+fn the_empty_engine_restarted_equals_a_new_one() {
     let cfg = pf_config(PfKind::Gapf, 100, 3).config;
-    // SAFETY (the firmware's argument): all-zero bytes are a valid engine.
-    let mut zeroed: Box<Ga100Engine> = unsafe { Box::new_zeroed().assume_init() };
-    zeroed.restart(3);
+    let mut empty = Box::new(Ga100Engine::EMPTY);
+    empty.restart(3);
     let mut new = Box::new(Ga100Engine::new(3));
     let mut rng = Rng::new(5);
     for k in 0..6 {
         let e = epoch(k, &mut rng, 3);
-        let a = zeroed.process(&cfg, k as f64, &e);
+        let a = empty.process(&cfg, k as f64, &e);
         let b = new.process(&cfg, k as f64, &e);
         assert_eq!(format!("{a:?}"), format!("{b:?}"), "epoch {k}");
     }
+}
+
+/// `PfRaim::EMPTY` is all zero bytes: the QEMU board's five engine statics
+/// are in `.bss` (no flash image, zeroed by the runtime). The STM32F4's
+/// engine in `.ccmram` relies on the same fact: `main` zero-fills that
+/// section, which is then the engine's `EMPTY` value.
+#[test]
+fn the_firmware_engines_are_all_zero_statics_in_bss() {
+    use object::{Object, ObjectSection, ObjectSymbol};
+    let elf = raim_qemu::firmware_elf().expect("firmware build");
+    let data = std::fs::read(&elf).expect("the firmware ELF");
+    let file = object::File::parse(&*data).expect("an ELF file");
+    let mut found = Vec::new();
+    for sym in file.symbols() {
+        let name = sym.name().unwrap_or("");
+        if !name.contains("pf_engines") {
+            continue;
+        }
+        for engine in ["EKF", "PF100", "PF300", "GA100", "GA300"] {
+            if name.contains(&format!("{}{engine}", engine.len())) {
+                let section = sym
+                    .section_index()
+                    .and_then(|i| file.section_by_index(i).ok())
+                    .and_then(|s| s.name().ok().map(str::to_string))
+                    .unwrap_or_default();
+                found.push((engine, section));
+            }
+        }
+    }
+    found.sort();
+    assert_eq!(
+        found,
+        ["EKF", "GA100", "GA300", "PF100", "PF300"]
+            .iter()
+            .map(|e| (*e, ".bss".to_string()))
+            .collect::<Vec<_>>(),
+        "the engine statics and their sections"
+    );
 }
 
 /// Stack of the thread that runs the host twin: a debug build constructs

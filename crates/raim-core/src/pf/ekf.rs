@@ -9,7 +9,7 @@
 //!
 //! [`Likelihood::variance_factor`]: super::config::Likelihood::variance_factor
 
-use nalgebra::{SMatrix, SVector};
+use nalgebra::{ArrayStorage, SMatrix, SVector};
 
 use crate::real::Real;
 
@@ -74,12 +74,12 @@ impl<T: Real> Estimator<T> for Ekf<T> {
     const KIND: &'static str = "ekf";
     const PARTICLES: usize = 0;
 
-    fn blank() -> Self {
-        Ekf {
-            x: Vector::zeros(),
-            p: Matrix::identity(),
-        }
-    }
+    /// Zero mean and zero covariance: [`Estimator::init`] sets both before
+    /// the first update reads them.
+    const BLANK: Self = Ekf {
+        x: Vector::from_array_storage(ArrayStorage([[T::ZERO; DIM]; 1])),
+        p: Matrix::from_array_storage(ArrayStorage([[T::ZERO; DIM]; DIM])),
+    };
 
     fn init(&mut self, cfg: &PfConfig, _rng: &mut PfRng) {
         let s = init_sigmas(cfg);

@@ -89,18 +89,46 @@ pub struct PfOutput<const S: usize> {
     pub llr: heapless::Vec<SatLlr, S>,
 }
 
+/// The satellite an auxiliary filter leaves out, or none. Not an
+/// `Option<SatId>`: its `None` is a niche value, while "none" here is all
+/// zero bytes, so that [`PfRaim::EMPTY`] is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct AuxSlot {
+    id: SatId,
+    used: bool,
+}
+
+impl AuxSlot {
+    /// No satellite.
+    const NONE: Self = AuxSlot {
+        id: SatId::DEFAULT,
+        used: false,
+    };
+
+    /// Satellite `id`.
+    fn of(id: SatId) -> Self {
+        AuxSlot { id, used: true }
+    }
+
+    /// The satellite, if any.
+    fn get(self) -> Option<SatId> {
+        self.used.then_some(self.id)
+    }
+}
+
 /// Particle-filter RAIM with filter `E` in precision `T` and room for `S`
 /// satellites (main filter + `S` auxiliary filters, all fixed arrays).
 pub struct PfRaim<T: Real, E: Estimator<T>, const S: usize> {
     main: E,
     aux: [E; S],
-    aux_id: [Option<SatId>; S],
+    aux_id: [AuxSlot; S],
     windows: [LlrWindow; S],
     reference: Reference,
     time_s: Option<f64>,
     /// Excluded satellites with the time of their exclusion.
     excluded: heapless::Vec<(SatId, f64), S>,
-    rng: PfRng,
+    /// `None` in [`PfRaim::EMPTY`] until first use, then seeded with 0.
+    rng: Option<PfRng>,
     _t: PhantomData<T>,
 }
 
@@ -108,17 +136,27 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
     /// A monitor whose randomness is seeded with `seed`.
     pub fn new(seed: u64) -> Self {
         PfRaim {
-            main: E::blank(),
-            aux: core::array::from_fn(|_| E::blank()),
-            aux_id: [None; S],
-            windows: [LlrWindow::default(); S],
-            reference: Reference::default(),
-            time_s: None,
-            excluded: heapless::Vec::new(),
-            rng: rng::seeded(seed),
-            _t: PhantomData,
+            rng: Some(rng::seeded(seed)),
+            ..Self::EMPTY
         }
     }
+
+    /// A monitor built at compile time, equal in behaviour to
+    /// [`PfRaim::new`]`(0)` (its generator is seeded with 0 on first use;
+    /// test `empty_equals_new_zero`). Every byte of it is zero, so a
+    /// `static` initialised with it takes no flash image and is never
+    /// built on the stack: the device's engine storage.
+    pub const EMPTY: Self = PfRaim {
+        main: E::BLANK,
+        aux: [E::BLANK; S],
+        aux_id: [AuxSlot::NONE; S],
+        windows: [LlrWindow::EMPTY; S],
+        reference: Reference::ZERO,
+        time_s: None,
+        excluded: heapless::Vec::new(),
+        rng: None,
+        _t: PhantomData,
+    };
 
     /// Forgets everything in place (no temporary copy of the filters, so a
     /// monitor in static storage can be restarted without stack): the next
@@ -128,14 +166,14 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
     /// the first epoch overwrites the main filter (`Estimator::init`) and
     /// every auxiliary filter is copied from it before its first use.
     pub fn restart(&mut self, seed: u64) {
-        self.aux_id = [None; S];
+        self.aux_id = [AuxSlot::NONE; S];
         for w in self.windows.iter_mut() {
             w.clear();
         }
-        self.reference = Reference::default();
+        self.reference = Reference::ZERO;
         self.time_s = None;
         self.excluded.clear();
-        self.rng = rng::seeded(seed);
+        self.rng = Some(rng::seeded(seed));
     }
 
     /// Bytes of state (filters, windows, reference).
@@ -278,7 +316,9 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         let clock_jump = self.absorb_clock_jump(cfg, &used, dt_s);
         let terms = self.reduce(cfg, &used);
         // 4. The main filter.
-        let main_step = self.main.update(cfg, &terms, None, &mut self.rng);
+        let main_step = self
+            .main
+            .update(cfg, &terms, None, rng::or_seed_zero(&mut self.rng));
         let mut out = PfOutput {
             time_s,
             position_m: None,
@@ -300,7 +340,7 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         if main_step.collapsed {
             // 5. Never a position from a collapsed filter: restart
             // everything from the prior about the last reference.
-            self.main.init(cfg, &mut self.rng);
+            self.main.init(cfg, rng::or_seed_zero(&mut self.rng));
             self.restart_auxiliaries();
             out.clock_m = self.reference.clock_m;
             return Ok(out);
@@ -372,8 +412,8 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
                     debug_assert!(pushed.is_ok());
                 }
                 self.reference = fix(&inputs, [0.0; 3])?;
-                self.main.init(cfg, &mut self.rng);
-                self.aux_id = [None; S];
+                self.main.init(cfg, rng::or_seed_zero(&mut self.rng));
+                self.aux_id = [AuxSlot::NONE; S];
                 for w in self.windows.iter_mut() {
                     w.clear();
                 }
@@ -394,25 +434,25 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
     /// filter.
     fn follow_satellites(&mut self, used: &[RangeObservation]) {
         for (id, w) in self.aux_id.iter_mut().zip(self.windows.iter_mut()) {
-            if let Some(i) = *id {
+            if let Some(i) = id.get() {
                 if !used.iter().any(|o| o.id == i) {
-                    *id = None;
+                    *id = AuxSlot::NONE;
                     w.clear();
                 }
             }
         }
         for o in used.iter() {
-            if self.aux_id.contains(&Some(o.id)) {
+            if self.aux_id.iter().any(|s| s.get() == Some(o.id)) {
                 continue;
             }
-            if let Some(slot) = self.aux_id.iter().position(|s| s.is_none()) {
+            if let Some(slot) = self.aux_id.iter().position(|s| s.get().is_none()) {
                 if let (Some(a), Some(id), Some(w)) = (
                     self.aux.get_mut(slot),
                     self.aux_id.get_mut(slot),
                     self.windows.get_mut(slot),
                 ) {
                     a.copy_from(&self.main);
-                    *id = Some(o.id);
+                    *id = AuxSlot::of(o.id);
                     w.clear();
                 }
             }
@@ -423,10 +463,11 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
     /// epoch).
     fn predict_all(&mut self, cfg: &PfConfig, dt_s: f64) {
         if dt_s > 0.0 {
-            self.main.predict(cfg, dt_s, &mut self.rng);
+            self.main
+                .predict(cfg, dt_s, rng::or_seed_zero(&mut self.rng));
             for (a, id) in self.aux.iter_mut().zip(self.aux_id.iter()) {
-                if id.is_some() {
-                    a.predict(cfg, dt_s, &mut self.rng);
+                if id.get().is_some() {
+                    a.predict(cfg, dt_s, rng::or_seed_zero(&mut self.rng));
                 }
             }
         }
@@ -460,7 +501,7 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
             .zip(self.windows.iter_mut())
         {
             w.clear();
-            if id.is_some() {
+            if id.get().is_some() {
                 a.copy_from(&self.main);
             }
         }
@@ -490,11 +531,11 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
             .zip(self.aux_id.iter())
             .zip(self.windows.iter_mut())
         {
-            let Some(id) = *id else { continue };
+            let Some(id) = id.get() else { continue };
             let Some(q) = terms.iter().position(|t| t.id == id) else {
                 continue;
             };
-            let step = a.update(cfg, terms, Some(q), &mut self.rng);
+            let step = a.update(cfg, terms, Some(q), rng::or_seed_zero(&mut self.rng));
             if step.collapsed {
                 a.copy_from(&self.main);
                 w.clear();
@@ -565,7 +606,7 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         }
         self.main.shift(&delta);
         for (a, id) in self.aux.iter_mut().zip(self.aux_id.iter()) {
-            if id.is_some() {
+            if id.get().is_some() {
                 a.shift(&delta);
             }
         }
@@ -586,12 +627,12 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
                 max: S,
             });
         }
-        if let Some(slot) = self.aux_id.iter().position(|s| *s == Some(id)) {
+        if let Some(slot) = self.aux_id.iter().position(|s| s.get() == Some(id)) {
             if let Some(a) = self.aux.get(slot) {
                 self.main.copy_from(a);
             }
             if let Some(s) = self.aux_id.get_mut(slot) {
-                *s = None;
+                *s = AuxSlot::NONE;
             }
         }
         self.restart_auxiliaries();

@@ -20,15 +20,18 @@ pub struct LlrWindow {
 
 impl Default for LlrWindow {
     fn default() -> Self {
-        LlrWindow {
-            values: [0.0; MAX_WINDOW],
-            len: 0,
-            head: 0,
-        }
+        Self::EMPTY
     }
 }
 
 impl LlrWindow {
+    /// No history (all zero).
+    pub const EMPTY: Self = LlrWindow {
+        values: [0.0; MAX_WINDOW],
+        len: 0,
+        head: 0,
+    };
+
     /// Forgets the history (after a reinitialisation or an exclusion).
     pub fn clear(&mut self) {
         self.len = 0;

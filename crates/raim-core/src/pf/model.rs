@@ -41,6 +41,15 @@ pub struct Reference {
     pub drift_m_s: f64,
 }
 
+impl Reference {
+    /// The origin with zero clocks (the derived `Default`, as a constant).
+    pub const ZERO: Self = Reference {
+        position_m: [0.0; 3],
+        clock_m: [0.0; MAX_SYSTEMS],
+        drift_m_s: 0.0,
+    };
+}
+
 /// One satellite's measurement, reduced against the reference.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SatTerm<T> {
@@ -250,8 +259,10 @@ pub trait Estimator<T: Real>: Sized {
     /// Particles per filter (0 for the EKF): with `KIND`, the row of the
     /// calibrated threshold table.
     const PARTICLES: usize;
-    /// An empty filter (call [`Estimator::init`] before use).
-    fn blank() -> Self;
+    /// An empty filter, all zero (call [`Estimator::init`] before use). A
+    /// constant, so that an engine can be built at compile time in a
+    /// static ([`super::PfRaim::EMPTY`]).
+    const BLANK: Self;
     /// Draws the prior about the zero offset (seed 004 step 1).
     fn init(&mut self, cfg: &PfConfig, rng: &mut PfRng);
     /// Becomes a copy of `other`.

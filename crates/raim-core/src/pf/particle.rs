@@ -163,13 +163,11 @@ impl<T: Real, const P: usize, const GA: bool> Estimator<T> for ParticleFilter<T,
     const KIND: &'static str = if GA { "gapf" } else { "pf" };
     const PARTICLES: usize = P;
 
-    fn blank() -> Self {
-        ParticleFilter {
-            particles: [[T::zero(); DIM]; P],
-            work: [T::zero(); P],
-            estimate: [T::zero(); DIM],
-        }
-    }
+    const BLANK: Self = ParticleFilter {
+        particles: [[T::ZERO; DIM]; P],
+        work: [T::ZERO; P],
+        estimate: [T::ZERO; DIM],
+    };
 
     fn init(&mut self, cfg: &PfConfig, rng: &mut PfRng) {
         let s = init_sigmas(cfg);

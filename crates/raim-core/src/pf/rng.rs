@@ -41,6 +41,20 @@ pub fn index(rng: &mut PfRng, n: usize) -> usize {
     }
 }
 
+/// The generator in `slot`, seeded with 0 if it has none yet (an engine
+/// made as [`super::PfRaim::EMPTY`] behaves as one made by `new(0)`).
+pub fn or_seed_zero(slot: &mut Option<PfRng>) -> &mut PfRng {
+    slot.get_or_insert_with(seeded_zero)
+}
+
+/// `seeded(0)`, out of line: it runs once per engine, and the check at
+/// each use stays a compare and a branch.
+#[cold]
+#[inline(never)]
+fn seeded_zero() -> PfRng {
+    seeded(0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -220,6 +220,49 @@ fn restart_equals_new() {
     assert_eq!(fresh(&mut used), fresh(&mut new));
 }
 
+/// The compile-time engine (the device's static storage) runs exactly as
+/// one made by `new(0)`, and `restart` makes it any seed's.
+#[test]
+fn empty_equals_new_zero() {
+    let c = cfg();
+    let run = |m: &mut PfRaim<f32, GaPf<f32, 100>, 12>| {
+        let mut noise = rng::seeded(31);
+        (0..8)
+            .map(|k| {
+                let faulty = (k >= 4).then_some((2, 300.0));
+                let out = m
+                    .process(&c, 10.0 + k as f64, &epoch(8, k, &mut noise, faulty))
+                    .unwrap();
+                std::format!("{out:?}")
+            })
+            .collect::<std::vec::Vec<_>>()
+    };
+    let mut empty = std::boxed::Box::new(PfRaim::<f32, GaPf<f32, 100>, 12>::EMPTY);
+    let mut new = std::boxed::Box::new(PfRaim::<f32, GaPf<f32, 100>, 12>::new(0));
+    assert_eq!(run(&mut empty), run(&mut new));
+    let mut empty = std::boxed::Box::new(PfRaim::<f64, Ekf<f64>, 12>::EMPTY);
+    empty.restart(6);
+    let mut new = std::boxed::Box::new(PfRaim::<f64, Ekf<f64>, 12>::new(6));
+    let mut a = std::vec::Vec::new();
+    let mut b = std::vec::Vec::new();
+    let mut noise_a = rng::seeded(5);
+    let mut noise_b = rng::seeded(5);
+    for k in 0..8 {
+        a.push(std::format!(
+            "{:?}",
+            empty
+                .process(&c, k as f64, &epoch(8, k, &mut noise_a, None))
+                .unwrap()
+        ));
+        b.push(std::format!(
+            "{:?}",
+            new.process(&c, k as f64, &epoch(8, k, &mut noise_b, None))
+                .unwrap()
+        ));
+    }
+    assert_eq!(a, b);
+}
+
 /// f32 particle state against f64 on the same seed and data: the GA-PF
 /// positions agree within 1.5 m (Monte Carlo spread: rounding changes some
 /// resampling draws, so the clouds differ by about sigma/sqrt(N)), the EKF
@@ -396,7 +439,7 @@ fn ekf_matches_linear_closed_form() {
         drift_m_s: 0.0,
     };
     let truth = [1.0, -2.0, 0.5, 3.0, 0.0, 0.0, 0.0, 0.0, 0.0];
-    let mut ekf = Ekf::<f64>::blank();
+    let mut ekf = Ekf::<f64>::BLANK;
     ekf.init(&c, &mut rng);
     let s0 = model::init_sigmas(&c);
     let p0 = DMatrix::from_diagonal(&DVector::from_iterator(9, s0.iter().map(|v| v * v)));

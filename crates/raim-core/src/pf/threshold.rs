@@ -162,7 +162,7 @@ fn interpolate(t: &[f64; N_PFA], pfa: f64) -> Result<f64, PfError> {
         return Err(bad);
     }
     let x = libm::log10(pfa);
-    let first = LOG10_PFA.first().copied().unwrap_or(0.0);
+    let [first, ..] = LOG10_PFA;
     if x >= first {
         return t.first().copied().filter(|v| v.is_finite()).ok_or(bad);
     }
