@@ -235,6 +235,17 @@ pub fn run(args: &ReplayArgs, w: &mut impl Write) -> Result<()> {
         )?;
         if demean {
             e_fold = fold;
+        } else {
+            // The raw vector (bias included) is what the MCUSUM accumulates;
+            // its integrated time in samples is the variance inflation I of
+            // a long sum, and the Gauss-Markov tau with that I at this step
+            // is the `--mcusum-tau-s` it calls for.
+            let inflation = integrated / dt;
+            writeln!(
+                w,
+                "Gauss-Markov fit to the raw integrated time: inflation {inflation:.1} at step {dt:.0} s, tau {:.0} s (--mcusum-tau-s)",
+                raim_core::sequential::mcusum::correlation_time_for_inflation_s(dt, inflation)
+            )?;
         }
     }
     let interval = match args.esq.esq_decimate_s {
