@@ -14,10 +14,12 @@
 # Short (deterministic; replays of the shared real data and one run of seven unit tests):
 #   esq-key-numbers, esq-app-d, esq-nstar, esq-cost, esq-onsets, mcusum-rho, mcusum-decimation,
 #   clean-false-alarms, pca-clean, pca-faults, pca-synthetic, pca-test-numbers (docs/ESQ.md),
-#   mcusum-tau, mcusum-replays (docs/MCRAIM.md),
+#   mcusum-tau, mcusum-replays, mcraim-seed001, mcraim-scenario (docs/MCRAIM.md; the last two
+#   copy the committed outputs docs/mcraim_*.txt of `raim arl`, which --long reruns),
 #   multifault-group-counts, multifault-amplification (docs/MULTIFAULT.md), pf-memory (docs/PF.md, that block only).
 # Long (seeded Monte Carlo; rerun by hand, not in CI):
-#   multifault-mc (docs/MULTIFAULT.md), budget-mc (docs/BUDGET.md).
+#   multifault-mc (docs/MULTIFAULT.md), budget-mc (docs/BUDGET.md), docs/mcraim_seed001.txt and
+#   docs/mcraim_scenario.txt (raim arl --seed001 / --scenario).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 MODE=write
@@ -321,7 +323,7 @@ f=$TMP/mcusum-tau
   # shellcheck disable=SC2086
   gm "0759 (GPS L1)" fitted "**training**: tau = $TAU s used in every MCUSUM-with-tau run" $O_RAW $G
   # shellcheck disable=SC2086
-  gm "0759" default "test (own fit shown, not used)" $O_RAW
+  gm "0759" default "the training file with the other sigma (own fit shown, not used)" $O_RAW
   # shellcheck disable=SC2086
   gm "ESBC (G+E+C)" fitted "test (own fit shown, not used)" $E $G
   # shellcheck disable=SC2086
@@ -345,7 +347,7 @@ f=$TMP/mcusum-replays
   rcell() { # summary text: delay; correct / wrong exclusions; clean false alarms + false exclusions
     local d
     d=$(sv "detection delay" "$1")
-    [ -z "$d" ] && d="never"
+    { [ -z "$d" ] || [ "$d" = - ]; } && d="never"
     [ "$2" = clean ] && d="-"
     echo "$d; $(sv "correct exclusions" "$1") / $(sv "wrong exclusions" "$1"); $(sv "false alarms (clean epochs)" "$1") + $(sv "false exclusions (clean epochs)" "$1")"
   }
@@ -380,9 +382,21 @@ f=$TMP/mcusum-replays
   # shellcheck disable=SC2086
   rp "ESBC clean" fitted "" $E $G
   echo
-  echo "Cells: detection delay (first alarm or exclusion after the onset); correct / wrong exclusions (epochs); clean-epoch false alarms + false exclusions (an exclusion held over several epochs counts once per epoch). \"default\": the core's sigma model; \"fitted\": \`$G\` (docs/REPLAY.md)."
+  echo "Cells: detection delay (first alarm or exclusion after the onset; \"never\" within the file); correct / wrong exclusions (epochs); clean-epoch false alarms + false exclusions (an exclusion held over several epochs counts once per epoch). \"default\": the core's sigma model; \"fitted\": \`$G\` (docs/REPLAY.md)."
 } >"$f"
 put "$DOCS/MCRAIM.md" mcusum-replays "$f"
+
+# Seed 001's Table 2 and the moving-sky scenario (docs/MCRAIM.md): the
+# committed outputs of `raim arl`, rerun by --long, copied into the doc.
+if [ $LONG = 1 ]; then
+  "$R" arl --seed001 --runs 200000 --seed 1 >docs/mcraim_seed001.txt
+  "$R" arl --scenario --runs 400 --fa-epochs 10000 >docs/mcraim_scenario.txt
+fi
+for b in seed001 scenario; do
+  f=$TMP/mcraim-$b
+  { echo '```'; cat "docs/mcraim_$b.txt"; echo '```'; } >"$f"
+  put "$DOCS/MCRAIM.md" "mcraim-$b" "$f"
+done
 
 f=$TMP/mcusum-decimation
 {
