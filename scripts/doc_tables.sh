@@ -6,7 +6,7 @@
 # and is rewritten from the output of the commands below; nothing between
 # markers is typed by hand.
 #
-#   bash scripts/doc_tables.sh           # short mode: rewrite the short tables (about 25 s of CPU once built;
+#   bash scripts/doc_tables.sh           # short mode: rewrite the short tables (about 1 min of CPU once built;
 #                                        # the first run also builds raim-core's release unit tests)
 #   bash scripts/doc_tables.sh --check   # short mode, but compare with the committed docs; exit 1 on a difference (CI)
 #   bash scripts/doc_tables.sh --long    # also the long Monte Carlo tables (about 15 min of CPU)
@@ -14,7 +14,7 @@
 # Short (deterministic; replays of the shared real data and one run of seven unit tests):
 #   esq-key-numbers, esq-app-d, esq-nstar, esq-cost, esq-onsets, mcusum-rho, mcusum-decimation,
 #   clean-false-alarms, pca-clean, pca-faults, pca-synthetic, pca-test-numbers (docs/ESQ.md),
-#   mcusum-tau, mcusum-replays, mcraim-seed001, mcraim-scenario (docs/MCRAIM.md; the last two
+#   mcusum-tau, mcusum-replays, mcraim-arl-example, mcraim-seed001, mcraim-scenario (docs/MCRAIM.md; the last two
 #   copy the committed outputs docs/mcraim_*.txt of `raim arl`, which --long reruns),
 #   multifault-group-counts, multifault-amplification (docs/MULTIFAULT.md), pf-memory (docs/PF.md, that block only).
 # Long (seeded Monte Carlo; rerun by hand, not in CI):
@@ -392,6 +392,14 @@ if [ $LONG = 1 ]; then
   "$R" arl --seed001 --runs 200000 --seed 1 >docs/mcraim_seed001.txt
   "$R" arl --scenario --runs 400 --fa-epochs 10000 >docs/mcraim_scenario.txt
 fi
+f=$TMP/mcraim-arl-example
+{
+  echo '```'
+  echo '$ raim arl --dim 2 --k 1 --h 5.21 --offset 0 --runs 20000 --seed 3'
+  "$R" arl --dim 2 --k 1 --h 5.21 --offset 0 --runs 20000 --seed 3
+  echo '```'
+} >"$f"
+put "$DOCS/MCRAIM.md" mcraim-arl-example "$f"
 for b in seed001 scenario; do
   f=$TMP/mcraim-$b
   { echo '```'; cat "docs/mcraim_$b.txt"; echo '```'; } >"$f"
