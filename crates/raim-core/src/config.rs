@@ -63,6 +63,16 @@ pub struct McusumConfig {
     pub carry: Carry,
     /// How long a satellite excluded after an MCUSUM alarm stays excluded, s.
     pub hold_s: f64,
+    /// Correlation time tau of the first-order Gauss-Markov error model the
+    /// MCUSUM whitens against, s; 0 (the default) is white noise, the
+    /// assumption of the ARL0 table. With tau > 0 each epoch's parity
+    /// vector is weighted by 1 / sqrt(I) before it enters the recursion,
+    /// I = (1 + rho) / (1 - rho), rho = exp(-dt / tau), dt the interval
+    /// since the previous epoch (`mcusum::variance_inflation`): the
+    /// variance of a sum of n weighted samples is then at most n, that of
+    /// the white unit-variance samples the threshold h was computed for.
+    /// Bounds: `config_bounds::CORRELATION_TIME_S`.
+    pub correlation_time_s: f64,
 }
 
 impl Default for McusumConfig {
@@ -75,6 +85,7 @@ impl Default for McusumConfig {
             arl0: 6.0e6,
             carry: Carry::Transport,
             hold_s: DEFAULT_MCUSUM_HOLD_S,
+            correlation_time_s: 0.0,
         }
     }
 }

@@ -181,6 +181,17 @@ pub const HOLD_S: Bound = Bound {
     max: 1e4,
 };
 
+/// Correlation time of the MCUSUM's Gauss-Markov error model, s (0 = white
+/// noise, up to one hour). Longer than an hour, the error is a bias over
+/// any flight phase and the weight 1 / sqrt(I) (I ~ 2 tau / dt) leaves the
+/// MCUSUM nothing to accumulate: a sigma model that overbounds the bias is
+/// then the remedy, not a longer tau.
+pub const CORRELATION_TIME_S: Bound = Bound {
+    field: "correlation_time_s",
+    min: 0.0,
+    max: 3600.0,
+};
+
 /// Simultaneous faults the reconstruction FDE searches for (SPEC §8; the
 /// covering designs exist for t = 1..3).
 pub const T_MAX: Bound = Bound {
@@ -231,6 +242,7 @@ pub fn check(cfg: &Config) -> Result<(), RaimError> {
     // later must not bring unchecked values into force.
     crate::sequential::mcusum::check_settings(cfg.mcusum.k, cfg.mcusum.arl0)?;
     HOLD_S.check(cfg.mcusum.hold_s)?;
+    CORRELATION_TIME_S.check(cfg.mcusum.correlation_time_s)?;
     if let FdeMethod::Reconstruction {
         t_max,
         group_budget,

@@ -63,6 +63,11 @@ pub struct ConfigArgs {
     /// How long an MCUSUM exclusion is held, s.
     #[arg(long, default_value_t = raim_core::config::DEFAULT_MCUSUM_HOLD_S)]
     pub mcusum_hold_s: f64,
+    /// Correlation time of the Gauss-Markov error model the MCUSUM whitens
+    /// against, s (0 = white noise, up to 3600; docs/MCRAIM.md "Time-correlated
+    /// errors").
+    #[arg(long, default_value_t = 0.0)]
+    pub mcusum_tau_s: f64,
     /// FDE by error reconstruction over constraint groups
     /// (docs/MULTIFAULT.md) for up to this many simultaneous faults (1-3);
     /// also raises --max-exclusions to it. Default: today's FDE.
@@ -105,6 +110,7 @@ impl ConfigArgs {
             c = c.split_false_alarm_budget(self.mcusum_share);
             c.mcusum.k = self.mcusum_k;
             c.mcusum.hold_s = self.mcusum_hold_s;
+            c.mcusum.correlation_time_s = self.mcusum_tau_s;
             if self.mcusum_reset {
                 c.mcusum.carry = raim_core::config::Carry::Reset;
             }
@@ -117,7 +123,13 @@ impl ConfigArgs {
     /// An option given on the command line (`given`) that the rest of the
     /// configuration would ignore, as a usage message naming both.
     pub fn ignored(&self, given: &dyn Fn(&str) -> bool) -> Option<String> {
-        for id in ["mcusum_k", "mcusum_share", "mcusum_reset", "mcusum_hold_s"] {
+        for id in [
+            "mcusum_k",
+            "mcusum_share",
+            "mcusum_reset",
+            "mcusum_hold_s",
+            "mcusum_tau_s",
+        ] {
             if given(id) && !self.mcusum {
                 return Some(format!(
                     "'--{}' would be ignored: it needs --mcusum",

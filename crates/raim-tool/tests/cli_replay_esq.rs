@@ -234,3 +234,81 @@ fn pca_null_scale_raises_the_threshold() {
     }
     assert!(nominal.contains("binomial 99 % bound 0"), "{nominal}");
 }
+
+/// The MCUSUM with the Gauss-Markov weight, trained on one file and tested
+/// on another (docs/MCRAIM.md "Time-correlated errors"): tau is fitted on
+/// clean 0759 (`--esq-mcusum` prints it), then the whole clean ESBC file,
+/// which played no part in the fit, is replayed with it: zero clean false
+/// events (the allocation's binomial 99 % bound on 360 epochs is 0). The
+/// white MCUSUM (tau 0) has false events on the same run, so the check can
+/// fail.
+#[test]
+fn mcusum_tau_trained_on_0759_has_no_false_events_on_clean_esbc() {
+    let train = raim(
+        &[
+            "replay",
+            "--obs",
+            &format!("{DATA}/07590920.05o"),
+            "--nav",
+            &format!("{DATA}/07590920.05n"),
+            "--systems",
+            "G",
+            "--mask-deg",
+            "15",
+            "--ura-m",
+            "0.3",
+            "--iono-vertical-m",
+            "0.5",
+            "--noise-m",
+            "0.2",
+            "--mcusum",
+            "--esq-mcusum",
+        ]
+        .map(String::from),
+    );
+    let l = train
+        .lines()
+        .find(|l| l.starts_with("Gauss-Markov fit"))
+        .unwrap_or_else(|| panic!("{train}"));
+    let tau: f64 = l
+        .split(", tau ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(tau > 0.0 && tau <= 3600.0, "{l}");
+    let events = |tau_s: f64| -> (usize, usize) {
+        let out = raim(&esbc(&[
+            "--quiet",
+            "--mcusum",
+            "--mcusum-tau-s",
+            &tau_s.to_string(),
+        ]));
+        let l = out
+            .lines()
+            .find(|l| l.starts_with("clean false events"))
+            .unwrap_or_else(|| panic!("{out}"));
+        let nums: Vec<usize> = l
+            .split("bound")
+            .nth(1)
+            .unwrap()
+            .split_whitespace()
+            .filter_map(|w| w.parse().ok())
+            .collect();
+        // "<events> in <epochs> tested clean epochs / <bound> ..."
+        assert!(nums.len() >= 3, "{l}");
+        assert_eq!(nums[1], 360, "{l}");
+        (nums[0], nums[2])
+    };
+    let (white, _) = events(0.0);
+    assert!(
+        white > 0,
+        "the white MCUSUM had no false event on clean ESBC"
+    );
+    let (weighted, bound) = events(tau);
+    assert_eq!(bound, 0);
+    assert_eq!(weighted, 0, "tau {tau} s");
+}

@@ -158,6 +158,18 @@ fn hold_bound_applies_whether_the_mcusum_runs_or_not() {
     float_bound(HOLD_S, |c, v| c.mcusum.hold_s = v);
 }
 
+#[test]
+fn correlation_time_bound_applies_whether_the_mcusum_runs_or_not() {
+    float_bound(CORRELATION_TIME_S, |c, v| {
+        *c = c.split_false_alarm_budget(0.5);
+        c.mcusum.correlation_time_s = v;
+    });
+    float_bound(CORRELATION_TIME_S, |c, v| c.mcusum.correlation_time_s = v);
+    // The default is white noise (0), inside the bound.
+    assert_eq!(Config::default().mcusum.correlation_time_s, 0.0);
+    assert_eq!(Config::default().validate(), Ok(()));
+}
+
 /// A disabled MCUSUM with k = NaN, ARL0 = -1 or hold = infinity is
 /// refused, with the field: a disabled part is validated too.
 #[test]

@@ -104,6 +104,60 @@ pub fn crosier_step<T: Real>(s: &mut [T], y: &[T], k: T) -> (T, T) {
     }
 }
 
+/// [`crosier_step`] with the observation weighted: S_(t-1) + w y_t in place
+/// of S_(t-1) + y_t (w = 1 / sqrt(I) of [`variance_inflation`]). A NaN
+/// weight or observation gives a NaN statistic, which alarms.
+pub fn crosier_step_weighted<T: Real>(s: &mut [T], y: &[T], k: T, w: T) -> (T, T) {
+    let mut c2 = T::zero();
+    for (si, yi) in s.iter_mut().zip(y.iter()) {
+        *si += w * *yi;
+        c2 += *si * *si;
+    }
+    let c = c2.sqrt();
+    if c <= k {
+        for si in s.iter_mut() {
+            *si = T::zero();
+        }
+        (c, T::zero())
+    } else {
+        let shrink = T::one() - k / c;
+        for si in s.iter_mut() {
+            *si *= shrink;
+        }
+        (c, c - k)
+    }
+}
+
+/// Variance inflation of a sum of samples of a first-order Gauss-Markov
+/// error (unit variance, correlation time `tau_s`) taken every `dt_s`:
+/// I = (1 + rho) / (1 - rho) = coth(dt / (2 tau)), rho = exp(-dt / tau).
+/// The variance of the sum of n samples is
+/// n I - 2 rho (1 - rho^n) / (1 - rho)^2 <= n I, so samples weighted by
+/// 1 / sqrt(I) have partial sums no more variable than white unit-variance
+/// samples, the process the ARL0 table was computed for. I ~ 2 tau / dt
+/// for dt << tau. `tau_s` <= 0 (white noise) gives 1; so does NaN.
+pub fn variance_inflation(dt_s: f64, tau_s: f64) -> f64 {
+    if !(tau_s > 0.0) {
+        return 1.0;
+    }
+    1.0 / libm::tanh(dt_s / (2.0 * tau_s))
+}
+
+/// The inverse of [`variance_inflation`] in tau: the correlation time whose
+/// inflation at the interval `dt_s` is `inflation` (> 1),
+/// tau = dt / (2 artanh(1 / I)). An integrated autocorrelation time
+/// 1 + 2 sum_L rho(L), measured in samples, is such an I. 0 for I <= 1
+/// (white or anti-correlated); NaN in, NaN out.
+pub fn correlation_time_for_inflation_s(dt_s: f64, inflation: f64) -> f64 {
+    if inflation.is_nan() {
+        return f64::NAN;
+    }
+    if inflation <= 1.0 {
+        return 0.0;
+    }
+    dt_s / (2.0 * libm::atanh(1.0 / inflation))
+}
+
 /// The Euclidean norm, in `T`.
 fn norm<'a, T: Real>(v: impl Iterator<Item = &'a T>) -> T {
     v.fold(T::zero(), |acc, x| acc + *x * *x).sqrt()
@@ -236,6 +290,10 @@ pub struct Mcusum<const N: usize, T: Real = Stat> {
     /// Dimension and threshold of the last update (0 / NaN before the first).
     last_dim: usize,
     last_h: f64,
+    /// Time of the last epoch seen by [`Self::observation_weight`] and the
+    /// last positive interval, s (NaN before them).
+    last_time_s: f64,
+    last_dt_s: f64,
     held: heapless::Vec<Held, MAX_HELD>,
 }
 
@@ -254,6 +312,8 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
             n: 0,
             last_dim: 0,
             last_h: f64::NAN,
+            last_time_s: f64::NAN,
+            last_dt_s: f64::NAN,
             held: heapless::Vec::new(),
         }
     }
@@ -321,6 +381,28 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         true
     }
 
+    /// The weight w = 1 / sqrt(I(dt, tau)) of the observation of the epoch at
+    /// `time_s` ([`variance_inflation`], SPEC §7.1 on whitened samples),
+    /// with dt the interval since the previous call. 1 when `tau_s` is 0
+    /// (white noise). When this epoch's interval is unknown (the first
+    /// epoch, or time not advancing) the last positive interval is used;
+    /// before any, the weight is 0: the epoch only starts the clock. The
+    /// clock survives [`Self::reset`] and [`Self::clear`].
+    pub fn observation_weight(&mut self, time_s: f64, tau_s: f64) -> f64 {
+        let dt = time_s - self.last_time_s;
+        if dt > 0.0 && dt.is_finite() {
+            self.last_dt_s = dt;
+        }
+        self.last_time_s = time_s;
+        if !(tau_s > 0.0) {
+            return 1.0;
+        }
+        if !(self.last_dt_s > 0.0) {
+            return 0.0;
+        }
+        1.0 / libm::sqrt(variance_inflation(self.last_dt_s, tau_s))
+    }
+
     /// One epoch: transport (or reset), then the Crosier step on this
     /// epoch's parity vector. `ids` names the rows of `parity`; `h` is this
     /// epoch's threshold. When the dimension dropped since the last epoch
@@ -338,6 +420,21 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         carry: Carry,
         h: f64,
     ) -> Step {
+        self.update_weighted(ids, parity, k, carry, h, 1.0)
+    }
+
+    /// [`Self::update`] with the observation weighted by `weight`
+    /// ([`Self::observation_weight`]); a weight of exactly 1 is the plain
+    /// recursion, bit for bit.
+    pub fn update_weighted(
+        &mut self,
+        ids: &[SatId],
+        parity: &Parity<N, T>,
+        k: f64,
+        carry: Carry,
+        h: f64,
+        weight: f64,
+    ) -> Step {
         let d = parity.dof();
         let mut s = [T::zero(); N];
         let carried = self.prior(ids, parity, carry, &mut s);
@@ -351,7 +448,11 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
             }
         }
         let prior_norm = norm(sd.iter()).to_f64();
-        let (c, statistic) = crosier_step(sd, parity.p(), T::of(k));
+        let (c, statistic) = if weight == 1.0 {
+            crosier_step(sd, parity.p(), T::of(k))
+        } else {
+            crosier_step_weighted(sd, parity.p(), T::of(k), T::of(weight))
+        };
         self.store(ids, parity, sd);
         self.last_dim = d;
         self.last_h = h;
@@ -782,5 +883,147 @@ mod tests {
         const H_TABLE_TOL: f64 = 1e-3;
         assert!((h - 5.206).abs() < H_TABLE_TOL, "{h}");
         assert!(((h * 100.0).round() - 521.0).abs() < 0.5);
+    }
+
+    /// I(dt = 30 s, tau = 1560 s) against the hand computation
+    /// rho = exp(-30 / 1560) = 0.9809529623602027,
+    /// (1 + rho) / (1 - rho) = 104.00320510844975 (Python, f64), and
+    /// I(1 s, 10 s) = 20.016663889550088; white noise (tau 0, NaN) gives 1;
+    /// the inverse returns tau; I -> 2 tau / dt for dt << tau.
+    #[test]
+    fn variance_inflation_by_hand() {
+        /// Relative difference between coth(dt / 2 tau) and the hand's
+        /// (1 + rho) / (1 - rho): a few f64 roundings of a quotient of 1e2.
+        const INFLATION_REL_TOL: f64 = 1e-12;
+        /// Round trip of tau through I, s (artanh of 1/I near 0.01).
+        const TAU_TOL_S: f64 = 1e-9;
+        for (dt, tau, hand) in [
+            (30.0, 1560.0, 104.00320510844975),
+            (1.0, 10.0, 20.016663889550088),
+        ] {
+            let i = variance_inflation(dt, tau);
+            assert!((i / hand - 1.0).abs() < INFLATION_REL_TOL, "{i} {hand}");
+            let back = correlation_time_for_inflation_s(dt, i);
+            assert!((back - tau).abs() < TAU_TOL_S, "{back} {tau}");
+        }
+        assert_eq!(variance_inflation(30.0, 0.0), 1.0);
+        assert_eq!(variance_inflation(30.0, f64::NAN), 1.0);
+        assert_eq!(correlation_time_for_inflation_s(30.0, 1.0), 0.0);
+        assert!(correlation_time_for_inflation_s(30.0, f64::NAN).is_nan());
+        // dt / tau = 1e-3: I = 2 tau / dt + dt / (6 tau) + ...
+        let i = variance_inflation(1.0, 1000.0);
+        assert!((i - 2000.0 - 1.0 / 6000.0).abs() < 1e-6, "{i}");
+    }
+
+    /// The overbound the weight rests on: for a unit-variance AR(1) with
+    /// correlation rho, Var(sum of n samples) = sum_ij rho^|i-j| (computed
+    /// here by the double sum) equals n I - 2 rho (1 - rho^n) / (1 - rho)^2
+    /// and never exceeds n I, for n = 1..300 and rho from tau / dt = 0.5..300.
+    #[test]
+    fn weighted_partial_sums_are_no_more_variable_than_white() {
+        /// Relative rounding of a double sum of up to 9e4 terms.
+        const SUM_REL_TOL: f64 = 1e-9;
+        for tau_over_dt in [0.5, 3.0, 52.0, 300.0] {
+            let rho = libm::exp(-1.0 / tau_over_dt);
+            let i = variance_inflation(1.0, tau_over_dt);
+            let mut var = 0.0;
+            for n in 1..=300usize {
+                // Adding sample n adds 1 + 2 sum_{L=1}^{n-1} rho^L.
+                let mut row = 1.0;
+                let mut r = 1.0;
+                for _ in 1..n {
+                    r *= rho;
+                    row += 2.0 * r;
+                }
+                var += row;
+                let nf = n as f64;
+                let closed =
+                    nf * i - 2.0 * rho * (1.0 - libm::pow(rho, nf)) / ((1.0 - rho) * (1.0 - rho));
+                assert!(
+                    (var / closed - 1.0).abs() < SUM_REL_TOL,
+                    "{n} {var} {closed}"
+                );
+                assert!(var <= nf * i * (1.0 + SUM_REL_TOL), "{n} {var} {}", nf * i);
+            }
+        }
+    }
+
+    /// The clock of the weight: 0 at the first epoch (no interval yet),
+    /// then 1 / sqrt(I) of the measured interval; a repeated time keeps the
+    /// last interval; tau = 0 is exactly 1 at every epoch.
+    #[test]
+    fn observation_weight_follows_the_epoch_interval() {
+        const W_TOL: f64 = 1e-12;
+        let mut m = Mcusum::<4>::new();
+        assert_eq!(m.observation_weight(100.0, 1560.0), 0.0);
+        let w30 = 1.0 / libm::sqrt(104.00320510844975);
+        assert!((m.observation_weight(130.0, 1560.0) - w30).abs() < W_TOL);
+        assert!((m.observation_weight(130.0, 1560.0) - w30).abs() < W_TOL);
+        m.reset();
+        let w60 = 1.0 / libm::sqrt(variance_inflation(60.0, 1560.0));
+        assert!((m.observation_weight(190.0, 1560.0) - w60).abs() < W_TOL);
+        let mut white = Mcusum::<4>::new();
+        for t in [0.0, 0.0, 1.0, 31.0, f64::NAN] {
+            assert_eq!(white.observation_weight(t, 0.0), 1.0);
+        }
+    }
+
+    /// In-control alarms of a d = 4 MCUSUM (k = 1, ARL0 = 500, restarted
+    /// after each alarm) over 2e5 epochs of AR(1) errors with tau / dt = 10
+    /// (seed 5): unweighted, the correlated errors alarm far above the
+    /// nominal 400; weighted by 1 / sqrt(I) the count is at most nominal
+    /// + 4 standard errors (sqrt(400) = 20).
+    #[test]
+    fn weight_restores_the_false_alarm_rate_on_gauss_markov_errors() {
+        const D: usize = 4;
+        const EPOCHS: usize = 200_000;
+        const ARL0: f64 = 500.0;
+        let h = threshold(D, 1.0, ARL0).unwrap();
+        let (dt, tau) = (1.0, 10.0);
+        let rho = libm::exp(-dt / tau);
+        let w = 1.0 / libm::sqrt(variance_inflation(dt, tau));
+        let mut rng = Rng::new(5);
+        let mut x = [0.0f64; D];
+        for xi in x.iter_mut() {
+            *xi = rng.normal();
+        }
+        let (mut s_plain, mut s_weighted) = ([0.0f64; D], [0.0f64; D]);
+        let (mut plain, mut weighted) = (0usize, 0usize);
+        for _ in 0..EPOCHS {
+            for xi in x.iter_mut() {
+                *xi = rho * *xi + libm::sqrt(1.0 - rho * rho) * rng.normal();
+            }
+            if crosier_step(&mut s_plain, &x, 1.0).1 >= h {
+                plain += 1;
+                s_plain = [0.0; D];
+            }
+            if crosier_step_weighted(&mut s_weighted, &x, 1.0, w).1 >= h {
+                weighted += 1;
+                s_weighted = [0.0; D];
+            }
+        }
+        let nominal = EPOCHS as f64 / ARL0;
+        std::println!(
+            "AR(1) tau/dt 10: alarms unweighted {plain}, weighted {weighted}, nominal {nominal}"
+        );
+        assert!(plain as f64 > 10.0 * nominal, "{plain}");
+        assert!(
+            (weighted as f64) <= nominal + 4.0 * libm::sqrt(nominal),
+            "{weighted}"
+        );
+    }
+
+    /// A weight of exactly 1 is the plain recursion, bit for bit.
+    #[test]
+    fn unit_weight_is_the_plain_step() {
+        let mut rng = Rng::new(9);
+        let (mut a, mut b) = ([0.0f64; 3], [0.0f64; 3]);
+        for _ in 0..1000 {
+            let y = [rng.normal(), rng.normal(), rng.normal()];
+            let ra = crosier_step(&mut a, &y, 0.5);
+            let rb = crosier_step_weighted(&mut b, &y, 0.5, 1.0);
+            assert_eq!(ra, rb);
+            assert_eq!(a, b);
+        }
     }
 }

@@ -285,6 +285,7 @@ impl<const N: usize, T: Real> Sequential<N, T> {
             dim: dim as u32,
             ..McusumReport::default()
         };
+        let weight = mcusum.observation_weight(epoch.time_s, mc.correlation_time_s);
         match mcusum::threshold(dim, mc.k, mc.arl0) {
             Err(_) => {
                 mcusum.reset();
@@ -293,7 +294,7 @@ impl<const N: usize, T: Real> Sequential<N, T> {
                 report.c = f64::NAN;
             }
             Ok(h) => {
-                let step = mcusum.update(ids, &sol.parity, mc.k, mc.carry, h);
+                let step = mcusum.update_weighted(ids, &sol.parity, mc.k, mc.carry, h, weight);
                 report.available = true;
                 report.threshold = h;
                 report.statistic = step.statistic;

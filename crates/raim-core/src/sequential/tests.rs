@@ -379,3 +379,44 @@ fn held_epochs_of_ranges_equal_the_snapshot_on_the_filtered_input() {
     }
     assert_eq!(held_checked, HELD_EPOCHS, "CUSUM alarm at {alarm_at:?}");
 }
+
+/// The configuration reaches the recursion: the persistent 3 m bias of
+/// `mcusum_catches_a_bias_the_snapshot_misses_and_holds_it` (sigma 1 m,
+/// 1 s epochs) is a time-correlated error to a monitor told that the
+/// errors have a correlation time of 600 s (I = coth(1 / 1200) ~ 1200,
+/// weight ~ 0.029): weighted, its parity-space shift per epoch is below
+/// k = 1 and the MCUSUM stays at 0 in all 20 seeds, where the white
+/// MCUSUM (tau = 0) alarms in every one. The first epoch only starts the
+/// weight's clock (C_t = 0 there).
+#[test]
+fn correlation_time_weights_the_recursion() {
+    let sky10: Vec<(f64, f64)> = SKY8
+        .iter()
+        .copied()
+        .chain([(120.0, 70.0), (280.0, 65.0)])
+        .collect();
+    let white = mcusum_cfg(crate::config::Carry::Transport);
+    let mut weighted = white;
+    weighted.mcusum.correlation_time_s = 600.0;
+    assert_eq!(weighted.validate(), Ok(()));
+    for seed in 0..20u64 {
+        let (mut a, mut b) = (Raim::<16>::new(), Raim::<16>::new());
+        let mut rng = Rng::new(7000 + seed);
+        let (mut white_alarm, mut weighted_max) = (false, 0.0f64);
+        for t in 0..200 {
+            let sats = linear_epoch(&sky10, 1.0, &mut rng, &[(4, 3.0)]);
+            let e = Epoch::linear(t as f64, &sats);
+            let ra = a.process(&white, &e).unwrap();
+            let rb = b.process(&weighted, &e).unwrap();
+            white_alarm |= ra.mcusum.unwrap().alarm;
+            let m = rb.mcusum.unwrap();
+            if t == 0 {
+                assert_eq!(m.c, 0.0, "seed {seed}");
+            }
+            assert!(!m.alarm, "seed {seed} t {t}: {m:?}");
+            weighted_max = weighted_max.max(m.statistic);
+        }
+        assert!(white_alarm, "seed {seed}");
+        assert_eq!(weighted_max, 0.0, "seed {seed}");
+    }
+}

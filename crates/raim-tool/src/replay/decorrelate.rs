@@ -21,8 +21,10 @@
 //!    and the combination on the decimated samples with its snapshot Pfa at
 //!    the smallest allowed value (1e-9 per sample: at most +0.6 % of the
 //!    budget), so that only the MCUSUM is decimated;
-//! 4. false alarms (alarms and exclusions before the onset) and the
-//!    detection delay after the onset are printed for all three.
+//! 4. "alone": the snapshot test alone on every epoch with the whole
+//!    budget, the reference for what the MCUSUM adds;
+//! 5. false alarms (alarms and exclusions before the onset) and the
+//!    detection delay after the onset are printed for all four.
 //!
 //! Why the measured correlation time and not dT_e: dT_e = T / N* comes
 //! from how the integrity risk spreads over the ARAIM fault modes (N* is
@@ -235,6 +237,17 @@ pub fn run(args: &ReplayArgs, w: &mut impl Write) -> Result<()> {
         )?;
         if demean {
             e_fold = fold;
+        } else {
+            // The raw vector (bias included) is what the MCUSUM accumulates;
+            // its integrated time in samples is the variance inflation I of
+            // a long sum, and the Gauss-Markov tau with that I at this step
+            // is the `--mcusum-tau-s` it calls for.
+            let inflation = integrated / dt;
+            writeln!(
+                w,
+                "Gauss-Markov fit to the raw integrated time: inflation {inflation:.1} at step {dt:.0} s, tau {:.0} s (--mcusum-tau-s)",
+                raim_core::sequential::mcusum::correlation_time_for_inflation_s(dt, inflation)
+            )?;
         }
     }
     let interval = match args.esq.esq_decimate_s {
@@ -259,6 +272,12 @@ pub fn run(args: &ReplayArgs, w: &mut impl Write) -> Result<()> {
         .validate()
         .map_err(|e| anyhow!("decimated MCUSUM configuration (M = {m}): {e}"))?;
     let split = monitor_split(&s, &snap_only, &mcusum_dec, m)?;
+    // The snapshot test alone on every epoch with the whole budget: what
+    // the MCUSUM adds is measured against it.
+    let mut alone = cfg;
+    alone.mcusum.enabled = false;
+    alone.pfa = cfg.pfa + 1.0 / cfg.mcusum.arl0;
+    let alone = monitor(&s, &alone, 1)?;
     writeln!(
         w,
         "nominal ARL0 {:.3e} s in both: before every {dt:.0} s (snapshot Pfa {:.3e}, MCUSUM ARL0 {:.3e} samples); after every {:.0} s (M = {m}: Pfa {:.3e}, ARL0 {:.3e} samples)",
@@ -269,7 +288,12 @@ pub fn run(args: &ReplayArgs, w: &mut impl Write) -> Result<()> {
         dec.pfa,
         dec.mcusum.arl0,
     )?;
-    for (name, o) in [("before", &before), ("after ", &after), ("split ", &split)] {
+    for (name, o) in [
+        ("before", &before),
+        ("after ", &after),
+        ("split ", &split),
+        ("alone ", &alone),
+    ] {
         writeln!(
             w,
             "  {name}: {} samples, false alarms {}, detection delay {}",
