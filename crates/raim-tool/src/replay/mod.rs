@@ -384,7 +384,7 @@ fn prepare_full(args: &ReplayArgs) -> Result<Prepared> {
     if stream.is_some() {
         let model = args.core_config().sigma_model;
         for e in &mut epochs {
-            receiver::set_sigmas(e, &model);
+            receiver::set_sigmas(e, &model, opts.glonass_sigma.as_ref());
         }
         let mut probe = args.core_config();
         let before = probe.sigma_model.iono_vertical_m;

@@ -69,6 +69,12 @@ pub fn receiver_codes() -> BTreeMap<System, Vec<String>> {
             ]),
         ),
         (System::Beidou, v(&["C2I+C6I", "C2I+C7I", "C2I", "C1I"])),
+        // GLONASS FDMA: L1/L2 of the same code first (C/A on both, as
+        // GLONASS-M broadcasts; then P), so no code-to-code bias enters.
+        (
+            System::Glonass,
+            v(&["C1C+C2C", "C1P+C2P", "C1C+C2P", "C1C", "C1P"]),
+        ),
         (
             System::Qzss,
             v(&["C1C+C2L", "C1C+C2X", "C1C+C2S", "C1C+C5Q", "C1C"]),
@@ -90,11 +96,17 @@ pub fn iono_free_sigma_m(model: &SigmaModel, el_rad: f64, factor: f64) -> f64 {
         .sqrt()
 }
 
-/// Set each iono-free observation's own sigma (see the module docs).
-pub fn set_sigmas(epoch: &mut PreparedEpoch, model: &SigmaModel) {
+/// Set each iono-free observation's own sigma (see the module docs): from
+/// `model`, or for a GLONASS satellite from `glonass` (its own URA,
+/// `RangingOptions::glonass_sigma`) when given.
+pub fn set_sigmas(epoch: &mut PreparedEpoch, model: &SigmaModel, glonass: Option<&SigmaModel>) {
     for s in &mut epoch.sats {
         if let Some(f) = iono_free_noise_factor(s.obs.id.system, &s.code) {
-            s.obs.sigma_m = Some(iono_free_sigma_m(model, s.elevation_rad, f));
+            let m = match (s.obs.id.system, glonass) {
+                (System::Glonass, Some(g)) => g,
+                _ => model,
+            };
+            s.obs.sigma_m = Some(iono_free_sigma_m(m, s.elevation_rad, f));
         }
     }
 }
@@ -180,22 +192,14 @@ pub fn load_file(format: Format, path: &Path) -> Result<Recording> {
         }
         if let Some(k) = c.ignored.get(raim_recv::rtcm::GLONASS_ALONE) {
             bail!(
-                "{shown}: only GLONASS observations ({k} epochs of GLONASS MSM): GLONASS orbits and time are not modelled, so nothing can be solved ({c})"
+                "{shown}: only GLONASS observations ({k} epochs of GLONASS MSM, no GPS, Galileo or BeiDou MSM): a GLONASS MSM carries only a GLONASS time of day, and this reader dates epochs by the GPS/Galileo/BeiDou MSM they arrive with, so nothing can be solved ({c})"
             );
         }
         bail!("{shown}: no observation epochs ({c})");
     }
-    if rec.nav.ephemerides.is_empty() {
-        let glo = if rec.glonass.is_empty() {
-            String::new()
-        } else {
-            format!(
-                " ({} GLONASS ephemerides, whose orbits this replay does not model)",
-                rec.glonass.len()
-            )
-        };
+    if rec.nav.ephemerides.is_empty() && rec.nav.glonass.is_empty() {
         bail!(
-            "{shown}: {} epochs but no ephemeris of a modelled system{glo}: the stream has no {} ({c})",
+            "{shown}: {} epochs but no ephemeris: the stream has no {} ({c})",
             rec.obs.epochs.len(),
             format.ephemeris_messages()
         );
@@ -238,7 +242,6 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
         epochs: Vec::new(),
     };
     let mut nav = NavData::default();
-    let mut glonass = Vec::new();
     let mut plan: Option<FaultPlan> = None;
     let mut records: Vec<EpochRecord> = Vec::new();
     let mut tally = crate::outcome::Tally::default();
@@ -273,22 +276,18 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
         for it in items.drain(..) {
             match it {
                 Item::Epoch(e) => epochs.push(e),
-                other => raim_recv::apply(other, &mut obs, &mut nav, &mut glonass),
+                other => raim_recv::apply(other, &mut obs, &mut nav),
             }
         }
         if nav.ephemerides.is_empty()
+            && nav.glonass.is_empty()
             && started.elapsed() > Duration::from_secs_f64(args.ephemeris_timeout_s.max(0.0))
         {
             bail!(
-                "{}: no ephemeris after {:.0} s of stream ({} epochs{}): a {} stream needs {} to be solved ({})",
+                "{}: no ephemeris after {:.0} s of stream ({} epochs): a {} stream needs {} to be solved ({})",
                 spec.name(),
                 args.ephemeris_timeout_s,
                 dec.counts().epochs,
-                if glonass.is_empty() {
-                    String::new()
-                } else {
-                    format!(", {} GLONASS ephemerides, not modelled", glonass.len())
-                },
                 format.name(),
                 format.ephemeris_messages(),
                 dec.counts()
@@ -304,7 +303,7 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
                 adjust_config(&mut cfg, args, &nav, &one);
                 iono_set = true;
             }
-            set_sigmas(&mut p, &cfg.sigma_model);
+            set_sigmas(&mut p, &cfg.sigma_model, opts.glonass_sigma.as_ref());
             let mut sats = p.observations();
             let injected = plan
                 .as_ref()
@@ -329,7 +328,7 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
                 }
                 Err(err) => {
                     let t = raim_gnss::time::time_of_day(p.time_gps_s);
-                    let why = if nav.ephemerides.is_empty() {
+                    let why = if nav.ephemerides.is_empty() && nav.glonass.is_empty() {
                         format!("{err} (no ephemeris received yet)")
                     } else {
                         err.clone()
@@ -379,7 +378,7 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
     } else if args.nmea != Some(NmeaMode::Only) {
         writeln!(w, "{}", summary.table())?;
     }
-    if records.is_empty() && nav.ephemerides.is_empty() {
+    if records.is_empty() && nav.ephemerides.is_empty() && nav.glonass.is_empty() {
         bail!(
             "{}: the stream ended with no epoch solved: no ephemeris ({}) in {}",
             spec.name(),
