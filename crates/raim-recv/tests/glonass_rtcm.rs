@@ -236,11 +236,7 @@ fn glonass_ranges_fit_the_gps_position() {
         let isb = r[1];
         for v in &r {
             worst_m = worst_m.max((v - isb).abs());
-            assert!(
-                (v - isb).abs() < RESIDUAL_TOL_M,
-                "{}: {r:?}",
-                e.time_gps_s
-            );
+            assert!((v - isb).abs() < RESIDUAL_TOL_M, "{}: {r:?}", e.time_gps_s);
         }
         checked += 1;
     }

@@ -185,9 +185,8 @@ pub fn load_file(format: Format, path: &Path) -> Result<Recording> {
     if rec.obs.epochs.is_empty() {
         if format == Format::Rtcm3 && c.epochs > 0 {
             bail!(
-                "{shown}: {} observation epochs but no ephemeris to date them ({} carry none): {c}",
+                "{shown}: {} observation epochs but no ephemeris to date them (the stream's weeks come from RTCM 1019/1042/1044/1045/1046; a 1020 has only a time of the Moscow day): {c}",
                 c.epochs,
-                format.ephemeris_messages()
             );
         }
         if let Some(k) = c.ignored.get(raim_recv::rtcm::GLONASS_ALONE) {
