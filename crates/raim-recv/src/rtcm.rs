@@ -900,7 +900,7 @@ impl Rtcm3 {
 /// (2^-30). Unhealthy: the MSB of B_n (DF108) or the GLONASS-M l_n of
 /// the third string (DF123). t_b (`tb_gps_s` here 0) is placed in GPS
 /// time once the stream's week is known.
-fn glonass_fields(m: &rtcm_rs::msg::Msg1020T) -> (GlonassIcdFields, f64) {
+pub fn glonass_fields(m: &rtcm_rs::msg::Msg1020T) -> (GlonassIcdFields, f64) {
     let f = GlonassIcdFields {
         slot: m.glo_satellite_id,
         frequency_channel: m.glo_satellite_freq_chan_number,
