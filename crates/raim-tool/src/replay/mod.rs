@@ -383,8 +383,9 @@ fn prepare_full(args: &ReplayArgs) -> Result<Prepared> {
     let mut iono_inflate = false;
     if stream.is_some() {
         let model = args.core_config().sigma_model;
+        let f = receiver::single_iono_factor(args, &nav);
         for e in &mut epochs {
-            receiver::set_sigmas(e, &model, opts.glonass_sigma.as_ref());
+            receiver::set_sigmas(e, &model, opts.glonass_sigma.as_ref(), f);
         }
         let mut probe = args.core_config();
         let before = probe.sigma_model.iono_vertical_m;

@@ -98,16 +98,40 @@ pub fn iono_free_sigma_m(model: &SigmaModel, el_rad: f64, factor: f64) -> f64 {
 
 /// Set each iono-free observation's own sigma (see the module docs): from
 /// `model`, or for a GLONASS satellite from `glonass` (its own URA,
-/// `RangingOptions::glonass_sigma`) when given.
-pub fn set_sigmas(epoch: &mut PreparedEpoch, model: &SigmaModel, glonass: Option<&SigmaModel>) {
+/// `RangingOptions::glonass_sigma`) when given. A single-frequency GLONASS
+/// satellite carries its own sigma too (the core's model is not used for
+/// it), so its residual-ionosphere term gets `single_iono_factor` here
+/// ([`NO_MODEL_IONO_FACTOR`] when its range is uncorrected, as
+/// [`adjust_config`] does for the others).
+pub fn set_sigmas(
+    epoch: &mut PreparedEpoch,
+    model: &SigmaModel,
+    glonass: Option<&SigmaModel>,
+    single_iono_factor: f64,
+) {
     for s in &mut epoch.sats {
+        let g = match (s.obs.id.system, glonass) {
+            (System::Glonass, Some(g)) => Some(g),
+            _ => None,
+        };
         if let Some(f) = iono_free_noise_factor(s.obs.id.system, &s.code) {
-            let m = match (s.obs.id.system, glonass) {
-                (System::Glonass, Some(g)) => g,
-                _ => model,
-            };
-            s.obs.sigma_m = Some(iono_free_sigma_m(m, s.elevation_rad, f));
+            s.obs.sigma_m = Some(iono_free_sigma_m(g.unwrap_or(model), s.elevation_rad, f));
+        } else if let Some(g) = g {
+            let mut g = *g;
+            g.iono_vertical_m *= single_iono_factor;
+            s.obs.sigma_m = Some(g.sigma_m(s.elevation_rad));
         }
+    }
+}
+
+/// The factor on the residual-ionosphere sigma of a single-frequency
+/// range: [`NO_MODEL_IONO_FACTOR`] with no Klobuchar model and no
+/// `--iono-vertical-m`, else 1.
+pub fn single_iono_factor(args: &ReplayArgs, nav: &NavData) -> f64 {
+    if nav.klobuchar.is_none() && args.iono_vertical_m.is_none() {
+        NO_MODEL_IONO_FACTOR
+    } else {
+        1.0
     }
 }
 
@@ -302,7 +326,8 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
                 adjust_config(&mut cfg, args, &nav, &one);
                 iono_set = true;
             }
-            set_sigmas(&mut p, &cfg.sigma_model, opts.glonass_sigma.as_ref());
+            let f = single_iono_factor(args, &nav);
+            set_sigmas(&mut p, &cfg.sigma_model, opts.glonass_sigma.as_ref(), f);
             let mut sats = p.observations();
             let injected = plan
                 .as_ref()
@@ -386,4 +411,67 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
         );
     }
     Ok(tally)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use raim_core::{RangeObservation, SatId};
+    use raim_gnss::ranging::PreparedSat;
+
+    fn sat(system: System, prn: u8, code: &str, el_deg: f64) -> PreparedSat {
+        PreparedSat {
+            obs: RangeObservation {
+                id: SatId::new(system, prn),
+                pseudorange_m: 2.0e7,
+                position_m: [2.0e7, 0.0, 0.0],
+                sigma_m: None,
+            },
+            code: code.into(),
+            raw_pseudorange_m: 2.0e7,
+            elevation_rad: el_deg.to_radians(),
+            azimuth_rad: 0.0,
+            sat_clock_m: 0.0,
+            group_delay_m: 0.0,
+            iono_m: 0.0,
+            tropo_m: 0.0,
+        }
+    }
+
+    /// GLONASS satellites take their sigmas from the GLONASS model: an
+    /// iono-free pair with its URA and no ionosphere, a single-frequency
+    /// range with the residual-ionosphere term times the factor; a GPS
+    /// single-frequency range keeps the core's model (no sigma of its own).
+    #[test]
+    fn glonass_sigmas_use_the_glonass_model() {
+        const TOL_M: f64 = 1e-12;
+        let gps = SigmaModel::default();
+        let glo = SigmaModel {
+            ura_m: raim_gnss::glonass::glonass_ura_m(gps.ura_m),
+            ..gps
+        };
+        let mut e = PreparedEpoch {
+            time_gps_s: 0.0,
+            reference_m: None,
+            sats: vec![
+                sat(System::Gps, 1, "C1C", 30.0),
+                sat(System::Glonass, 13, "C1C+C2P", 30.0),
+                sat(System::Glonass, 14, "C1C", 30.0),
+            ],
+            rejected: Vec::new(),
+        };
+        set_sigmas(&mut e, &gps, Some(&glo), NO_MODEL_IONO_FACTOR);
+        let el = 30f64.to_radians();
+        assert_eq!(e.sats[0].obs.sigma_m, None);
+        let f = iono_free_noise_factor(System::Glonass, "C1C+C2P").unwrap();
+        let want = iono_free_sigma_m(&glo, el, f);
+        assert!((e.sats[1].obs.sigma_m.unwrap() - want).abs() < TOL_M);
+        let doubled = SigmaModel {
+            iono_vertical_m: glo.iono_vertical_m * NO_MODEL_IONO_FACTOR,
+            ..glo
+        };
+        let got = e.sats[2].obs.sigma_m.unwrap();
+        assert!((got - doubled.sigma_m(el)).abs() < TOL_M);
+        assert!(got > glo.sigma_m(el));
+    }
 }
