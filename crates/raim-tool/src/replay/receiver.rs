@@ -209,7 +209,7 @@ pub fn load_file(format: Format, path: &Path) -> Result<Recording> {
     if rec.obs.epochs.is_empty() {
         if format == Format::Rtcm3 && c.epochs > 0 {
             bail!(
-                "{shown}: {} observation epochs but no ephemeris to date them (the stream's weeks come from RTCM 1019/1042/1044/1045/1046; a 1020 has only a time of the Moscow day): {c}",
+                "{shown}: {} observation epochs but no ephemeris to date them (the stream's weeks come from RTCM 1019/1042/1044/1045/1046, not from 1020): {c}",
                 c.epochs,
             );
         }
