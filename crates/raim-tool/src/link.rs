@@ -168,29 +168,45 @@ impl Link {
 /// `epochs`: the replay's epochs (its builder, faults and window) run on
 /// the unit, one fresh configuration per run as `raim replay` starts a
 /// fresh engine, and printed as `raim replay` prints them.
-fn epochs(link: Link, replay: &[String]) -> Result<Link> {
-    if replay.is_empty() {
-        bail!("epochs: give raim replay's options after `--`, e.g. `raim link --port P epochs -- --rtcm3 FILE --systems GR`");
-    }
-    let opts = ReplayOptions::try_parse_from(replay).map_err(|e| anyhow!("epochs: {e}"))?;
-    let args = opts.args;
-    if args.araim.araim || args.pf.pf.is_some() || args.esq.any() {
-        bail!(
-            "epochs: the unit runs the snapshot monitor; --araim, --pf and --esq are replay-only"
-        );
-    }
+fn epochs(link: Link, args: &ReplayArgs) -> Result<Link> {
     let shared = Rc::new(RefCell::new(link));
-    let out = crate::replay::replay_on(&args, &mut |cfg| {
+    let out = crate::replay::replay_on(args, &mut |cfg| {
         shared.borrow_mut().configure_for_epochs(cfg)?;
         Ok(Engine::Link(shared.clone()))
     })?;
-    crate::replay::write_outputs(&args, &out)?;
+    crate::replay::write_outputs(args, &out)?;
     Rc::try_unwrap(shared)
         .map(RefCell::into_inner)
         .map_err(|_| anyhow!("the link is still in use"))
 }
 
+/// `raim replay`'s options for `epochs`, checked before the port is opened.
+fn epoch_options(replay: &[String]) -> Result<ReplayArgs> {
+    if replay.is_empty() {
+        bail!("epochs: give raim replay's options after `--`, e.g. `raim link --port P epochs -- --rtcm3 FILE --systems GR`");
+    }
+    let opts = ReplayOptions::try_parse_from(replay).map_err(|e| anyhow!("epochs: {e}"))?;
+    let args = opts.args;
+    if args.run_config.is_some() {
+        bail!("epochs: a run file (--config) is read by raim replay only; give its options after `--`");
+    }
+    if args.araim.araim || args.pf.pf.is_some() || args.esq.any() {
+        bail!(
+            "epochs: the unit runs the snapshot monitor; --araim, --pf and --esq are replay-only"
+        );
+    }
+    Ok(args)
+}
+
 pub fn run(args: &LinkArgs) -> Result<()> {
+    if !args.replay.is_empty() && !args.commands.contains(&LinkCommand::Epochs) {
+        bail!("options after `--` are for `epochs`, which is not among the commands");
+    }
+    let replay = if args.commands.contains(&LinkCommand::Epochs) {
+        Some(epoch_options(&args.replay)?)
+    } else {
+        None
+    };
     let port = serialport::new(&args.port, args.baud)
         .timeout(Duration::from_millis(100))
         .open()
@@ -201,16 +217,15 @@ pub fn run(args: &LinkArgs) -> Result<()> {
         seq: 1,
     };
     let cfg = args.config.config();
-    if !args.replay.is_empty() && !args.commands.contains(&LinkCommand::Epochs) {
-        bail!("options after `--` are for `epochs`, which is not among the commands");
-    }
     for c in &args.commands {
         let r = match c {
             LinkCommand::Status => link.call(CommandRef::Status)?,
             LinkCommand::Configure => link.call(CommandRef::Configure(&cfg))?,
             LinkCommand::Lock => link.call(CommandRef::Lock)?,
             LinkCommand::Epochs => {
-                link = epochs(link, &args.replay)?;
+                if let Some(r) = &replay {
+                    link = epochs(link, r)?;
+                }
                 continue;
             }
         };

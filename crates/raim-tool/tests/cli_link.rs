@@ -180,3 +180,32 @@ fn link_epochs_answer_as_the_qemu_replay() {
     }
     assert_eq!(excluded, 11, "R14 excluded from the step's onset on");
 }
+
+/// `epochs` options are checked before the port is opened: none given,
+/// given without `epochs`, a replay-only monitor, a run file.
+#[test]
+fn link_epoch_options_are_checked_first() {
+    let port = "/nonexistent/tty";
+    for (args, want) in [
+        (vec!["epochs"], "after `--`"),
+        (
+            vec!["status", "--", "--rtcm3", "x.rtcm3"],
+            "options after `--` are for `epochs`",
+        ),
+        (
+            vec!["epochs", "--", "--rtcm3", "x.rtcm3", "--araim"],
+            "snapshot monitor",
+        ),
+        (
+            vec!["epochs", "--", "--rtcm3", "x.rtcm3", "--config", "run.toml"],
+            "--config",
+        ),
+    ] {
+        let mut a = vec!["link", "--port", port];
+        a.extend(args.iter().copied());
+        let (code, out, err) = raim(&a);
+        assert_eq!(code, Some(1), "{args:?}: {out}{err}");
+        assert!(err.contains(want), "{args:?}: {err}");
+        assert!(!err.contains("opening"), "{args:?}: {err}");
+    }
+}
