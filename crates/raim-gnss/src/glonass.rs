@@ -200,11 +200,15 @@ pub struct GlonassIcdFields {
 }
 
 /// Plausible bounds of the broadcast fields (the ICD's field ranges: |x|
-/// <= 2.7e4 km, |v| <= 4.3 km/s, |a| <= 6.2e-9 km/s^2, |tau_n| <= 2e-3 s,
-/// |gamma_n| <= 2^-30).
+/// <= 2.7e4 km, |v| <= 4.3 km/s, |tau_n| <= 2e-3 s, |gamma_n| <= 2^-30).
+/// The luni-solar acceleration is bounded by its 5-bit sign-magnitude
+/// field, 15 x 2^-30 km/s^2: the ICD's printed range (6.2e-9 km/s^2) is
+/// exceeded by real broadcasts (7 x 2^-30 = 6.5e-9 km/s^2 on slot 14 in
+/// the GMSD7 stream of 2012-10-14), and the Moon and Sun together reach
+/// about that at GLONASS altitude.
 const MAX_POSITION_KM: f64 = 27_000.0;
 const MAX_VELOCITY_KM_S: f64 = 4.3;
-const MAX_ACCEL_KM_S2: f64 = 6.3e-9;
+const MAX_ACCEL_KM_S2: f64 = 15.0 / 1_073_741_824.0;
 const MAX_TAU_N_S: f64 = 2.0e-3;
 const MAX_GAMMA_N: f64 = 9.32e-10;
 

@@ -21,6 +21,7 @@ use std::path::PathBuf;
 
 use raim_core::SatId;
 use raim_gnss::ephemeris::Kepler;
+use raim_gnss::glonass::GlonassEphemeris;
 use raim_gnss::iono::Klobuchar;
 use raim_gnss::{NavData, ObsData, ObsEpoch};
 use serde::Serialize;
@@ -45,7 +46,7 @@ impl Format {
     /// The messages that carry ephemerides, for "no ephemeris" messages.
     pub fn ephemeris_messages(self) -> &'static str {
         match self {
-            Format::Rtcm3 => "RTCM 1019/1042/1044/1045/1046",
+            Format::Rtcm3 => "RTCM 1019/1020/1042/1044/1045/1046",
             Format::Ubx => "UBX RXM-SFRB or RXM-SFRBX GPS subframes 1-3",
         }
     }
@@ -59,26 +60,6 @@ impl Format {
     }
 }
 
-/// A GLONASS broadcast ephemeris as RTCM 1020 carries it (ICD GLONASS
-/// 2008 §4.4: PZ-90 state vector at tb, lunisolar acceleration, clock).
-/// Decoded and kept; the orbit is not integrated here.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct GlonassEphemeris {
-    pub slot: u8,
-    /// Frequency channel k (-7..+6).
-    pub frequency_channel: i16,
-    /// tb, minutes of the Moscow day.
-    pub tb_min: u32,
-    /// tk, seconds of the Moscow day.
-    pub tk_s: u32,
-    pub position_km: [f64; 3],
-    pub velocity_km_s: [f64; 3],
-    pub acceleration_km_s2: [f64; 3],
-    pub tau_n_s: f64,
-    pub gamma_n: f64,
-    pub health: u8,
-}
-
 /// One decoded item, in stream order.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Item {
@@ -90,7 +71,7 @@ pub enum Item {
     Klobuchar(Klobuchar),
     /// The station's antenna reference point, ECEF, m (RTCM 1005/1006).
     Station([f64; 3]),
-    /// A GLONASS ephemeris (RTCM 1020).
+    /// A GLONASS ephemeris (RTCM 1020), t_b placed in GPS time.
     Glonass(GlonassEphemeris),
 }
 
@@ -170,6 +151,20 @@ pub fn add_ephemeris(nav: &mut NavData, k: Kepler) {
     }
 }
 
+/// Add a GLONASS ephemeris to `nav` unless the same one is there already
+/// (1020 repeats a message every cycle); each slot's list stays sorted by
+/// t_b.
+pub fn add_glonass(nav: &mut NavData, g: GlonassEphemeris) {
+    let list = nav
+        .glonass
+        .entry(SatId::new(raim_core::System::Glonass, g.slot))
+        .or_default();
+    if !list.contains(&g) {
+        list.push(g);
+        list.sort_by(|a, b| a.tb_gps_s.total_cmp(&b.tb_gps_s));
+    }
+}
+
 /// A whole recording, decoded.
 #[derive(Debug, Clone)]
 pub struct Recording {
@@ -177,25 +172,20 @@ pub struct Recording {
     /// The epochs; `approx_position_m` is the station position (RTCM
     /// 1005/1006) when the stream has one.
     pub obs: ObsData,
-    /// Every ephemeris in the stream, and Klobuchar when broadcast.
+    /// Every ephemeris in the stream (GLONASS in `nav.glonass`), and
+    /// Klobuchar when broadcast.
     pub nav: NavData,
-    pub glonass: Vec<GlonassEphemeris>,
     pub counts: Counts,
 }
 
 /// Apply one item to the growing recording.
-pub fn apply(
-    item: Item,
-    obs: &mut ObsData,
-    nav: &mut NavData,
-    glonass: &mut Vec<GlonassEphemeris>,
-) {
+pub fn apply(item: Item, obs: &mut ObsData, nav: &mut NavData) {
     match item {
         Item::Epoch(e) => obs.epochs.push(e),
         Item::Ephemeris(k) => add_ephemeris(nav, k),
         Item::Klobuchar(kb) => nav.klobuchar = Some(kb),
         Item::Station(p) => obs.approx_position_m = Some(p),
-        Item::Glonass(g) => glonass.push(g),
+        Item::Glonass(g) => add_glonass(nav, g),
     }
 }
 
@@ -212,7 +202,6 @@ pub fn read_all(
         epochs: Vec::new(),
     };
     let mut nav = NavData::default();
-    let mut glonass = Vec::new();
     let mut items = Vec::new();
     let mut chunk = vec![0u8; 1 << 16];
     loop {
@@ -224,12 +213,12 @@ pub fn read_all(
         };
         dec.push(chunk.get(..n).unwrap_or(&[]), &mut items);
         for it in items.drain(..) {
-            apply(it, &mut obs, &mut nav, &mut glonass);
+            apply(it, &mut obs, &mut nav);
         }
     }
     dec.finish(&mut items);
     for it in items.drain(..) {
-        apply(it, &mut obs, &mut nav, &mut glonass);
+        apply(it, &mut obs, &mut nav);
     }
     obs.epochs
         .sort_by(|a, b| a.time_gps_s.total_cmp(&b.time_gps_s));
@@ -237,7 +226,6 @@ pub fn read_all(
         format,
         obs,
         nav,
-        glonass,
         counts: dec.counts().clone(),
     })
 }

@@ -12,11 +12,23 @@
 //!   (DF393) is 0, or when the time changes.
 //! - Legacy GPS 1002/1004: L1 = DF011 + DF014 x 299,792.458 m, L2 = L1 +
 //!   DF017. 1001/1003 carry no ambiguity (the range modulo one
-//!   light-millisecond) and GLONASS 1009-1012 need GLONASS orbits: decoded
-//!   and counted, not used.
+//!   light-millisecond): decoded and counted, not used; so are the legacy
+//!   GLONASS 1009-1012 (MSM carry the same ranges).
 //! - Ephemerides 1019 (GPS), 1042 (BeiDou), 1044 (QZSS), 1045 (Galileo
 //!   F/NAV), 1046 (Galileo I/NAV) to [`Kepler`]; 1020 (GLONASS) to
-//!   [`crate::GlonassEphemeris`].
+//!   [`GlonassEphemeris`] (see [`glonass_fields`] for the units).
+//! - GLONASS MSM carry the GLONASS time of day (DF034, UTC(SU) + 3 h, and
+//!   the day of the week DF416), not a GPS time of week: they join the
+//!   epoch of the GPS/Galileo/BeiDou MSM they arrive with, and once the
+//!   epoch's absolute GPS time t is known, their DF034 must equal the
+//!   GLONASS time of day of t (GPS - UTC from the leap-second table,
+//!   `raim_gnss::glonass::glonass_time_of_day_s`), to the millisecond;
+//!   otherwise the epoch's GLONASS data is dropped and counted
+//!   ([`GLONASS_TIME_MISMATCH`]). MSM5/MSM7 also carry each satellite's
+//!   frequency channel (DF419), kept for checks
+//!   ([`Rtcm3::msm_frequency_channels`]); the ranging takes the channel
+//!   from the satellite's 1020 (an MSM range is in metres whatever the
+//!   carrier, and without a 1020 there is no orbit to use it with).
 //! - Station 1005/1006: the antenna reference point, ECEF.
 //!
 //! RTCM epoch times are seconds of the week (BeiDou: of the BDT week, GPS
@@ -32,12 +44,15 @@ use std::collections::BTreeMap;
 
 use raim_core::{SatId, System};
 use raim_gnss::ephemeris::{Kepler, BDT_MINUS_GPST_S, WEEK_S};
+use raim_gnss::glonass::{
+    glonass_time_of_day_s, glonass_time_of_day_to_gps_s, GlonassEphemeris, GlonassIcdFields,
+};
 use raim_gnss::rinex_io::CodeObs;
 use raim_gnss::ObsEpoch;
 use rtcm_rs::msg::message::Message;
 use rtcm_rs::MessageFrame;
 
-use crate::{Counts, Decoder, GlonassEphemeris, Item};
+use crate::{Counts, Decoder, Item};
 
 /// One light-millisecond, m (RTCM DF011/DF014 unit and the MSM range unit).
 pub const LIGHT_MS_M: f64 = 299_792.458;
@@ -48,7 +63,16 @@ const GST_WEEK0_GPS: i64 = 1024;
 /// GPS week of the BeiDou week 0 (BDT starts 2006-01-01 = GPS week 1356).
 const BDT_WEEK0_GPS: i64 = 1356;
 /// The `Counts::ignored` key of epochs that hold GLONASS MSM only.
-pub const GLONASS_ALONE: &str = "GLONASS-only MSM epoch (GLONASS time and orbits not modelled)";
+pub const GLONASS_ALONE: &str =
+    "GLONASS-only MSM epoch (no GPS, Galileo or BeiDou MSM to give its GPS time)";
+/// The `Counts::ignored` key of GLONASS MSM data whose GLONASS time of day
+/// is not the epoch's (dropped from the epoch).
+pub const GLONASS_TIME_MISMATCH: &str =
+    "GLONASS MSM whose time of day is not its epoch's (GLONASS data dropped)";
+/// The `Counts::ignored` key of 1020 messages outside the ICD's ranges.
+pub const GLONASS_BAD_1020: &str = "1020 (a field outside the GLONASS ICD's range)";
+/// Milliseconds in a day.
+const DAY_MS: i64 = 86_400_000;
 /// Largest RTCM 3 frame: 3 header bytes, 1023 payload bytes, 3 CRC bytes.
 const MAX_FRAME: usize = 1029;
 
@@ -90,6 +114,18 @@ struct Open {
     rel_week: i64,
     tow_ms: i64,
     sats: BTreeMap<SatId, Vec<CodeObs>>,
+    /// GLONASS time of day of its GLONASS MSM (DF034), ms.
+    glo_tod_ms: Option<i64>,
+}
+
+/// A 1020 waiting for the stream's week: its fields (t_b still a time of
+/// the Moscow day) and the stream-relative time of the latest epoch when
+/// it came.
+#[derive(Debug, Clone, Copy)]
+struct PendingGlonass {
+    fields: GlonassIcdFields,
+    tb_tod_s: f64,
+    near: Option<(i64, i64)>,
 }
 
 /// The RTCM 3 decoder (see the module documentation).
@@ -103,6 +139,14 @@ pub struct Rtcm3 {
     open: Option<Open>,
     /// GLONASS MSM data waiting for the epoch it belongs to.
     glonass_wait: BTreeMap<SatId, Vec<CodeObs>>,
+    /// The GLONASS time of day of the waiting data, ms.
+    glonass_wait_tod_ms: Option<i64>,
+    /// The GLONASS time of day of the MSM being decoded, ms.
+    glo_msg_tod_ms: Option<i64>,
+    /// Frequency channel per GLONASS slot from MSM5/MSM7 (DF419).
+    msm_fcn: BTreeMap<u8, i8>,
+    /// 1020 messages before the anchor.
+    pending_glo: Vec<PendingGlonass>,
     /// Week of the stream's relative week 0, once anchored.
     base_week: Option<i64>,
     /// Epochs (relative week, tow ms, data) before the anchor.
@@ -126,6 +170,10 @@ impl Rtcm3 {
             last: None,
             open: None,
             glonass_wait: BTreeMap::new(),
+            glonass_wait_tod_ms: None,
+            glo_msg_tod_ms: None,
+            msm_fcn: BTreeMap::new(),
+            pending_glo: Vec::new(),
             base_week: None,
             waiting: Vec::new(),
             pending_eph: Vec::new(),
@@ -254,20 +302,42 @@ impl Rtcm3 {
                 System::Gps,
                 gnss_signal_fine_pseudorange_ext_ms
             ),
-            Message::Msg1084(m) => msm!(m, None, System::Glonass, gnss_signal_fine_pseudorange_ms),
-            Message::Msg1085(m) => msm!(m, None, System::Glonass, gnss_signal_fine_pseudorange_ms),
-            Message::Msg1086(m) => msm!(
-                m,
-                None,
-                System::Glonass,
-                gnss_signal_fine_pseudorange_ext_ms
-            ),
-            Message::Msg1087(m) => msm!(
-                m,
-                None,
-                System::Glonass,
-                gnss_signal_fine_pseudorange_ext_ms
-            ),
+            Message::Msg1084(m) => {
+                self.glo_msg_tod_ms = Some(i64::from(m.glo_epoch_time_ms));
+                msm!(m, None, System::Glonass, gnss_signal_fine_pseudorange_ms)
+            }
+            Message::Msg1085(m) => {
+                self.glo_msg_tod_ms = Some(i64::from(m.glo_epoch_time_ms));
+                for s in m.data_segment.satellite_data.iter() {
+                    if let Some(k) = s.glonass_satellite_frequency_channel_number {
+                        self.msm_fcn.insert(s.satellite_id, k);
+                    }
+                }
+                msm!(m, None, System::Glonass, gnss_signal_fine_pseudorange_ms)
+            }
+            Message::Msg1086(m) => {
+                self.glo_msg_tod_ms = Some(i64::from(m.glo_epoch_time_ms));
+                msm!(
+                    m,
+                    None,
+                    System::Glonass,
+                    gnss_signal_fine_pseudorange_ext_ms
+                )
+            }
+            Message::Msg1087(m) => {
+                self.glo_msg_tod_ms = Some(i64::from(m.glo_epoch_time_ms));
+                for s in m.data_segment.satellite_data.iter() {
+                    if let Some(k) = s.glonass_satellite_frequency_channel_number {
+                        self.msm_fcn.insert(s.satellite_id, k);
+                    }
+                }
+                msm!(
+                    m,
+                    None,
+                    System::Glonass,
+                    gnss_signal_fine_pseudorange_ext_ms
+                )
+            }
             Message::Msg1094(m) => msm!(
                 m,
                 gps(m.gal_epoch_time_ms),
@@ -596,26 +666,13 @@ impl Rtcm3 {
             }
             Message::Msg1020(m) => {
                 self.counts.ephemerides += 1;
-                out.push(Item::Glonass(GlonassEphemeris {
-                    slot: m.glo_satellite_id,
-                    frequency_channel: i16::from(m.glo_satellite_freq_chan_number) - 7,
-                    tb_min: u32::from(m.tb_min) * 15,
-                    tk_s: u32::from(m.tk_h) * 3600 + u32::from(m.tk_min) * 60 + u32::from(m.tk_s),
-                    position_km: [m.xn_km, m.yn_km, m.zn_km],
-                    velocity_km_s: [
-                        m.xn_first_deriv_km_s,
-                        m.yn_first_deriv_km_s,
-                        m.zn_first_deriv_km_s,
-                    ],
-                    acceleration_km_s2: [
-                        fx(m.xn_second_deriv_km_s2),
-                        fx(m.yn_second_deriv_km_s2),
-                        fx(m.zn_second_deriv_km_s2),
-                    ],
-                    tau_n_s: m.tau_n_s,
-                    gamma_n: fx(m.gamma_n),
-                    health: m.glo_eph_health_flag,
-                }));
+                let (fields, tb_tod_s) = glonass_fields(&m);
+                self.pending_glo.push(PendingGlonass {
+                    fields,
+                    tb_tod_s,
+                    near: self.last,
+                });
+                self.try_anchor(out);
             }
             Message::Msg1005(m) => out.push(Item::Station([
                 m.antenna_ref_point_ecef_x_m,
@@ -651,16 +708,28 @@ impl Rtcm3 {
         out: &mut Vec<Item>,
     ) {
         let Some(tow_ms) = tow_ms else {
+            let tod_ms = self.glo_msg_tod_ms.take();
             let alone = self.open.is_none();
-            // A satellite already waiting: the waiting data was an epoch
-            // of its own (GLONASS alone, its multiple-message bit set).
-            if alone && obs.iter().any(|(id, _)| self.glonass_wait.contains_key(id)) {
+            // A satellite already waiting, or another time of day: the
+            // waiting data was an epoch of its own (GLONASS alone, its
+            // multiple-message bit set).
+            if alone
+                && (obs.iter().any(|(id, _)| self.glonass_wait.contains_key(id))
+                    || (self.glonass_wait_tod_ms.is_some() && self.glonass_wait_tod_ms != tod_ms))
+            {
                 self.glonass_wait.clear();
+                self.glonass_wait_tod_ms = None;
                 self.ignore(GLONASS_ALONE.into());
             }
             let target = match self.open.as_mut() {
-                Some(o) => &mut o.sats,
-                None => &mut self.glonass_wait,
+                Some(o) => {
+                    o.glo_tod_ms = o.glo_tod_ms.or(tod_ms);
+                    &mut o.sats
+                }
+                None => {
+                    self.glonass_wait_tod_ms = self.glonass_wait_tod_ms.or(tod_ms);
+                    &mut self.glonass_wait
+                }
             };
             for (id, o) in obs {
                 target.entry(id).or_default().push(o);
@@ -669,6 +738,7 @@ impl Rtcm3 {
                 // The epoch's last message, and no GPS-timed message in
                 // it: an epoch of GLONASS alone, which has no GPS time here.
                 self.glonass_wait.clear();
+                self.glonass_wait_tod_ms = None;
                 self.ignore(GLONASS_ALONE.into());
             } else if !more {
                 self.close(out);
@@ -697,6 +767,7 @@ impl Rtcm3 {
                 rel_week,
                 tow_ms,
                 sats: BTreeMap::new(),
+                glo_tod_ms: self.glonass_wait_tod_ms.take(),
             };
             o.sats.append(&mut self.glonass_wait);
             self.open = Some(o);
@@ -715,7 +786,10 @@ impl Rtcm3 {
         if let Some(o) = self.open.take() {
             self.counts.epochs += 1;
             match self.base_week {
-                Some(b) => out.push(Item::Epoch(absolute(b, o))),
+                Some(b) => {
+                    let e = self.absolute(b, o);
+                    out.push(Item::Epoch(e));
+                }
                 None => self.waiting.push(o),
             }
             self.try_anchor(out);
@@ -769,23 +843,88 @@ impl Rtcm3 {
             p.k.toc_gps_s = toc;
             out.push(Item::Ephemeris(p.k));
         }
-        for o in self.waiting.drain(..) {
-            out.push(Item::Epoch(absolute(base, o)));
+        let now = self.last;
+        for p in std::mem::take(&mut self.pending_glo) {
+            let Some((rel, tow_ms)) = p.near.or(now) else {
+                self.pending_glo.push(p);
+                continue;
+            };
+            let near_gps_s = (base + rel) as f64 * WEEK_S + tow_ms as f64 / 1000.0;
+            let fields = GlonassIcdFields {
+                tb_gps_s: glonass_time_of_day_to_gps_s(p.tb_tod_s, near_gps_s),
+                ..p.fields
+            };
+            match GlonassEphemeris::from_icd(&fields) {
+                Ok(g) => out.push(Item::Glonass(g)),
+                Err(_) => self.ignore(GLONASS_BAD_1020.into()),
+            }
+        }
+        for o in std::mem::take(&mut self.waiting) {
+            let e = self.absolute(base, o);
+            out.push(Item::Epoch(e));
         }
     }
+
+    /// The epoch in absolute GPS time; its GLONASS data is kept only if
+    /// the GLONASS MSM's time of day (DF034) is that of the epoch's GPS
+    /// time (leap seconds from the table), to the millisecond.
+    fn absolute(&mut self, base_week: i64, mut o: Open) -> ObsEpoch {
+        let time_gps_s = (base_week + o.rel_week) as f64 * WEEK_S + o.tow_ms as f64 / 1000.0;
+        if let Some(tod_ms) = o.glo_tod_ms {
+            let want_ms = (glonass_time_of_day_s(time_gps_s) * 1000.0).round() as i64;
+            if (tod_ms - want_ms).rem_euclid(DAY_MS) != 0 {
+                o.sats.retain(|id, _| id.system != System::Glonass);
+                self.ignore(GLONASS_TIME_MISMATCH.into());
+            }
+        }
+        ObsEpoch {
+            time_gps_s,
+            sats: o.sats,
+        }
+    }
+
+    /// The frequency channel of each GLONASS slot as the MSM5/MSM7
+    /// extended satellite information (DF419) gave it last.
+    pub fn msm_frequency_channels(&self) -> &BTreeMap<u8, i8> {
+        &self.msm_fcn
+    }
+}
+
+/// The ICD fields of a 1020 (RTCM 10403.3 Table 3.5-21) and its t_b as
+/// seconds of the Moscow day. `rtcm-rs` applies each data field's
+/// resolution, sign-magnitude coding and offset, as checked against the
+/// standard: DF040 channel number minus 7 (k = -7..=13), DF110 t_b in
+/// minutes (15-minute units), DF111/114/117 velocity km/s (2^-20),
+/// DF112/115/118 position km (2^-11), DF113/116/119 luni-solar
+/// acceleration km/s^2 (2^-30), DF121 gamma_n (2^-40), DF124 tau_n s
+/// (2^-30). Unhealthy: the MSB of B_n (DF108) or the GLONASS-M l_n of
+/// the third string (DF123). t_b (`tb_gps_s` here 0) is placed in GPS
+/// time once the stream's week is known.
+pub fn glonass_fields(m: &rtcm_rs::msg::Msg1020T) -> (GlonassIcdFields, f64) {
+    let f = GlonassIcdFields {
+        slot: m.glo_satellite_id,
+        frequency_channel: m.glo_satellite_freq_chan_number,
+        tb_gps_s: 0.0,
+        x_km: m.xn_km,
+        y_km: m.yn_km,
+        z_km: m.zn_km,
+        vx_km_s: m.xn_first_deriv_km_s,
+        vy_km_s: m.yn_first_deriv_km_s,
+        vz_km_s: m.zn_first_deriv_km_s,
+        ax_km_s2: fx(m.xn_second_deriv_km_s2),
+        ay_km_s2: fx(m.yn_second_deriv_km_s2),
+        az_km_s2: fx(m.zn_second_deriv_km_s2),
+        tau_n_s: m.tau_n_s,
+        gamma_n: fx(m.gamma_n),
+        unhealthy: m.glo_eph_health_flag != 0 || m.glo_m_3str_ln_flag != 0,
+    };
+    (f, f64::from(m.tb_min) * 60.0)
 }
 
 /// A field of any numeric width as f64 (the crate's fields are f32 or f64
 /// by their resolution).
 fn fx<T: Into<f64>>(x: T) -> f64 {
     x.into()
-}
-
-fn absolute(base_week: i64, o: Open) -> ObsEpoch {
-    ObsEpoch {
-        time_gps_s: (base_week + o.rel_week) as f64 * WEEK_S + o.tow_ms as f64 / 1000.0,
-        sats: o.sats,
-    }
 }
 
 /// The broadcast fields common to the Keplerian messages (angles in
@@ -864,6 +1003,7 @@ impl Decoder for Rtcm3 {
         self.close(out);
         if !self.glonass_wait.is_empty() {
             self.glonass_wait.clear();
+            self.glonass_wait_tod_ms = None;
             self.ignore(GLONASS_ALONE.into());
         }
     }

@@ -3,16 +3,28 @@
 //! (docs/PROTOCOL.md) and print each answer. The frames and the answers'
 //! decoding are those of the QEMU runner (`raim_qemu::encode_request`,
 //! `raim_proto::FrameReceiver`), over `serialport` instead of a socket.
+//!
+//! `epochs` sends the epochs of a RINEX pair, an RTCM 3 or a UBX file,
+//! built by the replay itself (`raim replay`'s options after `--`, the
+//! same epoch builder, faults and window), and prints each answer as
+//! `raim replay` prints its epochs (decision, protection levels,
+//! exclusions), then the summary.
 
+use std::cell::RefCell;
 use std::io::{Read, Write};
+use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, Context, Result};
-use clap::{Args, ValueEnum};
+use clap::{Args, Parser, ValueEnum};
+use raim_core::{Config, Epoch};
 use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody};
-use raim_proto::{FrameReceiver, MAX_RESPONSE_FRAME};
+use raim_proto::result::WireResult;
+use raim_proto::{FrameReceiver, WireError, MAX_RESPONSE_FRAME};
 
 use crate::config_args::ConfigArgs;
+use crate::replay::engine::Engine;
+use crate::replay::ReplayArgs;
 
 /// How long an answer is waited for.
 const ANSWER_TIMEOUT: Duration = Duration::from_secs(10);
@@ -25,6 +37,9 @@ pub enum LinkCommand {
     Configure,
     // Lock the configuration in force until the unit resets.
     Lock,
+    // Send the epochs of the source given after `--` (raim replay's
+    // options), configured as raim replay would run them.
+    Epochs,
 }
 
 #[derive(Debug, Clone, Args)]
@@ -36,15 +51,30 @@ pub struct LinkArgs {
     /// Baud rate (8N1).
     #[arg(long, default_value_t = 115_200)]
     pub baud: u32,
-    /// What to send, in order (repeatable): status, configure, lock.
+    /// What to send, in order (repeatable): status, configure, lock,
+    /// epochs.
     #[arg(value_enum, required = true)]
     pub commands: Vec<LinkCommand>,
     #[command(flatten, next_help_heading = "Monitor (for configure; docs/CORE.md)")]
     pub config: ConfigArgs,
+    /// For `epochs`: `raim replay`'s options after `--` (the source:
+    /// --obs/--nav, --rtcm3 FILE or --ubx FILE; --systems, --fault,
+    /// --start/--end, --json, ... and the monitor options the epochs are
+    /// configured with).
+    #[arg(last = true, value_name = "REPLAY_OPTIONS")]
+    pub replay: Vec<String>,
+}
+
+/// `raim replay`'s options, parsed on their own for `epochs`.
+#[derive(Debug, Parser)]
+#[command(name = "raim link ... epochs --", no_binary_name = true)]
+struct ReplayOptions {
+    #[command(flatten)]
+    args: ReplayArgs,
 }
 
 /// The link: frames out, answers in (boot notices printed and skipped).
-struct Link {
+pub struct Link {
     port: Box<dyn serialport::SerialPort>,
     frames: Box<FrameReceiver<MAX_RESPONSE_FRAME>>,
     seq: u32,
@@ -102,9 +132,81 @@ impl Link {
         self.port.flush()?;
         self.answer(seq)
     }
+
+    /// One epoch on the unit: its result, or its typed refusal as text (as
+    /// `Engine::process` gives it); an answer of another kind is an error.
+    pub fn process(
+        &mut self,
+        epoch: &Epoch<'_>,
+    ) -> Result<std::result::Result<WireResult, String>> {
+        let r = self.call(raim_qemu::epoch_command(epoch))?;
+        match r.body {
+            ResponseBody::Result(w) => Ok(Ok(w)),
+            ResponseBody::Error(e) => Ok(Err(e.to_string())),
+            other => bail!("epoch answered with {other:?}"),
+        }
+    }
+
+    /// Configure the unit for a run of epochs. A unit locked on another
+    /// configuration refuses; the epochs then run with the locked one,
+    /// and a notice says so (its decisions may differ from `raim replay`'s).
+    fn configure_for_epochs(&mut self, cfg: &Config) -> Result<()> {
+        let r = self.call(CommandRef::Configure(cfg))?;
+        match r.body {
+            ResponseBody::Configured => Ok(()),
+            ResponseBody::Error(e @ WireError::Locked { .. }) => {
+                eprintln!(
+                    "raim: link: {e}: the epochs run with the unit's locked configuration, not the replay's"
+                );
+                Ok(())
+            }
+            other => bail!("Configure for the epochs refused: {other:?}"),
+        }
+    }
+}
+
+/// `epochs`: the replay's epochs (its builder, faults and window) run on
+/// the unit, one fresh configuration per run as `raim replay` starts a
+/// fresh engine, and printed as `raim replay` prints them.
+fn epochs(link: Link, args: &ReplayArgs) -> Result<Link> {
+    let shared = Rc::new(RefCell::new(link));
+    let out = crate::replay::replay_on(args, &mut |cfg| {
+        shared.borrow_mut().configure_for_epochs(cfg)?;
+        Ok(Engine::Link(shared.clone()))
+    })?;
+    crate::replay::write_outputs(args, &out)?;
+    Rc::try_unwrap(shared)
+        .map(RefCell::into_inner)
+        .map_err(|_| anyhow!("the link is still in use"))
+}
+
+/// `raim replay`'s options for `epochs`, checked before the port is opened.
+fn epoch_options(replay: &[String]) -> Result<ReplayArgs> {
+    if replay.is_empty() {
+        bail!("epochs: give raim replay's options after `--`, e.g. `raim link --port P epochs -- --rtcm3 FILE --systems GR`");
+    }
+    let opts = ReplayOptions::try_parse_from(replay).map_err(|e| anyhow!("epochs: {e}"))?;
+    let args = opts.args;
+    if args.run_config.is_some() {
+        bail!("epochs: a run file (--config) is read by raim replay only; give its options after `--`");
+    }
+    if args.araim.araim || args.pf.pf.is_some() || args.esq.any() {
+        bail!(
+            "epochs: the unit runs the snapshot monitor; --araim, --pf and --esq are replay-only"
+        );
+    }
+    Ok(args)
 }
 
 pub fn run(args: &LinkArgs) -> Result<()> {
+    if !args.replay.is_empty() && !args.commands.contains(&LinkCommand::Epochs) {
+        bail!("options after `--` are for `epochs`, which is not among the commands");
+    }
+    let replay = if args.commands.contains(&LinkCommand::Epochs) {
+        Some(epoch_options(&args.replay)?)
+    } else {
+        None
+    };
     let port = serialport::new(&args.port, args.baud)
         .timeout(Duration::from_millis(100))
         .open()
@@ -120,6 +222,12 @@ pub fn run(args: &LinkArgs) -> Result<()> {
             LinkCommand::Status => link.call(CommandRef::Status)?,
             LinkCommand::Configure => link.call(CommandRef::Configure(&cfg))?,
             LinkCommand::Lock => link.call(CommandRef::Lock)?,
+            LinkCommand::Epochs => {
+                if let Some(r) = &replay {
+                    link = epochs(link, r)?;
+                }
+                continue;
+            }
         };
         let ok = matches!(
             (c, &r.body),

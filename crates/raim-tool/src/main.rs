@@ -138,7 +138,8 @@ enum Command {
 mod examples {
     pub const LINK: &str = "Examples:
   raim link --port /dev/ttyUSB0 status
-  raim link --port /dev/pts/3 configure lock status --pfa 1e-5";
+  raim link --port /dev/pts/3 configure lock status --pfa 1e-5
+  raim link --port /dev/ttyUSB0 epochs -- --rtcm3 GMSD7_20121014.rtcm3 --systems GR --mask-deg 0";
     pub const PROVISION: &str = "Examples:
   raim provision --config unit.toml -o unit.elf firmware/target/thumbv7em-none-eabihf/release/raim-firmware
   raim provision --config unit.toml --key $(cat unit42.key) -o unit42.elf raim-firmware";

@@ -2,7 +2,8 @@
 //! `-serial pty` on the link UART, as a serial port on a bench would be):
 //! Status, Configure, Lock and Status answered in order; a second
 //! `raim link` process's Configure is refused because the lock holds, and
-//! exits non-zero.
+//! exits non-zero. `epochs` of a receiver stream over the pty answered
+//! with the decisions of `raim replay --target qemu` on the same epochs.
 
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
@@ -35,8 +36,9 @@ fn raim(args: &[&str]) -> (Option<i32>, String, String) {
     )
 }
 
-#[test]
-fn link_over_a_pty_to_qemu() {
+/// The firmware under QEMU with its link UART on a pty: QEMU (killed on
+/// drop) and the pty's path.
+fn qemu_on_a_pty() -> (Qemu, String) {
     let elf = raim_qemu::firmware_elf().expect("firmware build");
     let mut child = Command::new("qemu-system-arm")
         .args(["-machine", "mps2-an386", "-cpu", "cortex-m4"])
@@ -68,7 +70,12 @@ fn link_over_a_pty_to_qemu() {
         }
     });
     let pty = rx.recv_timeout(PTY_TIMEOUT).expect("QEMU names its pty");
+    (_qemu, pty)
+}
 
+#[test]
+fn link_over_a_pty_to_qemu() {
+    let (_qemu, pty) = qemu_on_a_pty();
     let (code, out, err) = raim(&[
         "link",
         "--port",
@@ -101,4 +108,104 @@ fn link_over_a_pty_to_qemu() {
         err.contains("Configure refused") && err.contains("Locked"),
         "{out}{err}"
     );
+}
+
+/// 15 epochs of GMSD7 with GPS + GLONASS and a 50 m step on R14 from the
+/// 5th (`raim replay`'s options after `--`), sent over the pty: every
+/// epoch answered with the decision, exclusions, alarm cause, satellite
+/// count and protection levels of `raim replay --target qemu` on the
+/// same epochs (the same firmware, so the same f32 results, bit for bit).
+#[test]
+fn link_epochs_answer_as_the_qemu_replay() {
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data");
+    let src = format!("{data}/GMSD7_20121014.rtcm3");
+    let opts = [
+        "--rtcm3",
+        &src,
+        "--systems",
+        "GR",
+        "--mask-deg",
+        "0",
+        "--fault",
+        "step:R14:50@+60",
+        "--start",
+        "+56",
+        "--end",
+        "+70",
+        "--json",
+        "--keep-going",
+    ];
+    let lines = |out: &str| -> Vec<serde_json::Value> {
+        let mut v: Vec<serde_json::Value> = out
+            .lines()
+            .filter(|l| l.starts_with('{'))
+            .map(|l| serde_json::from_str(l).expect("json"))
+            .collect();
+        v.pop();
+        v
+    };
+    let mut replay = vec!["replay"];
+    replay.extend(opts);
+    replay.extend(["--target", "qemu"]);
+    let (code, out, err) = raim(&replay);
+    assert_eq!(code, Some(0), "{err}");
+    let want = lines(&out);
+    assert_eq!(want.len(), 15, "{out}");
+
+    let (_qemu, pty) = qemu_on_a_pty();
+    let mut link = vec!["link", "--port", &pty, "status", "epochs", "--"];
+    link.extend(opts);
+    let (code, out, err) = raim(&link);
+    assert_eq!(code, Some(0), "{out}{err}");
+    assert!(
+        out.lines().any(|l| l.starts_with("Status: Status(")),
+        "{out}"
+    );
+    let got = lines(&out);
+    assert_eq!(got.len(), want.len(), "{out}");
+    let mut excluded = 0;
+    for (g, w) in got.iter().zip(&want) {
+        assert_eq!(g["tod"], w["tod"]);
+        for k in [
+            "decision",
+            "excluded",
+            "alarm_cause",
+            "n_sats",
+            "hpl_m",
+            "vpl_m",
+        ] {
+            assert_eq!(g[k], w[k], "{} {k}", w["tod"]);
+        }
+        excluded += usize::from(w["excluded"] == serde_json::json!(["R14"]));
+    }
+    assert_eq!(excluded, 11, "R14 excluded from the step's onset on");
+}
+
+/// `epochs` options are checked before the port is opened: none given,
+/// given without `epochs`, a replay-only monitor, a run file.
+#[test]
+fn link_epoch_options_are_checked_first() {
+    let port = "/nonexistent/tty";
+    for (args, want) in [
+        (vec!["epochs"], "after `--`"),
+        (
+            vec!["status", "--", "--rtcm3", "x.rtcm3"],
+            "options after `--` are for `epochs`",
+        ),
+        (
+            vec!["epochs", "--", "--rtcm3", "x.rtcm3", "--araim"],
+            "snapshot monitor",
+        ),
+        (
+            vec!["epochs", "--", "--rtcm3", "x.rtcm3", "--config", "run.toml"],
+            "--config",
+        ),
+    ] {
+        let mut a = vec!["link", "--port", port];
+        a.extend(args.iter().copied());
+        let (code, out, err) = raim(&a);
+        assert_eq!(code, Some(1), "{args:?}: {out}{err}");
+        assert!(err.contains(want), "{args:?}: {err}");
+        assert!(!err.contains("opening"), "{args:?}: {err}");
+    }
 }

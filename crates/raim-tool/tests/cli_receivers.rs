@@ -260,8 +260,9 @@ fn stream_without_ephemerides_says_so() {
     assert!(err.contains("1019"), "{err}");
 }
 
-/// Only GLONASS (MSM 1087 and its 1020 ephemerides): the message says
-/// GLONASS orbits are not modelled.
+/// Only GLONASS (MSM 1087 and its 1020 ephemerides): a GLONASS MSM has a
+/// time of day and a day of the week, the 1020s of GMSD7 no date (N4 and
+/// N_T are 0), so the epochs cannot be dated; the message says so.
 #[test]
 fn glonass_only_stream_says_so() {
     let bytes = std::fs::read(gmsd7()).unwrap();
@@ -275,8 +276,81 @@ fn glonass_only_stream_says_so() {
     std::fs::write(&p, &kept).unwrap();
     let (code, _, err) = raim(&["replay", "--rtcm3", p.to_str().unwrap()]);
     assert_eq!(code, Some(1));
-    assert!(err.contains("GLONASS"), "{err}");
-    assert!(err.contains("not model"), "{err}");
+    assert!(err.contains("only GLONASS observations"), "{err}");
+    assert!(err.contains("GLONASS time of day"), "{err}");
+}
+
+/// GMSD7 with GPS and GLONASS (`--systems GR --mask-deg 0`): the 1020s
+/// give R13, R14 and R15 (the stream's other observed GLONASS satellites,
+/// R17, R18 and R24, have no 1020 before it is cut), so 9 satellites from
+/// 00:00:00. The first 16 epochs have 2 GPS + 3 GLONASS satellites for 5
+/// unknowns (position, two clocks): no redundancy, refused as with GPS
+/// alone, so 241 of 257 are solved (93.8 %): the stream holds no more.
+/// No alarm, no exclusion, and the errors no worse than GPS alone.
+#[test]
+fn gmsd7_gps_glonass_clean() {
+    /// Horizontal error bound (against the clean mean), m: GPS alone has
+    /// a 3.85 m maximum on this stream (docs/RECEIVERS.md).
+    const MAX_H_M: f64 = 3.85;
+    let (code, out, err) = raim(&[
+        "replay",
+        "--rtcm3",
+        &gmsd7(),
+        "--systems",
+        "GR",
+        "--mask-deg",
+        "0",
+        "--json",
+        "--keep-going",
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+    let s = summary(&out);
+    assert_eq!(n(&s, "epochs"), 257);
+    assert_eq!(n(&s, "solved"), 241, "{s}");
+    assert_eq!(n(&s, "alarms"), 0);
+    assert_eq!(n(&s, "false_alarms"), 0);
+    assert_eq!(n(&s, "false_exclusions"), 0);
+    assert_eq!(n(&s, "excluded"), 0);
+    assert_eq!(n(&s, "clean_false_events"), 0, "{s}");
+    assert!(s["error_h_max_m"].as_f64().unwrap() < MAX_H_M, "{s}");
+    assert!(err.contains("too few satellites: have 5"), "{err}");
+    let first_ok = out
+        .lines()
+        .find(|l| l.contains("\"decision\":\"ok\""))
+        .expect("an ok epoch");
+    assert!(first_ok.contains("\"n_sats\":9"), "{first_ok}");
+}
+
+/// A 50 m step from 60 s after the start on each satellite of the GPS +
+/// GLONASS run, one run each: excluded at every one of the 197 faulted
+/// epochs, nothing else excluded, no alarm. (GPS alone, G01 and G07 are
+/// mostly alarmed: 6 satellites leave 2 degrees of freedom; G+R has 9.)
+#[test]
+fn gmsd7_gps_glonass_step_excluded_every_epoch() {
+    for sat in ["R14", "R13", "R15", "G01", "G07"] {
+        let fault = format!("step:{sat}:50@+60");
+        let (code, out, err) = raim(&[
+            "replay",
+            "--rtcm3",
+            &gmsd7(),
+            "--systems",
+            "GR",
+            "--mask-deg",
+            "0",
+            "--fault",
+            &fault,
+            "--json",
+            "--keep-going",
+        ]);
+        assert_eq!(code, Some(0), "{err}");
+        let s = summary(&out);
+        assert_eq!(n(&s, "faulted_epochs"), 197, "{sat} {s}");
+        assert_eq!(n(&s, "correct_exclusions"), 197, "{sat} {s}");
+        assert_eq!(n(&s, "wrong_exclusions"), 0, "{sat}");
+        assert_eq!(n(&s, "missed_detections"), 0, "{sat}");
+        assert_eq!(n(&s, "alarms"), 0, "{sat}");
+        assert_eq!(n(&s, "false_alarms"), 0, "{sat}");
+    }
 }
 
 /// Empty file, a directory, a RINEX file and a UBX file given to --rtcm3,

@@ -63,6 +63,31 @@ fn gmsd7_on_the_firmware() {
     );
 }
 
+/// GPS + GLONASS (RTCM 1087 with the 1020 ephemerides): a 50 m step on the
+/// GLONASS satellite R14, the same decisions on the firmware.
+#[test]
+fn gmsd7_gps_glonass_on_the_firmware() {
+    let src = format!("{DATA}/GMSD7_20121014.rtcm3");
+    same_decisions(
+        &[
+            "replay",
+            "--rtcm3",
+            &src,
+            "--systems",
+            "GR",
+            "--mask-deg",
+            "0",
+            "--fault",
+            "step:R14:50@+60",
+            "--start",
+            "+40",
+            "--end",
+            "+79",
+        ],
+        40,
+    );
+}
+
 #[test]
 fn lea4t_on_the_firmware() {
     let src = format!("{DATA}/ubx_20080526.ubx");

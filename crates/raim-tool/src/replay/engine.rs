@@ -1,7 +1,11 @@
-//! Where the epochs run: the core on the host, or the firmware under QEMU
+//! Where the epochs run: the core on the host, the firmware under QEMU
 //! (`crates/raim-qemu`, the same core built for Cortex-M4F, reached over
-//! its framed UART protocol). Both answer in the wire form of a result,
-//! so the records, summary and plots are identical for the two targets.
+//! its framed UART protocol), or a unit on a serial port (`raim link`).
+//! All answer in the wire form of a result, so the records, summary and
+//! plots are identical for the targets.
+
+use std::cell::RefCell;
+use std::rc::Rc;
 
 use anyhow::Result;
 use raim_core::{Config, Epoch, Raim};
@@ -13,6 +17,9 @@ use super::{Target, REPLAY_CAPACITY};
 pub enum Engine {
     Host(Box<Raim<REPLAY_CAPACITY>>),
     Qemu(Box<QemuSession>),
+    /// A unit over its link UART, shared with the `raim link` run that
+    /// configured it; its NMEA goes to the unit's other UART, not here.
+    Link(Rc<RefCell<crate::link::Link>>),
 }
 
 impl Engine {
@@ -55,6 +62,7 @@ impl Engine {
                 let p = s.process(epoch)?;
                 (p.outcome.map_err(|e| e.to_string()), p.nmea)
             }
+            Engine::Link(l) => (l.borrow_mut().process(epoch)?, Vec::new()),
         })
     }
 }

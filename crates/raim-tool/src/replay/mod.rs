@@ -8,7 +8,7 @@
 pub mod araim;
 mod checks;
 mod decorrelate;
-mod engine;
+pub mod engine;
 pub mod esq;
 mod export;
 mod input;
@@ -383,8 +383,9 @@ fn prepare_full(args: &ReplayArgs) -> Result<Prepared> {
     let mut iono_inflate = false;
     if stream.is_some() {
         let model = args.core_config().sigma_model;
+        let f = receiver::single_iono_factor(args, &nav);
         for e in &mut epochs {
-            receiver::set_sigmas(e, &model);
+            receiver::set_sigmas(e, &model, opts.glonass_sigma.as_ref(), f);
         }
         let mut probe = args.core_config();
         let before = probe.sigma_model.iono_vertical_m;
@@ -434,7 +435,20 @@ fn run_core(
     reference: Option<[f64; 3]>,
     progress: Option<&indicatif::ProgressBar>,
 ) -> Result<Vec<EpochRecord>> {
-    let mut engine = Engine::start(target, cfg)?;
+    let mut start = |c: &Config| Engine::start(target, c);
+    run_core_on(&mut start, cfg, epochs, plan, reference, progress)
+}
+
+/// [`run_core`] on an engine from `start`.
+fn run_core_on(
+    start: &mut dyn FnMut(&Config) -> Result<Engine>,
+    cfg: &Config,
+    epochs: &[PreparedEpoch],
+    plan: &FaultPlan,
+    reference: Option<[f64; 3]>,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<Vec<EpochRecord>> {
+    let mut engine = start(cfg)?;
     let mut scratch = Raim::<REPLAY_CAPACITY>::new();
     let mut out = Vec::with_capacity(epochs.len());
     for e in epochs {
@@ -524,6 +538,16 @@ fn checked_fault_plan(
 }
 
 pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
+    replay_on(args, &mut |cfg| Engine::start(args.target, cfg))
+}
+
+/// The replay with each run's engine from `start` (given the monitor
+/// configuration it must run with): `raim link` runs the same epochs on a
+/// unit over a serial port.
+pub fn replay_on(
+    args: &ReplayArgs,
+    start: &mut dyn FnMut(&Config) -> Result<Engine>,
+) -> Result<ReplayOutput> {
     let mut cfg = args.core_config();
     cfg.validate()
         .map_err(|e| anyhow::anyhow!("configuration: {e}"))?;
@@ -558,8 +582,8 @@ pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
         );
         b
     });
-    let clean = run_core(
-        args.target,
+    let clean = run_core_on(
+        start,
         &cfg,
         &epochs,
         &FaultPlan::default(),
@@ -573,7 +597,7 @@ pub fn replay(args: &ReplayArgs) -> Result<ReplayOutput> {
     let mut records = if plan.is_empty() {
         clean
     } else {
-        run_core(args.target, &cfg, &epochs, &plan, reference, bar.as_ref())?
+        run_core_on(start, &cfg, &epochs, &plan, reference, bar.as_ref())?
     };
     if plan.is_empty() {
         // Recompute the errors of the clean run against the reference.
@@ -697,7 +721,7 @@ pub fn run_title(args: &ReplayArgs) -> String {
     format!("{file}, {}, {fault}, {window}", args.systems)
 }
 
-fn write_outputs(args: &ReplayArgs, out: &ReplayOutput) -> Result<()> {
+pub(crate) fn write_outputs(args: &ReplayArgs, out: &ReplayOutput) -> Result<()> {
     let stdout = std::io::stdout();
     let mut w = stdout.lock();
     if !args.quiet {

@@ -69,6 +69,12 @@ pub fn receiver_codes() -> BTreeMap<System, Vec<String>> {
             ]),
         ),
         (System::Beidou, v(&["C2I+C6I", "C2I+C7I", "C2I", "C1I"])),
+        // GLONASS FDMA: L1/L2 of the same code first (C/A on both, as
+        // GLONASS-M broadcasts; then P), so no code-to-code bias enters.
+        (
+            System::Glonass,
+            v(&["C1C+C2C", "C1P+C2P", "C1C+C2P", "C1C", "C1P"]),
+        ),
         (
             System::Qzss,
             v(&["C1C+C2L", "C1C+C2X", "C1C+C2S", "C1C+C5Q", "C1C"]),
@@ -90,12 +96,42 @@ pub fn iono_free_sigma_m(model: &SigmaModel, el_rad: f64, factor: f64) -> f64 {
         .sqrt()
 }
 
-/// Set each iono-free observation's own sigma (see the module docs).
-pub fn set_sigmas(epoch: &mut PreparedEpoch, model: &SigmaModel) {
+/// Set each iono-free observation's own sigma (see the module docs): from
+/// `model`, or for a GLONASS satellite from `glonass` (its own URA,
+/// `RangingOptions::glonass_sigma`) when given. A single-frequency GLONASS
+/// satellite carries its own sigma too (the core's model is not used for
+/// it), so its residual-ionosphere term gets `single_iono_factor` here
+/// ([`NO_MODEL_IONO_FACTOR`] when its range is uncorrected, as
+/// [`adjust_config`] does for the others).
+pub fn set_sigmas(
+    epoch: &mut PreparedEpoch,
+    model: &SigmaModel,
+    glonass: Option<&SigmaModel>,
+    single_iono_factor: f64,
+) {
     for s in &mut epoch.sats {
+        let g = match (s.obs.id.system, glonass) {
+            (System::Glonass, Some(g)) => Some(g),
+            _ => None,
+        };
         if let Some(f) = iono_free_noise_factor(s.obs.id.system, &s.code) {
-            s.obs.sigma_m = Some(iono_free_sigma_m(model, s.elevation_rad, f));
+            s.obs.sigma_m = Some(iono_free_sigma_m(g.unwrap_or(model), s.elevation_rad, f));
+        } else if let Some(g) = g {
+            let mut g = *g;
+            g.iono_vertical_m *= single_iono_factor;
+            s.obs.sigma_m = Some(g.sigma_m(s.elevation_rad));
         }
+    }
+}
+
+/// The factor on the residual-ionosphere sigma of a single-frequency
+/// range: [`NO_MODEL_IONO_FACTOR`] with no Klobuchar model and no
+/// `--iono-vertical-m`, else 1.
+pub fn single_iono_factor(args: &ReplayArgs, nav: &NavData) -> f64 {
+    if nav.klobuchar.is_none() && args.iono_vertical_m.is_none() {
+        NO_MODEL_IONO_FACTOR
+    } else {
+        1.0
     }
 }
 
@@ -173,29 +209,20 @@ pub fn load_file(format: Format, path: &Path) -> Result<Recording> {
     if rec.obs.epochs.is_empty() {
         if format == Format::Rtcm3 && c.epochs > 0 {
             bail!(
-                "{shown}: {} observation epochs but no ephemeris to date them ({} carry none): {c}",
+                "{shown}: {} observation epochs but no ephemeris to date them (the stream's weeks come from RTCM 1019/1042/1044/1045/1046, not from 1020): {c}",
                 c.epochs,
-                format.ephemeris_messages()
             );
         }
         if let Some(k) = c.ignored.get(raim_recv::rtcm::GLONASS_ALONE) {
             bail!(
-                "{shown}: only GLONASS observations ({k} epochs of GLONASS MSM): GLONASS orbits and time are not modelled, so nothing can be solved ({c})"
+                "{shown}: only GLONASS observations ({k} epochs of GLONASS MSM, no GPS, Galileo or BeiDou MSM): a GLONASS MSM carries only a GLONASS time of day, and this reader dates epochs by the GPS/Galileo/BeiDou MSM they arrive with, so nothing can be solved ({c})"
             );
         }
         bail!("{shown}: no observation epochs ({c})");
     }
-    if rec.nav.ephemerides.is_empty() {
-        let glo = if rec.glonass.is_empty() {
-            String::new()
-        } else {
-            format!(
-                " ({} GLONASS ephemerides, whose orbits this replay does not model)",
-                rec.glonass.len()
-            )
-        };
+    if rec.nav.ephemerides.is_empty() && rec.nav.glonass.is_empty() {
         bail!(
-            "{shown}: {} epochs but no ephemeris of a modelled system{glo}: the stream has no {} ({c})",
+            "{shown}: {} epochs but no ephemeris: the stream has no {} ({c})",
             rec.obs.epochs.len(),
             format.ephemeris_messages()
         );
@@ -238,7 +265,6 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
         epochs: Vec::new(),
     };
     let mut nav = NavData::default();
-    let mut glonass = Vec::new();
     let mut plan: Option<FaultPlan> = None;
     let mut records: Vec<EpochRecord> = Vec::new();
     let mut tally = crate::outcome::Tally::default();
@@ -273,22 +299,18 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
         for it in items.drain(..) {
             match it {
                 Item::Epoch(e) => epochs.push(e),
-                other => raim_recv::apply(other, &mut obs, &mut nav, &mut glonass),
+                other => raim_recv::apply(other, &mut obs, &mut nav),
             }
         }
         if nav.ephemerides.is_empty()
+            && nav.glonass.is_empty()
             && started.elapsed() > Duration::from_secs_f64(args.ephemeris_timeout_s.max(0.0))
         {
             bail!(
-                "{}: no ephemeris after {:.0} s of stream ({} epochs{}): a {} stream needs {} to be solved ({})",
+                "{}: no ephemeris after {:.0} s of stream ({} epochs): a {} stream needs {} to be solved ({})",
                 spec.name(),
                 args.ephemeris_timeout_s,
                 dec.counts().epochs,
-                if glonass.is_empty() {
-                    String::new()
-                } else {
-                    format!(", {} GLONASS ephemerides, not modelled", glonass.len())
-                },
                 format.name(),
                 format.ephemeris_messages(),
                 dec.counts()
@@ -304,7 +326,8 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
                 adjust_config(&mut cfg, args, &nav, &one);
                 iono_set = true;
             }
-            set_sigmas(&mut p, &cfg.sigma_model);
+            let f = single_iono_factor(args, &nav);
+            set_sigmas(&mut p, &cfg.sigma_model, opts.glonass_sigma.as_ref(), f);
             let mut sats = p.observations();
             let injected = plan
                 .as_ref()
@@ -329,7 +352,7 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
                 }
                 Err(err) => {
                     let t = raim_gnss::time::time_of_day(p.time_gps_s);
-                    let why = if nav.ephemerides.is_empty() {
+                    let why = if nav.ephemerides.is_empty() && nav.glonass.is_empty() {
                         format!("{err} (no ephemeris received yet)")
                     } else {
                         err.clone()
@@ -379,7 +402,7 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
     } else if args.nmea != Some(NmeaMode::Only) {
         writeln!(w, "{}", summary.table())?;
     }
-    if records.is_empty() && nav.ephemerides.is_empty() {
+    if records.is_empty() && nav.ephemerides.is_empty() && nav.glonass.is_empty() {
         bail!(
             "{}: the stream ended with no epoch solved: no ephemeris ({}) in {}",
             spec.name(),
@@ -388,4 +411,67 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
         );
     }
     Ok(tally)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use raim_core::{RangeObservation, SatId};
+    use raim_gnss::ranging::PreparedSat;
+
+    fn sat(system: System, prn: u8, code: &str, el_deg: f64) -> PreparedSat {
+        PreparedSat {
+            obs: RangeObservation {
+                id: SatId::new(system, prn),
+                pseudorange_m: 2.0e7,
+                position_m: [2.0e7, 0.0, 0.0],
+                sigma_m: None,
+            },
+            code: code.into(),
+            raw_pseudorange_m: 2.0e7,
+            elevation_rad: el_deg.to_radians(),
+            azimuth_rad: 0.0,
+            sat_clock_m: 0.0,
+            group_delay_m: 0.0,
+            iono_m: 0.0,
+            tropo_m: 0.0,
+        }
+    }
+
+    /// GLONASS satellites take their sigmas from the GLONASS model: an
+    /// iono-free pair with its URA and no ionosphere, a single-frequency
+    /// range with the residual-ionosphere term times the factor; a GPS
+    /// single-frequency range keeps the core's model (no sigma of its own).
+    #[test]
+    fn glonass_sigmas_use_the_glonass_model() {
+        const TOL_M: f64 = 1e-12;
+        let gps = SigmaModel::default();
+        let glo = SigmaModel {
+            ura_m: raim_gnss::glonass::glonass_ura_m(gps.ura_m),
+            ..gps
+        };
+        let mut e = PreparedEpoch {
+            time_gps_s: 0.0,
+            reference_m: None,
+            sats: vec![
+                sat(System::Gps, 1, "C1C", 30.0),
+                sat(System::Glonass, 13, "C1C+C2P", 30.0),
+                sat(System::Glonass, 14, "C1C", 30.0),
+            ],
+            rejected: Vec::new(),
+        };
+        set_sigmas(&mut e, &gps, Some(&glo), NO_MODEL_IONO_FACTOR);
+        let el = 30f64.to_radians();
+        assert_eq!(e.sats[0].obs.sigma_m, None);
+        let f = iono_free_noise_factor(System::Glonass, "C1C+C2P").unwrap();
+        let want = iono_free_sigma_m(&glo, el, f);
+        assert!((e.sats[1].obs.sigma_m.unwrap() - want).abs() < TOL_M);
+        let doubled = SigmaModel {
+            iono_vertical_m: glo.iono_vertical_m * NO_MODEL_IONO_FACTOR,
+            ..glo
+        };
+        let got = e.sats[2].obs.sigma_m.unwrap();
+        assert!((got - doubled.sigma_m(el)).abs() < TOL_M);
+        assert!(got > glo.sigma_m(el));
+    }
 }
