@@ -83,7 +83,7 @@ pub type DevicePrecision = f32;
 /// indices. The history of the versions is in CHANGELOG.md, "Wire protocol
 /// versions"; 11 is the core clock in `Status` (`core_clock_hz`,
 /// `clock_fallback`) and the boot nonce's source (`hardware_entropy`).
-pub const PROTOCOL_VERSION: u16 = 11;
+pub const PROTOCOL_VERSION: u16 = 12;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes
