@@ -12,10 +12,10 @@
 //! - MCUSUM: `McusumConfig::arl0` = 1 / (share x P_FA) epochs (off at 0);
 //! - ARAIM: P_FA,vert + P_FA,hor = share x P_FA, split in the ADD's ratio
 //!   3.9e-6 : 9e-8;
-//! - PCA and the particle filters: share 0 by default. A monitor whose
-//!   threshold is not verified against its allocation on real data does not
-//!   drive the alarm output (docs/ESQ.md, docs/PF.md); a share is reserved
-//!   for it only once it is.
+//! - the particle filters: `PfConfig::pfa` = share x P_FA (0 by default:
+//!   not run), their LLR threshold from the calibrated table (docs/PF.md);
+//! - PCA: share 0. Its threshold is not verified against an allocation on
+//!   real data, so it does not drive the alarm output (docs/ESQ.md).
 //!
 //! The multiple-fault search (`FdeMethod::Reconstruction`) runs only after
 //! the snapshot test has detected: it adds no false alarm of its own, and
@@ -66,7 +66,7 @@ pub struct FalseAlarmShares {
     pub araim: f64,
     /// The PCA constellation monitor (0: not on the integrity path).
     pub pca: f64,
-    /// The particle filters' LLR test (0: not on the integrity path).
+    /// The particle filters' LLR test (0: not run).
     pub pf: f64,
 }
 
