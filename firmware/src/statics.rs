@@ -9,9 +9,9 @@
 //!
 //! On the STM32F4 the particle filter's engine is in the core-coupled
 //! memory (`.ccmram`, memory-stm32f4.x), which the runtime neither loads
-//! nor zeroes: [`zero_ccm`] makes it `.bss`-like at the top of `main`, so
-//! that a cell there holds its all-zero `const` value as it would in
-//! `.bss`.
+//! nor zeroes: `zero_ccm` (in that board's build) makes it `.bss`-like at
+//! the top of `main`, so that a cell there holds its all-zero `const`
+//! value as it would in `.bss`.
 //!
 //! Two statics are deliberately left uninitialised, because their point
 //! is the bytes RAM holds at boot: the reset record that survives a
