@@ -39,3 +39,21 @@ pub enum GnssError {
         max: f64,
     },
 }
+
+impl From<raim_nav::NavError> for GnssError {
+    fn from(e: raim_nav::NavError) -> Self {
+        match e {
+            raim_nav::NavError::OutOfRange {
+                field,
+                value,
+                min,
+                max,
+            } => GnssError::OutOfRange {
+                field,
+                value,
+                min,
+                max,
+            },
+        }
+    }
+}

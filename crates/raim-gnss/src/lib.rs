@@ -9,17 +9,16 @@
 //! deterministic, seeded faults (steps, ramps, constellation biases, clock
 //! jumps, heavy-tailed noise) for replay tests (docs/REPLAY.md).
 
-pub mod ephemeris;
 pub mod error;
 pub mod faults;
-pub mod geometry;
-pub mod glonass;
-pub mod iono;
 pub mod ranging;
 pub mod rinex_guard;
 pub mod rinex_io;
 pub mod time;
-pub mod tropo;
+
+// The broadcast-navigation layer is raim-nav's (no_std, shared with the
+// firmware); its modules keep their paths here.
+pub use raim_nav::{ephemeris, geometry, glonass, iono, tropo};
 
 pub use error::GnssError;
 pub use faults::{Fault, FaultKind, FaultPlan, Noise, Scenario};

@@ -143,40 +143,8 @@ pub struct NavData {
     pub klobuchar: Option<Klobuchar>,
 }
 
-/// The broadcast ephemeris selected for one satellite: Keplerian elements
-/// (GPS, Galileo, BeiDou, QZSS) or a GLONASS state vector.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Broadcast<'a> {
-    Kepler(&'a Kepler),
-    Glonass(&'a GlonassEphemeris),
-}
+pub use raim_nav::ranging::Broadcast;
 
-impl Broadcast<'_> {
-    /// Position (WGS-84, Earth-fixed frame of the instant) and clock at GPS
-    /// time `t_gps_s`.
-    pub fn state(&self, t_gps_s: f64) -> crate::ephemeris::SatState {
-        match self {
-            Broadcast::Kepler(k) => k.state(t_gps_s),
-            Broadcast::Glonass(g) => g.state(t_gps_s),
-        }
-    }
-
-    /// The Keplerian ephemeris, if this is one (its group delays).
-    pub fn kepler(&self) -> Option<&Kepler> {
-        match self {
-            Broadcast::Kepler(k) => Some(k),
-            Broadcast::Glonass(_) => None,
-        }
-    }
-
-    /// The GLONASS frequency channel, if this is a GLONASS ephemeris.
-    pub fn frequency_channel(&self) -> Option<i8> {
-        match self {
-            Broadcast::Kepler(_) => None,
-            Broadcast::Glonass(g) => Some(g.frequency_channel),
-        }
-    }
-}
 
 /// A GLONASS record of a RINEX 2/3 navigation file: the epoch is t_b in
 /// UTC (RINEX 3 §A; the `rinex` crate reads it on the UTC scale), the

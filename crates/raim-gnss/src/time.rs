@@ -51,22 +51,73 @@ pub fn utc_hhmmss(t_gps_s: f64) -> String {
     format!("{h:02}{m:02}{:05.2}", s as f64 + ns as f64 * 1e-9)
 }
 
-/// UTC seconds since 1970-01-01 of a GPS time (leap seconds from hifitime):
-/// the epoch time of the wire protocol (docs/PROTOCOL.md), from which the
-/// firmware writes the NMEA time and date.
+/// UTC seconds since 1970-01-01 of a GPS time: the epoch time of the wire
+/// protocol (docs/PROTOCOL.md), from which the firmware writes the NMEA
+/// time and date. raim-nav's leap-second table, the one the firmware
+/// dates its own epochs with (checked against hifitime below).
 pub fn unix_utc_s(t_gps_s: f64) -> f64 {
-    use rinex::prelude::{Epoch, TimeScale};
-    Epoch::from_gpst_seconds(t_gps_s)
-        .to_time_scale(TimeScale::UTC)
-        .to_unix_seconds()
+    raim_nav::time::unix_utc_s(t_gps_s)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// 2020-06-25 00:00:00 GPST (ESBC's first epoch) is 2020-06-24
-    /// 23:59:42 UTC (18 leap seconds), Unix 1593043182.
+    /// raim-nav's leap-second table against hifitime's (an independent
+    /// implementation, through the `rinex` crate), every 5 days from the
+    /// GPS epoch to 2030 and a minute either side of every leap. Within a
+    /// minute of a leap hifitime steps at a slightly different instant
+    /// (by up to the offset itself): the
+    /// table steps at the leap itself (UTC midnight, GPS = UTC + the new
+    /// offset), as IS-GPS-200 20.3.3.5.2.4 defines it.
+    #[test]
+    fn leap_seconds_match_hifitime() {
+        /// hifitime's rounding of a fractional second, s.
+        const FRACTION_TOL_S: f64 = 1e-6;
+        use rinex::prelude::{Epoch, TimeScale};
+        let hifi = |t: f64| {
+            Epoch::from_gpst_seconds(t)
+                .to_time_scale(TimeScale::UTC)
+                .to_unix_seconds()
+        };
+        let leaps: Vec<f64> = (1..=18)
+            .map(|leap| {
+                (0..60 * 366 * 86_400_i64)
+                    .step_by(86_400)
+                    .map(|s| s as f64)
+                    .find(|&s| raim_nav::time::gps_minus_utc_s(s + 86_399.0) >= f64::from(leap))
+                    .unwrap()
+            })
+            .collect();
+        let near_leap = |t: f64| leaps.iter().any(|&l| (t - l).abs() < 60.0);
+        let mut t = 0.0;
+        let mut n = 0;
+        while t < 50.0 * 365.25 * DAY_S {
+            if !near_leap(t) {
+                assert_eq!(unix_utc_s(t), hifi(t), "GPS {t} s");
+                // hifitime rounds a fraction through its own f64 steps.
+                let d = unix_utc_s(t + 0.25) - hifi(t + 0.25);
+                assert!(d.abs() < FRACTION_TOL_S, "GPS {t} s + 0.25: {d}");
+                n += 1;
+            }
+            t += 5.0 * DAY_S;
+        }
+        assert!(n > 3000, "{n}");
+        for (i, &day) in leaps.iter().enumerate() {
+            // The leap is at the day's start (UTC) + the new offset.
+            let at = day + (i + 1) as f64;
+            for dt in [-2.0 * DAY_S, -60.0, 60.0, 2.0 * DAY_S] {
+                let t = at + dt;
+                assert_eq!(unix_utc_s(t), hifi(t), "leap {}, GPS {t} s", i + 1);
+            }
+            // Either side of the leap, the table's offsets differ by one.
+            assert_eq!(
+                raim_nav::time::gps_minus_utc_s(at) - raim_nav::time::gps_minus_utc_s(at - 1.0),
+                1.0
+            );
+        }
+    }
+
     #[test]
     fn unix_utc_of_a_gps_time() {
         // GPS week 2111, day 4 (Thursday) 00:00:00: 2111*604800 + 4*86400.

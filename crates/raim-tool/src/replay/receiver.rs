@@ -24,11 +24,10 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Result};
-use raim_core::araim::error_model::{multipath_sigma_m, tropo_sigma_m};
 use raim_core::sigma::SigmaModel;
 use raim_core::{Config, Epoch, System};
 use raim_gnss::faults::FaultPlan;
-use raim_gnss::ranging::{iono_free_noise_factor, prepare_epoch, PreparedEpoch, RangingOptions};
+use raim_gnss::ranging::{prepare_epoch, PreparedEpoch, RangingOptions};
 use raim_gnss::{NavData, ObsData};
 use raim_recv::source::Spec;
 use raim_recv::{Format, Item, Recording};
@@ -82,27 +81,14 @@ pub fn receiver_codes() -> BTreeMap<System, Vec<String>> {
     ])
 }
 
-/// The sigma of an iono-free combination with noise factor `factor` at
-/// elevation `el_rad`: the sigma model's terms with no ionosphere, the
-/// receiver noise and multipath amplified (they are independent on the two
-/// frequencies; SPEC §1 sigma model, DO-229D J.2.4 terms).
-pub fn iono_free_sigma_m(model: &SigmaModel, el_rad: f64, factor: f64) -> f64 {
-    let el = el_rad.max(model.min_elevation_rad);
-    let tropo = tropo_sigma_m(el.sin());
-    let mp = multipath_sigma_m(el.to_degrees());
-    (model.ura_m.powi(2)
-        + tropo * tropo
-        + factor * factor * (mp * mp + model.noise_m * model.noise_m))
-        .sqrt()
-}
-
 /// Set each iono-free observation's own sigma (see the module docs): from
 /// `model`, or for a GLONASS satellite from `glonass` (its own URA,
 /// `RangingOptions::glonass_sigma`) when given. A single-frequency GLONASS
 /// satellite carries its own sigma too (the core's model is not used for
 /// it), so its residual-ionosphere term gets `single_iono_factor` here
 /// ([`NO_MODEL_IONO_FACTOR`] when its range is uncorrected, as
-/// [`adjust_config`] does for the others).
+/// [`adjust_config`] does for the others). raim-nav's rule
+/// (`stream_sigma_m`), the one the firmware applies to its own epochs.
 pub fn set_sigmas(
     epoch: &mut PreparedEpoch,
     model: &SigmaModel,
@@ -110,16 +96,15 @@ pub fn set_sigmas(
     single_iono_factor: f64,
 ) {
     for s in &mut epoch.sats {
-        let g = match (s.obs.id.system, glonass) {
-            (System::Glonass, Some(g)) => Some(g),
-            _ => None,
-        };
-        if let Some(f) = iono_free_noise_factor(s.obs.id.system, &s.code) {
-            s.obs.sigma_m = Some(iono_free_sigma_m(g.unwrap_or(model), s.elevation_rad, f));
-        } else if let Some(g) = g {
-            let mut g = *g;
-            g.iono_vertical_m *= single_iono_factor;
-            s.obs.sigma_m = Some(g.sigma_m(s.elevation_rad));
+        if let Some(sigma_m) = raim_nav::ranging::stream_sigma_m(
+            s.obs.id.system,
+            &s.code,
+            s.elevation_rad,
+            model,
+            glonass,
+            single_iono_factor,
+        ) {
+            s.obs.sigma_m = Some(sigma_m);
         }
     }
 }
@@ -463,8 +448,8 @@ mod tests {
         set_sigmas(&mut e, &gps, Some(&glo), NO_MODEL_IONO_FACTOR);
         let el = 30f64.to_radians();
         assert_eq!(e.sats[0].obs.sigma_m, None);
-        let f = iono_free_noise_factor(System::Glonass, "C1C+C2P").unwrap();
-        let want = iono_free_sigma_m(&glo, el, f);
+        let f = raim_nav::ranging::iono_free_noise_factor(System::Glonass, "C1C+C2P").unwrap();
+        let want = raim_nav::ranging::iono_free_sigma_m(&glo, el, f);
         assert!((e.sats[1].obs.sigma_m.unwrap() - want).abs() < TOL_M);
         let doubled = SigmaModel {
             iono_vertical_m: glo.iono_vertical_m * NO_MODEL_IONO_FACTOR,

@@ -2,6 +2,7 @@
 //! azimuth/elevation in the local frame (WGS-84, via raim-core's frames).
 
 use crate::ephemeris::OMEGA_E_GPS_RAD_S;
+use crate::m;
 use raim_core::frames::{ecef_to_geodetic, enu_rotation, rotate, Geodetic};
 
 /// Rotate a satellite position computed in the ECEF frame of the transmit
@@ -9,14 +10,15 @@ use raim_core::frames::{ecef_to_geodetic, enu_rotation, rotate, Geodetic};
 /// the Earth turned by omega_e * transit_s about Z meanwhile (IS-GPS-200
 /// 20.3.3.4.3.4; ~30 m of position for a 70 ms transit).
 pub fn rotate_earth(position_m: [f64; 3], transit_s: f64) -> [f64; 3] {
-    let (s, c) = (OMEGA_E_GPS_RAD_S * transit_s).sin_cos();
+    let (s, c) = m::sin_cos(OMEGA_E_GPS_RAD_S * transit_s);
     let [x, y, z] = position_m;
     [c * x + s * y, -s * x + c * y, z]
 }
 
 /// Euclidean distance, m.
 pub fn distance_m(a: [f64; 3], b: [f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    let [dx, dy, dz] = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    m::sqrt(dx * dx + dy * dy + dz * dz)
 }
 
 /// Azimuth (clockwise from north) and elevation of `sat_m` seen from
@@ -31,8 +33,8 @@ pub fn az_el(rx_m: [f64; 3], sat_m: [f64; 3]) -> (f64, f64, Geodetic) {
     ];
     let [e, nn, u] = rotate(&enu_rotation(&g), d);
     (
-        e.atan2(nn).rem_euclid(2.0 * std::f64::consts::PI),
-        u.asin(),
+        m::rem_euclid(m::atan2(e, nn), 2.0 * core::f64::consts::PI),
+        libm::asin(u),
         g,
     )
 }

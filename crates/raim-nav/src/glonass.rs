@@ -36,7 +36,8 @@
 use raim_core::System;
 
 use crate::ephemeris::SatState;
-use crate::error::GnssError;
+use crate::error::NavError;
+use crate::m;
 
 /// PZ-90.11 gravitational constant, m^3/s^2 (ICD 5.1 Table 3.2).
 pub const MU_PZ90_M3_S2: f64 = 3.986_004_418e14;
@@ -51,7 +52,6 @@ pub const GLONASS_MINUS_UTC_S: f64 = 10_800.0;
 /// Seconds in a day.
 const DAY_S: f64 = 86_400.0;
 /// TAI - GPS time, s (constant since 1980-01-06).
-const TAI_MINUS_GPS_S: f64 = 19.0;
 /// Runge-Kutta step, s. The ICD's accuracy needs no less: halving it
 /// moves a 15-minute propagation by under 1 mm (test
 /// `rk4_step_is_converged`).
@@ -105,8 +105,7 @@ pub fn l2_hz(k: i8) -> f64 {
 /// GPS time minus UTC at GPS time `t_gps_s`, s (the leap seconds since
 /// 1980: TAI - UTC from hifitime's table, minus 19 s).
 pub fn gps_minus_utc_s(t_gps_s: f64) -> f64 {
-    use rinex::prelude::Epoch;
-    f64::from(Epoch::from_gpst_seconds(t_gps_s).leap_seconds_iers()) - TAI_MINUS_GPS_S
+    crate::time::gps_minus_utc_s(t_gps_s)
 }
 
 /// GLONASS time (UTC(SU) + 3 h) as continuous seconds on the GPS origin:
@@ -117,7 +116,7 @@ pub fn glonass_from_gps_s(t_gps_s: f64) -> f64 {
 
 /// Seconds of the GLONASS (Moscow) day at GPS time `t_gps_s`.
 pub fn glonass_time_of_day_s(t_gps_s: f64) -> f64 {
-    glonass_from_gps_s(t_gps_s).rem_euclid(DAY_S)
+    m::rem_euclid(glonass_from_gps_s(t_gps_s), DAY_S)
 }
 
 /// A time of the GLONASS day (t_b of an ephemeris, in [0, 86400) s) as
@@ -125,7 +124,7 @@ pub fn glonass_time_of_day_s(t_gps_s: f64) -> f64 {
 /// `near_gps_s` (the receiver time of the message that carried it).
 pub fn glonass_time_of_day_to_gps_s(tod_s: f64, near_gps_s: f64) -> f64 {
     let near_glo = glonass_from_gps_s(near_gps_s);
-    let day_start = (near_glo / DAY_S).floor() * DAY_S;
+    let day_start = m::floor(near_glo / DAY_S) * DAY_S;
     let mut t_glo = day_start + tod_s;
     if t_glo - near_glo > DAY_S / 2.0 {
         t_glo -= DAY_S;
@@ -212,11 +211,11 @@ const MAX_ACCEL_KM_S2: f64 = 15.0 / 1_073_741_824.0;
 const MAX_TAU_N_S: f64 = 2.0e-3;
 const MAX_GAMMA_N: f64 = 9.32e-10;
 
-fn check(field: &'static str, value: f64, max: f64) -> Result<f64, GnssError> {
+fn check(field: &'static str, value: f64, max: f64) -> Result<f64, NavError> {
     if value.is_finite() && value.abs() <= max {
         Ok(value)
     } else {
-        Err(GnssError::OutOfRange {
+        Err(NavError::OutOfRange {
             field,
             value,
             min: -max,
@@ -227,9 +226,9 @@ fn check(field: &'static str, value: f64, max: f64) -> Result<f64, GnssError> {
 
 impl GlonassEphemeris {
     /// Build from the ICD fields, checking each against its ICD range.
-    pub fn from_icd(f: &GlonassIcdFields) -> Result<Self, GnssError> {
+    pub fn from_icd(f: &GlonassIcdFields) -> Result<Self, NavError> {
         if !(1..=27).contains(&f.slot) {
-            return Err(GnssError::OutOfRange {
+            return Err(NavError::OutOfRange {
                 field: "slot",
                 value: f64::from(f.slot),
                 min: 1.0,
@@ -237,7 +236,7 @@ impl GlonassEphemeris {
             });
         }
         if !(-7..=6).contains(&f.frequency_channel) {
-            return Err(GnssError::OutOfRange {
+            return Err(NavError::OutOfRange {
                 field: "frequency_channel",
                 value: f64::from(f.frequency_channel),
                 min: -7.0,
@@ -245,7 +244,7 @@ impl GlonassEphemeris {
             });
         }
         if !f.tb_gps_s.is_finite() {
-            return Err(GnssError::OutOfRange {
+            return Err(NavError::OutOfRange {
                 field: "tb_gps_s",
                 value: f.tb_gps_s,
                 min: 0.0,
@@ -333,7 +332,7 @@ impl GlonassEphemeris {
 fn derivative(s: &[f64; 6], acc: &[f64; 3]) -> [f64; 6] {
     let [x, y, z, vx, vy, vz] = *s;
     let r2 = x * x + y * y + z * z;
-    let r = r2.sqrt();
+    let r = m::sqrt(r2);
     let r3 = r2 * r;
     let mu_r3 = MU_PZ90_M3_S2 / r3;
     // 3/2 J2 mu a_e^2 / r^5
@@ -559,7 +558,7 @@ mod tests {
             ),
         ] {
             match GlonassEphemeris::from_icd(&bad) {
-                Err(GnssError::OutOfRange { field, .. }) => assert_eq!(field, name),
+                Err(NavError::OutOfRange { field, .. }) => assert_eq!(field, name),
                 other => panic!("{name}: {other:?}"),
             }
         }

@@ -8,6 +8,8 @@
 
 use raim_core::System;
 
+use crate::m;
+
 /// Speed of light, m/s (IS-GPS-200 20.3.4.3).
 pub const C_M_S: f64 = 299_792_458.0;
 /// WGS-84 Earth rotation rate used by GPS and Galileo, rad/s.
@@ -102,7 +104,7 @@ impl Kepler {
             System::Beidou => t_gps_s + BDT_MINUS_GPST_S,
             _ => t_gps_s,
         };
-        t.rem_euclid(WEEK_S)
+        m::rem_euclid(t, WEEK_S)
     }
 
     /// t - toe in seconds, with the week crossover of IS-GPS-200 20.3.3.3.3.1.
@@ -128,47 +130,47 @@ impl Kepler {
     pub fn state(&self, t_gps_s: f64) -> SatState {
         let (mu, omega_e) = self.mu_omega();
         let a = self.sqrt_a_m05 * self.sqrt_a_m05;
-        let n0 = (mu / (a * a * a)).sqrt();
+        let n0 = m::sqrt(mu / (a * a * a));
         let tk = self.tk_s(t_gps_s);
         let n = n0 + self.delta_n_rad_s;
         let mk = self.m0_rad + n * tk;
         let e = self.e;
         let mut ek = mk;
         for _ in 0..KEPLER_MAX_ITERATIONS {
-            let next = mk + e * ek.sin();
+            let next = mk + e * m::sin(ek);
             let done = (next - ek).abs() < KEPLER_TOLERANCE_RAD;
             ek = next;
             if done {
                 break;
             }
         }
-        let (sin_e, cos_e) = ek.sin_cos();
-        let nu = ((1.0 - e * e).sqrt() * sin_e).atan2(cos_e - e);
+        let (sin_e, cos_e) = m::sin_cos(ek);
+        let nu = m::atan2(m::sqrt(1.0 - e * e) * sin_e, cos_e - e);
         let phi = nu + self.omega_rad;
-        let (s2, c2) = (2.0 * phi).sin_cos();
+        let (s2, c2) = m::sin_cos(2.0 * phi);
         let u = phi + self.cus_rad * s2 + self.cuc_rad * c2;
         let r = a * (1.0 - e * cos_e) + self.crs_m * s2 + self.crc_m * c2;
         let i = self.i0_rad + self.idot_rad_s * tk + self.cis_rad * s2 + self.cic_rad * c2;
-        let (x_orb, y_orb) = (r * u.cos(), r * u.sin());
-        let (sin_i, cos_i) = i.sin_cos();
+        let (x_orb, y_orb) = (r * m::cos(u), r * m::sin(u));
+        let (sin_i, cos_i) = m::sin_cos(i);
         let toe = self.toe_sow_s;
         let position_m = if self.is_beidou_geo() {
             // BDS ICD: GEO elements are in an inertial-like frame; rotate by
             // -5 deg about X, then by omega_e tk about Z.
             let omega = self.omega0_rad + self.omega_dot_rad_s * tk - omega_e * toe;
-            let (so, co) = omega.sin_cos();
+            let (so, co) = m::sin_cos(omega);
             let xg = x_orb * co - y_orb * cos_i * so;
             let yg = x_orb * so + y_orb * cos_i * co;
             let zg = y_orb * sin_i;
-            let (sf, cf) = (-5.0f64.to_radians()).sin_cos();
+            let (sf, cf) = m::sin_cos(-5.0f64.to_radians());
             // Rx(-5 deg)
             let (x1, y1, z1) = (xg, cf * yg + sf * zg, -sf * yg + cf * zg);
-            let (sz, cz) = (omega_e * tk).sin_cos();
+            let (sz, cz) = m::sin_cos(omega_e * tk);
             // Rz(omega_e tk)
             [cz * x1 + sz * y1, -sz * x1 + cz * y1, z1]
         } else {
             let omega = self.omega0_rad + (self.omega_dot_rad_s - omega_e) * tk - omega_e * toe;
-            let (so, co) = omega.sin_cos();
+            let (so, co) = m::sin_cos(omega);
             [
                 x_orb * co - y_orb * cos_i * so,
                 x_orb * so + y_orb * cos_i * co,
@@ -176,7 +178,7 @@ impl Kepler {
             ]
         };
         // Relativistic eccentricity term F e sqrt(A) sin(E), F = -2 sqrt(mu)/c^2.
-        let f = -2.0 * mu.sqrt() / (C_M_S * C_M_S);
+        let f = -2.0 * m::sqrt(mu) / (C_M_S * C_M_S);
         let clock_s = self.clock_polynomial_s(t_gps_s) + f * e * self.sqrt_a_m05 * sin_e;
         SatState {
             position_m,

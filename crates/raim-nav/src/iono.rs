@@ -3,7 +3,9 @@
 //! Other frequencies scale by (f_L1 / f)^2 (first-order ionosphere).
 
 use crate::ephemeris::C_M_S;
-use std::f64::consts::PI;
+use core::f64::consts::PI;
+
+use crate::m;
 
 /// GPS L1 / Galileo E1 carrier, Hz.
 pub const F_L1_HZ: f64 = 1_575.42e6;
@@ -34,17 +36,18 @@ impl Klobuchar {
         let lam_u = lon_rad / PI;
         let e = el_rad / PI;
         let psi = 0.0137 / (e + 0.11) - 0.022;
-        let phi_i = (phi_u + psi * az_rad.cos()).clamp(-0.416, 0.416);
-        let lam_i = lam_u + psi * az_rad.sin() / (phi_i * PI).cos();
-        let phi_m = phi_i + 0.064 * ((lam_i - 1.617) * PI).cos();
-        let t = (4.32e4 * lam_i + t_s).rem_euclid(86_400.0);
-        let f = 1.0 + 16.0 * (0.53 - e).powi(3);
+        let phi_i = (phi_u + psi * m::cos(az_rad)).clamp(-0.416, 0.416);
+        let lam_i = lam_u + psi * m::sin(az_rad) / m::cos(phi_i * PI);
+        let phi_m = phi_i + 0.064 * m::cos((lam_i - 1.617) * PI);
+        let t = m::rem_euclid(4.32e4 * lam_i + t_s, 86_400.0);
+        let d = 0.53 - e;
+        let f = 1.0 + 16.0 * (d * d * d);
         let poly = |c: &[f64; 4]| c[0] + phi_m * (c[1] + phi_m * (c[2] + phi_m * c[3]));
         let amp = poly(&self.alpha).max(0.0);
         let per = poly(&self.beta).max(72_000.0);
         let x = 2.0 * PI * (t - 50_400.0) / per;
         let delay_s = if x.abs() < 1.57 {
-            f * (5e-9 + amp * (1.0 - x * x / 2.0 + x.powi(4) / 24.0))
+            f * (5e-9 + amp * (1.0 - x * x / 2.0 + (x * x) * (x * x) / 24.0))
         } else {
             f * 5e-9
         };
@@ -54,7 +57,10 @@ impl Klobuchar {
 
 /// Scale an L1 ionospheric delay to carrier `f_hz` (first order, 1/f^2).
 pub fn scale_to_frequency(delay_l1_m: f64, f_hz: f64) -> f64 {
-    delay_l1_m * (F_L1_HZ / f_hz).powi(2)
+    {
+    let r = F_L1_HZ / f_hz;
+    delay_l1_m * (r * r)
+}
 }
 
 #[cfg(test)]

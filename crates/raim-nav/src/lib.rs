@@ -1,0 +1,42 @@
+//! raim-nav: broadcast navigation for the integrity monitor, `no_std` and
+//! heap-free, shared by the host tools and the firmware so that both turn
+//! the same broadcast data into the same bits.
+//!
+//! - [`ephemeris`]: Keplerian broadcast orbits and clocks (GPS, Galileo,
+//!   BeiDou, QZSS);
+//! - [`glonass`]: GLONASS FDMA state vectors integrated by RK4, GLONASS
+//!   time, PZ-90.11 to WGS-84;
+//! - [`time`]: GPS time, UTC and the leap seconds;
+//! - [`geometry`], [`tropo`], [`iono`]: the Earth-rotation correction,
+//!   azimuth/elevation, Saastamoinen and Klobuchar.
+//!
+//! Every elementary function goes through `libm` (`m`), on the host too.
+#![cfg_attr(not(test), no_std)]
+#![deny(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+#![cfg_attr(
+    test,
+    allow(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing
+    )
+)]
+
+pub mod ephemeris;
+pub mod error;
+pub mod geometry;
+pub mod glonass;
+pub mod iono;
+pub mod ranging;
+pub mod time;
+pub mod tropo;
+
+mod m;
+
+pub use error::NavError;

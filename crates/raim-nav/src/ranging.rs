@@ -1,0 +1,499 @@
+//! From a satellite's raw pseudorange to the core's input (SPEC §1, §11):
+//! the broadcast orbit and clock at transmit time, the Earth-rotation
+//! correction, Klobuchar, Saastamoinen and the group delay, or the
+//! iono-free combination of two codes; then the elevation mask. The result
+//! is a `raim_core::RangeObservation` whose pseudorange is fully corrected
+//! and whose position is in the ECEF frame of the reception time, as the
+//! core expects (docs/CORE.md).
+//!
+//! This is the one implementation: the host's RINEX and receiver-stream
+//! replays (raim-gnss) and the firmware's own epochs from a receiver's
+//! RTCM 3 stream ([`crate::rtcm`]) both call [`correct`] and
+//! [`bootstrap_position`], so that they form the same bits.
+
+use raim_core::sigma::SigmaModel;
+use raim_core::solve::solve;
+use raim_core::{Config, Epoch, RangeObservation, SatId, System};
+
+use crate::ephemeris::{Kepler, SatState, C_M_S, WEEK_S};
+use crate::geometry::{az_el, distance_m, rotate_earth};
+use crate::glonass::{l1_hz, l2_hz, GlonassEphemeris, F_L1_BASE_HZ, F_L2_BASE_HZ};
+use crate::iono::{scale_to_frequency, Klobuchar, F_B1I_HZ, F_L1_HZ};
+use crate::m;
+use crate::tropo::saastamoinen_m;
+
+/// A solved position is trusted as the linearisation point for the
+/// corrections only if it is within this of the Earth's surface, m.
+pub const SURFACE_BAND_M: f64 = 100_000.0;
+
+/// The broadcast ephemeris selected for one satellite: Keplerian elements
+/// (GPS, Galileo, BeiDou, QZSS) or a GLONASS state vector.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Broadcast<'a> {
+    Kepler(&'a Kepler),
+    Glonass(&'a GlonassEphemeris),
+}
+
+impl Broadcast<'_> {
+    /// Position (WGS-84, Earth-fixed frame of the instant) and clock at GPS
+    /// time `t_gps_s`.
+    pub fn state(&self, t_gps_s: f64) -> SatState {
+        match self {
+            Broadcast::Kepler(k) => k.state(t_gps_s),
+            Broadcast::Glonass(g) => g.state(t_gps_s),
+        }
+    }
+
+    /// The Keplerian ephemeris, if this is one (its group delays).
+    pub fn kepler(&self) -> Option<&Kepler> {
+        match self {
+            Broadcast::Kepler(k) => Some(k),
+            Broadcast::Glonass(_) => None,
+        }
+    }
+
+    /// The GLONASS frequency channel, if this is a GLONASS ephemeris.
+    pub fn frequency_channel(&self) -> Option<i8> {
+        match self {
+            Broadcast::Kepler(_) => None,
+            Broadcast::Glonass(g) => Some(g.frequency_channel),
+        }
+    }
+}
+
+/// Which corrections to apply.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Corrections {
+    pub elevation_mask_rad: f64,
+    pub iono: bool,
+    pub tropo: bool,
+    pub group_delay: bool,
+    /// The sigma model of GLONASS satellites (SPEC §3's model with its own
+    /// URA, [`crate::glonass::glonass_ura_m`]): each gets an explicit
+    /// `sigma_m` = this model at its elevation. None: the core's model, as
+    /// for every other system.
+    pub glonass_sigma: Option<SigmaModel>,
+}
+
+/// Why a satellite of the epoch was not used.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Rejection {
+    SystemNotSelected,
+    NoCode,
+    NoEphemeris,
+    BelowMask { elevation_rad: f64 },
+}
+
+/// One satellite's measurement and ephemeris, before any correction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SatInput<'a> {
+    pub id: SatId,
+    /// RINEX 3 code ("C1C"), or a pair "C1C+C2W" for the iono-free
+    /// combination (higher frequency first).
+    pub code: &'a str,
+    /// The code's pseudorange (the first code's for a pair), m.
+    pub p1_m: f64,
+    /// The second code's pseudorange for a pair, m.
+    pub p2_m: Option<f64>,
+    pub eph: Broadcast<'a>,
+}
+
+/// One satellite ready for the core, with the terms that went into it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Corrected {
+    /// Corrected pseudorange and rotated satellite position.
+    pub obs: RangeObservation,
+    /// The pseudorange before corrections (the combination's for a pair), m.
+    pub raw_pseudorange_m: f64,
+    pub elevation_rad: f64,
+    pub azimuth_rad: f64,
+    /// c x satellite clock (polynomial + relativity), m; added.
+    pub sat_clock_m: f64,
+    /// c x group delay, m; subtracted.
+    pub group_delay_m: f64,
+    /// Klobuchar slant delay at the signal's frequency, m; subtracted.
+    pub iono_m: f64,
+    /// Saastamoinen slant delay, m; subtracted.
+    pub tropo_m: f64,
+}
+
+/// Carrier frequency (Hz) of a RINEX 3 code's band digit, per system; None
+/// for a band this crate does not know. GLONASS FDMA: the channel-0
+/// carriers (L2/L1 = 7/9 for every channel, so the iono-free combination
+/// does not depend on the channel).
+pub fn band_hz(system: System, code: &str) -> Option<f64> {
+    let band = code.get(1..2)?;
+    Some(match (system, band) {
+        (System::Gps | System::Qzss, "1") | (System::Galileo, "1") => 1_575.42e6,
+        (System::Gps | System::Qzss, "2") => 1_227.60e6,
+        (System::Gps | System::Qzss, "5") | (System::Galileo, "5") => 1_176.45e6,
+        (System::Galileo, "7") | (System::Beidou, "7") => 1_207.14e6,
+        (System::Galileo, "8") => 1_191.795e6,
+        (System::Galileo, "6") => 1_278.75e6,
+        (System::Beidou, "2") | (System::Beidou, "1") => F_B1I_HZ,
+        (System::Beidou, "6") => 1_268.52e6,
+        (System::Glonass, "1") => F_L1_BASE_HZ,
+        (System::Glonass, "2") => F_L2_BASE_HZ,
+        _ => return None,
+    })
+}
+
+/// A dual-frequency code pair "C1W+C2W": the two codes.
+pub fn split_pair(code: &str) -> Option<(&str, &str)> {
+    code.split_once('+')
+}
+
+/// The iono-free combination's noise amplification sqrt(g^2 + 1) / (g - 1),
+/// g = (f1 / f2)^2, for equal noise on both codes (2.59 for L1/L5 and
+/// E1/E5a, 2.98 for L1/L2, 3.53 for B1I/B3I); None for a single code.
+pub fn iono_free_noise_factor(system: System, code: &str) -> Option<f64> {
+    let (a, b) = split_pair(code)?;
+    let r = band_hz(system, a)? / band_hz(system, b)?;
+    let g = r * r;
+    Some(m::sqrt(g * g + 1.0) / (g - 1.0))
+}
+
+/// The iono-free pseudorange of a code pair and the group delay (m,
+/// subtracted like the single-frequency TGD/BGD) that refers it to the
+/// broadcast clock:
+/// - GPS/QZSS: the LNAV clock is the L1/L2 P(Y) combination's, so C1W+C2W
+///   needs none (other GPS pairs: none applied either; the inter-signal
+///   corrections of CNAV are not in the navigation file).
+/// - Galileo with the I/NAV clock (the E1/E5b combination's): a pair
+///   E1 + E5a gets c (BGD(E1,E5b) - BGD(E1,E5a)) (the E1 clock
+///   dt - BGD(E1,E5b) = dt' - BGD(E1,E5a) solved for the E1/E5a clock dt');
+///   E1 + E5b none.
+/// - BeiDou (clock of B3I): B1I + B3I gets c g / (g - 1) TGD1.
+/// - GLONASS (`k` None): none (tau_n refers to L1; the L1/L2 delay
+///   Delta tau_n is not in RINEX 3 navigation files).
+///
+/// The first code must be the higher frequency. None if a band is unknown.
+pub fn iono_free(
+    system: System,
+    code: &str,
+    p1: f64,
+    p2: f64,
+    k: Option<&Kepler>,
+) -> Option<(f64, f64)> {
+    let (a, b) = split_pair(code)?;
+    let (f1, f2) = (band_hz(system, a)?, band_hz(system, b)?);
+    let r = f1 / f2;
+    let g = r * r;
+    if g.is_nan() || g <= 1.0 {
+        return None;
+    }
+    let p = (g * p1 - p2) / (g - 1.0);
+    let delay_s = match (system, b.get(1..2), k) {
+        (System::Galileo, Some("5"), Some(k)) => k.group_delay_s - k.group_delay_e5a_s,
+        (System::Beidou, Some("6"), Some(k)) => g / (g - 1.0) * k.group_delay_s,
+        _ => 0.0,
+    };
+    Some((p, C_M_S * delay_s))
+}
+
+/// Carrier frequency of a code, for the ionospheric scaling; GLONASS by
+/// the satellite's frequency channel `k`.
+pub fn carrier_hz(system: System, code: &str, k: Option<i8>) -> f64 {
+    match (system, code.get(1..2)) {
+        (System::Glonass, Some("2")) => l2_hz(k.unwrap_or(0)),
+        (System::Glonass, _) => l1_hz(k.unwrap_or(0)),
+        (System::Beidou, Some("2")) | (System::Beidou, Some("1")) if code.ends_with('I') => {
+            F_B1I_HZ
+        }
+        _ => F_L1_HZ,
+    }
+}
+
+/// Group delay applies to the codes the broadcast value is defined for:
+/// GPS/QZSS L1 C/A (TGD), Galileo E1 (BGD E1/E5b), BeiDou B1I (TGD1).
+fn group_delay_applies(system: System, code: &str) -> bool {
+    match system {
+        System::Gps | System::Qzss => code == "C1C" || code == "C1",
+        System::Galileo => code.starts_with("C1"),
+        System::Beidou => code == "C2I" || code == "C1I",
+        System::Glonass => false,
+    }
+}
+
+/// Satellite position (ECEF at transmit time, not yet rotated) and clock,
+/// from the receiver time tag and the pseudorange: the transmit time in
+/// GPS time is t_rx - P/c - dt_sv (exact whatever the receiver clock).
+fn transmit_state(k: &Broadcast<'_>, t_rx_gps_s: f64, pseudorange_m: f64) -> ([f64; 3], f64) {
+    let t_sv = t_rx_gps_s - pseudorange_m / C_M_S;
+    let dts = k.state(t_sv).clock_s;
+    let st = k.state(t_sv - dts);
+    (st.position_m, st.clock_s)
+}
+
+/// One satellite's corrected observation, every correction computed at the
+/// receiver position `rx_m` (None: no atmosphere, no mask, and the Earth
+/// rotation from the pseudorange's transit time); `full` false also skips
+/// the atmosphere and the mask (the bootstrap pass).
+pub fn correct(
+    s: &SatInput<'_>,
+    t_rx_gps_s: f64,
+    rx_m: Option<[f64; 3]>,
+    full: bool,
+    c: &Corrections,
+    klobuchar: Option<&Klobuchar>,
+) -> Result<Corrected, Rejection> {
+    let id = s.id;
+    let k = s.eph;
+    // An iono-free pair: the combination, its group delay, no Klobuchar
+    // (the combination removes the first-order ionosphere).
+    let pair = match s.p2_m {
+        Some(p2) => Some(iono_free(id.system, s.code, s.p1_m, p2, k.kepler()).ok_or(Rejection::NoCode)?),
+        None => None,
+    };
+    let p = pair.map_or(s.p1_m, |v| v.0);
+    let (pos_tx, clock_s) = transmit_state(&k, t_rx_gps_s, p);
+    let transit_s = match rx_m {
+        Some(rx) => {
+            // Two fixed-point steps: the rotation moves the satellite by
+            // < 150 m, changing the transit by < 0.5 us.
+            let t0 = distance_m(pos_tx, rx) / C_M_S;
+            distance_m(rotate_earth(pos_tx, t0), rx) / C_M_S
+        }
+        None => p / C_M_S,
+    };
+    let pos = rotate_earth(pos_tx, transit_s);
+    let group_delay_m = match pair {
+        Some((_, d)) if c.group_delay => d,
+        Some(_) => 0.0,
+        None if c.group_delay && group_delay_applies(id.system, s.code) => {
+            C_M_S * k.kepler().map_or(0.0, |k| k.group_delay_s)
+        }
+        None => 0.0,
+    };
+    let (mut az, mut el, mut iono_m, mut tropo_m) = (0.0, core::f64::consts::FRAC_PI_2, 0.0, 0.0);
+    if let (Some(rx), true) = (rx_m, full) {
+        let (a, e, g) = az_el(rx, pos);
+        az = a;
+        el = e;
+        if el < c.elevation_mask_rad {
+            return Err(Rejection::BelowMask { elevation_rad: el });
+        }
+        if c.iono && pair.is_none() {
+            if let Some(kb) = klobuchar {
+                let tow = m::rem_euclid(t_rx_gps_s, WEEK_S);
+                let l1 = kb.delay_l1_m(g.lat_rad, g.lon_rad, az, el, tow);
+                let f_hz = carrier_hz(id.system, s.code, k.frequency_channel());
+                iono_m = scale_to_frequency(l1, f_hz);
+            }
+        }
+        if c.tropo {
+            tropo_m = saastamoinen_m(g.lat_rad, g.height_m, el);
+        }
+    }
+    let sat_clock_m = C_M_S * clock_s;
+    let corrected = p + sat_clock_m - group_delay_m - iono_m - tropo_m;
+    let sigma_m = match (id.system, &c.glonass_sigma, rx_m.is_some() && full) {
+        (System::Glonass, Some(model), true) => Some(model.sigma_m(el)),
+        _ => None,
+    };
+    Ok(Corrected {
+        obs: RangeObservation {
+            id,
+            pseudorange_m: corrected,
+            position_m: pos,
+            sigma_m,
+        },
+        raw_pseudorange_m: p,
+        elevation_rad: el,
+        azimuth_rad: az,
+        sat_clock_m,
+        group_delay_m,
+        iono_m,
+        tropo_m,
+    })
+}
+
+/// A least-squares position from `sats` (unit weights until the position
+/// is near the surface, then the core's default elevation model), at
+/// capacity `N`; None with fewer than 4 or more than `N` satellites, or a
+/// solution farther than [`SURFACE_BAND_M`] from the surface.
+pub fn bootstrap_position<const N: usize>(
+    time_s: f64,
+    sats: &[RangeObservation],
+    apriori: Option<[f64; 3]>,
+) -> Option<[f64; 3]> {
+    if sats.len() > N || sats.len() < 4 {
+        return None;
+    }
+    let mut mask = [false; N];
+    for m in mask.iter_mut().take(sats.len()) {
+        *m = true;
+    }
+    let cfg = Config::default();
+    let sol = solve::<N>(&cfg, &Epoch::ranges(time_s, sats, apriori), &mask).ok()?;
+    let p = sol.position_ecef_m?;
+    let r = distance_m(p, [0.0; 3]);
+    ((r - raim_core::frames::WGS84_A_M).abs() < SURFACE_BAND_M).then_some(p)
+}
+
+/// The sigma of an iono-free combination with noise factor `factor` at
+/// elevation `el_rad`: the sigma model's terms with no ionosphere, the
+/// receiver noise and multipath amplified (they are independent on the two
+/// frequencies; SPEC §1 sigma model, DO-229D J.2.4 terms).
+pub fn iono_free_sigma_m(model: &SigmaModel, el_rad: f64, factor: f64) -> f64 {
+    use raim_core::araim::error_model::{multipath_sigma_m, tropo_sigma_m};
+    let el = el_rad.max(model.min_elevation_rad);
+    let tropo = tropo_sigma_m(m::sin(el));
+    let mp = multipath_sigma_m(el.to_degrees());
+    m::sqrt(
+        model.ura_m * model.ura_m
+            + tropo * tropo
+            + factor * factor * (mp * mp + model.noise_m * model.noise_m),
+    )
+}
+
+/// The explicit sigma of one satellite of a receiver stream (which has no
+/// ionospheric model unless it carries one): an iono-free pair gets
+/// [`iono_free_sigma_m`] of `model` (`glonass` for a GLONASS satellite,
+/// when given); a single-frequency GLONASS satellite with `glonass` gets
+/// that model with its residual-ionosphere term times
+/// `single_iono_factor`; any other satellite None (the core's model, set
+/// by the configuration).
+pub fn stream_sigma_m(
+    system: System,
+    code: &str,
+    elevation_rad: f64,
+    model: &SigmaModel,
+    glonass: Option<&SigmaModel>,
+    single_iono_factor: f64,
+) -> Option<f64> {
+    let g = match (system, glonass) {
+        (System::Glonass, Some(g)) => Some(g),
+        _ => None,
+    };
+    if let Some(f) = iono_free_noise_factor(system, code) {
+        Some(iono_free_sigma_m(g.unwrap_or(model), elevation_rad, f))
+    } else {
+        g.map(|g| {
+            let mut g = *g;
+            g.iono_vertical_m *= single_iono_factor;
+            g.sigma_m(elevation_rad)
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Relative tolerance of the combination's closed forms (f64 rounding
+    /// of 2e7 m ranges).
+    const TOL_M: f64 = 1e-6;
+
+    /// A circular orbit ([`crate::ephemeris::circular`]) with no clock
+    /// terms and the given group delays.
+    fn kepler(system: System, group_delay_s: f64, group_delay_e5a_s: f64) -> Kepler {
+        Kepler {
+            toc_gps_s: 0.0,
+            af0_s: 0.0,
+            af1_s_s: 0.0,
+            sqrt_a_m05: 5153.0,
+            group_delay_s,
+            group_delay_e5a_s,
+            ..crate::ephemeris::circular(system, 1)
+        }
+    }
+
+    /// GLONASS codes take the satellite's FDMA carrier for the iono
+    /// scaling (1602 MHz + k x 562.5 kHz, L2 1246 MHz + k x 437.5 kHz);
+    /// the iono-free noise factor of L1/L2 is the channel-free 7/9 ratio's.
+    #[test]
+    fn glonass_carriers_follow_the_channel() {
+        assert_eq!(carrier_hz(System::Glonass, "C1C", Some(-7)), 1_598.062_5e6);
+        assert_eq!(carrier_hz(System::Glonass, "C1C", Some(6)), 1_605.375e6);
+        assert_eq!(carrier_hz(System::Glonass, "C2C", Some(1)), 1_246.437_5e6);
+        // GPS is unchanged by a channel argument.
+        assert_eq!(carrier_hz(System::Gps, "C1C", None), F_L1_HZ);
+        let g = (9.0f64 / 7.0).powi(2);
+        let want = (g * g + 1.0).sqrt() / (g - 1.0);
+        let got = iono_free_noise_factor(System::Glonass, "C1C+C2C").unwrap();
+        assert!((got - want).abs() < 1e-12, "{got} {want}");
+    }
+
+    /// The noise factors against their published values: 2.59 (L1/L5,
+    /// the ADD's, `error_model::iono_free_factor_sq`), 2.98 (L1/L2), 3.53
+    /// (B1I/B3I); a single code has none.
+    #[test]
+    fn noise_factors() {
+        let l15 = iono_free_noise_factor(System::Gps, "C1C+C5Q").unwrap();
+        assert!((l15 * l15 - raim_core::araim::error_model::iono_free_factor_sq()).abs() < 1e-12);
+        assert!((iono_free_noise_factor(System::Galileo, "C1C+C5Q").unwrap() - l15).abs() < 1e-12);
+        let l12 = iono_free_noise_factor(System::Gps, "C1W+C2W").unwrap();
+        assert!((l12 - 2.978).abs() < 1e-3, "{l12}");
+        let b13 = iono_free_noise_factor(System::Beidou, "C2I+C6I").unwrap();
+        assert!((b13 - 3.53).abs() < 1e-2, "{b13}");
+        assert!(iono_free_noise_factor(System::Gps, "C1C").is_none());
+        assert!(iono_free_noise_factor(System::Gps, "C1C+C9X").is_none());
+    }
+
+    /// A first-order ionosphere (delay 40.3 TEC / f^2 on each code) leaves
+    /// the combination exactly; and the satellite hardware delays T1, T5a,
+    /// T5b of E1, E5a, E5b, whose broadcast BGDs are (T1 - Tx) / (1 -
+    /// (f1/fx)^2), are referred to the I/NAV clock (dt minus the E1/E5b
+    /// combination's delay): the corrected E1/E5a combination equals the
+    /// delay-free range, as the E1 single-frequency correction does.
+    #[test]
+    fn combination_removes_the_ionosphere_and_refers_to_the_inav_clock() {
+        let range_m = 2.3e7;
+        let tec = 4.0e17;
+        let iono = |f: f64| 40.3 * tec / (f * f);
+        let (f1, f5a, f5b) = (1_575.42e6, 1_176.45e6, 1_207.14e6);
+        let (t1, t5a, t5b) = (3.0e-9, -2.0e-9, 5.0e-9);
+        let c = C_M_S;
+        let bgd = |tx: f64, fx: f64| (t1 - tx) / (1.0 - (f1 / fx).powi(2));
+        let (bgd_a, bgd_b) = (bgd(t5a, f5a), bgd(t5b, f5b));
+        let k = kepler(System::Galileo, bgd_b, bgd_a);
+        // The I/NAV clock's own offset: the E1/E5b combination's delay.
+        let g_b = (f1 / f5b).powi(2);
+        let t_if_b = (g_b * t1 - t5b) / (g_b - 1.0);
+        let p1 = range_m + iono(f1) + c * t1;
+        let p5a = range_m + iono(f5a) + c * t5a;
+        let (p, delay_m) = iono_free(System::Galileo, "C1C+C5Q", p1, p5a, Some(&k)).unwrap();
+        // corrected = P + c dt_inav - group delay, dt_inav = -T_IF(E1,E5b).
+        let corrected = p - c * t_if_b - delay_m;
+        assert!(
+            (corrected - range_m).abs() < TOL_M * 10.0,
+            "{}",
+            corrected - range_m
+        );
+        // E1 alone with BGD(E1,E5b), iono removed: the same range.
+        let e1 = p1 - iono(f1) - c * t_if_b - c * bgd_b;
+        assert!((e1 - range_m).abs() < TOL_M * 10.0, "{}", e1 - range_m);
+        // GPS L1/L2 P(Y): the LNAV clock's own combination, no delay.
+        let (f2, t2) = (1_227.60e6, 1.0e-9);
+        let g = (f1 / f2).powi(2);
+        let t_if = (g * t1 - t2) / (g - 1.0);
+        let (p, delay_m) = iono_free(
+            System::Gps,
+            "C1W+C2W",
+            range_m + iono(f1) + c * t1,
+            range_m + iono(f2) + c * t2,
+            Some(&kepler(System::Gps, 0.0, 0.0)),
+        )
+        .unwrap();
+        assert_eq!(delay_m, 0.0);
+        assert!((p - c * t_if - range_m).abs() < TOL_M * 10.0);
+        // BeiDou B1I/B3I with the B3I clock: TGD1 = T1 - T3.
+        let (fb1, fb3, tb1, tb3) = (F_B1I_HZ, 1_268.52e6, 4.0e-9, 1.5e-9);
+        let (p, delay_m) = iono_free(
+            System::Beidou,
+            "C2I+C6I",
+            range_m + iono(fb1) + c * tb1,
+            range_m + iono(fb3) + c * tb3,
+            Some(&kepler(System::Beidou, tb1 - tb3, 0.0)),
+        )
+        .unwrap();
+        let corrected = p - c * tb3 - delay_m;
+        assert!(
+            (corrected - range_m).abs() < TOL_M * 10.0,
+            "{}",
+            corrected - range_m
+        );
+    }
+}
