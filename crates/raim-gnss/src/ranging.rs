@@ -198,9 +198,12 @@ pub fn prepare_epoch(
     apriori_m: Option<[f64; 3]>,
 ) -> PreparedEpoch {
     let first = build(nav, epoch, opts, apriori_m, false);
-    let reference =
-        bootstrap_position::<BOOTSTRAP_CAPACITY>(epoch.time_gps_s, &first.observations(), apriori_m)
-            .or(apriori_m);
+    let reference = bootstrap_position::<BOOTSTRAP_CAPACITY>(
+        epoch.time_gps_s,
+        &first.observations(),
+        apriori_m,
+    )
+    .or(apriori_m);
     match reference {
         Some(rx) => build(nav, epoch, opts, Some(rx), true),
         None => first,

@@ -145,7 +145,6 @@ pub struct NavData {
 
 pub use raim_nav::ranging::Broadcast;
 
-
 /// A GLONASS record of a RINEX 2/3 navigation file: the epoch is t_b in
 /// UTC (RINEX 3 §A; the `rinex` crate reads it on the UTC scale), the
 /// clock bias -tau_n, the drift +gamma_n, the state vector in km, km/s and

@@ -353,13 +353,21 @@ fn derivative(s: &[f64; 6], acc: &[f64; 3]) -> [f64; 6] {
 /// One classical 4th-order Runge-Kutta step of `h` seconds.
 fn rk4_step(s: &[f64; 6], h: f64, acc: &[f64; 3]) -> [f64; 6] {
     let add = |a: &[f64; 6], k: &[f64; 6], f: f64| -> [f64; 6] {
-        core::array::from_fn(|i| a[i] + k[i] * f)
+        let mut out = *a;
+        for (o, k) in out.iter_mut().zip(k) {
+            *o += k * f;
+        }
+        out
     };
     let k1 = derivative(s, acc);
     let k2 = derivative(&add(s, &k1, h / 2.0), acc);
     let k3 = derivative(&add(s, &k2, h / 2.0), acc);
     let k4 = derivative(&add(s, &k3, h), acc);
-    core::array::from_fn(|i| s[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]))
+    let mut out = *s;
+    for ((((o, a), b), c), d) in out.iter_mut().zip(&k1).zip(&k2).zip(&k3).zip(&k4) {
+        *o += h / 6.0 * (a + 2.0 * b + 2.0 * c + d);
+    }
+    out
 }
 
 #[cfg(test)]

@@ -58,9 +58,9 @@ impl Klobuchar {
 /// Scale an L1 ionospheric delay to carrier `f_hz` (first order, 1/f^2).
 pub fn scale_to_frequency(delay_l1_m: f64, f_hz: f64) -> f64 {
     {
-    let r = F_L1_HZ / f_hz;
-    delay_l1_m * (r * r)
-}
+        let r = F_L1_HZ / f_hz;
+        delay_l1_m * (r * r)
+    }
 }
 
 #[cfg(test)]

@@ -34,6 +34,9 @@ pub mod geometry;
 pub mod glonass;
 pub mod iono;
 pub mod ranging;
+#[cfg(feature = "rtcm")]
+pub mod rtcm;
+pub mod store;
 pub mod time;
 pub mod tropo;
 

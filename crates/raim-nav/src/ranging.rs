@@ -243,7 +243,9 @@ pub fn correct(
     // An iono-free pair: the combination, its group delay, no Klobuchar
     // (the combination removes the first-order ionosphere).
     let pair = match s.p2_m {
-        Some(p2) => Some(iono_free(id.system, s.code, s.p1_m, p2, k.kepler()).ok_or(Rejection::NoCode)?),
+        Some(p2) => {
+            Some(iono_free(id.system, s.code, s.p1_m, p2, k.kepler()).ok_or(Rejection::NoCode)?)
+        }
         None => None,
     };
     let p = pair.map_or(s.p1_m, |v| v.0);
@@ -376,6 +378,42 @@ pub fn stream_sigma_m(
             g.sigma_m(elevation_rad)
         })
     }
+}
+
+/// Code preferences for receiver streams, per system: iono-free pairs
+/// first (a stream has no ionospheric model), then single codes. GLONASS
+/// FDMA: L1/L2 of the same code first (C/A on both, as GLONASS-M
+/// broadcasts; then P), so that no code-to-code bias enters.
+pub const STREAM_CODES: [(System, &[&str]); 5] = [
+    (
+        System::Gps,
+        &[
+            "C1C+C2W", "C1C+C2L", "C1C+C2X", "C1C+C2S", "C1C+C5Q", "C1C+C5X", "C1C", "C1W",
+        ],
+    ),
+    (
+        System::Galileo,
+        &[
+            "C1C+C5Q", "C1X+C5X", "C1C+C7Q", "C1X+C7X", "C1C", "C1X", "C1B",
+        ],
+    ),
+    (System::Beidou, &["C2I+C6I", "C2I+C7I", "C2I", "C1I"]),
+    (
+        System::Glonass,
+        &["C1C+C2C", "C1P+C2P", "C1C+C2P", "C1C", "C1P"],
+    ),
+    (
+        System::Qzss,
+        &["C1C+C2L", "C1C+C2X", "C1C+C2S", "C1C+C5Q", "C1C"],
+    ),
+];
+
+/// The stream code preferences of `system`.
+pub fn stream_codes(system: System) -> &'static [&'static str] {
+    STREAM_CODES
+        .iter()
+        .find(|(s, _)| *s == system)
+        .map_or(&[], |(_, c)| *c)
 }
 
 #[cfg(test)]

@@ -18,7 +18,8 @@ pub fn saastamoinen_m(lat_rad: f64, height_m: f64, el_rad: f64) -> f64 {
     let h = height_m.max(0.0);
     let pressure_hpa = 1013.25 * crate::m::pow(1.0 - 2.2557e-5 * h, 5.2568);
     let temp_k = 15.0 - 6.5e-3 * h + 273.16;
-    let e_hpa = 6.108 * RELATIVE_HUMIDITY * crate::m::exp((17.15 * temp_k - 4684.0) / (temp_k - 38.45));
+    let e_hpa =
+        6.108 * RELATIVE_HUMIDITY * crate::m::exp((17.15 * temp_k - 4684.0) / (temp_k - 38.45));
     let cos_z = crate::m::sin(el_rad); // cos(pi/2 - el)
     let hydro = 0.002_276_8 * pressure_hpa
         / (1.0 - 0.002_66 * crate::m::cos(2.0 * lat_rad) - 0.000_28 * h / 1e3)

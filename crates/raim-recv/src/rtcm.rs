@@ -54,8 +54,8 @@ use rtcm_rs::MessageFrame;
 
 use crate::{Counts, Decoder, Item};
 
-/// One light-millisecond, m (RTCM DF011/DF014 unit and the MSM range unit).
-pub const LIGHT_MS_M: f64 = 299_792.458;
+use raim_nav::rtcm::fx;
+pub use raim_nav::rtcm::{glonass_fields, kepler, latest_week, KeplerFields, LIGHT_MS_M};
 /// Milliseconds in a week.
 const WEEK_MS: i64 = 604_800_000;
 /// GPS week of the Galileo week 0 (GST starts 1999-08-22 = GPS week 1024).
@@ -86,16 +86,6 @@ pub fn gps_week_now() -> i64 {
     // GPS epoch 1980-01-06 is Unix 315964800; leap seconds (< 1 min) do not
     // move the week by more than a minute.
     ((unix_s - 315_964_800.0) / WEEK_S).floor() as i64
-}
-
-/// The latest full week congruent to `week_mod` modulo `modulus` and not
-/// after `now_week` (a week number ahead of the clock is a past rollover).
-pub fn latest_week(week_mod: i64, modulus: i64, now_week: i64) -> i64 {
-    let mut w = now_week - (now_week - week_mod).rem_euclid(modulus);
-    if w < 0 {
-        w = week_mod;
-    }
-    w
 }
 
 /// An ephemeris as broadcast: weeks and times not yet anchored.
@@ -887,105 +877,6 @@ impl Rtcm3 {
     /// extended satellite information (DF419) gave it last.
     pub fn msm_frequency_channels(&self) -> &BTreeMap<u8, i8> {
         &self.msm_fcn
-    }
-}
-
-/// The ICD fields of a 1020 (RTCM 10403.3 Table 3.5-21) and its t_b as
-/// seconds of the Moscow day. `rtcm-rs` applies each data field's
-/// resolution, sign-magnitude coding and offset, as checked against the
-/// standard: DF040 channel number minus 7 (k = -7..=13), DF110 t_b in
-/// minutes (15-minute units), DF111/114/117 velocity km/s (2^-20),
-/// DF112/115/118 position km (2^-11), DF113/116/119 luni-solar
-/// acceleration km/s^2 (2^-30), DF121 gamma_n (2^-40), DF124 tau_n s
-/// (2^-30). Unhealthy: the MSB of B_n (DF108) or the GLONASS-M l_n of
-/// the third string (DF123). t_b (`tb_gps_s` here 0) is placed in GPS
-/// time once the stream's week is known.
-pub fn glonass_fields(m: &rtcm_rs::msg::Msg1020T) -> (GlonassIcdFields, f64) {
-    let f = GlonassIcdFields {
-        slot: m.glo_satellite_id,
-        frequency_channel: m.glo_satellite_freq_chan_number,
-        tb_gps_s: 0.0,
-        x_km: m.xn_km,
-        y_km: m.yn_km,
-        z_km: m.zn_km,
-        vx_km_s: m.xn_first_deriv_km_s,
-        vy_km_s: m.yn_first_deriv_km_s,
-        vz_km_s: m.zn_first_deriv_km_s,
-        ax_km_s2: fx(m.xn_second_deriv_km_s2),
-        ay_km_s2: fx(m.yn_second_deriv_km_s2),
-        az_km_s2: fx(m.zn_second_deriv_km_s2),
-        tau_n_s: m.tau_n_s,
-        gamma_n: fx(m.gamma_n),
-        unhealthy: m.glo_eph_health_flag != 0 || m.glo_m_3str_ln_flag != 0,
-    };
-    (f, f64::from(m.tb_min) * 60.0)
-}
-
-/// A field of any numeric width as f64 (the crate's fields are f32 or f64
-/// by their resolution).
-fn fx<T: Into<f64>>(x: T) -> f64 {
-    x.into()
-}
-
-/// The broadcast fields common to the Keplerian messages (angles in
-/// semicircles as sent).
-struct KeplerFields {
-    toc_s: f64,
-    toe_s: f64,
-    af0: f64,
-    af1: f64,
-    af2: f64,
-    sqrt_a: f64,
-    e: f64,
-    i0_sc: f64,
-    omega0_sc: f64,
-    omega_sc: f64,
-    m0_sc: f64,
-    delta_n_sc: f64,
-    omega_dot_sc: f64,
-    idot_sc: f64,
-    cuc: f64,
-    cus: f64,
-    crc: f64,
-    crs: f64,
-    cic: f64,
-    cis: f64,
-    tgd: f64,
-    tgd2: f64,
-    health: u32,
-    iod: u32,
-}
-
-fn kepler(system: System, prn: u8, f: &KeplerFields) -> Kepler {
-    let pi = std::f64::consts::PI;
-    let _ = f.toc_s;
-    Kepler {
-        system,
-        prn,
-        toc_gps_s: 0.0,
-        toe_sow_s: f.toe_s,
-        af0_s: f.af0,
-        af1_s_s: f.af1,
-        af2_s_s2: f.af2,
-        sqrt_a_m05: f.sqrt_a,
-        e: f.e,
-        i0_rad: f.i0_sc * pi,
-        omega0_rad: f.omega0_sc * pi,
-        omega_rad: f.omega_sc * pi,
-        m0_rad: f.m0_sc * pi,
-        delta_n_rad_s: f.delta_n_sc * pi,
-        omega_dot_rad_s: f.omega_dot_sc * pi,
-        idot_rad_s: f.idot_sc * pi,
-        cuc_rad: f.cuc,
-        cus_rad: f.cus,
-        crc_m: f.crc,
-        crs_m: f.crs,
-        cic_rad: f.cic,
-        cis_rad: f.cis,
-        group_delay_s: f.tgd,
-        group_delay_e5a_s: f.tgd2,
-        health: f.health,
-        iod: f.iod,
     }
 }
 

@@ -51,34 +51,13 @@ pub fn source(args: &ReplayArgs) -> Result<Option<(Format, Spec)>> {
 }
 
 /// Code preferences for receiver streams: iono-free pairs first (the
-/// stream has no ionospheric model), then the single codes of RINEX.
+/// stream has no ionospheric model), then the single codes of RINEX
+/// (raim-nav's `STREAM_CODES`, the firmware's too).
 pub fn receiver_codes() -> BTreeMap<System, Vec<String>> {
-    let v = |c: &[&str]| c.iter().map(|s| s.to_string()).collect::<Vec<_>>();
-    BTreeMap::from([
-        (
-            System::Gps,
-            v(&[
-                "C1C+C2W", "C1C+C2L", "C1C+C2X", "C1C+C2S", "C1C+C5Q", "C1C+C5X", "C1C", "C1W",
-            ]),
-        ),
-        (
-            System::Galileo,
-            v(&[
-                "C1C+C5Q", "C1X+C5X", "C1C+C7Q", "C1X+C7X", "C1C", "C1X", "C1B",
-            ]),
-        ),
-        (System::Beidou, v(&["C2I+C6I", "C2I+C7I", "C2I", "C1I"])),
-        // GLONASS FDMA: L1/L2 of the same code first (C/A on both, as
-        // GLONASS-M broadcasts; then P), so no code-to-code bias enters.
-        (
-            System::Glonass,
-            v(&["C1C+C2C", "C1P+C2P", "C1C+C2P", "C1C", "C1P"]),
-        ),
-        (
-            System::Qzss,
-            v(&["C1C+C2L", "C1C+C2X", "C1C+C2S", "C1C+C5Q", "C1C"]),
-        ),
-    ])
+    raim_nav::ranging::STREAM_CODES
+        .iter()
+        .map(|(s, c)| (*s, c.iter().map(|c| c.to_string()).collect()))
+        .collect()
 }
 
 /// Set each iono-free observation's own sigma (see the module docs): from

@@ -1,0 +1,713 @@
+//! A receiver's RTCM 3 stream to the monitor's epochs, with no host in the
+//! loop: the broadcast ephemerides the stream carries are kept
+//! ([`EphemerisStore`]), each epoch's MSM ranges are gathered, and a
+//! closed epoch is dated, corrected ([`crate::ranging`], the host's own
+//! kernel) and handed over as `RangeObservation`s.
+//!
+//! What it reads, and how:
+//! - GPS MSM4-MSM7 (1074-1077) and GLONASS MSM4-MSM7 (1084-1087):
+//!   pseudorange = (rough range + fine range) x c / 1000 (DF397 + DF398 +
+//!   DF400/DF405), one RINEX 3 code per signal. An epoch closes at the
+//!   message whose multiple-message bit (DF393) is 0, or when the GPS time
+//!   of week changes. GLONASS MSM carry the GLONASS time of day (DF034):
+//!   they join the open epoch, and once the epoch's GPS time is known their
+//!   time of day must be its GLONASS time of day to the millisecond
+//!   (leap seconds from [`crate::time`]); otherwise the epoch's GLONASS
+//!   data is dropped and counted. GLONASS MSM before any GPS MSM of their
+//!   epoch wait for it.
+//! - Ephemerides 1019 (GPS) and 1020 (GLONASS). The 10-bit GPS week is the
+//!   latest one not after `pivot_week` (the firmware's build week: a
+//!   receiver's week-rollover pivot). The stream's epochs are dated by the
+//!   first 1019: the week that puts the latest epoch nearest its toe. A
+//!   1020's t_b (a time of the Moscow day) is placed by the epoch it came
+//!   after.
+//! - Station 1005/1006: the antenna reference point, the a-priori position
+//!   of the bootstrap solution.
+//! - Galileo, BeiDou and QZSS messages, and the legacy observables, are
+//!   counted and not used here (the host's reader takes them).
+//!
+//! An epoch is formed as the host's receiver-stream replay forms it
+//! (docs/RECEIVERS.md): the stream codes ([`crate::ranging::STREAM_CODES`],
+//! iono-free pairs first), the ephemeris in force ([`EphemerisStore::select`]),
+//! two passes of [`crate::ranging::correct`] around a bootstrap position,
+//! and the stream sigmas ([`crate::ranging::stream_sigma_m`]; a
+//! single-frequency range has its residual-ionosphere term doubled, since a
+//! stream carries no ionospheric model).
+
+use heapless::Vec;
+use raim_core::sigma::SigmaModel;
+use raim_core::{RangeObservation, SatId, System};
+use rtcm_rs::msg::message::Message;
+use rtcm_rs::MessageFrame;
+
+use crate::ephemeris::WEEK_S;
+use crate::glonass::{
+    glonass_time_of_day_s, glonass_time_of_day_to_gps_s, glonass_ura_m, GlonassEphemeris,
+    GlonassIcdFields,
+};
+use crate::m;
+use crate::ranging::{
+    bootstrap_position, correct, split_pair, stream_codes, stream_sigma_m, Corrections, SatInput,
+};
+use crate::store::{EphemerisStore, Stored};
+
+use super::fields::{fx, glonass_fields, kepler, latest_week, KeplerFields, LIGHT_MS_M};
+
+/// Milliseconds in a week and in a day.
+const WEEK_MS: i64 = 604_800_000;
+const DAY_MS: i64 = 86_400_000;
+/// The residual-ionosphere sigma of a single-frequency range is doubled:
+/// the stream carries no Klobuchar model, which removes at least 50 % of
+/// the delay (IS-GPS-200 20.3.3.5.2.5), so the uncorrected delay is at
+/// most twice the corrected model's residual.
+pub const NO_MODEL_IONO_FACTOR: f64 = 2.0;
+/// Keplerian and GLONASS sets kept: two per satellite of a full
+/// constellation (the set in force and the next).
+const KEPLER_SETS: usize = 64;
+const GLONASS_SETS: usize = 48;
+/// 1020 messages held until the stream's epochs are dated.
+const PENDING_GLONASS: usize = 32;
+
+/// Why a closed epoch was not handed over.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FormError {
+    /// No 1019 yet: the epoch cannot be dated (its GPS week is unknown).
+    NotDated {
+        /// The epoch's GPS time of week, ms.
+        tow_ms: i64,
+    },
+    /// More signals in one epoch than the receiver holds; the rest were
+    /// dropped and the epoch is refused.
+    TooManySignals { capacity: u32 },
+}
+
+impl core::fmt::Display for FormError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            FormError::NotDated { tow_ms } => write!(
+                f,
+                "epoch at GPS time of week {tow_ms} ms not dated: no GPS ephemeris (1019) received yet"
+            ),
+            FormError::TooManySignals { capacity } => {
+                write!(f, "more than {capacity} signals in one epoch")
+            }
+        }
+    }
+}
+
+/// What the receiver counted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RtcmCounts {
+    pub frames: u32,
+    pub epochs: u32,
+    pub ephemerides: u32,
+    /// Messages of a type this receiver does not use.
+    pub ignored: u32,
+    /// Frames whose message did not decode.
+    pub undecodable: u32,
+    /// Epochs whose GLONASS data was dropped (time of day mismatch) or
+    /// GLONASS-only epochs (no GPS time to date them).
+    pub glonass_dropped: u32,
+    /// 1020 outside the ICD's ranges.
+    pub glonass_bad: u32,
+}
+
+/// One signal's pseudorange.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Signal {
+    id: SatId,
+    /// RINEX 3 code "C1C": band digit and attribute letter.
+    code: [u8; 3],
+    value_m: f64,
+}
+
+impl Signal {
+    fn code(&self) -> &str {
+        core::str::from_utf8(&self.code).unwrap_or("")
+    }
+}
+
+/// An epoch being gathered: stream-relative week and GPS time of week.
+#[derive(Debug, Clone)]
+struct Open<const S: usize> {
+    rel_week: i64,
+    tow_ms: i64,
+    sigs: Vec<Signal, S>,
+    glo_tod_ms: Option<i64>,
+    overflow: bool,
+}
+
+/// A 1020 waiting for the stream's epochs to be dated.
+#[derive(Debug, Clone, Copy)]
+struct PendingGlonass {
+    fields: GlonassIcdFields,
+    tb_tod_s: f64,
+    near: Option<(i64, i64)>,
+}
+
+/// An epoch formed by the receiver: time, the a-priori position used, and
+/// the corrected observations in satellite order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FormedEpoch<const N: usize> {
+    pub time_gps_s: f64,
+    /// The linearisation point of the corrections (the bootstrap
+    /// solution, else the station position, else none).
+    pub reference_m: Option<[f64; 3]>,
+    pub sats: Vec<RangeObservation, N>,
+    /// Satellites seen but not used (no code, no ephemeris, below the
+    /// mask, system not used here).
+    pub rejected: u32,
+}
+
+/// The receiver: `N` satellites per epoch, `S` signals per epoch.
+#[derive(Debug, Clone)]
+pub struct StreamReceiver<const N: usize, const S: usize> {
+    pivot_week: i64,
+    store: EphemerisStore<KEPLER_SETS, GLONASS_SETS>,
+    pending_glo: Vec<PendingGlonass, PENDING_GLONASS>,
+    /// (GPS week, toe s) of the first 1019, until the stream is dated.
+    first_eph: Option<(i64, f64)>,
+    base_week: Option<i64>,
+    last: Option<(i64, i64)>,
+    open: Option<Open<S>>,
+    glo_wait: Vec<Signal, S>,
+    glo_wait_tod_ms: Option<i64>,
+    station_m: Option<[f64; 3]>,
+    counts: RtcmCounts,
+}
+
+impl<const N: usize, const S: usize> StreamReceiver<N, S> {
+    /// A receiver that reads 10-bit GPS weeks as the latest week not after
+    /// `pivot_week`.
+    pub const fn new(pivot_week: i64) -> Self {
+        StreamReceiver {
+            pivot_week,
+            store: EphemerisStore::new(),
+            pending_glo: Vec::new(),
+            first_eph: None,
+            base_week: None,
+            last: None,
+            open: None,
+            glo_wait: Vec::new(),
+            glo_wait_tod_ms: None,
+            station_m: None,
+            counts: RtcmCounts {
+                frames: 0,
+                epochs: 0,
+                ephemerides: 0,
+                ignored: 0,
+                undecodable: 0,
+                glonass_dropped: 0,
+                glonass_bad: 0,
+            },
+        }
+    }
+
+    /// What has been counted so far.
+    pub fn counts(&self) -> RtcmCounts {
+        self.counts
+    }
+
+    /// The ephemerides held (Keplerian, GLONASS).
+    pub fn ephemerides(&self) -> (usize, usize) {
+        self.store.len()
+    }
+
+    /// The station position of the latest 1005/1006, if any.
+    pub fn station_m(&self) -> Option<[f64; 3]> {
+        self.station_m
+    }
+
+    /// Take one whole RTCM 3 frame (preamble to CRC). When it closes an
+    /// epoch, that epoch is formed into `out` with the configuration's
+    /// `model` and `elevation_mask_rad`, and `Some` says whether it could
+    /// be: `Ok(())` with `out` filled, or why not.
+    pub fn on_frame(
+        &mut self,
+        frame: &[u8],
+        model: &SigmaModel,
+        elevation_mask_rad: f64,
+        out: &mut FormedEpoch<N>,
+    ) -> Option<Result<(), FormError>> {
+        let closed = self.decode(frame)?;
+        Some(self.form(closed, model, elevation_mask_rad, out))
+    }
+
+    /// Decode one frame; the epoch it closed, if any.
+    fn decode(&mut self, frame: &[u8]) -> Option<Open<S>> {
+        let Ok(f) = MessageFrame::new(frame) else {
+            self.counts.undecodable = self.counts.undecodable.wrapping_add(1);
+            return None;
+        };
+        self.counts.frames = self.counts.frames.wrapping_add(1);
+        macro_rules! msm {
+            ($m:expr, $sys:expr, $fine:ident) => {{
+                let m = &$m;
+                let mut sigs: Vec<Signal, S> = Vec::new();
+                let mut overflow = false;
+                for sig in m.data_segment.signal_data.iter() {
+                    let rough = m
+                        .data_segment
+                        .satellite_data
+                        .iter()
+                        .find(|s| s.satellite_id == sig.satellite_id)
+                        .and_then(|s| {
+                            s.gnss_satellite_rough_range_integer_ms
+                                .map(|i| fx(i) + s.gnss_satellite_rough_range_mod1ms_ms)
+                        });
+                    let (Some(r), Some(fine)) = (rough, sig.$fine) else {
+                        continue;
+                    };
+                    let band = sig.signal_id.band();
+                    let attr = sig.signal_id.attribute();
+                    if band > 9 || !attr.is_ascii() {
+                        continue;
+                    }
+                    let s = Signal {
+                        id: SatId::new($sys, sig.satellite_id),
+                        code: [b'C', b'0' + band, attr as u8],
+                        value_m: (r + fine) * LIGHT_MS_M,
+                    };
+                    overflow |= sigs.push(s).is_err();
+                }
+                (sigs, m.msm_multiple_message_flag == 1, overflow)
+            }};
+        }
+        match f.get_message() {
+            Message::Msg1074(m) => {
+                let (s, more, o) = msm!(m, System::Gps, gnss_signal_fine_pseudorange_ms);
+                self.gps_msm(i64::from(m.gps_epoch_time_ms), s, more, o)
+            }
+            Message::Msg1075(m) => {
+                let (s, more, o) = msm!(m, System::Gps, gnss_signal_fine_pseudorange_ms);
+                self.gps_msm(i64::from(m.gps_epoch_time_ms), s, more, o)
+            }
+            Message::Msg1076(m) => {
+                let (s, more, o) = msm!(m, System::Gps, gnss_signal_fine_pseudorange_ext_ms);
+                self.gps_msm(i64::from(m.gps_epoch_time_ms), s, more, o)
+            }
+            Message::Msg1077(m) => {
+                let (s, more, o) = msm!(m, System::Gps, gnss_signal_fine_pseudorange_ext_ms);
+                self.gps_msm(i64::from(m.gps_epoch_time_ms), s, more, o)
+            }
+            Message::Msg1084(m) => {
+                let (s, more, o) = msm!(m, System::Glonass, gnss_signal_fine_pseudorange_ms);
+                self.glonass_msm(i64::from(m.glo_epoch_time_ms), s, more, o)
+            }
+            Message::Msg1085(m) => {
+                let (s, more, o) = msm!(m, System::Glonass, gnss_signal_fine_pseudorange_ms);
+                self.glonass_msm(i64::from(m.glo_epoch_time_ms), s, more, o)
+            }
+            Message::Msg1086(m) => {
+                let (s, more, o) = msm!(m, System::Glonass, gnss_signal_fine_pseudorange_ext_ms);
+                self.glonass_msm(i64::from(m.glo_epoch_time_ms), s, more, o)
+            }
+            Message::Msg1087(m) => {
+                let (s, more, o) = msm!(m, System::Glonass, gnss_signal_fine_pseudorange_ext_ms);
+                self.glonass_msm(i64::from(m.glo_epoch_time_ms), s, more, o)
+            }
+            Message::Msg1019(m) => {
+                self.counts.ephemerides = self.counts.ephemerides.wrapping_add(1);
+                let week = latest_week(i64::from(m.gps_week_number), 1024, self.pivot_week);
+                let mut k = kepler(
+                    System::Gps,
+                    m.gps_satellite_id,
+                    &KeplerFields {
+                        toc_s: fx(m.toc_s),
+                        toe_s: fx(m.toe_s),
+                        af0: fx(m.af0_s),
+                        af1: fx(m.af1_s_s),
+                        af2: fx(m.af2_s_s2),
+                        sqrt_a: fx(m.sqrt_a_sqrt_m),
+                        e: fx(m.eccentricity),
+                        i0_sc: fx(m.i0_sc),
+                        omega0_sc: fx(m.omega0_sc),
+                        omega_sc: fx(m.omega_sc),
+                        m0_sc: fx(m.m0_sc),
+                        delta_n_sc: fx(m.delta_n_sc_s),
+                        omega_dot_sc: fx(m.omegadot_sc_s),
+                        idot_sc: fx(m.idot_sc_s),
+                        cuc: fx(m.cuc_rad),
+                        cus: fx(m.cus_rad),
+                        crc: fx(m.crc_m),
+                        crs: fx(m.crs_m),
+                        cic: fx(m.cic_rad),
+                        cis: fx(m.cis_rad),
+                        tgd: fx(m.tgd_s),
+                        tgd2: 0.0,
+                        health: u32::from(m.sv_health_ind),
+                        iod: u32::from(m.iode),
+                    },
+                );
+                k.toc_gps_s = toc_near_toe(week, k.toe_sow_s, fx(m.toc_s));
+                let _: Stored = self.store.insert_kepler(k);
+                if self.first_eph.is_none() {
+                    self.first_eph = Some((week, k.toe_sow_s));
+                }
+                self.try_date();
+                None
+            }
+            Message::Msg1020(m) => {
+                self.counts.ephemerides = self.counts.ephemerides.wrapping_add(1);
+                let (fields, tb_tod_s) = glonass_fields(&m);
+                let p = PendingGlonass {
+                    fields,
+                    tb_tod_s,
+                    near: self.last,
+                };
+                match self.base_week {
+                    Some(base) => self.place_glonass(base, p),
+                    None => {
+                        // Full: the oldest waiting message gives way.
+                        if self.pending_glo.is_full() && !self.pending_glo.is_empty() {
+                            self.pending_glo.remove(0);
+                        }
+                        let _ = self.pending_glo.push(p);
+                    }
+                }
+                None
+            }
+            Message::Msg1005(m) => {
+                self.station_m = Some([
+                    m.antenna_ref_point_ecef_x_m,
+                    m.antenna_ref_point_ecef_y_m,
+                    m.antenna_ref_point_ecef_z_m,
+                ]);
+                None
+            }
+            Message::Msg1006(m) => {
+                self.station_m = Some([
+                    m.antenna_ref_point_ecef_x_m,
+                    m.antenna_ref_point_ecef_y_m,
+                    m.antenna_ref_point_ecef_z_m,
+                ]);
+                None
+            }
+            msg => {
+                if matches!(msg, Message::Corrupt) {
+                    self.counts.undecodable = self.counts.undecodable.wrapping_add(1);
+                } else {
+                    self.counts.ignored = self.counts.ignored.wrapping_add(1);
+                }
+                // Another system's MSM still ends the epoch when its
+                // multiple-message bit is 0 (the epoch's last message).
+                let other_msm = f
+                    .message_number()
+                    .is_some_and(|n| (1071..=1137).contains(&n));
+                if other_msm && msm_more_bit(frame) == Some(false) {
+                    self.close()
+                } else {
+                    None
+                }
+            }
+        }
+    }
+
+    /// GPS MSM data at GPS time of week `tow_ms`; `more` is DF393.
+    fn gps_msm(
+        &mut self,
+        tow_ms: i64,
+        sigs: Vec<Signal, S>,
+        more: bool,
+        overflow: bool,
+    ) -> Option<Open<S>> {
+        let tow_ms = tow_ms.rem_euclid(WEEK_MS);
+        let mut closed = None;
+        if self.open.as_ref().is_some_and(|o| o.tow_ms != tow_ms) {
+            closed = self.close();
+        }
+        if self.open.is_none() {
+            let rel_week = match self.last {
+                Some((w, t)) if tow_ms < t - WEEK_MS / 2 => w + 1,
+                Some((w, _)) => w,
+                None => 0,
+            };
+            self.last = Some((rel_week, tow_ms));
+            let mut o = Open {
+                rel_week,
+                tow_ms,
+                sigs: Vec::new(),
+                glo_tod_ms: self.glo_wait_tod_ms.take(),
+                overflow: false,
+            };
+            for s in self.glo_wait.iter() {
+                o.overflow |= o.sigs.push(*s).is_err();
+            }
+            self.glo_wait.clear();
+            self.open = Some(o);
+            self.try_date();
+        }
+        if let Some(o) = self.open.as_mut() {
+            o.overflow |= overflow;
+            for s in sigs {
+                o.overflow |= o.sigs.push(s).is_err();
+            }
+        }
+        if !more {
+            // A GPS epoch closed while another waits to be formed: the
+            // earlier one is the one handed over (a stream never closes
+            // two in one frame unless its epochs hold no data).
+            let now = self.close();
+            return closed.or(now);
+        }
+        closed
+    }
+
+    /// GLONASS MSM data at GLONASS time of day `tod_ms`.
+    fn glonass_msm(
+        &mut self,
+        tod_ms: i64,
+        sigs: Vec<Signal, S>,
+        more: bool,
+        overflow: bool,
+    ) -> Option<Open<S>> {
+        match self.open.as_mut() {
+            Some(o) => {
+                o.glo_tod_ms = o.glo_tod_ms.or(Some(tod_ms));
+                o.overflow |= overflow;
+                for s in sigs {
+                    o.overflow |= o.sigs.push(s).is_err();
+                }
+                if more {
+                    None
+                } else {
+                    self.close()
+                }
+            }
+            None => {
+                // Another time of day, or a satellite already waiting: the
+                // waiting data was an epoch of GLONASS alone.
+                let again = sigs
+                    .iter()
+                    .any(|s| self.glo_wait.iter().any(|w| w.id == s.id));
+                if again || self.glo_wait_tod_ms.is_some_and(|t| t != tod_ms) {
+                    self.drop_glonass_wait();
+                }
+                self.glo_wait_tod_ms = Some(tod_ms);
+                for s in sigs {
+                    let _ = self.glo_wait.push(s);
+                }
+                if !more {
+                    self.drop_glonass_wait();
+                }
+                None
+            }
+        }
+    }
+
+    /// GLONASS data with no GPS MSM to date it: dropped and counted.
+    fn drop_glonass_wait(&mut self) {
+        if !self.glo_wait.is_empty() {
+            self.counts.glonass_dropped = self.counts.glonass_dropped.wrapping_add(1);
+        }
+        self.glo_wait.clear();
+        self.glo_wait_tod_ms = None;
+    }
+
+    fn close(&mut self) -> Option<Open<S>> {
+        let o = self.open.take()?;
+        self.counts.epochs = self.counts.epochs.wrapping_add(1);
+        Some(o)
+    }
+
+    /// Date the stream from the first 1019 and the latest epoch: the GPS
+    /// week (of the three around the ephemeris') that puts that epoch
+    /// nearest the toe; then place the waiting 1020s.
+    fn try_date(&mut self) {
+        if self.base_week.is_some() {
+            return;
+        }
+        let (Some((week, toe_s)), Some((rel, tow_ms))) = (self.first_eph, self.last) else {
+            return;
+        };
+        let toe_gps_s = week as f64 * WEEK_S + toe_s;
+        let tow_s = tow_ms as f64 / 1000.0;
+        let dist = |w: i64| (w as f64 * WEEK_S + tow_s - toe_gps_s).abs();
+        let mut w = week;
+        for c in [week - 1, week + 1] {
+            if dist(c) < dist(w) {
+                w = c;
+            }
+        }
+        let base = w - rel;
+        self.base_week = Some(base);
+        let pending = core::mem::take(&mut self.pending_glo);
+        for p in pending {
+            self.place_glonass(base, p);
+        }
+    }
+
+    /// A 1020 in GPS time, checked and stored.
+    fn place_glonass(&mut self, base: i64, p: PendingGlonass) {
+        let Some((rel, tow_ms)) = p.near.or(self.last) else {
+            return;
+        };
+        let near_gps_s = (base + rel) as f64 * WEEK_S + tow_ms as f64 / 1000.0;
+        let fields = GlonassIcdFields {
+            tb_gps_s: glonass_time_of_day_to_gps_s(p.tb_tod_s, near_gps_s),
+            ..p.fields
+        };
+        match GlonassEphemeris::from_icd(&fields) {
+            Ok(g) => {
+                let _: Stored = self.store.insert_glonass(g);
+            }
+            Err(_) => self.counts.glonass_bad = self.counts.glonass_bad.wrapping_add(1),
+        }
+    }
+
+    /// Form a closed epoch into `out`.
+    fn form(
+        &mut self,
+        mut o: Open<S>,
+        model: &SigmaModel,
+        elevation_mask_rad: f64,
+        out: &mut FormedEpoch<N>,
+    ) -> Result<(), FormError> {
+        out.sats.clear();
+        out.rejected = 0;
+        out.reference_m = None;
+        let Some(base) = self.base_week else {
+            out.time_gps_s = o.tow_ms as f64 / 1000.0;
+            return Err(FormError::NotDated { tow_ms: o.tow_ms });
+        };
+        let time_gps_s = (base + o.rel_week) as f64 * WEEK_S + o.tow_ms as f64 / 1000.0;
+        out.time_gps_s = time_gps_s;
+        if o.overflow {
+            return Err(FormError::TooManySignals {
+                capacity: u32::try_from(S).unwrap_or(u32::MAX),
+            });
+        }
+        if let Some(tod_ms) = o.glo_tod_ms {
+            let want_ms = m::round(glonass_time_of_day_s(time_gps_s) * 1000.0) as i64;
+            if (tod_ms - want_ms).rem_euclid(DAY_MS) != 0 {
+                o.sigs.retain(|s| s.id.system != System::Glonass);
+                self.counts.glonass_dropped = self.counts.glonass_dropped.wrapping_add(1);
+            }
+        }
+        // Satellite order, as the host's epochs (a BTreeMap by SatId).
+        o.sigs
+            .sort_unstable_by(|a, b| a.id.cmp(&b.id).then(a.code.cmp(&b.code)));
+        let mut inputs: Vec<SatInput<'_>, N> = Vec::new();
+        let mut previous: Option<SatId> = None;
+        for s in o.sigs.iter() {
+            if previous == Some(s.id) {
+                continue;
+            }
+            previous = Some(s.id);
+            let have: &[Signal] = {
+                let start = o.sigs.iter().position(|x| x.id == s.id).unwrap_or(0);
+                let len = o
+                    .sigs
+                    .iter()
+                    .skip(start)
+                    .take_while(|x| x.id == s.id)
+                    .count();
+                o.sigs.get(start..start + len).unwrap_or(&[])
+            };
+            if !matches!(s.id.system, System::Gps | System::Glonass) {
+                out.rejected += 1;
+                continue;
+            }
+            let Some((code, p1_m, p2_m)) = pick_code(stream_codes(s.id.system), have) else {
+                out.rejected += 1;
+                continue;
+            };
+            let Some(eph) = self.store.select(s.id, time_gps_s) else {
+                out.rejected += 1;
+                continue;
+            };
+            let input = SatInput {
+                id: s.id,
+                code,
+                p1_m,
+                p2_m,
+                eph,
+            };
+            if inputs.push(input).is_err() {
+                return Err(FormError::TooManySignals {
+                    capacity: u32::try_from(N).unwrap_or(u32::MAX),
+                });
+            }
+        }
+        let glonass_model = SigmaModel {
+            ura_m: glonass_ura_m(model.ura_m),
+            ..*model
+        };
+        let c = Corrections {
+            elevation_mask_rad,
+            iono: false,
+            tropo: true,
+            group_delay: true,
+            glonass_sigma: Some(glonass_model),
+        };
+        // The bootstrap pass: clock- and rotation-corrected ranges.
+        let apriori = self.station_m;
+        let mut first: Vec<RangeObservation, N> = Vec::new();
+        for s in inputs.iter() {
+            if let Ok(x) = correct(s, time_gps_s, apriori, false, &c, None) {
+                let _ = first.push(x.obs);
+            }
+        }
+        let reference = bootstrap_position::<N>(time_gps_s, &first, apriori).or(apriori);
+        out.reference_m = reference;
+        // Every correction at the reference; with none (the bootstrap
+        // failed and no station position), the bootstrap pass's ranges, as
+        // the host hands them over.
+        for s in inputs.iter() {
+            match correct(s, time_gps_s, reference, reference.is_some(), &c, None) {
+                Ok(mut x) => {
+                    let sigma = stream_sigma_m(
+                        s.id.system,
+                        s.code,
+                        x.elevation_rad,
+                        model,
+                        c.glonass_sigma.as_ref(),
+                        NO_MODEL_IONO_FACTOR,
+                    )
+                    .or_else(|| {
+                        // A single-frequency range of another system: the
+                        // configuration's model with the ionosphere doubled.
+                        let mut single = *model;
+                        single.iono_vertical_m *= NO_MODEL_IONO_FACTOR;
+                        Some(single.sigma_m(x.elevation_rad))
+                    });
+                    x.obs.sigma_m = sigma;
+                    let _ = out.sats.push(x.obs);
+                }
+                Err(_) => out.rejected += 1,
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The multiple-message bit (DF393) of an MSM frame: bit 54 of the
+/// payload, after DF002 (12 bits), DF003 (12) and the epoch time (30;
+/// RTCM 10403.3 Table 3.5-78), the payload starting at byte 3.
+fn msm_more_bit(frame: &[u8]) -> Option<bool> {
+    frame.get(3 + 54 / 8).map(|b| b & (0x80 >> (54 % 8)) != 0)
+}
+
+/// toc in GPS seconds: the week's toc placed within half a week of toe.
+fn toc_near_toe(week: i64, toe_sow_s: f64, toc_sow_s: f64) -> f64 {
+    let toe = week as f64 * WEEK_S + toe_sow_s;
+    let mut toc = week as f64 * WEEK_S + toc_sow_s;
+    if toc - toe > WEEK_S / 2.0 {
+        toc -= WEEK_S;
+    } else if toe - toc > WEEK_S / 2.0 {
+        toc += WEEK_S;
+    }
+    toc
+}
+
+/// The first preferred code present: a single code, or a pair (both
+/// present) for the iono-free combination.
+fn pick_code<'c>(codes: &[&'c str], have: &[Signal]) -> Option<(&'c str, f64, Option<f64>)> {
+    let find = |c: &str| have.iter().find(|s| s.code() == c).map(|s| s.value_m);
+    codes.iter().find_map(|&c| match split_pair(c) {
+        Some((a, b)) => Some((c, find(a)?, Some(find(b)?))),
+        None => Some((c, find(c)?, None)),
+    })
+}
