@@ -187,17 +187,7 @@ pub fn health_word(v: Option<f64>) -> u32 {
     }
 }
 
-/// Largest |t - toe| at which a broadcast ephemeris is used, s (the
-/// classic single-point choices: GPS 2 h, Galileo 4 h, BeiDou 6 h,
-/// GLONASS 30 min, the spacing of its t_b).
-pub fn max_ephemeris_age_s(system: System) -> f64 {
-    match system {
-        System::Gps | System::Qzss => 7_200.0,
-        System::Galileo => 14_400.0,
-        System::Beidou => 21_600.0,
-        System::Glonass => 1_800.0,
-    }
-}
+pub use raim_nav::store::max_ephemeris_age_s;
 
 impl NavData {
     /// Load a navigation file; a panic inside the `rinex` crate becomes

@@ -215,6 +215,19 @@ pub enum WireError {
         /// The satellite's index in the epoch.
         index: u32,
     },
+    /// An epoch of the receiver's RTCM 3 stream (on the link UART) that
+    /// cannot be dated: no GPS ephemeris (1019) has arrived yet, so its
+    /// GPS week is unknown. Answered unasked (`seq: None`).
+    StreamNotDated {
+        /// The epoch's GPS time of week, ms.
+        tow_ms: u32,
+    },
+    /// An epoch of the receiver's RTCM 3 stream with more signals than
+    /// the unit's receiver holds (`capacity`); refused whole.
+    StreamCapacity {
+        /// Signals (or satellites) the receiver holds per epoch.
+        capacity: u32,
+    },
 }
 
 /// A field name for the wire (truncated to 24 bytes).
@@ -413,6 +426,13 @@ impl core::fmt::Display for WireError {
             }
             WireError::CounterExhausted { counter } => {
                 write!(f, "counter {counter} is at the top of its range")
+            }
+            WireError::StreamNotDated { tow_ms } => write!(
+                f,
+                "stream epoch at GPS time of week {tow_ms} ms not dated: no GPS ephemeris (1019) yet"
+            ),
+            WireError::StreamCapacity { capacity } => {
+                write!(f, "stream epoch with more than {capacity} signals")
             }
             WireError::HostSigmaRefused { index } => write!(
                 f,

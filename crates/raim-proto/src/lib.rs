@@ -81,9 +81,9 @@ pub type DevicePrecision = f32;
 /// Bump on any change of a serialized type (postcard is not self-describing);
 /// new enum variants are appended so that the earlier ones keep their
 /// indices. The history of the versions is in CHANGELOG.md, "Wire protocol
-/// versions"; 11 is the core clock in `Status` (`core_clock_hz`,
-/// `clock_fallback`) and the boot nonce's source (`hardware_entropy`).
-pub const PROTOCOL_VERSION: u16 = 12;
+/// versions"; 13 is the unit's own epochs from a receiver's RTCM 3 stream
+/// (answered unasked, and the `StreamNotDated`/`StreamCapacity` errors).
+pub const PROTOCOL_VERSION: u16 = 13;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes

@@ -404,6 +404,15 @@ pub struct Status {
     /// cycles: frames recorded in an earlier power-on could then verify
     /// again (docs/SAFETY.md "Boot nonce").
     pub hardware_entropy: bool,
+    /// RTCM 3 frames taken from the link (CRC verified), since reset.
+    pub rtcm_frames: u32,
+    /// Candidate RTCM 3 frames whose CRC failed (their bytes went to the
+    /// frame receiver instead), since reset.
+    pub rtcm_bad_crc: u32,
+    /// Epochs the unit formed from the RTCM 3 stream, answered or refused.
+    pub stream_epochs: u32,
+    /// Broadcast ephemerides the stream receiver holds (GPS, GLONASS).
+    pub stream_ephemerides: [u16; 2],
 }
 
 impl Status {
@@ -437,6 +446,10 @@ impl Status {
         core_clock_hz: 0,
         clock_fallback: false,
         hardware_entropy: false,
+        rtcm_frames: 0,
+        rtcm_bad_crc: 0,
+        stream_epochs: 0,
+        stream_ephemerides: [0, 0],
     };
 }
 

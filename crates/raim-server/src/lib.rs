@@ -35,7 +35,7 @@ use embedded_io::Write;
 use raim_core::{Config, Epoch, EpochResult, Raim};
 
 use raim_proto::error::WireError;
-use raim_proto::frame::FrameReceiver;
+use raim_proto::link::{LinkEvent, LinkReceiver};
 use raim_proto::lock::{ConfigId, ConfigSource};
 #[cfg(doc)]
 use raim_proto::message::Response;
@@ -49,6 +49,8 @@ use raim_proto::{
 
 mod answer;
 mod gate;
+#[cfg(feature = "rtcm")]
+pub mod stream;
 
 use answer::{send_answer, BodyRef, Buffers};
 use gate::Applied;
@@ -103,7 +105,9 @@ impl Platform for NoPlatform {
 /// here rather than on the stack). The firmware keeps it in a
 /// static (docs/bench-history/firmware.md, the stack work).
 pub struct Server {
-    rx: FrameReceiver<MAX_REQUEST_FRAME>,
+    /// The link's receiver: the host's frames, and a receiver's RTCM 3
+    /// frames beside them.
+    rx: LinkReceiver<MAX_REQUEST_FRAME>,
     raim: Raim<CAPACITY, DevicePrecision>,
     /// The snapshot configuration in force; `None` until one is
     /// provisioned or taken (snapshot epochs are then `Unconfigured`).
@@ -137,6 +141,9 @@ pub struct Server {
     /// The PF configuration and the engines lent by the owner
     /// (`attach_pf`; a few pointers, the engines stay where they are).
     pf: PfUnit,
+    /// The receiver of an RTCM 3 stream on the link (`stream`).
+    #[cfg(feature = "rtcm")]
+    stream: stream::StreamState,
 }
 
 impl Default for Server {
@@ -169,7 +176,7 @@ impl Server {
         // `const`: the firmware's server is a static initialised at
         // compile time (`.bss`/`.data`), never built on the stack.
         Server {
-            rx: FrameReceiver::new(),
+            rx: LinkReceiver::new(),
             raim: Raim::new(),
             config: None,
             host_sigmas: true,
@@ -195,6 +202,8 @@ impl Server {
             result: EpochResult::empty(),
             wire: WireResult::empty(),
             pf: PfUnit::EMPTY,
+            #[cfg(feature = "rtcm")]
+            stream: stream::StreamState::new(),
         }
     }
 
@@ -355,16 +364,56 @@ impl Server {
         nmea_out: &mut M,
         platform: &mut P,
     ) -> Result<(), IoError<L::Error, M::Error>> {
-        let decoded = match self.rx.push(byte) {
-            None => return Ok(()),
-            Some(Err(e)) => Err(answer::Refusal {
-                seq: None,
-                error: WireError::from(e),
-                epoch: false,
-                nmea_time_s: None,
-            }),
-            Some(Ok(payload)) => answer::decode(payload, &mut self.request),
-        };
+        // One byte may complete several frames (`LinkReceiver::poll`).
+        let mut first = true;
+        loop {
+            let step = {
+                let event = if first {
+                    self.rx.push(byte)
+                } else {
+                    self.rx.poll()
+                };
+                first = false;
+                match event {
+                    None => return Ok(()),
+                    Some(LinkEvent::Frame(Err(e))) => Step::Frame(Err(answer::Refusal {
+                        seq: None,
+                        error: WireError::from(e),
+                        epoch: false,
+                        nmea_time_s: None,
+                    })),
+                    Some(LinkEvent::Frame(Ok(payload))) => {
+                        Step::Frame(answer::decode(payload, &mut self.request))
+                    }
+                    #[cfg(feature = "rtcm")]
+                    Some(LinkEvent::Rtcm(frame)) => {
+                        match self.stream.on_frame(frame, self.config.as_ref()) {
+                            Some(formed) => Step::Stream(formed),
+                            None => continue,
+                        }
+                    }
+                    // Without a stream receiver, RTCM frames are counted
+                    // (`Status::rtcm_frames`) and not used.
+                    #[cfg(not(feature = "rtcm"))]
+                    Some(LinkEvent::Rtcm(_)) => continue,
+                }
+            };
+            match step {
+                Step::Frame(decoded) => self.on_frame(decoded, link, nmea_out, platform)?,
+                #[cfg(feature = "rtcm")]
+                Step::Stream(formed) => self.on_stream_epoch(formed, link, nmea_out, platform)?,
+            }
+        }
+    }
+
+    /// A frame from the host, decoded (or refused).
+    fn on_frame<L: Write, M: Write, P: Platform>(
+        &mut self,
+        decoded: Result<u32, answer::Refusal>,
+        link: &mut L,
+        nmea_out: &mut M,
+        platform: &mut P,
+    ) -> Result<(), IoError<L::Error, M::Error>> {
         self.status.frames = self.status.frames.wrapping_add(1);
         match decoded {
             Ok(seq) => {
@@ -409,7 +458,7 @@ impl Server {
         }
         match command {
             Command::Ranges(_) | Command::Linear(_) => {
-                self.answer_epoch(seq, link, nmea_out, platform)
+                self.answer_epoch(Some(seq), link, nmea_out, platform)
             }
             Command::Araim(AraimCommand::Epoch(_) | AraimCommand::Ranges(_)) => {
                 self.answer_araim_epoch(seq, link, nmea_out, platform)
@@ -557,6 +606,12 @@ impl Server {
         self.status.stack_high_water_bytes = platform.stack_high_water_bytes();
         (self.status.resets, self.status.reset_cause) = platform.reset_record();
         self.status.auth_provisioned = self.auth.is_some();
+        let link = self.rx.counts();
+        (self.status.rtcm_frames, self.status.rtcm_bad_crc) = (link.rtcm_frames, link.rtcm_bad_crc);
+        #[cfg(feature = "rtcm")]
+        {
+            (self.status.stream_epochs, self.status.stream_ephemerides) = self.stream.counters();
+        }
         platform.board_status(&mut self.status);
         self.status()
     }
@@ -566,7 +621,7 @@ impl Server {
     #[inline(never)]
     fn answer_epoch<L: Write, M: Write, P: Platform>(
         &mut self,
-        seq: u32,
+        seq: Option<u32>,
         link: &mut L,
         nmea_out: &mut M,
         platform: &mut P,
@@ -626,13 +681,13 @@ impl Server {
                         config: *config_id,
                     },
                     link,
-                    Some(seq),
+                    seq,
                     BodyRef::Result(wire),
                 )
             }
             Err(e) => {
                 self.write_no_fix(nmea_out).map_err(IoError::Nmea)?;
-                self.send(link, Some(seq), BodyRef::Error(&e))
+                self.send(link, seq, BodyRef::Error(&e))
             }
         }
     }
@@ -683,6 +738,15 @@ impl Server {
             body,
         )
     }
+}
+
+/// What one link event asks of the server.
+enum Step {
+    /// A host frame, decoded into the request slot (or refused).
+    Frame(Result<u32, answer::Refusal>),
+    /// A stream epoch closed: formed, or why not.
+    #[cfg(feature = "rtcm")]
+    Stream(Result<(), raim_nav::rtcm::FormError>),
 }
 
 /// The per-satellite sigma bound (`raim_core::config_bounds::SIGMA_M`) on

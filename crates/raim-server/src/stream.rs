@@ -1,0 +1,143 @@
+//! A receiver wired straight to the unit: its RTCM 3 frames arrive on the
+//! link UART beside the host's frames ([`raim_proto::link`] separates
+//! them), and the unit forms its own epochs from them
+//! ([`raim_nav::rtcm::StreamReceiver`]: ephemerides, satellite positions
+//! and clocks, the corrections, in f64), runs the monitor on each as it
+//! runs a `Ranges` epoch, and writes the NMEA sentences and the alarm
+//! output. No host is in the loop.
+//!
+//! Each stream epoch is answered on the link unasked (`seq: None`): its
+//! result, or why it could not be run (`StreamNotDated` before the first
+//! GPS ephemeris, `StreamCapacity`, `Unconfigured` with no configuration
+//! in force: a stream never puts a default in force). Sigmas are the
+//! unit's own (the stream rule of `raim_nav::ranging::stream_sigma_m`
+//! from the configuration's model), whatever `host_sigmas` says: the
+//! host supplies nothing here. docs/RECEIVERS.md "Straight into the unit".
+
+use embedded_io::Write;
+use raim_nav::rtcm::{FormError, FormedEpoch, StreamReceiver};
+use raim_proto::error::WireError;
+use raim_proto::lock::ConfigSource;
+use raim_proto::message::{Command, RangeEpoch, Request, SatList};
+use raim_proto::CAPACITY;
+
+use crate::{IoError, Platform, Server};
+
+/// Signals one stream epoch may carry (GPS and GLONASS, every band).
+pub const STREAM_SIGNALS: usize = 128;
+/// The elevation mask of stream epochs, rad (10 degrees, the replay's
+/// default `--mask-deg`).
+pub const STREAM_MASK_RAD: f64 = 10.0 * core::f64::consts::PI / 180.0;
+/// The GPS week a stream's 10-bit week numbers are read against (the
+/// latest week not after it): GPS week 2400, 2026-01-04, a date before
+/// this firmware's release. A receiver's week-rollover pivot; it serves
+/// until 2045 (1024 weeks on).
+pub const PIVOT_WEEK: i64 = 2400;
+
+/// The stream receiver and the epoch it formed last.
+pub struct StreamState {
+    receiver: StreamReceiver<CAPACITY, STREAM_SIGNALS>,
+    formed: FormedEpoch<CAPACITY>,
+    epochs: u32,
+}
+
+impl StreamState {
+    pub const fn new() -> Self {
+        StreamState {
+            receiver: StreamReceiver::new(PIVOT_WEEK),
+            formed: FormedEpoch {
+                time_gps_s: 0.0,
+                reference_m: None,
+                sats: heapless::Vec::new(),
+                rejected: 0,
+            },
+            epochs: 0,
+        }
+    }
+
+    /// Decode one RTCM frame; `Some` when it closed an epoch.
+    pub(crate) fn on_frame(
+        &mut self,
+        frame: &[u8],
+        config: Option<&raim_core::Config>,
+    ) -> Option<Result<(), FormError>> {
+        let model = config.map_or_else(raim_core::sigma::SigmaModel::default, |c| c.sigma_model);
+        let r = self
+            .receiver
+            .on_frame(frame, &model, STREAM_MASK_RAD, &mut self.formed);
+        if r.is_some() {
+            self.epochs = self.epochs.wrapping_add(1);
+        }
+        r
+    }
+
+    /// Epochs formed (answered or refused) and ephemerides held.
+    pub(crate) fn counters(&self) -> (u32, [u16; 2]) {
+        let (k, g) = self.receiver.ephemerides();
+        let n = |x: usize| u16::try_from(x).unwrap_or(u16::MAX);
+        (self.epochs, [n(k), n(g)])
+    }
+}
+
+impl Default for StreamState {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The wire form of a stream epoch that could not be formed.
+fn wire_error(e: FormError) -> WireError {
+    match e {
+        FormError::NotDated { tow_ms } => WireError::StreamNotDated {
+            tow_ms: u32::try_from(tow_ms).unwrap_or(u32::MAX),
+        },
+        FormError::TooManySignals { capacity } => WireError::StreamCapacity { capacity },
+    }
+}
+
+impl Server {
+    /// A stream epoch closed (`formed`: whether it could be formed): run
+    /// it as a `Ranges` epoch, or refuse it, and answer unasked.
+    pub(crate) fn on_stream_epoch<L: Write, M: Write, P: Platform>(
+        &mut self,
+        formed: Result<(), FormError>,
+        link: &mut L,
+        nmea_out: &mut M,
+        platform: &mut P,
+    ) -> Result<(), IoError<L::Error, M::Error>> {
+        let f = &self.stream.formed;
+        let time_s = raim_nav::time::unix_utc_s(f.time_gps_s);
+        let mut sats = SatList::default();
+        for s in f.sats.iter() {
+            // `formed` holds at most CAPACITY satellites.
+            let _ = sats.items.push(*s);
+        }
+        sats.declared = u32::try_from(sats.items.len()).unwrap_or(u32::MAX);
+        self.request = Some(Request {
+            seq: 0,
+            command: Command::Ranges(RangeEpoch {
+                time_s,
+                apriori_m: f.reference_m,
+                sats,
+            }),
+        });
+        let unconfigured =
+            self.config_id.source == ConfigSource::Unconfigured || self.config.is_none();
+        let refusal = match formed {
+            Err(e) => Some(wire_error(e)),
+            Ok(()) if unconfigured => Some(WireError::Unconfigured {
+                provision: self.provision_error,
+            }),
+            Ok(()) => None,
+        };
+        match refusal {
+            Some(e) => {
+                platform.on_epoch(None);
+                self.write_no_fix(nmea_out).map_err(IoError::Nmea)?;
+                self.request = None;
+                self.send(link, None, crate::answer::BodyRef::Error(&e))
+            }
+            None => self.answer_epoch(None, link, nmea_out, platform),
+        }
+    }
+}
