@@ -114,6 +114,24 @@ impl<const B: usize> FrameReceiver<B> {
         }
     }
 
+    /// Between chunks: no byte of a chunk is held and no overflowed chunk
+    /// is being skipped, so the next byte is the first of a frame.
+    pub fn is_idle(&self) -> bool {
+        self.pending == 0 && !self.discarding
+    }
+
+    /// Whether [`push`](Self::push)`(byte)` would return `Some`, without
+    /// feeding it: a delimiter that ends a non-empty chunk, or a byte that
+    /// overflows the buffer (the accumulator holds exactly `pending` bytes).
+    pub fn completes_chunk(&self, byte: u8) -> bool {
+        !self.discarding
+            && if byte == 0 {
+                self.pending > 0
+            } else {
+                self.pending + 1 > B
+            }
+    }
+
     /// Feed one byte. Returns `None` while a frame is incomplete (and for
     /// empty chunks and the rest of an overflowed chunk), `Some(Ok(payload))`
     /// for a frame whose CRC matches, and `Some(Err(_))` once per bad chunk.

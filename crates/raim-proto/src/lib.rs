@@ -7,6 +7,8 @@
 //!
 //! - [`frame`]: `COBS(postcard(Envelope { payload, crc32 }))`, a receiver
 //!   that turns a byte stream into verified payloads or typed framing errors.
+//! - [`link`]: COBS frames and RTCM 3 frames from a GNSS receiver on one
+//!   link, told apart byte by byte.
 //! - [`message`]: what the payloads carry (requests, responses).
 //! - [`result`]: the epoch result on the wire, converted from
 //!   `raim_core::EpochResult`.
@@ -45,6 +47,7 @@ pub mod araim_msg;
 pub mod auth;
 pub mod error;
 pub mod frame;
+pub mod link;
 pub mod lock;
 pub mod message;
 pub mod nmea;
@@ -56,6 +59,7 @@ pub use alert::{AlarmOutput, AlertMonitor};
 pub use auth::{AuthKey, Authenticated, AuthenticatedRef, Change, ChangeRef, Nonce};
 pub use error::WireError;
 pub use frame::{encode, FrameError, FrameReceiver};
+pub use link::{LinkCounts, LinkEvent, LinkReceiver};
 pub use lock::{ConfigId, ConfigSource};
 pub use message::{
     BootNotice, Command, LinearEpoch, RangeEpoch, Request, RequestRef, ResetCause, Response,

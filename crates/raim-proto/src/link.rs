@@ -1,0 +1,756 @@
+//! One link, two framings: the project's COBS frames ([`crate::frame`]) and
+//! RTCM 3 frames from a GNSS receiver wired to the same UART.
+//!
+//! An RTCM 3 frame (RTCM 10403, "Transport layer") is the preamble 0xD3, six
+//! reserved bits that must be 0, a 10-bit payload length `N` (0..=1023), `N`
+//! payload bytes and a 24-bit CRC-24Q of everything before it: 6..=1029
+//! bytes. RTCM payloads contain zeros, so an RTCM frame cannot pass through
+//! the COBS receiver; [`LinkReceiver`] takes it out of the byte stream first.
+//!
+//! Where an RTCM frame may start: only where a COBS frame could start, i.e.
+//! when the COBS receiver is between chunks ([`FrameReceiver::is_idle`]).
+//! A 0xD3 there opens an RTCM *candidate*; the bytes that follow go to the
+//! candidate buffer, zeros included, until one of two things decides it:
+//!
+//! - the second byte has a reserved bit set: not RTCM;
+//! - `N + 6` bytes are in: RTCM if the CRC-24Q matches, not RTCM otherwise
+//!   (counted in [`LinkCounts::rtcm_bad_crc`]).
+//!
+//! A candidate that is not RTCM is *replayed*, byte by byte and in order,
+//! into the COBS receiver, because a COBS frame may itself start with 0xD3
+//! (the code byte of a frame whose first zero is 210 bytes in). Replayed
+//! bytes are never looked at as RTCM again, so every byte is examined as an
+//! RTCM candidate at most once and the work per byte is bounded.
+//!
+//! Which candidates are ambiguous: a valid project frame that starts with
+//! 0xD3 has its first 210 envelope bytes non-zero, so its payload is at
+//! least 128 bytes long and its second byte, the first byte of the
+//! payload's length varint, has the continuation bit 0x80 set. Such a frame
+//! is rejected by the reserved-bit test at its second byte: a replay of two
+//! bytes. A candidate that passes the header test and fails the CRC is
+//! therefore never the start of a valid project frame; it is a corrupted
+//! RTCM frame or noise. After its replay, the COBS receiver may be inside a
+//! chunk (the bytes after the candidate's last zero). If the replay yielded
+//! no CRC-verified COBS frame, that chunk is ended there as if a delimiter
+//! had followed (it is reported as a framing error like any other chunk):
+//! the candidate held no COBS traffic, its tail belongs to the corrupted
+//! RTCM frame, and the frame that follows on the link must not be glued to
+//! it. If the replay did yield a verified frame, the window held COBS
+//! traffic (a stray 0xD3 before it) and the open chunk is kept, since it is
+//! most likely a frame that continues past the window.
+//!
+//! # Events
+//!
+//! One byte can complete several COBS frames (a replay), so events come out
+//! of two calls: [`LinkReceiver::push`] feeds one byte and returns the first
+//! event, [`LinkReceiver::poll`] returns the following ones, and returns
+//! `None` once the byte is fully processed. After every `push`, call `poll`
+//! until it returns `None`:
+//!
+//! ```
+//! use raim_proto::link::{LinkEvent, LinkReceiver};
+//! let mut rx = LinkReceiver::<2048>::new();
+//! # let bytes = [0u8; 4];
+//! for &b in &bytes {
+//!     let mut event = rx.push(b);
+//!     while let Some(ev) = event {
+//!         match ev {
+//!             LinkEvent::Frame(_payload_or_error) => {}
+//!             LinkEvent::Rtcm(_frame) => {}
+//!         }
+//!         event = rx.poll();
+//!     }
+//! }
+//! ```
+//!
+//! A `push` while events are still pending first completes the pending
+//! replay, dropping its events; they are counted in
+//! [`LinkCounts::unpolled_events`] (0 for a caller that polls as above).
+//!
+//! Size: `FrameReceiver<B>` plus [`RTCM_MAX_FRAME`] bytes and a few words.
+
+use crate::frame::{FrameError, FrameReceiver};
+use crc::{Crc, NoTable, CRC_24_LTE_A};
+
+/// CRC-24Q, the RTCM 3 frame check (poly 0x864CFB, init 0, not reflected,
+/// no xorout: the catalogue's CRC-24/LTE-A), check value 0xCDE703 for
+/// "123456789". Bitwise (`NoTable`): no 1 KiB table in flash for a check
+/// run once per RTCM frame.
+pub const CRC24Q: Crc<u32, NoTable> = Crc::<u32, NoTable>::new(&CRC_24_LTE_A);
+
+/// The RTCM 3 preamble.
+pub const RTCM_PREAMBLE: u8 = 0xD3;
+
+/// Largest RTCM 3 payload, bytes (10-bit length field).
+pub const RTCM_MAX_PAYLOAD: usize = 1023;
+
+/// Largest RTCM 3 frame: 3 header bytes, the payload, 3 CRC bytes.
+pub const RTCM_MAX_FRAME: usize = RTCM_MAX_PAYLOAD + 6;
+
+/// What one byte (or a replay) completed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LinkEvent<'a> {
+    /// A COBS chunk: exactly what [`FrameReceiver::push`] yields.
+    Frame(Result<&'a [u8], FrameError>),
+    /// A whole RTCM 3 frame, preamble to CRC inclusive, CRC verified.
+    Rtcm(&'a [u8]),
+}
+
+/// What the link receiver took out of the stream besides COBS chunks.
+/// Counters wrap.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LinkCounts {
+    /// RTCM frames reported ([`LinkEvent::Rtcm`]).
+    pub rtcm_frames: u32,
+    /// Candidates with a plausible header (reserved bits 0) whose CRC-24Q
+    /// failed once all `N + 6` bytes were in; their bytes were replayed.
+    pub rtcm_bad_crc: u32,
+    /// Events dropped because `push` was called before `poll` had returned
+    /// `None` (a caller that does not follow the module's event contract).
+    pub unpolled_events: u32,
+}
+
+/// Where the receiver is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    /// Bytes go to the COBS receiver.
+    Cobs,
+    /// Bytes go to the RTCM candidate buffer (`len` bytes so far).
+    Candidate,
+    /// `buf[cursor..len]` still has to go to the COBS receiver.
+    Replay {
+        /// After the bytes, end an open COBS chunk with a delimiter.
+        close_tail: bool,
+        /// The replay has yielded a CRC-verified COBS frame.
+        saw_frame: bool,
+    },
+}
+
+/// Splits one byte stream into COBS frames and RTCM 3 frames (module
+/// documentation). `B` is the COBS receive buffer, as in [`FrameReceiver`].
+pub struct LinkReceiver<const B: usize> {
+    frames: FrameReceiver<B>,
+    buf: [u8; RTCM_MAX_FRAME],
+    /// Bytes of the candidate in `buf`.
+    len: usize,
+    /// Next byte of `buf` to replay.
+    cursor: usize,
+    mode: Mode,
+    counts: LinkCounts,
+}
+
+impl<const B: usize> Default for LinkReceiver<B> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const B: usize> LinkReceiver<B> {
+    /// An empty receiver, between frames.
+    pub const fn new() -> Self {
+        LinkReceiver {
+            frames: FrameReceiver::new(),
+            buf: [0; RTCM_MAX_FRAME],
+            len: 0,
+            cursor: 0,
+            mode: Mode::Cobs,
+            counts: LinkCounts {
+                rtcm_frames: 0,
+                rtcm_bad_crc: 0,
+                unpolled_events: 0,
+            },
+        }
+    }
+
+    /// The counters so far.
+    pub fn counts(&self) -> LinkCounts {
+        self.counts
+    }
+
+    /// Feed one byte; returns the first event it completes. Call
+    /// [`poll`](Self::poll) until `None` before the next `push`.
+    pub fn push(&mut self, byte: u8) -> Option<LinkEvent<'_>> {
+        if matches!(self.mode, Mode::Replay { .. }) {
+            while self.poll().is_some() {
+                self.counts.unpolled_events = self.counts.unpolled_events.wrapping_add(1);
+            }
+        }
+        if self.mode == Mode::Cobs {
+            if byte == RTCM_PREAMBLE && self.frames.is_idle() {
+                self.buf[0] = byte;
+                self.len = 1;
+                self.mode = Mode::Candidate;
+                return None;
+            }
+            return self.frames.push(byte).map(LinkEvent::Frame);
+        }
+        // A candidate: `len < RTCM_MAX_FRAME` here, since a candidate is
+        // decided at `N + 6 <= RTCM_MAX_FRAME` bytes.
+        let Some(slot) = self.buf.get_mut(self.len) else {
+            return self.replay(false);
+        };
+        *slot = byte;
+        self.len += 1;
+        if self.len == 2 && byte & 0xFC != 0 {
+            return self.replay(false);
+        }
+        if self.len < 3 {
+            return None;
+        }
+        let total = self.frame_len();
+        if self.len < total {
+            return None;
+        }
+        let (Some(body), Some(crc)) = (self.buf.get(..total - 3), self.buf.get(total - 3..total))
+        else {
+            return self.replay(false);
+        };
+        let received = crc.iter().fold(0u32, |acc, &b| (acc << 8) | u32::from(b));
+        if CRC24Q.checksum(body) == received {
+            self.counts.rtcm_frames = self.counts.rtcm_frames.wrapping_add(1);
+            self.mode = Mode::Cobs;
+            return self.buf.get(..total).map(LinkEvent::Rtcm);
+        }
+        self.counts.rtcm_bad_crc = self.counts.rtcm_bad_crc.wrapping_add(1);
+        self.replay(true)
+    }
+
+    /// The next event of the last [`push`](Self::push), `None` once there
+    /// is none left.
+    pub fn poll(&mut self) -> Option<LinkEvent<'_>> {
+        let Mode::Replay {
+            close_tail,
+            saw_frame,
+        } = self.mode
+        else {
+            return None;
+        };
+        while self.cursor < self.len {
+            let Some(&b) = self.buf.get(self.cursor) else {
+                break;
+            };
+            self.cursor += 1;
+            if self.frames.completes_chunk(b) {
+                let event = self.frames.push(b);
+                if matches!(event, Some(Ok(_))) {
+                    self.mode = Mode::Replay {
+                        close_tail,
+                        saw_frame: true,
+                    };
+                }
+                return event.map(LinkEvent::Frame);
+            }
+            // `completes_chunk` was false: no event to lose.
+            let _none = self.frames.push(b);
+        }
+        self.mode = Mode::Cobs;
+        self.len = 0;
+        self.cursor = 0;
+        if close_tail && !saw_frame && !self.frames.is_idle() {
+            return self.frames.push(0).map(LinkEvent::Frame);
+        }
+        None
+    }
+
+    /// Start replaying the candidate; returns its first event.
+    fn replay(&mut self, close_tail: bool) -> Option<LinkEvent<'_>> {
+        self.cursor = 0;
+        self.mode = Mode::Replay {
+            close_tail,
+            saw_frame: false,
+        };
+        self.poll()
+    }
+
+    /// `N + 6` from the candidate's header (needs `len >= 3`).
+    fn frame_len(&self) -> usize {
+        let hi = usize::from(self.buf.get(1).copied().unwrap_or(0) & 0x03);
+        let lo = usize::from(self.buf.get(2).copied().unwrap_or(0));
+        ((hi << 8) | lo) + 6
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::frame::{encode, Envelope, CRC32};
+    use crate::message::{CommandRef, RequestRef};
+    use crate::MAX_REQUEST_FRAME;
+    use proptest::prelude::*;
+    use raim_core::{RangeObservation, SatId, System};
+    use std::vec::Vec;
+
+    type Rx = LinkReceiver<MAX_REQUEST_FRAME>;
+
+    /// An owned [`LinkEvent`].
+    #[derive(Debug, Clone, PartialEq, Eq)]
+    enum Ev {
+        Frame(Result<Vec<u8>, FrameError>),
+        Rtcm(Vec<u8>),
+    }
+
+    fn owned(ev: LinkEvent<'_>) -> Ev {
+        match ev {
+            LinkEvent::Frame(r) => Ev::Frame(r.map(<[u8]>::to_vec)),
+            LinkEvent::Rtcm(f) => Ev::Rtcm(f.to_vec()),
+        }
+    }
+
+    /// Every event of `bytes`, following the push-then-poll contract.
+    fn run<const B: usize>(rx: &mut LinkReceiver<B>, bytes: &[u8]) -> Vec<Ev> {
+        let mut out = Vec::new();
+        for &b in bytes {
+            let mut event = rx.push(b).map(owned);
+            while let Some(ev) = event {
+                out.push(ev);
+                event = rx.poll().map(owned);
+            }
+        }
+        out
+    }
+
+    /// The RTCM 3 frame of `payload` (at most 1023 bytes).
+    fn rtcm_frame(payload: &[u8]) -> Vec<u8> {
+        let n = payload.len();
+        assert!(n <= RTCM_MAX_PAYLOAD);
+        let mut f = std::vec![RTCM_PREAMBLE, (n >> 8) as u8, n as u8];
+        f.extend_from_slice(payload);
+        let crc = CRC24Q.checksum(&f);
+        f.extend_from_slice(&crc.to_be_bytes()[1..]);
+        f
+    }
+
+    /// The COBS frame of a raw payload (any bytes, not a message).
+    fn cobs_frame(payload: &[u8]) -> Vec<u8> {
+        let env = Envelope {
+            payload,
+            crc32: CRC32.checksum(payload),
+        };
+        let mut out = std::vec![0u8; 2 * MAX_REQUEST_FRAME];
+        postcard::to_slice_cobs(&env, &mut out).unwrap().to_vec()
+    }
+
+    /// (payload, frame) of a message.
+    fn message_frame(req: &RequestRef<'_>) -> (Vec<u8>, Vec<u8>) {
+        let mut scratch = [0u8; 4096];
+        let mut out = [0u8; 4096];
+        let frame = encode(req, &mut scratch, &mut out).unwrap().to_vec();
+        let payload = postcard::to_slice(req, &mut scratch).unwrap().to_vec();
+        (payload, frame)
+    }
+
+    fn status(seq: u32) -> (Vec<u8>, Vec<u8>) {
+        message_frame(&RequestRef {
+            seq,
+            command: CommandRef::Status,
+        })
+    }
+
+    /// `x` with every zero byte of its encoding set to 1 (a change in the
+    /// mantissa only, for the magnitudes used here).
+    fn no_zero_byte(x: f64) -> f64 {
+        f64::from_le_bytes(x.to_le_bytes().map(|b| b.max(1)))
+    }
+
+    /// A 24-satellite range epoch whose COBS encoding starts with 0xD3: the
+    /// envelope's first zero byte must be its 211th (index 210). Envelope
+    /// bytes: payload length varint 2, seq varint 1, command 1, time 8,
+    /// a-priori 1 + 24, list length 1, so satellite `j` starts at 38 + 43 j
+    /// (system, PRN, pseudorange 8, position 24, sigma 1 + 8): index 210 is
+    /// the system byte of satellite 4, and GPS encodes as 0. Every other
+    /// byte before it is made non-zero.
+    fn d3_ranges_epoch() -> (Vec<u8>, Vec<u8>) {
+        let sats: Vec<RangeObservation> = (0..24u8)
+            .map(|i| {
+                let f = f64::from(i);
+                RangeObservation {
+                    id: SatId::new(if i == 4 { System::Gps } else { System::Galileo }, i + 1),
+                    pseudorange_m: no_zero_byte(2.1e7 + 1234.567 * f),
+                    position_m: [
+                        no_zero_byte(-1.5e7 - 11.1 * f),
+                        no_zero_byte(2.2e7 + 22.2 * f),
+                        no_zero_byte(1.3e7 + 33.3 * f),
+                    ],
+                    sigma_m: Some(no_zero_byte(1.25 + 0.01 * f)),
+                }
+            })
+            .collect();
+        let apriori_m = Some([
+            no_zero_byte(3.9e6),
+            no_zero_byte(3.0e5),
+            no_zero_byte(5.0e6),
+        ]);
+        message_frame(&RequestRef::ranges(
+            5,
+            no_zero_byte(12.345),
+            apriori_m,
+            &sats,
+        ))
+    }
+
+    fn gmsd7() -> Option<Vec<u8>> {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../../shared/data/GMSD7_20121014.rtcm3"
+        );
+        match std::fs::read(path) {
+            Ok(b) => Some(b),
+            Err(e) => {
+                std::println!("skipped: {path} not readable ({e})");
+                None
+            }
+        }
+    }
+
+    /// The frames of `data` by `rtcm_rs`: at every 0xD3, a frame if
+    /// `MessageFrame::new` accepts it (length and CRC), else the next byte;
+    /// stops at an incomplete last frame.
+    fn reference_frames(data: &[u8]) -> Vec<Vec<u8>> {
+        let mut out = Vec::new();
+        let mut i = 0;
+        while i < data.len() {
+            if data[i] != RTCM_PREAMBLE {
+                i += 1;
+                continue;
+            }
+            match rtcm_rs::MessageFrame::new(&data[i..]) {
+                Ok(f) => {
+                    out.push(f.frame_data().to_vec());
+                    i += f.frame_len();
+                }
+                Err(rtcm_rs::rtcm_error::RtcmError::Incomplete) => break,
+                Err(_) => i += 1,
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn crc24q_is_the_catalogue_crc_and_checks_a_real_frame() {
+        // Catalogue check value of CRC-24/LTE-A (= CRC-24Q).
+        assert_eq!(CRC24Q.checksum(b"123456789"), 0x00CD_E703);
+        // A frame built here is accepted by an independent RTCM reader.
+        let f = rtcm_frame(&[0x3E, 0xD0, 0x00, 0x03, 0x8A]);
+        let m = rtcm_rs::MessageFrame::new(&f).unwrap();
+        assert_eq!(m.frame_len(), f.len());
+        let Some(data) = gmsd7() else { return };
+        // The file's first frame: header + payload, then its CRC.
+        let n = (usize::from(data[1] & 3) << 8) | usize::from(data[2]);
+        let crc = u32::from_be_bytes([0, data[n + 3], data[n + 4], data[n + 5]]);
+        assert_eq!(CRC24Q.checksum(&data[..n + 3]), crc);
+    }
+
+    #[test]
+    fn every_gmsd7_frame_comes_out_as_rtcm() {
+        let Some(data) = gmsd7() else { return };
+        let reference = reference_frames(&data);
+        let mut rx = Rx::new();
+        let got = run(&mut rx, &data);
+        let expected: Vec<Ev> = reference.iter().cloned().map(Ev::Rtcm).collect();
+        // The file is frames back to back: nothing else comes out.
+        assert_eq!(got.len(), expected.len());
+        assert!(got == expected, "the frames differ from rtcm-rs's");
+        std::println!("GMSD7: {} RTCM frames", got.len());
+        assert!(got.len() > 1000, "{} frames", got.len());
+        let c = rx.counts();
+        assert_eq!(c.rtcm_frames as usize, reference.len());
+        assert_eq!((c.rtcm_bad_crc, c.unpolled_events), (0, 0));
+    }
+
+    #[test]
+    fn the_d3_epoch_starts_with_the_preamble_and_stays_a_cobs_frame() {
+        let (payload, frame) = d3_ranges_epoch();
+        assert_eq!(frame[0], RTCM_PREAMBLE);
+        assert!(frame[1] & 0xFC != 0, "second byte {:#04x}", frame[1]);
+        let mut rx = Rx::new();
+        assert_eq!(run(&mut rx, &frame), std::vec![Ev::Frame(Ok(payload))]);
+        assert_eq!(rx.counts(), LinkCounts::default());
+    }
+
+    #[test]
+    fn gmsd7_interleaved_with_cobs_requests_comes_out_in_order() {
+        let Some(data) = gmsd7() else { return };
+        let reference = reference_frames(&data);
+        let (d3_payload, d3_frame) = d3_ranges_epoch();
+        assert_eq!(d3_frame[0], RTCM_PREAMBLE);
+        let mut stream = Vec::new();
+        let mut expected = Vec::new();
+        for (k, f) in reference.iter().enumerate() {
+            match k % 4 {
+                0 => {
+                    let (p, g) = status(k as u32);
+                    stream.extend(&g);
+                    expected.push(Ev::Frame(Ok(p)));
+                }
+                1 => {
+                    stream.extend(&d3_frame);
+                    expected.push(Ev::Frame(Ok(d3_payload.clone())));
+                }
+                2 => {
+                    // Two frames in a row, then a sync byte.
+                    for seq in [k as u32, k as u32 + 1] {
+                        let (p, g) = status(seq);
+                        stream.extend(&g);
+                        expected.push(Ev::Frame(Ok(p)));
+                    }
+                    stream.push(0);
+                }
+                _ => {}
+            }
+            stream.extend(f);
+            expected.push(Ev::Rtcm(f.clone()));
+        }
+        stream.extend(&d3_frame);
+        expected.push(Ev::Frame(Ok(d3_payload)));
+        let mut rx = Rx::new();
+        let got = run(&mut rx, &stream);
+        assert_eq!(got.len(), expected.len());
+        assert!(got == expected, "events differ");
+        let c = rx.counts();
+        assert_eq!(c.rtcm_frames as usize, reference.len());
+        assert_eq!((c.rtcm_bad_crc, c.unpolled_events), (0, 0));
+    }
+
+    /// `f` with bit `bit` of its payload flipped.
+    fn flipped(f: &[u8], bit: usize) -> Vec<u8> {
+        let mut g = f.to_vec();
+        let n = f.len() - 6;
+        g[3 + (bit / 8) % n] ^= 1 << (bit % 8);
+        g
+    }
+
+    /// A corrupted frame, then a COBS frame, an intact RTCM frame and
+    /// another COBS frame: the corrupted frame only gives framing errors.
+    fn check_corrupted(bad: &[u8], good: &[u8]) {
+        let (p1, f1) = status(1);
+        let (p2, f2) = status(2);
+        let mut stream = bad.to_vec();
+        stream.extend(&f1);
+        stream.extend(good);
+        stream.extend(&f2);
+        let mut rx = Rx::new();
+        let got = run(&mut rx, &stream);
+        let tail = [
+            Ev::Frame(Ok(p1)),
+            Ev::Rtcm(good.to_vec()),
+            Ev::Frame(Ok(p2)),
+        ];
+        assert!(got.len() >= tail.len(), "{got:?}");
+        let (junk, rest) = got.split_at(got.len() - tail.len());
+        assert_eq!(rest, tail);
+        assert!(
+            junk.iter().all(|e| matches!(e, Ev::Frame(Err(_)))),
+            "{junk:?}"
+        );
+        let c = rx.counts();
+        assert_eq!((c.rtcm_frames, c.rtcm_bad_crc), (1, 1));
+    }
+
+    #[test]
+    fn a_corrupted_rtcm_frame_is_not_rtcm_and_keeps_the_next_frames() {
+        // Synthetic payloads with and without zeros, so that the replay
+        // leaves an open chunk or none.
+        let payloads: [Vec<u8>; 4] = [
+            (0..200u32).map(|i| (i * 37 % 256) as u8).collect(),
+            std::vec![0x5A; 40],
+            std::vec![0; 12],
+            (0..1023u32).map(|i| (i * 101 % 251) as u8).collect(),
+        ];
+        for p in &payloads {
+            let f = rtcm_frame(p);
+            for bit in [0, 7, 13, 8 * p.len() - 1] {
+                check_corrupted(&flipped(&f, bit), &f);
+            }
+        }
+        let Some(data) = gmsd7() else { return };
+        let reference = reference_frames(&data);
+        for (k, pair) in reference.windows(2).enumerate() {
+            check_corrupted(&flipped(&pair[0], 8 * k + k % 8), &pair[1]);
+        }
+    }
+
+    #[test]
+    fn a_failed_candidate_replays_every_cobs_frame_it_covered() {
+        // A stray 0xD3 at a frame boundary, then 0x01 0x00: a plausible
+        // header of a 256-byte payload (262-byte candidate). The zero ends
+        // the chunk "D3 01"; the status frames that follow are inside the
+        // candidate, the last one straddles its end.
+        let mut stream = std::vec![RTCM_PREAMBLE, 0x01, 0x00];
+        let mut expected = std::vec![Ev::Frame(Err(FrameError::Undecodable { len: 3 }))];
+        let mut seq = 0x100;
+        while stream.len() < 262 + 5 {
+            let (p, f) = status(seq);
+            stream.extend(&f);
+            expected.push(Ev::Frame(Ok(p)));
+            seq += 1;
+        }
+        let mut rx = Rx::new();
+        assert_eq!(run(&mut rx, &stream), expected);
+        assert_eq!(rx.counts().rtcm_bad_crc, 1);
+        assert_eq!(rx.counts().unpolled_events, 0);
+        // Without `poll`, only the first event of the last candidate byte
+        // comes out; the rest are counted as dropped at the next push.
+        let mut rx = Rx::new();
+        let mut first = Vec::new();
+        for &b in &stream {
+            if let Some(ev) = rx.push(b) {
+                first.push(owned(ev));
+            }
+        }
+        let _ = rx.push(0);
+        let complete_in_window = expected.len() - 1;
+        assert_eq!(first.len(), 2, "{first:?}");
+        assert_eq!(rx.counts().unpolled_events as usize, complete_in_window - 1);
+    }
+
+    #[test]
+    fn reserved_bits_reject_a_candidate_at_its_second_byte() {
+        // 0xD3 0x04: not RTCM, two bytes replayed into the open chunk.
+        let (p, f) = status(9);
+        let mut stream = std::vec![0u8, RTCM_PREAMBLE, 0x04, 0x00];
+        stream.extend(&f);
+        let mut rx = Rx::new();
+        let got = run(&mut rx, &stream);
+        assert_eq!(
+            got,
+            std::vec![
+                Ev::Frame(Err(FrameError::Undecodable { len: 3 })),
+                Ev::Frame(Ok(p))
+            ]
+        );
+        assert_eq!(rx.counts(), LinkCounts::default());
+    }
+
+    #[test]
+    fn rtcm_starts_only_between_cobs_chunks() {
+        // An RTCM frame glued to the end of an open chunk is COBS bytes.
+        let r = rtcm_frame(&[1, 2, 3, 4]);
+        let mut stream = std::vec![0x11u8, 0x22];
+        stream.extend(&r);
+        let mut rx = Rx::new();
+        let got = run(&mut rx, &stream);
+        assert!(got.iter().all(|e| matches!(e, Ev::Frame(Err(_)))));
+        assert_eq!(rx.counts().rtcm_frames, 0);
+        // After the next delimiter the same frame is recognised.
+        let mut stream = std::vec![0x11u8, 0x22, 0x00];
+        stream.extend(&r);
+        let got = run(&mut Rx::new(), &stream);
+        assert_eq!(got.last(), Some(&Ev::Rtcm(r)));
+        // The shortest frame: an empty payload.
+        let e = rtcm_frame(&[]);
+        assert_eq!(e.len(), 6);
+        assert_eq!(run(&mut Rx::new(), &e), std::vec![Ev::Rtcm(e.clone())]);
+    }
+
+    #[derive(Debug, Clone)]
+    enum Item {
+        Cobs(Vec<u8>),
+        Rtcm(Vec<u8>),
+        Sync,
+    }
+
+    fn item() -> impl Strategy<Value = Item> {
+        prop_oneof![
+            3 => prop::collection::vec(any::<u8>(), 1..300).prop_map(Item::Cobs),
+            // A payload whose COBS frame starts with 0xD3: non-zero bytes
+            // with a zero at payload index 208 (envelope index 210).
+            1 => (
+                prop::collection::vec(1u8..=255, 209..600),
+                prop::collection::vec(any::<u8>(), 0..200)
+            )
+                .prop_map(|(mut p, rest)| {
+                    p[208] = 0;
+                    p.extend(rest);
+                    Item::Cobs(p)
+                }),
+            3 => prop::collection::vec(any::<u8>(), 0..=RTCM_MAX_PAYLOAD).prop_map(Item::Rtcm),
+            1 => Just(Item::Sync),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+
+        #[test]
+        fn interleavings_round_trip_in_order(items in prop::collection::vec(item(), 0..12)) {
+            let mut stream = Vec::new();
+            let mut expected = Vec::new();
+            let mut n_rtcm = 0u32;
+            for it in &items {
+                match it {
+                    Item::Cobs(p) => {
+                        let f = cobs_frame(p);
+                        if p.len() >= 209 && p[..208].iter().all(|&b| b != 0) && p[208] == 0 {
+                            prop_assert_eq!(f[0], RTCM_PREAMBLE);
+                        }
+                        stream.extend(&f);
+                        expected.push(Ev::Frame(Ok(p.clone())));
+                    }
+                    Item::Rtcm(p) => {
+                        let f = rtcm_frame(p);
+                        let m = rtcm_rs::MessageFrame::new(&f);
+                        prop_assert!(m.is_ok_and(|m| m.frame_len() == f.len()));
+                        stream.extend(&f);
+                        expected.push(Ev::Rtcm(f));
+                        n_rtcm += 1;
+                    }
+                    Item::Sync => stream.push(0),
+                }
+            }
+            let mut rx = Rx::new();
+            prop_assert_eq!(run(&mut rx, &stream), expected);
+            let c = rx.counts();
+            prop_assert_eq!((c.rtcm_frames, c.rtcm_bad_crc, c.unpolled_events), (n_rtcm, 0, 0));
+        }
+
+        /// On a stream of COBS frames, sync bytes and garbage chunks ended by
+        /// a delimiter, the link receiver yields what the frame receiver
+        /// alone yields.
+        #[test]
+        fn pure_cobs_streams_are_unchanged(
+            parts in prop::collection::vec(
+                prop_oneof![
+                    prop::collection::vec(any::<u8>(), 1..400).prop_map(|p| cobs_frame(&p)),
+                    prop::collection::vec(1u8..=255, 0..40).prop_map(|mut g| { g.push(0); g }),
+                ],
+                0..10,
+            )
+        ) {
+            let stream: Vec<u8> = parts.concat();
+            let mut fr = FrameReceiver::<MAX_REQUEST_FRAME>::new();
+            let alone: Vec<Ev> = stream
+                .iter()
+                .filter_map(|&b| fr.push(b).map(|r| Ev::Frame(r.map(<[u8]>::to_vec))))
+                .collect();
+            let mut rx = Rx::new();
+            prop_assert_eq!(run(&mut rx, &stream), alone);
+        }
+
+        /// `completes_chunk` predicts `push`, overflows included, and
+        /// `is_idle` holds exactly at chunk boundaries.
+        #[test]
+        fn completes_chunk_predicts_push(bytes in prop::collection::vec(
+            prop_oneof![3 => 1u8..=255, 1 => Just(0u8)], 0..200)
+        ) {
+            let mut fr = FrameReceiver::<16>::new();
+            let mut boundary = true;
+            let mut discarding = false;
+            for &b in &bytes {
+                prop_assert_eq!(fr.is_idle(), boundary && !discarding);
+                let predicted = fr.completes_chunk(b);
+                let got = fr.push(b);
+                prop_assert_eq!(predicted, got.is_some());
+                if matches!(got, Some(Err(FrameError::Overflow { .. }))) && b != 0 {
+                    discarding = true;
+                }
+                if b == 0 {
+                    discarding = false;
+                }
+                boundary = b == 0 || (boundary && discarding);
+            }
+        }
+    }
+}
