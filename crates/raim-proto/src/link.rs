@@ -27,19 +27,42 @@
 //! payload under 128 bytes makes an envelope of at most 133 bytes (length
 //! varint 1, CRC varint at most 5), so the payload has 128 bytes or more
 //! and the frame's second byte, the first byte of the payload's length
-//! varint, has the continuation bit 0x80 set. Such a frame
-//! is rejected by the reserved-bit test at its second byte: a replay of two
-//! bytes. A candidate that passes the header test and fails the CRC is
-//! therefore never the start of a valid project frame; it is a corrupted
-//! RTCM frame or noise. After its replay, the COBS receiver may be inside a
-//! chunk (the bytes after the candidate's last zero). If the replay yielded
-//! no CRC-verified COBS frame, that chunk is ended there as if a delimiter
-//! had followed (it is reported as a framing error like any other chunk):
-//! the candidate held no COBS traffic, its tail belongs to the corrupted
-//! RTCM frame, and the frame that follows on the link must not be glued to
-//! it. If the replay did yield a verified frame, the window held COBS
-//! traffic (a stray 0xD3 before it) and the open chunk is kept, since it is
-//! most likely a frame that continues past the window.
+//! varint, has the continuation bit 0x80 set. Such a frame is rejected by
+//! the reserved-bit test at its second byte: a replay of two bytes, and the
+//! frame is received exactly as by [`FrameReceiver`] alone.
+//!
+//! A candidate that passes the header test and fails the CRC is therefore
+//! never the start of a valid project frame: it is a corrupted RTCM frame
+//! or noise (a stray 0xD3 followed by a byte in 0..=3). After its replay
+//! the COBS receiver may be inside a chunk, the *tail* (the bytes after the
+//! candidate's last zero):
+//!
+//! - If the replay yielded a CRC-verified COBS frame, the window held COBS
+//!   traffic and the tail is kept open: most likely a frame that continues
+//!   past the window.
+//! - Otherwise the tail is ended there as if a delimiter had followed (one
+//!   framing-error event, or the frame if the tail is a whole one), so that
+//!   the chunk after a corrupted RTCM frame, a COBS frame or the next RTCM
+//!   frame, starts clean. The tail is kept in the buffer with the bytes that
+//!   follow it; at the next delimiter, if the chunk that ends there is not
+//!   a verified frame, the joined chunk (tail + those bytes) is tried too
+//!   and reported if it is one. A frame cut by the end of a noise window is
+//!   so received late but not lost, unless the byte after the window is a
+//!   0xD3 (a new candidate takes the buffer) or the joined chunk exceeds
+//!   [`RTCM_MAX_FRAME`] bytes. Only verified frames come out of the joined
+//!   chunk: its errors were already reported as the two chunks'.
+//!
+//! A candidate holds its bytes back until it is decided, up to
+//! [`RTCM_MAX_FRAME`] bytes: a request behind a stray 0xD3 waits for the
+//! bytes that follow it, or for [`LinkReceiver::line_idle`], which a caller
+//! with an idle-line interrupt or a timeout calls on a pause (an RTCM frame
+//! arrives in one burst).
+//!
+//! Resynchronisation: a byte that is neither COBS nor RTCM (line noise)
+//! just before an RTCM frame puts the frame's preamble inside a COBS chunk,
+//! and the following back-to-back RTCM frames are read as COBS chunks
+//! until one ends with a zero byte at a frame boundary (test
+//! `a_stray_byte_costs_rtcm_frames_until_a_boundary`).
 //!
 //! # Events
 //!
@@ -803,6 +826,46 @@ mod tests {
         // Nothing open: a pause changes nothing.
         assert!(rx.line_idle().is_none());
         assert_eq!(rx.counts(), LinkCounts::default());
+    }
+
+    #[test]
+    fn a_stray_byte_costs_rtcm_frames_until_a_boundary() {
+        // A stray byte before frame k of GMSD7: frames are read as COBS
+        // chunks until frame j, the first from k on whose last byte is 0;
+        // every frame after j comes out again, in order.
+        let Some(data) = gmsd7() else { return };
+        let reference = reference_frames(&data);
+        let mut lost = Vec::new();
+        for k in (0..reference.len()).step_by(97) {
+            let Some(j) = (k..reference.len()).find(|&i| reference[i].last() == Some(&0)) else {
+                continue;
+            };
+            let mut stream = Vec::new();
+            for (i, f) in reference.iter().enumerate() {
+                if i == k {
+                    stream.push(0x55);
+                }
+                stream.extend(f);
+            }
+            let got: Vec<Vec<u8>> = run(&mut Rx::new(), &stream)
+                .into_iter()
+                .filter_map(|e| match e {
+                    Ev::Rtcm(f) => Some(f),
+                    Ev::Frame(_) => None,
+                })
+                .collect();
+            let n_lost = reference.len() - got.len();
+            assert!(n_lost <= j - k + 1, "k {k}: {n_lost} lost, j {j}");
+            assert_eq!(got[..k], reference[..k]);
+            let after = reference.len() - (j + 1);
+            assert_eq!(got[got.len() - after..], reference[j + 1..]);
+            lost.push(n_lost);
+        }
+        let ends_in_zero = reference.iter().filter(|f| f.last() == Some(&0)).count();
+        std::println!(
+            "GMSD7: {ends_in_zero} of {} frames end in 0; RTCM frames lost after one stray byte: {lost:?}",
+            reference.len()
+        );
     }
 
     #[test]
