@@ -310,13 +310,15 @@ impl<const B: usize> LinkReceiver<B> {
         if !close_tail || saw_frame || self.frames.is_idle() {
             return None;
         }
-        if self.frames.completes_chunk(0) {
-            // An open chunk: the bytes after the candidate's last zero.
-            let tail_start = self
-                .buf
-                .get(..len)
-                .and_then(|c| c.iter().rposition(|&b| b == 0))
-                .map_or(0, |z| z + 1);
+        if let Some(candidate) = self
+            .buf
+            .get(..len)
+            .filter(|_| self.frames.completes_chunk(0))
+        {
+            // An open chunk: the bytes after the candidate's last zero
+            // (`tail_start <= len <= RTCM_MAX_FRAME`, so the copy is in
+            // bounds).
+            let tail_start = candidate.iter().rposition(|&b| b == 0).map_or(0, |z| z + 1);
             self.buf.copy_within(tail_start..len, 0);
             self.alt_len = len - tail_start;
         }
