@@ -67,19 +67,7 @@ fn epoch(k: usize, rng: &mut Rng, fault_from: usize) -> Vec<RangeObservation> {
     e
 }
 
-struct Sink(Vec<u8>);
-impl embedded_io::ErrorType for Sink {
-    type Error = core::convert::Infallible;
-}
-impl embedded_io::Write for Sink {
-    fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
-        self.0.extend_from_slice(buf);
-        Ok(buf.len())
-    }
-    fn flush(&mut self) -> Result<(), Self::Error> {
-        Ok(())
-    }
-}
+use qemu_common::Sink;
 
 /// The host's answer to one frame.
 fn host_answer(server: &mut Server, req: &RequestRef<'_>) -> Response {

@@ -222,21 +222,9 @@ fn netduinoplus2_pf_60_m_step_alarm_isolation_exclusion() {
 
 /// The host server's answer to one frame.
 fn pf_host_answer(server: &mut raim_server::Server, seq: u32, command: CommandRef<'_>) -> Response {
+    use qemu_common::Sink;
     use raim_proto::frame::{encode, FrameReceiver};
     use raim_proto::message::RequestRef;
-    struct Sink(Vec<u8>);
-    impl embedded_io::ErrorType for Sink {
-        type Error = core::convert::Infallible;
-    }
-    impl embedded_io::Write for Sink {
-        fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
-            self.0.extend_from_slice(buf);
-            Ok(buf.len())
-        }
-        fn flush(&mut self) -> Result<(), Self::Error> {
-            Ok(())
-        }
-    }
     let mut scratch = vec![0u8; 8192];
     let mut out = vec![0u8; 8192];
     let frame = encode(&RequestRef { seq, command }, &mut scratch, &mut out)

@@ -36,15 +36,27 @@ fn device_receiver_forms_the_host_epochs_bit_for_bit() {
                 let h = host
                     .iter()
                     .find(|h| h.prepared.time_gps_s == formed.time_gps_s)
-                    .unwrap_or_else(|| panic!("device epoch at {} s, none on the host", formed.time_gps_s));
+                    .unwrap_or_else(|| {
+                        panic!("device epoch at {} s, none on the host", formed.time_gps_s)
+                    });
                 // The host releases an epoch at the frame that closes it,
                 // as the device does.
                 assert_eq!(h.frame, n, "epoch {} s", formed.time_gps_s);
                 assert_eq!(h.prepared.reference_m, formed.reference_m);
-                assert_eq!(h.obs.len(), formed.sats.len(), "epoch {} s", formed.time_gps_s);
+                assert_eq!(
+                    h.obs.len(),
+                    formed.sats.len(),
+                    "epoch {} s",
+                    formed.time_gps_s
+                );
                 for (h, d) in h.obs.iter().zip(formed.sats.iter()) {
                     assert_eq!(h.id, d.id);
-                    assert_eq!(h.pseudorange_m.to_bits(), d.pseudorange_m.to_bits(), "{:?}", h.id);
+                    assert_eq!(
+                        h.pseudorange_m.to_bits(),
+                        d.pseudorange_m.to_bits(),
+                        "{:?}",
+                        h.id
+                    );
                     assert_eq!(h.position_m, d.position_m, "{:?}", h.id);
                     assert_eq!(h.sigma_m, d.sigma_m, "{:?}", h.id);
                 }

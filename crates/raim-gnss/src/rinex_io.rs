@@ -317,14 +317,15 @@ impl NavData {
     }
 
     /// The healthy ephemeris of `id` whose toe is closest to `t_gps_s`,
-    /// within [`max_ephemeris_age_s`].
+    /// within [`max_ephemeris_age_s`] and of `t_gps_s`'s week
+    /// (`raim_nav::store::kepler_age_s`).
     pub fn select(&self, id: SatId, t_gps_s: f64) -> Option<&Kepler> {
         let max_age = max_ephemeris_age_s(id.system);
         self.ephemerides
             .get(&id)?
             .iter()
             .filter(|k| k.health == 0)
-            .map(|k| (k.tk_s(t_gps_s).abs(), k))
+            .filter_map(|k| Some((raim_nav::store::kepler_age_s(k, t_gps_s)?, k)))
             .filter(|(age, _)| *age <= max_age)
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .map(|(_, k)| k)

@@ -12,7 +12,7 @@
 //! [`bootstrap_position`], so that they form the same bits.
 
 use raim_core::sigma::SigmaModel;
-use raim_core::solve::solve;
+use raim_core::solve::{solve_into, Solution};
 use raim_core::{Config, Epoch, RangeObservation, SatId, System};
 
 use crate::ephemeris::{Kepler, SatState, C_M_S, WEEK_S};
@@ -314,11 +314,25 @@ pub fn correct(
 /// A least-squares position from `sats` (unit weights until the position
 /// is near the surface, then the core's default elevation model), at
 /// capacity `N`; None with fewer than 4 or more than `N` satellites, or a
-/// solution farther than [`SURFACE_BAND_M`] from the surface.
+/// solution farther than [`SURFACE_BAND_M`] from the surface. The solution
+/// is built on the stack (host use; [`bootstrap_position_into`] takes the
+/// storage).
 pub fn bootstrap_position<const N: usize>(
     time_s: f64,
     sats: &[RangeObservation],
     apriori: Option<[f64; 3]>,
+) -> Option<[f64; 3]> {
+    let mut out = Solution::<N>::empty();
+    bootstrap_position_into(time_s, sats, apriori, &mut out)
+}
+
+/// [`bootstrap_position`] into existing storage `out` (the firmware keeps
+/// it in a static: an f64 solution at N = 32 is tens of KB).
+pub fn bootstrap_position_into<const N: usize>(
+    time_s: f64,
+    sats: &[RangeObservation],
+    apriori: Option<[f64; 3]>,
+    out: &mut Solution<N>,
 ) -> Option<[f64; 3]> {
     if sats.len() > N || sats.len() < 4 {
         return None;
@@ -328,8 +342,8 @@ pub fn bootstrap_position<const N: usize>(
         *m = true;
     }
     let cfg = Config::default();
-    let sol = solve::<N>(&cfg, &Epoch::ranges(time_s, sats, apriori), &mask).ok()?;
-    let p = sol.position_ecef_m?;
+    solve_into(&cfg, &Epoch::ranges(time_s, sats, apriori), &mask, out).ok()?;
+    let p = out.position_ecef_m?;
     let r = distance_m(p, [0.0; 3]);
     ((r - raim_core::frames::WGS84_A_M).abs() < SURFACE_BAND_M).then_some(p)
 }

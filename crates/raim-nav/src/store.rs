@@ -23,6 +23,18 @@ pub fn max_ephemeris_age_s(system: System) -> f64 {
     }
 }
 
+/// |t - toe| of a Keplerian set at GPS time `t_gps_s` (IS-GPS-200's
+/// week-free t_k), or None when the set is not of `t_gps_s`'s week: t_k
+/// alone cannot tell a set from the same one a week earlier, so the set's
+/// absolute toc must also be within twice the system's
+/// [`max_ephemeris_age_s`] of t (toc and toe are within minutes of each
+/// other for every system).
+pub fn kepler_age_s(k: &Kepler, t_gps_s: f64) -> Option<f64> {
+    let max_age = max_ephemeris_age_s(k.system);
+    let age = k.tk_s(t_gps_s).abs();
+    ((t_gps_s - k.toc_gps_s).abs() <= 2.0 * max_age).then_some(age)
+}
+
 /// What [`EphemerisStore::insert_kepler`] and
 /// [`EphemerisStore::insert_glonass`] did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -111,7 +123,7 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
                 .iter()
                 .enumerate()
                 .filter(|(_, k)| k.system == id.system && k.prn == id.prn && k.health == 0)
-                .map(|(i, k)| (k.tk_s(t_gps_s).abs(), i))
+                .filter_map(|(i, k)| Some((kepler_age_s(k, t_gps_s)?, i)))
                 .filter(|(age, _)| *age <= max_age)
                 .reduce(best)?;
             self.kepler.get(i).map(Broadcast::Kepler)
@@ -176,6 +188,8 @@ mod tests {
         // Beyond 2 h of every healthy set: none.
         assert_eq!(pick(&s, 1000.0 * 604_800.0 + 14_400.0 + 7_201.0), None);
         assert_eq!(s.select(SatId::new(System::Gps, 6), t), None);
+        // A week later the sets have the same t_k, but not the week.
+        assert_eq!(pick(&s, t + 604_800.0), None);
         // Full: the oldest (toe 7200) goes.
         assert_eq!(s.insert_kepler(k(5, 28_800.0, 0)), Stored::Replaced);
         assert_eq!(pick(&s, 1000.0 * 604_800.0 + 7_200.0), Some(14_400.0));

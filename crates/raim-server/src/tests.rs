@@ -4,6 +4,7 @@ use super::*;
 use crate::answer::ResponseRef;
 use raim_core::{FiRule, LinearObservation, RangeObservation, SatId, System};
 use raim_proto::frame::encode;
+use raim_proto::frame::FrameReceiver;
 use raim_proto::message::{CommandRef, RequestRef, Response};
 use serde::Serialize;
 use std::vec::Vec;

@@ -168,3 +168,18 @@ pub fn range_vectors(seed: u64) -> Vec<(f64, Vec<RangeObservation>, Option<[f64;
         ),
     ]
 }
+
+/// A byte sink for the host `Server`'s UARTs.
+pub struct Sink(pub Vec<u8>);
+impl embedded_io::ErrorType for Sink {
+    type Error = core::convert::Infallible;
+}
+impl embedded_io::Write for Sink {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        self.0.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}

@@ -65,12 +65,19 @@ pub fn options(model: &SigmaModel) -> RangingOptions {
 /// model, ionosphere doubled (what `raim replay` does through its
 /// configuration, `adjust_config`).
 pub fn sigma_m(model: &SigmaModel, system: System, code: &str, el_rad: f64) -> f64 {
-    raim_nav::ranging::stream_sigma_m(system, code, el_rad, model, Some(&glonass_model(model)), 2.0)
-        .unwrap_or_else(|| {
-            let mut m = *model;
-            m.iono_vertical_m *= 2.0;
-            m.sigma_m(el_rad)
-        })
+    raim_nav::ranging::stream_sigma_m(
+        system,
+        code,
+        el_rad,
+        model,
+        Some(&glonass_model(model)),
+        2.0,
+    )
+    .unwrap_or_else(|| {
+        let mut m = *model;
+        m.iono_vertical_m *= 2.0;
+        m.sigma_m(el_rad)
+    })
 }
 
 /// One epoch as the host forms it: its prepared form and the observations

@@ -36,6 +36,7 @@
 
 use heapless::Vec;
 use raim_core::sigma::SigmaModel;
+use raim_core::solve::Solution;
 use raim_core::{RangeObservation, SatId, System};
 use rtcm_rs::msg::message::Message;
 use rtcm_rs::MessageFrame;
@@ -47,7 +48,8 @@ use crate::glonass::{
 };
 use crate::m;
 use crate::ranging::{
-    bootstrap_position, correct, split_pair, stream_codes, stream_sigma_m, Corrections, SatInput,
+    bootstrap_position_into, correct, split_pair, stream_codes, stream_sigma_m, Corrections,
+    SatInput,
 };
 use crate::store::{EphemerisStore, Stored};
 
@@ -176,6 +178,8 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     glo_wait_tod_ms: Option<i64>,
     station_m: Option<[f64; 3]>,
     counts: RtcmCounts,
+    /// The bootstrap solution's storage (not on the stack).
+    solution: Solution<N>,
 }
 
 impl<const N: usize, const S: usize> StreamReceiver<N, S> {
@@ -202,6 +206,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 glonass_dropped: 0,
                 glonass_bad: 0,
             },
+            solution: Solution::empty(),
         }
     }
 
@@ -235,7 +240,10 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         Some(self.form(closed, model, elevation_mask_rad, out))
     }
 
-    /// Decode one frame; the epoch it closed, if any.
+    /// Decode one frame; the epoch it closed, if any. Not inlined: the
+    /// decoded message (several KB) is off the stack before the epoch is
+    /// formed.
+    #[inline(never)]
     fn decode(&mut self, frame: &[u8]) -> Option<Open<S>> {
         let Ok(f) = MessageFrame::new(frame) else {
             self.counts.undecodable = self.counts.undecodable.wrapping_add(1);
@@ -558,6 +566,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
     }
 
     /// Form a closed epoch into `out`.
+    #[inline(never)]
     fn form(
         &mut self,
         mut o: Open<S>,
@@ -650,7 +659,8 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 let _ = first.push(x.obs);
             }
         }
-        let reference = bootstrap_position::<N>(time_gps_s, &first, apriori).or(apriori);
+        let reference =
+            bootstrap_position_into(time_gps_s, &first, apriori, &mut self.solution).or(apriori);
         out.reference_m = reference;
         // Every correction at the reference; with none (the bootstrap
         // failed and no station position), the bootstrap pass's ranges, as

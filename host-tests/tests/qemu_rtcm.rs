@@ -1,0 +1,225 @@
+//! A receiver wired straight to the unit, under QEMU (mps2-an386): the
+//! real GMSD7 RTCM 3 stream (GPS + GLONASS MSM7 with 1019/1020) written
+//! into the link UART, and the unit forming, running and answering its own
+//! epochs (raim-server's `stream`, raim-nav's receiver).
+//!
+//! Checked against two references:
+//! - the host's causal RTCM replay (`rtcm_common`: raim-recv's reader,
+//!   raim-gnss's preparation), its epochs sent to a second unit as
+//!   `Ranges` frames: every epoch the stream unit answers has the same
+//!   wire result, to the bit (the device's precision, f32);
+//! - the same bytes through raim-server's `Server` on the host: the same
+//!   answer frames, byte for byte.
+
+mod qemu_common;
+mod rtcm_common;
+
+use std::time::Duration;
+
+use qemu_common::{session_on, wire_bytes, Sink};
+use raim_core::{Config, Decision, Epoch};
+use raim_proto::error::WireError;
+use raim_proto::message::{Response, ResponseBody};
+use raim_qemu::{Machine, Options, QemuSession, ANSWER_TIMEOUT};
+use rtcm_common::{frames, host_epochs, GMSD7};
+
+/// How long the unit may take over the whole stream (257 epochs).
+const STREAM_TIMEOUT: Duration = Duration::from_secs(300);
+
+/// The stream up to the end of its last whole frame. The shared file is
+/// cut at 256 KiB inside a frame; sent as it is, that partial frame would
+/// hold the host's next request in the link's RTCM candidate until 1029
+/// bytes have come (docs/RECEIVERS.md "Straight into the unit").
+fn whole_frames(bytes: &[u8]) -> &[u8] {
+    let end = frames(bytes).last().map_or(0, |f| {
+        f.as_ptr() as usize - bytes.as_ptr() as usize + f.len()
+    });
+    &bytes[..end]
+}
+
+/// Stream `bytes` into the unit's link and collect `n` unasked answers.
+fn stream_answers(fw: &mut QemuSession, bytes: &[u8], n: usize) -> Vec<Response> {
+    for chunk in bytes.chunks(4096) {
+        fw.send_raw(chunk).unwrap();
+    }
+    let mut out = Vec::new();
+    let deadline = std::time::Instant::now() + STREAM_TIMEOUT;
+    while out.len() < n {
+        let left = deadline.saturating_duration_since(std::time::Instant::now());
+        let r = fw
+            .recv(left.max(Duration::from_millis(1)))
+            .unwrap_or_else(|e| panic!("after {} answers: {e}", out.len()));
+        assert_eq!(r.seq, None, "a stream epoch's answer is unasked: {r:?}");
+        out.push(r);
+    }
+    out
+}
+
+#[test]
+fn qemu_rtcm_stream_epochs_equal_the_host_replay_bit_for_bit() {
+    let file = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let once = whole_frames(&file);
+    assert_eq!(file.len() - once.len(), 302, "the cut last frame");
+    // Cold, the ephemerides arrive over the stream's 257 s, a satellite at
+    // a time, and few epochs have enough of them. So the stream is sent
+    // warm: its ephemeris frames (1019, 1020) first, as a receiver sends
+    // its stored ephemerides at start-up, then the whole stream.
+    let eph: Vec<u8> = frames(once)
+        .into_iter()
+        .filter(|f| {
+            let n = rtcm_rs::MessageFrame::new(f)
+                .ok()
+                .and_then(|m| m.message_number());
+            matches!(n, Some(1019 | 1020))
+        })
+        .flatten()
+        .copied()
+        .collect();
+    let warm = [eph.as_slice(), once].concat();
+    let bytes = warm.as_slice();
+    let (host, counts) = host_epochs(bytes);
+    let n_epochs = counts.epochs as usize;
+
+    // The unit fed the stream.
+    let mut fw = session_on(Machine::Mps2An386);
+    let answers = stream_answers(&mut fw, bytes, n_epochs);
+    let status = fw.status().unwrap();
+    let nframes = frames(bytes).len() as u32;
+    let _ = once;
+    assert_eq!(status.rtcm_frames, nframes);
+    assert_eq!(status.rtcm_bad_crc, 0);
+    assert_eq!(status.stream_epochs as usize, n_epochs);
+    assert!(status.stream_ephemerides[0] > 0 && status.stream_ephemerides[1] > 0);
+
+    // The host's epochs through a second unit.
+    let mut reference = session_on(Machine::Mps2An386);
+    let (mut same, mut not_dated, mut refused, mut decisions) = (0, 0, 0, [0usize; 4]);
+    // Epochs solved (Ok or Excluded), epochs.
+    let mut solved = [0usize; 2];
+    // Answers and host epochs pair up in order.
+    assert_eq!(answers.len(), host.len());
+    for (a, h) in answers.iter().zip(&host) {
+        solved[1] += 1;
+        let time_s = raim_nav::time::unix_utc_s(h.prepared.time_gps_s);
+        if let ResponseBody::Error(WireError::StreamNotDated { .. }) = a.body {
+            // Before the first GPS ephemeris; the host held this epoch
+            // back until then.
+            not_dated += 1;
+            continue;
+        }
+        let want = reference
+            .process(&Epoch::ranges(time_s, &h.obs, h.prepared.reference_m))
+            .unwrap()
+            .outcome;
+        match (&a.body, want) {
+            (ResponseBody::Result(r), Ok(want)) => {
+                assert_eq!(wire_bytes(r), wire_bytes(&want), "epoch at {time_s} s");
+                let k = match r.decision {
+                    Decision::Ok => 0,
+                    Decision::Excluded { .. } => 1,
+                    Decision::Alarm { .. } => 2,
+                    Decision::Unavailable { .. } => 3,
+                };
+                decisions[k] += 1;
+                same += 1;
+                if k < 2 {
+                    solved[0] += 1;
+                }
+            }
+            // An epoch with too few satellites (the first ephemerides):
+            // the same typed error.
+            (ResponseBody::Error(e), Err(want)) => {
+                assert_eq!(*e, want, "epoch at {time_s} s");
+                if refused < 5 || refused % 50 == 0 {
+                    println!("refused at {time_s}: {e} ({} sats)", h.obs.len());
+                }
+                refused += 1;
+            }
+            (got, want) => panic!("epoch at {time_s} s: unit {got:?}, host {want:?}"),
+        }
+    }
+    println!(
+        "GMSD7 (ephemerides first) through the link: {same} epochs answered as the host replay's (ok/excluded/alarm/unavailable {decisions:?}), {refused} refused alike, {not_dated} not dated; {} of {} solved; {status:?}",
+        solved[0], solved[1]
+    );
+    assert_eq!(same + refused + not_dated, n_epochs);
+    assert!(solved[0] * 10 >= solved[1] * 8, "{solved:?}");
+    // A clean station stream: no alarm.
+    assert_eq!(decisions[2], 0);
+}
+
+/// The same bytes through the host's `Server` (the firmware's protocol
+/// loop, compiled for x86): the unit's answer frames byte for byte.
+#[test]
+fn qemu_rtcm_answers_equal_the_host_server_byte_for_byte() {
+    let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let part = whole_frames(&bytes[..40_000.min(bytes.len())]);
+    let mut fw = session_on(Machine::Mps2An386);
+    let mut server = raim_server::Server::new();
+    server.take_runtime_config(Config::default()).unwrap();
+    let mut link = Sink(Vec::new());
+    let mut nmea = Sink(Vec::new());
+    for &b in part {
+        server
+            .on_byte(b, &mut link, &mut nmea, &mut raim_server::NoPlatform)
+            .unwrap();
+    }
+    let mut rx = raim_proto::frame::FrameReceiver::<{ raim_proto::MAX_RESPONSE_FRAME }>::new();
+    let host: Vec<Response> = link
+        .0
+        .iter()
+        .filter_map(|&b| match rx.push(b) {
+            Some(Ok(p)) => Some(postcard::from_bytes::<Response>(p).expect("host answer")),
+            Some(Err(e)) => panic!("host answer frame: {e}"),
+            None => None,
+        })
+        .collect();
+    assert!(host.len() >= 30, "{}", host.len());
+    let unit = stream_answers(&mut fw, part, host.len());
+    for (h, u) in host.iter().zip(&unit) {
+        assert_eq!(h.seq, u.seq);
+        match (&h.body, &u.body) {
+            (ResponseBody::Result(a), ResponseBody::Result(b)) => {
+                assert_eq!(wire_bytes(a), wire_bytes(b), "epoch at {} s", a.time_s)
+            }
+            (a, b) => assert_eq!(a, b),
+        }
+    }
+    // Nothing more from the unit.
+    assert!(fw.recv(Duration::from_millis(500)).is_err());
+    let _ = ANSWER_TIMEOUT;
+}
+
+/// An unconfigured unit keeps the stream's ephemerides but puts nothing in
+/// force: every stream epoch is answered `Unconfigured` (or not dated).
+#[test]
+fn qemu_rtcm_stream_on_an_unconfigured_unit_is_refused() {
+    let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let part = whole_frames(&bytes[..20_000.min(bytes.len())]);
+    let elf = raim_qemu::firmware_elf_for(Machine::Mps2An386).unwrap();
+    let mut fw = QemuSession::start_with(
+        &elf,
+        &Options {
+            raw: true,
+            ..Options::default()
+        },
+    )
+    .unwrap();
+    let (_, counts) = host_epochs(part);
+    let answers = stream_answers(&mut fw, part, counts.epochs as usize);
+    let mut unconfigured = 0;
+    for a in &answers {
+        match &a.body {
+            ResponseBody::Error(WireError::Unconfigured { .. }) => unconfigured += 1,
+            ResponseBody::Error(WireError::StreamNotDated { .. }) => {}
+            other => panic!("unconfigured unit answered {other:?}"),
+        }
+    }
+    assert!(
+        unconfigured >= answers.len() - 1,
+        "{unconfigured} of {}",
+        answers.len()
+    );
+    let s = fw.status().unwrap();
+    assert!(s.stream_ephemerides[0] > 0, "ephemerides are kept: {s:?}");
+}
