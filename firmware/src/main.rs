@@ -173,14 +173,24 @@ fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts:
         NVIC::unmask(Irq(B::LINK_RX_IRQ));
         cortex_m::interrupt::enable();
     }
+    // A pause on the link (`raim_server::LINK_IDLE_S`): ticks, and the
+    // time of the last byte while no pause has been signalled since.
+    let idle_ticks = (raim_server::LINK_IDLE_S * f64::from(core_hz)) as u64;
+    let mut last_byte: Option<u64> = None;
     loop {
         while let Some(b) = rx.next() {
             // A UART error is the board's to count (`link_rx`); the
             // server's state is the same whether or not the answer went out.
             let _ = server.on_byte(b, &mut link, &mut nmea, &mut platform);
             watchdog.feed();
+            last_byte = Some(platform.ticks.now64());
         }
         let now = platform.ticks.now64();
+        if last_byte.is_some_and(|t| now.wrapping_sub(t) >= idle_ticks) {
+            last_byte = None;
+            let _ = server.on_line_idle(&mut link, &mut nmea, &mut platform);
+            watchdog.feed();
+        }
         platform.discrete.update(now);
         // Sleep until the next byte or SysTick wrap, unless a byte came in
         // since the ring was found empty: interrupts are masked between

@@ -26,10 +26,8 @@ use rtcm_common::{frames, host_epochs, GMSD7};
 /// How long the unit may take over the whole stream (257 epochs).
 const STREAM_TIMEOUT: Duration = Duration::from_secs(300);
 
-/// The stream up to the end of its last whole frame. The shared file is
-/// cut at 256 KiB inside a frame; sent as it is, that partial frame would
-/// hold the host's next request in the link's RTCM candidate until 1029
-/// bytes have come (docs/RECEIVERS.md "Straight into the unit").
+/// The stream up to the end of its last whole frame (the shared file is
+/// cut at 256 KiB inside a frame).
 fn whole_frames(bytes: &[u8]) -> &[u8] {
     let end = frames(bytes).last().map_or(0, |f| {
         f.as_ptr() as usize - bytes.as_ptr() as usize + f.len()
@@ -83,6 +81,20 @@ fn qemu_rtcm_stream_epochs_equal_the_host_replay_bit_for_bit() {
     // The unit fed the stream.
     let mut fw = session_on(Machine::Mps2An386);
     let answers = stream_answers(&mut fw, bytes, n_epochs);
+    // Then the file's cut last frame (302 bytes of a longer one), as a
+    // receiver losing power mid-frame: it holds the link until the pause
+    // (`LINK_IDLE_S`, checked at SysTick wraps), which ends it as a bad
+    // chunk; the next request is answered.
+    fw.send_raw(&file[once.len()..]).unwrap();
+    std::thread::sleep(Duration::from_secs_f64(
+        4.0 * raim_server::LINK_IDLE_S + 1.0,
+    ));
+    while let Ok(r) = fw.recv(Duration::from_millis(500)) {
+        assert!(
+            r.seq.is_none() && matches!(r.body, ResponseBody::Error(_)),
+            "after the cut frame: {r:?}"
+        );
+    }
     let status = fw.status().unwrap();
     let nframes = frames(bytes).len() as u32;
     let _ = once;

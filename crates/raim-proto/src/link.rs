@@ -265,12 +265,18 @@ impl<const B: usize> LinkReceiver<B> {
     /// decided, and a receiver sends an RTCM frame in one burst, so a
     /// candidate still open at a pause is not RTCM: its bytes are replayed
     /// into the COBS receiver now rather than when `N + 6` bytes are in.
-    /// Returns the first event; call [`poll`](Self::poll) until `None`.
+    /// A COBS chunk still open at a pause is ended as if its delimiter had
+    /// come (a host sends a frame in one burst too): so a stray byte, or a
+    /// receiver's frame cut at power-up, costs the frames up to the next
+    /// pause (a receiver pauses between its epochs), not up to the next
+    /// frame that happens to end in 0x00. Returns the first event; call
+    /// [`poll`](Self::poll) until `None`.
     pub fn line_idle(&mut self) -> Option<LinkEvent<'_>> {
-        if self.mode == Mode::Candidate {
-            return self.replay(false);
+        match self.mode {
+            Mode::Candidate => self.replay(true),
+            Mode::Cobs if !self.frames.is_idle() => self.frames.push(0).map(LinkEvent::Frame),
+            _ => None,
         }
-        None
     }
 
     /// The next event of the last [`push`](Self::push), `None` once there
@@ -831,6 +837,28 @@ mod tests {
     }
 
     #[test]
+    fn a_frame_cut_short_ends_at_the_pause_and_keeps_the_next_request() {
+        // A receiver's frame cut after 40 bytes (its power went, or the
+        // stream's file ends there), a pause, then a request: the cut
+        // frame's bytes end as a chunk at the pause, the request comes
+        // through whole.
+        let Some(data) = gmsd7() else { return };
+        let reference = reference_frames(&data);
+        let cut = &reference[0][..40];
+        let (p, f) = status(12);
+        let mut rx = Rx::new();
+        assert_eq!(run(&mut rx, cut), []);
+        let at_pause = run_then_idle(&mut rx, &[]);
+        assert!(
+            at_pause.iter().all(|e| matches!(e, Ev::Frame(Err(_)))),
+            "{at_pause:?}"
+        );
+        assert!(!at_pause.is_empty());
+        assert_eq!(run(&mut rx, &f), [Ev::Frame(Ok(p))]);
+        assert_eq!(rx.counts().rtcm_bad_crc, 0);
+    }
+
+    #[test]
     fn a_stray_byte_costs_rtcm_frames_until_a_boundary() {
         // A stray byte before frame k of GMSD7: frames are read as COBS
         // chunks until frame j, the first from k on whose last byte is 0;
@@ -868,6 +896,57 @@ mod tests {
             "GMSD7: {ends_in_zero} of {} frames end in 0; RTCM frames lost after one stray byte: {lost:?}",
             reference.len()
         );
+    }
+
+    #[test]
+    fn a_pause_between_epochs_resynchronises_after_a_stray_byte() {
+        // GMSD7 as a receiver sends it: each epoch's frames in one burst
+        // (up to the MSM whose multiple-message bit is 0), a pause after
+        // it. A stray byte before frame k costs at most the rest of k's
+        // burst: the pause ends the open COBS chunk, and the next burst's
+        // first 0xD3 starts a candidate again.
+        let Some(data) = gmsd7() else { return };
+        let reference = reference_frames(&data);
+        let ends_epoch = |f: &[u8]| {
+            let n = (u16::from(f[3]) << 4) | (u16::from(f[4]) >> 4);
+            (1071..=1137).contains(&n) && f[9] & 0x02 == 0
+        };
+        let bursts = reference.iter().filter(|f| ends_epoch(f)).count();
+        assert!(bursts > 200, "{bursts} bursts");
+        let mut lost = Vec::new();
+        for k in (0..reference.len()).step_by(37) {
+            let Some(end) = (k..reference.len()).find(|&i| ends_epoch(&reference[i])) else {
+                continue;
+            };
+            let mut rx = Rx::new();
+            let mut got = Vec::new();
+            for (i, f) in reference.iter().enumerate() {
+                let mut bytes = Vec::new();
+                if i == k {
+                    bytes.push(0x55);
+                }
+                bytes.extend(f);
+                let evs = if ends_epoch(f) {
+                    run_then_idle(&mut rx, &bytes)
+                } else {
+                    run(&mut rx, &bytes)
+                };
+                got.extend(evs.into_iter().filter_map(|e| match e {
+                    Ev::Rtcm(f) => Some(f),
+                    Ev::Frame(_) => None,
+                }));
+            }
+            let n_lost = reference.len() - got.len();
+            assert!(
+                n_lost <= end - k + 1,
+                "k {k}: {n_lost} lost, burst ends at {end}"
+            );
+            assert_eq!(got[..k], reference[..k]);
+            let after = reference.len() - (end + 1);
+            assert_eq!(got[got.len() - after..], reference[end + 1..]);
+            lost.push(n_lost);
+        }
+        std::println!("GMSD7 in epoch bursts: RTCM frames lost after one stray byte: {lost:?}");
     }
 
     #[test]

@@ -63,6 +63,14 @@ pub use pf::{map_error as pf_error, PfEngines, PfUnit};
 #[cfg(feature = "pf")]
 pub use pf::{EkfEngine, Ga100Engine, Ga300Engine, Pf100Engine, Pf300Engine, PfT};
 
+/// A pause on the link of this long ends an open frame and releases a held
+/// RTCM candidate ([`Server::on_line_idle`]), s: 250 ms, 2,880 byte times
+/// at 115200 baud, far longer than a USB-serial adapter's gaps inside one
+/// write or an emulator's scheduling stalls, and shorter than a 1 Hz
+/// receiver's pause between epochs (a faster receiver may never pause that
+/// long; its link then resynchronises at a frame ending in 0x00).
+pub const LINK_IDLE_S: f64 = 0.25;
+
 /// What the board provides besides the UARTs.
 pub trait Platform {
     /// A free-running tick counter (any rate); wraps at `TICK_MASK + 1`.
@@ -364,14 +372,39 @@ impl Server {
         nmea_out: &mut M,
         platform: &mut P,
     ) -> Result<(), IoError<L::Error, M::Error>> {
-        // One byte may complete several frames (`LinkReceiver::poll`).
+        self.link_events(Some(byte), link, nmea_out, platform)
+    }
+
+    /// The link has been quiet for a while (no byte for [`LINK_IDLE_S`]):
+    /// a held RTCM candidate is released and an open frame is ended
+    /// (`LinkReceiver::line_idle`), and whatever that completes is
+    /// answered. The board calls it once per pause.
+    pub fn on_line_idle<L: Write, M: Write, P: Platform>(
+        &mut self,
+        link: &mut L,
+        nmea_out: &mut M,
+        platform: &mut P,
+    ) -> Result<(), IoError<L::Error, M::Error>> {
+        self.link_events(None, link, nmea_out, platform)
+    }
+
+    /// The events of one byte (`Some`) or of a pause (`None`), answered
+    /// in order: one byte may complete several frames
+    /// (`LinkReceiver::poll`).
+    fn link_events<L: Write, M: Write, P: Platform>(
+        &mut self,
+        byte: Option<u8>,
+        link: &mut L,
+        nmea_out: &mut M,
+        platform: &mut P,
+    ) -> Result<(), IoError<L::Error, M::Error>> {
         let mut first = true;
         loop {
             let step = {
-                let event = if first {
-                    self.rx.push(byte)
-                } else {
-                    self.rx.poll()
+                let event = match (first, byte) {
+                    (true, Some(b)) => self.rx.push(b),
+                    (true, None) => self.rx.line_idle(),
+                    (false, _) => self.rx.poll(),
                 };
                 first = false;
                 match event {
