@@ -235,3 +235,55 @@ fn qemu_rtcm_stream_on_an_unconfigured_unit_is_refused() {
     let s = fw.status().unwrap();
     assert!(s.stream_ephemerides[0] > 0, "ephemerides are kept: {s:?}");
 }
+
+/// The cost of a stream epoch on the unit (BENCHMARKS.md), under
+/// `-icount shift=0` (a SysTick tick is 40 guest instructions): the
+/// forming of the last epoch (`Status.last_stream_ticks`: its closing
+/// frame's decoding, the orbits and clocks, the corrections, the bootstrap
+/// solution) and its monitor run (`last_epoch_ticks`). Printed, not
+/// asserted (a benchmark).
+#[test]
+fn qemu_rtcm_stream_epoch_cost() {
+    let file = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let once = whole_frames(&file);
+    let eph: Vec<u8> = frames(once)
+        .into_iter()
+        .filter(|f| {
+            let n = rtcm_rs::MessageFrame::new(f)
+                .ok()
+                .and_then(|m| m.message_number());
+            matches!(n, Some(1019 | 1020))
+        })
+        .flatten()
+        .copied()
+        .collect();
+    let part = whole_frames(&once[..60_000]);
+    let warm = [eph.as_slice(), part].concat();
+    let (host, counts) = host_epochs(&warm);
+    let elf = raim_qemu::firmware_elf_for(Machine::Mps2An386).unwrap();
+    let mut fw = QemuSession::start_with(
+        &elf,
+        &Options {
+            icount: true,
+            ..Options::default()
+        },
+    )
+    .unwrap();
+    let answers = stream_answers(&mut fw, &warm, counts.epochs as usize);
+    let s = fw.status().unwrap();
+    let last = answers.last().unwrap();
+    let sats = host.last().map_or(0, |h| h.obs.len());
+    println!(
+        "stream epoch, {sats} satellites (G+R iono-free), answer {}: forming {} ticks = {} instructions; monitor {} ticks = {} instructions; stack high water {} B",
+        match &last.body {
+            ResponseBody::Result(r) => format!("{:?}", r.decision),
+            other => format!("{other:?}"),
+        },
+        s.last_stream_ticks,
+        40 * u64::from(s.last_stream_ticks),
+        s.last_epoch_ticks,
+        40 * u64::from(s.last_epoch_ticks),
+        s.stack_high_water_bytes
+    );
+    assert!(s.last_stream_ticks > 0);
+}

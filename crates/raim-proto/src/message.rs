@@ -413,6 +413,10 @@ pub struct Status {
     pub stream_epochs: u32,
     /// Broadcast ephemerides the stream receiver holds (GPS, GLONASS).
     pub stream_ephemerides: [u16; 2],
+    /// Ticks (as `last_epoch_ticks`) of the last stream epoch's forming:
+    /// the decoding of the frame that closed it, the satellites' orbits
+    /// and clocks, the corrections and the bootstrap solution.
+    pub last_stream_ticks: u32,
 }
 
 impl Status {
@@ -450,6 +454,7 @@ impl Status {
         rtcm_bad_crc: 0,
         stream_epochs: 0,
         stream_ephemerides: [0, 0],
+        last_stream_ticks: 0,
     };
 }
 

@@ -420,8 +420,14 @@ impl Server {
                     }
                     #[cfg(feature = "rtcm")]
                     Some(LinkEvent::Rtcm(frame)) => {
-                        match self.stream.on_frame(frame, self.config.as_ref()) {
-                            Some(formed) => Step::Stream(formed),
+                        let t0 = platform.now();
+                        let formed = self.stream.on_frame(frame, self.config.as_ref());
+                        let t1 = platform.now();
+                        match formed {
+                            Some(formed) => {
+                                self.status.last_stream_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
+                                Step::Stream(formed)
+                            }
                             None => continue,
                         }
                     }
@@ -434,7 +440,11 @@ impl Server {
             match step {
                 Step::Frame(decoded) => self.on_frame(decoded, link, nmea_out, platform)?,
                 #[cfg(feature = "rtcm")]
-                Step::Stream(formed) => self.on_stream_epoch(formed, link, nmea_out, platform)?,
+                Step::Stream(formed) => {
+                    if self.stage_stream_epoch(formed, link, nmea_out, platform)? {
+                        self.answer_epoch(None, link, nmea_out, platform)?;
+                    }
+                }
             }
         }
     }

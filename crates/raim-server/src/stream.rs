@@ -55,7 +55,9 @@ impl StreamState {
         }
     }
 
-    /// Decode one RTCM frame; `Some` when it closed an epoch.
+    /// Decode one RTCM frame; `Some` when it closed an epoch. Not inlined:
+    /// its stack stays off the link's other paths.
+    #[inline(never)]
     pub(crate) fn on_frame(
         &mut self,
         frame: &[u8],
@@ -96,15 +98,19 @@ fn wire_error(e: FormError) -> WireError {
 }
 
 impl Server {
-    /// A stream epoch closed (`formed`: whether it could be formed): run
-    /// it as a `Ranges` epoch, or refuse it, and answer unasked.
-    pub(crate) fn on_stream_epoch<L: Write, M: Write, P: Platform>(
+    /// A stream epoch closed (`formed`: whether it could be formed): put it
+    /// in the request slot as a `Ranges` epoch and say `true` (the caller
+    /// runs it, `answer_epoch`), or refuse it, answered unasked. Not
+    /// inlined, and the epoch is run by the caller: the slot's value is
+    /// built in this frame, which is gone when the engine runs.
+    #[inline(never)]
+    pub(crate) fn stage_stream_epoch<L: Write, M: Write, P: Platform>(
         &mut self,
         formed: Result<(), FormError>,
         link: &mut L,
         nmea_out: &mut M,
         platform: &mut P,
-    ) -> Result<(), IoError<L::Error, M::Error>> {
+    ) -> Result<bool, IoError<L::Error, M::Error>> {
         let f = &self.stream.formed;
         let time_s = raim_nav::time::unix_utc_s(f.time_gps_s);
         let mut sats = SatList::default();
@@ -135,9 +141,10 @@ impl Server {
                 platform.on_epoch(None);
                 self.write_no_fix(nmea_out).map_err(IoError::Nmea)?;
                 self.request = None;
-                self.send(link, None, crate::answer::BodyRef::Error(&e))
+                self.send(link, None, crate::answer::BodyRef::Error(&e))?;
+                Ok(false)
             }
-            None => self.answer_epoch(None, link, nmea_out, platform),
+            None => Ok(true),
         }
     }
 }
