@@ -170,11 +170,21 @@ impl Link {
 /// fresh engine, and printed as `raim replay` prints them.
 fn epochs(link: Link, args: &ReplayArgs) -> Result<Link> {
     let shared = Rc::new(RefCell::new(link));
-    let out = crate::replay::replay_on(args, &mut |cfg| {
+    let mut start = |cfg: &Config| {
         shared.borrow_mut().configure_for_epochs(cfg)?;
         Ok(Engine::Link(shared.clone()))
-    })?;
-    crate::replay::write_outputs(args, &out)?;
+    };
+    match crate::replay::receiver::source(args)? {
+        // A live source (TCP, serial): each epoch sent to the unit as it
+        // arrives, printed as `raim replay` prints a live source's.
+        Some((format, spec)) if spec.is_live() => {
+            let _tally = crate::replay::receiver::run_live_on(args, format, &spec, &mut start)?;
+        }
+        _ => {
+            let out = crate::replay::replay_on(args, &mut start)?;
+            crate::replay::write_outputs(args, &out)?;
+        }
+    }
     Rc::try_unwrap(shared)
         .map(RefCell::into_inner)
         .map_err(|_| anyhow!("the link is still in use"))

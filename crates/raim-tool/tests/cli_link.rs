@@ -5,6 +5,7 @@
 //! exits non-zero. `epochs` of a receiver stream over the pty answered
 //! with the decisions of `raim replay --target qemu` on the same epochs.
 
+mod common;
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
@@ -179,6 +180,76 @@ fn link_epochs_answer_as_the_qemu_replay() {
         excluded += usize::from(w["excluded"] == serde_json::json!(["R14"]));
     }
     assert_eq!(excluded, 11, "R14 excluded from the step's onset on");
+}
+
+/// A live source through the unit: GMSD7 served over TCP, `raim link
+/// epochs -- --rtcm3 tcp://...` sends each epoch to the unit over the pty
+/// as it arrives; every epoch gets the decision, satellite count and
+/// protection levels of `raim replay --target qemu` on the same live
+/// source, and the run ends cleanly at the end of the stream.
+#[test]
+fn link_epochs_from_a_live_source() {
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data");
+    let bytes = std::fs::read(format!("{data}/GMSD7_20121014.rtcm3")).unwrap();
+    let opts = |addr: &str| {
+        vec![
+            "--rtcm3".to_string(),
+            format!("tcp://{addr}"),
+            "--systems".into(),
+            "GR".into(),
+            "--mask-deg".into(),
+            "0".into(),
+            "--json".into(),
+            "--keep-going".into(),
+        ]
+    };
+    let records = |out: &str| -> Vec<serde_json::Value> {
+        out.lines()
+            .filter(|l| l.starts_with('{'))
+            .map(|l| serde_json::from_str::<serde_json::Value>(l).expect("json"))
+            .filter(|v| v.get("summary").is_none())
+            .collect()
+    };
+    let addr = common::serve(
+        bytes.clone(),
+        8192,
+        Duration::from_millis(1),
+        Duration::ZERO,
+    );
+    let mut replay = vec!["replay".to_string()];
+    replay.extend(opts(&addr));
+    replay.extend(["--target".into(), "qemu".into()]);
+    let replay: Vec<&str> = replay.iter().map(String::as_str).collect();
+    let (code, out, err) = raim(&replay);
+    assert_eq!(code, Some(0), "{err}");
+    let want = records(&out);
+    assert_eq!(want.len(), 257, "{err}");
+
+    let (_qemu, pty) = qemu_on_a_pty();
+    let addr = common::serve(bytes, 8192, Duration::from_millis(1), Duration::ZERO);
+    let mut link = vec![
+        "link".to_string(),
+        "--port".into(),
+        pty.clone(),
+        "epochs".into(),
+        "--".into(),
+    ];
+    link.extend(opts(&addr));
+    let link: Vec<&str> = link.iter().map(String::as_str).collect();
+    let (code, out, err) = raim(&link);
+    assert_eq!(code, Some(0), "{out}{err}");
+    assert!(err.contains("stopped (end of stream)"), "{err}");
+    let got = records(&out);
+    assert_eq!(got.len(), want.len(), "{err}");
+    let mut solved = 0;
+    for (g, w) in got.iter().zip(&want) {
+        assert_eq!(g["tod"], w["tod"]);
+        for k in ["decision", "excluded", "n_sats", "hpl_m", "vpl_m"] {
+            assert_eq!(g[k], w[k], "{} {k}", w["tod"]);
+        }
+        solved += usize::from(w["hpl_m"].is_number());
+    }
+    assert!(solved > 0);
 }
 
 /// `epochs` options are checked before the port is opened: none given,

@@ -3,8 +3,8 @@
 //! RXM-RAW/SFRB log), their faults, damaged streams, live TCP sources, and
 //! the distinct messages when nothing can be solved.
 
-use std::io::Write;
-use std::net::TcpListener;
+mod common;
+use common::serve;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
@@ -468,25 +468,6 @@ fn nothing_solves_says_why() {
         "{err}"
     );
     assert!(err.contains("hold G") && err.contains("selects E"), "{err}");
-}
-
-/// Serve `bytes` on a local TCP port in chunks, then close; returns the
-/// address.
-fn serve(bytes: Vec<u8>, chunk: usize, pause: Duration, hold: Duration) -> String {
-    let l = TcpListener::bind("127.0.0.1:0").unwrap();
-    let addr = l.local_addr().unwrap().to_string();
-    std::thread::spawn(move || {
-        if let Ok((mut s, _)) = l.accept() {
-            for c in bytes.chunks(chunk) {
-                if s.write_all(c).is_err() {
-                    return;
-                }
-                std::thread::sleep(pause);
-            }
-            std::thread::sleep(hold);
-        }
-    });
-    addr
 }
 
 /// A live TCP source: each epoch printed as decoded (ephemerides as they

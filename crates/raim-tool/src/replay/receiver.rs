@@ -206,6 +206,20 @@ pub fn load_file(format: Format, path: &Path) -> Result<Recording> {
 /// at once; stop at the end of the stream or on Ctrl-C (then the counts
 /// and the summary). Ephemerides are those received so far.
 pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate::outcome::Tally> {
+    run_live_on(args, format, spec, &mut |cfg| {
+        Engine::start(args.target, cfg)
+    })
+}
+
+/// [`run_live`] with the engine from `start` (given the monitor
+/// configuration): `raim link epochs` runs a live source on a unit over a
+/// serial port.
+pub fn run_live_on(
+    args: &ReplayArgs,
+    format: Format,
+    spec: &Spec,
+    start: &mut dyn FnMut(&Config) -> Result<Engine>,
+) -> Result<crate::outcome::Tally> {
     let mut reader = spec.open()?;
     let stop = Arc::new(AtomicBool::new(false));
     {
@@ -221,7 +235,7 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
     if args.codes.is_empty() {
         opts.codes = receiver_codes();
     }
-    let mut engine = Engine::start(args.target, &cfg)?;
+    let mut engine = start(&cfg)?;
     let mut dec = format.decoder();
     let mut obs = ObsData {
         path: PathBuf::from(spec.name()),
