@@ -12,8 +12,12 @@
 //!   (DF393) is 0, or when the time changes.
 //! - Legacy GPS 1002/1004: L1 = DF011 + DF014 x 299,792.458 m, L2 = L1 +
 //!   DF017. 1001/1003 carry no ambiguity (the range modulo one
-//!   light-millisecond): decoded and counted, not used; so are the legacy
-//!   GLONASS 1009-1012 (MSM carry the same ranges).
+//!   light-millisecond): decoded and counted, not used.
+//! - Legacy GLONASS 1010/1012: L1 = DF041 + DF044 (the integer number of
+//!   599,584.916 m, two light-milliseconds), L2 = L1 + DF047 (code by
+//!   DF039/DF046: C/A or P); timed like the GLONASS MSM, by the GLONASS
+//!   time of day (DF034), joining the epoch they arrive with. 1009/1011
+//!   carry no ambiguity: counted, not used.
 //! - Ephemerides 1019 (GPS), 1042 (BeiDou), 1044 (QZSS), 1045 (Galileo
 //!   F/NAV), 1046 (Galileo I/NAV) to [`Kepler`]; 1020 (GLONASS) to
 //!   [`GlonassEphemeris`] (see [`glonass_fields`] for the units).
@@ -678,10 +682,61 @@ impl Rtcm3 {
             Message::Msg1001(_) | Message::Msg1003(_) => {
                 self.ignore(format!("{n} (GPS L1/L2 without the millisecond ambiguity)"))
             }
-            Message::Msg1009(_)
-            | Message::Msg1010(_)
-            | Message::Msg1011(_)
-            | Message::Msg1012(_) => self.ignore(format!("{n} (GLONASS legacy observations)")),
+            Message::Msg1010(m) => {
+                let mut obs = Vec::new();
+                for s in m.satellites.iter() {
+                    if let Some(p) = s.l1_pseudorange_m {
+                        let code = if s.glo_l1_code_ind == 0 { "C1C" } else { "C1P" };
+                        obs.push((
+                            SatId::new(System::Glonass, s.glo_satellite_id),
+                            CodeObs {
+                                code: code.into(),
+                                value_m: p + s.l1_pseudorange_amb_m,
+                            },
+                        ));
+                    }
+                }
+                self.glo_msg_tod_ms = Some(i64::from(m.glo_epoch_time_ms));
+                self.msm(None, None, obs, m.synchronous_gnss_msg_flag == 1, out);
+            }
+            Message::Msg1012(m) => {
+                let mut obs = Vec::new();
+                for s in m.satellites.iter() {
+                    let Some(p) = s.l1_pseudorange_m else {
+                        continue;
+                    };
+                    let id = SatId::new(System::Glonass, s.glo_satellite_id);
+                    let l1 = p + s.l1_pseudorange_amb_m;
+                    let code = if s.glo_l1_code_ind == 0 { "C1C" } else { "C1P" };
+                    obs.push((
+                        id,
+                        CodeObs {
+                            code: code.into(),
+                            value_m: l1,
+                        },
+                    ));
+                    // DF046: 0 C/A, 1 P (2, 3 reserved: not used).
+                    let l2_code = match s.glo_l2_code_ind {
+                        0 => Some("C2C"),
+                        1 => Some("C2P"),
+                        _ => None,
+                    };
+                    if let (Some(d), Some(code)) = (s.l2_l1_pseudorange_diff_m, l2_code) {
+                        obs.push((
+                            id,
+                            CodeObs {
+                                code: code.into(),
+                                value_m: l1 + fx(d),
+                            },
+                        ));
+                    }
+                }
+                self.glo_msg_tod_ms = Some(i64::from(m.glo_epoch_time_ms));
+                self.msm(None, None, obs, m.synchronous_gnss_msg_flag == 1, out);
+            }
+            Message::Msg1009(_) | Message::Msg1011(_) => self.ignore(format!(
+                "{n} (GLONASS L1/L2 without the millisecond ambiguity)"
+            )),
             _ => self.ignore(format!("{n}")),
         }
     }

@@ -243,3 +243,122 @@ fn glonass_ranges_fit_the_gps_position() {
     eprintln!("largest GLONASS residual from their median: {worst_m:.2} m");
     assert_eq!(checked, 241);
 }
+
+/// Legacy GLONASS 1012 against MSM7: every GLONASS MSM7 (1087) of GMSD7
+/// rewritten as the 1012 a legacy station would send for the same
+/// signals (L1 C/A as DF041 + DF044, L2 as DF047 from L1, the GLONASS time
+/// of day and the multiple-message bit kept), encoded by `rtcm-rs`. The
+/// reader's GLONASS ranges from the legacy stream equal the MSM ones to
+/// the legacy fields' resolution: DF041 0.02 m (so 0.01 m once rounded),
+/// and L2 through DF047's 0.02 m as well.
+#[test]
+fn legacy_1012_gives_the_msm_ranges() {
+    /// Rounding of DF041 (0.02 m), m.
+    const L1_TOL_M: f64 = 0.01 + 1e-6;
+    /// Rounding of DF041 and DF047 (0.02 m each), m.
+    const L2_TOL_M: f64 = 0.02 + 1e-6;
+    /// DF044's unit: two light-milliseconds, m.
+    const AMBIGUITY_M: f64 = 599_584.916;
+    let bytes = std::fs::read(gmsd7()).unwrap();
+    let mut legacy = Vec::new();
+    let mut builder = MessageBuilder::new();
+    let mut n1012 = 0;
+    for (at, len, m) in messages(&bytes) {
+        let Message::Msg1087(m) = m else {
+            legacy.extend_from_slice(&bytes[at..at + len]);
+            continue;
+        };
+        let mut out = rtcm_rs::msg::Msg1012T {
+            reference_station_id: m.reference_station_id,
+            glo_epoch_time_ms: m.glo_epoch_time_ms,
+            synchronous_gnss_msg_flag: m.msm_multiple_message_flag,
+            ..Default::default()
+        };
+        for s in m.data_segment.satellite_data.iter() {
+            let Some(int_ms) = s.gnss_satellite_rough_range_integer_ms else {
+                continue;
+            };
+            let rough = f64::from(int_ms) + s.gnss_satellite_rough_range_mod1ms_ms;
+            let range = |band: u8, attr: char| {
+                m.data_segment
+                    .signal_data
+                    .iter()
+                    .find(|g| {
+                        g.satellite_id == s.satellite_id
+                            && g.signal_id.band() == band
+                            && g.signal_id.attribute() == attr
+                    })
+                    .and_then(|g| g.gnss_signal_fine_pseudorange_ext_ms)
+                    .map(|fine| (rough + fine) * raim_recv::rtcm::LIGHT_MS_M)
+            };
+            let Some(l1) = range(1, 'C') else { continue };
+            let l2 = range(2, 'C')
+                .map(|p| (0, p))
+                .or(range(2, 'P').map(|p| (1, p)));
+            let amb = (l1 / AMBIGUITY_M).floor() * AMBIGUITY_M;
+            let sat = rtcm_rs::msg::Msg1012Sat {
+                glo_satellite_id: s.satellite_id,
+                glo_satellite_freq_chan_number: s
+                    .glonass_satellite_frequency_channel_number
+                    .unwrap_or(0),
+                l1_pseudorange_m: Some(l1 - amb),
+                l1_pseudorange_amb_m: amb,
+                glo_l2_code_ind: l2.map_or(0, |(c, _)| c),
+                l2_l1_pseudorange_diff_m: l2.map(|(_, p)| (p - l1) as f32),
+                ..Default::default()
+            };
+            out.satellites.push(sat);
+        }
+        legacy.extend_from_slice(builder.build_message(&Message::Msg1012(out)).unwrap());
+        n1012 += 1;
+    }
+    assert_eq!(n1012, 257);
+    let msm = read_all(Format::Rtcm3, bytes.as_slice(), gmsd7()).unwrap();
+    let leg = read_all(Format::Rtcm3, legacy.as_slice(), gmsd7()).unwrap();
+    assert_eq!(msm.obs.epochs.len(), leg.obs.epochs.len());
+    let (mut l1_n, mut l2_n) = (0, 0);
+    for (a, b) in msm.obs.epochs.iter().zip(&leg.obs.epochs) {
+        assert_eq!(a.time_gps_s, b.time_gps_s);
+        let glo = |e: &raim_gnss::ObsEpoch| {
+            e.sats
+                .iter()
+                .filter(|(id, _)| id.system == System::Glonass)
+                .map(|(id, o)| (*id, o.clone()))
+                .collect::<Vec<_>>()
+        };
+        let (ga, gb) = (glo(a), glo(b));
+        assert_eq!(ga.len(), gb.len(), "GLONASS satellites at {}", a.time_gps_s);
+        for ((ia, oa), (ib, ob)) in ga.iter().zip(&gb) {
+            assert_eq!(ia, ib);
+            for o in ob {
+                let want = oa
+                    .iter()
+                    .find(|x| x.code == o.code)
+                    .unwrap_or_else(|| panic!("{ia:?} {} not in the MSM epoch", o.code));
+                let (tol, n) = if o.code.starts_with("C1") {
+                    (L1_TOL_M, &mut l1_n)
+                } else {
+                    (L2_TOL_M, &mut l2_n)
+                };
+                assert!(
+                    (o.value_m - want.value_m).abs() <= tol,
+                    "{ia:?} {}: {} vs {}",
+                    o.code,
+                    o.value_m,
+                    want.value_m
+                );
+                *n += 1;
+            }
+        }
+    }
+    assert!(l1_n > 1000 && l2_n > 1000, "{l1_n} L1, {l2_n} L2 ranges");
+    // The GPS part is the same stream's.
+    assert_eq!(
+        leg.counts
+            .ignored
+            .keys()
+            .filter(|k| k.contains("legacy"))
+            .count(),
+        0
+    );
+}
