@@ -3,8 +3,12 @@
 //! receiver's stream into the monitor's epochs on its own, in fixed
 //! capacity ([`receiver`]).
 
+pub mod bits;
+pub mod decode;
 pub mod fields;
 pub mod receiver;
 
-pub use fields::{fx, glonass_fields, kepler, latest_week, KeplerFields, LIGHT_MS_M};
+#[cfg(feature = "rtcm-rs")]
+pub use fields::glonass_fields;
+pub use fields::{fx, kepler, latest_week, KeplerFields, LIGHT_MS_M};
 pub use receiver::{FormError, FormedEpoch, RtcmCounts, StreamReceiver};

@@ -38,8 +38,6 @@ use heapless::Vec;
 use raim_core::sigma::SigmaModel;
 use raim_core::solve::Solution;
 use raim_core::{RangeObservation, SatId, System};
-use rtcm_rs::msg::message::Message;
-use rtcm_rs::MessageFrame;
 
 use crate::ephemeris::WEEK_S;
 use crate::glonass::{
@@ -53,7 +51,8 @@ use crate::ranging::{
 };
 use crate::store::{EphemerisStore, Stored};
 
-use super::fields::{fx, glonass_fields, kepler, latest_week, KeplerFields, LIGHT_MS_M};
+use super::decode::{Frame, Message, Msm, MsmSystem};
+use super::fields::{kepler, latest_week};
 
 /// Milliseconds in a week and in a day.
 const WEEK_MS: i64 = 604_800_000;
@@ -241,115 +240,31 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
     }
 
     /// Decode one frame; the epoch it closed, if any. Not inlined: the
-    /// decoded message (several KB) is off the stack before the epoch is
-    /// formed.
+    /// decoder's state is off the stack before the epoch is formed.
     #[inline(never)]
     fn decode(&mut self, frame: &[u8]) -> Option<Open<S>> {
-        let Ok(f) = MessageFrame::new(frame) else {
+        let Ok(f) = Frame::new(frame) else {
             self.counts.undecodable = self.counts.undecodable.wrapping_add(1);
             return None;
         };
         self.counts.frames = self.counts.frames.wrapping_add(1);
-        macro_rules! msm {
-            ($m:expr, $sys:expr, $fine:ident) => {{
-                let m = &$m;
-                let mut sigs: Vec<Signal, S> = Vec::new();
-                let mut overflow = false;
-                for sig in m.data_segment.signal_data.iter() {
-                    let rough = m
-                        .data_segment
-                        .satellite_data
-                        .iter()
-                        .find(|s| s.satellite_id == sig.satellite_id)
-                        .and_then(|s| {
-                            s.gnss_satellite_rough_range_integer_ms
-                                .map(|i| fx(i) + s.gnss_satellite_rough_range_mod1ms_ms)
-                        });
-                    let (Some(r), Some(fine)) = (rough, sig.$fine) else {
-                        continue;
-                    };
-                    let band = sig.signal_id.band();
-                    let attr = sig.signal_id.attribute();
-                    if band > 9 || !attr.is_ascii() {
-                        continue;
-                    }
-                    let s = Signal {
-                        id: SatId::new($sys, sig.satellite_id),
-                        code: [b'C', b'0' + band, attr as u8],
-                        value_m: (r + fine) * LIGHT_MS_M,
-                    };
-                    overflow |= sigs.push(s).is_err();
-                }
-                (sigs, m.msm_multiple_message_flag == 1, overflow)
-            }};
-        }
-        match f.get_message() {
-            Message::Msg1074(m) => {
-                let (s, more, o) = msm!(m, System::Gps, gnss_signal_fine_pseudorange_ms);
-                self.gps_msm(i64::from(m.gps_epoch_time_ms), s, more, o)
+        let message = match f.message() {
+            Ok(m) => m,
+            Err(_) => {
+                self.counts.undecodable = self.counts.undecodable.wrapping_add(1);
+                return self.other_msm(&f, frame);
             }
-            Message::Msg1075(m) => {
-                let (s, more, o) = msm!(m, System::Gps, gnss_signal_fine_pseudorange_ms);
-                self.gps_msm(i64::from(m.gps_epoch_time_ms), s, more, o)
-            }
-            Message::Msg1076(m) => {
-                let (s, more, o) = msm!(m, System::Gps, gnss_signal_fine_pseudorange_ext_ms);
-                self.gps_msm(i64::from(m.gps_epoch_time_ms), s, more, o)
-            }
-            Message::Msg1077(m) => {
-                let (s, more, o) = msm!(m, System::Gps, gnss_signal_fine_pseudorange_ext_ms);
-                self.gps_msm(i64::from(m.gps_epoch_time_ms), s, more, o)
-            }
-            Message::Msg1084(m) => {
-                let (s, more, o) = msm!(m, System::Glonass, gnss_signal_fine_pseudorange_ms);
-                self.glonass_msm(i64::from(m.glo_epoch_time_ms), s, more, o)
-            }
-            Message::Msg1085(m) => {
-                let (s, more, o) = msm!(m, System::Glonass, gnss_signal_fine_pseudorange_ms);
-                self.glonass_msm(i64::from(m.glo_epoch_time_ms), s, more, o)
-            }
-            Message::Msg1086(m) => {
-                let (s, more, o) = msm!(m, System::Glonass, gnss_signal_fine_pseudorange_ext_ms);
-                self.glonass_msm(i64::from(m.glo_epoch_time_ms), s, more, o)
-            }
-            Message::Msg1087(m) => {
-                let (s, more, o) = msm!(m, System::Glonass, gnss_signal_fine_pseudorange_ext_ms);
-                self.glonass_msm(i64::from(m.glo_epoch_time_ms), s, more, o)
-            }
-            Message::Msg1019(m) => {
+        };
+        match message {
+            Message::Msm(m) => match m.system {
+                MsmSystem::Gps => self.gps_msm(&m),
+                MsmSystem::Glonass => self.glonass_msm(&m),
+            },
+            Message::Gps1019(e) => {
                 self.counts.ephemerides = self.counts.ephemerides.wrapping_add(1);
-                let week = latest_week(i64::from(m.gps_week_number), 1024, self.pivot_week);
-                let mut k = kepler(
-                    System::Gps,
-                    m.gps_satellite_id,
-                    &KeplerFields {
-                        toc_s: fx(m.toc_s),
-                        toe_s: fx(m.toe_s),
-                        af0: fx(m.af0_s),
-                        af1: fx(m.af1_s_s),
-                        af2: fx(m.af2_s_s2),
-                        sqrt_a: fx(m.sqrt_a_sqrt_m),
-                        e: fx(m.eccentricity),
-                        i0_sc: fx(m.i0_sc),
-                        omega0_sc: fx(m.omega0_sc),
-                        omega_sc: fx(m.omega_sc),
-                        m0_sc: fx(m.m0_sc),
-                        delta_n_sc: fx(m.delta_n_sc_s),
-                        omega_dot_sc: fx(m.omegadot_sc_s),
-                        idot_sc: fx(m.idot_sc_s),
-                        cuc: fx(m.cuc_rad),
-                        cus: fx(m.cus_rad),
-                        crc: fx(m.crc_m),
-                        crs: fx(m.crs_m),
-                        cic: fx(m.cic_rad),
-                        cis: fx(m.cis_rad),
-                        tgd: fx(m.tgd_s),
-                        tgd2: 0.0,
-                        health: u32::from(m.sv_health_ind),
-                        iod: u32::from(m.iode),
-                    },
-                );
-                k.toc_gps_s = toc_near_toe(week, k.toe_sow_s, fx(m.toc_s));
+                let week = latest_week(i64::from(e.week_mod1024), 1024, self.pivot_week);
+                let mut k = kepler(System::Gps, e.prn, &e.fields);
+                k.toc_gps_s = toc_near_toe(week, k.toe_sow_s, e.fields.toc_s);
                 let _: Stored = self.store.insert_kepler(k);
                 if self.first_eph.is_none() {
                     self.first_eph = Some((week, k.toe_sow_s));
@@ -357,9 +272,8 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 self.try_date();
                 None
             }
-            Message::Msg1020(m) => {
+            Message::Glo1020 { fields, tb_tod_s } => {
                 self.counts.ephemerides = self.counts.ephemerides.wrapping_add(1);
-                let (fields, tb_tod_s) = glonass_fields(&m);
                 let p = PendingGlonass {
                     fields,
                     tb_tod_s,
@@ -377,51 +291,33 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 }
                 None
             }
-            Message::Msg1005(m) => {
-                self.station_m = Some([
-                    m.antenna_ref_point_ecef_x_m,
-                    m.antenna_ref_point_ecef_y_m,
-                    m.antenna_ref_point_ecef_z_m,
-                ]);
+            Message::Station { ecef_m } => {
+                self.station_m = Some(ecef_m);
                 None
             }
-            Message::Msg1006(m) => {
-                self.station_m = Some([
-                    m.antenna_ref_point_ecef_x_m,
-                    m.antenna_ref_point_ecef_y_m,
-                    m.antenna_ref_point_ecef_z_m,
-                ]);
-                None
-            }
-            msg => {
-                if matches!(msg, Message::Corrupt) {
-                    self.counts.undecodable = self.counts.undecodable.wrapping_add(1);
-                } else {
-                    self.counts.ignored = self.counts.ignored.wrapping_add(1);
-                }
-                // Another system's MSM still ends the epoch when its
-                // multiple-message bit is 0 (the epoch's last message).
-                let other_msm = f
-                    .message_number()
-                    .is_some_and(|n| (1071..=1137).contains(&n));
-                if other_msm && msm_more_bit(frame) == Some(false) {
-                    self.close()
-                } else {
-                    None
-                }
+            Message::Other(_) => {
+                self.counts.ignored = self.counts.ignored.wrapping_add(1);
+                self.other_msm(&f, frame)
             }
         }
     }
 
-    /// GPS MSM data at GPS time of week `tow_ms`; `more` is DF393.
-    fn gps_msm(
-        &mut self,
-        tow_ms: i64,
-        sigs: Vec<Signal, S>,
-        more: bool,
-        overflow: bool,
-    ) -> Option<Open<S>> {
-        let tow_ms = tow_ms.rem_euclid(WEEK_MS);
+    /// A message not used here (or not decoded): another system's MSM
+    /// still ends the epoch when its multiple-message bit is 0 (the
+    /// epoch's last message).
+    fn other_msm(&mut self, f: &Frame<'_>, frame: &[u8]) -> Option<Open<S>> {
+        let msm = f.number().is_some_and(|n| (1071..=1137).contains(&n));
+        if msm && msm_more_bit(frame) == Some(false) {
+            self.close()
+        } else {
+            None
+        }
+    }
+
+    /// A GPS MSM: its data joins the epoch at its GPS time of week
+    /// (DF004); DF393 = 0 closes it.
+    fn gps_msm(&mut self, m: &Msm<'_>) -> Option<Open<S>> {
+        let tow_ms = i64::from(m.epoch_ms).rem_euclid(WEEK_MS);
         let mut closed = None;
         if self.open.as_ref().is_some_and(|o| o.tow_ms != tow_ms) {
             closed = self.close();
@@ -448,12 +344,11 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             self.try_date();
         }
         if let Some(o) = self.open.as_mut() {
-            o.overflow |= overflow;
-            for s in sigs {
+            for s in msm_signals(m, System::Gps) {
                 o.overflow |= o.sigs.push(s).is_err();
             }
         }
-        if !more {
+        if !m.more {
             // A GPS epoch closed while another waits to be formed: the
             // earlier one is the one handed over (a stream never closes
             // two in one frame unless its epochs hold no data).
@@ -463,22 +358,17 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         closed
     }
 
-    /// GLONASS MSM data at GLONASS time of day `tod_ms`.
-    fn glonass_msm(
-        &mut self,
-        tod_ms: i64,
-        sigs: Vec<Signal, S>,
-        more: bool,
-        overflow: bool,
-    ) -> Option<Open<S>> {
+    /// A GLONASS MSM: its data joins the open epoch with its GLONASS time
+    /// of day (DF034), or waits for the epoch's GPS MSM.
+    fn glonass_msm(&mut self, m: &Msm<'_>) -> Option<Open<S>> {
+        let tod_ms = i64::from(m.epoch_ms);
         match self.open.as_mut() {
             Some(o) => {
                 o.glo_tod_ms = o.glo_tod_ms.or(Some(tod_ms));
-                o.overflow |= overflow;
-                for s in sigs {
+                for s in msm_signals(m, System::Glonass) {
                     o.overflow |= o.sigs.push(s).is_err();
                 }
-                if more {
+                if m.more {
                     None
                 } else {
                     self.close()
@@ -487,17 +377,17 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             None => {
                 // Another time of day, or a satellite already waiting: the
                 // waiting data was an epoch of GLONASS alone.
-                let again = sigs
-                    .iter()
+                let again = msm_signals(m, System::Glonass)
+                    .take(S)
                     .any(|s| self.glo_wait.iter().any(|w| w.id == s.id));
                 if again || self.glo_wait_tod_ms.is_some_and(|t| t != tod_ms) {
                     self.drop_glonass_wait();
                 }
                 self.glo_wait_tod_ms = Some(tod_ms);
-                for s in sigs {
+                for s in msm_signals(m, System::Glonass) {
                     let _ = self.glo_wait.push(s);
                 }
-                if !more {
+                if !m.more {
                     self.drop_glonass_wait();
                 }
                 None
@@ -710,6 +600,17 @@ fn toc_near_toe(week: i64, toe_sow_s: f64, toc_sow_s: f64) -> f64 {
         toc += WEEK_S;
     }
     toc
+}
+
+/// An MSM's signals with a valid pseudorange, in cell order.
+fn msm_signals<'m>(m: &'m Msm<'_>, system: System) -> impl Iterator<Item = Signal> + 'm {
+    m.signals().filter_map(move |s| {
+        Some(Signal {
+            id: SatId::new(system, s.sat_id),
+            code: [b'C', b'0' + s.band, s.attribute],
+            value_m: s.pseudorange_m?,
+        })
+    })
 }
 
 /// The first preferred code present: a single code, or a pair (both
