@@ -476,6 +476,13 @@ impl Iterator for MsmSignals<'_, '_> {
     }
 }
 
+/// The multiple-message bit (DF393) of an MSM frame: bit 54 of the
+/// payload, after DF002 (12 bits), DF003 (12) and the epoch time (30;
+/// RTCM 10403.3 Table 3.5-78), the payload starting at byte 3.
+pub fn msm_more_bit(frame: &[u8]) -> Option<bool> {
+    frame.get(3 + 54 / 8).map(|b| b & (0x80 >> (54 % 8)) != 0)
+}
+
 /// A two's complement field times its resolution, in f64.
 fn f64_i(r: &mut BitReader<'_>, width: u32, res: f64) -> Result<f64, BitsError> {
     Ok(r.i(width)? as f64 * res)

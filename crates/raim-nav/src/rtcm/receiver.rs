@@ -51,7 +51,7 @@ use crate::ranging::{
 };
 use crate::store::{EphemerisStore, Stored};
 
-use super::decode::{Frame, Message, Msm, MsmSystem};
+use super::decode::{msm_more_bit, Frame, Message, Msm, MsmSystem};
 use super::fields::{kepler, latest_week};
 
 /// Milliseconds in a week and in a day.
@@ -581,13 +581,6 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         }
         Ok(())
     }
-}
-
-/// The multiple-message bit (DF393) of an MSM frame: bit 54 of the
-/// payload, after DF002 (12 bits), DF003 (12) and the epoch time (30;
-/// RTCM 10403.3 Table 3.5-78), the payload starting at byte 3.
-fn msm_more_bit(frame: &[u8]) -> Option<bool> {
-    frame.get(3 + 54 / 8).map(|b| b & (0x80 >> (54 % 8)) != 0)
 }
 
 /// toc in GPS seconds: the week's toc placed within half a week of toe.
