@@ -105,14 +105,62 @@ fn reference(frame: &[u8]) -> Decoded {
     let f = MessageFrame::new(frame).expect("a checked frame");
     let msg = f.get_message();
     match msg {
-        Message::Msg1074(m) => msm_ref!(m, false, m.gps_epoch_time_ms, None, gnss_signal_fine_pseudorange_ms),
-        Message::Msg1075(m) => msm_ref!(m, false, m.gps_epoch_time_ms, None, gnss_signal_fine_pseudorange_ms),
-        Message::Msg1076(m) => msm_ref!(m, false, m.gps_epoch_time_ms, None, gnss_signal_fine_pseudorange_ext_ms),
-        Message::Msg1077(m) => msm_ref!(m, false, m.gps_epoch_time_ms, None, gnss_signal_fine_pseudorange_ext_ms),
-        Message::Msg1084(m) => msm_ref!(m, true, m.glo_epoch_time_ms, Some(m.glo_day_of_week), gnss_signal_fine_pseudorange_ms),
-        Message::Msg1085(m) => msm_ref!(m, true, m.glo_epoch_time_ms, Some(m.glo_day_of_week), gnss_signal_fine_pseudorange_ms),
-        Message::Msg1086(m) => msm_ref!(m, true, m.glo_epoch_time_ms, Some(m.glo_day_of_week), gnss_signal_fine_pseudorange_ext_ms),
-        Message::Msg1087(m) => msm_ref!(m, true, m.glo_epoch_time_ms, Some(m.glo_day_of_week), gnss_signal_fine_pseudorange_ext_ms),
+        Message::Msg1074(m) => msm_ref!(
+            m,
+            false,
+            m.gps_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ms
+        ),
+        Message::Msg1075(m) => msm_ref!(
+            m,
+            false,
+            m.gps_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ms
+        ),
+        Message::Msg1076(m) => msm_ref!(
+            m,
+            false,
+            m.gps_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ext_ms
+        ),
+        Message::Msg1077(m) => msm_ref!(
+            m,
+            false,
+            m.gps_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ext_ms
+        ),
+        Message::Msg1084(m) => msm_ref!(
+            m,
+            true,
+            m.glo_epoch_time_ms,
+            Some(m.glo_day_of_week),
+            gnss_signal_fine_pseudorange_ms
+        ),
+        Message::Msg1085(m) => msm_ref!(
+            m,
+            true,
+            m.glo_epoch_time_ms,
+            Some(m.glo_day_of_week),
+            gnss_signal_fine_pseudorange_ms
+        ),
+        Message::Msg1086(m) => msm_ref!(
+            m,
+            true,
+            m.glo_epoch_time_ms,
+            Some(m.glo_day_of_week),
+            gnss_signal_fine_pseudorange_ext_ms
+        ),
+        Message::Msg1087(m) => msm_ref!(
+            m,
+            true,
+            m.glo_epoch_time_ms,
+            Some(m.glo_day_of_week),
+            gnss_signal_fine_pseudorange_ext_ms
+        ),
         Message::Msg1019(m) => Decoded::Gps1019 {
             prn: m.gps_satellite_id,
             week: m.gps_week_number,
@@ -171,18 +219,18 @@ fn reference(frame: &[u8]) -> Decoded {
             ]
         )),
         Message::Corrupt
-            if f.message_number().is_some_and(|n| {
-                matches!(n, 1005 | 1006 | 1019 | 1020 | 1074..=1077 | 1084..=1087)
-            }) =>
+            if f.message_number().is_some_and(
+                |n| matches!(n, 1005 | 1006 | 1019 | 1020 | 1074..=1077 | 1084..=1087),
+            ) =>
         {
             Decoded::Corrupt
         }
         other => Decoded::Other(other_msm_more!(
-            other, Msg1071, Msg1072, Msg1073, Msg1081, Msg1082, Msg1083, Msg1091, Msg1092,
-            Msg1093, Msg1094, Msg1095, Msg1096, Msg1097, Msg1101, Msg1102, Msg1103, Msg1104,
-            Msg1105, Msg1106, Msg1107, Msg1111, Msg1112, Msg1113, Msg1114, Msg1115, Msg1116,
-            Msg1117, Msg1121, Msg1122, Msg1123, Msg1124, Msg1125, Msg1126, Msg1127, Msg1131,
-            Msg1132, Msg1133, Msg1134, Msg1135, Msg1136, Msg1137
+            other, Msg1071, Msg1072, Msg1073, Msg1081, Msg1082, Msg1083, Msg1091, Msg1092, Msg1093,
+            Msg1094, Msg1095, Msg1096, Msg1097, Msg1101, Msg1102, Msg1103, Msg1104, Msg1105,
+            Msg1106, Msg1107, Msg1111, Msg1112, Msg1113, Msg1114, Msg1115, Msg1116, Msg1117,
+            Msg1121, Msg1122, Msg1123, Msg1124, Msg1125, Msg1126, Msg1127, Msg1131, Msg1132,
+            Msg1133, Msg1134, Msg1135, Msg1136, Msg1137
         )),
     }
 }
@@ -216,7 +264,11 @@ fn compact(frame: &[u8], more_known: bool) -> Decoded {
         },
         Ok(Dm::Station { ecef_m }) => Decoded::Station(format!("{ecef_m:?}")),
         Err(_) => Decoded::Corrupt,
-        Ok(Dm::Other(_)) => Decoded::Other(if more_known { msm_more_bit(frame) } else { None }),
+        Ok(Dm::Other(_)) => Decoded::Other(if more_known {
+            msm_more_bit(frame)
+        } else {
+            None
+        }),
     }
 }
 
@@ -247,7 +299,8 @@ fn gmsd7_every_frame_alike() {
             Decoded::Corrupt => "corrupt",
             _ => "",
         };
-        *n.entry(format!("{} {kind}", number.unwrap_or(0))).or_default() += 1;
+        *n.entry(format!("{} {kind}", number.unwrap_or(0)))
+            .or_default() += 1;
     }
     println!("GMSD7 frames by type: {n:?}; {signals} MSM signals");
     let count = |k: &str| n.get(k).copied().unwrap_or(0);

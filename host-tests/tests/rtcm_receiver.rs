@@ -81,7 +81,9 @@ fn device_receiver_forms_the_host_epochs_bit_for_bit() {
     let other = frames(&bytes)
         .iter()
         .filter(|f| {
-            let n = rtcm_rs::MessageFrame::new(f).ok().and_then(|x| x.message_number());
+            let n = rtcm_rs::MessageFrame::new(f)
+                .ok()
+                .and_then(|x| x.message_number());
             !matches!(n, Some(1077 | 1087 | 1019 | 1020))
         })
         .count();

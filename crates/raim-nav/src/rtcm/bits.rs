@@ -201,7 +201,10 @@ mod tests {
         assert_eq!(BitReader::new(&[0x80]).sm(8), Ok(0));
         assert_eq!(BitReader::new(&[0xff]).i(8), Ok(-1));
         assert_eq!(BitReader::new(&[0xff]).sm(8), Ok(-127));
-        assert_eq!(BitReader::new(&[0x80; 8]).i(64), Ok(i64::from_be_bytes([0x80; 8])));
+        assert_eq!(
+            BitReader::new(&[0x80; 8]).i(64),
+            Ok(i64::from_be_bytes([0x80; 8]))
+        );
     }
 
     #[test]
@@ -219,7 +222,7 @@ mod tests {
         assert_eq!(r.u(4), Ok(0b0011));
         assert!(r.u(1).is_err());
         assert!(r.skip(1).is_err());
-        assert_eq!(BitReader::at(&DATA, usize::MAX).u(1).is_err(), true);
+        assert!(BitReader::at(&DATA, usize::MAX).u(1).is_err());
         assert_eq!(
             BitReader::new(&DATA).u(0),
             Err(BitsError::Width { width_bits: 0 })

@@ -85,7 +85,10 @@ impl core::fmt::Display for DecodeError {
                 "MSM with {satellites} satellites x {signals} signals: not 1..=64 cells"
             ),
             DecodeError::SignalId { message, signal_id } => {
-                write!(f, "{message}: signal ID {signal_id} not in the signal table")
+                write!(
+                    f,
+                    "{message}: signal ID {signal_id} not in the signal table"
+                )
             }
         }
     }
@@ -151,13 +154,11 @@ impl<'a> Frame<'a> {
         match n {
             1074..=1077 | 1084..=1087 => Msm::new(self.payload, n).map(Message::Msm),
             1019 => msg1019(self.payload).map(Message::Gps1019),
-            1020 => msg1020(self.payload).map(|(fields, tb_tod_s)| Message::Glo1020 {
-                fields,
-                tb_tod_s,
-            }),
-            1005 | 1006 => station(self.payload, n == 1006).map(|ecef_m| Message::Station {
-                ecef_m,
-            }),
+            1020 => msg1020(self.payload)
+                .map(|(fields, tb_tod_s)| Message::Glo1020 { fields, tb_tod_s }),
+            1005 | 1006 => {
+                station(self.payload, n == 1006).map(|ecef_m| Message::Station { ecef_m })
+            }
             _ => Ok(Message::Other(Some(n))),
         }
     }
@@ -708,7 +709,7 @@ mod tests {
             Err(FrameError::Preamble { byte: 0xD2 })
         );
         // A 1005 of 4 bytes is too short for its fields.
-        let m = Frame::new(&f).and_then(|x| Ok(x.message()));
+        let m = Frame::new(&f).map(|x| x.message());
         assert!(matches!(m, Ok(Err(DecodeError::Bits(_)))));
     }
 }

@@ -4,6 +4,12 @@
 //! closed epoch is dated, corrected ([`crate::ranging`], the host's own
 //! kernel) and handed over as `RangeObservation`s.
 //!
+//! Frames are decoded by [`super::decode`] (the fields used, read straight
+//! from the frame's bits with small stack frames), not by `rtcm-rs`, whose
+//! decoding of one frame took 20-45 KB of stack on the device (see that
+//! module); the host's reader keeps `rtcm-rs`, and the host tests hold the
+//! two to the same values bit for bit.
+//!
 //! What it reads, and how:
 //! - GPS MSM4-MSM7 (1074-1077) and GLONASS MSM4-MSM7 (1084-1087):
 //!   pseudorange = (rough range + fine range) x c / 1000 (DF397 + DF398 +
