@@ -179,6 +179,9 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     base_week: Option<i64>,
     last: Option<(i64, i64)>,
     open: Option<Open<S>>,
+    /// The epoch the latest frame closed, until it is formed (held here,
+    /// not on the stack).
+    ready: Option<Open<S>>,
     glo_wait: Vec<Signal, S>,
     glo_wait_tod_ms: Option<i64>,
     station_m: Option<[f64; 3]>,
@@ -199,6 +202,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             base_week: None,
             last: None,
             open: None,
+            ready: None,
             glo_wait: Vec::new(),
             glo_wait_tod_ms: None,
             station_m: None,
@@ -241,24 +245,28 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         elevation_mask_rad: f64,
         out: &mut FormedEpoch<N>,
     ) -> Option<Result<(), FormError>> {
-        let closed = self.decode(frame)?;
-        Some(self.form(closed, model, elevation_mask_rad, out))
+        self.decode(frame);
+        let formed = self.form(model, elevation_mask_rad, out);
+        self.ready = None;
+        formed
     }
 
-    /// Decode one frame; the epoch it closed, if any. Not inlined: the
-    /// decoder's state is off the stack before the epoch is formed.
+    /// Decode one frame; the epoch it closed, if any, is left in `ready`.
+    /// Not inlined: the decoder's state is off the stack before the epoch
+    /// is formed.
     #[inline(never)]
-    fn decode(&mut self, frame: &[u8]) -> Option<Open<S>> {
+    fn decode(&mut self, frame: &[u8]) {
         let Ok(f) = Frame::new(frame) else {
             self.counts.undecodable = self.counts.undecodable.wrapping_add(1);
-            return None;
+            return;
         };
         self.counts.frames = self.counts.frames.wrapping_add(1);
         let message = match f.message() {
             Ok(m) => m,
             Err(_) => {
                 self.counts.undecodable = self.counts.undecodable.wrapping_add(1);
-                return self.other_msm(&f, frame);
+                self.other_msm(&f, frame);
+                return;
             }
         };
         match message {
@@ -276,7 +284,6 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                     self.first_eph = Some((week, k.toe_sow_s));
                 }
                 self.try_date();
-                None
             }
             Message::Glo1020 { fields, tb_tod_s } => {
                 self.counts.ephemerides = self.counts.ephemerides.wrapping_add(1);
@@ -295,11 +302,9 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                         let _ = self.pending_glo.push(p);
                     }
                 }
-                None
             }
             Message::Station { ecef_m } => {
                 self.station_m = Some(ecef_m);
-                None
             }
             Message::Other(_) => {
                 self.counts.ignored = self.counts.ignored.wrapping_add(1);
@@ -311,22 +316,19 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
     /// A message not used here (or not decoded): another system's MSM
     /// still ends the epoch when its multiple-message bit is 0 (the
     /// epoch's last message).
-    fn other_msm(&mut self, f: &Frame<'_>, frame: &[u8]) -> Option<Open<S>> {
+    fn other_msm(&mut self, f: &Frame<'_>, frame: &[u8]) {
         let msm = f.number().is_some_and(|n| (1071..=1137).contains(&n));
         if msm && msm_more_bit(frame) == Some(false) {
-            self.close()
-        } else {
-            None
+            self.close();
         }
     }
 
     /// A GPS MSM: its data joins the epoch at its GPS time of week
     /// (DF004); DF393 = 0 closes it.
-    fn gps_msm(&mut self, m: &Msm<'_>) -> Option<Open<S>> {
+    fn gps_msm(&mut self, m: &Msm<'_>) {
         let tow_ms = i64::from(m.epoch_ms).rem_euclid(WEEK_MS);
-        let mut closed = None;
         if self.open.as_ref().is_some_and(|o| o.tow_ms != tow_ms) {
-            closed = self.close();
+            self.close();
         }
         if self.open.is_none() {
             let rel_week = match self.last {
@@ -335,18 +337,19 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 None => 0,
             };
             self.last = Some((rel_week, tow_ms));
-            let mut o = Open {
+            let glo_tod_ms = self.glo_wait_tod_ms.take();
+            // Built in place (the signal list is kilobytes).
+            let o = self.open.insert(Open {
                 rel_week,
                 tow_ms,
                 sigs: Vec::new(),
-                glo_tod_ms: self.glo_wait_tod_ms.take(),
+                glo_tod_ms,
                 overflow: false,
-            };
+            });
             for s in self.glo_wait.iter() {
                 o.overflow |= o.sigs.push(*s).is_err();
             }
             self.glo_wait.clear();
-            self.open = Some(o);
             self.try_date();
         }
         if let Some(o) = self.open.as_mut() {
@@ -358,15 +361,13 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             // A GPS epoch closed while another waits to be formed: the
             // earlier one is the one handed over (a stream never closes
             // two in one frame unless its epochs hold no data).
-            let now = self.close();
-            return closed.or(now);
+            self.close();
         }
-        closed
     }
 
     /// A GLONASS MSM: its data joins the open epoch with its GLONASS time
     /// of day (DF034), or waits for the epoch's GPS MSM.
-    fn glonass_msm(&mut self, m: &Msm<'_>) -> Option<Open<S>> {
+    fn glonass_msm(&mut self, m: &Msm<'_>) {
         let tod_ms = i64::from(m.epoch_ms);
         match self.open.as_mut() {
             Some(o) => {
@@ -374,10 +375,8 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 for s in msm_signals(m, System::Glonass) {
                     o.overflow |= o.sigs.push(s).is_err();
                 }
-                if m.more {
-                    None
-                } else {
-                    self.close()
+                if !m.more {
+                    self.close();
                 }
             }
             None => {
@@ -396,7 +395,6 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 if !m.more {
                     self.drop_glonass_wait();
                 }
-                None
             }
         }
     }
@@ -410,10 +408,18 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         self.glo_wait_tod_ms = None;
     }
 
-    fn close(&mut self) -> Option<Open<S>> {
-        let o = self.open.take()?;
+    /// Close the open epoch, if any: it is the one formed after this frame
+    /// unless the frame already closed one (a stream never closes two in
+    /// one frame unless its epochs hold no data), then it is dropped.
+    fn close(&mut self) {
+        if self.open.is_none() {
+            return;
+        }
         self.counts.epochs = self.counts.epochs.wrapping_add(1);
-        Some(o)
+        if self.ready.is_none() {
+            core::mem::swap(&mut self.ready, &mut self.open);
+        }
+        self.open = None;
     }
 
     /// Date the stream from the first 1019 and the latest epoch: the GPS
@@ -437,10 +443,13 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         }
         let base = w - rel;
         self.base_week = Some(base);
-        let pending = core::mem::take(&mut self.pending_glo);
-        for p in pending {
-            self.place_glonass(base, p);
+        // In arrival order, one at a time (not the whole list on the stack).
+        for i in 0..self.pending_glo.len() {
+            if let Some(p) = self.pending_glo.get(i).copied() {
+                self.place_glonass(base, p);
+            }
         }
+        self.pending_glo.clear();
     }
 
     /// A 1020 in GPS time, checked and stored.
@@ -461,34 +470,44 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         }
     }
 
-    /// Form a closed epoch into `out`.
+    /// Form the epoch the latest frame closed, if any, into `out` (in
+    /// place: the epoch is not copied onto the stack).
     #[inline(never)]
     fn form(
         &mut self,
-        mut o: Open<S>,
         model: &SigmaModel,
         elevation_mask_rad: f64,
         out: &mut FormedEpoch<N>,
-    ) -> Result<(), FormError> {
+    ) -> Option<Result<(), FormError>> {
+        let Self {
+            ready,
+            base_week,
+            counts,
+            store,
+            station_m,
+            solution,
+            ..
+        } = self;
+        let o = ready.as_mut()?;
         out.sats.clear();
         out.rejected = 0;
         out.reference_m = None;
-        let Some(base) = self.base_week else {
+        let Some(base) = *base_week else {
             out.time_gps_s = o.tow_ms as f64 / 1000.0;
-            return Err(FormError::NotDated { tow_ms: o.tow_ms });
+            return Some(Err(FormError::NotDated { tow_ms: o.tow_ms }));
         };
         let time_gps_s = (base + o.rel_week) as f64 * WEEK_S + o.tow_ms as f64 / 1000.0;
         out.time_gps_s = time_gps_s;
         if o.overflow {
-            return Err(FormError::TooManySignals {
+            return Some(Err(FormError::TooManySignals {
                 capacity: u32::try_from(S).unwrap_or(u32::MAX),
-            });
+            }));
         }
         if let Some(tod_ms) = o.glo_tod_ms {
             let want_ms = m::round(glonass_time_of_day_s(time_gps_s) * 1000.0) as i64;
             if (tod_ms - want_ms).rem_euclid(DAY_MS) != 0 {
                 o.sigs.retain(|s| s.id.system != System::Glonass);
-                self.counts.glonass_dropped = self.counts.glonass_dropped.wrapping_add(1);
+                counts.glonass_dropped = counts.glonass_dropped.wrapping_add(1);
             }
         }
         // Satellite order, as the host's epochs (a BTreeMap by SatId).
@@ -519,7 +538,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 out.rejected += 1;
                 continue;
             };
-            let Some(eph) = self.store.select(s.id, time_gps_s) else {
+            let Some(eph) = store.select(s.id, time_gps_s) else {
                 out.rejected += 1;
                 continue;
             };
@@ -531,9 +550,9 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 eph,
             };
             if inputs.push(input).is_err() {
-                return Err(FormError::TooManySignals {
+                return Some(Err(FormError::TooManySignals {
                     capacity: u32::try_from(N).unwrap_or(u32::MAX),
-                });
+                }));
             }
         }
         let glonass_model = SigmaModel {
@@ -548,15 +567,14 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             glonass_sigma: Some(glonass_model),
         };
         // The bootstrap pass: clock- and rotation-corrected ranges.
-        let apriori = self.station_m;
+        let apriori = *station_m;
         let mut first: Vec<RangeObservation, N> = Vec::new();
         for s in inputs.iter() {
             if let Ok(x) = correct(s, time_gps_s, apriori, false, &c, None) {
                 let _ = first.push(x.obs);
             }
         }
-        let reference =
-            bootstrap_position_into(time_gps_s, &first, apriori, &mut self.solution).or(apriori);
+        let reference = bootstrap_position_into(time_gps_s, &first, apriori, solution).or(apriori);
         out.reference_m = reference;
         // Every correction at the reference; with none (the bootstrap
         // failed and no station position), the bootstrap pass's ranges, as
@@ -585,7 +603,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 Err(_) => out.rejected += 1,
             }
         }
-        Ok(())
+        Some(Ok(()))
     }
 }
 
