@@ -116,9 +116,9 @@ fn qemu_rtcm_stream_epochs_equal_the_host_replay_bit_for_bit() {
                 assert_eq!(wire_bytes(r), wire_bytes(&want), "epoch at {time_s} s");
                 let k = match r.decision {
                     Decision::Ok => 0,
-                    Decision::Excluded { .. } => 1,
-                    Decision::Alarm { .. } => 2,
-                    Decision::Unavailable { .. } => 3,
+                    Decision::Excluded => 1,
+                    Decision::Alarm => 2,
+                    Decision::Unavailable => 3,
                 };
                 decisions[k] += 1;
                 same += 1;

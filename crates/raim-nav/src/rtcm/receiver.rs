@@ -188,6 +188,9 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     counts: RtcmCounts,
     /// The bootstrap solution's storage (not on the stack).
     solution: Solution<N>,
+    /// The bootstrap pass's ranges (not on the stack: the epoch's deepest
+    /// path is the bootstrap solve under `form`).
+    bootstrap_obs: Vec<RangeObservation, N>,
 }
 
 impl<const N: usize, const S: usize> StreamReceiver<N, S> {
@@ -216,6 +219,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 glonass_bad: 0,
             },
             solution: Solution::empty(),
+            bootstrap_obs: Vec::new(),
         }
     }
 
@@ -486,6 +490,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             store,
             station_m,
             solution,
+            bootstrap_obs: first,
             ..
         } = self;
         let o = ready.as_mut()?;
@@ -568,13 +573,13 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         };
         // The bootstrap pass: clock- and rotation-corrected ranges.
         let apriori = *station_m;
-        let mut first: Vec<RangeObservation, N> = Vec::new();
+        first.clear();
         for s in inputs.iter() {
             if let Ok(x) = correct(s, time_gps_s, apriori, false, &c, None) {
                 let _ = first.push(x.obs);
             }
         }
-        let reference = bootstrap_position_into(time_gps_s, &first, apriori, solution).or(apriori);
+        let reference = bootstrap_position_into(time_gps_s, first, apriori, solution).or(apriori);
         out.reference_m = reference;
         // Every correction at the reference; with none (the bootstrap
         // failed and no station position), the bootstrap pass's ranges, as
