@@ -604,7 +604,7 @@ fn msg1019(payload: &[u8]) -> Result<Ephemeris1019, DecodeError> {
 /// DF113/116/119 acceleration 5 (2^-30 km/s^2); DF120, DF121 gamma_n 11
 /// (2^-40), DF122 2, DF123 l_n (third string), DF124 tau_n 22 (2^-30 s),
 /// and the GLONASS-M fields to the end (DF125-DF136, 7 reserved bits).
-/// The fields as [`super::fields::glonass_fields`] gives them from
+/// The fields as `fields::glonass_fields` (feature `rtcm-rs`) gives them from
 /// `rtcm-rs`'s 1020, and t_b as seconds of the Moscow day.
 fn msg1020(payload: &[u8]) -> Result<(GlonassIcdFields, f64), DecodeError> {
     let mut r = BitReader::at(payload, 12);

@@ -2,7 +2,7 @@
 //! broadcast ephemerides (1019, 1020, 1042, 1044, 1045, 1046) and the week
 //! numbers, as the host's stream reader and the firmware's receiver both
 //! read them. On the host `rtcm-rs` applies each data field's resolution
-//! and sign (feature `rtcm-rs`: [`glonass_fields`]); on the device the
+//! and sign (feature `rtcm-rs`: `glonass_fields`); on the device the
 //! compact decoder ([`super::decode`]) does, with the same operations.
 
 use raim_core::System;
