@@ -687,6 +687,120 @@ mod tests {
         f
     }
 
+    /// Fields packed most significant bit first.
+    struct Bits(std::vec::Vec<u8>, usize);
+
+    impl Bits {
+        fn put(&mut self, v: i64, width: u32) -> &mut Self {
+            for b in (0..width).rev() {
+                if self.1 % 8 == 0 {
+                    self.0.push(0);
+                }
+                if (v >> b) & 1 == 1 {
+                    if let Some(last) = self.0.last_mut() {
+                        *last |= 0x80 >> (self.1 % 8);
+                    }
+                }
+                self.1 += 1;
+            }
+            self
+        }
+    }
+
+    /// A GPS MSM4 (1074): satellites 3 and 17, signals 2 (1C) and
+    /// `second_signal`; cells (3, 1C), (17, 1C), (17, second).
+    fn msm4(second_signal: u32) -> std::vec::Vec<u8> {
+        let mut b = Bits(std::vec::Vec::new(), 0);
+        b.put(1074, 12).put(7, 12).put(345_600_000, 30).put(1, 1);
+        b.put(0, 3 + 7 + 2 + 2 + 1 + 3);
+        b.put(1 << 61 | 1 << 47, 64);
+        b.put(1 << 30 | 1 << (32 - second_signal), 32);
+        b.put(0b1011, 4);
+        // DF397, DF398 per satellite.
+        b.put(70, 8).put(75, 8).put(512, 10).put(100, 10);
+        // DF400 per cell (the second invalid), then DF401, DF402, DF420,
+        // DF403.
+        b.put(1000, 15).put(-0x4000, 15).put(-5, 15);
+        for _ in 0..3 {
+            b.put(0, 22 + 4 + 1 + 6);
+        }
+        frame(&b.0)
+    }
+
+    #[test]
+    fn msm4_signals_ranges_and_invalid_marks() {
+        let f = msm4(15);
+        let Ok(Ok(Message::Msm(m))) = Frame::new(&f).map(|x| x.message()) else {
+            panic!("not an MSM");
+        };
+        assert_eq!(
+            (m.system, m.station_id, m.epoch_ms, m.more, m.satellites()),
+            (MsmSystem::Gps, 7, 345_600_000, true, 2)
+        );
+        let s: std::vec::Vec<MsmSignal> = m.signals().collect();
+        let want_3 = (70.0 + 512.0 / 1024.0 + 1000.0 / 16_777_216.0) * LIGHT_MS_M;
+        let want_17 = (75.0 + 100.0 / 1024.0 - 5.0 / 16_777_216.0) * LIGHT_MS_M;
+        assert_eq!(
+            s,
+            [
+                MsmSignal {
+                    sat_id: 3,
+                    signal_id: 2,
+                    band: 1,
+                    attribute: b'C',
+                    pseudorange_m: Some(want_3)
+                },
+                MsmSignal {
+                    sat_id: 17,
+                    signal_id: 2,
+                    band: 1,
+                    attribute: b'C',
+                    pseudorange_m: None
+                },
+                MsmSignal {
+                    sat_id: 17,
+                    signal_id: 15,
+                    band: 2,
+                    attribute: b'S',
+                    pseudorange_m: Some(want_17)
+                },
+            ]
+        );
+    }
+
+    #[test]
+    fn msm_errors_are_typed() {
+        // Signal ID 1 is not in Table 3.5-91.
+        let f = msm4(1);
+        assert_eq!(
+            Frame::new(&f).map(|x| x.message().map(|_| ())),
+            Ok(Err(DecodeError::SignalId {
+                message: 1074,
+                signal_id: 1
+            }))
+        );
+        // Cut inside the signal data.
+        let f = msm4(15);
+        let payload = &f[3..f.len() - 3];
+        let cut = frame(&payload[..payload.len() - 4]);
+        assert!(matches!(
+            Frame::new(&cut).map(|x| x.message().map(|_| ())),
+            Ok(Err(DecodeError::Bits(BitsError::PastEnd { .. })))
+        ));
+        // 9 satellites x 8 signals: 72 cells.
+        let mut b = Bits(std::vec::Vec::new(), 0);
+        b.put(1077, 12).put(0, 12 + 30 + 1 + 18);
+        b.put(0x1FF, 64).put(0xFF, 32).put(0, 64);
+        let f = frame(&b.0);
+        assert_eq!(
+            Frame::new(&f).map(|x| x.message().map(|_| ())),
+            Ok(Err(DecodeError::CellCount {
+                satellites: 9,
+                signals: 8
+            }))
+        );
+    }
+
     #[test]
     fn crc24q_check_value() {
         assert_eq!(CRC24Q.checksum(b"123456789"), 0xCDE703);
