@@ -1,11 +1,14 @@
 //! The RTCM 3 message fields in the units of the navigation layer: the
 //! broadcast ephemerides (1019, 1020, 1042, 1044, 1045, 1046) and the week
 //! numbers, as the host's stream reader and the firmware's receiver both
-//! read them. `rtcm-rs` applies each data field's resolution and sign.
+//! read them. On the host `rtcm-rs` applies each data field's resolution
+//! and sign (feature `rtcm-rs`: `glonass_fields`); on the device the
+//! compact decoder ([`super::decode`]) does, with the same operations.
 
 use raim_core::System;
 
 use crate::ephemeris::Kepler;
+#[cfg(feature = "rtcm-rs")]
 use crate::glonass::GlonassIcdFields;
 
 /// One light-millisecond, m (RTCM DF011/DF014 unit and the MSM range unit).
@@ -31,6 +34,7 @@ pub fn latest_week(week_mod: i64, modulus: i64, now_week: i64) -> i64 {
 /// (2^-30). Unhealthy: the MSB of B_n (DF108) or the GLONASS-M l_n of
 /// the third string (DF123). t_b (`tb_gps_s` here 0) is placed in GPS
 /// time once the stream's week is known.
+#[cfg(feature = "rtcm-rs")]
 pub fn glonass_fields(m: &rtcm_rs::msg::Msg1020T) -> (GlonassIcdFields, f64) {
     let f = GlonassIcdFields {
         slot: m.glo_satellite_id,
@@ -60,6 +64,7 @@ pub fn fx<T: Into<f64>>(x: T) -> f64 {
 
 /// The broadcast fields common to the Keplerian messages (angles in
 /// semicircles as sent).
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct KeplerFields {
     pub toc_s: f64,
     pub toe_s: f64,

@@ -4,6 +4,12 @@
 //! closed epoch is dated, corrected ([`crate::ranging`], the host's own
 //! kernel) and handed over as `RangeObservation`s.
 //!
+//! Frames are decoded by [`super::decode`] (the fields used, read straight
+//! from the frame's bits with small stack frames), not by `rtcm-rs`, whose
+//! decoding of one frame took 20-45 KB of stack on the device (see that
+//! module); the host's reader keeps `rtcm-rs`, and the host tests hold the
+//! two to the same values bit for bit.
+//!
 //! What it reads, and how:
 //! - GPS MSM4-MSM7 (1074-1077) and GLONASS MSM4-MSM7 (1084-1087):
 //!   pseudorange = (rough range + fine range) x c / 1000 (DF397 + DF398 +
@@ -38,8 +44,6 @@ use heapless::Vec;
 use raim_core::sigma::SigmaModel;
 use raim_core::solve::Solution;
 use raim_core::{RangeObservation, SatId, System};
-use rtcm_rs::msg::message::Message;
-use rtcm_rs::MessageFrame;
 
 use crate::ephemeris::WEEK_S;
 use crate::glonass::{
@@ -53,7 +57,8 @@ use crate::ranging::{
 };
 use crate::store::{EphemerisStore, Stored};
 
-use super::fields::{fx, glonass_fields, kepler, latest_week, KeplerFields, LIGHT_MS_M};
+use super::decode::{msm_more_bit, Frame, Message, Msm, MsmSystem};
+use super::fields::{kepler, latest_week};
 
 /// Milliseconds in a week and in a day.
 const WEEK_MS: i64 = 604_800_000;
@@ -174,12 +179,18 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     base_week: Option<i64>,
     last: Option<(i64, i64)>,
     open: Option<Open<S>>,
+    /// The epoch the latest frame closed, until it is formed (held here,
+    /// not on the stack).
+    ready: Option<Open<S>>,
     glo_wait: Vec<Signal, S>,
     glo_wait_tod_ms: Option<i64>,
     station_m: Option<[f64; 3]>,
     counts: RtcmCounts,
     /// The bootstrap solution's storage (not on the stack).
     solution: Solution<N>,
+    /// The bootstrap pass's ranges (not on the stack: the epoch's deepest
+    /// path is the bootstrap solve under `form`).
+    bootstrap_obs: Vec<RangeObservation, N>,
 }
 
 impl<const N: usize, const S: usize> StreamReceiver<N, S> {
@@ -194,6 +205,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             base_week: None,
             last: None,
             open: None,
+            ready: None,
             glo_wait: Vec::new(),
             glo_wait_tod_ms: None,
             station_m: None,
@@ -207,6 +219,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 glonass_bad: 0,
             },
             solution: Solution::empty(),
+            bootstrap_obs: Vec::new(),
         }
     }
 
@@ -236,130 +249,48 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         elevation_mask_rad: f64,
         out: &mut FormedEpoch<N>,
     ) -> Option<Result<(), FormError>> {
-        let closed = self.decode(frame)?;
-        Some(self.form(closed, model, elevation_mask_rad, out))
+        self.decode(frame);
+        let formed = self.form(model, elevation_mask_rad, out);
+        self.ready = None;
+        formed
     }
 
-    /// Decode one frame; the epoch it closed, if any. Not inlined: the
-    /// decoded message (several KB) is off the stack before the epoch is
-    /// formed.
+    /// Decode one frame; the epoch it closed, if any, is left in `ready`.
+    /// Not inlined: the decoder's state is off the stack before the epoch
+    /// is formed.
     #[inline(never)]
-    fn decode(&mut self, frame: &[u8]) -> Option<Open<S>> {
-        let Ok(f) = MessageFrame::new(frame) else {
+    fn decode(&mut self, frame: &[u8]) {
+        let Ok(f) = Frame::new(frame) else {
             self.counts.undecodable = self.counts.undecodable.wrapping_add(1);
-            return None;
+            return;
         };
         self.counts.frames = self.counts.frames.wrapping_add(1);
-        macro_rules! msm {
-            ($m:expr, $sys:expr, $fine:ident) => {{
-                let m = &$m;
-                let mut sigs: Vec<Signal, S> = Vec::new();
-                let mut overflow = false;
-                for sig in m.data_segment.signal_data.iter() {
-                    let rough = m
-                        .data_segment
-                        .satellite_data
-                        .iter()
-                        .find(|s| s.satellite_id == sig.satellite_id)
-                        .and_then(|s| {
-                            s.gnss_satellite_rough_range_integer_ms
-                                .map(|i| fx(i) + s.gnss_satellite_rough_range_mod1ms_ms)
-                        });
-                    let (Some(r), Some(fine)) = (rough, sig.$fine) else {
-                        continue;
-                    };
-                    let band = sig.signal_id.band();
-                    let attr = sig.signal_id.attribute();
-                    if band > 9 || !attr.is_ascii() {
-                        continue;
-                    }
-                    let s = Signal {
-                        id: SatId::new($sys, sig.satellite_id),
-                        code: [b'C', b'0' + band, attr as u8],
-                        value_m: (r + fine) * LIGHT_MS_M,
-                    };
-                    overflow |= sigs.push(s).is_err();
-                }
-                (sigs, m.msm_multiple_message_flag == 1, overflow)
-            }};
-        }
-        match f.get_message() {
-            Message::Msg1074(m) => {
-                let (s, more, o) = msm!(m, System::Gps, gnss_signal_fine_pseudorange_ms);
-                self.gps_msm(i64::from(m.gps_epoch_time_ms), s, more, o)
+        let message = match f.message() {
+            Ok(m) => m,
+            Err(_) => {
+                self.counts.undecodable = self.counts.undecodable.wrapping_add(1);
+                self.other_msm(&f, frame);
+                return;
             }
-            Message::Msg1075(m) => {
-                let (s, more, o) = msm!(m, System::Gps, gnss_signal_fine_pseudorange_ms);
-                self.gps_msm(i64::from(m.gps_epoch_time_ms), s, more, o)
-            }
-            Message::Msg1076(m) => {
-                let (s, more, o) = msm!(m, System::Gps, gnss_signal_fine_pseudorange_ext_ms);
-                self.gps_msm(i64::from(m.gps_epoch_time_ms), s, more, o)
-            }
-            Message::Msg1077(m) => {
-                let (s, more, o) = msm!(m, System::Gps, gnss_signal_fine_pseudorange_ext_ms);
-                self.gps_msm(i64::from(m.gps_epoch_time_ms), s, more, o)
-            }
-            Message::Msg1084(m) => {
-                let (s, more, o) = msm!(m, System::Glonass, gnss_signal_fine_pseudorange_ms);
-                self.glonass_msm(i64::from(m.glo_epoch_time_ms), s, more, o)
-            }
-            Message::Msg1085(m) => {
-                let (s, more, o) = msm!(m, System::Glonass, gnss_signal_fine_pseudorange_ms);
-                self.glonass_msm(i64::from(m.glo_epoch_time_ms), s, more, o)
-            }
-            Message::Msg1086(m) => {
-                let (s, more, o) = msm!(m, System::Glonass, gnss_signal_fine_pseudorange_ext_ms);
-                self.glonass_msm(i64::from(m.glo_epoch_time_ms), s, more, o)
-            }
-            Message::Msg1087(m) => {
-                let (s, more, o) = msm!(m, System::Glonass, gnss_signal_fine_pseudorange_ext_ms);
-                self.glonass_msm(i64::from(m.glo_epoch_time_ms), s, more, o)
-            }
-            Message::Msg1019(m) => {
+        };
+        match message {
+            Message::Msm(m) => match m.system {
+                MsmSystem::Gps => self.gps_msm(&m),
+                MsmSystem::Glonass => self.glonass_msm(&m),
+            },
+            Message::Gps1019(e) => {
                 self.counts.ephemerides = self.counts.ephemerides.wrapping_add(1);
-                let week = latest_week(i64::from(m.gps_week_number), 1024, self.pivot_week);
-                let mut k = kepler(
-                    System::Gps,
-                    m.gps_satellite_id,
-                    &KeplerFields {
-                        toc_s: fx(m.toc_s),
-                        toe_s: fx(m.toe_s),
-                        af0: fx(m.af0_s),
-                        af1: fx(m.af1_s_s),
-                        af2: fx(m.af2_s_s2),
-                        sqrt_a: fx(m.sqrt_a_sqrt_m),
-                        e: fx(m.eccentricity),
-                        i0_sc: fx(m.i0_sc),
-                        omega0_sc: fx(m.omega0_sc),
-                        omega_sc: fx(m.omega_sc),
-                        m0_sc: fx(m.m0_sc),
-                        delta_n_sc: fx(m.delta_n_sc_s),
-                        omega_dot_sc: fx(m.omegadot_sc_s),
-                        idot_sc: fx(m.idot_sc_s),
-                        cuc: fx(m.cuc_rad),
-                        cus: fx(m.cus_rad),
-                        crc: fx(m.crc_m),
-                        crs: fx(m.crs_m),
-                        cic: fx(m.cic_rad),
-                        cis: fx(m.cis_rad),
-                        tgd: fx(m.tgd_s),
-                        tgd2: 0.0,
-                        health: u32::from(m.sv_health_ind),
-                        iod: u32::from(m.iode),
-                    },
-                );
-                k.toc_gps_s = toc_near_toe(week, k.toe_sow_s, fx(m.toc_s));
+                let week = latest_week(i64::from(e.week_mod1024), 1024, self.pivot_week);
+                let mut k = kepler(System::Gps, e.prn, &e.fields);
+                k.toc_gps_s = toc_near_toe(week, k.toe_sow_s, e.fields.toc_s);
                 let _: Stored = self.store.insert_kepler(k);
                 if self.first_eph.is_none() {
                     self.first_eph = Some((week, k.toe_sow_s));
                 }
                 self.try_date();
-                None
             }
-            Message::Msg1020(m) => {
+            Message::Glo1020 { fields, tb_tod_s } => {
                 self.counts.ephemerides = self.counts.ephemerides.wrapping_add(1);
-                let (fields, tb_tod_s) = glonass_fields(&m);
                 let p = PendingGlonass {
                     fields,
                     tb_tod_s,
@@ -375,56 +306,33 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                         let _ = self.pending_glo.push(p);
                     }
                 }
-                None
             }
-            Message::Msg1005(m) => {
-                self.station_m = Some([
-                    m.antenna_ref_point_ecef_x_m,
-                    m.antenna_ref_point_ecef_y_m,
-                    m.antenna_ref_point_ecef_z_m,
-                ]);
-                None
+            Message::Station { ecef_m } => {
+                self.station_m = Some(ecef_m);
             }
-            Message::Msg1006(m) => {
-                self.station_m = Some([
-                    m.antenna_ref_point_ecef_x_m,
-                    m.antenna_ref_point_ecef_y_m,
-                    m.antenna_ref_point_ecef_z_m,
-                ]);
-                None
-            }
-            msg => {
-                if matches!(msg, Message::Corrupt) {
-                    self.counts.undecodable = self.counts.undecodable.wrapping_add(1);
-                } else {
-                    self.counts.ignored = self.counts.ignored.wrapping_add(1);
-                }
-                // Another system's MSM still ends the epoch when its
-                // multiple-message bit is 0 (the epoch's last message).
-                let other_msm = f
-                    .message_number()
-                    .is_some_and(|n| (1071..=1137).contains(&n));
-                if other_msm && msm_more_bit(frame) == Some(false) {
-                    self.close()
-                } else {
-                    None
-                }
+            Message::Other(_) => {
+                self.counts.ignored = self.counts.ignored.wrapping_add(1);
+                self.other_msm(&f, frame)
             }
         }
     }
 
-    /// GPS MSM data at GPS time of week `tow_ms`; `more` is DF393.
-    fn gps_msm(
-        &mut self,
-        tow_ms: i64,
-        sigs: Vec<Signal, S>,
-        more: bool,
-        overflow: bool,
-    ) -> Option<Open<S>> {
-        let tow_ms = tow_ms.rem_euclid(WEEK_MS);
-        let mut closed = None;
+    /// A message not used here (or not decoded): another system's MSM
+    /// still ends the epoch when its multiple-message bit is 0 (the
+    /// epoch's last message).
+    fn other_msm(&mut self, f: &Frame<'_>, frame: &[u8]) {
+        let msm = f.number().is_some_and(|n| (1071..=1137).contains(&n));
+        if msm && msm_more_bit(frame) == Some(false) {
+            self.close();
+        }
+    }
+
+    /// A GPS MSM: its data joins the epoch at its GPS time of week
+    /// (DF004); DF393 = 0 closes it.
+    fn gps_msm(&mut self, m: &Msm<'_>) {
+        let tow_ms = i64::from(m.epoch_ms).rem_euclid(WEEK_MS);
         if self.open.as_ref().is_some_and(|o| o.tow_ms != tow_ms) {
-            closed = self.close();
+            self.close();
         }
         if self.open.is_none() {
             let rel_week = match self.last {
@@ -433,74 +341,64 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 None => 0,
             };
             self.last = Some((rel_week, tow_ms));
-            let mut o = Open {
+            let glo_tod_ms = self.glo_wait_tod_ms.take();
+            // Built in place (the signal list is kilobytes).
+            let o = self.open.insert(Open {
                 rel_week,
                 tow_ms,
                 sigs: Vec::new(),
-                glo_tod_ms: self.glo_wait_tod_ms.take(),
+                glo_tod_ms,
                 overflow: false,
-            };
+            });
             for s in self.glo_wait.iter() {
                 o.overflow |= o.sigs.push(*s).is_err();
             }
             self.glo_wait.clear();
-            self.open = Some(o);
             self.try_date();
         }
         if let Some(o) = self.open.as_mut() {
-            o.overflow |= overflow;
-            for s in sigs {
+            for s in msm_signals(m, System::Gps) {
                 o.overflow |= o.sigs.push(s).is_err();
             }
         }
-        if !more {
+        if !m.more {
             // A GPS epoch closed while another waits to be formed: the
             // earlier one is the one handed over (a stream never closes
             // two in one frame unless its epochs hold no data).
-            let now = self.close();
-            return closed.or(now);
+            self.close();
         }
-        closed
     }
 
-    /// GLONASS MSM data at GLONASS time of day `tod_ms`.
-    fn glonass_msm(
-        &mut self,
-        tod_ms: i64,
-        sigs: Vec<Signal, S>,
-        more: bool,
-        overflow: bool,
-    ) -> Option<Open<S>> {
+    /// A GLONASS MSM: its data joins the open epoch with its GLONASS time
+    /// of day (DF034), or waits for the epoch's GPS MSM.
+    fn glonass_msm(&mut self, m: &Msm<'_>) {
+        let tod_ms = i64::from(m.epoch_ms);
         match self.open.as_mut() {
             Some(o) => {
                 o.glo_tod_ms = o.glo_tod_ms.or(Some(tod_ms));
-                o.overflow |= overflow;
-                for s in sigs {
+                for s in msm_signals(m, System::Glonass) {
                     o.overflow |= o.sigs.push(s).is_err();
                 }
-                if more {
-                    None
-                } else {
-                    self.close()
+                if !m.more {
+                    self.close();
                 }
             }
             None => {
                 // Another time of day, or a satellite already waiting: the
                 // waiting data was an epoch of GLONASS alone.
-                let again = sigs
-                    .iter()
+                let again = msm_signals(m, System::Glonass)
+                    .take(S)
                     .any(|s| self.glo_wait.iter().any(|w| w.id == s.id));
                 if again || self.glo_wait_tod_ms.is_some_and(|t| t != tod_ms) {
                     self.drop_glonass_wait();
                 }
                 self.glo_wait_tod_ms = Some(tod_ms);
-                for s in sigs {
+                for s in msm_signals(m, System::Glonass) {
                     let _ = self.glo_wait.push(s);
                 }
-                if !more {
+                if !m.more {
                     self.drop_glonass_wait();
                 }
-                None
             }
         }
     }
@@ -514,10 +412,18 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         self.glo_wait_tod_ms = None;
     }
 
-    fn close(&mut self) -> Option<Open<S>> {
-        let o = self.open.take()?;
+    /// Close the open epoch, if any: it is the one formed after this frame
+    /// unless the frame already closed one (a stream never closes two in
+    /// one frame unless its epochs hold no data), then it is dropped.
+    fn close(&mut self) {
+        if self.open.is_none() {
+            return;
+        }
         self.counts.epochs = self.counts.epochs.wrapping_add(1);
-        Some(o)
+        if self.ready.is_none() {
+            core::mem::swap(&mut self.ready, &mut self.open);
+        }
+        self.open = None;
     }
 
     /// Date the stream from the first 1019 and the latest epoch: the GPS
@@ -541,10 +447,13 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         }
         let base = w - rel;
         self.base_week = Some(base);
-        let pending = core::mem::take(&mut self.pending_glo);
-        for p in pending {
-            self.place_glonass(base, p);
+        // In arrival order, one at a time (not the whole list on the stack).
+        for i in 0..self.pending_glo.len() {
+            if let Some(p) = self.pending_glo.get(i).copied() {
+                self.place_glonass(base, p);
+            }
         }
+        self.pending_glo.clear();
     }
 
     /// A 1020 in GPS time, checked and stored.
@@ -565,34 +474,45 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         }
     }
 
-    /// Form a closed epoch into `out`.
+    /// Form the epoch the latest frame closed, if any, into `out` (in
+    /// place: the epoch is not copied onto the stack).
     #[inline(never)]
     fn form(
         &mut self,
-        mut o: Open<S>,
         model: &SigmaModel,
         elevation_mask_rad: f64,
         out: &mut FormedEpoch<N>,
-    ) -> Result<(), FormError> {
+    ) -> Option<Result<(), FormError>> {
+        let Self {
+            ready,
+            base_week,
+            counts,
+            store,
+            station_m,
+            solution,
+            bootstrap_obs: first,
+            ..
+        } = self;
+        let o = ready.as_mut()?;
         out.sats.clear();
         out.rejected = 0;
         out.reference_m = None;
-        let Some(base) = self.base_week else {
+        let Some(base) = *base_week else {
             out.time_gps_s = o.tow_ms as f64 / 1000.0;
-            return Err(FormError::NotDated { tow_ms: o.tow_ms });
+            return Some(Err(FormError::NotDated { tow_ms: o.tow_ms }));
         };
         let time_gps_s = (base + o.rel_week) as f64 * WEEK_S + o.tow_ms as f64 / 1000.0;
         out.time_gps_s = time_gps_s;
         if o.overflow {
-            return Err(FormError::TooManySignals {
+            return Some(Err(FormError::TooManySignals {
                 capacity: u32::try_from(S).unwrap_or(u32::MAX),
-            });
+            }));
         }
         if let Some(tod_ms) = o.glo_tod_ms {
             let want_ms = m::round(glonass_time_of_day_s(time_gps_s) * 1000.0) as i64;
             if (tod_ms - want_ms).rem_euclid(DAY_MS) != 0 {
                 o.sigs.retain(|s| s.id.system != System::Glonass);
-                self.counts.glonass_dropped = self.counts.glonass_dropped.wrapping_add(1);
+                counts.glonass_dropped = counts.glonass_dropped.wrapping_add(1);
             }
         }
         // Satellite order, as the host's epochs (a BTreeMap by SatId).
@@ -623,7 +543,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 out.rejected += 1;
                 continue;
             };
-            let Some(eph) = self.store.select(s.id, time_gps_s) else {
+            let Some(eph) = store.select(s.id, time_gps_s) else {
                 out.rejected += 1;
                 continue;
             };
@@ -635,9 +555,9 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 eph,
             };
             if inputs.push(input).is_err() {
-                return Err(FormError::TooManySignals {
+                return Some(Err(FormError::TooManySignals {
                     capacity: u32::try_from(N).unwrap_or(u32::MAX),
-                });
+                }));
             }
         }
         let glonass_model = SigmaModel {
@@ -652,15 +572,14 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             glonass_sigma: Some(glonass_model),
         };
         // The bootstrap pass: clock- and rotation-corrected ranges.
-        let apriori = self.station_m;
-        let mut first: Vec<RangeObservation, N> = Vec::new();
+        let apriori = *station_m;
+        first.clear();
         for s in inputs.iter() {
             if let Ok(x) = correct(s, time_gps_s, apriori, false, &c, None) {
                 let _ = first.push(x.obs);
             }
         }
-        let reference =
-            bootstrap_position_into(time_gps_s, &first, apriori, &mut self.solution).or(apriori);
+        let reference = bootstrap_position_into(time_gps_s, first, apriori, solution).or(apriori);
         out.reference_m = reference;
         // Every correction at the reference; with none (the bootstrap
         // failed and no station position), the bootstrap pass's ranges, as
@@ -689,15 +608,8 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 Err(_) => out.rejected += 1,
             }
         }
-        Ok(())
+        Some(Ok(()))
     }
-}
-
-/// The multiple-message bit (DF393) of an MSM frame: bit 54 of the
-/// payload, after DF002 (12 bits), DF003 (12) and the epoch time (30;
-/// RTCM 10403.3 Table 3.5-78), the payload starting at byte 3.
-fn msm_more_bit(frame: &[u8]) -> Option<bool> {
-    frame.get(3 + 54 / 8).map(|b| b & (0x80 >> (54 % 8)) != 0)
 }
 
 /// toc in GPS seconds: the week's toc placed within half a week of toe.
@@ -710,6 +622,17 @@ fn toc_near_toe(week: i64, toe_sow_s: f64, toc_sow_s: f64) -> f64 {
         toc += WEEK_S;
     }
     toc
+}
+
+/// An MSM's signals with a valid pseudorange, in cell order.
+fn msm_signals<'m>(m: &'m Msm<'_>, system: System) -> impl Iterator<Item = Signal> + 'm {
+    m.signals().filter_map(move |s| {
+        Some(Signal {
+            id: SatId::new(system, s.sat_id),
+            code: [b'C', b'0' + s.band, s.attribute],
+            value_m: s.pseudorange_m?,
+        })
+    })
 }
 
 /// The first preferred code present: a single code, or a pair (both

@@ -1,0 +1,394 @@
+//! The device's compact RTCM 3 decoder (`raim_nav::rtcm::decode`) against
+//! `rtcm-rs` (the host's decoder), field by field and bit for bit: every
+//! frame of the real GMSD7 stream (GPS + GLONASS MSM7, 1019, 1020, 1005/
+//! 1006; other systems' MSM for their DF393), and random GPS/GLONASS
+//! MSM4-MSM7, 1019, 1020, 1005 and 1006 built by `rtcm-rs`'s own encoder
+//! (`build_generated_message`), whole, with a byte overwritten, and cut
+//! short.
+//!
+//! Values are compared through their `Debug` text: Rust prints an f64 as
+//! the shortest decimal that reads back to the same bits (and -0.0 as
+//! such), so equal text is equal bits.
+
+mod rtcm_common;
+
+use raim_nav::rtcm::decode::{msm_more_bit, DecodeError, Frame, Message as Dm, MsmSystem};
+use raim_nav::rtcm::{fx, glonass_fields, KeplerFields, LIGHT_MS_M};
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+use rtcm_rs::msg::message::{Message, MessageBuilder};
+use rtcm_rs::val_gen::ValGen;
+use rtcm_rs::MessageFrame;
+
+/// What a frame decodes to, in one form for both decoders.
+#[derive(Debug, PartialEq)]
+enum Decoded {
+    Msm {
+        glonass: bool,
+        station_id: u16,
+        epoch_ms: u32,
+        /// GLONASS: DF416 (`None` = 7, unknown).
+        glonass_day: Option<Option<u8>>,
+        more: bool,
+        /// (satellite, band, attribute, pseudorange m).
+        signals: Vec<(u8, u8, u8, Option<f64>)>,
+    },
+    Gps1019 {
+        prn: u8,
+        week: u16,
+        fields: String,
+    },
+    Glo1020 {
+        fields: String,
+        tb_tod_s: String,
+    },
+    Station(String),
+    Corrupt,
+    /// Not decoded by the compact decoder: another system's MSM with its
+    /// DF393, or another message.
+    Other(Option<bool>),
+}
+
+macro_rules! msm_ref {
+    ($m:expr, $glonass:expr, $epoch:expr, $day:expr, $fine:ident) => {{
+        let m = &$m;
+        let signals = m
+            .data_segment
+            .signal_data
+            .iter()
+            .map(|sig| {
+                // The receiver's computation as it was with rtcm-rs.
+                let rough = m
+                    .data_segment
+                    .satellite_data
+                    .iter()
+                    .find(|s| s.satellite_id == sig.satellite_id)
+                    .and_then(|s| {
+                        s.gnss_satellite_rough_range_integer_ms
+                            .map(|i| fx(i) + s.gnss_satellite_rough_range_mod1ms_ms)
+                    });
+                let pr = match (rough, sig.$fine) {
+                    (Some(r), Some(fine)) => Some((r + fine) * LIGHT_MS_M),
+                    _ => None,
+                };
+                (
+                    sig.satellite_id,
+                    sig.signal_id.band(),
+                    sig.signal_id.attribute() as u8,
+                    pr,
+                )
+            })
+            .collect();
+        Decoded::Msm {
+            glonass: $glonass,
+            station_id: m.reference_station_id,
+            epoch_ms: $epoch,
+            glonass_day: $day,
+            more: m.msm_multiple_message_flag == 1,
+            signals,
+        }
+    }};
+}
+
+/// DF393 of the MSM types the compact decoder does not read.
+macro_rules! other_msm_more {
+    ($msg:expr, $($v:ident),+) => {
+        match $msg {
+            $(Message::$v(m) => Some(m.msm_multiple_message_flag == 1),)+
+            _ => None,
+        }
+    };
+}
+
+/// rtcm-rs's reading of a frame.
+fn reference(frame: &[u8]) -> Decoded {
+    let f = MessageFrame::new(frame).expect("a checked frame");
+    let msg = f.get_message();
+    match msg {
+        Message::Msg1074(m) => msm_ref!(
+            m,
+            false,
+            m.gps_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ms
+        ),
+        Message::Msg1075(m) => msm_ref!(
+            m,
+            false,
+            m.gps_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ms
+        ),
+        Message::Msg1076(m) => msm_ref!(
+            m,
+            false,
+            m.gps_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ext_ms
+        ),
+        Message::Msg1077(m) => msm_ref!(
+            m,
+            false,
+            m.gps_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ext_ms
+        ),
+        Message::Msg1084(m) => msm_ref!(
+            m,
+            true,
+            m.glo_epoch_time_ms,
+            Some(m.glo_day_of_week),
+            gnss_signal_fine_pseudorange_ms
+        ),
+        Message::Msg1085(m) => msm_ref!(
+            m,
+            true,
+            m.glo_epoch_time_ms,
+            Some(m.glo_day_of_week),
+            gnss_signal_fine_pseudorange_ms
+        ),
+        Message::Msg1086(m) => msm_ref!(
+            m,
+            true,
+            m.glo_epoch_time_ms,
+            Some(m.glo_day_of_week),
+            gnss_signal_fine_pseudorange_ext_ms
+        ),
+        Message::Msg1087(m) => msm_ref!(
+            m,
+            true,
+            m.glo_epoch_time_ms,
+            Some(m.glo_day_of_week),
+            gnss_signal_fine_pseudorange_ext_ms
+        ),
+        Message::Msg1019(m) => Decoded::Gps1019 {
+            prn: m.gps_satellite_id,
+            week: m.gps_week_number,
+            // The receiver's fields as it built them from rtcm-rs.
+            fields: format!(
+                "{:?}",
+                KeplerFields {
+                    toc_s: fx(m.toc_s),
+                    toe_s: fx(m.toe_s),
+                    af0: fx(m.af0_s),
+                    af1: fx(m.af1_s_s),
+                    af2: fx(m.af2_s_s2),
+                    sqrt_a: fx(m.sqrt_a_sqrt_m),
+                    e: fx(m.eccentricity),
+                    i0_sc: fx(m.i0_sc),
+                    omega0_sc: fx(m.omega0_sc),
+                    omega_sc: fx(m.omega_sc),
+                    m0_sc: fx(m.m0_sc),
+                    delta_n_sc: fx(m.delta_n_sc_s),
+                    omega_dot_sc: fx(m.omegadot_sc_s),
+                    idot_sc: fx(m.idot_sc_s),
+                    cuc: fx(m.cuc_rad),
+                    cus: fx(m.cus_rad),
+                    crc: fx(m.crc_m),
+                    crs: fx(m.crs_m),
+                    cic: fx(m.cic_rad),
+                    cis: fx(m.cis_rad),
+                    tgd: fx(m.tgd_s),
+                    tgd2: 0.0,
+                    health: u32::from(m.sv_health_ind),
+                    iod: u32::from(m.iode),
+                }
+            ),
+        },
+        Message::Msg1020(m) => {
+            let (fields, tb_tod_s) = glonass_fields(&m);
+            Decoded::Glo1020 {
+                fields: format!("{fields:?}"),
+                tb_tod_s: format!("{tb_tod_s:?}"),
+            }
+        }
+        Message::Msg1005(m) => Decoded::Station(format!(
+            "{:?}",
+            [
+                m.antenna_ref_point_ecef_x_m,
+                m.antenna_ref_point_ecef_y_m,
+                m.antenna_ref_point_ecef_z_m
+            ]
+        )),
+        Message::Msg1006(m) => Decoded::Station(format!(
+            "{:?}",
+            [
+                m.antenna_ref_point_ecef_x_m,
+                m.antenna_ref_point_ecef_y_m,
+                m.antenna_ref_point_ecef_z_m
+            ]
+        )),
+        Message::Corrupt
+            if f.message_number().is_some_and(
+                |n| matches!(n, 1005 | 1006 | 1019 | 1020 | 1074..=1077 | 1084..=1087),
+            ) =>
+        {
+            Decoded::Corrupt
+        }
+        other => Decoded::Other(other_msm_more!(
+            other, Msg1071, Msg1072, Msg1073, Msg1081, Msg1082, Msg1083, Msg1091, Msg1092, Msg1093,
+            Msg1094, Msg1095, Msg1096, Msg1097, Msg1101, Msg1102, Msg1103, Msg1104, Msg1105,
+            Msg1106, Msg1107, Msg1111, Msg1112, Msg1113, Msg1114, Msg1115, Msg1116, Msg1117,
+            Msg1121, Msg1122, Msg1123, Msg1124, Msg1125, Msg1126, Msg1127, Msg1131, Msg1132,
+            Msg1133, Msg1134, Msg1135, Msg1136, Msg1137
+        )),
+    }
+}
+
+/// The compact decoder's reading of a frame; for a message it does not
+/// read, the DF393 the receiver takes from an MSM frame when `rtcm-rs`
+/// decodes that MSM (`more_known`).
+fn compact(frame: &[u8], more_known: bool) -> Decoded {
+    let f = Frame::new(frame).expect("a checked frame");
+    match f.message() {
+        Ok(Dm::Msm(m)) => Decoded::Msm {
+            glonass: m.system == MsmSystem::Glonass,
+            station_id: m.station_id,
+            epoch_ms: m.epoch_ms,
+            glonass_day: (m.system == MsmSystem::Glonass)
+                .then_some((m.glonass_day != 7).then_some(m.glonass_day)),
+            more: m.more,
+            signals: m
+                .signals()
+                .map(|s| (s.sat_id, s.band, s.attribute, s.pseudorange_m))
+                .collect(),
+        },
+        Ok(Dm::Gps1019(e)) => Decoded::Gps1019 {
+            prn: e.prn,
+            week: e.week_mod1024,
+            fields: format!("{:?}", e.fields),
+        },
+        Ok(Dm::Glo1020 { fields, tb_tod_s }) => Decoded::Glo1020 {
+            fields: format!("{fields:?}"),
+            tb_tod_s: format!("{tb_tod_s:?}"),
+        },
+        Ok(Dm::Station { ecef_m }) => Decoded::Station(format!("{ecef_m:?}")),
+        Err(_) => Decoded::Corrupt,
+        Ok(Dm::Other(_)) => Decoded::Other(if more_known {
+            msm_more_bit(frame)
+        } else {
+            None
+        }),
+    }
+}
+
+/// Both readings of a frame, asserted equal; the reading.
+fn both(frame: &[u8]) -> Decoded {
+    let r = reference(frame);
+    let c = compact(frame, matches!(r, Decoded::Other(Some(_))));
+    // The pseudoranges to the bit (the Debug text of an f64 is its bits).
+    assert_eq!(format!("{r:?}"), format!("{c:?}"), "frame {frame:02x?}");
+    r
+}
+
+#[test]
+fn gmsd7_every_frame_alike() {
+    let bytes = std::fs::read(rtcm_common::GMSD7).expect("GMSD7 stream (../shared/data)");
+    let mut n = std::collections::BTreeMap::<String, u32>::new();
+    let mut signals = 0usize;
+    for f in rtcm_common::frames(&bytes) {
+        let number = MessageFrame::new(f).ok().and_then(|x| x.message_number());
+        let d = both(f);
+        let kind = match &d {
+            Decoded::Msm { signals: s, .. } => {
+                signals += s.len();
+                "msm"
+            }
+            Decoded::Other(Some(_)) => "other MSM (DF393 compared)",
+            Decoded::Other(None) => "other",
+            Decoded::Corrupt => "corrupt",
+            _ => "",
+        };
+        *n.entry(format!("{} {kind}", number.unwrap_or(0)))
+            .or_default() += 1;
+    }
+    println!("GMSD7 frames by type: {n:?}; {signals} MSM signals");
+    let count = |k: &str| n.get(k).copied().unwrap_or(0);
+    // The stream's GPS and GLONASS MSM7 and ephemerides (README: 257
+    // epochs), all decoded alike, none corrupt.
+    assert!(count("1077 msm") >= 257, "{n:?}");
+    assert!(count("1087 msm") >= 257, "{n:?}");
+    assert!(count("1019 ") > 0 && count("1020 ") > 0, "{n:?}");
+    // GMSD7 has no 1005/1006 (its station is in 1007/1008/1033): they
+    // are compared on random messages below.
+    assert!(n.keys().all(|k| !k.ends_with("corrupt")), "{n:?}");
+    assert!(signals > 10_000, "{signals}");
+}
+
+/// A frame around `payload` (header and CRC-24Q).
+fn reframe(payload: &[u8]) -> Vec<u8> {
+    let crc = crc::Crc::<u32>::new(&crc::CRC_24_LTE_A);
+    let n = payload.len();
+    let mut f = vec![0xD3, (n >> 8) as u8, n as u8];
+    f.extend_from_slice(payload);
+    let c = crc.checksum(&f);
+    f.extend_from_slice(&[(c >> 16) as u8, (c >> 8) as u8, c as u8]);
+    f
+}
+
+/// The compact decoder refuses an MSM of more than 64 cells before
+/// `rtcm-rs` is asked: its decoder shifts a 64-bit word by the mask's
+/// length, which overflows (a panic in a debug build) for such a mask.
+fn too_many_cells(frame: &[u8]) -> bool {
+    matches!(
+        Frame::new(frame).map(|f| f.message()),
+        Ok(Err(DecodeError::CellCount { satellites, signals })) if satellites * signals > 64
+    )
+}
+
+#[test]
+fn random_messages_alike() {
+    const PER_TYPE: usize = 600;
+    let mut rng = StdRng::seed_from_u64(0x5254_434d);
+    let mut val_gen = ValGen::new(
+        StdRng::seed_from_u64(1),
+        StdRng::seed_from_u64(2),
+        StdRng::seed_from_u64(3),
+    );
+    let mut builder = MessageBuilder::new();
+    let (mut whole, mut mutated, mut corrupt, mut invalid, mut skipped) = (0, 0, 0, 0, 0);
+    let types = [
+        1074u16, 1075, 1076, 1077, 1084, 1085, 1086, 1087, 1019, 1020, 1005, 1006,
+    ];
+    for number in types {
+        for _ in 0..PER_TYPE {
+            let frame = builder
+                .build_generated_message(&mut val_gen, number)
+                .expect("rtcm-rs generates a valid message")
+                .to_vec();
+            match both(&frame) {
+                Decoded::Msm { signals, .. } => {
+                    invalid += signals.iter().filter(|s| s.3.is_none()).count();
+                    whole += 1;
+                }
+                Decoded::Gps1019 { .. } | Decoded::Glo1020 { .. } | Decoded::Station(_) => {
+                    whole += 1
+                }
+                d => panic!("{number}: generated message read as {d:?}"),
+            }
+            let payload = &frame[3..frame.len() - 3];
+            // A byte overwritten (masks, data, invalid markers).
+            let mut p = payload.to_vec();
+            let at = rng.gen_range(2..p.len());
+            p[at] = [0x00, 0xFF, 0x80, 0x7F, rng.gen()][rng.gen_range(0..5)];
+            // Cut short.
+            let cut = payload[..rng.gen_range(2..payload.len())].to_vec();
+            for m in [reframe(&p), reframe(&cut)] {
+                if too_many_cells(&m) {
+                    skipped += 1;
+                    continue;
+                }
+                if both(&m) == Decoded::Corrupt {
+                    corrupt += 1;
+                }
+                mutated += 1;
+            }
+        }
+    }
+    println!(
+        "{whole} random MSM4-7, 1019, 1020, 1005, 1006 alike ({invalid} invalid ranges), {mutated} altered alike ({corrupt} corrupt on both), {skipped} over 64 cells refused"
+    );
+    assert_eq!(whole, types.len() * PER_TYPE);
+    assert!(corrupt > PER_TYPE, "{corrupt}");
+    assert!(invalid > 0);
+}
