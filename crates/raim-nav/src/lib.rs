@@ -8,7 +8,13 @@
 //!   time, PZ-90.11 to WGS-84;
 //! - [`time`]: GPS time, UTC and the leap seconds;
 //! - [`geometry`], [`tropo`], [`iono`]: the Earth-rotation correction,
-//!   azimuth/elevation, Saastamoinen and Klobuchar.
+//!   azimuth/elevation, Saastamoinen and Klobuchar;
+//! - [`ranging`]: a satellite's raw pseudorange(s) and ephemeris to the
+//!   core's corrected observation (the host's replays and the firmware's
+//!   own epochs both call it);
+//! - [`store`]: the ephemerides a receiver holds, in fixed capacity;
+//! - `rtcm` (feature `rtcm`): the RTCM 3 fields, a compact decoder and the
+//!   stream receiver that forms epochs on the device.
 //!
 //! Every elementary function goes through `libm` (`m`), on the host too.
 #![cfg_attr(not(test), no_std)]
