@@ -38,6 +38,22 @@ fn whole_frames(bytes: &[u8]) -> &[u8] {
     &bytes[..end]
 }
 
+/// The stream's ephemeris frames (1019, 1020), in order: what a receiver
+/// sends of its stored ephemerides at start-up.
+fn ephemeris_frames(bytes: &[u8]) -> Vec<u8> {
+    frames(bytes)
+        .into_iter()
+        .filter(|f| {
+            let n = rtcm_rs::MessageFrame::new(f)
+                .ok()
+                .and_then(|m| m.message_number());
+            matches!(n, Some(1019 | 1020))
+        })
+        .flatten()
+        .copied()
+        .collect()
+}
+
 /// Stream `bytes` into the unit's link and collect `n` unasked answers.
 fn stream_answers(fw: &mut QemuSession, bytes: &[u8], n: usize) -> Vec<Response> {
     for chunk in bytes.chunks(4096) {
@@ -63,20 +79,8 @@ fn qemu_rtcm_stream_epochs_equal_the_host_replay_bit_for_bit() {
     assert_eq!(file.len() - once.len(), 302, "the cut last frame");
     // Cold, the ephemerides arrive over the stream's 257 s, a satellite at
     // a time, and few epochs have enough of them. So the stream is sent
-    // warm: its ephemeris frames (1019, 1020) first, as a receiver sends
-    // its stored ephemerides at start-up, then the whole stream.
-    let eph: Vec<u8> = frames(once)
-        .into_iter()
-        .filter(|f| {
-            let n = rtcm_rs::MessageFrame::new(f)
-                .ok()
-                .and_then(|m| m.message_number());
-            matches!(n, Some(1019 | 1020))
-        })
-        .flatten()
-        .copied()
-        .collect();
-    let warm = [eph.as_slice(), once].concat();
+    // warm: its ephemeris frames first, then the whole stream.
+    let warm = [ephemeris_frames(once).as_slice(), once].concat();
     let bytes = warm.as_slice();
     let (host, counts) = host_epochs(bytes);
     let n_epochs = counts.epochs as usize;
@@ -256,19 +260,8 @@ fn qemu_rtcm_stream_on_an_unconfigured_unit_is_refused() {
 fn qemu_rtcm_stream_epoch_cost() {
     let file = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
     let once = whole_frames(&file);
-    let eph: Vec<u8> = frames(once)
-        .into_iter()
-        .filter(|f| {
-            let n = rtcm_rs::MessageFrame::new(f)
-                .ok()
-                .and_then(|m| m.message_number());
-            matches!(n, Some(1019 | 1020))
-        })
-        .flatten()
-        .copied()
-        .collect();
     let part = whole_frames(&once[..60_000]);
-    let warm = [eph.as_slice(), part].concat();
+    let warm = [ephemeris_frames(once).as_slice(), part].concat();
     let (host, counts) = host_epochs(&warm);
     let elf = raim_qemu::firmware_elf_for(Machine::Mps2An386).unwrap();
     let mut fw = QemuSession::start_with(

@@ -877,15 +877,8 @@ impl Rtcm3 {
         }
         let Some(base) = self.base_week else { return };
         for mut p in self.pending_eph.drain(..) {
-            // toc within half a week of toe.
-            let toe = p.week_gps as f64 * WEEK_S + p.k.toe_sow_s;
-            let mut toc = p.week_gps as f64 * WEEK_S + p.toc_gps_sow_s;
-            if toc - toe > WEEK_S / 2.0 {
-                toc -= WEEK_S;
-            } else if toe - toc > WEEK_S / 2.0 {
-                toc += WEEK_S;
-            }
-            p.k.toc_gps_s = toc;
+            p.k.toc_gps_s =
+                raim_nav::rtcm::fields::toc_near_toe(p.week_gps, p.k.toe_sow_s, p.toc_gps_sow_s);
             out.push(Item::Ephemeris(p.k));
         }
         let now = self.last;

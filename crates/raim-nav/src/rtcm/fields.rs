@@ -7,12 +7,26 @@
 
 use raim_core::System;
 
-use crate::ephemeris::Kepler;
+use crate::ephemeris::{Kepler, WEEK_S};
 #[cfg(feature = "rtcm-rs")]
 use crate::glonass::GlonassIcdFields;
 
 /// One light-millisecond, m (RTCM DF011/DF014 unit and the MSM range unit).
 pub const LIGHT_MS_M: f64 = 299_792.458;
+
+/// toc in GPS seconds from a broadcast's week (`week`, full GPS week),
+/// toe and toc (seconds of that week): the toc placed within half a week
+/// of the toe (the two may sit on either side of a week's end).
+pub fn toc_near_toe(week: i64, toe_sow_s: f64, toc_sow_s: f64) -> f64 {
+    let toe = week as f64 * WEEK_S + toe_sow_s;
+    let mut toc = week as f64 * WEEK_S + toc_sow_s;
+    if toc - toe > WEEK_S / 2.0 {
+        toc -= WEEK_S;
+    } else if toe - toc > WEEK_S / 2.0 {
+        toc += WEEK_S;
+    }
+    toc
+}
 
 /// The latest full week congruent to `week_mod` modulo `modulus` and not
 /// after `now_week` (a week number ahead of the clock is a past rollover).

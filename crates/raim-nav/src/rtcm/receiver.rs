@@ -58,7 +58,7 @@ use crate::ranging::{
 use crate::store::{EphemerisStore, Stored};
 
 use super::decode::{msm_more_bit, Frame, Message, Msm, MsmSystem};
-use super::fields::{kepler, latest_week};
+use super::fields::{kepler, latest_week, toc_near_toe};
 
 /// Milliseconds in a week and in a day.
 const WEEK_MS: i64 = 604_800_000;
@@ -610,18 +610,6 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         }
         Some(Ok(()))
     }
-}
-
-/// toc in GPS seconds: the week's toc placed within half a week of toe.
-fn toc_near_toe(week: i64, toe_sow_s: f64, toc_sow_s: f64) -> f64 {
-    let toe = week as f64 * WEEK_S + toe_sow_s;
-    let mut toc = week as f64 * WEEK_S + toc_sow_s;
-    if toc - toe > WEEK_S / 2.0 {
-        toc -= WEEK_S;
-    } else if toe - toc > WEEK_S / 2.0 {
-        toc += WEEK_S;
-    }
-    toc
 }
 
 /// An MSM's signals with a valid pseudorange, in cell order.
