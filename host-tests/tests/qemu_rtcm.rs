@@ -21,7 +21,18 @@ use raim_core::{Config, Decision, Epoch};
 use raim_proto::error::WireError;
 use raim_proto::message::{Response, ResponseBody};
 use raim_qemu::{Machine, Options, QemuSession, ANSWER_TIMEOUT};
-use rtcm_common::{frames, host_epochs, GMSD7};
+use rtcm_common::{frames, gmsd7_moved_to, host_epochs, in_window_week, GMSD7};
+
+/// GMSD7 as a receiver would send it within this firmware's dating window
+/// (`rtcm_common::gmsd7_moved_to`: the same orbits and observables, dated
+/// half a year after the firmware's pivot): the unit dates a stream from
+/// its build date on, so the 2012 recording as sent would be read 1024
+/// weeks on. Returns the bytes and the host reader's clock week for them.
+fn gmsd7_in_window() -> (Vec<u8>, i64) {
+    let file = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let week = in_window_week();
+    (gmsd7_moved_to(&file, week), week + 1)
+}
 
 /// The firmware's stack goal for every path (BENCHMARKS.md "Stack"), B.
 const STACK_GOAL_BYTES: u32 = 16 * 1024;
@@ -74,7 +85,7 @@ fn stream_answers(fw: &mut QemuSession, bytes: &[u8], n: usize) -> Vec<Response>
 
 #[test]
 fn qemu_rtcm_stream_epochs_equal_the_host_replay_bit_for_bit() {
-    let file = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let (file, now_week) = gmsd7_in_window();
     let once = whole_frames(&file);
     assert_eq!(file.len() - once.len(), 302, "the cut last frame");
     // Cold, the ephemerides arrive over the stream's 257 s, a satellite at
@@ -82,7 +93,7 @@ fn qemu_rtcm_stream_epochs_equal_the_host_replay_bit_for_bit() {
     // warm: its ephemeris frames first, then the whole stream.
     let warm = [ephemeris_frames(once).as_slice(), once].concat();
     let bytes = warm.as_slice();
-    let (host, counts) = host_epochs(bytes);
+    let (host, counts) = host_epochs(bytes, now_week);
     let n_epochs = counts.epochs as usize;
 
     // The unit fed the stream.
@@ -178,7 +189,7 @@ fn qemu_rtcm_stream_epochs_equal_the_host_replay_bit_for_bit() {
 /// loop, compiled for x86): the unit's answer frames byte for byte.
 #[test]
 fn qemu_rtcm_answers_equal_the_host_server_byte_for_byte() {
-    let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let (bytes, _) = gmsd7_in_window();
     let part = whole_frames(&bytes[..40_000.min(bytes.len())]);
     let mut fw = session_on(Machine::Mps2An386);
     let mut server = raim_server::Server::new();
@@ -220,7 +231,7 @@ fn qemu_rtcm_answers_equal_the_host_server_byte_for_byte() {
 /// force: every stream epoch is answered `Unconfigured` (or not dated).
 #[test]
 fn qemu_rtcm_stream_on_an_unconfigured_unit_is_refused() {
-    let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let (bytes, now_week) = gmsd7_in_window();
     let part = whole_frames(&bytes[..20_000.min(bytes.len())]);
     let elf = raim_qemu::firmware_elf_for(Machine::Mps2An386).unwrap();
     let mut fw = QemuSession::start_with(
@@ -231,7 +242,7 @@ fn qemu_rtcm_stream_on_an_unconfigured_unit_is_refused() {
         },
     )
     .unwrap();
-    let (_, counts) = host_epochs(part);
+    let (_, counts) = host_epochs(part, now_week);
     let answers = stream_answers(&mut fw, part, counts.epochs as usize);
     let mut unconfigured = 0;
     for a in &answers {
@@ -258,11 +269,11 @@ fn qemu_rtcm_stream_on_an_unconfigured_unit_is_refused() {
 /// asserted (a benchmark).
 #[test]
 fn qemu_rtcm_stream_epoch_cost() {
-    let file = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let (file, now_week) = gmsd7_in_window();
     let once = whole_frames(&file);
     let part = whole_frames(&once[..60_000]);
     let warm = [ephemeris_frames(once).as_slice(), part].concat();
-    let (host, counts) = host_epochs(&warm);
+    let (host, counts) = host_epochs(&warm, now_week);
     let elf = raim_qemu::firmware_elf_for(Machine::Mps2An386).unwrap();
     let mut fw = QemuSession::start_with(
         &elf,

@@ -12,22 +12,38 @@ mod rtcm_common;
 
 use raim_core::Config;
 use raim_nav::rtcm::{FormError, FormedEpoch, StreamReceiver};
-use rtcm_common::{frames, host_epochs, GMSD7, MASK_RAD, PIVOT_WEEK};
+use rtcm_common::{
+    frames, gmsd7_moved_to, host_epochs, in_window_week, GMSD7, GMSD7_NOW_WEEK, GMSD7_PIVOT_WEEK,
+    GMSD7_WEEK, MASK_RAD,
+};
 
-#[test]
-fn device_receiver_forms_the_host_epochs_bit_for_bit() {
-    let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+/// What one run of the device receiver against the host gave.
+struct Run {
+    same: usize,
+    not_dated: usize,
+    /// The time of every epoch formed alike, GPS s.
+    times_gps_s: Vec<f64>,
+    /// The satellites of every epoch formed alike.
+    sats: Vec<Vec<raim_core::SatId>>,
+    counts: raim_nav::rtcm::RtcmCounts,
+    host_counts: raim_recv::Counts,
+}
+
+/// The device receiver (pivot `pivot_week`) and the host's causal replay
+/// (clock at `now_week`) on `bytes`: every epoch the device forms must be
+/// the host's, to the bit.
+fn device_against_host(bytes: &[u8], pivot_week: i64, now_week: i64) -> Run {
     let model = Config::default().sigma_model;
-    let (host, host_counts) = host_epochs(&bytes);
-    let mut dev = Box::new(StreamReceiver::<64, 256>::new(PIVOT_WEEK));
+    let (host, host_counts) = host_epochs(bytes, now_week);
+    let mut dev = Box::new(StreamReceiver::<64, 256>::new(pivot_week));
     let mut formed = FormedEpoch::<64> {
         time_gps_s: 0.0,
         reference_m: None,
         sats: heapless::Vec::new(),
         rejected: 0,
     };
-    let (mut same, mut not_dated) = (0, 0);
-    for (n, f) in frames(&bytes).into_iter().enumerate() {
+    let (mut same, mut not_dated, mut times_gps_s, mut sats) = (0, 0, Vec::new(), Vec::new());
+    for (n, f) in frames(bytes).into_iter().enumerate() {
         match dev.on_frame(f, &model, MASK_RAD, &mut formed) {
             None => {}
             Some(Err(FormError::NotDated { .. })) => not_dated += 1,
@@ -39,8 +55,6 @@ fn device_receiver_forms_the_host_epochs_bit_for_bit() {
                     .unwrap_or_else(|| {
                         panic!("device epoch at {} s, none on the host", formed.time_gps_s)
                     });
-                // The host releases an epoch at the frame that closes it,
-                // as the device does.
                 assert_eq!(h.frame, n, "epoch {} s", formed.time_gps_s);
                 assert_eq!(h.prepared.reference_m, formed.reference_m);
                 assert_eq!(
@@ -60,15 +74,76 @@ fn device_receiver_forms_the_host_epochs_bit_for_bit() {
                     assert_eq!(h.position_m, d.position_m, "{:?}", h.id);
                     assert_eq!(h.sigma_m, d.sigma_m, "{:?}", h.id);
                 }
+                times_gps_s.push(formed.time_gps_s);
+                sats.push(formed.sats.iter().map(|s| s.id).collect());
                 same += 1;
             }
         }
     }
-    let c = dev.counts();
+    Run {
+        same,
+        not_dated,
+        times_gps_s,
+        sats,
+        counts: dev.counts(),
+        host_counts,
+    }
+}
+
+/// GMSD7 re-sent as in a week of this build's dating window
+/// (`rtcm_common::gmsd7_moved_to`: 1019 weeks moved on, the GLONASS times
+/// moved by the leap seconds between 2012 and the moved date, CRC
+/// recomputed), into a unit whose pivot is this build's (raim-server's
+/// `PIVOT_WEEK`, from the build date): every epoch is dated in the moved
+/// week, none in 2007 or 2032; the device and the host (clock a week
+/// later) form the same epochs, with the original's GPS times of week and
+/// its satellites, GLONASS included (joined at the right second, none
+/// dropped).
+#[test]
+fn a_stream_sent_today_is_dated_today() {
+    let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let week = in_window_week();
+    let delta = week - GMSD7_WEEK;
+    let moved = gmsd7_moved_to(&bytes, week);
+    let run = device_against_host(&moved, raim_server::stream::PIVOT_WEEK, week + 1);
+    let original = device_against_host(&bytes, GMSD7_PIVOT_WEEK, GMSD7_NOW_WEEK);
     println!(
-        "GMSD7: {same} epochs formed alike, {not_dated} before the first 1019; host {} epochs; device counts {c:?}, ephemerides {:?}",
-        host.len(),
-        dev.ephemerides()
+        "GMSD7 moved {delta} weeks to week {week}: {} epochs formed alike, {} not dated; counts {:?}",
+        run.same, run.not_dated, run.counts
+    );
+    assert_eq!(run.counts.epochs, original.counts.epochs);
+    assert_eq!(run.same + run.not_dated, run.counts.epochs as usize);
+    assert!(run.same >= 250, "{}", run.same);
+    let week_s = raim_nav::ephemeris::WEEK_S;
+    for t in &run.times_gps_s {
+        let w = (t / week_s).floor() as i64;
+        assert!(
+            w == week || w == week + 1,
+            "epoch at {t} s dated in week {w}"
+        );
+    }
+    // The same GPS times of week as the original.
+    let shift_s = delta as f64 * week_s;
+    for (a, b) in run.times_gps_s.iter().zip(&original.times_gps_s) {
+        assert_eq!(*a, b + shift_s);
+    }
+    assert_eq!(run.counts.glonass_dropped, 0);
+    assert_eq!(run.sats, original.sats);
+}
+
+#[test]
+fn device_receiver_forms_the_host_epochs_bit_for_bit() {
+    let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    // A unit built when the stream was recorded.
+    let Run {
+        same,
+        not_dated,
+        counts: c,
+        host_counts,
+        ..
+    } = device_against_host(&bytes, GMSD7_PIVOT_WEEK, GMSD7_NOW_WEEK);
+    println!(
+        "GMSD7: {same} epochs formed alike, {not_dated} before the first 1019; host counts {host_counts:?}; device counts {c:?}"
     );
     // 257 epochs in the stream; the one before the first GPS ephemeris
     // cannot be dated on the device (the host holds it back until then).

@@ -420,18 +420,35 @@ impl QemuSession {
     }
 
     /// Wait for the unit's next boot notice (the first frame after every
-    /// reset); frames before it are dropped.
+    /// reset) and return as soon as it arrives; frames before it, and
+    /// frames that do not decode (a reset may cut one), are dropped.
+    /// `timeout` is a deadline only a hung or silent unit reaches.
     pub fn wait_boot(&mut self, timeout: Duration) -> Result<BootNotice> {
-        let n = self.boots.len();
         let deadline = Instant::now() + timeout;
-        while self.boots.len() == n {
+        loop {
             let left = deadline.saturating_duration_since(Instant::now());
             if left.is_zero() {
                 bail!("no boot notice within {timeout:?}");
             }
-            let _ = self.recv(left);
+            match self.responses.recv_timeout(left) {
+                Ok(Ok(r)) => {
+                    if let ResponseBody::Boot(b) = r.body {
+                        self.last_config = Some(r.config);
+                        self.boots.push(b);
+                        return Ok(b);
+                    }
+                }
+                Ok(Err(_)) => {}
+                Err(RecvTimeoutError::Timeout) => bail!("no boot notice within {timeout:?}"),
+                Err(RecvTimeoutError::Disconnected) => {
+                    let st = self.child.try_wait().ok().flatten();
+                    bail!(
+                        "the firmware's link closed before its boot notice (qemu status {st:?}); log {}",
+                        self.log.display()
+                    )
+                }
+            }
         }
-        self.boots.last().copied().context("no boot notice")
     }
 
     /// The boot notices received so far, oldest first.

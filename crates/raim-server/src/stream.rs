@@ -28,11 +28,19 @@ pub const STREAM_SIGNALS: usize = 128;
 /// The elevation mask of stream epochs, rad (10 degrees, the replay's
 /// default `--mask-deg`).
 pub const STREAM_MASK_RAD: f64 = 10.0 * core::f64::consts::PI / 180.0;
-/// The GPS week a stream's 10-bit week numbers are read against (the
-/// latest week not after it): GPS week 2400, 2026-01-04, a date before
-/// this firmware's release. A receiver's week-rollover pivot; it serves
-/// until 2045 (1024 weeks on).
-pub const PIVOT_WEEK: i64 = 2400;
+// `BUILD_GPS_WEEK`: the GPS week of this build's date
+// (`SOURCE_DATE_EPOCH`, else the build machine's clock), written by
+// build.rs.
+include!(concat!(env!("OUT_DIR"), "/build_week.rs"));
+/// Weeks before the build date a stream may still be dated in: a year,
+/// for recordings made before the build and replayed into the unit.
+pub const PIVOT_LOOKBACK_WEEKS: i64 = 52;
+/// The stream's week-rollover pivot, the earliest week the unit places a
+/// truncated week in (`raim_nav::rtcm::week_from_pivot`): a 10-bit GPS
+/// week is read in `[PIVOT_WEEK, PIVOT_WEEK + 1023]`, so a unit built on
+/// date D dates a stream correctly from D less a year to D plus 18.6
+/// years (docs/RECEIVERS.md "Dating the stream").
+pub const PIVOT_WEEK: i64 = BUILD_GPS_WEEK - PIVOT_LOOKBACK_WEEKS;
 
 /// The stream receiver and the epoch it formed last.
 pub struct StreamState {
@@ -146,5 +154,24 @@ impl Server {
             }
             None => Ok(true),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+
+    /// The pivot is the build week less the lookback, and the build week
+    /// is not after the week this test runs in (a build is not dated in
+    /// the future).
+    #[test]
+    fn the_pivot_is_the_build_week_less_a_year() {
+        assert_eq!(PIVOT_WEEK, BUILD_GPS_WEEK - 52);
+        let unix_s = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs() as i64);
+        let now_week = (unix_s - 315_964_800).div_euclid(604_800);
+        assert!(BUILD_GPS_WEEK <= now_week, "{BUILD_GPS_WEEK} > {now_week}");
     }
 }

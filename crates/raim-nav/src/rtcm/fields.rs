@@ -28,8 +28,26 @@ pub fn toc_near_toe(week: i64, toe_sow_s: f64, toc_sow_s: f64) -> f64 {
     toc
 }
 
+/// The full week congruent to `week_mod` modulo `modulus` in the window
+/// `[pivot_week, pivot_week + modulus - 1]`: a receiver's week-rollover
+/// pivot is the earliest week it can be operating in (its build date,
+/// less a stated lookback), so a truncated week is never placed before it
+/// (IS-GPS-200 20.3.3.3.1.1: the transmitted week is the full week modulo
+/// 1024; RTCM 10403.3 DF076, DF289, DF489 carry 10, 12 and 13 bits).
+/// `modulus` must be positive; a non-positive one places nothing and
+/// returns `pivot_week` with `week_mod` added, which no caller passes.
+pub fn week_from_pivot(week_mod: i64, modulus: i64, pivot_week: i64) -> i64 {
+    if modulus <= 0 {
+        return pivot_week.saturating_add(week_mod);
+    }
+    pivot_week + (week_mod - pivot_week).rem_euclid(modulus)
+}
+
 /// The latest full week congruent to `week_mod` modulo `modulus` and not
-/// after `now_week` (a week number ahead of the clock is a past rollover).
+/// after `now_week`: for a reader that knows the current week from a
+/// clock (the host's replay of a live source), where a week number ahead
+/// of the clock is a past rollover. The device has no clock and places
+/// weeks from its pivot instead ([`week_from_pivot`]).
 pub fn latest_week(week_mod: i64, modulus: i64, now_week: i64) -> i64 {
     let mut w = now_week - (now_week - week_mod).rem_euclid(modulus);
     if w < 0 {
@@ -136,5 +154,76 @@ pub fn kepler(system: System, prn: u8, f: &KeplerFields) -> Kepler {
         group_delay_e5a_s: f.tgd2,
         health: f.health,
         iod: f.iod,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// GPS weeks at which the 10-bit week rolls over (1999-08-22,
+    /// 2019-04-07, 2038-11-21), and 2447, the week of 2026-11-29.
+    const GPS_ROLLOVERS: [i64; 3] = [1024, 2048, 3072];
+    const TODAY_GPS_WEEK: i64 = 2447;
+
+    /// Every week in `[pivot, pivot + modulus - 1]` is placed exactly,
+    /// for truth weeks just before, at and just after each rollover, and
+    /// at today's week, with the pivot at the truth week, a year before
+    /// it, and as early as the window allows.
+    fn placed_exactly(modulus: i64, truths: &[i64]) {
+        for &truth in truths {
+            for back in [0, 1, 52, modulus - 1] {
+                let pivot = truth - back;
+                let sent = truth.rem_euclid(modulus);
+                assert_eq!(
+                    week_from_pivot(sent, modulus, pivot),
+                    truth,
+                    "week {truth} sent as {sent} (mod {modulus}), pivot {pivot}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn gps_10_bit_weeks_around_each_rollover_and_today() {
+        placed_exactly(1024, &[TODAY_GPS_WEEK]);
+        for r in GPS_ROLLOVERS {
+            placed_exactly(1024, &[r - 1, r, r + 1]);
+        }
+        // The case: week 2447 (2026-11-29) sent as 399 with the
+        // old pivot 2400 read as the latest week not after it: 1423
+        // (2007). Read from the pivot, it is 2447.
+        assert_eq!(latest_week(2447 % 1024, 1024, 2400), 1423);
+        assert_eq!(week_from_pivot(2447 % 1024, 1024, 2400), 2447);
+    }
+
+    /// Galileo's 12-bit week (DF289, GST weeks from 1999-08-22, rolling
+    /// over in 2078) and BeiDou's 13-bit week (DF489, BDT weeks from
+    /// 2006-01-01) are placed the same way, in their own week counts.
+    #[test]
+    fn galileo_12_bit_and_beidou_13_bit_weeks() {
+        // GST week of 2026-11-29 is GPS week 2447 - 1024.
+        placed_exactly(4096, &[1423, 4095, 4096, 4097]);
+        // BDT week of 2026-11-29 is GPS week 2447 - 1356.
+        placed_exactly(8192, &[1091, 8191, 8192, 8193]);
+    }
+
+    /// A week before the pivot is never placed before it: it is read as
+    /// the next rollover's, the receiver's own convention.
+    #[test]
+    fn a_week_before_the_pivot_is_placed_after_it() {
+        let pivot = 2395;
+        for truth in [1709, 2000, 2394] {
+            let w = week_from_pivot(truth % 1024, 1024, pivot);
+            assert!((pivot..pivot + 1024).contains(&w), "{truth} -> {w}");
+            assert_eq!(w.rem_euclid(1024), truth.rem_euclid(1024));
+        }
+    }
+
+    /// The degenerate modulus the function refuses to place with.
+    #[test]
+    fn non_positive_modulus_places_nothing() {
+        assert_eq!(week_from_pivot(5, 0, 2400), 2405);
+        assert_eq!(week_from_pivot(5, -1024, 2400), 2405);
     }
 }

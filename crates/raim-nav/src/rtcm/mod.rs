@@ -18,5 +18,5 @@ pub mod receiver;
 
 #[cfg(feature = "rtcm-rs")]
 pub use fields::glonass_fields;
-pub use fields::{fx, kepler, latest_week, KeplerFields, LIGHT_MS_M};
+pub use fields::{fx, kepler, latest_week, week_from_pivot, KeplerFields, LIGHT_MS_M};
 pub use receiver::{FormError, FormedEpoch, RtcmCounts, StreamReceiver};

@@ -21,9 +21,11 @@
 //!   (leap seconds from [`crate::time`]); otherwise the epoch's GLONASS
 //!   data is dropped and counted. GLONASS MSM before any GPS MSM of their
 //!   epoch wait for it.
-//! - Ephemerides 1019 (GPS) and 1020 (GLONASS). The 10-bit GPS week is the
-//!   latest one not after `pivot_week` (the firmware's build week: a
-//!   receiver's week-rollover pivot). The stream's epochs are dated by the
+//! - Ephemerides 1019 (GPS) and 1020 (GLONASS). The 10-bit GPS week is
+//!   placed in `[pivot_week, pivot_week + 1023]` (a receiver's
+//!   week-rollover pivot is the earliest week it can run in: the
+//!   firmware's build week less a lookback, raim-server's `PIVOT_WEEK`;
+//!   [`super::fields::week_from_pivot`]). The stream's epochs are dated by the
 //!   first 1019: the week that puts the latest epoch nearest its toe. A
 //!   1020's t_b (a time of the Moscow day) is placed by the epoch it came
 //!   after.
@@ -58,7 +60,7 @@ use crate::ranging::{
 use crate::store::{EphemerisStore, Stored};
 
 use super::decode::{msm_more_bit, Frame, Message, Msm, MsmSystem};
-use super::fields::{kepler, latest_week, toc_near_toe};
+use super::fields::{kepler, toc_near_toe, week_from_pivot};
 
 /// Milliseconds in a week and in a day.
 const WEEK_MS: i64 = 604_800_000;
@@ -194,8 +196,8 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
 }
 
 impl<const N: usize, const S: usize> StreamReceiver<N, S> {
-    /// A receiver that reads 10-bit GPS weeks as the latest week not after
-    /// `pivot_week`.
+    /// A receiver that places 10-bit GPS weeks in `[pivot_week,
+    /// pivot_week + 1023]`.
     pub const fn new(pivot_week: i64) -> Self {
         StreamReceiver {
             pivot_week,
@@ -280,7 +282,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             },
             Message::Gps1019(e) => {
                 self.counts.ephemerides = self.counts.ephemerides.wrapping_add(1);
-                let week = latest_week(i64::from(e.week_mod1024), 1024, self.pivot_week);
+                let week = week_from_pivot(i64::from(e.week_mod1024), 1024, self.pivot_week);
                 let mut k = kepler(System::Gps, e.prn, &e.fields);
                 k.toc_gps_s = toc_near_toe(week, k.toe_sow_s, e.fields.toc_s);
                 let _: Stored = self.store.insert_kepler(k);
