@@ -41,6 +41,8 @@ if [ "$what" = test ] && ! [ -x /usr/sbin/gpsd ]; then pkgs+=(gpsd); fi
 # RTKLIB's pos2kml reads the replay's .pos, xmllint its KML/GPX (cli_tool.rs).
 if [ "$what" = test ] && ! command -v pos2kml >/dev/null; then pkgs+=(rtklib); fi
 if [ "$what" = test ] && ! command -v xmllint >/dev/null; then pkgs+=(libxml2-utils); fi
+# llvm-objdump and llvm-nm read the firmware ELFs (scripts/firmware-evidence.sh).
+if [ "$what" = test ] && ! command -v llvm-objdump >/dev/null; then pkgs+=(llvm); fi
 if [ "${#pkgs[@]}" -gt 0 ]; then
     echo "install-deps: apt packages ${pkgs[*]} (--no-install-recommends)"
     SUDO=""; [ "$(id -u)" = 0 ] || SUDO="sudo"

@@ -25,6 +25,8 @@ echo "== firmware (own workspace: QEMU mps2-an386 and STM32F4 builds, clippy, fm
     && cargo build --release --no-default-features --features board-qemu --target-dir target/snapshot)
 # (the last: the QEMU build without araim/pf/multifault, whose flash
 # host-tests/tests/qemu_flash.rs bounds to 128 KiB, issue 10)
+echo "== static stack bound of every firmware entry within its stack region (call graph of each release ELF; docs/EVIDENCE.md)"
+bash scripts/firmware-evidence.sh
 echo "== tests (including the firmware under QEMU: host-tests/tests/qemu_*.rs)"
 cargo test --workspace --release
 # (the host's protocol server runs the device's precision, f32, in every

@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Static evidence from the release firmware ELFs (issue 37): the worst-case
+# stack of every entry (main and each exception handler) from the call
+# graph and the per-function frames of the disassembly
+# (scripts/firmware_callgraph.py), checked against each build's stack
+# region; and the panic sites still reachable from main, listed. Run from
+# the repository root after scripts/test.sh's firmware builds. Needs
+# llvm-objdump and llvm-nm (the `llvm` package, installed by
+# scripts/install-deps.sh test).
+#
+# Fails when a bound exceeds its build's stack region, when a frame is
+# sized at run time, or when an indirect call is left unresolved: each of
+# those must be removed or bounded by hand in docs/EVIDENCE.md first.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ELF=thumbv7em-none-eabihf/release/raim-firmware
+status=0
+for build in "QEMU mps2-an386, default:firmware/target/$ELF" \
+             "QEMU mps2-an386, snapshot:firmware/target/snapshot/$ELF" \
+             "STM32F4 (hardware layout):firmware/target/stm32f4-hw/$ELF" \
+             "STM32F4 (netduinoplus2 layout):firmware/target/stm32f4/$ELF"; do
+    name=${build%%:*}
+    elf=${build#*:}
+    [ -f "$elf" ] || { echo "== $name: no $elf (build it first)"; status=1; continue; }
+    echo "== $name"
+    json=$(mktemp)
+    python3 scripts/firmware_callgraph.py "$elf" --json "$json" | grep -v "deepest path"
+    python3 - "$json" "$name" <<'PY' || status=1
+import json, sys
+r = json.load(open(sys.argv[1]))
+name = sys.argv[2]
+bad = []
+if r["stack_region_bytes"] is None or r["bound_bytes"] > r["stack_region_bytes"]:
+    bad.append(f"stack bound {r['bound_bytes']} B over the region {r['stack_region_bytes']} B")
+for e, x in r["entries"].items():
+    if x["dynamic_frames"]:
+        bad.append(f"{e}: frames sized at run time {x['dynamic_frames']}")
+    if x["indirect"]:
+        bad.append(f"{e}: unresolved indirect calls in {x['indirect']}")
+for b in bad:
+    print(f"  FAIL ({name}): {b}")
+sys.exit(1 if bad else 0)
+PY
+    rm -f "$json"
+done
+exit $status
