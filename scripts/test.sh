@@ -9,6 +9,8 @@ bash scripts/install-deps.sh test
 
 echo "== fmt"
 cargo fmt --all -- --check
+echo "== requirements traced to tests, both ways (docs/requirements.toml -> docs/TRACE.md)"
+python3 scripts/trace.py --check
 echo "== clippy (host workspace)"
 cargo clippy --workspace --all-targets -- -D warnings
 echo "== docs (every rustdoc warning an error; missing_docs is warned in raim-core and raim-proto)"

@@ -10,6 +10,7 @@ fn f(v: &Value, key: &str) -> f64 {
     v[key].as_f64().unwrap_or_else(|| panic!("missing {key}"))
 }
 
+/// Verifies: SPEC-9.1
 #[test]
 fn add_v3_appendix_d_vector() {
     let text = std::fs::read_to_string(concat!(

@@ -65,6 +65,7 @@ fn f32_matches_f64_on_replay_windows() {
     }
 }
 
+/// Verifies: FW-EQUIV
 #[test]
 fn f32_matches_f64_on_the_vectors() {
     let t = run_vectors();

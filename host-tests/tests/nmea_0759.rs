@@ -71,6 +71,7 @@ fn find(epoch: &[String], kind: &str) -> Vec<String> {
     fields(epoch.iter().find(|s| &s[3..6] == kind).unwrap())
 }
 
+/// Verifies: NMEA-ALT
 #[test]
 fn msl_altitude_at_0759_is_rtklibs() {
     let epochs = sentences(1);
@@ -83,6 +84,7 @@ fn msl_altitude_at_0759_is_rtklibs() {
     );
 }
 
+/// Verifies: NMEA-FORMAT
 #[test]
 fn every_sentence_parses_with_the_nmea_crate_and_pynmea2() {
     let epochs = sentences(40);
@@ -149,6 +151,7 @@ fn free_port() -> u16 {
         .port()
 }
 
+/// Verifies: NMEA-FORMAT, NMEA-ALT
 #[test]
 fn gpsd_reports_sky_dops_and_msl_altitude() {
     let epochs = sentences(8);

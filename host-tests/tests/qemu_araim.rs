@@ -154,6 +154,8 @@ fn qemu_araim_appendix_d_and_a_20_satellite_sky_match_the_host() {
 
 /// The bad inputs over the wire: typed errors equal to the host's,
 /// the good ISM stays in force, every frame answered and counted, no reset.
+///
+/// Verifies: WIRE-Araim, WIRE-Locked
 #[test]
 fn qemu_araim_bad_input_is_typed_and_nothing_is_lost() {
     let mut t = Twin::new(qemu_common::session());

@@ -84,6 +84,8 @@ fn epochs() -> Vec<(f64, Vec<raim_core::RangeObservation>, Option<[f64; 3]>)> {
 
 /// Finding 2 (unprovisioned): no default ever claims integrity, before or
 /// after a reset, and what a bench host took at run time is gone after it.
+///
+/// Verifies: SAFE-T2, WIRE-Unconfigured
 #[test]
 fn qemu_unprovisioned_unit_is_unconfigured_and_a_reset_returns_it_there() {
     let elf = elf(Machine::Mps2An386);
@@ -132,6 +134,8 @@ fn qemu_unprovisioned_unit_is_unconfigured_and_a_reset_returns_it_there() {
 /// Findings 2 and 3 (provisioned): the installed configuration runs locked
 /// from boot, the same after a watchdog reset and a panic, and a corrupt
 /// section leaves the unit Unconfigured.
+///
+/// Verifies: SAFE-T2, SAFE-T3, SAFE-T6, WIRE-Locked, WIRE-HostSigmaRefused
 #[test]
 fn qemu_provisioned_unit_keeps_its_locked_configuration_across_resets() {
     let unit = installed();
@@ -219,6 +223,8 @@ fn qemu_provisioned_unit_keeps_its_locked_configuration_across_resets() {
 /// authenticated under the boot nonce; a recorded frame does not survive a
 /// reset; the top counter is refused; a forged provisioning seal (SHA-256
 /// where the key's HMAC is due) is refused.
+///
+/// Verifies: SAFE-T4, WIRE-AuthRequired, WIRE-BadAuthTag, WIRE-CounterExhausted
 #[test]
 fn qemu_keyed_unit_authenticates_every_change_and_no_frame_survives_a_reset() {
     let base = elf(Machine::Mps2An386);
@@ -339,6 +345,8 @@ fn qemu_keyed_unit_authenticates_every_change_and_no_frame_survives_a_reset() {
 
 /// Findings 1, 5, 6 and 7: settings outside their operational bounds are
 /// refused over the wire, typed, and nothing changes.
+///
+/// Verifies: SAFE-T1, SAFE-T5, SAFE-T6, SAFE-T7, WIRE-OutOfRange
 #[test]
 fn qemu_out_of_bounds_settings_are_refused() {
     let mut fw = start(&elf(Machine::Mps2An386), Machine::Mps2An386);

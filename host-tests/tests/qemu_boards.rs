@@ -41,6 +41,8 @@ fn qemu_boards_report_the_core_clock_they_run_at() {
 /// replay across power cycles that `hardware_entropy: false` warns of
 /// (docs/SAFETY.md "Boot nonce"). The host's server reports the source it
 /// was booted with.
+///
+/// Verifies: SAFE-T10
 #[test]
 fn qemu_boards_say_their_boot_nonce_had_no_hardware_entropy() {
     for machine in [Machine::Mps2An386, Machine::NetduinoPlus2] {

@@ -18,6 +18,7 @@ use raim_proto::{ConfigSource, ResetCause, TestFault};
 /// The watchdog fires 2 s after the last feed (mps2-an386's `WATCHDOG_TIMEOUT_MS`, firmware/src/board/mps2.rs).
 const WATCHDOG_S: f64 = 2.0;
 
+/// Verifies: SAFE-FAULT
 #[test]
 fn qemu_hang_and_panic_reset_the_unit_and_are_reported() {
     let mut fw = session();

@@ -74,6 +74,7 @@ fn report(name: &str, elf: &Path) -> u64 {
     total
 }
 
+/// Verifies: FW-FLASH
 #[test]
 fn snapshot_build_fits_128_kib_of_flash() {
     let snapshot = raim_qemu::firmware_elf_snapshot().expect("snapshot firmware build");
@@ -125,6 +126,8 @@ fn snapshot_build_fits_128_kib_of_flash() {
 /// Without the reconstruction FDE, `FdeMethod::Reconstruction` is refused
 /// over the wire (`t_max` outside [0, 0]), the configuration in force
 /// stays, and epochs run the sequential FDE bit for bit with the host.
+///
+/// Verifies: FW-FLASH
 #[test]
 fn snapshot_build_refuses_the_reconstruction_fde() {
     let elf = raim_qemu::firmware_elf_snapshot().expect("snapshot firmware build");
@@ -186,6 +189,8 @@ fn snapshot_build_refuses_the_reconstruction_fde() {
 /// `PfUnavailable`, a valid one and one with a particle count that no
 /// build has alike (the PF configuration checks are not linked into this
 /// build), and the configuration in force is unchanged.
+///
+/// Verifies: WIRE-PfUnavailable, FW-FLASH
 #[test]
 fn snapshot_build_answers_pf_configure_unavailable() {
     use raim_proto::message::{CommandRef, ResponseBody};

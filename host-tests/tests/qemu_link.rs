@@ -30,6 +30,7 @@ const TIME_TO_ALERT_S: f64 = 10.0;
 /// the time-to-alert (firmware/src/discrete.rs).
 const CHECK_PERIOD_S: f64 = 16_777_216.0 / 25.0e6;
 
+/// Verifies: SAFE-LINK
 #[test]
 fn qemu_streamed_frames_are_all_answered_in_order() {
     stream(Machine::Mps2An386, STREAM_FRAMES);
@@ -104,6 +105,7 @@ fn stream(machine: Machine, frames: u32) {
     );
 }
 
+/// Verifies: SAFE-ALARM
 #[test]
 fn qemu_integrity_alarm_output_follows_the_epochs_and_the_time_to_alert() {
     // -icount shift=0: the guest's SysTick runs on QEMU's virtual clock,

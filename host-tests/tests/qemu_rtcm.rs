@@ -83,6 +83,7 @@ fn stream_answers(fw: &mut QemuSession, bytes: &[u8], n: usize) -> Vec<Response>
     out
 }
 
+/// Verifies: RX-STREAM, RX-DATING, RX-LINK, SAFE-STACK
 #[test]
 fn qemu_rtcm_stream_epochs_equal_the_host_replay_bit_for_bit() {
     let (file, now_week) = gmsd7_in_window();
@@ -187,6 +188,8 @@ fn qemu_rtcm_stream_epochs_equal_the_host_replay_bit_for_bit() {
 
 /// The same bytes through the host's `Server` (the firmware's protocol
 /// loop, compiled for x86): the unit's answer frames byte for byte.
+///
+/// Verifies: RX-STREAM
 #[test]
 fn qemu_rtcm_answers_equal_the_host_server_byte_for_byte() {
     let (bytes, _) = gmsd7_in_window();
@@ -229,6 +232,8 @@ fn qemu_rtcm_answers_equal_the_host_server_byte_for_byte() {
 
 /// An unconfigured unit keeps the stream's ephemerides but puts nothing in
 /// force: every stream epoch is answered `Unconfigured` (or not dated).
+///
+/// Verifies: WIRE-Unconfigured, WIRE-StreamNotDated, RX-STREAM
 #[test]
 fn qemu_rtcm_stream_on_an_unconfigured_unit_is_refused() {
     let (bytes, now_week) = gmsd7_in_window();

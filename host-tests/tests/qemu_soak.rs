@@ -202,6 +202,7 @@ fn report(s: &Summary) {
     );
 }
 
+/// Verifies: SAFE-LINK, WIRE-Undecodable
 #[test]
 fn qemu_soak_short_2000_frames_with_1_percent_damage() {
     let s = soak(2_000, 1);

@@ -47,6 +47,7 @@ const STACK_BUDGET_SNAPSHOT_B: u32 = 14 * 1024;
 /// alarms is bounded by [`STACK_BUDGET_MCUSUM_ALARM_B`].
 const STACK_BUDGET_MCUSUM_B: u32 = 14 * 1024;
 
+/// Verifies: SAFE-STACK
 #[test]
 fn qemu_stack_high_water_of_a_32_satellite_two_fault_epoch() {
     let sats = two_fault_epoch();
@@ -215,6 +216,7 @@ fn qemu_stack_high_water_of_the_reconstruction_fde_with_two_faults() {
 /// deeper with 24 or 32 satellites). Measured 15,620 B.
 const STACK_BUDGET_ARAIM_B: u32 = 16 * 1024;
 
+/// Verifies: SAFE-STACK
 #[test]
 fn qemu_stack_high_water_of_an_araim_session() {
     let s = araim_common::sky20(0, 100.0);

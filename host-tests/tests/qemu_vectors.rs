@@ -18,6 +18,7 @@ use qemu_common::{host_result, range_vectors, session, wire_bytes};
 use raim_core::{Config, Decision, Epoch, FiRule, Phase};
 use raim_proto::WireError;
 
+/// Verifies: FW-EQUIV
 #[test]
 fn qemu_vectors_match_the_host_core_bit_for_bit() {
     let mut fw = session();

@@ -323,6 +323,7 @@ fn cross_check(netduino_instructions: u64) {
     );
 }
 
+/// Verifies: SAFE-WDOG
 #[test]
 fn qemu_netduinoplus2_worst_epochs_fit_half_the_shortest_watchdog_timeout() {
     let mut fw = netduino();

@@ -21,6 +21,7 @@ fn opts() -> RangingOptions {
     }
 }
 
+/// Verifies: TOOL-REPLAY
 #[test]
 fn clean_window_has_no_alarm_and_no_exclusion() {
     let rows = replay(
@@ -130,6 +131,8 @@ fn ramp_on_g24_is_caught_earlier_than_the_classic_algorithm() {
 /// leaving a 160+ m error; L-RAIM (the default rule, SPEC §4.2) excludes
 /// G24. In both cases the HPL after exclusion exceeds the NPA HAL there
 /// (the epoch is `Unavailable`), so neither position would be used.
+///
+/// Verifies: SPEC-4.1, SPEC-4.2
 #[test]
 fn lraim_picks_g24_where_mle_picks_g11() {
     use raim_core::FiRule;

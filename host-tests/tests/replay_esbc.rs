@@ -31,6 +31,8 @@ fn clean_window_has_no_alarm_and_no_exclusion() {
 }
 
 /// 20 m and 50 m on G15: excluded (and only G15) at every faulted epoch.
+///
+/// Verifies: SPEC-5, TOOL-REPLAY
 #[test]
 fn g15_steps_are_excluded_every_epoch() {
     let g15 = SatId::new(System::Gps, 15);

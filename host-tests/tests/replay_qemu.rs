@@ -18,6 +18,7 @@ fn bytes(r: &WireResult) -> Vec<u8> {
     postcard::to_slice(r, &mut buf).unwrap().to_vec()
 }
 
+/// Verifies: FW-EQUIV
 #[test]
 fn firmware_matches_host_on_real_epochs() {
     let obs = ObsData::load(&data("07590920.05o")).unwrap();

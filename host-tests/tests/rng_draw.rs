@@ -146,6 +146,7 @@ fn expected(skip: usize) -> Vec<u8> {
         .collect()
 }
 
+/// Verifies: SAFE-RNG
 #[test]
 fn a_healthy_rng_gives_eight_words_after_the_discarded_first() {
     let mut m = Model::healthy(64);
@@ -187,6 +188,7 @@ fn a_seed_error_discards_the_draw_and_restarts_it() {
     assert_eq!(m.enables, 2);
 }
 
+/// Verifies: SAFE-RNG
 #[test]
 fn repeated_seed_errors_give_none_after_the_allowed_restarts() {
     let mut m = Model::new(&[Event::SeedError; 16]);

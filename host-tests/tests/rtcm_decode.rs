@@ -281,6 +281,7 @@ fn both(frame: &[u8]) -> Decoded {
     r
 }
 
+/// Verifies: RX-DECODE
 #[test]
 fn gmsd7_every_frame_alike() {
     let bytes = std::fs::read(rtcm_common::GMSD7).expect("GMSD7 stream (../shared/data)");
@@ -336,6 +337,7 @@ fn too_many_cells(frame: &[u8]) -> bool {
     )
 }
 
+/// Verifies: RX-DECODE
 #[test]
 fn random_messages_alike() {
     const PER_TYPE: usize = 600;

@@ -99,6 +99,8 @@ fn device_against_host(bytes: &[u8], pivot_week: i64, now_week: i64) -> Run {
 /// later) form the same epochs, with the original's GPS times of week and
 /// its satellites, GLONASS included (joined at the right second, none
 /// dropped).
+///
+/// Verifies: RX-DATING, RX-STREAM
 #[test]
 fn a_stream_sent_today_is_dated_today() {
     let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
@@ -131,6 +133,7 @@ fn a_stream_sent_today_is_dated_today() {
     assert_eq!(run.sats, original.sats);
 }
 
+/// Verifies: RX-STREAM
 #[test]
 fn device_receiver_forms_the_host_epochs_bit_for_bit() {
     let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
@@ -166,4 +169,39 @@ fn device_receiver_forms_the_host_epochs_bit_for_bit() {
     assert!(host_counts.undecodable > 0);
     assert_eq!(c.ignored as usize, other);
     assert_eq!(c.glonass_dropped, 0);
+}
+
+/// A receiver that holds fewer signals than an epoch carries refuses that
+/// epoch with `TooManySignals` and its capacity (the unit answers it
+/// `StreamCapacity`), and forms none of it; the next epochs are refused
+/// alike, and nothing else is lost (every epoch is counted).
+///
+/// Verifies: WIRE-StreamCapacity
+#[test]
+fn an_epoch_beyond_the_signal_capacity_is_refused_whole() {
+    let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let model = Config::default().sigma_model;
+    let mut dev = Box::new(StreamReceiver::<64, 8>::new(GMSD7_PIVOT_WEEK));
+    let mut formed = FormedEpoch::<64> {
+        time_gps_s: 0.0,
+        reference_m: None,
+        sats: heapless::Vec::new(),
+        rejected: 0,
+    };
+    let (mut refused, mut closed) = (0, 0);
+    for f in frames(&bytes) {
+        match dev.on_frame(f, &model, MASK_RAD, &mut formed) {
+            None => {}
+            Some(Err(FormError::TooManySignals { capacity })) => {
+                assert_eq!(capacity, 8);
+                assert!(formed.sats.is_empty());
+                refused += 1;
+                closed += 1;
+            }
+            Some(Err(FormError::NotDated { .. })) => closed += 1,
+            Some(Ok(())) => panic!("an epoch of more than 8 signals was formed"),
+        }
+    }
+    assert!(refused >= 250, "{refused}");
+    assert_eq!(closed, dev.counts().epochs);
 }

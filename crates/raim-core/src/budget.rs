@@ -229,6 +229,7 @@ mod tests {
         assert_eq!(cfg, Config::preset(Phase::Npa));
     }
 
+    /// Verifies: SPEC-12
     #[test]
     fn shares_sum_to_the_total() {
         const REL_TOL: f64 = 1e-12;

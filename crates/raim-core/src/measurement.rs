@@ -461,6 +461,8 @@ mod tests {
     /// pairwise search alone: checked against a brute force on 3,000
     /// random id lists (n = 0..20, few distinct ids so repeats are common,
     /// PRNs 0 and 255 included), e.g. A B B A gives (0, 3), not (1, 2).
+    ///
+    /// Verifies: WIRE-DuplicateSatellite
     #[test]
     fn duplicates_are_named_by_the_first_pair() {
         extern crate std;
@@ -513,6 +515,7 @@ mod tests {
         ));
     }
 
+    /// Verifies: WIRE-OutOfRange
     #[test]
     fn elevation_outside_plus_minus_90_deg_is_out_of_range() {
         for el_deg in [200.0f64, -90.5, 90.000_001, -200.0] {

@@ -181,6 +181,8 @@ fn sibling_start_agrees_with_a_cold_subset_solve() {
 /// RELINEARISE_M away: sigmas within 3e-4, so D^2 within 6e-4 and the PLs
 /// within 3e-4 + 2e-5 relative), in fewer iterations. A fix
 /// older than WARM_START_MAX_AGE_S is not used (bit-exact with a cold run).
+///
+/// Verifies: SPEC-1
 #[test]
 fn warm_start_agrees_with_cold_start() {
     const POSITION_TOL_M: f64 = 1e-3;

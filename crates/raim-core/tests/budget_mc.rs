@@ -7,6 +7,7 @@
 #[path = "../examples/budget_mc/sim.rs"]
 mod sim;
 
+/// Verifies: SPEC-12
 #[test]
 fn combined_false_alarms_stay_within_the_total() {
     const EPOCHS: u64 = 40_000;

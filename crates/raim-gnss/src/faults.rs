@@ -415,6 +415,7 @@ mod tests {
             .collect()
     }
 
+    /// Verifies: TOOL-FAULTS
     #[test]
     fn step_and_ramp_on_named_satellites() {
         let plan = FaultPlan {
@@ -527,6 +528,7 @@ mod tests {
         assert!(toml::from_str::<Scenario>("[[fault]]\nkind='step'\nvalue=1\nbogus=2").is_err());
     }
 
+    /// Verifies: TOOL-FAULTS
     #[test]
     fn bad_specs_are_typed_errors() {
         for s in [

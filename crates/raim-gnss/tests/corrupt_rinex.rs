@@ -21,6 +21,7 @@ fn control_file_loads() {
     assert_eq!(d.epochs[0].sats.len(), 4);
 }
 
+/// Verifies: TOOL-RINEX
 #[test]
 fn month_13_is_a_typed_error_naming_the_line() {
     let err = ObsData::load(&data("month13.05o")).unwrap_err();

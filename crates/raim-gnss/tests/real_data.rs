@@ -247,6 +247,8 @@ fn geop_satellites_without_ephemeris_are_dropped() {
 /// pair, 4 m on the median (measured: 444 pairs, median 2.3 m, max
 /// 4.9 m). A wrong sign in the Coriolis or J2 term, a km/m slip or a
 /// UTC/GPS time error (18 s, ~70 km along track) breaks it by kilometres.
+///
+/// Verifies: SPEC-13
 #[test]
 fn glonass_state_vectors_propagate_onto_the_next_message() {
     const TOL_M: f64 = 10.0;

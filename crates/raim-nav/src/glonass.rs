@@ -406,6 +406,8 @@ mod tests {
     /// Sun and Moon ephemerides, not the broadcast constants, which the
     /// example leaves at zero), so the simplified algorithm here is
     /// expected to agree to about a metre; tolerance 2 m.
+    ///
+    /// Verifies: SPEC-13
     #[test]
     fn icd_5_1_worked_example() {
         const TOL_M: f64 = 2.0;
@@ -445,6 +447,8 @@ mod tests {
 
     /// RK4 at the chosen step against a 5 s step over the full 15-minute
     /// half-interval: under 1 mm apart.
+    ///
+    /// Verifies: SPEC-13
     #[test]
     fn rk4_step_is_converged() {
         const TOL_M: f64 = 1e-3;
@@ -504,6 +508,8 @@ mod tests {
     /// (18 leap seconds), 02:59:42 Moscow time; t_b = 02:45:00 Moscow is
     /// 2020-06-24 23:45:18 GPST, and a t_b just after Moscow midnight
     /// resolves to the next GLONASS day when the receiver is there.
+    ///
+    /// Verifies: RX-GLONASS-TIME
     #[test]
     fn glonass_time_and_leap_seconds() {
         let t = 2111.0 * 604_800.0 + 4.0 * DAY_S;

@@ -96,6 +96,7 @@ mod tests {
 
     const TTA: u64 = 1000;
 
+    /// Verifies: SAFE-ALARM
     #[test]
     fn asserted_from_boot_until_a_valid_epoch_and_again_after_the_time_to_alert() {
         let mut m = AlertMonitor::new(TTA);
@@ -113,6 +114,7 @@ mod tests {
         assert!(!m.output(7001).asserted());
     }
 
+    /// Verifies: SAFE-ALARM
     #[test]
     fn alarm_unavailable_and_errors_assert_at_once_whatever_the_time() {
         let mut m = AlertMonitor::new(TTA);

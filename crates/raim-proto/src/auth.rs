@@ -179,6 +179,7 @@ mod tests {
         assert_eq!(got, want);
     }
 
+    /// Verifies: SAFE-T4
     #[test]
     fn tag_binds_key_nonce_counter_and_change() {
         let key = [7u8; 32];

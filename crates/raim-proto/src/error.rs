@@ -449,6 +449,7 @@ mod tests {
     use super::*;
     use raim_core::System;
 
+    /// Verifies: WIRE-TooManySatellites, WIRE-NonFinite, WIRE-DegenerateGeometry, WIRE-DuplicateSatellite
     #[test]
     fn core_errors_keep_their_values() {
         let e: WireError = RaimError::NotFinite {

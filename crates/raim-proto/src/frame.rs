@@ -218,6 +218,7 @@ mod tests {
         assert_eq!(CRC32.checksum(b"123456789"), 0xCBF4_3926);
     }
 
+    /// Verifies: SPEC-11
     #[test]
     fn round_trip_and_one_answer_per_frame() {
         let s = sats(9);
@@ -289,6 +290,7 @@ mod tests {
         }
     }
 
+    /// Verifies: WIRE-BadCrc
     #[test]
     fn bad_crc_is_reported_with_both_values() {
         let payload = [1u8, 2, 3];
@@ -322,6 +324,7 @@ mod tests {
         assert!(got[2].is_ok());
     }
 
+    /// Verifies: WIRE-Overflow
     #[test]
     fn overflow_is_one_error_and_resynchronises_on_the_delimiter() {
         let mut stream = std::vec![0x55u8; 3 * MAX_REQUEST_FRAME + 17];

@@ -616,6 +616,7 @@ mod tests {
         assert_eq!(rx.counts(), LinkCounts::default());
     }
 
+    /// Verifies: RX-LINK
     #[test]
     fn gmsd7_interleaved_with_cobs_requests_comes_out_in_order() {
         let Some(data) = gmsd7() else { return };
@@ -898,6 +899,7 @@ mod tests {
         );
     }
 
+    /// Verifies: RX-LINK
     #[test]
     fn a_pause_between_epochs_resynchronises_after_a_stray_byte() {
         // GMSD7 as a receiver sends it: each epoch's frames in one burst

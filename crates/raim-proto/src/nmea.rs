@@ -999,6 +999,7 @@ mod tests {
         }
     }
 
+    /// Verifies: SPEC-11, NMEA-FORMAT
     #[test]
     fn sentences_are_checksummed_ordered_and_carry_the_raim_fields() {
         let (mut w, sats) = sky8_result(50.0);
@@ -1164,6 +1165,8 @@ mod tests {
     /// Every epoch writes every sentence whatever its values: sigmas of
     /// 1e5 m and 1e30 m, and non-finite ones, give fields that fit or are
     /// empty, never a sentence over 82 characters or a missing one.
+    ///
+    /// Verifies: SAFE-T9, NMEA-FORMAT
     #[test]
     fn extreme_values_keep_every_sentence_within_82_characters() {
         for sigma_m in [1e5, 1e30, f64::INFINITY] {
@@ -1206,6 +1209,7 @@ mod tests {
         }
     }
 
+    /// Verifies: NMEA-FORMAT
     #[test]
     fn numbers_fit_their_width_or_are_empty() {
         let cases: [(f64, u32, usize, &str); 8] = [
@@ -1242,6 +1246,8 @@ mod tests {
     /// give RMC status V and mode N, VTG mode N, GGA quality 0 and GSA fix
     /// 1, with the integrity decision in RMC's navigational status; GBS
     /// names the excluded satellite while its exclusion is in force.
+    ///
+    /// Verifies: SAFE-T9
     #[test]
     fn unavailable_and_alarm_epochs_are_not_a_valid_fix() {
         let (mut w, sats) = sky8_result(50.0);
@@ -1334,6 +1340,8 @@ mod tests {
     }
 
     /// With the geoid, GGA's altitude is h - N and its separation N.
+    ///
+    /// Verifies: NMEA-ALT
     #[cfg(feature = "geoid")]
     #[test]
     fn gga_altitude_is_above_mean_sea_level() {

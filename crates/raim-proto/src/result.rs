@@ -338,6 +338,8 @@ mod tests {
     /// and on the wire: postcard carries the f64 bit pattern, so +inf
     /// decodes as +inf (never 0, never f64::MAX); so do the ARAIM summary's
     /// levels and the sigma bound's error.
+    ///
+    /// Verifies: SAFE-T8
     #[test]
     fn unbounded_levels_travel_as_infinity() {
         let w = WireResult::empty();

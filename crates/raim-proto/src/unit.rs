@@ -285,6 +285,8 @@ mod tests {
     /// The fingerprint is SHA-256 of the domain and the postcard bytes,
     /// by reference or by value; every single-bit change of the encoding
     /// that still decodes changes it.
+    ///
+    /// Verifies: SAFE-T3
     #[test]
     fn fingerprint_is_sha256_of_the_encoding_and_every_bit_counts() {
         let u = unit();
@@ -312,6 +314,7 @@ mod tests {
         assert!(changed > 100, "{changed}");
     }
 
+    /// Verifies: SAFE-T3
     #[test]
     fn sealed_round_trips_and_any_corruption_is_refused() {
         let key = [3u8; 32];

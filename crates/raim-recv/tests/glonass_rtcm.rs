@@ -149,6 +149,8 @@ fn msm_frequency_channels_match_the_1020() {
 /// Every epoch of GMSD7 keeps its six GLONASS satellites (their MSM time of
 /// day is the epoch's: 2012 has GPS - UTC = 16 s); the same stream with
 /// each 1087's DF034 one second late has none, each counted.
+///
+/// Verifies: RX-GLONASS-TIME
 #[test]
 fn glonass_msm_time_is_checked() {
     let p = gmsd7();

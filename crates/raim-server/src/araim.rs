@@ -575,6 +575,8 @@ mod tests {
     /// The bad inputs, over the wire: each is a typed error with
     /// its values, the ISM in force stays, and every frame is answered and
     /// counted.
+    ///
+    /// Verifies: WIRE-TooManySatellites, WIRE-NonFinite, WIRE-NonPositiveSigma, WIRE-DuplicateSatellite, WIRE-Araim, WIRE-SigmaOutOfRange
     #[test]
     fn bad_input_is_typed_and_nothing_is_lost() {
         let (ism, obs) = sky20(usize::MAX, 0.0);
@@ -832,6 +834,8 @@ mod tests {
     /// integrity-alarm output (`Platform::on_epoch`) exactly as it goes on
     /// the wire (an ARAIM alarm asserts the discrete), a refused epoch as
     /// `None` (an epoch error), and an ISM frame is no epoch.
+    ///
+    /// Verifies: SAFE-ALARM
     #[test]
     fn araim_verdicts_drive_the_alarm_output() {
         let (ism, clean) = sky20(usize::MAX, 0.0);
@@ -1005,6 +1009,8 @@ mod tests {
     /// a valid fix; a faulted one its verdict, with the excluded satellite
     /// out of GSA and named in GBS; a refused epoch its no-fix sentences;
     /// an ISM frame none. Every sentence within 82 characters, CRLF.
+    ///
+    /// Verifies: SAFE-T9
     #[test]
     fn every_araim_epoch_writes_its_nmea() {
         let x = [3_582_105.0, 532_589.0, 5_232_755.0];

@@ -155,3 +155,64 @@ impl Server {
         Ok(applied)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use raim_core::Config;
+    use raim_proto::auth::{tag, Authenticated, Change};
+
+    const KEY: raim_proto::auth::AuthKey = [7; 32];
+
+    fn signed(s: &Server, key: &raim_proto::auth::AuthKey, counter: u64) -> Authenticated {
+        let change = Change::Configure(Config::default());
+        Authenticated {
+            counter,
+            tag: tag(key, &s.nonce(), counter, &change),
+            change,
+        }
+    }
+
+    /// The authentication's typed refusals, in the gate's order: a signed
+    /// change to an unkeyed unit, an unsigned one to a keyed unit, a tag
+    /// that does not verify, a counter not above the last accepted one;
+    /// and nothing changes on any of them (docs/SAFETY.md threat model #4).
+    ///
+    /// Verifies: WIRE-AuthNotProvisioned, WIRE-AuthRequired, WIRE-BadAuthTag, WIRE-Replayed, SAFE-T4
+    #[test]
+    fn authentication_refusals_are_typed_and_change_nothing() {
+        let mut open = std::boxed::Box::new(Server::new());
+        let a = signed(&open, &KEY, 1);
+        assert_eq!(
+            open.change_authenticated(&a),
+            Err(WireError::AuthNotProvisioned)
+        );
+        assert_eq!(open.config, None);
+
+        let mut keyed = std::boxed::Box::new(Server::with_auth_key(KEY));
+        assert_eq!(
+            keyed.change_plain(&Change::Configure(Config::default())),
+            Err(WireError::AuthRequired)
+        );
+        let forged = signed(&keyed, &[8; 32], 1);
+        assert_eq!(
+            keyed.change_authenticated(&forged),
+            Err(WireError::BadAuthTag { counter: 1 })
+        );
+        assert_eq!(keyed.config, None);
+        let first = signed(&keyed, &KEY, 5);
+        assert_eq!(keyed.change_authenticated(&first), Ok(Applied::Configured));
+        let fingerprint = keyed.config_id.fingerprint;
+        for counter in [5, 4] {
+            let again = signed(&keyed, &KEY, counter);
+            assert_eq!(
+                keyed.change_authenticated(&again),
+                Err(WireError::Replayed { counter, last: 5 })
+            );
+        }
+        assert_eq!(keyed.config_id.fingerprint, fingerprint);
+        let next = signed(&keyed, &KEY, 6);
+        assert_eq!(keyed.change_authenticated(&next), Ok(Applied::Configured));
+    }
+}

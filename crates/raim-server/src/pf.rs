@@ -555,6 +555,8 @@ mod tests {
     /// is untouched by a refused epoch; a satellite leaving view mid-window
     /// drops its auxiliary filter; a collapsed filter is reinitialised and
     /// reported without a position.
+    ///
+    /// Verifies: WIRE-PfNotConfigured, WIRE-PfParticles, WIRE-PfInvalidConfig, WIRE-TimeNotIncreasing
     #[test]
     fn bad_pf_input_gets_typed_errors() {
         crate::tests::on_big_stack(bad_pf_input_gets_typed_errors_body)

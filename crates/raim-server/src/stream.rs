@@ -162,6 +162,30 @@ mod tests {
     extern crate std;
     use super::*;
 
+    /// An epoch the receiver could not form is refused with its typed
+    /// wire error, the values carried over.
+    ///
+    /// Verifies: WIRE-StreamCapacity, WIRE-StreamNotDated
+    #[test]
+    fn unformed_epochs_map_to_their_wire_errors() {
+        assert_eq!(
+            wire_error(FormError::TooManySignals { capacity: 128 }),
+            WireError::StreamCapacity { capacity: 128 }
+        );
+        assert_eq!(
+            wire_error(FormError::NotDated {
+                tow_ms: 345_600_000
+            }),
+            WireError::StreamNotDated {
+                tow_ms: 345_600_000
+            }
+        );
+        assert_eq!(
+            wire_error(FormError::NotDated { tow_ms: -1 }),
+            WireError::StreamNotDated { tow_ms: u32::MAX }
+        );
+    }
+
     /// The pivot is the build week less the lookback, and the build week
     /// is not after the week this test runs in (a build is not dated in
     /// the future).

@@ -113,6 +113,7 @@ fn sky(step_m: f64) -> Vec<LinearObservation> {
         .collect()
 }
 
+/// Verifies: SPEC-11
 #[test]
 fn every_frame_is_answered_in_order_with_its_sequence_number() {
     let mut server = bench();
@@ -165,6 +166,7 @@ fn every_frame_is_answered_in_order_with_its_sequence_number() {
     assert!(nmea.ends_with(&want), "{nmea}");
 }
 
+/// Verifies: WIRE-BadCrc, WIRE-Undecodable, WIRE-Overflow, WIRE-SequenceGap, WIRE-TooManySatellites, WIRE-NonFinite, WIRE-DegenerateGeometry
 #[test]
 fn typed_errors_for_each_kind_of_bad_frame() {
     let mut server = bench();
@@ -325,6 +327,8 @@ fn body_ref_encodes_as_response_body() {
 
 /// `Status` carries the platform's reset count and cause; a
 /// test fault on a platform without test hooks is refused, typed.
+///
+/// Verifies: SAFE-FAULT, WIRE-TestHooksDisabled
 #[test]
 fn status_reports_the_reset_record_and_test_hooks_are_off_by_default() {
     struct Rebooted;
@@ -478,6 +482,8 @@ fn unconfigured_fingerprint_is_computed() {
 
 /// `Status.hardware_entropy` reports the source the boot was given, and a
 /// server that never booted has had none; the nonce follows the bytes.
+///
+/// Verifies: SAFE-T10
 #[test]
 fn status_reports_whether_the_boot_nonce_had_hardware_entropy() {
     use raim_proto::auth::BootEntropy;

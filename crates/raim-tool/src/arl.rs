@@ -746,6 +746,8 @@ mod tests {
     /// h = 5.21 is 10071 and h for ARL0 = 1e4 is 5.206, which rounds to the
     /// published 5.21. Also the discretisation has converged: doubling the
     /// nodes changes ARL0 by less than 1e-8 relative.
+    ///
+    /// Verifies: SPEC-7.2
     #[test]
     fn seed_001_threshold() {
         let a = arl(5.21, 1.0, 2, 0.0, 1).unwrap();
@@ -801,6 +803,8 @@ mod tests {
     /// 1.88) is, digit for digit, the aligned-shift model (integral equation
     /// with non-centrality R + delta: 22.44, 8.614, 5.281, 3.057, 2.230,
     /// 1.886) truncated to the printed digits.
+    ///
+    /// Verifies: SPEC-7.2
     #[test]
     fn seed_001_mcusum_row() {
         const RUNS: usize = 4000;

@@ -12,6 +12,7 @@ const CORRUPT: &str = concat!(
     "/../raim-gnss/tests/data/month13.05o"
 );
 
+/// Verifies: TOOL-RINEX
 #[test]
 fn month_13_is_an_error_naming_the_line_not_a_panic() {
     let out = Command::new(env!("CARGO_BIN_EXE_raim"))

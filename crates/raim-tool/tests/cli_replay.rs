@@ -52,6 +52,8 @@ fn summary(stdout: &str) -> serde_json::Value {
 
 /// 13 epochs; the 50 m G24 step from 00:20:00 is excluded at all 11
 /// faulted epochs, at once, with no wrong exclusion; the first two are ok.
+///
+/// Verifies: TOOL-REPLAY
 #[test]
 fn json_lines_and_summary() {
     let mut a = base();

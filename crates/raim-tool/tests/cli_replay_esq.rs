@@ -41,6 +41,8 @@ fn esbc(extra: &[&str]) -> Vec<String> {
 /// N* is P_Sigma / P_max, at least 1; the emitted epochs follow the
 /// schedule re-derived here from the printed times and N* (first epoch at
 /// or after t0 + j T / N* inside each window T); the summary counts them.
+///
+/// Verifies: SPEC-9.2
 #[test]
 fn esq_schedule_and_n_star_on_esbc() {
     let out = raim(&esbc(&["--esq", "--json", "--end", "00:40:00"]));
@@ -91,6 +93,8 @@ fn esq_schedule_and_n_star_on_esbc() {
 /// A Galileo-wide 10 m bias on a short ESBC stretch: ARAIM and the
 /// snapshot test cannot see it (the Galileo clock absorbs it); the PCA
 /// statistic jumps at the onset. A single-satellite step is seen by all.
+///
+/// Verifies: SPEC-9.3
 #[test]
 fn pca_constellation_bias_on_esbc() {
     let out = raim(&esbc(&[

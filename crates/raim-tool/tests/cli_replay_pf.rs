@@ -51,6 +51,8 @@ fn verification(stdout: &str) -> serde_json::Value {
 /// plots. (The 100-particle filters' calibrated thresholds on this
 /// profile are ~5e5, far beyond any step, and the GA-PF 300's is above
 /// what this step accumulates: docs/PF.md "Verification".)
+///
+/// Verifies: SPEC-10
 #[test]
 fn geop_step_calibrated_threshold_several_seeds() {
     let base = [

@@ -171,6 +171,8 @@ fn negative_numbers_are_values() {
 /// elevation cone and one at the zenith, plus a sixth) has S_ii = 0: the
 /// PLs are unbounded, `inf` in the text line and `null` in JSON (never
 /// 1.8e308).
+///
+/// Verifies: SAFE-T8
 #[test]
 fn unbounded_protection_levels_print_inf_and_null() {
     let sat = |prn: u32, az: f64, el: f64| {

@@ -97,6 +97,7 @@ mod add_appendix_d {
             .clone()
     }
 
+    /// Verifies: SPEC-9.1
     #[test]
     fn twelve_modes_and_k_fa() {
         let out = run();
@@ -118,6 +119,7 @@ mod add_appendix_d {
         assert_eq!(out.modes[11].events.consts, 2);
     }
 
+    /// Verifies: SPEC-9.1
     #[test]
     fn constellation_modes_match_published_intermediates() {
         let out = run();
@@ -136,6 +138,7 @@ mod add_appendix_d {
         }
     }
 
+    /// Verifies: SPEC-9.1
     #[test]
     fn vpl_emt_sigma_acc_match_published() {
         let out = run();
@@ -164,6 +167,7 @@ mod add_appendix_d {
         assert!(out.detection_passed);
     }
 
+    /// Verifies: SPEC-9.1
     #[test]
     fn hpl_exact_root_and_add_bracket_output() {
         let out = run();
@@ -720,6 +724,7 @@ mod bad_input {
             .map(|_| ())
     }
 
+    /// Verifies: WIRE-Araim, SAFE-NAN
     #[test]
     fn nan_in_the_ism() {
         let mut sats = appendix_d_sats();

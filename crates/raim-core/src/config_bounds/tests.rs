@@ -172,6 +172,8 @@ fn correlation_time_bound_applies_whether_the_mcusum_runs_or_not() {
 
 /// A disabled MCUSUM with k = NaN, ARL0 = -1 or hold = infinity is
 /// refused, with the field: a disabled part is validated too.
+///
+/// Verifies: SAFE-T7
 #[test]
 fn a_disabled_mcusum_is_validated() {
     let c = Config::default();
@@ -224,6 +226,8 @@ fn sigma_bound_brackets_the_elevation_model() {
 /// A host sigma outside the bound is refused with the satellite's index,
 /// in both epoch forms; the ends are accepted. 1e30 used to remove the
 /// satellite silently, 1e-9 to shrink every protection level to ~0.
+///
+/// Verifies: SAFE-T6, WIRE-SigmaOutOfRange
 #[test]
 fn per_satellite_sigma_is_bounded() {
     let sky: Vec<(System, u8, f64, f64)> = crate::testutil::SKY8

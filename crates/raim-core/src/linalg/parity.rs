@@ -363,6 +363,8 @@ mod tests {
         /// S = U2 U2^T idempotent and equal to I - H (H^T H)^-1 H^T (computed
         /// densely by nalgebra, independently), p^T p = z^T S z, S_ii and
         /// residuals, and seed 000 eq. 8: b_i = S_i^T z / S_ii minimises J(b).
+        ///
+        /// Verifies: SPEC-2
         #[test]
         fn parity_identities((h, z) in geometry()) {
             let (n, m) = (h.nrows(), h.ncols());
@@ -537,6 +539,7 @@ mod tests {
         assert!(checked[0] > 900 && checked[1] > 900, "{checked:?}");
     }
 
+    /// Verifies: SPEC-2, WIRE-TooFewSatellites
     #[test]
     fn needs_redundancy() {
         let h = [[0.0; N]; MAX_STATES];

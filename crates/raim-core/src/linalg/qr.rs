@@ -624,6 +624,7 @@ mod tests {
         }
     }
 
+    /// Verifies: SPEC-2, WIRE-DegenerateGeometry
     #[test]
     fn rejects_rank_deficiency() {
         let mut h = [[0.0; 8]; MAX_STATES];

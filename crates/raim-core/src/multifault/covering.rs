@@ -308,6 +308,8 @@ mod tests {
     /// most n - m satellites (so every constrained set has at least m), and
     /// the group count is what `len` says. Checked for the exact table and
     /// the parts construction, n = 5..32, m = 4..8, t = 1..3.
+    ///
+    /// Verifies: SPEC-8.3
     #[test]
     fn every_design_covers() {
         for n in 5..=32 {
@@ -361,6 +363,8 @@ mod tests {
     /// fewer where the exact search found a smaller covering. The known
     /// improvement n = 10, t = 2 (4 groups, seed 5) must be there. Prints
     /// the table (`cargo test -p raim-core --lib covering -- --nocapture`).
+    ///
+    /// Verifies: SPEC-8.3
     #[test]
     fn group_counts_against_seed_002() {
         std::println!("  n | t=1 seed/ours/parts | t=2 seed/ours/parts | t=3 seed/ours/parts");

@@ -105,6 +105,8 @@ fn seed_case(s: &DMatrix<f64>, sat: usize, f: SatSet) -> GroupFit<f64, N> {
 /// printing's own rounding (0.05 m for e, 0.05 or 0.5 for Q). The groups
 /// that hold the fault reconstruct it exactly whatever the rounding:
 /// e = 30 m on the faulty satellite and Q = 0 (to 1e-9).
+///
+/// Verifies: SPEC-8.2
 #[test]
 fn seed_002_reconstructions_and_q() {
     const EXACT_TOL_M: f64 = 1e-9;
@@ -185,6 +187,8 @@ fn seed_002_reconstructions_and_q() {
 /// The sign misprint of SPEC §8.2: with the printed +25.2 for satellite 2
 /// in "E3 group 1", S[:, F] e_F is far from the residual of 30 m on
 /// satellite 7; with -25.2 it matches to the print's rounding.
+///
+/// Verifies: SPEC-8.2
 #[test]
 fn seed_002_e3_group_1_sign_misprint() {
     let s = projector(&V1);
@@ -290,6 +294,8 @@ fn seed_002_reconstruction_is_linear_and_amplifies_noise() {
 /// The residuals and statistics of seed 002 (560.1 / 4.5 / 340.7) from
 /// S = V1 V1^T (linalg::parity checks them from the eigenvalue-0 vectors),
 /// and the reconstruction's D^2 = ||r||^2 equals them.
+///
+/// Verifies: SPEC-8.5
 #[test]
 fn seed_002_residuals_and_statistics_from_v1() {
     let cases: [(usize, [f64; 7], f64); 3] = [
@@ -496,6 +502,8 @@ fn search_finds_the_brute_force_minimum() {
 /// constellation has only 2 satellites (forcing swaps); and every set of
 /// 1..t satellites whose removal leaves rank m is searched (through a
 /// group or a repair).
+///
+/// Verifies: SPEC-8.3
 #[test]
 fn every_constrained_set_has_rank_m() {
     let mut swaps = 0;
@@ -781,6 +789,8 @@ fn reconstruction(t_max: u8) -> Config {
 /// The monitor with `FdeMethod::Reconstruction`: 1, 2 and 3 large faults
 /// on a 14-satellite two-constellation sky are excluded exactly (the set,
 /// its size, biases within 5 sigma of the truth), and the subset passes.
+///
+/// Verifies: SPEC-8.4
 #[test]
 #[cfg(feature = "multifault")]
 fn monitor_excludes_one_two_three_faults() {
@@ -867,6 +877,8 @@ fn budget_limit_is_reported_and_never_a_pick() {
 /// S e_a = -S e_b and a fault on one is explained exactly as well by the
 /// other (with the opposite bias). The reconstruction alarms `Ambiguous`
 /// naming both, never a silent pick (today's FDE does the same).
+///
+/// Verifies: SPEC-8.4
 #[test]
 #[cfg(feature = "multifault")]
 fn indistinguishable_sets_alarm_as_ambiguous() {

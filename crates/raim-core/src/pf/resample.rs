@@ -166,6 +166,8 @@ mod tests {
 
     /// Crossover keeps the pair's sum (a convex exchange) and Metropolis
     /// accepts a worse candidate at the rate exp(d) (within 0.01).
+    ///
+    /// Verifies: SPEC-10
     #[test]
     fn crossover_and_metropolis() {
         let a = [1.0f64; DIM];

@@ -143,6 +143,8 @@ extern crate std;
 /// A 40 m step on G4 from epoch 40: every filter stays quiet before it,
 /// alarms within 10 epochs after it and isolates G4; the fault-free
 /// position error is within 5 m RMS (sigma 3 m, 8 satellites).
+///
+/// Verifies: SPEC-10
 #[test]
 fn step_fault_detected_and_isolated_by_all_three() {
     const MAX_DELAY_EPOCHS: usize = 10;
@@ -331,6 +333,8 @@ fn collapse_is_reported_and_reinitialised() {
 
 /// Too few satellites: a typed error, and the filters are untouched (the
 /// next epoch with enough satellites continues); bad input is typed too.
+///
+/// Verifies: WIRE-TimeNotIncreasing, WIRE-SigmaOutOfRange
 #[test]
 fn too_few_satellites_and_bad_input() {
     let c = cfg();

@@ -223,6 +223,8 @@ mod tests {
 
     /// A model, window, filter or Pfa the table does not cover is a typed
     /// error naming it.
+    ///
+    /// Verifies: SAFE-T5
     #[test]
     fn uncovered_configurations_are_refused() {
         let r = ROWS[0];

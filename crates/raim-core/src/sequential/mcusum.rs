@@ -614,6 +614,8 @@ mod tests {
     /// The Crosier step against hand-computed values: S = 0, y = (3, 4),
     /// k = 1: C = 5, S = (3, 4) 4/5 = (2.4, 3.2), D = 4. Then y = (-2.4, -2.7):
     /// C = 0.5 <= k so S = 0.
+    ///
+    /// Verifies: SPEC-7.1
     #[test]
     fn crosier_step_by_hand() {
         let mut s = [0.0f64, 0.0];
@@ -630,6 +632,8 @@ mod tests {
     /// The squared form printed as seed 001 eq. 9 (C_t without the root) is
     /// not Crosier's: on the same input it shrinks by k / C^2 instead of
     /// k / C, so the two disagree (SPEC §7.1 explains why the norm is right).
+    ///
+    /// Verifies: SPEC-7.1
     #[test]
     fn misprinted_squared_form_differs() {
         let mut s = [0.0f64, 0.0];
@@ -666,6 +670,8 @@ mod tests {
     /// constellation change: S_(t-1) = U2_new^T v_mapped is checked through
     /// its norm against an independent dense projector,
     /// ||U2^T x||^2 = x^T (I - H (H^T H)^-1 H^T) x, for both carry modes.
+    ///
+    /// Verifies: SPEC-7.3
     #[test]
     fn transport_matches_dense_projector_across_set_changes() {
         let mut rng = Rng::new(5);
@@ -762,6 +768,8 @@ mod tests {
     /// snapshot test, accumulates until the MCUSUM alarms; identification
     /// from v names the satellite; removing its row and carrying the state
     /// into the subset's parity space clears the accumulated evidence.
+    ///
+    /// Verifies: SPEC-7.4
     #[test]
     fn accumulated_vector_identifies_and_exclusion_clears_it() {
         let sky10: Vec<(f64, f64)> = SKY8
@@ -829,6 +837,8 @@ mod tests {
     }
 
     /// Settings outside the table are typed errors carrying the value.
+    ///
+    /// Verifies: WIRE-InvalidDof
     #[test]
     fn threshold_rejects_values_outside_the_table() {
         assert!(matches!(
@@ -876,6 +886,7 @@ mod tests {
         }
     }
 
+    /// Verifies: SPEC-7.2
     #[test]
     fn table_gives_seed_001_threshold() {
         let h = threshold(2, 1.0, 1e4).unwrap();

@@ -52,6 +52,8 @@ fn disabled_mcusum_leaves_snapshot_results_alone() {
 /// it (decision Excluded, subset passes) and holds it out of the
 /// following epochs, where it is listed unused; when the satellite
 /// leaves the input the hold is released.
+///
+/// Verifies: SPEC-7.4
 #[test]
 fn mcusum_catches_a_bias_the_snapshot_misses_and_holds_it() {
     use crate::config::Carry;
@@ -142,6 +144,8 @@ fn large_step_is_the_snapshot_tests() {
 /// Random sequences of satellites rising, setting, reordering, a
 /// third constellation appearing with one satellite, faults of random
 /// size, both carry modes: no panic, no error, MCUSUM invariants hold.
+///
+/// Verifies: SPEC-7.3
 #[test]
 fn mcusum_survives_changing_constellations() {
     use crate::config::Carry;

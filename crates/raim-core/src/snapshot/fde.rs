@@ -695,6 +695,8 @@ mod nan_tests {
 
     /// An alternative whose subset statistic is NaN is not rejected, so the
     /// exclusion is ambiguous; finite values compare as before.
+    ///
+    /// Verifies: SAFE-NAN
     #[test]
     fn a_nan_alternative_is_not_rejected() {
         assert!(!alternative_rejected(f64::NAN, 9.0));

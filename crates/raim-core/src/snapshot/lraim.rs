@@ -151,6 +151,8 @@ mod tests {
 
     /// A NaN residual ranks first and the finite rows keep their order,
     /// for every position of the NaN row and every rule.
+    ///
+    /// Verifies: SAFE-NAN
     #[test]
     fn nan_ranking_does_not_depend_on_row_order() {
         let s = [0.5, 0.6, 0.4, 0.7];
@@ -176,6 +178,8 @@ mod tests {
     /// The flat-prior score is 2 ln of the marginal likelihood
     /// integral exp(-J(b)/2) db of seed 000 eq. 7, up to a constant common
     /// to all satellites. Check by numerical quadrature.
+    ///
+    /// Verifies: SPEC-4.2
     #[test]
     fn flat_prior_score_is_twice_log_marginal_likelihood() {
         // Two satellites with different S_ii and residuals; zSz common.
@@ -202,6 +206,7 @@ mod tests {
         }
     }
 
+    /// Verifies: SPEC-4.2
     #[test]
     fn gaussian_prior_tends_to_flat_and_matches_quadrature() {
         let (r, s) = (1.7, 0.3);
@@ -232,6 +237,7 @@ mod tests {
         );
     }
 
+    /// Verifies: SPEC-4.2
     #[test]
     fn unidentifiable_below_min_s_ii() {
         assert!(score(FiRule::Mle, 1.0, 1e-6, 1e-4).is_none());

@@ -97,6 +97,8 @@ mod tests {
     /// A NaN gain on one row gives an infinite PL with that row as the
     /// worst, wherever the row is (first, middle, last); the finite rows
     /// alone give the brute-force maximum slope times sqrt(lambda).
+    ///
+    /// Verifies: SAFE-NAN
     #[test]
     fn a_nan_slope_is_never_skipped() {
         const PL_TOL_M: f64 = 1e-12;

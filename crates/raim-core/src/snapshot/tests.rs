@@ -19,6 +19,8 @@ fn cfg() -> Config {
 /// A 50 m step on one of 8 satellites (sigma 1 m) is detected,
 /// identified and excluded, for every seed of noise tried and for each
 /// rule; the subset passes. Sat 2 (row 1) is a mid-leverage satellite.
+///
+/// Verifies: SPEC-5
 #[test]
 fn fde_excludes_a_50_m_step_on_one_of_eight() {
     let mut raim = Raim::<16>::new();
@@ -58,6 +60,8 @@ fn fde_excludes_a_50_m_step_on_one_of_eight() {
 
 /// Two simultaneous faults (60 m and -45 m) on 10 satellites: both are
 /// excluded, one after the other, and the final subset passes.
+///
+/// Verifies: SPEC-5
 #[test]
 fn fde_excludes_two_faults() {
     let sky10: Vec<(f64, f64)> = SKY8
@@ -101,6 +105,8 @@ fn fde_excludes_two_faults() {
 }
 
 /// With no fault, 1000 noise draws give no exclusion at Pfa 3.3e-7.
+///
+/// Verifies: SPEC-3
 #[test]
 fn clean_epochs_pass() {
     let mut raim = Raim::<16>::new();
@@ -117,6 +123,8 @@ fn clean_epochs_pass() {
 /// b_i = sqrt(lambda / S_ii), pushed through a dense nalgebra
 /// least-squares solve (normal equations, independent of the QR path),
 /// gives a horizontal error whose maximum over i is the HPL.
+///
+/// Verifies: SPEC-6
 #[test]
 fn protection_levels_match_brute_force_worst_bias() {
     use nalgebra::{DMatrix, DVector};
@@ -182,6 +190,8 @@ fn protection_levels_match_brute_force_worst_bias() {
 
 /// Gauss-Newton from the Earth's centre recovers a receiver and two
 /// clocks (GPS + Galileo) from noise-free pseudoranges.
+///
+/// Verifies: SPEC-1
 #[test]
 fn gauss_newton_recovers_position_and_clocks() {
     let (rx, clock, sky) = (RX_ECEF_M, CLOCKS_GE_M, SKY_GE8);
@@ -227,6 +237,8 @@ fn sample() -> Vec<LinearObservation> {
 
 /// Every error variant is reachable from input and carries the
 /// offending value.
+///
+/// Verifies: WIRE-TooFewSatellites, WIRE-DuplicateSatellite, WIRE-NonPositiveSigma, WIRE-NoConvergence, WIRE-InvalidDof
 #[test]
 fn bad_input_gets_typed_errors() {
     let mut raim = Raim::<8>::new();
@@ -366,6 +378,8 @@ fn bad_input_gets_typed_errors() {
 
 /// With only one redundant measurement, a fault is detected but cannot
 /// be excluded: the result says so.
+///
+/// Verifies: SPEC-5
 #[test]
 fn alarm_without_exclusion_capability() {
     let mut raim = Raim::<8>::new();
@@ -450,6 +464,8 @@ fn a_reused_engine_equals_a_fresh_one() {
 /// for every rule, on 300 noisy 8- and 10-satellite epochs with 0-2
 /// faults, it is bit for bit `lraim::rank`'s best, and `None` when not
 /// asked for.
+///
+/// Verifies: SPEC-4.1
 #[test]
 fn per_satellite_ranking_equals_rank() {
     use crate::real::Real;

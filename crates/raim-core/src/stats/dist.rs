@@ -949,6 +949,7 @@ mod tests {
         ((value - reference) / reference).abs()
     }
 
+    /// Verifies: SPEC-3
     #[test]
     fn threshold_matches_spec_tables() {
         for dof in 1..=10u32 {
@@ -967,6 +968,7 @@ mod tests {
         }
     }
 
+    /// Verifies: SPEC-6
     #[test]
     fn pbias_matches_spec_table() {
         for dof in 1..=10u32 {
@@ -1070,6 +1072,7 @@ mod tests {
         }
     }
 
+    /// Verifies: SPEC-3
     #[test]
     fn chi2_far_tails_match_mpmath() {
         // (dof, x, cdf, sf) from mpmath 1.3 gammainc at 40 digits.

@@ -768,6 +768,7 @@ mod tests {
         );
     }
 
+    /// Verifies: RX-DECODE
     #[test]
     fn msm_errors_are_typed() {
         // Signal ID 1 is not in Table 3.5-91.

@@ -184,6 +184,7 @@ mod tests {
         }
     }
 
+    /// Verifies: RX-DATING
     #[test]
     fn gps_10_bit_weeks_around_each_rollover_and_today() {
         placed_exactly(1024, &[TODAY_GPS_WEEK]);
@@ -200,6 +201,8 @@ mod tests {
     /// Galileo's 12-bit week (DF289, GST weeks from 1999-08-22, rolling
     /// over in 2078) and BeiDou's 13-bit week (DF489, BDT weeks from
     /// 2006-01-01) are placed the same way, in their own week counts.
+    ///
+    /// Verifies: RX-DATING
     #[test]
     fn galileo_12_bit_and_beidou_13_bit_weeks() {
         // GST week of 2026-11-29 is GPS week 2447 - 1024.

@@ -684,6 +684,8 @@ mod tests {
     /// errors for every satellite and rule, d = 1, 2, 3 (2^16 draws).
     /// Common random numbers make the cells correlated, so the seed is
     /// fixed; the criterion is per cell (SPEC §4.3 "show that the two agree").
+    ///
+    /// Verifies: SPEC-4.3
     #[test]
     fn exact_agrees_with_monte_carlo() {
         const AGREE_SE: f64 = 3.0; // standard errors

@@ -240,6 +240,8 @@ mod tests {
     /// Monte Carlo P_D of every satellite agrees with the core's
     /// non-central chi-square P(ncx2(d, b^2 S_ii) >= T^2) within 3 standard
     /// errors, for d = 2 and d = 6 (any d: the detection test has a closed form).
+    ///
+    /// Verifies: SPEC-4.3
     #[test]
     fn detection_matches_noncentral_chi_square() {
         const AGREE_SE: f64 = 3.0; // standard errors

@@ -47,6 +47,7 @@ fn q(z: f64) -> f64 {
     Normal::new(0.0, 1.0).unwrap().sf(z)
 }
 
+/// Verifies: SPEC-9.2
 #[test]
 fn p_sigma_is_the_allocated_risk_at_the_exact_root() {
     let cfg = AraimConfig::default();
@@ -210,6 +211,7 @@ fn run(times: &[f64], window_s: f64, n_star: impl Fn(f64) -> f64) -> Vec<f64> {
     out
 }
 
+/// Verifies: SPEC-9.2
 #[test]
 fn resampler_matches_the_brute_force_schedule() {
     // 30 s epochs over 3 h, with a gap of 7 epochs and a jittered time tag.

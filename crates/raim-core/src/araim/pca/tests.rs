@@ -312,6 +312,8 @@ fn galileo_wide_common_bias_is_invisible_and_harmless() {
 /// docs/ESQ.md. Independent check: a bias common to one constellation is
 /// on its clock column, so ARAIM's separations are unchanged to rounding
 /// (S0 of any subset annihilates it) and the PCA cannot see it either.
+///
+/// Verifies: SPEC-9.3
 #[test]
 fn synthetic_constellation_faults_table() {
     use crate::araim::{Araim, AraimConfig, Ism};

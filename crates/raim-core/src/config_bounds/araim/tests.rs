@@ -99,6 +99,7 @@ fn sat() -> AraimSat<f64> {
     }
 }
 
+/// Verifies: SAFE-T1
 #[test]
 fn every_ism_field_is_bounded() {
     let sat_bound = |b: Bound, set: fn(&mut AraimSat<f64>, f64)| {
@@ -208,6 +209,8 @@ fn the_add_values_are_inside() {
 /// its field: P_sat = P_const = 1e-300 (0 fault modes, `Ok` with VPL
 /// 10.6 m over a 123.5 m error), PHMI near 1 with P_THRES 0.9, Pfa
 /// 1e-300, limits of 1e300.
+///
+/// Verifies: SAFE-T1
 #[test]
 fn the_attack_values_are_refused() {
     let mut s = sat();

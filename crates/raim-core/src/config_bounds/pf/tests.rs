@@ -181,6 +181,8 @@ fn the_calibrated_table_against_the_bound() {
 
 /// The review's values: a threshold of 1e300 (a 160 m fault never
 /// alarms), a Pfa of 1e-300 and sigmas far outside the model.
+///
+/// Verifies: SAFE-T5
 #[test]
 fn the_review_values_are_refused() {
     let b = threshold_bound(&Likelihood::Gaussian, 10);
