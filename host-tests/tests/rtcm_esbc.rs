@@ -20,328 +20,88 @@ mod rtcm_common;
 
 use std::collections::BTreeMap;
 
-use raim_core::{Config, SatId, System};
-use raim_gnss::ephemeris::{Kepler, BDT_MINUS_GPST_S, WEEK_S};
-use raim_gnss::{NavData, ObsData};
+use raim_core::{Config, System};
 use raim_nav::rtcm::{FormError, FormedEpoch, StreamReceiver, LIGHT_MS_M};
 use raim_recv::{Decoder, Item};
+use rtcm_common::esbc::{esbc_stream, EPOCHS, ESBC_WEEK, FINE_MS, SIGNALS};
 use rtcm_common::{frames, host_epochs, MASK_RAD};
-use rtcm_rs::msg::message::{Message, MessageBuilder};
-use rtcm_rs::msg::{BdsSigId, GalSigId, GpsSigId};
 
-const OBS: &str = "ESBC00DNK_R_20201770000_03H_30S_MO.rnx.gz";
-const NAV: &str = "ESBC00DNK_R_20201770000_01D_MN.rnx.gz";
-/// ESBC's GPS week (2020-06-25).
-const ESBC_WEEK: i64 = 2111;
-/// Epochs of the stream (30 s apart: the first 40 minutes).
-const EPOCHS: usize = 80;
-/// Ephemerides are sent this long before their toc, s.
-const LEAD_S: f64 = 3600.0;
-/// The MSM7 fine pseudorange (DF405) resolution, ms.
-const FINE_MS: f64 = 1.0 / (512.0 * 1024.0 * 1024.0);
-/// A signal sent: RINEX code and the MSM (band, attribute).
-type SignalCode = (&'static str, u8, char);
-/// The signals sent per system.
-const SIGNALS: [(System, [SignalCode; 2]); 3] = [
-    (System::Gps, [("C1C", 1, 'C'), ("C2W", 2, 'W')]),
-    (System::Galileo, [("C1C", 1, 'C'), ("C5Q", 5, 'Q')]),
-    (System::Beidou, [("C2I", 2, 'I'), ("C6I", 6, 'I')]),
-];
-
-fn data(name: &str) -> std::path::PathBuf {
-    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(name)
+/// What the device receiver gave against the host on a stream.
+struct Run {
+    host: Vec<rtcm_common::HostEpoch>,
+    same: usize,
+    sats_per_system: BTreeMap<System, usize>,
+    counts: raim_nav::rtcm::RtcmCounts,
+    times_gps_s: Vec<f64>,
+    sats: Vec<Vec<raim_core::SatId>>,
 }
 
-/// Seconds of the week and the week of GPS time `t`.
-fn week_sow(t_gps_s: f64) -> (i64, f64) {
-    let w = (t_gps_s / WEEK_S).floor();
-    (w as i64, t_gps_s - w * WEEK_S)
-}
-
-/// A Keplerian set as its RTCM message (angles back to semicircles).
-fn ephemeris_message(k: &Kepler) -> Message {
-    let sc = |rad: f64| rad / std::f64::consts::PI;
-    let f32_ = |v: f64| v as f32;
-    let unhealthy = u8::from(k.health != 0);
-    match k.system {
-        System::Gps => {
-            let (week, toc_s) = week_sow(k.toc_gps_s);
-            Message::Msg1019(rtcm_rs::msg::Msg1019T {
-                gps_satellite_id: k.prn,
-                gps_week_number: (week.rem_euclid(1024)) as u16,
-                idot_sc_s: sc(k.idot_rad_s),
-                iode: k.iod as u8,
-                toc_s: f32_(toc_s),
-                af2_s_s2: f32_(k.af2_s_s2),
-                af1_s_s: f32_(k.af1_s_s),
-                af0_s: k.af0_s,
-                iodc: k.iod as u16,
-                crs_m: f32_(k.crs_m),
-                delta_n_sc_s: f32_(sc(k.delta_n_rad_s)),
-                m0_sc: sc(k.m0_rad),
-                cuc_rad: f32_(k.cuc_rad),
-                eccentricity: k.e,
-                cus_rad: f32_(k.cus_rad),
-                sqrt_a_sqrt_m: k.sqrt_a_m05,
-                toe_s: f32_(k.toe_sow_s),
-                cic_rad: f32_(k.cic_rad),
-                omega0_sc: sc(k.omega0_rad),
-                cis_rad: f32_(k.cis_rad),
-                i0_sc: sc(k.i0_rad),
-                crc_m: f32_(k.crc_m),
-                omega_sc: sc(k.omega_rad),
-                omegadot_sc_s: sc(k.omega_dot_rad_s),
-                tgd_s: f32_(k.group_delay_s),
-                sv_health_ind: unhealthy,
-                ..Default::default()
-            })
-        }
-        System::Galileo => {
-            let (week, toc_s) = week_sow(k.toc_gps_s);
-            Message::Msg1046(rtcm_rs::msg::Msg1046T {
-                gal_satellite_id: k.prn,
-                gal_week_number: ((week - 1024).rem_euclid(4096)) as u16,
-                iodnav: k.iod as u16,
-                idot_sc_s: f32_(sc(k.idot_rad_s)),
-                toc_s: f32_(toc_s),
-                af2_s_s2: f32_(k.af2_s_s2),
-                af1_s_s: k.af1_s_s,
-                af0_s: k.af0_s,
-                crs_m: f32_(k.crs_m),
-                delta_n_sc_s: f32_(sc(k.delta_n_rad_s)),
-                m0_sc: sc(k.m0_rad),
-                cuc_rad: f32_(k.cuc_rad),
-                eccentricity: k.e,
-                cus_rad: f32_(k.cus_rad),
-                sqrt_a_sqrt_m: k.sqrt_a_m05,
-                toe_s: f32_(k.toe_sow_s),
-                cic_rad: f32_(k.cic_rad),
-                omega0_sc: sc(k.omega0_rad),
-                cis_rad: f32_(k.cis_rad),
-                i0_sc: sc(k.i0_rad),
-                crc_m: f32_(k.crc_m),
-                omega_sc: sc(k.omega_rad),
-                omegadot_sc_s: sc(k.omega_dot_rad_s),
-                bgd_e1_e5a_s: f32_(k.group_delay_e5a_s),
-                bgd_e1_e5b_s: f32_(k.group_delay_s),
-                e1_b_sig_health_ind: unhealthy,
-                ..Default::default()
-            })
-        }
-        System::Beidou => {
-            // BDT: GPS - 14 s, weeks from GPS week 1356.
-            let (week, toc_s) = week_sow(k.toc_gps_s + BDT_MINUS_GPST_S);
-            Message::Msg1042(rtcm_rs::msg::Msg1042T {
-                bds_satellite_id: k.prn,
-                bds_week_number: ((week - 1356).rem_euclid(8192)) as u16,
-                idot_sc_s: sc(k.idot_rad_s),
-                aode: k.iod as u8,
-                toc_s: f32_(toc_s),
-                a2_s_s2: f32_(k.af2_s_s2),
-                a1_s_s: k.af1_s_s,
-                a0_s: k.af0_s,
-                crs_m: f32_(k.crs_m),
-                delta_n_sc_s: f32_(sc(k.delta_n_rad_s)),
-                m0_sc: sc(k.m0_rad),
-                cuc_rad: f32_(k.cuc_rad),
-                eccentricity: k.e,
-                cus_rad: f32_(k.cus_rad),
-                sqrt_a_sqrt_m: k.sqrt_a_m05,
-                toe_s: f32_(k.toe_sow_s),
-                cic_rad: f32_(k.cic_rad),
-                omega0_sc: sc(k.omega0_rad),
-                cis_rad: f32_(k.cis_rad),
-                i0_sc: sc(k.i0_rad),
-                crc_m: f32_(k.crc_m),
-                omega_sc: sc(k.omega_rad),
-                omegadot_sc_s: sc(k.omega_dot_rad_s),
-                tgd1_s: f32_(k.group_delay_s),
-                sv_health_flag: unhealthy,
-                ..Default::default()
-            })
-        }
-        s => panic!("no Keplerian message for {s:?}"),
-    }
-}
-
-/// One system's MSM7 at an epoch: (satellite, rough ms as DF397 + DF398,
-/// [(band, attribute, fine ms)]).
-type Cells = Vec<(u8, u8, f64, Vec<(u8, char, f64)>)>;
-
-/// The cells of `sys` in an ESBC epoch: the rough range (1/1024 ms) from
-/// the first signal, each signal's remainder as the fine range (within
-/// DF405's +-2^-10 ms, else the signal is left out).
-fn cells(sats: &BTreeMap<SatId, Vec<raim_gnss::rinex_io::CodeObs>>, sys: System) -> Cells {
-    let signals = SIGNALS.iter().find(|(s, _)| *s == sys).unwrap().1;
-    let mut out = Cells::new();
-    for (id, obs) in sats.iter().filter(|(id, _)| id.system == sys) {
-        let ms = |code: &str| {
-            obs.iter()
-                .find(|o| o.code == code)
-                .map(|o| o.value_m / LIGHT_MS_M)
-        };
-        let Some(first_ms) = signals.iter().find_map(|(c, _, _)| ms(c)) else {
-            continue;
-        };
-        let rough_1024 = (first_ms * 1024.0).round() as i64;
-        let (int_ms, mod_1024) = (rough_1024 / 1024, rough_1024 % 1024);
-        let rough_ms = int_ms as f64 + mod_1024 as f64 / 1024.0;
-        let sigs: Vec<(u8, char, f64)> = signals
-            .iter()
-            .filter_map(|(c, band, attr)| {
-                let fine = ms(c)? - rough_ms;
-                (fine.abs() < 1.0 / 1024.0 - FINE_MS).then_some((*band, *attr, fine))
-            })
-            .collect();
-        if !sigs.is_empty() && (1..=254).contains(&int_ms) {
-            out.push((id.prn, int_ms as u8, mod_1024 as f64 / 1024.0, sigs));
-        }
-    }
-    out
-}
-
-macro_rules! msm7 {
-    ($variant:ident, $t:ident, $sig_t:ident, $sig_id:ident, $time:ident, $time_ms:expr, $more:expr, $cells:expr) => {{
-        let mut m = rtcm_rs::msg::$t {
-            reference_station_id: 7,
-            $time: $time_ms,
-            msm_multiple_message_flag: $more,
-            ..Default::default()
-        };
-        for (prn, int_ms, mod_ms, sigs) in $cells {
-            m.data_segment.satellite_data.push(rtcm_rs::msg::Msm57Sat {
-                satellite_id: *prn,
-                gnss_satellite_rough_range_integer_ms: Some(*int_ms),
-                gnss_satellite_rough_range_mod1ms_ms: *mod_ms,
-                ..Default::default()
-            });
-            for (band, attr, fine) in sigs {
-                m.data_segment.signal_data.push(rtcm_rs::msg::$sig_t {
-                    satellite_id: *prn,
-                    signal_id: $sig_id::new(*band, *attr),
-                    gnss_signal_fine_pseudorange_ext_ms: Some(*fine),
-                    ..Default::default()
-                });
-            }
-        }
-        Message::$variant(m)
-    }};
-}
-
-/// An epoch's GPS time and the (satellite, code, RINEX value m) it carries.
-type Carried = (f64, Vec<(SatId, String, f64)>);
-
-/// ESBC's first `EPOCHS` epochs as a receiver's RTCM 3 stream, and the
-/// observations it carries (RINEX values of the signals sent).
-fn esbc_stream() -> (Vec<u8>, Vec<Carried>) {
-    let obs = ObsData::load(&data(OBS)).unwrap();
-    let nav = NavData::load(&data(NAV)).unwrap();
-    let mut b = MessageBuilder::new();
-    let mut out = Vec::new();
-    let mut put = |b: &mut MessageBuilder, m: &Message| {
-        out.extend_from_slice(b.build_message(m).expect("rtcm-rs encodes it"));
+/// The device receiver (pivot `pivot_week`) and the host's causal replay
+/// (clock at `now_week`) on `bytes`: every epoch the device forms must be
+/// the host's, to the bit.
+fn device_against_host(bytes: &[u8], pivot_week: i64, now_week: i64) -> Run {
+    let model = Config::default().sigma_model;
+    let (host, _) = host_epochs(bytes, now_week);
+    let mut dev = Box::new(StreamReceiver::<64, 256>::new(pivot_week));
+    let mut formed = FormedEpoch::<64> {
+        time_gps_s: 0.0,
+        reference_m: None,
+        sats: heapless::Vec::new(),
+        rejected: 0,
     };
-    let station = obs.approx_position_m.unwrap();
-    put(
-        &mut b,
-        &Message::Msg1005(rtcm_rs::msg::Msg1005T {
-            reference_station_id: 7,
-            gps_flag: 1,
-            galileo_flag: 1,
-            antenna_ref_point_ecef_x_m: station[0],
-            antenna_ref_point_ecef_y_m: station[1],
-            antenna_ref_point_ecef_z_m: station[2],
-            ..Default::default()
-        }),
-    );
-    let mut sets: Vec<&Kepler> = nav
-        .ephemerides
-        .iter()
-        .filter(|(id, _)| matches!(id.system, System::Gps | System::Galileo | System::Beidou))
-        .flat_map(|(_, v)| v.iter())
-        .collect();
-    sets.sort_by(|a, b| a.toc_gps_s.total_cmp(&b.toc_gps_s));
-    let t0 = obs.epochs[0].time_gps_s;
-    // Sets already in force at the start: those of the last 4 hours.
-    sets.retain(|k| k.toc_gps_s >= t0 - 4.0 * 3600.0);
-    let mut next = 0;
-    let mut carried = Vec::new();
-    for e in obs.epochs.iter().take(EPOCHS) {
-        while next < sets.len() && sets[next].toc_gps_s - LEAD_S <= e.time_gps_s {
-            put(&mut b, &ephemeris_message(sets[next]));
-            next += 1;
-        }
-        let (_, sow) = week_sow(e.time_gps_s);
-        let tow_ms = (sow * 1000.0).round() as u32;
-        let bdt_ms = ((sow + BDT_MINUS_GPST_S) * 1000.0)
-            .round()
-            .rem_euclid(WEEK_S * 1000.0) as u32;
-        let (g, ga, c) = (
-            cells(&e.sats, System::Gps),
-            cells(&e.sats, System::Galileo),
-            cells(&e.sats, System::Beidou),
-        );
-        put(
-            &mut b,
-            &msm7!(
-                Msg1077,
-                Msg1077T,
-                Msg1077Sig,
-                GpsSigId,
-                gps_epoch_time_ms,
-                tow_ms,
-                1,
-                &g
-            ),
-        );
-        put(
-            &mut b,
-            &msm7!(
-                Msg1097,
-                Msg1097T,
-                Msg1097Sig,
-                GalSigId,
-                gal_epoch_time_ms,
-                tow_ms,
-                1,
-                &ga
-            ),
-        );
-        put(
-            &mut b,
-            &msm7!(
-                Msg1127,
-                Msg1127T,
-                Msg1127Sig,
-                BdsSigId,
-                bds_epoch_time_ms,
-                bdt_ms,
-                0,
-                &c
-            ),
-        );
-        let mut sent = Vec::new();
-        for (sys, _) in SIGNALS {
-            let cs = cells(&e.sats, sys);
-            for (prn, _, _, sigs) in &cs {
-                let id = SatId::new(sys, *prn);
-                for (band, attr, _) in sigs {
-                    let code = format!("C{band}{attr}");
-                    let v = e.sats[&id].iter().find(|o| o.code == code).unwrap().value_m;
-                    sent.push((id, code, v));
+    let (mut same, mut sats_per_system) = (0, BTreeMap::<System, usize>::new());
+    let (mut times_gps_s, mut sats) = (Vec::new(), Vec::new());
+    for (n, f) in frames(bytes).into_iter().enumerate() {
+        match dev.on_frame(f, &model, MASK_RAD, &mut formed) {
+            None => {}
+            Some(Err(e @ FormError::NotDated { .. })) => panic!("{e}: ephemerides come first"),
+            Some(Err(e)) => panic!("{e}"),
+            Some(Ok(())) => {
+                let h = host
+                    .iter()
+                    .find(|h| h.prepared.time_gps_s == formed.time_gps_s)
+                    .unwrap_or_else(|| {
+                        panic!("device epoch {} s not on the host", formed.time_gps_s)
+                    });
+                assert_eq!(h.frame, n);
+                assert_eq!(h.prepared.reference_m, formed.reference_m);
+                assert_eq!(
+                    h.obs.len(),
+                    formed.sats.len(),
+                    "epoch {} s",
+                    formed.time_gps_s
+                );
+                for (h, d) in h.obs.iter().zip(formed.sats.iter()) {
+                    assert_eq!(h.id, d.id);
+                    assert_eq!(
+                        h.pseudorange_m.to_bits(),
+                        d.pseudorange_m.to_bits(),
+                        "{:?}",
+                        h.id
+                    );
+                    assert_eq!(h.position_m, d.position_m, "{:?}", h.id);
+                    assert_eq!(h.sigma_m, d.sigma_m, "{:?}", h.id);
+                    *sats_per_system.entry(d.id.system).or_default() += 1;
                 }
+                times_gps_s.push(formed.time_gps_s);
+                sats.push(formed.sats.iter().map(|s| s.id).collect());
+                same += 1;
             }
         }
-        carried.push((e.time_gps_s, sent));
     }
-    (out, carried)
+    Run {
+        host,
+        same,
+        sats_per_system,
+        counts: dev.counts(),
+        times_gps_s,
+        sats,
+    }
 }
 
 #[test]
 fn esbc_stream_round_trips_and_the_device_forms_the_host_epochs() {
-    let (bytes, carried) = esbc_stream();
+    let (bytes, carried) = esbc_stream(0);
     // Round trip through the host's reader.
     let mut host = raim_recv::rtcm::Rtcm3::new(ESBC_WEEK + 1);
     let mut items = Vec::new();
@@ -377,58 +137,14 @@ fn esbc_stream_round_trips_and_the_device_forms_the_host_epochs() {
     assert_eq!(per_system.len(), 3);
 
     // The device receiver against the host's causal replay.
-    let model = Config::default().sigma_model;
-    let (host, _) = host_epochs(&bytes, ESBC_WEEK + 1);
-    let mut dev = Box::new(StreamReceiver::<64, 256>::new(ESBC_WEEK - 52));
-    let mut formed = FormedEpoch::<64> {
-        time_gps_s: 0.0,
-        reference_m: None,
-        sats: heapless::Vec::new(),
-        rejected: 0,
-    };
-    let (mut same, mut sats_per_system) = (0, BTreeMap::<System, usize>::new());
-    for (n, f) in frames(&bytes).into_iter().enumerate() {
-        match dev.on_frame(f, &model, MASK_RAD, &mut formed) {
-            None => {}
-            Some(Err(e @ FormError::NotDated { .. })) => panic!("{e}: ephemerides come first"),
-            Some(Err(e)) => panic!("{e}"),
-            Some(Ok(())) => {
-                let h = host
-                    .iter()
-                    .find(|h| h.prepared.time_gps_s == formed.time_gps_s)
-                    .unwrap_or_else(|| {
-                        panic!("device epoch {} s not on the host", formed.time_gps_s)
-                    });
-                assert_eq!(h.frame, n);
-                assert_eq!(h.prepared.reference_m, formed.reference_m);
-                assert_eq!(
-                    h.obs.len(),
-                    formed.sats.len(),
-                    "epoch {} s",
-                    formed.time_gps_s
-                );
-                for (h, d) in h.obs.iter().zip(formed.sats.iter()) {
-                    assert_eq!(h.id, d.id);
-                    assert_eq!(
-                        h.pseudorange_m.to_bits(),
-                        d.pseudorange_m.to_bits(),
-                        "{:?}",
-                        h.id
-                    );
-                    assert_eq!(h.position_m, d.position_m, "{:?}", h.id);
-                    assert_eq!(h.sigma_m, d.sigma_m, "{:?}", h.id);
-                    *sats_per_system.entry(d.id.system).or_default() += 1;
-                }
-                same += 1;
-            }
-        }
-    }
+    let run = device_against_host(&bytes, ESBC_WEEK - 52, ESBC_WEEK + 1);
+    let (host, same, sats_per_system) = (&run.host, run.same, &run.sats_per_system);
     // The iono-free pairs of the stream codes (GPS L1/L2, Galileo E1/E5a,
     // BeiDou B1I/B3I) on the host's (and so the device's) epochs, for
     // every satellite whose two signals were sent (some of ESBC's BeiDou
     // satellites have no C6I: single frequency).
     let mut codes = BTreeMap::<(System, String), usize>::new();
-    for h in &host {
+    for h in host {
         let (_, sent) = carried
             .iter()
             .find(|(t, _)| *t == h.prepared.time_gps_s)
@@ -451,7 +167,7 @@ fn esbc_stream_round_trips_and_the_device_forms_the_host_epochs() {
         }
     }
     println!("codes used: {codes:?}");
-    let c = dev.counts();
+    let c = run.counts;
     println!(
         "device: {same} epochs formed as the host's, satellites {sats_per_system:?}, counts {c:?}"
     );
@@ -464,5 +180,33 @@ fn esbc_stream_round_trips_and_the_device_forms_the_host_epochs() {
             sats_per_system.get(&sys).copied().unwrap_or(0) >= 4 * EPOCHS,
             "{sys:?}: {sats_per_system:?}"
         );
+    }
+}
+
+/// The generator's stream sent today (in this build's dating window) and
+/// in 2040 (GPS week 3160, past the 10-bit GPS rollover of 2038-11-21),
+/// into a unit with this build's pivot (raim-server's `PIVOT_WEEK`): every
+/// epoch dated in the moved week by GPS (1019), Galileo (1046: GST week
+/// modulo 4096) and BeiDou (1042: BDT week modulo 8192) weeks alike, the
+/// device and the host forming the same epochs as on the original stream,
+/// with the same satellites.
+#[test]
+fn esbc_stream_sent_today_and_in_2040_is_dated_in_its_week() {
+    let (bytes, _) = esbc_stream(0);
+    let original = device_against_host(&bytes, ESBC_WEEK - 52, ESBC_WEEK + 1);
+    for week in [rtcm_common::in_window_week(), 3160] {
+        let delta = week - ESBC_WEEK;
+        let (moved, _) = esbc_stream(delta);
+        let run = device_against_host(&moved, raim_server::stream::PIVOT_WEEK, week + 1);
+        println!(
+            "ESBC moved {delta} weeks to week {week}: {} epochs formed alike",
+            run.same
+        );
+        assert_eq!(run.same, EPOCHS);
+        let shift_s = delta as f64 * raim_nav::ephemeris::WEEK_S;
+        for (a, b) in run.times_gps_s.iter().zip(&original.times_gps_s) {
+            assert_eq!(*a, b + shift_s, "week {week}");
+        }
+        assert_eq!(run.sats, original.sats, "week {week}");
     }
 }

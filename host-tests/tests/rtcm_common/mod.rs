@@ -5,6 +5,8 @@
 
 #![allow(dead_code)]
 
+pub mod esbc;
+
 use raim_core::sigma::SigmaModel;
 use raim_core::{Config, RangeObservation, System};
 use raim_gnss::ranging::{prepare_epoch, PreparedEpoch, RangingOptions};
