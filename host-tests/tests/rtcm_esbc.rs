@@ -210,3 +210,21 @@ fn esbc_stream_sent_today_and_in_2040_is_dated_in_its_week() {
         assert_eq!(run.sats, original.sats, "week {week}");
     }
 }
+
+/// BeiDou MSM tagged with GPS time, as encoders before RTCM 3.2 wrote them:
+/// both readers join them to the epoch whose GPS time of week they carry
+/// (not 14 s later), and form the same epochs as from the BDT-tagged
+/// stream, to the bit.
+#[test]
+fn beidou_msm_in_gps_time_join_their_epoch() {
+    use rtcm_common::esbc::{esbc_stream_with, BeidouTime};
+    let (bdt, _) = esbc_stream_with(0, BeidouTime::Bdt);
+    let (gps, _) = esbc_stream_with(0, BeidouTime::Gps);
+    assert_ne!(bdt, gps);
+    let a = device_against_host(&bdt, ESBC_WEEK - 52, ESBC_WEEK + 1);
+    let b = device_against_host(&gps, ESBC_WEEK - 52, ESBC_WEEK + 1);
+    assert_eq!(b.same, EPOCHS);
+    assert_eq!(b.times_gps_s, a.times_gps_s);
+    assert_eq!(b.sats, a.sats);
+    assert_eq!(b.sats_per_system, a.sats_per_system);
+}

@@ -228,6 +228,20 @@ pub type Carried = (f64, Vec<(SatId, String, f64)>);
 /// `delta_weeks` after the recording, and the observations it carries
 /// (GPS time as recorded, RINEX values of the signals sent).
 pub fn esbc_stream(delta_weeks: i64) -> (Vec<u8>, Vec<Carried>) {
+    esbc_stream_with(delta_weeks, BeidouTime::Bdt)
+}
+
+/// The time tag of the BeiDou MSM (DF427).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BeidouTime {
+    /// BDT (RTCM 10403.3: GPS - 14 s).
+    Bdt,
+    /// GPS time, as encoders before RTCM 3.2 settled on BDT wrote it.
+    Gps,
+}
+
+/// [`esbc_stream`] with the BeiDou MSM's time tag `bds_time`.
+pub fn esbc_stream_with(delta_weeks: i64, bds_time: BeidouTime) -> (Vec<u8>, Vec<Carried>) {
     let obs = ObsData::load(&data(OBS)).unwrap();
     let nav = NavData::load(&data(NAV)).unwrap();
     let mut b = MessageBuilder::new();
@@ -270,6 +284,10 @@ pub fn esbc_stream(delta_weeks: i64) -> (Vec<u8>, Vec<Carried>) {
         let bdt_ms = ((sow + BDT_MINUS_GPST_S) * 1000.0)
             .round()
             .rem_euclid(WEEK_S * 1000.0) as u32;
+        let bdt_ms = match bds_time {
+            BeidouTime::Bdt => bdt_ms,
+            BeidouTime::Gps => tow_ms,
+        };
         let (g, ga, c) = (
             cells(&e.sats, System::Gps),
             cells(&e.sats, System::Galileo),
