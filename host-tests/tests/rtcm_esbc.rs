@@ -218,8 +218,8 @@ fn esbc_stream_sent_today_and_in_2040_is_dated_in_its_week() {
 #[test]
 fn beidou_msm_in_gps_time_join_their_epoch() {
     use rtcm_common::esbc::{esbc_stream_with, BeidouTime};
-    let (bdt, _) = esbc_stream_with(0, BeidouTime::Bdt);
-    let (gps, _) = esbc_stream_with(0, BeidouTime::Gps);
+    let (bdt, _) = esbc_stream_with(0, BeidouTime::Bdt, false);
+    let (gps, _) = esbc_stream_with(0, BeidouTime::Gps, false);
     assert_ne!(bdt, gps);
     let a = device_against_host(&bdt, ESBC_WEEK - 52, ESBC_WEEK + 1);
     let b = device_against_host(&gps, ESBC_WEEK - 52, ESBC_WEEK + 1);
@@ -227,4 +227,35 @@ fn beidou_msm_in_gps_time_join_their_epoch() {
     assert_eq!(b.times_gps_s, a.times_gps_s);
     assert_eq!(b.sats, a.sats);
     assert_eq!(b.sats_per_system, a.sats_per_system);
+}
+
+/// Galileo on both navigation messages, as a receiver sends them: each set
+/// as I/NAV (1046) and F/NAV (1045). The device stores and selects them as
+/// the host does (same toe: the first received), and forms the host's
+/// epochs to the bit with every Galileo satellite of the I/NAV-only
+/// stream.
+#[test]
+fn galileo_inav_and_fnav_both_sent() {
+    use rtcm_common::esbc::{esbc_stream_with, BeidouTime};
+    let (inav, _) = esbc_stream_with(0, BeidouTime::Bdt, false);
+    let (both, _) = esbc_stream_with(0, BeidouTime::Bdt, true);
+    let fnav = frames(&both)
+        .iter()
+        .filter(|f| {
+            rtcm_rs::MessageFrame::new(f)
+                .ok()
+                .and_then(|m| m.message_number())
+                == Some(1045)
+        })
+        .count();
+    let a = device_against_host(&inav, ESBC_WEEK - 52, ESBC_WEEK + 1);
+    let b = device_against_host(&both, ESBC_WEEK - 52, ESBC_WEEK + 1);
+    println!(
+        "{fnav} F/NAV 1045 beside the I/NAV sets; device counts {:?}",
+        b.counts
+    );
+    assert!(fnav > 20, "{fnav}");
+    assert_eq!(b.counts.ephemerides, a.counts.ephemerides + fnav as u32);
+    assert_eq!(b.same, EPOCHS);
+    assert_eq!(b.sats, a.sats);
 }

@@ -157,6 +157,42 @@ fn ephemeris_message(k: &Kepler, delta_weeks: i64) -> Message {
     }
 }
 
+/// A Galileo set as an F/NAV 1045 (angles back to semicircles).
+fn fnav_message(k: &Kepler, delta_weeks: i64) -> Message {
+    let sc = |rad: f64| rad / std::f64::consts::PI;
+    let f32_ = |v: f64| v as f32;
+    let (week, toc_s) = week_sow(k.toc_gps_s);
+    let week = week + delta_weeks;
+    Message::Msg1045(rtcm_rs::msg::Msg1045T {
+        gal_satellite_id: k.prn,
+        gal_week_number: ((week - 1024).rem_euclid(4096)) as u16,
+        iodnav: k.iod as u16,
+        idot_sc_s: f32_(sc(k.idot_rad_s)),
+        toc_s: f32_(toc_s),
+        af2_s_s2: f32_(k.af2_s_s2),
+        af1_s_s: k.af1_s_s,
+        af0_s: k.af0_s,
+        crs_m: f32_(k.crs_m),
+        delta_n_sc_s: f32_(sc(k.delta_n_rad_s)),
+        m0_sc: sc(k.m0_rad),
+        cuc_rad: f32_(k.cuc_rad),
+        eccentricity: k.e,
+        cus_rad: f32_(k.cus_rad),
+        sqrt_a_sqrt_m: k.sqrt_a_m05,
+        toe_s: f32_(k.toe_sow_s),
+        cic_rad: f32_(k.cic_rad),
+        omega0_sc: sc(k.omega0_rad),
+        cis_rad: f32_(k.cis_rad),
+        i0_sc: sc(k.i0_rad),
+        crc_m: f32_(k.crc_m),
+        omega_sc: sc(k.omega_rad),
+        omegadot_sc_s: sc(k.omega_dot_rad_s),
+        bgd_e1_e5a_s: f32_(k.group_delay_e5a_s),
+        e5a_sig_health_ind: u8::from(k.health != 0),
+        ..Default::default()
+    })
+}
+
 /// One system's MSM7 at an epoch: (satellite, rough ms as DF397 + DF398,
 /// [(band, attribute, fine ms)]).
 type Cells = Vec<(u8, u8, f64, Vec<(u8, char, f64)>)>;
@@ -228,7 +264,7 @@ pub type Carried = (f64, Vec<(SatId, String, f64)>);
 /// `delta_weeks` after the recording, and the observations it carries
 /// (GPS time as recorded, RINEX values of the signals sent).
 pub fn esbc_stream(delta_weeks: i64) -> (Vec<u8>, Vec<Carried>) {
-    esbc_stream_with(delta_weeks, BeidouTime::Bdt)
+    esbc_stream_with(delta_weeks, BeidouTime::Bdt, false)
 }
 
 /// The time tag of the BeiDou MSM (DF427).
@@ -240,8 +276,14 @@ pub enum BeidouTime {
     Gps,
 }
 
-/// [`esbc_stream`] with the BeiDou MSM's time tag `bds_time`.
-pub fn esbc_stream_with(delta_weeks: i64, bds_time: BeidouTime) -> (Vec<u8>, Vec<Carried>) {
+/// [`esbc_stream`] with the BeiDou MSM's time tag `bds_time`, and with
+/// each Galileo set also sent as an F/NAV 1045 after its I/NAV 1046
+/// (`fnav`: the same orbit and clock, BGD(E1,E5a), E5a health).
+pub fn esbc_stream_with(
+    delta_weeks: i64,
+    bds_time: BeidouTime,
+    fnav: bool,
+) -> (Vec<u8>, Vec<Carried>) {
     let obs = ObsData::load(&data(OBS)).unwrap();
     let nav = NavData::load(&data(NAV)).unwrap();
     let mut b = MessageBuilder::new();
@@ -277,6 +319,9 @@ pub fn esbc_stream_with(delta_weeks: i64, bds_time: BeidouTime) -> (Vec<u8>, Vec
     for e in obs.epochs.iter().take(EPOCHS) {
         while next < sets.len() && sets[next].toc_gps_s - LEAD_S <= e.time_gps_s {
             put(&mut b, &ephemeris_message(sets[next], delta_weeks));
+            if fnav && sets[next].system == System::Galileo {
+                put(&mut b, &fnav_message(sets[next], delta_weeks));
+            }
             next += 1;
         }
         let (_, sow) = week_sow(e.time_gps_s);
