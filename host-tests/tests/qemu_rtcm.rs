@@ -306,3 +306,54 @@ fn qemu_rtcm_stream_epoch_cost() {
     );
     assert!(s.last_stream_ticks > 0);
 }
+
+/// The G+E+C stream generated from ESBC's RINEX (`rtcm_common::esbc`:
+/// 1005, 1019/1046/1042, MSM7 1077/1097/1127), sent in this build's dating
+/// window into the unit's link: every epoch is formed and answered as a
+/// second unit answers the host replay's epoch (the same wire bytes), with
+/// Galileo and BeiDou in the solution, within the stack goal.
+///
+/// Verifies: RX-MULTI, RX-STREAM
+#[test]
+fn qemu_rtcm_esbc_gec_stream_answers_equal_the_host_replay() {
+    use rtcm_common::esbc::{esbc_stream, EPOCHS, ESBC_WEEK};
+    let week = in_window_week();
+    let (bytes, _) = esbc_stream(week - ESBC_WEEK);
+    let (host, counts) = host_epochs(&bytes, week + 1);
+    assert_eq!(counts.epochs as usize, EPOCHS);
+    assert_eq!(host.len(), EPOCHS);
+    let mut fw = session_on(Machine::Mps2An386);
+    let answers = stream_answers(&mut fw, &bytes, EPOCHS);
+    let status = fw.status().unwrap();
+    assert_eq!(status.rtcm_frames, frames(&bytes).len() as u32);
+    assert_eq!(status.stream_epochs as usize, EPOCHS);
+    assert!(
+        status.stack_high_water_bytes <= STACK_GOAL_BYTES,
+        "stack high water {} B",
+        status.stack_high_water_bytes
+    );
+    let mut reference = session_on(Machine::Mps2An386);
+    let (mut ok, mut systems) = (0, std::collections::BTreeSet::new());
+    for (a, h) in answers.iter().zip(&host) {
+        let time_s = raim_nav::time::unix_utc_s(h.prepared.time_gps_s);
+        let want = reference
+            .process(&Epoch::ranges(time_s, &h.obs, h.prepared.reference_m))
+            .unwrap()
+            .outcome;
+        match (&a.body, want) {
+            (ResponseBody::Result(r), Ok(want)) => {
+                assert_eq!(wire_bytes(r), wire_bytes(&want), "epoch at {time_s} s");
+                assert_eq!(r.decision, Decision::Ok, "a clean stream: {r:?}");
+                systems.extend(h.obs.iter().map(|s| s.id.system));
+                ok += 1;
+            }
+            (got, want) => panic!("epoch at {time_s} s: unit {got:?}, host {want:?}"),
+        }
+    }
+    println!(
+        "ESBC G+E+C stream in week {week}: {ok} of {EPOCHS} epochs answered Ok as the host replay's, systems {systems:?}; stack high water {} B, last stream epoch {} ticks",
+        status.stack_high_water_bytes, status.last_stream_ticks
+    );
+    assert_eq!(ok, EPOCHS);
+    assert_eq!(systems.len(), 3, "{systems:?}");
+}

@@ -1,10 +1,12 @@
 //! The device's compact RTCM 3 decoder (`raim_nav::rtcm::decode`) against
 //! `rtcm-rs` (the host's decoder), field by field and bit for bit: every
 //! frame of the real GMSD7 stream (GPS + GLONASS MSM7, 1019, 1020, 1005/
-//! 1006; other systems' MSM for their DF393), and random GPS/GLONASS
-//! MSM4-MSM7, 1019, 1020, 1005 and 1006 built by `rtcm-rs`'s own encoder
+//! 1006; other systems' MSM for their DF393), and random GPS, GLONASS,
+//! Galileo, QZSS and BeiDou MSM4-MSM7, 1019, 1020, 1042, 1044, 1045,
+//! 1046, 1005 and 1006 built by `rtcm-rs`'s own encoder
 //! (`build_generated_message`), whole, with a byte overwritten, and cut
-//! short.
+//! short. The ephemerides' fields are compared with the host reader's
+//! conversion of `rtcm-rs`'s message (`raim_nav::rtcm::msg10xx_fields`).
 //!
 //! Values are compared through their `Debug` text: Rust prints an f64 as
 //! the shortest decimal that reads back to the same bits (and -0.0 as
@@ -13,7 +15,10 @@
 mod rtcm_common;
 
 use raim_nav::rtcm::decode::{msm_more_bit, DecodeError, Frame, Message as Dm, MsmSystem};
-use raim_nav::rtcm::{fx, glonass_fields, KeplerFields, LIGHT_MS_M};
+use raim_nav::rtcm::{
+    fx, glonass_fields, msg1019_fields, msg1042_fields, msg1044_fields, msg1045_fields,
+    msg1046_fields, LIGHT_MS_M,
+};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rtcm_rs::msg::message::{Message, MessageBuilder};
@@ -24,7 +29,7 @@ use rtcm_rs::MessageFrame;
 #[derive(Debug, PartialEq)]
 enum Decoded {
     Msm {
-        glonass: bool,
+        system: String,
         station_id: u16,
         epoch_ms: u32,
         /// GLONASS: DF416 (`None` = 7, unknown).
@@ -33,8 +38,10 @@ enum Decoded {
         /// (satellite, band, attribute, pseudorange m).
         signals: Vec<(u8, u8, u8, Option<f64>)>,
     },
-    Gps1019 {
+    Kepler {
+        number: u16,
         prn: u8,
+        /// The week as sent (modulo 1024, 4096 or 8192).
         week: u16,
         fields: String,
     },
@@ -50,7 +57,7 @@ enum Decoded {
 }
 
 macro_rules! msm_ref {
-    ($m:expr, $glonass:expr, $epoch:expr, $day:expr, $fine:ident) => {{
+    ($m:expr, $system:expr, $epoch:expr, $day:expr, $fine:ident) => {{
         let m = &$m;
         let signals = m
             .data_segment
@@ -80,7 +87,7 @@ macro_rules! msm_ref {
             })
             .collect();
         Decoded::Msm {
-            glonass: $glonass,
+            system: $system.into(),
             station_id: m.reference_station_id,
             epoch_ms: $epoch,
             glonass_day: $day,
@@ -107,93 +114,173 @@ fn reference(frame: &[u8]) -> Decoded {
     match msg {
         Message::Msg1074(m) => msm_ref!(
             m,
-            false,
+            "Gps",
             m.gps_epoch_time_ms,
             None,
             gnss_signal_fine_pseudorange_ms
         ),
         Message::Msg1075(m) => msm_ref!(
             m,
-            false,
+            "Gps",
             m.gps_epoch_time_ms,
             None,
             gnss_signal_fine_pseudorange_ms
         ),
         Message::Msg1076(m) => msm_ref!(
             m,
-            false,
+            "Gps",
             m.gps_epoch_time_ms,
             None,
             gnss_signal_fine_pseudorange_ext_ms
         ),
         Message::Msg1077(m) => msm_ref!(
             m,
-            false,
+            "Gps",
             m.gps_epoch_time_ms,
             None,
             gnss_signal_fine_pseudorange_ext_ms
         ),
         Message::Msg1084(m) => msm_ref!(
             m,
-            true,
+            "Glonass",
             m.glo_epoch_time_ms,
             Some(m.glo_day_of_week),
             gnss_signal_fine_pseudorange_ms
         ),
         Message::Msg1085(m) => msm_ref!(
             m,
-            true,
+            "Glonass",
             m.glo_epoch_time_ms,
             Some(m.glo_day_of_week),
             gnss_signal_fine_pseudorange_ms
         ),
         Message::Msg1086(m) => msm_ref!(
             m,
-            true,
+            "Glonass",
             m.glo_epoch_time_ms,
             Some(m.glo_day_of_week),
             gnss_signal_fine_pseudorange_ext_ms
         ),
         Message::Msg1087(m) => msm_ref!(
             m,
-            true,
+            "Glonass",
             m.glo_epoch_time_ms,
             Some(m.glo_day_of_week),
             gnss_signal_fine_pseudorange_ext_ms
         ),
-        Message::Msg1019(m) => Decoded::Gps1019 {
+        Message::Msg1094(m) => msm_ref!(
+            m,
+            "Galileo",
+            m.gal_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ms
+        ),
+        Message::Msg1095(m) => msm_ref!(
+            m,
+            "Galileo",
+            m.gal_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ms
+        ),
+        Message::Msg1096(m) => msm_ref!(
+            m,
+            "Galileo",
+            m.gal_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ext_ms
+        ),
+        Message::Msg1097(m) => msm_ref!(
+            m,
+            "Galileo",
+            m.gal_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ext_ms
+        ),
+        Message::Msg1114(m) => msm_ref!(
+            m,
+            "Qzss",
+            m.qzss_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ms
+        ),
+        Message::Msg1115(m) => msm_ref!(
+            m,
+            "Qzss",
+            m.qzss_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ms
+        ),
+        Message::Msg1116(m) => msm_ref!(
+            m,
+            "Qzss",
+            m.qzss_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ext_ms
+        ),
+        Message::Msg1117(m) => msm_ref!(
+            m,
+            "Qzss",
+            m.qzss_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ext_ms
+        ),
+        Message::Msg1124(m) => msm_ref!(
+            m,
+            "Beidou",
+            m.bds_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ms
+        ),
+        Message::Msg1125(m) => msm_ref!(
+            m,
+            "Beidou",
+            m.bds_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ms
+        ),
+        Message::Msg1126(m) => msm_ref!(
+            m,
+            "Beidou",
+            m.bds_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ext_ms
+        ),
+        Message::Msg1127(m) => msm_ref!(
+            m,
+            "Beidou",
+            m.bds_epoch_time_ms,
+            None,
+            gnss_signal_fine_pseudorange_ext_ms
+        ),
+        Message::Msg1019(m) => Decoded::Kepler {
+            number: 1019,
             prn: m.gps_satellite_id,
             week: m.gps_week_number,
-            // The receiver's fields as it built them from rtcm-rs.
-            fields: format!(
-                "{:?}",
-                KeplerFields {
-                    toc_s: fx(m.toc_s),
-                    toe_s: fx(m.toe_s),
-                    af0: fx(m.af0_s),
-                    af1: fx(m.af1_s_s),
-                    af2: fx(m.af2_s_s2),
-                    sqrt_a: fx(m.sqrt_a_sqrt_m),
-                    e: fx(m.eccentricity),
-                    i0_sc: fx(m.i0_sc),
-                    omega0_sc: fx(m.omega0_sc),
-                    omega_sc: fx(m.omega_sc),
-                    m0_sc: fx(m.m0_sc),
-                    delta_n_sc: fx(m.delta_n_sc_s),
-                    omega_dot_sc: fx(m.omegadot_sc_s),
-                    idot_sc: fx(m.idot_sc_s),
-                    cuc: fx(m.cuc_rad),
-                    cus: fx(m.cus_rad),
-                    crc: fx(m.crc_m),
-                    crs: fx(m.crs_m),
-                    cic: fx(m.cic_rad),
-                    cis: fx(m.cis_rad),
-                    tgd: fx(m.tgd_s),
-                    tgd2: 0.0,
-                    health: u32::from(m.sv_health_ind),
-                    iod: u32::from(m.iode),
-                }
-            ),
+            fields: format!("{:?}", msg1019_fields(&m)),
+        },
+        Message::Msg1042(m) => Decoded::Kepler {
+            number: 1042,
+            prn: m.bds_satellite_id,
+            week: m.bds_week_number,
+            fields: format!("{:?}", msg1042_fields(&m)),
+        },
+        Message::Msg1044(m) => Decoded::Kepler {
+            number: 1044,
+            prn: m.qzss_satellite_id,
+            week: m.qzss_week_number,
+            fields: format!("{:?}", msg1044_fields(&m)),
+        },
+        Message::Msg1045(m) => Decoded::Kepler {
+            number: 1045,
+            prn: m.gal_satellite_id,
+            week: m.gal_week_number,
+            fields: format!("{:?}", msg1045_fields(&m)),
+        },
+        Message::Msg1046(m) => Decoded::Kepler {
+            number: 1046,
+            prn: m.gal_satellite_id,
+            week: m.gal_week_number,
+            fields: format!("{:?}", msg1046_fields(&m)),
         },
         Message::Msg1020(m) => {
             let (fields, tb_tod_s) = glonass_fields(&m);
@@ -219,18 +306,31 @@ fn reference(frame: &[u8]) -> Decoded {
             ]
         )),
         Message::Corrupt
-            if f.message_number().is_some_and(
-                |n| matches!(n, 1005 | 1006 | 1019 | 1020 | 1074..=1077 | 1084..=1087),
-            ) =>
+            if f.message_number().is_some_and(|n| {
+                matches!(
+                    n,
+                    1005 | 1006
+                        | 1019
+                        | 1020
+                        | 1042
+                        | 1044
+                        | 1045
+                        | 1046
+                        | 1074..=1077
+                        | 1084..=1087
+                        | 1094..=1097
+                        | 1114..=1117
+                        | 1124..=1127
+                )
+            }) =>
         {
             Decoded::Corrupt
         }
         other => Decoded::Other(other_msm_more!(
             other, Msg1071, Msg1072, Msg1073, Msg1081, Msg1082, Msg1083, Msg1091, Msg1092, Msg1093,
-            Msg1094, Msg1095, Msg1096, Msg1097, Msg1101, Msg1102, Msg1103, Msg1104, Msg1105,
-            Msg1106, Msg1107, Msg1111, Msg1112, Msg1113, Msg1114, Msg1115, Msg1116, Msg1117,
-            Msg1121, Msg1122, Msg1123, Msg1124, Msg1125, Msg1126, Msg1127, Msg1131, Msg1132,
-            Msg1133, Msg1134, Msg1135, Msg1136, Msg1137
+            Msg1101, Msg1102, Msg1103, Msg1104, Msg1105, Msg1106, Msg1107, Msg1111, Msg1112,
+            Msg1113, Msg1121, Msg1122, Msg1123, Msg1131, Msg1132, Msg1133, Msg1134, Msg1135,
+            Msg1136, Msg1137
         )),
     }
 }
@@ -242,7 +342,7 @@ fn compact(frame: &[u8], more_known: bool) -> Decoded {
     let f = Frame::new(frame).expect("a checked frame");
     match f.message() {
         Ok(Dm::Msm(m)) => Decoded::Msm {
-            glonass: m.system == MsmSystem::Glonass,
+            system: format!("{:?}", m.system),
             station_id: m.station_id,
             epoch_ms: m.epoch_ms,
             glonass_day: (m.system == MsmSystem::Glonass)
@@ -253,9 +353,10 @@ fn compact(frame: &[u8], more_known: bool) -> Decoded {
                 .map(|s| (s.sat_id, s.band, s.attribute, s.pseudorange_m))
                 .collect(),
         },
-        Ok(Dm::Gps1019(e)) => Decoded::Gps1019 {
+        Ok(Dm::Kepler(e)) => Decoded::Kepler {
+            number: e.number,
             prn: e.prn,
-            week: e.week_mod1024,
+            week: e.week_sent,
             fields: format!("{:?}", e.fields),
         },
         Ok(Dm::Glo1020 { fields, tb_tod_s }) => Decoded::Glo1020 {
@@ -310,9 +411,23 @@ fn gmsd7_every_frame_alike() {
     assert!(count("1077 msm") >= 257, "{n:?}");
     assert!(count("1087 msm") >= 257, "{n:?}");
     assert!(count("1019 ") > 0 && count("1020 ") > 0, "{n:?}");
+    // Its BeiDou MSM7 too.
+    assert!(count("1127 msm") >= 257, "{n:?}");
     // GMSD7 has no 1005/1006 (its station is in 1007/1008/1033): they
-    // are compared on random messages below.
-    assert!(n.keys().all(|k| !k.ends_with("corrupt")), "{n:?}");
+    // are compared on random messages below. Its QZSS MSM7 (1117) is
+    // refused by both decoders (`both` holds them equal): a cell's signal
+    // ID is not in Table 3.5-105; nothing else is corrupt.
+    assert!(
+        n.iter()
+            .all(|(k, v)| !k.ends_with("corrupt") || (k == "1117 corrupt" && *v >= 257)),
+        "{n:?}"
+    );
+    let qzss_refused = rtcm_common::frames(&bytes)
+        .into_iter()
+        .filter(|f| MessageFrame::new(f).ok().and_then(|x| x.message_number()) == Some(1117))
+        .map(|f| Frame::new(f).map(|x| x.message().map(|_| ())))
+        .find(|r| !matches!(r, Ok(Err(DecodeError::SignalId { message: 1117, .. }))));
+    assert_eq!(qzss_refused, None, "a 1117 refused for another reason");
     assert!(signals > 10_000, "{signals}");
 }
 
@@ -350,7 +465,8 @@ fn random_messages_alike() {
     let mut builder = MessageBuilder::new();
     let (mut whole, mut mutated, mut corrupt, mut invalid, mut skipped) = (0, 0, 0, 0, 0);
     let types = [
-        1074u16, 1075, 1076, 1077, 1084, 1085, 1086, 1087, 1019, 1020, 1005, 1006,
+        1074u16, 1075, 1076, 1077, 1084, 1085, 1086, 1087, 1094, 1095, 1096, 1097, 1114, 1115,
+        1116, 1117, 1124, 1125, 1126, 1127, 1019, 1020, 1042, 1044, 1045, 1046, 1005, 1006,
     ];
     for number in types {
         for _ in 0..PER_TYPE {
@@ -363,7 +479,7 @@ fn random_messages_alike() {
                     invalid += signals.iter().filter(|s| s.3.is_none()).count();
                     whole += 1;
                 }
-                Decoded::Gps1019 { .. } | Decoded::Glo1020 { .. } | Decoded::Station(_) => {
+                Decoded::Kepler { .. } | Decoded::Glo1020 { .. } | Decoded::Station(_) => {
                     whole += 1
                 }
                 d => panic!("{number}: generated message read as {d:?}"),
@@ -388,7 +504,7 @@ fn random_messages_alike() {
         }
     }
     println!(
-        "{whole} random MSM4-7, 1019, 1020, 1005, 1006 alike ({invalid} invalid ranges), {mutated} altered alike ({corrupt} corrupt on both), {skipped} over 64 cells refused"
+        "{whole} random MSM4-7 (G, R, E, J, C), 1019, 1020, 1042, 1044, 1045, 1046, 1005, 1006 alike ({invalid} invalid ranges), {mutated} altered alike ({corrupt} corrupt on both), {skipped} over 64 cells refused"
     );
     assert_eq!(whole, types.len() * PER_TYPE);
     assert!(corrupt > PER_TYPE, "{corrupt}");

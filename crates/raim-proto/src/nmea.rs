@@ -18,11 +18,11 @@
 //! Field choices (docs/PROTOCOL.md):
 //! - Time: the epoch's `time_s` read as UTC seconds since 1970-01-01.
 //! - Talker `GP` when every satellite is GPS, else `GN`; GSV carries the
-//!   constellation's own talker (GP, GL, GA, GB, GQ). Satellite numbers:
-//!   GPS 1-32, GLONASS 65-96, Galileo 301-, BeiDou 401-, QZSS 193- (the
-//!   extended numbering of gpsd and u-blox, which gpsd reads the same
-//!   whatever the talker). NMEA 4.11 system IDs: 1 GPS, 2 GLONASS,
-//!   3 Galileo, 4 BeiDou, 5 QZSS; signal IDs are those of the L1/E1/B1I
+//!   constellation's own talker (GP, GL, GA, GB, GQ). Satellite numbers
+//!   are NMEA 4.11's, within the system ID: GPS 1-32, GLONASS 65-96
+//!   (64 + slot), Galileo 1-36, BeiDou 1-63, QZSS 1-10 (as u-blox M9/F9
+//!   write them in 4.11 mode; [`nmea_svid`]). NMEA 4.11 system IDs: 1 GPS,
+//!   2 GLONASS, 3 Galileo, 4 BeiDou, 5 QZSS; signal IDs are those of the L1/E1/B1I
 //!   open signals (1, 1, 7, 1, 1): a pseudorange epoch does not say which
 //!   signal it came from, and single-frequency L1 is the ranging the
 //!   replay feeds.
@@ -232,15 +232,18 @@ fn num<W: Write>(w: &mut W, v: f64, prec: u32, width: usize) -> core::fmt::Resul
     Ok(())
 }
 
-/// The NMEA satellite number (gpsd / u-blox extended numbering).
+/// The NMEA 0183 4.11 satellite number, read with the system ID
+/// ([`system_id`]: GSA field 18, GBS field 9) or the GSV talker: GPS PRN
+/// 1-32, GLONASS 64 + slot (65-96), Galileo SVID 1-36, BeiDou PRN 1-63,
+/// QZSS 1-10 (PRN 193-202 less 192), as u-blox M9/F9 write them in NMEA
+/// 4.11 mode. Not the extended numbering of NMEA 4.10 receivers and
+/// gpsd's skyview (Galileo 301-336, BeiDou 401-463, QZSS 193-202), which
+/// gpsd derives from these with the system ID (docs/PROTOCOL.md).
 pub fn nmea_svid(id: SatId) -> u16 {
     let prn = u16::from(id.prn);
     match id.system {
-        System::Gps => prn,
         System::Glonass => 64 + prn,
-        System::Galileo => 300 + prn,
-        System::Beidou => 400 + prn,
-        System::Qzss => 192 + prn,
+        System::Gps | System::Galileo | System::Beidou | System::Qzss => prn,
     }
 }
 
@@ -1112,7 +1115,7 @@ mod tests {
         checked(&all);
         let gsa: std::vec::Vec<_> = all.iter().filter(|s| &s[3..6] == "GSA").collect();
         assert_eq!(gsa.len(), 3, "{all:?}");
-        for (s, (id, first)) in gsa.iter().zip([("1", "03"), ("3", "303"), ("4", "403")]) {
+        for (s, (id, first)) in gsa.iter().zip([("1", "03"), ("3", "03"), ("4", "03")]) {
             let f: std::vec::Vec<&str> = parse(s).0.leak().split(',').collect();
             assert_eq!((f[0], f[3], f[18]), ("GNGSA", first, id), "{s}");
         }
@@ -1160,6 +1163,82 @@ mod tests {
         }
         let d = dops(&w, &Sky::new(&Epoch::linear(0.0, &sats))).unwrap();
         assert!((d.pdop - want[0]).abs() < 1e-9 && (d.vdop - want[2]).abs() < 1e-9);
+    }
+
+    /// NMEA 4.11 numbers a satellite within its system ID: the ends of each
+    /// system's range, and GSA/GSV/GBS of a G+R+E+C+J epoch carry those
+    /// numbers under the system's ID (GSA field 18) or talker (GSV).
+    ///
+    /// Verifies: NMEA-NUMBERING
+    #[test]
+    fn satellite_numbers_are_nmea_4_11_within_the_system_id() {
+        for (sys, prn, svid) in [
+            (System::Gps, 1, 1),
+            (System::Gps, 32, 32),
+            (System::Glonass, 1, 65),
+            (System::Glonass, 24, 88),
+            (System::Galileo, 1, 1),
+            (System::Galileo, 36, 36),
+            (System::Beidou, 1, 1),
+            (System::Beidou, 63, 63),
+            (System::Qzss, 1, 1),
+            (System::Qzss, 10, 10),
+        ] {
+            assert_eq!(nmea_svid(SatId::new(sys, prn)), svid, "{sys:?} {prn}");
+        }
+        let systems = [
+            (System::Gps, 7, "1", "GP"),
+            (System::Glonass, 7, "2", "GL"),
+            (System::Galileo, 36, "3", "GA"),
+            (System::Beidou, 59, "4", "GB"),
+            (System::Qzss, 2, "5", "GQ"),
+        ];
+        let mut sats = std::vec::Vec::new();
+        for (k, (sys, prn, _, _)) in systems.iter().enumerate() {
+            for j in 0..2u8 {
+                let az = (40.0 * f64::from(j) + 71.0 * k as f64).to_radians();
+                let el = (20.0 + 25.0 * f64::from(j) + 4.0 * k as f64).to_radians();
+                sats.push(LinearObservation::from_az_el(
+                    SatId::new(*sys, prn - j),
+                    az,
+                    el,
+                    0.1,
+                ));
+            }
+        }
+        let r = Raim::<32>::new()
+            .process(&Config::default(), &Epoch::linear(1_709_164_800.0, &sats))
+            .unwrap();
+        let w = WireResult::from_result(&r);
+        let all = sentences(&w, &sats);
+        checked(&all);
+        for (sys, prn, id, talker) in systems {
+            let (a, b) = (
+                std::format!("{:02}", nmea_svid(SatId::new(sys, prn))),
+                std::format!("{:02}", nmea_svid(SatId::new(sys, prn - 1))),
+            );
+            let used: std::vec::Vec<String> = all
+                .iter()
+                .map(|s| parse(s).0)
+                .filter(|b| b.starts_with("GNGSA") && b.split(',').nth(18) == Some(id))
+                .flat_map(|b| {
+                    let f: std::vec::Vec<String> = b.split(',').map(String::from).collect();
+                    f[3..15].to_vec()
+                })
+                .filter(|f| !f.is_empty())
+                .collect();
+            assert_eq!(used, [a.clone(), b.clone()], "{sys:?} {all:?}");
+            let seen: std::vec::Vec<String> = all
+                .iter()
+                .map(|s| parse(s).0)
+                .filter(|b| b.starts_with(talker) && &b[2..5] == "GSV")
+                .flat_map(|b| {
+                    let f: std::vec::Vec<String> = b.split(',').map(String::from).collect();
+                    [f[4].clone(), f[8].clone()]
+                })
+                .collect();
+            assert_eq!(seen, [a, b], "{sys:?} {all:?}");
+        }
     }
 
     /// Every epoch writes every sentence whatever its values: sigmas of

@@ -60,12 +60,12 @@ use crate::{Counts, Decoder, Item};
 
 use raim_nav::rtcm::fx;
 pub use raim_nav::rtcm::{glonass_fields, kepler, latest_week, KeplerFields, LIGHT_MS_M};
+use raim_nav::rtcm::{
+    msg1019_fields, msg1042_fields, msg1044_fields, msg1045_fields, msg1046_fields, BDT_WEEK0_GPS,
+    GST_WEEK0_GPS,
+};
 /// Milliseconds in a week.
 const WEEK_MS: i64 = 604_800_000;
-/// GPS week of the Galileo week 0 (GST starts 1999-08-22 = GPS week 1024).
-const GST_WEEK0_GPS: i64 = 1024;
-/// GPS week of the BeiDou week 0 (BDT starts 2006-01-01 = GPS week 1356).
-const BDT_WEEK0_GPS: i64 = 1356;
 /// The `Counts::ignored` key of epochs that hold GLONASS MSM only.
 pub const GLONASS_ALONE: &str =
     "GLONASS-only MSM epoch (no GPS, Galileo or BeiDou MSM to give its GPS time)";
@@ -470,70 +470,12 @@ impl Rtcm3 {
             }
             Message::Msg1019(m) => {
                 let week = latest_week(i64::from(m.gps_week_number), 1024, self.now_week);
-                let k = kepler(
-                    System::Gps,
-                    m.gps_satellite_id,
-                    &KeplerFields {
-                        toc_s: fx(m.toc_s),
-                        toe_s: fx(m.toe_s),
-                        af0: fx(m.af0_s),
-                        af1: fx(m.af1_s_s),
-                        af2: fx(m.af2_s_s2),
-                        sqrt_a: fx(m.sqrt_a_sqrt_m),
-                        e: fx(m.eccentricity),
-                        i0_sc: fx(m.i0_sc),
-                        omega0_sc: fx(m.omega0_sc),
-                        omega_sc: fx(m.omega_sc),
-                        m0_sc: fx(m.m0_sc),
-                        delta_n_sc: fx(m.delta_n_sc_s),
-                        omega_dot_sc: fx(m.omegadot_sc_s),
-                        idot_sc: fx(m.idot_sc_s),
-                        cuc: fx(m.cuc_rad),
-                        cus: fx(m.cus_rad),
-                        crc: fx(m.crc_m),
-                        crs: fx(m.crs_m),
-                        cic: fx(m.cic_rad),
-                        cis: fx(m.cis_rad),
-                        tgd: fx(m.tgd_s),
-                        tgd2: 0.0,
-                        health: u32::from(m.sv_health_ind),
-                        iod: u32::from(m.iode),
-                    },
-                );
+                let k = kepler(System::Gps, m.gps_satellite_id, &msg1019_fields(&m));
                 self.ephemeris(k, week, fx(m.toc_s), out);
             }
             Message::Msg1044(m) => {
                 let week = latest_week(i64::from(m.qzss_week_number), 1024, self.now_week);
-                let k = kepler(
-                    System::Qzss,
-                    m.qzss_satellite_id,
-                    &KeplerFields {
-                        toc_s: fx(m.toc_s),
-                        toe_s: fx(m.toe_s),
-                        af0: fx(m.af0_s),
-                        af1: fx(m.af1_s_s),
-                        af2: fx(m.af2_s_s2),
-                        sqrt_a: fx(m.sqrt_a_sqrt_m),
-                        e: fx(m.eccentricity),
-                        i0_sc: fx(m.i0_sc),
-                        omega0_sc: fx(m.omega0_sc),
-                        omega_sc: fx(m.omega_sc),
-                        m0_sc: fx(m.m0_sc),
-                        delta_n_sc: fx(m.delta_n_sc_s),
-                        omega_dot_sc: fx(m.omegadot_sc_s),
-                        idot_sc: fx(m.idot_sc_s),
-                        cuc: fx(m.cuc_rad),
-                        cus: fx(m.cus_rad),
-                        crc: fx(m.crc_m),
-                        crs: fx(m.crs_m),
-                        cic: fx(m.cic_rad),
-                        cis: fx(m.cis_rad),
-                        tgd: fx(m.tgd_s),
-                        tgd2: 0.0,
-                        health: u32::from(m.sv_health_ind),
-                        iod: u32::from(m.iode),
-                    },
-                );
+                let k = kepler(System::Qzss, m.qzss_satellite_id, &msg1044_fields(&m));
                 self.ephemeris(k, week, fx(m.toc_s), out);
             }
             Message::Msg1045(m) => {
@@ -542,40 +484,7 @@ impl Rtcm3 {
                     4096,
                     self.now_week - GST_WEEK0_GPS,
                 ) + GST_WEEK0_GPS;
-                let bgd = fx(m.bgd_e1_e5a_s);
-                let k = kepler(
-                    System::Galileo,
-                    m.gal_satellite_id,
-                    &KeplerFields {
-                        toc_s: fx(m.toc_s),
-                        toe_s: fx(m.toe_s),
-                        af0: fx(m.af0_s),
-                        af1: fx(m.af1_s_s),
-                        af2: fx(m.af2_s_s2),
-                        sqrt_a: fx(m.sqrt_a_sqrt_m),
-                        e: fx(m.eccentricity),
-                        i0_sc: fx(m.i0_sc),
-                        omega0_sc: fx(m.omega0_sc),
-                        omega_sc: fx(m.omega_sc),
-                        m0_sc: fx(m.m0_sc),
-                        delta_n_sc: fx(m.delta_n_sc_s),
-                        omega_dot_sc: fx(m.omegadot_sc_s),
-                        idot_sc: fx(m.idot_sc_s),
-                        cuc: fx(m.cuc_rad),
-                        cus: fx(m.cus_rad),
-                        crc: fx(m.crc_m),
-                        crs: fx(m.crs_m),
-                        cic: fx(m.cic_rad),
-                        cis: fx(m.cis_rad),
-                        // F/NAV's clock is the E1/E5a combination's: BGD(E1,E5a)
-                        // for E1 alone, none for the E1/E5a pair.
-                        tgd: bgd,
-                        tgd2: bgd,
-                        health: u32::from(m.e5a_sig_health_ind)
-                            | (u32::from(m.e5a_data_validity_flag) << 2),
-                        iod: u32::from(m.iodnav),
-                    },
-                );
+                let k = kepler(System::Galileo, m.gal_satellite_id, &msg1045_fields(&m));
                 self.ephemeris(k, week, fx(m.toc_s), out);
             }
             Message::Msg1046(m) => {
@@ -584,39 +493,7 @@ impl Rtcm3 {
                     4096,
                     self.now_week - GST_WEEK0_GPS,
                 ) + GST_WEEK0_GPS;
-                let k = kepler(
-                    System::Galileo,
-                    m.gal_satellite_id,
-                    &KeplerFields {
-                        toc_s: fx(m.toc_s),
-                        toe_s: fx(m.toe_s),
-                        af0: fx(m.af0_s),
-                        af1: fx(m.af1_s_s),
-                        af2: fx(m.af2_s_s2),
-                        sqrt_a: fx(m.sqrt_a_sqrt_m),
-                        e: fx(m.eccentricity),
-                        i0_sc: fx(m.i0_sc),
-                        omega0_sc: fx(m.omega0_sc),
-                        omega_sc: fx(m.omega_sc),
-                        m0_sc: fx(m.m0_sc),
-                        delta_n_sc: fx(m.delta_n_sc_s),
-                        omega_dot_sc: fx(m.omegadot_sc_s),
-                        idot_sc: fx(m.idot_sc_s),
-                        cuc: fx(m.cuc_rad),
-                        cus: fx(m.cus_rad),
-                        crc: fx(m.crc_m),
-                        crs: fx(m.crs_m),
-                        cic: fx(m.cic_rad),
-                        cis: fx(m.cis_rad),
-                        tgd: fx(m.bgd_e1_e5b_s),
-                        tgd2: fx(m.bgd_e1_e5a_s),
-                        health: u32::from(m.e1_b_sig_health_ind)
-                            | (u32::from(m.e1_b_data_validity_flag) << 2)
-                            | (u32::from(m.e5b_sig_health_ind) << 3)
-                            | (u32::from(m.e5b_data_validity_flag) << 5),
-                        iod: u32::from(m.iodnav),
-                    },
-                );
+                let k = kepler(System::Galileo, m.gal_satellite_id, &msg1046_fields(&m));
                 self.ephemeris(k, week, fx(m.toc_s), out);
             }
             Message::Msg1042(m) => {
@@ -625,36 +502,7 @@ impl Rtcm3 {
                     8192,
                     self.now_week - BDT_WEEK0_GPS,
                 ) + BDT_WEEK0_GPS;
-                let k = kepler(
-                    System::Beidou,
-                    m.bds_satellite_id,
-                    &KeplerFields {
-                        toc_s: fx(m.toc_s),
-                        toe_s: fx(m.toe_s),
-                        af0: fx(m.a0_s),
-                        af1: fx(m.a1_s_s),
-                        af2: fx(m.a2_s_s2),
-                        sqrt_a: fx(m.sqrt_a_sqrt_m),
-                        e: fx(m.eccentricity),
-                        i0_sc: fx(m.i0_sc),
-                        omega0_sc: fx(m.omega0_sc),
-                        omega_sc: fx(m.omega_sc),
-                        m0_sc: fx(m.m0_sc),
-                        delta_n_sc: fx(m.delta_n_sc_s),
-                        omega_dot_sc: fx(m.omegadot_sc_s),
-                        idot_sc: fx(m.idot_sc_s),
-                        cuc: fx(m.cuc_rad),
-                        cus: fx(m.cus_rad),
-                        crc: fx(m.crc_m),
-                        crs: fx(m.crs_m),
-                        cic: fx(m.cic_rad),
-                        cis: fx(m.cis_rad),
-                        tgd: fx(m.tgd1_s),
-                        tgd2: 0.0,
-                        health: u32::from(m.sv_health_flag),
-                        iod: u32::from(m.aode),
-                    },
-                );
+                let k = kepler(System::Beidou, m.bds_satellite_id, &msg1042_fields(&m));
                 // BDT seconds of week to GPS: + 14 s.
                 self.ephemeris(k, week, fx(m.toc_s) - BDT_MINUS_GPST_S, out);
             }

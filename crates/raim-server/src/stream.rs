@@ -23,8 +23,10 @@ use raim_proto::CAPACITY;
 
 use crate::{IoError, Platform, Server};
 
-/// Signals one stream epoch may carry (GPS and GLONASS, every band).
-pub const STREAM_SIGNALS: usize = 128;
+/// Signals one stream epoch may carry (GPS, GLONASS, Galileo, BeiDou and
+/// QZSS, every band: e.g. 60 satellites on 3 signals and more; an epoch
+/// with more is refused, `StreamCapacity`).
+pub const STREAM_SIGNALS: usize = 256;
 /// The elevation mask of stream epochs, rad (10 degrees, the replay's
 /// default `--mask-deg`).
 pub const STREAM_MASK_RAD: f64 = 10.0 * core::f64::consts::PI / 180.0;

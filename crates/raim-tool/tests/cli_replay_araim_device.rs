@@ -87,13 +87,16 @@ fn epochs_of(stream: &str) -> Vec<Vec<&str>> {
         .collect()
 }
 
-/// The PRNs a GSA sentence lists as used (fields 3 to 14).
-fn gsa_used(epoch: &[&str]) -> Vec<String> {
+/// The satellite numbers the GSA sentences of NMEA 4.11 system ID
+/// `system_id` (field 18) list as used (fields 3 to 14): numbers are per
+/// system (Galileo 1-36, BeiDou 1-63).
+fn gsa_used(epoch: &[&str], system_id: &str) -> Vec<String> {
     epoch
         .iter()
         .filter(|l| l.get(3..6) == Some("GSA"))
-        .flat_map(|l| {
-            let body = l.split('*').next().unwrap_or("");
+        .map(|l| l.split('*').next().unwrap_or(""))
+        .filter(|body| body.split(',').nth(18) == Some(system_id))
+        .flat_map(|body| {
             body.split(',')
                 .skip(3)
                 .take(12)
@@ -141,8 +144,8 @@ fn araim_nmea_on_the_host() {
         assert_eq!(rmc.get(9), Some(&"250620"), "{e:?}");
         let valid = rmc.get(2) == Some(&"A");
         assert_eq!(valid, r["available"] == true, "{r}\n{e:?}");
-        let used = gsa_used(e);
-        // GPS PRN 15 is "15" (Galileo's are 301..336).
+        let used = gsa_used(e, "1");
+        // GPS PRN 15 is "15" in the GSA of system ID 1 (GPS).
         let g15 = used.contains(&"15".to_string());
         assert_eq!(g15, r["fde"] != "excluded", "{used:?}\n{r}");
     }
@@ -237,7 +240,9 @@ fn qemu_araim_decides_as_the_host_on_esbc_with_a_step() {
     let (de, he) = (epochs_of(&dev_nmea), epochs_of(&host_nmea));
     assert_eq!(de.len(), EPOCHS);
     for (a, b) in de.iter().zip(&he) {
-        assert_eq!(gsa_used(a), gsa_used(b));
+        for id in ["1", "3", "4"] {
+            assert_eq!(gsa_used(a, id), gsa_used(b, id), "system ID {id}");
+        }
         assert_eq!(fields(a, "RMC").get(2), fields(b, "RMC").get(2));
         let kinds = |e: &[&str]| e.iter().map(|l| l[3..6].to_string()).collect::<Vec<_>>();
         assert_eq!(kinds(a), kinds(b));

@@ -5,6 +5,8 @@
 
 #![allow(dead_code)]
 
+pub mod esbc;
+
 use raim_core::sigma::SigmaModel;
 use raim_core::{Config, RangeObservation, System};
 use raim_gnss::ranging::{prepare_epoch, PreparedEpoch, RangingOptions};
@@ -50,10 +52,17 @@ pub fn glonass_model(model: &SigmaModel) -> SigmaModel {
     }
 }
 
-/// The ranging options of a G+R stream replay at the firmware's mask.
+/// The ranging options of a stream replay at the firmware's mask: every
+/// system the device's receiver forms.
 pub fn options(model: &SigmaModel) -> RangingOptions {
     RangingOptions {
-        systems: vec![System::Gps, System::Glonass],
+        systems: vec![
+            System::Gps,
+            System::Glonass,
+            System::Galileo,
+            System::Beidou,
+            System::Qzss,
+        ],
         codes: raim_nav::ranging::STREAM_CODES
             .iter()
             .map(|(s, c)| (*s, c.iter().map(|c| c.to_string()).collect()))

@@ -15,14 +15,20 @@
 //!
 //! What it reads (RTCM 10403.3):
 //! - The frame (§4): preamble 0xD3, 10-bit length, CRC-24Q.
-//! - GPS and GLONASS MSM4-MSM7 (1074-1077, 1084-1087; Table 3.5-78 header,
-//!   DF394-DF396 masks, satellite data DF397, extended info, DF398, DF399,
-//!   signal data DF400/DF405 and the rest of the cell's fields skipped):
-//!   pseudorange = (DF397 + DF398 + fine range) ms x c / 1000, the signal's
-//!   RINEX band and attribute (Tables 3.5-91, 3.5-96).
-//! - 1019 (GPS ephemeris) and 1020 (GLONASS, sign-magnitude fields) into
-//!   [`KeplerFields`] and [`GlonassIcdFields`]; 1005/1006 antenna
-//!   reference point (DF025-DF027, 0.0001 m).
+//! - MSM4-MSM7 of GPS (1074-1077), GLONASS (1084-1087), Galileo
+//!   (1094-1097), QZSS (1114-1117) and BeiDou (1124-1127) (Table 3.5-78
+//!   header: a 30-bit time of week, GPS DF004, Galileo DF248, QZSS DF428,
+//!   BeiDou DF427 (BDT), GLONASS DF416 + DF034; DF394-DF396 masks,
+//!   satellite data DF397, extended info, DF398, DF399, signal data
+//!   DF400/DF405 and the rest of the cell's fields skipped): pseudorange =
+//!   (DF397 + DF398 + fine range) ms x c / 1000, the signal's RINEX band and
+//!   attribute (Tables 3.5-91 GPS, 3.5-96 GLONASS, 3.5-99 Galileo, 3.5-105
+//!   QZSS, 3.5-108 BeiDou).
+//! - The Keplerian ephemerides 1019 (GPS), 1042 (BeiDou), 1044 (QZSS),
+//!   1045 (Galileo F/NAV) and 1046 (Galileo I/NAV) into [`KeplerFields`]
+//!   ([`KeplerMessage`], the week as sent), 1020 (GLONASS, sign-magnitude
+//!   fields) into [`GlonassIcdFields`]; 1005/1006 antenna reference point
+//!   (DF025-DF027, 0.0001 m).
 //! - Any other message: [`Message::Other`].
 //!
 //! Each value is computed with the operations `rtcm-rs` uses (the
@@ -30,6 +36,8 @@
 //! the host and the device agree to the bit.
 
 use crc::{Crc, NoTable, CRC_24_LTE_A};
+
+use raim_core::System;
 
 use crate::glonass::GlonassIcdFields;
 
@@ -65,6 +73,8 @@ pub enum DecodeError {
     CellCount { satellites: u32, signals: u32 },
     /// An MSM cell whose signal ID has no code in the system's table.
     SignalId { message: u16, signal_id: u8 },
+    /// A message number that is not an MSM of the five systems.
+    NotMsm { message: u16 },
 }
 
 impl From<BitsError> for DecodeError {
@@ -90,6 +100,7 @@ impl core::fmt::Display for DecodeError {
                     "{message}: signal ID {signal_id} not in the signal table"
                 )
             }
+            DecodeError::NotMsm { message } => write!(f, "{message} is not an MSM"),
         }
     }
 }
@@ -152,8 +163,13 @@ impl<'a> Frame<'a> {
             return Ok(Message::Other(None));
         };
         match n {
-            1074..=1077 | 1084..=1087 => Msm::new(self.payload, n).map(Message::Msm),
-            1019 => msg1019(self.payload).map(Message::Gps1019),
+            1074..=1077 | 1084..=1087 | 1094..=1097 | 1114..=1117 | 1124..=1127 => {
+                Msm::new(self.payload, n).map(Message::Msm)
+            }
+            1019 => msg1019(self.payload).map(Message::Kepler),
+            1042 => msg1042(self.payload).map(Message::Kepler),
+            1044 => msg1044(self.payload).map(Message::Kepler),
+            1045 | 1046 => msg1045_1046(self.payload, n == 1046).map(Message::Kepler),
             1020 => msg1020(self.payload)
                 .map(|(fields, tb_tod_s)| Message::Glo1020 { fields, tb_tod_s }),
             1005 | 1006 => {
@@ -167,10 +183,10 @@ impl<'a> Frame<'a> {
 /// A decoded message.
 #[derive(Debug, Clone)]
 pub enum Message<'a> {
-    /// GPS or GLONASS MSM4-MSM7.
+    /// MSM4-MSM7 of GPS, GLONASS, Galileo, QZSS or BeiDou.
     Msm(Msm<'a>),
-    /// 1019.
-    Gps1019(Ephemeris1019),
+    /// 1019, 1042, 1044, 1045 or 1046.
+    Kepler(KeplerMessage),
     /// 1020: the ICD fields (t_b not yet placed: `tb_gps_s` 0) and t_b as
     /// seconds of the Moscow day.
     Glo1020 {
@@ -184,13 +200,20 @@ pub enum Message<'a> {
     Other(Option<u16>),
 }
 
-/// A 1019: the satellite, the 10-bit week and the Keplerian fields.
+/// A Keplerian ephemeris message: the satellite, the week as sent (in
+/// the system's own week count, [`super::fields::gps_week_of`] places it)
+/// and the fields in the units of [`KeplerFields`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Ephemeris1019 {
-    /// DF009.
+pub struct KeplerMessage {
+    /// 1019, 1042, 1044, 1045 or 1046.
+    pub number: u16,
+    pub system: System,
+    /// GPS DF009, BeiDou DF488 (PRN), QZSS DF429 (satellite ID 1-10, PRN
+    /// 193-202), Galileo DF252 (SVID).
     pub prn: u8,
-    /// DF076, modulo 1024.
-    pub week_mod1024: u16,
+    /// GPS DF076 and QZSS DF452 (GPS week modulo 1024), Galileo DF289 (GST
+    /// week modulo 4096), BeiDou DF489 (BDT week modulo 8192).
+    pub week_sent: u16,
     pub fields: KeplerFields,
 }
 
@@ -200,23 +223,55 @@ pub struct Ephemeris1019 {
 pub enum MsmSystem {
     Gps,
     Glonass,
+    Galileo,
+    Qzss,
+    Beidou,
 }
 
-/// An MSM4-MSM7 of GPS or GLONASS, checked: its header, masks and where
-/// its fields are. The signals are read from the payload as they are
-/// iterated ([`Msm::signals`]).
+impl MsmSystem {
+    /// The system of MSM message `number` (107x GPS, 108x GLONASS, 109x
+    /// Galileo, 111x QZSS, 112x BeiDou), if one of those.
+    pub fn of_message(number: u16) -> Option<Self> {
+        Some(match number / 10 {
+            107 => MsmSystem::Gps,
+            108 => MsmSystem::Glonass,
+            109 => MsmSystem::Galileo,
+            111 => MsmSystem::Qzss,
+            112 => MsmSystem::Beidou,
+            _ => return None,
+        })
+    }
+
+    /// The navigation system.
+    pub fn system(self) -> System {
+        match self {
+            MsmSystem::Gps => System::Gps,
+            MsmSystem::Glonass => System::Glonass,
+            MsmSystem::Galileo => System::Galileo,
+            MsmSystem::Qzss => System::Qzss,
+            MsmSystem::Beidou => System::Beidou,
+        }
+    }
+}
+
+/// An MSM4-MSM7 of GPS, GLONASS, Galileo, QZSS or BeiDou, checked: its
+/// header, masks and where its fields are. The signals are read from the
+/// payload as they are iterated ([`Msm::signals`]).
 #[derive(Debug, Clone, Copy)]
 pub struct Msm<'a> {
     payload: &'a [u8],
-    /// The message number (1074-1077, 1084-1087).
+    /// The message number (1074-1077, 1084-1087, 1094-1097, 1114-1117,
+    /// 1124-1127).
     pub number: u16,
     pub system: MsmSystem,
     /// DF003.
     pub station_id: u16,
-    /// GPS: DF004, the GPS time of week, ms. GLONASS: DF034, the GLONASS
-    /// time of day, ms (the day of the week, DF416, is `glonass_day`).
+    /// The system's time of week, ms: GPS DF004, Galileo DF248 (GST,
+    /// aligned with GPS time), QZSS DF428 (QZSST = GPS time), BeiDou DF427
+    /// (BDT = GPS - 14 s). GLONASS: DF034, the GLONASS time of day, ms (the
+    /// day of the week, DF416, is `glonass_day`).
     pub epoch_ms: u32,
-    /// DF416 (GLONASS; 7 = unknown), 0 for GPS.
+    /// DF416 (GLONASS; 7 = unknown), 0 for the other systems.
     pub glonass_day: u8,
     /// DF393: more messages of this epoch follow.
     pub more: bool,
@@ -299,6 +354,78 @@ fn glonass_signal(id: u8) -> Option<(u8, u8)> {
     })
 }
 
+/// RTCM 10403.3 Table 3.5-99 (Galileo signal IDs): band and attribute
+/// (E1 1, E6 6, E5b 7, E5a+b 8, E5a 5).
+fn galileo_signal(id: u8) -> Option<(u8, u8)> {
+    Some(match id {
+        2 => (1, b'C'),
+        3 => (1, b'A'),
+        4 => (1, b'B'),
+        5 => (1, b'X'),
+        6 => (1, b'Z'),
+        8 => (6, b'C'),
+        9 => (6, b'A'),
+        10 => (6, b'B'),
+        11 => (6, b'X'),
+        12 => (6, b'Z'),
+        14 => (7, b'I'),
+        15 => (7, b'Q'),
+        16 => (7, b'X'),
+        18 => (8, b'I'),
+        19 => (8, b'Q'),
+        20 => (8, b'X'),
+        22 => (5, b'I'),
+        23 => (5, b'Q'),
+        24 => (5, b'X'),
+        _ => return None,
+    })
+}
+
+/// RTCM 10403.3 Table 3.5-105 (QZSS signal IDs): band and attribute
+/// (L1 1, LEX/L6 6, L2 2, L5 5).
+fn qzss_signal(id: u8) -> Option<(u8, u8)> {
+    Some(match id {
+        2 => (1, b'C'),
+        9 => (6, b'S'),
+        10 => (6, b'L'),
+        11 => (6, b'X'),
+        15 => (2, b'S'),
+        16 => (2, b'L'),
+        17 => (2, b'X'),
+        22 => (5, b'I'),
+        23 => (5, b'Q'),
+        24 => (5, b'X'),
+        30 => (1, b'S'),
+        31 => (1, b'L'),
+        32 => (1, b'X'),
+        _ => return None,
+    })
+}
+
+/// RTCM 10403.3 Table 3.5-108 (BeiDou signal IDs): band and attribute
+/// (B1I 2, B3I 6, B2I/B2b 7, B2a 5, B1C 1).
+fn beidou_signal(id: u8) -> Option<(u8, u8)> {
+    Some(match id {
+        2 => (2, b'I'),
+        3 => (2, b'Q'),
+        4 => (2, b'X'),
+        8 => (6, b'I'),
+        9 => (6, b'Q'),
+        10 => (6, b'X'),
+        14 => (7, b'I'),
+        15 => (7, b'Q'),
+        16 => (7, b'X'),
+        22 => (5, b'D'),
+        23 => (5, b'P'),
+        24 => (5, b'X'),
+        25 => (7, b'D'),
+        30 => (1, b'D'),
+        31 => (1, b'P'),
+        32 => (1, b'X'),
+        _ => return None,
+    })
+}
+
 impl<'a> Msm<'a> {
     /// Check an MSM4-MSM7 payload of message `number`: the header (Table
     /// 3.5-78: DF002 12, DF003 12, the epoch time 30 (GPS DF004; GLONASS
@@ -307,19 +434,16 @@ impl<'a> Msm<'a> {
     /// bits: 1..=64 cells), every cell's signal ID, and that the payload
     /// holds all the satellite and signal data.
     pub fn new(payload: &'a [u8], number: u16) -> Result<Self, DecodeError> {
-        let system = if number < 1080 {
-            MsmSystem::Gps
-        } else {
-            MsmSystem::Glonass
-        };
+        let system =
+            MsmSystem::of_message(number).ok_or(DecodeError::NotMsm { message: number })?;
         let kind = number % 10;
         let extended = kind == 5 || kind == 7;
         let high_res = kind == 6 || kind == 7;
         let mut r = BitReader::at(payload, 12);
         let station_id = r.u(12)? as u16;
         let (glonass_day, epoch_ms) = match system {
-            MsmSystem::Gps => (0, r.u32(30)?),
             MsmSystem::Glonass => (r.u8(3)?, r.u32(27)?),
+            _ => (0, r.u32(30)?),
         };
         let more = r.u(1)? == 1;
         // DF409, DF001 (7), DF411, DF412, DF417, DF418.
@@ -390,6 +514,9 @@ impl<'a> Msm<'a> {
         match self.system {
             MsmSystem::Gps => gps_signal(signal_id),
             MsmSystem::Glonass => glonass_signal(signal_id),
+            MsmSystem::Galileo => galileo_signal(signal_id),
+            MsmSystem::Qzss => qzss_signal(signal_id),
+            MsmSystem::Beidou => beidou_signal(signal_id),
         }
     }
 
@@ -494,13 +621,14 @@ fn f64_u(r: &mut BitReader<'_>, width: u32, res: f64) -> Result<f64, BitsError> 
     Ok(r.u(width)? as f64 * res)
 }
 
-/// A two's complement field (at most 16 bits) times its resolution in f32
-/// (the fields `rtcm-rs` holds as f32), widened.
+/// A two's complement field (at most 24 bits, exact in f32) times its
+/// resolution in f32 (the fields `rtcm-rs` holds as f32), widened.
 fn f32_i(r: &mut BitReader<'_>, width: u32, res: f32) -> Result<f64, BitsError> {
     Ok(f64::from(r.i(width)? as f32 * res))
 }
 
-/// An unsigned field (at most 16 bits) times its resolution in f32.
+/// An unsigned field (at most 24 bits, exact in f32) times its resolution
+/// in f32.
 fn f32_u(r: &mut BitReader<'_>, width: u32, res: f32) -> Result<f64, BitsError> {
     Ok(f64::from(r.u(width)? as f32 * res))
 }
@@ -535,7 +663,7 @@ const P2_55_F: f32 = 1.0 / (1024.0 * 1024.0 * 1024.0 * 1024.0 * 1024.0 * 32.0);
 /// s), DF094 Cic 16, DF095 Omega0 32 (2^-31), DF096 Cis 16, DF097 i0 32,
 /// DF098 Crc 16 (2^-5 m), DF099 omega 32, DF100 Omega dot 24 (2^-43),
 /// DF101 TGD 8 (2^-31 s), DF102 health 6, DF103 1, DF137 1.
-fn msg1019(payload: &[u8]) -> Result<Ephemeris1019, DecodeError> {
+fn msg1019(payload: &[u8]) -> Result<KeplerMessage, DecodeError> {
     let mut r = BitReader::at(payload, 12);
     let prn = r.u8(6)?;
     let week_mod1024 = r.u(10)? as u16;
@@ -565,9 +693,11 @@ fn msg1019(payload: &[u8]) -> Result<Ephemeris1019, DecodeError> {
     let tgd = f32_i(&mut r, 8, P2_31_F)?;
     let health = r.u32(6)?;
     r.skip(1 + 1)?;
-    Ok(Ephemeris1019 {
+    Ok(KeplerMessage {
+        number: 1019,
+        system: System::Gps,
         prn,
-        week_mod1024,
+        week_sent: week_mod1024,
         fields: KeplerFields {
             toc_s,
             toe_s,
@@ -593,6 +723,258 @@ fn msg1019(payload: &[u8]) -> Result<Ephemeris1019, DecodeError> {
             tgd2: 0.0,
             health,
             iod: iode,
+        },
+    })
+}
+
+/// More 2^-n resolutions as f64 and f32, and BeiDou's 0.1 ns (DF513) in
+/// f32, each as `rtcm-rs` writes it.
+const P2_34: f64 = 1.0 / (1024.0 * 1024.0 * 1024.0 * 16.0);
+const P2_46: f64 = 1.0 / (1024.0 * 1024.0 * 1024.0 * 1024.0 * 64.0);
+const P2_50: f64 = 1.0 / (1024.0 * 1024.0 * 1024.0 * 1024.0 * 1024.0);
+const P2_6_F: f32 = 1.0 / 64.0;
+const P2_32_F: f32 = 1.0 / (1024.0 * 1024.0 * 1024.0 * 4.0);
+const P2_59_F: f32 = 1.0 / (1024.0 * 1024.0 * 1024.0 * 1024.0 * 1024.0 * 512.0);
+const P2_66_F: f32 = 1.0 / (1024.0 * 1024.0 * 1024.0 * 1024.0 * 1024.0 * 1024.0 * 64.0);
+const TENTH_NS_F: f32 = 1.0 / 10_000_000_000.0;
+
+/// 1045 (Galileo F/NAV, RTCM 10403.3 §3.5.14, 496 bits) and 1046
+/// (Galileo I/NAV, 504 bits): DF252 SVID 6, DF289 GST week 12, DF290
+/// IODnav 10, DF291/DF286 SISA 8, DF292 IDOT 14 (2^-43 sc/s), DF293 toc 14
+/// (60 s), DF294 af2 6 (2^-59), DF295 af1 21 (2^-46), DF296 af0 31
+/// (2^-34), DF297 Crs 16 (2^-5 m), DF298 delta n 16 (2^-43), DF299 M0 32
+/// (2^-31), DF300 Cuc 16 (2^-29), DF301 e 32 (2^-33), DF302 Cus 16,
+/// DF303 sqrt A 32 (2^-19), DF304 toe 14 (60 s), DF305 Cic 16, DF306
+/// Omega0 32, DF307 Cis 16, DF308 i0 32, DF309 Crc 16, DF310 omega 32,
+/// DF311 Omega dot 24 (2^-43), DF312 BGD(E1,E5a) 10 (2^-32 s); 1045:
+/// DF314 E5a health 2, DF315 E5a data validity 1, 7 reserved; 1046: DF313
+/// BGD(E1,E5b) 10, DF316 E5b health 2, DF317 E5b validity 1, DF287 E1-B
+/// health 2, DF288 E1-B validity 1, 2 reserved. Group delays and health
+/// as the host's reader takes them (`fields::msg1045_fields`,
+/// `fields::msg1046_fields`): F/NAV's clock is the E1/E5a pair's, so its
+/// BGD(E1,E5a) serves E1 alone and the pair; the health word packs the
+/// signal health and data validity bits of the message.
+fn msg1045_1046(payload: &[u8], inav: bool) -> Result<KeplerMessage, DecodeError> {
+    let mut r = BitReader::at(payload, 12);
+    let prn = r.u8(6)?;
+    let week_sent = r.u(12)? as u16;
+    let iod = r.u32(10)?;
+    r.skip(8)?;
+    let idot_sc = f32_i(&mut r, 14, P2_43_F)?;
+    let toc_s = f32_u(&mut r, 14, 60.0)?;
+    let af2 = f32_i(&mut r, 6, P2_59_F)?;
+    let af1 = f64_i(&mut r, 21, P2_46)?;
+    let af0 = f64_i(&mut r, 31, P2_34)?;
+    let crs = f32_i(&mut r, 16, P2_5_F)?;
+    let delta_n_sc = f32_i(&mut r, 16, P2_43_F)?;
+    let m0_sc = f64_i(&mut r, 32, P2_31)?;
+    let cuc = f32_i(&mut r, 16, P2_29_F)?;
+    let e = f64_u(&mut r, 32, P2_33)?;
+    let cus = f32_i(&mut r, 16, P2_29_F)?;
+    let sqrt_a = f64_u(&mut r, 32, P2_19)?;
+    let toe_s = f32_u(&mut r, 14, 60.0)?;
+    let cic = f32_i(&mut r, 16, P2_29_F)?;
+    let omega0_sc = f64_i(&mut r, 32, P2_31)?;
+    let cis = f32_i(&mut r, 16, P2_29_F)?;
+    let i0_sc = f64_i(&mut r, 32, P2_31)?;
+    let crc = f32_i(&mut r, 16, P2_5_F)?;
+    let omega_sc = f64_i(&mut r, 32, P2_31)?;
+    let omega_dot_sc = f64_i(&mut r, 24, P2_43)?;
+    let bgd_e1_e5a = f32_i(&mut r, 10, P2_32_F)?;
+    let (tgd, health) = if inav {
+        let bgd_e1_e5b = f32_i(&mut r, 10, P2_32_F)?;
+        let e5b_health = r.u32(2)?;
+        let e5b_validity = r.u32(1)?;
+        let e1b_health = r.u32(2)?;
+        let e1b_validity = r.u32(1)?;
+        r.skip(2)?;
+        (
+            bgd_e1_e5b,
+            e1b_health | (e1b_validity << 2) | (e5b_health << 3) | (e5b_validity << 5),
+        )
+    } else {
+        let e5a_health = r.u32(2)?;
+        let e5a_validity = r.u32(1)?;
+        r.skip(7)?;
+        (bgd_e1_e5a, e5a_health | (e5a_validity << 2))
+    };
+    Ok(KeplerMessage {
+        number: if inav { 1046 } else { 1045 },
+        system: System::Galileo,
+        prn,
+        week_sent,
+        fields: KeplerFields {
+            toc_s,
+            toe_s,
+            af0,
+            af1,
+            af2,
+            sqrt_a,
+            e,
+            i0_sc,
+            omega0_sc,
+            omega_sc,
+            m0_sc,
+            delta_n_sc,
+            omega_dot_sc,
+            idot_sc,
+            cuc,
+            cus,
+            crc,
+            crs,
+            cic,
+            cis,
+            tgd,
+            tgd2: bgd_e1_e5a,
+            health,
+            iod,
+        },
+    })
+}
+
+/// 1042 (BeiDou, RTCM 10403.3 §3.5.15, 511 bits): DF488 PRN 6, DF489 BDT
+/// week 13, DF490 URA 4, DF491 IDOT 14 (2^-43 sc/s), DF492 AODE 5, DF493
+/// toc 17 (8 s, BDT), DF494 a2 11 (2^-66), DF495 a1 22 (2^-50), DF496 a0
+/// 24 (2^-33), DF497 AODC 5, DF498 Crs 18 (2^-6 m), DF499 delta n 16
+/// (2^-43), DF500 M0 32 (2^-31), DF501 Cuc 18 (2^-31), DF502 e 32
+/// (2^-33), DF503 Cus 18, DF504 sqrt A 32 (2^-19), DF505 toe 17 (8 s),
+/// DF506 Cic 18, DF507 Omega0 32, DF508 Cis 18, DF509 i0 32, DF510 Crc 18
+/// (2^-6 m), DF511 omega 32, DF512 Omega dot 24 (2^-43), DF513 TGD1 10
+/// (0.1 ns), DF514 TGD2 10, DF515 health 1. TGD1 is the B1I group delay
+/// the ranging applies; AODE is the issue of data.
+fn msg1042(payload: &[u8]) -> Result<KeplerMessage, DecodeError> {
+    let mut r = BitReader::at(payload, 12);
+    let prn = r.u8(6)?;
+    let week_sent = r.u(13)? as u16;
+    r.skip(4)?;
+    let idot_sc = f64_i(&mut r, 14, P2_43)?;
+    let iod = r.u32(5)?;
+    let toc_s = f32_u(&mut r, 17, 8.0)?;
+    let af2 = f32_i(&mut r, 11, P2_66_F)?;
+    let af1 = f64_i(&mut r, 22, P2_50)?;
+    let af0 = f64_i(&mut r, 24, P2_33)?;
+    r.skip(5)?;
+    let crs = f32_i(&mut r, 18, P2_6_F)?;
+    let delta_n_sc = f32_i(&mut r, 16, P2_43_F)?;
+    let m0_sc = f64_i(&mut r, 32, P2_31)?;
+    let cuc = f32_i(&mut r, 18, P2_31_F)?;
+    let e = f64_u(&mut r, 32, P2_33)?;
+    let cus = f32_i(&mut r, 18, P2_31_F)?;
+    let sqrt_a = f64_u(&mut r, 32, P2_19)?;
+    let toe_s = f32_u(&mut r, 17, 8.0)?;
+    let cic = f32_i(&mut r, 18, P2_31_F)?;
+    let omega0_sc = f64_i(&mut r, 32, P2_31)?;
+    let cis = f32_i(&mut r, 18, P2_31_F)?;
+    let i0_sc = f64_i(&mut r, 32, P2_31)?;
+    let crc = f32_i(&mut r, 18, P2_6_F)?;
+    let omega_sc = f64_i(&mut r, 32, P2_31)?;
+    let omega_dot_sc = f64_i(&mut r, 24, P2_43)?;
+    let tgd = f32_i(&mut r, 10, TENTH_NS_F)?;
+    r.skip(10)?;
+    let health = r.u32(1)?;
+    Ok(KeplerMessage {
+        number: 1042,
+        system: System::Beidou,
+        prn,
+        week_sent,
+        fields: KeplerFields {
+            toc_s,
+            toe_s,
+            af0,
+            af1,
+            af2,
+            sqrt_a,
+            e,
+            i0_sc,
+            omega0_sc,
+            omega_sc,
+            m0_sc,
+            delta_n_sc,
+            omega_dot_sc,
+            idot_sc,
+            cuc,
+            cus,
+            crc,
+            crs,
+            cic,
+            cis,
+            tgd,
+            tgd2: 0.0,
+            health,
+            iod,
+        },
+    })
+}
+
+/// 1044 (QZSS, RTCM 10403.3 §3.5.13, 485 bits): DF429 satellite ID 4,
+/// DF430 toc 16 (2^4 s), DF431 af2 8 (2^-55), DF432 af1 16 (2^-43), DF433
+/// af0 22 (2^-31), DF434 IODE 8, DF435 Crs 16 (2^-5 m), DF436 delta n 16
+/// (2^-43), DF437 M0 32 (2^-31), DF438 Cuc 16 (2^-29), DF439 e 32
+/// (2^-33), DF440 Cus 16, DF441 sqrt A 32 (2^-19), DF442 toe 16 (2^4 s),
+/// DF443 Cic 16, DF444 Omega0 32, DF445 Cis 16, DF446 i0 32, DF447 Crc 16,
+/// DF448 omega 32, DF449 Omega dot 24 (2^-43), DF450 IDOT 14 (2^-43),
+/// DF451 L2 codes 2, DF452 week 10, DF453 URA 4, DF454 health 6, DF455
+/// TGD 8 (2^-31 s), DF456 IODC 10, DF457 fit interval 1.
+fn msg1044(payload: &[u8]) -> Result<KeplerMessage, DecodeError> {
+    let mut r = BitReader::at(payload, 12);
+    let prn = r.u8(4)?;
+    let toc_s = f32_u(&mut r, 16, 16.0)?;
+    let af2 = f32_i(&mut r, 8, P2_55_F)?;
+    let af1 = f32_i(&mut r, 16, P2_43_F)?;
+    let af0 = f64_i(&mut r, 22, P2_31)?;
+    let iod = r.u32(8)?;
+    let crs = f32_i(&mut r, 16, P2_5_F)?;
+    let delta_n_sc = f32_i(&mut r, 16, P2_43_F)?;
+    let m0_sc = f64_i(&mut r, 32, P2_31)?;
+    let cuc = f32_i(&mut r, 16, P2_29_F)?;
+    let e = f64_u(&mut r, 32, P2_33)?;
+    let cus = f32_i(&mut r, 16, P2_29_F)?;
+    let sqrt_a = f64_u(&mut r, 32, P2_19)?;
+    let toe_s = f32_u(&mut r, 16, 16.0)?;
+    let cic = f32_i(&mut r, 16, P2_29_F)?;
+    let omega0_sc = f64_i(&mut r, 32, P2_31)?;
+    let cis = f32_i(&mut r, 16, P2_29_F)?;
+    let i0_sc = f64_i(&mut r, 32, P2_31)?;
+    let crc = f32_i(&mut r, 16, P2_5_F)?;
+    let omega_sc = f64_i(&mut r, 32, P2_31)?;
+    let omega_dot_sc = f64_i(&mut r, 24, P2_43)?;
+    let idot_sc = f64_i(&mut r, 14, P2_43)?;
+    r.skip(2)?;
+    let week_sent = r.u(10)? as u16;
+    r.skip(4)?;
+    let health = r.u32(6)?;
+    let tgd = f32_i(&mut r, 8, P2_31_F)?;
+    r.skip(10 + 1)?;
+    Ok(KeplerMessage {
+        number: 1044,
+        system: System::Qzss,
+        prn,
+        week_sent,
+        fields: KeplerFields {
+            toc_s,
+            toe_s,
+            af0,
+            af1,
+            af2,
+            sqrt_a,
+            e,
+            i0_sc,
+            omega0_sc,
+            omega_sc,
+            m0_sc,
+            delta_n_sc,
+            omega_dot_sc,
+            idot_sc,
+            cuc,
+            cus,
+            crc,
+            crs,
+            cic,
+            cis,
+            tgd,
+            tgd2: 0.0,
+            health,
+            iod,
         },
     })
 }

@@ -43,6 +43,29 @@ pub fn week_from_pivot(week_mod: i64, modulus: i64, pivot_week: i64) -> i64 {
     pivot_week + (week_mod - pivot_week).rem_euclid(modulus)
 }
 
+/// GPS week of the Galileo week 0 (GST starts 1999-08-22 00:00 GPS time,
+/// Galileo OS SIS ICD 5.1.2).
+pub const GST_WEEK0_GPS: i64 = 1024;
+/// GPS week of the BeiDou week 0 (BDT starts 2006-01-01 00:00 UTC, GPS
+/// time 14 s later; BDS-SIS-ICD-B1I 5.1.2).
+pub const BDT_WEEK0_GPS: i64 = 1356;
+
+/// The full GPS week of a Keplerian ephemeris' week as sent, placed from
+/// the receiver's pivot (a GPS week) in the system's own week count:
+/// GPS and QZSS send the GPS week modulo 1024 (DF076, DF452), Galileo the
+/// GST week modulo 4096 (DF289), BeiDou the BDT week modulo 8192 (DF489),
+/// each placed in `[pivot_week, ...]` by [`week_from_pivot`] and returned
+/// as the GPS week of that system week's start. GLONASS sends no week:
+/// its value is placed as a 10-bit GPS week, which no caller asks for.
+pub fn gps_week_of(system: System, week_sent: u16, pivot_week: i64) -> i64 {
+    let w = i64::from(week_sent);
+    match system {
+        System::Galileo => week_from_pivot(w, 4096, pivot_week - GST_WEEK0_GPS) + GST_WEEK0_GPS,
+        System::Beidou => week_from_pivot(w, 8192, pivot_week - BDT_WEEK0_GPS) + BDT_WEEK0_GPS,
+        System::Gps | System::Qzss | System::Glonass => week_from_pivot(w, 1024, pivot_week),
+    }
+}
+
 /// The latest full week congruent to `week_mod` modulo `modulus` and not
 /// after `now_week`: for a reader that knows the current week from a
 /// clock (the host's replay of a live source), where a week number ahead
@@ -86,6 +109,173 @@ pub fn glonass_fields(m: &rtcm_rs::msg::Msg1020T) -> (GlonassIcdFields, f64) {
         unhealthy: m.glo_eph_health_flag != 0 || m.glo_m_3str_ln_flag != 0,
     };
     (f, f64::from(m.tb_min) * 60.0)
+}
+
+/// The [`KeplerFields`] of a 1019 from `rtcm-rs` (the host's reader).
+#[cfg(feature = "rtcm-rs")]
+pub fn msg1019_fields(m: &rtcm_rs::msg::Msg1019T) -> KeplerFields {
+    KeplerFields {
+        toc_s: fx(m.toc_s),
+        toe_s: fx(m.toe_s),
+        af0: fx(m.af0_s),
+        af1: fx(m.af1_s_s),
+        af2: fx(m.af2_s_s2),
+        sqrt_a: fx(m.sqrt_a_sqrt_m),
+        e: fx(m.eccentricity),
+        i0_sc: fx(m.i0_sc),
+        omega0_sc: fx(m.omega0_sc),
+        omega_sc: fx(m.omega_sc),
+        m0_sc: fx(m.m0_sc),
+        delta_n_sc: fx(m.delta_n_sc_s),
+        omega_dot_sc: fx(m.omegadot_sc_s),
+        idot_sc: fx(m.idot_sc_s),
+        cuc: fx(m.cuc_rad),
+        cus: fx(m.cus_rad),
+        crc: fx(m.crc_m),
+        crs: fx(m.crs_m),
+        cic: fx(m.cic_rad),
+        cis: fx(m.cis_rad),
+        tgd: fx(m.tgd_s),
+        tgd2: 0.0,
+        health: u32::from(m.sv_health_ind),
+        iod: u32::from(m.iode),
+    }
+}
+
+/// The [`KeplerFields`] of a 1044 (QZSS) from `rtcm-rs`: TGD (DF455) the
+/// L1 C/A group delay, health DF454, IODE DF434.
+#[cfg(feature = "rtcm-rs")]
+pub fn msg1044_fields(m: &rtcm_rs::msg::Msg1044T) -> KeplerFields {
+    KeplerFields {
+        toc_s: fx(m.toc_s),
+        toe_s: fx(m.toe_s),
+        af0: fx(m.af0_s),
+        af1: fx(m.af1_s_s),
+        af2: fx(m.af2_s_s2),
+        sqrt_a: fx(m.sqrt_a_sqrt_m),
+        e: fx(m.eccentricity),
+        i0_sc: fx(m.i0_sc),
+        omega0_sc: fx(m.omega0_sc),
+        omega_sc: fx(m.omega_sc),
+        m0_sc: fx(m.m0_sc),
+        delta_n_sc: fx(m.delta_n_sc_s),
+        omega_dot_sc: fx(m.omegadot_sc_s),
+        idot_sc: fx(m.idot_sc_s),
+        cuc: fx(m.cuc_rad),
+        cus: fx(m.cus_rad),
+        crc: fx(m.crc_m),
+        crs: fx(m.crs_m),
+        cic: fx(m.cic_rad),
+        cis: fx(m.cis_rad),
+        tgd: fx(m.tgd_s),
+        tgd2: 0.0,
+        health: u32::from(m.sv_health_ind),
+        iod: u32::from(m.iode),
+    }
+}
+
+/// The [`KeplerFields`] of a 1045 (Galileo F/NAV) from `rtcm-rs`: F/NAV's
+/// clock is the E1/E5a combination's, so BGD(E1,E5a) (DF312) serves E1
+/// alone and the pair; health: E5a signal health (DF314) and data
+/// validity (DF315) << 2; IODnav DF290.
+#[cfg(feature = "rtcm-rs")]
+pub fn msg1045_fields(m: &rtcm_rs::msg::Msg1045T) -> KeplerFields {
+    let bgd = fx(m.bgd_e1_e5a_s);
+    KeplerFields {
+        toc_s: fx(m.toc_s),
+        toe_s: fx(m.toe_s),
+        af0: fx(m.af0_s),
+        af1: fx(m.af1_s_s),
+        af2: fx(m.af2_s_s2),
+        sqrt_a: fx(m.sqrt_a_sqrt_m),
+        e: fx(m.eccentricity),
+        i0_sc: fx(m.i0_sc),
+        omega0_sc: fx(m.omega0_sc),
+        omega_sc: fx(m.omega_sc),
+        m0_sc: fx(m.m0_sc),
+        delta_n_sc: fx(m.delta_n_sc_s),
+        omega_dot_sc: fx(m.omegadot_sc_s),
+        idot_sc: fx(m.idot_sc_s),
+        cuc: fx(m.cuc_rad),
+        cus: fx(m.cus_rad),
+        crc: fx(m.crc_m),
+        crs: fx(m.crs_m),
+        cic: fx(m.cic_rad),
+        cis: fx(m.cis_rad),
+        tgd: bgd,
+        tgd2: bgd,
+        health: u32::from(m.e5a_sig_health_ind) | (u32::from(m.e5a_data_validity_flag) << 2),
+        iod: u32::from(m.iodnav),
+    }
+}
+
+/// The [`KeplerFields`] of a 1046 (Galileo I/NAV) from `rtcm-rs`:
+/// BGD(E1,E5b) (DF313) for E1 alone, BGD(E1,E5a) (DF312) for the E1/E5a
+/// pair; health: E1-B health (DF287), validity (DF288) << 2, E5b health
+/// (DF316) << 3, validity (DF317) << 5; IODnav DF290.
+#[cfg(feature = "rtcm-rs")]
+pub fn msg1046_fields(m: &rtcm_rs::msg::Msg1046T) -> KeplerFields {
+    KeplerFields {
+        toc_s: fx(m.toc_s),
+        toe_s: fx(m.toe_s),
+        af0: fx(m.af0_s),
+        af1: fx(m.af1_s_s),
+        af2: fx(m.af2_s_s2),
+        sqrt_a: fx(m.sqrt_a_sqrt_m),
+        e: fx(m.eccentricity),
+        i0_sc: fx(m.i0_sc),
+        omega0_sc: fx(m.omega0_sc),
+        omega_sc: fx(m.omega_sc),
+        m0_sc: fx(m.m0_sc),
+        delta_n_sc: fx(m.delta_n_sc_s),
+        omega_dot_sc: fx(m.omegadot_sc_s),
+        idot_sc: fx(m.idot_sc_s),
+        cuc: fx(m.cuc_rad),
+        cus: fx(m.cus_rad),
+        crc: fx(m.crc_m),
+        crs: fx(m.crs_m),
+        cic: fx(m.cic_rad),
+        cis: fx(m.cis_rad),
+        tgd: fx(m.bgd_e1_e5b_s),
+        tgd2: fx(m.bgd_e1_e5a_s),
+        health: u32::from(m.e1_b_sig_health_ind)
+            | (u32::from(m.e1_b_data_validity_flag) << 2)
+            | (u32::from(m.e5b_sig_health_ind) << 3)
+            | (u32::from(m.e5b_data_validity_flag) << 5),
+        iod: u32::from(m.iodnav),
+    }
+}
+
+/// The [`KeplerFields`] of a 1042 (BeiDou) from `rtcm-rs`: a0-a2 the clock
+/// terms, TGD1 (DF513) the B1I group delay, health DF515, AODE DF492.
+#[cfg(feature = "rtcm-rs")]
+pub fn msg1042_fields(m: &rtcm_rs::msg::Msg1042T) -> KeplerFields {
+    KeplerFields {
+        toc_s: fx(m.toc_s),
+        toe_s: fx(m.toe_s),
+        af0: fx(m.a0_s),
+        af1: fx(m.a1_s_s),
+        af2: fx(m.a2_s_s2),
+        sqrt_a: fx(m.sqrt_a_sqrt_m),
+        e: fx(m.eccentricity),
+        i0_sc: fx(m.i0_sc),
+        omega0_sc: fx(m.omega0_sc),
+        omega_sc: fx(m.omega_sc),
+        m0_sc: fx(m.m0_sc),
+        delta_n_sc: fx(m.delta_n_sc_s),
+        omega_dot_sc: fx(m.omegadot_sc_s),
+        idot_sc: fx(m.idot_sc_s),
+        cuc: fx(m.cuc_rad),
+        cus: fx(m.cus_rad),
+        crc: fx(m.crc_m),
+        crs: fx(m.crs_m),
+        cic: fx(m.cic_rad),
+        cis: fx(m.cis_rad),
+        tgd: fx(m.tgd1_s),
+        tgd2: 0.0,
+        health: u32::from(m.sv_health_flag),
+        iod: u32::from(m.aode),
+    }
 }
 
 /// A field of any numeric width as f64 (the crate's fields are f32 or f64
@@ -209,6 +399,31 @@ mod tests {
         placed_exactly(4096, &[1423, 4095, 4096, 4097]);
         // BDT week of 2026-11-29 is GPS week 2447 - 1356.
         placed_exactly(8192, &[1091, 8191, 8192, 8193]);
+    }
+
+    /// A Keplerian message's week as sent, to the GPS week of its
+    /// system week's start: GPS/QZSS 10 bits, Galileo 12-bit GST weeks
+    /// (GPS week 1024 = GST 0), BeiDou 13-bit BDT weeks (GPS week 1356 =
+    /// BDT 0), at today's week and around GPS's 2038 rollover, from a
+    /// pivot a year before.
+    ///
+    /// Verifies: RX-DATING, RX-MULTI
+    #[test]
+    fn message_weeks_in_each_system_count() {
+        for truth in [TODAY_GPS_WEEK, 3071, 3072, 3073] {
+            let pivot = truth - 52;
+            let sent = |w: i64, m: i64| u16::try_from(w.rem_euclid(m)).unwrap_or(u16::MAX);
+            for s in [System::Gps, System::Qzss] {
+                assert_eq!(gps_week_of(s, sent(truth, 1024), pivot), truth);
+            }
+            let gst = sent(truth - GST_WEEK0_GPS, 4096);
+            assert_eq!(gps_week_of(System::Galileo, gst, pivot), truth);
+            let bdt = sent(truth - BDT_WEEK0_GPS, 8192);
+            assert_eq!(gps_week_of(System::Beidou, bdt, pivot), truth);
+        }
+        // 2026-11-29: GST week 1423, BDT week 1091.
+        assert_eq!(gps_week_of(System::Galileo, 1423, 2395), 2447);
+        assert_eq!(gps_week_of(System::Beidou, 1091, 2395), 2447);
     }
 
     /// A week before the pivot is never placed before it: it is read as

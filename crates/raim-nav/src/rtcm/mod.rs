@@ -16,7 +16,12 @@ pub mod decode;
 pub mod fields;
 pub mod receiver;
 
+pub use fields::{
+    fx, gps_week_of, kepler, latest_week, week_from_pivot, KeplerFields, BDT_WEEK0_GPS,
+    GST_WEEK0_GPS, LIGHT_MS_M,
+};
 #[cfg(feature = "rtcm-rs")]
-pub use fields::glonass_fields;
-pub use fields::{fx, kepler, latest_week, week_from_pivot, KeplerFields, LIGHT_MS_M};
+pub use fields::{
+    glonass_fields, msg1019_fields, msg1042_fields, msg1044_fields, msg1045_fields, msg1046_fields,
+};
 pub use receiver::{FormError, FormedEpoch, RtcmCounts, StreamReceiver};

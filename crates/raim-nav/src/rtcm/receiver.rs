@@ -11,28 +11,36 @@
 //! two to the same values bit for bit.
 //!
 //! What it reads, and how:
-//! - GPS MSM4-MSM7 (1074-1077) and GLONASS MSM4-MSM7 (1084-1087):
-//!   pseudorange = (rough range + fine range) x c / 1000 (DF397 + DF398 +
-//!   DF400/DF405), one RINEX 3 code per signal. An epoch closes at the
-//!   message whose multiple-message bit (DF393) is 0, or when the GPS time
-//!   of week changes. GLONASS MSM carry the GLONASS time of day (DF034):
-//!   they join the open epoch, and once the epoch's GPS time is known their
-//!   time of day must be its GLONASS time of day to the millisecond
-//!   (leap seconds from [`crate::time`]); otherwise the epoch's GLONASS
-//!   data is dropped and counted. GLONASS MSM before any GPS MSM of their
-//!   epoch wait for it.
-//! - Ephemerides 1019 (GPS) and 1020 (GLONASS). The 10-bit GPS week is
-//!   placed in `[pivot_week, pivot_week + 1023]` (a receiver's
-//!   week-rollover pivot is the earliest week it can run in: the
+//! - MSM4-MSM7 of GPS (1074-1077), Galileo (1094-1097), QZSS (1114-1117),
+//!   BeiDou (1124-1127) and GLONASS (1084-1087): pseudorange = (rough
+//!   range + fine range) x c / 1000 (DF397 + DF398 + DF400/DF405), one
+//!   RINEX 3 code per signal. GPS, Galileo (GST) and QZSS MSM carry the GPS
+//!   time of week; BeiDou MSM the BDT time of week (GPS = BDT + 14 s; a
+//!   BeiDou MSM whose time equals the open epoch's GPS time of week, as
+//!   encoders before RTCM 3.2 wrote it, joins that epoch, as on the host).
+//!   An epoch closes at the message whose multiple-message bit (DF393) is
+//!   0, or when the time of week changes. GLONASS MSM carry the GLONASS
+//!   time of day (DF034): they join the open epoch, and once the epoch's
+//!   GPS time is known their time of day must be its GLONASS time of day
+//!   to the millisecond (leap seconds from [`crate::time`]); otherwise the
+//!   epoch's GLONASS data is dropped and counted. GLONASS MSM before any
+//!   other MSM of their epoch wait for it.
+//! - Ephemerides 1019 (GPS), 1042 (BeiDou), 1044 (QZSS), 1045 and 1046
+//!   (Galileo F/NAV and I/NAV) and 1020 (GLONASS). A truncated week is
+//!   placed from the pivot in its system's own week count (GPS and QZSS
+//!   10 bits, Galileo GST 12 bits from GPS week 1024, BeiDou BDT 13 bits
+//!   from GPS week 1356; [`super::fields::gps_week_of`]): a receiver's
+//!   week-rollover pivot is the earliest week it can run in (the
 //!   firmware's build week less a lookback, raim-server's `PIVOT_WEEK`;
-//!   [`super::fields::week_from_pivot`]). The stream's epochs are dated by the
-//!   first 1019: the week that puts the latest epoch nearest its toe. A
-//!   1020's t_b (a time of the Moscow day) is placed by the epoch it came
-//!   after.
+//!   [`super::fields::week_from_pivot`]). The stream's epochs are dated by
+//!   the first Keplerian ephemeris: the week that puts the latest epoch
+//!   nearest its toe (in GPS time). A 1020's t_b (a time of the Moscow
+//!   day) is placed by the epoch it came after.
 //! - Station 1005/1006: the antenna reference point, the a-priori position
 //!   of the bootstrap solution.
-//! - Galileo, BeiDou and QZSS messages, and the legacy observables, are
-//!   counted and not used here (the host's reader takes them).
+//! - The legacy observables (1001-1004, 1009-1012) and the other systems'
+//!   MSM (SBAS, NavIC, MSM1-3) are counted and not used here (the host's
+//!   reader takes the legacy ones).
 //!
 //! An epoch is formed as the host's receiver-stream replay forms it
 //! (docs/RECEIVERS.md): the stream codes ([`crate::ranging::STREAM_CODES`],
@@ -47,7 +55,7 @@ use raim_core::sigma::SigmaModel;
 use raim_core::solve::Solution;
 use raim_core::{RangeObservation, SatId, System};
 
-use crate::ephemeris::WEEK_S;
+use crate::ephemeris::{BDT_MINUS_GPST_S, WEEK_S};
 use crate::glonass::{
     glonass_time_of_day_s, glonass_time_of_day_to_gps_s, glonass_ura_m, GlonassEphemeris,
     GlonassIcdFields,
@@ -60,7 +68,7 @@ use crate::ranging::{
 use crate::store::{EphemerisStore, Stored};
 
 use super::decode::{msm_more_bit, Frame, Message, Msm, MsmSystem};
-use super::fields::{kepler, toc_near_toe, week_from_pivot};
+use super::fields::{gps_week_of, kepler, toc_near_toe};
 
 /// Milliseconds in a week and in a day.
 const WEEK_MS: i64 = 604_800_000;
@@ -70,9 +78,12 @@ const DAY_MS: i64 = 86_400_000;
 /// the delay (IS-GPS-200 20.3.3.5.2.5), so the uncorrected delay is at
 /// most twice the corrected model's residual.
 pub const NO_MODEL_IONO_FACTOR: f64 = 2.0;
-/// Keplerian and GLONASS sets kept: two per satellite of a full
-/// constellation (the set in force and the next).
-const KEPLER_SETS: usize = 64;
+/// Keplerian sets kept: the set in force and the next for 32 GPS, 36
+/// Galileo (I/NAV and F/NAV are sets of their own: 72), 46 BeiDou (the
+/// BDS-2 and BDS-3 satellites in service) and 10 QZSS satellites, less a
+/// margin the oldest-out rule covers (a full store drops its oldest toc).
+pub const KEPLER_SETS: usize = 256;
+/// GLONASS sets kept: two per slot of a full constellation.
 const GLONASS_SETS: usize = 48;
 /// 1020 messages held until the stream's epochs are dated.
 const PENDING_GLONASS: usize = 32;
@@ -81,7 +92,8 @@ const PENDING_GLONASS: usize = 32;
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum FormError {
-    /// No 1019 yet: the epoch cannot be dated (its GPS week is unknown).
+    /// No Keplerian ephemeris (1019, 1042, 1044, 1045, 1046) yet: the
+    /// epoch cannot be dated (its GPS week is unknown).
     NotDated {
         /// The epoch's GPS time of week, ms.
         tow_ms: i64,
@@ -96,7 +108,7 @@ impl core::fmt::Display for FormError {
         match *self {
             FormError::NotDated { tow_ms } => write!(
                 f,
-                "epoch at GPS time of week {tow_ms} ms not dated: no GPS ephemeris (1019) received yet"
+                "epoch at GPS time of week {tow_ms} ms not dated: no ephemeris (1019, 1042, 1044, 1045, 1046) received yet"
             ),
             FormError::TooManySignals { capacity } => {
                 write!(f, "more than {capacity} signals in one epoch")
@@ -176,7 +188,8 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     pivot_week: i64,
     store: EphemerisStore<KEPLER_SETS, GLONASS_SETS>,
     pending_glo: Vec<PendingGlonass, PENDING_GLONASS>,
-    /// (GPS week, toe s) of the first 1019, until the stream is dated.
+    /// (GPS week, toe in GPS s) of the first Keplerian ephemeris, until the
+    /// stream is dated.
     first_eph: Option<(i64, f64)>,
     base_week: Option<i64>,
     last: Option<(i64, i64)>,
@@ -196,8 +209,10 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
 }
 
 impl<const N: usize, const S: usize> StreamReceiver<N, S> {
-    /// A receiver that places 10-bit GPS weeks in `[pivot_week,
-    /// pivot_week + 1023]`.
+    /// A receiver that places truncated weeks from `pivot_week` (a GPS
+    /// week): 10-bit GPS weeks in `[pivot_week, pivot_week + 1023]`, and
+    /// Galileo's and BeiDou's in their own counts
+    /// ([`super::fields::gps_week_of`]).
     pub const fn new(pivot_week: i64) -> Self {
         StreamReceiver {
             pivot_week,
@@ -277,17 +292,25 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         };
         match message {
             Message::Msm(m) => match m.system {
-                MsmSystem::Gps => self.gps_msm(&m),
                 MsmSystem::Glonass => self.glonass_msm(&m),
+                _ => self.timed_msm(&m),
             },
-            Message::Gps1019(e) => {
+            Message::Kepler(e) => {
                 self.counts.ephemerides = self.counts.ephemerides.wrapping_add(1);
-                let week = week_from_pivot(i64::from(e.week_mod1024), 1024, self.pivot_week);
-                let mut k = kepler(System::Gps, e.prn, &e.fields);
-                k.toc_gps_s = toc_near_toe(week, k.toe_sow_s, e.fields.toc_s);
+                let week = gps_week_of(e.system, e.week_sent, self.pivot_week);
+                let mut k = kepler(e.system, e.prn, &e.fields);
+                // BeiDou's toc and toe are BDT seconds of the BDT week:
+                // toc to GPS (+14 s) for the clock, toe to GPS for the
+                // dating, as the host's reader does.
+                let bdt_s = if e.system == System::Beidou {
+                    BDT_MINUS_GPST_S
+                } else {
+                    0.0
+                };
+                k.toc_gps_s = toc_near_toe(week, k.toe_sow_s, e.fields.toc_s - bdt_s);
                 let _: Stored = self.store.insert_kepler(k);
                 if self.first_eph.is_none() {
-                    self.first_eph = Some((week, k.toe_sow_s));
+                    self.first_eph = Some((week, week as f64 * WEEK_S + k.toe_sow_s - bdt_s));
                 }
                 self.try_date();
             }
@@ -329,10 +352,22 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         }
     }
 
-    /// A GPS MSM: its data joins the epoch at its GPS time of week
-    /// (DF004); DF393 = 0 closes it.
-    fn gps_msm(&mut self, m: &Msm<'_>) {
-        let tow_ms = i64::from(m.epoch_ms).rem_euclid(WEEK_MS);
+    /// A GPS, Galileo, QZSS or BeiDou MSM: its data joins the epoch at its
+    /// GPS time of week (GPS DF004, Galileo DF248, QZSS DF428; BeiDou
+    /// DF427 + 14 s, or the open epoch's when DF427 equals it); DF393 = 0
+    /// closes it.
+    fn timed_msm(&mut self, m: &Msm<'_>) {
+        let epoch_ms = i64::from(m.epoch_ms);
+        let mut tow_ms = if m.system == MsmSystem::Beidou {
+            (epoch_ms - (BDT_MINUS_GPST_S * 1000.0) as i64).rem_euclid(WEEK_MS)
+        } else {
+            epoch_ms.rem_euclid(WEEK_MS)
+        };
+        if let Some(o) = self.open.as_ref() {
+            if m.system == MsmSystem::Beidou && o.tow_ms == epoch_ms.rem_euclid(WEEK_MS) {
+                tow_ms = o.tow_ms;
+            }
+        }
         if self.open.as_ref().is_some_and(|o| o.tow_ms != tow_ms) {
             self.close();
         }
@@ -359,12 +394,12 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             self.try_date();
         }
         if let Some(o) = self.open.as_mut() {
-            for s in msm_signals(m, System::Gps) {
+            for s in msm_signals(m, m.system.system()) {
                 o.overflow |= o.sigs.push(s).is_err();
             }
         }
         if !m.more {
-            // A GPS epoch closed while another waits to be formed: the
+            // An epoch closed while another waits to be formed: the
             // earlier one is the one handed over (a stream never closes
             // two in one frame unless its epochs hold no data).
             self.close();
@@ -428,17 +463,16 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         self.open = None;
     }
 
-    /// Date the stream from the first 1019 and the latest epoch: the GPS
-    /// week (of the three around the ephemeris') that puts that epoch
-    /// nearest the toe; then place the waiting 1020s.
+    /// Date the stream from the first Keplerian ephemeris and the latest
+    /// epoch: the GPS week (of the three around the ephemeris') that puts
+    /// that epoch nearest the toe; then place the waiting 1020s.
     fn try_date(&mut self) {
         if self.base_week.is_some() {
             return;
         }
-        let (Some((week, toe_s)), Some((rel, tow_ms))) = (self.first_eph, self.last) else {
+        let (Some((week, toe_gps_s)), Some((rel, tow_ms))) = (self.first_eph, self.last) else {
             return;
         };
-        let toe_gps_s = week as f64 * WEEK_S + toe_s;
         let tow_s = tow_ms as f64 / 1000.0;
         let dist = |w: i64| (w as f64 * WEEK_S + tow_s - toe_gps_s).abs();
         let mut w = week;
@@ -537,10 +571,6 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                     .count();
                 o.sigs.get(start..start + len).unwrap_or(&[])
             };
-            if !matches!(s.id.system, System::Gps | System::Glonass) {
-                out.rejected += 1;
-                continue;
-            }
             let Some((code, p1_m, p2_m)) = pick_code(stream_codes(s.id.system), have) else {
                 out.rejected += 1;
                 continue;
