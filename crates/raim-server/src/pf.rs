@@ -300,21 +300,22 @@ pub fn map_error(e: PfError, sats: &[RangeObservation]) -> WireError {
 }
 
 /// The integrity-alarm output's reading of a PF epoch (the discrete
-/// output; docs/SAFETY.md): no position (a collapsed filter) is
-/// `Unavailable`; an alarm this epoch is `Alarm`, even when the isolated
-/// satellite was excluded in the same epoch (the position of that epoch
-/// came from the filter that included it); an exclusion without an alarm
-/// is `Excluded`; otherwise `Ok`.
+/// output and the NMEA status; docs/SAFETY.md "Integrity-alarm discrete
+/// output", docs/PF.md "No protection level"). The particle filter gives
+/// a position and a fault test, but no protection level: nothing bounds
+/// its position error at an integrity risk, so a PF epoch never claims
+/// integrity on its own (issue 35). An alarm this epoch is `Alarm` (also
+/// when the isolated satellite was excluded in the same epoch); every
+/// other epoch is `Unavailable`, its position kept on the wire and in the
+/// NMEA sentences as information, not as a valid fix. A PF epoch therefore
+/// never clears the alarm output: integrity comes from the monitors that
+/// bound their error (snapshot, ARAIM).
 pub(crate) fn pf_decision(r: &WirePfResult) -> raim_core::Decision {
     use raim_core::Decision;
-    if r.position_ecef_m.is_none() {
-        Decision::Unavailable
-    } else if r.alarm {
+    if r.position_ecef_m.is_some() && r.alarm {
         Decision::Alarm
-    } else if r.excluded.is_some() {
-        Decision::Excluded
     } else {
-        Decision::Ok
+        Decision::Unavailable
     }
 }
 
@@ -754,20 +755,25 @@ mod decision_tests {
         }
     }
 
+    /// A PF epoch never reads as `Ok` or `Excluded`: with no protection
+    /// level it claims no integrity, whatever its flags; an alarm with a
+    /// position is an alarm.
+    ///
+    /// Verifies: SAFE-PF-NO-BOUND, SAFE-ALARM
     #[test]
-    fn no_position_is_unavailable_an_alarm_is_an_alarm() {
-        for alarm in [false, true] {
-            for excluded in [false, true] {
-                assert_eq!(
-                    pf_decision(&result(false, alarm, excluded)),
-                    Decision::Unavailable
-                );
-                let want = match (alarm, excluded) {
-                    (true, _) => Decision::Alarm,
-                    (false, true) => Decision::Excluded,
-                    (false, false) => Decision::Ok,
-                };
-                assert_eq!(pf_decision(&result(true, alarm, excluded)), want);
+    fn a_pf_epoch_never_clears_the_alarm() {
+        for position in [false, true] {
+            for alarm in [false, true] {
+                for excluded in [false, true] {
+                    let d = pf_decision(&result(position, alarm, excluded));
+                    let want = if position && alarm {
+                        Decision::Alarm
+                    } else {
+                        Decision::Unavailable
+                    };
+                    assert_eq!(d, want, "{position} {alarm} {excluded}");
+                    assert!(!matches!(d, Decision::Ok | Decision::Excluded));
+                }
             }
         }
     }
