@@ -111,12 +111,16 @@ pub fn check_ism(frame: &IsmFrame) -> Result<(), WireError> {
             capacity: CAPACITY as u32,
         });
     }
+    if frame.sats.items.is_empty() {
+        return Err(WireError::Araim(AraimWireError::EmptyIsm));
+    }
     AraimConfig::from(frame.config).validate()?;
     let ism = Ism {
         p_const: frame.p_const,
     };
     ism.validate()?;
     for (i, s) in frame.sats.items.iter().enumerate() {
+        raim_core::measurement::check_prn(i, s.id)?;
         check_sat(i, s)?;
         if frame
             .p_const
@@ -682,6 +686,45 @@ mod tests {
                     second: 9
                 }
             ),
+            // Issue 35: an ISM with no entry (it was `IsmAccepted { 0 }`),
+            // with or without P_const; entries for PRN 0, 255, E37.
+            (
+                Vec::new(),
+                gal(),
+                WireError::Araim(AraimWireError::EmptyIsm)
+            ),
+            (
+                Vec::new(),
+                [None; MAX_SYSTEMS],
+                WireError::Araim(AraimWireError::EmptyIsm)
+            ),
+            (
+                with(&|v| v[4].id.prn = 0),
+                gal(),
+                WireError::PrnOutOfRange {
+                    index: 4,
+                    id: SatId::new(System::Gps, 0),
+                    max: 32
+                }
+            ),
+            (
+                with(&|v| v[6].id.prn = 255),
+                gal(),
+                WireError::PrnOutOfRange {
+                    index: 6,
+                    id: SatId::new(System::Gps, 255),
+                    max: 32
+                }
+            ),
+            (
+                with(&|v| v[7].id.prn = 37),
+                gal(),
+                WireError::PrnOutOfRange {
+                    index: 7,
+                    id: SatId::new(System::Galileo, 37),
+                    max: 36
+                }
+            ),
         ];
         let mut errors = 0;
         for (k, (sats, p_const, want)) in cases.iter().enumerate() {
@@ -784,8 +827,40 @@ mod tests {
                 capacity: 32
             }
         );
-        // The six refused epochs above and the two out-of-bound sigmas.
-        errors += 6 + 2;
+        // Issue 35: an epoch time outside the GPS era, and satellite
+        // numbers outside their system's range (before the ISM lookup).
+        let era = raim_core::measurement::EPOCH_TIME_S;
+        for t in [1e300, -1e300, -1.0] {
+            let r = l.ask(CommandRef::Araim(AraimCommandRef::Epoch {
+                time_s: t,
+                sats: &obs,
+            }));
+            assert_eq!(
+                *error(&r),
+                WireError::OutOfRange {
+                    field: raim_proto::error::field_name("time_s"),
+                    value: t,
+                    min: era.min,
+                    max: era.max
+                }
+            );
+        }
+        for prn in [0u8, 255] {
+            let mut odd = obs.clone();
+            odd[3].id.prn = prn;
+            let r = l.epoch(&odd);
+            assert_eq!(
+                *error(&r),
+                WireError::PrnOutOfRange {
+                    index: 3,
+                    id: odd[3].id,
+                    max: odd[3].id.system.max_prn()
+                }
+            );
+        }
+        // The six refused epochs above, the two out-of-bound sigmas, and
+        // the three times and two numbers of issue 35.
+        errors += 6 + 2 + 3 + 2;
         // The good ISM stayed in force: the same answer as before.
         assert_eq!(*result(&l.epoch(&obs)), good);
         let ResponseBody::Status(st) = l.ask(CommandRef::Status).body else {

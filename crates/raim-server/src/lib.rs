@@ -797,6 +797,13 @@ enum Step {
 /// PF engines check theirs.
 fn araim_sigma_bounds(command: &Command) -> Result<(), WireError> {
     use raim_proto::araim_msg::AraimCommand;
+    // A build without the ARAIM engine answers every ARAIM epoch
+    // `Araim(Disabled)` whatever it holds (as a build without the PF
+    // answers `PfUnavailable`), and carries no code to check it
+    // (docs/FLASH.md).
+    if !cfg!(feature = "araim") {
+        return Ok(());
+    }
     let bound = raim_core::config_bounds::SIGMA_M;
     let sigmas: &mut dyn Iterator<Item = Option<f64>> = match command {
         Command::Araim(AraimCommand::Epoch(e)) => &mut e.sats.items.iter().map(|s| s.sigma_m),

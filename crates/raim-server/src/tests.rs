@@ -495,3 +495,126 @@ fn status_reports_whether_the_boot_nonce_had_hardware_entropy() {
     assert_eq!(nonces[0], nonces[1]);
     assert_ne!(nonces[1], nonces[2]);
 }
+
+/// Issue 35 "Inputs", on the firmware's path: an epoch time outside the
+/// GPS era (±1e300 s, NaN), PRN 0 and 255, and, with the MCUSUM on, a time
+/// going backwards (t + 1, then t - 50) are each refused with a typed
+/// error, the alarm output hears a refused epoch, and the no-fix sentences
+/// go out; the MCUSUM epoch after them is answered as if they had never
+/// come.
+#[test]
+fn absurd_times_satellite_numbers_and_backward_time_are_refused() {
+    let mut server = std::boxed::Box::new(Server::new());
+    let on = Config::default().split_false_alarm_budget(raim_core::config::DEFAULT_SNAPSHOT_SHARE);
+    server.take_runtime_config(on).unwrap();
+    let mut twin = std::boxed::Box::new(Server::new());
+    twin.take_runtime_config(on).unwrap();
+    let good = sky(0.0);
+    let mut prn0 = sky(0.0);
+    prn0[2].id.prn = 0;
+    let mut prn255 = sky(0.0);
+    prn255[5].id.prn = 255;
+    let t = 1_000.0;
+    let mut bytes = Vec::new();
+    let mut twin_bytes = Vec::new();
+    for k in 0..5u32 {
+        let f = frame(&RequestRef::linear(k, t - 4.0 + f64::from(k), &good));
+        bytes.extend(&f);
+        twin_bytes.extend(f);
+    }
+    // The refused ones (the twin never sees them), then t + 1 in order.
+    let refused = [
+        (1e300, &good),
+        (-1e300, &good),
+        (f64::NAN, &good),
+        (t - 50.0, &good),
+        (t, &good),
+        (t + 0.5, &prn0),
+        (t + 0.5, &prn255),
+    ];
+    for (i, (time_s, sats)) in refused.iter().enumerate() {
+        bytes.extend(frame(&RequestRef::linear(5 + i as u32, *time_s, sats)));
+    }
+    bytes.extend(frame(&RequestRef::linear(12, t + 1.0, &good)));
+    twin_bytes.extend(frame(&RequestRef::linear(5, t + 1.0, &good)));
+    struct Count(Vec<Option<raim_core::Decision>>);
+    impl Platform for Count {
+        fn now(&mut self) -> u32 {
+            0
+        }
+        fn on_epoch(&mut self, d: Option<raim_core::Decision>) {
+            self.0.push(d);
+        }
+    }
+    let (mut link, mut nmea, mut p) = (Sink::default(), Sink::default(), Count(Vec::new()));
+    for &b in &bytes {
+        server.on_byte(b, &mut link, &mut nmea, &mut p).unwrap();
+    }
+    let resp = responses(&link.0);
+    assert_eq!(resp.len(), 13, "{resp:?}");
+    let era = raim_core::measurement::EPOCH_TIME_S;
+    let oor = |value: f64| WireError::OutOfRange {
+        field: raim_proto::error::field_name("time_s"),
+        value,
+        min: era.min,
+        max: era.max,
+    };
+    let want = [
+        oor(1e300),
+        oor(-1e300),
+        WireError::NonFinite {
+            field: raim_proto::error::field_name("time_s"),
+            index: 0,
+            value: f64::NAN,
+        },
+        WireError::TimeNotIncreasing {
+            previous_s: t,
+            now_s: t - 50.0,
+        },
+        WireError::TimeNotIncreasing {
+            previous_s: t,
+            now_s: t,
+        },
+        WireError::PrnOutOfRange {
+            index: 2,
+            id: SatId::new(System::Gps, 0),
+            max: 32,
+        },
+        WireError::PrnOutOfRange {
+            index: 5,
+            id: SatId::new(System::Gps, 255),
+            max: 32,
+        },
+    ];
+    for (k, w) in want.iter().enumerate() {
+        let ResponseBody::Error(e) = &resp[5 + k].body else {
+            panic!("{k}: {:?}", resp[5 + k])
+        };
+        // NaN != NaN: compare the encoded bytes.
+        let (mut a, mut b) = ([0u8; 128], [0u8; 128]);
+        assert_eq!(
+            postcard::to_slice(e, &mut a).unwrap(),
+            postcard::to_slice(w, &mut b).unwrap(),
+            "{k}: {e:?}"
+        );
+    }
+    // Every refused epoch reached the alarm output as a refusal.
+    assert_eq!(p.0.len(), 13);
+    assert!(p.0[5..12].iter().all(Option::is_none), "{:?}", p.0);
+    // 13 epochs, 13 RMC sentences; the 7 refused ones void.
+    let rmc: Vec<&str> = std::str::from_utf8(&nmea.0)
+        .unwrap()
+        .lines()
+        .filter(|l| l.contains("RMC,"))
+        .collect();
+    assert_eq!(rmc.len(), 13);
+    assert!(rmc[5..12].iter().all(|l| l.split(',').nth(2) == Some("V")));
+    // The epoch after them: as the twin's, which never saw them.
+    let (twin_resp, _) = run(&mut twin, &twin_bytes);
+    let (ResponseBody::Result(a), ResponseBody::Result(b)) = (&resp[12].body, &twin_resp[5].body)
+    else {
+        panic!("{:?} {:?}", resp[12], twin_resp[5])
+    };
+    assert_eq!(a.mcusum, b.mcusum);
+    assert_eq!(a.decision, b.decision);
+}
