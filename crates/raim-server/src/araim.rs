@@ -1193,4 +1193,75 @@ mod tests {
             );
         }
     }
+
+    /// Issue 35 "Bounds that agree with the device's arithmetic": every
+    /// accepted combination of the ISM's and the host sigma's floors (and
+    /// a nominal value beside each floor: sigma_URA 0.3 / 0.75 m,
+    /// sigma_URE 0.2 / 0.3 / 0.5 m within sigma_URA, host sigma none /
+    /// 0.3 / 1 m, b_nom 0 / 0.5 m, P_sat 1e-6 / 1e-5, P_const 1e-8 / 1e-4),
+    /// through the unit's engine in its precision (`AraimT`, f32): each
+    /// ISM is accepted and its clean epoch gives service (`Ok`). At
+    /// sigma_URE 0.2 m and a host sigma of 0.3 m, C_acc is 0.13 m² in f64
+    /// and 0.1299999952 m² in f32, and was refused `c_acc_m2 OutOfRange`
+    /// at every epoch.
+    #[test]
+    fn every_accepted_combination_of_the_floors_gives_service() {
+        use raim_core::config_bounds::araim::{B_NOM_M, P_CONST, P_SAT, SIGMA_URA_M, SIGMA_URE_M};
+        use raim_core::config_bounds::SIGMA_M;
+        let (base, clean) = sky20(usize::MAX, 0.0);
+        let mut runs = 0;
+        for ura in [SIGMA_URA_M.min, 0.75] {
+            for ure in [SIGMA_URE_M.min, 0.3, 0.5]
+                .into_iter()
+                .filter(|u| *u <= ura)
+            {
+                for sigma in [None, Some(SIGMA_M.min), Some(1.0)] {
+                    for b_nom in [B_NOM_M.min, 0.5] {
+                        for p_sat in [P_SAT.min, 1e-5] {
+                            for p_c in [P_CONST.min, 1e-4] {
+                                let ism: Vec<IsmSat> = base
+                                    .iter()
+                                    .map(|e| IsmSat {
+                                        sigma_ura_m: ura,
+                                        sigma_ure_m: ure,
+                                        b_nom_m: b_nom,
+                                        p_sat,
+                                        ..*e
+                                    })
+                                    .collect();
+                                let obs: Vec<LinearObservation> = clean
+                                    .iter()
+                                    .map(|o| LinearObservation {
+                                        sigma_m: sigma,
+                                        ..*o
+                                    })
+                                    .collect();
+                                let mut p = [None; MAX_SYSTEMS];
+                                p[System::Gps.index()] = Some(p_c);
+                                p[System::Galileo.index()] = Some(p_c);
+                                let mut l = Link::new();
+                                let what = (ura, ure, sigma, b_nom, p_sat, p_c);
+                                assert!(
+                                    matches!(
+                                        l.ism(&ism, p).body,
+                                        ResponseBody::Araim(AraimAnswer::IsmAccepted {
+                                            satellites: 20
+                                        })
+                                    ),
+                                    "{what:?}"
+                                );
+                                let r = l.epoch(&obs);
+                                let ResponseBody::Araim(AraimAnswer::Result(w)) = &r.body else {
+                                    panic!("{what:?}: {r:?}")
+                                };
+                                assert_eq!(w.decision, Decision::Ok, "{what:?}: {w:?}");
+                                runs += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(runs, 5 * 3 * 2 * 2 * 2);
+    }
 }
