@@ -54,6 +54,7 @@ pub mod stream;
 
 use answer::{send_answer, BodyRef, Buffers};
 use gate::Applied;
+pub use gate::{check_unit, UnitRefusal};
 use raim_proto::auth::Change;
 
 // Particle-filter RAIM: a child module, so it reaches the
@@ -266,8 +267,8 @@ impl Server {
     /// Puts a provisioned unit configuration in force, locked, if every
     /// part passes its checks (all or nothing).
     pub fn provision(&mut self, unit: UnitConfig) -> Result<(), ProvisionError> {
-        if let Err(part) = gate::check_unit(&unit) {
-            return Err(ProvisionError::InvalidPart(part));
+        if let Err(refusal) = gate::check_unit(&unit) {
+            return Err(ProvisionError::InvalidPart(refusal.part));
         }
         let UnitConfig {
             snapshot,
