@@ -410,12 +410,15 @@ impl Server {
                 first = false;
                 match event {
                     None => return Ok(()),
-                    Some(LinkEvent::Frame(Err(e))) => Step::Frame(Err(answer::Refusal {
-                        seq: None,
-                        error: WireError::from(e),
-                        epoch: false,
-                        nmea_time_s: None,
-                    })),
+                    // A frame the unit cannot read (longer than the
+                    // receive buffer, not COBS or not an envelope, a bad
+                    // CRC) may have been an epoch: it is answered as a
+                    // refused epoch, the alarm output hears it and the
+                    // no-fix sentences go out at once (issue 35,
+                    // docs/SAFETY.md "Frames the unit cannot read").
+                    Some(LinkEvent::Frame(Err(e))) => {
+                        Step::Frame(Err(answer::Refusal::unread(None, WireError::from(e))))
+                    }
                     Some(LinkEvent::Frame(Ok(payload))) => {
                         Step::Frame(answer::decode(payload, &mut self.request))
                     }

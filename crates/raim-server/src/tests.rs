@@ -215,11 +215,20 @@ fn typed_errors_for_each_kind_of_bad_frame() {
         command: CommandRef::Status,
     }));
     let (resp, nmea) = run(&mut server, &bytes);
-    // Each of the three epochs writes its no-fix sentences (status void).
+    // Each of the three epochs writes its no-fix sentences (status void),
+    // and so does each of the three frames that could not be read (CRC,
+    // not an envelope, overflow: any of them may have been an epoch;
+    // issue 35), with empty time and date fields.
     let rmc: Vec<&str> = nmea.lines().filter(|l| l.contains("RMC,")).collect();
-    assert_eq!(rmc.len(), 3, "{nmea}");
+    assert_eq!(rmc.len(), 6, "{nmea}");
     assert!(
         rmc.iter().all(|l| l.split(',').nth(2) == Some("V")),
+        "{nmea}"
+    );
+    assert!(
+        rmc[3..]
+            .iter()
+            .all(|l| l.split(',').nth(1) == Some("") && l.split(',').nth(9) == Some("")),
         "{nmea}"
     );
     let got: Vec<(Option<u32>, &str)> = resp
@@ -617,4 +626,97 @@ fn absurd_times_satellite_numbers_and_backward_time_are_refused() {
     };
     assert_eq!(a.mcusum, b.mcusum);
     assert_eq!(a.decision, b.decision);
+}
+
+/// Issue 35: a frame the unit cannot read may have been an epoch. A
+/// 64-satellite Linear frame (longer than the receive buffer: `Overflow`),
+/// a chunk that is not an envelope (`Undecodable`) and a frame with a bad
+/// CRC each assert the alarm output at once (`EpochError`, as a refused
+/// epoch) and write the no-fix sentences; the next valid epoch clears it.
+/// A frame that is read and is not an epoch (`Status`) changes nothing.
+#[test]
+fn unreadable_frames_assert_the_alarm_at_once_and_write_no_fix() {
+    use raim_proto::alert::{AlarmOutput, AlertMonitor};
+    struct Discrete(AlertMonitor, u64);
+    impl Platform for Discrete {
+        fn now(&mut self) -> u32 {
+            0
+        }
+        fn on_epoch(&mut self, decision: Option<raim_core::Decision>) {
+            self.1 += 1;
+            self.0.on_epoch(self.1, decision);
+        }
+        fn board_status(&mut self, status: &mut Status) {
+            status.alarm_output = self.0.output(self.1);
+            status.alarm_pin_asserted = status.alarm_output.asserted();
+        }
+    }
+    let ok = sky(0.0);
+    let big: Vec<LinearObservation> = (0..64u8)
+        .map(|i| LinearObservation {
+            id: SatId::new(System::Beidou, i % 63 + 1),
+            ..ok[0]
+        })
+        .collect();
+    let oversized = frame(&RequestRef::linear(2, 1.0, &big));
+    assert!(oversized.len() > MAX_REQUEST_FRAME);
+    let mut bad_crc = frame(&RequestRef::linear(7, 3.0, &ok));
+    bad_crc[5] ^= 0x40;
+    let mut server = bench();
+    let mut p = Discrete(AlertMonitor::new(100), 0);
+    let status = |seq| {
+        frame(&RequestRef {
+            seq,
+            command: CommandRef::Status,
+        })
+    };
+    let mut alarms = Vec::new();
+    let mut rmc_count = Vec::new();
+    let steps: [Vec<u8>; 7] = [
+        frame(&RequestRef::linear(0, 0.0, &ok)),
+        status(1),
+        oversized,
+        frame(&RequestRef::linear(4, 2.0, &ok)),
+        std::vec![0x01, 0x01, 0x00],
+        frame(&RequestRef::linear(6, 2.5, &ok)),
+        bad_crc,
+    ];
+    for step in steps {
+        let (mut link, mut nmea) = (Sink::default(), Sink::default());
+        for &b in step.iter().chain(status(99).iter()) {
+            server.on_byte(b, &mut link, &mut nmea, &mut p).unwrap();
+        }
+        let st = responses(&link.0)
+            .into_iter()
+            .find_map(|r| match r.body {
+                ResponseBody::Status(s) => Some(s),
+                _ => None,
+            })
+            .unwrap();
+        alarms.push((st.alarm_output, st.alarm_pin_asserted));
+        let nmea = std::string::String::from_utf8(nmea.0).unwrap();
+        rmc_count.push(
+            nmea.lines()
+                .filter(|l| {
+                    let f: Vec<&str> = l.split(',').collect();
+                    l.contains("RMC,") && f[1].is_empty() && f[2] == "V"
+                })
+                .count(),
+        );
+    }
+    assert_eq!(
+        alarms,
+        [
+            (AlarmOutput::Clear, false),
+            (AlarmOutput::Clear, false),
+            (AlarmOutput::EpochError, true),
+            (AlarmOutput::Clear, false),
+            (AlarmOutput::EpochError, true),
+            (AlarmOutput::Clear, false),
+            (AlarmOutput::EpochError, true),
+        ]
+    );
+    // A void RMC without a time for each unreadable frame (its time is
+    // unknown), none for the others (linearised epochs: void, timed).
+    assert_eq!(rmc_count, [0, 0, 1, 0, 1, 0, 1]);
 }
