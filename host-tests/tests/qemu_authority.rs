@@ -429,3 +429,76 @@ fn qemu_netduinoplus2_boots_unconfigured_or_provisioned_and_locked() {
     ));
     let _ = std::fs::remove_file(img);
 }
+
+/// Issue 35: a frame the unit cannot read may have been an epoch. On the
+/// unit (mps2-an386), after a valid epoch has cleared the alarm output, a
+/// 64-satellite epoch frame (longer than the receive buffer: `Overflow`)
+/// asserts it at once (`EpochError`, the pin read back asserted, not
+/// after the time-to-alert) and writes the no-fix sentences (a void RMC
+/// without a time), as a refused epoch does; the next valid epoch clears
+/// it again.
+///
+/// Verifies: SAFE-UNREADABLE, WIRE-Overflow
+#[test]
+fn qemu_oversized_frame_asserts_the_alarm_at_once_and_writes_no_fix() {
+    let elf = elf(Machine::Mps2An386);
+    let mut fw = start(&elf, Machine::Mps2An386);
+    fw.configure(&Config::preset(Phase::EnRoute)).unwrap();
+    let vectors = epochs();
+    let valid = |fw: &mut QemuSession, k: usize| {
+        let (t, sats, apriori) = &vectors[k];
+        let p = fw.process(&Epoch::ranges(*t, sats, *apriori)).unwrap();
+        assert!(p.outcome.is_ok(), "{:?}", p.outcome);
+        let st = fw.status().unwrap();
+        assert_eq!(
+            (st.alarm_output, st.alarm_pin_asserted),
+            (AlarmOutput::Clear, false)
+        );
+    };
+    valid(&mut fw, 0);
+    let _ = fw.drain_nmea();
+    let (t, sats, _) = &vectors[1];
+    let big: Vec<raim_core::LinearObservation> = (0..64u8)
+        .map(|i| {
+            raim_core::LinearObservation::from_az_el(
+                raim_core::SatId::new(raim_core::System::Beidou, i % 63 + 1),
+                f64::from(i) * 0.3,
+                0.2 + f64::from(i % 7) * 0.2,
+                0.1,
+            )
+        })
+        .collect();
+    assert!(!sats.is_empty());
+    // Outside the session's sequence: the unit never reads it.
+    let frame =
+        raim_qemu::encode_request(&raim_proto::message::RequestRef::linear(9_999, *t, &big))
+            .unwrap();
+    assert!(
+        frame.len() > raim_proto::MAX_REQUEST_FRAME,
+        "{}",
+        frame.len()
+    );
+    fw.send_raw(&frame).unwrap();
+    let r = fw.recv(Duration::from_secs(30)).unwrap();
+    assert!(
+        matches!(r.body, ResponseBody::Error(WireError::Overflow { .. })) && r.seq.is_none(),
+        "{r:?}"
+    );
+    let rmc = loop {
+        let s = fw
+            .take_nmea(1, Duration::from_secs(30))
+            .expect("the no-fix sentences")
+            .remove(0);
+        if s.contains("RMC,") {
+            break s;
+        }
+    };
+    let f: Vec<&str> = rmc.split(',').collect();
+    assert_eq!((f[1], f[2]), ("", "V"), "{rmc}");
+    let st = fw.status().unwrap();
+    assert_eq!(
+        (st.alarm_output, st.alarm_pin_asserted),
+        (AlarmOutput::EpochError, true)
+    );
+    valid(&mut fw, 1);
+}

@@ -94,6 +94,26 @@ pub enum RaimError {
         /// The bound's ceiling, m.
         max_m: f64,
     },
+    /// A satellite number outside its system's range 1..=`max`
+    /// (`System::max_prn`; satellite `index` of the epoch).
+    PrnOutOfRange {
+        /// The satellite's index in the epoch.
+        index: usize,
+        /// Its constellation.
+        system: System,
+        /// The number given.
+        prn: u8,
+        /// The system's largest number.
+        max: u8,
+    },
+    /// An epoch whose time does not follow the last one a stateful monitor
+    /// (the MCUSUM) took: refused, the monitor's state left as it was.
+    TimeNotIncreasing {
+        /// The time of the last epoch the monitor took, s.
+        previous_s: f64,
+        /// This epoch's time, s.
+        now_s: f64,
+    },
 }
 
 impl core::fmt::Display for RaimError {
@@ -152,6 +172,20 @@ impl core::fmt::Display for RaimError {
             } => write!(
                 f,
                 "sigma at index {index} is {sigma_m} m, outside [{min_m}, {max_m}] m"
+            ),
+            RaimError::PrnOutOfRange {
+                index,
+                system,
+                prn,
+                max,
+            } => write!(
+                f,
+                "satellite number {prn} of {} at index {index} is outside 1..={max}",
+                system.letter()
+            ),
+            RaimError::TimeNotIncreasing { previous_s, now_s } => write!(
+                f,
+                "time {now_s} s does not follow the last epoch's {previous_s} s"
             ),
         }
     }

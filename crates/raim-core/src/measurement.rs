@@ -2,7 +2,7 @@
 //! the two input forms of an epoch (ranges + ECEF positions, or the
 //! linearised form the seeds print: line of sight + residual).
 
-use crate::config_bounds::SIGMA_M;
+use crate::config_bounds::{Bound, SIGMA_M};
 use crate::error::RaimError;
 
 /// A GNSS constellation. Each constellation present adds one receiver clock
@@ -70,6 +70,24 @@ impl System {
             System::Beidou => 2,
             System::Glonass => 3,
             System::Qzss => 4,
+        }
+    }
+
+    /// The largest satellite number of this system (the smallest is 1 for
+    /// every system): GPS PRN 1-32 (IS-GPS-200), Galileo 1-36 (Galileo OS
+    /// SIS ICD, RINEX 3 E01-E36), BeiDou 1-63 (BDS ICD, RINEX 3 C01-C63),
+    /// GLONASS slots 1-24 and up to 27 for spares (as `raim_nav::glonass`
+    /// reads them), QZSS 1-10 (IS-QZSS PRN 193-202, RINEX 3 J01-J10, as
+    /// the receivers' readers number them). A number outside is no
+    /// satellite the error models, ISMs or NMEA numbering know: an epoch
+    /// carrying one is refused ([`check_prn`]).
+    pub const fn max_prn(self) -> u8 {
+        match self {
+            System::Gps => 32,
+            System::Galileo => 36,
+            System::Beidou => 63,
+            System::Glonass => 27,
+            System::Qzss => 10,
         }
     }
 
@@ -286,6 +304,67 @@ impl<'a> Epoch<'a> {
     }
 }
 
+/// Unix time of the GPS epoch, 1980-01-06 00:00:00 UTC, s.
+pub const GPS_EPOCH_UNIX_S: f64 = 315_964_800.0;
+/// One GPS week, s.
+pub const GPS_WEEK_S: f64 = 604_800.0;
+/// Weeks the GPS era counts: the 13-bit week number of the modernised
+/// navigation messages (IS-GPS-200 CNAV, the widest GPS week count), 8192
+/// weeks from the GPS epoch, to 2137-01-06.
+pub const GPS_ERA_WEEKS: f64 = 8192.0;
+
+/// The epoch times every engine accepts, s (`time_s`: Unix UTC seconds,
+/// docs/FORMATS.md "Time"; the host tools' GPS seconds are inside it too).
+/// From 0 (the Unix epoch: the seeds' tables and the bench vectors count
+/// their epochs from 0, and the monitors use only differences of the
+/// time) to the end of the GPS era, [`GPS_EPOCH_UNIX_S`] +
+/// [`GPS_ERA_WEEKS`] weeks = 5,270,486,400 s. Within it an f64 time
+/// resolves 2^-20 s (< 1 µs), so the intervals the stateful monitors take
+/// (MCUSUM weight and holds, PF prediction, windows) are exact to the
+/// microsecond; outside it a time is no receiver's (a time of 1e300 s
+/// resolves 1e284 s and every interval is 0 or absurd). docs/SAFETY.md
+/// "Inputs refused".
+pub const EPOCH_TIME_S: Bound = Bound {
+    field: "time_s",
+    min: 0.0,
+    max: GPS_EPOCH_UNIX_S + GPS_ERA_WEEKS * GPS_WEEK_S,
+};
+
+/// An epoch time against [`EPOCH_TIME_S`]: `NotFinite` for NaN and
+/// infinities (as before), `OutOfRange { field: "time_s" }` outside the
+/// bound. Every engine's epoch check calls it (snapshot, MCUSUM, ARAIM,
+/// PF), so the host tools and the firmware refuse alike.
+pub fn check_time_s(time_s: f64) -> Result<(), RaimError> {
+    finite("time_s", 0, time_s)?;
+    EPOCH_TIME_S.check(time_s)
+}
+
+/// A satellite number against its system's range, 1..=[`System::max_prn`]:
+/// `PrnOutOfRange` with the satellite's `index` in the epoch.
+pub fn check_prn(index: usize, id: SatId) -> Result<(), RaimError> {
+    if prn_in_range(id) {
+        Ok(())
+    } else {
+        Err(RaimError::PrnOutOfRange {
+            index,
+            system: id.system,
+            prn: id.prn,
+            max: id.system.max_prn(),
+        })
+    }
+}
+
+/// Whether `id`'s number is within its system's range (branch-free, for
+/// the one-pass checks).
+pub const fn prn_in_range(id: SatId) -> bool {
+    (id.prn >= 1) & (id.prn <= id.system.max_prn())
+}
+
+/// [`check_prn`] over a list of identities: the first one out of range.
+pub fn check_prns(ids: impl Iterator<Item = SatId>) -> Result<(), RaimError> {
+    ids.enumerate().try_for_each(|(i, id)| check_prn(i, id))
+}
+
 /// Reject a non-finite value with its field name and index.
 pub(crate) fn finite(field: &'static str, index: usize, value: f64) -> Result<f64, RaimError> {
     if value.is_finite() {
@@ -336,11 +415,12 @@ pub fn check_sigma_bound(index: usize, sigma_m: f64) -> Result<(), RaimError> {
     }
 }
 
-/// Check an epoch's inputs: capacity, finiteness, sigma sign and bound,
+/// Check an epoch's inputs: the time ([`check_time_s`]), capacity,
+/// finiteness, sigma sign and bound, satellite numbers ([`check_prn`]),
 /// duplicates.
 /// O(n^2) duplicate check; n <= N is small.
 pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimError> {
-    finite("time_s", 0, epoch.time_s)?;
+    check_time_s(epoch.time_s)?;
     let n = epoch.len();
     if n > N {
         return Err(RaimError::CapacityExceeded {
@@ -414,7 +494,9 @@ pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimErro
     // the same first pair as before.
     let mut seen = [[0u64; 4]; MAX_SYSTEMS];
     let mut repeated = false;
+    let mut numbered = true;
     let mut mark = |id: SatId| {
+        numbered &= prn_in_range(id);
         let (word, bit) = (usize::from(id.prn >> 6), id.prn & 63);
         if let Some(w) = seen
             .get_mut(id.system.index())
@@ -430,20 +512,23 @@ pub(crate) fn validate<const N: usize>(epoch: &Epoch<'_>) -> Result<(), RaimErro
         Observations::Ranges { sats, .. } => sats.iter().for_each(|s| mark(s.id)),
         Observations::Linear { sats } => sats.iter().for_each(|s| mark(s.id)),
     }
-    if !repeated {
+    if numbered && !repeated {
         return Ok(());
     }
+    // The first offender by index: a number out of range, or the first
+    // appearance of a satellite that appears again (the pair named by its
+    // first index, then its second).
     for i in 0..n {
+        let Some(a) = epoch.id(i) else { continue };
+        check_prn(i, a)?;
         for j in (i + 1)..n {
-            if let (Some(a), Some(b)) = (epoch.id(i), epoch.id(j)) {
-                if a == b {
-                    return Err(RaimError::DuplicateSatellite {
-                        system: a.system,
-                        prn: a.prn,
-                        first: i,
-                        second: j,
-                    });
-                }
+            if epoch.id(j) == Some(a) {
+                return Err(RaimError::DuplicateSatellite {
+                    system: a.system,
+                    prn: a.prn,
+                    first: i,
+                    second: j,
+                });
             }
         }
     }
@@ -459,8 +544,8 @@ mod tests {
     /// The duplicate check (a bitmap pass, then the pairwise search only on
     /// a repeat) names the lexicographically first pair (i, j), like the
     /// pairwise search alone: checked against a brute force on 3,000
-    /// random id lists (n = 0..20, few distinct ids so repeats are common,
-    /// PRNs 0 and 255 included), e.g. A B B A gives (0, 3), not (1, 2).
+    /// random id lists (n = 0..20, few distinct ids so repeats are common),
+    /// e.g. A B B A gives (0, 3), not (1, 2).
     ///
     /// Verifies: WIRE-DuplicateSatellite
     #[test]
@@ -468,7 +553,9 @@ mod tests {
         extern crate std;
         use std::vec::Vec;
         let mut rng = crate::testutil::Rng::new(7);
-        let prns = [0u8, 1, 63, 64, 200, 255];
+        // Numbers valid in both systems drawn (GPS and Galileo): an
+        // out-of-range one is refused before the duplicate search.
+        let prns = [1u8, 2, 17, 31, 32, 9];
         let mut errors = 0;
         for trial in 0..3000 {
             let n = trial % 21;
@@ -569,5 +656,109 @@ mod tests {
                 other => panic!("{other:?}"),
             }
         }
+    }
+}
+
+/// Issue 35 "Inputs": epoch times outside the GPS era and satellite
+/// numbers outside their system's range are refused by every entry of the
+/// snapshot monitor (the firmware's too: the server calls it).
+#[cfg(test)]
+mod input_tests {
+    extern crate std;
+    use super::*;
+    use crate::config::Phase;
+    use crate::testutil::{linear_epoch, Rng, SKY8};
+    use crate::{Config, Raim};
+
+    /// Verifies: SAFE-INPUTS
+    #[test]
+    fn times_outside_the_gps_era_are_refused() {
+        let sats = linear_epoch(&SKY8, 1.0, &mut Rng::new(1), &[]);
+        let cfg = Config::preset(Phase::Npa);
+        let end_s = 315_964_800.0 + 8192.0 * 604_800.0;
+        assert_eq!(EPOCH_TIME_S.max, end_s);
+        assert_eq!(end_s, 5_270_486_400.0);
+        for t in [1e300, -1e300, -1.0, -1e-9, end_s + 1.0, f64::MAX] {
+            let e = Raim::<16>::new()
+                .process(&cfg, &Epoch::linear(t, &sats))
+                .unwrap_err();
+            assert_eq!(
+                e,
+                RaimError::OutOfRange {
+                    field: "time_s",
+                    value: t,
+                    min: 0.0,
+                    max: end_s
+                },
+                "{t}"
+            );
+        }
+        for t in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let e = Raim::<16>::new()
+                .process(&cfg, &Epoch::linear(t, &sats))
+                .unwrap_err();
+            assert!(
+                matches!(
+                    e,
+                    RaimError::NotFinite {
+                        field: "time_s",
+                        ..
+                    }
+                ),
+                "{e:?}"
+            );
+        }
+        // The bounds themselves and a time of today are taken; an f64
+        // time resolves better than 1 µs everywhere inside.
+        for t in [0.0, 1.0, 1_764_000_000.0, end_s] {
+            assert!(Raim::<16>::new()
+                .process(&cfg, &Epoch::linear(t, &sats))
+                .is_ok());
+        }
+        assert!(end_s + 1e-6 > end_s);
+    }
+
+    /// Verifies: SAFE-INPUTS, WIRE-PrnOutOfRange
+    #[test]
+    fn satellite_numbers_outside_each_systems_range_are_refused() {
+        let cfg = Config::preset(Phase::Npa);
+        for system in System::ALL {
+            let max = system.max_prn();
+            for (prn, ok) in [
+                (0u8, false),
+                (1, true),
+                (max, true),
+                (max + 1, false),
+                (255, false),
+            ] {
+                let mut sats = linear_epoch(&SKY8, 1.0, &mut Rng::new(2), &[]);
+                // Satellite 3 gets the number under test, in its own system
+                // (the rest are GPS 1..8, distinct from it unless `ok`
+                // repeats one: then give the others high GPS numbers).
+                for (i, o) in sats.iter_mut().enumerate() {
+                    o.id = SatId::new(System::Gps, 20 + i as u8);
+                }
+                sats[3].id = SatId::new(system, prn);
+                let r = Raim::<16>::new().process(&cfg, &Epoch::linear(10.0, &sats));
+                if ok {
+                    assert!(r.is_ok(), "{system:?} {prn}: {r:?}");
+                } else {
+                    assert_eq!(
+                        r.unwrap_err(),
+                        RaimError::PrnOutOfRange {
+                            index: 3,
+                            system,
+                            prn,
+                            max
+                        }
+                    );
+                }
+            }
+        }
+        assert_eq!(
+            System::ALL.map(System::max_prn),
+            [32, 36, 63, 27, 10],
+            "GPS, Galileo, BeiDou, GLONASS, QZSS"
+        );
     }
 }

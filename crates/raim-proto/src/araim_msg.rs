@@ -554,6 +554,11 @@ pub enum AraimWireError {
         /// Index of the satellite in the epoch.
         index: u32,
     },
+    /// An ISM frame with no satellite entry: it would put in force an ISM
+    /// under which every ARAIM epoch is refused, and answer
+    /// `IsmAccepted { 0 }` as if a usable one had been taken (issue 35).
+    /// Protocol 14.
+    EmptyIsm,
 }
 
 impl core::fmt::Display for AraimWireError {
@@ -584,6 +589,7 @@ impl core::fmt::Display for AraimWireError {
                 "satellite at index {index} is of {}, which has no P_const",
                 system.letter()
             ),
+            AraimWireError::EmptyIsm => write!(f, "the ISM has no satellite entry"),
         }
     }
 }

@@ -228,6 +228,17 @@ pub enum WireError {
         /// Signals (or satellites) the receiver holds per epoch.
         capacity: u32,
     },
+    /// A satellite number outside its system's range 1..=`max`
+    /// (`raim_core::System::max_prn`), in an epoch or an ISM (satellite
+    /// `index`). Protocol 14.
+    PrnOutOfRange {
+        /// The satellite's index in the epoch (or the ISM's entries).
+        index: u32,
+        /// The satellite as given.
+        id: SatId,
+        /// The system's largest number.
+        max: u8,
+    },
 }
 
 /// A field name for the wire (truncated to 24 bytes).
@@ -313,6 +324,19 @@ impl From<RaimError> for WireError {
                 min_m,
                 max_m,
             },
+            RaimError::PrnOutOfRange {
+                index,
+                system,
+                prn,
+                max,
+            } => WireError::PrnOutOfRange {
+                index: u32_of(index),
+                id: SatId::new(system, prn),
+                max,
+            },
+            RaimError::TimeNotIncreasing { previous_s, now_s } => {
+                WireError::TimeNotIncreasing { previous_s, now_s }
+            }
         }
     }
 }
@@ -437,6 +461,12 @@ impl core::fmt::Display for WireError {
             WireError::HostSigmaRefused { index } => write!(
                 f,
                 "satellite at index {index} carries a sigma; this unit uses only its own sigma model"
+            ),
+            WireError::PrnOutOfRange { index, id, max } => write!(
+                f,
+                "satellite number {} of {} at index {index} is outside 1..={max}",
+                id.prn,
+                id.system.letter()
             ),
         }
     }

@@ -65,8 +65,24 @@ pub(crate) struct Refusal {
     /// output, as an epoch answered with an error does).
     pub(crate) epoch: bool,
     /// The time of a refused snapshot epoch, whose no-fix NMEA sentences
-    /// are written.
+    /// are written (NaN: a frame that could not be read, whose time is
+    /// unknown; its sentences carry empty time and date fields).
     pub(crate) nmea_time_s: Option<f64>,
+}
+
+impl Refusal {
+    /// A frame that could not be read (overflow, COBS or envelope, CRC,
+    /// or a payload that is not a request): it may have been an epoch, so
+    /// it is refused as one (the alarm output hears a refused epoch, the
+    /// no-fix sentences go out), whatever it was (issue 35).
+    pub(crate) fn unread(seq: Option<u32>, error: WireError) -> Self {
+        Refusal {
+            seq,
+            error,
+            epoch: true,
+            nmea_time_s: Some(f64::NAN),
+        }
+    }
 }
 
 /// Decode a request payload into `slot` and check it once: its sequence
@@ -99,12 +115,10 @@ pub(crate) fn decode(payload: &[u8], slot: &mut Option<Request>) -> Result<u32, 
                 .ok()
                 .map(|(s, _)| s);
             let len = u32::try_from(payload.len()).unwrap_or(u32::MAX);
-            Err(Refusal {
+            Err(Refusal::unread(
                 seq,
-                error: WireError::from(FrameError::Undecodable { len }),
-                epoch: false,
-                nmea_time_s: None,
-            })
+                WireError::from(FrameError::Undecodable { len }),
+            ))
         }
     }
 }

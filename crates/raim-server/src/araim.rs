@@ -111,12 +111,16 @@ pub fn check_ism(frame: &IsmFrame) -> Result<(), WireError> {
             capacity: CAPACITY as u32,
         });
     }
+    if frame.sats.items.is_empty() {
+        return Err(WireError::Araim(AraimWireError::EmptyIsm));
+    }
     AraimConfig::from(frame.config).validate()?;
     let ism = Ism {
         p_const: frame.p_const,
     };
     ism.validate()?;
     for (i, s) in frame.sats.items.iter().enumerate() {
+        raim_core::measurement::check_prn(i, s.id)?;
         check_sat(i, s)?;
         if frame
             .p_const
@@ -684,6 +688,45 @@ mod tests {
                     second: 9
                 }
             ),
+            // Issue 35: an ISM with no entry (it was `IsmAccepted { 0 }`),
+            // with or without P_const; entries for PRN 0, 255, E37.
+            (
+                Vec::new(),
+                gal(),
+                WireError::Araim(AraimWireError::EmptyIsm)
+            ),
+            (
+                Vec::new(),
+                [None; MAX_SYSTEMS],
+                WireError::Araim(AraimWireError::EmptyIsm)
+            ),
+            (
+                with(&|v| v[4].id.prn = 0),
+                gal(),
+                WireError::PrnOutOfRange {
+                    index: 4,
+                    id: SatId::new(System::Gps, 0),
+                    max: 32
+                }
+            ),
+            (
+                with(&|v| v[6].id.prn = 255),
+                gal(),
+                WireError::PrnOutOfRange {
+                    index: 6,
+                    id: SatId::new(System::Gps, 255),
+                    max: 32
+                }
+            ),
+            (
+                with(&|v| v[7].id.prn = 37),
+                gal(),
+                WireError::PrnOutOfRange {
+                    index: 7,
+                    id: SatId::new(System::Galileo, 37),
+                    max: 36
+                }
+            ),
         ];
         let mut errors = 0;
         for (k, (sats, p_const, want)) in cases.iter().enumerate() {
@@ -786,8 +829,40 @@ mod tests {
                 capacity: 32
             }
         );
-        // The six refused epochs above and the two out-of-bound sigmas.
-        errors += 6 + 2;
+        // Issue 35: an epoch time outside the GPS era, and satellite
+        // numbers outside their system's range (before the ISM lookup).
+        let era = raim_core::measurement::EPOCH_TIME_S;
+        for t in [1e300, -1e300, -1.0] {
+            let r = l.ask(CommandRef::Araim(AraimCommandRef::Epoch {
+                time_s: t,
+                sats: &obs,
+            }));
+            assert_eq!(
+                *error(&r),
+                WireError::OutOfRange {
+                    field: raim_proto::error::field_name("time_s"),
+                    value: t,
+                    min: era.min,
+                    max: era.max
+                }
+            );
+        }
+        for prn in [0u8, 255] {
+            let mut odd = obs.clone();
+            odd[3].id.prn = prn;
+            let r = l.epoch(&odd);
+            assert_eq!(
+                *error(&r),
+                WireError::PrnOutOfRange {
+                    index: 3,
+                    id: odd[3].id,
+                    max: odd[3].id.system.max_prn()
+                }
+            );
+        }
+        // The six refused epochs above, the two out-of-bound sigmas, and
+        // the three times and two numbers of issue 35.
+        errors += 6 + 2 + 3 + 2;
         // The good ISM stayed in force: the same answer as before.
         assert_eq!(*result(&l.epoch(&obs)), good);
         let ResponseBody::Status(st) = l.ask(CommandRef::Status).body else {
@@ -1123,5 +1198,78 @@ mod tests {
                 "{r:?}"
             );
         }
+    }
+
+    /// Issue 35 "Bounds that agree with the device's arithmetic": every
+    /// accepted combination of the ISM's and the host sigma's floors (and
+    /// a nominal value beside each floor: sigma_URA 0.3 / 0.75 m,
+    /// sigma_URE 0.2 / 0.3 / 0.5 m within sigma_URA, host sigma none /
+    /// 0.3 / 1 m, b_nom 0 / 0.5 m, P_sat 1e-6 / 1e-5, P_const 1e-8 / 1e-4),
+    /// through the unit's engine in its precision (`AraimT`, f32): each
+    /// ISM is accepted and its clean epoch gives service (`Ok`). At
+    /// sigma_URE 0.2 m and a host sigma of 0.3 m, C_acc is 0.13 m² in f64
+    /// and 0.1299999952 m² in f32, and was refused `c_acc_m2 OutOfRange`
+    /// at every epoch.
+    ///
+    /// Verifies: SAFE-BOUNDS-PRECISION
+    #[test]
+    fn every_accepted_combination_of_the_floors_gives_service() {
+        use raim_core::config_bounds::araim::{B_NOM_M, P_CONST, P_SAT, SIGMA_URA_M, SIGMA_URE_M};
+        use raim_core::config_bounds::SIGMA_M;
+        let (base, clean) = sky20(usize::MAX, 0.0);
+        let mut runs = 0;
+        for ura in [SIGMA_URA_M.min, 0.75] {
+            for ure in [SIGMA_URE_M.min, 0.3, 0.5]
+                .into_iter()
+                .filter(|u| *u <= ura)
+            {
+                for sigma in [None, Some(SIGMA_M.min), Some(1.0)] {
+                    for b_nom in [B_NOM_M.min, 0.5] {
+                        for p_sat in [P_SAT.min, 1e-5] {
+                            for p_c in [P_CONST.min, 1e-4] {
+                                let ism: Vec<IsmSat> = base
+                                    .iter()
+                                    .map(|e| IsmSat {
+                                        sigma_ura_m: ura,
+                                        sigma_ure_m: ure,
+                                        b_nom_m: b_nom,
+                                        p_sat,
+                                        ..*e
+                                    })
+                                    .collect();
+                                let obs: Vec<LinearObservation> = clean
+                                    .iter()
+                                    .map(|o| LinearObservation {
+                                        sigma_m: sigma,
+                                        ..*o
+                                    })
+                                    .collect();
+                                let mut p = [None; MAX_SYSTEMS];
+                                p[System::Gps.index()] = Some(p_c);
+                                p[System::Galileo.index()] = Some(p_c);
+                                let mut l = Link::new();
+                                let what = (ura, ure, sigma, b_nom, p_sat, p_c);
+                                assert!(
+                                    matches!(
+                                        l.ism(&ism, p).body,
+                                        ResponseBody::Araim(AraimAnswer::IsmAccepted {
+                                            satellites: 20
+                                        })
+                                    ),
+                                    "{what:?}"
+                                );
+                                let r = l.epoch(&obs);
+                                let ResponseBody::Araim(AraimAnswer::Result(w)) = &r.body else {
+                                    panic!("{what:?}: {r:?}")
+                                };
+                                assert_eq!(w.decision, Decision::Ok, "{what:?}: {w:?}");
+                                runs += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(runs, 5 * 3 * 2 * 2 * 2);
     }
 }

@@ -20,20 +20,41 @@ use raim_proto::unit::{UnitConfig, UnitPart};
 
 use crate::Server;
 
+/// Why a unit configuration is refused: the first part that fails its
+/// checks, and that part's own typed error (the one a runtime change of
+/// the part gets).
+#[derive(Debug, Clone, PartialEq)]
+pub struct UnitRefusal {
+    /// The part refused (the boot notice's `InvalidPart`).
+    pub part: UnitPart,
+    /// Its own check's typed error.
+    pub error: WireError,
+}
+
 /// Every part of a unit configuration checked, as the gate checks a
-/// runtime change of that part; the first part that fails.
-pub(crate) fn check_unit(unit: &UnitConfig) -> Result<(), UnitPart> {
+/// runtime change of that part; the first part that fails. The one
+/// validation of a unit configuration: boot ([`Server::provision`]) puts
+/// nothing in force that fails it, and `raim provision` refuses to seal
+/// what fails it (issue 35), with the same part and error. The checks
+/// that depend on the build are this build's: without the `araim`
+/// feature an ARAIM part is refused `Araim(Disabled)`, without `pf` a PF
+/// part `PfUnavailable`.
+pub fn check_unit(unit: &UnitConfig) -> Result<(), UnitRefusal> {
+    let refuse = |part: UnitPart| move |error: WireError| UnitRefusal { part, error };
     if let Some(c) = &unit.snapshot {
-        c.validate().map_err(|_| UnitPart::Snapshot)?;
+        c.validate()
+            .map_err(|e| refuse(UnitPart::Snapshot)(e.into()))?;
     }
     if let Some(i) = &unit.araim {
         if !cfg!(feature = "araim") {
-            return Err(UnitPart::Araim);
+            return Err(refuse(UnitPart::Araim)(WireError::Araim(
+                raim_proto::araim_msg::AraimWireError::Disabled,
+            )));
         }
-        crate::araim::check_ism(i).map_err(|_| UnitPart::Araim)?;
+        crate::araim::check_ism(i).map_err(refuse(UnitPart::Araim))?;
     }
     if let Some(p) = &unit.pf {
-        crate::pf::check(p).map_err(|_| UnitPart::Pf)?;
+        crate::pf::check(p).map_err(refuse(UnitPart::Pf))?;
     }
     Ok(())
 }

@@ -54,6 +54,7 @@ pub mod stream;
 
 use answer::{send_answer, BodyRef, Buffers};
 use gate::Applied;
+pub use gate::{check_unit, UnitRefusal};
 use raim_proto::auth::Change;
 
 // Particle-filter RAIM: a child module, so it reaches the
@@ -266,8 +267,8 @@ impl Server {
     /// Puts a provisioned unit configuration in force, locked, if every
     /// part passes its checks (all or nothing).
     pub fn provision(&mut self, unit: UnitConfig) -> Result<(), ProvisionError> {
-        if let Err(part) = gate::check_unit(&unit) {
-            return Err(ProvisionError::InvalidPart(part));
+        if let Err(refusal) = gate::check_unit(&unit) {
+            return Err(ProvisionError::InvalidPart(refusal.part));
         }
         let UnitConfig {
             snapshot,
@@ -409,12 +410,15 @@ impl Server {
                 first = false;
                 match event {
                     None => return Ok(()),
-                    Some(LinkEvent::Frame(Err(e))) => Step::Frame(Err(answer::Refusal {
-                        seq: None,
-                        error: WireError::from(e),
-                        epoch: false,
-                        nmea_time_s: None,
-                    })),
+                    // A frame the unit cannot read (longer than the
+                    // receive buffer, not COBS or not an envelope, a bad
+                    // CRC) may have been an epoch: it is answered as a
+                    // refused epoch, the alarm output hears it and the
+                    // no-fix sentences go out at once (issue 35,
+                    // docs/SAFETY.md "Frames the unit cannot read").
+                    Some(LinkEvent::Frame(Err(e))) => {
+                        Step::Frame(Err(answer::Refusal::unread(None, WireError::from(e))))
+                    }
                     Some(LinkEvent::Frame(Ok(payload))) => {
                         Step::Frame(answer::decode(payload, &mut self.request))
                     }
@@ -797,6 +801,13 @@ enum Step {
 /// PF engines check theirs.
 fn araim_sigma_bounds(command: &Command) -> Result<(), WireError> {
     use raim_proto::araim_msg::AraimCommand;
+    // A build without the ARAIM engine answers every ARAIM epoch
+    // `Araim(Disabled)` whatever it holds (as a build without the PF
+    // answers `PfUnavailable`), and carries no code to check it
+    // (docs/FLASH.md).
+    if !cfg!(feature = "araim") {
+        return Ok(());
+    }
     let bound = raim_core::config_bounds::SIGMA_M;
     let sigmas: &mut dyn Iterator<Item = Option<f64>> = match command {
         Command::Araim(AraimCommand::Epoch(e)) => &mut e.sats.items.iter().map(|s| s.sigma_m),

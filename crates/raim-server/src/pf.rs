@@ -296,6 +296,11 @@ pub fn map_error(e: PfError, sats: &[RangeObservation]) -> WireError {
             min_m,
             max_m,
         },
+        PfError::PrnOutOfRange { index, id, max } => WireError::PrnOutOfRange {
+            index: u32_of(index),
+            id,
+            max,
+        },
     }
 }
 

@@ -217,11 +217,20 @@ fn typed_errors_for_each_kind_of_bad_frame() {
         command: CommandRef::Status,
     }));
     let (resp, nmea) = run(&mut server, &bytes);
-    // Each of the three epochs writes its no-fix sentences (status void).
+    // Each of the three epochs writes its no-fix sentences (status void),
+    // and so does each of the three frames that could not be read (CRC,
+    // not an envelope, overflow: any of them may have been an epoch;
+    // issue 35), with empty time and date fields.
     let rmc: Vec<&str> = nmea.lines().filter(|l| l.contains("RMC,")).collect();
-    assert_eq!(rmc.len(), 3, "{nmea}");
+    assert_eq!(rmc.len(), 6, "{nmea}");
     assert!(
         rmc.iter().all(|l| l.split(',').nth(2) == Some("V")),
+        "{nmea}"
+    );
+    assert!(
+        rmc[3..]
+            .iter()
+            .all(|l| l.split(',').nth(1) == Some("") && l.split(',').nth(9) == Some("")),
         "{nmea}"
     );
     let got: Vec<(Option<u32>, &str)> = resp
@@ -500,4 +509,224 @@ fn status_reports_whether_the_boot_nonce_had_hardware_entropy() {
     // The flag is reported, not hashed: the same bytes give the same nonce.
     assert_eq!(nonces[0], nonces[1]);
     assert_ne!(nonces[1], nonces[2]);
+}
+
+/// Issue 35 "Inputs", on the firmware's path: an epoch time outside the
+/// GPS era (±1e300 s, NaN), PRN 0 and 255, and, with the MCUSUM on, a time
+/// going backwards (t + 1, then t - 50) are each refused with a typed
+/// error, the alarm output hears a refused epoch, and the no-fix sentences
+/// go out; the MCUSUM epoch after them is answered as if they had never
+/// come.
+///
+/// Verifies: SAFE-INPUTS, WIRE-PrnOutOfRange, WIRE-OutOfRange
+#[test]
+fn absurd_times_satellite_numbers_and_backward_time_are_refused() {
+    let mut server = std::boxed::Box::new(Server::new());
+    let on = Config::default().split_false_alarm_budget(raim_core::config::DEFAULT_SNAPSHOT_SHARE);
+    server.take_runtime_config(on).unwrap();
+    let mut twin = std::boxed::Box::new(Server::new());
+    twin.take_runtime_config(on).unwrap();
+    let good = sky(0.0);
+    let mut prn0 = sky(0.0);
+    prn0[2].id.prn = 0;
+    let mut prn255 = sky(0.0);
+    prn255[5].id.prn = 255;
+    let t = 1_000.0;
+    let mut bytes = Vec::new();
+    let mut twin_bytes = Vec::new();
+    for k in 0..5u32 {
+        let f = frame(&RequestRef::linear(k, t - 4.0 + f64::from(k), &good));
+        bytes.extend(&f);
+        twin_bytes.extend(f);
+    }
+    // The refused ones (the twin never sees them), then t + 1 in order.
+    let refused = [
+        (1e300, &good),
+        (-1e300, &good),
+        (f64::NAN, &good),
+        (t - 50.0, &good),
+        (t, &good),
+        (t + 0.5, &prn0),
+        (t + 0.5, &prn255),
+    ];
+    for (i, (time_s, sats)) in refused.iter().enumerate() {
+        bytes.extend(frame(&RequestRef::linear(5 + i as u32, *time_s, sats)));
+    }
+    bytes.extend(frame(&RequestRef::linear(12, t + 1.0, &good)));
+    twin_bytes.extend(frame(&RequestRef::linear(5, t + 1.0, &good)));
+    struct Count(Vec<Option<raim_core::Decision>>);
+    impl Platform for Count {
+        fn now(&mut self) -> u32 {
+            0
+        }
+        fn on_epoch(&mut self, d: Option<raim_core::Decision>) {
+            self.0.push(d);
+        }
+    }
+    let (mut link, mut nmea, mut p) = (Sink::default(), Sink::default(), Count(Vec::new()));
+    for &b in &bytes {
+        server.on_byte(b, &mut link, &mut nmea, &mut p).unwrap();
+    }
+    let resp = responses(&link.0);
+    assert_eq!(resp.len(), 13, "{resp:?}");
+    let era = raim_core::measurement::EPOCH_TIME_S;
+    let oor = |value: f64| WireError::OutOfRange {
+        field: raim_proto::error::field_name("time_s"),
+        value,
+        min: era.min,
+        max: era.max,
+    };
+    let want = [
+        oor(1e300),
+        oor(-1e300),
+        WireError::NonFinite {
+            field: raim_proto::error::field_name("time_s"),
+            index: 0,
+            value: f64::NAN,
+        },
+        WireError::TimeNotIncreasing {
+            previous_s: t,
+            now_s: t - 50.0,
+        },
+        WireError::TimeNotIncreasing {
+            previous_s: t,
+            now_s: t,
+        },
+        WireError::PrnOutOfRange {
+            index: 2,
+            id: SatId::new(System::Gps, 0),
+            max: 32,
+        },
+        WireError::PrnOutOfRange {
+            index: 5,
+            id: SatId::new(System::Gps, 255),
+            max: 32,
+        },
+    ];
+    for (k, w) in want.iter().enumerate() {
+        let ResponseBody::Error(e) = &resp[5 + k].body else {
+            panic!("{k}: {:?}", resp[5 + k])
+        };
+        // NaN != NaN: compare the encoded bytes.
+        let (mut a, mut b) = ([0u8; 128], [0u8; 128]);
+        assert_eq!(
+            postcard::to_slice(e, &mut a).unwrap(),
+            postcard::to_slice(w, &mut b).unwrap(),
+            "{k}: {e:?}"
+        );
+    }
+    // Every refused epoch reached the alarm output as a refusal.
+    assert_eq!(p.0.len(), 13);
+    assert!(p.0[5..12].iter().all(Option::is_none), "{:?}", p.0);
+    // 13 epochs, 13 RMC sentences; the 7 refused ones void.
+    let rmc: Vec<&str> = std::str::from_utf8(&nmea.0)
+        .unwrap()
+        .lines()
+        .filter(|l| l.contains("RMC,"))
+        .collect();
+    assert_eq!(rmc.len(), 13);
+    assert!(rmc[5..12].iter().all(|l| l.split(',').nth(2) == Some("V")));
+    // The epoch after them: as the twin's, which never saw them.
+    let (twin_resp, _) = run(&mut twin, &twin_bytes);
+    let (ResponseBody::Result(a), ResponseBody::Result(b)) = (&resp[12].body, &twin_resp[5].body)
+    else {
+        panic!("{:?} {:?}", resp[12], twin_resp[5])
+    };
+    assert_eq!(a.mcusum, b.mcusum);
+    assert_eq!(a.decision, b.decision);
+}
+
+/// Issue 35: a frame the unit cannot read may have been an epoch. A
+/// 64-satellite Linear frame (longer than the receive buffer: `Overflow`),
+/// a chunk that is not an envelope (`Undecodable`) and a frame with a bad
+/// CRC each assert the alarm output at once (`EpochError`, as a refused
+/// epoch) and write the no-fix sentences; the next valid epoch clears it.
+/// A frame that is read and is not an epoch (`Status`) changes nothing.
+///
+/// Verifies: SAFE-UNREADABLE, SAFE-ALARM, WIRE-Overflow, WIRE-Undecodable, WIRE-BadCrc
+#[test]
+fn unreadable_frames_assert_the_alarm_at_once_and_write_no_fix() {
+    use raim_proto::alert::{AlarmOutput, AlertMonitor};
+    struct Discrete(AlertMonitor, u64);
+    impl Platform for Discrete {
+        fn now(&mut self) -> u32 {
+            0
+        }
+        fn on_epoch(&mut self, decision: Option<raim_core::Decision>) {
+            self.1 += 1;
+            self.0.on_epoch(self.1, decision);
+        }
+        fn board_status(&mut self, status: &mut Status) {
+            status.alarm_output = self.0.output(self.1);
+            status.alarm_pin_asserted = status.alarm_output.asserted();
+        }
+    }
+    let ok = sky(0.0);
+    let big: Vec<LinearObservation> = (0..64u8)
+        .map(|i| LinearObservation {
+            id: SatId::new(System::Beidou, i % 63 + 1),
+            ..ok[0]
+        })
+        .collect();
+    let oversized = frame(&RequestRef::linear(2, 1.0, &big));
+    assert!(oversized.len() > MAX_REQUEST_FRAME);
+    let mut bad_crc = frame(&RequestRef::linear(7, 3.0, &ok));
+    bad_crc[5] ^= 0x40;
+    let mut server = bench();
+    let mut p = Discrete(AlertMonitor::new(100), 0);
+    let status = |seq| {
+        frame(&RequestRef {
+            seq,
+            command: CommandRef::Status,
+        })
+    };
+    let mut alarms = Vec::new();
+    let mut rmc_count = Vec::new();
+    let steps: [Vec<u8>; 7] = [
+        frame(&RequestRef::linear(0, 0.0, &ok)),
+        status(1),
+        oversized,
+        frame(&RequestRef::linear(4, 2.0, &ok)),
+        std::vec![0x01, 0x01, 0x00],
+        frame(&RequestRef::linear(6, 2.5, &ok)),
+        bad_crc,
+    ];
+    for step in steps {
+        let (mut link, mut nmea) = (Sink::default(), Sink::default());
+        for &b in step.iter().chain(status(99).iter()) {
+            server.on_byte(b, &mut link, &mut nmea, &mut p).unwrap();
+        }
+        let st = responses(&link.0)
+            .into_iter()
+            .find_map(|r| match r.body {
+                ResponseBody::Status(s) => Some(s),
+                _ => None,
+            })
+            .unwrap();
+        alarms.push((st.alarm_output, st.alarm_pin_asserted));
+        let nmea = std::string::String::from_utf8(nmea.0).unwrap();
+        rmc_count.push(
+            nmea.lines()
+                .filter(|l| {
+                    let f: Vec<&str> = l.split(',').collect();
+                    l.contains("RMC,") && f[1].is_empty() && f[2] == "V"
+                })
+                .count(),
+        );
+    }
+    assert_eq!(
+        alarms,
+        [
+            (AlarmOutput::Clear, false),
+            (AlarmOutput::Clear, false),
+            (AlarmOutput::EpochError, true),
+            (AlarmOutput::Clear, false),
+            (AlarmOutput::EpochError, true),
+            (AlarmOutput::Clear, false),
+            (AlarmOutput::EpochError, true),
+        ]
+    );
+    // A void RMC without a time for each unreadable frame (its time is
+    // unknown), none for the others (linearised epochs: void, timed).
+    assert_eq!(rmc_count, [0, 0, 1, 0, 1, 0, 1]);
 }

@@ -61,7 +61,8 @@ impl<T: Real> AraimSat<T> {
     /// Range-checks every field against its operational bound
     /// (`config_bounds::araim`, docs/PROTOCOL.md "Configuration bounds"):
     /// finite first, then the unit geometry row, C_int and C_acc (C_acc <=
-    /// C_int), b_nom and P_sat. `index` is the satellite's position in the
+    /// C_int; both in the precision `T` they are held in, against their
+    /// bounds rounded to `T`: `Bound::check_araim_in`), b_nom and P_sat. `index` is the satellite's position in the
     /// epoch, reported in the error.
     pub fn validate(&self, index: usize) -> Result<(), AraimError> {
         for (field, v) in [
@@ -78,9 +79,10 @@ impl<T: Real> AraimSat<T> {
         finite("p_sat", index, self.p_sat)?;
         let [e, n, u] = self.g_enu.map(|v| v.to_f64());
         b::G_NORM.check_araim(index, libm::sqrt(e * e + n * n + u * u))?;
+        // In the precision they were formed in (`check_araim_in`).
+        b::C_INT_M2.check_araim_in(index, self.c_int_m2)?;
+        b::C_ACC_M2.check_araim_in(index, self.c_acc_m2)?;
         let (c_int, c_acc) = (self.c_int_m2.to_f64(), self.c_acc_m2.to_f64());
-        b::C_INT_M2.check_araim(index, c_int)?;
-        b::C_ACC_M2.check_araim(index, c_acc)?;
         if c_acc > c_int {
             return Err(AraimError::OutOfRange {
                 field: "c_acc_m2",

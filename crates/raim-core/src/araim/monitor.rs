@@ -38,7 +38,8 @@ use crate::config::Config;
 use crate::error::RaimError;
 use crate::frames::{enu_rotation, rotate, unrotate};
 use crate::measurement::{
-    Epoch, LinearObservation, Observations, RangeObservation, SatId, MAX_SYSTEMS,
+    check_prns, check_time_s, Epoch, LinearObservation, Observations, RangeObservation, SatId,
+    MAX_SYSTEMS,
 };
 use crate::real::Real;
 use crate::result::Decision;
@@ -331,6 +332,7 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
         epoch: &Epoch<'_>,
         limits: FdeLimits,
     ) -> Result<Verdict<N>, MonitorError> {
+        check_time_s(epoch.time_s)?;
         let sats = match epoch.observations {
             Observations::Linear { sats } => return self.linear(cfg, ism, models, sats, limits),
             Observations::Ranges { sats, .. } => sats,
@@ -549,7 +551,7 @@ fn check_ranges(
             })
         }
     };
-    finite("time_s", 0, time_s)?;
+    check_time_s(time_s)?;
     for v in apriori_m.iter().flatten() {
         finite("apriori_m", 0, *v)?;
     }
@@ -583,6 +585,7 @@ fn join<T: Real, M: SatelliteModels + ?Sized, const N: usize>(
     if obs.len() > N {
         return Err(capacity::<N>(obs.len()));
     }
+    check_prns(obs.iter().map(|o| o.id))?;
     let mut p_const = [None; MAX_SYSTEMS];
     for (i, (o, slot)) in obs.iter().zip(out.iter_mut()).enumerate() {
         let Some(entry) = models.ism(o.id) else {

@@ -1545,3 +1545,75 @@ mod fde_multi {
         assert!(exceeded > 0 && kept > 0 && stage2_needed > 0);
     }
 }
+
+/// Issue 35 "Inputs": the ARAIM monitor refuses an epoch time outside the
+/// GPS era (`measurement::EPOCH_TIME_S`, both epoch forms) and a satellite
+/// number outside its system's range (PRN 0, 255, G33), with the snapshot
+/// monitor's typed errors; the same sky at a valid time is taken.
+///
+/// Verifies: SAFE-INPUTS, WIRE-PrnOutOfRange
+#[test]
+fn monitor_refuses_absurd_times_and_satellite_numbers() {
+    use super::{FdeLimits, Ism, Monitor, MonitorError, SatIsm};
+    use crate::measurement::{Epoch, LinearObservation, SatId, System, EPOCH_TIME_S};
+    use crate::{Config, Phase, RaimError};
+    let mut obs = [LinearObservation::default(); 10];
+    let mut entries = [SatIsm::default(); 10];
+    for (i, r) in appendix_d::ROWS.iter().enumerate() {
+        let system = if i < 5 { System::Gps } else { System::Galileo };
+        let id = SatId::new(system, (i % 5 + 1) as u8);
+        obs[i] = LinearObservation {
+            id,
+            los_enu: r.g.map(|v| -v),
+            residual_m: 0.0,
+            sigma_m: None,
+        };
+        entries[i] = SatIsm {
+            id,
+            sigma_ura_m: 0.75,
+            sigma_ure_m: 0.5,
+            b_nom_m: 0.5,
+            p_sat: 1e-5,
+        };
+    }
+    let cfg = super::AraimConfig::default();
+    let solver = Config::preset(Phase::Npa);
+    let ism = Ism::with(&[System::Gps, System::Galileo], 1e-4);
+    let mut monitor = std::boxed::Box::new(Monitor::<f64, 16, 600>::new());
+    let mut run = |t: f64, obs: &[LinearObservation], entries: &[SatIsm]| {
+        monitor.epoch(
+            &solver,
+            &cfg,
+            &ism,
+            entries,
+            &Epoch::linear(t, obs),
+            FdeLimits::UNLIMITED,
+        )
+    };
+    assert!(run(100.0, &obs, &entries).is_ok());
+    for t in [1e300, -1e300, -1.0] {
+        assert_eq!(
+            run(t, &obs, &entries).err(),
+            Some(MonitorError::Raim(RaimError::OutOfRange {
+                field: "time_s",
+                value: t,
+                min: EPOCH_TIME_S.min,
+                max: EPOCH_TIME_S.max
+            }))
+        );
+    }
+    for prn in [0u8, 33, 255] {
+        let (mut o, mut e) = (obs, entries);
+        o[2].id.prn = prn;
+        e[2].id.prn = prn;
+        assert_eq!(
+            run(100.0, &o, &e).err(),
+            Some(MonitorError::Raim(RaimError::PrnOutOfRange {
+                index: 2,
+                system: System::Gps,
+                prn,
+                max: 32
+            }))
+        );
+    }
+}

@@ -51,6 +51,35 @@ impl Bound {
             })
         }
     }
+
+    /// [`Bound::check_araim`] on a value derived and stored in the
+    /// engine's precision `T` (C_int, C_acc: sums of the ISM's and the
+    /// sigma model's squares, formed in f64 and rounded to `T` once), held
+    /// against the bound rounded to `T` the same way (issue 35). Rounding
+    /// to nearest is monotone, so a value whose f64 origin is within the
+    /// bound stays within the rounded bound: the check refuses only what
+    /// the f64 check refuses. In f64 the f32 image of 0.2² + 0.3² =
+    /// 0.13 m² is 0.1299999952 m², below 0.13 (every ARAIM epoch at those
+    /// accepted floors was refused). The error carries the value and the
+    /// bound as the check saw them (rounded to `T`).
+    pub fn check_araim_in<T: crate::real::Real>(
+        &self,
+        index: usize,
+        value: T,
+    ) -> Result<(), AraimError> {
+        let (min, max) = (T::of(self.min), T::of(self.max));
+        if value >= min && value <= max {
+            Ok(())
+        } else {
+            Err(AraimError::OutOfRange {
+                field: self.field,
+                index,
+                value: value.to_f64(),
+                min: min.to_f64(),
+                max: max.to_f64(),
+            })
+        }
+    }
 }
 
 /// Vertical integrity budget per approach. ADD LPV-200: 9.8e-8. Ceiling

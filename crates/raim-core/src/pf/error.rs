@@ -72,7 +72,8 @@ pub enum PfError {
         step_m: f64,
     },
     /// A configuration value outside its operational bound
-    /// (`config_bounds::pf`).
+    /// (`config_bounds::pf`), or the epoch time outside
+    /// `measurement::EPOCH_TIME_S`.
     OutOfRange {
         /// The field.
         field: &'static str,
@@ -94,6 +95,16 @@ pub enum PfError {
         min_m: f64,
         /// The bound's ceiling, m.
         max_m: f64,
+    },
+    /// A satellite number outside its system's range 1..=`max`
+    /// (`System::max_prn`; satellite `index` of the epoch).
+    PrnOutOfRange {
+        /// The satellite's index in the epoch.
+        index: usize,
+        /// The satellite as given.
+        id: SatId,
+        /// The system's largest number.
+        max: u8,
     },
 }
 
@@ -130,7 +141,13 @@ impl core::fmt::Display for PfError {
                 value,
                 min,
                 max,
-            } => write!(f, "configuration {field} = {value} outside [{min}, {max}]"),
+            } => write!(f, "{field} = {value} outside [{min}, {max}]"),
+            PfError::PrnOutOfRange { index, id, max } => write!(
+                f,
+                "satellite number {} of {} at index {index} is outside 1..={max}",
+                id.prn,
+                id.system.letter()
+            ),
             PfError::SigmaOutOfRange {
                 index,
                 sigma_m,

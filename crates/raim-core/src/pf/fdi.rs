@@ -208,6 +208,15 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
                 value: time_s,
             });
         }
+        let era = crate::measurement::EPOCH_TIME_S;
+        if !era.contains(time_s) {
+            return Err(PfError::OutOfRange {
+                field: era.field,
+                value: time_s,
+                min: era.min,
+                max: era.max,
+            });
+        }
         if let Some(prev) = self.time_s {
             if !(time_s > prev) {
                 return Err(PfError::TimeNotIncreasing {
@@ -235,6 +244,13 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
                     })
                 }
             };
+            if !crate::measurement::prn_in_range(o.id) {
+                return Err(PfError::PrnOutOfRange {
+                    index: i,
+                    id: o.id,
+                    max: o.id.system.max_prn(),
+                });
+            }
             bad("pseudorange_m", o.pseudorange_m)?;
             for &p in o.position_m.iter() {
                 bad("position_m", p)?;

@@ -387,6 +387,33 @@ fn too_few_satellites_and_bad_input() {
         m.process(&c, 1.0, &epoch(8, 3, &mut noise, None)),
         Err(PfError::TimeNotIncreasing { .. })
     ));
+    // Issue 35: a time outside the GPS era, and satellite numbers outside
+    // their system's range (PRN 0, 255), are refused as well.
+    let era = crate::measurement::EPOCH_TIME_S;
+    for t in [1e300, era.max * 2.0] {
+        assert_eq!(
+            m.process(&c, t, &epoch(8, 3, &mut noise, None)).err(),
+            Some(PfError::OutOfRange {
+                field: "time_s",
+                value: t,
+                min: era.min,
+                max: era.max
+            })
+        );
+    }
+    for prn in [0u8, 255] {
+        let mut odd = epoch(8, 3, &mut noise, None);
+        odd[4].id.prn = prn;
+        assert_eq!(
+            m.process(&c, 3.0, &odd).err(),
+            Some(PfError::PrnOutOfRange {
+                index: 4,
+                id: odd[4].id,
+                max: odd[4].id.system.max_prn()
+            })
+        );
+    }
+    assert_eq!(*m.reference(), r0);
     let bad_cfg = PfConfig { window: 0, ..c };
     assert!(matches!(
         m.process(&bad_cfg, 3.0, &epoch(8, 3, &mut noise, None)),

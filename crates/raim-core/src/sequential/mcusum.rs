@@ -295,6 +295,9 @@ pub struct Mcusum<const N: usize, T: Real = Stat> {
     last_time_s: f64,
     last_dt_s: f64,
     held: heapless::Vec<Held, MAX_HELD>,
+    /// Time of the last epoch the sequential monitor took ([`Self::take_time`]),
+    /// s; `None` before any and after [`Self::clear`].
+    last_epoch_s: Option<f64>,
 }
 
 impl<const N: usize, T: Real> Default for Mcusum<N, T> {
@@ -315,6 +318,7 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
             last_time_s: f64::NAN,
             last_dt_s: f64::NAN,
             held: heapless::Vec::new(),
+            last_epoch_s: None,
         }
     }
 }
@@ -328,10 +332,34 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         self.last_h = f64::NAN;
     }
 
-    /// Forget everything, holds included.
+    /// Forget everything, holds included (and the last epoch's time: with
+    /// no state left, nothing is carried to an earlier time).
     pub fn clear(&mut self) {
         self.reset();
         self.held.clear();
+        self.last_epoch_s = None;
+    }
+
+    /// Whether an epoch at `time_s` may be taken: its time must follow the
+    /// last epoch's strictly (as the PF's, the ESQ's and the PCA's), else
+    /// `TimeNotIncreasing`. A state accumulated at t carried to an earlier
+    /// time (or counted twice at the same time) would weigh the same
+    /// errors again and release holds by a negative age (issue 35). The
+    /// caller checks before it changes any state, so a refused epoch
+    /// leaves the monitor exactly as it was.
+    pub fn check_time(&self, time_s: f64) -> Result<(), RaimError> {
+        match self.last_epoch_s {
+            Some(previous_s) if !(time_s > previous_s) => Err(RaimError::TimeNotIncreasing {
+                previous_s,
+                now_s: time_s,
+            }),
+            _ => Ok(()),
+        }
+    }
+
+    /// Record `time_s` as the last epoch's ([`Self::check_time`] passed).
+    pub fn take_time(&mut self, time_s: f64) {
+        self.last_epoch_s = Some(time_s);
     }
 
     /// The accumulated vector v = U2 S_t in measurement space, with the

@@ -143,6 +143,9 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         outcome: &mut FdeOutcome<N, T>,
         out: &mut EpochResult<N>,
     ) -> Result<(), RaimError> {
+        // Before any state changes: a refused epoch leaves it as it was.
+        self.mcusum.check_time(epoch.time_s)?;
+        self.mcusum.take_time(epoch.time_s);
         outcome.reset();
         let present = |id: SatId| (0..epoch.len()).any(|i| epoch.id(i) == Some(id));
         self.mcusum
@@ -165,6 +168,7 @@ impl<const N: usize, T: Real> Sequential<N, T> {
                     // The holds leave no solvable set: release them rather
                     // than lose the epoch (the snapshot test still guards).
                     self.mcusum.clear();
+                    self.mcusum.take_time(epoch.time_s);
                     outcome.reset();
                 }
                 other => return other,

@@ -213,7 +213,11 @@ fn mcusum_unavailable_beyond_table_dimension() {
     let sky: Vec<(f64, f64)> = (0..34)
         .map(|i| ((i as f64 * 137.5) % 360.0, 10.0 + (i * 7 % 34) as f64 * 2.2))
         .collect();
-    let sats = linear_epoch(&sky, 1.0, &mut Rng::new(3), &[]);
+    let mut sats = linear_epoch(&sky, 1.0, &mut Rng::new(3), &[]);
+    // 34 satellites of one system: BeiDou (PRN 1-63; GPS has 32).
+    for o in sats.iter_mut() {
+        o.id.system = System::Beidou;
+    }
     let mut raim = Raim::<40>::new();
     let r = raim
         .process(
@@ -423,4 +427,55 @@ fn correlation_time_weights_the_recursion() {
         assert!(white_alarm, "seed {seed}");
         assert_eq!(weighted_max, 0.0, "seed {seed}");
     }
+}
+
+/// Issue 35: with the MCUSUM on, an epoch whose time goes backwards
+/// (t + 1, then t - 50) or repeats is refused `TimeNotIncreasing`, and the
+/// monitor's whole state (MCUSUM vector, holds, clocks, snapshot caches)
+/// is exactly as it was: its `Debug` image before and after is the same,
+/// and the next epoch in order gives the result a monitor that never saw
+/// the refused epochs gives.
+///
+/// Verifies: SAFE-INPUTS, WIRE-TimeNotIncreasing
+#[test]
+fn mcusum_refuses_time_going_backwards_and_keeps_its_state() {
+    let c = mcusum_cfg(crate::config::Carry::Transport);
+    let mut raim = Raim::<16>::new();
+    let mut rng = Rng::new(11);
+    let t0 = 1_000.0;
+    for k in 0..20 {
+        // A 2 sigma bias on row 2: the CUSUM state grows, non-zero.
+        let sats = linear_epoch(&SKY8, 1.0, &mut rng, &[(2, 2.0)]);
+        raim.process(&c, &Epoch::linear(t0 + k as f64, &sats))
+            .unwrap();
+    }
+    assert!(raim.mcusum().norm() > 0.0);
+    let last_s = t0 + 19.0;
+    let sats = linear_epoch(&SKY8, 1.0, &mut rng, &[(2, 2.0)]);
+    raim.process(&c, &Epoch::linear(last_s + 1.0, &sats))
+        .unwrap();
+    let untouched = raim.clone();
+    let before = std::format!("{raim:?}");
+    for bad_s in [last_s + 1.0 - 50.0, last_s + 1.0, last_s] {
+        let e = raim.process(&c, &Epoch::linear(bad_s, &sats)).unwrap_err();
+        assert_eq!(
+            e,
+            RaimError::TimeNotIncreasing {
+                previous_s: last_s + 1.0,
+                now_s: bad_s
+            }
+        );
+        assert_eq!(std::format!("{raim:?}"), before, "{bad_s}");
+    }
+    let next = linear_epoch(&SKY8, 1.0, &mut rng, &[(2, 2.0)]);
+    let e = Epoch::linear(last_s + 2.0, &next);
+    let got = raim.process(&c, &e).unwrap();
+    let want = untouched.clone().process(&c, &e).unwrap();
+    assert_eq!(got.mcusum, want.mcusum);
+    assert_eq!(got.decision, want.decision);
+    // The snapshot monitor alone (MCUSUM off) keeps no order: its epochs
+    // are independent, and it forgets the MCUSUM state and clock.
+    let snap = cfg();
+    raim.process(&snap, &Epoch::linear(5.0, &next)).unwrap();
+    raim.process(&c, &Epoch::linear(3.0, &next)).unwrap();
 }

@@ -555,3 +555,70 @@ fn unavailable_after_an_exclusion_reports_unbounded_pls() {
     assert_eq!(sub.pl_add, crate::araim::ProtectionLevels::UNBOUNDED);
     assert_eq!(sub.pl_exact, crate::araim::ProtectionLevels::UNBOUNDED);
 }
+
+/// Issue 35: C_int and C_acc are held against their bounds in the
+/// precision they are formed in. In f32 the floors' C_acc (0.2² + 0.3² m²)
+/// is 0.1299999952 m², below the f64 bound 0.13 m²; it is accepted against
+/// the bound rounded to f32, and so is every combination of the floors
+/// with itself and with the ceilings; the f32 value just below the rounded
+/// floor (and just above the rounded ceiling) is refused, carrying the
+/// bound as the check saw it.
+///
+/// Verifies: SAFE-BOUNDS-PRECISION
+#[test]
+fn derived_variances_are_checked_in_the_engines_precision() {
+    let sq = |a: f64, b: f64| a * a + b * b;
+    let (ura, ure, sig) = (SIGMA_URA_M, SIGMA_URE_M, SIGMA_M);
+    assert_eq!(C_ACC_M2.min, sq(ure.min, sig.min));
+    assert_eq!(C_INT_M2.min, sq(ura.min, sig.min));
+    assert!(f64::from(sq(ure.min, sig.min) as f32) < C_ACC_M2.min);
+    let base = AraimSat::<f32> {
+        id: SatId::new(System::Gps, 1),
+        g_enu: [0.0, 0.0, -1.0],
+        c_int_m2: 1.0,
+        c_acc_m2: 0.5,
+        b_nom_m: 0.5,
+        p_sat: 1e-5,
+        residual_m: 0.0,
+    };
+    let mut n = 0;
+    for u in [ura.min, ura.max] {
+        for e in [ure.min, ure.max].into_iter().filter(|e| *e <= u) {
+            for s in [sig.min, sig.max] {
+                let sat = AraimSat::<f32> {
+                    c_int_m2: sq(u, s) as f32,
+                    c_acc_m2: sq(e, s) as f32,
+                    ..base
+                };
+                assert_eq!(sat.validate(3), Ok(()), "{u} {e} {s}");
+                n += 1;
+            }
+        }
+    }
+    assert_eq!(n, 6);
+    let floor = C_ACC_M2.min as f32;
+    let below = f32::from_bits(floor.to_bits() - 1);
+    let low = AraimSat::<f32> {
+        c_acc_m2: below,
+        ..base
+    };
+    assert_eq!(
+        low.validate(3),
+        Err(AraimError::OutOfRange {
+            field: "c_acc_m2",
+            index: 3,
+            value: f64::from(below),
+            min: f64::from(floor),
+            max: f64::from(C_ACC_M2.max as f32)
+        })
+    );
+    let ceiling = C_INT_M2.max as f32;
+    let high = AraimSat::<f32> {
+        c_int_m2: f32::from_bits(ceiling.to_bits() + 1),
+        ..base
+    };
+    assert!(matches!(
+        high.validate(0),
+        Err(AraimError::OutOfRange { field: "c_int_m2", max, .. }) if max == f64::from(ceiling)
+    ));
+}
