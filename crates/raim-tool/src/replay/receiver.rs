@@ -400,8 +400,14 @@ impl<'a> Live<'a> {
         let mut p = prepare_epoch(&self.nav, e, &self.opts, self.obs.approx_position_m);
         if !self.iono_set && !p.sats.is_empty() {
             let one = [p.clone()];
+            let before = self.cfg.sigma_model.iono_vertical_m;
             adjust_config(&mut self.cfg, args, &self.nav, &one);
             self.iono_set = true;
+            // The engine started with the configuration as given: a device
+            // must run the adjusted one too, as the host does.
+            if self.cfg.sigma_model.iono_vertical_m != before {
+                self.engine.reconfigure(&self.cfg)?;
+            }
         }
         let f = single_iono_factor(args, &self.nav);
         set_sigmas(
