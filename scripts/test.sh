@@ -7,37 +7,82 @@ cd "$(dirname "$0")/.."
 # tests (host-tests/tests/qemu_*.rs), quietly and without recommends.
 bash scripts/install-deps.sh test
 
-echo "== fmt"
+# Each step's wall time, printed as a table when the script ends (at the
+# end, or at the step that failed): `step NAME` ends the previous step
+# and starts the next. Timing only; it changes nothing that runs.
+STEP_NAMES=()
+STEP_US=()
+STEP_NAME=""
+STEP_START=0
+now_us() { echo "${EPOCHREALTIME/./}"; }
+SUITE_START=$(now_us)
+step() {
+    local now
+    now=$(now_us)
+    if [ -n "$STEP_NAME" ]; then
+        STEP_NAMES+=("$STEP_NAME")
+        STEP_US+=("$((now - STEP_START))")
+    fi
+    STEP_NAME=$1
+    STEP_START=$now
+    if [ -n "$STEP_NAME" ]; then echo "== $STEP_NAME"; fi
+}
+seconds() { printf '%6d.%d' "$(($1 / 1000000))" "$(($1 % 1000000 / 100000))"; }
+step_times() {
+    local rc=$? last=$STEP_NAME i
+    step ""
+    echo
+    if [ "$rc" -ne 0 ]; then
+        echo "== wall time per step, s (stopped by a failure in: $last)"
+    else
+        echo "== wall time per step, s"
+    fi
+    for i in "${!STEP_NAMES[@]}"; do
+        echo "$(seconds "${STEP_US[$i]}")  ${STEP_NAMES[$i]}"
+    done
+    echo "$(seconds "$(($(now_us) - SUITE_START))")  total (the install step aside)"
+}
+trap step_times EXIT
+
+step "fmt"
 cargo fmt --all -- --check
-echo "== requirements traced to tests, both ways (docs/requirements.toml -> docs/TRACE.md)"
+step "requirements traced to tests, both ways (docs/requirements.toml -> docs/TRACE.md)"
 python3 scripts/trace.py --check
-echo "== clippy (host workspace)"
+step "clippy (host workspace)"
 cargo clippy --workspace --all-targets -- -D warnings
-echo "== docs (every rustdoc warning an error; missing_docs is warned in raim-core and raim-proto)"
+step "docs (every rustdoc warning an error; missing_docs is warned in raim-core and raim-proto)"
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace
-echo "== no_std build of the core for Cortex-M4F"
+step "no_std build of the core for Cortex-M4F"
 cargo build -p raim-core --target thumbv7em-none-eabihf --release
 cargo build -p raim-core --target thumbv7em-none-eabihf --release --features defmt
-echo "== firmware (own workspace: QEMU mps2-an386 and STM32F4 builds, clippy, fmt, docs)"
-(cd firmware && cargo fmt -- --check && cargo clippy --release -- -D warnings \
-    && RUSTDOCFLAGS="-D warnings" cargo doc --release --no-deps && cargo build --release \
-    && cargo build --release --no-default-features --features board-stm32f4 --target-dir target/stm32f4-hw \
-    && cargo build --release --no-default-features --features board-stm32f4,qemu-netduinoplus2 --target-dir target/stm32f4 \
-    && cargo clippy --release --no-default-features --features board-qemu --target-dir target/snapshot -- -D warnings \
+# The firmware: its own workspace (QEMU mps2-an386 and STM32F4 builds,
+# clippy, fmt, docs), one step per command, in the order they always ran.
+step "firmware: fmt, clippy (default features)"
+(cd firmware && cargo fmt -- --check && cargo clippy --release -- -D warnings)
+step "firmware: docs"
+(cd firmware && RUSTDOCFLAGS="-D warnings" cargo doc --release --no-deps)
+step "firmware: build, QEMU mps2-an386 (default features)"
+(cd firmware && cargo build --release)
+step "firmware: build, STM32F4 hardware layout"
+(cd firmware && cargo build --release --no-default-features --features board-stm32f4 --target-dir target/stm32f4-hw)
+step "firmware: build, STM32F4 for QEMU netduinoplus2"
+(cd firmware && cargo build --release --no-default-features --features board-stm32f4,qemu-netduinoplus2 --target-dir target/stm32f4)
+step "firmware: clippy and build, QEMU snapshot-only"
+(cd firmware && cargo clippy --release --no-default-features --features board-qemu --target-dir target/snapshot -- -D warnings \
     && cargo build --release --no-default-features --features board-qemu --target-dir target/snapshot)
 # (the last: the QEMU build without araim/pf/multifault, whose flash
 # host-tests/tests/qemu_flash.rs bounds to 128 KiB, issue 10)
-echo "== static stack bound of every firmware entry within its stack region (call graph of each release ELF; docs/EVIDENCE.md)"
+step "static stack bound of every firmware entry within its stack region (call graph of each release ELF; docs/EVIDENCE.md)"
 bash scripts/firmware-evidence.sh
-echo "== tests (including the firmware under QEMU: host-tests/tests/qemu_*.rs)"
+step "tests (including the firmware under QEMU: host-tests/tests/qemu_*.rs)"
 cargo test --workspace --release
 # (the host's protocol server runs the device's precision, f32, in every
 # build: raim_proto::DevicePrecision; the QEMU tests above compare with it)
-echo "== generated doc tables (docs/ESQ.md, docs/MULTIFAULT.md, docs/BUDGET.md) match the code (about 1-2 min)"
+step "generated doc tables (docs/ESQ.md, docs/MULTIFAULT.md, docs/BUDGET.md) match the code (about 1-2 min)"
 bash scripts/doc_tables.sh --check
-echo "== docs/PF.md's generated tables reproduce (short mode; the long mode: bash scripts/pf-tables.sh --long)"
+step "docs/PF.md's generated tables reproduce (short mode; the long mode: bash scripts/pf-tables.sh --long)"
 bash scripts/pf-tables.sh --check
-echo "== the core's own unit tests in the device's precision (their default Stat = f32; ~1 min to build)"
+step "the core's own unit tests in the device's precision (their default Stat = f32; ~1 min to build)"
 cargo test -p raim-core --release --features test-f32 --lib
-echo "== the core's own tests without the optional reconstruction FDE (the 128 KiB flash build's core)"
+step "the core's own tests without the optional reconstruction FDE (the 128 KiB flash build's core)"
 cargo test -p raim-core --release --no-default-features --lib

@@ -150,7 +150,7 @@ impl Link {
     /// Configure the unit for a run of epochs. A unit locked on another
     /// configuration refuses; the epochs then run with the locked one,
     /// and a notice says so (its decisions may differ from `raim replay`'s).
-    fn configure_for_epochs(&mut self, cfg: &Config) -> Result<()> {
+    pub(crate) fn configure_for_epochs(&mut self, cfg: &Config) -> Result<()> {
         let r = self.call(CommandRef::Configure(cfg))?;
         match r.body {
             ResponseBody::Configured => Ok(()),

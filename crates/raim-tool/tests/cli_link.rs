@@ -187,6 +187,8 @@ fn link_epochs_answer_as_the_qemu_replay() {
 /// as it arrives; every epoch gets the decision, satellite count and
 /// protection levels of `raim replay --target qemu` on the same live
 /// source, and the run ends cleanly at the end of the stream.
+///
+/// Verifies: TOOL-LIVE
 #[test]
 fn link_epochs_from_a_live_source() {
     let data = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data");

@@ -11,6 +11,15 @@ use std::time::Duration;
 
 const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data");
 
+/// How long a test's TCP source stays open after its last byte when the
+/// run must end by something else (a timeout, Ctrl-C): a deadline only a
+/// hung run reaches (the serving thread ends with the test binary).
+const HOLD_OPEN: Duration = Duration::from_secs(600);
+
+/// How long a test waits for an event of a live run (its first epoch): a
+/// deadline only a hang reaches, not a measure of speed.
+const EVENT_DEADLINE: Duration = Duration::from_secs(300);
+
 fn gmsd7() -> String {
     format!("{DATA}/GMSD7_20121014.rtcm3")
 }
@@ -520,7 +529,10 @@ fn live_tcp_ubx() {
 }
 
 /// A live stream that sends epochs but no ephemeris is given up after
-/// --ephemeris-timeout-s with a message that says so.
+/// --ephemeris-timeout-s with a message that says so. The source stays
+/// open far longer than the timeout (it is wall-clock supervision of a
+/// silent source), so however slowly the machine runs `raim` the timeout
+/// is what ends the run, never the end of the stream.
 #[test]
 fn live_stream_without_ephemerides_times_out() {
     let bytes = std::fs::read(gmsd7()).unwrap();
@@ -531,7 +543,7 @@ fn live_stream_without_ephemerides_times_out() {
         .flatten()
         .copied()
         .collect();
-    let addr = serve(kept, 512, Duration::from_millis(20), Duration::from_secs(5));
+    let addr = serve(kept, 512, Duration::from_millis(20), HOLD_OPEN);
     let (code, _, err) = raim(&[
         "replay",
         "--rtcm3",
@@ -545,18 +557,17 @@ fn live_stream_without_ephemerides_times_out() {
 }
 
 /// Ctrl-C (SIGINT) on a live source that stays open: the run stops
-/// cleanly, prints the reader's counts and the summary, exit 0.
+/// cleanly, prints the reader's counts and the summary, exit 0. SIGINT is
+/// sent once the first epoch has been printed (so the handler is in place
+/// and an epoch was run, however loaded the machine), and the source stays
+/// open until long after that ([`HOLD_OPEN`]).
 #[test]
 fn live_source_stops_on_ctrl_c() {
+    use std::io::{BufRead, BufReader, Read};
     let bytes = std::fs::read(lea4t()).unwrap();
     let head = bytes[..60_000].to_vec();
-    let addr = serve(
-        head,
-        4096,
-        Duration::from_millis(1),
-        Duration::from_secs(30),
-    );
-    let child = Command::new(env!("CARGO_BIN_EXE_raim"))
+    let addr = serve(head, 4096, Duration::from_millis(1), HOLD_OPEN);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_raim"))
         .args([
             "replay",
             "--ubx",
@@ -568,17 +579,38 @@ fn live_source_stops_on_ctrl_c() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .expect("spawn raim");
-    std::thread::sleep(Duration::from_secs(2));
+    // The stdout lines, read on a thread so that a silent run fails the
+    // test at the deadline instead of hanging it.
+    let stdout = child.stdout.take().expect("stdout");
+    let (tx, rx) = std::sync::mpsc::channel();
+    let reader = std::thread::spawn(move || {
+        let mut lines = Vec::new();
+        for l in BufReader::new(stdout).lines() {
+            let Ok(l) = l else { break };
+            let _ = tx.send(());
+            lines.push(l);
+        }
+        lines
+    });
+    rx.recv_timeout(EVENT_DEADLINE)
+        .expect("the first epoch printed");
     let killed = Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status()
         .expect("kill");
     assert!(killed.success());
-    let out = child.wait_with_output().expect("wait");
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(0), "{err}");
+    let status = child.wait().expect("wait");
+    let mut err = String::new();
+    child
+        .stderr
+        .take()
+        .expect("stderr")
+        .read_to_string(&mut err)
+        .expect("stderr");
+    let lines = reader.join().expect("stdout reader");
+    assert_eq!(status.code(), Some(0), "{err}");
     assert!(err.contains("stopped (Ctrl-C)"), "{err}");
-    let s = summary(&String::from_utf8_lossy(&out.stdout));
+    let s = summary(&lines.join("\n"));
     assert!(n(&s, "epochs") > 0, "{s}");
 }
 

@@ -37,6 +37,20 @@ impl Engine {
         })
     }
 
+    /// Put `cfg` in force for the epochs that follow: a live run learns its
+    /// residual-ionosphere sigma from its first epoch with satellites
+    /// (`receiver::adjust_config`), after the engine started. The host
+    /// takes the configuration with every epoch; the firmware under QEMU
+    /// and a unit on a link are sent `Configure` (a locked unit keeps its
+    /// configuration, with a notice, as at the start).
+    pub fn reconfigure(&mut self, cfg: &Config) -> Result<()> {
+        match self {
+            Engine::Host(_) => Ok(()),
+            Engine::Qemu(s) => s.configure(cfg),
+            Engine::Link(l) => l.borrow_mut().configure_for_epochs(cfg),
+        }
+    }
+
     /// One epoch: the result, or the monitor's typed error as text, and
     /// the epoch's NMEA sentences (RMC to ZDA, without their CRLF): the firmware's
     /// own second-UART output under QEMU, the same writer on the host. A

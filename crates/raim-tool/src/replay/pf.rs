@@ -44,8 +44,8 @@ pub struct PfArgs {
     /// Run the particle-filter RAIM (Wang et al. 2014, docs/PF.md) instead of the snapshot monitor: ekf (EKF baseline), pf (plain SIR PF baseline) or gapf (genetic-resampling PF).
     #[arg(long, value_enum)]
     pub pf: Option<PfKind>,
-    /// Particles per filter: 50, 100, 300 or 1000.
-    #[arg(long, default_value_t = 100)]
+    /// Particles per filter: 50, 100, 300 or 1000. The default, 300, is the smallest count whose calibrated thresholds the default model (phone_1hz) accepts at every Pfa node and window (docs/PF.md "The detectability ceiling"); 100 is refused there.
+    #[arg(long, default_value_t = 300)]
     pub particles: usize,
     /// Seed of the filters' random generator.
     #[arg(long, default_value_t = 1)]

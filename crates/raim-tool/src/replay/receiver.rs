@@ -214,6 +214,12 @@ pub fn run_live(args: &ReplayArgs, format: Format, spec: &Spec) -> Result<crate:
 /// [`run_live`] with the engine from `start` (given the monitor
 /// configuration): `raim link epochs` runs a live source on a unit over a
 /// serial port.
+///
+/// The decisions do not depend on how the bytes arrive: the decoder's
+/// items are taken in stream order ([`Live::push`]), so how the source's
+/// reads happen to cut the stream (a loaded machine reads larger pieces)
+/// changes nothing. Only `--ephemeris-timeout-s` is wall-clock time: it
+/// supervises a live source that sends no ephemeris at all, and gives up.
 pub fn run_live_on(
     args: &ReplayArgs,
     format: Format,
@@ -228,29 +234,9 @@ pub fn run_live_on(
         // process the ordinary way.
         let _ = ctrlc::set_handler(move || s.store(true, Ordering::SeqCst));
     }
-    let mut cfg = args.core_config();
-    cfg.validate()
-        .map_err(|e| anyhow::anyhow!("configuration: {e}"))?;
-    let mut opts: RangingOptions = args.ranging()?;
-    if args.codes.is_empty() {
-        opts.codes = receiver_codes();
-    }
-    let mut engine = start(&cfg)?;
-    let mut dec = format.decoder();
-    let mut obs = ObsData {
-        path: PathBuf::from(spec.name()),
-        approx_position_m: None,
-        epochs: Vec::new(),
-    };
-    let mut nav = NavData::default();
-    let mut plan: Option<FaultPlan> = None;
-    let mut records: Vec<EpochRecord> = Vec::new();
-    let mut tally = crate::outcome::Tally::default();
+    let mut live = Live::start(args, format, spec.name(), start)?;
     let started = Instant::now();
-    let mut items = Vec::new();
     let mut chunk = vec![0u8; 4096];
-    let mut iono_set = false;
-    let stdout = std::io::stdout();
     let mut ended_by = "end of stream";
     loop {
         if stop.load(Ordering::SeqCst) {
@@ -272,123 +258,222 @@ pub fn run_live_on(
             }
             Err(e) => bail!("{}: {e}", spec.name()),
         };
-        dec.push(chunk.get(..n).unwrap_or(&[]), &mut items);
-        let mut epochs = Vec::new();
-        for it in items.drain(..) {
-            match it {
-                Item::Epoch(e) => epochs.push(e),
-                other => raim_recv::apply(other, &mut obs, &mut nav),
-            }
-        }
-        if nav.ephemerides.is_empty()
-            && nav.glonass.is_empty()
+        live.push(chunk.get(..n).unwrap_or(&[]))?;
+        if !live.has_ephemeris()
             && started.elapsed() > Duration::from_secs_f64(args.ephemeris_timeout_s.max(0.0))
         {
             bail!(
                 "{}: no ephemeris after {:.0} s of stream ({} epochs): a {} stream needs {} to be solved ({})",
                 spec.name(),
                 args.ephemeris_timeout_s,
-                dec.counts().epochs,
+                live.dec.counts().epochs,
                 format.name(),
                 format.ephemeris_messages(),
-                dec.counts()
+                live.dec.counts()
             );
-        }
-        for e in epochs {
-            if plan.is_none() {
-                plan = Some(super::fault_plan(args, e.time_gps_s)?.0);
-            }
-            let mut p = prepare_epoch(&nav, &e, &opts, obs.approx_position_m);
-            if !iono_set && !p.sats.is_empty() {
-                let one = [p.clone()];
-                adjust_config(&mut cfg, args, &nav, &one);
-                iono_set = true;
-            }
-            let f = single_iono_factor(args, &nav);
-            set_sigmas(&mut p, &cfg.sigma_model, opts.glonass_sigma.as_ref(), f);
-            let mut sats = p.observations();
-            let injected = plan
-                .as_ref()
-                .map(|pl| pl.apply(p.time_gps_s, &mut sats))
-                .unwrap_or_default();
-            let wire = Epoch::ranges(
-                raim_gnss::time::unix_utc_s(p.time_gps_s),
-                &sats,
-                p.reference_m,
-            );
-            let (outcome, nmea) = engine.process(&cfg, &wire)?;
-            let mut rec = match outcome {
-                Ok(r) => {
-                    tally.answered();
-                    EpochRecord::from_result(
-                        &r,
-                        p.time_gps_s,
-                        sats.len(),
-                        &injected.faulted,
-                        obs.approx_position_m,
-                    )
-                }
-                Err(err) => {
-                    let t = raim_gnss::time::time_of_day(p.time_gps_s);
-                    let why = if nav.ephemerides.is_empty() && nav.glonass.is_empty() {
-                        format!("{err} (no ephemeris received yet)")
-                    } else {
-                        err.clone()
-                    };
-                    tally.refuse(|| format!("{t} {why}"));
-                    EpochRecord::from_error(p.time_gps_s, sats.len(), &injected.faulted, &why)
-                }
-            };
-            rec.nmea = nmea;
-            let mut w = stdout.lock();
-            if !args.quiet {
-                match args.nmea {
-                    _ if args.json => writeln!(w, "{}", serde_json::to_string(&rec)?)?,
-                    Some(NmeaMode::Only) => {
-                        for s in &rec.nmea {
-                            write!(w, "{}\r\n", s.trim_end())?;
-                        }
-                    }
-                    Some(NmeaMode::WithText) => {
-                        writeln!(w, "{}", rec.text_line())?;
-                        for s in &rec.nmea {
-                            writeln!(w, "    {}", s.trim_end())?;
-                        }
-                    }
-                    None => writeln!(w, "{}", rec.text_line())?,
-                }
-            }
-            w.flush()?;
-            records.push(rec);
         }
     }
-    dec.finish(&mut items);
+    live.finish()?;
     let _ = writeln!(
         std::io::stderr(),
         "raim: {} stopped ({ended_by}): {}",
         spec.name(),
-        dec.counts()
+        live.dec.counts()
     );
-    let summary = super::summary::summarise(&records, None, args.config.pfa);
+    let summary = super::summary::summarise(&live.records, None, args.config.pfa);
+    let stdout = std::io::stdout();
     let mut w = stdout.lock();
     if args.json {
         writeln!(
             w,
             "{}",
-            serde_json::json!({ "summary": summary, "reference_ecef_m": obs.approx_position_m })
+            serde_json::json!({ "summary": summary, "reference_ecef_m": live.obs.approx_position_m })
         )?;
     } else if args.nmea != Some(NmeaMode::Only) {
         writeln!(w, "{}", summary.table())?;
     }
-    if records.is_empty() && nav.ephemerides.is_empty() && nav.glonass.is_empty() {
+    if live.records.is_empty() && !live.has_ephemeris() {
         bail!(
             "{}: the stream ended with no epoch solved: no ephemeris ({}) in {}",
             spec.name(),
             format.ephemeris_messages(),
-            dec.counts()
+            live.dec.counts()
         );
     }
-    Ok(tally)
+    Ok(live.tally)
+}
+
+/// A live run's state: the decoder, the navigation data received so far,
+/// the engine and what it answered. Bytes go in with [`Live::push`] in any
+/// pieces; each epoch is prepared with the ephemerides that came before it
+/// in the stream (and, for the epochs the decoder holds until the first
+/// ephemeris dates them, with that ephemeris), run and printed at once.
+struct Live<'a> {
+    args: &'a ReplayArgs,
+    dec: Box<dyn raim_recv::Decoder + Send>,
+    cfg: Config,
+    opts: RangingOptions,
+    engine: Engine,
+    obs: ObsData,
+    nav: NavData,
+    plan: Option<FaultPlan>,
+    records: Vec<EpochRecord>,
+    tally: crate::outcome::Tally,
+    /// Whether the residual-ionosphere sigma has been set from the first
+    /// epoch with satellites ([`adjust_config`]).
+    iono_set: bool,
+}
+
+impl<'a> Live<'a> {
+    /// The configuration checked and the engine started from it.
+    fn start(
+        args: &'a ReplayArgs,
+        format: Format,
+        name: String,
+        start: &mut dyn FnMut(&Config) -> Result<Engine>,
+    ) -> Result<Self> {
+        let cfg = args.core_config();
+        cfg.validate()
+            .map_err(|e| anyhow::anyhow!("configuration: {e}"))?;
+        let mut opts: RangingOptions = args.ranging()?;
+        if args.codes.is_empty() {
+            opts.codes = receiver_codes();
+        }
+        let engine = start(&cfg)?;
+        Ok(Live {
+            args,
+            dec: format.decoder(),
+            cfg,
+            opts,
+            engine,
+            obs: ObsData {
+                path: PathBuf::from(name),
+                approx_position_m: None,
+                epochs: Vec::new(),
+            },
+            nav: NavData::default(),
+            plan: None,
+            records: Vec::new(),
+            tally: crate::outcome::Tally::default(),
+            iono_set: false,
+        })
+    }
+
+    fn has_ephemeris(&self) -> bool {
+        !(self.nav.ephemerides.is_empty() && self.nav.glonass.is_empty())
+    }
+
+    /// The next bytes of the stream, however they were cut: the decoder's
+    /// items in stream order, an ephemeris or station position applied
+    /// before the epochs that follow it and never before an earlier one.
+    fn push(&mut self, bytes: &[u8]) -> Result<()> {
+        let mut items = Vec::new();
+        self.dec.push(bytes, &mut items);
+        self.items(items)
+    }
+
+    /// The end of the stream: what the decoder still holds (an epoch left
+    /// open by the last frame).
+    fn finish(&mut self) -> Result<()> {
+        let mut items = Vec::new();
+        self.dec.finish(&mut items);
+        self.items(items)
+    }
+
+    fn items(&mut self, items: Vec<Item>) -> Result<()> {
+        for it in items {
+            match it {
+                Item::Epoch(e) => self.epoch(&e)?,
+                other => raim_recv::apply(other, &mut self.obs, &mut self.nav),
+            }
+        }
+        Ok(())
+    }
+
+    /// One epoch: prepared with the navigation data so far, faulted, run,
+    /// recorded and printed.
+    fn epoch(&mut self, e: &raim_gnss::ObsEpoch) -> Result<()> {
+        let args = self.args;
+        if self.plan.is_none() {
+            self.plan = Some(super::fault_plan(args, e.time_gps_s)?.0);
+        }
+        let mut p = prepare_epoch(&self.nav, e, &self.opts, self.obs.approx_position_m);
+        if !self.iono_set && !p.sats.is_empty() {
+            let one = [p.clone()];
+            let before = self.cfg.sigma_model.iono_vertical_m;
+            adjust_config(&mut self.cfg, args, &self.nav, &one);
+            self.iono_set = true;
+            // The engine started with the configuration as given: a device
+            // must run the adjusted one too, as the host does.
+            if self.cfg.sigma_model.iono_vertical_m != before {
+                self.engine.reconfigure(&self.cfg)?;
+            }
+        }
+        let f = single_iono_factor(args, &self.nav);
+        set_sigmas(
+            &mut p,
+            &self.cfg.sigma_model,
+            self.opts.glonass_sigma.as_ref(),
+            f,
+        );
+        let mut sats = p.observations();
+        let injected = self
+            .plan
+            .as_ref()
+            .map(|pl| pl.apply(p.time_gps_s, &mut sats))
+            .unwrap_or_default();
+        let wire = Epoch::ranges(
+            raim_gnss::time::unix_utc_s(p.time_gps_s),
+            &sats,
+            p.reference_m,
+        );
+        let (outcome, nmea) = self.engine.process(&self.cfg, &wire)?;
+        let mut rec = match outcome {
+            Ok(r) => {
+                self.tally.answered();
+                EpochRecord::from_result(
+                    &r,
+                    p.time_gps_s,
+                    sats.len(),
+                    &injected.faulted,
+                    self.obs.approx_position_m,
+                )
+            }
+            Err(err) => {
+                let t = raim_gnss::time::time_of_day(p.time_gps_s);
+                let why = if self.has_ephemeris() {
+                    err.clone()
+                } else {
+                    format!("{err} (no ephemeris received yet)")
+                };
+                self.tally.refuse(|| format!("{t} {why}"));
+                EpochRecord::from_error(p.time_gps_s, sats.len(), &injected.faulted, &why)
+            }
+        };
+        rec.nmea = nmea;
+        if !args.quiet {
+            let stdout = std::io::stdout();
+            let mut w = stdout.lock();
+            match args.nmea {
+                _ if args.json => writeln!(w, "{}", serde_json::to_string(&rec)?)?,
+                Some(NmeaMode::Only) => {
+                    for s in &rec.nmea {
+                        write!(w, "{}\r\n", s.trim_end())?;
+                    }
+                }
+                Some(NmeaMode::WithText) => {
+                    writeln!(w, "{}", rec.text_line())?;
+                    for s in &rec.nmea {
+                        writeln!(w, "    {}", s.trim_end())?;
+                    }
+                }
+                None => writeln!(w, "{}", rec.text_line())?,
+            }
+            w.flush()?;
+        }
+        self.records.push(rec);
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -413,6 +498,72 @@ mod tests {
             group_delay_m: 0.0,
             iono_m: 0.0,
             tropo_m: 0.0,
+        }
+    }
+
+    /// `raim replay`'s options, parsed as the command line would give them.
+    #[derive(Debug, clap::Parser)]
+    #[command(no_binary_name = true)]
+    struct Opts {
+        #[command(flatten)]
+        args: ReplayArgs,
+    }
+
+    /// The records of GMSD7 (GPS + GLONASS, as cli_link's live test runs
+    /// it) fed to a live run in pieces of `piece` bytes, on the host.
+    fn live_records(bytes: &[u8], piece: usize) -> Vec<String> {
+        use clap::Parser;
+        let opts = Opts::try_parse_from([
+            "--rtcm3",
+            "tcp://127.0.0.1:1",
+            "--systems",
+            "GR",
+            "--mask-deg",
+            "0",
+            "--quiet",
+        ])
+        .unwrap();
+        let mut start = |cfg: &Config| Engine::start(super::super::Target::Host, cfg);
+        let mut live = Live::start(&opts.args, Format::Rtcm3, "test".into(), &mut start).unwrap();
+        for c in bytes.chunks(piece) {
+            live.push(c).unwrap();
+        }
+        live.finish().unwrap();
+        live.records
+            .iter()
+            .map(|r| serde_json::to_string(r).unwrap())
+            .collect()
+    }
+
+    /// A live run's decisions do not depend on how the stream's bytes are
+    /// cut into reads (issue 37: `raim link ... epochs` on a live GMSD7
+    /// answered `error` at 00:02:25 where the replay said `ok`, because
+    /// every ephemeris of a read was applied before the read's epochs, so
+    /// a larger read, as a loaded machine makes, let an ephemeris broadcast
+    /// after an epoch serve it). One byte at a time, odd pieces, the
+    /// source's 4,096-byte reads and the whole stream at once give the same
+    /// records, epoch for epoch; and the ephemerides arrive during the
+    /// stream, so the first epochs are refused and later ones solved (the
+    /// whole-stream piece would otherwise give every epoch every ephemeris).
+    ///
+    /// Verifies: TOOL-LIVE
+    #[test]
+    fn live_results_do_not_depend_on_how_bytes_arrive() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../../shared/data/GMSD7_20121014.rtcm3"
+        );
+        let bytes = std::fs::read(path).unwrap();
+        let want = live_records(&bytes, 4096);
+        assert_eq!(want.len(), 257);
+        assert!(want.first().unwrap().contains("\"decision\":\"error\""));
+        assert!(want.last().unwrap().contains("\"decision\":\"ok\""));
+        for piece in [1, 97, 1000, 8192, bytes.len()] {
+            let got = live_records(&bytes, piece);
+            assert_eq!(got.len(), want.len(), "pieces of {piece} B");
+            for (g, w) in got.iter().zip(&want) {
+                assert_eq!(g, w, "pieces of {piece} B");
+            }
         }
     }
 
