@@ -9,12 +9,12 @@
 //! grid); users run in parallel (rayon), each streaming over its epochs
 //! and keeping only its own PL lists, so memory is flat in the grid size.
 
-use raim_core::araim::{AraimError, FdeLimits, Monitor, MonitorError, Unavailable};
+use raim_core::araim::{AraimError, AraimOutput, FdeLimits, Monitor, MonitorError, Unavailable};
 use raim_core::frames::{enu_rotation, geodetic_to_ecef, rotate, Geodetic};
 use raim_core::LinearObservation;
 use rayon::prelude::*;
 
-use crate::run::{Study, User};
+use crate::run::{ExclusionSpec, Study, User};
 
 /// The engine's satellite capacity (raim-core's mode masks hold 64).
 pub const N_SATS: usize = 64;
@@ -208,23 +208,71 @@ pub fn evaluate(
         Err(e) => return Err(e),
     };
     let out = monitor.in_force();
-    let pl = match study.cfg.pl_output {
-        raim_core::araim::PlOutput::AddBracket => out.pl_add,
-        raim_core::araim::PlOutput::Exact => out.pl_exact,
-    };
-    let monitored = !matches!(
-        out.unavailable,
-        Some(Unavailable::ModeCapacity { .. } | Unavailable::TooManyEvents { .. })
-    );
-    Ok(EpochOutcome {
+    let mut o = EpochOutcome {
         available: verdict.decision == raim_core::Decision::Ok,
-        vpl_m: pl.vpl_m,
-        hpl_m: pl.hpl_m,
-        emt_m: if monitored { out.emt_m } else { f64::INFINITY },
+        vpl_m: f64::NEG_INFINITY,
+        hpl_m: f64::NEG_INFINITY,
+        emt_m: f64::NEG_INFINITY,
         sigma_v_acc_m: out.sigma_v_acc_m,
         modes: out.n_monitored as u32,
         refused: false,
-    })
+    };
+    o.worsen(study, out);
+    if study.exclusion == ExclusionSpec::None || !o.available {
+        return Ok(o);
+    }
+    // Availability with exclusion: every candidate exclusion of the
+    // chosen kind must leave the service available (the subset's output
+    // as the core's FDE would leave it); the PLs and EMT reported are the
+    // worst over the all-in-view run and those subsets.
+    let candidates: Vec<usize> = out
+        .modes
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| m.status == raim_core::araim::ModeStatus::Monitored)
+        .filter(|(_, m)| {
+            let (s, c) = (m.events.sats.count_ones(), m.events.consts.count_ones());
+            match study.exclusion {
+                ExclusionSpec::None => false,
+                ExclusionSpec::Satellites => s == 1 && c == 0,
+                ExclusionSpec::SingleEvents => s + c == 1,
+            }
+        })
+        .map(|(k, _)| k)
+        .collect();
+    for k in candidates {
+        match monitor.after_excluding(&study.cfg, &study.ism, k)? {
+            Some(sub) => {
+                o.available &= sub.available();
+                o.worsen(study, sub);
+            }
+            None => {
+                o.available = false;
+                o.vpl_m = f64::INFINITY;
+                o.hpl_m = f64::INFINITY;
+            }
+        }
+    }
+    Ok(o)
+}
+
+impl EpochOutcome {
+    /// Takes the larger of each reported level and `out`'s (the PL the
+    /// configuration judges; the EMT +inf when no mode was monitored).
+    fn worsen<const K: usize>(&mut self, study: &Study, out: &AraimOutput<f64, K>) {
+        let pl = match study.cfg.pl_output {
+            raim_core::araim::PlOutput::AddBracket => out.pl_add,
+            raim_core::araim::PlOutput::Exact => out.pl_exact,
+        };
+        let monitored = !matches!(
+            out.unavailable,
+            Some(Unavailable::ModeCapacity { .. } | Unavailable::TooManyEvents { .. })
+        );
+        let emt = if monitored { out.emt_m } else { f64::INFINITY };
+        self.vpl_m = self.vpl_m.max(pl.vpl_m);
+        self.hpl_m = self.hpl_m.max(pl.hpl_m);
+        self.emt_m = self.emt_m.max(emt);
+    }
 }
 
 /// A fresh engine on the heap (two ARAIM engines of `K_MODES` modes).

@@ -23,9 +23,12 @@ pub struct RunFile {
     /// Every user's height above the WGS-84 ellipsoid (m).
     #[serde(default)]
     pub height_m: f64,
-    /// Detection with exclusion: not built yet, refused when true.
+    /// Availability with exclusion: `none` (detection only, the default),
+    /// `satellites` (every single-satellite exclusion must leave the
+    /// service available) or `single_events` (satellites and whole
+    /// constellations).
     #[serde(default)]
-    pub exclusion: bool,
+    pub exclusion: ExclusionSpec,
     /// The time span.
     pub time: TimeSpec,
     /// The users.
@@ -34,6 +37,20 @@ pub struct RunFile {
     pub service: ServiceSpec,
     /// One entry per constellation.
     pub constellation: Vec<ConstellationSpec>,
+}
+
+/// Which exclusions must leave the service available (docs/AVAILABILITY.md
+/// "Availability with exclusion").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ExclusionSpec {
+    /// Detection only.
+    #[default]
+    None,
+    /// Each monitored single-satellite mode.
+    Satellites,
+    /// Each monitored single-event mode: satellites and constellations.
+    SingleEvents,
 }
 
 /// Epochs `start_s + k step_s` for `k` in `0..floor(span_s / step_s)` (the
@@ -179,6 +196,8 @@ pub struct Study {
     pub cfg: AraimConfig,
     /// The availability target.
     pub target: f64,
+    /// Which exclusions must leave the service available.
+    pub exclusion: ExclusionSpec,
     /// The elevation mask (rad).
     pub mask_rad: f64,
     /// The users' height (m).
@@ -235,13 +254,6 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
         }
     })?;
     let at = |key: &str| format!("{file}:{}", line_of(text, key));
-    if run.exclusion {
-        bail!(
-            "{}: exclusion = true: availability with exclusion is not built yet \
-             (docs/AVAILABILITY.md \"Not done\")",
-            at("exclusion")
-        );
-    }
     if !(0.0..90.0).contains(&run.mask_deg) {
         bail!(
             "{}: mask_deg {} outside [0, 90)",
@@ -428,6 +440,7 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
         ism,
         cfg,
         target,
+        exclusion: run.exclusion,
         mask_rad: run.mask_deg.to_radians(),
         height_m: run.height_m,
         users,

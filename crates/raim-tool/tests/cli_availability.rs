@@ -27,9 +27,15 @@ fn tmp_dir(tag: &str) -> PathBuf {
 
 /// The MAAST scenario's ISM and service on a 3 x 3 region and one hour.
 fn small_run() -> String {
+    small_run_with("none")
+}
+
+/// [`small_run`] with `exclusion` = `none`, `satellites` or `single_events`.
+fn small_run_with(exclusion: &str) -> String {
     format!(
         r#"name = "small"
 mask_deg = 5.0
+exclusion = "{exclusion}"
 [time]
 start_s = 345600.0
 span_s = 3600.0
@@ -68,6 +74,21 @@ p_const = 1e-4
     )
 }
 
+/// The CSV's rows as (availability, VPL percentile).
+fn rows(csv: &[u8]) -> Vec<(f64, f64)> {
+    String::from_utf8_lossy(csv)
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (
+                f[6].parse().expect("availability"),
+                f[7].parse().expect("vpl"),
+            )
+        })
+        .collect()
+}
+
 fn raim(args: &[&str]) -> (i32, String, String) {
     let o = Command::new(env!("CARGO_BIN_EXE_raim"))
         .args(args)
@@ -90,9 +111,23 @@ fn read(dir: &Path) -> (Vec<u8>, Vec<u8>) {
 
 #[test]
 fn same_inputs_same_bytes_and_shards_merge_bit_for_bit() {
-    let d = tmp_dir("shards");
+    let none = shards_merge_bit_for_bit("none");
+    // With exclusion (every single-satellite exclusion must leave the
+    // service available) no user is more available, and no level lower.
+    let fde = shards_merge_bit_for_bit("satellites");
+    let (none, fde) = (rows(&none), rows(&fde));
+    assert_eq!(none.len(), fde.len());
+    for ((a0, v0), (a1, v1)) in none.iter().zip(&fde) {
+        assert!(a1 <= a0 && v1 >= v0, "{a0} {v0} -> {a1} {v1}");
+    }
+    assert!(fde.iter().zip(&none).any(|(f, n)| f.1 > n.1));
+}
+
+/// Runs the small study twice and in 4 shards; returns the CSV.
+fn shards_merge_bit_for_bit(exclusion: &str) -> Vec<u8> {
+    let d = tmp_dir(&format!("shards-{exclusion}"));
     let runf = d.join("small.toml");
-    std::fs::write(&runf, small_run()).expect("write run");
+    std::fs::write(&runf, small_run_with(exclusion)).expect("write run");
     let r = runf.to_str().expect("utf8");
     let (a, b, s, m) = (d.join("a"), d.join("b"), d.join("s"), d.join("m"));
     for out in [&a, &b] {
@@ -151,6 +186,7 @@ fn same_inputs_same_bytes_and_shards_merge_bit_for_bit() {
     assert_ne!(code, 0);
     assert!(err.contains("shard 3/4 is missing"), "{err}");
     let _ = std::fs::remove_dir_all(&d);
+    single.1
 }
 
 /// SPEC §9.1's nominal variance written out (DO-229 troposphere, the
@@ -266,11 +302,11 @@ fn bad_run_files_name_file_and_line() {
     let cases = [
         (
             small_run().replace("level = \"LPV-200\"", "level = \"custom\"\nval_m = 35.0\nhal_m = 40.0\nemt_max_m = 40.0\nsigma_acc_max_m = 1.87"),
-            "bad.toml:15: the service level is refused by raim-core",
+            "bad.toml:16: the service level is refused by raim-core",
         ),
         (
             small_run().replace("step_deg = 10.0\nlat_min_deg = 50.0", "step_deg = 10.0\nlat_min_deg = 80.0"),
-            "bad.toml:8: bad grid axis [80, 70]",
+            "bad.toml:9: bad grid axis [80, 70]",
         ),
         (
             small_run().replacen("week_rollovers = 0\n", "", 1),
