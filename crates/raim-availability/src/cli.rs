@@ -29,6 +29,10 @@ pub struct AvailabilityArgs {
     /// A second coverage level beside the run file's target, e.g. 0.99.
     #[arg(long)]
     pub level: Option<f64>,
+    /// Also draw the PNG maps (availability, 99.5th-percentile VPL, fault
+    /// modes) beside the outputs (not with --shard).
+    #[arg(long)]
+    pub maps: bool,
     /// Worker threads (default: rayon's, one per core).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -49,6 +53,9 @@ pub enum MergeCmd {
         /// A second coverage level beside the run's target.
         #[arg(long)]
         level: Option<f64>,
+        /// Also draw the PNG maps.
+        #[arg(long)]
+        maps: bool,
     },
 }
 
@@ -68,11 +75,20 @@ fn levels(target: f64, level: Option<f64>) -> Result<Vec<f64>> {
 /// # Errors
 /// Bad input (file and line named) or an output that cannot be written.
 pub fn run(args: &AvailabilityArgs) -> Result<()> {
-    if let Some(MergeCmd::Merge { parts, out, level }) = &args.merge {
+    if let Some(MergeCmd::Merge {
+        parts,
+        out,
+        level,
+        maps,
+    }) = &args.merge
+    {
         let (meta, users) = output::merge(parts)?;
         let files = output::write_outputs(out, &meta, &users, &levels(meta.target, *level)?)?;
         for f in files {
             eprintln!("wrote {}", f.display());
+        }
+        if *maps {
+            draw_maps(out, &meta, &users)?;
         }
         return Ok(());
     }
@@ -141,6 +157,9 @@ pub fn run(args: &AvailabilityArgs) -> Result<()> {
             for f in files {
                 eprintln!("wrote {}", f.display());
             }
+            if args.maps {
+                draw_maps(&args.out, &meta, &users)?;
+            }
         }
     }
     let s = t0.elapsed().as_secs_f64();
@@ -148,5 +167,13 @@ pub fn run(args: &AvailabilityArgs) -> Result<()> {
         "{user_epochs} user-epochs in {s:.2} s: {:.0} user-epochs/s",
         user_epochs as f64 / s
     );
+    Ok(())
+}
+
+fn draw_maps(dir: &std::path::Path, meta: &Meta, users: &[engine::UserSummary]) -> Result<()> {
+    let cov = output::coverage(meta, users, meta.target);
+    for f in crate::map::write_maps(dir, meta, users, cov)? {
+        eprintln!("wrote {}", f.display());
+    }
     Ok(())
 }

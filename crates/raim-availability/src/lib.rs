@@ -7,5 +7,6 @@
 pub mod almanac;
 pub mod cli;
 pub mod engine;
+pub mod map;
 pub mod output;
 pub mod run;
