@@ -338,14 +338,26 @@ pub fn run_users<R: Send>(
     finish: impl Fn(UserPartial) -> R + Sync,
 ) -> Result<Vec<R>, MonitorError> {
     let sky = sky_table(study, range);
-    study
+    // A progress bar on stderr, drawn only when stderr is a terminal.
+    let bar = indicatif::ProgressBar::new(study.users.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} users, {eta} left")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let out = study
         .users
         .par_iter()
         .map_init(
             || (new_engine(), Vec::with_capacity(N_SATS)),
-            |(m, obs), u| run_user(study, &sky, u, m, obs).map(&finish),
+            |(m, obs), u| {
+                let r = run_user(study, &sky, u, m, obs).map(&finish);
+                bar.inc(1);
+                r
+            },
         )
-        .collect()
+        .collect();
+    bar.finish_and_clear();
+    out
 }
 
 /// The worker threads' stack: the monitor is built on the stack before it

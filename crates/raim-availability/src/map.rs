@@ -23,7 +23,7 @@ pub const HEIGHT_PX: u32 = 760;
 /// The map area's width (pixels).
 pub const MAP_WIDTH_PX: u32 = 1180;
 
-/// Colour bins: value v is in bin i when edges[i] <= v < edges[i + 1]
+/// Colour bins: value v is in bin i when `edges[i] <= v < edges[i + 1]`
 /// (the last bin is open above; NaN falls in no bin and is drawn grey).
 #[derive(Debug, Clone)]
 pub struct Bins {
