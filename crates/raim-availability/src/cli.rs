@@ -11,7 +11,7 @@ use crate::{engine, run};
 /// `raim availability --run FILE [--shard i/n] [--out DIR] [--level L]`, or
 /// `raim availability merge PARTIAL... [--out DIR] [--level L]`.
 #[derive(clap::Args, Debug)]
-#[command(args_conflicts_with_subcommands = true)]
+#[command(args_conflicts_with_subcommands = true, after_help = EXAMPLES)]
 pub struct AvailabilityArgs {
     /// Combine shard results.
     #[command(subcommand)]
@@ -37,6 +37,15 @@ pub struct AvailabilityArgs {
     #[arg(long)]
     pub threads: Option<usize>,
 }
+
+/// The examples that end `raim availability --help`.
+pub const EXAMPLES: &str = "Examples:
+  raim availability --run docs/runs/availability_maast_g24e24.toml --out runs/availability --level 0.99 --maps
+  raim availability --run docs/runs/availability_maast_g24e24.toml --shard 2/4 --out shards
+  raim availability merge shards/availability_maast_g24e24.shard-*-of-4.json --out runs/availability
+
+Outputs: <name>.summary.json (coverage, users, user-epochs), <name>.users.csv (per user: availability,
+99.5th-percentile VPL/HPL/EMT, fault modes), with --maps three PNG maps. Run file: docs/AVAILABILITY.md.";
 
 /// `merge`.
 #[derive(clap::Subcommand, Debug)]
@@ -106,6 +115,11 @@ pub fn run(args: &AvailabilityArgs) -> Result<()> {
     let lv = levels(study.target, args.level)?;
     let t0 = Instant::now();
     let n_epochs = study.epochs_gps_s.len();
+    if args.maps && args.shard.is_some() {
+        return Err(anyhow!(
+            "--maps draws a whole run: give it to `raim availability merge`, not with --shard"
+        ));
+    }
     let (range, shard) = match &args.shard {
         Some(s) => {
             let (i, n) = output::parse_shard(s)?;
