@@ -247,7 +247,7 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
     let run: RunFile = toml::from_str(text).map_err(|e| {
         let line = e
             .span()
-            .map(|s| text[..s.start.min(text.len())].lines().count().max(1));
+            .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
         match line {
             Some(l) => anyhow!("{file}:{l}: {}", e.message()),
             None => anyhow!("{file}: {}", e.message()),
@@ -538,5 +538,131 @@ fn users(g: &GridSpec) -> Result<Vec<User>> {
                 Ok(user(s.lat_deg, s.lon_deg, s.name.clone()))
             })
             .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn data() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data")
+    }
+
+    /// The MAAST run file's text with `grid` and `extra` (top-level keys)
+    /// in place of its grid, almanacs from the shared data.
+    fn text(grid: &str, service: &str, gps_extra: &str) -> String {
+        format!(
+            r#"name = "t"
+mask_deg = 5.0
+[time]
+start_s = 345600.0
+span_s = 900.0
+step_s = 300.0
+{grid}
+[service]
+{service}
+[[constellation]]
+system = "G"
+almanac = "almanac_gps24_mops.yuma"
+week_rollovers = 0
+{gps_extra}
+sigma_ura_m = 1.0
+sigma_ure_m = 0.5
+b_nom_m = 0.75
+p_sat = 1e-5
+p_const = 1e-8
+"#
+        )
+    }
+
+    fn load_text(t: &str) -> Result<Study> {
+        from_text(t, Path::new("t.toml"), &data())
+    }
+
+    #[test]
+    fn grids_and_weights() {
+        let s = load_text(&text(
+            "[grid]\nkind = \"world\"\nstep_deg = 10.0",
+            "level = \"LPV-200\"",
+            "",
+        ))
+        .unwrap();
+        // 19 latitudes (-90..=90) x 36 longitudes (-180..<180).
+        assert_eq!(s.users.len(), 19 * 36);
+        assert_eq!((s.users[0].lat_deg, s.users[0].lon_deg), (-90.0, -180.0));
+        assert_eq!(
+            s.users.last().map(|u| (u.lat_deg, u.lon_deg)),
+            Some((90.0, 170.0))
+        );
+        let u60 = s.users.iter().find(|u| u.lat_deg == 60.0).unwrap();
+        assert!((u60.weight - 0.5).abs() < 1e-15);
+        assert_eq!(s.epochs_gps_s.len(), 3);
+        assert_eq!(s.epochs_gps_s[0], 703.0 * 604_800.0 + 345_600.0);
+        let r = load_text(&text(
+            "[grid]\nkind = \"region\"\nstep_deg = 5.0\nlat_min_deg = 40.0\nlat_max_deg = 50.0\nlon_min_deg = -5.0\nlon_max_deg = 5.0",
+            "level = \"LPV-200\"",
+            "",
+        ))
+        .unwrap();
+        assert_eq!(r.users.len(), 9);
+        let sites = load_text(&text(
+            "[grid]\nkind = \"sites\"\nsites = [{ name = \"LFPG\", lat_deg = 49.0097, lon_deg = 2.5479 }]",
+            "level = \"LPV-200\"",
+            "",
+        ))
+        .unwrap();
+        assert_eq!(sites.users.len(), 1);
+        assert_eq!(sites.users[0].name, "LFPG");
+    }
+
+    #[test]
+    fn service_levels_and_outages() {
+        let grid = "[grid]\nkind = \"world\"\nstep_deg = 30.0";
+        let s = load_text(&text(grid, "level = \"LPV-250\"", "remove = [3, 17]")).unwrap();
+        assert_eq!(s.cfg.val_m, 50.0);
+        assert_eq!(s.cfg.hal_m, 40.0);
+        assert_eq!(s.sats.len(), 22);
+        assert!(!s.sats.iter().any(|x| x.id.prn == 3 || x.id.prn == 17));
+        let c = load_text(&text(
+            grid,
+            "level = \"custom\"\nval_m = 50.0\nhal_m = 100.0\nemt_max_m = 20.0\nsigma_acc_max_m = 2.0",
+            "",
+        ))
+        .unwrap();
+        assert_eq!(
+            [
+                c.cfg.val_m,
+                c.cfg.hal_m,
+                c.cfg.emt_max_m,
+                c.cfg.sigma_acc_max_m
+            ],
+            [50.0, 100.0, 20.0, 2.0]
+        );
+        let e = load_text(&text(grid, "level = \"LPV-200\"", "remove = [25]")).unwrap_err();
+        assert!(e.to_string().contains("remove = PRN 25"), "{e}");
+        let e = load_text(&text(grid, "level = \"LPV-200\"\nval_m = 10.0", "")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t.toml:11: limits are given only with level = \"custom\""
+        );
+        let e = load_text(&text(grid, "level = \"CAT-I\"", "")).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("t.toml:11: unknown service level `CAT-I`"),
+            "{e}"
+        );
+        let e = load_text(&text(
+            "[grid]\nkind = \"sites\"\nsites = []",
+            "level = \"LPV-200\"",
+            "",
+        ))
+        .unwrap_err();
+        assert_eq!(e.to_string(), "t.toml:8: the grid has no user");
+        let e = load_text(&text(grid, "level = \"LPV-200\"\ntypo = 1", "")).unwrap_err();
+        assert!(
+            e.to_string().starts_with("t.toml:12: unknown field `typo`"),
+            "{e}"
+        );
     }
 }
