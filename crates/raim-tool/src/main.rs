@@ -78,6 +78,8 @@ enum Command {
     /// ARAIM (docs/ARAIM.md) on ARAIM epochs as JSON lines (docs/FORMATS.md).
     #[command(after_help = examples::ARAIM)]
     Araim(araim_cmd::AraimArgs),
+    /// ARAIM availability over a user grid from almanacs: coverage, per-user availability and PLs (docs/AVAILABILITY.md).
+    Availability(raim_availability::cli::AvailabilityArgs),
     /// Seeded Monte Carlo validation campaigns (false-alarm rate; single-fault identification).
     #[command(after_help = examples::CAMPAIGN)]
     Campaign {
@@ -267,6 +269,7 @@ fn run(command: Command) -> Result<Tally> {
             json,
         } => none(threshold(pfa, dof, pmd, json)),
         Command::Araim(args) => none(araim_cmd::run(&args)),
+        Command::Availability(args) => none(raim_availability::cli::run(&args)),
         Command::Qemu(args) => qemu::run(&args),
         Command::Link(args) => none(link::run(&args)),
         Command::Replay(args) => replay::run(&args),

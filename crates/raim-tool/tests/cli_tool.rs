@@ -485,6 +485,7 @@ fn help_is_grouped_with_examples_and_plain_names() {
     for sub in [
         "snapshot",
         "araim",
+        "availability",
         "campaign",
         "pci",
         "arl",

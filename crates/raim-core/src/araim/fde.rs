@@ -146,6 +146,32 @@ fn events_of<T>(mode: &super::FaultMode<T>) -> u32 {
     mode.events.sats.count_ones() + mode.events.consts.count_ones()
 }
 
+/// The satellites of `sats` not in `removed` into `buf` (their count) and
+/// the ISM's P_const restricted to the constellations left.
+fn subset_of<T: Real, const N: usize>(
+    ism: &Ism,
+    sats: &[AraimSat<T>],
+    removed: u64,
+    buf: &mut [AraimSat<T>; N],
+) -> (usize, Ism) {
+    let mut n = 0;
+    let mut sub_ism = Ism::default();
+    for (i, s) in sats.iter().enumerate() {
+        if i < 64 && removed & (1u64 << i) != 0 {
+            continue;
+        }
+        if let Some(slot) = buf.get_mut(n) {
+            *slot = *s;
+            n += 1;
+        }
+        let j = s.id.system.index();
+        if let (Some(dst), Some(src)) = (sub_ism.p_const.get_mut(j), ism.p_const.get(j)) {
+            *dst = *src;
+        }
+    }
+    (n, sub_ism)
+}
+
 /// The two stages of the candidate search.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Stage {
@@ -256,17 +282,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             return Ok(FdeDecision::NoFault);
         }
         let mut subset = [AraimSat::<T>::default(); N];
-        // N_ex: every candidate the search could return, single-event and
-        // multi-event alike (module doc, "Exclusion risk").
-        let (mut n_single, mut n_multi) = (0usize, 0usize);
-        for mode in self.out.modes.iter() {
-            if mode.status == ModeStatus::Monitored {
-                match events_of(mode) {
-                    1 => n_single += 1,
-                    _ => n_multi += 1,
-                }
-            }
-        }
+        let (n_single, n_multi) = self.candidate_counts();
         let n_ex = n_single + n_multi;
         // Stage 1, the single-event candidates; stage 2, only when no
         // single event explains the data, the multi-event ones.
@@ -326,6 +342,62 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         })
     }
 
+    /// N_ex's two parts: the monitored single-event and multi-event modes
+    /// of the last `process`, every candidate the search could return
+    /// (module doc, "Exclusion risk").
+    fn candidate_counts(&self) -> (usize, usize) {
+        let (mut n_single, mut n_multi) = (0usize, 0usize);
+        for mode in self.out.modes.iter() {
+            if mode.status == ModeStatus::Monitored {
+                match events_of(mode) {
+                    1 => n_single += 1,
+                    _ => n_multi += 1,
+                }
+            }
+        }
+        (n_single, n_multi)
+    }
+
+    /// Availability with exclusion (issue 36, docs/AVAILABILITY.md): the
+    /// output the epoch last processed by `self` (same `cfg`, `ism`,
+    /// `sats`) would have after excluding the events of its mode `k`,
+    /// computed in `scratch` exactly as [`Self::fde`] leaves an `Excluded`
+    /// subset: the subset processed as an epoch of its own, its PLs at the
+    /// exclusion-risk share 1 / N_ex (module doc), whatever the
+    /// residuals. `Ok(None)` when mode `k` is not a monitored mode or its
+    /// subset cannot be processed (too few satellites, singular).
+    ///
+    /// # Errors
+    /// The engine's refusal of the subset for any other cause.
+    pub fn after_excluding<'s>(
+        &self,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        sats: &[AraimSat<T>],
+        k: usize,
+        scratch: &'s mut Araim<T, N, K>,
+    ) -> Result<Option<&'s super::AraimOutput<T, K>>, AraimError> {
+        let Some(mode) = self.out.modes.get(k) else {
+            return Ok(None);
+        };
+        if mode.status != ModeStatus::Monitored {
+            return Ok(None);
+        }
+        let removed = removed_sats(sats, mode.events.sats, mode.events.consts);
+        let (n_single, n_multi) = self.candidate_counts();
+        let share = 1.0 / (n_single + n_multi).max(1) as f64;
+        let mut buf = [AraimSat::<T>::default(); N];
+        let (n, sub_ism) = subset_of(ism, sats, removed, &mut buf);
+        let Some(subset) = buf.get(..n) else {
+            return Ok(None);
+        };
+        match scratch.process_scaled(cfg, &sub_ism, subset, share) {
+            Ok(out) => Ok(Some(out)),
+            Err(AraimError::TooFewSatellites { .. } | AraimError::RankDeficient { .. }) => Ok(None),
+            Err(e) => Err(e),
+        }
+    }
+
     /// Processes the subset without `removed` in `scratch`, with its PLs at
     /// the budget share `share`, or its tests only (`None`: the candidate
     /// search needs no PLs); true when it is valid and passes all its own
@@ -341,21 +413,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         scratch: &mut Araim<T, N, K>,
         share: Option<f64>,
     ) -> Result<bool, AraimError> {
-        let mut n = 0;
-        let mut sub_ism = Ism::default();
-        for (i, s) in sats.iter().enumerate() {
-            if i < 64 && removed & (1u64 << i) != 0 {
-                continue;
-            }
-            if let Some(slot) = buf.get_mut(n) {
-                *slot = *s;
-                n += 1;
-            }
-            let j = s.id.system.index();
-            if let (Some(dst), Some(src)) = (sub_ism.p_const.get_mut(j), ism.p_const.get(j)) {
-                *dst = *src;
-            }
-        }
+        let (n, sub_ism) = subset_of(ism, sats, removed, buf);
         let Some(subset) = buf.get(..n) else {
             return Ok(false);
         };

@@ -377,6 +377,30 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
         self.decide(cfg, ism, limits)
     }
 
+    /// Availability with exclusion (issue 36): after the last epoch, the
+    /// output after excluding the events of the all-in-view run's mode `k`
+    /// ([`Araim::after_excluding`], in the FDE's scratch engine, which
+    /// then holds no excluded subset: [`Self::in_force`] is the
+    /// all-in-view output afterwards). `ism` is the epoch's.
+    ///
+    /// # Errors
+    /// The engine's refusal of the subset (not its geometry: `Ok(None)`).
+    pub fn after_excluding(
+        &mut self,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        k: usize,
+    ) -> Result<Option<&AraimOutput<T, K>>, MonitorError> {
+        self.excluded = false;
+        let sats = self
+            .sats
+            .get(..self.n_sats)
+            .ok_or(capacity::<N>(self.n_sats))?;
+        Ok(self
+            .main
+            .after_excluding(cfg, ism, sats, k, &mut self.scratch)?)
+    }
+
     /// The last epoch's all-in-view output.
     pub fn all_in_view(&self) -> &AraimOutput<T, K> {
         self.main.output()

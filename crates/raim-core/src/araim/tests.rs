@@ -1065,6 +1065,58 @@ mod fde_tests {
         assert!(excluded_it >= 10, "only {excluded_it} of 20 excluded");
     }
 
+    /// `after_excluding` (availability with exclusion, issue 36) gives
+    /// exactly the output the FDE leaves after excluding the same mode:
+    /// on every 30 m step of sky20 that ends in an exclusion, the two
+    /// outputs are equal (PLs, EMT, sigma_v,acc, availability). On the
+    /// clean epoch it gives the same subset's output whatever the
+    /// residuals: the fault-free residuals change no PL.
+    #[test]
+    fn after_excluding_is_the_fdes_excluded_subset() {
+        let cfg = AraimConfig::default();
+        let ism = ge_ism(1e-4);
+        let mut main = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        let mut scratch = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        let mut other = std::boxed::Box::new(Araim::<f64, 32, 1024>::new());
+        let clean = sky20();
+        let mut compared = 0;
+        for target in 0..clean.len() {
+            let mut sats = clean.clone();
+            sats[target].residual_m = 30.0;
+            main.process(&cfg, &ism, &sats).unwrap();
+            let FdeDecision::Excluded { mode, .. } =
+                main.fde(&cfg, &ism, &sats, &mut scratch).unwrap()
+            else {
+                continue;
+            };
+            let got = main
+                .after_excluding(&cfg, &ism, &sats, mode, &mut other)
+                .unwrap()
+                .expect("a monitored mode");
+            let want = scratch.output();
+            assert_eq!(got.pl_add, want.pl_add, "target {target}");
+            assert_eq!(got.pl_exact, want.pl_exact, "target {target}");
+            assert_eq!(got.emt_m.to_bits(), want.emt_m.to_bits());
+            assert_eq!(got.sigma_v_acc_m.to_bits(), want.sigma_v_acc_m.to_bits());
+            assert_eq!(got.unavailable, want.unavailable);
+            // The same exclusion on the clean epoch: the same PLs.
+            main.process(&cfg, &ism, &clean).unwrap();
+            let on_clean = main
+                .after_excluding(&cfg, &ism, &clean, mode, &mut other)
+                .unwrap()
+                .expect("a monitored mode");
+            assert_eq!(on_clean.pl_add, want.pl_add, "target {target}");
+            compared += 1;
+        }
+        assert!(compared >= 10, "only {compared} exclusions");
+        // Not a mode: None.
+        main.process(&cfg, &ism, &clean).unwrap();
+        assert!(main
+            .after_excluding(&cfg, &ism, &clean, 5000, &mut other)
+            .unwrap()
+            .is_none());
+    }
+
     /// A Galileo-wide fault: every Galileo range biased by a different
     /// amount (10-30 m, by PRN). A common bias would be absorbed by the
     /// Galileo clock, and a bias g_i . d by the position (then excluding

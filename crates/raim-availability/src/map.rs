@@ -1,0 +1,360 @@
+//! PNG maps of a grid's results (issue 36): per-user availability, the
+//! 99.5th-percentile VPL and the most monitored fault modes, each cell
+//! filled with its bin's colour, a colour bar and a title naming the
+//! scenario. No coastlines yet (no packaged dataset offline).
+//!
+//! Availability bins are the ones MAAST's coverage maps use (0, 50, 75,
+//! 85, 90, 95, 98, 99, 99.5, 99.9 %); VPL bins step 5 m up to the LPV
+//! alert limits (10, 15, ..., 35, 40, 50 m).
+
+use std::path::Path;
+
+use anyhow::{anyhow, Result};
+use plotters::prelude::*;
+
+use crate::engine::UserSummary;
+use crate::output::Meta;
+
+/// The canvas (pixels) and the map area's width: the colour bar is to
+/// its right.
+pub const WIDTH_PX: u32 = 1400;
+/// Canvas height (pixels).
+pub const HEIGHT_PX: u32 = 760;
+/// The map area's width (pixels).
+pub const MAP_WIDTH_PX: u32 = 1180;
+
+/// Colour bins: value v is in bin i when `edges[i] <= v < edges[i + 1]`
+/// (the last bin is open above; NaN falls in no bin and is drawn grey).
+#[derive(Debug, Clone)]
+pub struct Bins {
+    /// Lower edges, increasing.
+    pub edges: Vec<f64>,
+    /// One colour per bin.
+    pub colours: Vec<RGBColor>,
+    /// One label per bin.
+    pub labels: Vec<String>,
+}
+
+impl Bins {
+    /// The bin of `v`.
+    pub fn of(&self, v: f64) -> Option<usize> {
+        if v.is_nan() {
+            return None;
+        }
+        self.edges.iter().rposition(|e| v >= *e)
+    }
+}
+
+/// A red-to-blue ramp of `n` colours (low values red).
+fn ramp(n: usize, reverse: bool) -> Vec<RGBColor> {
+    const STOPS: [(u8, u8, u8); 10] = [
+        (128, 0, 0),
+        (200, 0, 0),
+        (255, 64, 0),
+        (255, 150, 0),
+        (255, 220, 0),
+        (200, 230, 60),
+        (100, 200, 80),
+        (0, 160, 120),
+        (0, 110, 200),
+        (0, 40, 140),
+    ];
+    let mut v: Vec<RGBColor> = (0..n)
+        .map(|i| {
+            let k = if n == 1 {
+                0
+            } else {
+                i * (STOPS.len() - 1) / (n - 1)
+            };
+            let (r, g, b) = STOPS[k];
+            RGBColor(r, g, b)
+        })
+        .collect();
+    if reverse {
+        v.reverse();
+    }
+    v
+}
+
+/// MAAST's availability bins.
+pub fn availability_bins() -> Bins {
+    let edges = vec![0.0, 0.5, 0.75, 0.85, 0.9, 0.95, 0.98, 0.99, 0.995, 0.999];
+    let labels = edges
+        .iter()
+        .enumerate()
+        .map(|(i, e)| match edges.get(i + 1) {
+            Some(n) => format!("{}-{} %", e * 100.0, n * 100.0),
+            None => format!(">= {} %", e * 100.0),
+        })
+        .collect();
+    Bins {
+        colours: ramp(edges.len(), false),
+        edges,
+        labels,
+    }
+}
+
+/// VPL bins (m), good (small) in blue.
+pub fn vpl_bins() -> Bins {
+    let edges = vec![0.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0, 50.0];
+    let labels = edges
+        .iter()
+        .enumerate()
+        .map(|(i, e)| match edges.get(i + 1) {
+            Some(n) => format!("{e}-{n} m"),
+            None => format!(">= {e} m"),
+        })
+        .collect();
+    Bins {
+        colours: ramp(edges.len(), true),
+        edges,
+        labels,
+    }
+}
+
+/// Fault-mode bins: one per count from the smallest to the largest seen.
+pub fn mode_bins(users: &[UserSummary]) -> Bins {
+    let lo = users.iter().map(|u| u.max_modes).min().unwrap_or(0);
+    let hi = users.iter().map(|u| u.max_modes).max().unwrap_or(0).max(lo);
+    let edges: Vec<f64> = (lo..=hi).map(f64::from).collect();
+    Bins {
+        colours: ramp(edges.len(), false),
+        labels: (lo..=hi).map(|m| format!("{m} modes")).collect(),
+        edges,
+    }
+}
+
+/// The smallest positive step between the sorted distinct values (1 when
+/// there is one value).
+fn step(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.dedup();
+    let d = v
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .fold(f64::INFINITY, f64::min);
+    if d.is_finite() && d > 0.0 {
+        d
+    } else {
+        1.0
+    }
+}
+
+const FONT_CANDIDATES: [&str; 3] = [
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+];
+
+/// Registers DejaVu Sans (where distributions install it) as plotters'
+/// sans-serif, once.
+fn register_font() -> Result<()> {
+    static DONE: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
+    DONE.get_or_init(|| {
+        let path = FONT_CANDIDATES
+            .iter()
+            .find(|p| Path::new(p).exists())
+            .ok_or("no TrueType font found (DejaVu Sans) for the maps' text")?;
+        let bytes = std::fs::read(path).map_err(|e| format!("{path}: {e}"))?;
+        let leaked: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+        plotters::style::register_font("sans-serif", FontStyle::Normal, leaked)
+            .map_err(|_| format!("{path} is not a usable TrueType font"))
+    })
+    .clone()
+    .map_err(|e| anyhow!(e))
+}
+
+/// Draws one map of `values` (one per user of `meta`) into `path`.
+///
+/// # Errors
+/// No font, or the PNG cannot be written.
+pub fn draw(path: &Path, title: &str, meta: &Meta, values: &[f64], bins: &Bins) -> Result<()> {
+    register_font()?;
+    let e = |e: &dyn std::fmt::Display| anyhow!("{}: {e}", path.display());
+    let root = BitMapBackend::new(path, (WIDTH_PX, HEIGHT_PX)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(&x))?;
+    let (map, bar) = root.split_horizontally(MAP_WIDTH_PX);
+    let lats: Vec<f64> = meta.users.iter().map(|u| u.1).collect();
+    let lons: Vec<f64> = meta.users.iter().map(|u| u.2).collect();
+    let (dlat, dlon) = (step(lats.clone()), step(lons.clone()));
+    let lo = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let (lat0, lat1) = (
+        (lo(&lats) - dlat / 2.0).max(-90.0),
+        (hi(&lats) + dlat / 2.0).min(90.0),
+    );
+    let (lon0, lon1) = (lo(&lons) - dlon / 2.0, hi(&lons) + dlon / 2.0);
+    let mut chart = ChartBuilder::on(&map)
+        .caption(title, ("sans-serif", 24))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(lon0..lon1, lat0..lat1)
+        .map_err(|x| e(&x))?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_desc("longitude (deg)")
+        .y_desc("latitude (deg)")
+        .draw()
+        .map_err(|x| e(&x))?;
+    let grey = RGBColor(160, 160, 160);
+    chart
+        .draw_series(meta.users.iter().zip(values).map(|(u, v)| {
+            let c = bins.of(*v).map_or(grey, |b| bins.colours[b]);
+            Rectangle::new(
+                [
+                    (u.2 - dlon / 2.0, (u.1 - dlat / 2.0).max(lat0)),
+                    (u.2 + dlon / 2.0, (u.1 + dlat / 2.0).min(lat1)),
+                ],
+                c.filled(),
+            )
+        }))
+        .map_err(|x| e(&x))?;
+    // The colour bar: one box per bin, lowest at the bottom.
+    let n = bins.edges.len() as i32;
+    let h = (HEIGHT_PX as i32 - 120) / n.max(1);
+    for (i, (c, label)) in bins.colours.iter().zip(&bins.labels).enumerate() {
+        let y = 60 + (n - 1 - i as i32) * h;
+        bar.draw(&Rectangle::new([(10, y), (40, y + h - 2)], c.filled()))
+            .map_err(|x| e(&x))?;
+        bar.draw(&Text::new(
+            label.clone(),
+            (48, y + h / 2 - 8),
+            ("sans-serif", 16),
+        ))
+        .map_err(|x| e(&x))?;
+    }
+    root.present().map_err(|x| e(&x))?;
+    Ok(())
+}
+
+/// The three maps beside the outputs: `<name>.availability.png`,
+/// `<name>.vpl.png`, `<name>.modes.png`; returns their paths.
+///
+/// # Errors
+/// As [`draw`].
+pub fn write_maps(
+    dir: &Path,
+    meta: &Meta,
+    users: &[UserSummary],
+    coverage: f64,
+) -> Result<Vec<std::path::PathBuf>> {
+    let avail: Vec<f64> = users.iter().map(|u| u.availability).collect();
+    let vpl: Vec<f64> = users.iter().map(|u| u.vpl_pct_m).collect();
+    let modes: Vec<f64> = users.iter().map(|u| f64::from(u.max_modes)).collect();
+    let target = meta.target * 100.0;
+    let maps = [
+        (
+            "availability",
+            format!(
+                "{}: availability (coverage at {target} %: {:.2} %)",
+                meta.name,
+                coverage * 100.0
+            ),
+            avail,
+            availability_bins(),
+        ),
+        (
+            "vpl",
+            format!("{}: VPL, 99.5th percentile (m)", meta.name),
+            vpl,
+            vpl_bins(),
+        ),
+        (
+            "modes",
+            format!("{}: most monitored fault modes", meta.name),
+            modes,
+            mode_bins(users),
+        ),
+    ];
+    let mut out = Vec::new();
+    for (tag, title, values, bins) in maps {
+        let p = dir.join(format!("{}.{tag}.png", meta.name));
+        draw(&p, &title, meta, &values, &bins)?;
+        out.push(p);
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bins_place_values() {
+        let a = availability_bins();
+        assert_eq!(a.of(1.0), Some(9));
+        assert_eq!(a.of(0.995), Some(8));
+        assert_eq!(a.of(0.9949), Some(7));
+        assert_eq!(a.of(0.0), Some(0));
+        assert_eq!(a.of(f64::NAN), None);
+        let v = vpl_bins();
+        assert_eq!(v.of(f64::INFINITY), Some(8));
+        assert_eq!(v.of(34.99), Some(5));
+        assert_eq!(step(vec![10.0, -10.0, 0.0, 0.0]), 10.0);
+        assert_eq!(step(vec![5.0]), 1.0);
+    }
+
+    /// A 3 x 4 grid whose availabilities fall in 3 of the 10 bins: in the
+    /// map area exactly those 3 bin colours appear (and grey for the NaN
+    /// user); the colour bar shows all 10.
+    #[test]
+    fn map_cells_take_their_bin_colour() {
+        let mut users = Vec::new();
+        let mut values = Vec::new();
+        for (i, lat) in [-10.0, 0.0, 10.0].into_iter().enumerate() {
+            for (j, lon) in [0.0, 10.0, 20.0, 30.0].into_iter().enumerate() {
+                users.push((String::new(), lat, lon, 1.0));
+                values.push(match (i + j) % 3 {
+                    0 => 1.0,
+                    1 => 0.97,
+                    _ => 0.6,
+                });
+            }
+        }
+        values[5] = f64::NAN;
+        let meta = Meta {
+            name: "t".into(),
+            run_digest: String::new(),
+            satellites: vec![],
+            unhealthy: vec![],
+            epochs: 1,
+            mask_rad: 0.0,
+            limits_m: [35.0, 40.0, 15.0, 1.87],
+            target: 0.995,
+            users,
+        };
+        let bins = availability_bins();
+        let dir = std::env::temp_dir().join(format!("raim-avail-map-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("t.png");
+        draw(&path, "test", &meta, &values, &bins).unwrap();
+        let img = image::open(&path).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (WIDTH_PX, HEIGHT_PX));
+        let count = |c: RGBColor, map_area: bool| {
+            img.enumerate_pixels()
+                .filter(|(x, _, p)| (*x < MAP_WIDTH_PX) == map_area && p.0 == [c.0, c.1, c.2])
+                .count()
+        };
+        let used = [
+            bins.of(1.0).unwrap(),
+            bins.of(0.97).unwrap(),
+            bins.of(0.6).unwrap(),
+        ];
+        for (b, c) in bins.colours.iter().enumerate() {
+            let n = count(*c, true);
+            if used.contains(&b) {
+                assert!(n > 1000, "bin {b}: {n} pixels");
+            } else {
+                assert_eq!(n, 0, "bin {b} drawn but unused");
+            }
+            assert!(
+                count(*c, false) > 100,
+                "bin {b} missing from the colour bar"
+            );
+        }
+        assert!(count(RGBColor(160, 160, 160), true) > 1000, "the NaN cell");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -1,0 +1,669 @@
+//! The TOML run file of an availability study (docs/AVAILABILITY.md "Run
+//! file"): the constellations with their almanacs, outages and ISM, the
+//! user grid, the time span, the mask and the service level. Every number
+//! is named with its unit; errors name the file and line.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{anyhow, bail, Result};
+use raim_core::araim::{AraimConfig, Ism, SatIsm};
+use raim_core::{SatId, System};
+use serde::Deserialize;
+
+use crate::almanac::{self, AlmanacSpec};
+
+/// The run file as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunFile {
+    /// The scenario's name: the output files' stem and the maps' title.
+    pub name: String,
+    /// The elevation mask (degrees).
+    pub mask_deg: f64,
+    /// Every user's height above the WGS-84 ellipsoid (m).
+    #[serde(default)]
+    pub height_m: f64,
+    /// Availability with exclusion: `none` (detection only, the default),
+    /// `satellites` (every single-satellite exclusion must leave the
+    /// service available) or `single_events` (satellites and whole
+    /// constellations).
+    #[serde(default)]
+    pub exclusion: ExclusionSpec,
+    /// The time span.
+    pub time: TimeSpec,
+    /// The users.
+    pub grid: GridSpec,
+    /// The service level.
+    pub service: ServiceSpec,
+    /// One entry per constellation.
+    pub constellation: Vec<ConstellationSpec>,
+}
+
+/// Which exclusions must leave the service available (docs/AVAILABILITY.md
+/// "Availability with exclusion").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ExclusionSpec {
+    /// Detection only.
+    #[default]
+    None,
+    /// Each monitored single-satellite mode.
+    Satellites,
+    /// Each monitored single-event mode: satellites and constellations.
+    SingleEvents,
+}
+
+/// Epochs `start_s + k step_s` for `k` in `0..floor(span_s / step_s)` (the
+/// end excluded: 24 h at 300 s is 288 epochs).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSpec {
+    /// Seconds from the start of the first almanac's GPS week.
+    pub start_s: f64,
+    /// The span (s).
+    pub span_s: f64,
+    /// The step (s).
+    pub step_s: f64,
+}
+
+/// The users: a world grid, a region or a list of sites.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, tag = "kind", rename_all = "lowercase")]
+pub enum GridSpec {
+    /// Latitudes -90..=90 and longitudes -180..<180 at `step_deg`.
+    World {
+        /// Grid step (degrees).
+        step_deg: f64,
+    },
+    /// Latitudes `lat_min_deg..=lat_max_deg` and longitudes
+    /// `lon_min_deg..=lon_max_deg` at `step_deg`.
+    Region {
+        /// Grid step (degrees).
+        step_deg: f64,
+        /// Southern edge (degrees).
+        lat_min_deg: f64,
+        /// Northern edge (degrees).
+        lat_max_deg: f64,
+        /// Western edge (degrees).
+        lon_min_deg: f64,
+        /// Eastern edge (degrees).
+        lon_max_deg: f64,
+    },
+    /// Named sites (airports), each weighted by cos(latitude) too.
+    Sites {
+        /// The sites.
+        sites: Vec<Site>,
+    },
+}
+
+/// One named user position.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Site {
+    /// Its name (for the CSV).
+    pub name: String,
+    /// Latitude (degrees).
+    pub lat_deg: f64,
+    /// Longitude (degrees).
+    pub lon_deg: f64,
+}
+
+/// The service level: a preset or the limits given.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ServiceSpec {
+    /// `LPV-200`, `LPV-250` or `custom`.
+    pub level: String,
+    /// The availability target (0.995 for LPV-200).
+    #[serde(default = "default_target")]
+    pub target: f64,
+    /// Custom: the VAL (m).
+    pub val_m: Option<f64>,
+    /// Custom: the HAL (m).
+    pub hal_m: Option<f64>,
+    /// Custom: the EMT limit (m).
+    pub emt_max_m: Option<f64>,
+    /// Custom: the sigma_v,acc limit (m).
+    pub sigma_acc_max_m: Option<f64>,
+}
+
+fn default_target() -> f64 {
+    0.995
+}
+
+/// One constellation: its almanac, outages and ISM.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConstellationSpec {
+    /// `G` or `E`.
+    pub system: String,
+    /// The YUMA file, relative to the run file's directory.
+    pub almanac: PathBuf,
+    /// 1024-week rollovers to add to the file's 10-bit week.
+    pub week_rollovers: Option<u32>,
+    /// PRN = almanac ID - `id_offset`.
+    #[serde(default)]
+    pub id_offset: u32,
+    /// PRNs taken out (outages).
+    #[serde(default)]
+    pub remove: Vec<u8>,
+    /// sigma_URA (m).
+    pub sigma_ura_m: f64,
+    /// sigma_URE (m).
+    pub sigma_ure_m: f64,
+    /// b_nom (m).
+    pub b_nom_m: f64,
+    /// P_sat.
+    pub p_sat: f64,
+    /// P_const.
+    pub p_const: f64,
+}
+
+/// One satellite of the study.
+#[derive(Debug, Clone, Copy)]
+pub struct StudySat {
+    /// The satellite.
+    pub id: SatId,
+    /// Its orbit.
+    pub kepler: raim_nav::ephemeris::Kepler,
+}
+
+/// One user of the grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct User {
+    /// A site's name; empty on a grid.
+    pub name: String,
+    /// Latitude (degrees, as given).
+    pub lat_deg: f64,
+    /// Longitude (degrees, as given).
+    pub lon_deg: f64,
+    /// The area weight cos(latitude).
+    pub weight: f64,
+}
+
+/// A run file read and checked: everything the engine needs.
+#[derive(Debug, Clone)]
+pub struct Study {
+    /// The scenario's name.
+    pub name: String,
+    /// The satellites in use, constellation by constellation, in PRN order.
+    pub sats: Vec<StudySat>,
+    /// Their ISM entries (same order).
+    pub ism_entries: Vec<SatIsm>,
+    /// P_const per constellation.
+    pub ism: Ism,
+    /// The ARAIM configuration (the service level's limits).
+    pub cfg: AraimConfig,
+    /// The availability target.
+    pub target: f64,
+    /// Which exclusions must leave the service available.
+    pub exclusion: ExclusionSpec,
+    /// The elevation mask (rad).
+    pub mask_rad: f64,
+    /// The users' height (m).
+    pub height_m: f64,
+    /// The users.
+    pub users: Vec<User>,
+    /// The epochs, GPS seconds since 1980-01-06.
+    pub epochs_gps_s: Vec<f64>,
+    /// The unhealthy satellites left out, per constellation letter.
+    pub unhealthy: Vec<String>,
+    /// The run file's text: the partial results carry its digest.
+    pub source: String,
+}
+
+/// The 1-based line of the first line of `text` that starts with `key`
+/// (after spaces), for errors about a value the TOML parser accepted.
+fn line_of(text: &str, key: &str) -> usize {
+    text.lines()
+        .position(|l| {
+            let t = l.trim_start();
+            t.strip_prefix(key)
+                .is_some_and(|r| r.trim_start().starts_with('='))
+        })
+        .map_or(0, |i| i + 1)
+}
+
+/// Reads and checks the run file at `path`.
+///
+/// # Errors
+/// TOML errors (with the parser's line and column), an unknown level or
+/// system, a bad grid or time span, an ISM or service level that raim-core's
+/// bounds refuse, an outage PRN not in the almanac, an almanac error, a
+/// span more than half a week from an almanac's time of applicability.
+pub fn load(path: &Path) -> Result<Study> {
+    let text = std::fs::read_to_string(path).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    from_text(&text, path, base)
+}
+
+/// [`load`] on text in memory; `path` names it in errors, almanac paths
+/// are relative to `base`.
+///
+/// # Errors
+/// As [`load`].
+pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
+    let file = path.display();
+    let run: RunFile = toml::from_str(text).map_err(|e| {
+        let line = e
+            .span()
+            .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+        match line {
+            Some(l) => anyhow!("{file}:{l}: {}", e.message()),
+            None => anyhow!("{file}: {}", e.message()),
+        }
+    })?;
+    let at = |key: &str| format!("{file}:{}", line_of(text, key));
+    if !(0.0..90.0).contains(&run.mask_deg) {
+        bail!(
+            "{}: mask_deg {} outside [0, 90)",
+            at("mask_deg"),
+            run.mask_deg
+        );
+    }
+    if !(-1000.0..=100_000.0).contains(&run.height_m) {
+        bail!(
+            "{}: height_m {} outside [-1000, 100000]",
+            at("height_m"),
+            run.height_m
+        );
+    }
+    // Service level.
+    let mut cfg = AraimConfig::default();
+    match run.service.level.as_str() {
+        "LPV-200" => {}
+        "LPV-250" => cfg.val_m = 50.0,
+        "custom" => {
+            let need = |v: Option<f64>, k: &str| {
+                v.ok_or_else(|| anyhow!("{}: level = \"custom\" needs `{k}`", at("level")))
+            };
+            cfg.val_m = need(run.service.val_m, "val_m")?;
+            cfg.hal_m = need(run.service.hal_m, "hal_m")?;
+            cfg.emt_max_m = need(run.service.emt_max_m, "emt_max_m")?;
+            cfg.sigma_acc_max_m = need(run.service.sigma_acc_max_m, "sigma_acc_max_m")?;
+        }
+        other => bail!(
+            "{}: unknown service level `{other}` (LPV-200, LPV-250 or custom)",
+            at("level")
+        ),
+    }
+    if run.service.level != "custom"
+        && [
+            run.service.val_m,
+            run.service.hal_m,
+            run.service.emt_max_m,
+            run.service.sigma_acc_max_m,
+        ]
+        .iter()
+        .any(Option::is_some)
+    {
+        bail!(
+            "{}: limits are given only with level = \"custom\"",
+            at("level")
+        );
+    }
+    cfg.validate().map_err(|e| {
+        anyhow!(
+            "{}: the service level is refused by raim-core: {e}",
+            at("level")
+        )
+    })?;
+    let target = run.service.target;
+    if !(target > 0.0 && target <= 1.0) {
+        bail!("{}: target {target} outside (0, 1]", at("target"));
+    }
+    // Time.
+    let t = run.time;
+    let finite = t.step_s.is_finite() && t.span_s.is_finite() && t.start_s.is_finite();
+    if !finite || t.step_s <= 0.0 || t.span_s < t.step_s {
+        bail!(
+            "{}: the time span needs 0 < step_s <= span_s, finite (start_s {}, span_s {}, step_s {})",
+            at("step_s"),
+            t.start_s,
+            t.span_s,
+            t.step_s
+        );
+    }
+    let n_epochs = (t.span_s / t.step_s).floor() as usize;
+    if n_epochs > 10_000_000 {
+        bail!("{}: {n_epochs} epochs: more than 10^7", at("span_s"));
+    }
+    // Users.
+    let users = users(&run.grid).map_err(|e| anyhow!("{}: {e}", at("kind")))?;
+    if users.is_empty() {
+        bail!("{}: the grid has no user", at("kind"));
+    }
+    // Constellations.
+    if run.constellation.is_empty() {
+        bail!("{file}: no [[constellation]]");
+    }
+    let mut ism = Ism::default();
+    let mut sats = Vec::new();
+    let mut entries = Vec::new();
+    let mut unhealthy = Vec::new();
+    let mut week0: Option<u32> = None;
+    let mut almanac_sats = Vec::new();
+    for (ci, c) in run.constellation.iter().enumerate() {
+        let here = format!(
+            "{file}: [[constellation]] {} (system {:?})",
+            ci + 1,
+            c.system
+        );
+        let system = match c.system.as_str() {
+            "G" => System::Gps,
+            "E" => System::Galileo,
+            s => bail!("{here}: system `{s}`: G or E (the almanac forms read here)"),
+        };
+        if ism.p_const[system.index()].is_some() {
+            bail!("{here}: the constellation is given twice");
+        }
+        ism.p_const[system.index()] = Some(c.p_const);
+        let alm = almanac::read(&AlmanacSpec {
+            path: almanac::resolve(base, &c.almanac),
+            system,
+            id_offset: c.id_offset,
+            week_rollovers: c.week_rollovers,
+        })?;
+        for p in &c.remove {
+            if !alm.sats.iter().any(|s| s.kepler.prn == *p) {
+                bail!(
+                    "{here}: remove = PRN {p}, which is not a healthy satellite of {}",
+                    c.almanac.display()
+                );
+            }
+        }
+        unhealthy.extend(
+            alm.unhealthy
+                .iter()
+                .map(|p| format!("{}{p:02}", system.letter())),
+        );
+        let mut kept: Vec<_> = alm
+            .sats
+            .into_iter()
+            .filter(|s| !c.remove.contains(&s.kepler.prn))
+            .collect();
+        kept.sort_by_key(|s| s.kepler.prn);
+        for s in kept {
+            let id = SatId::new(system, s.kepler.prn);
+            week0.get_or_insert(s.week);
+            entries.push(SatIsm {
+                id,
+                sigma_ura_m: c.sigma_ura_m,
+                sigma_ure_m: c.sigma_ure_m,
+                b_nom_m: c.b_nom_m,
+                p_sat: c.p_sat,
+            });
+            sats.push(StudySat {
+                id,
+                kepler: s.kepler,
+            });
+            almanac_sats.push((c.almanac.clone(), s));
+        }
+        check_ism(c, system)
+            .map_err(|e| anyhow!("{here}: the ISM is refused by raim-core: {e}"))?;
+    }
+    ism.validate()
+        .map_err(|e| anyhow!("{file}: the ISM is refused by raim-core: {e}"))?;
+    if sats.len() > crate::engine::N_SATS {
+        bail!(
+            "{file}: {} satellites; the engine holds {}",
+            sats.len(),
+            crate::engine::N_SATS
+        );
+    }
+    let Some(week0) = week0 else {
+        bail!("{file}: no satellite left after the outages");
+    };
+    let t0 = f64::from(week0) * raim_nav::ephemeris::WEEK_S + t.start_s;
+    let epochs_gps_s: Vec<f64> = (0..n_epochs).map(|k| t0 + k as f64 * t.step_s).collect();
+    // Kepler::state places t within half a week of the time of
+    // applicability (IS-GPS-200's crossover): a span beyond that would be
+    // silently moved by a week.
+    let (first, last) = (t0, t0 + (n_epochs - 1) as f64 * t.step_s);
+    for (alm, s) in &almanac_sats {
+        let toa = s.kepler.toc_gps_s;
+        let half = raim_nav::ephemeris::WEEK_S / 2.0;
+        if (first - toa).abs() > half || (last - toa).abs() > half {
+            bail!(
+                "{}:{}: the run's epochs [{first}, {last}] s (GPS) are more than half a week from \
+                 this almanac's time of applicability {toa} s: move [time] start_s ({})",
+                almanac::resolve(base, alm).display(),
+                s.line,
+                at("start_s")
+            );
+        }
+    }
+    Ok(Study {
+        name: run.name.clone(),
+        sats,
+        ism_entries: entries,
+        ism,
+        cfg,
+        target,
+        exclusion: run.exclusion,
+        mask_rad: run.mask_deg.to_radians(),
+        height_m: run.height_m,
+        users,
+        epochs_gps_s,
+        unhealthy,
+        source: text.to_string(),
+    })
+}
+
+/// A constellation's ISM against raim-core's own satellite check
+/// (`AraimSat::validate`: the operational bounds of sigma, b_nom, P_sat)
+/// at a zenith satellite.
+fn check_ism(c: &ConstellationSpec, system: System) -> Result<()> {
+    if c.sigma_ure_m.is_nan() || c.sigma_ure_m > c.sigma_ura_m {
+        bail!(
+            "sigma_ure_m {} above sigma_ura_m {} (C_acc must not exceed C_int)",
+            c.sigma_ure_m,
+            c.sigma_ura_m
+        );
+    }
+    let el = core::f64::consts::FRAC_PI_2;
+    let (c_int, c_acc) =
+        raim_core::araim::error_model::variances_m2(el, c.sigma_ura_m, c.sigma_ure_m);
+    let sat = raim_core::araim::AraimSat {
+        id: SatId::new(system, 1),
+        g_enu: [0.0, 0.0, -1.0],
+        c_int_m2: c_int,
+        c_acc_m2: c_acc,
+        b_nom_m: c.b_nom_m,
+        p_sat: c.p_sat,
+        residual_m: 0.0,
+    };
+    sat.validate(0).map_err(|e| anyhow!("{e}"))?;
+    Ism::with(&[system], c.p_const)
+        .validate()
+        .map_err(|e| anyhow!("{e}"))
+}
+
+/// The grid's users, south to north then west to east.
+fn users(g: &GridSpec) -> Result<Vec<User>> {
+    let user = |lat: f64, lon: f64, name: String| User {
+        name,
+        lat_deg: lat,
+        lon_deg: lon,
+        weight: lat.to_radians().cos().max(0.0),
+    };
+    // Steps are counted in integers so that every node is k * step exactly.
+    let axis = |lo: f64, hi: f64, step: f64, closed: bool| -> Result<Vec<f64>> {
+        if !(step > 0.0 && step.is_finite() && lo.is_finite() && hi.is_finite() && lo <= hi) {
+            bail!("bad grid axis [{lo}, {hi}] at step {step}");
+        }
+        let n = ((hi - lo) / step + 1e-9).floor() as usize;
+        let mut v: Vec<f64> = (0..=n).map(|k| lo + k as f64 * step).collect();
+        if !closed && v.last().is_some_and(|x| (*x - hi).abs() < 1e-9) {
+            v.pop();
+        }
+        Ok(v)
+    };
+    let grid = |lats: Vec<f64>, lons: Vec<f64>| {
+        lats.iter()
+            .flat_map(|&la| lons.iter().map(move |&lo| (la, lo)))
+            .map(|(la, lo)| user(la, lo, String::new()))
+            .collect::<Vec<_>>()
+    };
+    match g {
+        GridSpec::World { step_deg } => Ok(grid(
+            axis(-90.0, 90.0, *step_deg, true)?,
+            axis(-180.0, 180.0, *step_deg, false)?,
+        )),
+        GridSpec::Region {
+            step_deg,
+            lat_min_deg,
+            lat_max_deg,
+            lon_min_deg,
+            lon_max_deg,
+        } => {
+            if *lat_min_deg < -90.0 || *lat_max_deg > 90.0 {
+                bail!("region latitudes [{lat_min_deg}, {lat_max_deg}] beyond +-90");
+            }
+            Ok(grid(
+                axis(*lat_min_deg, *lat_max_deg, *step_deg, true)?,
+                axis(*lon_min_deg, *lon_max_deg, *step_deg, true)?,
+            ))
+        }
+        GridSpec::Sites { sites } => sites
+            .iter()
+            .map(|s| {
+                if !(-90.0..=90.0).contains(&s.lat_deg) || !s.lon_deg.is_finite() {
+                    bail!(
+                        "site `{}`: latitude {} outside [-90, 90]",
+                        s.name,
+                        s.lat_deg
+                    );
+                }
+                Ok(user(s.lat_deg, s.lon_deg, s.name.clone()))
+            })
+            .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn data() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data")
+    }
+
+    /// The MAAST run file's text with `grid` and `extra` (top-level keys)
+    /// in place of its grid, almanacs from the shared data.
+    fn text(grid: &str, service: &str, gps_extra: &str) -> String {
+        format!(
+            r#"name = "t"
+mask_deg = 5.0
+[time]
+start_s = 345600.0
+span_s = 900.0
+step_s = 300.0
+{grid}
+[service]
+{service}
+[[constellation]]
+system = "G"
+almanac = "almanac_gps24_mops.yuma"
+week_rollovers = 0
+{gps_extra}
+sigma_ura_m = 1.0
+sigma_ure_m = 0.5
+b_nom_m = 0.75
+p_sat = 1e-5
+p_const = 1e-8
+"#
+        )
+    }
+
+    fn load_text(t: &str) -> Result<Study> {
+        from_text(t, Path::new("t.toml"), &data())
+    }
+
+    /// Verifies: SPEC-14
+    #[test]
+    fn grids_and_weights() {
+        let s = load_text(&text(
+            "[grid]\nkind = \"world\"\nstep_deg = 10.0",
+            "level = \"LPV-200\"",
+            "",
+        ))
+        .unwrap();
+        // 19 latitudes (-90..=90) x 36 longitudes (-180..<180).
+        assert_eq!(s.users.len(), 19 * 36);
+        assert_eq!((s.users[0].lat_deg, s.users[0].lon_deg), (-90.0, -180.0));
+        assert_eq!(
+            s.users.last().map(|u| (u.lat_deg, u.lon_deg)),
+            Some((90.0, 170.0))
+        );
+        let u60 = s.users.iter().find(|u| u.lat_deg == 60.0).unwrap();
+        assert!((u60.weight - 0.5).abs() < 1e-15);
+        assert_eq!(s.epochs_gps_s.len(), 3);
+        assert_eq!(s.epochs_gps_s[0], 703.0 * 604_800.0 + 345_600.0);
+        let r = load_text(&text(
+            "[grid]\nkind = \"region\"\nstep_deg = 5.0\nlat_min_deg = 40.0\nlat_max_deg = 50.0\nlon_min_deg = -5.0\nlon_max_deg = 5.0",
+            "level = \"LPV-200\"",
+            "",
+        ))
+        .unwrap();
+        assert_eq!(r.users.len(), 9);
+        let sites = load_text(&text(
+            "[grid]\nkind = \"sites\"\nsites = [{ name = \"LFPG\", lat_deg = 49.0097, lon_deg = 2.5479 }]",
+            "level = \"LPV-200\"",
+            "",
+        ))
+        .unwrap();
+        assert_eq!(sites.users.len(), 1);
+        assert_eq!(sites.users[0].name, "LFPG");
+    }
+
+    #[test]
+    fn service_levels_and_outages() {
+        let grid = "[grid]\nkind = \"world\"\nstep_deg = 30.0";
+        let s = load_text(&text(grid, "level = \"LPV-250\"", "remove = [3, 17]")).unwrap();
+        assert_eq!(s.cfg.val_m, 50.0);
+        assert_eq!(s.cfg.hal_m, 40.0);
+        assert_eq!(s.sats.len(), 22);
+        assert!(!s.sats.iter().any(|x| x.id.prn == 3 || x.id.prn == 17));
+        let c = load_text(&text(
+            grid,
+            "level = \"custom\"\nval_m = 50.0\nhal_m = 100.0\nemt_max_m = 20.0\nsigma_acc_max_m = 2.0",
+            "",
+        ))
+        .unwrap();
+        assert_eq!(
+            [
+                c.cfg.val_m,
+                c.cfg.hal_m,
+                c.cfg.emt_max_m,
+                c.cfg.sigma_acc_max_m
+            ],
+            [50.0, 100.0, 20.0, 2.0]
+        );
+        let e = load_text(&text(grid, "level = \"LPV-200\"", "remove = [25]")).unwrap_err();
+        assert!(e.to_string().contains("remove = PRN 25"), "{e}");
+        let e = load_text(&text(grid, "level = \"LPV-200\"\nval_m = 10.0", "")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t.toml:11: limits are given only with level = \"custom\""
+        );
+        let e = load_text(&text(grid, "level = \"CAT-I\"", "")).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("t.toml:11: unknown service level `CAT-I`"),
+            "{e}"
+        );
+        let e = load_text(&text(
+            "[grid]\nkind = \"sites\"\nsites = []",
+            "level = \"LPV-200\"",
+            "",
+        ))
+        .unwrap_err();
+        assert_eq!(e.to_string(), "t.toml:8: the grid has no user");
+        let e = load_text(&text(grid, "level = \"LPV-200\"\ntypo = 1", "")).unwrap_err();
+        assert!(
+            e.to_string().starts_with("t.toml:12: unknown field `typo`"),
+            "{e}"
+        );
+    }
+}

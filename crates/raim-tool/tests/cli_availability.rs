@@ -1,0 +1,336 @@
+//! `raim availability` (issue 36, docs/AVAILABILITY.md) on a small study of
+//! the real almanacs (G24 + E24, 9 users, 12 epochs): the same inputs give
+//! the same bytes; 4 time shards merged give the single run's files bit
+//! for bit; at single user-epochs the engine's VPL, HPL, EMT and
+//! sigma_v,acc equal `raim araim`'s on the same sky, with the sky and the
+//! ADD error model formed independently of the engine.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use raim_availability::{engine, run};
+use serde_json::{json, Value};
+
+const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+
+fn data(name: &str) -> String {
+    format!("{ROOT}/../shared/data/{name}")
+}
+
+/// A fresh directory under the system temp dir.
+fn tmp_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("raim-avail-{}-{tag}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("tmp dir");
+    d
+}
+
+/// The MAAST scenario's ISM and service on a 3 x 3 region and one hour.
+fn small_run() -> String {
+    small_run_with("none")
+}
+
+/// [`small_run`] with `exclusion` = `none`, `satellites` or `single_events`.
+fn small_run_with(exclusion: &str) -> String {
+    format!(
+        r#"name = "small"
+mask_deg = 5.0
+exclusion = "{exclusion}"
+[time]
+start_s = 345600.0
+span_s = 3600.0
+step_s = 300.0
+[grid]
+kind = "region"
+step_deg = 10.0
+lat_min_deg = 50.0
+lat_max_deg = 70.0
+lon_min_deg = 0.0
+lon_max_deg = 20.0
+[service]
+level = "LPV-200"
+[[constellation]]
+system = "G"
+almanac = "{}"
+week_rollovers = 0
+sigma_ura_m = 1.0
+sigma_ure_m = 0.6666666666666666
+b_nom_m = 0.75
+p_sat = 1e-5
+p_const = 1e-8
+[[constellation]]
+system = "E"
+almanac = "{}"
+week_rollovers = 0
+id_offset = 74
+sigma_ura_m = 1.0
+sigma_ure_m = 0.6666666666666666
+b_nom_m = 0.75
+p_sat = 1e-5
+p_const = 1e-4
+"#,
+        data("almanac_gps24_mops.yuma"),
+        data("almanac_galileo24.yuma")
+    )
+}
+
+/// The CSV's rows as (availability, VPL percentile).
+fn rows(csv: &[u8]) -> Vec<(f64, f64)> {
+    String::from_utf8_lossy(csv)
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (
+                f[6].parse().expect("availability"),
+                f[7].parse().expect("vpl"),
+            )
+        })
+        .collect()
+}
+
+fn raim(args: &[&str]) -> (i32, String, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_raim"))
+        .args(args)
+        .current_dir(ROOT)
+        .output()
+        .expect("run raim");
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+fn read(dir: &Path) -> (Vec<u8>, Vec<u8>) {
+    (
+        std::fs::read(dir.join("small.summary.json")).expect("summary"),
+        std::fs::read(dir.join("small.users.csv")).expect("csv"),
+    )
+}
+
+/// Verifies: SPEC-14
+#[test]
+fn same_inputs_same_bytes_and_shards_merge_bit_for_bit() {
+    let none = shards_merge_bit_for_bit("none");
+    // With exclusion (every single-satellite exclusion must leave the
+    // service available) no user is more available, and no level lower.
+    let fde = shards_merge_bit_for_bit("satellites");
+    let (none, fde) = (rows(&none), rows(&fde));
+    assert_eq!(none.len(), fde.len());
+    for ((a0, v0), (a1, v1)) in none.iter().zip(&fde) {
+        assert!(a1 <= a0 && v1 >= v0, "{a0} {v0} -> {a1} {v1}");
+    }
+    assert!(fde.iter().zip(&none).any(|(f, n)| f.1 > n.1));
+}
+
+/// Runs the small study twice and in 4 shards; returns the CSV.
+fn shards_merge_bit_for_bit(exclusion: &str) -> Vec<u8> {
+    let d = tmp_dir(&format!("shards-{exclusion}"));
+    let runf = d.join("small.toml");
+    std::fs::write(&runf, small_run_with(exclusion)).expect("write run");
+    let r = runf.to_str().expect("utf8");
+    let (a, b, s, m) = (d.join("a"), d.join("b"), d.join("s"), d.join("m"));
+    for out in [&a, &b] {
+        let (code, _, err) = raim(&[
+            "availability",
+            "--run",
+            r,
+            "--out",
+            out.to_str().expect("utf8"),
+            "--level",
+            "0.99",
+        ]);
+        assert_eq!(code, 0, "{err}");
+    }
+    let single = read(&a);
+    assert_eq!(single, read(&b), "two runs of the same inputs differ");
+    let csv = String::from_utf8(single.1.clone()).expect("utf8");
+    assert_eq!(csv.lines().count(), 10, "{csv}");
+    // Shards 1..4 (by time: 12 epochs as 3 + 3 + 3 + 3), one thread each,
+    // merged in reverse order.
+    let mut parts = Vec::new();
+    for i in 1..=4 {
+        let sh = format!("{i}/4");
+        let (code, _, err) = raim(&[
+            "availability",
+            "--run",
+            r,
+            "--shard",
+            &sh,
+            "--threads",
+            "1",
+            "--out",
+            s.to_str().expect("utf8"),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        parts.push(
+            s.join(format!("small.shard-{i}-of-4.json"))
+                .to_str()
+                .expect("utf8")
+                .to_string(),
+        );
+    }
+    let mut args = vec!["availability", "merge"];
+    args.extend(parts.iter().rev().map(String::as_str));
+    let mo = m.to_str().expect("utf8").to_string();
+    args.extend(["--out", &mo, "--level", "0.99"]);
+    let (code, _, err) = raim(&args);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        read(&m),
+        single,
+        "4 shards merged differ from the single run"
+    );
+    // A missing shard is refused by name.
+    let (code, _, err) = raim(&["availability", "merge", &parts[0], &parts[1], &parts[3]]);
+    assert_ne!(code, 0);
+    assert!(err.contains("shard 3/4 is missing"), "{err}");
+    let _ = std::fs::remove_dir_all(&d);
+    single.1
+}
+
+/// SPEC §9.1's nominal variance written out (DO-229 troposphere, the
+/// ADD's multipath and noise through the L1/L5 iono-free factor), in std
+/// arithmetic: independent of raim-core's `error_model`.
+fn nominal_m2(el_rad: f64) -> f64 {
+    let s = el_rad.sin();
+    let tropo = 0.12 * 1.001 / (0.002_001 + s * s).sqrt();
+    let el_deg = el_rad.to_degrees();
+    let mp = 0.13 + 0.53 * (-el_deg / 10.0).exp();
+    let noise = 0.15 + 0.43 * (-el_deg / 6.9).exp();
+    let (f1, f5) = (1575.42f64.powi(2), 1176.45f64.powi(2));
+    let k2 = (f1 * f1 + f5 * f5) / ((f1 - f5) * (f1 - f5));
+    tropo * tropo + k2 * (mp * mp + noise * noise)
+}
+
+/// Verifies: SPEC-14, SPEC-9.1
+#[test]
+fn one_user_epoch_equals_raim_araim_on_the_same_sky() {
+    let d = tmp_dir("epoch");
+    let runf = d.join("small.toml");
+    std::fs::write(&runf, small_run()).expect("write run");
+    let study = run::load(&runf).expect("study");
+    let mut monitor = engine::new_engine();
+    let mut lines = String::new();
+    let mut expected = Vec::new();
+    // Three users (one unavailable at 99.5 % in the 24 h run) at three epochs.
+    for (ui, k) in [(0usize, 0usize), (4, 5), (8, 11)] {
+        let u = &study.users[ui];
+        let sky = engine::sky_table(&study, k..k + 1);
+        let (x, rot) = engine::user_frame(&study, u);
+        let mut obs = Vec::new();
+        engine::visible(&study, &sky, x, &rot, &mut obs);
+        let o = engine::evaluate(&study, &mut monitor, &obs).expect("epoch");
+        assert!(o.vpl_m.is_finite() && o.hpl_m.is_finite() && o.modes > obs.len() as u32);
+        // The same sky by raim-nav's az/el from ECEF (its own geodetic
+        // conversion and trigonometry), the G rows and variances by hand.
+        let mut sats = Vec::new();
+        for (s, p) in study.sats.iter().zip(&sky) {
+            let (az, el, _) = raim_nav::geometry::az_el(x, *p);
+            if el < 5f64.to_radians() {
+                continue;
+            }
+            let v = nominal_m2(el);
+            let (c_int, c_acc) = (1.0 + v, (2.0f64 / 3.0).powi(2) + v);
+            sats.push(json!({
+                "sys": s.id.system.letter().to_string(), "prn": s.id.prn,
+                "g_enu": [-el.cos() * az.sin(), -el.cos() * az.cos(), -el.sin()],
+                "c_int_m2": c_int, "c_acc_m2": c_acc, "b_nom_m": 0.75, "p_sat": 1e-5,
+            }));
+        }
+        assert_eq!(
+            sats.len(),
+            obs.len(),
+            "user {ui} epoch {k}: visible sets differ"
+        );
+        let line = json!({
+            "time_s": study.epochs_gps_s[k],
+            "ism": {"p_const": {"G": 1e-8, "E": 1e-4}},
+            "sats": sats,
+        });
+        lines.push_str(&format!("{line}\n"));
+        expected.push((ui, k, o));
+    }
+    let input = d.join("sky.jsonl");
+    std::fs::write(&input, &lines).expect("write");
+    let (code, out, err) = raim(&["araim", "--json", "--input", input.to_str().expect("utf8")]);
+    assert_eq!(code, 0, "{err}");
+    let got: Vec<Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("json"))
+        .collect();
+    assert_eq!(got.len(), expected.len());
+    for ((ui, k, o), g) in expected.iter().zip(&got) {
+        let f = |key: &str| g[key].as_f64().unwrap_or(f64::INFINITY);
+        for (name, ours, theirs) in [
+            ("VPL", o.vpl_m, f("vpl_m")),
+            ("HPL", o.hpl_m, f("hpl_m")),
+            ("EMT", o.emt_m, f("emt_m")),
+            ("sigma_v,acc", o.sigma_v_acc_m, f("sigma_v_acc_m")),
+        ] {
+            assert!(
+                (ours - theirs).abs() <= 1e-6,
+                "user {ui} epoch {k}: {name} engine {ours} vs raim araim {theirs}"
+            );
+        }
+        assert_eq!(
+            Some(o.available),
+            g["available"].as_bool(),
+            "user {ui} epoch {k}"
+        );
+        assert_eq!(u64::from(o.modes), g["monitored"].as_u64().unwrap_or(0));
+    }
+    // App. D's vector still holds through the same subcommand.
+    let (code, out, err) = raim(&[
+        "araim",
+        "--json",
+        "--input",
+        "host-tests/vectors/add_v3_appendix_d.json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_str(out.lines().next().unwrap_or("")).expect("json");
+    assert!(
+        (v["vpl_m"].as_f64().unwrap_or(0.0) - 19.2).abs() < 0.05,
+        "{out}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Bad run files are refused with the file and line.
+///
+/// Verifies: SPEC-14
+#[test]
+fn bad_run_files_name_file_and_line() {
+    let d = tmp_dir("bad");
+    let cases = [
+        (
+            small_run().replace("level = \"LPV-200\"", "level = \"custom\"\nval_m = 35.0\nhal_m = 40.0\nemt_max_m = 40.0\nsigma_acc_max_m = 1.87"),
+            "bad.toml:16: the service level is refused by raim-core",
+        ),
+        (
+            small_run().replace("step_deg = 10.0\nlat_min_deg = 50.0", "step_deg = 10.0\nlat_min_deg = 80.0"),
+            "bad.toml:9: bad grid axis [80, 70]",
+        ),
+        (
+            small_run().replacen("week_rollovers = 0\n", "", 1),
+            "almanac_gps24_mops.yuma:14: week 703 is a 10-bit broadcast week",
+        ),
+        (
+            small_run().replace("start_s = 345600.0", "start_s = 0.0"),
+            "almanac_gps24_mops.yuma:2: the run's epochs",
+        ),
+        (
+            small_run().replacen("p_sat = 1e-5", "p_sat = 2.0", 1),
+            "the ISM is refused by raim-core",
+        ),
+    ];
+    for (text, want) in cases {
+        let f = d.join("bad.toml");
+        std::fs::write(&f, text).expect("write");
+        let (code, _, err) = raim(&["availability", "--run", f.to_str().expect("utf8")]);
+        assert_ne!(code, 0, "{want}");
+        assert!(err.contains(want), "want `{want}` in: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
