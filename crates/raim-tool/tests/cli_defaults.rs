@@ -86,6 +86,7 @@ fn every_subcommand_is_covered() {
         "completions",
         "man",
         "provision",
+        "availability",
         // Excluded, see the module docs.
         "qemu",
         "link",
@@ -174,6 +175,26 @@ fn analysis_defaults() {
     accepted(&["pf-table", "--only", "ekf", "--epochs", "100"]);
     accepted(&["completions", "bash"]);
     accepted(&["man"]);
+}
+
+/// `availability` on the committed MAAST scenario (its required input, the
+/// run file), defaults otherwise, its outputs into a temporary directory
+/// instead of the default `.`. It reports on stderr and writes its
+/// results as files: the summary must be there, with the coverage.
+///
+/// Verifies: TOOL-DEFAULTS, SPEC-14
+#[test]
+fn availability_defaults() {
+    let dir = std::env::temp_dir().join(format!("raim-cli-defaults-avail-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let run = format!("{REPO}/docs/runs/availability_maast_g24e24.toml");
+    let out = dir.to_str().expect("utf-8 path");
+    let (code, _, err) = raim(&["availability", "--run", &run, "--out", out], None);
+    assert_eq!(code, Some(0), "{err}");
+    let summary = std::fs::read_to_string(dir.join("availability_maast_g24e24.summary.json"))
+        .unwrap_or_else(|e| panic!("no summary ({e}); {err}"));
+    assert!(summary.contains("coverage"), "{summary}");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// `provision` seals docs/unit.toml into the firmware image (its required
