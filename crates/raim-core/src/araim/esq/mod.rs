@@ -57,7 +57,8 @@ pub enum EsqError {
         /// Its value.
         value: f64,
     },
-    /// A window length or N* that is not positive and finite, or N* < 1.
+    /// A window length or N* that is not positive and finite, or N* < 1;
+    /// an epoch time outside `measurement::EPOCH_TIME_S`.
     OutOfRange {
         /// Name of the offending field.
         field: &'static str,

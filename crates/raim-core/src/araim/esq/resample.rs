@@ -88,11 +88,19 @@ impl Resampler {
     ///
     /// # Errors
     /// `NotFinite` for a non-finite time, `NonMonotonicTime` when `t_s` is
-    /// not after the previous epoch, `OutOfRange` when a window opens
+    /// not after the previous epoch, `OutOfRange` for a time outside the
+    /// GPS era (`measurement::EPOCH_TIME_S`) or when a window opens
     /// without a finite N* >= 1.
     pub fn offer(&mut self, t_s: f64, n_star: Option<f64>) -> Result<Sample, EsqError> {
         if !t_s.is_finite() {
             return Err(EsqError::NotFinite {
+                field: "t_s",
+                value: t_s,
+            });
+        }
+        // The GPS era (`measurement::EPOCH_TIME_S`, issue 35).
+        if !crate::measurement::EPOCH_TIME_S.contains(t_s) {
+            return Err(EsqError::OutOfRange {
                 field: "t_s",
                 value: t_s,
             });

@@ -269,6 +269,16 @@ fn resampler_refuses_bad_input() {
         r.offer(f64::NAN, None),
         Err(EsqError::NotFinite { .. })
     ));
+    // Issue 35: outside the GPS era (`measurement::EPOCH_TIME_S`).
+    for t in [1e300, -1e300] {
+        assert_eq!(
+            r.offer(t, None),
+            Err(EsqError::OutOfRange {
+                field: "t_s",
+                value: t
+            })
+        );
+    }
     assert_eq!(r.offer(30.0, None), Ok(Sample::Skip));
     assert!(matches!(
         r.offer(150.0, None),

@@ -119,6 +119,16 @@ pub enum PcaError {
     RankDeficient,
     /// The SVD did not converge.
     SvdFailed,
+    /// The epoch time is outside the GPS era
+    /// (`measurement::EPOCH_TIME_S`, issue 35).
+    TimeOutOfRange {
+        /// The epoch time, s.
+        t_s: f64,
+        /// The earliest time accepted, s.
+        min_s: f64,
+        /// The latest time accepted, s.
+        max_s: f64,
+    },
     /// The epoch time did not advance.
     NonMonotonicTime {
         /// The previous epoch's time, s.
@@ -150,6 +160,9 @@ impl core::fmt::Display for PcaError {
             }
             PcaError::RankDeficient => write!(f, "the all-in-view normal matrix is singular"),
             PcaError::SvdFailed => write!(f, "the SVD of the residual covariance did not converge"),
+            PcaError::TimeOutOfRange { t_s, min_s, max_s } => {
+                write!(f, "time {t_s} s outside [{min_s}, {max_s}] s")
+            }
             PcaError::NonMonotonicTime { previous_s, now_s } => {
                 write!(f, "time {now_s} s does not follow {previous_s} s")
             }
@@ -334,6 +347,14 @@ where
                 field: "t_s",
                 index: 0,
                 value: t_s,
+            });
+        }
+        let era = crate::measurement::EPOCH_TIME_S;
+        if !era.contains(t_s) {
+            return Err(PcaError::TimeOutOfRange {
+                t_s,
+                min_s: era.min,
+                max_s: era.max,
             });
         }
         if sats.len() > N {

@@ -392,3 +392,28 @@ fn synthetic_constellation_faults_table() {
         }
     }
 }
+
+/// Issue 35: an epoch time outside the GPS era
+/// (`measurement::EPOCH_TIME_S`) is refused, and the history is left as it
+/// was (the next epoch in order is taken).
+#[test]
+fn times_outside_the_gps_era_are_refused() {
+    let (e, _) = stream(2, 1, |_, _| 0.0);
+    let mut pca = Pca::<f64, 16, W>::new();
+    let cfg = PcaConfig::default();
+    pca.process(&cfg, 30.0, &e[0]).unwrap();
+    let era = crate::measurement::EPOCH_TIME_S;
+    for t in [1e300, -1e300, -1.0] {
+        assert_eq!(
+            pca.process(&cfg, t, &e[1]).err(),
+            Some(PcaError::TimeOutOfRange {
+                t_s: t,
+                min_s: era.min,
+                max_s: era.max
+            })
+        );
+    }
+    assert_eq!(pca.filled(), 1);
+    pca.process(&cfg, 60.0, &e[1]).unwrap();
+    assert_eq!(pca.filled(), 2);
+}
