@@ -528,6 +528,9 @@ fn users(g: &GridSpec) -> Result<Vec<User>> {
         GridSpec::Sites { sites } => sites
             .iter()
             .map(|s| {
+                if s.name.contains([',', '"', '\n', '\r']) {
+                    bail!("site `{}`: a name without commas, quotes or line breaks (it is a CSV field)", s.name);
+                }
                 if !(-90.0..=90.0).contains(&s.lat_deg) || !s.lon_deg.is_finite() {
                     bail!(
                         "site `{}`: latitude {} outside [-90, 90]",
@@ -615,6 +618,13 @@ p_const = 1e-8
         .unwrap();
         assert_eq!(sites.users.len(), 1);
         assert_eq!(sites.users[0].name, "LFPG");
+        let e = load_text(&text(
+            "[grid]\nkind = \"sites\"\nsites = [{ name = \"Paris, CDG\", lat_deg = 49.0, lon_deg = 2.5 }]",
+            "level = \"LPV-200\"",
+            "",
+        ))
+        .unwrap_err();
+        assert!(e.to_string().contains("without commas"), "{e}");
     }
 
     #[test]
