@@ -13,12 +13,16 @@
 # those must be removed or bounded by hand in docs/EVIDENCE.md first.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# scripts/test.sh keeps each build's ELF in firmware/target/elf/ (one
+# shared target directory); a build by hand with the per-configuration
+# target directories of scripts/firmware-memory.sh's header also works.
 ELF=thumbv7em-none-eabihf/release/raim-firmware
+pick() { if [ -f "firmware/target/elf/$1" ]; then echo "firmware/target/elf/$1"; else echo "$2"; fi; }
 status=0
-for build in "QEMU mps2-an386, default:firmware/target/$ELF" \
-             "QEMU mps2-an386, snapshot:firmware/target/snapshot/$ELF" \
-             "STM32F4 (hardware layout):firmware/target/stm32f4-hw/$ELF" \
-             "STM32F4 (netduinoplus2 layout):firmware/target/stm32f4/$ELF"; do
+for build in "QEMU mps2-an386, default:$(pick qemu "firmware/target/$ELF")" \
+             "QEMU mps2-an386, snapshot:$(pick snapshot "firmware/target/snapshot/$ELF")" \
+             "STM32F4 (hardware layout):$(pick stm32f4-hw "firmware/target/stm32f4-hw/$ELF")" \
+             "STM32F4 (netduinoplus2 layout):$(pick stm32f4-netduinoplus2 "firmware/target/stm32f4/$ELF")"; do
     name=${build%%:*}
     elf=${build#*:}
     [ -f "$elf" ] || { echo "== $name: no $elf (build it first)"; status=1; continue; }

@@ -56,22 +56,39 @@ step "no_std build of the core for Cortex-M4F"
 cargo build -p raim-core --target thumbv7em-none-eabihf --release
 cargo build -p raim-core --target thumbv7em-none-eabihf --release --features defmt
 # The firmware: its own workspace (QEMU mps2-an386 and STM32F4 builds,
-# clippy, fmt, docs), one step per command, in the order they always ran.
+# clippy, fmt, docs), one step per command. Every build shares one target
+# directory (firmware/target), so the dependency tree a configuration
+# shares with another is built once (the two STM32F4 builds differ only in
+# the firmware crate's memory layout). A build's ELF is copied to
+# firmware/target/elf/ before the next one overwrites it, and the tests
+# take the copies ($RAIM_FIRMWARE_ELF, $RAIM_FIRMWARE_ELF_STM32F4,
+# $RAIM_FIRMWARE_ELF_SNAPSHOT, crates/raim-qemu). The default build goes
+# last, so that firmware/target/thumbv7em-none-eabihf/release/raim-firmware
+# is the default firmware afterwards, as before.
+FW_ELF=firmware/target/thumbv7em-none-eabihf/release/raim-firmware
+keep_elf() { mkdir -p firmware/target/elf && cp "$FW_ELF" "firmware/target/elf/$1"; }
 step "firmware: fmt, clippy (default features)"
 (cd firmware && cargo fmt -- --check && cargo clippy --release -- -D warnings)
 step "firmware: docs"
 (cd firmware && RUSTDOCFLAGS="-D warnings" cargo doc --release --no-deps)
+step "firmware: build, STM32F4 hardware layout"
+(cd firmware && cargo build --release --no-default-features --features board-stm32f4)
+keep_elf stm32f4-hw
+step "firmware: build, STM32F4 for QEMU netduinoplus2"
+(cd firmware && cargo build --release --no-default-features --features board-stm32f4,qemu-netduinoplus2)
+keep_elf stm32f4-netduinoplus2
+step "firmware: clippy and build, QEMU snapshot-only"
+(cd firmware && cargo clippy --release --no-default-features --features board-qemu -- -D warnings \
+    && cargo build --release --no-default-features --features board-qemu)
+keep_elf snapshot
+# (the QEMU build without araim/pf/multifault, whose flash
+# host-tests/tests/qemu_flash.rs bounds to 128 KiB, issue 10)
 step "firmware: build, QEMU mps2-an386 (default features)"
 (cd firmware && cargo build --release)
-step "firmware: build, STM32F4 hardware layout"
-(cd firmware && cargo build --release --no-default-features --features board-stm32f4 --target-dir target/stm32f4-hw)
-step "firmware: build, STM32F4 for QEMU netduinoplus2"
-(cd firmware && cargo build --release --no-default-features --features board-stm32f4,qemu-netduinoplus2 --target-dir target/stm32f4)
-step "firmware: clippy and build, QEMU snapshot-only"
-(cd firmware && cargo clippy --release --no-default-features --features board-qemu --target-dir target/snapshot -- -D warnings \
-    && cargo build --release --no-default-features --features board-qemu --target-dir target/snapshot)
-# (the last: the QEMU build without araim/pf/multifault, whose flash
-# host-tests/tests/qemu_flash.rs bounds to 128 KiB, issue 10)
+keep_elf qemu
+export RAIM_FIRMWARE_ELF="$PWD/firmware/target/elf/qemu"
+export RAIM_FIRMWARE_ELF_STM32F4="$PWD/firmware/target/elf/stm32f4-netduinoplus2"
+export RAIM_FIRMWARE_ELF_SNAPSHOT="$PWD/firmware/target/elf/snapshot"
 step "static stack bound of every firmware entry within its stack region (call graph of each release ELF; docs/EVIDENCE.md)"
 bash scripts/firmware-evidence.sh
 step "tests (including the firmware under QEMU: host-tests/tests/qemu_*.rs)"

@@ -115,6 +115,8 @@ fn lea4t_on_the_firmware() {
 /// has started; the firmware is sent that configuration too, so its
 /// protection levels are the host's (to the f32 device precision) and its
 /// decisions the same, epoch by epoch.
+///
+/// Verifies: TOOL-LIVE
 #[test]
 fn live_single_frequency_stream_configures_the_firmware_as_the_host() {
     let bytes = std::fs::read(format!("{DATA}/GMSD7_20121014.rtcm3")).unwrap();
