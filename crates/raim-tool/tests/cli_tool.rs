@@ -616,15 +616,34 @@ fn run_files_reproduce_and_are_overridden() {
     }
 }
 
-/// The run files in docs/runs parse into options `raim replay` accepts.
+/// The run files in docs/runs parse into options `raim replay` accepts;
+/// the availability run files (`availability_*.toml`, docs/AVAILABILITY.md)
+/// are read by `raim availability`, run here on the first of 288 time
+/// shards (one epoch of the grid) so that the whole file is checked.
 #[test]
 fn documented_run_files_are_valid() {
     let dir = format!("{ROOT}/docs/runs");
-    let mut n = 0;
+    let (mut n, mut n_availability) = (0, 0);
     for e in std::fs::read_dir(&dir).expect("docs/runs") {
         let p = e.expect("entry").path();
         if p.extension().is_some_and(|x| x == "toml") {
             let s = p.to_str().expect("utf8");
+            let availability = p
+                .file_name()
+                .and_then(|f| f.to_str())
+                .is_some_and(|f| f.starts_with("availability_"));
+            if availability {
+                let out = tmp("availability-run-file");
+                std::fs::create_dir_all(&out).expect("temp dir");
+                let o = out.to_str().expect("utf8");
+                let r = raim(
+                    &["availability", "--run", s, "--shard", "1/288", "--out", o],
+                    "",
+                );
+                assert_eq!(r.code, 0, "{s}: {}", r.stderr);
+                n_availability += 1;
+                continue;
+            }
             // --help after the run file: parsed and checked, nothing run.
             let r = raim(&["replay", "--config", s, "--help"], "");
             assert_eq!(r.code, 0, "{s}: {}", r.stderr);
@@ -632,6 +651,10 @@ fn documented_run_files_are_valid() {
         }
     }
     assert!(n >= 2, "{n} run files");
+    assert!(
+        n_availability >= 1,
+        "{n_availability} availability run files"
+    );
 }
 
 // ---- Standard outputs.
