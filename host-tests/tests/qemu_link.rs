@@ -29,6 +29,11 @@ const TIME_TO_ALERT_S: f64 = 10.0;
 /// The output asserts up to one SysTick wrap (2^24 ticks at 25 MHz) before
 /// the time-to-alert (firmware/src/discrete.rs).
 const CHECK_PERIOD_S: f64 = 16_777_216.0 / 25.0e6;
+/// How long past the time-to-alert the test waits for the output before it
+/// calls the unit hung (a deadline only a hang reaches, not a timing check).
+const TTA_HANG_DEADLINE: Duration = Duration::from_secs(120);
+/// The pace of the status polls while waiting for the time-to-alert.
+const POLL_PERIOD: Duration = Duration::from_millis(250);
 
 /// Verifies: SAFE-LINK
 #[test]
@@ -108,17 +113,10 @@ fn stream(machine: Machine, frames: u32) {
 /// Verifies: SAFE-ALARM
 #[test]
 fn qemu_integrity_alarm_output_follows_the_epochs_and_the_time_to_alert() {
-    // -icount shift=0: the guest's SysTick runs on QEMU's virtual clock,
-    // which follows real time while the guest sleeps.
+    // No -icount: the guest's SysTick runs on QEMU's virtual clock, which
+    // is the host's monotonic clock while the guest runs.
     let elf = raim_qemu::firmware_elf().unwrap();
-    let mut fw = QemuSession::start_with(
-        &elf,
-        &Options {
-            icount: true,
-            ..Options::default()
-        },
-    )
-    .unwrap();
+    let mut fw = QemuSession::start_with(&elf, &Options::default()).unwrap();
     let cfg = Config::default();
     let mut vectors = range_vectors(3);
     // Five satellites, one with a 200 m fault: detected, and no subset is
@@ -161,19 +159,44 @@ fn qemu_integrity_alarm_output_follows_the_epochs_and_the_time_to_alert() {
     assert_eq!(state(&mut fw), AlarmOutput::Clear);
     run(&mut fw, errored);
     assert_eq!(state(&mut fw), AlarmOutput::EpochError);
+    // The last valid epoch: sent at `s0`, answered at `r0` (host clock).
+    // Without -icount the guest's clock is QEMU's virtual clock, the
+    // host's monotonic clock while the guest runs, so the unit ran this
+    // epoch at a guest time in [s0, r0], and it may assert the output
+    // from one check period before the time-to-alert after that.
+    let s0 = Instant::now();
     run(&mut fw, valid);
-    let t_valid = Instant::now();
+    let r0 = Instant::now();
     assert_eq!(state(&mut fw), AlarmOutput::Clear);
-    // Half the time-to-alert: still clear.
-    std::thread::sleep(Duration::from_secs_f64(TIME_TO_ALERT_S / 2.0));
-    assert_eq!(state(&mut fw), AlarmOutput::Clear);
-    // Not before the time-to-alert less one check period ...
-    let early = Duration::from_secs_f64(TIME_TO_ALERT_S - CHECK_PERIOD_S - 0.5);
-    std::thread::sleep(early.saturating_sub(t_valid.elapsed()));
-    assert_eq!(state(&mut fw), AlarmOutput::Clear);
-    // ... and asserted once it has passed.
-    let late = Duration::from_secs_f64(TIME_TO_ALERT_S + 0.3);
-    std::thread::sleep(late.saturating_sub(t_valid.elapsed()));
+    // Poll until the output asserts, with a deadline only a hang reaches.
+    // Each answer is read at a guest time in [s, r] of its request, so an
+    // assertion answered by r < s0 + TTA - one check period would be early,
+    // whatever the machine's load; a late one is measured in the guest's
+    // own time by the hung-loop test (qemu_fail_loud).
+    let earliest = Duration::from_secs_f64(TIME_TO_ALERT_S - CHECK_PERIOD_S);
+    let hang = r0 + Duration::from_secs_f64(TIME_TO_ALERT_S) + TTA_HANG_DEADLINE;
+    let mut clear_polls = 0u32;
+    loop {
+        let st = state(&mut fw);
+        let r = Instant::now();
+        match st {
+            AlarmOutput::Clear => clear_polls += 1,
+            AlarmOutput::TimeToAlertExceeded => {
+                assert!(
+                    r.duration_since(s0) >= earliest,
+                    "asserted {:.2} s after the valid epoch was sent, before {:.2} s",
+                    r.duration_since(s0).as_secs_f64(),
+                    earliest.as_secs_f64()
+                );
+                break;
+            }
+            other => panic!("after a valid epoch and no other: {other:?}"),
+        }
+        assert!(r < hang, "the time-to-alert never asserted the output");
+        std::thread::sleep(POLL_PERIOD);
+    }
+    // The output was seen clear after the epoch before it asserted.
+    assert!(clear_polls >= 1);
     assert_eq!(state(&mut fw), AlarmOutput::TimeToAlertExceeded);
     run(&mut fw, valid);
     assert_eq!(state(&mut fw), AlarmOutput::Clear);
