@@ -354,7 +354,7 @@ fn solve_linear<const N: usize, T: Real>(
     elevations_and_sigmas(cfg, sibling, out, &h, &given, n);
     // n <= N: `gather` counts rows zipped with the N-row arrays.
     #[allow(clippy::indexing_slicing)]
-    let sigmas = &out.sigma_m[..n];
+    let sigmas = &out.sigma_m[..n.min(N)];
     check_sigmas(sigmas, &out.source)?;
     whiten(sigmas, &out.ids, &cols, &mut h, &mut z, n);
     out.parity.compute(&h, &z, n, m)?;

@@ -451,9 +451,8 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             }
             // In range: a clock column is 3 + the number of constellations
             // before it, < 3 + MAX_SYSTEMS = MAX_STATES.
-            #[allow(clippy::indexing_slicing)]
-            {
-                g[clock] = one;
+            if let Some(x) = g.get_mut(clock) {
+                *x = one;
             }
             *col = clock;
             *w = one / s.c_int_m2;

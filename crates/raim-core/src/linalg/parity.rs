@@ -218,10 +218,12 @@ impl<const N: usize, T: Real> Parity<N, T> {
 
     /// The parity vector p = U2^T z (length n - m).
     // m < n <= N once computed, 0 = m = n before: `compute` sets them
-    // only after `factor_from` accepted n <= N and m <= n.
+    // only after `factor_from` accepted n <= N and m <= n. The `min`s
+    // change nothing then, and let the build prove the slice in bounds.
     #[allow(clippy::indexing_slicing)]
     pub fn p(&self) -> &[T] {
-        &self.utz[self.m..self.n]
+        let n = self.n.min(N);
+        &self.utz[self.m.min(n)..n]
     }
 
     /// Weighted sum of squared residuals, p^T p = ||S z||^2.
@@ -233,14 +235,14 @@ impl<const N: usize, T: Real> Parity<N, T> {
     // n <= N, as for `p`.
     #[allow(clippy::indexing_slicing)]
     pub fn s_ii(&self) -> &[T] {
-        &self.s_ii[..self.n]
+        &self.s_ii[..self.n.min(N)]
     }
 
     /// Whitened residuals r = S z.
     // n <= N, as for `p`.
     #[allow(clippy::indexing_slicing)]
     pub fn residuals(&self) -> &[T] {
-        &self.residual[..self.n]
+        &self.residual[..self.n.min(N)]
     }
 
     /// The rows E, N, U of the position gain A (each of length n).
@@ -248,7 +250,8 @@ impl<const N: usize, T: Real> Parity<N, T> {
     #[allow(clippy::indexing_slicing)]
     pub fn gains(&self) -> [&[T]; 3] {
         let [e, n, u] = &self.gain;
-        [&e[..self.n], &n[..self.n], &u[..self.n]]
+        let len = self.n.min(N);
+        [&e[..len], &n[..len], &u[..len]]
     }
 
     /// Least-squares state correction dx (first m entries meaningful).

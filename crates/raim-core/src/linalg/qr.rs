@@ -226,7 +226,9 @@ impl<const N: usize, T: Real> Householder<N, T> {
     pub fn solve_tt(&self, y: &[T; MAX_STATES]) -> [T; MAX_STATES] {
         let mut x = [T::zero(); MAX_STATES];
         for (i, (col, &d)) in self.a.iter().zip(self.diag.iter()).take(self.m).enumerate() {
-            let (head, tail) = x.split_at_mut(i);
+            let Some((head, tail)) = x.split_at_mut_checked(i) else {
+                break;
+            };
             let dot = dot(head.iter(), col.iter());
             if let (Some(xi), Some(yi)) = (tail.first_mut(), y.get(i)) {
                 *xi = (*yi - dot) / d;

@@ -98,8 +98,11 @@ pub fn check(n: usize, m: usize, t: usize) -> Result<(), MultifaultError> {
 /// k = n - m satellites (parts of sizes ceil(n/g) and floor(n/g)).
 fn parts_count(n: usize, m: usize, t: usize) -> usize {
     let k = n - m;
-    (t + 1..=n)
-        .find(|&g| t * (n / g) + t.min(n % g) <= k)
+    (t.saturating_add(1).max(1)..=n)
+        .find(|&g| match (n.checked_div(g), n.checked_rem(g)) {
+            (Some(q), Some(r)) => t * q + t.min(r) <= k,
+            _ => false,
+        })
         .unwrap_or(n)
 }
 
@@ -176,6 +179,9 @@ impl Covering {
             Design::Exact(groups) => groups.get(i).copied(),
             Design::Parts { parts } => {
                 let g = usize::from(parts);
+                if g == 0 {
+                    return None;
+                }
                 let chosen = unrank(i, g, usize::from(self.t))?;
                 let mut set = 0;
                 for sat in 0..self.satellites() {
@@ -236,8 +242,7 @@ pub fn members(set: SatSet) -> ([u8; MAX_SATS], usize) {
 pub fn for_each_subset(set: SatSet, t: usize, mut f: impl FnMut(SatSet)) {
     let (idx, k) = members(set);
     // k <= 64 = MAX_SATS, the bits of a u64 set.
-    #[allow(clippy::indexing_slicing)]
-    let idx = &idx[..k];
+    let idx = idx.get(..k).unwrap_or(&[]);
     let bit = |i: &u8| 1u64 << *i;
     if t >= 1 {
         for a in idx {

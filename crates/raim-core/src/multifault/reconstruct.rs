@@ -117,9 +117,8 @@ impl<T: Real, const N: usize> ResidualModel<T, N> {
                 *v = P::one();
             }
             let k = parity.project(&e, &mut y);
-            // k <= y.len(): `project` writes at most that many entries.
-            #[allow(clippy::indexing_slicing)]
-            let col = parity.lift(&y[..k]);
+            // `project` writes at most y.len() entries.
+            let col = parity.lift(y.get(..k).unwrap_or(&[]));
             if let Some(v) = e.get_mut(j) {
                 *v = P::zero();
             }
@@ -143,17 +142,20 @@ impl<T: Real, const N: usize> ResidualModel<T, N> {
 
     /// S_ij, for satellites i, j < [`Self::n`].
     // In range: every caller passes satellites it checked against n(), and
-    // n <= N (`fill_from_parity` sets it to the parity's row count).
-    #[allow(clippy::indexing_slicing)]
+    // n <= N (`fill_from_parity` sets it to the parity's row count). Out
+    // of range would be NaN, which no test passes.
     fn s(&self, i: usize, j: usize) -> T {
-        self.s[i][j]
+        self.s
+            .get(i)
+            .and_then(|row| row.get(j))
+            .copied()
+            .unwrap_or(T::of(f64::NAN))
     }
 
     /// r_i, for a satellite i < [`Self::n`].
     // In range: as for `s`.
-    #[allow(clippy::indexing_slicing)]
     fn residual(&self, i: usize) -> T {
-        self.r[i]
+        self.r.get(i).copied().unwrap_or(T::of(f64::NAN))
     }
 
     /// D^2 = ||r||^2, the all-in-view statistic.
@@ -226,17 +228,20 @@ impl<T: Real, const N: usize> Workspace<T, N> {
 }
 
 // In range: a, b < k, and k <= n <= N (one row per distinct satellite
-// j < n that `reconstruct` admits).
-#[allow(clippy::indexing_slicing)]
+// j < n that `reconstruct` admits); out of range would be NaN.
 impl<T: Real, const N: usize> Workspace<T, N> {
     fn l(&self, a: usize, b: usize) -> T {
-        self.l[a][b]
+        self.l
+            .get(a)
+            .and_then(|row| row.get(b))
+            .copied()
+            .unwrap_or(T::of(f64::NAN))
     }
 
     /// Solves L y = rhs in place over the first k rows.
     fn forward(&self, y: &mut [T; N]) {
-        for a in 0..self.k {
-            let mut v = y[a];
+        for a in 0..self.k.min(N) {
+            let mut v = y.get(a).copied().unwrap_or(T::of(f64::NAN));
             for (b, yb) in y.iter().enumerate().take(a) {
                 v -= self.l(a, b) * *yb;
             }
@@ -248,8 +253,8 @@ impl<T: Real, const N: usize> Workspace<T, N> {
 
     /// Solves L^T x = y in place over the first k rows.
     fn backward(&self, y: &mut [T; N]) {
-        for a in (0..self.k).rev() {
-            let mut v = y[a];
+        for a in (0..self.k.min(N)).rev() {
+            let mut v = y.get(a).copied().unwrap_or(T::of(f64::NAN));
             for (b, &yb) in y.iter().enumerate().take(self.k).skip(a + 1) {
                 v -= self.l(b, a) * yb;
             }
@@ -281,8 +286,7 @@ pub fn reconstruct<T: Real, const N: usize>(
     out.q = T::zero();
     let mut l_row = [T::zero(); N];
     // count <= 64 = MAX_SATS, the bits of a u64 set.
-    #[allow(clippy::indexing_slicing)]
-    let sats = &sats[..count];
+    let sats = sats.get(..count).unwrap_or(&[]);
     for &j in sats {
         let j = usize::from(j);
         if j >= model.n() {

@@ -60,8 +60,9 @@ pub fn fix(sats: &[FixInput], start: [f64; 3]) -> Result<Reference, PfError> {
             h[2] = -d[2] / r;
             let ci = CLOCK0 + s.sys;
             // ci < CLOCK0 + MAX_SYSTEMS <= DIM (`sys` checked on entry).
-            #[allow(clippy::indexing_slicing)]
-            let clock = x[ci];
+            let Some(&clock) = x.get(ci) else {
+                continue;
+            };
             if let Some(c) = h.get_mut(ci) {
                 *c = 1.0;
             }

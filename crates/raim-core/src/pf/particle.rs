@@ -99,16 +99,18 @@ impl<T: Real, const P: usize, const GA: bool> ParticleFilter<T, P, GA> {
             }
         }
         // n_low <= P: it counts only the successful stores above.
-        #[allow(clippy::indexing_slicing)]
-        let low = &low[..n_low];
+        let low = low.get(..n_low).unwrap_or(&[]);
         // Crossover: floor(N_L / 2) random pairs (eqs. 5-6), each child
         // accepted against the better parent.
         for _ in 0..n_low / 2 {
             // rng::index(_, n) < n for n >= 1, and here n_low >= 2.
-            #[allow(clippy::indexing_slicing)]
-            let m = low[rng::index(rng, n_low)] as usize;
-            #[allow(clippy::indexing_slicing)]
-            let n = low[rng::index(rng, n_low)] as usize;
+            let (Some(&m), Some(&n)) = (
+                low.get(rng::index(rng, n_low)),
+                low.get(rng::index(rng, n_low)),
+            ) else {
+                continue;
+            };
+            let (m, n) = (m as usize, n as usize);
             let a = T::of(rng::uniform(rng));
             let (Some(&xm), Some(&xn)) = (self.particles.get(m), self.particles.get(n)) else {
                 continue;

@@ -75,11 +75,50 @@ pub fn rank_threshold<T: Real, const P: usize>(weights: &[T; P]) -> T {
     if P == 0 {
         return T::zero();
     }
-    // NaN sorts as equal: a NaN weight never reaches here (collapse check).
-    let (_, kth, _) = sorted.select_nth_unstable_by(k, |a, b| {
-        a.partial_cmp(b).unwrap_or(core::cmp::Ordering::Equal)
-    });
-    *kth
+    kth_smallest(&mut sorted, k).unwrap_or(T::zero())
+}
+
+/// The k-th smallest value of `v` (0-based), by quickselect with the
+/// middle element as pivot (Lomuto partition), reordering `v`; `None` when
+/// k >= v.len(). Every access is checked, so no input can make it panic
+/// (`core`'s `select_nth_unstable_by` carries panic paths into the
+/// firmware; docs/EVIDENCE.md "Panic sites"). A NaN compares as not less:
+/// it never reaches here (the filter's collapse check), and it could only
+/// change which value is returned, not end the loop, since every pass
+/// shrinks the range by at least the pivot.
+pub fn kth_smallest<T: Real>(v: &mut [T], k: usize) -> Option<T> {
+    let less = |a: T, b: T| a.partial_cmp(&b) == Some(core::cmp::Ordering::Less);
+    let (mut lo, mut hi) = (0usize, v.len());
+    if k >= hi {
+        return None;
+    }
+    while hi - lo > 1 {
+        let last = hi - 1;
+        swap(v, lo + (hi - lo) / 2, last);
+        let pivot = *v.get(last)?;
+        let mut store = lo;
+        for i in lo..last {
+            let x = *v.get(i)?;
+            if less(x, pivot) {
+                swap(v, i, store);
+                store += 1;
+            }
+        }
+        swap(v, store, last);
+        match k.cmp(&store) {
+            core::cmp::Ordering::Equal => break,
+            core::cmp::Ordering::Less => hi = store,
+            core::cmp::Ordering::Greater => lo = store + 1,
+        }
+    }
+    v.get(k).copied()
+}
+
+/// `v.swap(a, b)` when both are in range (always, in `kth_smallest`).
+fn swap<T>(v: &mut [T], a: usize, b: usize) {
+    if a < v.len() && b < v.len() {
+        v.swap(a, b);
+    }
 }
 
 /// Metropolis acceptance of a candidate with log-likelihood `cand` against
@@ -109,6 +148,7 @@ pub fn crossover<T: Real>(xm: &[T; DIM], xn: &[T; DIM], a: T) -> ([T; DIM], [T; 
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
     use super::*;
 
     /// Systematic resampling: every count is floor or ceil of N w_i, the
@@ -152,6 +192,28 @@ mod tests {
         let mut ids: [f64; 5] = core::array::from_fn(|i| p[i][0]);
         ids.sort_by(|a, b| a.partial_cmp(b).unwrap());
         assert_eq!(ids, [1.0, 1.0, 1.0, 3.0, 4.0]);
+    }
+
+    /// The quickselect gives the value sorting gives, at every rank tried,
+    /// with ties, and on an ascending input.
+    #[test]
+    fn kth_smallest_equals_the_sorted_order() {
+        let mut rng = crate::testutil::Rng::new(7);
+        for n in [1usize, 2, 3, 7, 100, 301] {
+            let v: std::vec::Vec<f64> = (0..n)
+                .map(|i| if i % 5 == 0 { 1.0 } else { rng.normal() })
+                .collect();
+            let mut sorted = v.clone();
+            sorted.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            for k in [0, n / 3, n / 2, n - 1] {
+                let mut w = v.clone();
+                assert_eq!(kth_smallest(&mut w, k), Some(sorted[k]), "n {n} k {k}");
+            }
+            let mut w = v.clone();
+            assert_eq!(kth_smallest(&mut w, n), None);
+        }
+        let mut ascending: std::vec::Vec<f64> = (0..200).map(f64::from).collect();
+        assert_eq!(kth_smallest(&mut ascending, 66), Some(66.0));
     }
 
     /// The rank threshold is the weight of rank round(N/3) ascending, so

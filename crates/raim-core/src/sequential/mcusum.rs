@@ -367,7 +367,7 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
     // n <= N: `store` sets it to at most N.
     #[allow(clippy::indexing_slicing)]
     pub fn state(&self) -> (&[SatId], &[T]) {
-        (&self.ids[..self.n], &self.v[..self.n])
+        (&self.ids[..self.n.min(N)], &self.v[..self.n.min(N)])
     }
 
     /// D = ||S|| = ||v|| (U2 has orthonormal columns).
@@ -468,7 +468,7 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         let carried = self.prior(ids, parity, carry, &mut s);
         // d = n - m < n <= N (a computed parity space).
         #[allow(clippy::indexing_slicing)]
-        let sd = &mut s[..d];
+        let sd = &mut s[..d.min(N)];
         if d < self.last_dim && self.last_h > 0.0 && h < self.last_h {
             let scale = T::of(h / self.last_h);
             for x in sd.iter_mut() {
@@ -514,7 +514,7 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         self.prior(ids, parity, carry, &mut s);
         // d = n - m < n <= N (a computed parity space).
         #[allow(clippy::indexing_slicing)]
-        let sd = &s[..d];
+        let sd = &s[..d.min(N)];
         self.store(ids, parity, sd);
         self.last_dim = d;
         self.norm()
@@ -535,7 +535,7 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
     ) -> (Option<Candidate<T>>, Option<Candidate<T>>) {
         // n <= N: `store` sets it to at most N.
         #[allow(clippy::indexing_slicing)]
-        let v = &self.v[..self.n];
+        let v = &self.v[..self.n.min(N)];
         lraim::rank_rows(FiRule::Mle, v, parity.s_ii(), T::of(min_s_ii))
     }
 
@@ -555,8 +555,10 @@ impl<const N: usize, T: Real> Mcusum<N, T> {
         if self.is_held(id) {
             return;
         }
-        if self.held.is_full() && !self.held.is_empty() {
-            self.held.remove(0);
+        if self.held.is_full() {
+            // The oldest hold (the first) released, the others kept in order.
+            let mut first = true;
+            self.held.retain(|_| !core::mem::take(&mut first));
         }
         let pushed = self.held.push(Held {
             id,

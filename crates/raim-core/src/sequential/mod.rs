@@ -273,15 +273,15 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         snap.run(cfg, epoch, outcome, result)?;
         let sol = &outcome.solution;
         // k < N: an exclusion's index is a satellite of `epoch`, which
-        // holds at most N (the monitor validated the input epoch).
-        #[allow(clippy::indexing_slicing)]
-        let to_input = |k: usize| src[k];
+        // holds at most N (the monitor validated the input epoch), so the
+        // fallback (the index unchanged) is never taken.
+        let to_input = |k: usize| src.get(k).copied().unwrap_or(k);
         for e in result.exclusions.iter_mut() {
             e.index = to_input(e.index);
         }
         let rows = sol.rows();
         #[allow(clippy::indexing_slicing)] // rows <= N, a parity's rows
-        let ids = &sol.ids[..rows];
+        let ids = &sol.ids[..rows.min(N)];
         let dim = sol.parity.dof();
         let snapshot_alarm = result.initial_test.alarm();
         let mut report = McusumReport {
@@ -414,7 +414,7 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         };
         mcusum.hold(id, epoch.time_s);
         #[allow(clippy::indexing_slicing)] // rows <= N, a parity's rows
-        let sub_ids = &sub.ids[..sub.rows()];
+        let sub_ids = &sub.ids[..sub.rows().min(N)];
         report.after_exclusion = Some(mcusum.carry_to(sub_ids, &sub.parity, cfg.mcusum.carry));
         if snapshot_failed {
             // The snapshot alarm stands this epoch; the hold applies from the next.
@@ -422,9 +422,8 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         }
         let after = fde::test(cfg, &mut snap.thresholds, &sub)?;
         // cand.row < N: `sol.ids.get(cand.row)` found its satellite above.
-        #[allow(clippy::indexing_slicing)]
-        let sigma = sol.sigma_m[cand.row];
         let nan = T::of(f64::NAN);
+        let sigma = sol.sigma_m.get(cand.row).copied().unwrap_or(f64::NAN);
         let r_j = sol.parity.residuals().get(cand.row).copied().unwrap_or(nan);
         let s_jj = sol.parity.s_ii().get(cand.row).copied().unwrap_or(nan);
         let record = Exclusion {

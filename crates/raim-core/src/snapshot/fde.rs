@@ -228,9 +228,8 @@ fn best_pairs<const N: usize, T: Real>(
             *v = T::one();
         }
         let k_dims = parity.project(&e, &mut y);
-        // k_dims <= y.len(): `project` writes at most that many entries.
-        #[allow(clippy::indexing_slicing)]
-        let col = parity.lift(&y[..k_dims]);
+        // `project` writes at most y.len() entries.
+        let col = parity.lift(y.get(..k_dims).unwrap_or(&[]));
         if let Some(v) = e.get_mut(j) {
             *v = T::zero();
         }
@@ -326,12 +325,15 @@ fn exclude_pair<const N: usize, T: Real>(
             let (a, b) = alt.rows;
             let other = if a != j && a != k { a } else { b };
             let mine = if j != a && j != b { j } else { k };
-            // A pair's rows are parity rows, < n <= N (`ids` has N).
-            #[allow(clippy::indexing_slicing)]
-            let id = |row: usize| current.ids[row];
+            // A pair's rows are parity rows, < n <= N (`ids` has N); a row
+            // without an id leaves the pair unidentifiable: alarm.
+            let (Some(&best), Some(&runner_up)) = (current.ids.get(mine), current.ids.get(other))
+            else {
+                return Ok(PairOutcome::Ambiguous(AlarmCause::Unidentifiable));
+            };
             return Ok(PairOutcome::Ambiguous(AlarmCause::Ambiguous {
-                best: id(mine),
-                runner_up: id(other),
+                best,
+                runner_up,
             }));
         }
     }

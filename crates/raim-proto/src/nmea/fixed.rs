@@ -41,7 +41,10 @@ pub fn uint<W: Write>(w: &mut W, n: u64, width: u32) -> Result {
     }
     let mut rest = n;
     loop {
-        let d = rest / top;
+        // top >= 1 (a power of ten); the `else` is never taken.
+        let Some(d) = rest.checked_div(top) else {
+            return Ok(());
+        };
         rest -= d * top;
         w.write_char(digit(d))?;
         if top == 1 {
