@@ -3,7 +3,9 @@
 # stack of every entry (main and each exception handler) from the call
 # graph and the per-function frames of the disassembly
 # (scripts/firmware_callgraph.py), checked against each build's stack
-# region; and the panic sites still reachable from main, listed. Run from
+# region; and the panic sites reachable from every entry, each of which
+# must be listed in docs/panic_allowlist.toml (no entry for raim-core: a
+# panic path in the core fails the check), with no stale entry. Run from
 # the repository root after scripts/test.sh's firmware builds. Needs
 # llvm-objdump and llvm-nm (the `llvm` package, installed by
 # scripts/install-deps.sh test).
@@ -19,6 +21,7 @@ cd "$(dirname "$0")/.."
 ELF=thumbv7em-none-eabihf/release/raim-firmware
 pick() { if [ -f "firmware/target/elf/$1" ]; then echo "firmware/target/elf/$1"; else echo "$2"; fi; }
 status=0
+JSON_DIR=$(mktemp -d)
 for build in "QEMU mps2-an386, default:$(pick qemu "firmware/target/$ELF")" \
              "QEMU mps2-an386, snapshot:$(pick snapshot "firmware/target/snapshot/$ELF")" \
              "STM32F4 (hardware layout):$(pick stm32f4-hw "firmware/target/stm32f4-hw/$ELF")" \
@@ -27,7 +30,7 @@ for build in "QEMU mps2-an386, default:$(pick qemu "firmware/target/$ELF")" \
     elf=${build#*:}
     [ -f "$elf" ] || { echo "== $name: no $elf (build it first)"; status=1; continue; }
     echo "== $name"
-    json=$(mktemp)
+    json="$JSON_DIR/$(echo "$name" | tr -c 'A-Za-z0-9' '_').json"
     python3 scripts/firmware_callgraph.py "$elf" --json "$json" | grep -v "deepest path"
     python3 - "$json" "$name" <<'PY' || status=1
 import json, sys
@@ -45,6 +48,27 @@ for b in bad:
     print(f"  FAIL ({name}): {b}")
 sys.exit(1 if bad else 0)
 PY
-    rm -f "$json"
 done
+# Panic sites: every one reachable in any build must be listed in
+# docs/panic_allowlist.toml, and every entry there must match a site.
+python3 - "$JSON_DIR" docs/panic_allowlist.toml <<'PY' || status=1
+import glob, json, sys, tomllib
+reports = [json.load(open(p)) for p in sorted(glob.glob(sys.argv[1] + "/*.json"))]
+allow = tomllib.load(open(sys.argv[2], "rb"))["site"]
+sites = {}
+for r in reports:
+    for e, x in r["entries"].items():
+        for s in x["panic_sites"]:
+            sites.setdefault(s, set()).add(e)
+unlisted = sorted(s for s in sites if not any(a["symbol"] in s for a in allow))
+stale = [a["symbol"] for a in allow if not any(a["symbol"] in s for s in sites)]
+open_ = sum(1 for s in sites if any(a["symbol"] in s and a["kind"] == "open" for a in allow))
+print(f"== panic sites: {len(sites)} reachable across the builds, {open_} open (docs/panic_allowlist.toml)")
+for s in unlisted:
+    print(f"  FAIL: panic site not in docs/panic_allowlist.toml: {s} (from {sorted(sites[s])})")
+for a in stale:
+    print(f"  FAIL: docs/panic_allowlist.toml entry matches no panic site (remove it): {a}")
+sys.exit(1 if unlisted or stale else 0)
+PY
+rm -rf "$JSON_DIR"
 exit $status
