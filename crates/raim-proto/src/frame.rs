@@ -3,15 +3,18 @@
 //!
 //! The payload is the postcard encoding of a message ([`crate::message`]);
 //! the CRC is CRC-32/ISO-HDLC (the Ethernet/zlib CRC) of the payload bytes.
-//! COBS and the accumulation of a byte stream into delimited chunks are
-//! postcard's (`to_slice_cobs`, `CobsAccumulator`); the CRC is the `crc`
-//! crate's. What this module adds is the policy: a chunk longer than the
-//! receive buffer is reported once and skipped up to the next delimiter, an
-//! empty chunk (a lone delimiter) is a sync byte and not a frame, and every
-//! other chunk yields either a verified payload or a typed [`FrameError`].
+//! Encoding is postcard's (`to_slice_cobs`); the CRC is the `crc` crate's.
+//! On the receive side the chunk is gathered and COBS-decoded here, with
+//! every access checked ([`FrameReceiver`], `decode_cobs_in_place`), so
+//! that the frame decoder links no panic path (docs/EVIDENCE.md "Panic
+//! sites"); it answers exactly as postcard's `CobsAccumulator` did (a test
+//! compares the two on random streams). What this module adds is the
+//! policy: a chunk longer than the receive buffer is reported once and
+//! skipped up to the next delimiter, an empty chunk (a lone delimiter) is
+//! a sync byte and not a frame, and every other chunk yields either a
+//! verified payload or a typed [`FrameError`].
 
 use crc::{Crc, CRC_32_ISO_HDLC};
-use postcard::accumulator::{CobsAccumulator, FeedResult};
 use serde::{Deserialize, Serialize};
 
 /// CRC-32/ISO-HDLC (poly 0x04C11DB7 reflected, init and xorout 0xFFFFFFFF):
@@ -91,7 +94,8 @@ pub fn encode<'o, T: Serialize + ?Sized>(
 /// Turns a byte stream into verified payloads. `B` is the receive buffer,
 /// the largest frame (delimiter included) that can be received.
 pub struct FrameReceiver<const B: usize> {
-    acc: CobsAccumulator<B>,
+    /// The current chunk's bytes, `buf[..pending]`.
+    buf: [u8; B],
     /// Bytes of the current chunk so far (delimiter excluded).
     pending: usize,
     /// After an overflow: drop bytes up to the next delimiter.
@@ -108,7 +112,7 @@ impl<const B: usize> FrameReceiver<B> {
     /// An empty receiver.
     pub const fn new() -> Self {
         FrameReceiver {
-            acc: CobsAccumulator::new(),
+            buf: [0; B],
             pending: 0,
             discarding: false,
         }
@@ -146,32 +150,80 @@ impl<const B: usize> FrameReceiver<B> {
             return None;
         }
         let len = self.pending + 1;
-        self.pending = if byte == 0 { 0 } else { len };
-        match self.acc.feed_ref::<Envelope<'_>>(&[byte]) {
-            FeedResult::Consumed => None,
-            FeedResult::OverFull(_) => {
+        if byte != 0 {
+            // A chunk longer than the buffer (the delimiter counts):
+            // reported once, the rest skipped up to the next delimiter.
+            let Some(slot) = self.buf.get_mut(self.pending) else {
                 self.pending = 0;
-                self.discarding = byte != 0;
-                Some(Err(FrameError::Overflow { capacity: B as u32 }))
-            }
-            FeedResult::DeserError(_) => Some(Err(FrameError::Undecodable { len: len as u32 })),
-            FeedResult::Success { data, .. } => {
-                let computed = CRC32.checksum(data.payload);
-                if data.payload.is_empty() {
-                    // No message is empty, and the CRC of nothing is 0: a
-                    // chunk of noise can decode as (empty, 0).
-                    Some(Err(FrameError::Undecodable { len: len as u32 }))
-                } else if computed == data.crc32 {
-                    Some(Ok(data.payload))
-                } else {
-                    Some(Err(FrameError::BadCrc {
-                        computed,
-                        received: data.crc32,
-                    }))
-                }
-            }
+                self.discarding = true;
+                return Some(Err(FrameError::Overflow { capacity: B as u32 }));
+            };
+            *slot = byte;
+            self.pending = len;
+            return None;
+        }
+        // The delimiter: it must fit in the buffer too.
+        let body = self.pending;
+        self.pending = 0;
+        if len > B {
+            return Some(Err(FrameError::Overflow { capacity: B as u32 }));
+        }
+        let undecodable = FrameError::Undecodable { len: len as u32 };
+        let chunk = self.buf.get_mut(..body)?;
+        let Some(n) = decode_cobs_in_place(chunk) else {
+            return Some(Err(undecodable));
+        };
+        let Ok(data) = postcard::from_bytes::<Envelope<'_>>(chunk.get(..n)?) else {
+            return Some(Err(undecodable));
+        };
+        let computed = CRC32.checksum(data.payload);
+        if data.payload.is_empty() {
+            // No message is empty, and the CRC of nothing is 0: a chunk of
+            // noise can decode as (empty, 0).
+            Some(Err(undecodable))
+        } else if computed == data.crc32 {
+            Some(Ok(data.payload))
+        } else {
+            Some(Err(FrameError::BadCrc {
+                computed,
+                received: data.crc32,
+            }))
         }
     }
+}
+
+/// COBS-decodes `chunk` (a frame's bytes without its delimiter) in place and
+/// returns the decoded length; `None` when it is not valid COBS. Each code
+/// byte k is followed by k - 1 data bytes and stands for a zero after them
+/// unless k is 0xFF or the chunk ends there. The rules of the `cobs`
+/// crate's `decode_in_place` that postcard applies: an empty chunk is
+/// invalid, a zero ends the chunk early, and a code running past the end is
+/// invalid unless it is 1. Written with checked accesses only: the decoder
+/// of every byte from the host links no panic path.
+fn decode_cobs_in_place(chunk: &mut [u8]) -> Option<usize> {
+    if chunk.is_empty() {
+        return None;
+    }
+    let end = chunk.iter().position(|&b| b == 0).unwrap_or(chunk.len());
+    let (mut src, mut dst) = (0usize, 0usize);
+    while src < end {
+        let code = usize::from(*chunk.get(src)?);
+        if src + code > end && code != 1 {
+            return None;
+        }
+        src += 1;
+        for _ in 1..code {
+            let b = *chunk.get(src)?;
+            *chunk.get_mut(dst)? = b;
+            src += 1;
+            dst += 1;
+        }
+        if code != 0xFF && src < end {
+            *chunk.get_mut(dst)? = 0;
+            dst += 1;
+        }
+    }
+    Some(dst)
 }
 
 #[cfg(test)]
@@ -352,5 +404,133 @@ mod tests {
         let g = postcard::to_slice_cobs(&env, &mut out).unwrap().to_vec();
         assert!(g.len() <= 64);
         assert!(matches!(feed_all(&mut rx, &g).as_slice(), [Ok(_)]));
+    }
+
+    /// The receiver as postcard's `CobsAccumulator` drove it (the
+    /// implementation this module had): the oracle for the checked one.
+    struct Oracle<const B: usize> {
+        acc: postcard::accumulator::CobsAccumulator<B>,
+        pending: usize,
+        discarding: bool,
+    }
+
+    impl<const B: usize> Oracle<B> {
+        fn push(&mut self, byte: u8) -> Option<Result<Vec<u8>, FrameError>> {
+            use postcard::accumulator::FeedResult;
+            if self.discarding {
+                if byte == 0 {
+                    self.discarding = false;
+                }
+                return None;
+            }
+            if byte == 0 && self.pending == 0 {
+                return None;
+            }
+            let len = self.pending + 1;
+            self.pending = if byte == 0 { 0 } else { len };
+            match self.acc.feed_ref::<Envelope<'_>>(&[byte]) {
+                FeedResult::Consumed => None,
+                FeedResult::OverFull(_) => {
+                    self.pending = 0;
+                    self.discarding = byte != 0;
+                    Some(Err(FrameError::Overflow { capacity: B as u32 }))
+                }
+                FeedResult::DeserError(_) => Some(Err(FrameError::Undecodable { len: len as u32 })),
+                FeedResult::Success { data, .. } => {
+                    let computed = CRC32.checksum(data.payload);
+                    if data.payload.is_empty() {
+                        Some(Err(FrameError::Undecodable { len: len as u32 }))
+                    } else if computed == data.crc32 {
+                        Some(Ok(data.payload.to_vec()))
+                    } else {
+                        Some(Err(FrameError::BadCrc {
+                            computed,
+                            received: data.crc32,
+                        }))
+                    }
+                }
+            }
+        }
+    }
+
+    /// Byte streams of valid frames (some with a flipped byte), random
+    /// bytes, runs of zeros and chunks longer than the buffer: the checked
+    /// receiver answers every byte exactly as postcard's accumulator did.
+    fn same_as_the_accumulator<const B: usize>(stream: &[u8]) {
+        let mut rx = FrameReceiver::<B>::new();
+        let mut oracle = Oracle::<B> {
+            acc: postcard::accumulator::CobsAccumulator::new(),
+            pending: 0,
+            discarding: false,
+        };
+        for (i, &b) in stream.iter().enumerate() {
+            let got = rx.push(b).map(|r| r.map(|p| p.to_vec()));
+            assert_eq!(got, oracle.push(b), "byte {i} ({b:#04x}) of {stream:02x?}");
+        }
+    }
+
+    fn stream_of(parts: &[(u8, Vec<u8>)]) -> Vec<u8> {
+        let mut out = Vec::new();
+        for (kind, bytes) in parts {
+            match kind % 5 {
+                0 | 4 => {
+                    // A valid frame of these payload bytes (non-empty), or
+                    // of a run of 254 non-zero bytes and more (COBS code
+                    // 0xFF blocks).
+                    let payload = if *kind % 5 == 4 {
+                        (0..254 + bytes.len())
+                            .map(|i| (i % 255 + 1) as u8)
+                            .collect()
+                    } else if bytes.is_empty() {
+                        std::vec![1]
+                    } else {
+                        bytes.clone()
+                    };
+                    let env = Envelope {
+                        payload: &payload,
+                        crc32: CRC32.checksum(&payload),
+                    };
+                    let mut buf = [0u8; 1024];
+                    out.extend(postcard::to_slice_cobs(&env, &mut buf).unwrap().iter());
+                }
+                1 => {
+                    // The same with one byte changed.
+                    let payload = if bytes.is_empty() {
+                        std::vec![9]
+                    } else {
+                        bytes.clone()
+                    };
+                    let env = Envelope {
+                        payload: &payload,
+                        crc32: CRC32.checksum(&payload),
+                    };
+                    let mut buf = [0u8; 1024];
+                    let mut f = postcard::to_slice_cobs(&env, &mut buf).unwrap().to_vec();
+                    let k = bytes.len() % f.len();
+                    f[k] ^= 0x5A;
+                    out.extend(f);
+                }
+                2 => out.extend(bytes),
+                _ => out.extend(std::iter::repeat_n(0u8, bytes.len() % 3)),
+            }
+        }
+        out
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(512))]
+        /// Verifies: WIRE-Overflow, WIRE-Undecodable, WIRE-BadCrc
+        #[test]
+        fn checked_receiver_answers_as_postcards_accumulator(
+            parts in proptest::collection::vec(
+                (0u8..5, proptest::collection::vec(proptest::prelude::any::<u8>(), 0..90)),
+                0..12,
+            )
+        ) {
+            let stream = stream_of(&parts);
+            same_as_the_accumulator::<16>(&stream);
+            same_as_the_accumulator::<64>(&stream);
+            same_as_the_accumulator::<{ MAX_REQUEST_FRAME }>(&stream);
+        }
     }
 }
