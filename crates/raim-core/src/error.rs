@@ -192,3 +192,108 @@ impl core::fmt::Display for RaimError {
 }
 
 impl core::error::Error for RaimError {}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use std::format;
+
+    /// Every rejection says what was wrong with the values it carries: each
+    /// variant's message names its field and shows its offending values.
+    #[test]
+    fn every_error_names_its_values() {
+        let cases: [(RaimError, &[&str]); 12] = [
+            (
+                RaimError::NotFinite {
+                    field: "pseudorange_m",
+                    index: 7,
+                    value: f64::NAN,
+                },
+                &["pseudorange_m", "7", "NaN"],
+            ),
+            (
+                RaimError::DuplicateSatellite {
+                    system: System::Galileo,
+                    prn: 5,
+                    first: 2,
+                    second: 9,
+                },
+                &["E05", "2", "9"],
+            ),
+            (
+                RaimError::TooFewSatellites { have: 4, need: 6 },
+                &["have 4", "need 6"],
+            ),
+            (
+                RaimError::RankDeficient {
+                    column: 3,
+                    pivot: 1.5e-13,
+                },
+                &["column 3", "1.5e-13"],
+            ),
+            (
+                RaimError::NonPositiveSigma {
+                    index: 11,
+                    sigma_m: -0.25,
+                },
+                &["index 11", "-0.25 m"],
+            ),
+            (
+                RaimError::CapacityExceeded {
+                    have: 40,
+                    capacity: 32,
+                },
+                &["40", "32"],
+            ),
+            (
+                RaimError::OutOfRange {
+                    field: "pfa",
+                    value: 2.0,
+                    min: 1e-9,
+                    max: 0.5,
+                },
+                &["pfa = 2", "0.000000001", "0.5"],
+            ),
+            (
+                RaimError::NoConvergence {
+                    iterations: 20,
+                    step_m: 12.5,
+                },
+                &["20 iterations", "12.5 m"],
+            ),
+            (RaimError::InvalidDof { dof: 0, max: 64 }, &["0", "1..=64"]),
+            (
+                RaimError::SigmaOutOfRange {
+                    index: 3,
+                    sigma_m: 900.0,
+                    min_m: 0.1,
+                    max_m: 300.0,
+                },
+                &["index 3", "900 m", "[0.1, 300] m"],
+            ),
+            (
+                RaimError::PrnOutOfRange {
+                    index: 1,
+                    system: System::Gps,
+                    prn: 0,
+                    max: 32,
+                },
+                &["number 0 of G", "index 1", "1..=32"],
+            ),
+            (
+                RaimError::TimeNotIncreasing {
+                    previous_s: 101.0,
+                    now_s: 51.0,
+                },
+                &["51 s", "101 s"],
+            ),
+        ];
+        for (e, parts) in cases {
+            let msg = format!("{e}");
+            for p in parts {
+                assert!(msg.contains(p), "{e:?}: {msg:?} lacks {p:?}");
+            }
+        }
+    }
+}

@@ -134,3 +134,82 @@ impl core::fmt::Display for AraimError {
 }
 
 impl core::error::Error for AraimError {}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use std::format;
+
+    /// Every ARAIM rejection's message names its field and shows its
+    /// offending values.
+    #[test]
+    fn every_error_names_its_values() {
+        let cases: [(AraimError, &[&str]); 8] = [
+            (
+                AraimError::NotFinite {
+                    field: "residual_m",
+                    index: 4,
+                    value: f64::INFINITY,
+                },
+                &["residual_m", "index 4", "inf"],
+            ),
+            (
+                AraimError::OutOfRange {
+                    field: "sigma_ura_m",
+                    index: 2,
+                    value: 0.01,
+                    min: 0.3,
+                    max: 100.0,
+                },
+                &["sigma_ura_m", "index 2", "0.01", "[0.3, 100]"],
+            ),
+            (
+                AraimError::DuplicateSatellite {
+                    system: System::Gps,
+                    prn: 12,
+                    first: 0,
+                    second: 5,
+                },
+                &["G12", "0 and 5"],
+            ),
+            (
+                AraimError::CapacityExceeded {
+                    have: 30,
+                    capacity: 24,
+                },
+                &["30", "24"],
+            ),
+            (
+                AraimError::EmptyConstellation {
+                    system: System::Galileo,
+                },
+                &["constellation E"],
+            ),
+            (
+                AraimError::MissingConstellationIsm {
+                    system: System::Beidou,
+                    index: 9,
+                },
+                &["index 9", "constellation C"],
+            ),
+            (
+                AraimError::TooFewSatellites { have: 4, need: 5 },
+                &["have 4", "need 5"],
+            ),
+            (
+                AraimError::RankDeficient {
+                    column: 4,
+                    pivot: 2.5e-14,
+                },
+                &["column 4", "2.5e-14"],
+            ),
+        ];
+        for (e, parts) in cases {
+            let msg = format!("{e}");
+            for p in parts {
+                assert!(msg.contains(p), "{e:?}: {msg:?} lacks {p:?}");
+            }
+        }
+    }
+}

@@ -86,3 +86,65 @@ impl core::fmt::Display for MultifaultError {
 }
 
 impl core::error::Error for MultifaultError {}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use std::format;
+
+    /// Every reconstruction rejection's message shows its offending values.
+    #[test]
+    fn every_error_names_its_values() {
+        let cases: [(MultifaultError, &[&str]); 6] = [
+            (
+                MultifaultError::TooManyFaults {
+                    t: 4,
+                    n: 9,
+                    m: 5,
+                    max: 2,
+                },
+                &["4 faults", "n = 9", "m = 5", "at most 2"],
+            ),
+            (
+                MultifaultError::FaultCountOutOfRange {
+                    field: "t_max",
+                    t: 0,
+                    max: 3,
+                },
+                &["t_max = 0", "1..=3"],
+            ),
+            (
+                MultifaultError::ZeroGroupBudget {
+                    field: "group_budget",
+                },
+                &["group_budget is 0"],
+            ),
+            (
+                MultifaultError::CapacityExceeded {
+                    have: 70,
+                    capacity: 64,
+                },
+                &["70", "64"],
+            ),
+            (
+                MultifaultError::NoIdentifiableGroup { n: 7, groups: 21 },
+                &["21 groups", "7 satellites"],
+            ),
+            (
+                MultifaultError::GroupOutOfRange {
+                    group: 3,
+                    mask: 0x100,
+                    n: 8,
+                },
+                &["group 3", "0x100", ">= 8"],
+            ),
+        ];
+        for (e, parts) in cases {
+            let msg = format!("{e}");
+            for p in parts {
+                assert!(msg.contains(p), "{e:?}: {msg:?} lacks {p:?}");
+            }
+        }
+    }
+}

@@ -162,3 +162,101 @@ impl core::fmt::Display for PfError {
 }
 
 impl core::error::Error for PfError {}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::measurement::System;
+    use std::format;
+
+    /// Every particle-filter rejection's message names its field and shows
+    /// its offending values.
+    #[test]
+    fn every_error_names_its_values() {
+        let g07 = SatId::new(System::Gps, 7);
+        let cases: [(PfError, &[&str]); 11] = [
+            (
+                PfError::NotFinite {
+                    field: "pseudorange_m",
+                    index: 3,
+                    value: f64::NAN,
+                },
+                &["pseudorange_m[3]", "NaN"],
+            ),
+            (PfError::DuplicateSatellite { id: g07 }, &["G07"]),
+            (
+                PfError::TooFewSatellites { have: 3, need: 5 },
+                &["3 usable", "5 needed"],
+            ),
+            (
+                PfError::Capacity {
+                    field: "particles",
+                    have: 5000,
+                    max: 1000,
+                },
+                &["particles", "5000", "1000"],
+            ),
+            (
+                PfError::InvalidConfig {
+                    field: "window",
+                    value: 0.0,
+                },
+                &["window = 0"],
+            ),
+            (
+                PfError::NotCalibrated {
+                    field: "particles",
+                    value: 77.0,
+                },
+                &["particles = 77"],
+            ),
+            (
+                PfError::TimeNotIncreasing {
+                    previous_s: 10.0,
+                    now_s: 9.0,
+                },
+                &["9 s", "10 s"],
+            ),
+            (
+                PfError::NoInitialFix {
+                    iterations: 30,
+                    step_m: 1e4,
+                },
+                &["30 iterations", "10000 m"],
+            ),
+            (
+                PfError::OutOfRange {
+                    field: "pfa",
+                    value: 0.9,
+                    min: 1e-6,
+                    max: 0.1,
+                },
+                &["pfa = 0.9", "0.1]"],
+            ),
+            (
+                PfError::SigmaOutOfRange {
+                    index: 2,
+                    sigma_m: 0.01,
+                    min_m: 0.1,
+                    max_m: 300.0,
+                },
+                &["sigma_m[2] = 0.01 m", "[0.1, 300] m"],
+            ),
+            (
+                PfError::PrnOutOfRange {
+                    index: 5,
+                    id: SatId::new(System::Galileo, 40),
+                    max: 36,
+                },
+                &["number 40 of E", "index 5", "1..=36"],
+            ),
+        ];
+        for (e, parts) in cases {
+            let msg = format!("{e}");
+            for p in parts {
+                assert!(msg.contains(p), "{e:?}: {msg:?} lacks {p:?}");
+            }
+        }
+    }
+}
