@@ -154,7 +154,7 @@ fn faults_round_trip_at_the_msm7_resolution() {
             seed: 0,
         };
         let out = fault_stream(&bytes, &plan).unwrap();
-        let (moved, worst_m) = check(&bytes, &out.bytes, |t, id| bias_at(t, id));
+        let (moved, worst_m) = check(&bytes, &out.bytes, &bias_at);
         println!(
             "{spec}: {moved} pseudoranges moved (worst {worst_m:.2e} m), {} MSM rewritten, {} rough ranges moved, {} phases dropped",
             out.msm_faulted, out.rough_moved, out.phase_dropped

@@ -807,12 +807,23 @@ fn araim_sigma_bounds(command: &Command) -> Result<(), WireError> {
     if !cfg!(feature = "araim") {
         return Ok(());
     }
+    // Statically dispatched (no vtable call on the epoch path: the
+    // firmware's call graph, scripts/firmware_callgraph.py, resolves every
+    // call).
+    match command {
+        Command::Araim(AraimCommand::Epoch(e)) => {
+            check_sigma_bounds(e.sats.items.iter().map(|s| s.sigma_m))
+        }
+        Command::Araim(AraimCommand::Ranges(e)) => {
+            check_sigma_bounds(e.sats.items.iter().map(|s| s.sigma_m))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// [`araim_sigma_bounds`] on one epoch's host sigmas.
+fn check_sigma_bounds(sigmas: impl Iterator<Item = Option<f64>>) -> Result<(), WireError> {
     let bound = raim_core::config_bounds::SIGMA_M;
-    let sigmas: &mut dyn Iterator<Item = Option<f64>> = match command {
-        Command::Araim(AraimCommand::Epoch(e)) => &mut e.sats.items.iter().map(|s| s.sigma_m),
-        Command::Araim(AraimCommand::Ranges(e)) => &mut e.sats.items.iter().map(|s| s.sigma_m),
-        _ => return Ok(()),
-    };
     for (i, s) in sigmas.enumerate() {
         // A non-positive or non-finite sigma is the engine's own typed
         // error (`NonPositiveSigma`, `NonFinite`).
