@@ -497,3 +497,65 @@ fn qemu_rtcm_araim_galileo_constellation_fault_is_caught() {
     let o = unit_equals_host(&ism, &faulted, &host, "Galileo constellation fault");
     check_constellation(&o, &host);
 }
+
+/// The cost of an ARAIM stream epoch on the unit (BENCHMARKS.md
+/// "Firmware: receiver stream"), under `-icount shift=0` (a SysTick tick
+/// is 40 guest instructions): for the ESBC stream up to epoch `k`, clean
+/// and with the 30 m Galileo step, the forming of epoch `k`
+/// (`Status.last_stream_ticks`) and its ARAIM run (`last_epoch_ticks`:
+/// all in view, and the exclusion when faulted), with the epoch's
+/// satellites and modes. Printed, not asserted (a benchmark).
+#[test]
+fn qemu_rtcm_araim_stream_epoch_cost() {
+    let (bytes, host) = stream();
+    let ism = ism(&host);
+    let e = galileo_in_all(&host);
+    let faulted = with_step(&bytes, e, 30.0);
+    let elf = raim_qemu::firmware_elf_for(Machine::Mps2An386).unwrap();
+    // The epoch measured: the last of the stream, and the first faulted.
+    let onset = host
+        .iter()
+        .position(|h| h.prepared.time_gps_s - host[0].prepared.time_gps_s >= ONSET_S)
+        .unwrap();
+    for (what, stream, k) in [
+        ("clean, last epoch", &bytes, EPOCHS - 1),
+        ("30 m Galileo step, first faulted epoch", &faulted, onset),
+    ] {
+        // The frames up to the one that closed epoch k.
+        let end = rtcm_common::frames(stream)
+            .get(host[k].frame)
+            .map(|f| f.as_ptr() as usize - stream.as_ptr() as usize + f.len())
+            .unwrap();
+        let mut fw = QemuSession::start_with(
+            &elf,
+            &raim_qemu::Options {
+                icount: true,
+                ..raim_qemu::Options::default()
+            },
+        )
+        .unwrap();
+        fw.call(ism_command(&ism.0, ism.1)).unwrap();
+        for chunk in stream[..end].chunks(4096) {
+            fw.send_raw(chunk).unwrap();
+        }
+        let mut last = None;
+        for _ in 0..=k {
+            last = Some(fw.recv(STREAM_TIMEOUT).unwrap());
+        }
+        let s = fw.status().unwrap();
+        let w = araim_result(&last.as_ref().unwrap().body).clone();
+        println!(
+            "ARAIM stream epoch ({what}): {} satellites, {} modes, {:?} {:?}; forming {} ticks = {} instructions; ARAIM {} ticks = {} instructions; stack high water {} B",
+            host[k].obs.len(),
+            w.all_in_view.modes,
+            w.decision,
+            w.fde,
+            s.last_stream_ticks,
+            40 * u64::from(s.last_stream_ticks),
+            s.last_epoch_ticks,
+            40 * u64::from(s.last_epoch_ticks),
+            s.stack_high_water_bytes
+        );
+        assert!(s.last_epoch_ticks > 0);
+    }
+}

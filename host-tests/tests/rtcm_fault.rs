@@ -190,4 +190,10 @@ fn glonass_faults_are_refused() {
     ));
     let out = fault_stream(&bytes, &plan("step:G06:50@+60")).unwrap();
     assert!(out.cells_faulted > 0);
+    assert_eq!(out.bytes.len(), bytes.len());
+    // A fault that never starts within the stream changes no byte (the
+    // file's cut last frame included).
+    let out = fault_stream(&bytes, &plan("step:G06:50@+100000")).unwrap();
+    assert_eq!(out.msm_faulted, 0);
+    assert!(out.bytes == bytes);
 }
