@@ -290,8 +290,22 @@ fn with_step(bytes: &[u8], sat: SatId, bias_m: f64) -> Vec<u8> {
 /// the Galileo solution displaced by `shift_enu_m` at the station (the
 /// lines of sight of the host's epochs), written into the stream.
 fn with_galileo_shift(bytes: &[u8], host: &[HostEpoch], shift_enu_m: [f64; 3]) -> Vec<u8> {
-    let t0 = host[0].prepared.time_gps_s;
     let first = raim_recv::msm_fault::first_msm_gps_s(bytes).unwrap();
+    let table = galileo_shift_table(host, shift_enu_m);
+    raim_recv::msm_fault::bias_stream(bytes, |t, sats| {
+        let k = (t - first).round() as i64;
+        for s in sats.iter_mut() {
+            s.pseudorange_m += table.get(&(k, s.id)).copied().unwrap_or(0.0);
+        }
+    })
+    .unwrap()
+    .bytes
+}
+
+/// The biases of [`with_galileo_shift`], keyed by (s from the first
+/// epoch, satellite), from the host's epochs.
+fn galileo_shift_table(host: &[HostEpoch], shift_enu_m: [f64; 3]) -> BTreeMap<(i64, SatId), f64> {
+    let t0 = host[0].prepared.time_gps_s;
     let mut table = BTreeMap::<(i64, SatId), f64>::new();
     for h in host {
         let t = h.prepared.time_gps_s;
@@ -308,20 +322,15 @@ fn with_galileo_shift(bytes: &[u8], host: &[HostEpoch], shift_enu_m: [f64; 3]) -
             table.insert(((t - t0).round() as i64, id), b);
         }
     }
-    raim_recv::msm_fault::bias_stream(bytes, |t, sats| {
-        let k = (t - first).round() as i64;
-        for s in sats.iter_mut() {
-            s.pseudorange_m += table.get(&(k, s.id)).copied().unwrap_or(0.0);
-        }
-    })
-    .unwrap()
-    .bytes
+    table
 }
 
 /// Host side only (no QEMU): with an ISM in force every stream epoch of
 /// the host `Server` is an ARAIM epoch whose answer body is the one the
 /// host's own epochs get as `Araim(Ranges)` requests; clean, every epoch
-/// has ARAIM service; the two faults are caught as the module docs say.
+/// has ARAIM service; the two faults are caught as the module docs say,
+/// the constellation fault also as `raim rtcm-fault --araim-const-fault`
+/// writes it.
 ///
 /// Verifies: RX-ARAIM, RX-STREAM-FAULT
 #[test]
@@ -358,6 +367,40 @@ fn host_server_stream_araim_is_the_araim_path() {
     let (answers, _) = host_run(&ism, &with_galileo_shift(&bytes, &host, [0.0, 0.0, 60.0]));
     let shift = outcomes(&answers, &host);
     check_constellation(&shift, &host);
+
+    // `raim rtcm-fault --araim-const-fault E:0:0,0,60@+600`'s biases
+    // (`constellation_table`: the file read whole, the station's lines of
+    // sight) against the ones above (the causal host epochs' reference
+    // positions): within 1 mm for every satellite used; and its stream is
+    // caught alike.
+    let first = raim_recv::msm_fault::first_msm_gps_s(&bytes).unwrap();
+    let lib = raim_recv::msm_fault::constellation_table(
+        &bytes,
+        &[raim_recv::msm_fault::ConstellationShift {
+            system: System::Galileo,
+            common_m: 0.0,
+            shift_enu_m: [0.0, 0.0, 60.0],
+            start_s: first + ONSET_S,
+            end_s: None,
+        }],
+    )
+    .unwrap();
+    let mine = galileo_shift_table(&host, [0.0, 0.0, 60.0]);
+    let mut worst_m = 0.0f64;
+    for ((k, id), b) in &mine {
+        let key = (raim_recv::msm_fault::time_key(first + *k as f64), *id);
+        let got = lib.get(&key).unwrap_or_else(|| panic!("{key:?} missing"));
+        worst_m = worst_m.max((got - b).abs());
+    }
+    println!(
+        "constellation_table against the host epochs' biases: {} entries, worst {worst_m:.1e} m",
+        mine.len()
+    );
+    assert!(worst_m <= 1e-3, "{worst_m}");
+    let plan = raim_gnss::faults::FaultPlan::default();
+    let tool = raim_recv::msm_fault::fault_stream_with(&bytes, &plan, &lib).unwrap();
+    let (answers, _) = host_run(&ism, &tool.bytes);
+    check_constellation(&outcomes(&answers, &host), &host);
 }
 
 /// 0 alarms and exclusions before the onset; from it, `sat` excluded

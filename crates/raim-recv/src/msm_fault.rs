@@ -538,3 +538,123 @@ mod tests {
         assert_eq!(c.at(6.0), 604_806.0);
     }
 }
+
+/// A constellation-wide fault with a displaced solution (ARAIM's
+/// constellation fault mode; `raim replay --araim-const-fault`): from
+/// `start_s` (stream time, as the fault plan's) to `end_s`, every satellite
+/// of `system` gets `raim_gnss::faults::constellation_bias` with the common
+/// error `common_m` and the constellation's solution displaced by
+/// `shift_enu_m` (east, north, up) at the receiver.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConstellationShift {
+    pub system: System,
+    pub common_m: f64,
+    pub shift_enu_m: [f64; 3],
+    pub start_s: f64,
+    pub end_s: Option<f64>,
+}
+
+/// Biases keyed by (stream time ms, satellite).
+pub type BiasTable = std::collections::BTreeMap<(i64, SatId), f64>;
+
+/// The stream time's key in a [`BiasTable`].
+pub fn time_key(t_s: f64) -> i64 {
+    (t_s * 1000.0).round() as i64
+}
+
+/// The biases of `faults` at each epoch of `bytes` (read whole,
+/// `crate::read_all`: its ephemerides and station position), keyed by
+/// stream time (`first_msm_gps_s`'s scale): each satellite's position from
+/// the broadcast ephemeris at its transmit time (raim-gnss's preparation,
+/// the stream codes, no elevation mask) and the line of sight from the
+/// station (RTCM 1005/1006). A satellite the stream has no ephemeris for
+/// gets no bias (no receiver could use it). Refused: GLONASS (its MSM
+/// time, above), a stream without a station position.
+pub fn constellation_table(
+    bytes: &[u8],
+    faults: &[ConstellationShift],
+) -> Result<BiasTable, ConstellationError> {
+    let mut table = BiasTable::new();
+    if faults.is_empty() {
+        return Ok(table);
+    }
+    if let Some(f) = faults.iter().find(|f| f.system == System::Glonass) {
+        return Err(ConstellationError::Glonass(f.system));
+    }
+    let first = first_msm_gps_s(bytes).ok_or(ConstellationError::Msm(MsmFaultError::NoMsm))?;
+    let rec = crate::read_all(crate::Format::Rtcm3, bytes, "stream".into())
+        .map_err(|e| ConstellationError::Read(e.to_string()))?;
+    let station = rec
+        .obs
+        .approx_position_m
+        .ok_or(ConstellationError::NoStation)?;
+    let Some(e0) = rec.obs.epochs.first() else {
+        return Ok(table);
+    };
+    // The reader's GPS times against the stream's: a whole number of weeks.
+    let weeks = ((e0.time_gps_s - first) / WEEK_S).round() * WEEK_S;
+    let rot = raim_core::frames::enu_rotation(&raim_core::frames::ecef_to_geodetic(station));
+    let opts = raim_gnss::ranging::RangingOptions {
+        systems: vec![System::Gps, System::Galileo, System::Beidou, System::Qzss],
+        codes: raim_nav::ranging::STREAM_CODES
+            .iter()
+            .map(|(s, c)| (*s, c.iter().map(|c| c.to_string()).collect()))
+            .collect(),
+        elevation_mask_rad: -core::f64::consts::FRAC_PI_2,
+        iono: false,
+        tropo: true,
+        group_delay: true,
+        glonass_sigma: None,
+    };
+    for e in &rec.obs.epochs {
+        let t = e.time_gps_s - weeks;
+        let active: Vec<&ConstellationShift> = faults
+            .iter()
+            .filter(|f| t >= f.start_s && f.end_s.is_none_or(|end| t < end))
+            .collect();
+        if active.is_empty() {
+            continue;
+        }
+        let prepared = raim_gnss::ranging::prepare_epoch(&rec.nav, e, &opts, Some(station));
+        let mut sats = prepared.observations();
+        for f in active {
+            let shift = raim_core::frames::unrotate(&rot, f.shift_enu_m);
+            for (id, b) in raim_gnss::faults::constellation_bias(
+                &mut sats, f.system, station, f.common_m, shift,
+            ) {
+                *table.entry((time_key(t), id)).or_default() += b;
+            }
+        }
+    }
+    Ok(table)
+}
+
+/// Why a constellation fault could not be placed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ConstellationError {
+    #[error("a constellation fault on {0:?}: GLONASS MSM time cannot be joined to GPS time without a date")]
+    Glonass(System),
+    #[error("a constellation fault needs the receiver position: the stream has no station position (RTCM 1005/1006)")]
+    NoStation,
+    #[error("reading the stream: {0}")]
+    Read(String),
+    #[error(transparent)]
+    Msm(#[from] MsmFaultError),
+}
+
+/// [`fault_stream`] with the constellation biases of `table` added
+/// ([`constellation_table`]).
+pub fn fault_stream_with(
+    bytes: &[u8],
+    plan: &raim_gnss::faults::FaultPlan,
+    table: &BiasTable,
+) -> Result<FaultedStream, MsmFaultError> {
+    bias_stream(bytes, |t, sats| {
+        plan.apply(t, sats);
+        for s in sats.iter_mut() {
+            if let Some(b) = table.get(&(time_key(t), s.id)) {
+                s.pseudorange_m += b;
+            }
+        }
+    })
+}

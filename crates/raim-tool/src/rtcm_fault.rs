@@ -1,8 +1,9 @@
 //! `raim rtcm-fault`: a receiver's RTCM 3 stream re-encoded with seeded
 //! faults (`raim_recv::msm_fault`): a step, ramp, clock jump or noise of
 //! the `raim replay --fault` vocabulary (`raim_gnss::faults`, the same
-//! parser and scenario files) written into the MSM pseudoranges of the
-//! satellites it names, every signal alike, with each frame's CRC-24Q
+//! parser and scenario files), and ARAIM constellation faults of
+//! `--araim-const-fault` (the replay's parser), written into the MSM
+//! pseudoranges of the satellites they touch, every signal alike, with each frame's CRC-24Q
 //! recomputed and every other bit kept. The result can be sent to a unit's
 //! link UART, or replayed with `raim replay --rtcm3`, as a receiver's
 //! output with a faulty satellite or constellation (docs/RECEIVERS.md
@@ -32,6 +33,13 @@ pub struct RtcmFaultArgs {
     /// Seed of the injected noise (overrides the scenario's).
     #[arg(long)]
     pub seed: Option<u64>,
+    /// A constellation-wide fault, as `raim replay --araim-const-fault`: SYS:COMMON_M:E_M,N_M,U_M@START[..END], a common range error plus the range change of a shift (east, north, up) of that constellation's solution at the stream's station (RTCM 1005/1006); repeatable.
+    #[arg(
+        long = "araim-const-fault",
+        value_name = "SPEC",
+        allow_hyphen_values = true
+    )]
+    pub araim_const_faults: Vec<String>,
 }
 
 /// The plan of `args`, its times counted from `first_gps_s`.
@@ -51,8 +59,8 @@ fn plan(args: &RtcmFaultArgs, first_gps_s: f64) -> Result<FaultPlan> {
 }
 
 pub fn run(args: &RtcmFaultArgs) -> Result<()> {
-    if args.faults.is_empty() && args.scenario.is_none() {
-        bail!("rtcm-fault: no fault given (--fault SPEC or --scenario FILE)");
+    if args.faults.is_empty() && args.scenario.is_none() && args.araim_const_faults.is_empty() {
+        bail!("rtcm-fault: no fault given (--fault SPEC, --scenario FILE or --araim-const-fault SPEC)");
     }
     let bytes =
         std::fs::read(&args.input).with_context(|| format!("--in {}", args.input.display()))?;
@@ -64,7 +72,23 @@ pub fn run(args: &RtcmFaultArgs) -> Result<()> {
         )
     })?;
     let plan = plan(args, first)?;
-    let out = raim_recv::msm_fault::fault_stream(&bytes, &plan)
+    let shifts = args
+        .araim_const_faults
+        .iter()
+        .map(|s| {
+            let f = crate::replay::araim::ConstFault::parse(s, first)?;
+            Ok(raim_recv::msm_fault::ConstellationShift {
+                system: f.system,
+                common_m: f.common_m,
+                shift_enu_m: f.shift_enu_m,
+                start_s: f.start_gps_s,
+                end_s: f.end_gps_s,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let table = raim_recv::msm_fault::constellation_table(&bytes, &shifts)
+        .with_context(|| format!("--in {}", args.input.display()))?;
+    let out = raim_recv::msm_fault::fault_stream_with(&bytes, &plan, &table)
         .with_context(|| format!("--in {}", args.input.display()))?;
     std::fs::write(&args.output, &out.bytes)
         .with_context(|| format!("--out {}", args.output.display()))?;

@@ -238,6 +238,27 @@ fn rtcm_fault_defaults() {
     assert!(solved_after > 150, "{solved_after}: {err}");
     assert_eq!(excluded, solved_after, "{err}");
     assert!(before >= 60, "{before}");
+    // A constellation fault needs the station's lines of sight: GMSD7
+    // sends no 1005/1006, and GLONASS is refused.
+    for (spec, why) in [
+        ("G:0:0,0,30@+60", "no station position"),
+        ("R:0:0,0,30@+60", "GLONASS MSM time"),
+    ] {
+        let (code, _, err) = raim(
+            &[
+                "rtcm-fault",
+                "--in",
+                &format!("{DATA}/GMSD7_20121014.rtcm3"),
+                "--out",
+                out,
+                "--araim-const-fault",
+                spec,
+            ],
+            None,
+        );
+        assert_eq!(code, Some(1), "{spec}: {err}");
+        assert!(err.contains(why), "{spec}: {err}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
