@@ -351,10 +351,23 @@ fn host_server_stream_araim_is_the_araim_path() {
         .iter()
         .map(|a| araim_result(&a.body).all_in_view.modes)
         .collect();
+    let pls: Vec<(f64, f64)> = answers
+        .iter()
+        .map(|a| {
+            let w = araim_result(&a.body).in_force();
+            (w.vpl_m, w.hpl_m)
+        })
+        .collect();
+    let mean = |f: fn(&(f64, f64)) -> f64| pls.iter().map(f).sum::<f64>() / pls.len() as f64;
+    let max = |f: fn(&(f64, f64)) -> f64| pls.iter().map(f).fold(0.0, f64::max);
     println!(
-        "clean: {ok} of {EPOCHS} Ok, modes {}..{}, {} NMEA lines",
+        "clean: {ok} of {EPOCHS} Ok, modes {}..{}, VPL mean {:.2} m max {:.2} m, HPL mean {:.2} m max {:.2} m, {} NMEA lines",
         modes.iter().min().unwrap(),
         modes.iter().max().unwrap(),
+        mean(|p| p.0),
+        max(|p| p.0),
+        mean(|p| p.1),
+        max(|p| p.1),
         nmea.len()
     );
     assert_eq!(ok, EPOCHS, "{clean:?}");
