@@ -197,3 +197,92 @@ fn glonass_faults_are_refused() {
     assert_eq!(out.msm_faulted, 0);
     assert!(out.bytes == bytes);
 }
+
+/// Full pseudorange and phase range (ms) of every GPS MSM7 cell of
+/// `bytes`, read with `rtcm-rs`: (frame, satellite, signal) -> (pseudorange,
+/// phase range), None where the field is invalid.
+type Cells = BTreeMap<(usize, u8, String), (Option<f64>, Option<f64>)>;
+fn gps_msm7_cells(bytes: &[u8]) -> Cells {
+    use rtcm_rs::msg::message::Message;
+    let mut out = Cells::new();
+    for (k, f) in rtcm_common::frames(bytes).into_iter().enumerate() {
+        let Ok(m) = rtcm_rs::MessageFrame::new(f) else {
+            continue;
+        };
+        let Message::Msg1077(m) = m.get_message() else {
+            continue;
+        };
+        let sats = &m.data_segment.satellite_data;
+        for s in m.data_segment.signal_data.iter() {
+            let sat = sats
+                .iter()
+                .find(|x| x.satellite_id == s.satellite_id)
+                .unwrap();
+            let rough = sat
+                .gnss_satellite_rough_range_integer_ms
+                .map(|i| i as f64 + sat.gnss_satellite_rough_range_mod1ms_ms);
+            let pr = rough
+                .zip(s.gnss_signal_fine_pseudorange_ext_ms)
+                .map(|(r, f)| r + f);
+            let ph = rough
+                .zip(s.gnss_signal_fine_phaserange_ext_ms)
+                .map(|(r, f)| r + f);
+            out.insert((k, s.satellite_id, format!("{:?}", s.signal_id)), (pr, ph));
+        }
+    }
+    out
+}
+
+/// GMSD7's MSM7 carry phase ranges: a 500 m step on G06 (beyond the fine
+/// pseudorange field, so its rough range moves by two 2^-10 ms units)
+/// leaves every phase range where it was (the fine phase ranges move back
+/// by as much), and moves the pseudoranges by 500 m within half of DF405;
+/// every other satellite's cells are bit-identical. At 2 km the rough
+/// range moves by 7 units, 2,049 m, beyond DF406's +-1,171 m: every
+/// moved satellite's phase range is marked invalid, and counted.
+///
+/// Verifies: RX-STREAM-FAULT
+#[test]
+fn a_moved_rough_range_keeps_the_carrier_phase() {
+    let bytes = std::fs::read(rtcm_common::GMSD7).expect("GMSD7 (../shared/data)");
+    let first = raim_recv::msm_fault::first_msm_gps_s(&bytes).unwrap();
+    let plan = |s: &str| FaultPlan {
+        faults: vec![FaultPlan::parse_cli(s, first).unwrap()],
+        seed: 0,
+    };
+    let far = fault_stream(&bytes, &plan("step:G06:2000@+60")).unwrap();
+    assert_eq!(far.phase_dropped, far.cells_faulted);
+    let out = fault_stream(&bytes, &plan("step:G06:500@+60")).unwrap();
+    assert!(out.rough_moved > 0);
+    let (a, b) = (gps_msm7_cells(&bytes), gps_msm7_cells(&out.bytes));
+    assert_eq!(a.len(), b.len());
+    let bias_ms = 500.0 / LIGHT_MS_M;
+    let half_ms = FINE_MS / 2.0;
+    let (mut moved, mut phases) = (0, 0);
+    for (key, (pr, ph)) in &a {
+        let (qr, qh) = b[key];
+        if key.1 == 6
+            && (pr.is_some()
+                && qr.map(|q| (q - pr.unwrap() - bias_ms).abs() <= half_ms + 1e-12) == Some(true))
+        {
+            moved += 1;
+            if let (Some(x), Some(y)) = (ph, qh) {
+                // The same phase range, to the f64 sum of its two fields.
+                assert!((x - y).abs() <= 1e-12, "{key:?}: {x} {y}");
+                phases += 1;
+            }
+        } else {
+            assert_eq!(
+                (pr.map(f64::to_bits), ph.map(f64::to_bits)),
+                (qr.map(f64::to_bits), qh.map(f64::to_bits)),
+                "{key:?}"
+            );
+        }
+    }
+    println!(
+        "500 m on G06: {moved} pseudoranges moved, {phases} phase ranges kept, {} phases dropped",
+        out.phase_dropped
+    );
+    assert!(moved > 300 && phases > 300, "{moved} {phases}");
+    assert_eq!(out.phase_dropped, 0);
+}
