@@ -87,6 +87,9 @@ pub struct FaultedStream {
     pub rough_moved: usize,
     /// Fine phase ranges marked invalid (out of their field).
     pub phase_dropped: usize,
+    /// MSM4-7 frames whose layout could not be read (more than 64 cells,
+    /// or shorter than their masks say): copied as they are, unfaulted.
+    pub msm_unread: usize,
     /// The GPS time of the first MSM (seconds from the GPS week 0 of the
     /// first MSM's week): what `+S` and `HH:MM:SS` are counted from.
     pub first_gps_s: f64,
@@ -328,8 +331,12 @@ pub fn bias_stream(
         let frame = &bytes[start..start + n];
         let mut f = frame.to_vec();
         let number = get_bits(&f, HDR_BITS, 12);
-        let layout = msm_of(number).and_then(|(sys, kind)| Layout::parse(&f, sys, kind));
-        let Some(layout) = layout else {
+        let Some((system, kind)) = msm_of(number) else {
+            out.bytes.extend_from_slice(frame);
+            continue;
+        };
+        let Some(layout) = Layout::parse(&f, system, kind) else {
+            out.msm_unread += 1;
             out.bytes.extend_from_slice(frame);
             continue;
         };

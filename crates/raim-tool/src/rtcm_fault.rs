@@ -90,15 +90,23 @@ pub fn run(args: &RtcmFaultArgs) -> Result<()> {
         .with_context(|| format!("--in {}", args.input.display()))?;
     let out = raim_recv::msm_fault::fault_stream_with(&bytes, &plan, &table)
         .with_context(|| format!("--in {}", args.input.display()))?;
+    if out.cells_faulted == 0 {
+        bail!(
+            "--in {}: the faults move no pseudorange of the stream (no MSM of the satellites they name within their times; {} MSM frames unread); nothing written",
+            args.input.display(),
+            out.msm_unread
+        );
+    }
     std::fs::write(&args.output, &out.bytes)
         .with_context(|| format!("--out {}", args.output.display()))?;
     writeln!(
         std::io::stdout(),
-        "{}: {} bytes, {} frames; {} MSM rewritten, {} pseudoranges moved, {} rough ranges moved, {} phase ranges dropped; first MSM at GPS {} (time of week {:.3} s)",
+        "{}: {} bytes, {} frames; {} MSM rewritten ({} unread), {} pseudoranges moved, {} rough ranges moved, {} phase ranges dropped; first MSM at GPS {} (time of week {:.3} s)",
         args.output.display(),
         out.bytes.len(),
         out.frames,
         out.msm_faulted,
+        out.msm_unread,
         out.cells_faulted,
         out.rough_moved,
         out.phase_dropped,
