@@ -11,6 +11,7 @@
 //! docs/RECEIVERS.md describes the formats, the sources and the choices.
 
 pub mod lnav;
+pub mod msm_fault;
 pub mod rtcm;
 pub mod source;
 pub mod ubx;

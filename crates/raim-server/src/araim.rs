@@ -99,6 +99,13 @@ impl AraimState {
             engine: engine::Engines::new(),
         }
     }
+
+    /// Whether ARAIM is the configured monitor of the unit's own stream
+    /// epochs: an ISM is in force (`stream.rs`, "Which monitor").
+    #[cfg_attr(not(feature = "rtcm"), allow(dead_code))]
+    pub(super) fn runs_stream(&self) -> bool {
+        self.ism.is_some()
+    }
 }
 
 /// Range checks of an ISM frame: everything the core checks at an epoch
@@ -175,7 +182,8 @@ impl Server {
     }
 
     /// An ARAIM epoch request (`Araim(Epoch)` or `Araim(Ranges)`, in
-    /// `self.request`), answered from a reference into the request
+    /// `self.request`; `seq` None for a stream epoch the unit formed
+    /// itself, `stream.rs`), answered from a reference into the request
     /// (the firmware's stack: the epoch is not moved out of the
     /// server's request slot onto this frame, as `answer_other` moves the
     /// other requests).
@@ -186,7 +194,7 @@ impl Server {
         P: super::Platform,
     >(
         &mut self,
-        seq: u32,
+        seq: Option<u32>,
         link: &mut L,
         nmea_out: &mut M,
         platform: &mut P,
@@ -214,8 +222,8 @@ impl Server {
         self.write_araim_nmea(&answer, nmea_out)
             .map_err(super::IoError::Nmea)?;
         match &answer {
-            Ok(a) => self.send(link, Some(seq), super::BodyRef::Araim(a)),
-            Err(e) => self.send(link, Some(seq), super::BodyRef::Error(e)),
+            Ok(a) => self.send(link, seq, super::BodyRef::Araim(a)),
+            Err(e) => self.send(link, seq, super::BodyRef::Error(e)),
         }
     }
 
@@ -1271,5 +1279,112 @@ mod tests {
             }
         }
         assert_eq!(runs, 5 * 3 * 2 * 2 * 2);
+    }
+
+    /// A stream epoch (the unit's own, formed from a receiver's RTCM) with
+    /// an ISM in force runs ARAIM through the same path as the host's
+    /// `Araim(Ranges)` epoch of the same satellites: the same answer body,
+    /// sent unasked (`seq: None`), the same NMEA sentences and the same
+    /// verdict at the alarm output, clean and with a 100 m fault (the
+    /// satellite excluded); a satellite without an ISM entry is that
+    /// path's typed refusal (`NotInIsm`), sent unasked, heard as a refused
+    /// epoch. With no ISM in force the stream epoch is a snapshot epoch
+    /// (a `Result`, not an ARAIM answer).
+    ///
+    /// Verifies: RX-ARAIM
+    #[cfg(feature = "rtcm")]
+    #[test]
+    fn a_stream_epoch_with_an_ism_runs_the_araim_path() {
+        let x = [3_582_105.0, 532_589.0, 5_232_755.0];
+        let time_gps_s = 1.3e9;
+        let time_s = raim_nav::time::unix_utc_s(time_gps_s);
+        /// The unit's answer and NMEA for a stream epoch of `sats`.
+        fn stream_epoch(
+            l: &mut Link,
+            time_gps_s: f64,
+            sats: &[raim_core::RangeObservation],
+        ) -> (Response, std::string::String) {
+            let f = l.server.stream.formed_mut();
+            f.time_gps_s = time_gps_s;
+            f.reference_m = None;
+            f.sats.clear();
+            for s in sats {
+                f.sats.push(*s).unwrap();
+            }
+            let (mut link, mut nmea) = (Sink::default(), Sink::default());
+            l.server
+                .on_stream_epoch(Ok(()), &mut link, &mut nmea, &mut l.heard)
+                .unwrap();
+            let mut rx = FrameReceiver::<MAX_RESPONSE_FRAME>::new();
+            let resp: Vec<Response> = link
+                .0
+                .iter()
+                .filter_map(|&b| {
+                    rx.push(b)
+                        .map(|p| postcard::from_bytes(p.unwrap()).unwrap())
+                })
+                .collect();
+            assert_eq!(resp.len(), 1, "{resp:?}");
+            let nmea = std::string::String::from_utf8(nmea.0).unwrap();
+            (resp.into_iter().next().unwrap(), nmea)
+        }
+
+        let mut l = Link::new();
+        let (ism, _) = sky(20, usize::MAX, 0.0);
+        l.ism(&ism, gal());
+        for (faulty, fault_m) in [(usize::MAX, 0.0), (5, 100.0)] {
+            let (_, obs) = sky(20, faulty, fault_m);
+            let ranges = as_ranges(&obs, x);
+            let asked = l.ask(CommandRef::Araim(AraimCommandRef::Ranges {
+                time_s,
+                apriori_m: None,
+                sats: &ranges,
+            }));
+            let (asked_nmea, asked_heard) = (l.nmea.clone(), *l.heard.0.last().unwrap());
+            let (unasked, nmea) = stream_epoch(&mut l, time_gps_s, &ranges);
+            assert_eq!(unasked.seq, None);
+            assert_eq!(unasked.body, asked.body, "{faulty}");
+            assert_eq!(nmea, asked_nmea);
+            assert!(nmea.contains("RMC"), "{nmea}");
+            assert_eq!(l.heard.0.last(), Some(&asked_heard));
+            let r = result(&unasked);
+            if faulty == usize::MAX {
+                assert_eq!(r.decision, Decision::Ok);
+            } else {
+                assert_eq!(r.decision, Decision::Excluded);
+                assert_eq!(r.excluded.as_slice(), &[obs[faulty].id]);
+            }
+        }
+
+        // A satellite the ISM does not hold: the ARAIM path's refusal.
+        let (_, obs) = sky(21, usize::MAX, 0.0);
+        let ranges = as_ranges(&obs, x);
+        let asked = l.ask(CommandRef::Araim(AraimCommandRef::Ranges {
+            time_s,
+            apriori_m: None,
+            sats: &ranges,
+        }));
+        let (unasked, nmea) = stream_epoch(&mut l, time_gps_s, &ranges);
+        assert_eq!(unasked.seq, None);
+        assert_eq!(unasked.body, asked.body);
+        assert!(
+            matches!(
+                error(&unasked),
+                WireError::Araim(AraimWireError::NotInIsm { id, index: 20 }) if *id == obs[20].id
+            ),
+            "{unasked:?}"
+        );
+        assert_eq!(l.heard.0.last(), Some(&None));
+        assert!(nmea.contains("RMC"), "the no-fix sentences: {nmea}");
+
+        // No ISM in force: the snapshot monitor.
+        let mut l = Link::new();
+        let (_, obs) = sky(20, usize::MAX, 0.0);
+        let (unasked, _) = stream_epoch(&mut l, time_gps_s, &as_ranges(&obs, x));
+        assert_eq!(unasked.seq, None);
+        assert!(
+            matches!(unasked.body, ResponseBody::Result(_)),
+            "{unasked:?}"
+        );
     }
 }

@@ -425,7 +425,10 @@ impl Server {
                     #[cfg(feature = "rtcm")]
                     Some(LinkEvent::Rtcm(frame)) => {
                         let t0 = platform.now();
-                        let formed = self.stream.on_frame(frame, self.config.as_ref());
+                        // `stream_runs_araim`, on the field (`frame`
+                        // borrows the receiver).
+                        let araim = self.araim.runs_stream();
+                        let formed = self.stream.on_frame(frame, self.config.as_ref(), araim);
                         let t1 = platform.now();
                         match formed {
                             Some(formed) => {
@@ -444,11 +447,7 @@ impl Server {
             match step {
                 Step::Frame(decoded) => self.on_frame(decoded, link, nmea_out, platform)?,
                 #[cfg(feature = "rtcm")]
-                Step::Stream(formed) => {
-                    if self.stage_stream_epoch(formed, link, nmea_out, platform)? {
-                        self.answer_epoch(None, link, nmea_out, platform)?;
-                    }
-                }
+                Step::Stream(formed) => self.on_stream_epoch(formed, link, nmea_out, platform)?,
             }
         }
     }
@@ -508,7 +507,7 @@ impl Server {
                 self.answer_epoch(Some(seq), link, nmea_out, platform)
             }
             Command::Araim(AraimCommand::Epoch(_) | AraimCommand::Ranges(_)) => {
-                self.answer_araim_epoch(seq, link, nmea_out, platform)
+                self.answer_araim_epoch(Some(seq), link, nmea_out, platform)
             }
             _ => self.answer_other(seq, link, nmea_out, platform),
         }
@@ -666,7 +665,7 @@ impl Server {
     /// A `Ranges` or `Linear` request (in `self.request`): the epoch, its
     /// NMEA sentences and the answer, the result written into `self.wire`.
     #[inline(never)]
-    fn answer_epoch<L: Write, M: Write, P: Platform>(
+    pub(crate) fn answer_epoch<L: Write, M: Write, P: Platform>(
         &mut self,
         seq: Option<u32>,
         link: &mut L,
@@ -808,12 +807,23 @@ fn araim_sigma_bounds(command: &Command) -> Result<(), WireError> {
     if !cfg!(feature = "araim") {
         return Ok(());
     }
+    // Statically dispatched (no vtable call on the epoch path: the
+    // firmware's call graph, scripts/firmware_callgraph.py, resolves every
+    // call).
+    match command {
+        Command::Araim(AraimCommand::Epoch(e)) => {
+            check_sigma_bounds(e.sats.items.iter().map(|s| s.sigma_m))
+        }
+        Command::Araim(AraimCommand::Ranges(e)) => {
+            check_sigma_bounds(e.sats.items.iter().map(|s| s.sigma_m))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// [`araim_sigma_bounds`] on one epoch's host sigmas.
+fn check_sigma_bounds(sigmas: impl Iterator<Item = Option<f64>>) -> Result<(), WireError> {
     let bound = raim_core::config_bounds::SIGMA_M;
-    let sigmas: &mut dyn Iterator<Item = Option<f64>> = match command {
-        Command::Araim(AraimCommand::Epoch(e)) => &mut e.sats.items.iter().map(|s| s.sigma_m),
-        Command::Araim(AraimCommand::Ranges(e)) => &mut e.sats.items.iter().map(|s| s.sigma_m),
-        _ => return Ok(()),
-    };
     for (i, s) in sigmas.enumerate() {
         // A non-positive or non-finite sigma is the engine's own typed
         // error (`NonPositiveSigma`, `NonFinite`).

@@ -13,9 +13,25 @@
 //! unit's own (the stream rule of `raim_nav::ranging::stream_sigma_m`
 //! from the configuration's model), whatever `host_sigmas` says: the
 //! host supplies nothing here. docs/RECEIVERS.md "Straight into the unit".
+//!
+//! **Which monitor.** ARAIM is the configured monitor when an ISM is in
+//! force (provisioned, or taken from an `Ism`/`AuthIsm` frame, as for the
+//! host's `Araim` epochs): each stream epoch is then staged as an
+//! `Araim(Ranges)` epoch and answered by `answer_araim_epoch`, the one
+//! ARAIM decision path (its answer, NMEA and alarm output); otherwise as a
+//! `Ranges` epoch through `answer_epoch`. A satellite the ISM has no entry
+//! for is that path's typed refusal of the epoch (`NotInIsm`), never a
+//! default entry. The stream sigma of an ARAIM epoch has no
+//! signal-in-space term (the configuration's model with `ura_m` = 0):
+//! the ISM's sigma_URA and sigma_URE carry it, and the stream sigma is the
+//! satellite's nominal (troposphere, the pair's own noise factor times
+//! multipath and noise, the doubled residual ionosphere of a
+//! single-frequency range) that the ARAIM join adds to them
+//! (docs/RECEIVERS.md "ARAIM from the stream").
 
 use embedded_io::Write;
 use raim_nav::rtcm::{FormError, FormedEpoch, StreamReceiver};
+use raim_proto::araim_msg::AraimCommand;
 use raim_proto::error::WireError;
 use raim_proto::lock::ConfigSource;
 use raim_proto::message::{Command, RangeEpoch, Request, SatList};
@@ -65,15 +81,18 @@ impl StreamState {
         }
     }
 
-    /// Decode one RTCM frame; `Some` when it closed an epoch. Not inlined:
-    /// its stack stays off the link's other paths.
+    /// Decode one RTCM frame; `Some` when it closed an epoch. `araim`:
+    /// the epoch will run ARAIM, so its sigmas leave out the
+    /// signal-in-space term ([`stream_sigma_model`]). Not inlined: its
+    /// stack stays off the link's other paths.
     #[inline(never)]
     pub(crate) fn on_frame(
         &mut self,
         frame: &[u8],
         config: Option<&raim_core::Config>,
+        araim: bool,
     ) -> Option<Result<(), FormError>> {
-        let model = config.map_or_else(raim_core::sigma::SigmaModel::default, |c| c.sigma_model);
+        let model = stream_sigma_model(config, araim);
         let r = self
             .receiver
             .on_frame(frame, &model, STREAM_MASK_RAD, &mut self.formed);
@@ -81,6 +100,13 @@ impl StreamState {
             self.epochs = self.epochs.wrapping_add(1);
         }
         r
+    }
+
+    /// The epoch formed last, to be written by the tests as the receiver
+    /// writes it.
+    #[cfg(test)]
+    pub(crate) fn formed_mut(&mut self) -> &mut FormedEpoch<CAPACITY> {
+        &mut self.formed
     }
 
     /// Epochs formed (answered or refused) and ephemerides held.
@@ -97,6 +123,31 @@ impl Default for StreamState {
     }
 }
 
+/// The sigma model of a stream epoch's satellites: the configuration's
+/// (the default before one is in force: such epochs are refused
+/// `Unconfigured`), and for ARAIM without its signal-in-space term, which
+/// the ISM's sigma_URA/sigma_URE give (the ARAIM join adds them to the
+/// satellite's sigma, `raim_core::araim::monitor`).
+pub fn stream_sigma_model(
+    config: Option<&raim_core::Config>,
+    araim: bool,
+) -> raim_core::sigma::SigmaModel {
+    let mut model = config.map_or_else(raim_core::sigma::SigmaModel::default, |c| c.sigma_model);
+    if araim {
+        model.ura_m = 0.0;
+    }
+    model
+}
+
+/// The monitor a staged stream epoch runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum StreamMonitor {
+    /// The snapshot monitor (`answer_epoch`).
+    Snapshot,
+    /// ARAIM with the ISM in force (`answer_araim_epoch`).
+    Araim,
+}
+
 /// The wire form of a stream epoch that could not be formed.
 fn wire_error(e: FormError) -> WireError {
     match e {
@@ -108,9 +159,33 @@ fn wire_error(e: FormError) -> WireError {
 }
 
 impl Server {
+    /// Whether stream epochs run ARAIM: an ISM is in force (module docs,
+    /// "Which monitor").
+    pub(crate) fn stream_runs_araim(&self) -> bool {
+        self.araim.runs_stream()
+    }
+
+    /// A stream epoch closed (`formed`: whether it could be formed, its
+    /// satellites in `self.stream`): staged in the request slot and run by
+    /// the monitor in force, or refused; answered unasked (`seq: None`).
+    pub(crate) fn on_stream_epoch<L: Write, M: Write, P: Platform>(
+        &mut self,
+        formed: Result<(), FormError>,
+        link: &mut L,
+        nmea_out: &mut M,
+        platform: &mut P,
+    ) -> Result<(), IoError<L::Error, M::Error>> {
+        match self.stage_stream_epoch(formed, link, nmea_out, platform)? {
+            Some(StreamMonitor::Snapshot) => self.answer_epoch(None, link, nmea_out, platform),
+            Some(StreamMonitor::Araim) => self.answer_araim_epoch(None, link, nmea_out, platform),
+            None => Ok(()),
+        }
+    }
+
     /// A stream epoch closed (`formed`: whether it could be formed): put it
-    /// in the request slot as a `Ranges` epoch and say `true` (the caller
-    /// runs it, `answer_epoch`), or refuse it, answered unasked. Not
+    /// in the request slot as a `Ranges` epoch, or as an `Araim(Ranges)`
+    /// epoch when an ISM is in force, and say which monitor runs it (the
+    /// caller runs it), or refuse it, answered unasked (`None`). Not
     /// inlined, and the epoch is run by the caller: the slot's value is
     /// built in this frame, which is gone when the engine runs.
     #[inline(never)]
@@ -120,7 +195,12 @@ impl Server {
         link: &mut L,
         nmea_out: &mut M,
         platform: &mut P,
-    ) -> Result<bool, IoError<L::Error, M::Error>> {
+    ) -> Result<Option<StreamMonitor>, IoError<L::Error, M::Error>> {
+        let monitor = if self.stream_runs_araim() {
+            StreamMonitor::Araim
+        } else {
+            StreamMonitor::Snapshot
+        };
         let f = &self.stream.formed;
         let time_s = raim_nav::time::unix_utc_s(f.time_gps_s);
         let mut sats = SatList::default();
@@ -129,13 +209,17 @@ impl Server {
             let _ = sats.items.push(*s);
         }
         sats.declared = u32::try_from(sats.items.len()).unwrap_or(u32::MAX);
+        let epoch = RangeEpoch {
+            time_s,
+            apriori_m: f.reference_m,
+            sats,
+        };
         self.request = Some(Request {
             seq: 0,
-            command: Command::Ranges(RangeEpoch {
-                time_s,
-                apriori_m: f.reference_m,
-                sats,
-            }),
+            command: match monitor {
+                StreamMonitor::Snapshot => Command::Ranges(epoch),
+                StreamMonitor::Araim => Command::Araim(AraimCommand::Ranges(epoch)),
+            },
         });
         let unconfigured =
             self.config_id.source == ConfigSource::Unconfigured || self.config.is_none();
@@ -152,9 +236,9 @@ impl Server {
                 self.write_no_fix(nmea_out).map_err(IoError::Nmea)?;
                 self.request = None;
                 self.send(link, None, crate::answer::BodyRef::Error(&e))?;
-                Ok(false)
+                Ok(None)
             }
-            None => Ok(true),
+            None => Ok(Some(monitor)),
         }
     }
 }
@@ -185,6 +269,31 @@ mod tests {
         assert_eq!(
             wire_error(FormError::NotDated { tow_ms: -1 }),
             WireError::StreamNotDated { tow_ms: u32::MAX }
+        );
+    }
+
+    /// The stream sigma model: the configuration's, and for ARAIM the
+    /// same without its signal-in-space term (the ISM's); the default
+    /// model before a configuration is in force.
+    #[test]
+    fn araim_stream_sigmas_leave_the_signal_in_space_to_the_ism() {
+        let mut c = raim_core::Config::default();
+        c.sigma_model.ura_m = 1.5;
+        c.sigma_model.noise_m = 0.2;
+        assert_eq!(stream_sigma_model(Some(&c), false), c.sigma_model);
+        let a = stream_sigma_model(Some(&c), true);
+        assert_eq!(a.ura_m, 0.0);
+        assert_eq!(
+            (a.noise_m, a.iono_vertical_m, a.min_elevation_rad),
+            (
+                0.2,
+                c.sigma_model.iono_vertical_m,
+                c.sigma_model.min_elevation_rad
+            )
+        );
+        assert_eq!(
+            stream_sigma_model(None, false),
+            raim_core::sigma::SigmaModel::default()
         );
     }
 

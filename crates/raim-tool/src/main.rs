@@ -13,6 +13,7 @@ mod provision_cmd;
 mod qemu;
 mod replay;
 mod result_json;
+mod rtcm_fault;
 mod runfile;
 mod snapshot;
 
@@ -134,6 +135,9 @@ enum Command {
     /// Seal a unit configuration into a firmware image: the installation step (docs/PROTOCOL.md "Configuration authority").
     #[command(after_help = examples::PROVISION)]
     Provision(provision_cmd::ProvisionArgs),
+    /// Re-encode an RTCM 3 stream with seeded faults on its MSM pseudoranges, as replay --fault (docs/RECEIVERS.md "Faults in a stream").
+    #[command(after_help = examples::RTCM_FAULT)]
+    RtcmFault(rtcm_fault::RtcmFaultArgs),
 }
 
 /// The examples that end each subcommand's `--help`.
@@ -142,6 +146,9 @@ mod examples {
   raim link --port /dev/ttyUSB0 status
   raim link --port /dev/pts/3 configure lock status --pfa 1e-5
   raim link --port /dev/ttyUSB0 epochs -- --rtcm3 GMSD7_20121014.rtcm3 --systems GR --mask-deg 0";
+    pub const RTCM_FAULT: &str = "Examples:
+  raim rtcm-fault --in esbc.rtcm3 --out esbc_e11.rtcm3 --fault step:E11:30@+600
+  raim rtcm-fault --in GMSD7_20121014.rtcm3 --out ramp.rtcm3 --fault ramp:G06:0.5@00:10:00 --fault noise:G:t3:0.5 --seed 7";
     pub const PROVISION: &str = "Examples:
   raim provision --config unit.toml -o unit.elf firmware/target/thumbv7em-none-eabihf/release/raim-firmware
   raim provision --config unit.toml --key $(cat unit42.key) -o unit42.elf raim-firmware";
@@ -280,6 +287,7 @@ fn run(command: Command) -> Result<Tally> {
         Command::Completions { shell } => none(completions(shell)),
         Command::Man => none(man()),
         Command::Provision(args) => none(provision_cmd::run(&args)),
+        Command::RtcmFault(args) => none(rtcm_fault::run(&args)),
     }
 }
 

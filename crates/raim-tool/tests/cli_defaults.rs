@@ -87,6 +87,7 @@ fn every_subcommand_is_covered() {
         "man",
         "provision",
         "availability",
+        "rtcm-fault",
         // Excluded, see the module docs.
         "qemu",
         "link",
@@ -175,6 +176,97 @@ fn analysis_defaults() {
     accepted(&["pf-table", "--only", "ekf", "--epochs", "100"]);
     accepted(&["completions", "bash"]);
     accepted(&["man"]);
+}
+
+/// `rtcm-fault` on GMSD7 with what it requires (the stream, an output
+/// and a fault: a 50 m step on G06 a minute after the first MSM), and the
+/// faulted stream replayed (`raim replay --rtcm3 --systems G --mask-deg
+/// 0`, as docs/RECEIVERS.md runs GMSD7): G06 is excluded at every solved
+/// epoch from the onset on and at none before, where the original stream
+/// has no exclusion at all.
+///
+/// Verifies: TOOL-DEFAULTS, RX-STREAM-FAULT
+#[test]
+fn rtcm_fault_defaults() {
+    let dir = std::env::temp_dir().join(format!("raim-cli-defaults-rtcm-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let out = dir.join("gmsd7_g06.rtcm3");
+    let out = out.to_str().expect("utf-8 path");
+    accepted(&[
+        "rtcm-fault",
+        "--in",
+        &format!("{DATA}/GMSD7_20121014.rtcm3"),
+        "--out",
+        out,
+        "--fault",
+        "step:G06:50@+60",
+    ]);
+    let (code, text, err) = raim(
+        &[
+            "replay",
+            "--rtcm3",
+            out,
+            "--systems",
+            "G",
+            "--mask-deg",
+            "0",
+            "--json",
+            "--keep-going",
+        ],
+        None,
+    );
+    assert_eq!(code, Some(0), "{err}");
+    let (mut first, mut excluded, mut before, mut solved_after) = (None, 0, 0, 0);
+    for line in text.lines() {
+        let v: serde_json::Value = match serde_json::from_str(line) {
+            Ok(v) => v,
+            Err(_) => continue,
+        };
+        let Some(t) = v.get("time_gps_s").and_then(|t| t.as_f64()) else {
+            continue;
+        };
+        let t0 = *first.get_or_insert(t);
+        let ex = v.get("excluded").map(|e| e.to_string()).unwrap_or_default();
+        let decision = v.get("decision").and_then(|d| d.as_str()).unwrap_or("");
+        if t < t0 + 60.0 {
+            before += usize::from(!ex.contains("G06") && decision != "excluded");
+        } else if matches!(decision, "ok" | "excluded") {
+            solved_after += 1;
+            excluded += usize::from(ex.contains("G06"));
+        }
+    }
+    assert!(solved_after > 150, "{solved_after}: {err}");
+    assert_eq!(excluded, solved_after, "{err}");
+    assert!(before >= 60, "{before}");
+    // A constellation fault needs the station's lines of sight: GMSD7
+    // sends no 1005/1006, and GLONASS is refused; a fault on a satellite
+    // the stream does not carry (or after its end) writes nothing.
+    for (option, spec, why) in [
+        (
+            "--araim-const-fault",
+            "G:0:0,0,30@+60",
+            "no station position",
+        ),
+        ("--araim-const-fault", "R:0:0,0,30@+60", "GLONASS MSM time"),
+        ("--fault", "step:G02:50@+60", "move no pseudorange"),
+        ("--fault", "step:G06:50@+100000", "move no pseudorange"),
+    ] {
+        let (code, _, err) = raim(
+            &[
+                "rtcm-fault",
+                "--in",
+                &format!("{DATA}/GMSD7_20121014.rtcm3"),
+                "--out",
+                out,
+                option,
+                spec,
+            ],
+            None,
+        );
+        assert_eq!(code, Some(1), "{spec}: {err}");
+        assert!(err.contains(why), "{spec}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// `availability` on the committed MAAST scenario (its required input, the

@@ -260,7 +260,17 @@ pub fn gmsd7_moved_to(bytes: &[u8], week: i64) -> Vec<u8> {
 /// host's clock at `now_week` (10-bit weeks read as the latest not after
 /// it, as `raim replay --rtcm3` reads them against the computer's clock).
 pub fn host_epochs(bytes: &[u8], now_week: i64) -> (Vec<HostEpoch>, raim_recv::Counts) {
-    let model = Config::default().sigma_model;
+    host_epochs_with(bytes, now_week, &Config::default().sigma_model)
+}
+
+/// [`host_epochs`] with the stream sigmas of `model` (an ARAIM stream
+/// epoch's: the configuration's model without its signal-in-space term).
+pub fn host_epochs_with(
+    bytes: &[u8],
+    now_week: i64,
+    model: &SigmaModel,
+) -> (Vec<HostEpoch>, raim_recv::Counts) {
+    let model = *model;
     let opts = options(&model);
     let mut host = raim_recv::rtcm::Rtcm3::new(now_week);
     let mut obs = ObsData {
