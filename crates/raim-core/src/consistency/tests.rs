@@ -434,3 +434,27 @@ fn araim_red_team_noise_against_the_ism_floors_is_rejected_within_the_window() {
     let se = (2.0 * f64::from(dof)).sqrt();
     assert!((sum - f64::from(dof)).abs() <= 4.0 * se, "{sum} vs {dof}");
 }
+
+/// The default window is the smallest with the design power: the full
+/// window's test detects errors twice the model (q x 4) at 4 dof per
+/// sample with probability >= `DESIGN_POWER` at W = `DEFAULT_WINDOW`, and
+/// not at one sample fewer. The threshold from the crate's quantile, the
+/// power from statrs (independent), and the quantile checked against
+/// statrs too.
+///
+/// Verifies: SAFE-MODEL
+#[test]
+fn default_window_has_the_design_power() {
+    use crate::stats::dist::chi2_quantile_upper;
+    let c = ModelCheckConfig::DEFAULT;
+    let p = c.p_fa_per_evaluation();
+    let power = |w: usize| {
+        let dof = 4 * w as u32;
+        let t = chi2_quantile_upper(p, dof).unwrap();
+        assert!((sf(t, dof) - p).abs() <= 1e-6 * p);
+        sf(t / 4.0, dof)
+    };
+    let (below, at) = (power(DEFAULT_WINDOW - 1), power(DEFAULT_WINDOW));
+    std::eprintln!("power: W - 1 {below:.4}, W {at:.4}");
+    assert!(at >= DESIGN_POWER && below < DESIGN_POWER);
+}
