@@ -78,7 +78,7 @@ done
 echo
 echo "Allocation in every row: P_h = 1e-6 per hour; p per evaluation = P_h / (floor(3600 / spacing) + 1)."
 echo
-echo "Commands (D=$D; -- json added by the script):"
+echo "Commands (D=$D; the script adds --json):"
 echo '```'
 for c in "${cmds[@]}"; do echo "$c"; done
 echo '```'
