@@ -7,7 +7,9 @@
 //! chi-square unless C_int is proportional to C_acc, so the sample is the
 //! C_acc-weighted least-squares fit of the same linearised epoch:
 //!
-//!     x = (G^T W G)^-1 G^T W y,   r = y - G x,   q = r^T W r,   W = C_acc^-1,
+//! ```text
+//! x = (G^T W G)^-1 G^T W y,   r = y - G x,   q = r^T W r,   W = C_acc^-1,
+//! ```
 //!
 //! which is chi2(n - m) when y = G x + e with e ~ N(0, C_acc). C_acc is
 //! the model that says how large the errors are in normal operation (the

@@ -10,7 +10,9 @@
 //! its model is wrong. Under the model, the normalised residuals of each
 //! answered epoch give
 //!
-//!     q = r^T W r ~ chi2(n - m),    r = (I - G (G^T W G)^-1 G^T W) y,
+//! ```text
+//! q = r^T W r ~ chi2(n - m),    r = (I - G (G^T W G)^-1 G^T W) y,
+//! ```
 //!
 //! W the model's weights (SPEC §2-3: the snapshot test's D^2 with the
 //! sigma model; for ARAIM W = C_acc^-1, [`fit::accuracy_fit`]). A model

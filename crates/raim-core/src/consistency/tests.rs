@@ -7,7 +7,6 @@ use std::vec::Vec;
 
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
-use super::fit::accuracy_fit;
 use super::*;
 use crate::araim::{AraimConfig, FdeLimits, Ism, Monitor, SatIsm};
 use crate::config::Phase;
