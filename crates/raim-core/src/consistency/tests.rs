@@ -21,7 +21,7 @@ fn sf(q: f64, dof: u32) -> f64 {
     1.0 - ChiSquared::new(f64::from(dof)).unwrap().cdf(q)
 }
 
-fn cfg(spacing_s: f64, window: usize, p_fa_per_hour: f64) -> ModelCheckConfig {
+fn cfg_of(spacing_s: f64, window: usize, p_fa_per_hour: f64) -> ModelCheckConfig {
     ModelCheckConfig {
         spacing_s,
         window,
@@ -36,7 +36,7 @@ fn cfg(spacing_s: f64, window: usize, p_fa_per_hour: f64) -> ModelCheckConfig {
 /// Verifies: SAFE-MODEL
 #[test]
 fn window_arithmetic_matches_an_independent_computation() {
-    let c = cfg(10.0, 3, 1e-3);
+    let c = cfg_of(10.0, 3, 1e-3);
     // floor(3600 / 10) + 1 = 361 evaluations an hour at most.
     assert_eq!(c.evaluations_per_hour(), 361.0);
     assert_eq!(c.p_fa_per_evaluation(), 1e-3 / 361.0);
@@ -98,7 +98,7 @@ fn window_arithmetic_matches_an_independent_computation() {
 /// Verifies: SAFE-MODEL
 #[test]
 fn bad_input_is_refused_and_leaves_the_state_alone() {
-    let c = cfg(10.0, 3, 1e-3);
+    let c = cfg_of(10.0, 3, 1e-3);
     let mut mc = ModelCheck::<4>::new();
     mc.offer(&c, 100.0, 3.0, 4).unwrap();
     mc.offer(&c, 120.0, 5.0, 4).unwrap();
@@ -139,7 +139,7 @@ fn bad_input_is_refused_and_leaves_the_state_alone() {
             },
         ),
         (
-            mc.clone().offer(&cfg(0.0, 3, 1e-3), 200.0, 1.0, 4),
+            mc.clone().offer(&cfg_of(0.0, 3, 1e-3), 200.0, 1.0, 4),
             ModelCheckError::OutOfRange {
                 field: "spacing_s",
                 value: 0.0,
@@ -148,21 +148,21 @@ fn bad_input_is_refused_and_leaves_the_state_alone() {
             },
         ),
         (
-            mc.clone().offer(&cfg(10.0, 5, 1e-3), 200.0, 1.0, 4),
+            mc.clone().offer(&cfg_of(10.0, 5, 1e-3), 200.0, 1.0, 4),
             ModelCheckError::WindowOutOfRange {
                 window: 5,
                 capacity: 4,
             },
         ),
         (
-            mc.clone().offer(&cfg(10.0, 0, 1e-3), 200.0, 1.0, 4),
+            mc.clone().offer(&cfg_of(10.0, 0, 1e-3), 200.0, 1.0, 4),
             ModelCheckError::WindowOutOfRange {
                 window: 0,
                 capacity: 4,
             },
         ),
         (
-            mc.clone().offer(&cfg(10.0, 3, 1.0), 200.0, 1.0, 4),
+            mc.clone().offer(&cfg_of(10.0, 3, 1.0), 200.0, 1.0, 4),
             ModelCheckError::OutOfRange {
                 field: "p_fa_per_hour",
                 value: 1.0,
@@ -182,7 +182,7 @@ fn bad_input_is_refused_and_leaves_the_state_alone() {
         (200.0, 1.0, f64::NAN, 1e-3, "spacing_s"),
         (200.0, 1.0, 10.0, f64::NAN, "p_fa_per_hour"),
     ] {
-        match mc.offer(&cfg(s, 3, p), t, q, 4) {
+        match mc.offer(&cfg_of(s, 3, p), t, q, 4) {
             Err(ModelCheckError::NotFinite { field: f, .. }) => assert_eq!(f, field),
             other => panic!("{field}: {other:?}"),
         }
@@ -239,7 +239,7 @@ fn snapshot_run(
 /// Verifies: SAFE-MODEL
 #[test]
 fn false_alarms_with_residuals_from_the_model_match_the_allocation() {
-    let c = cfg(600.0, 4, 0.1);
+    let c = cfg_of(600.0, 4, 0.1);
     let p = c.p_fa_per_evaluation();
     assert_eq!(p, 0.1 / 7.0);
     let trials = 4000usize;
@@ -456,4 +456,51 @@ fn default_window_has_the_design_power() {
     let (below, at) = (power(DEFAULT_WINDOW - 1), power(DEFAULT_WINDOW));
     std::eprintln!("power: W - 1 {below:.4}, W {at:.4}");
     assert!(at >= DESIGN_POWER && below < DESIGN_POWER);
+}
+
+/// Residuals drawn from ARAIM's accuracy model (C_acc = sigma_URE^2 +
+/// sigma^2 = 0.13 m^2 per satellite, the floors' ISM with a host sigma of
+/// 0.3 m) through the ARAIM monitor and its accuracy fit: over 2,000
+/// independent windows of 4 samples, the rejections match the allocation
+/// p_eval = 0.1 / 7 within 4 binomial standard errors (as
+/// `false_alarms_with_residuals_from_the_model_match_the_allocation`).
+/// Epochs that ARAIM answers `Alarm` are not offered, as in service.
+///
+/// Verifies: SAFE-MODEL
+#[test]
+fn araim_false_alarms_with_residuals_from_c_acc_match_the_allocation() {
+    let entries = floor_ism();
+    let ism = Ism::with(&[System::Gps, System::Galileo], 1e-4);
+    let cfg = AraimConfig::default();
+    let c = cfg_of(600.0, 4, 0.1);
+    let p = c.p_fa_per_evaluation();
+    let sigma_acc_m = (0.2f64 * 0.2 + 0.3 * 0.3).sqrt();
+    let mut monitor = std::boxed::Box::new(Monitor::<f64, 16, 600>::new());
+    let mut rng = Rng::new(36);
+    let (mut evaluations, mut rejections) = (0usize, 0usize);
+    for _ in 0..2000 {
+        let mut mc = ModelCheck::<8>::new();
+        for k in 0..4 {
+            let obs = ge_epoch(&mut rng, sigma_acc_m, 0.3);
+            let v = monitor
+                .linear(&cfg, &ism, &entries[..], &obs, FdeLimits::UNLIMITED)
+                .unwrap();
+            if v.decision == Decision::Alarm {
+                continue;
+            }
+            let f = monitor.accuracy_sample().unwrap();
+            if let Offer::Evaluated(e) = mc.offer(&c, k as f64 * 600.0, f.q, f.dof).unwrap() {
+                evaluations += 1;
+                rejections += usize::from(e.rejects);
+            }
+        }
+    }
+    let n = evaluations as f64;
+    let se = (n * p * (1.0 - p)).sqrt();
+    let expected = n * p;
+    std::eprintln!(
+        "ARAIM: {rejections} rejections in {evaluations} evaluations, expected {expected:.1} +- {se:.1}"
+    );
+    assert!(evaluations >= 7900);
+    assert!((rejections as f64 - expected).abs() <= 4.0 * se);
 }
