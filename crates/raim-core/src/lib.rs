@@ -9,7 +9,8 @@
 //! tests: `snapshot` (detection, L-RAIM identification, FDE, protection
 //! levels) and `sequential` (MCUSUM), and `pf` (particle-filter RAIM of
 //! seed 004: GA-PF, SIR PF and EKF in a main + auxiliary LLR structure,
-//! docs/PF.md). Shared layers beside them: `linalg`
+//! docs/PF.md), and `consistency` (the run-time check of the error model
+//! against the residuals, docs/MODEL_CHECK.md). Shared layers beside them: `linalg`
 //! (QR, parity space), `stats` (distributions), `solve` (measurement model
 //! and Gauss-Newton), `measurement`, `frames`, `sigma`, `config`, `error`,
 //! `result`, and `real` (the precision policy: which quantities are `f64`
@@ -40,6 +41,7 @@ pub mod araim;
 pub mod budget;
 pub mod config;
 pub mod config_bounds;
+pub mod consistency;
 pub mod error;
 pub mod frames;
 pub mod linalg;

@@ -150,4 +150,15 @@ impl<const N: usize> EpochResult<N> {
             multifault: None,
         }
     }
+
+    /// The model check's sample of this epoch (issue 35,
+    /// docs/MODEL_CHECK.md): q = D^2 and the dof of the test of the
+    /// solution in force (all in view, or the subset after an
+    /// exclusion), with the sigma model's weights. `None` for an `Alarm`
+    /// (no solution delivered, and a fault is not a model error) and
+    /// without redundancy (dof 0).
+    pub fn model_sample(&self) -> Option<(f64, u32)> {
+        (self.decision != Decision::Alarm && self.test.dof > 0)
+            .then_some((self.test.statistic, self.test.dof))
+    }
 }

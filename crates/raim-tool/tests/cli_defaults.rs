@@ -105,7 +105,8 @@ fn every_subcommand_is_covered() {
 /// `raim replay` on the 0759 RINEX pair (GPS, 30 s, 2005) with nothing
 /// but the files: the snapshot monitor and each other monitor it selects
 /// (`--pf` ekf, pf and gapf with the default particle count, `--araim`,
-/// `--esq`, `--pca`, `--mcusum`) with their defaults.
+/// `--esq`, `--pca`, `--mcusum`, `--model-check` beside the snapshot
+/// monitor and ARAIM) with their defaults.
 ///
 /// Verifies: TOOL-DEFAULTS
 #[test]
@@ -121,6 +122,8 @@ fn replay_defaults_on_the_0759_pair() {
         &["--esq"],
         &["--pca"],
         &["--mcusum"],
+        &["--model-check"],
+        &["--model-check", "--araim"],
     ] {
         let mut a = vec!["replay", "--obs", &obs, "--nav", &nav];
         a.extend_from_slice(monitor);

@@ -480,6 +480,13 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         self.process_scaled(cfg, ism, sats, 1.0)
     }
 
+    /// The geometry of the last epoch processed (rows, C_acc, residuals):
+    /// what the model check's accuracy fit reads
+    /// ([`crate::consistency::fit::accuracy_fit`]).
+    pub fn geometry(&self) -> &Geometry<T, N> {
+        &self.geo
+    }
+
     /// The share of the integrity budget the last `process` gave its PL
     /// equations: 1 for an epoch, 1 / N_ex for the subset after an
     /// exclusion (fde.rs, the exclusion risk).

@@ -418,6 +418,25 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
         self.after_exclusion().unwrap_or(self.main.output())
     }
 
+    /// The model check's sample of the last epoch (issue 35,
+    /// docs/MODEL_CHECK.md): q and dof of the C_acc-weighted fit of the
+    /// solution in force (the excluded subset's after an exclusion, else
+    /// all in view). Offer it to a [`crate::consistency::ModelCheck`] for
+    /// an answered epoch (not an `Alarm`, not a refused epoch).
+    ///
+    /// # Errors
+    /// As [`crate::consistency::fit::accuracy_fit`].
+    pub fn accuracy_sample(
+        &self,
+    ) -> Result<crate::consistency::fit::Fit, crate::consistency::ModelCheckError> {
+        let engine = if self.excluded {
+            &self.scratch
+        } else {
+            &self.main
+        };
+        crate::consistency::fit::accuracy_fit(engine.geometry())
+    }
+
     /// The last epoch's satellites as the engine saw them (joined).
     pub fn satellites(&self) -> &[AraimSat<T>] {
         // n_sats <= N: it is set only after `join` or `given` checked the

@@ -43,7 +43,7 @@ pub const ARAIM_SATS: usize = super::REPLAY_CAPACITY;
 /// Fault modes per epoch (G+E+C with pairs: about 700).
 pub const ARAIM_MODES: usize = 4096;
 
-type Engine = Monitor<f64, ARAIM_SATS, ARAIM_MODES>;
+pub(super) type Engine = Monitor<f64, ARAIM_SATS, ARAIM_MODES>;
 
 #[derive(Debug, Clone, Args)]
 pub struct AraimReplayArgs {
@@ -575,6 +575,23 @@ fn host_epoch(
             other => format!("ARAIM: {other}"),
         })?;
     WireAraimResult::from_verdict(monitor, &verdict, cfg, unix_s).map_err(|e| format!("ARAIM: {e}"))
+}
+
+/// One epoch through the host's core monitor with the replay's satellite
+/// models: the verdict itself (the model check reads the monitor after
+/// it, `super::model_check`).
+pub(super) fn host_verdict(
+    a: &AraimReplayArgs,
+    solver: &Config,
+    cfg: &AraimConfig,
+    ism: &Ism,
+    e: &PreparedEpoch,
+    sats: &[RangeObservation],
+    monitor: &mut Engine,
+) -> Result<raim_core::araim::Verdict<ARAIM_SATS>, MonitorError> {
+    let models = ReplayModels { args: a, epoch: e };
+    let ranges = Epoch::ranges(e.time_gps_s, sats, e.reference_m);
+    monitor.epoch(solver, cfg, ism, &models, &ranges, FdeLimits::UNLIMITED)
 }
 
 /// The NMEA sentences of an ARAIM epoch as the firmware writes them

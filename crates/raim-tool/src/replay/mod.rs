@@ -12,6 +12,7 @@ pub mod engine;
 pub mod esq;
 mod export;
 mod input;
+pub mod model_check;
 mod pca;
 pub mod pf;
 mod plot;
@@ -79,6 +80,7 @@ pub mod heading {
     pub const ARAIM: &str = "Monitors: ARAIM (docs/ARAIM.md)";
     pub const PF: &str = "Monitors: particle filter (docs/PF.md)";
     pub const ESQ: &str = "Monitors: effective sample quantity and PCA (docs/ESQ.md)";
+    pub const MODEL_CHECK: &str = "Monitors: model check (docs/MODEL_CHECK.md)";
     pub const OUTPUTS: &str = "Outputs";
     pub const PLOTS: &str = "Plots";
 }
@@ -224,6 +226,10 @@ pub struct ReplayArgs {
     /// Effective sample quantity and PCA constellation monitor (docs/ESQ.md).
     #[command(flatten, next_help_heading = heading::ESQ)]
     pub esq: esq::EsqArgs,
+    /// The run-time model check beside the snapshot monitor or ARAIM
+    /// (docs/MODEL_CHECK.md).
+    #[command(flatten, next_help_heading = heading::MODEL_CHECK)]
+    pub model_check: model_check::ModelCheckArgs,
 }
 
 /// Everything a replay produces.
@@ -635,6 +641,13 @@ pub fn run(args: &ReplayArgs) -> Result<Tally> {
         if spec.is_live() {
             return receiver::run_live(args, format, &spec);
         }
+    }
+    if args.model_check.model_check {
+        // The model check beside the snapshot monitor or ARAIM
+        // (docs/MODEL_CHECK.md): its own report.
+        let stdout = std::io::stdout();
+        model_check::run(args, &mut stdout.lock())?;
+        return Ok(Tally::default());
     }
     if args.esq.any() {
         // Seed 003's own claims (docs/ESQ.md), built on its ARAIM modes:

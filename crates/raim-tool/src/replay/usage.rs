@@ -181,6 +181,9 @@ pub fn check(args: &ReplayArgs, m: &ArgMatches) -> Option<String> {
             ));
         }
     }
+    if let Some(m) = model_check(args, monitor, mon, &given) {
+        return Some(m);
+    }
     if let Some(m) = args.config.ignored(&given) {
         return Some(m);
     }
@@ -188,6 +191,60 @@ pub fn check(args: &ReplayArgs, m: &ArgMatches) -> Option<String> {
         return Some(
             "'--pf-onset-spread-s' would be ignored: it needs --pf-seeds 2 or more".into(),
         );
+    }
+    None
+}
+
+/// `--model-check` (docs/MODEL_CHECK.md): a host study beside the snapshot
+/// monitor or `--araim`, with its own report only; its options need it.
+fn model_check(
+    args: &ReplayArgs,
+    monitor: Monitor,
+    mon: &str,
+    given: &dyn Fn(&str) -> bool,
+) -> Option<String> {
+    let mc = &args.model_check;
+    if !mc.model_check {
+        for id in ids_of(super::model_check::ModelCheckArgs::augment_args) {
+            if id != "model_check" && given(&id) {
+                return Some(format!(
+                    "'{}' would be ignored: it needs --model-check",
+                    long(&id)
+                ));
+            }
+        }
+        return None;
+    }
+    if !matches!(monitor, Monitor::Snapshot | Monitor::Araim) {
+        return Some(format!(
+            "'--model-check' cannot be used with '{mon}': it runs beside the snapshot \
+             monitor or --araim"
+        ));
+    }
+    if args.target == Target::Qemu {
+        return Some(
+            "'--model-check' cannot be used with '--target qemu': it runs on the host".into(),
+        );
+    }
+    for id in [
+        "pos",
+        "csv",
+        "kml",
+        "gpx",
+        "plot",
+        "nmea",
+        "nmea_file",
+        "araim_plot",
+        "keep_going",
+        "quiet",
+    ] {
+        if given(id) {
+            return Some(format!(
+                "'{}' cannot be used with '--model-check': the model check prints its \
+                 report only",
+                long(id)
+            ));
+        }
     }
     None
 }
