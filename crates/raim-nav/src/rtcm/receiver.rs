@@ -55,15 +55,15 @@ use raim_core::sigma::SigmaModel;
 use raim_core::solve::Solution;
 use raim_core::{RangeObservation, SatId, System};
 
-use crate::ephemeris::{BDT_MINUS_GPST_S, WEEK_S};
+use crate::ephemeris::{SatState, BDT_MINUS_GPST_S, WEEK_S};
 use crate::glonass::{
-    glonass_time_of_day_s, glonass_time_of_day_to_gps_s, glonass_ura_m, GlonassEphemeris,
-    GlonassIcdFields,
+    glonass_time_of_day_s, glonass_time_of_day_to_gps_s, glonass_ura_m, GlonassArc,
+    GlonassEphemeris, GlonassIcdFields,
 };
 use crate::m;
 use crate::ranging::{
-    bootstrap_position_into, correct, split_pair, stream_codes, stream_sigma_m, Corrections,
-    SatInput,
+    bootstrap_position_into, correct_at, split_pair, stream_codes, stream_sigma_m, transmit_time_s,
+    Broadcast, Corrections, SatInput,
 };
 use crate::store::{EphemerisStore, Stored};
 
@@ -87,6 +87,64 @@ pub const KEPLER_SETS: usize = 256;
 const GLONASS_SETS: usize = 48;
 /// 1020 messages held until the stream's epochs are dated.
 const PENDING_GLONASS: usize = 32;
+/// GLONASS orbits kept integrated between epochs: one per slot (1-27),
+/// so every GLONASS satellite of an epoch has its own.
+const GLONASS_ARCS: usize = 27;
+
+/// The GLONASS orbits of the latest epochs, each integrated up to the
+/// last RK4 node before its latest transmit time ([`GlonassArc`]): an
+/// epoch integrates each satellite's orbit once, from the node the
+/// previous epoch reached, and the result is the ICD integration's from
+/// t_b to the bit.
+#[derive(Debug, Clone)]
+struct GlonassArcs {
+    arcs: Vec<(GlonassArc, u32), GLONASS_ARCS>,
+    /// The epoch count stamped on the arcs used in it.
+    epoch: u32,
+}
+
+impl GlonassArcs {
+    const fn new() -> Self {
+        GlonassArcs {
+            arcs: Vec::new(),
+            epoch: 0,
+        }
+    }
+
+    /// The next epoch's arcs are stamped anew.
+    fn next_epoch(&mut self) {
+        self.epoch = self.epoch.wrapping_add(1);
+    }
+
+    /// `g`'s state at `t_gps_s`, from its arc: the one kept for `g`, else
+    /// a new one in place of an arc no satellite of this epoch uses (with
+    /// every arc in use, which 27 slots do not reach, integrated from t_b
+    /// as [`GlonassEphemeris::state`]).
+    fn state(&mut self, g: &GlonassEphemeris, t_gps_s: f64) -> SatState {
+        let epoch = self.epoch;
+        let at = match self.arcs.iter().position(|(a, _)| a.ephemeris() == g) {
+            Some(i) => Some(i),
+            None => {
+                if self.arcs.push((GlonassArc::new(g), epoch)).is_ok() {
+                    Some(self.arcs.len() - 1)
+                } else {
+                    let free = self.arcs.iter().position(|(_, e)| *e != epoch);
+                    if let Some(slot) = free.and_then(|i| self.arcs.get_mut(i)) {
+                        *slot = (GlonassArc::new(g), epoch);
+                    }
+                    free
+                }
+            }
+        };
+        match at.and_then(|i| self.arcs.get_mut(i)) {
+            Some((arc, used)) => {
+                *used = epoch;
+                arc.state(t_gps_s)
+            }
+            None => g.state(t_gps_s),
+        }
+    }
+}
 
 /// Why a closed epoch was not handed over.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -206,6 +264,10 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     /// The bootstrap pass's ranges (not on the stack: the epoch's deepest
     /// path is the bootstrap solve under `form`).
     bootstrap_obs: Vec<RangeObservation, N>,
+    /// Each input satellite's state at its transmit time (None: no usable
+    /// code pair), computed once for both passes.
+    transmit: Vec<Option<SatState>, N>,
+    glonass_arcs: GlonassArcs,
 }
 
 impl<const N: usize, const S: usize> StreamReceiver<N, S> {
@@ -237,6 +299,8 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             },
             solution: Solution::empty(),
             bootstrap_obs: Vec::new(),
+            transmit: Vec::new(),
+            glonass_arcs: GlonassArcs::new(),
         }
     }
 
@@ -527,6 +591,8 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             station_m,
             solution,
             bootstrap_obs: first,
+            transmit,
+            glonass_arcs,
             ..
         } = self;
         let o = ready.as_mut()?;
@@ -603,11 +669,25 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             group_delay: true,
             glonass_sigma: Some(glonass_model),
         };
+        // Each satellite's orbit and clock at its transmit time, once for
+        // both passes (the transmit time does not depend on the receiver
+        // position); a GLONASS orbit from its arc.
+        glonass_arcs.next_epoch();
+        transmit.clear();
+        for s in inputs.iter() {
+            let tx = transmit_time_s(s, time_gps_s).ok().map(|t| match s.eph {
+                Broadcast::Glonass(g) => glonass_arcs.state(g, t),
+                Broadcast::Kepler(k) => k.state(t),
+            });
+            // `inputs` and `transmit` have the same capacity N.
+            let _ = transmit.push(tx);
+        }
         // The bootstrap pass: clock- and rotation-corrected ranges.
         let apriori = *station_m;
         first.clear();
-        for s in inputs.iter() {
-            if let Ok(x) = correct(s, time_gps_s, apriori, false, &c, None) {
+        for (s, tx) in inputs.iter().zip(transmit.iter()) {
+            let Some(tx) = tx else { continue };
+            if let Ok(x) = correct_at(s, time_gps_s, tx, apriori, false, &c, None) {
                 let _ = first.push(x.obs);
             }
         }
@@ -616,8 +696,12 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // Every correction at the reference; with none (the bootstrap
         // failed and no station position), the bootstrap pass's ranges, as
         // the host hands them over.
-        for s in inputs.iter() {
-            match correct(s, time_gps_s, reference, reference.is_some(), &c, None) {
+        for (s, tx) in inputs.iter().zip(transmit.iter()) {
+            let Some(tx) = tx else {
+                out.rejected += 1;
+                continue;
+            };
+            match correct_at(s, time_gps_s, tx, reference, reference.is_some(), &c, None) {
                 Ok(mut x) => {
                     let sigma = stream_sigma_m(
                         s.id.system,
