@@ -111,19 +111,36 @@ pub fn gps_minus_utc_s(t_gps_s: f64) -> f64 {
 /// GLONASS time (UTC(SU) + 3 h) as continuous seconds on the GPS origin:
 /// t_gps - (GPS - UTC) + 3 h.
 pub fn glonass_from_gps_s(t_gps_s: f64) -> f64 {
-    t_gps_s - gps_minus_utc_s(t_gps_s) + GLONASS_MINUS_UTC_S
+    glonass_from_gps_with_s(t_gps_s, gps_minus_utc_s(t_gps_s))
+}
+
+/// [`glonass_from_gps_s`] with GPS - UTC = `gps_minus_utc_s` (the count in
+/// force: a stream's, or the table's before its expiry).
+pub fn glonass_from_gps_with_s(t_gps_s: f64, gps_minus_utc_s: f64) -> f64 {
+    t_gps_s - gps_minus_utc_s + GLONASS_MINUS_UTC_S
 }
 
 /// Seconds of the GLONASS (Moscow) day at GPS time `t_gps_s`.
 pub fn glonass_time_of_day_s(t_gps_s: f64) -> f64 {
-    m::rem_euclid(glonass_from_gps_s(t_gps_s), DAY_S)
+    glonass_time_of_day_with_s(t_gps_s, gps_minus_utc_s(t_gps_s))
+}
+
+/// [`glonass_time_of_day_s`] with GPS - UTC = `gps_minus_utc_s`.
+pub fn glonass_time_of_day_with_s(t_gps_s: f64, gps_minus_utc_s: f64) -> f64 {
+    m::rem_euclid(glonass_from_gps_with_s(t_gps_s, gps_minus_utc_s), DAY_S)
 }
 
 /// A time of the GLONASS day (t_b of an ephemeris, in [0, 86400) s) as
 /// GPS seconds: the day is the one that puts it within 12 h of
 /// `near_gps_s` (the receiver time of the message that carried it).
 pub fn glonass_time_of_day_to_gps_s(tod_s: f64, near_gps_s: f64) -> f64 {
-    let near_glo = glonass_from_gps_s(near_gps_s);
+    glonass_time_of_day_to_gps_with_s(tod_s, near_gps_s, gps_minus_utc_s(near_gps_s))
+}
+
+/// [`glonass_time_of_day_to_gps_s`] with GPS - UTC = `gps_minus_utc_s` (the
+/// count at `near_gps_s`).
+pub fn glonass_time_of_day_to_gps_with_s(tod_s: f64, near_gps_s: f64, gps_minus_utc_s: f64) -> f64 {
+    let near_glo = glonass_from_gps_with_s(near_gps_s, gps_minus_utc_s);
     let day_start = m::floor(near_glo / DAY_S) * DAY_S;
     let mut t_glo = day_start + tod_s;
     if t_glo - near_glo > DAY_S / 2.0 {
@@ -131,8 +148,7 @@ pub fn glonass_time_of_day_to_gps_s(tod_s: f64, near_gps_s: f64) -> f64 {
     } else if near_glo - t_glo > DAY_S / 2.0 {
         t_glo += DAY_S;
     }
-    // Invert glonass_from_gps_s with the leap count of the nearby time.
-    t_glo + gps_minus_utc_s(near_gps_s) - GLONASS_MINUS_UTC_S
+    t_glo + gps_minus_utc_s - GLONASS_MINUS_UTC_S
 }
 
 /// PZ-90.11 to WGS-84 (G1762) through ITRF2008 (EPSG:7960 coordinate-frame

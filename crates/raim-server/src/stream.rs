@@ -91,6 +91,20 @@ impl StreamState {
     }
 }
 
+impl StreamState {
+    /// The leap seconds the receiver dates GLONASS with, for `Status`.
+    pub(crate) fn leap_seconds(&self) -> raim_proto::message::StreamLeapSeconds {
+        use raim_nav::rtcm::LeapSeconds as L;
+        use raim_proto::message::StreamLeapSeconds as S;
+        match self.receiver.leap_seconds() {
+            L::NotDated => S::NotDated,
+            L::Stream(n) => S::Stream { gps_minus_utc_s: n },
+            L::Table(n) => S::Table { gps_minus_utc_s: n },
+            L::TableExpired => S::TableExpired,
+        }
+    }
+}
+
 impl Default for StreamState {
     fn default() -> Self {
         Self::new()
@@ -104,6 +118,9 @@ fn wire_error(e: FormError) -> WireError {
             tow_ms: u32::try_from(tow_ms).unwrap_or(u32::MAX),
         },
         FormError::TooManySignals { capacity } => WireError::StreamCapacity { capacity },
+        FormError::LeapSecondsUnknown { tow_ms } => WireError::StreamLeapSecondsUnknown {
+            tow_ms: u32::try_from(tow_ms).unwrap_or(u32::MAX),
+        },
     }
 }
 
@@ -185,6 +202,18 @@ mod tests {
         assert_eq!(
             wire_error(FormError::NotDated { tow_ms: -1 }),
             WireError::StreamNotDated { tow_ms: u32::MAX }
+        );
+    }
+
+    /// A GLONASS epoch past the leap-second table's expiry, with no count
+    /// from the stream, is refused `StreamLeapSecondsUnknown`.
+    ///
+    /// Verifies: WIRE-StreamLeapSecondsUnknown
+    #[test]
+    fn leap_seconds_unknown_maps_to_its_wire_error() {
+        assert_eq!(
+            wire_error(FormError::LeapSecondsUnknown { tow_ms: 7_000 }),
+            WireError::StreamLeapSecondsUnknown { tow_ms: 7_000 }
         );
     }
 

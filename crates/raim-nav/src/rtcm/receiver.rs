@@ -57,7 +57,7 @@ use raim_core::{RangeObservation, SatId, System};
 
 use crate::ephemeris::{SatState, BDT_MINUS_GPST_S, WEEK_S};
 use crate::glonass::{
-    glonass_time_of_day_s, glonass_time_of_day_to_gps_s, glonass_ura_m, GlonassArc,
+    glonass_time_of_day_to_gps_with_s, glonass_time_of_day_with_s, glonass_ura_m, GlonassArc,
     GlonassEphemeris, GlonassIcdFields,
 };
 use crate::m;
@@ -66,6 +66,7 @@ use crate::ranging::{
     Broadcast, Corrections, SatInput,
 };
 use crate::store::{EphemerisStore, Stored};
+use crate::time::table_gps_minus_utc_s;
 
 use super::decode::{msm_more_bit, Frame, Message, Msm, MsmSystem};
 use super::fields::{gps_week_of, kepler, toc_near_toe};
@@ -159,6 +160,32 @@ pub enum FormError {
     /// More signals in one epoch than the receiver holds; the rest were
     /// dropped and the epoch is refused.
     TooManySignals { capacity: u32 },
+    /// An epoch with GLONASS data past the leap-second table's expiry
+    /// ([`crate::time::LEAP_TABLE_EXPIRES_GPS_S`]) with no leap-second
+    /// count from the stream (RTCM 1013): GLONASS time is UTC-based, so
+    /// its data cannot be joined to the GPS epoch without GPS - UTC, and
+    /// the epoch is refused rather than misaligned.
+    LeapSecondsUnknown {
+        /// The epoch's GPS time of week, ms.
+        tow_ms: i64,
+    },
+}
+
+/// Where the GPS - UTC leap seconds the receiver dates GLONASS with come
+/// from, at its latest dated epoch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LeapSeconds {
+    /// No epoch dated yet, and no 1013.
+    NotDated,
+    /// The stream's latest RTCM 1013 (DF054), s.
+    Stream(u8),
+    /// The built-in table, s: the latest epoch is before its expiry.
+    Table(u8),
+    /// The latest epoch is past the table's expiry and the stream sent no
+    /// count: epochs with GLONASS data are refused
+    /// ([`FormError::LeapSecondsUnknown`]).
+    TableExpired,
 }
 
 impl core::fmt::Display for FormError {
@@ -171,6 +198,10 @@ impl core::fmt::Display for FormError {
             FormError::TooManySignals { capacity } => {
                 write!(f, "more than {capacity} signals in one epoch")
             }
+            FormError::LeapSecondsUnknown { tow_ms } => write!(
+                f,
+                "epoch at GPS time of week {tow_ms} ms has GLONASS data, but GPS - UTC is unknown: the leap-second table has expired and the stream sent no RTCM 1013"
+            ),
         }
     }
 }
@@ -191,6 +222,8 @@ pub struct RtcmCounts {
     pub glonass_dropped: u32,
     /// 1020 outside the ICD's ranges.
     pub glonass_bad: u32,
+    /// RTCM 1013 system parameters taken.
+    pub system_parameters: u32,
 }
 
 /// One signal's pseudorange.
@@ -268,6 +301,12 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     /// code pair), computed once for both passes.
     transmit: Vec<Option<SatState>, N>,
     glonass_arcs: GlonassArcs,
+    /// GPS - UTC of the stream's latest 1013 (DF054), s.
+    stream_leap_s: Option<u8>,
+    /// The GPS - UTC the GLONASS sets in the store were placed with, s.
+    glonass_placed_leap_s: Option<f64>,
+    /// GPS time of the latest dated epoch, s.
+    latest_gps_s: Option<f64>,
 }
 
 impl<const N: usize, const S: usize> StreamReceiver<N, S> {
@@ -296,11 +335,15 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 undecodable: 0,
                 glonass_dropped: 0,
                 glonass_bad: 0,
+                system_parameters: 0,
             },
             solution: Solution::empty(),
             bootstrap_obs: Vec::new(),
             transmit: Vec::new(),
             glonass_arcs: GlonassArcs::new(),
+            stream_leap_s: None,
+            glonass_placed_leap_s: None,
+            latest_gps_s: None,
         }
     }
 
@@ -312,6 +355,26 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
     /// The ephemerides held (Keplerian, GLONASS).
     pub fn ephemerides(&self) -> (usize, usize) {
         self.store.len()
+    }
+
+    /// The leap seconds GLONASS is dated with, and where they come from.
+    pub fn leap_seconds(&self) -> LeapSeconds {
+        match (self.stream_leap_s, self.latest_gps_s) {
+            (Some(n), _) => LeapSeconds::Stream(n),
+            (None, None) => LeapSeconds::NotDated,
+            (None, Some(t)) => match table_gps_minus_utc_s(t) {
+                Some(n) => LeapSeconds::Table(n as u8),
+                None => LeapSeconds::TableExpired,
+            },
+        }
+    }
+
+    /// GPS - UTC at GPS time `t_gps_s`: the stream's (1013), else the
+    /// table's before its expiry, else unknown.
+    fn gps_minus_utc_s(&self, t_gps_s: f64) -> Option<f64> {
+        self.stream_leap_s
+            .map(f64::from)
+            .or_else(|| table_gps_minus_utc_s(t_gps_s))
     }
 
     /// The station position of the latest 1005/1006, if any.
@@ -385,19 +448,31 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                     tb_tod_s,
                     near: self.last,
                 };
-                match self.base_week {
+                let placed = match self.base_week {
                     Some(base) => self.place_glonass(base, p),
-                    None => {
-                        // Full: the oldest waiting message gives way.
-                        if self.pending_glo.is_full() && !self.pending_glo.is_empty() {
-                            self.pending_glo.remove(0);
-                        }
-                        let _ = self.pending_glo.push(p);
+                    None => false,
+                };
+                if !placed {
+                    // Full: the oldest waiting message gives way.
+                    if self.pending_glo.is_full() && !self.pending_glo.is_empty() {
+                        self.pending_glo.remove(0);
                     }
+                    let _ = self.pending_glo.push(p);
                 }
             }
             Message::Station { ecef_m } => {
                 self.station_m = Some(ecef_m);
+            }
+            Message::SystemParameters {
+                gps_minus_utc_s, ..
+            } => {
+                self.counts.system_parameters = self.counts.system_parameters.wrapping_add(1);
+                if gps_minus_utc_s.is_some() {
+                    self.stream_leap_s = gps_minus_utc_s;
+                    if let Some(base) = self.base_week {
+                        self.place_pending(base);
+                    }
+                }
             }
             Message::Other(_) => {
                 self.counts.ignored = self.counts.ignored.wrapping_add(1);
@@ -547,23 +622,43 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         }
         let base = w - rel;
         self.base_week = Some(base);
-        // In arrival order, one at a time (not the whole list on the stack).
-        for i in 0..self.pending_glo.len() {
-            if let Some(p) = self.pending_glo.get(i).copied() {
-                self.place_glonass(base, p);
-            }
-        }
-        self.pending_glo.clear();
+        self.place_pending(base);
     }
 
-    /// A 1020 in GPS time, checked and stored.
-    fn place_glonass(&mut self, base: i64, p: PendingGlonass) {
+    /// Place the waiting 1020s that can be: in arrival order, one at a
+    /// time (not the whole list on the stack); those whose leap seconds
+    /// are unknown wait on.
+    fn place_pending(&mut self, base: i64) {
+        let mut i = 0;
+        while let Some(p) = self.pending_glo.get(i).copied() {
+            if self.place_glonass(base, p) {
+                self.pending_glo.remove(i);
+            } else {
+                i += 1;
+            }
+        }
+    }
+
+    /// A 1020 in GPS time, checked and stored; false when it cannot be
+    /// placed yet (no epoch to place it by, or GPS - UTC unknown). Its
+    /// t_b is a time of the Moscow day: GPS - UTC places it. When the
+    /// count differs from the one the stored GLONASS sets were placed with
+    /// (a 1013 that corrects the table), those sets are dropped: each
+    /// would be a second off (3.9 km along its orbit).
+    fn place_glonass(&mut self, base: i64, p: PendingGlonass) -> bool {
         let Some((rel, tow_ms)) = p.near.or(self.last) else {
-            return;
+            return false;
         };
         let near_gps_s = (base + rel) as f64 * WEEK_S + tow_ms as f64 / 1000.0;
+        let Some(leap_s) = self.gps_minus_utc_s(near_gps_s) else {
+            return false;
+        };
+        if self.glonass_placed_leap_s.is_some_and(|l| l != leap_s) {
+            self.store.clear_glonass();
+        }
+        self.glonass_placed_leap_s = Some(leap_s);
         let fields = GlonassIcdFields {
-            tb_gps_s: glonass_time_of_day_to_gps_s(p.tb_tod_s, near_gps_s),
+            tb_gps_s: glonass_time_of_day_to_gps_with_s(p.tb_tod_s, near_gps_s, leap_s),
             ..p.fields
         };
         match GlonassEphemeris::from_icd(&fields) {
@@ -572,6 +667,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             }
             Err(_) => self.counts.glonass_bad = self.counts.glonass_bad.wrapping_add(1),
         }
+        true
     }
 
     /// Form the epoch the latest frame closed, if any, into `out` (in
@@ -583,6 +679,14 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         elevation_mask_rad: f64,
         out: &mut FormedEpoch<N>,
     ) -> Option<Result<(), FormError>> {
+        let leap_s = match (self.base_week, self.ready.as_ref()) {
+            (Some(base), Some(o)) => {
+                let t = (base + o.rel_week) as f64 * WEEK_S + o.tow_ms as f64 / 1000.0;
+                self.latest_gps_s = Some(t);
+                self.gps_minus_utc_s(t)
+            }
+            _ => None,
+        };
         let Self {
             ready,
             base_week,
@@ -611,7 +715,10 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             }));
         }
         if let Some(tod_ms) = o.glo_tod_ms {
-            let want_ms = m::round(glonass_time_of_day_s(time_gps_s) * 1000.0) as i64;
+            let Some(leap_s) = leap_s else {
+                return Some(Err(FormError::LeapSecondsUnknown { tow_ms: o.tow_ms }));
+            };
+            let want_ms = m::round(glonass_time_of_day_with_s(time_gps_s, leap_s) * 1000.0) as i64;
             if (tod_ms - want_ms).rem_euclid(DAY_MS) != 0 {
                 o.sigs.retain(|s| s.id.system != System::Glonass);
                 counts.glonass_dropped = counts.glonass_dropped.wrapping_add(1);
