@@ -431,6 +431,54 @@ fn a_1013_leap_count_moves_the_glonass_alignment_by_its_difference() {
         .iter()
         .all(|(_, s)| s.iter().all(|o| o.id.system != raim_core::System::Glonass)));
 
+    // The 1013 after the stream's last 1020, followed by its 1020s again
+    // (as a receiver resends them): the GLONASS sets placed before it with
+    // the table's count are dropped at once, so no epoch after it joins
+    // GLONASS data to a set a second off: every GLONASS position formed
+    // is within 1 m of the original's (until the 1013 the GLONASS data is
+    // 1 s off and dropped).
+    let all = frames(&shifted);
+    let is_1020 = |f: &[u8]| {
+        rtcm_rs::MessageFrame::new(f)
+            .ok()
+            .and_then(|m| m.message_number())
+            == Some(1020)
+    };
+    let last = all
+        .iter()
+        .rposition(|f| is_1020(f))
+        .expect("GMSD7 has 1020s")
+        + 1;
+    let late_1013: Vec<u8> = all[..last]
+        .iter()
+        .flat_map(|f| f.iter().copied())
+        .chain(msg1013(17))
+        .chain(
+            all.iter()
+                .filter(|f| is_1020(f))
+                .flat_map(|f| f.iter().copied()),
+        )
+        .chain(all[last..].iter().flat_map(|f| f.iter().copied()))
+        .collect();
+    let (late, _, _, _) = device_epochs(&late_1013, GMSD7_PIVOT_WEEK);
+    let mut joined = 0;
+    for (t, a) in &late {
+        let (_, b) = orig.iter().find(|(t0, _)| t0 == t).expect("same epochs");
+        for x in a
+            .iter()
+            .filter(|o| o.id.system == raim_core::System::Glonass)
+        {
+            let y = b.iter().find(|o| o.id == x.id).expect("in the original");
+            let d = (0..3)
+                .map(|i| (x.position_m[i] - y.position_m[i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            assert!(d < 1.0, "{:?} at {t} s: {d} m", x.id);
+            joined += 1;
+        }
+    }
+    assert!(joined > 0);
+
     let same = [msg1013(16), bytes.clone()].concat();
     let (again, _, _, leap) = device_epochs(&same, GMSD7_PIVOT_WEEK);
     assert_eq!(leap, LeapSeconds::Stream(16));

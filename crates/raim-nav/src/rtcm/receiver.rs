@@ -467,7 +467,16 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 gps_minus_utc_s, ..
             } => {
                 self.counts.system_parameters = self.counts.system_parameters.wrapping_add(1);
-                if gps_minus_utc_s.is_some() {
+                if let Some(n) = gps_minus_utc_s {
+                    // GLONASS sets placed with another count are a second
+                    // off: dropped at once (the stream resends them).
+                    if self
+                        .glonass_placed_leap_s
+                        .is_some_and(|l| l != f64::from(n))
+                    {
+                        self.store.clear_glonass();
+                        self.glonass_placed_leap_s = None;
+                    }
                     self.stream_leap_s = gps_minus_utc_s;
                     if let Some(base) = self.base_week {
                         self.place_pending(base);
