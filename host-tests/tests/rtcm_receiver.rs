@@ -583,6 +583,18 @@ fn server_run(
     Vec<raim_proto::message::ResponseBody>,
     raim_proto::message::Status,
 ) {
+    let (answers, status, _) = server_run_nmea(bytes);
+    (answers, status)
+}
+
+/// [`server_run`], with the NMEA the unit wrote.
+fn server_run_nmea(
+    bytes: &[u8],
+) -> (
+    Vec<raim_proto::message::ResponseBody>,
+    raim_proto::message::Status,
+    String,
+) {
     use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody};
     let mut server = raim_server::Server::new();
     server.take_runtime_config(Config::default()).unwrap();
@@ -611,7 +623,11 @@ fn server_run(
             }
         }
     }
-    (answers, found.expect("Status answered"))
+    (
+        answers,
+        found.expect("Status answered"),
+        String::from_utf8(nmea.0).expect("NMEA is text"),
+    )
 }
 
 /// The unit says in `Status` where its GPS - UTC comes from, and refuses
@@ -702,4 +718,78 @@ fn status_says_the_leap_table_has_expired_and_glonass_epochs_are_refused() {
         "{refused} stream epochs refused StreamLeapSecondsUnknown past the table's expiry; with a 1013, {} answered ({results} results)",
         answers.len()
     );
+}
+
+/// The UTC time and date of the unit's RMC and ZDA sentences use the leap
+/// seconds in force: GMSD7 re-sent past the table's expiry (8 weeks after
+/// this build), its ephemerides first, with a 1013 carrying 18 s, then
+/// the same with 17 s: every RMC and ZDA time of the second run is one
+/// second later than the first's, dates included (the GPS epochs are the same; with 17 s
+/// the stream's GLONASS times are a second off and dropped, so only the
+/// sentences' times are compared).
+///
+/// Verifies: RX-LEAP
+#[test]
+fn nmea_dates_use_the_leap_seconds_in_force() {
+    let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let moved = gmsd7_moved_to(&bytes, raim_server::stream::PIVOT_WEEK + 60);
+    let all = frames(&moved);
+    let number = |f: &&[u8]| {
+        rtcm_rs::MessageFrame::new(f)
+            .ok()
+            .and_then(|m| m.message_number())
+    };
+    let part: Vec<u8> = all
+        .iter()
+        .filter(|f| matches!(number(f), Some(1019 | 1020)))
+        .chain(all.iter().take(400))
+        .flat_map(|f| f.iter().copied())
+        .collect();
+    // hhmmss.ss of each RMC and ZDA sentence, as seconds of the day, and
+    // their dates.
+    let times = |nmea: &str, kind: &str| -> Vec<(f64, String)> {
+        nmea.lines()
+            .filter(|l| l.get(3..6) == Some(kind))
+            .filter_map(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                let t = f.get(1)?;
+                let s = t.get(0..2)?.parse::<f64>().ok()? * 3600.0
+                    + t.get(2..4)?.parse::<f64>().ok()? * 60.0
+                    + t.get(4..)?.parse::<f64>().ok()?;
+                let date = match kind {
+                    "RMC" => f.get(9)?.to_string(),
+                    _ => f.get(2..5)?.join("/"),
+                };
+                Some((s, date))
+            })
+            .collect()
+    };
+    let (_, s18, nmea18) = server_run_nmea(&[msg1013(18), part.clone()].concat());
+    let (_, s17, nmea17) = server_run_nmea(&[msg1013(17), part].concat());
+    assert_eq!(
+        s18.stream_leap_seconds,
+        raim_proto::message::StreamLeapSeconds::Stream {
+            gps_minus_utc_s: 18
+        }
+    );
+    assert_eq!(
+        s17.stream_leap_seconds,
+        raim_proto::message::StreamLeapSeconds::Stream {
+            gps_minus_utc_s: 17
+        }
+    );
+    for kind in ["RMC", "ZDA"] {
+        let (a, b) = (times(&nmea18, kind), times(&nmea17, kind));
+        assert!(a.len() >= 20, "{kind}: {} sentences", a.len());
+        assert_eq!(a.len(), b.len(), "{kind}");
+        for ((ta, da), (tb, db)) in a.iter().zip(&b) {
+            // GMSD7 starts 18 s before UTC midnight: a sentence a second
+            // later may be of the next day.
+            let day_s = if da == db { 0.0 } else { 86_400.0 };
+            assert!(
+                (tb + day_s - ta - 1.0).abs() < 1e-6,
+                "{kind}: {ta} {da} then {tb} {db}"
+            );
+        }
+    }
 }

@@ -139,7 +139,10 @@ impl Server {
         platform: &mut P,
     ) -> Result<bool, IoError<L::Error, M::Error>> {
         let f = &self.stream.formed;
-        let time_s = raim_nav::time::unix_utc_s(f.time_gps_s);
+        let time_s = raim_nav::time::unix_utc_with_s(
+            f.time_gps_s,
+            self.stream.receiver.utc_offset_s(f.time_gps_s),
+        );
         let mut sats = SatList::default();
         for s in f.sats.iter() {
             // `formed` holds at most CAPACITY satellites.

@@ -369,6 +369,16 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         }
     }
 
+    /// GPS - UTC in force at GPS time `t_gps_s`, for the UTC time and
+    /// date of the unit's answers and NMEA sentences: the stream's (1013),
+    /// else the table's (past its expiry, its latest count: the
+    /// `TableExpired` state of [`Self::leap_seconds`] says the date may
+    /// then be a second off; GLONASS is refused).
+    pub fn utc_offset_s(&self, t_gps_s: f64) -> f64 {
+        self.stream_leap_s
+            .map_or_else(|| crate::time::gps_minus_utc_s(t_gps_s), f64::from)
+    }
+
     /// GPS - UTC at GPS time `t_gps_s`: the stream's (1013), else the
     /// table's before its expiry, else unknown.
     fn gps_minus_utc_s(&self, t_gps_s: f64) -> Option<f64> {
