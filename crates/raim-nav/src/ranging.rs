@@ -11,12 +11,13 @@
 //! RTCM 3 stream ([`crate::rtcm`]) both call [`correct`] and
 //! [`bootstrap_position`], so that they form the same bits.
 
+use raim_core::frames::{ecef_to_geodetic, Geodetic};
 use raim_core::sigma::SigmaModel;
 use raim_core::solve::{solve_into, Solution};
 use raim_core::{Config, Epoch, RangeObservation, SatId, System};
 
 use crate::ephemeris::{Kepler, SatState, C_M_S, WEEK_S};
-use crate::geometry::{az_el, distance_m, rotate_earth};
+use crate::geometry::{az_el_from, distance_m, rotate_earth};
 use crate::glonass::{l1_hz, l2_hz, GlonassEphemeris, F_L1_BASE_HZ, F_L2_BASE_HZ};
 use crate::iono::{scale_to_frequency, Klobuchar, F_B1I_HZ, F_L1_HZ};
 use crate::m;
@@ -264,19 +265,24 @@ pub fn correct(
     klobuchar: Option<&Klobuchar>,
 ) -> Result<Corrected, Rejection> {
     let tx = s.eph.state(transmit_time_s(s, t_rx_gps_s)?);
-    correct_at(s, t_rx_gps_s, &tx, rx_m, full, c, klobuchar)
+    correct_at(s, t_rx_gps_s, &tx, rx_m, None, full, c, klobuchar)
 }
 
 /// [`correct`] with the satellite's position (ECEF at transmit time, not
 /// yet rotated) and clock at its transmit time given: `tx` =
 /// `s.eph.state(transmit_time_s(s, t_rx_gps_s)?)`, computed once per
 /// epoch however many passes use it (the device's receiver integrates a
-/// GLONASS orbit there from a [`crate::glonass::GlonassArc`]).
+/// GLONASS orbit there from a [`crate::glonass::GlonassArc`]); and, when
+/// given, the receiver's geodetic position `rx_geodetic` =
+/// `ecef_to_geodetic(rx_m)`, computed once for all the epoch's satellites
+/// (else here, for a full correction).
+#[allow(clippy::too_many_arguments)]
 pub fn correct_at(
     s: &SatInput<'_>,
     t_rx_gps_s: f64,
     tx: &SatState,
     rx_m: Option<[f64; 3]>,
+    rx_geodetic: Option<Geodetic>,
     full: bool,
     c: &Corrections,
     klobuchar: Option<&Klobuchar>,
@@ -307,7 +313,8 @@ pub fn correct_at(
     };
     let (mut az, mut el, mut iono_m, mut tropo_m) = (0.0, core::f64::consts::FRAC_PI_2, 0.0, 0.0);
     if let (Some(rx), true) = (rx_m, full) {
-        let (a, e, g) = az_el(rx, pos);
+        let g = rx_geodetic.unwrap_or_else(|| ecef_to_geodetic(rx));
+        let (a, e, g) = az_el_from(rx, g, pos);
         az = a;
         el = e;
         if el < c.elevation_mask_rad {

@@ -51,6 +51,7 @@
 //! stream carries no ionospheric model).
 
 use heapless::Vec;
+use raim_core::frames::ecef_to_geodetic;
 use raim_core::sigma::SigmaModel;
 use raim_core::solve::Solution;
 use raim_core::{RangeObservation, SatId, System};
@@ -813,7 +814,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         first.clear();
         for (s, tx) in inputs.iter().zip(transmit.iter()) {
             let Some(tx) = tx else { continue };
-            if let Ok(x) = correct_at(s, time_gps_s, tx, apriori, false, &c, None) {
+            if let Ok(x) = correct_at(s, time_gps_s, tx, apriori, None, false, &c, None) {
                 let _ = first.push(x.obs);
             }
         }
@@ -822,12 +823,23 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // Every correction at the reference; with none (the bootstrap
         // failed and no station position), the bootstrap pass's ranges, as
         // the host hands them over.
+        // The receiver's geodetic position, once for every satellite.
+        let rx_geodetic = reference.map(ecef_to_geodetic);
         for (s, tx) in inputs.iter().zip(transmit.iter()) {
             let Some(tx) = tx else {
                 out.rejected += 1;
                 continue;
             };
-            match correct_at(s, time_gps_s, tx, reference, reference.is_some(), &c, None) {
+            match correct_at(
+                s,
+                time_gps_s,
+                tx,
+                reference,
+                rx_geodetic,
+                reference.is_some(),
+                &c,
+                None,
+            ) {
                 Ok(mut x) => {
                     let sigma = stream_sigma_m(
                         s.id.system,
