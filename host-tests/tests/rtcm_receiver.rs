@@ -13,8 +13,8 @@ mod rtcm_common;
 use raim_core::Config;
 use raim_nav::rtcm::{FormError, FormedEpoch, StreamReceiver};
 use rtcm_common::{
-    frames, gmsd7_moved_to, host_epochs, in_window_week, GMSD7, GMSD7_NOW_WEEK, GMSD7_PIVOT_WEEK,
-    GMSD7_WEEK, MASK_RAD,
+    frames, gmsd7_moved_bare, gmsd7_moved_to, host_epochs, in_window_week, msg1013, GMSD7,
+    GMSD7_NOW_WEEK, GMSD7_PIVOT_WEEK, GMSD7_WEEK, MASK_RAD,
 };
 
 /// What one run of the device receiver against the host gave.
@@ -283,36 +283,6 @@ fn glonass_arcs_give_the_icd_integration_on_real_ephemerides() {
     );
 }
 
-/// An RTCM 1013 (system parameters, RTCM 10403.3 Table 3.5-14) with GPS -
-/// UTC = `leap_s` and no message announcements: DF002 12, DF003 12, DF051
-/// 16, DF052 17, DF053 5, DF054 8.
-fn msg1013(leap_s: u8) -> Vec<u8> {
-    let fields: [(u64, usize); 6] = [
-        (1013, 12),
-        (0, 12),
-        (56_214, 16),
-        (3_600, 17),
-        (0, 5),
-        (u64::from(leap_s), 8),
-    ];
-    let mut payload = vec![0u8; 9];
-    let mut at = 0;
-    for (v, w) in fields {
-        for k in 0..w {
-            if (v >> (w - 1 - k)) & 1 == 1 {
-                payload[(at + k) / 8] |= 1 << (7 - (at + k) % 8);
-            }
-        }
-        at += w;
-    }
-    let crc = crc::Crc::<u32>::new(&crc::CRC_24_LTE_A);
-    let mut f = vec![0xD3, 0, payload.len() as u8];
-    f.extend_from_slice(&payload);
-    let c = crc.checksum(&f);
-    f.extend_from_slice(&[(c >> 16) as u8, (c >> 8) as u8, c as u8]);
-    f
-}
-
 /// `bytes` without its GLONASS MSM frames (1081-1087).
 fn without_glonass_msm(bytes: &[u8]) -> Vec<u8> {
     frames(bytes)
@@ -511,7 +481,12 @@ fn past_the_table_expiry_glonass_epochs_are_refused_and_gps_formed() {
     assert!(after as f64 * week_s > LEAP_TABLE_EXPIRES_GPS_S);
     assert!(((before + 1) as f64) * week_s < LEAP_TABLE_EXPIRES_GPS_S);
 
-    let late = gmsd7_moved_to(&bytes, after);
+    let late = gmsd7_moved_bare(&bytes, after);
+    // As the tests' moved streams are sent past the expiry: led by a 1013.
+    assert_eq!(
+        gmsd7_moved_to(&bytes, after),
+        [msg1013(18), late.clone()].concat()
+    );
     let (ok, refused, counts, leap) = device_epochs(&late, after - 26);
     assert_eq!(leap, LeapSeconds::TableExpired);
     assert!(ok.is_empty(), "{} formed", ok.len());
@@ -648,7 +623,7 @@ fn status_says_the_leap_table_has_expired_and_glonass_epochs_are_refused() {
     let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
     let week = raim_server::stream::PIVOT_WEEK + 60;
     assert!(week as f64 * raim_nav::ephemeris::WEEK_S > raim_nav::time::LEAP_TABLE_EXPIRES_GPS_S);
-    let moved = gmsd7_moved_to(&bytes, week);
+    let moved = gmsd7_moved_bare(&bytes, week);
     let all = frames(&moved);
     // The stream's ephemerides first, as a receiver sends its stored
     // ones at start-up, then its first 30 kB.
@@ -732,7 +707,7 @@ fn status_says_the_leap_table_has_expired_and_glonass_epochs_are_refused() {
 #[test]
 fn nmea_dates_use_the_leap_seconds_in_force() {
     let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
-    let moved = gmsd7_moved_to(&bytes, raim_server::stream::PIVOT_WEEK + 60);
+    let moved = gmsd7_moved_bare(&bytes, raim_server::stream::PIVOT_WEEK + 60);
     let all = frames(&moved);
     let number = |f: &&[u8]| {
         rtcm_rs::MessageFrame::new(f)
