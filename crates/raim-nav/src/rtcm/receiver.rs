@@ -22,9 +22,11 @@
 //!   0, or when the time of week changes. GLONASS MSM carry the GLONASS
 //!   time of day (DF034): they join the open epoch, and once the epoch's
 //!   GPS time is known their time of day must be its GLONASS time of day
-//!   to the millisecond (leap seconds from [`crate::time`]); otherwise the
-//!   epoch's GLONASS data is dropped and counted. GLONASS MSM before any
-//!   other MSM of their epoch wait for it.
+//!   to the millisecond (GPS - UTC from the stream's latest RTCM 1013,
+//!   else from [`crate::time`]'s table before its expiry; past it, with no
+//!   1013, the epoch is refused [`FormError::LeapSecondsUnknown`]);
+//!   otherwise the epoch's GLONASS data is dropped and counted. GLONASS
+//!   MSM before any other MSM of their epoch wait for it.
 //! - Ephemerides 1019 (GPS), 1042 (BeiDou), 1044 (QZSS), 1045 and 1046
 //!   (Galileo F/NAV and I/NAV) and 1020 (GLONASS). A truncated week is
 //!   placed from the pivot in its system's own week count (GPS and QZSS
@@ -663,8 +665,9 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
     /// placed yet (no epoch to place it by, or GPS - UTC unknown). Its
     /// t_b is a time of the Moscow day: GPS - UTC places it. When the
     /// count differs from the one the stored GLONASS sets were placed with
-    /// (a 1013 that corrects the table), those sets are dropped: each
-    /// would be a second off (3.9 km along its orbit).
+    /// (a 1013 that corrects the table, or the table across a leap
+    /// second), those sets are dropped: each may be a second off (3.9 km
+    /// along its orbit); the stream resends them.
     fn place_glonass(&mut self, base: i64, p: PendingGlonass) -> bool {
         let Some((rel, tow_ms)) = p.near.or(self.last) else {
             return false;
