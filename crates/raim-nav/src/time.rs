@@ -45,7 +45,7 @@ const LEAP_GPS_S: [f64; 18] = [
     13510.0 * DAY_S + 18.0, // 2017-01-01
 ];
 
-/// GPS time (s since 1980-01-06) up to which [`LEAP_GPS_S`] is known to
+/// GPS time (s since 1980-01-06) up to which the leap-second table is known to
 /// hold: 2026-06-28 00:00:00 UTC (day 16,975 of GPS time, + 18 s), the
 /// expiry of the IERS leap-seconds.list issued with Bulletin C 70.
 pub const LEAP_TABLE_EXPIRES_GPS_S: f64 = 16_975.0 * DAY_S + 18.0;
