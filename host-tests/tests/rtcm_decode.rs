@@ -50,6 +50,8 @@ enum Decoded {
         tb_tod_s: String,
     },
     Station(String),
+    /// 1013: (MJD, UTC seconds of day, GPS - UTC).
+    SystemParameters(String),
     Corrupt,
     /// Not decoded by the compact decoder: another system's MSM with its
     /// DF393, or another message.
@@ -305,11 +307,20 @@ fn reference(frame: &[u8]) -> Decoded {
                 m.antenna_ref_point_ecef_z_m
             ]
         )),
+        Message::Msg1013(m) => Decoded::SystemParameters(format!(
+            "{:?}",
+            (
+                m.modified_julian_day_number,
+                m.seconds_of_day_s,
+                m.leap_seconds_gps_utc_s
+            )
+        )),
         Message::Corrupt
             if f.message_number().is_some_and(|n| {
                 matches!(
                     n,
                     1005 | 1006
+                        | 1013
                         | 1019
                         | 1020
                         | 1042
@@ -364,6 +375,11 @@ fn compact(frame: &[u8], more_known: bool) -> Decoded {
             tb_tod_s: format!("{tb_tod_s:?}"),
         },
         Ok(Dm::Station { ecef_m }) => Decoded::Station(format!("{ecef_m:?}")),
+        Ok(Dm::SystemParameters {
+            mjd,
+            utc_sod_s,
+            gps_minus_utc_s,
+        }) => Decoded::SystemParameters(format!("{:?}", (mjd, utc_sod_s, gps_minus_utc_s))),
         Err(_) => Decoded::Corrupt,
         Ok(Dm::Other(_)) => Decoded::Other(if more_known {
             msm_more_bit(frame)
@@ -466,7 +482,7 @@ fn random_messages_alike() {
     let (mut whole, mut mutated, mut corrupt, mut invalid, mut skipped) = (0, 0, 0, 0, 0);
     let types = [
         1074u16, 1075, 1076, 1077, 1084, 1085, 1086, 1087, 1094, 1095, 1096, 1097, 1114, 1115,
-        1116, 1117, 1124, 1125, 1126, 1127, 1019, 1020, 1042, 1044, 1045, 1046, 1005, 1006,
+        1116, 1117, 1124, 1125, 1126, 1127, 1019, 1020, 1042, 1044, 1045, 1046, 1005, 1006, 1013,
     ];
     for number in types {
         for _ in 0..PER_TYPE {
@@ -479,9 +495,10 @@ fn random_messages_alike() {
                     invalid += signals.iter().filter(|s| s.3.is_none()).count();
                     whole += 1;
                 }
-                Decoded::Kepler { .. } | Decoded::Glo1020 { .. } | Decoded::Station(_) => {
-                    whole += 1
-                }
+                Decoded::Kepler { .. }
+                | Decoded::Glo1020 { .. }
+                | Decoded::Station(_)
+                | Decoded::SystemParameters(_) => whole += 1,
                 d => panic!("{number}: generated message read as {d:?}"),
             }
             let payload = &frame[3..frame.len() - 3];
@@ -504,7 +521,7 @@ fn random_messages_alike() {
         }
     }
     println!(
-        "{whole} random MSM4-7 (G, R, E, J, C), 1019, 1020, 1042, 1044, 1045, 1046, 1005, 1006 alike ({invalid} invalid ranges), {mutated} altered alike ({corrupt} corrupt on both), {skipped} over 64 cells refused"
+        "{whole} random MSM4-7 (G, R, E, J, C), 1019, 1020, 1042, 1044, 1045, 1046, 1005, 1006, 1013 alike ({invalid} invalid ranges), {mutated} altered alike ({corrupt} corrupt on both), {skipped} over 64 cells refused"
     );
     assert_eq!(whole, types.len() * PER_TYPE);
     assert!(corrupt > PER_TYPE, "{corrupt}");

@@ -13,8 +13,8 @@ mod rtcm_common;
 use raim_core::Config;
 use raim_nav::rtcm::{FormError, FormedEpoch, StreamReceiver};
 use rtcm_common::{
-    frames, gmsd7_moved_to, host_epochs, in_window_week, GMSD7, GMSD7_NOW_WEEK, GMSD7_PIVOT_WEEK,
-    GMSD7_WEEK, MASK_RAD,
+    frames, gmsd7_moved_bare, gmsd7_moved_to, host_epochs, in_window_week, msg1013, GMSD7,
+    GMSD7_NOW_WEEK, GMSD7_PIVOT_WEEK, GMSD7_WEEK, MASK_RAD,
 };
 
 /// What one run of the device receiver against the host gave.
@@ -203,9 +203,568 @@ fn an_epoch_beyond_the_signal_capacity_is_refused_whole() {
                 closed += 1;
             }
             Some(Err(FormError::NotDated { .. })) => closed += 1,
+            Some(Err(e @ FormError::LeapSecondsUnknown { .. })) => panic!("{e}"),
             Some(Ok(())) => panic!("an epoch of more than 8 signals was formed"),
         }
     }
     assert!(refused >= 250, "{refused}");
     assert_eq!(closed, dev.counts().epochs);
+}
+
+/// The device receiver integrates each GLONASS orbit once per epoch, from
+/// the RK4 node its previous epoch reached (`raim_nav::glonass::GlonassArc`),
+/// instead of from t_b for every evaluation. On real broadcast state
+/// vectors, every 1020 of GMSD7 (decoded by the device's decoder) and the
+/// first 120 GLONASS records of ESBC's navigation file, evaluated as a
+/// 1 Hz receiver asks (transmit times about 70 ms before each second,
+/// every 3rd second from t_b - 30 min to t_b + 30 min, then back to t_b -
+/// 10 min and across t_b), the arc's position and velocity are the ICD
+/// integration's from t_b to the bit: the tolerance is 0 m.
+///
+/// Verifies: RX-GLONASS-ARC
+#[test]
+fn glonass_arcs_give_the_icd_integration_on_real_ephemerides() {
+    use raim_nav::glonass::{glonass_time_of_day_to_gps_s, GlonassArc, GlonassEphemeris};
+    use raim_nav::rtcm::decode::{Frame, Message};
+    let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    // GMSD7 is 2012-10-14, 00:00 GPS of week 1709's first day.
+    let near_gps_s = GMSD7_WEEK as f64 * raim_nav::ephemeris::WEEK_S;
+    let mut ephs: Vec<GlonassEphemeris> = Vec::new();
+    for f in frames(&bytes) {
+        if let Ok(Message::Glo1020 { fields, tb_tod_s }) = Frame::new(f).unwrap().message() {
+            let fields = raim_nav::glonass::GlonassIcdFields {
+                tb_gps_s: glonass_time_of_day_to_gps_s(tb_tod_s, near_gps_s),
+                ..fields
+            };
+            if let Ok(g) = GlonassEphemeris::from_icd(&fields) {
+                ephs.push(g);
+            }
+        }
+    }
+    let from_stream = ephs.len();
+    let nav = raim_gnss::NavData::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../shared/data/ESBC00DNK_R_20201770000_01D_MN.rnx.gz"
+    )))
+    .expect("ESBC navigation file (../shared/data)");
+    ephs.extend(nav.glonass.values().flatten().take(120).copied());
+    assert!(from_stream >= 16 && ephs.len() >= from_stream + 120);
+    let mut evaluations = 0;
+    let mut max_m: f64 = 0.0;
+    for g in &ephs {
+        let mut arc = GlonassArc::new(g);
+        let forward = (-1800..=1800).step_by(3).map(|k| f64::from(k) - 0.071_3);
+        let back = (-600..=600).step_by(7).map(|k| f64::from(k) - 0.068_9);
+        for dt in forward.chain(back) {
+            let t = g.tb_gps_s + dt;
+            let (p, v) = arc.propagate_pz90(t);
+            let (p0, v0) = g.propagate_pz90(t);
+            assert_eq!(
+                p.map(f64::to_bits),
+                p0.map(f64::to_bits),
+                "R{:02} at t_b {dt:+} s",
+                g.slot
+            );
+            assert_eq!(
+                v.map(f64::to_bits),
+                v0.map(f64::to_bits),
+                "R{:02} at t_b {dt:+} s",
+                g.slot
+            );
+            let d = (0..3).map(|i| (p[i] - p0[i]).powi(2)).sum::<f64>().sqrt();
+            max_m = max_m.max(d);
+            evaluations += 1;
+        }
+    }
+    println!(
+        "GLONASS arcs: {} ephemerides ({from_stream} from GMSD7's 1020, {} from ESBC), {evaluations} evaluations, largest position difference from the ICD integration {max_m} m",
+        ephs.len(),
+        ephs.len() - from_stream
+    );
+}
+
+/// `bytes` without its GLONASS MSM frames (1081-1087).
+fn without_glonass_msm(bytes: &[u8]) -> Vec<u8> {
+    frames(bytes)
+        .into_iter()
+        .filter(|f| {
+            let n = rtcm_rs::MessageFrame::new(f)
+                .ok()
+                .and_then(|m| m.message_number());
+            !matches!(n, Some(1081..=1087))
+        })
+        .flatten()
+        .copied()
+        .collect()
+}
+
+/// Every epoch of `bytes` through a device receiver with pivot `pivot`:
+/// the formed epochs (time and satellites, with their positions) and the
+/// refusals, and the receiver's leap-second state at the end.
+#[allow(clippy::type_complexity)]
+fn device_epochs(
+    bytes: &[u8],
+    pivot: i64,
+) -> (
+    Vec<(f64, Vec<raim_core::RangeObservation>)>,
+    Vec<FormError>,
+    raim_nav::rtcm::RtcmCounts,
+    raim_nav::rtcm::LeapSeconds,
+) {
+    let model = Config::default().sigma_model;
+    let mut dev = Box::new(StreamReceiver::<64, 256>::new(pivot));
+    let mut formed = FormedEpoch::<64> {
+        time_gps_s: 0.0,
+        reference_m: None,
+        sats: heapless::Vec::new(),
+        rejected: 0,
+    };
+    let (mut ok, mut refused) = (Vec::new(), Vec::new());
+    for f in frames(bytes) {
+        match dev.on_frame(f, &model, MASK_RAD, &mut formed) {
+            None => {}
+            Some(Ok(())) => ok.push((formed.time_gps_s, formed.sats.to_vec())),
+            Some(Err(e)) => refused.push(e),
+        }
+    }
+    (ok, refused, dev.counts(), dev.leap_seconds())
+}
+
+/// GPS - UTC from the stream moves the GLONASS alignment by exactly its
+/// difference from the table. GMSD7 (2012: the table says 16 s) re-sent
+/// as a receiver would if GPS - UTC were 17 s (`move_stream_weeks` with
+/// 16 -> 17: every GLONASS MSM time of day 1,000 ms earlier, every 1020
+/// state vector propagated 1 s so that its unchanged t_b is the same
+/// instant of the orbit):
+/// - with a 1013 carrying 17 first, every epoch joins its GLONASS data
+///   (the time of day is checked to the millisecond, so only a shift of
+///   exactly 1 s passes), with the original's satellites, and each
+///   GLONASS position is within 1 m of the original's (the 1020 fields'
+///   re-encoding; a t_b 1 s off would move it ~3.9 km);
+/// - without the 1013 (the table's 16) every epoch's GLONASS data is 1 s
+///   off and dropped;
+/// - the original with a 1013 carrying the table's own 16 gives the
+///   original's epochs to the bit, and says `Stream(16)` where the table
+///   says `Table(16)`.
+///
+/// Verifies: RX-LEAP
+#[test]
+fn a_1013_leap_count_moves_the_glonass_alignment_by_its_difference() {
+    use raim_nav::rtcm::LeapSeconds;
+    let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let shifted = rtcm_common::move_stream_weeks(&bytes, 0, 16, 17);
+    let (orig, orig_refused, orig_counts, orig_leap) = device_epochs(&bytes, GMSD7_PIVOT_WEEK);
+    assert_eq!(orig_leap, LeapSeconds::Table(16));
+    assert_eq!(orig_counts.glonass_dropped, 0);
+    let glonass_epochs = orig
+        .iter()
+        .filter(|(_, s)| s.iter().any(|o| o.id.system == raim_core::System::Glonass))
+        .count();
+    assert!(glonass_epochs >= 50, "{glonass_epochs}");
+
+    let with_1013 = [msg1013(17), shifted.clone()].concat();
+    let (got, refused, counts, leap) = device_epochs(&with_1013, GMSD7_PIVOT_WEEK);
+    assert_eq!(leap, LeapSeconds::Stream(17));
+    assert_eq!(counts.system_parameters, 1);
+    assert_eq!(counts.glonass_dropped, 0);
+    assert_eq!(refused, orig_refused);
+    assert_eq!(got.len(), orig.len());
+    let mut worst_m: f64 = 0.0;
+    for ((t, a), (t0, b)) in got.iter().zip(&orig) {
+        assert_eq!(t, t0);
+        assert_eq!(
+            a.iter().map(|o| o.id).collect::<Vec<_>>(),
+            b.iter().map(|o| o.id).collect::<Vec<_>>()
+        );
+        for (x, y) in a.iter().zip(b) {
+            if x.id.system == raim_core::System::Glonass {
+                let d = (0..3)
+                    .map(|i| (x.position_m[i] - y.position_m[i]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                worst_m = worst_m.max(d);
+            }
+        }
+    }
+    println!(
+        "1013 with 17 s on GMSD7 moved to 17 s: {} epochs, GLONASS positions within {worst_m:.3} m of the original's",
+        got.len()
+    );
+    assert!(worst_m < 1.0, "{worst_m} m");
+
+    let (no_1013, _, counts, leap) = device_epochs(&shifted, GMSD7_PIVOT_WEEK);
+    assert_eq!(leap, LeapSeconds::Table(16));
+    // Every dated epoch (the first, before the first 1019, is not).
+    assert_eq!(counts.glonass_dropped as usize, no_1013.len());
+    assert_eq!(no_1013.len(), orig.len());
+    assert!(no_1013
+        .iter()
+        .all(|(_, s)| s.iter().all(|o| o.id.system != raim_core::System::Glonass)));
+
+    // The 1013 after the stream's last 1020, followed by its 1020s again
+    // (as a receiver resends them): the GLONASS sets placed before it with
+    // the table's count are dropped at once, so no epoch after it joins
+    // GLONASS data to a set a second off: every GLONASS position formed
+    // is within 1 m of the original's (until the 1013 the GLONASS data is
+    // 1 s off and dropped).
+    let all = frames(&shifted);
+    let is_1020 = |f: &[u8]| {
+        rtcm_rs::MessageFrame::new(f)
+            .ok()
+            .and_then(|m| m.message_number())
+            == Some(1020)
+    };
+    let last = all
+        .iter()
+        .rposition(|f| is_1020(f))
+        .expect("GMSD7 has 1020s")
+        + 1;
+    let late_1013: Vec<u8> = all[..last]
+        .iter()
+        .flat_map(|f| f.iter().copied())
+        .chain(msg1013(17))
+        .chain(
+            all.iter()
+                .filter(|f| is_1020(f))
+                .flat_map(|f| f.iter().copied()),
+        )
+        .chain(all[last..].iter().flat_map(|f| f.iter().copied()))
+        .collect();
+    let (late, _, _, _) = device_epochs(&late_1013, GMSD7_PIVOT_WEEK);
+    let mut joined = 0;
+    for (t, a) in &late {
+        let (_, b) = orig.iter().find(|(t0, _)| t0 == t).expect("same epochs");
+        for x in a
+            .iter()
+            .filter(|o| o.id.system == raim_core::System::Glonass)
+        {
+            let y = b.iter().find(|o| o.id == x.id).expect("in the original");
+            let d = (0..3)
+                .map(|i| (x.position_m[i] - y.position_m[i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            assert!(d < 1.0, "{:?} at {t} s: {d} m", x.id);
+            joined += 1;
+        }
+    }
+    assert!(joined > 0);
+
+    let same = [msg1013(16), bytes.clone()].concat();
+    let (again, _, _, leap) = device_epochs(&same, GMSD7_PIVOT_WEEK);
+    assert_eq!(leap, LeapSeconds::Stream(16));
+    assert_eq!(again, orig);
+}
+
+/// The leap-second table expires on 2026-06-28 (`raim_nav::time`). GMSD7
+/// re-sent in GPS week 2430 (2026-08-02, past the expiry), into a unit
+/// whose pivot dates it there:
+/// - with no 1013, every epoch (each has GLONASS MSM) is refused
+///   `LeapSecondsUnknown`, none is formed, and the receiver says
+///   `TableExpired`;
+/// - the same stream without its GLONASS MSM is formed epoch by epoch as
+///   the host forms it (GPS only);
+/// - with a 1013 carrying 18 s, every epoch is formed with its GLONASS
+///   data, as the host (which dates by its table) forms it.
+///
+/// Sent in week 2420 (2026-05-24, before the expiry) with no 1013, the
+/// table is used: every epoch is formed with GLONASS, as on the host, and
+/// the receiver says `Table(18)`.
+///
+/// Verifies: RX-LEAP, RX-STREAM
+#[test]
+fn past_the_table_expiry_glonass_epochs_are_refused_and_gps_formed() {
+    use raim_nav::rtcm::LeapSeconds;
+    use raim_nav::time::LEAP_TABLE_EXPIRES_GPS_S;
+    let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let week_s = raim_nav::ephemeris::WEEK_S;
+    let (after, before) = (2430, 2420);
+    assert!(after as f64 * week_s > LEAP_TABLE_EXPIRES_GPS_S);
+    assert!(((before + 1) as f64) * week_s < LEAP_TABLE_EXPIRES_GPS_S);
+
+    let late = gmsd7_moved_bare(&bytes, after);
+    // As the tests' moved streams are sent past the expiry: led by a 1013.
+    assert_eq!(
+        gmsd7_moved_to(&bytes, after),
+        [msg1013(18), late.clone()].concat()
+    );
+    let (ok, refused, counts, leap) = device_epochs(&late, after - 26);
+    assert_eq!(leap, LeapSeconds::TableExpired);
+    assert!(ok.is_empty(), "{} formed", ok.len());
+    let unknown = refused
+        .iter()
+        .filter(|e| matches!(e, FormError::LeapSecondsUnknown { .. }))
+        .count();
+    assert_eq!(unknown + 1, counts.epochs as usize, "{refused:?}");
+
+    let gps_only = device_against_host(&without_glonass_msm(&late), after - 26, after + 1);
+    assert!(gps_only.same >= 250, "{}", gps_only.same);
+    assert!(gps_only
+        .sats
+        .iter()
+        .flatten()
+        .all(|s| s.system == raim_core::System::Gps));
+
+    let told = [msg1013(18), late.clone()].concat();
+    let run = device_against_host(&told, after - 26, after + 1);
+    assert!(run.same >= 250, "{}", run.same);
+    assert_eq!(run.counts.glonass_dropped, 0);
+    let with_glonass = |r: &Run| {
+        r.sats
+            .iter()
+            .filter(|s| s.iter().any(|id| id.system == raim_core::System::Glonass))
+            .count()
+    };
+    let told_glonass = with_glonass(&run);
+    assert_eq!(device_epochs(&told, after - 26).3, LeapSeconds::Stream(18));
+
+    let early = gmsd7_moved_to(&bytes, before);
+    let run = device_against_host(&early, before - 26, before + 1);
+    assert!(run.same >= 250, "{}", run.same);
+    assert_eq!(run.counts.glonass_dropped, 0);
+    assert_eq!(device_epochs(&early, before - 26).3, LeapSeconds::Table(18));
+    // The GLONASS satellites above the mask: as many epochs with them
+    // either way (GMSD7's 1020s cover 3 of its 6 GLONASS satellites).
+    assert!(told_glonass >= 50, "{told_glonass}");
+    assert_eq!(told_glonass, with_glonass(&run));
+    println!(
+        "week {after}: {unknown} epochs with GLONASS MSM refused, {} GPS-only formed; with a 1013 {told_glonass} formed with GLONASS satellites; week {before}: {} formed with the table, {} with GLONASS satellites",
+        gps_only.same,
+        run.same,
+        with_glonass(&run)
+    );
+}
+
+/// A byte sink for the host server's link and NMEA outputs.
+struct Sink(Vec<u8>);
+impl embedded_io::ErrorType for Sink {
+    type Error = core::convert::Infallible;
+}
+impl embedded_io::Write for Sink {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        self.0.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+/// `bytes` then a `Status` request through raim-server's `Server` (the
+/// firmware's protocol loop, on the host, with this build's pivot): the
+/// unasked stream answers and the `Status`.
+fn server_run(
+    bytes: &[u8],
+) -> (
+    Vec<raim_proto::message::ResponseBody>,
+    raim_proto::message::Status,
+) {
+    let (answers, status, _) = server_run_nmea(bytes);
+    (answers, status)
+}
+
+/// [`server_run`], with the NMEA the unit wrote.
+fn server_run_nmea(
+    bytes: &[u8],
+) -> (
+    Vec<raim_proto::message::ResponseBody>,
+    raim_proto::message::Status,
+    String,
+) {
+    use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody};
+    let mut server = raim_server::Server::new();
+    server.take_runtime_config(Config::default()).unwrap();
+    let (mut link, mut nmea) = (Sink(Vec::new()), Sink(Vec::new()));
+    let status = raim_qemu::encode_request(&RequestRef {
+        seq: 1,
+        command: CommandRef::Status,
+    })
+    .unwrap();
+    // A pause-free line: the request frame follows the stream's last frame.
+    for &b in bytes.iter().chain(&status) {
+        server
+            .on_byte(b, &mut link, &mut nmea, &mut raim_server::NoPlatform)
+            .unwrap();
+    }
+    let mut rx = raim_proto::frame::FrameReceiver::<{ raim_proto::MAX_RESPONSE_FRAME }>::new();
+    let mut answers = Vec::new();
+    let mut found = None;
+    for &b in &link.0 {
+        if let Some(Ok(p)) = rx.push(b) {
+            let r: Response = postcard::from_bytes(p).expect("an answer");
+            match (r.seq, r.body) {
+                (Some(1), ResponseBody::Status(s)) => found = Some(s),
+                (None, body) => answers.push(body),
+                other => panic!("{other:?}"),
+            }
+        }
+    }
+    (
+        answers,
+        found.expect("Status answered"),
+        String::from_utf8(nmea.0).expect("NMEA is text"),
+    )
+}
+
+/// The unit says in `Status` where its GPS - UTC comes from, and refuses
+/// GLONASS epochs on the wire once its table has expired: GMSD7's first
+/// 30 kB re-sent 8 weeks after this build's date (past the table's expiry
+/// whatever the build date; its ephemerides first) through raim-server's
+/// `Server`: every epoch
+/// with GLONASS data is answered `StreamLeapSecondsUnknown` and `Status`
+/// says `TableExpired`; with a 1013 carrying 18 s first, the epochs are
+/// answered with results and `Status` says `Stream { 18 }`. Before any
+/// stream, `NotDated`.
+///
+/// Verifies: RX-LEAP, WIRE-StreamLeapSecondsUnknown
+#[test]
+fn status_says_the_leap_table_has_expired_and_glonass_epochs_are_refused() {
+    use raim_proto::error::WireError;
+    use raim_proto::message::{ResponseBody, StreamLeapSeconds};
+    let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let week = raim_server::stream::PIVOT_WEEK + 60;
+    assert!(week as f64 * raim_nav::ephemeris::WEEK_S > raim_nav::time::LEAP_TABLE_EXPIRES_GPS_S);
+    let moved = gmsd7_moved_bare(&bytes, week);
+    let all = frames(&moved);
+    // The stream's ephemerides first, as a receiver sends its stored
+    // ones at start-up, then its first 30 kB.
+    let number = |f: &&[u8]| {
+        rtcm_rs::MessageFrame::new(f)
+            .ok()
+            .and_then(|m| m.message_number())
+    };
+    let part: Vec<u8> = all
+        .iter()
+        .filter(|f| matches!(number(f), Some(1019 | 1020)))
+        .chain(
+            all.iter()
+                .take_while(|f| f.as_ptr() as usize - moved.as_ptr() as usize + f.len() <= 30_000),
+        )
+        .flat_map(|f| f.iter().copied())
+        .collect();
+
+    let (_, s) = server_run(&[]);
+    assert_eq!(s.stream_leap_seconds, StreamLeapSeconds::NotDated);
+
+    let (answers, s) = server_run(&part);
+    let epochs = answers.len();
+    assert_eq!(s.stream_leap_seconds, StreamLeapSeconds::TableExpired);
+    let refused = answers
+        .iter()
+        .filter(|a| {
+            matches!(
+                a,
+                ResponseBody::Error(WireError::StreamLeapSecondsUnknown { .. })
+            )
+        })
+        .count();
+    assert!(refused >= 25, "{answers:?}");
+    assert!(
+        answers.iter().all(|a| matches!(
+            a,
+            ResponseBody::Error(
+                WireError::StreamLeapSecondsUnknown { .. } | WireError::StreamNotDated { .. }
+            )
+        )),
+        "{answers:?}"
+    );
+
+    let told = [msg1013(18), part].concat();
+    let (answers, s) = server_run(&told);
+    assert_eq!(
+        s.stream_leap_seconds,
+        StreamLeapSeconds::Stream {
+            gps_minus_utc_s: 18
+        }
+    );
+    // Each epoch answered as without GLONASS trouble: a result, or the
+    // core's refusal (the stream's first epochs have too few satellites
+    // with an ephemeris), never `StreamLeapSecondsUnknown`.
+    assert_eq!(answers.len(), epochs);
+    assert!(!answers.iter().any(|a| matches!(
+        a,
+        ResponseBody::Error(WireError::StreamLeapSecondsUnknown { .. })
+    )));
+    let results = answers
+        .iter()
+        .filter(|a| matches!(a, ResponseBody::Result(_)))
+        .count();
+    assert!(results > 0, "{answers:?}");
+    println!(
+        "{refused} stream epochs refused StreamLeapSecondsUnknown past the table's expiry; with a 1013, {} answered ({results} results)",
+        answers.len()
+    );
+}
+
+/// The UTC time and date of the unit's RMC and ZDA sentences use the leap
+/// seconds in force: GMSD7 re-sent past the table's expiry (8 weeks after
+/// this build), its ephemerides first, with a 1013 carrying 18 s, then
+/// the same with 17 s: every RMC and ZDA time of the second run is one
+/// second later than the first's, dates included (the GPS epochs are the same; with 17 s
+/// the stream's GLONASS times are a second off and dropped, so only the
+/// sentences' times are compared).
+///
+/// Verifies: RX-LEAP
+#[test]
+fn nmea_dates_use_the_leap_seconds_in_force() {
+    let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let moved = gmsd7_moved_bare(&bytes, raim_server::stream::PIVOT_WEEK + 60);
+    let all = frames(&moved);
+    let number = |f: &&[u8]| {
+        rtcm_rs::MessageFrame::new(f)
+            .ok()
+            .and_then(|m| m.message_number())
+    };
+    let part: Vec<u8> = all
+        .iter()
+        .filter(|f| matches!(number(f), Some(1019 | 1020)))
+        .chain(all.iter().take(400))
+        .flat_map(|f| f.iter().copied())
+        .collect();
+    // hhmmss.ss of each RMC and ZDA sentence, as seconds of the day, and
+    // their dates.
+    let times = |nmea: &str, kind: &str| -> Vec<(f64, String)> {
+        nmea.lines()
+            .filter(|l| l.get(3..6) == Some(kind))
+            .filter_map(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                let t = f.get(1)?;
+                let s = t.get(0..2)?.parse::<f64>().ok()? * 3600.0
+                    + t.get(2..4)?.parse::<f64>().ok()? * 60.0
+                    + t.get(4..)?.parse::<f64>().ok()?;
+                let date = match kind {
+                    "RMC" => f.get(9)?.to_string(),
+                    _ => f.get(2..5)?.join("/"),
+                };
+                Some((s, date))
+            })
+            .collect()
+    };
+    let (_, s18, nmea18) = server_run_nmea(&[msg1013(18), part.clone()].concat());
+    let (_, s17, nmea17) = server_run_nmea(&[msg1013(17), part].concat());
+    assert_eq!(
+        s18.stream_leap_seconds,
+        raim_proto::message::StreamLeapSeconds::Stream {
+            gps_minus_utc_s: 18
+        }
+    );
+    assert_eq!(
+        s17.stream_leap_seconds,
+        raim_proto::message::StreamLeapSeconds::Stream {
+            gps_minus_utc_s: 17
+        }
+    );
+    for kind in ["RMC", "ZDA"] {
+        let (a, b) = (times(&nmea18, kind), times(&nmea17, kind));
+        assert!(a.len() >= 20, "{kind}: {} sentences", a.len());
+        assert_eq!(a.len(), b.len(), "{kind}");
+        for ((ta, da), (tb, db)) in a.iter().zip(&b) {
+            // GMSD7 starts 18 s before UTC midnight: a sentence a second
+            // later may be of the next day.
+            let day_s = if da == db { 0.0 } else { 86_400.0 };
+            assert!(
+                (tb + day_s - ta - 1.0).abs() < 1e-6,
+                "{kind}: {ta} {da} then {tb} {db}"
+            );
+        }
+    }
 }

@@ -24,7 +24,13 @@ pub fn distance_m(a: [f64; 3], b: [f64; 3]) -> f64 {
 /// Azimuth (clockwise from north) and elevation of `sat_m` seen from
 /// `rx_m`, radians, with the receiver's geodetic coordinates.
 pub fn az_el(rx_m: [f64; 3], sat_m: [f64; 3]) -> (f64, f64, Geodetic) {
-    let g = ecef_to_geodetic(rx_m);
+    az_el_from(rx_m, ecef_to_geodetic(rx_m), sat_m)
+}
+
+/// [`az_el`] with the receiver's geodetic position `g` =
+/// `ecef_to_geodetic(rx_m)` given: computed once for all the satellites
+/// of an epoch (ten f64 latitude iterations, soft-float on the M4).
+pub fn az_el_from(rx_m: [f64; 3], g: Geodetic, sat_m: [f64; 3]) -> (f64, f64, Geodetic) {
     let n = distance_m(sat_m, rx_m);
     let d = [
         (sat_m[0] - rx_m[0]) / n,

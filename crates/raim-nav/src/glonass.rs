@@ -111,19 +111,36 @@ pub fn gps_minus_utc_s(t_gps_s: f64) -> f64 {
 /// GLONASS time (UTC(SU) + 3 h) as continuous seconds on the GPS origin:
 /// t_gps - (GPS - UTC) + 3 h.
 pub fn glonass_from_gps_s(t_gps_s: f64) -> f64 {
-    t_gps_s - gps_minus_utc_s(t_gps_s) + GLONASS_MINUS_UTC_S
+    glonass_from_gps_with_s(t_gps_s, gps_minus_utc_s(t_gps_s))
+}
+
+/// [`glonass_from_gps_s`] with GPS - UTC = `gps_minus_utc_s` (the count in
+/// force: a stream's, or the table's before its expiry).
+pub fn glonass_from_gps_with_s(t_gps_s: f64, gps_minus_utc_s: f64) -> f64 {
+    t_gps_s - gps_minus_utc_s + GLONASS_MINUS_UTC_S
 }
 
 /// Seconds of the GLONASS (Moscow) day at GPS time `t_gps_s`.
 pub fn glonass_time_of_day_s(t_gps_s: f64) -> f64 {
-    m::rem_euclid(glonass_from_gps_s(t_gps_s), DAY_S)
+    glonass_time_of_day_with_s(t_gps_s, gps_minus_utc_s(t_gps_s))
+}
+
+/// [`glonass_time_of_day_s`] with GPS - UTC = `gps_minus_utc_s`.
+pub fn glonass_time_of_day_with_s(t_gps_s: f64, gps_minus_utc_s: f64) -> f64 {
+    m::rem_euclid(glonass_from_gps_with_s(t_gps_s, gps_minus_utc_s), DAY_S)
 }
 
 /// A time of the GLONASS day (t_b of an ephemeris, in [0, 86400) s) as
 /// GPS seconds: the day is the one that puts it within 12 h of
 /// `near_gps_s` (the receiver time of the message that carried it).
 pub fn glonass_time_of_day_to_gps_s(tod_s: f64, near_gps_s: f64) -> f64 {
-    let near_glo = glonass_from_gps_s(near_gps_s);
+    glonass_time_of_day_to_gps_with_s(tod_s, near_gps_s, gps_minus_utc_s(near_gps_s))
+}
+
+/// [`glonass_time_of_day_to_gps_s`] with GPS - UTC = `gps_minus_utc_s` (the
+/// count at `near_gps_s`).
+pub fn glonass_time_of_day_to_gps_with_s(tod_s: f64, near_gps_s: f64, gps_minus_utc_s: f64) -> f64 {
+    let near_glo = glonass_from_gps_with_s(near_gps_s, gps_minus_utc_s);
     let day_start = m::floor(near_glo / DAY_S) * DAY_S;
     let mut t_glo = day_start + tod_s;
     if t_glo - near_glo > DAY_S / 2.0 {
@@ -131,8 +148,7 @@ pub fn glonass_time_of_day_to_gps_s(tod_s: f64, near_gps_s: f64) -> f64 {
     } else if near_glo - t_glo > DAY_S / 2.0 {
         t_glo += DAY_S;
     }
-    // Invert glonass_from_gps_s with the leap count of the nearby time.
-    t_glo + gps_minus_utc_s(near_gps_s) - GLONASS_MINUS_UTC_S
+    t_glo + gps_minus_utc_s - GLONASS_MINUS_UTC_S
 }
 
 /// PZ-90.11 to WGS-84 (G1762) through ITRF2008 (EPSG:7960 coordinate-frame
@@ -299,14 +315,7 @@ impl GlonassEphemeris {
         let mut remaining = self
             .age_s(t_gps_s)
             .clamp(-MAX_PROPAGATION_S, MAX_PROPAGATION_S);
-        let mut s = [
-            self.position_m[0],
-            self.position_m[1],
-            self.position_m[2],
-            self.velocity_m_s[0],
-            self.velocity_m_s[1],
-            self.velocity_m_s[2],
-        ];
+        let mut s = initial_state(self);
         let acc = self.lunisolar_m_s2;
         while remaining.abs() > 1e-9 {
             let h = remaining.clamp(-RK4_STEP_S, RK4_STEP_S);
@@ -325,6 +334,117 @@ impl GlonassEphemeris {
             clock_s: self.clock_s(t_gps_s),
         }
     }
+}
+
+/// One GLONASS orbit integrated once and evaluated at many times: the
+/// state at the latest node of the ICD's RK4 grid reached so far (t_b +
+/// k x [`RK4_STEP_S`], on one side of t_b), from which a time t is
+/// reached by the remaining whole steps and the one shortened step.
+///
+/// [`GlonassEphemeris::propagate_pz90`] takes exactly these steps from
+/// t_b (whole steps of +-[`RK4_STEP_S`], then `t - t_b - k x 60 s`, which
+/// is exact in f64), so a time evaluated here gives its result to the bit
+/// (test `arc_equals_the_icd_integration`, and host-tests `rtcm_receiver`
+/// on the 1020s of GMSD7 and the GLONASS records of ESBC), while a
+/// receiver at 1 Hz pays one shortened step per satellite and epoch and a
+/// whole step once a minute, instead of up to 15 steps (30 at the 30 min
+/// age limit) per evaluation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GlonassArc {
+    /// The ephemeris integrated.
+    eph: GlonassEphemeris,
+    /// Direction of the node from t_b: +1 after, -1 before (0 at t_b).
+    dir: i8,
+    /// Whole steps from t_b to the node.
+    steps: u32,
+    /// [x, y, z, vx, vy, vz] at the node, PZ-90.11, m and m/s.
+    state: [f64; 6],
+}
+
+impl GlonassArc {
+    /// The arc of `eph`, at its reference time.
+    pub fn new(eph: &GlonassEphemeris) -> Self {
+        GlonassArc {
+            eph: *eph,
+            dir: 0,
+            steps: 0,
+            state: initial_state(eph),
+        }
+    }
+
+    /// The ephemeris this arc integrates.
+    pub fn ephemeris(&self) -> &GlonassEphemeris {
+        &self.eph
+    }
+
+    /// Position and velocity in PZ-90.11 at GPS time `t_gps_s`: the same
+    /// bits as [`GlonassEphemeris::propagate_pz90`], from the node reached
+    /// so far when `t_gps_s` is at or beyond it on the same side of t_b
+    /// (else from t_b again); the node moves to the last whole step before
+    /// `t_gps_s`.
+    pub fn propagate_pz90(&mut self, t_gps_s: f64) -> ([f64; 3], [f64; 3]) {
+        let age = self
+            .eph
+            .age_s(t_gps_s)
+            .clamp(-MAX_PROPAGATION_S, MAX_PROPAGATION_S);
+        if age.is_nan() {
+            let s = initial_state(&self.eph);
+            return ([s[0], s[1], s[2]], [s[3], s[4], s[5]]);
+        }
+        let dir: i8 = if age < 0.0 { -1 } else { 1 };
+        let span = age.abs();
+        // Whole steps: the largest k with span - 60 k >= 0 (the division
+        // may round across an integer, so checked both ways).
+        let mut steps = m::floor(span / RK4_STEP_S) as u32;
+        while steps > 0 && span - f64::from(steps) * RK4_STEP_S < 0.0 {
+            steps -= 1;
+        }
+        while span - f64::from(steps + 1) * RK4_STEP_S >= 0.0 {
+            steps += 1;
+        }
+        if self.steps > steps || (self.steps > 0 && self.dir != dir) {
+            self.dir = 0;
+            self.steps = 0;
+            self.state = initial_state(&self.eph);
+        }
+        let h = f64::from(dir) * RK4_STEP_S;
+        while self.steps < steps {
+            self.state = rk4_step(&self.state, h, &self.eph.lunisolar_m_s2);
+            self.steps += 1;
+            self.dir = dir;
+        }
+        // The remainder, exact: age - k x 60 s (propagate_pz90 subtracts
+        // the same whole steps one by one, each exactly).
+        let rest = age - h * f64::from(steps);
+        let s = if rest.abs() > 1e-9 {
+            rk4_step(&self.state, rest, &self.eph.lunisolar_m_s2)
+        } else {
+            self.state
+        };
+        ([s[0], s[1], s[2]], [s[3], s[4], s[5]])
+    }
+
+    /// Position (WGS-84) and clock at `t_gps_s`: the same bits as
+    /// [`GlonassEphemeris::state`].
+    pub fn state(&mut self, t_gps_s: f64) -> SatState {
+        let (p, _) = self.propagate_pz90(t_gps_s);
+        SatState {
+            position_m: pz90_to_wgs84(p),
+            clock_s: self.eph.clock_s(t_gps_s),
+        }
+    }
+}
+
+/// [x, y, z, vx, vy, vz] of the broadcast state at t_b.
+fn initial_state(e: &GlonassEphemeris) -> [f64; 6] {
+    [
+        e.position_m[0],
+        e.position_m[1],
+        e.position_m[2],
+        e.velocity_m_s[0],
+        e.velocity_m_s[1],
+        e.velocity_m_s[2],
+    ]
 }
 
 /// The ICD's equations of motion in the rotating PZ-90 frame: the time
@@ -483,6 +603,56 @@ mod tests {
         };
         let (p0, _) = back.propagate_pz90(e.tb_gps_s);
         assert!(norm(p0, e.position_m) < TOL_M);
+    }
+
+    /// The arc gives [`GlonassEphemeris::propagate_pz90`]'s result to the
+    /// bit, whatever the order of the times asked: 1 Hz forward and
+    /// backward across t_b over the whole +-1 h, times on the grid's nodes
+    /// and a nanosecond either side, jumps back to an earlier node, to the
+    /// other side of t_b and beyond the clamp.
+    ///
+    /// Verifies: RX-GLONASS-ARC
+    #[test]
+    fn arc_equals_the_icd_integration() {
+        let e = eph(
+            [7_003.008789, -12_206.626953, 21_280.765625],
+            [0.7835417, 2.8042530, 1.3525150],
+            [0.0, 1.7e-9, -5.41e-9],
+        );
+        let mut times: Vec<f64> = Vec::new();
+        // A 1 Hz receiver from t_b - 30 min to t_b + 30 min, with transit
+        // times of about 70 ms.
+        for k in -1800..=1800 {
+            times.push(e.tb_gps_s + f64::from(k) - 0.071_234_567);
+        }
+        for k in [0.0, 60.0, 120.0, -60.0, 900.0, -900.0, 3_600.0, -3_600.0] {
+            times.extend([k, k + 1e-9, k - 1e-9, k + 1e-6, k - 1e-6].map(|d| e.tb_gps_s + d));
+        }
+        times.extend(
+            [
+                5_000.0, -5_000.0, 1_799.5, 30.0, -0.5, 1_200.25, 1_199.75, 59.999_999, 0.0,
+            ]
+            .map(|d| e.tb_gps_s + d),
+        );
+        let mut arc = GlonassArc::new(&e);
+        for (i, &t) in times.iter().enumerate() {
+            let want = e.propagate_pz90(t);
+            let got = arc.propagate_pz90(t);
+            assert_eq!(
+                got.0.map(f64::to_bits),
+                want.0.map(f64::to_bits),
+                "time {i}"
+            );
+            assert_eq!(
+                got.1.map(f64::to_bits),
+                want.1.map(f64::to_bits),
+                "time {i}"
+            );
+            assert_eq!(arc.state(t), e.state(t), "time {i}");
+        }
+        // NaN: the broadcast state, as the ICD integration gives it.
+        let nan = arc.propagate_pz90(f64::NAN);
+        assert_eq!(nan.0, e.position_m);
     }
 
     /// The clock model and its sign convention: dt = -tau_n + gamma_n dt.

@@ -11,12 +11,13 @@
 //! RTCM 3 stream ([`crate::rtcm`]) both call [`correct`] and
 //! [`bootstrap_position`], so that they form the same bits.
 
+use raim_core::frames::{ecef_to_geodetic, Geodetic};
 use raim_core::sigma::SigmaModel;
 use raim_core::solve::{solve_into, Solution};
 use raim_core::{Config, Epoch, RangeObservation, SatId, System};
 
 use crate::ephemeris::{Kepler, SatState, C_M_S, WEEK_S};
-use crate::geometry::{az_el, distance_m, rotate_earth};
+use crate::geometry::{az_el_from, distance_m, rotate_earth};
 use crate::glonass::{l1_hz, l2_hz, GlonassEphemeris, F_L1_BASE_HZ, F_L2_BASE_HZ};
 use crate::iono::{scale_to_frequency, Klobuchar, F_B1I_HZ, F_L1_HZ};
 use crate::m;
@@ -41,6 +42,16 @@ impl Broadcast<'_> {
         match self {
             Broadcast::Kepler(k) => k.state(t_gps_s),
             Broadcast::Glonass(g) => g.state(t_gps_s),
+        }
+    }
+
+    /// Satellite clock at GPS time `t_gps_s`, s: [`Self::state`]'s clock,
+    /// without integrating a GLONASS orbit (its clock is a polynomial of
+    /// t - t_b alone).
+    pub fn clock_s(&self, t_gps_s: f64) -> f64 {
+        match self {
+            Broadcast::Kepler(k) => k.state(t_gps_s).clock_s,
+            Broadcast::Glonass(g) => g.clock_s(t_gps_s),
         }
     }
 
@@ -216,14 +227,29 @@ fn group_delay_applies(system: System, code: &str) -> bool {
     }
 }
 
-/// Satellite position (ECEF at transmit time, not yet rotated) and clock,
-/// from the receiver time tag and the pseudorange: the transmit time in
-/// GPS time is t_rx - P/c - dt_sv (exact whatever the receiver clock).
-fn transmit_state(k: &Broadcast<'_>, t_rx_gps_s: f64, pseudorange_m: f64) -> ([f64; 3], f64) {
-    let t_sv = t_rx_gps_s - pseudorange_m / C_M_S;
-    let dts = k.state(t_sv).clock_s;
-    let st = k.state(t_sv - dts);
-    (st.position_m, st.clock_s)
+/// The pseudorange the satellite's transmit time is taken from (the
+/// code's, or the iono-free pair's) and, for a pair, the combination and
+/// its group delay ([`iono_free`]).
+#[allow(clippy::type_complexity)]
+fn ranging_pseudorange(s: &SatInput<'_>) -> Result<(f64, Option<(f64, f64)>), Rejection> {
+    let pair = match s.p2_m {
+        Some(p2) => Some(
+            iono_free(s.id.system, s.code, s.p1_m, p2, s.eph.kepler()).ok_or(Rejection::NoCode)?,
+        ),
+        None => None,
+    };
+    Ok((pair.map_or(s.p1_m, |v| v.0), pair))
+}
+
+/// GPS time at which the signal of `s` received at `t_rx_gps_s` left the
+/// satellite: t_rx - P/c - dt_sv (exact whatever the receiver clock: P
+/// holds it), or why `s` cannot be used (an iono-free pair of unknown
+/// bands). The satellite's state there is `s.eph.state(t)`, which
+/// [`correct_at`] takes.
+pub fn transmit_time_s(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<f64, Rejection> {
+    let (p, _) = ranging_pseudorange(s)?;
+    let t_sv = t_rx_gps_s - p / C_M_S;
+    Ok(t_sv - s.eph.clock_s(t_sv))
 }
 
 /// One satellite's corrected observation, every correction computed at the
@@ -238,18 +264,35 @@ pub fn correct(
     c: &Corrections,
     klobuchar: Option<&Klobuchar>,
 ) -> Result<Corrected, Rejection> {
+    let tx = s.eph.state(transmit_time_s(s, t_rx_gps_s)?);
+    correct_at(s, t_rx_gps_s, &tx, rx_m, None, full, c, klobuchar)
+}
+
+/// [`correct`] with the satellite's position (ECEF at transmit time, not
+/// yet rotated) and clock at its transmit time given: `tx` =
+/// `s.eph.state(transmit_time_s(s, t_rx_gps_s)?)`, computed once per
+/// epoch however many passes use it (the device's receiver integrates a
+/// GLONASS orbit there from a [`crate::glonass::GlonassArc`]); and, when
+/// given, the receiver's geodetic position `rx_geodetic` =
+/// `ecef_to_geodetic(rx_m)`, computed once for all the epoch's satellites
+/// (else here, for a full correction).
+#[allow(clippy::too_many_arguments)]
+pub fn correct_at(
+    s: &SatInput<'_>,
+    t_rx_gps_s: f64,
+    tx: &SatState,
+    rx_m: Option<[f64; 3]>,
+    rx_geodetic: Option<Geodetic>,
+    full: bool,
+    c: &Corrections,
+    klobuchar: Option<&Klobuchar>,
+) -> Result<Corrected, Rejection> {
     let id = s.id;
     let k = s.eph;
     // An iono-free pair: the combination, its group delay, no Klobuchar
     // (the combination removes the first-order ionosphere).
-    let pair = match s.p2_m {
-        Some(p2) => {
-            Some(iono_free(id.system, s.code, s.p1_m, p2, k.kepler()).ok_or(Rejection::NoCode)?)
-        }
-        None => None,
-    };
-    let p = pair.map_or(s.p1_m, |v| v.0);
-    let (pos_tx, clock_s) = transmit_state(&k, t_rx_gps_s, p);
+    let (p, pair) = ranging_pseudorange(s)?;
+    let (pos_tx, clock_s) = (tx.position_m, tx.clock_s);
     let transit_s = match rx_m {
         Some(rx) => {
             // Two fixed-point steps: the rotation moves the satellite by
@@ -270,7 +313,8 @@ pub fn correct(
     };
     let (mut az, mut el, mut iono_m, mut tropo_m) = (0.0, core::f64::consts::FRAC_PI_2, 0.0, 0.0);
     if let (Some(rx), true) = (rx_m, full) {
-        let (a, e, g) = az_el(rx, pos);
+        let g = rx_geodetic.unwrap_or_else(|| ecef_to_geodetic(rx));
+        let (a, e, g) = az_el_from(rx, g, pos);
         az = a;
         el = e;
         if el < c.elevation_mask_rad {

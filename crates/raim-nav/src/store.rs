@@ -76,6 +76,12 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
         self.glonass.clear();
     }
 
+    /// Forget every GLONASS set (their t_b were placed with a leap-second
+    /// count found wrong).
+    pub fn clear_glonass(&mut self) {
+        self.glonass.clear();
+    }
+
     /// Number of Keplerian and GLONASS sets held.
     pub fn len(&self) -> (usize, usize) {
         (self.kepler.len(), self.glonass.len())

@@ -7,6 +7,16 @@
 //! offset). No leap second has been announced after 2017-01-01 (Bulletin C
 //! 70, July 2025); a later one needs a new row here. The host's tests check
 //! the table against hifitime's (raim-gnss).
+//!
+//! **Expiry.** The table is known to hold only up to the date the last
+//! Bulletin C reaches: Bulletin C 70 (July 2025) announced no leap second
+//! at the end of December 2025, and the IERS leap-seconds.list issued with
+//! it expires 2026-06-28 (NTP 3991593600; the next possible leap second is
+//! at the end of June 2026). Past [`LEAP_TABLE_EXPIRES_GPS_S`] the table
+//! is not used ([`table_gps_minus_utc_s`] says None): the count must then
+//! come from the data (RTCM 1013 DF054, the GPS LNAV UTC parameters), or
+//! whatever needs it (GLONASS, whose time is UTC-based) is refused.
+//! Renewing the table with a later Bulletin C moves the expiry on.
 
 /// Seconds in a day.
 pub const DAY_S: f64 = 86_400.0;
@@ -35,7 +45,21 @@ const LEAP_GPS_S: [f64; 18] = [
     13510.0 * DAY_S + 18.0, // 2017-01-01
 ];
 
-/// GPS time minus UTC at GPS time `t_gps_s`, s (0 before 1981-07-01).
+/// GPS time (s since 1980-01-06) up to which the leap-second table is known to
+/// hold: 2026-06-28 00:00:00 UTC (day 16,975 of GPS time, + 18 s), the
+/// expiry of the IERS leap-seconds.list issued with Bulletin C 70.
+pub const LEAP_TABLE_EXPIRES_GPS_S: f64 = 16_975.0 * DAY_S + 18.0;
+
+/// GPS - UTC from the table at GPS time `t_gps_s`, s, or None from
+/// [`LEAP_TABLE_EXPIRES_GPS_S`] on (a leap second may have been
+/// announced since the table was made).
+pub fn table_gps_minus_utc_s(t_gps_s: f64) -> Option<f64> {
+    (t_gps_s < LEAP_TABLE_EXPIRES_GPS_S).then(|| gps_minus_utc_s(t_gps_s))
+}
+
+/// GPS time minus UTC at GPS time `t_gps_s`, s (0 before 1981-07-01): the
+/// table's latest count, also past its expiry (host tools that date by the
+/// computer's clock; the device uses [`table_gps_minus_utc_s`]).
 pub fn gps_minus_utc_s(t_gps_s: f64) -> f64 {
     let n = LEAP_GPS_S.iter().take_while(|&&t| t_gps_s >= t).count();
     n as f64
@@ -44,7 +68,13 @@ pub fn gps_minus_utc_s(t_gps_s: f64) -> f64 {
 /// UTC seconds since 1970-01-01 of GPS time `t_gps_s` (the wire protocol's
 /// epoch time, from which the NMEA time and date are written).
 pub fn unix_utc_s(t_gps_s: f64) -> f64 {
-    t_gps_s + GPS_EPOCH_UNIX_S - gps_minus_utc_s(t_gps_s)
+    unix_utc_with_s(t_gps_s, gps_minus_utc_s(t_gps_s))
+}
+
+/// UTC seconds since 1970-01-01 of GPS time `t_gps_s` with GPS - UTC =
+/// `gps_minus_utc_s` (the count in force, from the stream or the table).
+pub fn unix_utc_with_s(t_gps_s: f64, gps_minus_utc_s: f64) -> f64 {
+    t_gps_s + GPS_EPOCH_UNIX_S - gps_minus_utc_s
 }
 
 #[cfg(test)]
@@ -62,5 +92,26 @@ mod tests {
         // The leap itself: one second before the 2017 entry, still 17.
         assert_eq!(gps_minus_utc_s(13510.0 * DAY_S + 17.0), 17.0);
         assert_eq!(gps_minus_utc_s(13510.0 * DAY_S + 18.0), 18.0);
+    }
+
+    /// The table's expiry is 2026-06-28 00:00:00 UTC (Unix 1782604800):
+    /// the table answers up to the second before, not from it on.
+    ///
+    /// Verifies: RX-LEAP
+    #[test]
+    fn the_table_expires() {
+        assert_eq!(
+            unix_utc_s(LEAP_TABLE_EXPIRES_GPS_S),
+            1_782_604_800.0,
+            "2026-06-28 00:00:00 UTC"
+        );
+        assert_eq!(
+            table_gps_minus_utc_s(LEAP_TABLE_EXPIRES_GPS_S - 1.0),
+            Some(18.0)
+        );
+        assert_eq!(table_gps_minus_utc_s(LEAP_TABLE_EXPIRES_GPS_S), None);
+        assert_eq!(table_gps_minus_utc_s(f64::NAN), None);
+        assert_eq!(table_gps_minus_utc_s(1711.0 * 7.0 * DAY_S), Some(16.0));
+        assert_eq!(unix_utc_with_s(0.0, 0.0), GPS_EPOCH_UNIX_S);
     }
 }

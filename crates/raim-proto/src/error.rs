@@ -239,6 +239,15 @@ pub enum WireError {
         /// The system's largest number.
         max: u8,
     },
+    /// An epoch of the receiver's RTCM 3 stream with GLONASS data, dated
+    /// past the unit's leap-second table's expiry, while the stream has
+    /// sent no GPS - UTC count (RTCM 1013): GLONASS time is UTC-based, so
+    /// the epoch is refused rather than joined at a guessed second
+    /// (`Status.stream_leap_seconds` says `TableExpired`). Protocol 15.
+    StreamLeapSecondsUnknown {
+        /// The epoch's GPS time of week, ms.
+        tow_ms: u32,
+    },
 }
 
 /// A field name for the wire (truncated to 24 bytes).
@@ -467,6 +476,10 @@ impl core::fmt::Display for WireError {
                 "satellite number {} of {} at index {index} is outside 1..={max}",
                 id.prn,
                 id.system.letter()
+            ),
+            WireError::StreamLeapSecondsUnknown { tow_ms } => write!(
+                f,
+                "stream epoch at GPS time of week {tow_ms} ms has GLONASS data, but GPS - UTC is unknown: the unit's leap-second table has expired and the stream sent no RTCM 1013"
             ),
         }
     }

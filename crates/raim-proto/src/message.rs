@@ -417,6 +417,36 @@ pub struct Status {
     /// the decoding of the frame that closed it, the satellites' orbits
     /// and clocks, the corrections and the bootstrap solution.
     pub last_stream_ticks: u32,
+    /// The GPS - UTC leap seconds the stream receiver dates GLONASS with,
+    /// and where they come from (protocol 15).
+    pub stream_leap_seconds: StreamLeapSeconds,
+}
+
+/// Where the stream receiver's GPS - UTC leap seconds come from, at its
+/// latest dated epoch (GLONASS time is UTC-based: docs/RECEIVERS.md
+/// "Leap seconds").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum StreamLeapSeconds {
+    /// No stream epoch dated yet and no RTCM 1013 (or no stream receiver).
+    #[default]
+    NotDated,
+    /// From the stream's latest RTCM 1013 (DF054), s.
+    Stream {
+        /// GPS - UTC, s.
+        gps_minus_utc_s: u8,
+    },
+    /// From the unit's table, s: the latest stream epoch is before the
+    /// table's expiry.
+    Table {
+        /// GPS - UTC, s.
+        gps_minus_utc_s: u8,
+    },
+    /// The latest stream epoch is past the table's expiry and the stream
+    /// has sent no count: stream epochs with GLONASS data are refused
+    /// (`WireError::StreamLeapSecondsUnknown`); GPS, Galileo, BeiDou and
+    /// QZSS epochs are formed.
+    TableExpired,
 }
 
 impl Status {
@@ -455,6 +485,7 @@ impl Status {
         stream_epochs: 0,
         stream_ephemerides: [0, 0],
         last_stream_ticks: 0,
+        stream_leap_seconds: StreamLeapSeconds::NotDated,
     };
 }
 

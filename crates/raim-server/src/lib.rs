@@ -657,6 +657,7 @@ impl Server {
         #[cfg(feature = "rtcm")]
         {
             (self.status.stream_epochs, self.status.stream_ephemerides) = self.stream.counters();
+            self.status.stream_leap_seconds = self.stream.leap_seconds();
         }
         platform.board_status(&mut self.status);
         self.status()

@@ -117,6 +117,20 @@ impl StreamState {
     }
 }
 
+impl StreamState {
+    /// The leap seconds the receiver dates GLONASS with, for `Status`.
+    pub(crate) fn leap_seconds(&self) -> raim_proto::message::StreamLeapSeconds {
+        use raim_nav::rtcm::LeapSeconds as L;
+        use raim_proto::message::StreamLeapSeconds as S;
+        match self.receiver.leap_seconds() {
+            L::NotDated => S::NotDated,
+            L::Stream(n) => S::Stream { gps_minus_utc_s: n },
+            L::Table(n) => S::Table { gps_minus_utc_s: n },
+            L::TableExpired => S::TableExpired,
+        }
+    }
+}
+
 impl Default for StreamState {
     fn default() -> Self {
         Self::new()
@@ -155,6 +169,9 @@ fn wire_error(e: FormError) -> WireError {
             tow_ms: u32::try_from(tow_ms).unwrap_or(u32::MAX),
         },
         FormError::TooManySignals { capacity } => WireError::StreamCapacity { capacity },
+        FormError::LeapSecondsUnknown { tow_ms } => WireError::StreamLeapSecondsUnknown {
+            tow_ms: u32::try_from(tow_ms).unwrap_or(u32::MAX),
+        },
     }
 }
 
@@ -202,7 +219,10 @@ impl Server {
             StreamMonitor::Snapshot
         };
         let f = &self.stream.formed;
-        let time_s = raim_nav::time::unix_utc_s(f.time_gps_s);
+        let time_s = raim_nav::time::unix_utc_with_s(
+            f.time_gps_s,
+            self.stream.receiver.utc_offset_s(f.time_gps_s),
+        );
         let mut sats = SatList::default();
         for s in f.sats.iter() {
             // `formed` holds at most CAPACITY satellites.
@@ -294,6 +314,18 @@ mod tests {
         assert_eq!(
             stream_sigma_model(None, false),
             raim_core::sigma::SigmaModel::default()
+        );
+    }
+
+    /// A GLONASS epoch past the leap-second table's expiry, with no count
+    /// from the stream, is refused `StreamLeapSecondsUnknown`.
+    ///
+    /// Verifies: WIRE-StreamLeapSecondsUnknown
+    #[test]
+    fn leap_seconds_unknown_maps_to_its_wire_error() {
+        assert_eq!(
+            wire_error(FormError::LeapSecondsUnknown { tow_ms: 7_000 }),
+            WireError::StreamLeapSecondsUnknown { tow_ms: 7_000 }
         );
     }
 

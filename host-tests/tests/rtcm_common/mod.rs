@@ -247,13 +247,60 @@ pub fn move_stream_weeks(
     out
 }
 
+/// GMSD7 as sent in GPS week `week`: [`gmsd7_moved_bare`], led by an
+/// RTCM 1013 with GPS - UTC when the moved dates reach the leap-second
+/// table's expiry (`raim_nav::time::LEAP_TABLE_EXPIRES_GPS_S`), as a
+/// receiver that sends its system parameters would: past it the unit
+/// takes the count from the stream or refuses GLONASS epochs.
+pub fn gmsd7_moved_to(bytes: &[u8], week: i64) -> Vec<u8> {
+    let week_s = raim_nav::ephemeris::WEEK_S;
+    let moved = gmsd7_moved_bare(bytes, week);
+    // The stream runs from 16 s before the week to 4 min 16 s into it.
+    if week as f64 * week_s + 300.0 >= raim_nav::time::LEAP_TABLE_EXPIRES_GPS_S {
+        let leap = raim_nav::time::gps_minus_utc_s(week as f64 * week_s) as u8;
+        [msg1013(leap), moved].concat()
+    } else {
+        moved
+    }
+}
+
 /// GMSD7 as sent in GPS week `week`: [`move_stream_weeks`] with the
 /// leap seconds of the recording and of the moved dates (raim-nav's
-/// table).
-pub fn gmsd7_moved_to(bytes: &[u8], week: i64) -> Vec<u8> {
+/// table), and no 1013.
+pub fn gmsd7_moved_bare(bytes: &[u8], week: i64) -> Vec<u8> {
     let week_s = raim_nav::ephemeris::WEEK_S;
     let leap = |w: i64| raim_nav::time::gps_minus_utc_s(w as f64 * week_s) as i64;
     move_stream_weeks(bytes, week - GMSD7_WEEK, leap(GMSD7_WEEK), leap(week))
+}
+
+/// An RTCM 1013 (system parameters, RTCM 10403.3 Table 3.5-14) with GPS -
+/// UTC = `leap_s` and no message announcements: DF002 12, DF003 12, DF051
+/// 16, DF052 17, DF053 5, DF054 8.
+pub fn msg1013(leap_s: u8) -> Vec<u8> {
+    let fields: [(u64, usize); 6] = [
+        (1013, 12),
+        (0, 12),
+        (56_214, 16),
+        (3_600, 17),
+        (0, 5),
+        (u64::from(leap_s), 8),
+    ];
+    let mut payload = vec![0u8; 9];
+    let mut at = 0;
+    for (v, w) in fields {
+        for k in 0..w {
+            if (v >> (w - 1 - k)) & 1 == 1 {
+                payload[(at + k) / 8] |= 1 << (7 - (at + k) % 8);
+            }
+        }
+        at += w;
+    }
+    let crc = crc::Crc::<u32>::new(&crc::CRC_24_LTE_A);
+    let mut f = vec![0xD3, 0, payload.len() as u8];
+    f.extend_from_slice(&payload);
+    let c = crc.checksum(&f);
+    f.extend_from_slice(&[(c >> 16) as u8, (c >> 8) as u8, c as u8]);
+    f
 }
 
 /// The host's causal replay of `bytes`, and its reader's counts, with the

@@ -28,7 +28,8 @@
 //!   1045 (Galileo F/NAV) and 1046 (Galileo I/NAV) into [`KeplerFields`]
 //!   ([`KeplerMessage`], the week as sent), 1020 (GLONASS, sign-magnitude
 //!   fields) into [`GlonassIcdFields`]; 1005/1006 antenna reference point
-//!   (DF025-DF027, 0.0001 m).
+//!   (DF025-DF027, 0.0001 m); 1013 system parameters (DF051 MJD, DF052
+//!   UTC seconds of day, DF054 GPS - UTC leap seconds).
 //! - Any other message: [`Message::Other`].
 //!
 //! Each value is computed with the operations `rtcm-rs` uses (the
@@ -175,6 +176,7 @@ impl<'a> Frame<'a> {
             1005 | 1006 => {
                 station(self.payload, n == 1006).map(|ecef_m| Message::Station { ecef_m })
             }
+            1013 => msg1013(self.payload),
             _ => Ok(Message::Other(Some(n))),
         }
     }
@@ -195,6 +197,16 @@ pub enum Message<'a> {
     },
     /// 1005/1006: the antenna reference point, ECEF, m.
     Station { ecef_m: [f64; 3] },
+    /// 1013 (system parameters): the station's UTC date and time and the
+    /// GPS - UTC leap seconds (DF054; None when sent as 255, unknown).
+    SystemParameters {
+        /// DF051, the Modified Julian Day of UTC.
+        mjd: u16,
+        /// DF052, seconds of the UTC day.
+        utc_sod_s: u32,
+        /// DF054, GPS - UTC, s.
+        gps_minus_utc_s: Option<u8>,
+    },
     /// A message this decoder does not read (its number, if the frame has
     /// one).
     Other(Option<u16>),
@@ -1035,6 +1047,25 @@ fn msg1020(payload: &[u8]) -> Result<(GlonassIcdFields, f64), DecodeError> {
         unhealthy: bn_msb != 0 || ln3 != 0,
     };
     Ok((fields, f64::from(tb_min) * 60.0))
+}
+
+/// 1013 (RTCM 10403.3 §3.5.6, Table 3.5-14): DF003 12, DF051 16, DF052
+/// 17, DF053 5 (N), DF054 8 (255: not known), then N announcements of 29
+/// bits (DF055 12, DF056 1, DF057 16), which must all be there (as
+/// `rtcm-rs` requires) and are not used.
+fn msg1013(payload: &[u8]) -> Result<Message<'static>, DecodeError> {
+    let mut r = BitReader::at(payload, 12);
+    r.skip(12)?;
+    let mjd = r.u(16)? as u16;
+    let utc_sod_s = r.u32(17)?;
+    let n = r.u32(5)?;
+    let leap = r.u8(8)?;
+    r.skip(29 * n)?;
+    Ok(Message::SystemParameters {
+        mjd,
+        utc_sod_s,
+        gps_minus_utc_s: (leap != 255).then_some(leap),
+    })
 }
 
 /// 1005/1006 (RTCM 10403.3 §3.5.3, 152/168 bits): DF003 12, DF021 6,

@@ -22,9 +22,11 @@
 //!   0, or when the time of week changes. GLONASS MSM carry the GLONASS
 //!   time of day (DF034): they join the open epoch, and once the epoch's
 //!   GPS time is known their time of day must be its GLONASS time of day
-//!   to the millisecond (leap seconds from [`crate::time`]); otherwise the
-//!   epoch's GLONASS data is dropped and counted. GLONASS MSM before any
-//!   other MSM of their epoch wait for it.
+//!   to the millisecond (GPS - UTC from the stream's latest RTCM 1013,
+//!   else from [`crate::time`]'s table before its expiry; past it, with no
+//!   1013, the epoch is refused [`FormError::LeapSecondsUnknown`]);
+//!   otherwise the epoch's GLONASS data is dropped and counted. GLONASS
+//!   MSM before any other MSM of their epoch wait for it.
 //! - Ephemerides 1019 (GPS), 1042 (BeiDou), 1044 (QZSS), 1045 and 1046
 //!   (Galileo F/NAV and I/NAV) and 1020 (GLONASS). A truncated week is
 //!   placed from the pivot in its system's own week count (GPS and QZSS
@@ -51,21 +53,23 @@
 //! stream carries no ionospheric model).
 
 use heapless::Vec;
+use raim_core::frames::ecef_to_geodetic;
 use raim_core::sigma::SigmaModel;
 use raim_core::solve::Solution;
 use raim_core::{RangeObservation, SatId, System};
 
-use crate::ephemeris::{BDT_MINUS_GPST_S, WEEK_S};
+use crate::ephemeris::{SatState, BDT_MINUS_GPST_S, WEEK_S};
 use crate::glonass::{
-    glonass_time_of_day_s, glonass_time_of_day_to_gps_s, glonass_ura_m, GlonassEphemeris,
-    GlonassIcdFields,
+    glonass_time_of_day_to_gps_with_s, glonass_time_of_day_with_s, glonass_ura_m, GlonassArc,
+    GlonassEphemeris, GlonassIcdFields,
 };
 use crate::m;
 use crate::ranging::{
-    bootstrap_position_into, correct, split_pair, stream_codes, stream_sigma_m, Corrections,
-    SatInput,
+    bootstrap_position_into, correct_at, split_pair, stream_codes, stream_sigma_m, transmit_time_s,
+    Broadcast, Corrections, SatInput,
 };
 use crate::store::{EphemerisStore, Stored};
+use crate::time::table_gps_minus_utc_s;
 
 use super::decode::{msm_more_bit, Frame, Message, Msm, MsmSystem};
 use super::fields::{gps_week_of, kepler, toc_near_toe};
@@ -87,6 +91,64 @@ pub const KEPLER_SETS: usize = 256;
 const GLONASS_SETS: usize = 48;
 /// 1020 messages held until the stream's epochs are dated.
 const PENDING_GLONASS: usize = 32;
+/// GLONASS orbits kept integrated between epochs: one per slot (1-27),
+/// so every GLONASS satellite of an epoch has its own.
+const GLONASS_ARCS: usize = 27;
+
+/// The GLONASS orbits of the latest epochs, each integrated up to the
+/// last RK4 node before its latest transmit time ([`GlonassArc`]): an
+/// epoch integrates each satellite's orbit once, from the node the
+/// previous epoch reached, and the result is the ICD integration's from
+/// t_b to the bit.
+#[derive(Debug, Clone)]
+struct GlonassArcs {
+    arcs: Vec<(GlonassArc, u32), GLONASS_ARCS>,
+    /// The epoch count stamped on the arcs used in it.
+    epoch: u32,
+}
+
+impl GlonassArcs {
+    const fn new() -> Self {
+        GlonassArcs {
+            arcs: Vec::new(),
+            epoch: 0,
+        }
+    }
+
+    /// The next epoch's arcs are stamped anew.
+    fn next_epoch(&mut self) {
+        self.epoch = self.epoch.wrapping_add(1);
+    }
+
+    /// `g`'s state at `t_gps_s`, from its arc: the one kept for `g`, else
+    /// a new one in place of an arc no satellite of this epoch uses (with
+    /// every arc in use, which 27 slots do not reach, integrated from t_b
+    /// as [`GlonassEphemeris::state`]).
+    fn state(&mut self, g: &GlonassEphemeris, t_gps_s: f64) -> SatState {
+        let epoch = self.epoch;
+        let at = match self.arcs.iter().position(|(a, _)| a.ephemeris() == g) {
+            Some(i) => Some(i),
+            None => {
+                if self.arcs.push((GlonassArc::new(g), epoch)).is_ok() {
+                    Some(self.arcs.len() - 1)
+                } else {
+                    let free = self.arcs.iter().position(|(_, e)| *e != epoch);
+                    if let Some(slot) = free.and_then(|i| self.arcs.get_mut(i)) {
+                        *slot = (GlonassArc::new(g), epoch);
+                    }
+                    free
+                }
+            }
+        };
+        match at.and_then(|i| self.arcs.get_mut(i)) {
+            Some((arc, used)) => {
+                *used = epoch;
+                arc.state(t_gps_s)
+            }
+            None => g.state(t_gps_s),
+        }
+    }
+}
 
 /// Why a closed epoch was not handed over.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -101,6 +163,32 @@ pub enum FormError {
     /// More signals in one epoch than the receiver holds; the rest were
     /// dropped and the epoch is refused.
     TooManySignals { capacity: u32 },
+    /// An epoch with GLONASS data past the leap-second table's expiry
+    /// ([`crate::time::LEAP_TABLE_EXPIRES_GPS_S`]) with no leap-second
+    /// count from the stream (RTCM 1013): GLONASS time is UTC-based, so
+    /// its data cannot be joined to the GPS epoch without GPS - UTC, and
+    /// the epoch is refused rather than misaligned.
+    LeapSecondsUnknown {
+        /// The epoch's GPS time of week, ms.
+        tow_ms: i64,
+    },
+}
+
+/// Where the GPS - UTC leap seconds the receiver dates GLONASS with come
+/// from, at its latest dated epoch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LeapSeconds {
+    /// No epoch dated yet, and no 1013.
+    NotDated,
+    /// The stream's latest RTCM 1013 (DF054), s.
+    Stream(u8),
+    /// The built-in table, s: the latest epoch is before its expiry.
+    Table(u8),
+    /// The latest epoch is past the table's expiry and the stream sent no
+    /// count: epochs with GLONASS data are refused
+    /// ([`FormError::LeapSecondsUnknown`]).
+    TableExpired,
 }
 
 impl core::fmt::Display for FormError {
@@ -113,6 +201,10 @@ impl core::fmt::Display for FormError {
             FormError::TooManySignals { capacity } => {
                 write!(f, "more than {capacity} signals in one epoch")
             }
+            FormError::LeapSecondsUnknown { tow_ms } => write!(
+                f,
+                "epoch at GPS time of week {tow_ms} ms has GLONASS data, but GPS - UTC is unknown: the leap-second table has expired and the stream sent no RTCM 1013"
+            ),
         }
     }
 }
@@ -133,6 +225,8 @@ pub struct RtcmCounts {
     pub glonass_dropped: u32,
     /// 1020 outside the ICD's ranges.
     pub glonass_bad: u32,
+    /// RTCM 1013 system parameters taken.
+    pub system_parameters: u32,
 }
 
 /// One signal's pseudorange.
@@ -206,6 +300,16 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     /// The bootstrap pass's ranges (not on the stack: the epoch's deepest
     /// path is the bootstrap solve under `form`).
     bootstrap_obs: Vec<RangeObservation, N>,
+    /// Each input satellite's state at its transmit time (None: no usable
+    /// code pair), computed once for both passes.
+    transmit: Vec<Option<SatState>, N>,
+    glonass_arcs: GlonassArcs,
+    /// GPS - UTC of the stream's latest 1013 (DF054), s.
+    stream_leap_s: Option<u8>,
+    /// The GPS - UTC the GLONASS sets in the store were placed with, s.
+    glonass_placed_leap_s: Option<f64>,
+    /// GPS time of the latest dated epoch, s.
+    latest_gps_s: Option<f64>,
 }
 
 impl<const N: usize, const S: usize> StreamReceiver<N, S> {
@@ -234,9 +338,15 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 undecodable: 0,
                 glonass_dropped: 0,
                 glonass_bad: 0,
+                system_parameters: 0,
             },
             solution: Solution::empty(),
             bootstrap_obs: Vec::new(),
+            transmit: Vec::new(),
+            glonass_arcs: GlonassArcs::new(),
+            stream_leap_s: None,
+            glonass_placed_leap_s: None,
+            latest_gps_s: None,
         }
     }
 
@@ -248,6 +358,36 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
     /// The ephemerides held (Keplerian, GLONASS).
     pub fn ephemerides(&self) -> (usize, usize) {
         self.store.len()
+    }
+
+    /// The leap seconds GLONASS is dated with, and where they come from.
+    pub fn leap_seconds(&self) -> LeapSeconds {
+        match (self.stream_leap_s, self.latest_gps_s) {
+            (Some(n), _) => LeapSeconds::Stream(n),
+            (None, None) => LeapSeconds::NotDated,
+            (None, Some(t)) => match table_gps_minus_utc_s(t) {
+                Some(n) => LeapSeconds::Table(n as u8),
+                None => LeapSeconds::TableExpired,
+            },
+        }
+    }
+
+    /// GPS - UTC in force at GPS time `t_gps_s`, for the UTC time and
+    /// date of the unit's answers and NMEA sentences: the stream's (1013),
+    /// else the table's (past its expiry, its latest count: the
+    /// `TableExpired` state of [`Self::leap_seconds`] says the date may
+    /// then be a second off; GLONASS is refused).
+    pub fn utc_offset_s(&self, t_gps_s: f64) -> f64 {
+        self.stream_leap_s
+            .map_or_else(|| crate::time::gps_minus_utc_s(t_gps_s), f64::from)
+    }
+
+    /// GPS - UTC at GPS time `t_gps_s`: the stream's (1013), else the
+    /// table's before its expiry, else unknown.
+    fn gps_minus_utc_s(&self, t_gps_s: f64) -> Option<f64> {
+        self.stream_leap_s
+            .map(f64::from)
+            .or_else(|| table_gps_minus_utc_s(t_gps_s))
     }
 
     /// The station position of the latest 1005/1006, if any.
@@ -321,19 +461,40 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                     tb_tod_s,
                     near: self.last,
                 };
-                match self.base_week {
+                let placed = match self.base_week {
                     Some(base) => self.place_glonass(base, p),
-                    None => {
-                        // Full: the oldest waiting message gives way.
-                        if self.pending_glo.is_full() && !self.pending_glo.is_empty() {
-                            self.pending_glo.remove(0);
-                        }
-                        let _ = self.pending_glo.push(p);
+                    None => false,
+                };
+                if !placed {
+                    // Full: the oldest waiting message gives way.
+                    if self.pending_glo.is_full() && !self.pending_glo.is_empty() {
+                        self.pending_glo.remove(0);
                     }
+                    let _ = self.pending_glo.push(p);
                 }
             }
             Message::Station { ecef_m } => {
                 self.station_m = Some(ecef_m);
+            }
+            Message::SystemParameters {
+                gps_minus_utc_s, ..
+            } => {
+                self.counts.system_parameters = self.counts.system_parameters.wrapping_add(1);
+                if let Some(n) = gps_minus_utc_s {
+                    // GLONASS sets placed with another count are a second
+                    // off: dropped at once (the stream resends them).
+                    if self
+                        .glonass_placed_leap_s
+                        .is_some_and(|l| l != f64::from(n))
+                    {
+                        self.store.clear_glonass();
+                        self.glonass_placed_leap_s = None;
+                    }
+                    self.stream_leap_s = gps_minus_utc_s;
+                    if let Some(base) = self.base_week {
+                        self.place_pending(base);
+                    }
+                }
             }
             Message::Other(_) => {
                 self.counts.ignored = self.counts.ignored.wrapping_add(1);
@@ -483,23 +644,44 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         }
         let base = w - rel;
         self.base_week = Some(base);
-        // In arrival order, one at a time (not the whole list on the stack).
-        for i in 0..self.pending_glo.len() {
-            if let Some(p) = self.pending_glo.get(i).copied() {
-                self.place_glonass(base, p);
-            }
-        }
-        self.pending_glo.clear();
+        self.place_pending(base);
     }
 
-    /// A 1020 in GPS time, checked and stored.
-    fn place_glonass(&mut self, base: i64, p: PendingGlonass) {
+    /// Place the waiting 1020s that can be: in arrival order, one at a
+    /// time (not the whole list on the stack); those whose leap seconds
+    /// are unknown wait on.
+    fn place_pending(&mut self, base: i64) {
+        let mut i = 0;
+        while let Some(p) = self.pending_glo.get(i).copied() {
+            if self.place_glonass(base, p) {
+                self.pending_glo.remove(i);
+            } else {
+                i += 1;
+            }
+        }
+    }
+
+    /// A 1020 in GPS time, checked and stored; false when it cannot be
+    /// placed yet (no epoch to place it by, or GPS - UTC unknown). Its
+    /// t_b is a time of the Moscow day: GPS - UTC places it. When the
+    /// count differs from the one the stored GLONASS sets were placed with
+    /// (a 1013 that corrects the table, or the table across a leap
+    /// second), those sets are dropped: each may be a second off (3.9 km
+    /// along its orbit); the stream resends them.
+    fn place_glonass(&mut self, base: i64, p: PendingGlonass) -> bool {
         let Some((rel, tow_ms)) = p.near.or(self.last) else {
-            return;
+            return false;
         };
         let near_gps_s = (base + rel) as f64 * WEEK_S + tow_ms as f64 / 1000.0;
+        let Some(leap_s) = self.gps_minus_utc_s(near_gps_s) else {
+            return false;
+        };
+        if self.glonass_placed_leap_s.is_some_and(|l| l != leap_s) {
+            self.store.clear_glonass();
+        }
+        self.glonass_placed_leap_s = Some(leap_s);
         let fields = GlonassIcdFields {
-            tb_gps_s: glonass_time_of_day_to_gps_s(p.tb_tod_s, near_gps_s),
+            tb_gps_s: glonass_time_of_day_to_gps_with_s(p.tb_tod_s, near_gps_s, leap_s),
             ..p.fields
         };
         match GlonassEphemeris::from_icd(&fields) {
@@ -508,6 +690,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             }
             Err(_) => self.counts.glonass_bad = self.counts.glonass_bad.wrapping_add(1),
         }
+        true
     }
 
     /// Form the epoch the latest frame closed, if any, into `out` (in
@@ -519,6 +702,14 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         elevation_mask_rad: f64,
         out: &mut FormedEpoch<N>,
     ) -> Option<Result<(), FormError>> {
+        let leap_s = match (self.base_week, self.ready.as_ref()) {
+            (Some(base), Some(o)) => {
+                let t = (base + o.rel_week) as f64 * WEEK_S + o.tow_ms as f64 / 1000.0;
+                self.latest_gps_s = Some(t);
+                self.gps_minus_utc_s(t)
+            }
+            _ => None,
+        };
         let Self {
             ready,
             base_week,
@@ -527,6 +718,8 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             station_m,
             solution,
             bootstrap_obs: first,
+            transmit,
+            glonass_arcs,
             ..
         } = self;
         let o = ready.as_mut()?;
@@ -545,7 +738,10 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             }));
         }
         if let Some(tod_ms) = o.glo_tod_ms {
-            let want_ms = m::round(glonass_time_of_day_s(time_gps_s) * 1000.0) as i64;
+            let Some(leap_s) = leap_s else {
+                return Some(Err(FormError::LeapSecondsUnknown { tow_ms: o.tow_ms }));
+            };
+            let want_ms = m::round(glonass_time_of_day_with_s(time_gps_s, leap_s) * 1000.0) as i64;
             if (tod_ms - want_ms).rem_euclid(DAY_MS) != 0 {
                 o.sigs.retain(|s| s.id.system != System::Glonass);
                 counts.glonass_dropped = counts.glonass_dropped.wrapping_add(1);
@@ -603,11 +799,25 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             group_delay: true,
             glonass_sigma: Some(glonass_model),
         };
+        // Each satellite's orbit and clock at its transmit time, once for
+        // both passes (the transmit time does not depend on the receiver
+        // position); a GLONASS orbit from its arc.
+        glonass_arcs.next_epoch();
+        transmit.clear();
+        for s in inputs.iter() {
+            let tx = transmit_time_s(s, time_gps_s).ok().map(|t| match s.eph {
+                Broadcast::Glonass(g) => glonass_arcs.state(g, t),
+                Broadcast::Kepler(k) => k.state(t),
+            });
+            // `inputs` and `transmit` have the same capacity N.
+            let _ = transmit.push(tx);
+        }
         // The bootstrap pass: clock- and rotation-corrected ranges.
         let apriori = *station_m;
         first.clear();
-        for s in inputs.iter() {
-            if let Ok(x) = correct(s, time_gps_s, apriori, false, &c, None) {
+        for (s, tx) in inputs.iter().zip(transmit.iter()) {
+            let Some(tx) = tx else { continue };
+            if let Ok(x) = correct_at(s, time_gps_s, tx, apriori, None, false, &c, None) {
                 let _ = first.push(x.obs);
             }
         }
@@ -616,8 +826,23 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // Every correction at the reference; with none (the bootstrap
         // failed and no station position), the bootstrap pass's ranges, as
         // the host hands them over.
-        for s in inputs.iter() {
-            match correct(s, time_gps_s, reference, reference.is_some(), &c, None) {
+        // The receiver's geodetic position, once for every satellite.
+        let rx_geodetic = reference.map(ecef_to_geodetic);
+        for (s, tx) in inputs.iter().zip(transmit.iter()) {
+            let Some(tx) = tx else {
+                out.rejected += 1;
+                continue;
+            };
+            match correct_at(
+                s,
+                time_gps_s,
+                tx,
+                reference,
+                rx_geodetic,
+                reference.is_some(),
+                &c,
+                None,
+            ) {
                 Ok(mut x) => {
                     let sigma = stream_sigma_m(
                         s.id.system,
