@@ -455,8 +455,8 @@ fn a_1013_leap_count_moves_the_glonass_alignment_by_its_difference() {
     assert_eq!(again, orig);
 }
 
-/// The leap-second table expires on 2026-06-28 (`raim_nav::time`). GMSD7
-/// re-sent in GPS week 2430 (2026-08-02, past the expiry), into a unit
+/// The leap-second table expires on 2027-06-28 (`raim_nav::time`). GMSD7
+/// re-sent in GPS week 2480 (2027-07-18, past the expiry), into a unit
 /// whose pivot dates it there:
 /// - with no 1013, every epoch (each has GLONASS MSM) is refused
 ///   `LeapSecondsUnknown`, none is formed, and the receiver says
@@ -466,7 +466,7 @@ fn a_1013_leap_count_moves_the_glonass_alignment_by_its_difference() {
 /// - with a 1013 carrying 18 s, every epoch is formed with its GLONASS
 ///   data, as the host (which dates by its table) forms it.
 ///
-/// Sent in week 2420 (2026-05-24, before the expiry) with no 1013, the
+/// Sent in week 2470 (2027-05-09, before the expiry) with no 1013, the
 /// table is used: every epoch is formed with GLONASS, as on the host, and
 /// the receiver says `Table(18)`.
 ///
@@ -477,7 +477,7 @@ fn past_the_table_expiry_glonass_epochs_are_refused_and_gps_formed() {
     use raim_nav::time::LEAP_TABLE_EXPIRES_GPS_S;
     let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
     let week_s = raim_nav::ephemeris::WEEK_S;
-    let (after, before) = (2430, 2420);
+    let (after, before) = (2480, 2470);
     assert!(after as f64 * week_s > LEAP_TABLE_EXPIRES_GPS_S);
     assert!(((before + 1) as f64) * week_s < LEAP_TABLE_EXPIRES_GPS_S);
 
@@ -607,8 +607,9 @@ fn server_run_nmea(
 
 /// The unit says in `Status` where its GPS - UTC comes from, and refuses
 /// GLONASS epochs on the wire once its table has expired: GMSD7's first
-/// 30 kB re-sent 8 weeks after this build's date (past the table's expiry
-/// whatever the build date; its ephemerides first) through raim-server's
+/// 30 kB re-sent 90 weeks after this build's pivot (38 after its date: past
+/// the table's expiry for any build from 2026-10; its ephemerides first)
+/// through raim-server's
 /// `Server`: every epoch
 /// with GLONASS data is answered `StreamLeapSecondsUnknown` and `Status`
 /// says `TableExpired`; with a 1013 carrying 18 s first, the epochs are
@@ -621,7 +622,7 @@ fn status_says_the_leap_table_has_expired_and_glonass_epochs_are_refused() {
     use raim_proto::error::WireError;
     use raim_proto::message::{ResponseBody, StreamLeapSeconds};
     let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
-    let week = raim_server::stream::PIVOT_WEEK + 60;
+    let week = raim_server::stream::PIVOT_WEEK + 90;
     assert!(week as f64 * raim_nav::ephemeris::WEEK_S > raim_nav::time::LEAP_TABLE_EXPIRES_GPS_S);
     let moved = gmsd7_moved_bare(&bytes, week);
     let all = frames(&moved);

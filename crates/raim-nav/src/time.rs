@@ -5,14 +5,17 @@
 //! epoch (1980-01-06, when GPS - UTC was 0); each entry is the GPS time at
 //! which the new offset takes effect (UTC midnight of the date plus the new
 //! offset). No leap second has been announced after 2017-01-01 (Bulletin C
-//! 70, July 2025); a later one needs a new row here. The host's tests check
+//! 72, July 2026); a later one needs a new row here. The host's tests check
 //! the table against hifitime's (raim-gnss).
 //!
 //! **Expiry.** The table is known to hold only up to the date the last
-//! Bulletin C reaches: Bulletin C 70 (July 2025) announced no leap second
-//! at the end of December 2025, and the IERS leap-seconds.list issued with
-//! it expires 2026-06-28 (NTP 3991593600; the next possible leap second is
-//! at the end of June 2026). Past [`LEAP_TABLE_EXPIRES_GPS_S`] the table
+//! Bulletin C reaches: Bulletin C 72 (July 2026) announced no leap second
+//! at the end of December 2026, and the leap-second list issued with it
+//! expires 2027-06-28 (NTP 4023129600; the next possible leap second is at
+//! the end of June 2027). Source as read here: the IANA tz database's
+//! `leapseconds` file, release 2026.6 (as packaged by the Python `tzdata`
+//! 2026.6: "Updated through IERS Bulletin C", `#expires 1814140800
+//! (2027-06-28 00:00:00 UTC)`, last leap second 2016-12-31). Past [`LEAP_TABLE_EXPIRES_GPS_S`] the table
 //! is not used ([`table_gps_minus_utc_s`] says None): the count must then
 //! come from the data (RTCM 1013 DF054, the GPS LNAV UTC parameters), or
 //! whatever needs it (GLONASS, whose time is UTC-based) is refused.
@@ -46,9 +49,9 @@ const LEAP_GPS_S: [f64; 18] = [
 ];
 
 /// GPS time (s since 1980-01-06) up to which the leap-second table is known to
-/// hold: 2026-06-28 00:00:00 UTC (day 16,975 of GPS time, + 18 s), the
-/// expiry of the IERS leap-seconds.list issued with Bulletin C 70.
-pub const LEAP_TABLE_EXPIRES_GPS_S: f64 = 16_975.0 * DAY_S + 18.0;
+/// hold: 2027-06-28 00:00:00 UTC (day 17,340 of GPS time, + 18 s), the
+/// expiry of the leap-second list issued with IERS Bulletin C 72.
+pub const LEAP_TABLE_EXPIRES_GPS_S: f64 = 17_340.0 * DAY_S + 18.0;
 
 /// GPS - UTC from the table at GPS time `t_gps_s`, s, or None from
 /// [`LEAP_TABLE_EXPIRES_GPS_S`] on (a leap second may have been
@@ -94,7 +97,7 @@ mod tests {
         assert_eq!(gps_minus_utc_s(13510.0 * DAY_S + 18.0), 18.0);
     }
 
-    /// The table's expiry is 2026-06-28 00:00:00 UTC (Unix 1782604800):
+    /// The table's expiry is 2027-06-28 00:00:00 UTC (Unix 1814140800):
     /// the table answers up to the second before, not from it on.
     ///
     /// Verifies: RX-LEAP
@@ -102,8 +105,8 @@ mod tests {
     fn the_table_expires() {
         assert_eq!(
             unix_utc_s(LEAP_TABLE_EXPIRES_GPS_S),
-            1_782_604_800.0,
-            "2026-06-28 00:00:00 UTC"
+            1_814_140_800.0,
+            "2027-06-28 00:00:00 UTC"
         );
         assert_eq!(
             table_gps_minus_utc_s(LEAP_TABLE_EXPIRES_GPS_S - 1.0),
