@@ -214,6 +214,13 @@ fn qemu_provisioned_unit_keeps_its_locked_configuration_across_resets() {
             provision: Some(ProvisionError::BadSeal)
         }
     );
+    // A corrupt unkeyed unit is no bench unit either (issue 35).
+    assert_eq!(
+        fw.try_configure(&Config::preset(Phase::EnRoute)).unwrap(),
+        Err(WireError::Unconfigured {
+            provision: Some(ProvisionError::BadSeal)
+        })
+    );
     for f in [img, bad] {
         let _ = std::fs::remove_file(f);
     }
@@ -501,4 +508,77 @@ fn qemu_oversized_frame_asserts_the_alarm_at_once_and_writes_no_fix() {
         (AlarmOutput::EpochError, true)
     );
     valid(&mut fw, 1);
+}
+
+/// Issue 35: erasing `.raim_key` must not turn a sealed unit into an open
+/// bench unit. The installation's configuration sealed under the key, in
+/// an image whose key section is erased: the unit opens the section with
+/// no key (`BadSeal`) and fails safe. It boots Unconfigured and locked;
+/// every epoch is refused `Unconfigured { provision: BadSeal }` with the
+/// alarm asserted (pin read back) and the no-fix sentences; a plain
+/// `Configure`, `Lock` and `HostSigmas` are refused with the same reason;
+/// `Status` says why; and a reset brings it back to the same state.
+///
+/// Verifies: SAFE-SEALED-NO-KEY, SAFE-LOCK-UNCONFIGURED
+#[test]
+fn qemu_sealed_unit_without_its_key_refuses_to_run() {
+    let base = elf(Machine::Mps2An386);
+    // Sealed with the key's HMAC, written into the unkeyed image.
+    let img = raim_qemu::provision_config(&base, &installed(), Some(&KEY), "key-erased").unwrap();
+    let mut fw = start(&img, Machine::Mps2An386);
+    let refused = WireError::Unconfigured {
+        provision: Some(ProvisionError::BadSeal),
+    };
+    let check = |fw: &mut QemuSession, b: raim_proto::BootNotice| {
+        assert!(!b.auth_provisioned);
+        assert_eq!(b.config.source, ConfigSource::Unconfigured);
+        assert!(b.config.locked, "{b:?}");
+        assert_eq!(b.provision_error, Some(ProvisionError::BadSeal));
+        for (t, sats, apriori) in epochs() {
+            let p = fw.process(&Epoch::ranges(t, &sats, apriori)).unwrap();
+            assert_eq!(p.outcome.unwrap_err(), refused);
+            let rmc = p.nmea.iter().find(|s| s.contains("RMC,")).expect("RMC");
+            assert_eq!(rmc.split(',').nth(2), Some("V"), "{rmc}");
+        }
+        assert_eq!(
+            fw.try_configure(&Config::preset(Phase::EnRoute)).unwrap(),
+            Err(refused.clone())
+        );
+        for c in [CommandRef::Lock, CommandRef::HostSigmas(true)] {
+            assert_eq!(fw.call(c).unwrap(), ResponseBody::Error(refused.clone()));
+        }
+        let st = fw.status().unwrap();
+        assert_eq!(st.provision_error, Some(ProvisionError::BadSeal));
+        assert_eq!(st.config.source, ConfigSource::Unconfigured);
+        assert!(st.config.locked);
+        assert!(
+            st.alarm_output.asserted() && st.alarm_pin_asserted,
+            "{st:?}"
+        );
+    };
+    let b = fw.boots()[0];
+    check(&mut fw, b);
+    let b = hang_and_reboot(&mut fw);
+    check(&mut fw, b);
+    drop(fw);
+    let _ = std::fs::remove_file(img);
+}
+
+/// Issue 35: on the unit, an unkeyed, Unconfigured unit refuses `Lock`
+/// (`Unconfigured`, still unlocked) until a configuration is in force.
+///
+/// Verifies: SAFE-LOCK-UNCONFIGURED
+#[test]
+fn qemu_unconfigured_unit_refuses_lock() {
+    let mut fw = start(&elf(Machine::Mps2An386), Machine::Mps2An386);
+    assert_eq!(
+        fw.call(CommandRef::Lock).unwrap(),
+        ResponseBody::Error(WireError::Unconfigured { provision: None })
+    );
+    let st = fw.status().unwrap();
+    assert!(!st.config.locked);
+    assert_eq!(st.config.source, ConfigSource::Unconfigured);
+    fw.configure(&Config::preset(Phase::EnRoute)).unwrap();
+    fw.lock().unwrap();
+    assert!(fw.status().unwrap().config.locked);
 }

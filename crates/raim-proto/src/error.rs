@@ -239,6 +239,16 @@ pub enum WireError {
         /// The system's largest number.
         max: u8,
     },
+    /// Bytes dropped from the link: they began like an RTCM 3 frame whose
+    /// header declared `declared` bytes, and a host frame ended `received`
+    /// bytes after its 0xD3 (`link::LinkEvent::TruncatedRtcm`); that frame
+    /// is answered next. Unasked (`seq: None`). Protocol 15.
+    TruncatedRtcm {
+        /// Bytes dropped, the 0xD3 included.
+        received: u32,
+        /// The frame length its header declared (N + 6), bytes.
+        declared: u32,
+    },
 }
 
 /// A field name for the wire (truncated to 24 bytes).
@@ -467,6 +477,10 @@ impl core::fmt::Display for WireError {
                 "satellite number {} of {} at index {index} is outside 1..={max}",
                 id.prn,
                 id.system.letter()
+            ),
+            WireError::TruncatedRtcm { received, declared } => write!(
+                f,
+                "{received} bytes dropped: an RTCM 3 header declaring {declared} bytes, cut by a host frame"
             ),
         }
     }

@@ -85,10 +85,9 @@ pub type DevicePrecision = f32;
 /// Bump on any change of a serialized type (postcard is not self-describing);
 /// new enum variants are appended so that the earlier ones keep their
 /// indices. The history of the versions is in CHANGELOG.md, "Wire protocol
-/// versions"; 14 is the refusal of satellite numbers outside their
-/// system's range (`WireError::PrnOutOfRange`) and of an ISM with no
-/// entry (`AraimWireError::EmptyIsm`).
-pub const PROTOCOL_VERSION: u16 = 14;
+/// versions"; 15 adds `WireError::TruncatedRtcm`, the answer to bytes
+/// dropped when a host frame ends inside an RTCM candidate.
+pub const PROTOCOL_VERSION: u16 = 15;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes
