@@ -219,11 +219,13 @@ fn boot(
     server.boot(provisioned, resets, entropy);
 }
 
-/// SysTick's wrap (every 2^24 core ticks): extends the tick counter and
-/// wakes the waiting loop.
+/// SysTick's wrap (every 2^24 core ticks): extends the tick counter,
+/// asserts the alarm output when no valid epoch came within the
+/// time-to-alert (`discrete::on_wrap`, whatever the main loop is doing)
+/// and wakes the waiting loop.
 #[exception]
 fn SysTick() {
-    board::on_systick();
+    discrete::on_wrap(board::on_systick());
 }
 
 /// Every device interrupt (cortex-m-rt's `DefaultHandler` receives its

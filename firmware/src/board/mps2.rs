@@ -42,6 +42,15 @@ impl Board for Mps2An386 {
     /// RX lines 0, 2, 4, 18, 20 for UART0-4; TX one above each).
     const LINK_RX_IRQ: u16 = 0;
 
+    /// LED0's bit cleared (read-modify-write of the FPGA I/O register:
+    /// should the main loop's own write of the pin interleave, it writes
+    /// the level its monitor decided, which after the deadline is the
+    /// alarm level too).
+    fn force_alarm() {
+        let r = Regs(FPGAIO);
+        r.write(LED0, r.read(LED0) & !LED0_BIT);
+    }
+
     fn take() -> Option<Parts<Self>> {
         static TAKEN: AtomicBool = AtomicBool::new(false);
         cortex_m::interrupt::disable();

@@ -286,6 +286,15 @@ fn hsi_fallback(rcc: Rcc) -> Option<Rcc> {
 }
 
 impl Board for Stm32f4 {
+    /// PD12 reset through GPIOD_BSRR (RM0090 §8.4.7: a write of 1 to
+    /// BR12 drives the pin low, atomically, whatever the other bits).
+    fn force_alarm() {
+        const GPIOD_BSRR: usize = 0x4002_0C00 + 0x18;
+        // SAFETY: GPIOD's bit set/reset register, always mapped; writing
+        // BR12 alone changes PD12's output only (the pin the HAL set up as
+        // the alarm output), and only to the alarm level.
+        unsafe { core::ptr::write_volatile(GPIOD_BSRR as *mut u32, 1 << (16 + 12)) }
+    }
     type Link = Uart<pac::USART2>;
     type Nmea = Uart<pac::USART3>;
     type LinkRx = RxPort;
