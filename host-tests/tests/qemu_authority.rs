@@ -582,3 +582,36 @@ fn qemu_unconfigured_unit_refuses_lock() {
     fw.lock().unwrap();
     assert!(fw.status().unwrap().config.locked);
 }
+
+/// Issue 35, the link that lost a frame: the 3 bytes `D3 03 FF` (an RTCM 3
+/// header declaring a 1029-byte frame) and 10 bytes, with no delimiter,
+/// then a `Status` request in the same write. The request is not lost: the
+/// dropped bytes are answered first, unasked, with what is known of them
+/// (`TruncatedRtcm { received: 13, declared: 1029 }`), then the request
+/// with its own sequence number, without waiting for a pause on the line.
+///
+/// Verifies: SAFE-LINK-RESYNC, WIRE-TruncatedRtcm
+#[test]
+fn qemu_a_request_after_a_cut_rtcm_header_is_answered() {
+    let mut fw = start(&elf(Machine::Mps2An386), Machine::Mps2An386);
+    let (seq, status) = fw.frame(CommandRef::Status).unwrap();
+    let mut bytes = vec![0xD3, 0x03, 0xFF];
+    bytes.extend([0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88, 0x99, 0xAA]);
+    bytes.extend(&status);
+    fw.send_raw(&bytes).unwrap();
+    let first = fw.recv(raim_qemu::ANSWER_TIMEOUT).unwrap();
+    assert_eq!(first.seq, None, "{first:?}");
+    assert_eq!(
+        first.body,
+        ResponseBody::Error(WireError::TruncatedRtcm {
+            received: 13,
+            declared: 1029
+        })
+    );
+    let second = fw.recv(raim_qemu::ANSWER_TIMEOUT).unwrap();
+    assert_eq!(second.seq, Some(seq), "{second:?}");
+    let ResponseBody::Status(st) = second.body else {
+        panic!("{second:?}")
+    };
+    assert_eq!(st.protocol_version, raim_proto::PROTOCOL_VERSION);
+}
