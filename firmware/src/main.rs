@@ -18,6 +18,7 @@ mod link_rx;
 mod provision;
 mod stack;
 mod statics;
+mod unit_id;
 
 use cortex_m::interrupt::InterruptNumber;
 use cortex_m::peripheral::NVIC;
@@ -152,7 +153,8 @@ fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts:
     // The provisioned configuration, if its seal verifies and every part
     // passes its checks, runs locked; otherwise the unit is Unconfigured.
     // No default is ever put in force.
-    let entropy = provision::entropy(platform.ticks.now(), hardware_entropy.as_ref());
+    let identity = unit_id::identity(B::unique_id());
+    let entropy = provision::entropy(platform.ticks.now(), hardware_entropy.as_ref(), &identity);
     boot(server, key.as_ref(), reset.0, &entropy);
     watchdog.start();
     stack::paint();

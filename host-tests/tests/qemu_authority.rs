@@ -615,3 +615,63 @@ fn qemu_a_request_after_a_cut_rtcm_header_is_answered() {
     };
     assert_eq!(st.protocol_version, raim_proto::PROTOCOL_VERSION);
 }
+
+/// Issue 35, a fleet key: two units that share a key but have different
+/// provisioned unit IDs (`.raim_unit`, firmware/src/unit_id.rs) boot with
+/// different nonces, and unit 2 refuses an authenticated frame made for
+/// unit 1, which unit 1 takes. Under `-icount shift=0` everything else in
+/// the nonce is the same for both (the key, the reset count, QEMU's zeroed
+/// SRAM, the SysTick count at boot): the same unit booted twice gets the
+/// same nonce, so the unit ID is what tells them apart.
+///
+/// Verifies: SAFE-UNIT-ID, WIRE-BadAuthTag
+#[test]
+fn qemu_units_sharing_a_key_do_not_share_a_nonce() {
+    let base = elf(Machine::Mps2An386);
+    let keyed = raim_qemu::provision_key(&base, &KEY).unwrap();
+    let unit = |n: u8| {
+        raim_qemu::write_section(&keyed, ".raim_unit", &[n; 16], &format!("unit{n}")).unwrap()
+    };
+    let (img1, img2) = (unit(1), unit(2));
+    let boot = |img: &std::path::Path| {
+        QemuSession::start_with(
+            img,
+            &Options {
+                machine: Machine::Mps2An386,
+                raw: true,
+                icount: true,
+                ..Options::default()
+            },
+        )
+        .expect("qemu-system-arm with the firmware")
+    };
+    let nonce_of = |fw: &QemuSession| fw.boots()[0].boot_nonce;
+    let n1 = nonce_of(&boot(&img1));
+    let mut u1 = boot(&img1);
+    let mut u2 = boot(&img2);
+    assert_eq!(nonce_of(&u1), n1, "the same unit boots with the same nonce");
+    assert_ne!(nonce_of(&u2), n1, "two units of one key");
+    let terminal = Config::preset(Phase::Terminal);
+    let change = ChangeRef::Configure(&terminal);
+    let for_unit_1 = AuthenticatedRef {
+        counter: 1,
+        change,
+        tag: tag(&KEY, &n1, 1, &change),
+    };
+    assert_eq!(
+        u2.call(CommandRef::Authenticated(for_unit_1)).unwrap(),
+        ResponseBody::Error(WireError::BadAuthTag { counter: 1 })
+    );
+    assert_eq!(
+        u2.status().unwrap().config.source,
+        ConfigSource::Unconfigured
+    );
+    assert_eq!(
+        u1.call(CommandRef::Authenticated(for_unit_1)).unwrap(),
+        ResponseBody::Configured
+    );
+    drop((u1, u2));
+    for f in [keyed, img1, img2] {
+        let _ = std::fs::remove_file(f);
+    }
+}

@@ -128,6 +128,9 @@ pub trait Board: Sized {
     /// cannot leave the pin at the clear level (the time-to-alert timer,
     /// `discrete::on_wrap`). Only ever asserts.
     fn force_alarm();
+    /// The part's factory-programmed unique ID, where the board has one
+    /// (the STM32F4's 96 bits), for the boot nonce (`unit_id`).
+    fn unique_id() -> Option<[u8; 12]>;
     /// The board's peripherals, set up (clocks, pins, UARTs at 115200 8N1),
     /// with interrupts masked (PRIMASK) until the application has set up
     /// the receive ring. `None` if called twice, or if the

@@ -51,6 +51,12 @@ impl Board for Mps2An386 {
         r.write(LED0, r.read(LED0) & !LED0_BIT);
     }
 
+    /// The AN386 image has no unique ID: the provisioned unit ID is the
+    /// unit's identity.
+    fn unique_id() -> Option<[u8; 12]> {
+        None
+    }
+
     fn take() -> Option<Parts<Self>> {
         static TAKEN: AtomicBool = AtomicBool::new(false);
         cortex_m::interrupt::disable();

@@ -1,0 +1,34 @@
+//! The unit's identity in its boot nonce (issue 35, "A fleet key"): two
+//! units that share a key must not boot with the same nonce, or a frame
+//! made for one would verify on the other. The identity is the part's
+//! own unique ID where the board has one (the STM32F4's 96-bit UID,
+//! `Board::unique_id`) and a provisioned unit ID: 16 bytes in their own
+//! flash output section, `.raim_unit` (after `.raim_config` in
+//! `memory.x` / `memory-stm32f4.x`), erased (0xFF) in the image and
+//! written per unit by production as the key is
+//! (`raim_qemu::write_section`). On a board without a unique ID
+//! (mps2-an386, and QEMU's netduinoplus2, which does not model it) the
+//! provisioned ID is the only identity: units sharing a key must then
+//! each be given their own (docs/SAFETY.md "Boot nonce").
+
+/// The section; erased flash is all ones.
+#[link_section = ".raim_unit"]
+#[used]
+static UNIT_ID: [u8; 16] = [0xFF; 16];
+
+/// The identity mixed into the boot entropy (`provision::entropy`): the
+/// part's unique ID in bytes 0-11 (erased value where the board has
+/// none), the provisioned unit ID in bytes 16-31.
+pub fn identity(unique: Option<[u8; 12]>) -> [u8; 32] {
+    let mut id = [0u8; 32];
+    let (hw, rest) = id.split_at_mut(12);
+    hw.copy_from_slice(&unique.unwrap_or([0xFF; 12]));
+    // SAFETY: a plain read of a static array; volatile, so that the
+    // build's erased value is not folded in: production changes the bytes
+    // after linking.
+    let provisioned = unsafe { core::ptr::read_volatile(core::ptr::addr_of!(UNIT_ID)) };
+    if let Some(tail) = rest.get_mut(4..) {
+        tail.copy_from_slice(&provisioned);
+    }
+    id
+}
