@@ -84,7 +84,7 @@ keep_elf snapshot
 # (the QEMU build without araim/pf/multifault, whose flash
 # host-tests/tests/qemu_flash.rs bounds to 128 KiB, issue 10)
 step "firmware: build, QEMU mps2-an386 with a 1 s time-to-alert (the hung-loop alarm test)"
-(cd firmware && RAIM_TIME_TO_ALERT_S=1 cargo build --release)
+(cd firmware && RAIM_TIME_TO_ALERT_S=1 cargo build --release --features tta-record)
 keep_elf qemu-tta1
 step "firmware: build, QEMU mps2-an386 (default features)"
 (cd firmware && cargo build --release)

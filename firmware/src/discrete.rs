@@ -39,26 +39,26 @@ pub fn time_to_alert_ticks(core_hz: u32) -> u64 {
 }
 
 /// The SysTick wrap (2^24 core ticks) at or after which the exception
-/// asserts the output: the first wrap at or after the last valid epoch's
-/// tick plus [`time_to_alert_ticks`], so at the monitor's own deadline or
-/// later, and at most one wrap later, which is the setting. `u32::MAX`
+/// asserts the output: the first wrap after the last valid epoch's tick
+/// plus [`time_to_alert_ticks`], so after the monitor's own deadline, and
+/// less than one wrap later, which is within the setting. `u32::MAX`
 /// until the first valid epoch (the output is asserted until then).
 /// Written by the main loop, read by the exception.
 static DEADLINE_WRAPS: AtomicU32 = AtomicU32::new(u32::MAX);
 
 /// The last valid epoch's tick, split in two words (no 64-bit atomics on
 /// the Cortex-M4), for the test build's record of the timer's assertion.
-#[cfg(feature = "board-qemu")]
+#[cfg(feature = "tta-record")]
 static VALID_AT: [AtomicU32; 2] = [AtomicU32::new(0), AtomicU32::new(0)];
 
 /// Arms the timer for a valid epoch at `now_ticks`; before the pin may be
 /// cleared, so that the exception never sees the old deadline with the
 /// pin clear for a new epoch's sake.
 fn arm(now_ticks: u64, tta_ticks: u64) {
-    let wraps = now_ticks
-        .saturating_add(tta_ticks)
-        .div_ceil(CHECK_PERIOD_TICKS);
-    #[cfg(feature = "board-qemu")]
+    // The wrap after the one the deadline falls in: at or after the
+    // deadline, and less than one wrap after it.
+    let wraps = (now_ticks.saturating_add(tta_ticks) >> 24) + 1;
+    #[cfg(feature = "tta-record")]
     {
         VALID_AT[0].store(now_ticks as u32, Ordering::Relaxed);
         VALID_AT[1].store((now_ticks >> 32) as u32, Ordering::Relaxed);
@@ -73,19 +73,20 @@ pub fn on_wrap(wraps: u32) {
     let deadline = DEADLINE_WRAPS.load(Ordering::Acquire);
     if wraps >= deadline {
         crate::board::Active::force_alarm();
-        #[cfg(feature = "board-qemu")]
+        #[cfg(feature = "tta-record")]
         if wraps == deadline {
             record_assertion(wraps);
         }
     }
 }
 
-/// The test build's record of the timer's assertion, on the semihosting
+/// The test build's record (feature `tta-record`) of the timer's
+/// assertion, on the semihosting
 /// output (plain text among the defmt frames): the tick of the last valid
 /// epoch and of the assertion, and the time-to-alert in ticks, all in the
 /// guest's own time base (SysTick). `host-tests/tests/qemu_fail_loud.rs`
 /// reads it while the main loop hangs.
-#[cfg(feature = "board-qemu")]
+#[cfg(feature = "tta-record")]
 fn record_assertion(wraps: u32) {
     fn decimal(out: &mut [u8; 20], mut v: u64) -> &[u8] {
         let mut i = out.len();

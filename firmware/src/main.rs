@@ -153,8 +153,11 @@ fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts:
     // The provisioned configuration, if its seal verifies and every part
     // passes its checks, runs locked; otherwise the unit is Unconfigured.
     // No default is ever put in force.
-    let identity = unit_id::identity(B::unique_id());
-    let entropy = provision::entropy(platform.ticks.now(), hardware_entropy.as_ref(), &identity);
+    let entropy = provision::entropy(
+        platform.ticks.now(),
+        hardware_entropy.as_ref(),
+        B::unique_id(),
+    );
     boot(server, key.as_ref(), reset.0, &entropy);
     watchdog.start();
     stack::paint();

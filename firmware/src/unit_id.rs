@@ -11,24 +11,17 @@
 //! provisioned ID is the only identity: units sharing a key must then
 //! each be given their own (docs/SAFETY.md "Boot nonce").
 
-/// The section; erased flash is all ones.
+/// The section; erased flash is all ones. Words, so that it is read in
+/// four loads.
 #[link_section = ".raim_unit"]
 #[used]
-static UNIT_ID: [u8; 16] = [0xFF; 16];
+static UNIT_ID: [u32; 4] = [u32::MAX; 4];
 
-/// The identity mixed into the boot entropy (`provision::entropy`): the
-/// part's unique ID in bytes 0-11 (erased value where the board has
-/// none), the provisioned unit ID in bytes 16-31.
-pub fn identity(unique: Option<[u8; 12]>) -> [u8; 32] {
-    let mut id = [0u8; 32];
-    let (hw, rest) = id.split_at_mut(12);
-    hw.copy_from_slice(&unique.unwrap_or([0xFF; 12]));
+/// The provisioned unit ID, as four words (all ones when none was
+/// written), for the boot entropy (`provision::entropy`).
+pub fn provisioned() -> [u32; 4] {
     // SAFETY: a plain read of a static array; volatile, so that the
     // build's erased value is not folded in: production changes the bytes
     // after linking.
-    let provisioned = unsafe { core::ptr::read_volatile(core::ptr::addr_of!(UNIT_ID)) };
-    if let Some(tail) = rest.get_mut(4..) {
-        tail.copy_from_slice(&provisioned);
-    }
-    id
+    unsafe { core::ptr::read_volatile(core::ptr::addr_of!(UNIT_ID)) }
 }

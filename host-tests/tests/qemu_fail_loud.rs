@@ -92,7 +92,7 @@ fn qemu_hang_and_panic_reset_the_unit_and_are_reported() {
 
 /// The firmware built with a time-to-alert of 1 s (`RAIM_TIME_TO_ALERT_S=1`),
 /// shorter than mps2-an386's 2 s watchdog, so that a hung loop outlives
-/// the time-to-alert: `$RAIM_FIRMWARE_ELF_TTA1` (scripts/test.sh copies it
+/// the time-to-alert, and with the timer's record (feature `tta-record`): `$RAIM_FIRMWARE_ELF_TTA1` (scripts/test.sh copies it
 /// to firmware/target/elf/qemu-tta1), else built into
 /// `firmware/target/tta1`.
 fn tta1_elf() -> std::path::PathBuf {
@@ -107,6 +107,8 @@ fn tta1_elf() -> std::path::PathBuf {
             "build",
             "--release",
             "--quiet",
+            "--features",
+            "tta-record",
             "--target-dir",
             "target/tta1",
         ])

@@ -76,7 +76,7 @@
 //! that zero, is a CRC-verified COBS frame. Its start lies after the
 //! candidate's previous zero (a COBS frame has no zero before its
 //! delimiter); a start is tried only if its chain of COBS code bytes lands
-//! exactly on the zero (one backward pass finds them all), at most
+//! exactly on the zero, at most
 //! [`MAX_RESYNC_TRIES`] starts per zero, longest suffix first. If one
 //! verifies, the candidate is not RTCM: its bytes before the frame are
 //! reported as [`LinkEvent::TruncatedRtcm`] (how many, and the length the
@@ -196,12 +196,6 @@ enum Mode {
     /// that chunk was a verified frame, the joined chunk `buf[..alt_len]`
     /// is tried next.
     Rejoin,
-    /// A verified host frame is `buf[start..len]` (its delimiter last),
-    /// found inside a candidate; it is the next event.
-    Resync {
-        /// Where the frame starts in the candidate.
-        start: usize,
-    },
 }
 
 /// At most this many suffixes of a candidate are tried as a host frame at
@@ -262,10 +256,7 @@ impl<const B: usize> LinkReceiver<B> {
     /// Feed one byte; returns the first event it completes. Call
     /// [`poll`](Self::poll) until `None` before the next `push`.
     pub fn push(&mut self, byte: u8) -> Option<LinkEvent<'_>> {
-        if matches!(
-            self.mode,
-            Mode::Replay { .. } | Mode::Rejoin | Mode::Resync { .. }
-        ) {
+        if matches!(self.mode, Mode::Replay { .. } | Mode::Rejoin) {
             while self.poll().is_some() {
                 self.counts.unpolled_events = self.counts.unpolled_events.wrapping_add(1);
             }
@@ -299,26 +290,31 @@ impl<const B: usize> LinkReceiver<B> {
             return None;
         }
         let total = self.frame_len();
-        if self.len < total {
-            return if byte == 0 { self.resync(total) } else { None };
+        let complete = self.len >= total;
+        if complete {
+            let (Some(body), Some(crc)) =
+                (self.buf.get(..total - 3), self.buf.get(total - 3..total))
+            else {
+                return self.replay(false);
+            };
+            let received = crc.iter().fold(0u32, |acc, &b| (acc << 8) | u32::from(b));
+            if CRC24Q.checksum(body) == received {
+                self.counts.rtcm_frames = self.counts.rtcm_frames.wrapping_add(1);
+                self.mode = Mode::Cobs;
+                return self.buf.get(..total).map(LinkEvent::Rtcm);
+            }
+            self.counts.rtcm_bad_crc = self.counts.rtcm_bad_crc.wrapping_add(1);
         }
-        let (Some(body), Some(crc)) = (self.buf.get(..total - 3), self.buf.get(total - 3..total))
-        else {
-            return self.replay(false);
-        };
-        let received = crc.iter().fold(0u32, |acc, &b| (acc << 8) | u32::from(b));
-        if CRC24Q.checksum(body) == received {
-            self.counts.rtcm_frames = self.counts.rtcm_frames.wrapping_add(1);
-            self.mode = Mode::Cobs;
-            return self.buf.get(..total).map(LinkEvent::Rtcm);
-        }
-        self.counts.rtcm_bad_crc = self.counts.rtcm_bad_crc.wrapping_add(1);
+        // Not RTCM (yet): a host frame may have ended at this zero.
         if byte == 0 {
             if let Some(event) = self.resync(total) {
                 return Some(event);
             }
         }
-        self.replay(true)
+        if complete {
+            return self.replay(true);
+        }
+        None
     }
 
     /// A zero byte ended the candidate's `len` bytes so far: if a
@@ -328,10 +324,17 @@ impl<const B: usize> LinkReceiver<B> {
     /// `poll`. `declared` is the header's N + 6.
     fn resync(&mut self, declared: usize) -> Option<LinkEvent<'static>> {
         let start = self.frame_suffix()?;
-        self.mode = Mode::Resync { start };
+        // The frame, `buf[start..len]`, is replayed into the idle COBS
+        // receiver at the next `poll`: its delimiter completes it.
+        self.cursor = start;
+        self.mode = Mode::Replay {
+            close_tail: false,
+            saw_frame: false,
+        };
+        // Both at most `RTCM_MAX_FRAME`: exact in a u32.
         Some(LinkEvent::TruncatedRtcm {
-            received: u32::try_from(start).unwrap_or(u32::MAX),
-            declared: u32::try_from(declared).unwrap_or(u32::MAX),
+            received: start as u32,
+            declared: declared as u32,
         })
     }
 
@@ -341,39 +344,44 @@ impl<const B: usize> LinkReceiver<B> {
     /// zero before its delimiter, so a start lies after the candidate's
     /// previous zero (and after the 0xD3, which a valid frame cannot start
     /// with here: module documentation); a start is plausible when its
-    /// chain of COBS code bytes lands exactly on the delimiter, found for
-    /// every start at once by one backward pass. The COBS receiver is idle
+    /// chain of COBS code bytes lands exactly on the delimiter (followed
+    /// from each start: at most `len^2 / 2` steps of an add and a compare
+    /// per candidate, all zeros together). The COBS receiver is idle
     /// during a candidate and is idle again after each try (its chunk ends
     /// at the delimiter).
     fn frame_suffix(&mut self) -> Option<usize> {
         let z = self.len.checked_sub(1)?;
-        let head = self.buf.get(..z)?;
-        let first = head.iter().rposition(|&b| b == 0).unwrap_or(0) + 1;
-        // Bit s: the chain from s lands on z.
-        let mut lands = [0u32; RTCM_MAX_FRAME.div_ceil(32)];
-        let bit = |v: &[u32], i: usize| v.get(i / 32).is_some_and(|w| w >> (i % 32) & 1 == 1);
-        for s in (first..z).rev() {
-            let next = s + usize::from(head.get(s).copied().unwrap_or(0));
-            if next == z || (next < z && bit(&lands, next)) {
-                if let Some(w) = lands.get_mut(s / 32) {
-                    *w |= 1 << (s % 32);
-                }
-            }
-        }
         let Self { buf, frames, .. } = self;
         let chunk = buf.get(..=z)?;
-        (first..z)
-            .filter(|&s| bit(&lands, s))
-            .take(MAX_RESYNC_TRIES)
-            .find(|&s| {
-                let mut verified = false;
-                for &b in chunk.get(s..).unwrap_or(&[]) {
-                    if let Some(event) = frames.push(b) {
-                        verified = event.is_ok();
-                    }
+        let first = chunk
+            .get(..z)?
+            .iter()
+            .rposition(|&b| b == 0)
+            .map_or(1, |p| p + 1);
+        let mut tries = 0;
+        for s in first..z {
+            let mut k = s;
+            while let Some(&code) = chunk.get(k).filter(|_| k < z) {
+                k += usize::from(code);
+            }
+            if k != z {
+                continue;
+            }
+            tries += 1;
+            if tries > MAX_RESYNC_TRIES {
+                return None;
+            }
+            let mut verified = false;
+            for &b in chunk.get(s..)? {
+                if let Some(event) = frames.push(b) {
+                    verified = event.is_ok();
                 }
-                verified
-            })
+            }
+            if verified {
+                return Some(s);
+            }
+        }
+        None
     }
 
     /// The line went quiet (a UART idle-line interrupt, a timeout). A
@@ -400,15 +408,6 @@ impl<const B: usize> LinkReceiver<B> {
     pub fn poll(&mut self) -> Option<LinkEvent<'_>> {
         if self.mode == Mode::Rejoin {
             return self.rejoin();
-        }
-        if let Mode::Resync { start } = self.mode {
-            self.mode = Mode::Cobs;
-            let len = core::mem::take(&mut self.len);
-            let (&delimiter, body) = self.buf.get(start..len)?.split_last()?;
-            for &b in body {
-                let _none = self.frames.push(b);
-            }
-            return self.frames.push(delimiter).map(LinkEvent::Frame);
         }
         let Mode::Replay {
             close_tail,

@@ -130,7 +130,7 @@ pub trait Board: Sized {
     fn force_alarm();
     /// The part's factory-programmed unique ID, where the board has one
     /// (the STM32F4's 96 bits), for the boot nonce (`unit_id`).
-    fn unique_id() -> Option<[u8; 12]>;
+    fn unique_id() -> Option<[u32; 3]>;
     /// The board's peripherals, set up (clocks, pins, UARTs at 115200 8N1),
     /// with interrupts masked (PRIMASK) until the application has set up
     /// the receive ring. `None` if called twice, or if the

@@ -53,7 +53,7 @@ impl Board for Mps2An386 {
 
     /// The AN386 image has no unique ID: the provisioned unit ID is the
     /// unit's identity.
-    fn unique_id() -> Option<[u8; 12]> {
+    fn unique_id() -> Option<[u32; 3]> {
         None
     }
 

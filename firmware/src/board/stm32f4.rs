@@ -299,19 +299,16 @@ impl Board for Stm32f4 {
     /// 0x1FFF_7A10, factory-programmed, read-only). QEMU's netduinoplus2
     /// does not map that region (a read would be a bus fault), so its
     /// build has none and uses the provisioned unit ID alone.
-    fn unique_id() -> Option<[u8; 12]> {
+    fn unique_id() -> Option<[u32; 3]> {
         if cfg!(feature = "qemu-netduinoplus2") {
             return None;
         }
         const UID: usize = 0x1FFF_7A10;
-        let mut id = [0u8; 12];
-        for (k, chunk) in id.chunks_exact_mut(4).enumerate() {
-            // SAFETY: the unique ID's three aligned words, mapped on every
-            // STM32F405/407 (RM0090 §39.1); a plain read.
-            let w = unsafe { core::ptr::read_volatile((UID + 4 * k) as *const u32) };
-            chunk.copy_from_slice(&w.to_le_bytes());
-        }
-        Some(id)
+        // SAFETY: the unique ID's three aligned words, mapped on every
+        // STM32F405/407 (RM0090 §39.1); plain reads.
+        Some(core::array::from_fn(|k| unsafe {
+            core::ptr::read_volatile((UID + 4 * k) as *const u32)
+        }))
     }
     type Link = Uart<pac::USART2>;
     type Nmea = Uart<pac::USART3>;
