@@ -200,8 +200,10 @@ enum Mode {
 
 /// At most this many suffixes of a candidate are tried as a host frame at
 /// each zero byte inside it (the cost of one try: a pass of the suffix
-/// through the COBS receiver): the work per candidate stays within
-/// `(MAX_RESYNC_TRIES + 1) x RTCM_MAX_FRAME` byte steps.
+/// through the COBS receiver). The tries of all the zeros of a candidate
+/// pass at most `MAX_RESYNC_TRIES x RTCM_MAX_FRAME` bytes through it, and
+/// finding the plausible starts takes at most `RTCM_MAX_FRAME^2 / 2`
+/// steps of an add and a compare.
 pub const MAX_RESYNC_TRIES: usize = 16;
 
 /// Splits one byte stream into COBS frames and RTCM 3 frames (module
