@@ -220,6 +220,10 @@ mod tests {
     /// Verifies: WIRE-AuthNotProvisioned, WIRE-AuthRequired, WIRE-BadAuthTag, WIRE-Replayed, SAFE-T4
     #[test]
     fn authentication_refusals_are_typed_and_change_nothing() {
+        crate::tests::on_big_stack(authentication_refusals);
+    }
+
+    fn authentication_refusals() {
         let mut open = std::boxed::Box::new(Server::new());
         let a = signed(&open, &KEY, 1);
         assert_eq!(
@@ -261,6 +265,10 @@ mod tests {
     /// Verifies: SAFE-LOCK-UNCONFIGURED
     #[test]
     fn lock_is_refused_until_a_configuration_is_in_force() {
+        crate::tests::on_big_stack(lock_refused_until_configured);
+    }
+
+    fn lock_refused_until_configured() {
         let mut open = std::boxed::Box::new(Server::new());
         let before = open.config_id;
         assert_eq!(
@@ -286,6 +294,10 @@ mod tests {
     /// Verifies: SAFE-SEALED-NO-KEY
     #[test]
     fn a_refused_provisioned_section_takes_no_change() {
+        crate::tests::on_big_stack(refused_section_takes_no_change);
+    }
+
+    fn refused_section_takes_no_change() {
         let entropy = raim_proto::auth::BootEntropy {
             bytes: [3; 32],
             hardware: false,
