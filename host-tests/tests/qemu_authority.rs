@@ -589,11 +589,19 @@ fn qemu_unconfigured_unit_refuses_lock() {
 /// dropped bytes are answered first, unasked, with what is known of them
 /// (`TruncatedRtcm { received: 13, declared: 1029 }`), then the request
 /// with its own sequence number, without waiting for a pause on the line.
+/// The dropped bytes count as an unreadable frame: after a valid epoch
+/// had cleared it, the alarm output is asserted (`EpochError`).
 ///
 /// Verifies: SAFE-LINK-RESYNC, WIRE-TruncatedRtcm
 #[test]
 fn qemu_a_request_after_a_cut_rtcm_header_is_answered() {
     let mut fw = start(&elf(Machine::Mps2An386), Machine::Mps2An386);
+    // A valid epoch first: the output is clear.
+    fw.configure(&Config::preset(Phase::EnRoute)).unwrap();
+    let (t, sats, apriori) = &epochs()[0];
+    let p = fw.process(&Epoch::ranges(*t, sats, *apriori)).unwrap();
+    assert!(p.outcome.is_ok(), "{:?}", p.outcome);
+    assert_eq!(fw.status().unwrap().alarm_output, AlarmOutput::Clear);
     let (seq, status) = fw.frame(CommandRef::Status).unwrap();
     let mut bytes = vec![0xD3, 0x03, 0xFF];
     bytes.extend([0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88, 0x99, 0xAA]);
@@ -614,6 +622,12 @@ fn qemu_a_request_after_a_cut_rtcm_header_is_answered() {
         panic!("{second:?}")
     };
     assert_eq!(st.protocol_version, raim_proto::PROTOCOL_VERSION);
+    // The dropped bytes may have been an epoch: the output was asserted
+    // at once, as for any frame the unit cannot read.
+    assert_eq!(
+        (st.alarm_output, st.alarm_pin_asserted),
+        (AlarmOutput::EpochError, true)
+    );
 }
 
 /// Issue 35, a fleet key: two units that share a key but have different
