@@ -83,9 +83,13 @@ step "firmware: clippy and build, QEMU snapshot-only"
 keep_elf snapshot
 # (the QEMU build without araim/pf/multifault, whose flash
 # host-tests/tests/qemu_flash.rs bounds to 128 KiB, issue 10)
+step "firmware: build, QEMU mps2-an386 with a 1 s time-to-alert (the hung-loop alarm test)"
+(cd firmware && RAIM_TIME_TO_ALERT_S=1 cargo build --release --features tta-record)
+keep_elf qemu-tta1
 step "firmware: build, QEMU mps2-an386 (default features)"
 (cd firmware && cargo build --release)
 keep_elf qemu
+export RAIM_FIRMWARE_ELF_TTA1="$PWD/firmware/target/elf/qemu-tta1"
 export RAIM_FIRMWARE_ELF="$PWD/firmware/target/elf/qemu"
 export RAIM_FIRMWARE_ELF_STM32F4="$PWD/firmware/target/elf/stm32f4-netduinoplus2"
 export RAIM_FIRMWARE_ELF_SNAPSHOT="$PWD/firmware/target/elf/snapshot"

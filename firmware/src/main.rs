@@ -18,6 +18,7 @@ mod link_rx;
 mod provision;
 mod stack;
 mod statics;
+mod unit_id;
 
 use cortex_m::interrupt::InterruptNumber;
 use cortex_m::peripheral::NVIC;
@@ -152,7 +153,11 @@ fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts:
     // The provisioned configuration, if its seal verifies and every part
     // passes its checks, runs locked; otherwise the unit is Unconfigured.
     // No default is ever put in force.
-    let entropy = provision::entropy(platform.ticks.now(), hardware_entropy.as_ref());
+    let entropy = provision::entropy(
+        platform.ticks.now(),
+        hardware_entropy.as_ref(),
+        B::unique_id(),
+    );
     boot(server, key.as_ref(), reset.0, &entropy);
     watchdog.start();
     stack::paint();
@@ -219,11 +224,13 @@ fn boot(
     server.boot(provisioned, resets, entropy);
 }
 
-/// SysTick's wrap (every 2^24 core ticks): extends the tick counter and
-/// wakes the waiting loop.
+/// SysTick's wrap (every 2^24 core ticks): extends the tick counter,
+/// asserts the alarm output when no valid epoch came within the
+/// time-to-alert (`discrete::on_wrap`, whatever the main loop is doing)
+/// and wakes the waiting loop.
 #[exception]
 fn SysTick() {
-    board::on_systick();
+    discrete::on_wrap(board::on_systick());
 }
 
 /// Every device interrupt (cortex-m-rt's `DefaultHandler` receives its

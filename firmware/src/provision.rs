@@ -31,15 +31,24 @@ static mut NOISE: core::mem::MaybeUninit<[u8; 32]> = core::mem::MaybeUninit::uni
 /// after the set-up so far and, when the board has one that worked, its
 /// hardware random source's 32 bytes (`Parts::hardware_entropy`), all
 /// XORed together: the result is at least as unpredictable as the most
-/// unpredictable of them. The boot nonce is SHA-256 of it with the key
-/// and the reset count (`raim_proto::auth::boot_nonce`). Without hardware
-/// entropy, under QEMU, it changes with the reset count only.
-pub fn entropy(ticks: u32, hardware: Option<&[u8; 32]>) -> BootEntropy {
+/// unpredictable of them. The unit's identity is XORed in too, the part's
+/// unique ID (`unique`, three words, where the board has one) into bytes
+/// 0-11 and the
+/// provisioned unit ID (`unit_id::provisioned`) into bytes 16-31, so that
+/// two units with the same key, reset count and entropy still boot with
+/// different nonces (issue 35, a fleet key). The
+/// boot nonce is SHA-256 of it with the key and the reset count
+/// (`raim_proto::auth::boot_nonce`). Without hardware entropy, under QEMU,
+/// it changes with the reset count and the unit only.
+pub fn entropy(ticks: u32, hardware: Option<&[u8; 32]>, unique: Option<[u32; 3]>) -> BootEntropy {
     // SAFETY: a plain read of 32 bytes of RAM owned by this module; any bit
     // pattern is a value. Never written, so it keeps its power-on state.
     let mut e = unsafe { core::ptr::read_volatile(core::ptr::addr_of!(NOISE).cast::<[u8; 32]>()) };
-    for (b, t) in e.iter_mut().zip(ticks.to_le_bytes()) {
-        *b ^= t;
+    let [u0, u1, u2] = unique.unwrap_or([0; 3]);
+    let [p0, p1, p2, p3] = crate::unit_id::provisioned();
+    let words = [ticks ^ u0, u1, u2, 0, p0, p1, p2, p3];
+    for (b, w) in e.iter_mut().zip(words.iter().flat_map(|w| w.to_le_bytes())) {
+        *b ^= w;
     }
     if let Some(h) = hardware {
         for (b, r) in e.iter_mut().zip(h) {

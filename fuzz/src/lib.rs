@@ -94,7 +94,7 @@ impl<'a> Arbitrary<'a> for Scenario {
 }
 
 /// The provisioned configuration of a scenario, and its sealed section.
-fn provisioned(p: Provision) -> (Option<UnitConfig>, Box<[u8; PROVISION_BYTES]>) {
+fn provisioned(p: Provision) -> (Option<UnitConfig>, bool, Box<[u8; PROVISION_BYTES]>) {
     let mut blob = Box::new([0xFFu8; PROVISION_BYTES]);
     let unit = |phase: u8, host_sigmas| UnitConfig {
         snapshot: Some(Config::preset(
@@ -105,11 +105,11 @@ fn provisioned(p: Provision) -> (Option<UnitConfig>, Box<[u8; PROVISION_BYTES]>)
         host_sigmas,
     };
     match p {
-        Provision::None => (None, blob),
+        Provision::None => (None, false, blob),
         Provision::Valid { phase, host_sigmas } => {
             let u = unit(phase, host_sigmas);
             let _ = raim_proto::unit::seal(&u, None, &mut blob);
-            (Some(u), blob)
+            (Some(u), false, blob)
         }
         Provision::Corrupt { phase, byte, flip } => {
             let u = unit(phase, false);
@@ -120,7 +120,7 @@ fn provisioned(p: Provision) -> (Option<UnitConfig>, Box<[u8; PROVISION_BYTES]>)
             blob[i] ^= flip.max(1);
             // A flip that still opened would be a broken seal: the run
             // checks that it never does.
-            (None, blob)
+            (None, true, blob)
         }
     }
 }
@@ -294,9 +294,12 @@ fn check_result(r: &WireResult, cfg: &Config) -> Result<(), String> {
 /// answers' own: `Ok` only under the provisioned configuration or one
 /// taken at run time since the last reset, whose fingerprint the answer
 /// carries; after every reset the configuration in force is the
-/// provisioned one or none; every frame after the boot notice is answered.
+/// provisioned one or none; a unit whose section is corrupt boots
+/// Unconfigured and locked and refuses every change with the reason
+/// (issue 35); `Lock` is taken only with a configuration in force; every
+/// frame after the boot notice is answered.
 pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
-    let (provision, section) = provisioned(scenario.provision);
+    let (provision, corrupt, section) = provisioned(scenario.provision);
     let mut resets = 0u32;
     let mut server = boot(&section, resets);
     let after_boot = |server: &Server,
@@ -314,10 +317,12 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                 Ok((u.snapshot, true, u.host_sigmas))
             }
             None => {
-                if id.source != ConfigSource::Unconfigured || id.locked {
-                    return Err(format!("booted with {id:?}, nothing provisioned"));
+                if id.source != ConfigSource::Unconfigured || id.locked != corrupt {
+                    return Err(format!(
+                        "booted with {id:?}, nothing provisioned (corrupt section: {corrupt})"
+                    ));
                 }
-                Ok((None, false, true))
+                Ok((None, corrupt, true))
             }
         }
     };
@@ -392,6 +397,10 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
         for &b in &frame {
             let _ = server.on_byte(b, &mut link, &mut nmea, &mut NoPlatform);
         }
+        // The host waits for the answer: a pause on the line, which ends
+        // an RTCM candidate that garbage starting 0xD3 opened (as the
+        // firmware's loop does after `LINK_IDLE_S`).
+        let _ = server.on_line_idle(&mut link, &mut nmea, &mut NoPlatform);
         tally.frames += 1;
         let mut answers: Vec<Response> = Vec::new();
         for &b in &link.0 {
@@ -406,6 +415,21 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
         if empty {
             if !answers.is_empty() {
                 return Err(format!("an empty chunk answered: {answers:?}"));
+            }
+            continue;
+        }
+        // Garbage that starts like an RTCM header may be cut in two
+        // chunks (module raim_proto::link): one error answer or more,
+        // unasked; it changes nothing.
+        if matches!(step, Step::Garbage(_)) && !answers.is_empty() {
+            let id = server.config_id();
+            for a in &answers {
+                if a.seq.is_some() || !matches!(a.body, ResponseBody::Error(_)) || a.config != id {
+                    return Err(format!("step {seq}: garbage answered {a:?}"));
+                }
+            }
+            if id.locked != locked || id.source != source {
+                return Err(format!("step {seq}: garbage changed {id:?}"));
             }
             continue;
         }
@@ -454,14 +478,29 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                 source = ConfigSource::Runtime;
                 tally.configured += 1;
             }
-            (Step::Configure { .. }, ResponseBody::Error(WireError::Locked { .. })) if locked => {
+            (
+                Step::Configure { .. } | Step::Lock,
+                ResponseBody::Error(WireError::Unconfigured { provision: Some(_) }),
+            ) if corrupt => {
+                tally.locked_refusals += 1;
+            }
+            (Step::Configure { .. }, ResponseBody::Error(WireError::Locked { .. }))
+                if locked && !corrupt =>
+            {
                 tally.locked_refusals += 1;
             }
             (Step::Configure { .. }, ResponseBody::Error(_)) if !locked => {
                 tally.refused_configs += 1;
             }
-            (Step::Lock, ResponseBody::LockEngaged) if !locked => locked = true,
-            (Step::Lock, ResponseBody::Error(WireError::Locked { .. })) if locked => {}
+            // `Lock` only with a configuration in force (issue 35).
+            (Step::Lock, ResponseBody::LockEngaged)
+                if !locked && source != ConfigSource::Unconfigured =>
+            {
+                locked = true
+            }
+            (Step::Lock, ResponseBody::Error(WireError::Unconfigured { provision: None }))
+                if !locked && source == ConfigSource::Unconfigured => {}
+            (Step::Lock, ResponseBody::Error(WireError::Locked { .. })) if locked && !corrupt => {}
             (Step::Status, ResponseBody::Status(_)) => {}
             (Step::Garbage(_), ResponseBody::Error(_)) => {}
             (s, b) => return Err(format!("step {seq}: {s:?} answered {b:?}")),

@@ -214,6 +214,13 @@ fn qemu_provisioned_unit_keeps_its_locked_configuration_across_resets() {
             provision: Some(ProvisionError::BadSeal)
         }
     );
+    // A corrupt unkeyed unit is no bench unit either (issue 35).
+    assert_eq!(
+        fw.try_configure(&Config::preset(Phase::EnRoute)).unwrap(),
+        Err(WireError::Unconfigured {
+            provision: Some(ProvisionError::BadSeal)
+        })
+    );
     for f in [img, bad] {
         let _ = std::fs::remove_file(f);
     }
@@ -501,4 +508,184 @@ fn qemu_oversized_frame_asserts_the_alarm_at_once_and_writes_no_fix() {
         (AlarmOutput::EpochError, true)
     );
     valid(&mut fw, 1);
+}
+
+/// Issue 35: erasing `.raim_key` must not turn a sealed unit into an open
+/// bench unit. The installation's configuration sealed under the key, in
+/// an image whose key section is erased: the unit opens the section with
+/// no key (`BadSeal`) and fails safe. It boots Unconfigured and locked;
+/// every epoch is refused `Unconfigured { provision: BadSeal }` with the
+/// alarm asserted (pin read back) and the no-fix sentences; a plain
+/// `Configure`, `Lock` and `HostSigmas` are refused with the same reason;
+/// `Status` says why; and a reset brings it back to the same state.
+///
+/// Verifies: SAFE-SEALED-NO-KEY, SAFE-LOCK-UNCONFIGURED
+#[test]
+fn qemu_sealed_unit_without_its_key_refuses_to_run() {
+    let base = elf(Machine::Mps2An386);
+    // Sealed with the key's HMAC, written into the unkeyed image.
+    let img = raim_qemu::provision_config(&base, &installed(), Some(&KEY), "key-erased").unwrap();
+    let mut fw = start(&img, Machine::Mps2An386);
+    let refused = WireError::Unconfigured {
+        provision: Some(ProvisionError::BadSeal),
+    };
+    let check = |fw: &mut QemuSession, b: raim_proto::BootNotice| {
+        assert!(!b.auth_provisioned);
+        assert_eq!(b.config.source, ConfigSource::Unconfigured);
+        assert!(b.config.locked, "{b:?}");
+        assert_eq!(b.provision_error, Some(ProvisionError::BadSeal));
+        for (t, sats, apriori) in epochs() {
+            let p = fw.process(&Epoch::ranges(t, &sats, apriori)).unwrap();
+            assert_eq!(p.outcome.unwrap_err(), refused);
+            let rmc = p.nmea.iter().find(|s| s.contains("RMC,")).expect("RMC");
+            assert_eq!(rmc.split(',').nth(2), Some("V"), "{rmc}");
+        }
+        assert_eq!(
+            fw.try_configure(&Config::preset(Phase::EnRoute)).unwrap(),
+            Err(refused.clone())
+        );
+        for c in [CommandRef::Lock, CommandRef::HostSigmas(true)] {
+            assert_eq!(fw.call(c).unwrap(), ResponseBody::Error(refused.clone()));
+        }
+        let st = fw.status().unwrap();
+        assert_eq!(st.provision_error, Some(ProvisionError::BadSeal));
+        assert_eq!(st.config.source, ConfigSource::Unconfigured);
+        assert!(st.config.locked);
+        assert!(
+            st.alarm_output.asserted() && st.alarm_pin_asserted,
+            "{st:?}"
+        );
+    };
+    let b = fw.boots()[0];
+    check(&mut fw, b);
+    let b = hang_and_reboot(&mut fw);
+    check(&mut fw, b);
+    drop(fw);
+    let _ = std::fs::remove_file(img);
+}
+
+/// Issue 35: on the unit, an unkeyed, Unconfigured unit refuses `Lock`
+/// (`Unconfigured`, still unlocked) until a configuration is in force.
+///
+/// Verifies: SAFE-LOCK-UNCONFIGURED
+#[test]
+fn qemu_unconfigured_unit_refuses_lock() {
+    let mut fw = start(&elf(Machine::Mps2An386), Machine::Mps2An386);
+    assert_eq!(
+        fw.call(CommandRef::Lock).unwrap(),
+        ResponseBody::Error(WireError::Unconfigured { provision: None })
+    );
+    let st = fw.status().unwrap();
+    assert!(!st.config.locked);
+    assert_eq!(st.config.source, ConfigSource::Unconfigured);
+    fw.configure(&Config::preset(Phase::EnRoute)).unwrap();
+    fw.lock().unwrap();
+    assert!(fw.status().unwrap().config.locked);
+}
+
+/// Issue 35, the link that lost a frame: the 3 bytes `D3 03 FF` (an RTCM 3
+/// header declaring a 1029-byte frame) and 10 bytes, with no delimiter,
+/// then a `Status` request in the same write. The request is not lost: the
+/// dropped bytes are answered first, unasked, with what is known of them
+/// (`TruncatedRtcm { received: 13, declared: 1029 }`), then the request
+/// with its own sequence number, without waiting for a pause on the line.
+/// The dropped bytes count as an unreadable frame: after a valid epoch
+/// had cleared it, the alarm output is asserted (`EpochError`).
+///
+/// Verifies: SAFE-LINK-RESYNC, WIRE-TruncatedRtcm
+#[test]
+fn qemu_a_request_after_a_cut_rtcm_header_is_answered() {
+    let mut fw = start(&elf(Machine::Mps2An386), Machine::Mps2An386);
+    // A valid epoch first: the output is clear.
+    fw.configure(&Config::preset(Phase::EnRoute)).unwrap();
+    let (t, sats, apriori) = &epochs()[0];
+    let p = fw.process(&Epoch::ranges(*t, sats, *apriori)).unwrap();
+    assert!(p.outcome.is_ok(), "{:?}", p.outcome);
+    assert_eq!(fw.status().unwrap().alarm_output, AlarmOutput::Clear);
+    let (seq, status) = fw.frame(CommandRef::Status).unwrap();
+    let mut bytes = vec![0xD3, 0x03, 0xFF];
+    bytes.extend([0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88, 0x99, 0xAA]);
+    bytes.extend(&status);
+    fw.send_raw(&bytes).unwrap();
+    let first = fw.recv(raim_qemu::ANSWER_TIMEOUT).unwrap();
+    assert_eq!(first.seq, None, "{first:?}");
+    assert_eq!(
+        first.body,
+        ResponseBody::Error(WireError::TruncatedRtcm {
+            received: 13,
+            declared: 1029
+        })
+    );
+    let second = fw.recv(raim_qemu::ANSWER_TIMEOUT).unwrap();
+    assert_eq!(second.seq, Some(seq), "{second:?}");
+    let ResponseBody::Status(st) = second.body else {
+        panic!("{second:?}")
+    };
+    assert_eq!(st.protocol_version, raim_proto::PROTOCOL_VERSION);
+    // The dropped bytes may have been an epoch: the output was asserted
+    // at once, as for any frame the unit cannot read.
+    assert_eq!(
+        (st.alarm_output, st.alarm_pin_asserted),
+        (AlarmOutput::EpochError, true)
+    );
+}
+
+/// Issue 35, a fleet key: two units that share a key but have different
+/// provisioned unit IDs (`.raim_unit`, firmware/src/unit_id.rs) boot with
+/// different nonces, and unit 2 refuses an authenticated frame made for
+/// unit 1, which unit 1 takes. Under `-icount shift=0` everything else in
+/// the nonce is the same for both (the key, the reset count, QEMU's zeroed
+/// SRAM, the SysTick count at boot): the same unit booted twice gets the
+/// same nonce, so the unit ID is what tells them apart.
+///
+/// Verifies: SAFE-UNIT-ID, WIRE-BadAuthTag
+#[test]
+fn qemu_units_sharing_a_key_do_not_share_a_nonce() {
+    let base = elf(Machine::Mps2An386);
+    let keyed = raim_qemu::provision_key(&base, &KEY).unwrap();
+    let unit = |n: u8| {
+        raim_qemu::write_section(&keyed, ".raim_unit", &[n; 16], &format!("unit{n}")).unwrap()
+    };
+    let (img1, img2) = (unit(1), unit(2));
+    let boot = |img: &std::path::Path| {
+        QemuSession::start_with(
+            img,
+            &Options {
+                machine: Machine::Mps2An386,
+                raw: true,
+                icount: true,
+                ..Options::default()
+            },
+        )
+        .expect("qemu-system-arm with the firmware")
+    };
+    let nonce_of = |fw: &QemuSession| fw.boots()[0].boot_nonce;
+    let n1 = nonce_of(&boot(&img1));
+    let mut u1 = boot(&img1);
+    let mut u2 = boot(&img2);
+    assert_eq!(nonce_of(&u1), n1, "the same unit boots with the same nonce");
+    assert_ne!(nonce_of(&u2), n1, "two units of one key");
+    let terminal = Config::preset(Phase::Terminal);
+    let change = ChangeRef::Configure(&terminal);
+    let for_unit_1 = AuthenticatedRef {
+        counter: 1,
+        change,
+        tag: tag(&KEY, &n1, 1, &change),
+    };
+    assert_eq!(
+        u2.call(CommandRef::Authenticated(for_unit_1)).unwrap(),
+        ResponseBody::Error(WireError::BadAuthTag { counter: 1 })
+    );
+    assert_eq!(
+        u2.status().unwrap().config.source,
+        ConfigSource::Unconfigured
+    );
+    assert_eq!(
+        u1.call(CommandRef::Authenticated(for_unit_1)).unwrap(),
+        ResponseBody::Configured
+    );
+    drop((u1, u2));
+    for f in [keyed, img1, img2] {
+        let _ = std::fs::remove_file(f);
+    }
 }

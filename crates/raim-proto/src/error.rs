@@ -248,6 +248,16 @@ pub enum WireError {
         /// The epoch's GPS time of week, ms.
         tow_ms: u32,
     },
+    /// Bytes dropped from the link: they began like an RTCM 3 frame whose
+    /// header declared `declared` bytes, and a host frame ended `received`
+    /// bytes after its 0xD3 (`link::LinkEvent::TruncatedRtcm`); that frame
+    /// is answered next. Unasked (`seq: None`). Protocol 15.
+    TruncatedRtcm {
+        /// Bytes dropped, the 0xD3 included.
+        received: u32,
+        /// The frame length its header declared (N + 6), bytes.
+        declared: u32,
+    },
 }
 
 /// A field name for the wire (truncated to 24 bytes).
@@ -480,6 +490,10 @@ impl core::fmt::Display for WireError {
             WireError::StreamLeapSecondsUnknown { tow_ms } => write!(
                 f,
                 "stream epoch at GPS time of week {tow_ms} ms has GLONASS data, but GPS - UTC is unknown: the unit's leap-second table has expired and the stream sent no RTCM 1013"
+            ),
+            WireError::TruncatedRtcm { received, declared } => write!(
+                f,
+                "{received} bytes dropped: an RTCM 3 header declaring {declared} bytes, cut by a host frame"
             ),
         }
     }

@@ -86,7 +86,9 @@ pub type DevicePrecision = f32;
 /// new enum variants are appended so that the earlier ones keep their
 /// indices. The history of the versions is in CHANGELOG.md, "Wire protocol
 /// versions"; 15 is the stream's leap seconds (`Status::stream_leap_seconds`,
-/// `WireError::StreamLeapSecondsUnknown`).
+/// `WireError::StreamLeapSecondsUnknown`) and `WireError::TruncatedRtcm`,
+/// the answer to bytes dropped when a host frame ends inside an RTCM
+/// candidate.
 pub const PROTOCOL_VERSION: u16 = 15;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.

@@ -64,6 +64,35 @@
 //! until one ends with a zero byte at a frame boundary (test
 //! `a_stray_byte_costs_rtcm_frames_until_a_boundary`).
 //!
+//! # Resynchronisation on a host frame
+//!
+//! A candidate whose header declares a long frame holds the bytes that
+//! follow it, so a stray 0xD3 with a plausible header (`D3 03 FF`: 1029
+//! bytes declared) followed by a few bytes of noise would swallow the host
+//! frames that come next, until the candidate fills or the line pauses,
+//! and then answer them all as one unreadable chunk (issue 35). So at
+//! every zero byte inside a candidate the receiver asks whether a host
+//! frame has just ended: whether some suffix of the candidate, ending at
+//! that zero, is a CRC-verified COBS frame. Its start lies after the
+//! candidate's previous zero (a COBS frame has no zero before its
+//! delimiter); a start is tried only if its chain of COBS code bytes lands
+//! exactly on the zero, at most
+//! [`MAX_RESYNC_TRIES`] starts per zero, longest suffix first. If one
+//! verifies, the candidate is not RTCM: its bytes before the frame are
+//! reported as [`LinkEvent::TruncatedRtcm`] (how many, and the length the
+//! header declared), then the frame itself, and the receiver is between
+//! frames again.
+//!
+//! Zero bytes are ordinary inside an RTCM payload, so a zero alone
+//! releases nothing: the candidate keeps every byte until a verified frame
+//! ends in it, it completes (CRC-24Q), or the line pauses. A genuine RTCM
+//! frame is given up only if a suffix of it passes the CRC-32 of a host
+//! envelope (and its COBS and envelope structure) by chance, about 2^-32
+//! per try; that costs one RTCM frame (a stream epoch, whose absence the
+//! time-to-alert catches) and yields a verified frame that must still
+//! decode as a request. A frame behind more than [`MAX_RESYNC_TRIES`]
+//! plausible starts of noise is received at the pause as before.
+//!
 //! # Events
 //!
 //! One byte can complete several COBS frames (a replay), so events come out
@@ -82,6 +111,7 @@
 //!         match ev {
 //!             LinkEvent::Frame(_payload_or_error) => {}
 //!             LinkEvent::Rtcm(_frame) => {}
+//!             LinkEvent::TruncatedRtcm { .. } => {}
 //!         }
 //!         event = rx.poll();
 //!     }
@@ -120,6 +150,17 @@ pub enum LinkEvent<'a> {
     Frame(Result<&'a [u8], FrameError>),
     /// A whole RTCM 3 frame, preamble to CRC inclusive, CRC verified.
     Rtcm(&'a [u8]),
+    /// The first `received` bytes of an RTCM candidate whose header
+    /// declared a frame of `declared` bytes (N + 6), dropped because a
+    /// CRC-verified host frame ended inside the candidate
+    /// ([resynchronisation](self#resynchronisation-on-a-host-frame));
+    /// that frame is the next event.
+    TruncatedRtcm {
+        /// Bytes dropped, the 0xD3 included.
+        received: u32,
+        /// The frame length the candidate's header declared, bytes.
+        declared: u32,
+    },
 }
 
 /// What the link receiver took out of the stream besides COBS chunks.
@@ -156,6 +197,14 @@ enum Mode {
     /// is tried next.
     Rejoin,
 }
+
+/// At most this many suffixes of a candidate are tried as a host frame at
+/// each zero byte inside it (the cost of one try: a pass of the suffix
+/// through the COBS receiver). The tries of all the zeros of a candidate
+/// pass at most `MAX_RESYNC_TRIES x RTCM_MAX_FRAME` bytes through it, and
+/// finding the plausible starts takes at most `RTCM_MAX_FRAME^2 / 2`
+/// steps of an add and a compare.
+pub const MAX_RESYNC_TRIES: usize = 16;
 
 /// Splits one byte stream into COBS frames and RTCM 3 frames (module
 /// documentation). `B` is the COBS receive buffer, as in [`FrameReceiver`].
@@ -243,21 +292,98 @@ impl<const B: usize> LinkReceiver<B> {
             return None;
         }
         let total = self.frame_len();
-        if self.len < total {
-            return None;
+        let complete = self.len >= total;
+        if complete {
+            let (Some(body), Some(crc)) =
+                (self.buf.get(..total - 3), self.buf.get(total - 3..total))
+            else {
+                return self.replay(false);
+            };
+            let received = crc.iter().fold(0u32, |acc, &b| (acc << 8) | u32::from(b));
+            if CRC24Q.checksum(body) == received {
+                self.counts.rtcm_frames = self.counts.rtcm_frames.wrapping_add(1);
+                self.mode = Mode::Cobs;
+                return self.buf.get(..total).map(LinkEvent::Rtcm);
+            }
+            self.counts.rtcm_bad_crc = self.counts.rtcm_bad_crc.wrapping_add(1);
         }
-        let (Some(body), Some(crc)) = (self.buf.get(..total - 3), self.buf.get(total - 3..total))
-        else {
-            return self.replay(false);
+        // Not RTCM (yet): a host frame may have ended at this zero.
+        if byte == 0 {
+            if let Some(event) = self.resync(total) {
+                return Some(event);
+            }
+        }
+        if complete {
+            return self.replay(true);
+        }
+        None
+    }
+
+    /// A zero byte ended the candidate's `len` bytes so far: if a
+    /// CRC-verified host frame ends with it, the candidate is given up:
+    /// its bytes before the frame are reported dropped
+    /// ([`LinkEvent::TruncatedRtcm`]) and the frame follows at the next
+    /// `poll`. `declared` is the header's N + 6.
+    fn resync(&mut self, declared: usize) -> Option<LinkEvent<'static>> {
+        let start = self.frame_suffix()?;
+        // The frame, `buf[start..len]`, is replayed into the idle COBS
+        // receiver at the next `poll`: its delimiter completes it.
+        self.cursor = start;
+        self.mode = Mode::Replay {
+            close_tail: false,
+            saw_frame: false,
         };
-        let received = crc.iter().fold(0u32, |acc, &b| (acc << 8) | u32::from(b));
-        if CRC24Q.checksum(body) == received {
-            self.counts.rtcm_frames = self.counts.rtcm_frames.wrapping_add(1);
-            self.mode = Mode::Cobs;
-            return self.buf.get(..total).map(LinkEvent::Rtcm);
+        // Both at most `RTCM_MAX_FRAME`: exact in a u32.
+        Some(LinkEvent::TruncatedRtcm {
+            received: start as u32,
+            declared: declared as u32,
+        })
+    }
+
+    /// The start of the longest suffix of the candidate that is a
+    /// CRC-verified COBS frame ending at its last byte (a zero), if one of
+    /// the first [`MAX_RESYNC_TRIES`] plausible starts is. A frame has no
+    /// zero before its delimiter, so a start lies after the candidate's
+    /// previous zero (and after the 0xD3, which a valid frame cannot start
+    /// with here: module documentation); a start is plausible when its
+    /// chain of COBS code bytes lands exactly on the delimiter (followed
+    /// from each start: at most `len^2 / 2` steps of an add and a compare
+    /// per candidate, all zeros together). The COBS receiver is idle
+    /// during a candidate and is idle again after each try (its chunk ends
+    /// at the delimiter).
+    fn frame_suffix(&mut self) -> Option<usize> {
+        let z = self.len.checked_sub(1)?;
+        let Self { buf, frames, .. } = self;
+        let chunk = buf.get(..=z)?;
+        let first = chunk
+            .get(..z)?
+            .iter()
+            .rposition(|&b| b == 0)
+            .map_or(1, |p| p + 1);
+        let mut tries = 0;
+        for s in first..z {
+            let mut k = s;
+            while let Some(&code) = chunk.get(k).filter(|_| k < z) {
+                k += usize::from(code);
+            }
+            if k != z {
+                continue;
+            }
+            tries += 1;
+            if tries > MAX_RESYNC_TRIES {
+                return None;
+            }
+            let mut verified = false;
+            for &b in chunk.get(s..)? {
+                if let Some(event) = frames.push(b) {
+                    verified = event.is_ok();
+                }
+            }
+            if verified {
+                return Some(s);
+            }
         }
-        self.counts.rtcm_bad_crc = self.counts.rtcm_bad_crc.wrapping_add(1);
-        self.replay(true)
+        None
     }
 
     /// The line went quiet (a UART idle-line interrupt, a timeout). A
@@ -425,12 +551,14 @@ mod tests {
     enum Ev {
         Frame(Result<Vec<u8>, FrameError>),
         Rtcm(Vec<u8>),
+        Truncated { received: u32, declared: u32 },
     }
 
     fn owned(ev: LinkEvent<'_>) -> Ev {
         match ev {
             LinkEvent::Frame(r) => Ev::Frame(r.map(<[u8]>::to_vec)),
             LinkEvent::Rtcm(f) => Ev::Rtcm(f.to_vec()),
+            LinkEvent::TruncatedRtcm { received, declared } => Ev::Truncated { received, declared },
         }
     }
 
@@ -720,13 +848,17 @@ mod tests {
     }
 
     #[test]
-    fn a_failed_candidate_replays_every_cobs_frame_it_covered() {
+    fn a_stray_header_is_given_up_at_the_first_frame_it_covers() {
         // A stray 0xD3 at a frame boundary, then 0x01 0x00: a plausible
-        // header of a 256-byte payload (262-byte candidate). The zero ends
-        // the chunk "D3 01"; the status frames that follow are inside the
-        // candidate, the last one straddles its end.
+        // header of a 256-byte payload (262-byte candidate). The status
+        // frames that follow would be inside the candidate: the first one's
+        // delimiter ends it (resynchronisation), the rest are received as
+        // they come.
         let mut stream = std::vec![RTCM_PREAMBLE, 0x01, 0x00];
-        let mut expected = std::vec![Ev::Frame(Err(FrameError::Undecodable { len: 3 }))];
+        let mut expected = std::vec![Ev::Truncated {
+            received: 3,
+            declared: 262
+        }];
         let mut seq = 0x100;
         while stream.len() < 262 + 5 {
             let (p, f) = status(seq);
@@ -734,17 +866,12 @@ mod tests {
             expected.push(Ev::Frame(Ok(p)));
             seq += 1;
         }
-        let last = status(seq - 1).1.len();
-        assert!(
-            stream.len() - last < 262 && stream.len() > 262,
-            "the last frame straddles the candidate's end"
-        );
         let mut rx = Rx::new();
         assert_eq!(run(&mut rx, &stream), expected);
-        assert_eq!(rx.counts().rtcm_bad_crc, 1);
+        assert_eq!(rx.counts().rtcm_bad_crc, 0);
         assert_eq!(rx.counts().unpolled_events, 0);
-        // Without `poll`, only the first event of the last candidate byte
-        // comes out; the rest are counted as dropped at the next push.
+        // Without `poll`, the first frame (the second event of its
+        // delimiter) is counted as dropped at the next push.
         let mut rx = Rx::new();
         let mut first = Vec::new();
         for &b in &stream {
@@ -752,10 +879,8 @@ mod tests {
                 first.push(owned(ev));
             }
         }
-        let _ = rx.push(0);
-        let complete_in_window = expected.len() - 1;
-        assert_eq!(first.len(), 2, "{first:?}");
-        assert_eq!(rx.counts().unpolled_events as usize, complete_in_window - 1);
+        assert_eq!(first.len(), expected.len() - 1, "{first:?}");
+        assert_eq!(rx.counts().unpolled_events, 1);
     }
 
     #[test]
@@ -819,9 +944,11 @@ mod tests {
     fn a_pause_replays_an_open_candidate() {
         // The candidate (N = 0x100) would wait for 262 bytes; a pause on
         // the line decides it.
+        // A frame whose delimiter has not come (a host that sends it
+        // after the pause) ends at the pause too.
         let (p, f) = status(11);
         let mut stream = std::vec![RTCM_PREAMBLE, 0x01, 0x00];
-        stream.extend(&f);
+        stream.extend(&f[..f.len() - 1]);
         let mut rx = Rx::new();
         assert_eq!(run(&mut rx, &stream), []);
         let got = run_then_idle(&mut rx, &[]);
@@ -882,7 +1009,7 @@ mod tests {
                 .into_iter()
                 .filter_map(|e| match e {
                     Ev::Rtcm(f) => Some(f),
-                    Ev::Frame(_) => None,
+                    Ev::Frame(_) | Ev::Truncated { .. } => None,
                 })
                 .collect();
             let n_lost = reference.len() - got.len();
@@ -935,7 +1062,7 @@ mod tests {
                 };
                 got.extend(evs.into_iter().filter_map(|e| match e {
                     Ev::Rtcm(f) => Some(f),
-                    Ev::Frame(_) => None,
+                    Ev::Frame(_) | Ev::Truncated { .. } => None,
                 }));
             }
             let n_lost = reference.len() - got.len();
@@ -988,6 +1115,44 @@ mod tests {
         let e = rtcm_frame(&[]);
         assert_eq!(e.len(), 6);
         assert_eq!(run(&mut Rx::new(), &e), std::vec![Ev::Rtcm(e.clone())]);
+    }
+
+    /// Issue 35, the link that lost a frame: `D3 03 FF` (an RTCM header
+    /// declaring 1023 payload bytes) and 10 bytes of noise, no delimiter,
+    /// then a host request. The request is answered at its own delimiter,
+    /// not at the next pause or 1029 bytes later, and the noise before it
+    /// is reported first, with what is known of it: 13 bytes of a
+    /// 1029-byte frame.
+    ///
+    /// Verifies: SAFE-LINK-RESYNC
+    #[test]
+    fn a_host_frame_after_a_cut_rtcm_header_is_not_lost() {
+        let (payload, frame) = status(7);
+        let mut stream = std::vec![RTCM_PREAMBLE, 0x03, 0xFF];
+        stream.extend([0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88, 0x99, 0xAA]);
+        stream.extend(&frame);
+        let mut rx = Rx::new();
+        assert_eq!(
+            run(&mut rx, &stream),
+            std::vec![
+                Ev::Truncated {
+                    received: 13,
+                    declared: 1029
+                },
+                Ev::Frame(Ok(payload.clone())),
+            ]
+        );
+        // The receiver is between frames again: the next request and an
+        // RTCM frame with zeros in its payload come out as they are.
+        let rtcm = rtcm_frame(&[0, 1, 0, 0, 2, 0, 3]);
+        let (p2, f2) = status(8);
+        let mut next = rtcm.clone();
+        next.extend(&f2);
+        assert_eq!(
+            run(&mut rx, &next),
+            std::vec![Ev::Rtcm(rtcm), Ev::Frame(Ok(p2))]
+        );
+        assert_eq!(rx.counts().unpolled_events, 0);
     }
 
     #[derive(Debug, Clone)]
@@ -1049,7 +1214,7 @@ mod tests {
     fn verified(events: &[Ev]) -> Vec<Ev> {
         events
             .iter()
-            .filter(|e| !matches!(e, Ev::Frame(Err(_))))
+            .filter(|e| !matches!(e, Ev::Frame(Err(_)) | Ev::Truncated { .. }))
             .cloned()
             .collect()
     }
@@ -1152,6 +1317,44 @@ mod tests {
             let got = run_then_idle(&mut rx, &stream);
             prop_assert_eq!(verified(&got), verified(&frames_alone(&stream)));
             prop_assert_eq!(rx.counts().rtcm_frames, 0);
+        }
+
+        /// Issue 35: any plausible RTCM header (reserved bits 0, a declared
+        /// length longer than what follows), then noise of any bytes,
+        /// zeros included, then a host frame with no pause: the frame comes
+        /// out at its own delimiter, verified, preceded by one
+        /// `TruncatedRtcm` that declares the header's length; no RTCM frame
+        /// is reported.
+        ///
+        /// Verifies: SAFE-LINK-RESYNC
+        #[test]
+        fn a_host_frame_after_rtcm_like_noise_comes_out_at_its_delimiter(
+            hi in 0u8..=3,
+            lo in any::<u8>(),
+            noise in prop::collection::vec(any::<u8>(), 0..40),
+            payload in prop::collection::vec(any::<u8>(), 1..300),
+        ) {
+            let declared = ((usize::from(hi) << 8) | usize::from(lo)) + 6;
+            let frame = cobs_frame(&payload);
+            let mut stream = std::vec![RTCM_PREAMBLE, hi, lo];
+            stream.extend(&noise);
+            // The header must declare more than the bytes up to the frame's
+            // end (else the candidate is decided by its CRC first).
+            prop_assume!(declared > stream.len() + frame.len());
+            stream.extend(&frame);
+            let mut rx = Rx::new();
+            let got = run(&mut rx, &stream);
+            let want = Ev::Frame(Ok(payload));
+            prop_assert_eq!(got.last(), Some(&want), "events {:?}", &got);
+            let truncated: Vec<&Ev> =
+                got.iter().filter(|e| matches!(e, Ev::Truncated { .. })).collect();
+            prop_assert_eq!(truncated.len(), 1);
+            prop_assert!(matches!(
+                truncated[0],
+                Ev::Truncated { declared: d, .. } if *d as usize == declared
+            ), "declared {}", declared);
+            prop_assert!(!got.iter().any(|e| matches!(e, Ev::Rtcm(_))));
+            prop_assert!(rx.line_idle().is_none());
         }
 
         /// `completes_chunk` predicts `push`, overflows included, and

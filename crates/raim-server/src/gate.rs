@@ -6,10 +6,15 @@
 //!
 //! The rule (docs/SAFETY.md "Configuration authority"): a provisioned unit
 //! runs its provisioned configuration, locked, from boot, and takes no
-//! change until reset; an unprovisioned unit takes runtime changes (bench
-//! use), authenticated when it holds a key, until it is locked; runtime
-//! changes are volatile, so a reset returns the unit to its provisioned
-//! configuration or to none.
+//! change until reset; a unit whose provisioned section is present but
+//! refused at boot (a bad seal, an erased key under a sealed section, a
+//! part that fails its checks) takes no change either and stays
+//! Unconfigured (it is an installed unit whose installation failed, never
+//! a bench unit); an unprovisioned unit takes runtime changes (bench
+//! use), authenticated when it holds a key, until it is locked, and
+//! `Lock` only once a configuration is in force; runtime changes are
+//! volatile, so a reset returns the unit to its provisioned configuration
+//! or to none.
 
 use raim_proto::araim_msg::AraimAnswer;
 use raim_proto::auth::{Authenticated, Change};
@@ -122,6 +127,12 @@ impl Server {
                 raim_proto::araim_msg::AraimWireError::Disabled,
             ));
         }
+        // A provisioned section refused at boot: fail safe until reset,
+        // whatever the change and whoever sends it (issue 35: erasing the
+        // key must not make a sealed unit an open bench unit).
+        if let Some(e) = self.provision_error {
+            return Err(WireError::Unconfigured { provision: Some(e) });
+        }
         if self.config_id.locked {
             return Err(WireError::Locked {
                 fingerprint: self.config_id.fingerprint,
@@ -166,6 +177,12 @@ impl Server {
                 self.host_sigmas = *on;
                 Applied::Configured
             }
+            // Locking a unit with nothing in force would leave it
+            // Unconfigured and deaf to every change until a reset (issue
+            // 35): refused, typed, until a configuration is in force.
+            Change::Lock if self.config_id.source == ConfigSource::Unconfigured => {
+                return Err(WireError::Unconfigured { provision: None });
+            }
             Change::Lock => {
                 self.config_id.locked = true;
                 return Ok(Applied::LockEngaged);
@@ -203,6 +220,10 @@ mod tests {
     /// Verifies: WIRE-AuthNotProvisioned, WIRE-AuthRequired, WIRE-BadAuthTag, WIRE-Replayed, SAFE-T4
     #[test]
     fn authentication_refusals_are_typed_and_change_nothing() {
+        crate::tests::on_big_stack(authentication_refusals);
+    }
+
+    fn authentication_refusals() {
         let mut open = std::boxed::Box::new(Server::new());
         let a = signed(&open, &KEY, 1);
         assert_eq!(
@@ -235,5 +256,87 @@ mod tests {
         assert_eq!(keyed.config_id.fingerprint, fingerprint);
         let next = signed(&keyed, &KEY, 6);
         assert_eq!(keyed.change_authenticated(&next), Ok(Applied::Configured));
+    }
+    /// Issue 35: an unkeyed, Unconfigured unit refuses `Lock` (typed,
+    /// `Unconfigured`, nothing changes) until a configuration is in force;
+    /// then `Lock` is taken. A host could otherwise lock a unit that can
+    /// only answer `Unconfigured`, deaf to every change until a reset.
+    ///
+    /// Verifies: SAFE-LOCK-UNCONFIGURED
+    #[test]
+    fn lock_is_refused_until_a_configuration_is_in_force() {
+        crate::tests::on_big_stack(lock_refused_until_configured);
+    }
+
+    fn lock_refused_until_configured() {
+        let mut open = std::boxed::Box::new(Server::new());
+        let before = open.config_id;
+        assert_eq!(
+            open.change_plain(&Change::Lock),
+            Err(WireError::Unconfigured { provision: None })
+        );
+        assert_eq!(open.config_id, before);
+        assert!(!open.config_id.locked);
+        assert_eq!(
+            open.change_plain(&Change::Configure(Config::default())),
+            Ok(Applied::Configured)
+        );
+        assert_eq!(open.change_plain(&Change::Lock), Ok(Applied::LockEngaged));
+        assert!(open.config_id.locked);
+    }
+
+    /// Issue 35: a unit whose provisioned section is present but refused
+    /// (a sealed section read without its key: `BadSeal`; any corrupt
+    /// section) never becomes an open bench unit: it boots Unconfigured
+    /// and locked, refuses every change, plain or authenticated, with the
+    /// reason (`Unconfigured { provision }`), and `Status` says why.
+    ///
+    /// Verifies: SAFE-SEALED-NO-KEY
+    #[test]
+    fn a_refused_provisioned_section_takes_no_change() {
+        crate::tests::on_big_stack(refused_section_takes_no_change);
+    }
+
+    fn refused_section_takes_no_change() {
+        let entropy = raim_proto::auth::BootEntropy {
+            bytes: [3; 32],
+            hardware: false,
+        };
+        for e in [
+            raim_proto::unit::ProvisionError::BadSeal,
+            raim_proto::unit::ProvisionError::BadMagic,
+            raim_proto::unit::ProvisionError::InvalidPart(raim_proto::unit::UnitPart::Snapshot),
+        ] {
+            let refused = WireError::Unconfigured { provision: Some(e) };
+            let mut unit = std::boxed::Box::new(Server::new());
+            unit.boot(Err(e), 0, &entropy);
+            assert_eq!(unit.config_id.source, ConfigSource::Unconfigured);
+            assert!(unit.config_id.locked);
+            let st = unit.status();
+            assert_eq!(st.provision_error, Some(e));
+            assert!(st.config.locked);
+            for change in [
+                Change::Configure(Config::default()),
+                Change::Lock,
+                Change::HostSigmas(true),
+            ] {
+                assert_eq!(unit.change_plain(&change), Err(refused.clone()));
+            }
+            assert_eq!(unit.config, None);
+            // The same with a key: an authenticated change is refused too.
+            let mut keyed = std::boxed::Box::new(Server::with_auth_key(KEY));
+            keyed.boot(Err(e), 0, &entropy);
+            let a = signed(&keyed, &KEY, 1);
+            assert_eq!(keyed.change_authenticated(&a), Err(refused));
+            assert_eq!(keyed.config, None);
+        }
+        // An erased section is a bench unit: open, and it takes changes.
+        let mut bench = std::boxed::Box::new(Server::new());
+        bench.boot(Ok(None), 0, &entropy);
+        assert!(!bench.config_id.locked);
+        assert_eq!(
+            bench.change_plain(&Change::Configure(Config::default())),
+            Ok(Applied::Configured)
+        );
     }
 }

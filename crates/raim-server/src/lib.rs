@@ -237,9 +237,12 @@ impl Server {
     /// then reports), then the provisioned configuration, if
     /// any. A provisioned configuration whose seal verified (`provisioned`
     /// is what `unit::open` gave) and whose every part passes its checks
-    /// is put in force, locked. Anything else leaves the unit
-    /// unconfigured, with the reason kept for the boot notice and
-    /// `Status`; no default is ever put in force.
+    /// is put in force, locked. A section that is present and refused
+    /// (any [`ProvisionError`]: a bad seal, a sealed section on a unit
+    /// whose key was erased, a part that fails its checks) leaves the unit
+    /// Unconfigured and locked, the reason kept for the boot notice,
+    /// `Status` and every refusal; an erased section leaves it
+    /// Unconfigured and open (bench use). No default is ever put in force.
     pub fn boot(
         &mut self,
         provisioned: Result<Option<UnitConfig>, ProvisionError>,
@@ -260,6 +263,13 @@ impl Server {
             }
             Ok(None) => {}
             Err(e) => self.provision_error = Some(e),
+        }
+        // A section that is present and refused: an installed unit whose
+        // installation failed. It stays Unconfigured and locked (the gate
+        // refuses every change with the reason, `gate.rs`) until a reset
+        // finds a good section; it never becomes an open bench unit.
+        if self.provision_error.is_some() {
+            self.config_id.locked = true;
         }
         self.config_id.fingerprint = self.fingerprint();
     }
@@ -418,6 +428,16 @@ impl Server {
                     // docs/SAFETY.md "Frames the unit cannot read").
                     Some(LinkEvent::Frame(Err(e))) => {
                         Step::Frame(Err(answer::Refusal::unread(None, WireError::from(e))))
+                    }
+                    // Bytes given up when a host frame ended inside an
+                    // RTCM candidate (`link` "Resynchronisation on a host
+                    // frame"): unreadable, answered as such; the frame
+                    // follows.
+                    Some(LinkEvent::TruncatedRtcm { received, declared }) => {
+                        Step::Frame(Err(answer::Refusal::unread(
+                            None,
+                            WireError::TruncatedRtcm { received, declared },
+                        )))
                     }
                     Some(LinkEvent::Frame(Ok(payload))) => {
                         Step::Frame(answer::decode(payload, &mut self.request))

@@ -15,11 +15,9 @@ use std::vec::Vec;
 /// the engine's size, so a test that builds a few of them overflows the
 /// 2 MiB default test thread. A constructor that builds in place (a
 /// `const fn new` into a static) would need none of it.
-#[cfg_attr(not(feature = "pf"), allow(dead_code))]
 pub(crate) const BIG_STACK_BYTES: usize = 32 << 20;
 
 /// Runs `f` on a thread of [`BIG_STACK_BYTES`], passing its panic on.
-#[cfg_attr(not(feature = "pf"), allow(dead_code))]
 pub(crate) fn on_big_stack<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     std::thread::scope(|s| {
         std::thread::Builder::new()

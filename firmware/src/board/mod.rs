@@ -123,6 +123,14 @@ pub trait Board: Sized {
     type Watchdog: Watchdog;
     /// The link's receive interrupt line (NVIC number).
     const LINK_RX_IRQ: u16;
+    /// Drives the integrity-alarm output to its alarm (low) level from an
+    /// interrupt handler, without the pin's owner: one register write that
+    /// cannot leave the pin at the clear level (the time-to-alert timer,
+    /// `discrete::on_wrap`). Only ever asserts.
+    fn force_alarm();
+    /// The part's factory-programmed unique ID, where the board has one
+    /// (the STM32F4's 96 bits), for the boot nonce (`unit_id`).
+    fn unique_id() -> Option<[u32; 3]>;
     /// The board's peripherals, set up (clocks, pins, UARTs at 115200 8N1),
     /// with interrupts masked (PRIMASK) until the application has set up
     /// the receive ring. `None` if called twice, or if the
@@ -133,9 +141,10 @@ pub trait Board: Sized {
 /// Wraps of SysTick's 24-bit counter since boot (its exception, `main.rs`).
 static WRAPS: AtomicU32 = AtomicU32::new(0);
 
-/// The SysTick exception's work: one more wrap.
-pub fn on_systick() {
-    WRAPS.fetch_add(1, Ordering::Relaxed);
+/// The SysTick exception's work: one more wrap; returns the wraps since
+/// boot, this one included.
+pub fn on_systick() -> u32 {
+    WRAPS.fetch_add(1, Ordering::Relaxed).wrapping_add(1)
 }
 
 /// SysTick as a free-running 24-bit counter at the core clock, extended to

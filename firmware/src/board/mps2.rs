@@ -42,6 +42,21 @@ impl Board for Mps2An386 {
     /// RX lines 0, 2, 4, 18, 20 for UART0-4; TX one above each).
     const LINK_RX_IRQ: u16 = 0;
 
+    /// LED0's bit cleared (read-modify-write of the FPGA I/O register:
+    /// should the main loop's own write of the pin interleave, it writes
+    /// the level its monitor decided, which after the deadline is the
+    /// alarm level too).
+    fn force_alarm() {
+        let r = Regs(FPGAIO);
+        r.write(LED0, r.read(LED0) & !LED0_BIT);
+    }
+
+    /// The AN386 image has no unique ID: the provisioned unit ID is the
+    /// unit's identity.
+    fn unique_id() -> Option<[u32; 3]> {
+        None
+    }
+
     fn take() -> Option<Parts<Self>> {
         static TAKEN: AtomicBool = AtomicBool::new(false);
         cortex_m::interrupt::disable();

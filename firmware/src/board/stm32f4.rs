@@ -286,6 +286,30 @@ fn hsi_fallback(rcc: Rcc) -> Option<Rcc> {
 }
 
 impl Board for Stm32f4 {
+    /// PD12 reset through GPIOD_BSRR (RM0090 §8.4.7: a write of 1 to
+    /// BR12 drives the pin low, atomically, whatever the other bits).
+    fn force_alarm() {
+        const GPIOD_BSRR: usize = 0x4002_0C00 + 0x18;
+        // SAFETY: GPIOD's bit set/reset register, always mapped; writing
+        // BR12 alone changes PD12's output only (the pin the HAL set up as
+        // the alarm output), and only to the alarm level.
+        unsafe { core::ptr::write_volatile(GPIOD_BSRR as *mut u32, 1 << (16 + 12)) }
+    }
+    /// The 96-bit unique device ID (RM0090 §39.1: three words at
+    /// 0x1FFF_7A10, factory-programmed, read-only). QEMU's netduinoplus2
+    /// does not map that region (a read would be a bus fault), so its
+    /// build has none and uses the provisioned unit ID alone.
+    fn unique_id() -> Option<[u32; 3]> {
+        if cfg!(feature = "qemu-netduinoplus2") {
+            return None;
+        }
+        const UID: usize = 0x1FFF_7A10;
+        // SAFETY: the unique ID's three aligned words, mapped on every
+        // STM32F405/407 (RM0090 §39.1); plain reads.
+        Some(core::array::from_fn(|k| unsafe {
+            core::ptr::read_volatile((UID + 4 * k) as *const u32)
+        }))
+    }
     type Link = Uart<pac::USART2>;
     type Nmea = Uart<pac::USART3>;
     type LinkRx = RxPort;
