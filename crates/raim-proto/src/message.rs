@@ -420,6 +420,26 @@ pub struct Status {
     /// The GPS - UTC leap seconds the stream receiver dates GLONASS with,
     /// and where they come from (protocol 15).
     pub stream_leap_seconds: StreamLeapSeconds,
+    /// The run-time model check of the configuration and ISM in force
+    /// (docs/MODEL_CHECK.md; protocol 15).
+    pub model_check: ModelCheckStatus,
+}
+
+/// The run-time model check's state: its windowed chi-square goodness of
+/// fit of the delivered solutions' normalised residuals against the error
+/// model in force (`raim_core::consistency`), since that model was put in
+/// force. Once it has rejected, every epoch is answered `Unavailable`
+/// (alarm output asserted) until a new configuration or ISM.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ModelCheckStatus {
+    /// Windows tested (one per sample taken).
+    pub evaluations: u32,
+    /// Windows that rejected the model.
+    pub rejections: u32,
+    /// The epoch time of the first rejection, ms (the epoch's `time_s`
+    /// x 1000, rounded): the model is declared broken from then on.
+    pub broken_at_ms: Option<u64>,
 }
 
 /// Where the stream receiver's GPS - UTC leap seconds come from, at its
@@ -486,6 +506,11 @@ impl Status {
         stream_ephemerides: [0, 0],
         last_stream_ticks: 0,
         stream_leap_seconds: StreamLeapSeconds::NotDated,
+        model_check: ModelCheckStatus {
+            evaluations: 0,
+            rejections: 0,
+            broken_at_ms: None,
+        },
     };
 }
 

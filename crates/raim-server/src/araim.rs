@@ -205,6 +205,7 @@ impl Server {
                 araim,
                 status,
                 config,
+                model,
                 ..
             } = self;
             let input = match request.as_ref().map(|r| &r.command) {
@@ -217,7 +218,7 @@ impl Server {
                 // `dispatch` sends only ARAIM epochs here.
                 _ => return Ok(()),
             };
-            epoch_answer(araim, status, config.as_ref(), &input, platform)
+            epoch_answer((araim, model), status, config.as_ref(), &input, platform)
         };
         self.write_araim_nmea(&answer, nmea_out)
             .map_err(super::IoError::Nmea)?;
@@ -257,21 +258,45 @@ impl Server {
 
 /// An ARAIM epoch on the server's ARAIM state, status and configuration
 /// (disjoint fields, so the epoch may be borrowed from the request slot);
-/// its decision (or its refusal, as `None`) drives the integrity-alarm
-/// output like a snapshot epoch's (`Platform::on_epoch`).
+/// the model check takes the delivered solution's C_acc sample, and a
+/// model it has declared broken makes the decision `Unavailable`
+/// (`model_check`); the decision (or the refusal, as `None`) drives the
+/// integrity-alarm output like a snapshot epoch's (`Platform::on_epoch`).
 fn epoch_answer<P: super::Platform>(
-    araim: &mut AraimState,
+    (araim, model): (&mut AraimState, &mut super::model_check::UnitModelCheck),
     status: &mut raim_proto::message::Status,
     config: Option<&Config>,
     epoch: &Input<'_>,
     platform: &mut P,
 ) -> Result<AraimAnswer, WireError> {
-    let r = epoch_answer_inner(araim, status, config, epoch, platform);
+    let mut r = epoch_answer_inner(araim, status, config, epoch, platform);
+    if let Ok(AraimAnswer::Result(res)) = &mut r {
+        let sample = if res.decision == raim_core::Decision::Alarm {
+            None
+        } else {
+            accuracy_sample(araim)
+        };
+        res.decision = super::model_check::judge(model, res.time_s, sample, res.decision);
+    }
     platform.on_epoch(match &r {
         Ok(AraimAnswer::Result(res)) => Some(res.decision),
         _ => None,
     });
     r
+}
+
+/// The delivered solution's (q, dof) against C_acc, of the epoch the
+/// engine ran last (`araim::Monitor::accuracy_sample`).
+fn accuracy_sample(araim: &AraimState) -> Option<(f64, u32)> {
+    #[cfg(feature = "araim")]
+    {
+        araim.engine.accuracy_sample()
+    }
+    #[cfg(not(feature = "araim"))]
+    {
+        let _ = araim;
+        None
+    }
 }
 
 fn epoch_answer_inner<P: super::Platform>(
@@ -381,6 +406,12 @@ mod engine {
         ) -> Result<WireAraimResult, WireError> {
             let e = Epoch::ranges(epoch.time_s, &epoch.sats.items, epoch.apriori_m);
             self.evaluate(cfg, ism, &e)
+        }
+
+        /// The last epoch's delivered solution, q = r^T C_acc^-1 r and its
+        /// dof, for the model check; `None` when it has none.
+        pub(super) fn accuracy_sample(&self) -> Option<(f64, u32)> {
+            self.0.accuracy_sample().ok().map(|f| (f.q, f.dof))
         }
 
         fn evaluate(

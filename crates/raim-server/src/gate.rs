@@ -190,6 +190,8 @@ impl Server {
         };
         self.config_id.source = ConfigSource::Runtime;
         self.config_id.fingerprint = self.fingerprint();
+        // A new model is in force: the model check starts again.
+        self.model.reset();
         Ok(applied)
     }
 }

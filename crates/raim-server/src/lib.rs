@@ -49,6 +49,7 @@ use raim_proto::{
 
 mod answer;
 mod gate;
+pub mod model_check;
 #[cfg(feature = "rtcm")]
 pub mod stream;
 
@@ -153,6 +154,8 @@ pub struct Server {
     /// The receiver of an RTCM 3 stream on the link (`stream`).
     #[cfg(feature = "rtcm")]
     stream: stream::StreamState,
+    /// The run-time model check of the model in force (`model_check`).
+    model: model_check::UnitModelCheck,
 }
 
 impl Default for Server {
@@ -213,6 +216,7 @@ impl Server {
             pf: PfUnit::EMPTY,
             #[cfg(feature = "rtcm")]
             stream: stream::StreamState::new(),
+            model: model_check::UnitModelCheck::new(),
         }
     }
 
@@ -294,6 +298,7 @@ impl Server {
         self.config = snapshot;
         self.araim.ism = araim;
         self.host_sigmas = host_sigmas;
+        self.model.reset();
         self.config_id = ConfigId {
             fingerprint: self.fingerprint(),
             locked: true,
@@ -679,6 +684,7 @@ impl Server {
             (self.status.stream_epochs, self.status.stream_ephemerides) = self.stream.counters();
             self.status.stream_leap_seconds = self.stream.leap_seconds();
         }
+        self.status.model_check = model_check::status(&self.model);
         platform.board_status(&mut self.status);
         self.status()
     }
@@ -704,12 +710,13 @@ impl Server {
                 status,
                 result,
                 wire,
+                model,
                 ..
             } = self;
             let slots = (&mut *result, &mut *wire);
             match request.as_ref().map(|r| &r.command) {
                 Some(Command::Ranges(e)) => run_epoch(
-                    raim,
+                    (raim, model),
                     &config,
                     status,
                     slots,
@@ -717,7 +724,7 @@ impl Server {
                     platform,
                 ),
                 Some(Command::Linear(e)) => run_epoch(
-                    raim,
+                    (raim, model),
                     &config,
                     status,
                     slots,
@@ -863,10 +870,15 @@ fn check_sigma_bounds(sigmas: impl Iterator<Item = Option<f64>>) -> Result<(), W
 }
 
 /// One epoch through the engine; the result written into `result` and
-/// its wire form into `wire`, or the typed error. The platform hears the
-/// verdict.
+/// its wire form into `wire`, or the typed error. The model check takes
+/// the delivered solution's sample, and a model it has declared broken
+/// makes the decision `Unavailable` (`model_check`). The platform hears
+/// the verdict.
 fn run_epoch<P: Platform>(
-    raim: &mut Raim<CAPACITY, DevicePrecision>,
+    (raim, model): (
+        &mut Raim<CAPACITY, DevicePrecision>,
+        &mut model_check::UnitModelCheck,
+    ),
     config: &Config,
     status: &mut Status,
     (result, wire): (&mut EpochResult<CAPACITY>, &mut WireResult),
@@ -878,6 +890,10 @@ fn run_epoch<P: Platform>(
     let r = raim.process_into(config, epoch, result);
     let t1 = platform.now();
     status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
+    if r.is_ok() {
+        result.decision =
+            model_check::judge(model, epoch.time_s, result.model_sample(), result.decision);
+    }
     platform.on_epoch(r.as_ref().ok().map(|()| result.decision));
     match r {
         Ok(()) => {

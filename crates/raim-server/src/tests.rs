@@ -728,3 +728,120 @@ fn unreadable_frames_assert_the_alarm_at_once_and_write_no_fix() {
     // unknown), none for the others (linearised epochs: void, timed).
     assert_eq!(rmc_count, [0, 0, 1, 0, 1, 0, 1]);
 }
+
+/// The model check through the server (docs/MODEL_CHECK.md): an 8-satellite
+/// sky whose residuals pass the snapshot test (`Ok`) but are several times
+/// the sigma model's, sent every 1,800 s, is declared broken within the
+/// window: from then on the same epoch is answered `Unavailable`, and
+/// `Status.model_check` says when; a new `Configure` puts a new model in
+/// force and the check starts again (`Ok`). The nominal sky never breaks
+/// it.
+///
+/// Verifies: SAFE-MODEL
+#[test]
+fn a_model_the_residuals_deny_makes_the_unit_unavailable_until_reconfigured() {
+    use crate::model_check::CONFIG;
+    use raim_core::consistency::DEFAULT_WINDOW;
+    use raim_core::{Decision, Epoch, Raim};
+    let cfg = Config::default();
+    // The largest scale of a fixed residual pattern that the snapshot test
+    // still passes, found with the core itself (the server's engine).
+    let pattern = [1.0, -1.2, 0.8, -0.6, 1.1, -0.9, 0.7, -1.3];
+    let scaled = |a: f64| -> Vec<LinearObservation> {
+        sky(0.0)
+            .into_iter()
+            .zip(pattern)
+            .map(|(mut o, p)| {
+                o.residual_m = a * p;
+                o
+            })
+            .collect()
+    };
+    let mut core =
+        std::boxed::Box::new(Raim::<{ raim_proto::CAPACITY }, raim_proto::DevicePrecision>::new());
+    let mut best = None;
+    for k in 1..200 {
+        let a = 0.1 * f64::from(k);
+        let r = core.process(&cfg, &Epoch::linear(0.0, &scaled(a))).unwrap();
+        match (r.decision, r.model_sample()) {
+            (Decision::Ok, Some((q, dof))) => best = Some((a, q, dof)),
+            _ => break,
+        }
+    }
+    let (a, q, dof) = best.expect("an Ok scale");
+    assert!(q / f64::from(dof) > 3.0, "q {q}, dof {dof}");
+    let (loud, calm) = (scaled(a), scaled(0.05));
+
+    let status = |seq| {
+        frame(&RequestRef {
+            seq,
+            command: CommandRef::Status,
+        })
+    };
+    let decision = |r: &Response| match &r.body {
+        ResponseBody::Result(w) => w.decision,
+        other => panic!("{other:?}"),
+    };
+    on_big_stack(|| {
+        let mut server = bench();
+        // The nominal sky: no declaration over twice the window.
+        let mut t = 1.0e9;
+        let mut seq = 0;
+        for _ in 0..(2 * DEFAULT_WINDOW) {
+            t += CONFIG.spacing_s;
+            seq += 1;
+            let (r, _) = run(&mut server, &frame(&RequestRef::linear(seq, t, &calm)));
+            assert_eq!(decision(&r[0]), Decision::Ok);
+        }
+        // The loud sky: Ok until the window rejects, then Unavailable.
+        let mut declared = None;
+        for k in 1..=DEFAULT_WINDOW {
+            t += CONFIG.spacing_s;
+            seq += 1;
+            let (r, _) = run(&mut server, &frame(&RequestRef::linear(seq, t, &loud)));
+            if decision(&r[0]) == Decision::Unavailable {
+                declared = Some((k, t));
+                break;
+            }
+            assert_eq!(decision(&r[0]), Decision::Ok);
+        }
+        let (k, t_broken) = declared.expect("declared within the window");
+        let (r, _) = run(&mut server, &status(seq + 1));
+        let ResponseBody::Status(st) = r[0].body else {
+            panic!("{r:?}")
+        };
+        assert_eq!(
+            st.model_check.broken_at_ms,
+            Some((t_broken * 1000.0) as u64)
+        );
+        assert!(st.model_check.rejections >= 1);
+        // Latched: the calm sky too is Unavailable now.
+        let (r, _) = run(
+            &mut server,
+            &frame(&RequestRef::linear(seq + 2, t + 1.0, &calm)),
+        );
+        assert_eq!(decision(&r[0]), Decision::Unavailable);
+        // A new configuration: a new model in force, the check restarted.
+        let (r, _) = run(
+            &mut server,
+            &frame(&RequestRef {
+                seq: seq + 3,
+                command: CommandRef::Configure(&cfg),
+            }),
+        );
+        assert_eq!(r[0].body, ResponseBody::Configured);
+        let (r, _) = run(
+            &mut server,
+            &frame(&RequestRef::linear(seq + 4, t + 2.0, &calm)),
+        );
+        assert_eq!(decision(&r[0]), Decision::Ok);
+        let (r, _) = run(&mut server, &status(seq + 5));
+        let ResponseBody::Status(st) = r[0].body else {
+            panic!("{r:?}")
+        };
+        assert_eq!(st.model_check.broken_at_ms, None);
+        std::println!(
+            "scale {a:.1} (q {q:.1} at {dof} dof): declared at sample {k}, 1,800 s apart"
+        );
+    });
+}
