@@ -416,6 +416,8 @@ mod tests {
         }
         let min_s_ii: f64 = "1e-4".parse().unwrap();
         assert_eq!(min_s_ii, raim_core::config::DEFAULT_MIN_S_II);
+        let pfa_hour: f64 = "1e-6".parse().unwrap();
+        assert_eq!(pfa_hour, raim_core::consistency::DEFAULT_P_FA_PER_HOUR);
         let cli = Cli::try_parse_from(["raim", "snapshot"]).unwrap();
         let Command::Snapshot { config, .. } = cli.command else {
             panic!()

@@ -22,7 +22,7 @@ use anyhow::{anyhow, Result};
 use clap::Args;
 use raim_core::araim::AraimConfig;
 use raim_core::consistency::{
-    ModelCheck, ModelCheckConfig, Offer, DEFAULT_P_FA_PER_HOUR, DEFAULT_SPACING_S, DEFAULT_WINDOW,
+    ModelCheck, ModelCheckConfig, Offer, DEFAULT_SPACING_S, DEFAULT_WINDOW,
 };
 use raim_core::{Decision, Epoch, Raim};
 use serde::Serialize;
@@ -44,8 +44,8 @@ pub struct ModelCheckArgs {
     /// Model check: samples in the window (at most 64).
     #[arg(long, default_value_t = DEFAULT_WINDOW)]
     pub model_check_window: usize,
-    /// Model check: allocated false-declaration probability per hour of operation.
-    #[arg(long, default_value_t = DEFAULT_P_FA_PER_HOUR)]
+    /// Model check: allocated false-declaration probability per hour of operation (the core's DEFAULT_P_FA_PER_HOUR).
+    #[arg(long, default_value = "1e-6")]
     pub model_check_pfa_hour: f64,
 }
 
