@@ -24,11 +24,16 @@ pub struct RunFile {
     #[serde(default)]
     pub height_m: f64,
     /// Availability with exclusion: `none` (detection only, the default),
-    /// `satellites` (every single-satellite exclusion must leave the
-    /// service available) or `single_events` (satellites and whole
-    /// constellations).
+    /// `continuity` (the fault modes whose exclusion would leave the
+    /// service unavailable must start within the exposure with a summed
+    /// probability inside the continuity allocation to failed exclusions,
+    /// `[continuity]`), or the strict rules `satellites` (every
+    /// single-satellite exclusion must leave the service available) and
+    /// `single_events` (satellites and whole constellations).
     #[serde(default)]
     pub exclusion: ExclusionSpec,
+    /// The continuity allocation of `exclusion = "continuity"`.
+    pub continuity: Option<ContinuitySpec>,
     /// The time span.
     pub time: TimeSpec,
     /// The users.
@@ -51,6 +56,35 @@ pub enum ExclusionSpec {
     Satellites,
     /// Each monitored single-event mode: satellites and constellations.
     SingleEvents,
+    /// The failed exclusions' onset probability within the continuity
+    /// allocation (docs/AVAILABILITY.md "Availability with exclusion").
+    Continuity,
+}
+
+/// The continuity allocation to failed exclusions (`[continuity]`).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContinuitySpec {
+    /// P_ALERT: the continuity budget for disruptions by false alerts and
+    /// failed exclusions, per exposure; the false-alert share P_FA,V +
+    /// P_FA,H of the service level is taken out of it.
+    pub p_alert: f64,
+    /// The exposure time over which a fault may start (s).
+    pub t_exp_s: f64,
+}
+
+/// The continuity rule as the engine applies it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Continuity {
+    /// The allocation to failed exclusions: P_ALERT - P_FA,V - P_FA,H.
+    pub p_alloc: f64,
+    /// The exposure time (s).
+    pub t_exp_s: f64,
+    /// Per system (`System::index()`), the mean fault duration of a
+    /// satellite fault (s); NaN for a system not in the study.
+    pub mfd_sat_s: [f64; raim_core::measurement::MAX_SYSTEMS],
+    /// Per system, the mean fault duration of a constellation fault (s).
+    pub mfd_const_s: [f64; raim_core::measurement::MAX_SYSTEMS],
 }
 
 /// Epochs `start_s + k step_s` for `k` in `0..floor(span_s / step_s)` (the
@@ -157,6 +191,11 @@ pub struct ConstellationSpec {
     pub p_sat: f64,
     /// P_const.
     pub p_const: f64,
+    /// Mean duration of a satellite fault (s; `exclusion = "continuity"`).
+    pub mfd_sat_s: Option<f64>,
+    /// Mean duration of a constellation fault (s; `exclusion =
+    /// "continuity"`).
+    pub mfd_const_s: Option<f64>,
 }
 
 /// One satellite of the study.
@@ -198,6 +237,8 @@ pub struct Study {
     pub target: f64,
     /// Which exclusions must leave the service available.
     pub exclusion: ExclusionSpec,
+    /// The continuity rule (`exclusion = "continuity"` only).
+    pub continuity: Option<Continuity>,
     /// The elevation mask (rad).
     pub mask_rad: f64,
     /// The users' height (m).
@@ -343,6 +384,40 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
     let mut unhealthy = Vec::new();
     let mut week0: Option<u32> = None;
     let mut almanac_sats = Vec::new();
+    let continuous = run.exclusion == ExclusionSpec::Continuity;
+    let mut continuity = match (continuous, run.continuity) {
+        (true, Some(c)) => {
+            let p_alloc = c.p_alert - (cfg.pfa_vert + cfg.pfa_hor);
+            if !(c.p_alert.is_finite() && p_alloc > 0.0 && c.p_alert < 1.0) {
+                bail!(
+                    "{}: p_alert {} must exceed the false-alert budget P_FA,V + P_FA,H = {} and be below 1",
+                    at("p_alert"),
+                    c.p_alert,
+                    cfg.pfa_vert + cfg.pfa_hor
+                );
+            }
+            if !(c.t_exp_s.is_finite() && c.t_exp_s > 0.0) {
+                bail!("{}: t_exp_s {} must be positive", at("t_exp_s"), c.t_exp_s);
+            }
+            Some(Continuity {
+                p_alloc,
+                t_exp_s: c.t_exp_s,
+                mfd_sat_s: [f64::NAN; raim_core::measurement::MAX_SYSTEMS],
+                mfd_const_s: [f64::NAN; raim_core::measurement::MAX_SYSTEMS],
+            })
+        }
+        (true, None) => bail!(
+            "{}: exclusion = \"continuity\" needs a [continuity] table (p_alert, t_exp_s)",
+            at("exclusion")
+        ),
+        (false, Some(_)) => bail!(
+            "{file}:{}: [continuity] is read only with exclusion = \"continuity\"",
+            text.lines()
+                .position(|l| l.trim() == "[continuity]")
+                .map_or(0, |i| i + 1)
+        ),
+        (false, None) => None,
+    };
     for (ci, c) in run.constellation.iter().enumerate() {
         let here = format!(
             "{file}: [[constellation]] {} (system {:?})",
@@ -358,6 +433,24 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
             bail!("{here}: the constellation is given twice");
         }
         ism.p_const[system.index()] = Some(c.p_const);
+        match (&mut continuity, c.mfd_sat_s, c.mfd_const_s) {
+            (Some(k), Some(s), Some(cst)) => {
+                for (v, name) in [(s, "mfd_sat_s"), (cst, "mfd_const_s")] {
+                    if !(v.is_finite() && v > 0.0) {
+                        bail!("{here}: {name} {v} must be positive");
+                    }
+                }
+                k.mfd_sat_s[system.index()] = s;
+                k.mfd_const_s[system.index()] = cst;
+            }
+            (Some(_), _, _) => {
+                bail!("{here}: exclusion = \"continuity\" needs mfd_sat_s and mfd_const_s")
+            }
+            (None, None, None) => {}
+            (None, _, _) => bail!(
+                "{here}: mfd_sat_s and mfd_const_s are read only with exclusion = \"continuity\""
+            ),
+        }
         let alm = almanac::read(&AlmanacSpec {
             path: almanac::resolve(base, &c.almanac),
             system,
@@ -441,6 +534,7 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
         cfg,
         target,
         exclusion: run.exclusion,
+        continuity,
         mask_rad: run.mask_deg.to_radians(),
         height_m: run.height_m,
         users,

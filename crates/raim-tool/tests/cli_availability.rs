@@ -324,6 +324,24 @@ fn bad_run_files_name_file_and_line() {
             small_run().replacen("p_sat = 1e-5", "p_sat = 2.0", 1),
             "the ISM is refused by raim-core",
         ),
+        (
+            small_run_with("continuity"),
+            "bad.toml:3: exclusion = \"continuity\" needs a [continuity] table",
+        ),
+        (
+            continuity_run("1e-5", "{ name = \"A\", lat_deg = 0.0, lon_deg = 0.0 }")
+                .replacen("mfd_const_s = 7200.0\n", "", 1),
+            "[[constellation]] 2 (system \"E\"): exclusion = \"continuity\" needs mfd_sat_s and mfd_const_s",
+        ),
+        (
+            continuity_run("3e-6", "{ name = \"A\", lat_deg = 0.0, lon_deg = 0.0 }"),
+            "bad.toml:5: p_alert 0.000003 must exceed the false-alert budget",
+        ),
+        (
+            continuity_run("1e-5", "{ name = \"A\", lat_deg = 0.0, lon_deg = 0.0 }")
+                .replace("exclusion = \"continuity\"", "exclusion = \"none\""),
+            "bad.toml:4: [continuity] is read only with exclusion = \"continuity\"",
+        ),
     ];
     for (text, want) in cases {
         let f = d.join("bad.toml");
@@ -332,5 +350,118 @@ fn bad_run_files_name_file_and_line() {
         assert_ne!(code, 0, "{want}");
         assert!(err.contains(want), "want `{want}` in: {err}");
     }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// [`small_run`] as `exclusion = "continuity"` with ADD v4.2's LPV-200
+/// continuity parameters (docs/runs/availability_maast_g24e24_fde.toml),
+/// `p_alert` given, on `sites` over 24 h.
+fn continuity_run(p_alert: &str, sites: &str) -> String {
+    small_run_with("continuity")
+        .replace(
+            "[time]",
+            &format!("[continuity]\np_alert = {p_alert}\nt_exp_s = 150.0\n[time]"),
+        )
+        .replace("span_s = 3600.0", "span_s = 86400.0")
+        .replace(
+            "kind = \"region\"\nstep_deg = 10.0\nlat_min_deg = 50.0\nlat_max_deg = 70.0\nlon_min_deg = 0.0\nlon_max_deg = 20.0",
+            &format!("kind = \"sites\"\nsites = [{sites}]"),
+        )
+        .replacen("p_const = 1e-8\n", "p_const = 1e-8\nmfd_sat_s = 3600.0\nmfd_const_s = 3600.0\n", 1)
+        .replacen("p_const = 1e-4\n", "p_const = 1e-4\nmfd_sat_s = 5400.0\nmfd_const_s = 7200.0\n", 1)
+}
+
+/// `exclusion = "continuity"`: at every epoch of two users over 24 h the
+/// engine's decision equals the rule evaluated by brute force in the
+/// test: detection-only available, and the fault modes whose exclusion
+/// leaves the service unavailable (every monitored mode's subset through
+/// `Monitor::after_excluding`, no early exit) have a summed onset
+/// probability P T_exp / MFD, written out here from the run file's
+/// numbers (GPS satellite 1e-5 x 150 / 3600, Galileo satellite 1e-5 x 150
+/// / 5400, Galileo constellation 1e-4 x 150 / 7200, GPS constellation
+/// 1e-8 x 150 / 3600), within P_ALERT - P_FA,V - P_FA,H = 1e-5 - 3.99e-6.
+/// Both outcomes occur: epochs whose failed exclusions the allocation
+/// absorbs, and epochs it makes unavailable. With P_ALERT 0.5 the result
+/// is detection only.
+///
+/// Verifies: TOOL-AVAIL-FDE
+#[test]
+fn continuity_rule_equals_brute_force_over_every_candidate() {
+    use raim_core::araim::ModeStatus;
+    let d = tmp_dir("continuity");
+    let sites = r#"{ name = "A", lat_deg = 80.0, lon_deg = 150.0 }, { name = "B", lat_deg = 0.0, lon_deg = 70.0 }"#;
+    let runf = d.join("c.toml");
+    std::fs::write(&runf, continuity_run("1e-5", sites)).expect("write run");
+    let study = run::load(&runf).expect("study");
+    let mut detection = study.clone();
+    detection.exclusion = run::ExclusionSpec::None;
+    let mut lax = study.clone();
+    std::fs::write(&runf, continuity_run("0.5", sites)).expect("write run");
+    lax.continuity = run::load(&runf).expect("study").continuity;
+    let p_alloc = 1e-5 - 3.9e-6 - 9e-8;
+    let sky = engine::sky_table(&study, 0..study.epochs_gps_s.len());
+    let n = study.sats.len();
+    let mut monitor = engine::new_engine();
+    let (mut absorbed, mut lost, mut epochs) = (0, 0, 0);
+    for u in &study.users {
+        let (x, rot) = engine::user_frame(&study, u);
+        for row in sky.chunks_exact(n) {
+            let mut obs = Vec::new();
+            engine::visible(&study, row, x, &rot, &mut obs);
+            let got = engine::evaluate(&study, &mut monitor, &obs).expect("epoch");
+            let lax_got = engine::evaluate(&lax, &mut monitor, &obs).expect("epoch");
+            let det = engine::evaluate(&detection, &mut monitor, &obs).expect("epoch");
+            assert_eq!(lax_got, det, "P_ALERT 0.5 is detection only");
+            epochs += 1;
+            if !det.available {
+                assert!(!got.available);
+                continue;
+            }
+            let modes: Vec<(usize, raim_core::araim::ModeEvents)> = monitor
+                .all_in_view()
+                .modes
+                .iter()
+                .enumerate()
+                .filter(|(_, m)| m.status == ModeStatus::Monitored)
+                .map(|(k, m)| (k, m.events))
+                .collect();
+            let systems: Vec<raim_core::System> =
+                monitor.satellites().iter().map(|s| s.id.system).collect();
+            let mut failed = 0.0;
+            for (k, events) in modes {
+                let ok = monitor
+                    .after_excluding(&study.cfg, &study.ism, k)
+                    .expect("subset")
+                    .is_some_and(|s| s.available());
+                if ok {
+                    continue;
+                }
+                let sats_in: Vec<_> = (0..systems.len())
+                    .filter(|i| events.sats >> i & 1 == 1)
+                    .collect();
+                let onset = match (sats_in.as_slice(), events.consts) {
+                    ([i], 0) if systems[*i] == raim_core::System::Gps => 1e-5 * 150.0 / 3600.0,
+                    ([_], 0) => 1e-5 * 150.0 / 5400.0,
+                    ([], c) if c == 1 << raim_core::System::Galileo.index() => {
+                        1e-4 * 150.0 / 7200.0
+                    }
+                    ([], c) if c == 1 << raim_core::System::Gps.index() => 1e-8 * 150.0 / 3600.0,
+                    other => panic!("a multi-event mode at P_sat 1e-5: {other:?}"),
+                };
+                failed += onset;
+            }
+            let want = failed <= p_alloc;
+            assert_eq!(got.available, want, "user {} failed {failed:e}", u.name);
+            // The levels reported are the detection-only ones.
+            assert_eq!(
+                (got.vpl_m, got.hpl_m, got.emt_m),
+                (det.vpl_m, det.hpl_m, det.emt_m)
+            );
+            absorbed += usize::from(want && failed > 0.0);
+            lost += usize::from(!want);
+        }
+    }
+    assert_eq!(epochs, 2 * 288);
+    assert!(absorbed > 0 && lost > 0, "absorbed {absorbed}, lost {lost}");
     let _ = std::fs::remove_dir_all(&d);
 }
