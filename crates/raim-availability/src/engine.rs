@@ -14,7 +14,7 @@ use raim_core::frames::{enu_rotation, geodetic_to_ecef, rotate, Geodetic};
 use raim_core::LinearObservation;
 use rayon::prelude::*;
 
-use crate::run::{Continuity, ExclusionSpec, Study, User};
+use crate::run::{Airborne, Continuity, ExclusionSpec, Study, User};
 
 /// The engine's satellite capacity (raim-core's mode masks hold 64).
 pub const N_SATS: usize = 64;
@@ -142,11 +142,23 @@ pub fn visible(
         let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
         let los = rotate(rot, [d[0] / r, d[1] / r, d[2] / r]);
         if los[2] >= sin_mask {
+            // The core's curves (sigma_m None) unless the constellation
+            // uses the Galileo E1/E5a table: then the observation's own
+            // sigma, at the elevation the core would take from the row.
+            let sigma_m = match study.airborne[s.id.system.index()] {
+                Airborne::GpsL1l5 => None,
+                Airborne::GalileoE1e5a => Some(
+                    raim_core::araim::error_model::galileo_e1e5a_variance_m2(
+                        raim_core::araim::error_model::elevation_from_g(&los),
+                    )
+                    .sqrt(),
+                ),
+            };
             out.push(LinearObservation {
                 id: s.id,
                 los_enu: los,
                 residual_m: 0.0,
-                sigma_m: None,
+                sigma_m,
             });
         }
     }

@@ -61,6 +61,17 @@ pub enum ExclusionSpec {
     Continuity,
 }
 
+/// A constellation's airborne multipath and noise curve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Airborne {
+    /// The ADD's GPS L1/L5 curves (raim-core's `Curves::default()`).
+    #[default]
+    GpsL1l5,
+    /// The Galileo E1/E5a table (raim-core's `galileo_e1e5a_variance_m2`).
+    GalileoE1e5a,
+}
+
 /// The continuity allocation to failed exclusions (`[continuity]`).
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -191,6 +202,12 @@ pub struct ConstellationSpec {
     pub p_sat: f64,
     /// P_const.
     pub p_const: f64,
+    /// The airborne multipath and noise curve: `gps_l1l5` (the ADD's GPS
+    /// L1/L5 curves through the iono-free factor, raim-core's default, the
+    /// default here) or `galileo_e1e5a` (the Galileo E1/E5a table MAAST's
+    /// ARAIM uses, raim-core's `error_model::galileo_e1e5a_sigma_m`).
+    #[serde(default)]
+    pub airborne: Airborne,
     /// Mean duration of a satellite fault (s; `exclusion = "continuity"`).
     pub mfd_sat_s: Option<f64>,
     /// Mean duration of a constellation fault (s; `exclusion =
@@ -239,6 +256,8 @@ pub struct Study {
     pub exclusion: ExclusionSpec,
     /// The continuity rule (`exclusion = "continuity"` only).
     pub continuity: Option<Continuity>,
+    /// Per system (`System::index()`), the airborne curve.
+    pub airborne: [Airborne; raim_core::measurement::MAX_SYSTEMS],
     /// The elevation mask (rad).
     pub mask_rad: f64,
     /// The users' height (m).
@@ -418,6 +437,7 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
         ),
         (false, None) => None,
     };
+    let mut airborne = [Airborne::GpsL1l5; raim_core::measurement::MAX_SYSTEMS];
     for (ci, c) in run.constellation.iter().enumerate() {
         let here = format!(
             "{file}: [[constellation]] {} (system {:?})",
@@ -433,6 +453,13 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
             bail!("{here}: the constellation is given twice");
         }
         ism.p_const[system.index()] = Some(c.p_const);
+        airborne[system.index()] = c.airborne;
+        if c.airborne == Airborne::GalileoE1e5a && run.mask_deg < 5.0 {
+            bail!(
+                "{here}: airborne = \"galileo_e1e5a\" needs mask_deg >= 5 (the table starts at 5 deg; mask_deg {})",
+                run.mask_deg
+            );
+        }
         match (&mut continuity, c.mfd_sat_s, c.mfd_const_s) {
             (Some(k), Some(s), Some(cst)) => {
                 for (v, name) in [(s, "mfd_sat_s"), (cst, "mfd_const_s")] {
@@ -535,6 +562,7 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
         target,
         exclusion: run.exclusion,
         continuity,
+        airborne,
         mask_rad: run.mask_deg.to_radians(),
         height_m: run.height_m,
         users,

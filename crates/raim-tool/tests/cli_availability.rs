@@ -387,6 +387,22 @@ fn continuity_run(p_alert: &str, sites: &str) -> String {
 /// Verifies: TOOL-AVAIL-FDE
 #[test]
 fn continuity_rule_equals_brute_force_over_every_candidate() {
+    on_engine_stack(continuity_rule_body);
+}
+
+/// Runs `f` on a thread with the engine workers' stack
+/// (`engine::STACK_BYTES`: the monitor's outputs are formed on the stack,
+/// more than a test thread's default in a debug build).
+fn on_engine_stack(f: fn()) {
+    std::thread::Builder::new()
+        .stack_size(engine::STACK_BYTES)
+        .spawn(f)
+        .expect("spawn")
+        .join()
+        .expect("the test body panicked");
+}
+
+fn continuity_rule_body() {
     use raim_core::araim::ModeStatus;
     let d = tmp_dir("continuity");
     let sites = r#"{ name = "A", lat_deg = 80.0, lon_deg = 150.0 }, { name = "B", lat_deg = 0.0, lon_deg = 70.0 }"#;
@@ -463,5 +479,67 @@ fn continuity_rule_equals_brute_force_over_every_candidate() {
     }
     assert_eq!(epochs, 2 * 288);
     assert!(absorbed > 0 && lost > 0, "absorbed {absorbed}, lost {lost}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `airborne = "galileo_e1e5a"`: the Galileo satellites' C_int and C_acc
+/// are sigma_URA^2 (sigma_URE^2) + the DO-229 troposphere + the square of
+/// the E1/E5a table (MAAST's `af_cnmp_galileo` values, written out here
+/// and interpolated by hand), the GPS satellites keep the L1/L5 curves;
+/// a mask below the table's 5 degrees is refused.
+///
+/// Verifies: SPEC-14, SPEC-9.1
+#[test]
+fn galileo_e1e5a_curve_feeds_the_core() {
+    on_engine_stack(galileo_body);
+}
+
+fn galileo_body() {
+    const TABLE: [f64; 18] = [
+        0.4529, 0.3553, 0.3063, 0.2638, 0.2593, 0.2555, 0.2504, 0.2438, 0.2396, 0.2359, 0.2339,
+        0.2302, 0.2295, 0.2278, 0.2297, 0.2310, 0.2274, 0.2277,
+    ];
+    let d = tmp_dir("galileo");
+    let runf = d.join("g.toml");
+    let text = small_run().replace(
+        "id_offset = 74\n",
+        "id_offset = 74\nairborne = \"galileo_e1e5a\"\n",
+    );
+    std::fs::write(&runf, &text).expect("write run");
+    let study = run::load(&runf).expect("study");
+    let mut monitor = engine::new_engine();
+    let (mut n_gal, mut n_gps) = (0, 0);
+    for (ui, k) in [(0usize, 0usize), (4, 7)] {
+        let sky = engine::sky_table(&study, k..k + 1);
+        let (x, rot) = engine::user_frame(&study, &study.users[ui]);
+        let mut obs = Vec::new();
+        engine::visible(&study, &sky, x, &rot, &mut obs);
+        engine::evaluate(&study, &mut monitor, &obs).expect("epoch");
+        for s in monitor.satellites() {
+            let el_rad = (-s.g_enu[2]).asin();
+            let el = el_rad.to_degrees();
+            let v = if s.id.system == raim_core::System::Galileo {
+                n_gal += 1;
+                let lo = ((el / 5.0).floor() as usize).clamp(1, 17);
+                let (a, b) = (TABLE[lo - 1], TABLE[lo.min(17)]);
+                let air = a + (el - 5.0 * lo as f64) / 5.0 * (b - a);
+                let tropo = 0.12 * 1.001 / (0.002_001 + el_rad.sin().powi(2)).sqrt();
+                tropo * tropo + air * air
+            } else {
+                n_gps += 1;
+                nominal_m2(el_rad)
+            };
+            assert!((s.c_int_m2 - (1.0 + v)).abs() < 1e-9, "{:?} el {el}", s.id);
+            assert!(
+                (s.c_acc_m2 - (4.0 / 9.0 + v)).abs() < 1e-9,
+                "{:?} el {el}",
+                s.id
+            );
+        }
+    }
+    assert!(n_gal > 10 && n_gps > 10, "{n_gal} {n_gps}");
+    std::fs::write(&runf, text.replace("mask_deg = 5.0", "mask_deg = 2.0")).expect("write");
+    let e = run::load(&runf).expect_err("mask below 5");
+    assert!(e.to_string().contains("needs mask_deg >= 5"), "{e}");
     let _ = std::fs::remove_dir_all(&d);
 }
