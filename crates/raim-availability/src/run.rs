@@ -61,6 +61,17 @@ pub enum ExclusionSpec {
     Continuity,
 }
 
+/// An almanac file's format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AlmanacFormat {
+    /// YUMA (`almanac::parse`).
+    #[default]
+    Yuma,
+    /// SEM (`almanac::parse_sem`).
+    Sem,
+}
+
 /// A constellation's airborne multipath and noise curve.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -182,8 +193,18 @@ fn default_target() -> f64 {
 pub struct ConstellationSpec {
     /// `G` or `E`.
     pub system: String,
-    /// The YUMA file, relative to the run file's directory.
+    /// The almanac file, relative to the run file's directory.
     pub almanac: PathBuf,
+    /// Its format: `yuma` (the default) or `sem` (GPS SEM, USCG NAVCEN).
+    #[serde(default)]
+    pub format: AlmanacFormat,
+    /// A second almanac (same format, week and ID rules) from which the
+    /// satellites `add` are taken.
+    pub add_almanac: Option<PathBuf>,
+    /// PRNs added from `add_almanac` (a satellite not in `almanac`, or
+    /// one taken out by `remove` and replaced).
+    #[serde(default)]
+    pub add: Vec<u8>,
     /// 1024-week rollovers to add to the file's 10-bit week.
     pub week_rollovers: Option<u32>,
     /// PRN = almanac ID - `id_offset`.
@@ -478,12 +499,19 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
                 "{here}: mfd_sat_s and mfd_const_s are read only with exclusion = \"continuity\""
             ),
         }
-        let alm = almanac::read(&AlmanacSpec {
-            path: almanac::resolve(base, &c.almanac),
-            system,
-            id_offset: c.id_offset,
-            week_rollovers: c.week_rollovers,
-        })?;
+        let read_alm = |p: &Path| {
+            let spec = AlmanacSpec {
+                path: almanac::resolve(base, p),
+                system,
+                id_offset: c.id_offset,
+                week_rollovers: c.week_rollovers,
+            };
+            match c.format {
+                AlmanacFormat::Yuma => almanac::read(&spec),
+                AlmanacFormat::Sem => almanac::read_sem(&spec),
+            }
+        };
+        let mut alm = read_alm(&c.almanac)?;
         for p in &c.remove {
             if !alm.sats.iter().any(|s| s.kepler.prn == *p) {
                 bail!(
@@ -491,6 +519,43 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
                     c.almanac.display()
                 );
             }
+        }
+        match (&c.add_almanac, c.add.is_empty()) {
+            (Some(path), false) => {
+                let extra = read_alm(path)?;
+                let mut sorted = c.add.clone();
+                sorted.sort_unstable();
+                if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+                    bail!("{}: add lists PRN {} twice", at("add"), w[0]);
+                }
+                for p in &c.add {
+                    let Some(s) = extra.sats.iter().find(|s| s.kepler.prn == *p) else {
+                        bail!(
+                            "{}: add = PRN {p}, which is not a healthy satellite of {}",
+                            at("add"),
+                            path.display()
+                        );
+                    };
+                    if alm.sats.iter().any(|k| k.kepler.prn == *p) && !c.remove.contains(p) {
+                        bail!(
+                            "{}: add = PRN {p}, which {} holds already (list it in `remove` to replace it)",
+                            at("add"),
+                            c.almanac.display()
+                        );
+                    }
+                    alm.sats.retain(|k| k.kepler.prn != *p);
+                    alm.sats.push(*s);
+                }
+            }
+            (None, true) => {}
+            (None, false) => bail!(
+                "{}: add needs `add_almanac`, the file to take them from",
+                at("add")
+            ),
+            (Some(_), true) => bail!(
+                "{}: add_almanac without `add` (the PRNs to take)",
+                at("add_almanac")
+            ),
         }
         unhealthy.extend(
             alm.unhealthy
@@ -500,7 +565,7 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
         let mut kept: Vec<_> = alm
             .sats
             .into_iter()
-            .filter(|s| !c.remove.contains(&s.kepler.prn))
+            .filter(|s| !c.remove.contains(&s.kepler.prn) || c.add.contains(&s.kepler.prn))
             .collect();
         kept.sort_by_key(|s| s.kepler.prn);
         for s in kept {
@@ -517,7 +582,11 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
                 id,
                 kepler: s.kepler,
             });
-            almanac_sats.push((c.almanac.clone(), s));
+            let from = match &c.add_almanac {
+                Some(a) if c.add.contains(&s.kepler.prn) => a.clone(),
+                _ => c.almanac.clone(),
+            };
+            almanac_sats.push((from, s));
         }
         check_ism(c, system)
             .map_err(|e| anyhow!("{here}: the ISM is refused by raim-core: {e}"))?;
@@ -797,5 +866,90 @@ p_const = 1e-8
             e.to_string().starts_with("t.toml:12: unknown field `typo`"),
             "{e}"
         );
+    }
+
+    /// Satellites added by PRN from a second almanac (written here in
+    /// YUMA: PRN 30 on PRN 3's orbit half a revolution ahead, and PRN 3
+    /// moved by 0.5 rad): 25 GPS satellites with PRN 30's and the new PRN
+    /// 3's orbits when PRN 3 is removed and both added; a constellation
+    /// read from a SEM file (`format = "sem"`, the same two records); bad
+    /// add lists named by the run file's line.
+    ///
+    /// Verifies: TOOL-AVAIL-SEM
+    #[test]
+    fn satellites_added_from_a_second_almanac() {
+        let dir = std::env::temp_dir().join(format!("raim-avail-add-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let yuma = crate::almanac::read(&AlmanacSpec {
+            path: data().join("almanac_gps24_mops.yuma"),
+            system: System::Gps,
+            id_offset: 0,
+            week_rollovers: Some(0),
+        })
+        .unwrap();
+        let k = yuma.sats[2].kepler;
+        let pi = core::f64::consts::PI;
+        let (m30, m3) = (k.m0_rad + pi, k.m0_rad + 0.5);
+        let yrec = |prn: u8, m0: f64| {
+            format!(
+                "**** PRN {prn} ****\nID: {prn}\nHealth: 000\nEccentricity: {:e}\nTime of Applicability(s): {}\n\
+                 Orbital Inclination(rad): {:e}\nRate of Right Ascen(r/s): {:e}\nSQRT(A)  (m 1/2): {:e}\n\
+                 Right Ascen at Week(rad): {:e}\nArgument of Perigee(rad): {:e}\nMean Anom(rad): {:e}\n\
+                 Af0(s): 0.0\nAf1(s/s): 0.0\nweek: 703\n\n",
+                k.e, k.toe_sow_s, k.i0_rad, k.omega_dot_rad_s, k.sqrt_a_m05, k.omega0_rad, k.omega_rad, m0
+            )
+        };
+        let srec = |prn: u8, m0: f64| {
+            format!(
+                "{prn}\n{prn}\n0\n {:.15E} {:.15E} {:.15E}\n {:.15E} {:.15E} {:.15E}\n {:.15E} 0.0 0.0\n0\n11\n\n",
+                k.e, k.i0_rad / pi - 0.30, k.omega_dot_rad_s / pi,
+                k.sqrt_a_m05, k.omega0_rad / pi, k.omega_rad / pi, m0 / pi
+            )
+        };
+        let extra = dir.join("extra.yuma");
+        std::fs::write(&extra, format!("{}{}", yrec(30, m30), yrec(3, m3))).unwrap();
+        let sem = dir.join("extra.sem");
+        std::fs::write(
+            &sem,
+            format!(
+                "2 EXTRA\n 703 {}\n\n{}{}",
+                k.toe_sow_s,
+                srec(30, m30),
+                srec(3, m3)
+            ),
+        )
+        .unwrap();
+        let grid = "[grid]\nkind = \"world\"\nstep_deg = 30.0";
+        let add_from = format!("add_almanac = \"{}\"", extra.display());
+        let run = |lines: &str| load_text(&text(grid, "level = \"LPV-200\"", lines));
+        let s = run(&format!("remove = [3]\n{add_from}\nadd = [30, 3]")).unwrap();
+        let prns: Vec<u8> = s.sats.iter().map(|x| x.id.prn).collect();
+        assert_eq!(prns, (1..=24).chain([30]).collect::<Vec<u8>>());
+        assert!((s.sats[2].kepler.m0_rad - m3).abs() < 1e-12);
+        assert!((s.sats[24].kepler.m0_rad - m30).abs() < 1e-12);
+        // The same two records as a SEM constellation.
+        let t = text(grid, "level = \"LPV-200\"", "").replace(
+            "almanac = \"almanac_gps24_mops.yuma\"",
+            &format!("almanac = \"{}\"\nformat = \"sem\"", sem.display()),
+        );
+        let s = load_text(&t).unwrap();
+        let got: Vec<(u8, f64)> = s.sats.iter().map(|x| (x.id.prn, x.kepler.m0_rad)).collect();
+        assert_eq!(got.len(), 2);
+        assert!(got[0].0 == 3 && (got[0].1 - m3).abs() < 1e-12 && got[1].0 == 30);
+        // Bad add lists.
+        let e = run(&format!("{add_from}\nadd = [3]")).unwrap_err();
+        assert!(e.to_string().contains("holds already"), "{e}");
+        let e = run("add = [30]").unwrap_err();
+        assert!(e.to_string().contains("add needs `add_almanac`"), "{e}");
+        let e = run(&format!("{add_from}\nadd = [31]")).unwrap_err();
+        assert!(e.to_string().starts_with("t.toml:"), "{e}");
+        assert!(
+            e.to_string()
+                .contains("add = PRN 31, which is not a healthy satellite"),
+            "{e}"
+        );
+        let e = run(&format!("{add_from}\nadd = [30, 30]")).unwrap_err();
+        assert!(e.to_string().contains("add lists PRN 30 twice"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -207,6 +207,10 @@ fn nominal_m2(el_rad: f64) -> f64 {
 /// Verifies: SPEC-14, SPEC-9.1
 #[test]
 fn one_user_epoch_equals_raim_araim_on_the_same_sky() {
+    on_engine_stack(one_user_epoch_body);
+}
+
+fn one_user_epoch_body() {
     let d = tmp_dir("epoch");
     let runf = d.join("small.toml");
     std::fs::write(&runf, small_run()).expect("write run");
