@@ -547,3 +547,80 @@ fn galileo_body() {
     assert!(e.to_string().contains("needs mask_deg >= 5"), "{e}");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `--outages G`: the run as given and each of the 24 GPS outages, each
+/// written as a run of its own; the outage of G05 gives the per-user CSV
+/// of a separate run with `remove = [5]` byte for byte, and its row of
+/// `small.outages.csv` that run's coverage; the base row the plain run's.
+///
+/// Verifies: SPEC-14
+#[test]
+fn outage_sweep_equals_separate_runs() {
+    let d = tmp_dir("outages");
+    let runf = d.join("small.toml");
+    std::fs::write(&runf, small_run()).expect("write");
+    let (sweep, single, plain) = (d.join("sweep"), d.join("single"), d.join("plain"));
+    let r = runf.to_str().expect("utf8");
+    let (code, _, err) = raim(&[
+        "availability",
+        "--run",
+        r,
+        "--outages",
+        "G",
+        "--out",
+        sweep.to_str().expect("utf8"),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = raim(&[
+        "availability",
+        "--run",
+        r,
+        "--out",
+        plain.to_str().expect("utf8"),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let runf5 = d.join("small5.toml");
+    std::fs::write(
+        &runf5,
+        small_run().replacen("p_const = 1e-8\n", "p_const = 1e-8\nremove = [5]\n", 1),
+    )
+    .expect("write");
+    let (code, _, err) = raim(&[
+        "availability",
+        "--run",
+        runf5.to_str().expect("utf8"),
+        "--out",
+        single.to_str().expect("utf8"),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let table = std::fs::read_to_string(sweep.join("small.outages.csv")).expect("table");
+    let rows: Vec<Vec<&str>> = table
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 25, "{table}");
+    assert_eq!(rows[0][1], "none");
+    let cov = |dir: &Path| -> f64 {
+        let v: Value = serde_json::from_slice(
+            &std::fs::read(dir.join("small.summary.json")).expect("summary"),
+        )
+        .expect("json");
+        v["coverage"][0]["coverage"].as_f64().expect("coverage")
+    };
+    let row5 = rows.iter().find(|r| r[1] == "G05").expect("G05 row");
+    assert!(
+        (row5[2].parse::<f64>().expect("num") - cov(&single)).abs() < 1e-6,
+        "{row5:?}"
+    );
+    assert!((rows[0][2].parse::<f64>().expect("num") - cov(&plain)).abs() < 1e-6);
+    assert_eq!(
+        std::fs::read(sweep.join("small.outage-G05.users.csv")).expect("csv"),
+        std::fs::read(single.join("small.users.csv")).expect("csv")
+    );
+    assert_eq!(
+        std::fs::read(sweep.join("small.users.csv")).expect("csv"),
+        std::fs::read(plain.join("small.users.csv")).expect("csv")
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
