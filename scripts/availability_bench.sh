@@ -2,7 +2,7 @@
 # ARAIM availability (issue 36): speed and memory of `raim availability`
 # on the MAAST G24+E24 scenario (docs/runs/availability_maast_g24e24.toml),
 # detection only, at world grids of 10, 5 and 2.5 degrees, on 1 and 2
-# threads; then with exclusion (docs/runs/availability_maast_g24e24_fde.toml)
+# threads; then with exclusion counted by continuity (docs/runs/availability_maast_g24e24_fde.toml)
 # at 10 degrees. `--fde-only` runs the last part alone. Prints per run: users x epochs, wall time, CPU time (user+sys),
 # user-epochs per wall second and per CPU second, maximum resident memory.
 # Numbers in BENCHMARKS.md "ARAIM availability" and docs/AVAILABILITY.md.

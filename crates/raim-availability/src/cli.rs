@@ -36,6 +36,12 @@ pub struct AvailabilityArgs {
     /// Worker threads (default: rayon's, one per core).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// A sweep of every single-satellite outage of constellation SYS (G or
+    /// E): the run as given, then once per satellite of SYS with that
+    /// satellite removed (`<name>.outage-G03.*`), and the table
+    /// `<name>.outages.csv` (not with --shard).
+    #[arg(long, value_name = "SYS")]
+    pub outages: Option<String>,
 }
 
 /// The examples that end `raim availability --help`.
@@ -43,6 +49,7 @@ pub const EXAMPLES: &str = "Examples:
   raim availability --run docs/runs/availability_maast_g24e24.toml --out runs/availability --level 0.99 --maps
   raim availability --run docs/runs/availability_maast_g24e24.toml --shard 2/4 --out shards
   raim availability merge shards/availability_maast_g24e24.shard-*-of-4.json --out runs/availability
+  raim availability --run docs/runs/availability_maast_g24e24.toml --outages G --out runs/outages --level 0.99
 
 Outputs: <name>.summary.json (coverage, users, user-epochs), <name>.users.csv (per user: availability,
 99.5th-percentile VPL/HPL/EMT, fault modes), with --maps three PNG maps. Run file: docs/AVAILABILITY.md.";
@@ -106,6 +113,12 @@ pub fn run(args: &AvailabilityArgs) -> Result<()> {
         .as_ref()
         .ok_or_else(|| anyhow!("raim availability: give --run FILE, or `merge PARTIAL...`"))?;
     let study = run::load(path)?;
+    if let Some(sys) = &args.outages {
+        if args.shard.is_some() {
+            return Err(anyhow!("--outages runs whole scenarios: not with --shard"));
+        }
+        return outage_sweep(args, &study, sys);
+    }
     let mut pool = rayon::ThreadPoolBuilder::new().stack_size(engine::STACK_BYTES);
     if let Some(t) = args.threads {
         pool = pool.num_threads(t);
@@ -189,5 +202,90 @@ fn draw_maps(dir: &std::path::Path, meta: &Meta, users: &[engine::UserSummary]) 
     for f in crate::map::write_maps(dir, meta, users, cov)? {
         eprintln!("wrote {}", f.display());
     }
+    Ok(())
+}
+
+/// `--outages SYS` (docs/AVAILABILITY.md "Outages"): the run as given and
+/// each single-satellite outage of SYS, each written as a run of its own
+/// (`<name>.outage-<sat>.summary.json`, `.users.csv`), and the table
+/// `<name>.outages.csv`: scenario, removed satellite, coverage at the
+/// target and at `--level`, the area-weighted mean availability, and the
+/// users less and more available than with every satellite.
+fn outage_sweep(args: &AvailabilityArgs, study: &run::Study, sys: &str) -> Result<()> {
+    let system = match sys {
+        "G" => raim_core::System::Gps,
+        "E" => raim_core::System::Galileo,
+        s => return Err(anyhow!("--outages {s}: G or E")),
+    };
+    let mut pool = rayon::ThreadPoolBuilder::new().stack_size(engine::STACK_BYTES);
+    if let Some(t) = args.threads {
+        pool = pool.num_threads(t);
+    }
+    let pool = pool.build()?;
+    let lv = levels(study.target, args.level)?;
+    let mut scenarios = vec![(String::new(), study.clone())];
+    for s in study.sats.iter().filter(|s| s.id.system == system) {
+        let label = format!("{}{:02}", system.letter(), s.id.prn);
+        let mut o = study.clone();
+        let keep: Vec<bool> = o.sats.iter().map(|x| x.id != s.id).collect();
+        let mut k = keep.iter();
+        o.sats.retain(|_| *k.next().unwrap_or(&true));
+        let mut k = keep.iter();
+        o.ism_entries.retain(|_| *k.next().unwrap_or(&true));
+        o.name = format!("{}.outage-{label}", study.name);
+        scenarios.push((label, o));
+    }
+    if scenarios.len() == 1 {
+        return Err(anyhow!(
+            "--outages {sys}: the run has no satellite of {sys}"
+        ));
+    }
+    let mut table = format!(
+        "scenario,removed,{},mean_availability,users_less_available,users_more_available\n",
+        lv.iter()
+            .map(|l| format!("coverage_{l}"))
+            .collect::<Vec<_>>()
+            .join(",")
+    );
+    let mut base: Vec<f64> = Vec::new();
+    for (label, sc) in &scenarios {
+        let meta = Meta::of(sc);
+        let e = |e: raim_core::araim::MonitorError| anyhow!("{}: {e}", sc.name);
+        let users = pool
+            .install(|| {
+                engine::run_users(sc, 0..sc.epochs_gps_s.len(), engine::UserPartial::summary)
+            })
+            .map_err(e)?;
+        output::write_outputs(&args.out, &meta, &users, &lv)?;
+        let avail: Vec<f64> = users.iter().map(|u| u.availability).collect();
+        if label.is_empty() {
+            base.clone_from(&avail);
+        }
+        let less = avail.iter().zip(&base).filter(|(a, b)| a < b).count();
+        let more = avail.iter().zip(&base).filter(|(a, b)| a > b).count();
+        let w: f64 = sc.users.iter().map(|u| u.weight).sum();
+        let mean = sc
+            .users
+            .iter()
+            .zip(&avail)
+            .map(|(u, a)| u.weight * a)
+            .sum::<f64>()
+            / w;
+        let cov: Vec<String> = lv
+            .iter()
+            .map(|l| format!("{:.6}", output::coverage(&meta, &users, *l)))
+            .collect();
+        table.push_str(&format!(
+            "{},{},{},{mean:.6},{less},{more}\n",
+            sc.name,
+            if label.is_empty() { "none" } else { label },
+            cov.join(",")
+        ));
+        eprintln!("{}: coverage at {}: {}", sc.name, lv[0], cov[0]);
+    }
+    std::fs::create_dir_all(&args.out)?;
+    let f = args.out.join(format!("{}.outages.csv", study.name));
+    std::fs::write(&f, table)?;
+    eprintln!("wrote {}", f.display());
     Ok(())
 }

@@ -14,7 +14,7 @@ use raim_core::frames::{enu_rotation, geodetic_to_ecef, rotate, Geodetic};
 use raim_core::LinearObservation;
 use rayon::prelude::*;
 
-use crate::run::{ExclusionSpec, Study, User};
+use crate::run::{Airborne, Continuity, ExclusionSpec, Study, User};
 
 /// The engine's satellite capacity (raim-core's mode masks hold 64).
 pub const N_SATS: usize = 64;
@@ -142,11 +142,23 @@ pub fn visible(
         let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
         let los = rotate(rot, [d[0] / r, d[1] / r, d[2] / r]);
         if los[2] >= sin_mask {
+            // The core's curves (sigma_m None) unless the constellation
+            // uses the Galileo E1/E5a table: then the observation's own
+            // sigma, at the elevation the core would take from the row.
+            let sigma_m = match study.airborne[s.id.system.index()] {
+                Airborne::GpsL1l5 => None,
+                Airborne::GalileoE1e5a => Some(
+                    raim_core::araim::error_model::galileo_e1e5a_variance_m2(
+                        raim_core::araim::error_model::elevation_from_g(&los),
+                    )
+                    .sqrt(),
+                ),
+            };
             out.push(LinearObservation {
                 id: s.id,
                 los_enu: los,
                 residual_m: 0.0,
-                sigma_m: None,
+                sigma_m,
             });
         }
     }
@@ -221,6 +233,10 @@ pub fn evaluate(
     if study.exclusion == ExclusionSpec::None || !o.available {
         return Ok(o);
     }
+    if let (ExclusionSpec::Continuity, Some(c)) = (study.exclusion, &study.continuity) {
+        o.available = continuity_holds(study, c, monitor)?;
+        return Ok(o);
+    }
     // Availability with exclusion: every candidate exclusion of the
     // chosen kind must leave the service available (the subset's output
     // as the core's FDE would leave it); the PLs and EMT reported are the
@@ -233,7 +249,7 @@ pub fn evaluate(
         .filter(|(_, m)| {
             let (s, c) = (m.events.sats.count_ones(), m.events.consts.count_ones());
             match study.exclusion {
-                ExclusionSpec::None => false,
+                ExclusionSpec::None | ExclusionSpec::Continuity => false,
                 ExclusionSpec::Satellites => s == 1 && c == 0,
                 ExclusionSpec::SingleEvents => s + c == 1,
             }
@@ -254,6 +270,83 @@ pub fn evaluate(
         }
     }
     Ok(o)
+}
+
+/// The probability that fault mode `events` starts within the exposure
+/// `c.t_exp_s`: for one event e, R_e T_exp = P_e T_exp / MFD_e (the fault
+/// rate of ADD v4.x, P over the mean fault duration); for several, the
+/// bound sum_e R_e T_exp prod_{f != e} P_f = p_k sum_e T_exp / MFD_e (one
+/// event starts while the others are present), p_k the mode's prior
+/// (which for a merged mode is above the product, so the bound holds).
+pub fn onset_probability(
+    c: &Continuity,
+    events: &raim_core::araim::ModeEvents,
+    sats: &[raim_core::araim::AraimSat<f64>],
+) -> f64 {
+    let mut per_s = 0.0;
+    for (i, s) in sats.iter().enumerate().take(64) {
+        if events.sats >> i & 1 == 1 {
+            per_s += 1.0 / c.mfd_sat_s[s.id.system.index()];
+        }
+    }
+    for (j, sys) in raim_core::System::ALL.iter().enumerate() {
+        if events.consts >> j & 1 == 1 {
+            per_s += 1.0 / c.mfd_const_s[sys.index()];
+        }
+    }
+    events.prior * c.t_exp_s * per_s
+}
+
+/// `exclusion = "continuity"` (docs/AVAILABILITY.md "Availability with
+/// exclusion"), after an available all-in-view epoch: the monitored fault
+/// modes whose exclusion leaves the service unavailable (the subset's
+/// output as raim-core's FDE leaves it, [`Monitor::after_excluding`]; a
+/// subset the core cannot solve counts as unavailable) must start within
+/// the exposure with a summed probability at most `c.p_alloc`. Candidates
+/// are taken by decreasing onset probability; the search stops once the
+/// failures exceed the allocation (unavailable) or once the candidates
+/// left could not exceed it even if all failed (available), so the
+/// decision is the one every candidate evaluated would give.
+///
+/// # Errors
+/// As [`evaluate`].
+pub fn continuity_holds(
+    study: &Study,
+    c: &Continuity,
+    monitor: &mut Engine,
+) -> Result<bool, MonitorError> {
+    let out = monitor.all_in_view();
+    let sats = monitor.satellites();
+    let mut cands: Vec<(usize, f64)> = out
+        .modes
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| m.status == raim_core::araim::ModeStatus::Monitored)
+        .map(|(k, m)| (k, onset_probability(c, &m.events, sats)))
+        .collect();
+    cands.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+    // left[i]: the onset probability of candidates i.. (summed from the
+    // smallest, so that it is exact to rounding and never below the sum).
+    let mut left = vec![0.0; cands.len() + 1];
+    for i in (0..cands.len()).rev() {
+        left[i] = left[i + 1] + cands[i].1;
+    }
+    let mut failed = 0.0;
+    for (i, &(k, w)) in cands.iter().enumerate() {
+        if failed + left[i] <= c.p_alloc {
+            return Ok(true);
+        }
+        let ok = monitor
+            .after_excluding(&study.cfg, &study.ism, k)?
+            .is_some_and(|sub| sub.available());
+        if !ok {
+            failed += w;
+            if failed > c.p_alloc {
+                return Ok(false);
+            }
+        }
+    }
+    Ok(true)
 }
 
 impl EpochOutcome {

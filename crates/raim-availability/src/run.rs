@@ -24,11 +24,16 @@ pub struct RunFile {
     #[serde(default)]
     pub height_m: f64,
     /// Availability with exclusion: `none` (detection only, the default),
-    /// `satellites` (every single-satellite exclusion must leave the
-    /// service available) or `single_events` (satellites and whole
-    /// constellations).
+    /// `continuity` (the fault modes whose exclusion would leave the
+    /// service unavailable must start within the exposure with a summed
+    /// probability inside the continuity allocation to failed exclusions,
+    /// `[continuity]`), or the strict rules `satellites` (every
+    /// single-satellite exclusion must leave the service available) and
+    /// `single_events` (satellites and whole constellations).
     #[serde(default)]
     pub exclusion: ExclusionSpec,
+    /// The continuity allocation of `exclusion = "continuity"`.
+    pub continuity: Option<ContinuitySpec>,
     /// The time span.
     pub time: TimeSpec,
     /// The users.
@@ -51,6 +56,57 @@ pub enum ExclusionSpec {
     Satellites,
     /// Each monitored single-event mode: satellites and constellations.
     SingleEvents,
+    /// The failed exclusions' onset probability within the continuity
+    /// allocation (docs/AVAILABILITY.md "Availability with exclusion").
+    Continuity,
+}
+
+/// An almanac file's format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AlmanacFormat {
+    /// YUMA (`almanac::parse`).
+    #[default]
+    Yuma,
+    /// SEM (`almanac::parse_sem`).
+    Sem,
+}
+
+/// A constellation's airborne multipath and noise curve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Airborne {
+    /// The ADD's GPS L1/L5 curves (raim-core's `Curves::default()`).
+    #[default]
+    GpsL1l5,
+    /// The Galileo E1/E5a table (raim-core's `galileo_e1e5a_variance_m2`).
+    GalileoE1e5a,
+}
+
+/// The continuity allocation to failed exclusions (`[continuity]`).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContinuitySpec {
+    /// P_ALERT: the continuity budget for disruptions by false alerts and
+    /// failed exclusions, per exposure; the false-alert share P_FA,V +
+    /// P_FA,H of the service level is taken out of it.
+    pub p_alert: f64,
+    /// The exposure time over which a fault may start (s).
+    pub t_exp_s: f64,
+}
+
+/// The continuity rule as the engine applies it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Continuity {
+    /// The allocation to failed exclusions: P_ALERT - P_FA,V - P_FA,H.
+    pub p_alloc: f64,
+    /// The exposure time (s).
+    pub t_exp_s: f64,
+    /// Per system (`System::index()`), the mean fault duration of a
+    /// satellite fault (s); NaN for a system not in the study.
+    pub mfd_sat_s: [f64; raim_core::measurement::MAX_SYSTEMS],
+    /// Per system, the mean fault duration of a constellation fault (s).
+    pub mfd_const_s: [f64; raim_core::measurement::MAX_SYSTEMS],
 }
 
 /// Epochs `start_s + k step_s` for `k` in `0..floor(span_s / step_s)` (the
@@ -137,8 +193,18 @@ fn default_target() -> f64 {
 pub struct ConstellationSpec {
     /// `G` or `E`.
     pub system: String,
-    /// The YUMA file, relative to the run file's directory.
+    /// The almanac file, relative to the run file's directory.
     pub almanac: PathBuf,
+    /// Its format: `yuma` (the default) or `sem` (GPS SEM, USCG NAVCEN).
+    #[serde(default)]
+    pub format: AlmanacFormat,
+    /// A second almanac (same format, week and ID rules) from which the
+    /// satellites `add` are taken.
+    pub add_almanac: Option<PathBuf>,
+    /// PRNs added from `add_almanac` (a satellite not in `almanac`, or
+    /// one taken out by `remove` and replaced).
+    #[serde(default)]
+    pub add: Vec<u8>,
     /// 1024-week rollovers to add to the file's 10-bit week.
     pub week_rollovers: Option<u32>,
     /// PRN = almanac ID - `id_offset`.
@@ -157,6 +223,17 @@ pub struct ConstellationSpec {
     pub p_sat: f64,
     /// P_const.
     pub p_const: f64,
+    /// The airborne multipath and noise curve: `gps_l1l5` (the ADD's GPS
+    /// L1/L5 curves through the iono-free factor, raim-core's default, the
+    /// default here) or `galileo_e1e5a` (the Galileo E1/E5a table MAAST's
+    /// ARAIM uses, raim-core's `error_model::galileo_e1e5a_sigma_m`).
+    #[serde(default)]
+    pub airborne: Airborne,
+    /// Mean duration of a satellite fault (s; `exclusion = "continuity"`).
+    pub mfd_sat_s: Option<f64>,
+    /// Mean duration of a constellation fault (s; `exclusion =
+    /// "continuity"`).
+    pub mfd_const_s: Option<f64>,
 }
 
 /// One satellite of the study.
@@ -198,6 +275,10 @@ pub struct Study {
     pub target: f64,
     /// Which exclusions must leave the service available.
     pub exclusion: ExclusionSpec,
+    /// The continuity rule (`exclusion = "continuity"` only).
+    pub continuity: Option<Continuity>,
+    /// Per system (`System::index()`), the airborne curve.
+    pub airborne: [Airborne; raim_core::measurement::MAX_SYSTEMS],
     /// The elevation mask (rad).
     pub mask_rad: f64,
     /// The users' height (m).
@@ -343,6 +424,41 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
     let mut unhealthy = Vec::new();
     let mut week0: Option<u32> = None;
     let mut almanac_sats = Vec::new();
+    let continuous = run.exclusion == ExclusionSpec::Continuity;
+    let mut continuity = match (continuous, run.continuity) {
+        (true, Some(c)) => {
+            let p_alloc = c.p_alert - (cfg.pfa_vert + cfg.pfa_hor);
+            if !(c.p_alert.is_finite() && p_alloc > 0.0 && c.p_alert < 1.0) {
+                bail!(
+                    "{}: p_alert {} must exceed the false-alert budget P_FA,V + P_FA,H = {} and be below 1",
+                    at("p_alert"),
+                    c.p_alert,
+                    cfg.pfa_vert + cfg.pfa_hor
+                );
+            }
+            if !(c.t_exp_s.is_finite() && c.t_exp_s > 0.0) {
+                bail!("{}: t_exp_s {} must be positive", at("t_exp_s"), c.t_exp_s);
+            }
+            Some(Continuity {
+                p_alloc,
+                t_exp_s: c.t_exp_s,
+                mfd_sat_s: [f64::NAN; raim_core::measurement::MAX_SYSTEMS],
+                mfd_const_s: [f64::NAN; raim_core::measurement::MAX_SYSTEMS],
+            })
+        }
+        (true, None) => bail!(
+            "{}: exclusion = \"continuity\" needs a [continuity] table (p_alert, t_exp_s)",
+            at("exclusion")
+        ),
+        (false, Some(_)) => bail!(
+            "{file}:{}: [continuity] is read only with exclusion = \"continuity\"",
+            text.lines()
+                .position(|l| l.trim() == "[continuity]")
+                .map_or(0, |i| i + 1)
+        ),
+        (false, None) => None,
+    };
+    let mut airborne = [Airborne::GpsL1l5; raim_core::measurement::MAX_SYSTEMS];
     for (ci, c) in run.constellation.iter().enumerate() {
         let here = format!(
             "{file}: [[constellation]] {} (system {:?})",
@@ -358,12 +474,44 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
             bail!("{here}: the constellation is given twice");
         }
         ism.p_const[system.index()] = Some(c.p_const);
-        let alm = almanac::read(&AlmanacSpec {
-            path: almanac::resolve(base, &c.almanac),
-            system,
-            id_offset: c.id_offset,
-            week_rollovers: c.week_rollovers,
-        })?;
+        airborne[system.index()] = c.airborne;
+        if c.airborne == Airborne::GalileoE1e5a && run.mask_deg < 5.0 {
+            bail!(
+                "{here}: airborne = \"galileo_e1e5a\" needs mask_deg >= 5 (the table starts at 5 deg; mask_deg {})",
+                run.mask_deg
+            );
+        }
+        match (&mut continuity, c.mfd_sat_s, c.mfd_const_s) {
+            (Some(k), Some(s), Some(cst)) => {
+                for (v, name) in [(s, "mfd_sat_s"), (cst, "mfd_const_s")] {
+                    if !(v.is_finite() && v > 0.0) {
+                        bail!("{here}: {name} {v} must be positive");
+                    }
+                }
+                k.mfd_sat_s[system.index()] = s;
+                k.mfd_const_s[system.index()] = cst;
+            }
+            (Some(_), _, _) => {
+                bail!("{here}: exclusion = \"continuity\" needs mfd_sat_s and mfd_const_s")
+            }
+            (None, None, None) => {}
+            (None, _, _) => bail!(
+                "{here}: mfd_sat_s and mfd_const_s are read only with exclusion = \"continuity\""
+            ),
+        }
+        let read_alm = |p: &Path| {
+            let spec = AlmanacSpec {
+                path: almanac::resolve(base, p),
+                system,
+                id_offset: c.id_offset,
+                week_rollovers: c.week_rollovers,
+            };
+            match c.format {
+                AlmanacFormat::Yuma => almanac::read(&spec),
+                AlmanacFormat::Sem => almanac::read_sem(&spec),
+            }
+        };
+        let mut alm = read_alm(&c.almanac)?;
         for p in &c.remove {
             if !alm.sats.iter().any(|s| s.kepler.prn == *p) {
                 bail!(
@@ -371,6 +519,43 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
                     c.almanac.display()
                 );
             }
+        }
+        match (&c.add_almanac, c.add.is_empty()) {
+            (Some(path), false) => {
+                let extra = read_alm(path)?;
+                let mut sorted = c.add.clone();
+                sorted.sort_unstable();
+                if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+                    bail!("{}: add lists PRN {} twice", at("add"), w[0]);
+                }
+                for p in &c.add {
+                    let Some(s) = extra.sats.iter().find(|s| s.kepler.prn == *p) else {
+                        bail!(
+                            "{}: add = PRN {p}, which is not a healthy satellite of {}",
+                            at("add"),
+                            path.display()
+                        );
+                    };
+                    if alm.sats.iter().any(|k| k.kepler.prn == *p) && !c.remove.contains(p) {
+                        bail!(
+                            "{}: add = PRN {p}, which {} holds already (list it in `remove` to replace it)",
+                            at("add"),
+                            c.almanac.display()
+                        );
+                    }
+                    alm.sats.retain(|k| k.kepler.prn != *p);
+                    alm.sats.push(*s);
+                }
+            }
+            (None, true) => {}
+            (None, false) => bail!(
+                "{}: add needs `add_almanac`, the file to take them from",
+                at("add")
+            ),
+            (Some(_), true) => bail!(
+                "{}: add_almanac without `add` (the PRNs to take)",
+                at("add_almanac")
+            ),
         }
         unhealthy.extend(
             alm.unhealthy
@@ -380,7 +565,7 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
         let mut kept: Vec<_> = alm
             .sats
             .into_iter()
-            .filter(|s| !c.remove.contains(&s.kepler.prn))
+            .filter(|s| !c.remove.contains(&s.kepler.prn) || c.add.contains(&s.kepler.prn))
             .collect();
         kept.sort_by_key(|s| s.kepler.prn);
         for s in kept {
@@ -397,7 +582,11 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
                 id,
                 kepler: s.kepler,
             });
-            almanac_sats.push((c.almanac.clone(), s));
+            let from = match &c.add_almanac {
+                Some(a) if c.add.contains(&s.kepler.prn) => a.clone(),
+                _ => c.almanac.clone(),
+            };
+            almanac_sats.push((from, s));
         }
         check_ism(c, system)
             .map_err(|e| anyhow!("{here}: the ISM is refused by raim-core: {e}"))?;
@@ -441,6 +630,8 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
         cfg,
         target,
         exclusion: run.exclusion,
+        continuity,
+        airborne,
         mask_rad: run.mask_deg.to_radians(),
         height_m: run.height_m,
         users,
@@ -675,5 +866,90 @@ p_const = 1e-8
             e.to_string().starts_with("t.toml:12: unknown field `typo`"),
             "{e}"
         );
+    }
+
+    /// Satellites added by PRN from a second almanac (written here in
+    /// YUMA: PRN 30 on PRN 3's orbit half a revolution ahead, and PRN 3
+    /// moved by 0.5 rad): 25 GPS satellites with PRN 30's and the new PRN
+    /// 3's orbits when PRN 3 is removed and both added; a constellation
+    /// read from a SEM file (`format = "sem"`, the same two records); bad
+    /// add lists named by the run file's line.
+    ///
+    /// Verifies: TOOL-AVAIL-SEM
+    #[test]
+    fn satellites_added_from_a_second_almanac() {
+        let dir = std::env::temp_dir().join(format!("raim-avail-add-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let yuma = crate::almanac::read(&AlmanacSpec {
+            path: data().join("almanac_gps24_mops.yuma"),
+            system: System::Gps,
+            id_offset: 0,
+            week_rollovers: Some(0),
+        })
+        .unwrap();
+        let k = yuma.sats[2].kepler;
+        let pi = core::f64::consts::PI;
+        let (m30, m3) = (k.m0_rad + pi, k.m0_rad + 0.5);
+        let yrec = |prn: u8, m0: f64| {
+            format!(
+                "**** PRN {prn} ****\nID: {prn}\nHealth: 000\nEccentricity: {:e}\nTime of Applicability(s): {}\n\
+                 Orbital Inclination(rad): {:e}\nRate of Right Ascen(r/s): {:e}\nSQRT(A)  (m 1/2): {:e}\n\
+                 Right Ascen at Week(rad): {:e}\nArgument of Perigee(rad): {:e}\nMean Anom(rad): {:e}\n\
+                 Af0(s): 0.0\nAf1(s/s): 0.0\nweek: 703\n\n",
+                k.e, k.toe_sow_s, k.i0_rad, k.omega_dot_rad_s, k.sqrt_a_m05, k.omega0_rad, k.omega_rad, m0
+            )
+        };
+        let srec = |prn: u8, m0: f64| {
+            format!(
+                "{prn}\n{prn}\n0\n {:.15E} {:.15E} {:.15E}\n {:.15E} {:.15E} {:.15E}\n {:.15E} 0.0 0.0\n0\n11\n\n",
+                k.e, k.i0_rad / pi - 0.30, k.omega_dot_rad_s / pi,
+                k.sqrt_a_m05, k.omega0_rad / pi, k.omega_rad / pi, m0 / pi
+            )
+        };
+        let extra = dir.join("extra.yuma");
+        std::fs::write(&extra, format!("{}{}", yrec(30, m30), yrec(3, m3))).unwrap();
+        let sem = dir.join("extra.sem");
+        std::fs::write(
+            &sem,
+            format!(
+                "2 EXTRA\n 703 {}\n\n{}{}",
+                k.toe_sow_s,
+                srec(30, m30),
+                srec(3, m3)
+            ),
+        )
+        .unwrap();
+        let grid = "[grid]\nkind = \"world\"\nstep_deg = 30.0";
+        let add_from = format!("add_almanac = \"{}\"", extra.display());
+        let run = |lines: &str| load_text(&text(grid, "level = \"LPV-200\"", lines));
+        let s = run(&format!("remove = [3]\n{add_from}\nadd = [30, 3]")).unwrap();
+        let prns: Vec<u8> = s.sats.iter().map(|x| x.id.prn).collect();
+        assert_eq!(prns, (1..=24).chain([30]).collect::<Vec<u8>>());
+        assert!((s.sats[2].kepler.m0_rad - m3).abs() < 1e-12);
+        assert!((s.sats[24].kepler.m0_rad - m30).abs() < 1e-12);
+        // The same two records as a SEM constellation.
+        let t = text(grid, "level = \"LPV-200\"", "").replace(
+            "almanac = \"almanac_gps24_mops.yuma\"",
+            &format!("almanac = \"{}\"\nformat = \"sem\"", sem.display()),
+        );
+        let s = load_text(&t).unwrap();
+        let got: Vec<(u8, f64)> = s.sats.iter().map(|x| (x.id.prn, x.kepler.m0_rad)).collect();
+        assert_eq!(got.len(), 2);
+        assert!(got[0].0 == 3 && (got[0].1 - m3).abs() < 1e-12 && got[1].0 == 30);
+        // Bad add lists.
+        let e = run(&format!("{add_from}\nadd = [3]")).unwrap_err();
+        assert!(e.to_string().contains("holds already"), "{e}");
+        let e = run("add = [30]").unwrap_err();
+        assert!(e.to_string().contains("add needs `add_almanac`"), "{e}");
+        let e = run(&format!("{add_from}\nadd = [31]")).unwrap_err();
+        assert!(e.to_string().starts_with("t.toml:"), "{e}");
+        assert!(
+            e.to_string()
+                .contains("add = PRN 31, which is not a healthy satellite"),
+            "{e}"
+        );
+        let e = run(&format!("{add_from}\nadd = [30, 30]")).unwrap_err();
+        assert!(e.to_string().contains("add lists PRN 30 twice"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -207,6 +207,10 @@ fn nominal_m2(el_rad: f64) -> f64 {
 /// Verifies: SPEC-14, SPEC-9.1
 #[test]
 fn one_user_epoch_equals_raim_araim_on_the_same_sky() {
+    on_engine_stack(one_user_epoch_body);
+}
+
+fn one_user_epoch_body() {
     let d = tmp_dir("epoch");
     let runf = d.join("small.toml");
     std::fs::write(&runf, small_run()).expect("write run");
@@ -324,6 +328,24 @@ fn bad_run_files_name_file_and_line() {
             small_run().replacen("p_sat = 1e-5", "p_sat = 2.0", 1),
             "the ISM is refused by raim-core",
         ),
+        (
+            small_run_with("continuity"),
+            "bad.toml:3: exclusion = \"continuity\" needs a [continuity] table",
+        ),
+        (
+            continuity_run("1e-5", "{ name = \"A\", lat_deg = 0.0, lon_deg = 0.0 }")
+                .replacen("mfd_const_s = 7200.0\n", "", 1),
+            "[[constellation]] 2 (system \"E\"): exclusion = \"continuity\" needs mfd_sat_s and mfd_const_s",
+        ),
+        (
+            continuity_run("3e-6", "{ name = \"A\", lat_deg = 0.0, lon_deg = 0.0 }"),
+            "bad.toml:5: p_alert 0.000003 must exceed the false-alert budget",
+        ),
+        (
+            continuity_run("1e-5", "{ name = \"A\", lat_deg = 0.0, lon_deg = 0.0 }")
+                .replace("exclusion = \"continuity\"", "exclusion = \"none\""),
+            "bad.toml:4: [continuity] is read only with exclusion = \"continuity\"",
+        ),
     ];
     for (text, want) in cases {
         let f = d.join("bad.toml");
@@ -332,5 +354,273 @@ fn bad_run_files_name_file_and_line() {
         assert_ne!(code, 0, "{want}");
         assert!(err.contains(want), "want `{want}` in: {err}");
     }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// [`small_run`] as `exclusion = "continuity"` with ADD v4.2's LPV-200
+/// continuity parameters (docs/runs/availability_maast_g24e24_fde.toml),
+/// `p_alert` given, on `sites` over 24 h.
+fn continuity_run(p_alert: &str, sites: &str) -> String {
+    small_run_with("continuity")
+        .replace(
+            "[time]",
+            &format!("[continuity]\np_alert = {p_alert}\nt_exp_s = 150.0\n[time]"),
+        )
+        .replace("span_s = 3600.0", "span_s = 86400.0")
+        .replace(
+            "kind = \"region\"\nstep_deg = 10.0\nlat_min_deg = 50.0\nlat_max_deg = 70.0\nlon_min_deg = 0.0\nlon_max_deg = 20.0",
+            &format!("kind = \"sites\"\nsites = [{sites}]"),
+        )
+        .replacen("p_const = 1e-8\n", "p_const = 1e-8\nmfd_sat_s = 3600.0\nmfd_const_s = 3600.0\n", 1)
+        .replacen("p_const = 1e-4\n", "p_const = 1e-4\nmfd_sat_s = 5400.0\nmfd_const_s = 7200.0\n", 1)
+}
+
+/// `exclusion = "continuity"`: at every epoch of two users over 24 h the
+/// engine's decision equals the rule evaluated by brute force in the
+/// test: detection-only available, and the fault modes whose exclusion
+/// leaves the service unavailable (every monitored mode's subset through
+/// `Monitor::after_excluding`, no early exit) have a summed onset
+/// probability P T_exp / MFD, written out here from the run file's
+/// numbers (GPS satellite 1e-5 x 150 / 3600, Galileo satellite 1e-5 x 150
+/// / 5400, Galileo constellation 1e-4 x 150 / 7200, GPS constellation
+/// 1e-8 x 150 / 3600), within P_ALERT - P_FA,V - P_FA,H = 1e-5 - 3.99e-6.
+/// Both outcomes occur: epochs whose failed exclusions the allocation
+/// absorbs, and epochs it makes unavailable. With P_ALERT 0.5 the result
+/// is detection only.
+///
+/// Verifies: TOOL-AVAIL-FDE
+#[test]
+fn continuity_rule_equals_brute_force_over_every_candidate() {
+    on_engine_stack(continuity_rule_body);
+}
+
+/// Runs `f` on a thread with the engine workers' stack
+/// (`engine::STACK_BYTES`: the monitor's outputs are formed on the stack,
+/// more than a test thread's default in a debug build).
+fn on_engine_stack(f: fn()) {
+    std::thread::Builder::new()
+        .stack_size(engine::STACK_BYTES)
+        .spawn(f)
+        .expect("spawn")
+        .join()
+        .expect("the test body panicked");
+}
+
+fn continuity_rule_body() {
+    use raim_core::araim::ModeStatus;
+    let d = tmp_dir("continuity");
+    let sites = r#"{ name = "A", lat_deg = 80.0, lon_deg = 150.0 }, { name = "B", lat_deg = 0.0, lon_deg = 70.0 }"#;
+    let runf = d.join("c.toml");
+    std::fs::write(&runf, continuity_run("1e-5", sites)).expect("write run");
+    let study = run::load(&runf).expect("study");
+    let mut detection = study.clone();
+    detection.exclusion = run::ExclusionSpec::None;
+    let mut lax = study.clone();
+    std::fs::write(&runf, continuity_run("0.5", sites)).expect("write run");
+    lax.continuity = run::load(&runf).expect("study").continuity;
+    let p_alloc = 1e-5 - 3.9e-6 - 9e-8;
+    let sky = engine::sky_table(&study, 0..study.epochs_gps_s.len());
+    let n = study.sats.len();
+    let mut monitor = engine::new_engine();
+    let (mut absorbed, mut lost, mut epochs) = (0, 0, 0);
+    for u in &study.users {
+        let (x, rot) = engine::user_frame(&study, u);
+        for row in sky.chunks_exact(n) {
+            let mut obs = Vec::new();
+            engine::visible(&study, row, x, &rot, &mut obs);
+            let got = engine::evaluate(&study, &mut monitor, &obs).expect("epoch");
+            let lax_got = engine::evaluate(&lax, &mut monitor, &obs).expect("epoch");
+            let det = engine::evaluate(&detection, &mut monitor, &obs).expect("epoch");
+            assert_eq!(lax_got, det, "P_ALERT 0.5 is detection only");
+            epochs += 1;
+            if !det.available {
+                assert!(!got.available);
+                continue;
+            }
+            let modes: Vec<(usize, raim_core::araim::ModeEvents)> = monitor
+                .all_in_view()
+                .modes
+                .iter()
+                .enumerate()
+                .filter(|(_, m)| m.status == ModeStatus::Monitored)
+                .map(|(k, m)| (k, m.events))
+                .collect();
+            let systems: Vec<raim_core::System> =
+                monitor.satellites().iter().map(|s| s.id.system).collect();
+            let mut failed = 0.0;
+            for (k, events) in modes {
+                let ok = monitor
+                    .after_excluding(&study.cfg, &study.ism, k)
+                    .expect("subset")
+                    .is_some_and(|s| s.available());
+                if ok {
+                    continue;
+                }
+                let sats_in: Vec<_> = (0..systems.len())
+                    .filter(|i| events.sats >> i & 1 == 1)
+                    .collect();
+                let onset = match (sats_in.as_slice(), events.consts) {
+                    ([i], 0) if systems[*i] == raim_core::System::Gps => 1e-5 * 150.0 / 3600.0,
+                    ([_], 0) => 1e-5 * 150.0 / 5400.0,
+                    ([], c) if c == 1 << raim_core::System::Galileo.index() => {
+                        1e-4 * 150.0 / 7200.0
+                    }
+                    ([], c) if c == 1 << raim_core::System::Gps.index() => 1e-8 * 150.0 / 3600.0,
+                    other => panic!("a multi-event mode at P_sat 1e-5: {other:?}"),
+                };
+                failed += onset;
+            }
+            let want = failed <= p_alloc;
+            assert_eq!(got.available, want, "user {} failed {failed:e}", u.name);
+            // The levels reported are the detection-only ones.
+            assert_eq!(
+                (got.vpl_m, got.hpl_m, got.emt_m),
+                (det.vpl_m, det.hpl_m, det.emt_m)
+            );
+            absorbed += usize::from(want && failed > 0.0);
+            lost += usize::from(!want);
+        }
+    }
+    assert_eq!(epochs, 2 * 288);
+    assert!(absorbed > 0 && lost > 0, "absorbed {absorbed}, lost {lost}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `airborne = "galileo_e1e5a"`: the Galileo satellites' C_int and C_acc
+/// are sigma_URA^2 (sigma_URE^2) + the DO-229 troposphere + the square of
+/// the E1/E5a table (MAAST's `af_cnmp_galileo` values, written out here
+/// and interpolated by hand), the GPS satellites keep the L1/L5 curves;
+/// a mask below the table's 5 degrees is refused.
+///
+/// Verifies: SPEC-14, SPEC-9.1
+#[test]
+fn galileo_e1e5a_curve_feeds_the_core() {
+    on_engine_stack(galileo_body);
+}
+
+fn galileo_body() {
+    const TABLE: [f64; 18] = [
+        0.4529, 0.3553, 0.3063, 0.2638, 0.2593, 0.2555, 0.2504, 0.2438, 0.2396, 0.2359, 0.2339,
+        0.2302, 0.2295, 0.2278, 0.2297, 0.2310, 0.2274, 0.2277,
+    ];
+    let d = tmp_dir("galileo");
+    let runf = d.join("g.toml");
+    let text = small_run().replace(
+        "id_offset = 74\n",
+        "id_offset = 74\nairborne = \"galileo_e1e5a\"\n",
+    );
+    std::fs::write(&runf, &text).expect("write run");
+    let study = run::load(&runf).expect("study");
+    let mut monitor = engine::new_engine();
+    let (mut n_gal, mut n_gps) = (0, 0);
+    for (ui, k) in [(0usize, 0usize), (4, 7)] {
+        let sky = engine::sky_table(&study, k..k + 1);
+        let (x, rot) = engine::user_frame(&study, &study.users[ui]);
+        let mut obs = Vec::new();
+        engine::visible(&study, &sky, x, &rot, &mut obs);
+        engine::evaluate(&study, &mut monitor, &obs).expect("epoch");
+        for s in monitor.satellites() {
+            let el_rad = (-s.g_enu[2]).asin();
+            let el = el_rad.to_degrees();
+            let v = if s.id.system == raim_core::System::Galileo {
+                n_gal += 1;
+                let lo = ((el / 5.0).floor() as usize).clamp(1, 17);
+                let (a, b) = (TABLE[lo - 1], TABLE[lo.min(17)]);
+                let air = a + (el - 5.0 * lo as f64) / 5.0 * (b - a);
+                let tropo = 0.12 * 1.001 / (0.002_001 + el_rad.sin().powi(2)).sqrt();
+                tropo * tropo + air * air
+            } else {
+                n_gps += 1;
+                nominal_m2(el_rad)
+            };
+            assert!((s.c_int_m2 - (1.0 + v)).abs() < 1e-9, "{:?} el {el}", s.id);
+            assert!(
+                (s.c_acc_m2 - (4.0 / 9.0 + v)).abs() < 1e-9,
+                "{:?} el {el}",
+                s.id
+            );
+        }
+    }
+    assert!(n_gal > 10 && n_gps > 10, "{n_gal} {n_gps}");
+    std::fs::write(&runf, text.replace("mask_deg = 5.0", "mask_deg = 2.0")).expect("write");
+    let e = run::load(&runf).expect_err("mask below 5");
+    assert!(e.to_string().contains("needs mask_deg >= 5"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `--outages G`: the run as given and each of the 24 GPS outages, each
+/// written as a run of its own; the outage of G05 gives the per-user CSV
+/// of a separate run with `remove = [5]` byte for byte, and its row of
+/// `small.outages.csv` that run's coverage; the base row the plain run's.
+///
+/// Verifies: SPEC-14
+#[test]
+fn outage_sweep_equals_separate_runs() {
+    let d = tmp_dir("outages");
+    let runf = d.join("small.toml");
+    std::fs::write(&runf, small_run()).expect("write");
+    let (sweep, single, plain) = (d.join("sweep"), d.join("single"), d.join("plain"));
+    let r = runf.to_str().expect("utf8");
+    let (code, _, err) = raim(&[
+        "availability",
+        "--run",
+        r,
+        "--outages",
+        "G",
+        "--out",
+        sweep.to_str().expect("utf8"),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = raim(&[
+        "availability",
+        "--run",
+        r,
+        "--out",
+        plain.to_str().expect("utf8"),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let runf5 = d.join("small5.toml");
+    std::fs::write(
+        &runf5,
+        small_run().replacen("p_const = 1e-8\n", "p_const = 1e-8\nremove = [5]\n", 1),
+    )
+    .expect("write");
+    let (code, _, err) = raim(&[
+        "availability",
+        "--run",
+        runf5.to_str().expect("utf8"),
+        "--out",
+        single.to_str().expect("utf8"),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let table = std::fs::read_to_string(sweep.join("small.outages.csv")).expect("table");
+    let rows: Vec<Vec<&str>> = table
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 25, "{table}");
+    assert_eq!(rows[0][1], "none");
+    let cov = |dir: &Path| -> f64 {
+        let v: Value = serde_json::from_slice(
+            &std::fs::read(dir.join("small.summary.json")).expect("summary"),
+        )
+        .expect("json");
+        v["coverage"][0]["coverage"].as_f64().expect("coverage")
+    };
+    let row5 = rows.iter().find(|r| r[1] == "G05").expect("G05 row");
+    assert!(
+        (row5[2].parse::<f64>().expect("num") - cov(&single)).abs() < 1e-6,
+        "{row5:?}"
+    );
+    assert!((rows[0][2].parse::<f64>().expect("num") - cov(&plain)).abs() < 1e-6);
+    assert_eq!(
+        std::fs::read(sweep.join("small.outage-G05.users.csv")).expect("csv"),
+        std::fs::read(single.join("small.users.csv")).expect("csv")
+    );
+    assert_eq!(
+        std::fs::read(sweep.join("small.users.csv")).expect("csv"),
+        std::fs::read(plain.join("small.users.csv")).expect("csv")
+    );
     let _ = std::fs::remove_dir_all(&d);
 }

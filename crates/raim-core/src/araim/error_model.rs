@@ -5,7 +5,10 @@
 //! DO-229 airborne troposphere and the ADD's airborne multipath and
 //! receiver noise curves (GPS L1/L5; used for Galileo too, since the ADD's
 //! Galileo curve is not at hand: SPEC §9.1 says so, and docs/ARAIM.md),
-//! through the dual-frequency iono-free factor.
+//! through the dual-frequency iono-free factor. MAAST's Galileo E1/E5a
+//! table is here too ([`galileo_e1e5a_sigma_m`]), for a caller that
+//! passes it as the observation's sigma (the availability engine, on
+//! request: docs/AVAILABILITY.md "The Galileo airborne curve").
 //!
 //! Every transcendental goes through [`Real`]'s `libm` methods (`sin_m`,
 //! `exp_m`, `asin_m`, ...), never the platform's: the host and the M4F
@@ -90,6 +93,52 @@ pub fn variances_m2<T: Real>(el_rad: T, sigma_ura_m: T, sigma_ure_m: T) -> (T, T
     (sigma_ura_m * sigma_ura_m + v, sigma_ure_m * sigma_ure_m + v)
 }
 
+/// The Galileo E1/E5a dual-frequency airborne sigma (multipath and noise
+/// of the iono-free combination, m) at 5, 10, ..., 90 degrees of
+/// elevation: the table of the ARAIM tool cross-check scenario
+/// (Stanford, "ToolCrossCheckScenarioDefinitionV1.4a", 2011) that MAAST's
+/// ARAIM uses for Galileo (`af_cnmp_galileo`, as carried by the ADD v4.2
+/// implementation 4datascience/ARAIM-Fault-Detection,
+/// `araim_matlab/lib/atmosphere/iono_gal.m`; the same values in the
+/// appendix example of Blanch et al., "Advanced RAIM user algorithm
+/// description", ION GNSS 2012). Already the iono-free sigma: no
+/// [`iono_free_factor_sq`] applies.
+pub const GALILEO_E1E5A_SIGMA_M: [f64; 18] = [
+    0.4529, 0.3553, 0.3063, 0.2638, 0.2593, 0.2555, 0.2504, 0.2438, 0.2396, 0.2359, 0.2339, 0.2302,
+    0.2295, 0.2278, 0.2297, 0.2310, 0.2274, 0.2277,
+];
+
+/// The Galileo E1/E5a airborne sigma (m) at `el_rad`: the table
+/// [`GALILEO_E1E5A_SIGMA_M`] interpolated linearly in degrees (as MAAST
+/// does); below 5 degrees the 5-10 degree segment continued (the table
+/// stops at 5; the continuation grows as the elevation falls, 0.5505 m at
+/// 0), above 90 the 90-degree value. NaN gives NaN.
+pub fn galileo_e1e5a_sigma_m(el_rad: f64) -> f64 {
+    let t = &GALILEO_E1E5A_SIGMA_M;
+    let x = el_rad / DEG_RAD / 5.0 - 1.0; // 0 at 5 deg, 17 at 90 deg
+    if x.is_nan() {
+        return f64::NAN;
+    }
+    let last = (t.len() - 1) as f64;
+    if x >= last {
+        return t.last().copied().unwrap_or(f64::NAN);
+    }
+    // x < 17: the segment index is in 0..=16 (0 below 5 degrees).
+    let i = if x <= 0.0 { 0 } else { x as usize };
+    match (t.get(i), t.get(i + 1)) {
+        (Some(&a), Some(&b)) => a + (x - i as f64) * (b - a),
+        _ => f64::NAN,
+    }
+}
+
+/// The nominal variance (m^2) of a Galileo E1/E5a satellite at `el_rad`:
+/// sigma_tropo^2 (DO-229, as for GPS) + [`galileo_e1e5a_sigma_m`]^2.
+pub fn galileo_e1e5a_variance_m2(el_rad: f64) -> f64 {
+    let tropo = tropo_sigma_m(el_rad.sin_m());
+    let air = galileo_e1e5a_sigma_m(el_rad);
+    tropo * tropo + air * air
+}
+
 /// One satellite's nominal curves: how its elevation-dependent variance
 /// (the part of C_int and C_acc besides the signal in space) is formed.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -155,6 +204,37 @@ mod tests {
                 (c_int - row.c_int).abs() <= TOL_M2,
                 "sat {i}: C_int {c_int}"
             );
+        }
+    }
+
+    /// The Galileo E1/E5a table (its source in the constant's doc): the
+    /// published values at the nodes, linear between them, the first
+    /// segment continued below 5 degrees, flat above 90; and it is below
+    /// the GPS L1/L5 curve the core uses for Galileo by default (at 5
+    /// degrees 0.4529 m against 1.49 m, at 90 degrees 0.2277 m against
+    /// 0.514 m).
+    #[test]
+    fn galileo_e1e5a_table() {
+        let d = core::f64::consts::PI / 180.0;
+        for (el, want) in [
+            (5.0, 0.4529),
+            (30.0, 0.2555),
+            (60.0, 0.2302),
+            (70.0, 0.2278),
+            (90.0, 0.2277),
+        ] {
+            assert!((galileo_e1e5a_sigma_m(el * d) - want).abs() < 1e-12, "{el}");
+        }
+        assert!((galileo_e1e5a_sigma_m(7.5 * d) - (0.4529 + 0.3553) / 2.0).abs() < 1e-12);
+        assert!((galileo_e1e5a_sigma_m(0.0) - 0.5505).abs() < 1e-12);
+        assert!((galileo_e1e5a_sigma_m(95.0 * d) - 0.2277).abs() < 1e-12);
+        assert!(galileo_e1e5a_sigma_m(f64::NAN).is_nan());
+        let el = 30.0 * d;
+        let tropo = 0.12 * 1.001 / (0.002_001 + 0.25f64).sqrt();
+        assert!((galileo_e1e5a_variance_m2(el) - (tropo * tropo + 0.2555 * 0.2555)).abs() < 1e-12);
+        for el_deg in [5.0, 90.0] {
+            let gps = (iono_free_factor_sq() * airborne_variance_m2(el_deg * d)).sqrt();
+            assert!(galileo_e1e5a_sigma_m(el_deg * d) < gps / 2.0);
         }
     }
 
