@@ -681,9 +681,12 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
             if r.is_empty() {
                 continue;
             }
-            r.sort_unstable_by(|a, b| a.partial_cmp(b).unwrap_or(core::cmp::Ordering::Equal));
+            // The median: the two middle order statistics, by the checked
+            // quickselect (no sort, so no panic path in the firmware).
             let n = r.len();
-            let med = match (r.get(n / 2), r.get(n.div_ceil(2) - 1)) {
+            let upper = super::resample::kth_smallest(&mut r, n / 2);
+            let lower = super::resample::kth_smallest(&mut r, n.div_ceil(2) - 1);
+            let med = match (upper, lower) {
                 (Some(a), Some(b)) => 0.5 * (a + b),
                 _ => 0.0,
             };

@@ -510,7 +510,9 @@ impl<'a> Msm<'a> {
         };
         for c in 0..cells {
             if (cell_mask >> (cells - 1 - c)) & 1 == 1 {
-                let signal_id = nth_set(u64::from(sig_mask), 32, c % n_sig).unwrap_or(0);
+                // n_sig >= 1 whenever there is a cell (cells = n_sat n_sig).
+                let j = c.checked_rem(n_sig).unwrap_or(0);
+                let signal_id = nth_set(u64::from(sig_mask), 32, j).unwrap_or(0);
                 if m.code(signal_id).is_none() {
                     return Err(DecodeError::SignalId {
                         message: number,
@@ -598,9 +600,10 @@ impl Iterator for MsmSignals<'_, '_> {
             }
             let k = self.k;
             self.k += 1;
-            let i = c / m.n_sig;
+            // n_sig >= 1 whenever there is a cell (cells = n_sat n_sig).
+            let i = c.checked_div(m.n_sig)?;
             let sat_id = nth_set(m.sat_mask, 64, i)?;
-            let signal_id = nth_set(u64::from(m.sig_mask), 32, c % m.n_sig)?;
+            let signal_id = nth_set(u64::from(m.sig_mask), 32, c.checked_rem(m.n_sig)?)?;
             let (band, attribute) = m.code(signal_id)?;
             // Checked in `Msm::new`: the payload holds every cell.
             let pseudorange_m = m.pseudorange_m(i as usize, k).ok()?;

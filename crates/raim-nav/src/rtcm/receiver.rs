@@ -467,8 +467,8 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 };
                 if !placed {
                     // Full: the oldest waiting message gives way.
-                    if self.pending_glo.is_full() && !self.pending_glo.is_empty() {
-                        self.pending_glo.remove(0);
+                    if self.pending_glo.is_full() {
+                        remove_at(&mut self.pending_glo, 0);
                     }
                     let _ = self.pending_glo.push(p);
                 }
@@ -654,7 +654,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         let mut i = 0;
         while let Some(p) = self.pending_glo.get(i).copied() {
             if self.place_glonass(base, p) {
-                self.pending_glo.remove(i);
+                remove_at(&mut self.pending_glo, i);
             } else {
                 i += 1;
             }
@@ -748,8 +748,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             }
         }
         // Satellite order, as the host's epochs (a BTreeMap by SatId).
-        o.sigs
-            .sort_unstable_by(|a, b| a.id.cmp(&b.id).then(a.code.cmp(&b.code)));
+        sort_checked(&mut o.sigs, |a, b| (a.id, a.code) < (b.id, b.code));
         let mut inputs: Vec<SatInput<'_>, N> = Vec::new();
         let mut previous: Option<SatId> = None;
         for s in o.sigs.iter() {
@@ -888,4 +887,84 @@ fn pick_code<'c>(codes: &[&'c str], have: &[Signal]) -> Option<(&'c str, f64, Op
         Some((a, b)) => Some((c, find(a)?, Some(find(b)?))),
         None => Some((c, find(c)?, None)),
     })
+}
+
+/// Sorts `v` by `less` (stable insertion sort: the stream's signals come
+/// sorted within each message, so it is close to linear), with checked
+/// accesses only: `core`'s sort carries a panic path
+/// (`panic_on_ord_violation`) into the firmware (docs/EVIDENCE.md "Panic
+/// sites").
+fn sort_checked<T: Copy>(v: &mut [T], less: impl Fn(&T, &T) -> bool) {
+    for i in 1..v.len() {
+        let mut j = i;
+        while j > 0 && j < v.len() {
+            match (v.get(j - 1), v.get(j)) {
+                (Some(a), Some(b)) if less(b, a) => v.swap(j - 1, j),
+                _ => break,
+            }
+            j -= 1;
+        }
+    }
+}
+
+/// Removes the element at `index`, keeping the others in order; nothing
+/// when there is none (heapless's `Vec::remove` would panic there: the
+/// stream receiver links no panic path, docs/EVIDENCE.md "Panic sites").
+fn remove_at<T, const N: usize>(v: &mut heapless::Vec<T, N>, index: usize) {
+    let mut k = 0usize;
+    v.retain(|_| {
+        let keep = k != index;
+        k += 1;
+        keep
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::{remove_at, sort_checked};
+    use std::vec::Vec;
+
+    /// The checked insertion sort orders as the standard stable sort
+    /// (ties keep their arrival order), on sorted, reversed, blocked and
+    /// pseudo-random inputs with ties.
+    #[test]
+    fn sort_checked_equals_the_stable_sort() {
+        let mut x = 12345u64;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let mut cases: Vec<Vec<(u8, usize)>> = std::vec![
+            Vec::new(),
+            (0..50).map(|i| (i as u8, i)).collect(),
+            (0..50).rev().map(|i| (i as u8, i)).collect(),
+            (0..60).map(|i| ((i % 20) as u8, i)).collect(),
+        ];
+        for n in [1usize, 2, 7, 100, 256] {
+            cases.push((0..n).map(|i| ((next() % 16) as u8, i)).collect());
+        }
+        for c in cases {
+            let mut want = c.clone();
+            want.sort_by_key(|a| a.0);
+            let mut got = c.clone();
+            sort_checked(&mut got, |a, b| a.0 < b.0);
+            assert_eq!(got, want);
+        }
+    }
+
+    /// Removing by index keeps the order of the rest; an index past the
+    /// end removes nothing.
+    #[test]
+    fn remove_at_keeps_the_order() {
+        let mut v: heapless::Vec<u8, 8> = heapless::Vec::from_slice(&[1, 2, 3, 4]).unwrap();
+        remove_at(&mut v, 0);
+        assert_eq!(v.as_slice(), &[2, 3, 4]);
+        remove_at(&mut v, 1);
+        assert_eq!(v.as_slice(), &[2, 4]);
+        remove_at(&mut v, 9);
+        assert_eq!(v.as_slice(), &[2, 4]);
+    }
 }
