@@ -1,8 +1,20 @@
-//! No byte lost: the link UART's receive interrupt moves bytes
-//! into a lock-free single-producer single-consumer ring
-//! (`heapless::spsc`), and the main loop takes them out and runs the
-//! protocol on them. While an epoch is computed or an answer is sent, the
-//! bytes that arrive wait in the ring instead of overrunning the UART.
+//! No byte lost: the link UART's receive interrupt moves bytes into a
+//! 4 KiB ring (`heapless::spsc::Queue`), and the main loop takes them out
+//! and runs the protocol on them. While an epoch is computed or an answer
+//! is sent, the bytes that arrive wait in the ring instead of overrunning
+//! the UART.
+//!
+//! The ring and the UART's receive port sit together in one
+//! critical-section mutex, and both sides take them inside a critical
+//! section (the main loop for one byte at a time: a few cycles with
+//! interrupts masked). The ring is the owned `Queue<u8, RING_SLOTS>`,
+//! whose index arithmetic is on the constant `RING_SLOTS`: its split
+//! halves carry the capacity at run time, and their `% capacity` is a
+//! division-by-zero check the build keeps. The `RefCell` is borrowed with
+//! `try_borrow_mut`, never `borrow_mut`: every borrow is inside a critical
+//! section and none calls back into this module, so it cannot fail, and
+//! the firmware links no panic path here (docs/EVIDENCE.md "Panic
+//! sites").
 //!
 //! When the ring is full the interrupt stops reading: the byte stays in the
 //! UART, the RX interrupt is disabled and the event is counted
@@ -22,10 +34,9 @@ use core::cell::RefCell;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use cortex_m::interrupt::{CriticalSection, Mutex};
-use heapless::spsc::{Consumer, Producer, Queue};
+use heapless::spsc::Queue;
 
 use crate::board::{LinkRxPort, RxPort};
-use crate::statics::ConstStaticCell;
 
 /// Ring size; it holds `RING_SLOTS - 1` bytes: 4 KiB, the bytes of 355 ms
 /// at 115200 baud, above the longest epoch at the real board's 16 MHz
@@ -35,70 +46,87 @@ pub const RING_SLOTS: usize = 4096;
 static OVERRUNS: AtomicU32 = AtomicU32::new(0);
 static RING_FULL: AtomicU32 = AtomicU32::new(0);
 
-/// The interrupt's side: the UART's receive port and the ring's producer.
+/// The receive side: the UART's receive port (set by [`init`]) and the
+/// ring.
 struct Rx {
-    port: RxPort,
-    producer: Producer<'static, u8>,
+    port: Option<RxPort>,
+    queue: Queue<u8, RING_SLOTS>,
     /// Reception paused on a full ring (RX interrupt disabled).
     paused: bool,
 }
 
-static RX: Mutex<RefCell<Option<Rx>>> = Mutex::new(RefCell::new(None));
+/// Initialised by a `const` value, like every large static
+/// (`statics.rs`): the 4 KiB ring is never built on the stack.
+static RX: Mutex<RefCell<Rx>> = Mutex::new(RefCell::new(Rx {
+    port: None,
+    queue: Queue::new(),
+    paused: false,
+}));
 
-/// The main loop's side: takes bytes in arrival order.
+/// The main loop's handle on the ring: takes bytes in arrival order. Only
+/// [`init`] makes one.
 pub struct LinkRx {
-    consumer: Consumer<'static, u8>,
+    _once: (),
 }
 
 /// Set up the ring; call once, with interrupts masked, before they are
 /// enabled. `None` if called twice.
 pub fn init(port: RxPort) -> Option<LinkRx> {
-    // The 4 KiB ring in the firmware's static pattern (`statics.rs`).
-    static QUEUE: ConstStaticCell<Queue<u8, RING_SLOTS>> = ConstStaticCell::new(Queue::new());
-    let queue = QUEUE.try_take()?;
-    let (producer, consumer) = queue.split();
     cortex_m::interrupt::free(|cs| {
-        RX.borrow(cs).replace(Some(Rx {
-            port,
-            producer,
-            paused: false,
-        }))
-    });
-    Some(LinkRx { consumer })
+        let mut rx = RX.borrow(cs).try_borrow_mut().ok()?;
+        if rx.port.is_some() {
+            return None;
+        }
+        rx.port = Some(port);
+        Some(LinkRx { _once: () })
+    })
 }
 
 /// Move the UART's waiting bytes into the ring; on a full ring, pause.
 fn pump_into(rx: &mut Rx) {
-    while rx.port.rx_ready() {
-        if !rx.producer.ready() {
-            if !rx.paused {
+    let Rx {
+        port: Some(port),
+        queue,
+        paused,
+    } = rx
+    else {
+        return;
+    };
+    while port.rx_ready() {
+        if queue.is_full() {
+            if !*paused {
                 RING_FULL.fetch_add(1, Ordering::Relaxed);
-                rx.paused = true;
-                rx.port.set_irq(false);
+                *paused = true;
+                port.set_irq(false);
             }
             return;
         }
-        let (byte, lost) = rx.port.read();
+        let (byte, lost) = port.read();
         if lost {
             OVERRUNS.fetch_add(1, Ordering::Relaxed);
         }
         if let Some(b) = byte {
-            // `ready()` said there is room, and only this side enqueues.
-            let _ = rx.producer.enqueue(b);
+            // `is_full()` said there is room, inside this critical section.
+            let _ = queue.enqueue(b);
         }
     }
-    if rx.paused {
-        rx.paused = false;
-        rx.port.set_irq(true);
+    if *paused {
+        *paused = false;
+        port.set_irq(true);
     }
 }
 
-/// The link UART's receive interrupt.
+/// The link UART's receive interrupt. (Were the ring ever found borrowed,
+/// which a critical section rules out, the interrupt would stay pending,
+/// the main loop would stop feeding the watchdog and the unit would reset:
+/// fail loud, not a wrong answer.)
 pub fn on_irq() {
     cortex_m::interrupt::free(|cs| {
-        if let Some(rx) = RX.borrow(cs).borrow_mut().as_mut() {
-            rx.port.ack();
-            pump_into(rx);
+        if let Ok(mut rx) = RX.borrow(cs).try_borrow_mut() {
+            if let Some(port) = rx.port.as_mut() {
+                port.ack();
+            }
+            pump_into(&mut rx);
         }
     });
 }
@@ -106,7 +134,7 @@ pub fn on_irq() {
 impl LinkRx {
     /// The next received byte, if any.
     pub fn next(&mut self) -> Option<u8> {
-        self.consumer.dequeue()
+        cortex_m::interrupt::free(|cs| RX.borrow(cs).try_borrow_mut().ok()?.queue.dequeue())
     }
 
     /// Called by the main loop with interrupts masked when the ring is
@@ -114,10 +142,16 @@ impl LinkRx {
     /// fire again for the byte it holds) and reports whether a byte is now
     /// waiting, so the loop does not sleep on it.
     pub fn pump(&mut self, cs: &CriticalSection) -> bool {
-        if let Some(rx) = RX.borrow(cs).borrow_mut().as_mut() {
-            pump_into(rx);
+        match RX.borrow(cs).try_borrow_mut() {
+            Ok(mut rx) => {
+                pump_into(&mut rx);
+                !rx.queue.is_empty()
+            }
+            // Not reachable (see `on_irq`). A waiting byte is assumed: the
+            // loop neither sleeps nor feeds the watchdog, which resets the
+            // unit (fail loud).
+            Err(_) => true,
         }
-        self.consumer.ready()
     }
 }
 

@@ -1,7 +1,9 @@
 //! The firmware's one static-allocation pattern: each large object (the
-//! server, the particle-filter engines, the link's receive ring) is a
+//! server, the particle-filter engines) is a
 //! `static` [`ConstStaticCell`] initialised by a `const` value and taken
-//! once, as `&'static mut`, by its owner. The value is in the image
+//! once, as `&'static mut`, by its owner (the link's receive ring, which
+//! its interrupt shares, is a `const`-initialised static behind a
+//! critical-section mutex instead: `link_rx`). The value is in the image
 //! (`.data`, copied from flash by cortex-m-rt before `main`), or in `.bss`
 //! when all its bytes are zero (the engines' `EMPTY` values are): it is
 //! never built on the stack at run time. A second take is a programming

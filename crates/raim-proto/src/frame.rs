@@ -3,7 +3,9 @@
 //!
 //! The payload is the postcard encoding of a message ([`crate::message`]);
 //! the CRC is CRC-32/ISO-HDLC (the Ethernet/zlib CRC) of the payload bytes.
-//! Encoding is postcard's (`to_slice_cobs`); the CRC is the `crc` crate's.
+//! Encoding is postcard's serialiser into a COBS stage written here with
+//! checked accesses (`CobsSlice`, the bytes of postcard's `to_slice_cobs`,
+//! compared by a property test); the CRC is the `crc` crate's.
 //! On the receive side the chunk is gathered and COBS-decoded here, with
 //! every access checked ([`FrameReceiver`], `decode_cobs_in_place`), so
 //! that the frame decoder links no panic path (docs/EVIDENCE.md "Panic
@@ -77,7 +79,10 @@ impl core::fmt::Display for FrameError {
 impl core::error::Error for FrameError {}
 
 /// Encode one message as a complete frame (delimiter included) into `out`,
-/// using `scratch` for the postcard payload.
+/// using `scratch` for the postcard payload. The bytes are postcard's
+/// `to_slice_cobs` bytes, and a too-small `out` is the same
+/// `SerializeBufferFull`; the COBS stage is `CobsSlice`, whose every
+/// access is checked (a property test compares the two).
 pub fn encode<'o, T: Serialize + ?Sized>(
     msg: &T,
     scratch: &mut [u8],
@@ -88,7 +93,90 @@ pub fn encode<'o, T: Serialize + ?Sized>(
         crc32: CRC32.checksum(payload),
         payload,
     };
-    postcard::to_slice_cobs(&env, out)
+    postcard::serialize_with_flavor(&env, CobsSlice::try_new(out)?)
+}
+
+/// A postcard serialisation flavour that COBS-encodes into a slice and
+/// appends the 0x00 delimiter: the encoding of postcard's `Cobs<Slice>`
+/// flavour (the `cobs` crate's `EncoderState`: a code byte k stands for
+/// the k - 1 data bytes after it and a zero, except 0xFF, which stands for
+/// 254 data bytes and no zero and is followed by a new code byte at once),
+/// written with checked accesses only, so that the answer path links no
+/// panic path (docs/EVIDENCE.md "Panic sites"). postcard's flavour writes
+/// its code bytes through an unchecked `IndexMut`.
+struct CobsSlice<'a> {
+    buf: &'a mut [u8],
+    /// Bytes written, the pending code byte's placeholder included.
+    len: usize,
+    /// Index of the pending code byte.
+    code_idx: usize,
+    /// The pending code byte's value: 1 + the data bytes after it so far.
+    code: u8,
+}
+
+impl<'a> CobsSlice<'a> {
+    /// Reserves the first code byte; `SerializeBufferFull` if `buf` is empty.
+    fn try_new(buf: &'a mut [u8]) -> postcard::Result<Self> {
+        let mut s = CobsSlice {
+            buf,
+            len: 0,
+            code_idx: 0,
+            code: 1,
+        };
+        s.append(0)?;
+        Ok(s)
+    }
+
+    fn append(&mut self, byte: u8) -> postcard::Result<()> {
+        let slot = self
+            .buf
+            .get_mut(self.len)
+            .ok_or(postcard::Error::SerializeBufferFull)?;
+        *slot = byte;
+        self.len += 1;
+        Ok(())
+    }
+
+    /// Writes the pending code byte and reserves the next one.
+    fn close_block(&mut self) -> postcard::Result<()> {
+        let slot = self
+            .buf
+            .get_mut(self.code_idx)
+            .ok_or(postcard::Error::SerializeBufferFull)?;
+        *slot = self.code;
+        self.code_idx = self.len;
+        self.code = 1;
+        self.append(0)
+    }
+}
+
+impl<'a> postcard::ser_flavors::Flavor for CobsSlice<'a> {
+    type Output = &'a mut [u8];
+
+    fn try_push(&mut self, data: u8) -> postcard::Result<()> {
+        if data == 0 {
+            return self.close_block();
+        }
+        self.append(data)?;
+        // `code` is at most 0xFE here: a block closes when it reaches 0xFF.
+        self.code = self.code.wrapping_add(1);
+        if self.code == 0xFF {
+            self.close_block()?;
+        }
+        Ok(())
+    }
+
+    fn finalize(mut self) -> postcard::Result<Self::Output> {
+        let slot = self
+            .buf
+            .get_mut(self.code_idx)
+            .ok_or(postcard::Error::SerializeBufferFull)?;
+        *slot = self.code;
+        self.append(0)?;
+        let CobsSlice { buf, len, .. } = self;
+        buf.get_mut(..len)
+            .ok_or(postcard::Error::SerializeBufferFull)
+    }
 }
 
 /// Turns a byte stream into verified payloads. `B` is the receive buffer,
@@ -517,8 +605,90 @@ mod tests {
         out
     }
 
+    /// An envelope's bytes with postcard's `to_slice_cobs` and with the
+    /// checked [`CobsSlice`] stage, into an output buffer of `room` bytes:
+    /// the same frame, or the same error.
+    fn same_as_postcards_cobs(payload: &[u8], crc32: u32, room: usize) {
+        let env = Envelope { payload, crc32 };
+        let mut a = std::vec![0xAAu8; room];
+        let mut b = std::vec![0x55u8; room];
+        let want = postcard::to_slice_cobs(&env, &mut a).map(|f| f.to_vec());
+        let got = CobsSlice::try_new(&mut b)
+            .and_then(|flavor| postcard::serialize_with_flavor(&env, flavor))
+            .map(|f| f.to_vec());
+        assert_eq!(
+            got, want,
+            "payload {payload:02x?}, crc {crc32:#x}, {room} B"
+        );
+    }
+
+    /// Payload bytes with long runs free of zeros (COBS's 0xFF blocks, at
+    /// and around 254 bytes) as well as dense zeros.
+    fn payload_of(parts: &[(u16, bool)]) -> Vec<u8> {
+        let mut out = Vec::new();
+        for (i, &(n, zero_after)) in parts.iter().enumerate() {
+            out.extend((0..n).map(|k| (usize::from(k) + i) as u8 % 255 + 1));
+            if zero_after {
+                out.push(0);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn checked_cobs_stage_matches_postcard_at_block_edges() {
+        for n in [0u16, 1, 252, 253, 254, 255, 256, 507, 508, 509, 600] {
+            for zero_after in [false, true] {
+                let p = payload_of(&[(n, zero_after)]);
+                for crc in [0u32, 0xFF, 0x0100_0000, 0xDEAD_BEEF] {
+                    for room in [0, 1, 2, p.len(), p.len() + 4, p.len() + 16] {
+                        same_as_postcards_cobs(&p, crc, room);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Verifies: SPEC-11
+    #[test]
+    fn encoded_request_is_postcards_frame() {
+        let s = sats(CAPACITY);
+        let req = RequestRef::ranges(u32::MAX, 1e9, Some([1.0; 3]), &s);
+        let mut scratch = [0u8; 4096];
+        let payload = postcard::to_slice(&req, &mut scratch).unwrap().to_vec();
+        let env = Envelope {
+            payload: &payload,
+            crc32: CRC32.checksum(&payload),
+        };
+        let mut want = [0u8; 4096];
+        let want = postcard::to_slice_cobs(&env, &mut want).unwrap().to_vec();
+        assert_eq!(frame_of(&req), want);
+        // One byte short of the frame: the same error as postcard's.
+        let mut scratch = [0u8; 4096];
+        let mut out = std::vec![0u8; want.len() - 1];
+        assert_eq!(
+            encode(&req, &mut scratch, &mut out),
+            Err(postcard::Error::SerializeBufferFull)
+        );
+    }
+
     proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(512))]
+        /// Verifies: SPEC-11
+        #[test]
+        fn checked_cobs_stage_answers_as_postcards(
+            parts in proptest::collection::vec((0u16..600, proptest::prelude::any::<bool>()), 0..6),
+            crc32 in proptest::prelude::any::<u32>(),
+            slack in 0usize..8,
+            short in proptest::prelude::any::<bool>(),
+        ) {
+            let p = payload_of(&parts);
+            // Room for the frame with some slack, or short of it by up to 8.
+            let full = p.len() + p.len() / 254 + 12;
+            let room = if short { full.saturating_sub(12 + slack) } else { full + slack };
+            same_as_postcards_cobs(&p, crc32, room);
+        }
+
         /// Verifies: WIRE-Overflow, WIRE-Undecodable, WIRE-BadCrc
         #[test]
         fn checked_receiver_answers_as_postcards_accumulator(

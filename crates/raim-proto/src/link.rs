@@ -447,12 +447,12 @@ impl<const B: usize> LinkReceiver<B> {
             .get(..len)
             .filter(|_| self.frames.completes_chunk(0))
         {
-            // An open chunk: the bytes after the candidate's last zero
-            // (`tail_start <= len <= RTCM_MAX_FRAME`, so the copy is in
-            // bounds).
+            // An open chunk: the bytes after the candidate's last zero,
+            // moved to the front (`tail_start <= len <= RTCM_MAX_FRAME`),
+            // with checked accesses (`copy_within`'s range check is one
+            // the build keeps).
             let tail_start = candidate.iter().rposition(|&b| b == 0).map_or(0, |z| z + 1);
-            self.buf.copy_within(tail_start..len, 0);
-            self.alt_len = len - tail_start;
+            self.alt_len = move_to_front(&mut self.buf, tail_start, len);
         }
         // Ends the open chunk (an event) or the skipping of an overflowed
         // one (none). A tail that is a whole frame needs no alternative.
@@ -533,6 +533,25 @@ impl<const B: usize> LinkReceiver<B> {
     }
 }
 
+/// Moves `buf[start..end]` to the front of `buf` (a forward copy, so the
+/// overlap is safe) and returns the bytes moved: `end - start` when the
+/// range is in `buf`, as `copy_within(start..end, 0)` would; otherwise only
+/// the bytes that exist (none when `start >= end`). Checked accesses only.
+fn move_to_front(buf: &mut [u8], start: usize, end: usize) -> usize {
+    let mut moved = 0;
+    for src in start..end {
+        let Some(&b) = buf.get(src) else {
+            break;
+        };
+        let Some(slot) = buf.get_mut(moved) else {
+            break;
+        };
+        *slot = b;
+        moved += 1;
+    }
+    moved
+}
+
 #[cfg(test)]
 mod tests {
     extern crate std;
@@ -545,6 +564,27 @@ mod tests {
     use std::vec::Vec;
 
     type Rx = LinkReceiver<MAX_REQUEST_FRAME>;
+
+    proptest! {
+        /// The checked move of an open chunk's tail is `copy_within`'s.
+        #[test]
+        fn move_to_front_is_copy_within(
+            bytes in proptest::collection::vec(any::<u8>(), 0..64),
+            a in 0usize..70,
+            b in 0usize..70,
+        ) {
+            let mut got = bytes.clone();
+            let moved = move_to_front(&mut got, a, b);
+            if a <= b && b <= bytes.len() {
+                let mut want = bytes.clone();
+                want.copy_within(a..b, 0);
+                prop_assert_eq!(moved, b - a);
+                prop_assert_eq!(got, want);
+            } else {
+                prop_assert_eq!(moved, b.min(bytes.len()).saturating_sub(a));
+            }
+        }
+    }
 
     /// An owned [`LinkEvent`].
     #[derive(Debug, Clone, PartialEq, Eq)]

@@ -451,8 +451,15 @@ impl Watchdog for Iwdg {
     fn timeout_ms(&self) -> u32 {
         self.timeout_ms
     }
+    /// The HAL asserts a timeout under 2^15 ms; both of this board's
+    /// timeouts are (checked at compile time below), and the clamp, the
+    /// identity on them, lets the build drop the assertion's panic path.
     fn start(&mut self) {
-        self.iwdg.start(self.timeout_ms.millis());
+        const IWDG_MAX_MS: u32 = (1 << 15) - 1;
+        const {
+            assert!(IWDG_TIMEOUT_PLL_MS <= IWDG_MAX_MS && IWDG_TIMEOUT_HSI_MS <= IWDG_MAX_MS);
+        }
+        self.iwdg.start(self.timeout_ms.min(IWDG_MAX_MS).millis());
     }
     fn feed(&mut self) {
         self.iwdg.feed();
