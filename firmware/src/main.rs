@@ -45,6 +45,8 @@ struct Unit<B: Board> {
     discrete: discrete::Discrete<B::Alarm>,
     /// The core clock running, Hz, and whether it is the board's fallback.
     clock: (u32, bool),
+    /// The DWT cycle counter, when it counts (not under QEMU).
+    cycles: Option<board::CycleCounter>,
 }
 
 /// An interrupt line by number, for the NVIC (no device crate).
@@ -69,6 +71,9 @@ impl<B: Board> Platform for Unit<B> {
     }
     fn reset_record(&mut self) -> (u32, ResetCause) {
         self.reset
+    }
+    fn cycles(&mut self) -> Option<u32> {
+        self.cycles.as_ref().map(board::CycleCounter::now)
     }
     fn on_epoch(&mut self, decision: Option<Decision>) {
         let now = self.ticks.now64();
@@ -149,6 +154,7 @@ fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts:
         reset,
         discrete: discrete::Discrete::new(alarm, core_hz),
         clock: (core_hz, clock_fallback),
+        cycles: board::CycleCounter::start(&mut core.DCB, &mut core.DWT),
     };
     // The provisioned configuration, if its seal verifies and every part
     // passes its checks, runs locked; otherwise the unit is Unconfigured.

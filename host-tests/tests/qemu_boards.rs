@@ -12,7 +12,7 @@ mod qemu_common;
 
 use qemu_common::{host_result, range_vectors, session_on, wire_bytes};
 use raim_core::{Config, Epoch, FiRule, Phase};
-use raim_proto::{ConfigSource, UnitConfigRef, PROTOCOL_VERSION};
+use raim_proto::{ConfigSource, EpochCycles, UnitConfigRef, PROTOCOL_VERSION};
 use raim_qemu::Machine;
 
 /// The clock each board reports in `Status`: mps2-an386 its fixed 25 MHz;
@@ -31,6 +31,35 @@ fn qemu_boards_report_the_core_clock_they_run_at() {
     // The host's server has no board: no clock.
     let host = raim_server::Server::new().status();
     assert_eq!((host.core_clock_hz, host.clock_fallback), (0, false));
+}
+
+/// Neither QEMU machine models the DWT cycle counter (QEMU reads its
+/// registers as 0 and ignores writes): after epochs have run and been
+/// timed in ticks, both boards' `Status` says their epochs' cycles are
+/// not measured, never a zero count; so does the host's server, which
+/// has no counter. (On a real board the counter runs: the server's unit
+/// test `status_reports_epoch_cycles_when_the_counter_runs_...` checks
+/// what it then reports.)
+///
+/// Verifies: FW-CYCLES
+#[test]
+fn qemu_boards_say_their_epoch_cycles_are_not_measured() {
+    for machine in [Machine::Mps2An386, Machine::NetduinoPlus2] {
+        let mut fw = session_on(machine);
+        let cfg = Config::preset(Phase::Terminal);
+        fw.configure(&cfg).unwrap();
+        for (time_s, sats, apriori) in range_vectors(3).iter().take(3) {
+            fw.process(&Epoch::ranges(*time_s, sats, *apriori)).unwrap();
+        }
+        let st = fw.status().unwrap();
+        // The DWT accesses at boot did not fault (QEMU logs them as
+        // unassigned; a fault would have reset the unit).
+        assert_eq!((st.epochs, st.resets), (3, 0), "{machine:?}");
+        assert!(st.last_epoch_ticks > 0, "{machine:?}: the epoch was timed");
+        assert_eq!(st.epoch_cycles, EpochCycles::NotMeasured, "{machine:?}");
+    }
+    let host = raim_server::Server::new().status();
+    assert_eq!(host.epoch_cycles, EpochCycles::NotMeasured);
 }
 
 /// Neither QEMU machine gives the boot nonce hardware entropy:

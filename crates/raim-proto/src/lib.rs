@@ -62,8 +62,8 @@ pub use frame::{encode, FrameError, FrameReceiver};
 pub use link::{LinkCounts, LinkEvent, LinkReceiver};
 pub use lock::{ConfigId, ConfigSource};
 pub use message::{
-    BootNotice, Command, LinearEpoch, RangeEpoch, Request, RequestRef, ResetCause, Response,
-    ResponseBody, SatList, Status, TestFault,
+    BootNotice, Command, CycleSpan, EpochCycles, EpochKind, LinearEpoch, RangeEpoch, Request,
+    RequestRef, ResetCause, Response, ResponseBody, SatList, Status, TestFault,
 };
 pub use pf_msg::{PfKind, WirePfConfig, WirePfResult};
 pub use result::{WireMcusum, WireResult};
@@ -85,11 +85,9 @@ pub type DevicePrecision = f32;
 /// Bump on any change of a serialized type (postcard is not self-describing);
 /// new enum variants are appended so that the earlier ones keep their
 /// indices. The history of the versions is in CHANGELOG.md, "Wire protocol
-/// versions"; 15 is the stream's leap seconds (`Status::stream_leap_seconds`,
-/// `WireError::StreamLeapSecondsUnknown`) and `WireError::TruncatedRtcm`,
-/// the answer to bytes dropped when a host frame ends inside an RTCM
-/// candidate.
-pub const PROTOCOL_VERSION: u16 = 15;
+/// versions"; 16 is the epochs' core clock cycles (`Status::epoch_cycles`,
+/// the DWT cycle counter of a real board, `NotMeasured` elsewhere).
+pub const PROTOCOL_VERSION: u16 = 16;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes

@@ -423,6 +423,119 @@ pub struct Status {
     /// The run-time model check of the configuration and ISM in force
     /// (docs/MODEL_CHECK.md; protocol 15).
     pub model_check: ModelCheckStatus,
+    /// Core clock cycles of the epochs since reset, per kind, from the
+    /// Cortex-M DWT cycle counter: a real board's own cost, beside the
+    /// QEMU-derived bounds (issue 37 "A time bound"; protocol 16).
+    /// `NotMeasured` where no cycle counter runs (QEMU, the host).
+    pub epoch_cycles: EpochCycles,
+}
+
+/// Core clock cycles of the epochs since reset (DWT CYCCNT, 32 bits: it
+/// wraps after 25.6 s at 168 MHz, five times the STM32F4's watchdog
+/// timeout, so one epoch's count never wraps twice). Each span covers
+/// what the `*_ticks` fields of [`Status`] cover: the monitor's run
+/// (`Raim::process`, the ARAIM engine, the particle filter) or the stream
+/// epoch's forming.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum EpochCycles {
+    /// No cycle counter runs: QEMU does not model the DWT (its CYCCNT
+    /// reads 0 and does not advance, which the firmware checks at boot),
+    /// and the host's server has none. Never reported as a zero count.
+    #[default]
+    NotMeasured,
+    /// The counter runs; per kind, the last and the largest count since
+    /// reset, `None` before the first epoch of that kind.
+    Measured {
+        /// Snapshot epochs (`Ranges`, `Linear`, and stream epochs the
+        /// snapshot monitor answers): `Raim::process`.
+        snapshot: Option<CycleSpan>,
+        /// ARAIM epochs (host frames and stream epochs): the engine's run.
+        araim: Option<CycleSpan>,
+        /// Particle-filter epochs (`PfRanges`): the filter's run.
+        pf: Option<CycleSpan>,
+        /// Stream epochs' forming: the closing frame's decoding, orbits,
+        /// clocks, corrections and the bootstrap solution.
+        stream_forming: Option<CycleSpan>,
+    },
+}
+
+/// The last and the largest cycle count of one kind of epoch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CycleSpan {
+    /// The last epoch's cycles.
+    pub last_cycles: u32,
+    /// The largest since reset.
+    pub max_cycles: u32,
+}
+
+/// The kinds of epoch [`EpochCycles`] counts apart.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EpochKind {
+    /// The snapshot monitor.
+    Snapshot,
+    /// ARAIM.
+    Araim,
+    /// The particle filter.
+    Pf,
+    /// A stream epoch's forming.
+    StreamForming,
+}
+
+impl EpochCycles {
+    /// All kinds measured, none run yet: what a platform whose counter
+    /// runs reports before its first epoch.
+    pub const RUNNING: EpochCycles = EpochCycles::Measured {
+        snapshot: None,
+        araim: None,
+        pf: None,
+        stream_forming: None,
+    };
+
+    /// One epoch of `kind` took `cycles`: the counter runs from now on.
+    pub fn record(&mut self, kind: EpochKind, cycles: u32) {
+        if *self == EpochCycles::NotMeasured {
+            *self = EpochCycles::RUNNING;
+        }
+        if let EpochCycles::Measured {
+            snapshot,
+            araim,
+            pf,
+            stream_forming,
+        } = self
+        {
+            let span = match kind {
+                EpochKind::Snapshot => snapshot,
+                EpochKind::Araim => araim,
+                EpochKind::Pf => pf,
+                EpochKind::StreamForming => stream_forming,
+            };
+            let max_cycles = span.map_or(cycles, |s| s.max_cycles.max(cycles));
+            *span = Some(CycleSpan {
+                last_cycles: cycles,
+                max_cycles,
+            });
+        }
+    }
+
+    /// The span of `kind`, `None` when not measured or not run yet.
+    pub fn get(&self, kind: EpochKind) -> Option<CycleSpan> {
+        match *self {
+            EpochCycles::NotMeasured => None,
+            EpochCycles::Measured {
+                snapshot,
+                araim,
+                pf,
+                stream_forming,
+            } => match kind {
+                EpochKind::Snapshot => snapshot,
+                EpochKind::Araim => araim,
+                EpochKind::Pf => pf,
+                EpochKind::StreamForming => stream_forming,
+            },
+        }
+    }
 }
 
 /// The run-time model check's state: its windowed chi-square goodness of
@@ -511,6 +624,7 @@ impl Status {
             rejections: 0,
             broken_at_ms: None,
         },
+        epoch_cycles: EpochCycles::NotMeasured,
     };
 }
 
@@ -701,11 +815,71 @@ mod tests {
 
 #[cfg(test)]
 mod status_zero {
-    use super::Status;
+    extern crate std;
+    use super::{CycleSpan, EpochCycles, EpochKind, Status};
 
     /// The `const` initial status is the derived `Default`, field for field.
     #[test]
     fn status_zero_is_the_default() {
         assert_eq!(Status::ZERO, Status::default());
+    }
+
+    /// A `Status` with measured epoch cycles and one saying "not measured"
+    /// survive the wire (postcard) unchanged, and differ on it: no zero
+    /// count stands for a counter that does not run.
+    ///
+    /// Verifies: FW-CYCLES
+    #[test]
+    fn epoch_cycles_round_trip_and_not_measured_is_no_zero() {
+        let mut measured = EpochCycles::NotMeasured;
+        for (kind, cycles) in [
+            (EpochKind::Snapshot, 1_200_000),
+            (EpochKind::Snapshot, 900_000),
+            (EpochKind::Araim, u32::MAX),
+            (EpochKind::StreamForming, 0),
+        ] {
+            measured.record(kind, cycles);
+        }
+        assert_eq!(
+            measured.get(EpochKind::Snapshot),
+            Some(CycleSpan {
+                last_cycles: 900_000,
+                max_cycles: 1_200_000
+            })
+        );
+        assert_eq!(measured.get(EpochKind::Pf), None);
+        let zero = EpochCycles::Measured {
+            snapshot: Some(CycleSpan {
+                last_cycles: 0,
+                max_cycles: 0,
+            }),
+            araim: None,
+            pf: None,
+            stream_forming: None,
+        };
+        let mut buf = [0u8; 512];
+        let mut bytes = std::vec::Vec::new();
+        for cycles in [
+            EpochCycles::NotMeasured,
+            EpochCycles::RUNNING,
+            zero,
+            measured,
+        ] {
+            let status = Status {
+                epoch_cycles: cycles,
+                ..Status::ZERO
+            };
+            let b = postcard::to_slice(&status, &mut buf).unwrap().to_vec();
+            let back: Status = postcard::from_bytes(&b).unwrap();
+            assert_eq!(back, status);
+            bytes.push(b);
+        }
+        // Four different encodings: not measured, running with no epoch
+        // yet, a zero count, and the counts.
+        for i in 0..bytes.len() {
+            for j in 0..i {
+                assert_ne!(bytes[i], bytes[j], "{i} and {j}");
+            }
+        }
     }
 }

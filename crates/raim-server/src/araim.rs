@@ -312,7 +312,7 @@ fn epoch_answer_inner<P: super::Platform>(
             return Err(WireError::Araim(AraimWireError::NoIsm));
         };
         status.epochs = status.epochs.wrapping_add(1);
-        let t0 = platform.now();
+        let watch = crate::Stopwatch::start(platform);
         // Both forms run with the snapshot configuration in force (the
         // solver's settings and sigma model); none in force: Unconfigured.
         let r = match (epoch, config) {
@@ -320,8 +320,9 @@ fn epoch_answer_inner<P: super::Platform>(
             (Input::Linear(e), Some(c)) => araim.engine.run(c, ism, e),
             (Input::Ranges(e), Some(c)) => araim.engine.run_ranges(c, ism, e),
         };
-        let t1 = platform.now();
-        status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
+        let lap = watch.stop(platform);
+        status.last_epoch_ticks = lap.ticks;
+        lap.record(status, raim_proto::EpochKind::Araim);
         r.map(AraimAnswer::Result)
     }
     #[cfg(not(feature = "araim"))]

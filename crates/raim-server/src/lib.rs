@@ -39,7 +39,9 @@ use raim_proto::link::{LinkEvent, LinkReceiver};
 use raim_proto::lock::{ConfigId, ConfigSource};
 #[cfg(doc)]
 use raim_proto::message::Response;
-use raim_proto::message::{Command, Request, ResetCause, ResponseBody, Status, TestFault};
+use raim_proto::message::{
+    Command, EpochCycles, EpochKind, Request, ResetCause, ResponseBody, Status, TestFault,
+};
 use raim_proto::result::WireResult;
 use raim_proto::unit::{ProvisionError, UnitConfig, UnitConfigRef};
 use raim_proto::{
@@ -100,6 +102,58 @@ pub trait Platform {
     /// Fills the board's fields of a `Status` (link counters, the alarm
     /// output, the key) before it is sent.
     fn board_status(&mut self, _status: &mut Status) {}
+    /// The core's cycle counter (Cortex-M DWT CYCCNT, wrapping at 2^32),
+    /// or `None` when the platform has none that runs: `Status` then says
+    /// `EpochCycles::NotMeasured`, never a zero count.
+    fn cycles(&mut self) -> Option<u32> {
+        None
+    }
+}
+
+/// The tick counter and the cycle counter, read at the start of a timed
+/// span (an epoch's monitor run, a stream epoch's forming).
+pub(crate) struct Stopwatch {
+    ticks: u32,
+    cycles: Option<u32>,
+}
+
+/// A timed span: ticks (masked to the counter's width) and, when the
+/// cycle counter runs, cycles.
+pub(crate) struct Lap {
+    pub(crate) ticks: u32,
+    cycles: Option<u32>,
+}
+
+impl Stopwatch {
+    pub(crate) fn start<P: Platform>(platform: &mut P) -> Self {
+        let cycles = platform.cycles();
+        Stopwatch {
+            ticks: platform.now(),
+            cycles,
+        }
+    }
+
+    pub(crate) fn stop<P: Platform>(self, platform: &mut P) -> Lap {
+        let t1 = platform.now();
+        let c1 = platform.cycles();
+        Lap {
+            ticks: t1.wrapping_sub(self.ticks) & P::TICK_MASK,
+            cycles: match (self.cycles, c1) {
+                (Some(c0), Some(c1)) => Some(c1.wrapping_sub(c0)),
+                _ => None,
+            },
+        }
+    }
+}
+
+impl Lap {
+    /// Counts the span's cycles as one epoch of `kind` in `status`, when
+    /// the cycle counter runs.
+    pub(crate) fn record(&self, status: &mut Status, kind: EpochKind) {
+        if let Some(c) = self.cycles {
+            status.epoch_cycles.record(kind, c);
+        }
+    }
 }
 
 /// A platform without a clock (host tests).
@@ -449,15 +503,16 @@ impl Server {
                     }
                     #[cfg(feature = "rtcm")]
                     Some(LinkEvent::Rtcm(frame)) => {
-                        let t0 = platform.now();
+                        let watch = Stopwatch::start(platform);
                         // `stream_runs_araim`, on the field (`frame`
                         // borrows the receiver).
                         let araim = self.araim.runs_stream();
                         let formed = self.stream.on_frame(frame, self.config.as_ref(), araim);
-                        let t1 = platform.now();
+                        let lap = watch.stop(platform);
                         match formed {
                             Some(formed) => {
-                                self.status.last_stream_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
+                                self.status.last_stream_ticks = lap.ticks;
+                                lap.record(&mut self.status, EpochKind::StreamForming);
                                 Step::Stream(formed)
                             }
                             None => continue,
@@ -685,6 +740,10 @@ impl Server {
             self.status.stream_leap_seconds = self.stream.leap_seconds();
         }
         self.status.model_check = model_check::status(&self.model);
+        if self.status.epoch_cycles == EpochCycles::NotMeasured && platform.cycles().is_some() {
+            // The counter runs, and no epoch has been timed yet.
+            self.status.epoch_cycles = EpochCycles::RUNNING;
+        }
         platform.board_status(&mut self.status);
         self.status()
     }
@@ -886,10 +945,11 @@ fn run_epoch<P: Platform>(
     platform: &mut P,
 ) -> Result<(), WireError> {
     status.epochs = status.epochs.wrapping_add(1);
-    let t0 = platform.now();
+    let watch = Stopwatch::start(platform);
     let r = raim.process_into(config, epoch, result);
-    let t1 = platform.now();
-    status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
+    let lap = watch.stop(platform);
+    status.last_epoch_ticks = lap.ticks;
+    lap.record(status, EpochKind::Snapshot);
     if r.is_ok() {
         result.decision =
             model_check::judge(model, epoch.time_s, result.model_sample(), result.decision);

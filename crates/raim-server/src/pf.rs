@@ -349,10 +349,11 @@ impl Server {
         platform: &mut P,
     ) -> ResponseBody {
         self.status.epochs = self.status.epochs.wrapping_add(1);
-        let t0 = platform.now();
+        let watch = super::Stopwatch::start(platform);
         let r = self.pf.process(time_s, sats);
-        let t1 = platform.now();
-        self.status.last_epoch_ticks = t1.wrapping_sub(t0) & P::TICK_MASK;
+        let lap = watch.stop(platform);
+        self.status.last_epoch_ticks = lap.ticks;
+        lap.record(&mut self.status, raim_proto::EpochKind::Pf);
         platform.on_epoch(r.as_ref().ok().map(pf_decision));
         match r {
             Ok(r) => ResponseBody::PfResult(r),

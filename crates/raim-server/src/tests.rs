@@ -332,6 +332,94 @@ fn body_ref_encodes_as_response_body() {
     }
 }
 
+/// The epochs' cycles in `Status`: on a platform whose cycle counter
+/// runs, the last and the largest span of each kind (across the counter's
+/// wrap), "running, none yet" before the first epoch; on one without a
+/// counter (the host's `NoPlatform`), `NotMeasured` after epochs too,
+/// never a zero count.
+///
+/// Verifies: FW-CYCLES
+#[test]
+fn status_reports_epoch_cycles_when_the_counter_runs_and_not_measured_otherwise() {
+    /// A cycle counter that advances by `step` at every read, from just
+    /// below its wrap.
+    struct Counting {
+        cycles: u32,
+        step: u32,
+    }
+    impl Platform for Counting {
+        fn now(&mut self) -> u32 {
+            0
+        }
+        fn cycles(&mut self) -> Option<u32> {
+            let c = self.cycles;
+            self.cycles = self.cycles.wrapping_add(self.step);
+            Some(c)
+        }
+    }
+    let status = |server: &mut Server, p: &mut Counting, seq: u32| -> Status {
+        let (mut link, mut nmea) = (Sink::default(), Sink::default());
+        for b in frame(&RequestRef {
+            seq,
+            command: CommandRef::Status,
+        }) {
+            server.on_byte(b, &mut link, &mut nmea, p).unwrap();
+        }
+        let resp = responses(&link.0);
+        let ResponseBody::Status(st) = resp[0].body else {
+            panic!("{:?}", resp[0])
+        };
+        st
+    };
+    let mut server = bench();
+    let mut p = Counting {
+        cycles: u32::MAX - 500,
+        step: 0,
+    };
+    assert_eq!(
+        status(&mut server, &mut p, 0).epoch_cycles,
+        EpochCycles::RUNNING
+    );
+    let s0 = sky(0.0);
+    for (step, seq) in [(3_000, 1), (1_000, 2)] {
+        p.step = step;
+        let (mut link, mut nmea) = (Sink::default(), Sink::default());
+        for b in frame(&RequestRef::linear(seq, f64::from(seq), &s0)) {
+            server.on_byte(b, &mut link, &mut nmea, &mut p).unwrap();
+        }
+        assert!(matches!(
+            responses(&link.0)[0].body,
+            ResponseBody::Result(_)
+        ));
+    }
+    let st = status(&mut server, &mut p, 3);
+    assert_eq!(
+        st.epoch_cycles,
+        EpochCycles::Measured {
+            snapshot: Some(raim_proto::CycleSpan {
+                last_cycles: 1_000,
+                max_cycles: 3_000,
+            }),
+            araim: None,
+            pf: None,
+            stream_forming: None,
+        }
+    );
+    // No counter: the same epochs leave it "not measured".
+    let mut host = bench();
+    let mut bytes = frame(&RequestRef::linear(1, 1.0, &s0));
+    bytes.extend(frame(&RequestRef {
+        seq: 2,
+        command: CommandRef::Status,
+    }));
+    let (resp, _) = run(&mut host, &bytes);
+    let ResponseBody::Status(st) = resp[1].body else {
+        panic!("{:?}", resp[1])
+    };
+    assert_eq!(st.epochs, 1);
+    assert_eq!(st.epoch_cycles, EpochCycles::NotMeasured);
+}
+
 /// `Status` carries the platform's reset count and cause; a
 /// test fault on a platform without test hooks is refused, typed.
 ///

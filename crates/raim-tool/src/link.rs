@@ -20,7 +20,7 @@ use clap::{Args, Parser, ValueEnum};
 use raim_core::{Config, Epoch};
 use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody};
 use raim_proto::result::WireResult;
-use raim_proto::{FrameReceiver, WireError, MAX_RESPONSE_FRAME};
+use raim_proto::{EpochCycles, EpochKind, FrameReceiver, WireError, MAX_RESPONSE_FRAME};
 
 use crate::config_args::ConfigArgs;
 use crate::replay::engine::Engine;
@@ -71,6 +71,42 @@ pub struct LinkArgs {
 struct ReplayOptions {
     #[command(flatten)]
     args: ReplayArgs,
+}
+
+/// `Status.epoch_cycles` for a reader: per kind of epoch, the last and
+/// the largest core clock cycles since the unit's reset and, with the
+/// unit's clock, the time they take; or that the unit has no running
+/// cycle counter (QEMU), which is not a zero count.
+pub fn epoch_cycles_line(cycles: &EpochCycles, core_clock_hz: u32) -> String {
+    if *cycles == EpochCycles::NotMeasured {
+        return "epoch cycles: not measured (the unit's cycle counter does not run)".into();
+    }
+    let ms = |c: u32| {
+        if core_clock_hz == 0 {
+            String::new()
+        } else {
+            format!(" ({:.2} ms)", f64::from(c) / f64::from(core_clock_hz) * 1e3)
+        }
+    };
+    let parts: Vec<String> = [
+        ("snapshot", EpochKind::Snapshot),
+        ("araim", EpochKind::Araim),
+        ("pf", EpochKind::Pf),
+        ("stream forming", EpochKind::StreamForming),
+    ]
+    .into_iter()
+    .map(|(name, kind)| match cycles.get(kind) {
+        Some(s) => format!(
+            "{name} last {}{} max {}{}",
+            s.last_cycles,
+            ms(s.last_cycles),
+            s.max_cycles,
+            ms(s.max_cycles)
+        ),
+        None => format!("{name} none yet"),
+    })
+    .collect();
+    format!("epoch cycles at {} Hz: {}", core_clock_hz, parts.join(", "))
 }
 
 /// The link: frames out, answers in (boot notices printed and skipped).
@@ -246,9 +282,43 @@ pub fn run(args: &LinkArgs) -> Result<()> {
                 | (LinkCommand::Lock, ResponseBody::LockEngaged)
         );
         crate::outln!("{c:?}: {:?} (configuration {:?})", r.body, r.config)?;
+        if let ResponseBody::Status(st) = &r.body {
+            crate::outln!("{}", epoch_cycles_line(&st.epoch_cycles, st.core_clock_hz))?;
+        }
         if !ok {
             bail!("{c:?} refused: {:?}", r.body);
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `raim link status` prints the unit's epoch cycles per kind, with
+    /// their time at the unit's clock, and says when they are not
+    /// measured rather than printing zeros.
+    ///
+    /// Verifies: FW-CYCLES
+    #[test]
+    fn epoch_cycles_are_printed_per_kind_and_not_measured_is_said() {
+        assert_eq!(
+            epoch_cycles_line(&EpochCycles::NotMeasured, 16_000_000),
+            "epoch cycles: not measured (the unit's cycle counter does not run)"
+        );
+        let mut c = EpochCycles::NotMeasured;
+        c.record(EpochKind::Snapshot, 1_680_000);
+        c.record(EpochKind::Snapshot, 840_000);
+        c.record(EpochKind::StreamForming, 16_800);
+        assert_eq!(
+            epoch_cycles_line(&c, 168_000_000),
+            "epoch cycles at 168000000 Hz: snapshot last 840000 (5.00 ms) max 1680000 (10.00 ms), \
+             araim none yet, pf none yet, stream forming last 16800 (0.10 ms) max 16800 (0.10 ms)"
+        );
+        assert_eq!(
+            epoch_cycles_line(&EpochCycles::RUNNING, 0),
+            "epoch cycles at 0 Hz: snapshot none yet, araim none yet, pf none yet, stream forming none yet"
+        );
+    }
 }

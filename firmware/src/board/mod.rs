@@ -17,7 +17,7 @@
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use cortex_m::peripheral::syst::SystClkSource;
-use cortex_m::peripheral::{SCB, SYST};
+use cortex_m::peripheral::{DCB, DWT, SCB, SYST};
 use embedded_hal::digital::{OutputPin, StatefulOutputPin};
 
 #[cfg(feature = "board-qemu")]
@@ -179,6 +179,35 @@ impl Ticks {
             }
             (u64::from(wraps) << 24) | u64::from(count)
         })
+    }
+}
+
+/// The core's cycle counter (the DWT's CYCCNT, ARMv7-M ARM C1.8.6), for
+/// `Status.epoch_cycles`: a real board reports its own epochs' cycles.
+/// Started once at boot, and only kept when it is seen to count: QEMU does
+/// not model the DWT (its registers read 0 and ignore writes, so CYCCNT
+/// stays 0), and the unit then reports "not measured", never a zero
+/// count.
+pub struct CycleCounter(());
+
+impl CycleCounter {
+    /// Enables tracing (DEMCR.TRCENA) and the counter, then checks that
+    /// it advances over a short busy wait; `None` when the core has no
+    /// counter or it does not count.
+    pub fn start(dcb: &mut DCB, dwt: &mut DWT) -> Option<Self> {
+        if !DWT::has_cycle_counter() {
+            return None;
+        }
+        dcb.enable_trace();
+        dwt.enable_cycle_counter();
+        let c0 = DWT::cycle_count();
+        cortex_m::asm::delay(64);
+        (DWT::cycle_count() != c0).then_some(CycleCounter(()))
+    }
+
+    /// Core clock cycles, wrapping at 2^32.
+    pub fn now(&self) -> u32 {
+        DWT::cycle_count()
     }
 }
 
