@@ -4,9 +4,8 @@
 //! is sent, the bytes that arrive wait in the ring instead of overrunning
 //! the UART.
 //!
-//! The ring and the UART's receive port sit together in one
-//! critical-section mutex, and both sides take them inside a critical
-//! section (the main loop for one byte at a time: a few cycles with
+//! The ring and the UART's receive port sit in critical-section
+//! mutexes, and both sides take them inside a critical section (the main loop for one byte at a time: a few cycles with
 //! interrupts masked). The ring is the owned `Queue<u8, RING_SLOTS>`,
 //! whose index arithmetic is on the constant `RING_SLOTS`: its split
 //! halves carry the capacity at run time, and their `% capacity` is a
@@ -46,22 +45,24 @@ pub const RING_SLOTS: usize = 4096;
 static OVERRUNS: AtomicU32 = AtomicU32::new(0);
 static RING_FULL: AtomicU32 = AtomicU32::new(0);
 
-/// The receive side: the UART's receive port (set by [`init`]) and the
-/// ring.
-struct Rx {
-    port: Option<RxPort>,
+/// The ring and the reception state, all zero at reset (`.bss`).
+struct Ring {
     queue: Queue<u8, RING_SLOTS>,
     /// Reception paused on a full ring (RX interrupt disabled).
     paused: bool,
 }
 
 /// Initialised by a `const` value, like every large static
-/// (`statics.rs`): the 4 KiB ring is never built on the stack.
-static RX: Mutex<RefCell<Rx>> = Mutex::new(RefCell::new(Rx {
-    port: None,
+/// (`statics.rs`): the 4 KiB ring is never built on the stack, and, all
+/// zero, it is in `.bss` (the port's `None` is not all zero on every
+/// board, so it has a static of its own).
+static RING: Mutex<RefCell<Ring>> = Mutex::new(RefCell::new(Ring {
     queue: Queue::new(),
     paused: false,
 }));
+
+/// The UART's receive port, set by [`init`].
+static PORT: Mutex<RefCell<Option<RxPort>>> = Mutex::new(RefCell::new(None));
 
 /// The main loop's handle on the ring: takes bytes in arrival order. Only
 /// [`init`] makes one.
@@ -73,30 +74,31 @@ pub struct LinkRx {
 /// enabled. `None` if called twice.
 pub fn init(port: RxPort) -> Option<LinkRx> {
     cortex_m::interrupt::free(|cs| {
-        let mut rx = RX.borrow(cs).try_borrow_mut().ok()?;
-        if rx.port.is_some() {
+        let mut slot = PORT.borrow(cs).try_borrow_mut().ok()?;
+        if slot.is_some() {
             return None;
         }
-        rx.port = Some(port);
+        *slot = Some(port);
         Some(LinkRx { _once: () })
     })
 }
 
+/// Runs `f` on the port and the ring, borrowed inside the critical section
+/// `cs`; `None` before [`init`] or were either found borrowed (which the
+/// critical section rules out: no borrow calls back into this module).
+fn with_rx<R>(cs: &CriticalSection, f: impl FnOnce(&mut RxPort, &mut Ring) -> R) -> Option<R> {
+    let mut port = PORT.borrow(cs).try_borrow_mut().ok()?;
+    let mut ring = RING.borrow(cs).try_borrow_mut().ok()?;
+    Some(f(port.as_mut()?, &mut ring))
+}
+
 /// Move the UART's waiting bytes into the ring; on a full ring, pause.
-fn pump_into(rx: &mut Rx) {
-    let Rx {
-        port: Some(port),
-        queue,
-        paused,
-    } = rx
-    else {
-        return;
-    };
+fn pump_into(port: &mut RxPort, ring: &mut Ring) {
     while port.rx_ready() {
-        if queue.is_full() {
-            if !*paused {
+        if ring.queue.is_full() {
+            if !ring.paused {
                 RING_FULL.fetch_add(1, Ordering::Relaxed);
-                *paused = true;
+                ring.paused = true;
                 port.set_irq(false);
             }
             return;
@@ -107,34 +109,32 @@ fn pump_into(rx: &mut Rx) {
         }
         if let Some(b) = byte {
             // `is_full()` said there is room, inside this critical section.
-            let _ = queue.enqueue(b);
+            let _ = ring.queue.enqueue(b);
         }
     }
-    if *paused {
-        *paused = false;
+    if ring.paused {
+        ring.paused = false;
         port.set_irq(true);
     }
 }
 
-/// The link UART's receive interrupt. (Were the ring ever found borrowed,
-/// which a critical section rules out, the interrupt would stay pending,
-/// the main loop would stop feeding the watchdog and the unit would reset:
-/// fail loud, not a wrong answer.)
+/// The link UART's receive interrupt. (Were the port or the ring ever
+/// found borrowed, which a critical section rules out, the interrupt would
+/// stay pending, the main loop would stop feeding the watchdog and the
+/// unit would reset: fail loud, not a wrong answer.)
 pub fn on_irq() {
     cortex_m::interrupt::free(|cs| {
-        if let Ok(mut rx) = RX.borrow(cs).try_borrow_mut() {
-            if let Some(port) = rx.port.as_mut() {
-                port.ack();
-            }
-            pump_into(&mut rx);
-        }
+        with_rx(cs, |port, ring| {
+            port.ack();
+            pump_into(port, ring);
+        })
     });
 }
 
 impl LinkRx {
     /// The next received byte, if any.
     pub fn next(&mut self) -> Option<u8> {
-        cortex_m::interrupt::free(|cs| RX.borrow(cs).try_borrow_mut().ok()?.queue.dequeue())
+        cortex_m::interrupt::free(|cs| RING.borrow(cs).try_borrow_mut().ok()?.queue.dequeue())
     }
 
     /// Called by the main loop with interrupts masked when the ring is
@@ -142,16 +142,14 @@ impl LinkRx {
     /// fire again for the byte it holds) and reports whether a byte is now
     /// waiting, so the loop does not sleep on it.
     pub fn pump(&mut self, cs: &CriticalSection) -> bool {
-        match RX.borrow(cs).try_borrow_mut() {
-            Ok(mut rx) => {
-                pump_into(&mut rx);
-                !rx.queue.is_empty()
-            }
-            // Not reachable (see `on_irq`). A waiting byte is assumed: the
-            // loop neither sleeps nor feeds the watchdog, which resets the
-            // unit (fail loud).
-            Err(_) => true,
-        }
+        with_rx(cs, |port, ring| {
+            pump_into(port, ring);
+            !ring.queue.is_empty()
+        })
+        // Not reachable (see `with_rx`). A waiting byte is assumed: the
+        // loop neither sleeps nor feeds the watchdog, which resets the
+        // unit (fail loud).
+        .unwrap_or(true)
     }
 }
 
