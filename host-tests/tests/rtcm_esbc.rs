@@ -40,7 +40,7 @@ struct Run {
 /// (clock at `now_week`) on `bytes`: every epoch the device forms must be
 /// the host's, to the bit.
 fn device_against_host(bytes: &[u8], pivot_week: i64, now_week: i64) -> Run {
-    let model = Config::default().sigma_model;
+    let model = raim_nav::ranging::StreamSigmas::Snapshot(Config::default().sigma_model);
     let (host, _) = host_epochs(bytes, now_week);
     let mut dev = Box::new(StreamReceiver::<64, 256>::new(pivot_week));
     let mut formed = FormedEpoch::<64> {

@@ -33,7 +33,7 @@ struct Run {
 /// (clock at `now_week`) on `bytes`: every epoch the device forms must be
 /// the host's, to the bit.
 fn device_against_host(bytes: &[u8], pivot_week: i64, now_week: i64) -> Run {
-    let model = Config::default().sigma_model;
+    let model = raim_nav::ranging::StreamSigmas::Snapshot(Config::default().sigma_model);
     let (host, host_counts) = host_epochs(bytes, now_week);
     let mut dev = Box::new(StreamReceiver::<64, 256>::new(pivot_week));
     let mut formed = FormedEpoch::<64> {
@@ -184,7 +184,7 @@ fn device_receiver_forms_the_host_epochs_bit_for_bit() {
 #[test]
 fn an_epoch_beyond_the_signal_capacity_is_refused_whole() {
     let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
-    let model = Config::default().sigma_model;
+    let model = raim_nav::ranging::StreamSigmas::Snapshot(Config::default().sigma_model);
     let mut dev = Box::new(StreamReceiver::<64, 8>::new(GMSD7_PIVOT_WEEK));
     let mut formed = FormedEpoch::<64> {
         time_gps_s: 0.0,
@@ -311,7 +311,7 @@ fn device_epochs(
     raim_nav::rtcm::RtcmCounts,
     raim_nav::rtcm::LeapSeconds,
 ) {
-    let model = Config::default().sigma_model;
+    let model = raim_nav::ranging::StreamSigmas::Snapshot(Config::default().sigma_model);
     let mut dev = Box::new(StreamReceiver::<64, 256>::new(pivot));
     let mut formed = FormedEpoch::<64> {
         time_gps_s: 0.0,

@@ -36,9 +36,15 @@ pub const SIGNALS: [(System, [SignalCode; 2]); 3] = [
     (System::Beidou, [("C2I", 2, 'I'), ("C6I", 6, 'I')]),
 ];
 
+/// A file of ../shared/data (beside the repository): found from the
+/// including crate's directory (host-tests, or crates/raim-tool, whose
+/// `stream_araim_replay` test includes this module).
 fn data(name: &str) -> std::path::PathBuf {
-    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    dir.ancestors()
+        .map(|p| p.join("shared/data"))
+        .find(|p| p.is_dir())
+        .unwrap_or_else(|| dir.join("../../shared/data"))
         .join(name)
 }
 
@@ -199,8 +205,13 @@ type Cells = Vec<(u8, u8, f64, Vec<(u8, char, f64)>)>;
 
 /// The cells of `sys` in an ESBC epoch: the rough range (1/1024 ms) from
 /// the first signal, each signal's remainder as the fine range (within
-/// DF405's +-2^-10 ms, else the signal is left out).
-fn cells(sats: &BTreeMap<SatId, Vec<raim_gnss::rinex_io::CodeObs>>, sys: System) -> Cells {
+/// DF405's +-2^-10 ms, else the signal is left out); `pairs_only`: a
+/// satellite is sent only with both signals of its system's pair.
+fn cells(
+    sats: &BTreeMap<SatId, Vec<raim_gnss::rinex_io::CodeObs>>,
+    sys: System,
+    pairs_only: bool,
+) -> Cells {
     let signals = SIGNALS.iter().find(|(s, _)| *s == sys).unwrap().1;
     let mut out = Cells::new();
     for (id, obs) in sats.iter().filter(|(id, _)| id.system == sys) {
@@ -222,7 +233,8 @@ fn cells(sats: &BTreeMap<SatId, Vec<raim_gnss::rinex_io::CodeObs>>, sys: System)
                 (fine.abs() < 1.0 / 1024.0 - FINE_MS).then_some((*band, *attr, fine))
             })
             .collect();
-        if !sigs.is_empty() && (1..=254).contains(&int_ms) {
+        let complete = !pairs_only || sigs.len() == signals.len();
+        if !sigs.is_empty() && complete && (1..=254).contains(&int_ms) {
             out.push((id.prn, int_ms as u8, mod_1024 as f64 / 1024.0, sigs));
         }
     }
@@ -284,6 +296,24 @@ pub fn esbc_stream_with(
     bds_time: BeidouTime,
     fnav: bool,
 ) -> (Vec<u8>, Vec<Carried>) {
+    esbc_stream_opts(delta_weeks, bds_time, fnav, false)
+}
+
+/// [`esbc_stream`] with only the satellites that carry both signals of
+/// their system's pair (GPS C1C+C2W, Galileo C1C+C5Q, BeiDou C2I+C6I): the
+/// satellites `raim replay --araim --code G=C1C+C2W --code E=C1C+C5Q
+/// --code C=C2I+C6I` ranges on the RINEX (it drops ESBC's C2I-only BeiDou
+/// satellites, which [`esbc_stream`] sends single-frequency).
+pub fn esbc_stream_pairs_only(delta_weeks: i64) -> (Vec<u8>, Vec<Carried>) {
+    esbc_stream_opts(delta_weeks, BeidouTime::Bdt, false, true)
+}
+
+fn esbc_stream_opts(
+    delta_weeks: i64,
+    bds_time: BeidouTime,
+    fnav: bool,
+    pairs_only: bool,
+) -> (Vec<u8>, Vec<Carried>) {
     let obs = ObsData::load(&data(OBS)).unwrap();
     let nav = NavData::load(&data(NAV)).unwrap();
     let mut b = MessageBuilder::new();
@@ -334,9 +364,9 @@ pub fn esbc_stream_with(
             BeidouTime::Gps => tow_ms,
         };
         let (g, ga, c) = (
-            cells(&e.sats, System::Gps),
-            cells(&e.sats, System::Galileo),
-            cells(&e.sats, System::Beidou),
+            cells(&e.sats, System::Gps, pairs_only),
+            cells(&e.sats, System::Galileo, pairs_only),
+            cells(&e.sats, System::Beidou, pairs_only),
         );
         put(
             &mut b,
@@ -379,7 +409,7 @@ pub fn esbc_stream_with(
         );
         let mut sent = Vec::new();
         for (sys, _) in SIGNALS {
-            let cs = cells(&e.sats, sys);
+            let cs = cells(&e.sats, sys, pairs_only);
             for (prn, _, _, sigs) in &cs {
                 let id = SatId::new(sys, *prn);
                 for (band, attr, _) in sigs {

@@ -48,25 +48,26 @@
 //! (docs/RECEIVERS.md): the stream codes ([`crate::ranging::STREAM_CODES`],
 //! iono-free pairs first), the ephemeris in force ([`EphemerisStore::select`]),
 //! two passes of [`crate::ranging::correct`] around a bootstrap position,
-//! and the stream sigmas ([`crate::ranging::stream_sigma_m`]; a
-//! single-frequency range has its residual-ionosphere term doubled, since a
-//! stream carries no ionospheric model).
+//! and the stream sigmas ([`crate::ranging::stream_sigma_for_m`]: for the
+//! snapshot monitor the configuration's model, a single-frequency range
+//! with its residual-ionosphere term doubled, since a stream carries no
+//! ionospheric model; for ARAIM the ADD's curves of the satellite's signal
+//! pair, `raim replay --araim`'s rule).
 
 use heapless::Vec;
 use raim_core::frames::ecef_to_geodetic;
-use raim_core::sigma::SigmaModel;
 use raim_core::solve::Solution;
 use raim_core::{RangeObservation, SatId, System};
 
 use crate::ephemeris::{SatState, BDT_MINUS_GPST_S, WEEK_S};
 use crate::glonass::{
-    glonass_time_of_day_to_gps_with_s, glonass_time_of_day_with_s, glonass_ura_m, GlonassArc,
-    GlonassEphemeris, GlonassIcdFields,
+    glonass_time_of_day_to_gps_with_s, glonass_time_of_day_with_s, GlonassArc, GlonassEphemeris,
+    GlonassIcdFields,
 };
 use crate::m;
 use crate::ranging::{
-    bootstrap_position_into, correct_at, split_pair, stream_codes, stream_sigma_m, transmit_time_s,
-    Broadcast, Corrections, SatInput,
+    bootstrap_position_into, correct_at, split_pair, stream_codes, stream_sigma_for_m,
+    transmit_time_s, Broadcast, Corrections, SatInput, StreamSigmas,
 };
 use crate::store::{EphemerisStore, Stored};
 use crate::time::table_gps_minus_utc_s;
@@ -396,18 +397,20 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
     }
 
     /// Take one whole RTCM 3 frame (preamble to CRC). When it closes an
-    /// epoch, that epoch is formed into `out` with the configuration's
-    /// `model` and `elevation_mask_rad`, and `Some` says whether it could
-    /// be: `Ok(())` with `out` filled, or why not.
+    /// epoch, that epoch is formed into `out` with the sigmas of `sigmas`
+    /// (the configuration's model for the snapshot monitor, or ARAIM's
+    /// curves of each satellite's signal pair) and `elevation_mask_rad`,
+    /// and `Some` says whether it could be: `Ok(())` with `out` filled, or
+    /// why not.
     pub fn on_frame(
         &mut self,
         frame: &[u8],
-        model: &SigmaModel,
+        sigmas: &StreamSigmas,
         elevation_mask_rad: f64,
         out: &mut FormedEpoch<N>,
     ) -> Option<Result<(), FormError>> {
         self.decode(frame);
-        let formed = self.form(model, elevation_mask_rad, out);
+        let formed = self.form(sigmas, elevation_mask_rad, out);
         self.ready = None;
         formed
     }
@@ -698,7 +701,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
     #[inline(never)]
     fn form(
         &mut self,
-        model: &SigmaModel,
+        sigmas: &StreamSigmas,
         elevation_mask_rad: f64,
         out: &mut FormedEpoch<N>,
     ) -> Option<Result<(), FormError>> {
@@ -787,16 +790,14 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 }));
             }
         }
-        let glonass_model = SigmaModel {
-            ura_m: glonass_ura_m(model.ura_m),
-            ..*model
-        };
+        // Each satellite's sigma is set below (`stream_sigma_for_m`), so
+        // the corrections give none.
         let c = Corrections {
             elevation_mask_rad,
             iono: false,
             tropo: true,
             group_delay: true,
-            glonass_sigma: Some(glonass_model),
+            glonass_sigma: None,
         };
         // Each satellite's orbit and clock at its transmit time, once for
         // both passes (the transmit time does not depend on the receiver
@@ -843,22 +844,13 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 None,
             ) {
                 Ok(mut x) => {
-                    let sigma = stream_sigma_m(
+                    x.obs.sigma_m = Some(stream_sigma_for_m(
+                        sigmas,
                         s.id.system,
                         s.code,
                         x.elevation_rad,
-                        model,
-                        c.glonass_sigma.as_ref(),
                         NO_MODEL_IONO_FACTOR,
-                    )
-                    .or_else(|| {
-                        // A single-frequency range of another system: the
-                        // configuration's model with the ionosphere doubled.
-                        let mut single = *model;
-                        single.iono_vertical_m *= NO_MODEL_IONO_FACTOR;
-                        Some(single.sigma_m(x.elevation_rad))
-                    });
-                    x.obs.sigma_m = sigma;
+                    ));
                     let _ = out.sats.push(x.obs);
                 }
                 Err(_) => out.rejected += 1,

@@ -19,7 +19,6 @@ use std::path::{Path, PathBuf};
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use plotters::prelude::*;
-use raim_core::araim::error_model::iono_free_factor_sq;
 use raim_core::araim::{
     AraimConfig, Curves, FdeLimits, Ism, Monitor, MonitorError, SatIsm, SatelliteModels,
 };
@@ -374,7 +373,9 @@ pub fn summarise(recs: &[AraimRecord]) -> AraimSummary {
 /// airborne term through its iono-free pair's noise factor when it is
 /// ranged with one (L1/L2: 2.98, B1I/B3I: 3.53; a single code or an
 /// L1/L5-type pair: the ADD's 2.59, docs/ARAIM.md "Iono-free replay"),
-/// plus the residual ionosphere of `--araim-iono-m`.
+/// plus the residual ionosphere of `--araim-iono-m`
+/// (`raim_nav::ranging::araim_curves`, the rule the unit's ARAIM stream
+/// epochs take their sigmas from).
 struct ReplayModels<'a> {
     args: &'a AraimReplayArgs,
     epoch: &'a PreparedEpoch,
@@ -393,16 +394,13 @@ impl SatelliteModels for ReplayModels<'_> {
     }
 
     fn curves(&self, id: SatId) -> Curves {
-        let factor = self
+        let code = self
             .epoch
             .sats
             .iter()
             .find(|p| p.obs.id == id)
-            .and_then(|p| raim_gnss::ranging::iono_free_noise_factor(id.system, &p.code));
-        Curves {
-            airborne_factor_sq: factor.map_or_else(iono_free_factor_sq, |k| k * k),
-            iono_vertical_m: self.args.araim_iono_m,
-        }
+            .map_or("", |p| p.code.as_str());
+        raim_nav::ranging::araim_curves(id.system, code, self.args.araim_iono_m)
     }
 }
 
