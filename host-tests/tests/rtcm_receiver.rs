@@ -40,6 +40,7 @@ fn device_against_host(bytes: &[u8], pivot_week: i64, now_week: i64) -> Run {
         time_gps_s: 0.0,
         reference_m: None,
         sats: heapless::Vec::new(),
+        cn0_dbhz: heapless::Vec::new(),
         rejected: 0,
     };
     let (mut same, mut not_dated, mut times_gps_s, mut sats) = (0, 0, Vec::new(), Vec::new());
@@ -74,6 +75,14 @@ fn device_against_host(bytes: &[u8], pivot_week: i64, now_week: i64) -> Run {
                     assert_eq!(h.position_m, d.position_m, "{:?}", h.id);
                     assert_eq!(h.sigma_m, d.sigma_m, "{:?}", h.id);
                 }
+                // The C/N0 of each satellite (GSV), from the MSM's CNR.
+                let host_cn0: Vec<u8> = h.prepared.sats.iter().map(|s| s.cn0_dbhz).collect();
+                assert_eq!(
+                    host_cn0,
+                    formed.cn0_dbhz.to_vec(),
+                    "C/N0 at {} s",
+                    formed.time_gps_s
+                );
                 times_gps_s.push(formed.time_gps_s);
                 sats.push(formed.sats.iter().map(|s| s.id).collect());
                 same += 1;
@@ -190,6 +199,7 @@ fn an_epoch_beyond_the_signal_capacity_is_refused_whole() {
         time_gps_s: 0.0,
         reference_m: None,
         sats: heapless::Vec::new(),
+        cn0_dbhz: heapless::Vec::new(),
         rejected: 0,
     };
     let (mut refused, mut closed) = (0, 0);
@@ -317,6 +327,7 @@ fn device_epochs(
         time_gps_s: 0.0,
         reference_m: None,
         sats: heapless::Vec::new(),
+        cn0_dbhz: heapless::Vec::new(),
         rejected: 0,
     };
     let (mut ok, mut refused) = (Vec::new(), Vec::new());

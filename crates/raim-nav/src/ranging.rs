@@ -549,6 +549,27 @@ pub fn stream_sigma_for_m(
     }
 }
 
+/// A carrier-to-noise density (dB-Hz: RINEX S observable, RTCM DF403 or
+/// DF408) in whole dB-Hz, as NMEA's GSV writes it and the stream receiver
+/// keeps it (one byte per satellite): rounded half away from zero, 0 for
+/// an unknown value (`None`, not finite, or below 0.5 dB-Hz: DF403 and
+/// DF408 send 0 for "not computed"), 255 at most. The device's receiver
+/// and the host's readers call this one function.
+pub fn cn0_dbhz_u8(cn0_dbhz: Option<f64>) -> u8 {
+    match cn0_dbhz {
+        Some(v) if v.is_finite() && v >= 0.5 => {
+            let r = m::round(v);
+            if r >= 255.0 {
+                255
+            } else {
+                // 1 <= r < 255: exact in u8.
+                r as u8
+            }
+        }
+        _ => 0,
+    }
+}
+
 /// The stream code preferences of `system`.
 pub fn stream_codes(system: System) -> &'static [&'static str] {
     STREAM_CODES

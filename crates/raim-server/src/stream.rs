@@ -78,6 +78,7 @@ impl StreamState {
                 time_gps_s: 0.0,
                 reference_m: None,
                 sats: heapless::Vec::new(),
+                cn0_dbhz: heapless::Vec::new(),
                 rejected: 0,
             },
             epochs: 0,
@@ -110,6 +111,11 @@ impl StreamState {
     #[cfg(test)]
     pub(crate) fn formed_mut(&mut self) -> &mut FormedEpoch<CAPACITY> {
         &mut self.formed
+    }
+
+    /// The C/N0 of the satellites of the epoch formed last (GSV).
+    pub(crate) fn cn0_dbhz(&self) -> &[u8] {
+        &self.formed.cn0_dbhz
     }
 
     /// Epochs formed (answered or refused) and ephemerides held.
@@ -260,7 +266,7 @@ impl Server {
         match refusal {
             Some(e) => {
                 platform.on_epoch(None);
-                self.write_no_fix(nmea_out).map_err(IoError::Nmea)?;
+                self.write_no_fix(None, nmea_out).map_err(IoError::Nmea)?;
                 self.request = None;
                 self.send(link, None, crate::answer::BodyRef::Error(&e))?;
                 Ok(None)

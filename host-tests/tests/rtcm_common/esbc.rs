@@ -4,7 +4,8 @@
 //! I/NAV, 1042 BeiDou) once, an hour before its toc, and at each epoch one
 //! MSM7 per system (1077, 1097, 1127; DF393 set on all but the last) with
 //! the signals of the stream's iono-free pairs (GPS C1C/C2W, Galileo
-//! C1C/C5Q, BeiDou C2I/C6I). The stream may be sent `delta_weeks` later:
+//! C1C/C5Q, BeiDou C2I/C6I), each with its C/N0 from the RINEX S
+//! observable (DF408). The stream may be sent `delta_weeks` later:
 //! every ephemeris week moved on, times of week as recorded (no GLONASS,
 //! so no leap-second shift).
 
@@ -39,7 +40,7 @@ pub const SIGNALS: [(System, [SignalCode; 2]); 3] = [
 /// A file of ../shared/data (beside the repository): found from the
 /// including crate's directory (host-tests, or crates/raim-tool, whose
 /// `stream_araim_replay` test includes this module).
-fn data(name: &str) -> std::path::PathBuf {
+pub fn data(name: &str) -> std::path::PathBuf {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     dir.ancestors()
         .map(|p| p.join("shared/data"))
@@ -200,8 +201,8 @@ fn fnav_message(k: &Kepler, delta_weeks: i64) -> Message {
 }
 
 /// One system's MSM7 at an epoch: (satellite, rough ms as DF397 + DF398,
-/// [(band, attribute, fine ms)]).
-type Cells = Vec<(u8, u8, f64, Vec<(u8, char, f64)>)>;
+/// [(band, attribute, fine ms, C/N0 dB-Hz)]).
+type Cells = Vec<(u8, u8, f64, Vec<(u8, char, f64, Option<f64>)>)>;
 
 /// The cells of `sys` in an ESBC epoch: the rough range (1/1024 ms) from
 /// the first signal, each signal's remainder as the fine range (within
@@ -226,11 +227,14 @@ fn cells(
         let rough_1024 = (first_ms * 1024.0).round() as i64;
         let (int_ms, mod_1024) = (rough_1024 / 1024, rough_1024 % 1024);
         let rough_ms = int_ms as f64 + mod_1024 as f64 / 1024.0;
-        let sigs: Vec<(u8, char, f64)> = signals
+        // The C/N0 of each signal: the RINEX S observable (DF408 holds it
+        // to 2^-4 dB-Hz).
+        let cn0 = |code: &str| obs.iter().find(|o| o.code == code).and_then(|o| o.cn0_dbhz);
+        let sigs: Vec<(u8, char, f64, Option<f64>)> = signals
             .iter()
             .filter_map(|(c, band, attr)| {
                 let fine = ms(c)? - rough_ms;
-                (fine.abs() < 1.0 / 1024.0 - FINE_MS).then_some((*band, *attr, fine))
+                (fine.abs() < 1.0 / 1024.0 - FINE_MS).then_some((*band, *attr, fine, cn0(c)))
             })
             .collect();
         let complete = !pairs_only || sigs.len() == signals.len();
@@ -256,11 +260,12 @@ macro_rules! msm7 {
                 gnss_satellite_rough_range_mod1ms_ms: *mod_ms,
                 ..Default::default()
             });
-            for (band, attr, fine) in sigs {
+            for (band, attr, fine, cn0) in sigs {
                 m.data_segment.signal_data.push(rtcm_rs::msg::$sig_t {
                     satellite_id: *prn,
                     signal_id: $sig_id::new(*band, *attr),
                     gnss_signal_fine_pseudorange_ext_ms: Some(*fine),
+                    gnss_signal_cnr_ext_dbhz: *cn0,
                     ..Default::default()
                 });
             }
@@ -412,7 +417,7 @@ fn esbc_stream_opts(
             let cs = cells(&e.sats, sys, pairs_only);
             for (prn, _, _, sigs) in &cs {
                 let id = SatId::new(sys, *prn);
-                for (band, attr, _) in sigs {
+                for (band, attr, _, _) in sigs {
                     let code = format!("C{band}{attr}");
                     let v = e.sats[&id].iter().find(|o| o.code == code).unwrap().value_m;
                     sent.push((id, code, v));

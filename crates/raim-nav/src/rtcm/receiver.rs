@@ -66,7 +66,7 @@ use crate::glonass::{
 };
 use crate::m;
 use crate::ranging::{
-    bootstrap_position_into, correct_at, split_pair, stream_codes, stream_sigma_for_m,
+    bootstrap_position_into, cn0_dbhz_u8, correct_at, split_pair, stream_codes, stream_sigma_for_m,
     transmit_time_s, Broadcast, Corrections, SatInput, StreamSigmas,
 };
 use crate::store::{EphemerisStore, Stored};
@@ -236,6 +236,8 @@ struct Signal {
     id: SatId,
     /// RINEX 3 code "C1C": band digit and attribute letter.
     code: [u8; 3],
+    /// C/N0, whole dB-Hz (0: unknown; `cn0_dbhz_u8`).
+    cn0_dbhz: u8,
     value_m: f64,
 }
 
@@ -272,6 +274,10 @@ pub struct FormedEpoch<const N: usize> {
     /// solution, else the station position, else none).
     pub reference_m: Option<[f64; 3]>,
     pub sats: Vec<RangeObservation, N>,
+    /// The C/N0 of each satellite of `sats` (same order), whole dB-Hz, of
+    /// the first signal of the code it was ranged with (the pair's higher
+    /// frequency); 0 when the MSM gave none (MSM4-7 carry it).
+    pub cn0_dbhz: Vec<u8, N>,
     /// Satellites seen but not used (no code, no ephemeris, below the
     /// mask, system not used here).
     pub rejected: u32,
@@ -727,6 +733,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         } = self;
         let o = ready.as_mut()?;
         out.sats.clear();
+        out.cn0_dbhz.clear();
         out.rejected = 0;
         out.reference_m = None;
         let Some(base) = *base_week else {
@@ -753,6 +760,8 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // Satellite order, as the host's epochs (a BTreeMap by SatId).
         sort_checked(&mut o.sigs, |a, b| (a.id, a.code) < (b.id, b.code));
         let mut inputs: Vec<SatInput<'_>, N> = Vec::new();
+        // The C/N0 of each input, in the same order.
+        let mut cn0s: Vec<u8, N> = Vec::new();
         let mut previous: Option<SatId> = None;
         for s in o.sigs.iter() {
             if previous == Some(s.id) {
@@ -769,7 +778,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                     .count();
                 o.sigs.get(start..start + len).unwrap_or(&[])
             };
-            let Some((code, p1_m, p2_m)) = pick_code(stream_codes(s.id.system), have) else {
+            let Some((code, p1_m, p2_m, cn0)) = pick_code(stream_codes(s.id.system), have) else {
                 out.rejected += 1;
                 continue;
             };
@@ -784,7 +793,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 p2_m,
                 eph,
             };
-            if inputs.push(input).is_err() {
+            if inputs.push(input).is_err() || cn0s.push(cn0).is_err() {
                 return Some(Err(FormError::TooManySignals {
                     capacity: u32::try_from(N).unwrap_or(u32::MAX),
                 }));
@@ -828,7 +837,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // the host hands them over.
         // The receiver's geodetic position, once for every satellite.
         let rx_geodetic = reference.map(ecef_to_geodetic);
-        for (s, tx) in inputs.iter().zip(transmit.iter()) {
+        for ((s, tx), cn0) in inputs.iter().zip(transmit.iter()).zip(cn0s.iter()) {
             let Some(tx) = tx else {
                 out.rejected += 1;
                 continue;
@@ -851,7 +860,11 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                         x.elevation_rad,
                         NO_MODEL_IONO_FACTOR,
                     ));
-                    let _ = out.sats.push(x.obs);
+                    // `out.sats` and `out.cn0_dbhz` have the capacity N of
+                    // `inputs`, and are filled together.
+                    if out.sats.push(x.obs).is_ok() {
+                        let _ = out.cn0_dbhz.push(*cn0);
+                    }
                 }
                 Err(_) => out.rejected += 1,
             }
@@ -866,18 +879,23 @@ fn msm_signals<'m>(m: &'m Msm<'_>, system: System) -> impl Iterator<Item = Signa
         Some(Signal {
             id: SatId::new(system, s.sat_id),
             code: [b'C', b'0' + s.band, s.attribute],
+            cn0_dbhz: cn0_dbhz_u8(s.cnr_dbhz),
             value_m: s.pseudorange_m?,
         })
     })
 }
 
 /// The first preferred code present: a single code, or a pair (both
-/// present) for the iono-free combination.
-fn pick_code<'c>(codes: &[&'c str], have: &[Signal]) -> Option<(&'c str, f64, Option<f64>)> {
-    let find = |c: &str| have.iter().find(|s| s.code() == c).map(|s| s.value_m);
+/// present) for the iono-free combination; with the C/N0 of its (first)
+/// signal.
+fn pick_code<'c>(codes: &[&'c str], have: &[Signal]) -> Option<(&'c str, f64, Option<f64>, u8)> {
+    let find = |c: &str| have.iter().find(|s| s.code() == c);
     codes.iter().find_map(|&c| match split_pair(c) {
-        Some((a, b)) => Some((c, find(a)?, Some(find(b)?))),
-        None => Some((c, find(c)?, None)),
+        Some((a, b)) => {
+            let first = find(a)?;
+            Some((c, first.value_m, Some(find(b)?.value_m), first.cn0_dbhz))
+        }
+        None => find(c).map(|s| (c, s.value_m, None, s.cn0_dbhz)),
     })
 }
 

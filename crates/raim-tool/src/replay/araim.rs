@@ -523,7 +523,8 @@ impl AraimEngine {
             AraimEngine::Host(monitor) => {
                 let r = host_epoch(a, solver, cfg, ism, e, sats, monitor, unix_s);
                 let sentences = if nmea {
-                    host_nmea(r.as_ref().ok(), unix_s, sats, e.reference_m)
+                    let cn0: Vec<u8> = e.sats.iter().map(|s| s.cn0_dbhz).collect();
+                    host_nmea(r.as_ref().ok(), unix_s, sats, &cn0, e.reference_m)
                 } else {
                     Vec::new()
                 };
@@ -599,6 +600,7 @@ fn host_nmea(
     r: Option<&WireAraimResult>,
     unix_s: f64,
     sats: &[RangeObservation],
+    cn0_dbhz: &[u8],
     apriori_m: Option<[f64; 3]>,
 ) -> Vec<String> {
     let mut wire = WireResult::empty();
@@ -607,7 +609,10 @@ fn host_nmea(
         None => wire.time_s = unix_s,
     }
     let epoch = Epoch::ranges(unix_s, sats, apriori_m);
-    let sky = raim_proto::nmea::Sky::new(&epoch);
+    let sky = raim_proto::nmea::Sky {
+        epoch: &epoch,
+        cn0_dbhz,
+    };
     raim_proto::nmea::epoch_sentences(&wire, &sky, raim_proto::nmea::BUILT)
         .map(|v| v.iter().map(|s| s.trim_end().to_string()).collect())
         .unwrap_or_default()

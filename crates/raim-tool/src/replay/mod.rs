@@ -467,7 +467,8 @@ fn run_core_on(
             &sats,
             e.reference_m,
         );
-        let (outcome, nmea) = engine.process(cfg, &wire_epoch)?;
+        let cn0: Vec<u8> = e.sats.iter().map(|s| s.cn0_dbhz).collect();
+        let (outcome, nmea) = engine.process(cfg, &wire_epoch, &cn0)?;
         let mut rec = match outcome {
             Ok(r) => {
                 let mut rec = EpochRecord::from_result(

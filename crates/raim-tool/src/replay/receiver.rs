@@ -427,7 +427,8 @@ impl<'a> Live<'a> {
             &sats,
             p.reference_m,
         );
-        let (outcome, nmea) = self.engine.process(&self.cfg, &wire)?;
+        let cn0: Vec<u8> = p.sats.iter().map(|s| s.cn0_dbhz).collect();
+        let (outcome, nmea) = self.engine.process(&self.cfg, &wire, &cn0)?;
         let mut rec = match outcome {
             Ok(r) => {
                 self.tally.answered();
@@ -491,6 +492,7 @@ mod tests {
                 sigma_m: None,
             },
             code: code.into(),
+            cn0_dbhz: 0,
             raw_pseudorange_m: 2.0e7,
             elevation_rad: el_deg.to_radians(),
             azimuth_rad: 0.0,
