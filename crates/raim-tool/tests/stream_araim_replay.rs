@@ -145,26 +145,30 @@ fn stream_answers(bytes: &[u8], ism: &(Vec<IsmSat>, [Option<f64>; 5])) -> Vec<Wi
 fn replay() -> (Vec<Value>, Value) {
     let obs = format!("{DATA}/{}", esbc::OBS);
     let nav = format!("{DATA}/{}", esbc::NAV);
+    replay_with(&[
+        "--obs",
+        &obs,
+        "--nav",
+        &nav,
+        "--systems",
+        "GEC",
+        "--code",
+        "G=C1C+C2W",
+        "--code",
+        "E=C1C+C5Q",
+        "--code",
+        "C=C2I+C6I",
+        "--end",
+        "00:39:30",
+    ])
+}
+
+/// `raim replay --araim --json` with the sources `args`.
+fn replay_with(args: &[&str]) -> (Vec<Value>, Value) {
     let out = Command::new(env!("CARGO_BIN_EXE_raim"))
-        .args([
-            "replay",
-            "--obs",
-            &obs,
-            "--nav",
-            &nav,
-            "--systems",
-            "GEC",
-            "--araim",
-            "--code",
-            "G=C1C+C2W",
-            "--code",
-            "E=C1C+C5Q",
-            "--code",
-            "C=C2I+C6I",
-            "--end",
-            "00:39:30",
-            "--json",
-        ])
+        .arg("replay")
+        .args(args)
+        .args(["--araim", "--json"])
         .output()
         .expect("spawn raim");
     assert!(
@@ -221,10 +225,54 @@ fn stream_araim_equals_the_rinex_replay_epoch_for_epoch() {
     assert_eq!(got.len(), esbc::EPOCHS);
     assert_eq!(want.len(), esbc::EPOCHS);
 
+    let (worst_all, worst_in_force, available, detections, mean_v, mean_h) =
+        compare(&got, &want, delta_weeks);
+    let decisions = |d: Decision| got.iter().filter(|w| w.decision == d).count();
+    println!(
+        "stream vs replay, {} epochs: the same modes, detections, FDE outcomes, exclusions and availability at every epoch; \
+         stream {} Ok / {} Excluded / {} Unavailable / {} Alarm, {available} available, {detections} detections \
+         (replay: {} available, {} alarms, {} exclusions, {} detections); \
+         stream mean VPL/HPL {:.2}/{:.2} m (replay {:.2}/{:.2} m); worst relative PL difference {:.1e} all in view, {:.1e} in force",
+        got.len(),
+        decisions(Decision::Ok),
+        decisions(Decision::Excluded),
+        decisions(Decision::Unavailable),
+        decisions(Decision::Alarm),
+        summary["available"],
+        summary["alarms"],
+        summary["exclusions"],
+        summary["false_detections"],
+        mean_v,
+        mean_h,
+        summary["mean_vpl_m"].as_f64().unwrap(),
+        summary["mean_hpl_m"].as_f64().unwrap(),
+        worst_all,
+        worst_in_force,
+    );
+    assert_eq!(available as u64, summary["available"].as_u64().unwrap());
+    // Both systems present in the stream (the pairs-only filter keeps the
+    // replay's satellites, not fewer).
+    for sys in [System::Gps, System::Galileo, System::Beidou] {
+        assert!(ism.0.iter().any(|s| s.id.system == sys), "{sys:?}");
+    }
+}
+
+/// Epoch for epoch, the unit's answers `got` against the replay's records
+/// `want` (the replay dated `delta_weeks` earlier): the same time, number
+/// of fault modes, detection outcome, FDE outcome, excluded satellites
+/// and availability; the all-in-view VPL and HPL, and those in force where
+/// the replay has them, within `PL_TOL_REL`. Returns the worst relative
+/// PL differences (all in view, in force), the available epochs, the
+/// detections and the mean VPL and HPL in force.
+fn compare(
+    got: &[WireAraimResult],
+    want: &[Value],
+    delta_weeks: i64,
+) -> (f64, f64, usize, usize, f64, f64) {
     let (mut worst_all, mut worst_in_force) = (0.0f64, 0.0f64);
     let (mut available, mut detections) = (0usize, 0usize);
     let (mut sum_v, mut sum_h, mut n_pl) = (0.0, 0.0, 0usize);
-    for (k, (w, r)) in got.iter().zip(&want).enumerate() {
+    for (k, (w, r)) in got.iter().zip(want).enumerate() {
         let t_gps = r["time_gps_s"].as_f64().unwrap() + delta_weeks as f64 * 604_800.0;
         let t_unix = raim_nav::time::unix_utc_s(t_gps);
         assert!((w.time_s - t_unix).abs() <= TIME_TOL_S, "epoch {k}");
@@ -269,32 +317,44 @@ fn stream_araim_equals_the_rinex_replay_epoch_for_epoch() {
             n_pl += 1;
         }
     }
-    let decisions = |d: Decision| got.iter().filter(|w| w.decision == d).count();
-    println!(
-        "stream vs replay, {} epochs: the same modes, detections, FDE outcomes, exclusions and availability at every epoch; \
-         stream {} Ok / {} Excluded / {} Unavailable / {} Alarm, {available} available, {detections} detections \
-         (replay: {} available, {} alarms, {} exclusions, {} detections); \
-         stream mean VPL/HPL {:.2}/{:.2} m (replay {:.2}/{:.2} m); worst relative PL difference {:.1e} all in view, {:.1e} in force",
-        got.len(),
-        decisions(Decision::Ok),
-        decisions(Decision::Excluded),
-        decisions(Decision::Unavailable),
-        decisions(Decision::Alarm),
-        summary["available"],
-        summary["alarms"],
-        summary["exclusions"],
-        summary["false_detections"],
-        sum_v / n_pl as f64,
-        sum_h / n_pl as f64,
-        summary["mean_vpl_m"].as_f64().unwrap(),
-        summary["mean_hpl_m"].as_f64().unwrap(),
+    (
         worst_all,
         worst_in_force,
+        available,
+        detections,
+        sum_v / n_pl as f64,
+        sum_h / n_pl as f64,
+    )
+}
+
+/// The host's own stream replay, `raim replay --rtcm3 FILE --araim`, on
+/// the full ESBC stream (with its three single-frequency BeiDou
+/// satellites) against the unit's answers to the same bytes: the replay
+/// forms a stream epoch's sigmas under ARAIM as the unit does
+/// (`StreamSigmas::Araim`), so the two agree epoch for epoch as above.
+///
+/// Verifies: RX-ARAIM-REPLAY
+#[test]
+fn host_stream_replay_under_araim_equals_the_unit() {
+    let week = raim_server::stream::PIVOT_WEEK + 26;
+    let delta_weeks = week - esbc::ESBC_WEEK;
+    let (bytes, carried) = esbc::esbc_stream(delta_weeks);
+    let ism = ism(&carried);
+    let got = stream_answers(&bytes, &ism);
+    let file = std::env::temp_dir().join(format!("raim-esbc-araim-{}.rtcm3", std::process::id()));
+    std::fs::write(&file, &bytes).unwrap();
+    let (want, summary) = replay_with(&["--rtcm3", file.to_str().unwrap()]);
+    let _ = std::fs::remove_file(&file);
+    assert_eq!(got.len(), esbc::EPOCHS);
+    assert_eq!(want.len(), esbc::EPOCHS);
+    // The replay's records are dated by the stream itself (the moved week).
+    let (worst_all, worst_in_force, available, detections, mean_v, mean_h) =
+        compare(&got, &want, 0);
+    println!(
+        "raim replay --rtcm3 --araim vs the unit on the full ESBC stream, {} epochs: the same modes, detections, FDE outcomes, exclusions and availability at every epoch; \
+         {available} available, {detections} detections (replay summary: {} available, {} alarms); mean VPL/HPL {mean_v:.2}/{mean_h:.2} m; worst relative PL difference {worst_all:.1e} all in view, {worst_in_force:.1e} in force",
+        got.len(),
+        summary["available"],
+        summary["alarms"],
     );
-    assert_eq!(available as u64, summary["available"].as_u64().unwrap());
-    // Both systems present in the stream (the pairs-only filter keeps the
-    // replay's satellites, not fewer).
-    for sys in [System::Gps, System::Galileo, System::Beidou] {
-        assert!(ism.0.iter().any(|s| s.id.system == sys), "{sys:?}");
-    }
 }
