@@ -279,9 +279,6 @@ struct SkyEpoch {
 const ESBC_LEAP_S: f64 = 18.0;
 /// GPS time zero (1980-01-06) in Unix seconds.
 const GPS_EPOCH_UNIX_S: f64 = 315_964_800.0;
-/// The C/N0 given to every satellite: gpsd 3.22 marks a GSV satellite used
-/// only when its C/N0 is above zero, and raim-gnss reads no S observables.
-const CN0_DBHZ: f64 = 45.0;
 
 /// The first `n` epochs of ESBC (G+E+C, ../shared/data) through the host's
 /// monitor and NMEA writer.
@@ -300,7 +297,11 @@ fn esbc(n: usize) -> Vec<SkyEpoch> {
             let t_utc_s = e.time_gps_s + GPS_EPOCH_UNIX_S - ESBC_LEAP_S;
             let epoch = Epoch::ranges(t_utc_s, &sats, p.reference_m);
             let w = WireResult::from_result(&raim.process(&cfg, &epoch).unwrap());
-            let cn0 = vec![CN0_DBHZ; sats.len()];
+            // Each satellite's C/N0, from the RINEX S observables (gpsd
+            // 3.22 marks a GSV satellite used only when its C/N0 is above
+            // zero).
+            let cn0: Vec<u8> = p.sats.iter().map(|s| s.cn0_dbhz).collect();
+            assert!(cn0.iter().all(|&c| c > 0), "{cn0:?}");
             let sky = Sky {
                 epoch: &epoch,
                 cn0_dbhz: &cn0,

@@ -35,8 +35,8 @@ enum Decoded {
         /// GLONASS: DF416 (`None` = 7, unknown).
         glonass_day: Option<Option<u8>>,
         more: bool,
-        /// (satellite, band, attribute, pseudorange m).
-        signals: Vec<(u8, u8, u8, Option<f64>)>,
+        /// (satellite, band, attribute, pseudorange m, C/N0 dB-Hz).
+        signals: Vec<(u8, u8, u8, Option<f64>, Option<f64>)>,
     },
     Kepler {
         number: u16,
@@ -59,7 +59,7 @@ enum Decoded {
 }
 
 macro_rules! msm_ref {
-    ($m:expr, $system:expr, $epoch:expr, $day:expr, $fine:ident) => {{
+    ($m:expr, $system:expr, $epoch:expr, $day:expr, $fine:ident, $cnr:ident) => {{
         let m = &$m;
         let signals = m
             .data_segment
@@ -85,6 +85,8 @@ macro_rules! msm_ref {
                     sig.signal_id.band(),
                     sig.signal_id.attribute() as u8,
                     pr,
+                    // DF403 (u8, 1 dB-Hz) or DF408 (2^-4 dB-Hz); 0 is None.
+                    sig.$cnr.map(f64::from),
                 )
             })
             .collect();
@@ -119,140 +121,160 @@ fn reference(frame: &[u8]) -> Decoded {
             "Gps",
             m.gps_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ms
+            gnss_signal_fine_pseudorange_ms,
+            gnss_signal_cnr_dbhz
         ),
         Message::Msg1075(m) => msm_ref!(
             m,
             "Gps",
             m.gps_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ms
+            gnss_signal_fine_pseudorange_ms,
+            gnss_signal_cnr_dbhz
         ),
         Message::Msg1076(m) => msm_ref!(
             m,
             "Gps",
             m.gps_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ext_ms
+            gnss_signal_fine_pseudorange_ext_ms,
+            gnss_signal_cnr_ext_dbhz
         ),
         Message::Msg1077(m) => msm_ref!(
             m,
             "Gps",
             m.gps_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ext_ms
+            gnss_signal_fine_pseudorange_ext_ms,
+            gnss_signal_cnr_ext_dbhz
         ),
         Message::Msg1084(m) => msm_ref!(
             m,
             "Glonass",
             m.glo_epoch_time_ms,
             Some(m.glo_day_of_week),
-            gnss_signal_fine_pseudorange_ms
+            gnss_signal_fine_pseudorange_ms,
+            gnss_signal_cnr_dbhz
         ),
         Message::Msg1085(m) => msm_ref!(
             m,
             "Glonass",
             m.glo_epoch_time_ms,
             Some(m.glo_day_of_week),
-            gnss_signal_fine_pseudorange_ms
+            gnss_signal_fine_pseudorange_ms,
+            gnss_signal_cnr_dbhz
         ),
         Message::Msg1086(m) => msm_ref!(
             m,
             "Glonass",
             m.glo_epoch_time_ms,
             Some(m.glo_day_of_week),
-            gnss_signal_fine_pseudorange_ext_ms
+            gnss_signal_fine_pseudorange_ext_ms,
+            gnss_signal_cnr_ext_dbhz
         ),
         Message::Msg1087(m) => msm_ref!(
             m,
             "Glonass",
             m.glo_epoch_time_ms,
             Some(m.glo_day_of_week),
-            gnss_signal_fine_pseudorange_ext_ms
+            gnss_signal_fine_pseudorange_ext_ms,
+            gnss_signal_cnr_ext_dbhz
         ),
         Message::Msg1094(m) => msm_ref!(
             m,
             "Galileo",
             m.gal_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ms
+            gnss_signal_fine_pseudorange_ms,
+            gnss_signal_cnr_dbhz
         ),
         Message::Msg1095(m) => msm_ref!(
             m,
             "Galileo",
             m.gal_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ms
+            gnss_signal_fine_pseudorange_ms,
+            gnss_signal_cnr_dbhz
         ),
         Message::Msg1096(m) => msm_ref!(
             m,
             "Galileo",
             m.gal_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ext_ms
+            gnss_signal_fine_pseudorange_ext_ms,
+            gnss_signal_cnr_ext_dbhz
         ),
         Message::Msg1097(m) => msm_ref!(
             m,
             "Galileo",
             m.gal_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ext_ms
+            gnss_signal_fine_pseudorange_ext_ms,
+            gnss_signal_cnr_ext_dbhz
         ),
         Message::Msg1114(m) => msm_ref!(
             m,
             "Qzss",
             m.qzss_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ms
+            gnss_signal_fine_pseudorange_ms,
+            gnss_signal_cnr_dbhz
         ),
         Message::Msg1115(m) => msm_ref!(
             m,
             "Qzss",
             m.qzss_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ms
+            gnss_signal_fine_pseudorange_ms,
+            gnss_signal_cnr_dbhz
         ),
         Message::Msg1116(m) => msm_ref!(
             m,
             "Qzss",
             m.qzss_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ext_ms
+            gnss_signal_fine_pseudorange_ext_ms,
+            gnss_signal_cnr_ext_dbhz
         ),
         Message::Msg1117(m) => msm_ref!(
             m,
             "Qzss",
             m.qzss_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ext_ms
+            gnss_signal_fine_pseudorange_ext_ms,
+            gnss_signal_cnr_ext_dbhz
         ),
         Message::Msg1124(m) => msm_ref!(
             m,
             "Beidou",
             m.bds_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ms
+            gnss_signal_fine_pseudorange_ms,
+            gnss_signal_cnr_dbhz
         ),
         Message::Msg1125(m) => msm_ref!(
             m,
             "Beidou",
             m.bds_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ms
+            gnss_signal_fine_pseudorange_ms,
+            gnss_signal_cnr_dbhz
         ),
         Message::Msg1126(m) => msm_ref!(
             m,
             "Beidou",
             m.bds_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ext_ms
+            gnss_signal_fine_pseudorange_ext_ms,
+            gnss_signal_cnr_ext_dbhz
         ),
         Message::Msg1127(m) => msm_ref!(
             m,
             "Beidou",
             m.bds_epoch_time_ms,
             None,
-            gnss_signal_fine_pseudorange_ext_ms
+            gnss_signal_fine_pseudorange_ext_ms,
+            gnss_signal_cnr_ext_dbhz
         ),
         Message::Msg1019(m) => Decoded::Kepler {
             number: 1019,
@@ -361,7 +383,7 @@ fn compact(frame: &[u8], more_known: bool) -> Decoded {
             more: m.more,
             signals: m
                 .signals()
-                .map(|s| (s.sat_id, s.band, s.attribute, s.pseudorange_m))
+                .map(|s| (s.sat_id, s.band, s.attribute, s.pseudorange_m, s.cnr_dbhz))
                 .collect(),
         },
         Ok(Dm::Kepler(e)) => Decoded::Kepler {

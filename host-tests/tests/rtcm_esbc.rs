@@ -40,13 +40,14 @@ struct Run {
 /// (clock at `now_week`) on `bytes`: every epoch the device forms must be
 /// the host's, to the bit.
 fn device_against_host(bytes: &[u8], pivot_week: i64, now_week: i64) -> Run {
-    let model = Config::default().sigma_model;
+    let model = raim_nav::ranging::StreamSigmas::Snapshot(Config::default().sigma_model);
     let (host, _) = host_epochs(bytes, now_week);
     let mut dev = Box::new(StreamReceiver::<64, 256>::new(pivot_week));
     let mut formed = FormedEpoch::<64> {
         time_gps_s: 0.0,
         reference_m: None,
         sats: heapless::Vec::new(),
+        cn0_dbhz: heapless::Vec::new(),
         rejected: 0,
     };
     let (mut same, mut sats_per_system) = (0, BTreeMap::<System, usize>::new());
@@ -83,6 +84,14 @@ fn device_against_host(bytes: &[u8], pivot_week: i64, now_week: i64) -> Run {
                     assert_eq!(h.sigma_m, d.sigma_m, "{:?}", h.id);
                     *sats_per_system.entry(d.id.system).or_default() += 1;
                 }
+                // The C/N0 of each satellite (GSV), from the MSM's CNR.
+                let host_cn0: Vec<u8> = h.prepared.sats.iter().map(|s| s.cn0_dbhz).collect();
+                assert_eq!(
+                    host_cn0,
+                    formed.cn0_dbhz.to_vec(),
+                    "C/N0 at {} s",
+                    formed.time_gps_s
+                );
                 times_gps_s.push(formed.time_gps_s);
                 sats.push(formed.sats.iter().map(|s| s.id).collect());
                 same += 1;

@@ -33,13 +33,14 @@ struct Run {
 /// (clock at `now_week`) on `bytes`: every epoch the device forms must be
 /// the host's, to the bit.
 fn device_against_host(bytes: &[u8], pivot_week: i64, now_week: i64) -> Run {
-    let model = Config::default().sigma_model;
+    let model = raim_nav::ranging::StreamSigmas::Snapshot(Config::default().sigma_model);
     let (host, host_counts) = host_epochs(bytes, now_week);
     let mut dev = Box::new(StreamReceiver::<64, 256>::new(pivot_week));
     let mut formed = FormedEpoch::<64> {
         time_gps_s: 0.0,
         reference_m: None,
         sats: heapless::Vec::new(),
+        cn0_dbhz: heapless::Vec::new(),
         rejected: 0,
     };
     let (mut same, mut not_dated, mut times_gps_s, mut sats) = (0, 0, Vec::new(), Vec::new());
@@ -74,6 +75,14 @@ fn device_against_host(bytes: &[u8], pivot_week: i64, now_week: i64) -> Run {
                     assert_eq!(h.position_m, d.position_m, "{:?}", h.id);
                     assert_eq!(h.sigma_m, d.sigma_m, "{:?}", h.id);
                 }
+                // The C/N0 of each satellite (GSV), from the MSM's CNR.
+                let host_cn0: Vec<u8> = h.prepared.sats.iter().map(|s| s.cn0_dbhz).collect();
+                assert_eq!(
+                    host_cn0,
+                    formed.cn0_dbhz.to_vec(),
+                    "C/N0 at {} s",
+                    formed.time_gps_s
+                );
                 times_gps_s.push(formed.time_gps_s);
                 sats.push(formed.sats.iter().map(|s| s.id).collect());
                 same += 1;
@@ -184,12 +193,13 @@ fn device_receiver_forms_the_host_epochs_bit_for_bit() {
 #[test]
 fn an_epoch_beyond_the_signal_capacity_is_refused_whole() {
     let bytes = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
-    let model = Config::default().sigma_model;
+    let model = raim_nav::ranging::StreamSigmas::Snapshot(Config::default().sigma_model);
     let mut dev = Box::new(StreamReceiver::<64, 8>::new(GMSD7_PIVOT_WEEK));
     let mut formed = FormedEpoch::<64> {
         time_gps_s: 0.0,
         reference_m: None,
         sats: heapless::Vec::new(),
+        cn0_dbhz: heapless::Vec::new(),
         rejected: 0,
     };
     let (mut refused, mut closed) = (0, 0);
@@ -311,12 +321,13 @@ fn device_epochs(
     raim_nav::rtcm::RtcmCounts,
     raim_nav::rtcm::LeapSeconds,
 ) {
-    let model = Config::default().sigma_model;
+    let model = raim_nav::ranging::StreamSigmas::Snapshot(Config::default().sigma_model);
     let mut dev = Box::new(StreamReceiver::<64, 256>::new(pivot));
     let mut formed = FormedEpoch::<64> {
         time_gps_s: 0.0,
         reference_m: None,
         sats: heapless::Vec::new(),
+        cn0_dbhz: heapless::Vec::new(),
         rejected: 0,
     };
     let (mut ok, mut refused) = (Vec::new(), Vec::new());

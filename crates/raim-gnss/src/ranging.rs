@@ -82,6 +82,9 @@ pub struct PreparedSat {
     /// Corrected pseudorange and rotated satellite position.
     pub obs: RangeObservation,
     pub code: String,
+    /// C/N0 of the code's (first) signal, whole dB-Hz, 0 when unknown
+    /// (`raim_nav::ranging::cn0_dbhz_u8`): GSV's.
+    pub cn0_dbhz: u8,
     pub raw_pseudorange_m: f64,
     pub elevation_rad: f64,
     pub azimuth_rad: f64,
@@ -114,12 +117,17 @@ impl PreparedEpoch {
 
 /// Pick the first preferred code present: a single code, or a pair
 /// "C1W+C2W" (both present) for the iono-free combination; returns the
-/// code name and its one or two pseudoranges.
-fn pick_code(codes: &[String], have: &[CodeObs]) -> Option<(String, f64, Option<f64>)> {
-    let find = |c: &str| have.iter().find(|o| o.code == c).map(|o| o.value_m);
+/// code name, its one or two pseudoranges and the C/N0 of its (first)
+/// signal.
+fn pick_code(codes: &[String], have: &[CodeObs]) -> Option<(String, f64, Option<f64>, u8)> {
+    let find = |c: &str| have.iter().find(|o| o.code == c);
+    let cn0 = |o: &CodeObs| raim_nav::ranging::cn0_dbhz_u8(o.cn0_dbhz);
     codes.iter().find_map(|c| match split_pair(c) {
-        Some((a, b)) => Some((c.clone(), find(a)?, Some(find(b)?))),
-        None => Some((c.clone(), find(c)?, None)),
+        Some((a, b)) => {
+            let first = find(a)?;
+            Some((c.clone(), first.value_m, Some(find(b)?.value_m), cn0(first)))
+        }
+        None => find(c).map(|o| (c.clone(), o.value_m, None, cn0(o))),
     })
 }
 
@@ -141,7 +149,8 @@ fn build(
             rejected.push((id, Rejection::SystemNotSelected));
             continue;
         }
-        let Some((code, p1_m, p2_m)) = opts.codes.get(&id.system).and_then(|c| pick_code(c, have))
+        let Some((code, p1_m, p2_m, cn0_dbhz)) =
+            opts.codes.get(&id.system).and_then(|c| pick_code(c, have))
         else {
             rejected.push((id, Rejection::NoCode));
             continue;
@@ -168,6 +177,7 @@ fn build(
             Ok(c) => sats.push(PreparedSat {
                 obs: c.obs,
                 code,
+                cn0_dbhz,
                 raw_pseudorange_m: c.raw_pseudorange_m,
                 elevation_rad: c.elevation_rad,
                 azimuth_rad: c.azimuth_rad,

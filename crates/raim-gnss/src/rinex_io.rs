@@ -52,6 +52,11 @@ pub struct CodeObs {
     /// RINEX observable name: "C1" (RINEX 2), "C1C", "C2I", ...
     pub code: String,
     pub value_m: f64,
+    /// The signal's C/N0, dB-Hz, when the source gives it: the RINEX 3
+    /// S observable of the same band and attribute ("S1C" for "C1C"; RINEX
+    /// 2's S1/S2 are in receiver units and not read), an MSM's DF403 or
+    /// DF408, a UBX RXM-RAWX cno.
+    pub cn0_dbhz: Option<f64>,
 }
 
 /// One observation epoch: receiver time and every satellite's pseudoranges.
@@ -118,7 +123,31 @@ impl ObsData {
                 sats.entry(id).or_default().push(CodeObs {
                     code: code.clone(),
                     value_m: s.value,
+                    cn0_dbhz: None,
                 });
+            }
+            // Each code's C/N0: the RINEX 3 S observable of its signal.
+            for s in &obs.signals {
+                let Observable::SSI(name) = &s.observable else {
+                    continue;
+                };
+                let (Some(system), Some(signal)) =
+                    (system_of(s.sv.constellation), name.strip_prefix('S'))
+                else {
+                    continue;
+                };
+                if signal.len() != 2 || !s.value.is_finite() {
+                    continue;
+                }
+                let Some(codes) = sats.get_mut(&SatId::new(system, s.sv.prn)) else {
+                    continue;
+                };
+                if let Some(c) = codes
+                    .iter_mut()
+                    .find(|c| c.code.strip_prefix('C') == Some(signal))
+                {
+                    c.cn0_dbhz = Some(s.value);
+                }
             }
             epochs.push(ObsEpoch {
                 time_gps_s: t,

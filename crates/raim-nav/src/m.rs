@@ -34,7 +34,6 @@ pub(crate) fn floor(x: f64) -> f64 {
     libm::floor(x)
 }
 
-#[cfg(feature = "rtcm")]
 pub(crate) fn round(x: f64) -> f64 {
     libm::round(x)
 }

@@ -11,6 +11,7 @@
 //! RTCM 3 stream ([`crate::rtcm`]) both call [`correct`] and
 //! [`bootstrap_position`], so that they form the same bits.
 
+use raim_core::araim::error_model::{iono_free_factor_sq, Curves};
 use raim_core::frames::{ecef_to_geodetic, Geodetic};
 use raim_core::sigma::SigmaModel;
 use raim_core::solve::{solve_into, Solution};
@@ -466,6 +467,109 @@ pub const STREAM_CODES: [(System, &[&str]); 5] = [
     ),
 ];
 
+/// The ARAIM nominal curves of a satellite ranged with `code`
+/// (`raim_core::araim::error_model::Curves`, SPEC §9.1): the ADD's
+/// airborne multipath and noise curves through the noise factor of the
+/// iono-free pair `code` forms ([`iono_free_noise_factor`]: L1/L2 2.98,
+/// E1/E5a and L1/L5 2.59, B1I/B3I 3.53), or through the ADD's L1/L5 factor
+/// for a single code; `iono_vertical_m` a residual ionosphere's vertical
+/// sigma (0: none). The one rule of `raim replay --araim` (its satellite
+/// models) and of the unit's stream epochs under ARAIM
+/// ([`stream_sigma_for_m`]), docs/ARAIM.md "Iono-free replay".
+pub fn araim_curves(system: System, code: &str, iono_vertical_m: f64) -> Curves {
+    Curves {
+        airborne_factor_sq: iono_free_noise_factor(system, code)
+            .map_or_else(iono_free_factor_sq, |k| k * k),
+        iono_vertical_m,
+    }
+}
+
+/// How the satellites of a receiver stream's epoch get their sigmas.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum StreamSigmas {
+    /// For the snapshot monitor: [`stream_sigma_m`] of this model (the
+    /// configuration's), and a single-frequency range of another system
+    /// the model with its residual ionosphere doubled.
+    Snapshot(SigmaModel),
+    /// For ARAIM, whose ISM gives the signal-in-space term (sigma_URA,
+    /// sigma_URE, added by the ARAIM join): the satellite's nominal sigma
+    /// from [`araim_curves`] of the signal pair it was ranged with, as
+    /// `raim replay --araim` models it; a single-frequency range carries
+    /// the residual ionosphere `iono_vertical_m` doubled (a stream has no
+    /// ionospheric model; the ADD's dual-frequency curves have no
+    /// ionospheric term).
+    Araim {
+        /// The configuration's residual-ionosphere vertical sigma, m.
+        iono_vertical_m: f64,
+    },
+}
+
+/// The sigma (m) of one satellite of a stream epoch, ranged with `code`
+/// (one code, or a pair "C1C+C5Q") at elevation `el_rad`, under `sigmas`
+/// ([`StreamSigmas`]); `single_iono_factor` the factor on the residual
+/// ionosphere of a single-frequency range (a stream's: 2,
+/// `rtcm::NO_MODEL_IONO_FACTOR`). The device's stream receiver and the
+/// host's stream replay call this one function.
+pub fn stream_sigma_for_m(
+    sigmas: &StreamSigmas,
+    system: System,
+    code: &str,
+    el_rad: f64,
+    single_iono_factor: f64,
+) -> f64 {
+    match sigmas {
+        StreamSigmas::Snapshot(model) => {
+            let glonass = SigmaModel {
+                ura_m: crate::glonass::glonass_ura_m(model.ura_m),
+                ..*model
+            };
+            stream_sigma_m(
+                system,
+                code,
+                el_rad,
+                model,
+                Some(&glonass),
+                single_iono_factor,
+            )
+            .unwrap_or_else(|| {
+                let mut single = *model;
+                single.iono_vertical_m *= single_iono_factor;
+                single.sigma_m(el_rad)
+            })
+        }
+        StreamSigmas::Araim { iono_vertical_m } => {
+            let iono_m = if split_pair(code).is_some() {
+                0.0
+            } else {
+                iono_vertical_m * single_iono_factor
+            };
+            m::sqrt(araim_curves(system, code, iono_m).variance_m2(el_rad))
+        }
+    }
+}
+
+/// A carrier-to-noise density (dB-Hz: RINEX S observable, RTCM DF403 or
+/// DF408) in whole dB-Hz, as NMEA's GSV writes it and the stream receiver
+/// keeps it (one byte per satellite): rounded half away from zero, 0 for
+/// an unknown value (`None`, not finite, or below 0.5 dB-Hz: DF403 and
+/// DF408 send 0 for "not computed"), 255 at most. The device's receiver
+/// and the host's readers call this one function.
+pub fn cn0_dbhz_u8(cn0_dbhz: Option<f64>) -> u8 {
+    match cn0_dbhz {
+        Some(v) if v.is_finite() && v >= 0.5 => {
+            let r = m::round(v);
+            if r >= 255.0 {
+                255
+            } else {
+                // 1 <= r < 255: exact in u8.
+                r as u8
+            }
+        }
+        _ => 0,
+    }
+}
+
 /// The stream code preferences of `system`.
 pub fn stream_codes(system: System) -> &'static [&'static str] {
     STREAM_CODES
@@ -591,5 +695,52 @@ mod tests {
             "{}",
             corrected - range_m
         );
+    }
+
+    /// The ARAIM stream sigma is the replay's curves of the satellite's
+    /// pair, checked against the ADD's formulas written out here (DO-229D
+    /// A.4.2.4 troposphere, J.2.4 multipath, the ADD's airborne noise; the
+    /// pair factor sqrt(g^2 + 1) / (g - 1) from the carriers): L1/L2 at
+    /// 30 degrees, B1I/B3I at 60; a single code takes the L1/L5 factor and
+    /// the residual ionosphere times the factor and the obliquity; the
+    /// snapshot rule is `stream_sigma_m`'s.
+    ///
+    /// Verifies: RX-ARAIM-REPLAY
+    #[test]
+    fn araim_stream_sigma_is_the_add_curves_of_the_pair() {
+        let add_sigma = |el_deg: f64, f1_mhz: f64, f2_mhz: f64, iono_m: f64| {
+            let el = el_deg.to_radians();
+            let tropo = 0.12 * 1.001 / (0.002_001 + el.sin().powi(2)).sqrt();
+            let mp = 0.13 + 0.53 * (-el_deg / 10.0).exp();
+            let noise = 0.15 + 0.43 * (-el_deg / 6.9).exp();
+            let g = (f1_mhz / f2_mhz).powi(2);
+            let k2 = (g * g + 1.0) / ((g - 1.0) * (g - 1.0));
+            let re = 6378.1363 / (6378.1363 + 350.0);
+            let f_pp = 1.0 / (1.0 - (re * el.cos()).powi(2)).sqrt();
+            (tropo * tropo + k2 * (mp * mp + noise * noise) + (iono_m * f_pp).powi(2)).sqrt()
+        };
+        let araim = StreamSigmas::Araim {
+            iono_vertical_m: 0.4,
+        };
+        let got = stream_sigma_for_m(&araim, System::Gps, "C1C+C2W", 30f64.to_radians(), 2.0);
+        let want = add_sigma(30.0, 1575.42, 1227.60, 0.0);
+        assert!((got - want).abs() < 1e-12, "{got} {want}");
+        let got = stream_sigma_for_m(&araim, System::Beidou, "C2I+C6I", 60f64.to_radians(), 2.0);
+        let want = add_sigma(60.0, 1561.098, 1268.52, 0.0);
+        assert!((got - want).abs() < 1e-12, "{got} {want}");
+        let got = stream_sigma_for_m(&araim, System::Galileo, "C1C", 20f64.to_radians(), 2.0);
+        let want = add_sigma(20.0, 1575.42, 1176.45, 0.8);
+        assert!((got - want).abs() < 1e-12, "{got} {want}");
+        let model = SigmaModel::default();
+        let el = 25f64.to_radians();
+        let snap = stream_sigma_for_m(
+            &StreamSigmas::Snapshot(model),
+            System::Gps,
+            "C1C+C2W",
+            el,
+            2.0,
+        );
+        let k = iono_free_noise_factor(System::Gps, "C1C+C2W").unwrap();
+        assert_eq!(snap, iono_free_sigma_m(&model, el, k));
     }
 }

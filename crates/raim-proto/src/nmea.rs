@@ -293,9 +293,11 @@ fn talker(r: &WireResult) -> &'static str {
 pub struct Sky<'a> {
     /// The epoch whose satellites were seen.
     pub epoch: &'a Epoch<'a>,
-    /// C/N0 (dB-Hz) of the epoch's satellites in its order; shorter (or
-    /// empty) when unknown, and a non-finite entry is unknown too.
-    pub cn0_dbhz: &'a [f64],
+    /// C/N0 (whole dB-Hz) of the epoch's satellites in its order; shorter
+    /// (or empty) when unknown, and an entry of 0 is unknown too (a signal
+    /// tracked has more; `raim_nav::ranging::cn0_dbhz_u8`). A value above
+    /// 99, which GSV's two digits cannot hold, is written as unknown.
+    pub cn0_dbhz: &'a [u8],
 }
 
 impl<'a> Sky<'a> {
@@ -768,9 +770,9 @@ fn gsv(
             b.write_char(',')?;
         }
         b.write_char(',')?;
-        let cn0 = sky.cn0_dbhz.get(i).copied().unwrap_or(f64::NAN);
-        if (0.0..99.5).contains(&cn0) {
-            fixed::uint(&mut b, libm::round(cn0) as u64, 2)?;
+        let cn0 = sky.cn0_dbhz.get(i).copied().unwrap_or(0);
+        if (1..=99).contains(&cn0) {
+            fixed::uint(&mut b, u64::from(cn0), 2)?;
         }
     }
     b.write_char(',')?;

@@ -232,10 +232,10 @@ impl Rtcm3 {
     fn message(&mut self, number: Option<u16>, msg: Message, out: &mut Vec<Item>) {
         let n = number.unwrap_or(0);
         macro_rules! msm {
-            ($m:expr, $time:expr, $sys:expr, $fine:ident) => {{
-                msm!($m, $time, $sys, $fine, None)
+            ($m:expr, $time:expr, $sys:expr, $fine:ident, $cnr:ident) => {{
+                msm!($m, $time, $sys, $fine, $cnr, None)
             }};
-            ($m:expr, $time:expr, $sys:expr, $fine:ident, $alt:expr) => {{
+            ($m:expr, $time:expr, $sys:expr, $fine:ident, $cnr:ident, $alt:expr) => {{
                 let time = $time;
                 let m = &$m;
                 let rough: BTreeMap<u8, f64> = m
@@ -262,6 +262,8 @@ impl Rtcm3 {
                         CodeObs {
                             code,
                             value_m: (r + fine) * LIGHT_MS_M,
+                            // DF403 (u8, 1 dB-Hz) or DF408 (2^-4 dB-Hz).
+                            cn0_dbhz: sig.$cnr.map(f64::from),
                         },
                     ));
                 }
@@ -276,29 +278,39 @@ impl Rtcm3 {
                 m,
                 gps(m.gps_epoch_time_ms),
                 System::Gps,
-                gnss_signal_fine_pseudorange_ms
+                gnss_signal_fine_pseudorange_ms,
+                gnss_signal_cnr_dbhz
             ),
             Message::Msg1075(m) => msm!(
                 m,
                 gps(m.gps_epoch_time_ms),
                 System::Gps,
-                gnss_signal_fine_pseudorange_ms
+                gnss_signal_fine_pseudorange_ms,
+                gnss_signal_cnr_dbhz
             ),
             Message::Msg1076(m) => msm!(
                 m,
                 gps(m.gps_epoch_time_ms),
                 System::Gps,
-                gnss_signal_fine_pseudorange_ext_ms
+                gnss_signal_fine_pseudorange_ext_ms,
+                gnss_signal_cnr_ext_dbhz
             ),
             Message::Msg1077(m) => msm!(
                 m,
                 gps(m.gps_epoch_time_ms),
                 System::Gps,
-                gnss_signal_fine_pseudorange_ext_ms
+                gnss_signal_fine_pseudorange_ext_ms,
+                gnss_signal_cnr_ext_dbhz
             ),
             Message::Msg1084(m) => {
                 self.glo_msg_tod_ms = Some(i64::from(m.glo_epoch_time_ms));
-                msm!(m, None, System::Glonass, gnss_signal_fine_pseudorange_ms)
+                msm!(
+                    m,
+                    None,
+                    System::Glonass,
+                    gnss_signal_fine_pseudorange_ms,
+                    gnss_signal_cnr_dbhz
+                )
             }
             Message::Msg1085(m) => {
                 self.glo_msg_tod_ms = Some(i64::from(m.glo_epoch_time_ms));
@@ -307,7 +319,13 @@ impl Rtcm3 {
                         self.msm_fcn.insert(s.satellite_id, k);
                     }
                 }
-                msm!(m, None, System::Glonass, gnss_signal_fine_pseudorange_ms)
+                msm!(
+                    m,
+                    None,
+                    System::Glonass,
+                    gnss_signal_fine_pseudorange_ms,
+                    gnss_signal_cnr_dbhz
+                )
             }
             Message::Msg1086(m) => {
                 self.glo_msg_tod_ms = Some(i64::from(m.glo_epoch_time_ms));
@@ -315,7 +333,8 @@ impl Rtcm3 {
                     m,
                     None,
                     System::Glonass,
-                    gnss_signal_fine_pseudorange_ext_ms
+                    gnss_signal_fine_pseudorange_ext_ms,
+                    gnss_signal_cnr_ext_dbhz
                 )
             }
             Message::Msg1087(m) => {
@@ -329,62 +348,72 @@ impl Rtcm3 {
                     m,
                     None,
                     System::Glonass,
-                    gnss_signal_fine_pseudorange_ext_ms
+                    gnss_signal_fine_pseudorange_ext_ms,
+                    gnss_signal_cnr_ext_dbhz
                 )
             }
             Message::Msg1094(m) => msm!(
                 m,
                 gps(m.gal_epoch_time_ms),
                 System::Galileo,
-                gnss_signal_fine_pseudorange_ms
+                gnss_signal_fine_pseudorange_ms,
+                gnss_signal_cnr_dbhz
             ),
             Message::Msg1095(m) => msm!(
                 m,
                 gps(m.gal_epoch_time_ms),
                 System::Galileo,
-                gnss_signal_fine_pseudorange_ms
+                gnss_signal_fine_pseudorange_ms,
+                gnss_signal_cnr_dbhz
             ),
             Message::Msg1096(m) => msm!(
                 m,
                 gps(m.gal_epoch_time_ms),
                 System::Galileo,
-                gnss_signal_fine_pseudorange_ext_ms
+                gnss_signal_fine_pseudorange_ext_ms,
+                gnss_signal_cnr_ext_dbhz
             ),
             Message::Msg1097(m) => msm!(
                 m,
                 gps(m.gal_epoch_time_ms),
                 System::Galileo,
-                gnss_signal_fine_pseudorange_ext_ms
+                gnss_signal_fine_pseudorange_ext_ms,
+                gnss_signal_cnr_ext_dbhz
             ),
             Message::Msg1114(m) => msm!(
                 m,
                 gps(m.qzss_epoch_time_ms),
                 System::Qzss,
-                gnss_signal_fine_pseudorange_ms
+                gnss_signal_fine_pseudorange_ms,
+                gnss_signal_cnr_dbhz
             ),
             Message::Msg1115(m) => msm!(
                 m,
                 gps(m.qzss_epoch_time_ms),
                 System::Qzss,
-                gnss_signal_fine_pseudorange_ms
+                gnss_signal_fine_pseudorange_ms,
+                gnss_signal_cnr_dbhz
             ),
             Message::Msg1116(m) => msm!(
                 m,
                 gps(m.qzss_epoch_time_ms),
                 System::Qzss,
-                gnss_signal_fine_pseudorange_ext_ms
+                gnss_signal_fine_pseudorange_ext_ms,
+                gnss_signal_cnr_ext_dbhz
             ),
             Message::Msg1117(m) => msm!(
                 m,
                 gps(m.qzss_epoch_time_ms),
                 System::Qzss,
-                gnss_signal_fine_pseudorange_ext_ms
+                gnss_signal_fine_pseudorange_ext_ms,
+                gnss_signal_cnr_ext_dbhz
             ),
             Message::Msg1124(m) => msm!(
                 m,
                 bds(m.bds_epoch_time_ms),
                 System::Beidou,
                 gnss_signal_fine_pseudorange_ms,
+                gnss_signal_cnr_dbhz,
                 Some(bds_as_gps(m.bds_epoch_time_ms))
             ),
             Message::Msg1125(m) => msm!(
@@ -392,6 +421,7 @@ impl Rtcm3 {
                 bds(m.bds_epoch_time_ms),
                 System::Beidou,
                 gnss_signal_fine_pseudorange_ms,
+                gnss_signal_cnr_dbhz,
                 Some(bds_as_gps(m.bds_epoch_time_ms))
             ),
             Message::Msg1126(m) => msm!(
@@ -399,6 +429,7 @@ impl Rtcm3 {
                 bds(m.bds_epoch_time_ms),
                 System::Beidou,
                 gnss_signal_fine_pseudorange_ext_ms,
+                gnss_signal_cnr_ext_dbhz,
                 Some(bds_as_gps(m.bds_epoch_time_ms))
             ),
             Message::Msg1127(m) => msm!(
@@ -406,6 +437,7 @@ impl Rtcm3 {
                 bds(m.bds_epoch_time_ms),
                 System::Beidou,
                 gnss_signal_fine_pseudorange_ext_ms,
+                gnss_signal_cnr_ext_dbhz,
                 Some(bds_as_gps(m.bds_epoch_time_ms))
             ),
             Message::Msg1002(m) => {
@@ -418,6 +450,7 @@ impl Rtcm3 {
                             CodeObs {
                                 code: code.into(),
                                 value_m: p + amb,
+                                cn0_dbhz: s.l1_cnr_dbhz.map(f64::from),
                             },
                         ));
                     }
@@ -444,6 +477,7 @@ impl Rtcm3 {
                         CodeObs {
                             code: code.into(),
                             value_m: l1,
+                            cn0_dbhz: s.l1_cnr_dbhz.map(f64::from),
                         },
                     ));
                     if let Some(d) = s.l2_l1_pseudorange_diff_m {
@@ -456,6 +490,7 @@ impl Rtcm3 {
                             CodeObs {
                                 code: code.into(),
                                 value_m: l1 + fx(d),
+                                cn0_dbhz: s.l2_cnr_dbhz.map(f64::from),
                             },
                         ));
                     }
@@ -540,6 +575,7 @@ impl Rtcm3 {
                             CodeObs {
                                 code: code.into(),
                                 value_m: p + s.l1_pseudorange_amb_m,
+                                cn0_dbhz: s.l1_cnr_dbhz.map(f64::from),
                             },
                         ));
                     }
@@ -561,6 +597,7 @@ impl Rtcm3 {
                         CodeObs {
                             code: code.into(),
                             value_m: l1,
+                            cn0_dbhz: s.l1_cnr_dbhz.map(f64::from),
                         },
                     ));
                     // DF046: 0 C/A, 1 P (2, 3 reserved: not used).
@@ -575,6 +612,7 @@ impl Rtcm3 {
                             CodeObs {
                                 code: code.into(),
                                 value_m: l1 + fx(d),
+                                cn0_dbhz: s.l2_cnr_dbhz.map(f64::from),
                             },
                         ));
                     }

@@ -197,9 +197,12 @@ impl Ubx {
         };
         for k in 0..usize::from(n) {
             let q = 8 + 24 * k;
-            let (Some(pr), Some(&sv), Some(&qi)) =
-                (le::<8>(p, q + 8), p.get(q + 20), p.get(q + 21))
-            else {
+            let (Some(pr), Some(&sv), Some(&qi), Some(&cno)) = (
+                le::<8>(p, q + 8),
+                p.get(q + 20),
+                p.get(q + 21),
+                p.get(q + 22),
+            ) else {
                 return false;
             };
             let pr_m = f64::from_le_bytes(pr);
@@ -215,6 +218,8 @@ impl Ubx {
                 .push(CodeObs {
                     code: "C1C".into(),
                     value_m: pr_m,
+                    // cno: I1, dB-Hz.
+                    cn0_dbhz: Some(f64::from(cno as i8)),
                 });
         }
         self.counts.epochs += 1;
@@ -290,6 +295,7 @@ impl Ubx {
                 .push(CodeObs {
                     code: code.into(),
                     value_m: pr,
+                    cn0_dbhz: Some(f64::from(meas.cno())),
                 });
         }
         self.counts.epochs += 1;

@@ -19,14 +19,17 @@ use crate::IoError;
 /// The epoch's NMEA sentences, written one at a time as they are formed.
 /// Its own frame, not on the epoch's path. The request is the epoch's (the
 /// satellites seen, for GSV and the DOPs); without one, the sentences of an
-/// epoch with no satellites.
+/// epoch with no satellites. `cn0_dbhz`: the C/N0 of the epoch's
+/// satellites for GSV, when known (a stream epoch's, from its MSM; the
+/// protocol's epochs carry none: empty).
 #[inline(never)]
 pub(crate) fn write_nmea<M: Write>(
     wire: &WireResult,
     request: Option<&Request>,
+    cn0_dbhz: &[u8],
     nmea_out: &mut M,
 ) -> Result<(), M::Error> {
-    write_nmea_for(wire, request.map(|r| &r.command), nmea_out)
+    write_nmea_for(wire, request.map(|r| &r.command), cn0_dbhz, nmea_out)
 }
 
 /// [`write_nmea`] for an epoch command taken out of the request slot.
@@ -34,6 +37,7 @@ pub(crate) fn write_nmea<M: Write>(
 pub(crate) fn write_nmea_for<M: Write>(
     wire: &WireResult,
     command: Option<&Command>,
+    cn0_dbhz: &[u8],
     nmea_out: &mut M,
 ) -> Result<(), M::Error> {
     use raim_proto::araim_msg::AraimCommand;
@@ -48,7 +52,10 @@ pub(crate) fn write_nmea_for<M: Write>(
     };
     nmea::write_epoch(
         wire,
-        &nmea::Sky::new(&epoch),
+        &nmea::Sky {
+            epoch: &epoch,
+            cn0_dbhz,
+        },
         nmea::BUILT,
         &mut |s: &nmea::Sentence| nmea_out.write_all(s.as_bytes()),
     )?;

@@ -220,7 +220,7 @@ impl Server {
             };
             epoch_answer((araim, model), status, config.as_ref(), &input, platform)
         };
-        self.write_araim_nmea(&answer, nmea_out)
+        self.write_araim_nmea(seq, &answer, nmea_out)
             .map_err(super::IoError::Nmea)?;
         match &answer {
             Ok(a) => self.send(link, seq, super::BodyRef::Araim(a)),
@@ -236,11 +236,12 @@ impl Server {
     /// [`WireResult::set_from_araim`]: raim_proto::result::WireResult::set_from_araim
     fn write_araim_nmea<M: embedded_io::Write>(
         &mut self,
+        seq: Option<u32>,
         answer: &Result<AraimAnswer, WireError>,
         nmea_out: &mut M,
     ) -> Result<(), M::Error> {
         let Ok(AraimAnswer::Result(r)) = answer else {
-            return self.write_no_fix(nmea_out);
+            return self.write_no_fix(seq, nmea_out);
         };
         let Server { request, wire, .. } = self;
         match request.as_ref().map(|q| &q.command) {
@@ -252,7 +253,12 @@ impl Server {
             }
             _ => return Ok(()),
         }
-        super::answer::write_nmea(&self.wire, self.request.as_ref(), nmea_out)
+        super::answer::write_nmea(
+            &self.wire,
+            self.request.as_ref(),
+            self.nmea_cn0(seq),
+            nmea_out,
+        )
     }
 }
 

@@ -556,7 +556,7 @@ impl Server {
                 if let Some(time_s) = refusal.nmea_time_s {
                     self.wire.reset();
                     self.wire.time_s = time_s;
-                    answer::write_nmea(&self.wire, None, nmea_out).map_err(IoError::Nmea)?;
+                    answer::write_nmea(&self.wire, None, &[], nmea_out).map_err(IoError::Nmea)?;
                 }
                 self.send(link, refusal.seq, BodyRef::Error(&refusal.error))
             }
@@ -680,14 +680,32 @@ impl Server {
         platform: &mut P,
     ) -> Result<(), IoError<L::Error, M::Error>> {
         platform.on_epoch(None);
-        self.write_no_fix(nmea_out).map_err(IoError::Nmea)?;
+        self.write_no_fix(Some(seq), nmea_out)
+            .map_err(IoError::Nmea)?;
         self.request = None;
         self.send(link, Some(seq), BodyRef::Error(&e))
     }
 
+    /// The C/N0 of the epoch being answered, for GSV: a stream epoch's
+    /// (answered unasked, `seq` None: the satellites of the epoch formed
+    /// last, `stream::StreamState`), else none (the protocol's epochs carry
+    /// no C/N0).
+    pub(crate) fn nmea_cn0(&self, seq: Option<u32>) -> &[u8] {
+        #[cfg(feature = "rtcm")]
+        if seq.is_none() {
+            return self.stream.cn0_dbhz();
+        }
+        let _ = seq;
+        &[]
+    }
+
     /// The no-fix NMEA sentences of the epoch in the request slot (its
-    /// time, no position, status void).
-    pub(crate) fn write_no_fix<M: Write>(&mut self, nmea_out: &mut M) -> Result<(), M::Error> {
+    /// time, no position, status void); `seq` as for [`Self::nmea_cn0`].
+    pub(crate) fn write_no_fix<M: Write>(
+        &mut self,
+        seq: Option<u32>,
+        nmea_out: &mut M,
+    ) -> Result<(), M::Error> {
         let Some(time_s) = self
             .request
             .as_ref()
@@ -697,7 +715,12 @@ impl Server {
         };
         self.wire.reset();
         self.wire.time_s = time_s;
-        answer::write_nmea(&self.wire, self.request.as_ref(), nmea_out)
+        answer::write_nmea(
+            &self.wire,
+            self.request.as_ref(),
+            self.nmea_cn0(seq),
+            nmea_out,
+        )
     }
 
     /// The NMEA sentences of a particle-filter epoch (`command`, taken out
@@ -724,7 +747,7 @@ impl Server {
                 self.wire.time_s = e.time_s;
             }
         }
-        answer::write_nmea_for(&self.wire, Some(command), nmea_out)
+        answer::write_nmea_for(&self.wire, Some(command), &[], nmea_out)
     }
 
     /// `Status`, with the platform's fields filled in.
@@ -796,8 +819,13 @@ impl Server {
         };
         match outcome {
             Ok(()) => {
-                answer::write_nmea(&self.wire, self.request.as_ref(), nmea_out)
-                    .map_err(IoError::Nmea)?;
+                answer::write_nmea(
+                    &self.wire,
+                    self.request.as_ref(),
+                    self.nmea_cn0(seq),
+                    nmea_out,
+                )
+                .map_err(IoError::Nmea)?;
                 let Server {
                     scratch,
                     out,
@@ -819,7 +847,7 @@ impl Server {
                 )
             }
             Err(e) => {
-                self.write_no_fix(nmea_out).map_err(IoError::Nmea)?;
+                self.write_no_fix(seq, nmea_out).map_err(IoError::Nmea)?;
                 self.send(link, seq, BodyRef::Error(&e))
             }
         }

@@ -10,8 +10,8 @@
 //! result, or why it could not be run (`StreamNotDated` before the first
 //! GPS ephemeris, `StreamCapacity`, `Unconfigured` with no configuration
 //! in force: a stream never puts a default in force). Sigmas are the
-//! unit's own (the stream rule of `raim_nav::ranging::stream_sigma_m`
-//! from the configuration's model), whatever `host_sigmas` says: the
+//! unit's own (`raim_nav::ranging::stream_sigma_for_m`, [`stream_sigmas`]),
+//! whatever `host_sigmas` says: the
 //! host supplies nothing here. docs/RECEIVERS.md "Straight into the unit".
 //!
 //! **Which monitor.** ARAIM is the configured monitor when an ISM is in
@@ -22,14 +22,17 @@
 //! `Ranges` epoch through `answer_epoch`. A satellite the ISM has no entry
 //! for is that path's typed refusal of the epoch (`NotInIsm`), never a
 //! default entry. The stream sigma of an ARAIM epoch has no
-//! signal-in-space term (the configuration's model with `ura_m` = 0):
-//! the ISM's sigma_URA and sigma_URE carry it, and the stream sigma is the
-//! satellite's nominal (troposphere, the pair's own noise factor times
-//! multipath and noise, the doubled residual ionosphere of a
-//! single-frequency range) that the ARAIM join adds to them
+//! signal-in-space term: the ISM's sigma_URA and sigma_URE carry it, and
+//! the stream sigma is the satellite's nominal that the ARAIM join adds
+//! to them, `raim replay --araim`'s own rule
+//! (`raim_nav::ranging::araim_curves`: the DO-229 troposphere and the
+//! ADD's airborne multipath and noise curves through the noise factor of
+//! the signal pair the epoch formed; for a single-frequency range the
+//! doubled residual ionosphere the ADD's dual-frequency model lacks)
 //! (docs/RECEIVERS.md "ARAIM from the stream").
 
 use embedded_io::Write;
+use raim_nav::ranging::StreamSigmas;
 use raim_nav::rtcm::{FormError, FormedEpoch, StreamReceiver};
 use raim_proto::araim_msg::AraimCommand;
 use raim_proto::error::WireError;
@@ -75,6 +78,7 @@ impl StreamState {
                 time_gps_s: 0.0,
                 reference_m: None,
                 sats: heapless::Vec::new(),
+                cn0_dbhz: heapless::Vec::new(),
                 rejected: 0,
             },
             epochs: 0,
@@ -83,7 +87,7 @@ impl StreamState {
 
     /// Decode one RTCM frame; `Some` when it closed an epoch. `araim`:
     /// the epoch will run ARAIM, so its sigmas leave out the
-    /// signal-in-space term ([`stream_sigma_model`]). Not inlined: its
+    /// signal-in-space term ([`stream_sigmas`]). Not inlined: its
     /// stack stays off the link's other paths.
     #[inline(never)]
     pub(crate) fn on_frame(
@@ -92,10 +96,10 @@ impl StreamState {
         config: Option<&raim_core::Config>,
         araim: bool,
     ) -> Option<Result<(), FormError>> {
-        let model = stream_sigma_model(config, araim);
+        let sigmas = stream_sigmas(config, araim);
         let r = self
             .receiver
-            .on_frame(frame, &model, STREAM_MASK_RAD, &mut self.formed);
+            .on_frame(frame, &sigmas, STREAM_MASK_RAD, &mut self.formed);
         if r.is_some() {
             self.epochs = self.epochs.wrapping_add(1);
         }
@@ -107,6 +111,11 @@ impl StreamState {
     #[cfg(test)]
     pub(crate) fn formed_mut(&mut self) -> &mut FormedEpoch<CAPACITY> {
         &mut self.formed
+    }
+
+    /// The C/N0 of the satellites of the epoch formed last (GSV).
+    pub(crate) fn cn0_dbhz(&self) -> &[u8] {
+        &self.formed.cn0_dbhz
     }
 
     /// Epochs formed (answered or refused) and ephemerides held.
@@ -137,20 +146,24 @@ impl Default for StreamState {
     }
 }
 
-/// The sigma model of a stream epoch's satellites: the configuration's
-/// (the default before one is in force: such epochs are refused
-/// `Unconfigured`), and for ARAIM without its signal-in-space term, which
-/// the ISM's sigma_URA/sigma_URE give (the ARAIM join adds them to the
-/// satellite's sigma, `raim_core::araim::monitor`).
-pub fn stream_sigma_model(
-    config: Option<&raim_core::Config>,
-    araim: bool,
-) -> raim_core::sigma::SigmaModel {
-    let mut model = config.map_or_else(raim_core::sigma::SigmaModel::default, |c| c.sigma_model);
+/// The sigmas of a stream epoch's satellites
+/// ([`raim_nav::ranging::stream_sigma_for_m`]): for the snapshot monitor
+/// the configuration's model (the default before one is in force: such
+/// epochs are refused `Unconfigured`); for ARAIM the nominal curves of
+/// each satellite's signal pair, `raim replay --araim`'s
+/// ([`raim_nav::ranging::araim_curves`]), with no signal-in-space term
+/// (the ISM's sigma_URA/sigma_URE, which the ARAIM join adds,
+/// `raim_core::araim::monitor`) and, for a single-frequency range, the
+/// configuration's residual ionosphere doubled.
+pub fn stream_sigmas(config: Option<&raim_core::Config>, araim: bool) -> StreamSigmas {
+    let model = config.map_or_else(raim_core::sigma::SigmaModel::default, |c| c.sigma_model);
     if araim {
-        model.ura_m = 0.0;
+        StreamSigmas::Araim {
+            iono_vertical_m: model.iono_vertical_m,
+        }
+    } else {
+        StreamSigmas::Snapshot(model)
     }
-    model
 }
 
 /// The monitor a staged stream epoch runs.
@@ -253,7 +266,7 @@ impl Server {
         match refusal {
             Some(e) => {
                 platform.on_epoch(None);
-                self.write_no_fix(nmea_out).map_err(IoError::Nmea)?;
+                self.write_no_fix(None, nmea_out).map_err(IoError::Nmea)?;
                 self.request = None;
                 self.send(link, None, crate::answer::BodyRef::Error(&e))?;
                 Ok(None)
@@ -292,28 +305,28 @@ mod tests {
         );
     }
 
-    /// The stream sigma model: the configuration's, and for ARAIM the
-    /// same without its signal-in-space term (the ISM's); the default
-    /// model before a configuration is in force.
+    /// The stream sigmas: the configuration's model for the snapshot
+    /// monitor (the default model before a configuration is in force),
+    /// and for ARAIM the pair curves with the configuration's residual
+    /// ionosphere for single-frequency ranges.
     #[test]
     fn araim_stream_sigmas_leave_the_signal_in_space_to_the_ism() {
         let mut c = raim_core::Config::default();
         c.sigma_model.ura_m = 1.5;
-        c.sigma_model.noise_m = 0.2;
-        assert_eq!(stream_sigma_model(Some(&c), false), c.sigma_model);
-        let a = stream_sigma_model(Some(&c), true);
-        assert_eq!(a.ura_m, 0.0);
+        c.sigma_model.iono_vertical_m = 0.7;
         assert_eq!(
-            (a.noise_m, a.iono_vertical_m, a.min_elevation_rad),
-            (
-                0.2,
-                c.sigma_model.iono_vertical_m,
-                c.sigma_model.min_elevation_rad
-            )
+            stream_sigmas(Some(&c), false),
+            StreamSigmas::Snapshot(c.sigma_model)
         );
         assert_eq!(
-            stream_sigma_model(None, false),
-            raim_core::sigma::SigmaModel::default()
+            stream_sigmas(Some(&c), true),
+            StreamSigmas::Araim {
+                iono_vertical_m: 0.7
+            }
+        );
+        assert_eq!(
+            stream_sigmas(None, false),
+            StreamSigmas::Snapshot(raim_core::sigma::SigmaModel::default())
         );
     }
 

@@ -4,7 +4,8 @@
 //! I/NAV, 1042 BeiDou) once, an hour before its toc, and at each epoch one
 //! MSM7 per system (1077, 1097, 1127; DF393 set on all but the last) with
 //! the signals of the stream's iono-free pairs (GPS C1C/C2W, Galileo
-//! C1C/C5Q, BeiDou C2I/C6I). The stream may be sent `delta_weeks` later:
+//! C1C/C5Q, BeiDou C2I/C6I), each with its C/N0 from the RINEX S
+//! observable (DF408). The stream may be sent `delta_weeks` later:
 //! every ephemeris week moved on, times of week as recorded (no GLONASS,
 //! so no leap-second shift).
 
@@ -36,9 +37,15 @@ pub const SIGNALS: [(System, [SignalCode; 2]); 3] = [
     (System::Beidou, [("C2I", 2, 'I'), ("C6I", 6, 'I')]),
 ];
 
-fn data(name: &str) -> std::path::PathBuf {
-    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
+/// A file of ../shared/data (beside the repository): found from the
+/// including crate's directory (host-tests, or crates/raim-tool, whose
+/// `stream_araim_replay` test includes this module).
+pub fn data(name: &str) -> std::path::PathBuf {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    dir.ancestors()
+        .map(|p| p.join("shared/data"))
+        .find(|p| p.is_dir())
+        .unwrap_or_else(|| dir.join("../../shared/data"))
         .join(name)
 }
 
@@ -194,13 +201,18 @@ fn fnav_message(k: &Kepler, delta_weeks: i64) -> Message {
 }
 
 /// One system's MSM7 at an epoch: (satellite, rough ms as DF397 + DF398,
-/// [(band, attribute, fine ms)]).
-type Cells = Vec<(u8, u8, f64, Vec<(u8, char, f64)>)>;
+/// [(band, attribute, fine ms, C/N0 dB-Hz)]).
+type Cells = Vec<(u8, u8, f64, Vec<(u8, char, f64, Option<f64>)>)>;
 
 /// The cells of `sys` in an ESBC epoch: the rough range (1/1024 ms) from
 /// the first signal, each signal's remainder as the fine range (within
-/// DF405's +-2^-10 ms, else the signal is left out).
-fn cells(sats: &BTreeMap<SatId, Vec<raim_gnss::rinex_io::CodeObs>>, sys: System) -> Cells {
+/// DF405's +-2^-10 ms, else the signal is left out); `pairs_only`: a
+/// satellite is sent only with both signals of its system's pair.
+fn cells(
+    sats: &BTreeMap<SatId, Vec<raim_gnss::rinex_io::CodeObs>>,
+    sys: System,
+    pairs_only: bool,
+) -> Cells {
     let signals = SIGNALS.iter().find(|(s, _)| *s == sys).unwrap().1;
     let mut out = Cells::new();
     for (id, obs) in sats.iter().filter(|(id, _)| id.system == sys) {
@@ -215,14 +227,18 @@ fn cells(sats: &BTreeMap<SatId, Vec<raim_gnss::rinex_io::CodeObs>>, sys: System)
         let rough_1024 = (first_ms * 1024.0).round() as i64;
         let (int_ms, mod_1024) = (rough_1024 / 1024, rough_1024 % 1024);
         let rough_ms = int_ms as f64 + mod_1024 as f64 / 1024.0;
-        let sigs: Vec<(u8, char, f64)> = signals
+        // The C/N0 of each signal: the RINEX S observable (DF408 holds it
+        // to 2^-4 dB-Hz).
+        let cn0 = |code: &str| obs.iter().find(|o| o.code == code).and_then(|o| o.cn0_dbhz);
+        let sigs: Vec<(u8, char, f64, Option<f64>)> = signals
             .iter()
             .filter_map(|(c, band, attr)| {
                 let fine = ms(c)? - rough_ms;
-                (fine.abs() < 1.0 / 1024.0 - FINE_MS).then_some((*band, *attr, fine))
+                (fine.abs() < 1.0 / 1024.0 - FINE_MS).then_some((*band, *attr, fine, cn0(c)))
             })
             .collect();
-        if !sigs.is_empty() && (1..=254).contains(&int_ms) {
+        let complete = !pairs_only || sigs.len() == signals.len();
+        if !sigs.is_empty() && complete && (1..=254).contains(&int_ms) {
             out.push((id.prn, int_ms as u8, mod_1024 as f64 / 1024.0, sigs));
         }
     }
@@ -244,11 +260,12 @@ macro_rules! msm7 {
                 gnss_satellite_rough_range_mod1ms_ms: *mod_ms,
                 ..Default::default()
             });
-            for (band, attr, fine) in sigs {
+            for (band, attr, fine, cn0) in sigs {
                 m.data_segment.signal_data.push(rtcm_rs::msg::$sig_t {
                     satellite_id: *prn,
                     signal_id: $sig_id::new(*band, *attr),
                     gnss_signal_fine_pseudorange_ext_ms: Some(*fine),
+                    gnss_signal_cnr_ext_dbhz: *cn0,
                     ..Default::default()
                 });
             }
@@ -283,6 +300,24 @@ pub fn esbc_stream_with(
     delta_weeks: i64,
     bds_time: BeidouTime,
     fnav: bool,
+) -> (Vec<u8>, Vec<Carried>) {
+    esbc_stream_opts(delta_weeks, bds_time, fnav, false)
+}
+
+/// [`esbc_stream`] with only the satellites that carry both signals of
+/// their system's pair (GPS C1C+C2W, Galileo C1C+C5Q, BeiDou C2I+C6I): the
+/// satellites `raim replay --araim --code G=C1C+C2W --code E=C1C+C5Q
+/// --code C=C2I+C6I` ranges on the RINEX (it drops ESBC's C2I-only BeiDou
+/// satellites, which [`esbc_stream`] sends single-frequency).
+pub fn esbc_stream_pairs_only(delta_weeks: i64) -> (Vec<u8>, Vec<Carried>) {
+    esbc_stream_opts(delta_weeks, BeidouTime::Bdt, false, true)
+}
+
+fn esbc_stream_opts(
+    delta_weeks: i64,
+    bds_time: BeidouTime,
+    fnav: bool,
+    pairs_only: bool,
 ) -> (Vec<u8>, Vec<Carried>) {
     let obs = ObsData::load(&data(OBS)).unwrap();
     let nav = NavData::load(&data(NAV)).unwrap();
@@ -334,9 +369,9 @@ pub fn esbc_stream_with(
             BeidouTime::Gps => tow_ms,
         };
         let (g, ga, c) = (
-            cells(&e.sats, System::Gps),
-            cells(&e.sats, System::Galileo),
-            cells(&e.sats, System::Beidou),
+            cells(&e.sats, System::Gps, pairs_only),
+            cells(&e.sats, System::Galileo, pairs_only),
+            cells(&e.sats, System::Beidou, pairs_only),
         );
         put(
             &mut b,
@@ -379,10 +414,10 @@ pub fn esbc_stream_with(
         );
         let mut sent = Vec::new();
         for (sys, _) in SIGNALS {
-            let cs = cells(&e.sats, sys);
+            let cs = cells(&e.sats, sys, pairs_only);
             for (prn, _, _, sigs) in &cs {
                 let id = SatId::new(sys, *prn);
-                for (band, attr, _) in sigs {
+                for (band, attr, _, _) in sigs {
                     let code = format!("C{band}{attr}");
                     let v = e.sats[&id].iter().find(|o| o.code == code).unwrap().value_m;
                     sent.push((id, code, v));

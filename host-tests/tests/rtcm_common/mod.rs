@@ -11,6 +11,7 @@ use raim_core::sigma::SigmaModel;
 use raim_core::{Config, RangeObservation, System};
 use raim_gnss::ranging::{prepare_epoch, PreparedEpoch, RangingOptions};
 use raim_gnss::{NavData, ObsData};
+use raim_nav::ranging::StreamSigmas;
 use raim_recv::{Decoder, Item};
 
 pub const GMSD7: &str = concat!(
@@ -75,24 +76,11 @@ pub fn options(model: &SigmaModel) -> RangingOptions {
     }
 }
 
-/// The stream sigma of one prepared satellite: raim-nav's rule, and a
-/// single-frequency range of another system with the configuration's
-/// model, ionosphere doubled (what `raim replay` does through its
-/// configuration, `adjust_config`).
-pub fn sigma_m(model: &SigmaModel, system: System, code: &str, el_rad: f64) -> f64 {
-    raim_nav::ranging::stream_sigma_m(
-        system,
-        code,
-        el_rad,
-        model,
-        Some(&glonass_model(model)),
-        2.0,
-    )
-    .unwrap_or_else(|| {
-        let mut m = *model;
-        m.iono_vertical_m *= 2.0;
-        m.sigma_m(el_rad)
-    })
+/// The stream sigma of one prepared satellite: raim-nav's rule
+/// (`stream_sigma_for_m`, the one the device's receiver calls), with the
+/// stream's doubled residual ionosphere for a single-frequency range.
+pub fn sigma_m(sigmas: &StreamSigmas, system: System, code: &str, el_rad: f64) -> f64 {
+    raim_nav::ranging::stream_sigma_for_m(sigmas, system, code, el_rad, 2.0)
 }
 
 /// One epoch as the host forms it: its prepared form and the observations
@@ -307,18 +295,22 @@ pub fn msg1013(leap_s: u8) -> Vec<u8> {
 /// host's clock at `now_week` (10-bit weeks read as the latest not after
 /// it, as `raim replay --rtcm3` reads them against the computer's clock).
 pub fn host_epochs(bytes: &[u8], now_week: i64) -> (Vec<HostEpoch>, raim_recv::Counts) {
-    host_epochs_with(bytes, now_week, &Config::default().sigma_model)
+    host_epochs_with(
+        bytes,
+        now_week,
+        &StreamSigmas::Snapshot(Config::default().sigma_model),
+    )
 }
 
-/// [`host_epochs`] with the stream sigmas of `model` (an ARAIM stream
-/// epoch's: the configuration's model without its signal-in-space term).
+/// [`host_epochs`] with the stream sigmas `sigmas` (an ARAIM stream
+/// epoch's: `StreamSigmas::Araim`, the pair curves of `raim replay
+/// --araim`).
 pub fn host_epochs_with(
     bytes: &[u8],
     now_week: i64,
-    model: &SigmaModel,
+    sigmas: &StreamSigmas,
 ) -> (Vec<HostEpoch>, raim_recv::Counts) {
-    let model = *model;
-    let opts = options(&model);
+    let opts = options(&Config::default().sigma_model);
     let mut host = raim_recv::rtcm::Rtcm3::new(now_week);
     let mut obs = ObsData {
         path: GMSD7.into(),
@@ -343,7 +335,7 @@ pub fn host_epochs_with(
                 .sats
                 .iter()
                 .map(|s| RangeObservation {
-                    sigma_m: Some(sigma_m(&model, s.obs.id.system, &s.code, s.elevation_rad)),
+                    sigma_m: Some(sigma_m(sigmas, s.obs.id.system, &s.code, s.elevation_rad)),
                     ..s.obs
                 })
                 .collect();

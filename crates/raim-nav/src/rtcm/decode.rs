@@ -316,6 +316,10 @@ pub struct MsmSignal {
     /// (DF397 + DF398 + DF400/DF405) x c / 1000, m; `None` when the rough
     /// or the fine range is marked invalid.
     pub pseudorange_m: Option<f64>,
+    /// The signal's C/N0, dB-Hz: DF403 (MSM4/5, 1 dB-Hz) or DF408
+    /// (MSM6/7, 2^-4 dB-Hz); `None` when the field says 0 ("not
+    /// computed").
+    pub cnr_dbhz: Option<f64>,
 }
 
 /// A set bit's 1-based position, counted from the most significant of
@@ -549,6 +553,24 @@ impl<'a> Msm<'a> {
         }
     }
 
+    /// The C/N0 of cell `k` (0-based among the set cells), dB-Hz: the
+    /// signal data hold each field for every cell in turn (RTCM 10403.3
+    /// Tables 3.5-85 to 3.5-91: fine range, fine phase, lock time,
+    /// half-cycle, then the C/N0), so DF403 (6 bits, 1 dB-Hz) or DF408 (10
+    /// bits, 2^-4 dB-Hz) of cell `k` follows the first four fields of all
+    /// the cells. 0 is "not computed": `None`.
+    fn cnr_dbhz(&self, k: usize) -> Result<Option<f64>, BitsError> {
+        let n_cell = self.cell_mask.count_ones() as usize;
+        let v = if self.high_res {
+            let at = self.sig_at + (20 + 24 + 10 + 1) * n_cell + 10 * k;
+            f64::from(BitReader::at(self.payload, at).u32(10)?) * (1.0 / 16.0)
+        } else {
+            let at = self.sig_at + (15 + 22 + 4 + 1) * n_cell + 6 * k;
+            f64::from(BitReader::at(self.payload, at).u8(6)?)
+        };
+        Ok((v > 0.0).then_some(v))
+    }
+
     /// The pseudorange of cell `k` (0-based among the set cells) of
     /// satellite `i` (0-based among the set satellites).
     fn pseudorange_m(&self, i: usize, k: usize) -> Result<Option<f64>, BitsError> {
@@ -607,12 +629,14 @@ impl Iterator for MsmSignals<'_, '_> {
             let (band, attribute) = m.code(signal_id)?;
             // Checked in `Msm::new`: the payload holds every cell.
             let pseudorange_m = m.pseudorange_m(i as usize, k).ok()?;
+            let cnr_dbhz = m.cnr_dbhz(k).ok()?;
             return Some(MsmSignal {
                 sat_id,
                 signal_id,
                 band,
                 attribute,
                 pseudorange_m,
+                cnr_dbhz,
             });
         }
         None
@@ -1134,12 +1158,13 @@ mod tests {
         b.put(0b1011, 4);
         // DF397, DF398 per satellite.
         b.put(70, 8).put(75, 8).put(512, 10).put(100, 10);
-        // DF400 per cell (the second invalid), then DF401, DF402, DF420,
-        // DF403.
+        // DF400 per cell (the second invalid), then DF401, DF402 and
+        // DF420 per cell, then DF403 per cell (45 dB-Hz, 0 = not
+        // computed, 38 dB-Hz): each field for every cell in turn (RTCM
+        // 10403.3 Table 3.5-85).
         b.put(1000, 15).put(-0x4000, 15).put(-5, 15);
-        for _ in 0..3 {
-            b.put(0, 22 + 4 + 1 + 6);
-        }
+        b.put(0, 3 * 22).put(0, 3 * 4).put(0, 3);
+        b.put(45, 6).put(0, 6).put(38, 6);
         frame(&b.0)
     }
 
@@ -1164,21 +1189,24 @@ mod tests {
                     signal_id: 2,
                     band: 1,
                     attribute: b'C',
-                    pseudorange_m: Some(want_3)
+                    pseudorange_m: Some(want_3),
+                    cnr_dbhz: Some(45.0),
                 },
                 MsmSignal {
                     sat_id: 17,
                     signal_id: 2,
                     band: 1,
                     attribute: b'C',
-                    pseudorange_m: None
+                    pseudorange_m: None,
+                    cnr_dbhz: None,
                 },
                 MsmSignal {
                     sat_id: 17,
                     signal_id: 15,
                     band: 2,
                     attribute: b'S',
-                    pseudorange_m: Some(want_17)
+                    pseudorange_m: Some(want_17),
+                    cnr_dbhz: Some(38.0),
                 },
             ]
         );

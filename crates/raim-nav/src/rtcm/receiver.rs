@@ -48,25 +48,26 @@
 //! (docs/RECEIVERS.md): the stream codes ([`crate::ranging::STREAM_CODES`],
 //! iono-free pairs first), the ephemeris in force ([`EphemerisStore::select`]),
 //! two passes of [`crate::ranging::correct`] around a bootstrap position,
-//! and the stream sigmas ([`crate::ranging::stream_sigma_m`]; a
-//! single-frequency range has its residual-ionosphere term doubled, since a
-//! stream carries no ionospheric model).
+//! and the stream sigmas ([`crate::ranging::stream_sigma_for_m`]: for the
+//! snapshot monitor the configuration's model, a single-frequency range
+//! with its residual-ionosphere term doubled, since a stream carries no
+//! ionospheric model; for ARAIM the ADD's curves of the satellite's signal
+//! pair, `raim replay --araim`'s rule).
 
 use heapless::Vec;
 use raim_core::frames::ecef_to_geodetic;
-use raim_core::sigma::SigmaModel;
 use raim_core::solve::Solution;
 use raim_core::{RangeObservation, SatId, System};
 
 use crate::ephemeris::{SatState, BDT_MINUS_GPST_S, WEEK_S};
 use crate::glonass::{
-    glonass_time_of_day_to_gps_with_s, glonass_time_of_day_with_s, glonass_ura_m, GlonassArc,
-    GlonassEphemeris, GlonassIcdFields,
+    glonass_time_of_day_to_gps_with_s, glonass_time_of_day_with_s, GlonassArc, GlonassEphemeris,
+    GlonassIcdFields,
 };
 use crate::m;
 use crate::ranging::{
-    bootstrap_position_into, correct_at, split_pair, stream_codes, stream_sigma_m, transmit_time_s,
-    Broadcast, Corrections, SatInput,
+    bootstrap_position_into, cn0_dbhz_u8, correct_at, split_pair, stream_codes, stream_sigma_for_m,
+    transmit_time_s, Broadcast, Corrections, SatInput, StreamSigmas,
 };
 use crate::store::{EphemerisStore, Stored};
 use crate::time::table_gps_minus_utc_s;
@@ -235,6 +236,8 @@ struct Signal {
     id: SatId,
     /// RINEX 3 code "C1C": band digit and attribute letter.
     code: [u8; 3],
+    /// C/N0, whole dB-Hz (0: unknown; `cn0_dbhz_u8`).
+    cn0_dbhz: u8,
     value_m: f64,
 }
 
@@ -271,6 +274,10 @@ pub struct FormedEpoch<const N: usize> {
     /// solution, else the station position, else none).
     pub reference_m: Option<[f64; 3]>,
     pub sats: Vec<RangeObservation, N>,
+    /// The C/N0 of each satellite of `sats` (same order), whole dB-Hz, of
+    /// the first signal of the code it was ranged with (the pair's higher
+    /// frequency); 0 when the MSM gave none (MSM4-7 carry it).
+    pub cn0_dbhz: Vec<u8, N>,
     /// Satellites seen but not used (no code, no ephemeris, below the
     /// mask, system not used here).
     pub rejected: u32,
@@ -396,18 +403,20 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
     }
 
     /// Take one whole RTCM 3 frame (preamble to CRC). When it closes an
-    /// epoch, that epoch is formed into `out` with the configuration's
-    /// `model` and `elevation_mask_rad`, and `Some` says whether it could
-    /// be: `Ok(())` with `out` filled, or why not.
+    /// epoch, that epoch is formed into `out` with the sigmas of `sigmas`
+    /// (the configuration's model for the snapshot monitor, or ARAIM's
+    /// curves of each satellite's signal pair) and `elevation_mask_rad`,
+    /// and `Some` says whether it could be: `Ok(())` with `out` filled, or
+    /// why not.
     pub fn on_frame(
         &mut self,
         frame: &[u8],
-        model: &SigmaModel,
+        sigmas: &StreamSigmas,
         elevation_mask_rad: f64,
         out: &mut FormedEpoch<N>,
     ) -> Option<Result<(), FormError>> {
         self.decode(frame);
-        let formed = self.form(model, elevation_mask_rad, out);
+        let formed = self.form(sigmas, elevation_mask_rad, out);
         self.ready = None;
         formed
     }
@@ -698,7 +707,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
     #[inline(never)]
     fn form(
         &mut self,
-        model: &SigmaModel,
+        sigmas: &StreamSigmas,
         elevation_mask_rad: f64,
         out: &mut FormedEpoch<N>,
     ) -> Option<Result<(), FormError>> {
@@ -724,6 +733,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         } = self;
         let o = ready.as_mut()?;
         out.sats.clear();
+        out.cn0_dbhz.clear();
         out.rejected = 0;
         out.reference_m = None;
         let Some(base) = *base_week else {
@@ -750,6 +760,8 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // Satellite order, as the host's epochs (a BTreeMap by SatId).
         sort_checked(&mut o.sigs, |a, b| (a.id, a.code) < (b.id, b.code));
         let mut inputs: Vec<SatInput<'_>, N> = Vec::new();
+        // The C/N0 of each input, in the same order.
+        let mut cn0s: Vec<u8, N> = Vec::new();
         let mut previous: Option<SatId> = None;
         for s in o.sigs.iter() {
             if previous == Some(s.id) {
@@ -766,7 +778,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                     .count();
                 o.sigs.get(start..start + len).unwrap_or(&[])
             };
-            let Some((code, p1_m, p2_m)) = pick_code(stream_codes(s.id.system), have) else {
+            let Some((code, p1_m, p2_m, cn0)) = pick_code(stream_codes(s.id.system), have) else {
                 out.rejected += 1;
                 continue;
             };
@@ -781,22 +793,20 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 p2_m,
                 eph,
             };
-            if inputs.push(input).is_err() {
+            if inputs.push(input).is_err() || cn0s.push(cn0).is_err() {
                 return Some(Err(FormError::TooManySignals {
                     capacity: u32::try_from(N).unwrap_or(u32::MAX),
                 }));
             }
         }
-        let glonass_model = SigmaModel {
-            ura_m: glonass_ura_m(model.ura_m),
-            ..*model
-        };
+        // Each satellite's sigma is set below (`stream_sigma_for_m`), so
+        // the corrections give none.
         let c = Corrections {
             elevation_mask_rad,
             iono: false,
             tropo: true,
             group_delay: true,
-            glonass_sigma: Some(glonass_model),
+            glonass_sigma: None,
         };
         // Each satellite's orbit and clock at its transmit time, once for
         // both passes (the transmit time does not depend on the receiver
@@ -827,7 +837,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // the host hands them over.
         // The receiver's geodetic position, once for every satellite.
         let rx_geodetic = reference.map(ecef_to_geodetic);
-        for (s, tx) in inputs.iter().zip(transmit.iter()) {
+        for ((s, tx), cn0) in inputs.iter().zip(transmit.iter()).zip(cn0s.iter()) {
             let Some(tx) = tx else {
                 out.rejected += 1;
                 continue;
@@ -843,23 +853,18 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 None,
             ) {
                 Ok(mut x) => {
-                    let sigma = stream_sigma_m(
+                    x.obs.sigma_m = Some(stream_sigma_for_m(
+                        sigmas,
                         s.id.system,
                         s.code,
                         x.elevation_rad,
-                        model,
-                        c.glonass_sigma.as_ref(),
                         NO_MODEL_IONO_FACTOR,
-                    )
-                    .or_else(|| {
-                        // A single-frequency range of another system: the
-                        // configuration's model with the ionosphere doubled.
-                        let mut single = *model;
-                        single.iono_vertical_m *= NO_MODEL_IONO_FACTOR;
-                        Some(single.sigma_m(x.elevation_rad))
-                    });
-                    x.obs.sigma_m = sigma;
-                    let _ = out.sats.push(x.obs);
+                    ));
+                    // `out.sats` and `out.cn0_dbhz` have the capacity N of
+                    // `inputs`, and are filled together.
+                    if out.sats.push(x.obs).is_ok() {
+                        let _ = out.cn0_dbhz.push(*cn0);
+                    }
                 }
                 Err(_) => out.rejected += 1,
             }
@@ -874,18 +879,23 @@ fn msm_signals<'m>(m: &'m Msm<'_>, system: System) -> impl Iterator<Item = Signa
         Some(Signal {
             id: SatId::new(system, s.sat_id),
             code: [b'C', b'0' + s.band, s.attribute],
+            cn0_dbhz: cn0_dbhz_u8(s.cnr_dbhz),
             value_m: s.pseudorange_m?,
         })
     })
 }
 
 /// The first preferred code present: a single code, or a pair (both
-/// present) for the iono-free combination.
-fn pick_code<'c>(codes: &[&'c str], have: &[Signal]) -> Option<(&'c str, f64, Option<f64>)> {
-    let find = |c: &str| have.iter().find(|s| s.code() == c).map(|s| s.value_m);
+/// present) for the iono-free combination; with the C/N0 of its (first)
+/// signal.
+fn pick_code<'c>(codes: &[&'c str], have: &[Signal]) -> Option<(&'c str, f64, Option<f64>, u8)> {
+    let find = |c: &str| have.iter().find(|s| s.code() == c);
     codes.iter().find_map(|&c| match split_pair(c) {
-        Some((a, b)) => Some((c, find(a)?, Some(find(b)?))),
-        None => Some((c, find(c)?, None)),
+        Some((a, b)) => {
+            let first = find(a)?;
+            Some((c, first.value_m, Some(find(b)?.value_m), first.cn0_dbhz))
+        }
+        None => find(c).map(|s| (c, s.value_m, None, s.cn0_dbhz)),
     })
 }
 

@@ -19,7 +19,6 @@ use std::path::{Path, PathBuf};
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use plotters::prelude::*;
-use raim_core::araim::error_model::iono_free_factor_sq;
 use raim_core::araim::{
     AraimConfig, Curves, FdeLimits, Ism, Monitor, MonitorError, SatIsm, SatelliteModels,
 };
@@ -374,7 +373,9 @@ pub fn summarise(recs: &[AraimRecord]) -> AraimSummary {
 /// airborne term through its iono-free pair's noise factor when it is
 /// ranged with one (L1/L2: 2.98, B1I/B3I: 3.53; a single code or an
 /// L1/L5-type pair: the ADD's 2.59, docs/ARAIM.md "Iono-free replay"),
-/// plus the residual ionosphere of `--araim-iono-m`.
+/// plus the residual ionosphere of `--araim-iono-m`
+/// (`raim_nav::ranging::araim_curves`, the rule the unit's ARAIM stream
+/// epochs take their sigmas from).
 struct ReplayModels<'a> {
     args: &'a AraimReplayArgs,
     epoch: &'a PreparedEpoch,
@@ -393,16 +394,13 @@ impl SatelliteModels for ReplayModels<'_> {
     }
 
     fn curves(&self, id: SatId) -> Curves {
-        let factor = self
+        let code = self
             .epoch
             .sats
             .iter()
             .find(|p| p.obs.id == id)
-            .and_then(|p| raim_gnss::ranging::iono_free_noise_factor(id.system, &p.code));
-        Curves {
-            airborne_factor_sq: factor.map_or_else(iono_free_factor_sq, |k| k * k),
-            iono_vertical_m: self.args.araim_iono_m,
-        }
+            .map_or("", |p| p.code.as_str());
+        raim_nav::ranging::araim_curves(id.system, code, self.args.araim_iono_m)
     }
 }
 
@@ -525,7 +523,8 @@ impl AraimEngine {
             AraimEngine::Host(monitor) => {
                 let r = host_epoch(a, solver, cfg, ism, e, sats, monitor, unix_s);
                 let sentences = if nmea {
-                    host_nmea(r.as_ref().ok(), unix_s, sats, e.reference_m)
+                    let cn0: Vec<u8> = e.sats.iter().map(|s| s.cn0_dbhz).collect();
+                    host_nmea(r.as_ref().ok(), unix_s, sats, &cn0, e.reference_m)
                 } else {
                     Vec::new()
                 };
@@ -601,6 +600,7 @@ fn host_nmea(
     r: Option<&WireAraimResult>,
     unix_s: f64,
     sats: &[RangeObservation],
+    cn0_dbhz: &[u8],
     apriori_m: Option<[f64; 3]>,
 ) -> Vec<String> {
     let mut wire = WireResult::empty();
@@ -609,7 +609,10 @@ fn host_nmea(
         None => wire.time_s = unix_s,
     }
     let epoch = Epoch::ranges(unix_s, sats, apriori_m);
-    let sky = raim_proto::nmea::Sky::new(&epoch);
+    let sky = raim_proto::nmea::Sky {
+        epoch: &epoch,
+        cn0_dbhz,
+    };
     raim_proto::nmea::epoch_sentences(&wire, &sky, raim_proto::nmea::BUILT)
         .map(|v| v.iter().map(|s| s.trim_end().to_string()).collect())
         .unwrap_or_default()

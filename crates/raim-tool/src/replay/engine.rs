@@ -55,16 +55,20 @@ impl Engine {
     /// the epoch's NMEA sentences (RMC to ZDA, without their CRLF): the firmware's
     /// own second-UART output under QEMU, the same writer on the host. A
     /// transport failure (QEMU gone, timeout) is an `Err` of the outer result.
+    /// `cn0_dbhz`: the satellites' C/N0 for the host's GSV (the source's,
+    /// e.g. RINEX S observables); the protocol carries none, so the
+    /// firmware's GSV has no C/N0.
     pub fn process(
         &mut self,
         cfg: &Config,
         epoch: &Epoch<'_>,
+        cn0_dbhz: &[u8],
     ) -> Result<(Result<WireResult, String>, Vec<String>)> {
         Ok(match self {
             Engine::Host(raim) => match raim.process(cfg, epoch) {
                 Ok(r) => {
                     let w = WireResult::from_result(&r);
-                    let sky = raim_proto::nmea::Sky::new(epoch);
+                    let sky = raim_proto::nmea::Sky { epoch, cn0_dbhz };
                     let nmea = raim_proto::nmea::epoch_sentences(&w, &sky, raim_proto::nmea::BUILT)
                         .map(|v| v.iter().map(|s| s.trim_end().to_string()).collect())
                         .unwrap_or_default();

@@ -391,7 +391,13 @@ fn prepare_full(args: &ReplayArgs) -> Result<Prepared> {
         let model = args.core_config().sigma_model;
         let f = receiver::single_iono_factor(args, &nav);
         for e in &mut epochs {
-            receiver::set_sigmas(e, &model, opts.glonass_sigma.as_ref(), f);
+            if args.araim.araim {
+                // ARAIM: the unit's stream sigmas under ARAIM (the pair's
+                // curves, no signal-in-space term: the ISM's).
+                receiver::set_araim_sigmas(e, &model, f);
+            } else {
+                receiver::set_sigmas(e, &model, opts.glonass_sigma.as_ref(), f);
+            }
         }
         let mut probe = args.core_config();
         let before = probe.sigma_model.iono_vertical_m;
@@ -467,7 +473,8 @@ fn run_core_on(
             &sats,
             e.reference_m,
         );
-        let (outcome, nmea) = engine.process(cfg, &wire_epoch)?;
+        let cn0: Vec<u8> = e.sats.iter().map(|s| s.cn0_dbhz).collect();
+        let (outcome, nmea) = engine.process(cfg, &wire_epoch, &cn0)?;
         let mut rec = match outcome {
             Ok(r) => {
                 let mut rec = EpochRecord::from_result(

@@ -88,6 +88,30 @@ pub fn set_sigmas(
     }
 }
 
+/// Set every observation's sigma as the unit sets a stream epoch's under
+/// ARAIM (`raim_nav::ranging::stream_sigma_for_m` with
+/// `StreamSigmas::Araim`, raim-server's `stream::stream_sigmas`): the
+/// ARAIM curves of the satellite's code pair (the replay's own satellite
+/// models, `raim_nav::ranging::araim_curves`), no signal-in-space term
+/// (the ISM's), and for a single-frequency range `model`'s residual
+/// ionosphere times `single_iono_factor`. Without it a stream replayed
+/// with `--araim` would carry the snapshot sigma (with its URA) into
+/// C_int and C_acc beside the ISM's.
+pub fn set_araim_sigmas(epoch: &mut PreparedEpoch, model: &SigmaModel, single_iono_factor: f64) {
+    let sigmas = raim_nav::ranging::StreamSigmas::Araim {
+        iono_vertical_m: model.iono_vertical_m,
+    };
+    for s in &mut epoch.sats {
+        s.obs.sigma_m = Some(raim_nav::ranging::stream_sigma_for_m(
+            &sigmas,
+            s.obs.id.system,
+            &s.code,
+            s.elevation_rad,
+            single_iono_factor,
+        ));
+    }
+}
+
 /// The factor on the residual-ionosphere sigma of a single-frequency
 /// range: [`NO_MODEL_IONO_FACTOR`] with no Klobuchar model and no
 /// `--iono-vertical-m`, else 1.
@@ -427,7 +451,8 @@ impl<'a> Live<'a> {
             &sats,
             p.reference_m,
         );
-        let (outcome, nmea) = self.engine.process(&self.cfg, &wire)?;
+        let cn0: Vec<u8> = p.sats.iter().map(|s| s.cn0_dbhz).collect();
+        let (outcome, nmea) = self.engine.process(&self.cfg, &wire, &cn0)?;
         let mut rec = match outcome {
             Ok(r) => {
                 self.tally.answered();
@@ -491,6 +516,7 @@ mod tests {
                 sigma_m: None,
             },
             code: code.into(),
+            cn0_dbhz: 0,
             raw_pseudorange_m: 2.0e7,
             elevation_rad: el_deg.to_radians(),
             azimuth_rad: 0.0,
