@@ -42,6 +42,10 @@ pub struct RunFile {
     pub service: ServiceSpec,
     /// One entry per constellation.
     pub constellation: Vec<ConstellationSpec>,
+    /// A sweep: scenarios, each the run with what it names overridden
+    /// (read by `crate::sweep`; docs/AVAILABILITY.md "Sweeps").
+    #[serde(default)]
+    pub scenario: Vec<toml::Table>,
 }
 
 /// Which exclusions must leave the service available (docs/AVAILABILITY.md
@@ -293,19 +297,84 @@ pub struct Study {
     pub source: String,
 }
 
-/// The 1-based line of the first line of `text` that starts with `key`
-/// (after spaces), for errors about a value the TOML parser accepted.
-fn line_of(text: &str, key: &str) -> usize {
-    text.lines()
-        .position(|l| {
-            let t = l.trim_start();
-            t.strip_prefix(key)
-                .is_some_and(|r| r.trim_start().starts_with('='))
-        })
-        .map_or(0, |i| i + 1)
+/// Where a run file's keys are, for errors about a value the TOML parser
+/// accepted: the file's name, its text, and the lines (0-based, end
+/// excluded) searched first: the part before the first `[[scenario]]` for
+/// the run as written, a scenario's own lines for a scenario
+/// (`crate::sweep`), then the whole file.
+#[derive(Debug, Clone)]
+pub struct Loc<'a> {
+    /// The file's name as given.
+    pub file: String,
+    text: &'a str,
+    lines: std::ops::Range<usize>,
 }
 
-/// Reads and checks the run file at `path`.
+impl<'a> Loc<'a> {
+    /// The run as written: the lines before the first `[[scenario]]`.
+    pub fn base(text: &'a str, path: &Path) -> Loc<'a> {
+        let end = text
+            .lines()
+            .position(|l| l.trim() == "[[scenario]]")
+            .unwrap_or(usize::MAX);
+        Loc {
+            file: path.display().to_string(),
+            text,
+            lines: 0..end,
+        }
+    }
+
+    /// A scenario's lines `lines` (0-based, end excluded).
+    pub fn within(text: &'a str, path: &Path, lines: std::ops::Range<usize>) -> Loc<'a> {
+        Loc {
+            file: path.display().to_string(),
+            text,
+            lines,
+        }
+    }
+
+    /// The whole file's text.
+    pub fn text(&self) -> &'a str {
+        self.text
+    }
+
+    /// The 1-based line of the first line satisfying `pred`, in this
+    /// location's lines first, then anywhere (0 when none).
+    pub fn line_where(&self, pred: impl Fn(&str) -> bool) -> usize {
+        let found = |r: std::ops::Range<usize>| {
+            self.text
+                .lines()
+                .enumerate()
+                .skip(r.start)
+                .take(r.end.saturating_sub(r.start))
+                .find(|(_, l)| pred(l))
+                .map(|(i, _)| i + 1)
+        };
+        found(self.lines.clone())
+            .or_else(|| found(0..usize::MAX))
+            .unwrap_or(0)
+    }
+
+    /// The 1-based line of the first line that starts with `key =`, or
+    /// opens table `key` (`[key]`, `[scenario.key]`, or as an array).
+    pub fn line_of(&self, key: &str) -> usize {
+        self.line_where(|l| {
+            let t = l.trim();
+            let header = t.trim_start_matches('[').trim_end_matches(']');
+            t.starts_with('[') && (header == key || header.strip_prefix("scenario.") == Some(key))
+                || t.strip_prefix(key)
+                    .is_some_and(|r| r.trim_start().starts_with('='))
+        })
+    }
+
+    /// `file:line` of `key`.
+    pub fn at(&self, key: &str) -> String {
+        format!("{}:{}", self.file, self.line_of(key))
+    }
+}
+
+/// Reads and checks the run file at `path` (the run as written: its
+/// `[[scenario]]` list, if any, is `crate::sweep`'s).
 ///
 /// # Errors
 /// TOML errors (with the parser's line and column), an unknown level or
@@ -324,8 +393,17 @@ pub fn load(path: &Path) -> Result<Study> {
 /// # Errors
 /// As [`load`].
 pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
+    let run = parse(text, path)?;
+    build(&run, &Loc::base(text, path), base)
+}
+
+/// Parses the run file's text (TOML errors with the parser's line).
+///
+/// # Errors
+/// A TOML or schema error.
+pub fn parse<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<T> {
     let file = path.display();
-    let run: RunFile = toml::from_str(text).map_err(|e| {
+    toml::from_str(text).map_err(|e| {
         let line = e
             .span()
             .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
@@ -333,8 +411,18 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
             Some(l) => anyhow!("{file}:{l}: {}", e.message()),
             None => anyhow!("{file}: {}", e.message()),
         }
-    })?;
-    let at = |key: &str| format!("{file}:{}", line_of(text, key));
+    })
+}
+
+/// Checks a run (as written, or a scenario of it merged by
+/// `crate::sweep`) and forms its study; errors name `loc`'s file and
+/// lines; almanac paths are relative to `base`.
+///
+/// # Errors
+/// As [`load`].
+pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
+    let file = &loc.file;
+    let at = |key: &str| loc.at(key);
     if !(0.0..90.0).contains(&run.mask_deg) {
         bail!(
             "{}: mask_deg {} outside [0, 90)",
@@ -452,9 +540,7 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
         ),
         (false, Some(_)) => bail!(
             "{file}:{}: [continuity] is read only with exclusion = \"continuity\"",
-            text.lines()
-                .position(|l| l.trim() == "[continuity]")
-                .map_or(0, |i| i + 1)
+            loc.line_where(|l| matches!(l.trim(), "[continuity]" | "[scenario.continuity]"))
         ),
         (false, None) => None,
     };
@@ -637,7 +723,7 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
         users,
         epochs_gps_s,
         unhealthy,
-        source: text.to_string(),
+        source: loc.text().to_string(),
     })
 }
 

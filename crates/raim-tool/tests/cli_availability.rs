@@ -624,3 +624,218 @@ fn outage_sweep_equals_separate_runs() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// The sweep of [`small_run`]: the run as written, Galileo's P_const at
+/// 1e-5, LPV-250 with the strict exclusion rule, and every single GPS
+/// outage with E03 removed (24 scenarios from one generator).
+fn sweep_run() -> String {
+    format!(
+        r#"{}
+[[scenario]]
+name = "gal-pconst-1e-5"
+[[scenario.constellation]]
+system = "E"
+p_const = 1e-5
+
+[[scenario]]
+name = "lpv250-fde"
+exclusion = "satellites"
+[scenario.service]
+level = "LPV-250"
+
+[[scenario]]
+name = "gps-out"
+outages = "G"
+[[scenario.constellation]]
+system = "E"
+remove = [3]
+"#,
+        small_run()
+    )
+}
+
+/// Every file of `dir`, by name.
+fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .expect("dir")
+        .map(|e| {
+            let p = e.expect("entry").path();
+            (
+                p.file_name().expect("name").to_string_lossy().into_owned(),
+                std::fs::read(&p).expect("read"),
+            )
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+/// A sweep in one run file (`[[scenario]]`): each scenario's CSV equals a
+/// separate run file with its change written in, byte for byte (the
+/// P_const override; a generated outage, G05 with E03 removed); the
+/// coverage table has a row per scenario with the scenario's coverage; 4
+/// shards over scenario x epoch (27 scenarios x 12 epochs: whole scenarios
+/// and a scenario cut in time in one shard) merged in reverse order give
+/// every file of the whole run byte for byte.
+///
+/// Verifies: TOOL-AVAIL-SWEEP
+#[test]
+fn sweep_scenarios_equal_separate_runs_and_shards_merge_bit_for_bit() {
+    let d = tmp_dir("sweep");
+    let runf = d.join("small.toml");
+    std::fs::write(&runf, sweep_run()).expect("write");
+    let r = runf.to_str().expect("utf8");
+    let (whole, shards, merged) = (d.join("whole"), d.join("shards"), d.join("merged"));
+    let (code, _, err) = raim(&[
+        "availability",
+        "--run",
+        r,
+        "--out",
+        whole.to_str().expect("utf8"),
+        "--level",
+        "0.99",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    // Separate runs of two scenarios.
+    let separate = |tag: &str, text: String| -> Vec<u8> {
+        let f = d.join(format!("{tag}.toml"));
+        std::fs::write(&f, text).expect("write");
+        let o = d.join(tag);
+        let (code, _, err) = raim(&[
+            "availability",
+            "--run",
+            f.to_str().expect("utf8"),
+            "--out",
+            o.to_str().expect("utf8"),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        std::fs::read(o.join("small.users.csv")).expect("csv")
+    };
+    let pconst = separate(
+        "pconst",
+        small_run().replacen("p_const = 1e-4", "p_const = 1e-5", 1),
+    );
+    let out5 = separate(
+        "out5",
+        small_run()
+            .replacen("p_const = 1e-8\n", "p_const = 1e-8\nremove = [5]\n", 1)
+            .replacen("p_const = 1e-4\n", "p_const = 1e-4\nremove = [3]\n", 1),
+    );
+    let plain = separate("plain", small_run());
+    let csv = |stem: &str| std::fs::read(whole.join(format!("{stem}.users.csv"))).expect(stem);
+    assert_eq!(csv("small"), plain);
+    assert_eq!(csv("small.gal-pconst-1e-5"), pconst);
+    assert_eq!(csv("small.gps-out.outage-G05"), out5);
+    assert_ne!(pconst, plain, "the override changed nothing");
+    // The table: 1 + 2 + 24 rows, each row the scenario's own coverage.
+    let table = std::fs::read_to_string(whole.join("small.sweep.csv")).expect("table");
+    let rows: Vec<Vec<&str>> = table
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 27, "{table}");
+    assert_eq!(rows[0][..2], ["small", "none"]);
+    assert_eq!(rows[26][..2], ["small.gps-out.outage-G24", "G24"]);
+    for row in &rows {
+        let v: Value = serde_json::from_slice(
+            &std::fs::read(whole.join(format!("{}.summary.json", row[0]))).expect("summary"),
+        )
+        .expect("json");
+        let cov = v["coverage"][1]["coverage"].as_f64().expect("coverage");
+        assert!(
+            (row[3].parse::<f64>().expect("num") - cov).abs() < 1e-6,
+            "{row:?}"
+        );
+    }
+    let lpv250: Value = serde_json::from_slice(
+        &std::fs::read(whole.join("small.lpv250-fde.summary.json")).expect("summary"),
+    )
+    .expect("json");
+    assert_eq!(lpv250["val_m"], 50.0);
+    assert!(std::fs::read_to_string(whole.join("small.sweep.md"))
+        .expect("md")
+        .starts_with("| scenario | removed | coverage at 99.5 % | coverage at 99 % |"));
+    // 4 shards, one thread each, merged in reverse order.
+    let mut parts = Vec::new();
+    for i in 1..=4 {
+        let sh = format!("{i}/4");
+        let (code, _, err) = raim(&[
+            "availability",
+            "--run",
+            r,
+            "--shard",
+            &sh,
+            "--threads",
+            "1",
+            "--out",
+            shards.to_str().expect("utf8"),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        parts.push(
+            shards
+                .join(format!("small.shard-{i}-of-4.json"))
+                .to_str()
+                .expect("utf8")
+                .to_string(),
+        );
+    }
+    // Shard 1 holds whole scenarios and the start of one cut in time.
+    let p1: Value = serde_json::from_slice(&std::fs::read(&parts[0]).expect("part")).expect("json");
+    let ranges: Vec<(u64, u64)> = p1["pieces"]
+        .as_array()
+        .expect("pieces")
+        .iter()
+        .map(|p| {
+            (
+                p["epoch_range"][0].as_u64().expect("a"),
+                p["epoch_range"][1].as_u64().expect("b"),
+            )
+        })
+        .collect();
+    assert!(
+        ranges.contains(&(0, 12)) && ranges.last() == Some(&(0, 9)),
+        "{ranges:?}"
+    );
+    let mut args = vec!["availability", "merge"];
+    args.extend(parts.iter().rev().map(String::as_str));
+    let mo = merged.to_str().expect("utf8").to_string();
+    args.extend(["--out", &mo, "--level", "0.99"]);
+    let (code, _, err) = raim(&args);
+    assert_eq!(code, 0, "{err}");
+    let (w, m) = (files(&whole), files(&merged));
+    assert_eq!(w.len(), 27 * 2 + 2);
+    assert_eq!(
+        w.iter().map(|x| &x.0).collect::<Vec<_>>(),
+        m.iter().map(|x| &x.0).collect::<Vec<_>>()
+    );
+    for (a, b) in w.iter().zip(&m) {
+        assert!(a.1 == b.1, "{}: merged differs from the whole run", a.0);
+    }
+    // Scenario errors name the scenario and its line.
+    for (text, want) in [
+        (
+            format!("{}\n[[scenario]]\nname = \"g\"\n[scenario.grid]\nkind = \"world\"\nstep_deg = 5.0\n", small_run()),
+            ":39: scenario `g`: `grid` cannot be set in a scenario",
+        ),
+        (
+            format!("{}\n[[scenario]]\nname = \"p\"\n[[scenario.constellation]]\nsystem = \"G\"\np_sat = 2.0\n", small_run()),
+            "bad.toml: [[constellation]] 1 (system \"G\"): the ISM is refused by raim-core",
+        ),
+        (
+            format!("{}\n[[scenario]]\nname = \"m\"\nmask_deg = 95.0\n", small_run()),
+            "bad.toml:39: mask_deg 95 outside [0, 90)",
+        ),
+        (
+            format!("{}\n[[scenario]]\nmask_deg = 9.0\n", small_run()),
+            "a [[scenario]] needs `name`",
+        ),
+    ] {
+        let f = d.join("bad.toml");
+        std::fs::write(&f, text).expect("write");
+        let (code, _, err) = raim(&["availability", "--run", f.to_str().expect("utf8")]);
+        assert_ne!(code, 0, "{want}");
+        assert!(err.contains(want), "want `{want}` in: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
