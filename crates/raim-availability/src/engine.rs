@@ -114,11 +114,17 @@ impl UserPartial {
 
 /// The ECEF positions of every satellite at epochs `range`, row-major
 /// (epoch, satellite), by `Kepler::state` (no light time or Earth
-/// rotation during transit: the geometry of an almanac study).
+/// rotation during transit: the geometry of an almanac study); NaN for a
+/// broadcast satellite with no valid ephemeris at that epoch (not used).
 pub fn sky_table(study: &Study, range: std::ops::Range<usize>) -> Vec<[f64; 3]> {
     study.epochs_gps_s[range]
         .iter()
-        .flat_map(|&t| study.sats.iter().map(move |s| s.kepler.state(t).position_m))
+        .flat_map(|&t| {
+            study
+                .sats
+                .iter()
+                .map(move |s| s.position_m(t).unwrap_or([f64::NAN; 3]))
+        })
         .collect()
 }
 
@@ -134,6 +140,9 @@ pub fn visible(
     out.clear();
     let sin_mask = study.mask_rad.sin();
     for (s, p) in study.sats.iter().zip(positions) {
+        if !p[0].is_finite() {
+            continue;
+        }
         let d = [
             p[0] - user_ecef_m[0],
             p[1] - user_ecef_m[1],

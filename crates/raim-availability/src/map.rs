@@ -324,6 +324,7 @@ mod tests {
             limits_m: [35.0, 40.0, 15.0, 1.87],
             target: 0.995,
             users,
+            ephemeris_gaps: None,
         };
         let bins = availability_bins();
         let dir = std::env::temp_dir().join(format!("raim-avail-map-{}", std::process::id()));

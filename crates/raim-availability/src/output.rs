@@ -37,6 +37,11 @@ pub struct Meta {
     pub target: f64,
     /// The users: name, latitude, longitude (degrees), weight.
     pub users: Vec<(String, f64, f64, f64)>,
+    /// With a broadcast (RINEX) constellation: per satellite, the epochs
+    /// of the run at which it had no healthy ephemeris within its validity
+    /// window and was not used (satellites with none are not listed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ephemeris_gaps: Option<Vec<(String, usize)>>,
 }
 
 /// FNV-1a, 64 bits.
@@ -72,6 +77,21 @@ impl Meta {
                 .iter()
                 .map(|u| (u.name.clone(), u.lat_deg, u.lon_deg, u.weight))
                 .collect(),
+            ephemeris_gaps: study.sats.iter().any(|s| s.is_broadcast()).then(|| {
+                study
+                    .sats
+                    .iter()
+                    .map(|s| {
+                        let gaps = study
+                            .epochs_gps_s
+                            .iter()
+                            .filter(|t| s.kepler_at(**t).is_none())
+                            .count();
+                        (format!("{}{:02}", s.id.system.letter(), s.id.prn), gaps)
+                    })
+                    .filter(|(_, n)| *n > 0)
+                    .collect()
+            }),
         }
     }
 }
@@ -470,6 +490,20 @@ pub fn summary_json(meta: &Meta, users: &[UserSummary], levels: &[f64]) -> Strin
         "worst_user_vpl_percentile_m": num(worst_vpl),
         "max_modes": users.iter().map(|u| u.max_modes).max().unwrap_or(0),
     });
+    let mut v = v;
+    if let (Some(gaps), Some(o)) = (&meta.ephemeris_gaps, v.as_object_mut()) {
+        o.insert(
+            "satellite_epochs_without_ephemeris".into(),
+            gaps.iter().map(|g| g.1).sum::<usize>().into(),
+        );
+        o.insert(
+            "ephemeris_gaps_epochs".into(),
+            gaps.iter()
+                .map(|(id, n)| (id.clone(), serde_json::Value::from(*n)))
+                .collect::<serde_json::Map<_, _>>()
+                .into(),
+        );
+    }
     let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();
     s.push('\n');
     s

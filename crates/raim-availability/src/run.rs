@@ -3,7 +3,9 @@
 //! user grid, the time span, the mask and the service level. Every number
 //! is named with its unit; errors name the file and line.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use anyhow::{anyhow, bail, Result};
 use raim_core::araim::{AraimConfig, Ism, SatIsm};
@@ -197,8 +199,14 @@ fn default_target() -> f64 {
 pub struct ConstellationSpec {
     /// `G` or `E`.
     pub system: String,
-    /// The almanac file, relative to the run file's directory.
-    pub almanac: PathBuf,
+    /// The almanac file, relative to the run file's directory (or
+    /// `navigation`).
+    pub almanac: Option<PathBuf>,
+    /// A RINEX navigation file (2 or 3, gzip or not), relative to the run
+    /// file's directory: the constellation's broadcast ephemerides, at
+    /// each epoch the healthy set nearest in toe within its validity
+    /// window (or `almanac`).
+    pub navigation: Option<PathBuf>,
     /// Its format: `yuma` (the default) or `sem` (GPS SEM, USCG NAVCEN).
     #[serde(default)]
     pub format: AlmanacFormat,
@@ -240,13 +248,49 @@ pub struct ConstellationSpec {
     pub mfd_const_s: Option<f64>,
 }
 
+/// A satellite's orbit.
+#[derive(Debug, Clone)]
+pub enum Orbit {
+    /// One almanac record (every harmonic correction zero, toe its time of
+    /// applicability).
+    Almanac(raim_nav::ephemeris::Kepler),
+    /// The broadcast ephemerides of a RINEX navigation file, read by
+    /// raim-gnss's `NavData` (the replay's reader): at each epoch the
+    /// healthy set whose toe is nearest, within the system's validity
+    /// window (`NavData::select`, the replay's selection); none outside it.
+    Broadcast(Arc<raim_gnss::NavData>),
+}
+
 /// One satellite of the study.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct StudySat {
     /// The satellite.
     pub id: SatId,
     /// Its orbit.
-    pub kepler: raim_nav::ephemeris::Kepler,
+    pub orbit: Orbit,
+}
+
+impl StudySat {
+    /// The Keplerian set in force at `t_gps_s`: the almanac record, or the
+    /// selected broadcast ephemeris (None: no healthy set valid then, the
+    /// satellite is not used at that epoch).
+    pub fn kepler_at(&self, t_gps_s: f64) -> Option<&raim_nav::ephemeris::Kepler> {
+        match &self.orbit {
+            Orbit::Almanac(k) => Some(k),
+            Orbit::Broadcast(nav) => nav.select(self.id, t_gps_s),
+        }
+    }
+
+    /// The ECEF position at `t_gps_s` by `Kepler::state` (IS-GPS-200's
+    /// equations, the receiver's), or None without a valid set.
+    pub fn position_m(&self, t_gps_s: f64) -> Option<[f64; 3]> {
+        self.kepler_at(t_gps_s).map(|k| k.state(t_gps_s).position_m)
+    }
+
+    /// True for a broadcast (RINEX) orbit.
+    pub fn is_broadcast(&self) -> bool {
+        matches!(self.orbit, Orbit::Broadcast(_))
+    }
 }
 
 /// One user of the grid.
@@ -512,6 +556,7 @@ pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
     let mut unhealthy = Vec::new();
     let mut week0: Option<u32> = None;
     let mut almanac_sats = Vec::new();
+    let mut navs: BTreeMap<PathBuf, Arc<raim_gnss::NavData>> = BTreeMap::new();
     let continuous = run.exclusion == ExclusionSpec::Continuity;
     let mut continuity = match (continuous, run.continuity) {
         (true, Some(c)) => {
@@ -585,6 +630,74 @@ pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
                 "{here}: mfd_sat_s and mfd_const_s are read only with exclusion = \"continuity\""
             ),
         }
+        let almanac_path = match (&c.almanac, &c.navigation) {
+            (Some(a), None) => a.clone(),
+            (None, Some(nav)) => {
+                if c.week_rollovers.is_some()
+                    || c.id_offset != 0
+                    || c.format != AlmanacFormat::Yuma
+                    || c.add_almanac.is_some()
+                    || !c.add.is_empty()
+                {
+                    bail!(
+                        "{here}: week_rollovers, id_offset, format, add_almanac and add are almanac keys, not read with `navigation`"
+                    );
+                }
+                let p = almanac::resolve(base, nav);
+                let data = match navs.get(&p) {
+                    Some(d) => Arc::clone(d),
+                    None => {
+                        let d = Arc::new(
+                            raim_gnss::NavData::load(&p)
+                                .map_err(|e| anyhow!("{}: {e}", p.display()))?,
+                        );
+                        navs.insert(p.clone(), Arc::clone(&d));
+                        d
+                    }
+                };
+                let ids: Vec<SatId> = data
+                    .ephemerides
+                    .keys()
+                    .filter(|id| id.system == system)
+                    .copied()
+                    .collect();
+                if ids.is_empty() {
+                    bail!("{}: no {system:?} ephemeris ({here})", p.display());
+                }
+                for r in &c.remove {
+                    if !ids.iter().any(|id| id.prn == *r) {
+                        bail!(
+                            "{here}: remove = PRN {r}, which has no ephemeris in {}",
+                            p.display()
+                        );
+                    }
+                }
+                let first_toc = data
+                    .ephemerides
+                    .iter()
+                    .filter(|(id, _)| id.system == system)
+                    .flat_map(|(_, v)| v.iter().map(|k| k.toc_gps_s))
+                    .fold(f64::INFINITY, f64::min);
+                week0.get_or_insert((first_toc / raim_nav::ephemeris::WEEK_S).floor() as u32);
+                for id in ids.into_iter().filter(|id| !c.remove.contains(&id.prn)) {
+                    entries.push(SatIsm {
+                        id,
+                        sigma_ura_m: c.sigma_ura_m,
+                        sigma_ure_m: c.sigma_ure_m,
+                        b_nom_m: c.b_nom_m,
+                        p_sat: c.p_sat,
+                    });
+                    sats.push(StudySat {
+                        id,
+                        orbit: Orbit::Broadcast(Arc::clone(&data)),
+                    });
+                }
+                check_ism(c, system)
+                    .map_err(|e| anyhow!("{here}: the ISM is refused by raim-core: {e}"))?;
+                continue;
+            }
+            _ => bail!("{here}: give the constellation's `almanac` or `navigation` (one of them)"),
+        };
         let read_alm = |p: &Path| {
             let spec = AlmanacSpec {
                 path: almanac::resolve(base, p),
@@ -597,12 +710,12 @@ pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
                 AlmanacFormat::Sem => almanac::read_sem(&spec),
             }
         };
-        let mut alm = read_alm(&c.almanac)?;
+        let mut alm = read_alm(&almanac_path)?;
         for p in &c.remove {
             if !alm.sats.iter().any(|s| s.kepler.prn == *p) {
                 bail!(
                     "{here}: remove = PRN {p}, which is not a healthy satellite of {}",
-                    c.almanac.display()
+                    almanac_path.display()
                 );
             }
         }
@@ -626,7 +739,7 @@ pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
                         bail!(
                             "{}: add = PRN {p}, which {} holds already (list it in `remove` to replace it)",
                             at("add"),
-                            c.almanac.display()
+                            almanac_path.display()
                         );
                     }
                     alm.sats.retain(|k| k.kepler.prn != *p);
@@ -666,11 +779,11 @@ pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
             });
             sats.push(StudySat {
                 id,
-                kepler: s.kepler,
+                orbit: Orbit::Almanac(s.kepler),
             });
             let from = match &c.add_almanac {
                 Some(a) if c.add.contains(&s.kepler.prn) => a.clone(),
-                _ => c.almanac.clone(),
+                _ => almanac_path.clone(),
             };
             almanac_sats.push((from, s));
         }
@@ -707,6 +820,22 @@ pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
                 at("start_s")
             );
         }
+    }
+    // A broadcast satellite with no healthy set valid at any epoch of the
+    // run is left out (listed with the unhealthy ones).
+    let never: Vec<bool> = sats
+        .iter()
+        .map(|s| s.is_broadcast() && epochs_gps_s.iter().all(|t| s.kepler_at(*t).is_none()))
+        .collect();
+    for (s, _) in sats.iter().zip(&never).filter(|(_, n)| **n) {
+        unhealthy.push(format!("{}{:02}", s.id.system.letter(), s.id.prn));
+    }
+    let mut k = never.iter();
+    sats.retain(|_| !k.next().copied().unwrap_or(false));
+    let mut k = never.iter();
+    entries.retain(|_| !k.next().copied().unwrap_or(false));
+    if sats.is_empty() {
+        bail!("{file}: no satellite has a healthy ephemeris valid at an epoch of the run");
     }
     Ok(Study {
         name: run.name.clone(),
@@ -1011,15 +1140,19 @@ p_const = 1e-8
         let s = run(&format!("remove = [3]\n{add_from}\nadd = [30, 3]")).unwrap();
         let prns: Vec<u8> = s.sats.iter().map(|x| x.id.prn).collect();
         assert_eq!(prns, (1..=24).chain([30]).collect::<Vec<u8>>());
-        assert!((s.sats[2].kepler.m0_rad - m3).abs() < 1e-12);
-        assert!((s.sats[24].kepler.m0_rad - m30).abs() < 1e-12);
+        assert!((s.sats[2].kepler_at(0.0).unwrap().m0_rad - m3).abs() < 1e-12);
+        assert!((s.sats[24].kepler_at(0.0).unwrap().m0_rad - m30).abs() < 1e-12);
         // The same two records as a SEM constellation.
         let t = text(grid, "level = \"LPV-200\"", "").replace(
             "almanac = \"almanac_gps24_mops.yuma\"",
             &format!("almanac = \"{}\"\nformat = \"sem\"", sem.display()),
         );
         let s = load_text(&t).unwrap();
-        let got: Vec<(u8, f64)> = s.sats.iter().map(|x| (x.id.prn, x.kepler.m0_rad)).collect();
+        let got: Vec<(u8, f64)> = s
+            .sats
+            .iter()
+            .map(|x| (x.id.prn, x.kepler_at(0.0).unwrap().m0_rad))
+            .collect();
         assert_eq!(got.len(), 2);
         assert!(got[0].0 == 3 && (got[0].1 - m3).abs() < 1e-12 && got[1].0 == 30);
         // Bad add lists.

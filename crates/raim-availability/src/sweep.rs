@@ -75,7 +75,7 @@ pub fn single_outages(study: &Study, system: System) -> Vec<Scenario> {
                 .iter()
                 .zip(&study.ism_entries)
                 .filter(|(x, _)| x.id != s.id)
-                .map(|(x, i)| (*x, *i))
+                .map(|(x, i)| (x.clone(), *i))
                 .unzip();
             o.sats = sats;
             o.ism_entries = ism;

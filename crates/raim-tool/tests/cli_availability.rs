@@ -329,6 +329,10 @@ fn bad_run_files_name_file_and_line() {
             "the ISM is refused by raim-core",
         ),
         (
+            small_run().replacen("almanac = ", "navigation = \"x.rnx\"\nalmanac = ", 1),
+            "[[constellation]] 1 (system \"G\"): give the constellation's `almanac` or `navigation` (one of them)",
+        ),
+        (
             small_run_with("continuity"),
             "bad.toml:3: exclusion = \"continuity\" needs a [continuity] table",
         ),
@@ -837,5 +841,165 @@ fn sweep_scenarios_equal_separate_runs_and_shards_merge_bit_for_bit() {
         assert_ne!(code, 0, "{want}");
         assert!(err.contains(want), "want `{want}` in: {err}");
     }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A constellation from a RINEX navigation file (docs/runs/
+/// availability_esbc_nav.toml, GPS and Galileo from ESBC's mixed file):
+/// at the first epoch of ESBC's observation file, every GPS and Galileo
+/// satellite the replay's receiver path forms (raim-gnss `prepare_epoch`:
+/// the transmit time from the pseudorange, the position there rotated by
+/// the Earth's rotation during transit) is in the study, and the study's
+/// position at that transmit time, rotated here by hand, equals the
+/// replay's within 1 mm. A short run over a region gives a result, and a
+/// span past the file's end reports the epochs without a valid ephemeris,
+/// each satellite's count equal to the count of epochs at which no
+/// healthy record of it lies within the validity window (counted here
+/// from the records).
+///
+/// Verifies: TOOL-AVAIL-RINEX
+#[test]
+fn rinex_navigation_positions_equal_the_replays() {
+    let runf = Path::new(ROOT).join("docs/runs/availability_esbc_nav.toml");
+    let study = run::load(&runf).expect("study");
+    let nav = raim_gnss::NavData::load(Path::new(&data("ESBC00DNK_R_20201770000_01D_MN.rnx.gz")))
+        .expect("nav");
+    let obs = raim_gnss::ObsData::load(Path::new(&data(
+        "ESBC00DNK_R_20201770000_03H_30S_MO.rnx.gz",
+    )))
+    .expect("obs");
+    let opts = raim_gnss::RangingOptions {
+        systems: vec![raim_core::System::Gps, raim_core::System::Galileo],
+        ..Default::default()
+    };
+    let prep = raim_gnss::prepare_epoch(&nav, &obs.epochs[0], &opts, None);
+    let rx = prep.reference_m.expect("the replay's position");
+    const C: f64 = 299_792_458.0;
+    const OMEGA_E: f64 = 7.292_115_146_7e-5;
+    let dist = |a: [f64; 3], b: [f64; 3]| {
+        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    };
+    let rot = |p: [f64; 3], tau: f64| {
+        let (s, c) = (OMEGA_E * tau).sin_cos();
+        [c * p[0] + s * p[1], -s * p[0] + c * p[1], p[2]]
+    };
+    assert!(prep.sats.len() >= 15, "{} satellites", prep.sats.len());
+    for ps in &prep.sats {
+        let id = ps.obs.id;
+        let sat = study
+            .sats
+            .iter()
+            .find(|s| s.id == id)
+            .unwrap_or_else(|| panic!("{id:?} not in the study"));
+        let t_tx = prep.time_gps_s - ps.raw_pseudorange_m / C - ps.sat_clock_m / C;
+        let p = sat.position_m(t_tx).expect("a valid ephemeris");
+        let t0 = dist(p, rx) / C;
+        let q = rot(p, dist(rot(p, t0), rx) / C);
+        let d = dist(q, ps.obs.position_m);
+        assert!(d < 1e-3, "{id:?}: {d} m from the replay's position");
+    }
+    // A short run over a region (2 h, 9 users over the North Sea) gives a result.
+    let d = tmp_dir("nav");
+    let base = Path::new(ROOT).join("../shared/data");
+    let text = std::fs::read_to_string(&runf)
+        .expect("run file")
+        .replace("../../../shared/data", base.to_str().expect("utf8"))
+        .replace("span_s = 86400.0", "span_s = 7200.0")
+        .replace("lat_min_deg = 45.0", "lat_min_deg = 55.0")
+        .replace("lon_max_deg = 25.0", "lon_max_deg = 5.0");
+    let f = d.join("nav.toml");
+    std::fs::write(&f, &text).expect("write");
+    let (code, _, err) = raim(&[
+        "availability",
+        "--run",
+        f.to_str().expect("utf8"),
+        "--out",
+        d.to_str().expect("utf8"),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_slice(
+        &std::fs::read(d.join("availability_esbc_nav.summary.json")).expect("summary"),
+    )
+    .expect("json");
+    assert_eq!(v["users"], 3 * 3);
+    assert_eq!(v["user_epochs"], 9 * 24);
+    let cov = v["coverage"][0]["coverage"].as_f64().expect("coverage");
+    assert!((0.0..=1.0).contains(&cov), "{v}");
+    // From 22:00 for 6 h: past the file's last records, gaps are reported.
+    let late = text
+        .replace("span_s = 7200.0", "span_s = 21600.0")
+        .replace("start_s = 345600.0", "start_s = 424800.0");
+    std::fs::write(&f, &late).expect("write");
+    let study = run::load(&f).expect("late study");
+    let (code, _, err) = raim(&[
+        "availability",
+        "--run",
+        f.to_str().expect("utf8"),
+        "--out",
+        d.to_str().expect("utf8"),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_slice(
+        &std::fs::read(d.join("availability_esbc_nav.summary.json")).expect("summary"),
+    )
+    .expect("json");
+    let gaps = v["ephemeris_gaps_epochs"].as_object().expect("gaps");
+    assert!(!gaps.is_empty());
+    let mut listed = 0;
+    for s in &study.sats {
+        let name = format!("{}{:02}", s.id.system.letter(), s.id.prn);
+        let window = if s.id.system == raim_core::System::Gps {
+            7200.0
+        } else {
+            14400.0
+        };
+        let recs = &nav.ephemerides[&s.id];
+        let n = study
+            .epochs_gps_s
+            .iter()
+            .filter(|t| {
+                !recs.iter().any(|k| {
+                    let toe = (k.toc_gps_s / 604_800.0).floor() * 604_800.0 + k.toe_sow_s;
+                    k.health == 0 && (*t - toe).abs() <= window
+                })
+            })
+            .count();
+        assert_eq!(
+            gaps.get(&name).and_then(Value::as_u64).unwrap_or(0),
+            n as u64,
+            "{name}"
+        );
+        listed += usize::from(n > 0);
+    }
+    assert_eq!(listed, gaps.len());
+    // At the last epoch, the satellites without a valid set are not in any
+    // user's sky, and the others above the mask are.
+    let k = study.epochs_gps_s.len() - 1;
+    let t = study.epochs_gps_s[k];
+    let sky = engine::sky_table(&study, k..k + 1);
+    let mut seen_gap = false;
+    for u in &study.users {
+        let (x, r) = engine::user_frame(&study, u);
+        let mut obs = Vec::new();
+        engine::visible(&study, &sky, x, &r, &mut obs);
+        for s in &study.sats {
+            let used = obs.iter().any(|o| o.id == s.id);
+            match s.position_m(t) {
+                None => {
+                    seen_gap = true;
+                    assert!(!used, "{:?} used without an ephemeris", s.id);
+                }
+                Some(p) => {
+                    let (_, el, _) = raim_nav::geometry::az_el(x, p);
+                    assert_eq!(used, el >= 5f64.to_radians(), "{:?}", s.id);
+                }
+            }
+        }
+    }
+    assert!(seen_gap);
+    assert_eq!(
+        v["satellite_epochs_without_ephemeris"].as_u64(),
+        Some(gaps.values().filter_map(Value::as_u64).sum())
+    );
     let _ = std::fs::remove_dir_all(&d);
 }
