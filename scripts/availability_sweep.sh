@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # ARAIM availability, a sweep in one run file (issue 36, docs/AVAILABILITY.md
-# "Sweeps"): runs docs/runs/availability_sweep_europe.toml (32 scenarios,
+# "Sweeps"): runs docs/runs/availability_sweep_europe.toml (33 scenarios,
 # 35 users x 288 epochs each, a few CPU seconds), writes its outputs to
 # docs/availability/sweep/ and its coverage table between the markers
 # <!-- BEGIN generated: availability-sweep --> and <!-- END ... --> of

@@ -229,8 +229,18 @@ pub fn evaluate(
         Err(e) => return Err(e),
     };
     let out = monitor.in_force();
+    // The monitor's verdict judges the LPV criteria; a horizontal-only
+    // level re-judges an `Unavailable` epoch by its own criteria
+    // (raim-core's `AraimOutput::available_for`).
+    let available = match verdict.decision {
+        raim_core::Decision::Ok => true,
+        raim_core::Decision::Unavailable => {
+            out.detection_passed && out.available_for(study.criteria)
+        }
+        raim_core::Decision::Alarm | raim_core::Decision::Excluded => false,
+    };
     let mut o = EpochOutcome {
-        available: verdict.decision == raim_core::Decision::Ok,
+        available,
         vpl_m: f64::NEG_INFINITY,
         hpl_m: f64::NEG_INFINITY,
         emt_m: f64::NEG_INFINITY,
@@ -268,7 +278,7 @@ pub fn evaluate(
     for k in candidates {
         match monitor.after_excluding(&study.cfg, &study.ism, k)? {
             Some(sub) => {
-                o.available &= sub.available();
+                o.available &= sub.available_for(study.criteria);
                 o.worsen(study, sub);
             }
             None => {
@@ -347,7 +357,7 @@ pub fn continuity_holds(
         }
         let ok = monitor
             .after_excluding(&study.cfg, &study.ism, k)?
-            .is_some_and(|sub| sub.available());
+            .is_some_and(|sub| sub.available_for(study.criteria));
         if !ok {
             failed += w;
             if failed > c.p_alloc {

@@ -442,6 +442,7 @@ mod tests {
             target: 0.995,
             users,
             ephemeris_gaps: None,
+            horizontal_only: false,
         };
         let bins = availability_bins();
         let dir = std::env::temp_dir().join(format!("raim-avail-map-{}", std::process::id()));
@@ -531,6 +532,7 @@ mod tests {
             target: 0.995,
             users,
             ephemeris_gaps: None,
+            horizontal_only: false,
         };
         let dir = std::env::temp_dir().join(format!("raim-avail-coast-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();

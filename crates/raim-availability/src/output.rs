@@ -42,6 +42,9 @@ pub struct Meta {
     /// window and was not used (satellites with none are not listed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ephemeris_gaps: Option<Vec<(String, usize)>>,
+    /// The service level judges the HAL alone (H-ARAIM).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub horizontal_only: bool,
 }
 
 /// FNV-1a, 64 bits.
@@ -77,6 +80,7 @@ impl Meta {
                 .iter()
                 .map(|u| (u.name.clone(), u.lat_deg, u.lon_deg, u.weight))
                 .collect(),
+            horizontal_only: study.criteria == raim_core::araim::Criteria::HorizontalOnly,
             ephemeris_gaps: study.sats.iter().any(|s| s.is_broadcast()).then(|| {
                 study
                     .sats
@@ -491,6 +495,9 @@ pub fn summary_json(meta: &Meta, users: &[UserSummary], levels: &[f64]) -> Strin
         "max_modes": users.iter().map(|u| u.max_modes).max().unwrap_or(0),
     });
     let mut v = v;
+    if let (true, Some(o)) = (meta.horizontal_only, v.as_object_mut()) {
+        o.insert("criteria".into(), "HAL only".into());
+    }
     if let (Some(gaps), Some(o)) = (&meta.ephemeris_gaps, v.as_object_mut()) {
         o.insert(
             "satellite_epochs_without_ephemeris".into(),

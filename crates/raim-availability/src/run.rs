@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::{anyhow, bail, Result};
-use raim_core::araim::{AraimConfig, Ism, SatIsm};
+use raim_core::araim::{AraimConfig, Criteria, Ism, SatIsm};
 use raim_core::{SatId, System};
 use serde::Deserialize;
 
@@ -319,6 +319,9 @@ pub struct Study {
     pub ism: Ism,
     /// The ARAIM configuration (the service level's limits).
     pub cfg: AraimConfig,
+    /// The criteria the service level judges: LPV's four limits, or the
+    /// HAL alone (H-ARAIM).
+    pub criteria: Criteria,
     /// The availability target.
     pub target: f64,
     /// Which exclusions must leave the service available.
@@ -483,7 +486,41 @@ pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
     }
     // Service level.
     let mut cfg = AraimConfig::default();
-    match run.service.level.as_str() {
+    let mut criteria = Criteria::Vertical;
+    let level = run.service.level.as_str();
+    // H-ARAIM levels: the HAL alone, the RAIM alert limits of en route
+    // (2 NM), terminal (1 NM) and non-precision approach (0.3 NM); the
+    // vertical limits keep their defaults and are not judged.
+    let horizontal = match level {
+        "H-ARAIM-en-route" => Some(Some(3704.0)),
+        "H-ARAIM-terminal" => Some(Some(1852.0)),
+        "H-ARAIM-NPA" => Some(Some(555.6)),
+        "custom-horizontal" => Some(None),
+        _ => None,
+    };
+    match level {
+        _ if horizontal.is_some() => {
+            criteria = Criteria::HorizontalOnly;
+            if [
+                run.service.val_m,
+                run.service.emt_max_m,
+                run.service.sigma_acc_max_m,
+            ]
+            .iter()
+            .any(Option::is_some)
+            {
+                bail!(
+                    "{}: level `{level}` judges the HAL alone: no val_m, emt_max_m or sigma_acc_max_m",
+                    at("level")
+                );
+            }
+            cfg.hal_m = match (horizontal.flatten(), run.service.hal_m) {
+                (Some(h), None) => h,
+                (None, Some(h)) => h,
+                (None, None) => bail!("{}: level = \"custom-horizontal\" needs `hal_m`", at("level")),
+                (Some(_), Some(_)) => bail!("{}: level `{level}` sets its HAL; hal_m is given only with \"custom-horizontal\"", at("level")),
+            };
+        }
         "LPV-200" => {}
         "LPV-250" => cfg.val_m = 50.0,
         "custom" => {
@@ -496,11 +533,12 @@ pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
             cfg.sigma_acc_max_m = need(run.service.sigma_acc_max_m, "sigma_acc_max_m")?;
         }
         other => bail!(
-            "{}: unknown service level `{other}` (LPV-200, LPV-250 or custom)",
+            "{}: unknown service level `{other}` (LPV-200, LPV-250, custom, H-ARAIM-en-route, H-ARAIM-terminal, H-ARAIM-NPA or custom-horizontal)",
             at("level")
         ),
     }
     if run.service.level != "custom"
+        && horizontal.is_none()
         && [
             run.service.val_m,
             run.service.hal_m,
@@ -843,6 +881,7 @@ pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
         ism_entries: entries,
         ism,
         cfg,
+        criteria,
         target,
         exclusion: run.exclusion,
         continuity,

@@ -1003,3 +1003,57 @@ fn rinex_navigation_positions_equal_the_replays() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// A horizontal-only service level (`custom-horizontal`, HAL 40 m):
+/// at every user-epoch of the small study it is available exactly when
+/// the epoch's HPL (the same monitor, the LPV study's levels) is within
+/// 40 m, and it is available at user-epochs that a level with the
+/// tightest vertical limits (VAL 10 m, EMT 10 m, same HAL) refuses; the
+/// preset `H-ARAIM-NPA` has the HAL 555.6 m; vertical limits with a
+/// horizontal level are refused.
+///
+/// Verifies: TOOL-AVAIL-HARAIM
+#[test]
+fn horizontal_only_level_judges_the_hpl_alone() {
+    on_engine_stack(horizontal_only_body);
+}
+
+fn horizontal_only_body() {
+    let d = tmp_dir("haraim");
+    let load = |tag: &str, service: &str| {
+        let f = d.join(format!("{tag}.toml"));
+        std::fs::write(&f, small_run().replace("level = \"LPV-200\"", service)).expect("write");
+        run::load(&f)
+    };
+    let vert = load(
+        "v",
+        "level = \"custom\"\nval_m = 10.0\nhal_m = 40.0\nemt_max_m = 10.0\nsigma_acc_max_m = 1.87",
+    )
+    .expect("vertical");
+    let hor = load("h", "level = \"custom-horizontal\"\nhal_m = 40.0").expect("horizontal");
+    assert_eq!(hor.criteria, raim_core::araim::Criteria::HorizontalOnly);
+    let mut m = engine::new_engine();
+    let mut only_h = 0;
+    for u in &hor.users {
+        let (x, r) = engine::user_frame(&hor, u);
+        for k in 0..hor.epochs_gps_s.len() {
+            let sky = engine::sky_table(&hor, k..k + 1);
+            let mut obs = Vec::new();
+            engine::visible(&hor, &sky, x, &r, &mut obs);
+            let v = engine::evaluate(&vert, &mut m, &obs).expect("v");
+            let h = engine::evaluate(&hor, &mut m, &obs).expect("h");
+            assert_eq!(h.hpl_m, v.hpl_m);
+            assert_eq!(h.available, v.hpl_m <= 40.0, "HPL {}", v.hpl_m);
+            assert!(!v.available || h.available);
+            only_h += usize::from(h.available && !v.available);
+        }
+    }
+    assert!(only_h > 0, "no user-epoch available only horizontally");
+    let npa = load("n", "level = \"H-ARAIM-NPA\"").expect("npa");
+    assert_eq!(npa.cfg.hal_m, 555.6);
+    let e = load("e", "level = \"H-ARAIM-terminal\"\nval_m = 35.0").expect_err("val");
+    assert!(e.to_string().contains("judges the HAL alone"), "{e}");
+    let e = load("e", "level = \"custom-horizontal\"").expect_err("hal");
+    assert!(e.to_string().contains("needs `hal_m`"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
