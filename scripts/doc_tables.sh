@@ -17,6 +17,7 @@
 #   mcusum-tau, mcusum-replays, mcraim-arl-example, mcraim-seed001, mcraim-scenario (docs/MCRAIM.md; the last two
 #   copy the committed outputs docs/mcraim_*.txt of `raim arl`, which --long reruns),
 #   multifault-group-counts, multifault-amplification (docs/MULTIFAULT.md), pf-memory (docs/PF.md, that block only).
+#   Also docs/AVAILABILITY.md availability-sweep and docs/availability/sweep/ (scripts/availability_sweep.sh).
 # Long (seeded Monte Carlo; rerun by hand, not in CI):
 #   multifault-mc (docs/MULTIFAULT.md), budget-mc (docs/BUDGET.md), docs/mcraim_seed001.txt and
 #   docs/mcraim_scenario.txt (raim arl --seed001 / --scenario).
@@ -566,8 +567,12 @@ if [ $LONG = 1 ]; then
   put "$DOCS/BUDGET.md" budget-mc "$f"
 fi
 
+# --- docs/AVAILABILITY.md's sweep and its outputs (a few CPU seconds).
+sweep_status=0
+if [ $MODE = check ]; then bash scripts/availability_sweep.sh --check || sweep_status=1; else bash scripts/availability_sweep.sh; fi
+
 if [ $MODE = check ]; then
-  status=0
+  status=$sweep_status
   for d in ESQ.md MCRAIM.md MULTIFAULT.md BUDGET.md PF.md; do
     if ! diff -u "docs/$d" "$DOCS/$d"; then
       echo "docs/$d: a generated table differs from what the code produces now (bash scripts/doc_tables.sh)" >&2

@@ -5,8 +5,8 @@ use std::time::Instant;
 
 use anyhow::{anyhow, Result};
 
-use crate::output::{self, Meta, Partial, PartialUser, PARTIAL_FORMAT};
-use crate::{engine, run};
+use crate::output::{self, Meta, Partial, PartialUser, Piece, SweepHead, PARTIAL_FORMAT};
+use crate::{engine, run, sweep};
 
 /// `raim availability --run FILE [--shard i/n] [--out DIR] [--level L]`, or
 /// `raim availability merge PARTIAL... [--out DIR] [--level L]`.
@@ -19,8 +19,11 @@ pub struct AvailabilityArgs {
     /// The TOML run file (docs/runs/*.toml).
     #[arg(long)]
     pub run: Option<PathBuf>,
-    /// Run shard i of n (epochs split into n contiguous blocks) and write
-    /// its partial result `<name>.shard-i-of-n.json` for `merge`.
+    /// Run shard i of n and write its partial result
+    /// `<name>.shard-i-of-n.json` for `merge`: the run's (scenario, epoch)
+    /// units, scenario by scenario, split into n contiguous blocks (n equal
+    /// to the scenarios: one scenario per shard; more: scenarios split in
+    /// time).
     #[arg(long)]
     pub shard: Option<String>,
     /// Output directory.
@@ -39,7 +42,7 @@ pub struct AvailabilityArgs {
     /// A sweep of every single-satellite outage of constellation SYS (G or
     /// E): the run as given, then once per satellite of SYS with that
     /// satellite removed (`<name>.outage-G03.*`), and the table
-    /// `<name>.outages.csv` (not with --shard).
+    /// `<name>.outages.csv` and `.md` (a run file without `[[scenario]]`).
     #[arg(long, value_name = "SYS")]
     pub outages: Option<String>,
 }
@@ -50,9 +53,12 @@ pub const EXAMPLES: &str = "Examples:
   raim availability --run docs/runs/availability_maast_g24e24.toml --shard 2/4 --out shards
   raim availability merge shards/availability_maast_g24e24.shard-*-of-4.json --out runs/availability
   raim availability --run docs/runs/availability_maast_g24e24.toml --outages G --out runs/outages --level 0.99
+  raim availability --run docs/runs/availability_sweep_europe.toml --out runs/sweep --level 0.99
 
 Outputs: <name>.summary.json (coverage, users, user-epochs), <name>.users.csv (per user: availability,
-99.5th-percentile VPL/HPL/EMT, fault modes), with --maps three PNG maps. Run file: docs/AVAILABILITY.md.";
+99.5th-percentile VPL/HPL/EMT, fault modes), with --maps three PNG maps; a sweep ([[scenario]] in the run
+file, or --outages) writes them per scenario and the coverage table <name>.sweep.csv/.md. Run file:
+docs/AVAILABILITY.md.";
 
 /// `merge`.
 #[derive(clap::Subcommand, Debug)]
@@ -98,95 +104,83 @@ pub fn run(args: &AvailabilityArgs) -> Result<()> {
         maps,
     }) = &args.merge
     {
-        let (meta, users) = output::merge(parts)?;
-        let files = output::write_outputs(out, &meta, &users, &levels(meta.target, *level)?)?;
-        for f in files {
-            eprintln!("wrote {}", f.display());
-        }
-        if *maps {
-            draw_maps(out, &meta, &users)?;
-        }
-        return Ok(());
+        let (head, results) = output::merge(parts)?;
+        let target = results.first().map_or(0.995, |(m, _)| m.target);
+        return write_sweep(out, &head, &results, &levels(target, *level)?, *maps);
     }
     let path = args
         .run
         .as_ref()
         .ok_or_else(|| anyhow!("raim availability: give --run FILE, or `merge PARTIAL...`"))?;
-    let study = run::load(path)?;
-    if let Some(sys) = &args.outages {
-        if args.shard.is_some() {
-            return Err(anyhow!("--outages runs whole scenarios: not with --shard"));
-        }
-        return outage_sweep(args, &study, sys);
+    let sweep = match &args.outages {
+        Some(sys) => sweep::load_outages(path, sys)?,
+        None => sweep::load(path)?,
+    };
+    if args.maps && args.shard.is_some() {
+        return Err(anyhow!(
+            "--maps draws a whole run: give it to `raim availability merge`, not with --shard"
+        ));
     }
     let mut pool = rayon::ThreadPoolBuilder::new().stack_size(engine::STACK_BYTES);
     if let Some(t) = args.threads {
         pool = pool.num_threads(t);
     }
     let pool = pool.build()?;
-    let meta = Meta::of(&study);
-    let lv = levels(study.target, args.level)?;
+    let head = SweepHead::of(&sweep);
     let t0 = Instant::now();
-    let n_epochs = study.epochs_gps_s.len();
-    if args.maps && args.shard.is_some() {
-        return Err(anyhow!(
-            "--maps draws a whole run: give it to `raim availability merge`, not with --shard"
-        ));
-    }
-    let (range, shard) = match &args.shard {
+    let e = |e: raim_core::araim::MonitorError| anyhow!("{}: {e}", path.display());
+    let mut user_epochs = 0;
+    match &args.shard {
         Some(s) => {
             let (i, n) = output::parse_shard(s)?;
-            (output::shard_range(n_epochs, i, n), Some((i, n)))
-        }
-        None => (0..n_epochs, None),
-    };
-    let user_epochs = study.users.len() * range.len();
-    eprintln!(
-        "{}: {} users x {} epochs ({} satellites) on {} threads",
-        study.name,
-        study.users.len(),
-        range.len(),
-        study.sats.len(),
-        pool.current_num_threads()
-    );
-    let e = |e: raim_core::araim::MonitorError| anyhow!("{}: {e}", path.display());
-    match shard {
-        Some((i, n)) => {
-            let users = pool
-                .install(|| engine::run_users(&study, range.clone(), |p| PartialUser::from(&p)))
-                .map_err(e)?;
+            let mut pieces = Vec::new();
+            for (k, range) in output::shard_pieces(head.scenarios.len(), head.epochs, i, n) {
+                let study = &sweep.scenarios[k].study;
+                report(study, range.len(), &pool);
+                user_epochs += study.users.len() * range.len();
+                let users = pool
+                    .install(|| engine::run_users(study, range.clone(), |p| PartialUser::from(&p)))
+                    .map_err(e)?;
+                pieces.push(Piece {
+                    meta: Meta::of(study),
+                    epoch_range: [range.start, range.end],
+                    users,
+                });
+            }
             let part = Partial {
                 format: PARTIAL_FORMAT.into(),
-                meta,
+                head,
                 shard: i,
                 shards: n,
-                epoch_range: [range.start, range.end],
-                users,
+                pieces,
             };
             std::fs::create_dir_all(&args.out)?;
             let f = args
                 .out
-                .join(format!("{}.shard-{i}-of-{n}.json", part.meta.name));
+                .join(format!("{}.shard-{i}-of-{n}.json", part.head.name));
             std::fs::write(&f, serde_json::to_string(&part)?)?;
             eprintln!("wrote {}", f.display());
         }
         None => {
-            let users = pool
-                .install(|| engine::run_users(&study, range, engine::UserPartial::summary))
-                .map_err(e)?;
-            let files = output::write_outputs(&args.out, &meta, &users, &lv)?;
-            for l in &lv {
-                eprintln!(
-                    "coverage at {l}: {:.4}",
-                    output::coverage(&meta, &users, *l)
-                );
+            let mut results = Vec::new();
+            for sc in &sweep.scenarios {
+                let study = &sc.study;
+                let n_epochs = study.epochs_gps_s.len();
+                report(study, n_epochs, &pool);
+                user_epochs += study.users.len() * n_epochs;
+                let users = pool
+                    .install(|| engine::run_users(study, 0..n_epochs, engine::UserPartial::summary))
+                    .map_err(e)?;
+                results.push((Meta::of(study), users));
             }
-            for f in files {
-                eprintln!("wrote {}", f.display());
-            }
-            if args.maps {
-                draw_maps(&args.out, &meta, &users)?;
-            }
+            let target = sweep.scenarios[0].study.target;
+            write_sweep(
+                &args.out,
+                &head,
+                &results,
+                &levels(target, args.level)?,
+                args.maps,
+            )?;
         }
     }
     let s = t0.elapsed().as_secs_f64();
@@ -197,95 +191,62 @@ pub fn run(args: &AvailabilityArgs) -> Result<()> {
     Ok(())
 }
 
+fn report(study: &run::Study, epochs: usize, pool: &rayon::ThreadPool) {
+    eprintln!(
+        "{}: {} users x {} epochs ({} satellites) on {} threads",
+        study.name,
+        study.users.len(),
+        epochs,
+        study.sats.len(),
+        pool.current_num_threads()
+    );
+}
+
+/// Writes every scenario's summary and CSV (and maps), and a sweep's
+/// coverage table `<name>.<tag>.csv` and `.md`: the same function for a
+/// whole run and for `merge`, so that both give the same bytes.
+fn write_sweep(
+    dir: &std::path::Path,
+    head: &SweepHead,
+    results: &[(Meta, Vec<engine::UserSummary>)],
+    lv: &[f64],
+    maps: bool,
+) -> Result<()> {
+    for (meta, users) in results {
+        let files = output::write_outputs(dir, meta, users, lv)?;
+        let prefix = if results.len() > 1 {
+            format!("{}: ", meta.name)
+        } else {
+            String::new()
+        };
+        for l in lv {
+            eprintln!(
+                "{prefix}coverage at {l}: {:.4}",
+                output::coverage(meta, users, *l)
+            );
+        }
+        for f in files {
+            eprintln!("wrote {}", f.display());
+        }
+        if maps {
+            draw_maps(dir, meta, users)?;
+        }
+    }
+    if let Some(tag) = &head.table {
+        let (csv, md) = output::sweep_tables(head, results, lv);
+        for (ext, text) in [("csv", csv), ("md", md)] {
+            let f = dir.join(format!("{}.{tag}.{ext}", head.name));
+            std::fs::write(&f, text)?;
+            eprintln!("wrote {}", f.display());
+        }
+    }
+    Ok(())
+}
+
 fn draw_maps(dir: &std::path::Path, meta: &Meta, users: &[engine::UserSummary]) -> Result<()> {
     let cov = output::coverage(meta, users, meta.target);
     for f in crate::map::write_maps(dir, meta, users, cov)? {
         eprintln!("wrote {}", f.display());
     }
-    Ok(())
-}
-
-/// `--outages SYS` (docs/AVAILABILITY.md "Outages"): the run as given and
-/// each single-satellite outage of SYS, each written as a run of its own
-/// (`<name>.outage-<sat>.summary.json`, `.users.csv`), and the table
-/// `<name>.outages.csv`: scenario, removed satellite, coverage at the
-/// target and at `--level`, the area-weighted mean availability, and the
-/// users less and more available than with every satellite.
-fn outage_sweep(args: &AvailabilityArgs, study: &run::Study, sys: &str) -> Result<()> {
-    let system = match sys {
-        "G" => raim_core::System::Gps,
-        "E" => raim_core::System::Galileo,
-        s => return Err(anyhow!("--outages {s}: G or E")),
-    };
-    let mut pool = rayon::ThreadPoolBuilder::new().stack_size(engine::STACK_BYTES);
-    if let Some(t) = args.threads {
-        pool = pool.num_threads(t);
-    }
-    let pool = pool.build()?;
-    let lv = levels(study.target, args.level)?;
-    let mut scenarios = vec![(String::new(), study.clone())];
-    for s in study.sats.iter().filter(|s| s.id.system == system) {
-        let label = format!("{}{:02}", system.letter(), s.id.prn);
-        let mut o = study.clone();
-        let keep: Vec<bool> = o.sats.iter().map(|x| x.id != s.id).collect();
-        let mut k = keep.iter();
-        o.sats.retain(|_| *k.next().unwrap_or(&true));
-        let mut k = keep.iter();
-        o.ism_entries.retain(|_| *k.next().unwrap_or(&true));
-        o.name = format!("{}.outage-{label}", study.name);
-        scenarios.push((label, o));
-    }
-    if scenarios.len() == 1 {
-        return Err(anyhow!(
-            "--outages {sys}: the run has no satellite of {sys}"
-        ));
-    }
-    let mut table = format!(
-        "scenario,removed,{},mean_availability,users_less_available,users_more_available\n",
-        lv.iter()
-            .map(|l| format!("coverage_{l}"))
-            .collect::<Vec<_>>()
-            .join(",")
-    );
-    let mut base: Vec<f64> = Vec::new();
-    for (label, sc) in &scenarios {
-        let meta = Meta::of(sc);
-        let e = |e: raim_core::araim::MonitorError| anyhow!("{}: {e}", sc.name);
-        let users = pool
-            .install(|| {
-                engine::run_users(sc, 0..sc.epochs_gps_s.len(), engine::UserPartial::summary)
-            })
-            .map_err(e)?;
-        output::write_outputs(&args.out, &meta, &users, &lv)?;
-        let avail: Vec<f64> = users.iter().map(|u| u.availability).collect();
-        if label.is_empty() {
-            base.clone_from(&avail);
-        }
-        let less = avail.iter().zip(&base).filter(|(a, b)| a < b).count();
-        let more = avail.iter().zip(&base).filter(|(a, b)| a > b).count();
-        let w: f64 = sc.users.iter().map(|u| u.weight).sum();
-        let mean = sc
-            .users
-            .iter()
-            .zip(&avail)
-            .map(|(u, a)| u.weight * a)
-            .sum::<f64>()
-            / w;
-        let cov: Vec<String> = lv
-            .iter()
-            .map(|l| format!("{:.6}", output::coverage(&meta, &users, *l)))
-            .collect();
-        table.push_str(&format!(
-            "{},{},{},{mean:.6},{less},{more}\n",
-            sc.name,
-            if label.is_empty() { "none" } else { label },
-            cov.join(",")
-        ));
-        eprintln!("{}: coverage at {}: {}", sc.name, lv[0], cov[0]);
-    }
-    std::fs::create_dir_all(&args.out)?;
-    let f = args.out.join(format!("{}.outages.csv", study.name));
-    std::fs::write(&f, table)?;
-    eprintln!("wrote {}", f.display());
     Ok(())
 }

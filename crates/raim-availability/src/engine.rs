@@ -114,11 +114,17 @@ impl UserPartial {
 
 /// The ECEF positions of every satellite at epochs `range`, row-major
 /// (epoch, satellite), by `Kepler::state` (no light time or Earth
-/// rotation during transit: the geometry of an almanac study).
+/// rotation during transit: the geometry of an almanac study); NaN for a
+/// broadcast satellite with no valid ephemeris at that epoch (not used).
 pub fn sky_table(study: &Study, range: std::ops::Range<usize>) -> Vec<[f64; 3]> {
     study.epochs_gps_s[range]
         .iter()
-        .flat_map(|&t| study.sats.iter().map(move |s| s.kepler.state(t).position_m))
+        .flat_map(|&t| {
+            study
+                .sats
+                .iter()
+                .map(move |s| s.position_m(t).unwrap_or([f64::NAN; 3]))
+        })
         .collect()
 }
 
@@ -134,6 +140,9 @@ pub fn visible(
     out.clear();
     let sin_mask = study.mask_rad.sin();
     for (s, p) in study.sats.iter().zip(positions) {
+        if !p[0].is_finite() {
+            continue;
+        }
         let d = [
             p[0] - user_ecef_m[0],
             p[1] - user_ecef_m[1],
@@ -220,8 +229,18 @@ pub fn evaluate(
         Err(e) => return Err(e),
     };
     let out = monitor.in_force();
+    // The monitor's verdict judges the LPV criteria; a horizontal-only
+    // level re-judges an `Unavailable` epoch by its own criteria
+    // (raim-core's `AraimOutput::available_for`).
+    let available = match verdict.decision {
+        raim_core::Decision::Ok => true,
+        raim_core::Decision::Unavailable => {
+            out.detection_passed && out.available_for(study.criteria)
+        }
+        raim_core::Decision::Alarm | raim_core::Decision::Excluded => false,
+    };
     let mut o = EpochOutcome {
-        available: verdict.decision == raim_core::Decision::Ok,
+        available,
         vpl_m: f64::NEG_INFINITY,
         hpl_m: f64::NEG_INFINITY,
         emt_m: f64::NEG_INFINITY,
@@ -259,7 +278,7 @@ pub fn evaluate(
     for k in candidates {
         match monitor.after_excluding(&study.cfg, &study.ism, k)? {
             Some(sub) => {
-                o.available &= sub.available();
+                o.available &= sub.available_for(study.criteria);
                 o.worsen(study, sub);
             }
             None => {
@@ -338,7 +357,7 @@ pub fn continuity_holds(
         }
         let ok = monitor
             .after_excluding(&study.cfg, &study.ism, k)?
-            .is_some_and(|sub| sub.available());
+            .is_some_and(|sub| sub.available_for(study.criteria));
         if !ok {
             failed += w;
             if failed > c.p_alloc {

@@ -10,3 +10,4 @@ pub mod engine;
 pub mod map;
 pub mod output;
 pub mod run;
+pub mod sweep;

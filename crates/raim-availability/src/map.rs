@@ -1,7 +1,12 @@
 //! PNG maps of a grid's results (issue 36): per-user availability, the
 //! 99.5th-percentile VPL and the most monitored fault modes, each cell
-//! filled with its bin's colour, a colour bar and a title naming the
-//! scenario. No coastlines yet (no packaged dataset offline).
+//! filled with its bin's colour, coastlines over the cells, a colour bar
+//! and a title naming the scenario.
+//!
+//! The coastlines are Natural Earth's 1:110m coastline (public domain),
+//! as packaged in the crate `plotine` 0.5.2 (MIT), converted by
+//! `scripts/coastline.py` into `data/coastline_ne110m.bin` (134 lines,
+//! 5,127 points at 0.01 degree; compiled in, nothing read at run time).
 //!
 //! Availability bins are the ones MAAST's coverage maps use (0, 50, 75,
 //! 85, 90, 95, 98, 99, 99.5, 99.9 %); VPL bins step 5 m up to the LPV
@@ -164,11 +169,103 @@ fn register_font() -> Result<()> {
     .map_err(|e| anyhow!(e))
 }
 
-/// Draws one map of `values` (one per user of `meta`) into `path`.
+/// Natural Earth's 1:110m coastlines (module doc): little-endian i16
+/// pairs, longitude then latitude in hundredths of a degree, with
+/// (-32768, -32768) between two lines.
+const COASTLINE: &[u8] = include_bytes!("../data/coastline_ne110m.bin");
+
+/// The coastlines, each a run of (longitude, latitude) points in degrees.
+pub fn coastlines() -> Vec<Vec<(f64, f64)>> {
+    let mut lines = Vec::new();
+    let mut line = Vec::new();
+    for c in COASTLINE.chunks_exact(4) {
+        let x = i16::from_le_bytes([c[0], c[1]]);
+        let y = i16::from_le_bytes([c[2], c[3]]);
+        if x == i16::MIN && y == i16::MIN {
+            lines.push(std::mem::take(&mut line));
+        } else {
+            line.push((f64::from(x) / 100.0, f64::from(y) / 100.0));
+        }
+    }
+    lines.push(line);
+    lines.retain(|l| l.len() >= 2);
+    lines
+}
+
+/// The part of segment a-b inside the box [x0, x1] x [y0, y1]
+/// (Liang-Barsky), if any.
+fn clip(
+    a: (f64, f64),
+    b: (f64, f64),
+    (x0, x1, y0, y1): (f64, f64, f64, f64),
+) -> Option<((f64, f64), (f64, f64))> {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for (p, q) in [
+        (-dx, a.0 - x0),
+        (dx, x1 - a.0),
+        (-dy, a.1 - y0),
+        (dy, y1 - a.1),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return None;
+            }
+        } else {
+            let r = q / p;
+            if p < 0.0 {
+                t0 = t0.max(r);
+            } else {
+                t1 = t1.min(r);
+            }
+        }
+    }
+    (t0 <= t1).then_some((
+        (a.0 + t0 * dx, a.1 + t0 * dy),
+        (a.0 + t1 * dx, a.1 + t1 * dy),
+    ))
+}
+
+/// Where a map's axes fell on the canvas: the plotting area's pixels and
+/// the longitudes and latitudes at its edges.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MapFrame {
+    /// Pixel columns of the plotting area.
+    pub x_px: std::ops::Range<i32>,
+    /// Pixel rows of the plotting area (top to bottom).
+    pub y_px: std::ops::Range<i32>,
+    /// Longitudes at the left and right edges (degrees).
+    pub lon_deg: (f64, f64),
+    /// Latitudes at the bottom and top edges (degrees).
+    pub lat_deg: (f64, f64),
+}
+
+impl MapFrame {
+    /// The pixel of (longitude, latitude).
+    pub fn pixel(&self, lon_deg: f64, lat_deg: f64) -> (i32, i32) {
+        let fx = (lon_deg - self.lon_deg.0) / (self.lon_deg.1 - self.lon_deg.0);
+        let fy = (self.lat_deg.1 - lat_deg) / (self.lat_deg.1 - self.lat_deg.0);
+        let w = f64::from(self.x_px.end - self.x_px.start);
+        let h = f64::from(self.y_px.end - self.y_px.start);
+        (
+            self.x_px.start + (fx * w).round() as i32,
+            self.y_px.start + (fy * h).round() as i32,
+        )
+    }
+}
+
+/// Draws one map of `values` (one per user of `meta`) into `path`, with
+/// the coastlines over the cells; returns where its axes fell.
 ///
 /// # Errors
 /// No font, or the PNG cannot be written.
-pub fn draw(path: &Path, title: &str, meta: &Meta, values: &[f64], bins: &Bins) -> Result<()> {
+pub fn draw(
+    path: &Path,
+    title: &str,
+    meta: &Meta,
+    values: &[f64],
+    bins: &Bins,
+) -> Result<MapFrame> {
     register_font()?;
     let e = |e: &dyn std::fmt::Display| anyhow!("{}: {e}", path.display());
     let root = BitMapBackend::new(path, (WIDTH_PX, HEIGHT_PX)).into_drawing_area();
@@ -211,6 +308,23 @@ pub fn draw(path: &Path, title: &str, meta: &Meta, values: &[f64], bins: &Bins) 
             )
         }))
         .map_err(|x| e(&x))?;
+    let area = (lon0, lon1, lat0, lat1);
+    chart
+        .draw_series(
+            coastlines()
+                .iter()
+                .flat_map(|l| l.windows(2))
+                .filter_map(|w| clip(w[0], w[1], area))
+                .map(|(a, b)| PathElement::new(vec![a, b], BLACK.stroke_width(1))),
+        )
+        .map_err(|x| e(&x))?;
+    let (x_px, y_px) = chart.plotting_area().get_pixel_range();
+    let frame = MapFrame {
+        x_px,
+        y_px,
+        lon_deg: (lon0, lon1),
+        lat_deg: (lat0, lat1),
+    };
     // The colour bar: one box per bin, lowest at the bottom.
     let n = bins.edges.len() as i32;
     let h = (HEIGHT_PX as i32 - 120) / n.max(1);
@@ -226,7 +340,7 @@ pub fn draw(path: &Path, title: &str, meta: &Meta, values: &[f64], bins: &Bins) 
         .map_err(|x| e(&x))?;
     }
     root.present().map_err(|x| e(&x))?;
-    Ok(())
+    Ok(frame)
 }
 
 /// The three maps beside the outputs: `<name>.availability.png`,
@@ -297,8 +411,11 @@ mod tests {
     }
 
     /// A 3 x 4 grid whose availabilities fall in 3 of the 10 bins: in the
-    /// map area exactly those 3 bin colours appear (and grey for the NaN
-    /// user); the colour bar shows all 10.
+    /// map area those 3 bin colours fill the cells (and grey the NaN
+    /// user's), any other only at a coastline's blended edge; the colour
+    /// bar shows all 10.
+    ///
+    /// Verifies: TOOL-AVAIL-MAPS
     #[test]
     fn map_cells_take_their_bin_colour() {
         let mut users = Vec::new();
@@ -324,6 +441,8 @@ mod tests {
             limits_m: [35.0, 40.0, 15.0, 1.87],
             target: 0.995,
             users,
+            ephemeris_gaps: None,
+            horizontal_only: false,
         };
         let bins = availability_bins();
         let dir = std::env::temp_dir().join(format!("raim-avail-map-{}", std::process::id()));
@@ -347,7 +466,9 @@ mod tests {
             if used.contains(&b) {
                 assert!(n > 1000, "bin {b}: {n} pixels");
             } else {
-                assert_eq!(n, 0, "bin {b} drawn but unused");
+                // A few pixels where the coastline's edge blends into a
+                // cell's colour.
+                assert!(n < 20, "bin {b} drawn but unused: {n} pixels");
             }
             assert!(
                 count(*c, false) > 100,
@@ -355,6 +476,92 @@ mod tests {
             );
         }
         assert!(count(RGBColor(160, 160, 160), true) > 1000, "the NaN cell");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// The packaged coastlines: Natural Earth's 1:110m coastline has 134
+    /// lines (rnaturalearthdata's `coastline110`: 134 rows); the southern
+    /// tip of Africa lies at Cape Agulhas, 34.83 S 20.00 E (within 0.3
+    /// deg), and South America's near Cape Horn, 55.98 S 67.27 W (within
+    /// 0.5 deg: the 1:110m generalisation of Tierra del Fuego ends at
+    /// 55.61 S).
+    ///
+    /// Verifies: TOOL-AVAIL-MAPS
+    #[test]
+    fn coastlines_are_natural_earths() {
+        let lines = coastlines();
+        assert_eq!(lines.len(), 134);
+        let points: Vec<(f64, f64)> = lines.iter().flatten().copied().collect();
+        assert!(points
+            .iter()
+            .all(|(x, y)| (-180.0..=180.0).contains(x) && (-90.0..=90.0).contains(y)));
+        let southmost = |lon: std::ops::Range<f64>, lat: std::ops::Range<f64>| {
+            points
+                .iter()
+                .filter(|(x, y)| lon.contains(x) && lat.contains(y))
+                .map(|p| p.1)
+                .fold(f64::INFINITY, f64::min)
+        };
+        assert!((southmost(15.0..30.0, -40.0..-30.0) + 34.83).abs() < 0.3);
+        assert!((southmost(-75.0..-60.0, -60.0..-50.0) + 55.98).abs() < 0.5);
+    }
+
+    /// On a map of the Gulf of Guinea (one colour), the coastline is drawn
+    /// in black through each of its vertices in the map's frame, and
+    /// nowhere near a point 5 deg from any coast (Central Africa, 20 E 5 N;
+    /// the South Atlantic, 10 W 10 S).
+    ///
+    /// Verifies: TOOL-AVAIL-MAPS
+    #[test]
+    fn coastlines_are_drawn_where_they_lie() {
+        let mut users = Vec::new();
+        for lat in [-10.0, 0.0, 10.0] {
+            for lon in [-10.0, 0.0, 10.0, 20.0, 30.0] {
+                users.push((String::new(), lat, lon, 1.0));
+            }
+        }
+        let values = vec![1.0; users.len()];
+        let meta = Meta {
+            name: "t".into(),
+            run_digest: String::new(),
+            satellites: vec![],
+            unhealthy: vec![],
+            epochs: 1,
+            mask_rad: 0.0,
+            limits_m: [35.0, 40.0, 15.0, 1.87],
+            target: 0.995,
+            users,
+            ephemeris_gaps: None,
+            horizontal_only: false,
+        };
+        let dir = std::env::temp_dir().join(format!("raim-avail-coast-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("t.png");
+        let frame = draw(&path, "test", &meta, &values, &availability_bins()).unwrap();
+        let img = image::open(&path).unwrap().to_rgb8();
+        let black_near = |(px, py): (i32, i32), r: i32| {
+            (-r..=r).any(|dx| {
+                (-r..=r).any(|dy| {
+                    let (x, y) = (px + dx, py + dy);
+                    x >= 0
+                        && y >= 0
+                        && img
+                            .get_pixel_checked(x as u32, y as u32)
+                            .is_some_and(|p| p.0 == [0, 0, 0])
+                })
+            })
+        };
+        let inside = |(x, y): &(f64, f64)| {
+            (frame.lon_deg.0 + 0.5..frame.lon_deg.1 - 0.5).contains(x)
+                && (frame.lat_deg.0 + 0.5..frame.lat_deg.1 - 0.5).contains(y)
+        };
+        let vertices: Vec<(f64, f64)> = coastlines().into_iter().flatten().filter(inside).collect();
+        assert!(vertices.len() > 20, "{}", vertices.len());
+        for (x, y) in &vertices {
+            assert!(black_near(frame.pixel(*x, *y), 1), "no coast at {x} {y}");
+        }
+        assert!(!black_near(frame.pixel(20.0, 5.0), 10));
+        assert!(!black_near(frame.pixel(-10.0, -10.0), 10));
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

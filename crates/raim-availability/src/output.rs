@@ -13,7 +13,7 @@ use crate::engine::{UserPartial, UserSummary, PERCENTILE};
 use crate::run::Study;
 
 /// The partial file's format tag.
-pub const PARTIAL_FORMAT: &str = "raim-availability-partial/1";
+pub const PARTIAL_FORMAT: &str = "raim-availability-partial/2";
 
 /// What the summary needs besides the users' results (carried by each
 /// partial so that `merge` needs no run file).
@@ -37,6 +37,14 @@ pub struct Meta {
     pub target: f64,
     /// The users: name, latitude, longitude (degrees), weight.
     pub users: Vec<(String, f64, f64, f64)>,
+    /// With a broadcast (RINEX) constellation: per satellite, the epochs
+    /// of the run at which it had no healthy ephemeris within its validity
+    /// window and was not used (satellites with none are not listed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ephemeris_gaps: Option<Vec<(String, usize)>>,
+    /// The service level judges the HAL alone (H-ARAIM).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub horizontal_only: bool,
 }
 
 /// FNV-1a, 64 bits.
@@ -72,25 +80,106 @@ impl Meta {
                 .iter()
                 .map(|u| (u.name.clone(), u.lat_deg, u.lon_deg, u.weight))
                 .collect(),
+            horizontal_only: study.criteria == raim_core::araim::Criteria::HorizontalOnly,
+            ephemeris_gaps: study.sats.iter().any(|s| s.is_broadcast()).then(|| {
+                study
+                    .sats
+                    .iter()
+                    .map(|s| {
+                        let gaps = study
+                            .epochs_gps_s
+                            .iter()
+                            .filter(|t| s.kepler_at(**t).is_none())
+                            .count();
+                        (format!("{}{:02}", s.id.system.letter(), s.id.prn), gaps)
+                    })
+                    .filter(|(_, n)| *n > 0)
+                    .collect()
+            }),
         }
     }
 }
 
-/// One shard's results.
+/// One scenario's metadata and per-user summaries.
+pub type ScenarioResult = (Meta, Vec<UserSummary>);
+
+/// The scenarios of a run as the partial files and `merge` see them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SweepHead {
+    /// The run's name.
+    pub name: String,
+    /// The coverage table's tag (`outages`, `sweep`), none for one scenario.
+    pub table: Option<String>,
+    /// Per scenario, in order: its output stem and the satellite an outage
+    /// removed (`none`).
+    pub scenarios: Vec<[String; 2]>,
+    /// Epochs of every scenario (the run's time span).
+    pub epochs: usize,
+}
+
+impl SweepHead {
+    /// The sweep's head.
+    pub fn of(sweep: &crate::sweep::Sweep) -> SweepHead {
+        SweepHead {
+            name: sweep.name.clone(),
+            table: sweep.table.clone(),
+            scenarios: sweep
+                .scenarios
+                .iter()
+                .map(|s| [s.study.name.clone(), s.removed.clone()])
+                .collect(),
+            epochs: sweep
+                .scenarios
+                .first()
+                .map_or(0, |s| s.study.epochs_gps_s.len()),
+        }
+    }
+}
+
+/// One shard's results: the scenario x epoch blocks of [`shard_pieces`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Partial {
     /// [`PARTIAL_FORMAT`].
     pub format: String,
-    /// The run.
-    pub meta: Meta,
+    /// The run's scenarios.
+    pub head: SweepHead,
     /// This shard, 1-based.
     pub shard: usize,
     /// Shards of the run.
     pub shards: usize,
-    /// The shard's epochs, [first, end).
+    /// The shard's pieces, in scenario order.
+    pub pieces: Vec<Piece>,
+}
+
+/// One scenario's epochs within a shard.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Piece {
+    /// The scenario.
+    pub meta: Meta,
+    /// The epochs, [first, end).
     pub epoch_range: [usize; 2],
     /// Per user (in `meta.users` order).
     pub users: Vec<PartialUser>,
+}
+
+/// The pieces of shard `i` (1-based) of `n` over `scenarios` x `epochs`:
+/// the units (scenario, epoch) in scenario-major order split into `n`
+/// contiguous blocks ([`shard_range`]), each cut at the scenarios'
+/// boundaries. With n = scenarios a shard is one scenario; with more, a
+/// scenario's epochs are split in time; with fewer, a shard holds several.
+pub fn shard_pieces(
+    scenarios: usize,
+    epochs: usize,
+    i: usize,
+    n: usize,
+) -> Vec<(usize, std::ops::Range<usize>)> {
+    let r = shard_range(scenarios * epochs, i, n);
+    (0..scenarios)
+        .filter_map(|s| {
+            let (a, b) = (r.start.max(s * epochs), r.end.min((s + 1) * epochs));
+            (a < b).then(|| (s, a - s * epochs..b - s * epochs))
+        })
+        .collect()
 }
 
 /// One user's shard, the floats as IEEE-754 bits.
@@ -171,35 +260,41 @@ pub fn parse_shard(s: &str) -> Result<(usize, usize)> {
     Ok((i, n))
 }
 
-/// Reads the partial files and combines them into per-user summaries.
+/// Reads the partial files and combines them into per-scenario, per-user
+/// summaries: every shard 1..n of one run exactly once, each holding the
+/// pieces [`shard_pieces`] assigns it, a scenario's pieces concatenated in
+/// epoch order.
 ///
 /// # Errors
 /// An unreadable or malformed file, files of different runs, a shard
-/// missing or given twice, user lists that differ.
-pub fn merge(paths: &[std::path::PathBuf]) -> Result<(Meta, Vec<UserSummary>)> {
+/// missing or given twice, pieces or user lists that differ from the head.
+pub fn merge(paths: &[std::path::PathBuf]) -> Result<(SweepHead, Vec<ScenarioResult>)> {
     let mut parts = Vec::new();
     for p in paths {
         let text = std::fs::read_to_string(p).with_context(|| p.display().to_string())?;
-        let part: Partial = serde_json::from_str(&text)
+        let format: serde_json::Value = serde_json::from_str(&text)
             .map_err(|e| anyhow!("{}:{}: {e}", p.display(), e.line()))?;
-        if part.format != PARTIAL_FORMAT {
+        if format["format"] != PARTIAL_FORMAT {
             bail!(
-                "{}: format `{}`, expected `{PARTIAL_FORMAT}`",
+                "{}: format {}, expected `{PARTIAL_FORMAT}`",
                 p.display(),
-                part.format
+                format["format"]
             );
         }
+        let part: Partial = serde_json::from_str(&text)
+            .map_err(|e| anyhow!("{}:{}: {e}", p.display(), e.line()))?;
         parts.push((p.clone(), part));
     }
     let Some((first_path, first)) = parts.first() else {
         bail!("merge: no partial file given");
     };
     let n = first.shards;
+    let head = &first.head;
     let mut slot: Vec<Option<usize>> = vec![None; n];
     for (k, (p, part)) in parts.iter().enumerate() {
-        if part.meta != first.meta || part.shards != n {
+        if part.head != *head || part.shards != n {
             bail!(
-                "{}: not a shard of the run of {} (different run file, users or shard count)",
+                "{}: not a shard of the run of {} (different run, scenarios or shard count)",
                 p.display(),
                 first_path.display()
             );
@@ -207,13 +302,21 @@ pub fn merge(paths: &[std::path::PathBuf]) -> Result<(Meta, Vec<UserSummary>)> {
         if part.shard == 0 || part.shard > n {
             bail!("{}: shard {} of {n}", p.display(), part.shard);
         }
-        if part.epoch_range != {
-            let r = shard_range(first.meta.epochs, part.shard, n);
-            [r.start, r.end]
-        } || part.users.len() != first.meta.users.len()
-        {
+        let want = shard_pieces(head.scenarios.len(), head.epochs, part.shard, n);
+        let matches = want.len() == part.pieces.len()
+            && want.iter().zip(&part.pieces).all(|((s, r), piece)| {
+                piece.meta.name == head.scenarios[*s][0]
+                    && piece.epoch_range == [r.start, r.end]
+                    && piece.meta.epochs == head.epochs
+                    && piece.users.len() == piece.meta.users.len()
+                    && piece
+                        .users
+                        .iter()
+                        .all(|u| u.vpl_bits.len() == r.len() && u.epochs as usize == r.len())
+            });
+        if !matches {
             bail!(
-                "{}: the shard's epochs or users do not match its header",
+                "{}: the shard's scenarios, epochs or users do not match its header",
                 p.display()
             );
         }
@@ -230,16 +333,115 @@ pub fn merge(paths: &[std::path::PathBuf]) -> Result<(Meta, Vec<UserSummary>)> {
         bail!("merge: shard {}/{n} is missing", missing + 1);
     }
     let order: Vec<usize> = slot.into_iter().flatten().collect();
-    let users = (0..first.meta.users.len())
-        .map(|u| {
-            let mut acc = UserPartial::default();
-            for &k in &order {
-                acc.extend(&UserPartial::from(&parts[k].1.users[u]));
-            }
-            acc.summary()
-        })
-        .collect();
-    Ok((first.meta.clone(), users))
+    let mut out = Vec::new();
+    for [stem, _] in &head.scenarios {
+        // Shard order is epoch order within a scenario.
+        let pieces: Vec<(&std::path::PathBuf, &Piece)> = order
+            .iter()
+            .flat_map(|&k| {
+                let (p, part) = &parts[k];
+                part.pieces
+                    .iter()
+                    .filter(move |x| &x.meta.name == stem)
+                    .map(move |x| (p, x))
+            })
+            .collect();
+        let Some((_, p0)) = pieces.first() else {
+            bail!("merge: scenario `{stem}` has no piece");
+        };
+        if let Some((p, _)) = pieces.iter().find(|(_, x)| x.meta != p0.meta) {
+            bail!(
+                "{}: scenario `{stem}` differs from the other shards' (run file or users)",
+                p.display()
+            );
+        }
+        let users = (0..p0.meta.users.len())
+            .map(|u| {
+                let mut acc = UserPartial::default();
+                for (_, piece) in &pieces {
+                    acc.extend(&UserPartial::from(&piece.users[u]));
+                }
+                acc.summary()
+            })
+            .collect();
+        out.push((p0.meta.clone(), users));
+    }
+    Ok((head.clone(), out))
+}
+
+/// The area-weighted mean availability.
+pub fn mean_availability(meta: &Meta, users: &[UserSummary]) -> f64 {
+    let wsum: f64 = meta.users.iter().map(|u| u.3).sum();
+    meta.users
+        .iter()
+        .zip(users)
+        .map(|(m, u)| m.3 * u.availability)
+        .sum::<f64>()
+        / wsum
+}
+
+/// The coverage-per-scenario table of a sweep, as CSV and markdown: per
+/// scenario its stem, the satellite an outage removed, the coverage at
+/// each level, the area-weighted mean availability, and the users less
+/// and more available than in the first scenario (the run as written).
+pub fn sweep_tables(
+    head: &SweepHead,
+    results: &[ScenarioResult],
+    levels: &[f64],
+) -> (String, String) {
+    let mut csv = format!(
+        "scenario,removed,{},mean_availability,users_less_available,users_more_available\n",
+        levels
+            .iter()
+            .map(|l| format!("coverage_{l}"))
+            .collect::<Vec<_>>()
+            .join(",")
+    );
+    let mut md = format!(
+        "| scenario | removed | {} | mean availability | users less available | users more available |\n| --- | --- |{} ---: | ---: | ---: |\n",
+        levels
+            .iter()
+            .map(|l| format!("coverage at {} %", l * 100.0))
+            .collect::<Vec<_>>()
+            .join(" | "),
+        " ---: |".repeat(levels.len())
+    );
+    let base: Vec<f64> = results
+        .first()
+        .map(|(_, u)| u.iter().map(|x| x.availability).collect())
+        .unwrap_or_default();
+    for ([stem, removed], (meta, users)) in head.scenarios.iter().zip(results) {
+        let less = users
+            .iter()
+            .zip(&base)
+            .filter(|(a, b)| a.availability < **b)
+            .count();
+        let more = users
+            .iter()
+            .zip(&base)
+            .filter(|(a, b)| a.availability > **b)
+            .count();
+        let mean = mean_availability(meta, users);
+        let cov: Vec<f64> = levels.iter().map(|l| coverage(meta, users, *l)).collect();
+        let _ = writeln!(
+            csv,
+            "{stem},{removed},{},{mean:.6},{less},{more}",
+            cov.iter()
+                .map(|c| format!("{c:.6}"))
+                .collect::<Vec<_>>()
+                .join(",")
+        );
+        let _ = writeln!(
+            md,
+            "| {stem} | {removed} | {} | {:.3} % | {less} | {more} |",
+            cov.iter()
+                .map(|c| format!("{:.2} %", c * 100.0))
+                .collect::<Vec<_>>()
+                .join(" | "),
+            mean * 100.0
+        );
+    }
+    (csv, md)
 }
 
 /// Area-weighted coverage at `level`: sum of the weights of the users with
@@ -264,14 +466,7 @@ fn num(x: f64) -> serde_json::Value {
 pub fn summary_json(meta: &Meta, users: &[UserSummary], levels: &[f64]) -> String {
     let epochs: u64 = users.iter().map(|u| u64::from(u.epochs)).sum();
     let refused: u64 = users.iter().map(|u| u64::from(u.refused)).sum();
-    let wsum: f64 = meta.users.iter().map(|u| u.3).sum();
-    let mean_avail = meta
-        .users
-        .iter()
-        .zip(users)
-        .map(|(m, u)| m.3 * u.availability)
-        .sum::<f64>()
-        / wsum;
+    let mean_avail = mean_availability(meta, users);
     let worst_vpl = users
         .iter()
         .map(|u| u.vpl_pct_m)
@@ -299,6 +494,23 @@ pub fn summary_json(meta: &Meta, users: &[UserSummary], levels: &[f64]) -> Strin
         "worst_user_vpl_percentile_m": num(worst_vpl),
         "max_modes": users.iter().map(|u| u.max_modes).max().unwrap_or(0),
     });
+    let mut v = v;
+    if let (true, Some(o)) = (meta.horizontal_only, v.as_object_mut()) {
+        o.insert("criteria".into(), "HAL only".into());
+    }
+    if let (Some(gaps), Some(o)) = (&meta.ephemeris_gaps, v.as_object_mut()) {
+        o.insert(
+            "satellite_epochs_without_ephemeris".into(),
+            gaps.iter().map(|g| g.1).sum::<usize>().into(),
+        );
+        o.insert(
+            "ephemeris_gaps_epochs".into(),
+            gaps.iter()
+                .map(|(id, n)| (id.clone(), serde_json::Value::from(*n)))
+                .collect::<serde_json::Map<_, _>>()
+                .into(),
+        );
+    }
     let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();
     s.push('\n');
     s

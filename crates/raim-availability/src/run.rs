@@ -3,10 +3,12 @@
 //! user grid, the time span, the mask and the service level. Every number
 //! is named with its unit; errors name the file and line.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use anyhow::{anyhow, bail, Result};
-use raim_core::araim::{AraimConfig, Ism, SatIsm};
+use raim_core::araim::{AraimConfig, Criteria, Ism, SatIsm};
 use raim_core::{SatId, System};
 use serde::Deserialize;
 
@@ -42,6 +44,10 @@ pub struct RunFile {
     pub service: ServiceSpec,
     /// One entry per constellation.
     pub constellation: Vec<ConstellationSpec>,
+    /// A sweep: scenarios, each the run with what it names overridden
+    /// (read by `crate::sweep`; docs/AVAILABILITY.md "Sweeps").
+    #[serde(default)]
+    pub scenario: Vec<toml::Table>,
 }
 
 /// Which exclusions must leave the service available (docs/AVAILABILITY.md
@@ -193,8 +199,14 @@ fn default_target() -> f64 {
 pub struct ConstellationSpec {
     /// `G` or `E`.
     pub system: String,
-    /// The almanac file, relative to the run file's directory.
-    pub almanac: PathBuf,
+    /// The almanac file, relative to the run file's directory (or
+    /// `navigation`).
+    pub almanac: Option<PathBuf>,
+    /// A RINEX navigation file (2 or 3, gzip or not), relative to the run
+    /// file's directory: the constellation's broadcast ephemerides, at
+    /// each epoch the healthy set nearest in toe within its validity
+    /// window (or `almanac`).
+    pub navigation: Option<PathBuf>,
     /// Its format: `yuma` (the default) or `sem` (GPS SEM, USCG NAVCEN).
     #[serde(default)]
     pub format: AlmanacFormat,
@@ -236,13 +248,49 @@ pub struct ConstellationSpec {
     pub mfd_const_s: Option<f64>,
 }
 
+/// A satellite's orbit.
+#[derive(Debug, Clone)]
+pub enum Orbit {
+    /// One almanac record (every harmonic correction zero, toe its time of
+    /// applicability).
+    Almanac(raim_nav::ephemeris::Kepler),
+    /// The broadcast ephemerides of a RINEX navigation file, read by
+    /// raim-gnss's `NavData` (the replay's reader): at each epoch the
+    /// healthy set whose toe is nearest, within the system's validity
+    /// window (`NavData::select`, the replay's selection); none outside it.
+    Broadcast(Arc<raim_gnss::NavData>),
+}
+
 /// One satellite of the study.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct StudySat {
     /// The satellite.
     pub id: SatId,
     /// Its orbit.
-    pub kepler: raim_nav::ephemeris::Kepler,
+    pub orbit: Orbit,
+}
+
+impl StudySat {
+    /// The Keplerian set in force at `t_gps_s`: the almanac record, or the
+    /// selected broadcast ephemeris (None: no healthy set valid then, the
+    /// satellite is not used at that epoch).
+    pub fn kepler_at(&self, t_gps_s: f64) -> Option<&raim_nav::ephemeris::Kepler> {
+        match &self.orbit {
+            Orbit::Almanac(k) => Some(k),
+            Orbit::Broadcast(nav) => nav.select(self.id, t_gps_s),
+        }
+    }
+
+    /// The ECEF position at `t_gps_s` by `Kepler::state` (IS-GPS-200's
+    /// equations, the receiver's), or None without a valid set.
+    pub fn position_m(&self, t_gps_s: f64) -> Option<[f64; 3]> {
+        self.kepler_at(t_gps_s).map(|k| k.state(t_gps_s).position_m)
+    }
+
+    /// True for a broadcast (RINEX) orbit.
+    pub fn is_broadcast(&self) -> bool {
+        matches!(self.orbit, Orbit::Broadcast(_))
+    }
 }
 
 /// One user of the grid.
@@ -271,6 +319,9 @@ pub struct Study {
     pub ism: Ism,
     /// The ARAIM configuration (the service level's limits).
     pub cfg: AraimConfig,
+    /// The criteria the service level judges: LPV's four limits, or the
+    /// HAL alone (H-ARAIM).
+    pub criteria: Criteria,
     /// The availability target.
     pub target: f64,
     /// Which exclusions must leave the service available.
@@ -293,19 +344,84 @@ pub struct Study {
     pub source: String,
 }
 
-/// The 1-based line of the first line of `text` that starts with `key`
-/// (after spaces), for errors about a value the TOML parser accepted.
-fn line_of(text: &str, key: &str) -> usize {
-    text.lines()
-        .position(|l| {
-            let t = l.trim_start();
-            t.strip_prefix(key)
-                .is_some_and(|r| r.trim_start().starts_with('='))
-        })
-        .map_or(0, |i| i + 1)
+/// Where a run file's keys are, for errors about a value the TOML parser
+/// accepted: the file's name, its text, and the lines (0-based, end
+/// excluded) searched first: the part before the first `[[scenario]]` for
+/// the run as written, a scenario's own lines for a scenario
+/// (`crate::sweep`), then the whole file.
+#[derive(Debug, Clone)]
+pub struct Loc<'a> {
+    /// The file's name as given.
+    pub file: String,
+    text: &'a str,
+    lines: std::ops::Range<usize>,
 }
 
-/// Reads and checks the run file at `path`.
+impl<'a> Loc<'a> {
+    /// The run as written: the lines before the first `[[scenario]]`.
+    pub fn base(text: &'a str, path: &Path) -> Loc<'a> {
+        let end = text
+            .lines()
+            .position(|l| l.trim() == "[[scenario]]")
+            .unwrap_or(usize::MAX);
+        Loc {
+            file: path.display().to_string(),
+            text,
+            lines: 0..end,
+        }
+    }
+
+    /// A scenario's lines `lines` (0-based, end excluded).
+    pub fn within(text: &'a str, path: &Path, lines: std::ops::Range<usize>) -> Loc<'a> {
+        Loc {
+            file: path.display().to_string(),
+            text,
+            lines,
+        }
+    }
+
+    /// The whole file's text.
+    pub fn text(&self) -> &'a str {
+        self.text
+    }
+
+    /// The 1-based line of the first line satisfying `pred`, in this
+    /// location's lines first, then anywhere (0 when none).
+    pub fn line_where(&self, pred: impl Fn(&str) -> bool) -> usize {
+        let found = |r: std::ops::Range<usize>| {
+            self.text
+                .lines()
+                .enumerate()
+                .skip(r.start)
+                .take(r.end.saturating_sub(r.start))
+                .find(|(_, l)| pred(l))
+                .map(|(i, _)| i + 1)
+        };
+        found(self.lines.clone())
+            .or_else(|| found(0..usize::MAX))
+            .unwrap_or(0)
+    }
+
+    /// The 1-based line of the first line that starts with `key =`, or
+    /// opens table `key` (`[key]`, `[scenario.key]`, or as an array).
+    pub fn line_of(&self, key: &str) -> usize {
+        self.line_where(|l| {
+            let t = l.trim();
+            let header = t.trim_start_matches('[').trim_end_matches(']');
+            t.starts_with('[') && (header == key || header.strip_prefix("scenario.") == Some(key))
+                || t.strip_prefix(key)
+                    .is_some_and(|r| r.trim_start().starts_with('='))
+        })
+    }
+
+    /// `file:line` of `key`.
+    pub fn at(&self, key: &str) -> String {
+        format!("{}:{}", self.file, self.line_of(key))
+    }
+}
+
+/// Reads and checks the run file at `path` (the run as written: its
+/// `[[scenario]]` list, if any, is `crate::sweep`'s).
 ///
 /// # Errors
 /// TOML errors (with the parser's line and column), an unknown level or
@@ -324,8 +440,17 @@ pub fn load(path: &Path) -> Result<Study> {
 /// # Errors
 /// As [`load`].
 pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
+    let run = parse(text, path)?;
+    build(&run, &Loc::base(text, path), base)
+}
+
+/// Parses the run file's text (TOML errors with the parser's line).
+///
+/// # Errors
+/// A TOML or schema error.
+pub fn parse<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<T> {
     let file = path.display();
-    let run: RunFile = toml::from_str(text).map_err(|e| {
+    toml::from_str(text).map_err(|e| {
         let line = e
             .span()
             .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
@@ -333,8 +458,18 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
             Some(l) => anyhow!("{file}:{l}: {}", e.message()),
             None => anyhow!("{file}: {}", e.message()),
         }
-    })?;
-    let at = |key: &str| format!("{file}:{}", line_of(text, key));
+    })
+}
+
+/// Checks a run (as written, or a scenario of it merged by
+/// `crate::sweep`) and forms its study; errors name `loc`'s file and
+/// lines; almanac paths are relative to `base`.
+///
+/// # Errors
+/// As [`load`].
+pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
+    let file = &loc.file;
+    let at = |key: &str| loc.at(key);
     if !(0.0..90.0).contains(&run.mask_deg) {
         bail!(
             "{}: mask_deg {} outside [0, 90)",
@@ -351,7 +486,41 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
     }
     // Service level.
     let mut cfg = AraimConfig::default();
-    match run.service.level.as_str() {
+    let mut criteria = Criteria::Vertical;
+    let level = run.service.level.as_str();
+    // H-ARAIM levels: the HAL alone, the RAIM alert limits of en route
+    // (2 NM), terminal (1 NM) and non-precision approach (0.3 NM); the
+    // vertical limits keep their defaults and are not judged.
+    let horizontal = match level {
+        "H-ARAIM-en-route" => Some(Some(3704.0)),
+        "H-ARAIM-terminal" => Some(Some(1852.0)),
+        "H-ARAIM-NPA" => Some(Some(555.6)),
+        "custom-horizontal" => Some(None),
+        _ => None,
+    };
+    match level {
+        _ if horizontal.is_some() => {
+            criteria = Criteria::HorizontalOnly;
+            if [
+                run.service.val_m,
+                run.service.emt_max_m,
+                run.service.sigma_acc_max_m,
+            ]
+            .iter()
+            .any(Option::is_some)
+            {
+                bail!(
+                    "{}: level `{level}` judges the HAL alone: no val_m, emt_max_m or sigma_acc_max_m",
+                    at("level")
+                );
+            }
+            cfg.hal_m = match (horizontal.flatten(), run.service.hal_m) {
+                (Some(h), None) => h,
+                (None, Some(h)) => h,
+                (None, None) => bail!("{}: level = \"custom-horizontal\" needs `hal_m`", at("level")),
+                (Some(_), Some(_)) => bail!("{}: level `{level}` sets its HAL; hal_m is given only with \"custom-horizontal\"", at("level")),
+            };
+        }
         "LPV-200" => {}
         "LPV-250" => cfg.val_m = 50.0,
         "custom" => {
@@ -364,11 +533,12 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
             cfg.sigma_acc_max_m = need(run.service.sigma_acc_max_m, "sigma_acc_max_m")?;
         }
         other => bail!(
-            "{}: unknown service level `{other}` (LPV-200, LPV-250 or custom)",
+            "{}: unknown service level `{other}` (LPV-200, LPV-250, custom, H-ARAIM-en-route, H-ARAIM-terminal, H-ARAIM-NPA or custom-horizontal)",
             at("level")
         ),
     }
     if run.service.level != "custom"
+        && horizontal.is_none()
         && [
             run.service.val_m,
             run.service.hal_m,
@@ -424,6 +594,7 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
     let mut unhealthy = Vec::new();
     let mut week0: Option<u32> = None;
     let mut almanac_sats = Vec::new();
+    let mut navs: BTreeMap<PathBuf, Arc<raim_gnss::NavData>> = BTreeMap::new();
     let continuous = run.exclusion == ExclusionSpec::Continuity;
     let mut continuity = match (continuous, run.continuity) {
         (true, Some(c)) => {
@@ -452,9 +623,7 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
         ),
         (false, Some(_)) => bail!(
             "{file}:{}: [continuity] is read only with exclusion = \"continuity\"",
-            text.lines()
-                .position(|l| l.trim() == "[continuity]")
-                .map_or(0, |i| i + 1)
+            loc.line_where(|l| matches!(l.trim(), "[continuity]" | "[scenario.continuity]"))
         ),
         (false, None) => None,
     };
@@ -499,6 +668,74 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
                 "{here}: mfd_sat_s and mfd_const_s are read only with exclusion = \"continuity\""
             ),
         }
+        let almanac_path = match (&c.almanac, &c.navigation) {
+            (Some(a), None) => a.clone(),
+            (None, Some(nav)) => {
+                if c.week_rollovers.is_some()
+                    || c.id_offset != 0
+                    || c.format != AlmanacFormat::Yuma
+                    || c.add_almanac.is_some()
+                    || !c.add.is_empty()
+                {
+                    bail!(
+                        "{here}: week_rollovers, id_offset, format, add_almanac and add are almanac keys, not read with `navigation`"
+                    );
+                }
+                let p = almanac::resolve(base, nav);
+                let data = match navs.get(&p) {
+                    Some(d) => Arc::clone(d),
+                    None => {
+                        let d = Arc::new(
+                            raim_gnss::NavData::load(&p)
+                                .map_err(|e| anyhow!("{}: {e}", p.display()))?,
+                        );
+                        navs.insert(p.clone(), Arc::clone(&d));
+                        d
+                    }
+                };
+                let ids: Vec<SatId> = data
+                    .ephemerides
+                    .keys()
+                    .filter(|id| id.system == system)
+                    .copied()
+                    .collect();
+                if ids.is_empty() {
+                    bail!("{}: no {system:?} ephemeris ({here})", p.display());
+                }
+                for r in &c.remove {
+                    if !ids.iter().any(|id| id.prn == *r) {
+                        bail!(
+                            "{here}: remove = PRN {r}, which has no ephemeris in {}",
+                            p.display()
+                        );
+                    }
+                }
+                let first_toc = data
+                    .ephemerides
+                    .iter()
+                    .filter(|(id, _)| id.system == system)
+                    .flat_map(|(_, v)| v.iter().map(|k| k.toc_gps_s))
+                    .fold(f64::INFINITY, f64::min);
+                week0.get_or_insert((first_toc / raim_nav::ephemeris::WEEK_S).floor() as u32);
+                for id in ids.into_iter().filter(|id| !c.remove.contains(&id.prn)) {
+                    entries.push(SatIsm {
+                        id,
+                        sigma_ura_m: c.sigma_ura_m,
+                        sigma_ure_m: c.sigma_ure_m,
+                        b_nom_m: c.b_nom_m,
+                        p_sat: c.p_sat,
+                    });
+                    sats.push(StudySat {
+                        id,
+                        orbit: Orbit::Broadcast(Arc::clone(&data)),
+                    });
+                }
+                check_ism(c, system)
+                    .map_err(|e| anyhow!("{here}: the ISM is refused by raim-core: {e}"))?;
+                continue;
+            }
+            _ => bail!("{here}: give the constellation's `almanac` or `navigation` (one of them)"),
+        };
         let read_alm = |p: &Path| {
             let spec = AlmanacSpec {
                 path: almanac::resolve(base, p),
@@ -511,12 +748,12 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
                 AlmanacFormat::Sem => almanac::read_sem(&spec),
             }
         };
-        let mut alm = read_alm(&c.almanac)?;
+        let mut alm = read_alm(&almanac_path)?;
         for p in &c.remove {
             if !alm.sats.iter().any(|s| s.kepler.prn == *p) {
                 bail!(
                     "{here}: remove = PRN {p}, which is not a healthy satellite of {}",
-                    c.almanac.display()
+                    almanac_path.display()
                 );
             }
         }
@@ -540,7 +777,7 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
                         bail!(
                             "{}: add = PRN {p}, which {} holds already (list it in `remove` to replace it)",
                             at("add"),
-                            c.almanac.display()
+                            almanac_path.display()
                         );
                     }
                     alm.sats.retain(|k| k.kepler.prn != *p);
@@ -580,11 +817,11 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
             });
             sats.push(StudySat {
                 id,
-                kepler: s.kepler,
+                orbit: Orbit::Almanac(s.kepler),
             });
             let from = match &c.add_almanac {
                 Some(a) if c.add.contains(&s.kepler.prn) => a.clone(),
-                _ => c.almanac.clone(),
+                _ => almanac_path.clone(),
             };
             almanac_sats.push((from, s));
         }
@@ -622,12 +859,29 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
             );
         }
     }
+    // A broadcast satellite with no healthy set valid at any epoch of the
+    // run is left out (listed with the unhealthy ones).
+    let never: Vec<bool> = sats
+        .iter()
+        .map(|s| s.is_broadcast() && epochs_gps_s.iter().all(|t| s.kepler_at(*t).is_none()))
+        .collect();
+    for (s, _) in sats.iter().zip(&never).filter(|(_, n)| **n) {
+        unhealthy.push(format!("{}{:02}", s.id.system.letter(), s.id.prn));
+    }
+    let mut k = never.iter();
+    sats.retain(|_| !k.next().copied().unwrap_or(false));
+    let mut k = never.iter();
+    entries.retain(|_| !k.next().copied().unwrap_or(false));
+    if sats.is_empty() {
+        bail!("{file}: no satellite has a healthy ephemeris valid at an epoch of the run");
+    }
     Ok(Study {
         name: run.name.clone(),
         sats,
         ism_entries: entries,
         ism,
         cfg,
+        criteria,
         target,
         exclusion: run.exclusion,
         continuity,
@@ -637,7 +891,7 @@ pub fn from_text(text: &str, path: &Path, base: &Path) -> Result<Study> {
         users,
         epochs_gps_s,
         unhealthy,
-        source: text.to_string(),
+        source: loc.text().to_string(),
     })
 }
 
@@ -925,15 +1179,19 @@ p_const = 1e-8
         let s = run(&format!("remove = [3]\n{add_from}\nadd = [30, 3]")).unwrap();
         let prns: Vec<u8> = s.sats.iter().map(|x| x.id.prn).collect();
         assert_eq!(prns, (1..=24).chain([30]).collect::<Vec<u8>>());
-        assert!((s.sats[2].kepler.m0_rad - m3).abs() < 1e-12);
-        assert!((s.sats[24].kepler.m0_rad - m30).abs() < 1e-12);
+        assert!((s.sats[2].kepler_at(0.0).unwrap().m0_rad - m3).abs() < 1e-12);
+        assert!((s.sats[24].kepler_at(0.0).unwrap().m0_rad - m30).abs() < 1e-12);
         // The same two records as a SEM constellation.
         let t = text(grid, "level = \"LPV-200\"", "").replace(
             "almanac = \"almanac_gps24_mops.yuma\"",
             &format!("almanac = \"{}\"\nformat = \"sem\"", sem.display()),
         );
         let s = load_text(&t).unwrap();
-        let got: Vec<(u8, f64)> = s.sats.iter().map(|x| (x.id.prn, x.kepler.m0_rad)).collect();
+        let got: Vec<(u8, f64)> = s
+            .sats
+            .iter()
+            .map(|x| (x.id.prn, x.kepler_at(0.0).unwrap().m0_rad))
+            .collect();
         assert_eq!(got.len(), 2);
         assert!(got[0].0 == 3 && (got[0].1 - m3).abs() < 1e-12 && got[1].0 == 30);
         // Bad add lists.

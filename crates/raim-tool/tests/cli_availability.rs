@@ -329,6 +329,10 @@ fn bad_run_files_name_file_and_line() {
             "the ISM is refused by raim-core",
         ),
         (
+            small_run().replacen("almanac = ", "navigation = \"x.rnx\"\nalmanac = ", 1),
+            "[[constellation]] 1 (system \"G\"): give the constellation's `almanac` or `navigation` (one of them)",
+        ),
+        (
             small_run_with("continuity"),
             "bad.toml:3: exclusion = \"continuity\" needs a [continuity] table",
         ),
@@ -622,5 +626,434 @@ fn outage_sweep_equals_separate_runs() {
         std::fs::read(sweep.join("small.users.csv")).expect("csv"),
         std::fs::read(plain.join("small.users.csv")).expect("csv")
     );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The sweep of [`small_run`]: the run as written, Galileo's P_const at
+/// 1e-5, LPV-250 with the strict exclusion rule, and every single GPS
+/// outage with E03 removed (24 scenarios from one generator).
+fn sweep_run() -> String {
+    format!(
+        r#"{}
+[[scenario]]
+name = "gal-pconst-1e-5"
+[[scenario.constellation]]
+system = "E"
+p_const = 1e-5
+
+[[scenario]]
+name = "lpv250-fde"
+exclusion = "satellites"
+[scenario.service]
+level = "LPV-250"
+
+[[scenario]]
+name = "gps-out"
+outages = "G"
+[[scenario.constellation]]
+system = "E"
+remove = [3]
+"#,
+        small_run()
+    )
+}
+
+/// Every file of `dir`, by name.
+fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .expect("dir")
+        .map(|e| {
+            let p = e.expect("entry").path();
+            (
+                p.file_name().expect("name").to_string_lossy().into_owned(),
+                std::fs::read(&p).expect("read"),
+            )
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+/// A sweep in one run file (`[[scenario]]`): each scenario's CSV equals a
+/// separate run file with its change written in, byte for byte (the
+/// P_const override; a generated outage, G05 with E03 removed); the
+/// coverage table has a row per scenario with the scenario's coverage; 4
+/// shards over scenario x epoch (27 scenarios x 12 epochs: whole scenarios
+/// and a scenario cut in time in one shard) merged in reverse order give
+/// every file of the whole run byte for byte.
+///
+/// Verifies: TOOL-AVAIL-SWEEP
+#[test]
+fn sweep_scenarios_equal_separate_runs_and_shards_merge_bit_for_bit() {
+    let d = tmp_dir("sweep");
+    let runf = d.join("small.toml");
+    std::fs::write(&runf, sweep_run()).expect("write");
+    let r = runf.to_str().expect("utf8");
+    let (whole, shards, merged) = (d.join("whole"), d.join("shards"), d.join("merged"));
+    let (code, _, err) = raim(&[
+        "availability",
+        "--run",
+        r,
+        "--out",
+        whole.to_str().expect("utf8"),
+        "--level",
+        "0.99",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    // Separate runs of two scenarios.
+    let separate = |tag: &str, text: String| -> Vec<u8> {
+        let f = d.join(format!("{tag}.toml"));
+        std::fs::write(&f, text).expect("write");
+        let o = d.join(tag);
+        let (code, _, err) = raim(&[
+            "availability",
+            "--run",
+            f.to_str().expect("utf8"),
+            "--out",
+            o.to_str().expect("utf8"),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        std::fs::read(o.join("small.users.csv")).expect("csv")
+    };
+    let pconst = separate(
+        "pconst",
+        small_run().replacen("p_const = 1e-4", "p_const = 1e-5", 1),
+    );
+    let out5 = separate(
+        "out5",
+        small_run()
+            .replacen("p_const = 1e-8\n", "p_const = 1e-8\nremove = [5]\n", 1)
+            .replacen("p_const = 1e-4\n", "p_const = 1e-4\nremove = [3]\n", 1),
+    );
+    let plain = separate("plain", small_run());
+    let csv = |stem: &str| std::fs::read(whole.join(format!("{stem}.users.csv"))).expect(stem);
+    assert_eq!(csv("small"), plain);
+    assert_eq!(csv("small.gal-pconst-1e-5"), pconst);
+    assert_eq!(csv("small.gps-out.outage-G05"), out5);
+    assert_ne!(pconst, plain, "the override changed nothing");
+    // The table: 1 + 2 + 24 rows, each row the scenario's own coverage.
+    let table = std::fs::read_to_string(whole.join("small.sweep.csv")).expect("table");
+    let rows: Vec<Vec<&str>> = table
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 27, "{table}");
+    assert_eq!(rows[0][..2], ["small", "none"]);
+    assert_eq!(rows[26][..2], ["small.gps-out.outage-G24", "G24"]);
+    for row in &rows {
+        let v: Value = serde_json::from_slice(
+            &std::fs::read(whole.join(format!("{}.summary.json", row[0]))).expect("summary"),
+        )
+        .expect("json");
+        let cov = v["coverage"][1]["coverage"].as_f64().expect("coverage");
+        assert!(
+            (row[3].parse::<f64>().expect("num") - cov).abs() < 1e-6,
+            "{row:?}"
+        );
+    }
+    let lpv250: Value = serde_json::from_slice(
+        &std::fs::read(whole.join("small.lpv250-fde.summary.json")).expect("summary"),
+    )
+    .expect("json");
+    assert_eq!(lpv250["val_m"], 50.0);
+    assert!(std::fs::read_to_string(whole.join("small.sweep.md"))
+        .expect("md")
+        .starts_with("| scenario | removed | coverage at 99.5 % | coverage at 99 % |"));
+    // 4 shards, one thread each, merged in reverse order.
+    let mut parts = Vec::new();
+    for i in 1..=4 {
+        let sh = format!("{i}/4");
+        let (code, _, err) = raim(&[
+            "availability",
+            "--run",
+            r,
+            "--shard",
+            &sh,
+            "--threads",
+            "1",
+            "--out",
+            shards.to_str().expect("utf8"),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        parts.push(
+            shards
+                .join(format!("small.shard-{i}-of-4.json"))
+                .to_str()
+                .expect("utf8")
+                .to_string(),
+        );
+    }
+    // Shard 1 holds whole scenarios and the start of one cut in time.
+    let p1: Value = serde_json::from_slice(&std::fs::read(&parts[0]).expect("part")).expect("json");
+    let ranges: Vec<(u64, u64)> = p1["pieces"]
+        .as_array()
+        .expect("pieces")
+        .iter()
+        .map(|p| {
+            (
+                p["epoch_range"][0].as_u64().expect("a"),
+                p["epoch_range"][1].as_u64().expect("b"),
+            )
+        })
+        .collect();
+    assert!(
+        ranges.contains(&(0, 12)) && ranges.last() == Some(&(0, 9)),
+        "{ranges:?}"
+    );
+    let mut args = vec!["availability", "merge"];
+    args.extend(parts.iter().rev().map(String::as_str));
+    let mo = merged.to_str().expect("utf8").to_string();
+    args.extend(["--out", &mo, "--level", "0.99"]);
+    let (code, _, err) = raim(&args);
+    assert_eq!(code, 0, "{err}");
+    let (w, m) = (files(&whole), files(&merged));
+    assert_eq!(w.len(), 27 * 2 + 2);
+    assert_eq!(
+        w.iter().map(|x| &x.0).collect::<Vec<_>>(),
+        m.iter().map(|x| &x.0).collect::<Vec<_>>()
+    );
+    for (a, b) in w.iter().zip(&m) {
+        assert!(a.1 == b.1, "{}: merged differs from the whole run", a.0);
+    }
+    // Scenario errors name the scenario and its line.
+    for (text, want) in [
+        (
+            format!("{}\n[[scenario]]\nname = \"g\"\n[scenario.grid]\nkind = \"world\"\nstep_deg = 5.0\n", small_run()),
+            ":39: scenario `g`: `grid` cannot be set in a scenario",
+        ),
+        (
+            format!("{}\n[[scenario]]\nname = \"p\"\n[[scenario.constellation]]\nsystem = \"G\"\np_sat = 2.0\n", small_run()),
+            "bad.toml: [[constellation]] 1 (system \"G\"): the ISM is refused by raim-core",
+        ),
+        (
+            format!("{}\n[[scenario]]\nname = \"m\"\nmask_deg = 95.0\n", small_run()),
+            "bad.toml:39: mask_deg 95 outside [0, 90)",
+        ),
+        (
+            format!("{}\n[[scenario]]\nmask_deg = 9.0\n", small_run()),
+            "a [[scenario]] needs `name`",
+        ),
+    ] {
+        let f = d.join("bad.toml");
+        std::fs::write(&f, text).expect("write");
+        let (code, _, err) = raim(&["availability", "--run", f.to_str().expect("utf8")]);
+        assert_ne!(code, 0, "{want}");
+        assert!(err.contains(want), "want `{want}` in: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A constellation from a RINEX navigation file (docs/runs/
+/// availability_esbc_nav.toml, GPS and Galileo from ESBC's mixed file):
+/// at the first epoch of ESBC's observation file, every GPS and Galileo
+/// satellite the replay's receiver path forms (raim-gnss `prepare_epoch`:
+/// the transmit time from the pseudorange, the position there rotated by
+/// the Earth's rotation during transit) is in the study, and the study's
+/// position at that transmit time, rotated here by hand, equals the
+/// replay's within 1 mm. A short run over a region gives a result, and a
+/// span past the file's end reports the epochs without a valid ephemeris,
+/// each satellite's count equal to the count of epochs at which no
+/// healthy record of it lies within the validity window (counted here
+/// from the records).
+///
+/// Verifies: TOOL-AVAIL-RINEX
+#[test]
+fn rinex_navigation_positions_equal_the_replays() {
+    let runf = Path::new(ROOT).join("docs/runs/availability_esbc_nav.toml");
+    let study = run::load(&runf).expect("study");
+    let nav = raim_gnss::NavData::load(Path::new(&data("ESBC00DNK_R_20201770000_01D_MN.rnx.gz")))
+        .expect("nav");
+    let obs = raim_gnss::ObsData::load(Path::new(&data(
+        "ESBC00DNK_R_20201770000_03H_30S_MO.rnx.gz",
+    )))
+    .expect("obs");
+    let opts = raim_gnss::RangingOptions {
+        systems: vec![raim_core::System::Gps, raim_core::System::Galileo],
+        ..Default::default()
+    };
+    let prep = raim_gnss::prepare_epoch(&nav, &obs.epochs[0], &opts, None);
+    let rx = prep.reference_m.expect("the replay's position");
+    const C: f64 = 299_792_458.0;
+    const OMEGA_E: f64 = 7.292_115_146_7e-5;
+    let dist = |a: [f64; 3], b: [f64; 3]| {
+        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    };
+    let rot = |p: [f64; 3], tau: f64| {
+        let (s, c) = (OMEGA_E * tau).sin_cos();
+        [c * p[0] + s * p[1], -s * p[0] + c * p[1], p[2]]
+    };
+    assert!(prep.sats.len() >= 15, "{} satellites", prep.sats.len());
+    for ps in &prep.sats {
+        let id = ps.obs.id;
+        let sat = study
+            .sats
+            .iter()
+            .find(|s| s.id == id)
+            .unwrap_or_else(|| panic!("{id:?} not in the study"));
+        let t_tx = prep.time_gps_s - ps.raw_pseudorange_m / C - ps.sat_clock_m / C;
+        let p = sat.position_m(t_tx).expect("a valid ephemeris");
+        let t0 = dist(p, rx) / C;
+        let q = rot(p, dist(rot(p, t0), rx) / C);
+        let d = dist(q, ps.obs.position_m);
+        assert!(d < 1e-3, "{id:?}: {d} m from the replay's position");
+    }
+    // A short run over a region (2 h, 9 users over the North Sea) gives a result.
+    let d = tmp_dir("nav");
+    let base = Path::new(ROOT).join("../shared/data");
+    let text = std::fs::read_to_string(&runf)
+        .expect("run file")
+        .replace("../../../shared/data", base.to_str().expect("utf8"))
+        .replace("span_s = 86400.0", "span_s = 7200.0")
+        .replace("lat_min_deg = 45.0", "lat_min_deg = 55.0")
+        .replace("lon_max_deg = 25.0", "lon_max_deg = 5.0");
+    let f = d.join("nav.toml");
+    std::fs::write(&f, &text).expect("write");
+    let (code, _, err) = raim(&[
+        "availability",
+        "--run",
+        f.to_str().expect("utf8"),
+        "--out",
+        d.to_str().expect("utf8"),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_slice(
+        &std::fs::read(d.join("availability_esbc_nav.summary.json")).expect("summary"),
+    )
+    .expect("json");
+    assert_eq!(v["users"], 3 * 3);
+    assert_eq!(v["user_epochs"], 9 * 24);
+    let cov = v["coverage"][0]["coverage"].as_f64().expect("coverage");
+    assert!((0.0..=1.0).contains(&cov), "{v}");
+    // From 22:00 for 6 h: past the file's last records, gaps are reported.
+    let late = text
+        .replace("span_s = 7200.0", "span_s = 21600.0")
+        .replace("start_s = 345600.0", "start_s = 424800.0");
+    std::fs::write(&f, &late).expect("write");
+    let study = run::load(&f).expect("late study");
+    let (code, _, err) = raim(&[
+        "availability",
+        "--run",
+        f.to_str().expect("utf8"),
+        "--out",
+        d.to_str().expect("utf8"),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_slice(
+        &std::fs::read(d.join("availability_esbc_nav.summary.json")).expect("summary"),
+    )
+    .expect("json");
+    let gaps = v["ephemeris_gaps_epochs"].as_object().expect("gaps");
+    assert!(!gaps.is_empty());
+    let mut listed = 0;
+    for s in &study.sats {
+        let name = format!("{}{:02}", s.id.system.letter(), s.id.prn);
+        let window = if s.id.system == raim_core::System::Gps {
+            7200.0
+        } else {
+            14400.0
+        };
+        let recs = &nav.ephemerides[&s.id];
+        let n = study
+            .epochs_gps_s
+            .iter()
+            .filter(|t| {
+                !recs.iter().any(|k| {
+                    let toe = (k.toc_gps_s / 604_800.0).floor() * 604_800.0 + k.toe_sow_s;
+                    k.health == 0 && (*t - toe).abs() <= window
+                })
+            })
+            .count();
+        assert_eq!(
+            gaps.get(&name).and_then(Value::as_u64).unwrap_or(0),
+            n as u64,
+            "{name}"
+        );
+        listed += usize::from(n > 0);
+    }
+    assert_eq!(listed, gaps.len());
+    // At the last epoch, the satellites without a valid set are not in any
+    // user's sky, and the others above the mask are.
+    let k = study.epochs_gps_s.len() - 1;
+    let t = study.epochs_gps_s[k];
+    let sky = engine::sky_table(&study, k..k + 1);
+    let mut seen_gap = false;
+    for u in &study.users {
+        let (x, r) = engine::user_frame(&study, u);
+        let mut obs = Vec::new();
+        engine::visible(&study, &sky, x, &r, &mut obs);
+        for s in &study.sats {
+            let used = obs.iter().any(|o| o.id == s.id);
+            match s.position_m(t) {
+                None => {
+                    seen_gap = true;
+                    assert!(!used, "{:?} used without an ephemeris", s.id);
+                }
+                Some(p) => {
+                    let (_, el, _) = raim_nav::geometry::az_el(x, p);
+                    assert_eq!(used, el >= 5f64.to_radians(), "{:?}", s.id);
+                }
+            }
+        }
+    }
+    assert!(seen_gap);
+    assert_eq!(
+        v["satellite_epochs_without_ephemeris"].as_u64(),
+        Some(gaps.values().filter_map(Value::as_u64).sum())
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A horizontal-only service level (`custom-horizontal`, HAL 40 m):
+/// at every user-epoch of the small study it is available exactly when
+/// the epoch's HPL (the same monitor, the LPV study's levels) is within
+/// 40 m, and it is available at user-epochs that a level with the
+/// tightest vertical limits (VAL 10 m, EMT 10 m, same HAL) refuses; the
+/// preset `H-ARAIM-NPA` has the HAL 555.6 m; vertical limits with a
+/// horizontal level are refused.
+///
+/// Verifies: TOOL-AVAIL-HARAIM
+#[test]
+fn horizontal_only_level_judges_the_hpl_alone() {
+    on_engine_stack(horizontal_only_body);
+}
+
+fn horizontal_only_body() {
+    let d = tmp_dir("haraim");
+    let load = |tag: &str, service: &str| {
+        let f = d.join(format!("{tag}.toml"));
+        std::fs::write(&f, small_run().replace("level = \"LPV-200\"", service)).expect("write");
+        run::load(&f)
+    };
+    let vert = load(
+        "v",
+        "level = \"custom\"\nval_m = 10.0\nhal_m = 40.0\nemt_max_m = 10.0\nsigma_acc_max_m = 1.87",
+    )
+    .expect("vertical");
+    let hor = load("h", "level = \"custom-horizontal\"\nhal_m = 40.0").expect("horizontal");
+    assert_eq!(hor.criteria, raim_core::araim::Criteria::HorizontalOnly);
+    let mut m = engine::new_engine();
+    let mut only_h = 0;
+    for u in &hor.users {
+        let (x, r) = engine::user_frame(&hor, u);
+        for k in 0..hor.epochs_gps_s.len() {
+            let sky = engine::sky_table(&hor, k..k + 1);
+            let mut obs = Vec::new();
+            engine::visible(&hor, &sky, x, &r, &mut obs);
+            let v = engine::evaluate(&vert, &mut m, &obs).expect("v");
+            let h = engine::evaluate(&hor, &mut m, &obs).expect("h");
+            assert_eq!(h.hpl_m, v.hpl_m);
+            assert_eq!(h.available, v.hpl_m <= 40.0, "HPL {}", v.hpl_m);
+            assert!(!v.available || h.available);
+            only_h += usize::from(h.available && !v.available);
+        }
+    }
+    assert!(only_h > 0, "no user-epoch available only horizontally");
+    let npa = load("n", "level = \"H-ARAIM-NPA\"").expect("npa");
+    assert_eq!(npa.cfg.hal_m, 555.6);
+    let e = load("e", "level = \"H-ARAIM-terminal\"\nval_m = 35.0").expect_err("val");
+    assert!(e.to_string().contains("judges the HAL alone"), "{e}");
+    let e = load("e", "level = \"custom-horizontal\"").expect_err("hal");
+    assert!(e.to_string().contains("needs `hal_m`"), "{e}");
     let _ = std::fs::remove_dir_all(&d);
 }

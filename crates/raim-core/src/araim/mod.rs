@@ -142,6 +142,32 @@ pub struct Limits {
     pub sigma_acc: bool,
 }
 
+/// Which availability criteria a service level judges (SPEC §14,
+/// docs/AVAILABILITY.md "Service levels"). The core computes every level
+/// whatever the criteria; a horizontal-only level just does not judge the
+/// vertical ones.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Criteria {
+    /// LPV (ADD v3.0): VPL <= VAL, HPL <= HAL, EMT <= EMT_max and
+    /// sigma_v,acc <= its maximum.
+    #[default]
+    Vertical,
+    /// H-ARAIM (en route to non-precision approach, HAL only): HPL <= HAL;
+    /// VAL, EMT and sigma_v,acc are not judged.
+    HorizontalOnly,
+}
+
+impl Limits {
+    /// The limits `criteria` judges are all met.
+    pub fn met(&self, criteria: Criteria) -> bool {
+        match criteria {
+            Criteria::Vertical => self.vpl && self.hpl && self.emt && self.sigma_acc,
+            Criteria::HorizontalOnly => self.hpl,
+        }
+    }
+}
+
 /// Protection levels, in metres. +infinity where no level was computed
 /// (the epoch stopped before step 5: enumeration limit, unmonitored
 /// probability, FDE candidate tests, a PL equation not bracketed): an
@@ -266,6 +292,18 @@ impl<T: Real, const K: usize> AraimOutput<T, K> {
     /// ARAIM service: no structural cause and every limit met.
     pub fn available(&self) -> bool {
         self.unavailable.is_none()
+    }
+
+    /// ARAIM service under `criteria`: no structural cause (mode capacity,
+    /// events, unmonitored probability, a PL not bracketed: unavailable
+    /// whatever the criteria) and the limits `criteria` judges met.
+    /// `available_for(Criteria::Vertical)` is [`Self::available`].
+    pub fn available_for(&self, criteria: Criteria) -> bool {
+        match self.unavailable {
+            None => true,
+            Some(Unavailable::Limits) => self.limits.met(criteria),
+            Some(_) => false,
+        }
     }
 
     /// The epoch's one verdict, for a user of the position: `Alarm` when a
@@ -870,8 +908,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             emt: out.emt_m.to_f64() <= cfg.emt_max_m,
             sigma_acc: out.sigma_v_acc_m.to_f64() <= cfg.sigma_acc_max_m,
         };
-        let l = out.limits;
-        if !(l.vpl && l.hpl && l.emt && l.sigma_acc) {
+        if !out.limits.met(Criteria::Vertical) {
             out.unavailable = Some(Unavailable::Limits);
         }
     }

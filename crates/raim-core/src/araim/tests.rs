@@ -88,6 +88,58 @@ mod add_appendix_d {
         assert_eq!(faulted.decision(), Decision::Alarm);
     }
 
+    /// A horizontal-only (H-ARAIM) level: with the VAL at its floor of 10
+    /// m, App. D's VPL (19.2 m) fails it, so the LPV criteria refuse the
+    /// epoch, while its HPL (14.4 m) is within the HAL: horizontal-only
+    /// available. At an HAL the HPL exceeds (App. D's geometry scaled up
+    /// until it does) both refuse; a structural cause (mode capacity)
+    /// refuses both, whatever the limits; with every limit met both agree
+    /// with `available()`.
+    ///
+    /// Verifies: TOOL-AVAIL-HARAIM
+    #[test]
+    fn horizontal_only_judges_the_hal_alone() {
+        let tight = AraimConfig {
+            val_m: 10.0,
+            emt_max_m: 10.0,
+            ..AraimConfig::default()
+        };
+        let mut engine = Araim::<f64, 16, 64>::new();
+        let sats = appendix_d_sats();
+        let out = engine.process(&tight, &ge_ism(1e-4), &sats).unwrap();
+        assert!(out.pl_add.vpl_m > 10.0 && out.pl_add.hpl_m < 40.0);
+        assert!(!out.limits.vpl && out.limits.hpl);
+        assert!(!out.available() && !out.available_for(Criteria::Vertical));
+        assert!(out.available_for(Criteria::HorizontalOnly));
+        // Both refuse when the HPL exceeds the HAL: the variances inflated
+        // until the HPL passes 40 m.
+        let mut wide = appendix_d_sats();
+        for s in wide.iter_mut() {
+            s.c_int_m2 *= 16.0;
+            s.c_acc_m2 *= 16.0;
+        }
+        let out = engine
+            .process(&AraimConfig::default(), &ge_ism(1e-4), &wide)
+            .unwrap();
+        assert!(out.pl_add.hpl_m > 40.0, "HPL {}", out.pl_add.hpl_m);
+        assert!(!out.available_for(Criteria::HorizontalOnly));
+        assert!(!out.available_for(Criteria::Vertical));
+        // A structural cause refuses both.
+        let mut small = Araim::<f64, 16, 4>::new();
+        let out = small.process(&tight, &ge_ism(1e-4), &sats).unwrap();
+        assert!(matches!(
+            out.unavailable,
+            Some(Unavailable::ModeCapacity { .. })
+        ));
+        assert!(!out.available_for(Criteria::HorizontalOnly));
+        // Every limit met: all three agree.
+        let out = run();
+        assert!(out.available());
+        assert!(
+            out.available_for(Criteria::Vertical) && out.available_for(Criteria::HorizontalOnly)
+        );
+    }
+
     fn run() -> AraimOutput<f64, 64> {
         let mut engine = Araim::<f64, 16, 64>::new();
         let sats = appendix_d_sats();
