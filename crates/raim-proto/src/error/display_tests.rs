@@ -259,3 +259,112 @@ fn core_refusals_keep_their_values_on_the_wire() {
     let e: WireError = RaimError::InvalidDof { dof: 0, max: 60 }.into();
     assert_eq!(e, WireError::InvalidDof { dof: 0, max: 60 });
 }
+
+/// ARAIM's own refusals' texts name their values: the satellite and its
+/// index, the ISM field with its index and bounds, the constellation by
+/// its RINEX letter.
+///
+/// Verifies: WIRE-TEXT, WIRE-Araim
+#[test]
+fn every_araim_refusal_names_its_values() {
+    let cases: &[(AraimWireError, &str)] = &[
+        (AraimWireError::Disabled, "this build has no ARAIM engine"),
+        (AraimWireError::NoIsm, "ARAIM epoch before any ISM"),
+        (
+            AraimWireError::NotInIsm {
+                id: SatId::new(System::Galileo, 11),
+                index: 6,
+            },
+            "satellite E11 at index 6 has no ISM entry",
+        ),
+        (
+            AraimWireError::OutOfRange {
+                field: field("p_sat"),
+                index: 2,
+                value: 1.5,
+                min: 0.0,
+                max: 1.0,
+            },
+            "ISM p_sat at index 2 is 1.5, outside [0, 1]",
+        ),
+        (
+            AraimWireError::EmptyConstellation {
+                system: System::Beidou,
+            },
+            "the ISM gives P_const for C but no satellite of it",
+        ),
+        (
+            AraimWireError::MissingConstellationIsm {
+                system: System::Qzss,
+                index: 4,
+            },
+            "satellite at index 4 is of J, which has no P_const",
+        ),
+        (AraimWireError::EmptyIsm, "the ISM has no satellite entry"),
+    ];
+    for (e, want) in cases {
+        assert_eq!(format!("{e}"), *want, "{e:?}");
+    }
+}
+
+/// Every reason the core gives for an unavailable ARAIM epoch reaches the
+/// wire with its values (the counts as u32, the probabilities unchanged).
+///
+/// Verifies: WIRE-Araim
+#[test]
+fn araim_unavailability_keeps_its_values_on_the_wire() {
+    use crate::araim_msg::WireUnavailable;
+    use raim_core::araim::Unavailable;
+    let cases = [
+        (
+            Unavailable::ModeCapacity {
+                needed: 601,
+                capacity: 600,
+            },
+            WireUnavailable::ModeCapacity {
+                needed: 601,
+                capacity: 600,
+            },
+        ),
+        (
+            Unavailable::TooManyEvents {
+                p_exceed_at_max: 2e-7,
+            },
+            WireUnavailable::TooManyEvents {
+                p_exceed_at_max: 2e-7,
+            },
+        ),
+        (
+            Unavailable::Unmonitored {
+                p_unmon: 1e-7,
+                p_thres: 9e-8,
+            },
+            WireUnavailable::Unmonitored {
+                p_unmon: 1e-7,
+                p_thres: 9e-8,
+            },
+        ),
+        (
+            Unavailable::PlNotSolved { axis: 2 },
+            WireUnavailable::PlNotSolved { axis: 2 },
+        ),
+        (Unavailable::Limits, WireUnavailable::Limits),
+    ];
+    for (core, wire) in cases {
+        assert_eq!(WireUnavailable::from(core), wire);
+    }
+}
+
+/// The provisioning tool's GA-PF configuration is seed 004's filter with
+/// the particles and seed asked for and the core's default PF
+/// configuration.
+///
+/// Verifies: SPEC-10
+#[test]
+fn the_gapf_configuration_is_the_default_pf_config() {
+    use crate::pf_msg::{PfKind, WirePfConfig};
+    let c = WirePfConfig::gapf(300, 42);
+    assert_eq!(c.kind, PfKind::Gapf);
+    assert_eq!((c.particles, c.seed), (300, 42));
+    assert_eq!(c.config, raim_core::pf::PfConfig::default());
+}
