@@ -617,3 +617,68 @@ fn exclusion_and_readmission() {
     }
     assert!(excluded_at.is_some() && readmitted && second_alarm);
 }
+
+/// The particle filters' measurement laws (SPEC §10: the likelihood of
+/// each residual, `PfConfig::likelihood`) against statrs's densities at
+/// residuals from the core to 12 sigma: the Gaussian, the Student-t with
+/// nu = 3, 4 and 30 degrees of freedom and scale sigma, and the Gaussian
+/// mixture (1 - eps) N(0, sigma^2) + eps N(0, (k sigma)^2) with eps =
+/// 0.05, k = 10 (its log-sum-exp form keeps the far tail finite where the
+/// plain sum of the two densities underflows). The EKF's law is the
+/// Gaussian whatever the configuration.
+///
+/// Verifies: SPEC-10
+#[test]
+fn measurement_laws_match_statrs_densities() {
+    use crate::pf::model::{Lik, SatTerm};
+    use statrs::distribution::{Continuous, Normal, StudentsT};
+    let sigma = 2.5;
+    let term = SatTerm::<f64> {
+        id: SatId::new(System::Gps, 1),
+        sys: 0,
+        los: [1.0, 0.0, 0.0],
+        inv_range: 1.0 / 2.0e7,
+        z0: 0.0,
+        sigma,
+        ln_sigma: libm::log(sigma),
+    };
+    let with = |likelihood| PfConfig {
+        likelihood,
+        ..PfConfig::default()
+    };
+    let residuals = [0.0, 0.3, -1.7, 4.0, -9.5, 30.0];
+    let normal = Normal::new(0.0, sigma).unwrap();
+    let gauss = Lik::<f64>::new(&with(Likelihood::Gaussian));
+    let ekf = Lik::<f64>::gaussian();
+    for r in residuals {
+        let want = normal.ln_pdf(r);
+        assert!((gauss.ln_density(r, &term) - want).abs() < 1e-12, "{r}");
+        assert!((ekf.ln_density(r, &term) - want).abs() < 1e-12, "{r}");
+    }
+    for nu in [3.0, 4.0, 30.0] {
+        let t = StudentsT::new(0.0, sigma, nu).unwrap();
+        let lik = Lik::<f64>::new(&with(Likelihood::StudentT { nu }));
+        for r in residuals {
+            let (got, want) = (lik.ln_density(r, &term), t.ln_pdf(r));
+            assert!((got - want).abs() < 1e-10, "nu {nu} r {r}: {got} vs {want}");
+        }
+    }
+    let (eps, k) = (0.05, 10.0);
+    let lik = Lik::<f64>::new(&with(Likelihood::Mixture {
+        outlier_prob: eps,
+        outlier_scale: k,
+    }));
+    let wide = Normal::new(0.0, k * sigma).unwrap();
+    for r in residuals {
+        let want = libm::log((1.0 - eps) * normal.pdf(r) + eps * wide.pdf(r));
+        let got = lik.ln_density(r, &term);
+        assert!((got - want).abs() < 1e-10, "r {r}: {got} vs {want}");
+    }
+    // 1e3 sigma out: the core's density underflows to 0 in f64, the
+    // mixture's log-density is the outlier component's.
+    let r = 1e3 * sigma;
+    assert_eq!(normal.pdf(r), 0.0);
+    let got = lik.ln_density(r, &term);
+    let want = libm::log(eps) + wide.ln_pdf(r);
+    assert!((got - want).abs() < 1e-9, "{got} vs {want}");
+}
