@@ -682,3 +682,52 @@ fn measurement_laws_match_statrs_densities() {
     let want = libm::log(eps) + wide.ln_pdf(r);
     assert!((got - want).abs() < 1e-9, "{got} vs {want}");
 }
+
+/// The PF monitor's refusals of an epoch (SPEC §10 inputs): a non-finite
+/// time, a NaN decision threshold given to `process_at`, and more
+/// satellites than the filter holds (`S` = 8 here) are typed errors with
+/// their values, and leave the filter as it was: the next good epoch
+/// answers exactly what a filter that never saw the refused ones answers.
+///
+/// Verifies: SPEC-10, SAFE-INPUTS
+#[test]
+fn refused_pf_epochs_leave_the_filter_untouched() {
+    let c = cfg();
+    let mut noise = rng::seeded(21);
+    let good: std::vec::Vec<_> = (0..3).map(|k| epoch(8, k, &mut noise, None)).collect();
+    let mut refused = std::boxed::Box::new(PfRaim::<f64, GaPf<f64, 100>, 8>::new(4));
+    let mut clean = std::boxed::Box::new(PfRaim::<f64, GaPf<f64, 100>, 8>::new(4));
+    let first = refused.process(&c, 0.0, &good[0]).unwrap();
+    assert_eq!(first, clean.process(&c, 0.0, &good[0]).unwrap());
+    assert_eq!(
+        refused.process(&c, f64::INFINITY, &good[1]).unwrap_err(),
+        PfError::NotFinite {
+            field: "time_s",
+            index: 0,
+            value: f64::INFINITY
+        }
+    );
+    let e = refused.process_at(&c, f64::NAN, 1.0, &good[1]).unwrap_err();
+    assert!(
+        matches!(e, PfError::InvalidConfig { field: "threshold", value } if value.is_nan()),
+        "{e:?}"
+    );
+    let extra = epoch(9, 1, &mut rng::seeded(3), None)[8];
+    let nine: std::vec::Vec<_> = good[1].iter().copied().chain([extra]).collect();
+    assert_eq!(
+        refused.process(&c, 1.0, &nine).unwrap_err(),
+        PfError::Capacity {
+            field: "observations",
+            have: 9,
+            max: 8
+        }
+    );
+    for (k, e) in good.iter().enumerate().skip(1) {
+        let t = k as f64;
+        assert_eq!(
+            refused.process(&c, t, e).unwrap(),
+            clean.process(&c, t, e).unwrap(),
+            "{k}"
+        );
+    }
+}
