@@ -105,6 +105,7 @@ def main():
     used = [0] * len(exceptions)
     tot = {"lines": [0, 0, 0], "branches": [0, 0, 0]}  # code, covered, justified
     unjustified = []
+    crates = {}  # crate: [lines, covered lines, branches, covered branches]
     for path, (lines, branches) in sorted(files.items()):
         try:
             src = open(path).read().split("\n")
@@ -136,10 +137,13 @@ def main():
             return False
 
         rel = os.path.relpath(path, ROOT)
+        crate = crates.setdefault(rel.split("/")[1] if rel.startswith("crates/") else rel, [0, 0, 0, 0])
         for n, covered in sorted(lines.items()):
             if in_tests(n):
                 continue
             tot["lines"][0] += 1
+            crate[0] += 1
+            crate[1] += bool(covered)
             if covered:
                 tot["lines"][1] += 1
             elif justified(n):
@@ -150,6 +154,8 @@ def main():
             if in_tests(n):
                 continue
             tot["branches"][0] += 1
+            crate[2] += 1
+            crate[3] += bool(hit)
             if hit:
                 tot["branches"][1] += 1
             elif justified(n):
@@ -167,6 +173,11 @@ def main():
     out = os.path.join(os.path.dirname(summary), "unjustified.txt")
     with open(out, "w") as fh:
         fh.write("\n".join(unjustified) + "\n")
+    for name, (n, c, b, bc) in sorted(crates.items()):
+        print(
+            f"  {name}: lines {100.0 * c / max(n, 1):.2f} % ({c} of {n}), "
+            f"branches {100.0 * bc / max(b, 1):.2f} % ({bc} of {b})"
+        )
     L, B = tot["lines"], tot["branches"]
     print(
         f"product code (the test modules inside the sources left out): lines {pct['lines']:.2f} % "
