@@ -9,7 +9,7 @@ LCOV.info is `llvm-cov export -format=lcov` over the on-device crates
 line's execution count (DA) and each branch outcome's (BRDA), then:
 
 - leaves out the crates' own test code inside the source files: a
-  `#[cfg(test)]` item (`mod tests { ... }`, a test-only function) from its
+  `#[cfg(test)]` (or `#[cfg(all(test, ...))]`) item (`mod tests { ... }`, a test-only function) from its
   attribute to its closing brace. llvm-cov counts those lines as the
   product's, and a test's failure arm (`panic!` on a wrong answer) never
   runs when the tests pass;
@@ -71,10 +71,16 @@ def test_ranges(src):
     out = []
     n = 0
     while n < len(src):
-        if src[n].strip() == "#[cfg(test)]":
+        t = src[n].strip()
+        if t == "#[cfg(test)]" or (t.startswith("#[cfg(all(test,") and t.endswith("))]")):
             k = n + 1
+            # Further attributes (a multi-line `#[allow(...)]` too) and comments.
             while k < len(src) and (src[k].strip().startswith("#[") or src[k].strip().startswith("//")):
+                depth = src[k].count("[") - src[k].count("]")
                 k += 1
+                while depth > 0 and k < len(src):
+                    depth += src[k].count("[") - src[k].count("]")
+                    k += 1
             if k < len(src):
                 out.append((n + 1, item_end(src, k + 1)))
                 n = out[-1][1]
