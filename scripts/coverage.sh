@@ -58,7 +58,20 @@ for line in sys.stdin:
     if m.get("reason") == "compiler-artifact" and m.get("executable") and m.get("profile", {}).get("test"):
         print(m["executable"])
 ' > "$out/binaries.txt"
-cargo +"$NIGHTLY" test --release "${packages[@]}" "${features[@]}" --lib -q >"$out/tests.log" 2>&1 || {
+# Left out of the instrumented run (CI's time; `RAIM_COVERAGE_FULL=1` runs
+# them): raim-core's seven brute-force and Monte Carlo tests, about 90 % of
+# the instrumented run's test time (~270 s of ~300 s at load 8.5 on 2
+# cores). Their code is the shorter tests' code: on 2026-11-29 leaving them
+# out lost 1 line and 3 branch outcomes of coverage. They still run,
+# uninstrumented, in scripts/test.sh's workspace tests.
+skip=()
+if [ "${RAIM_COVERAGE_FULL:-0}" != 1 ]; then
+    for t in fde_multi random_skies_match_dense_reference skies_without_nominal_bias_match_dense_reference \
+        synthetic_constellation_faults_table clean_stream_false_alarms_stay_near_the_budget; do
+        skip+=(--skip "$t")
+    done
+fi
+cargo +"$NIGHTLY" test --release "${packages[@]}" "${features[@]}" --lib -q -- "${skip[@]}" >"$out/tests.log" 2>&1 || {
     tail -30 "$out/tests.log" >&2
     echo "coverage: the instrumented tests failed (log: $out/tests.log)" >&2
     exit 1
