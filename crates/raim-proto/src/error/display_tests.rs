@@ -368,3 +368,105 @@ fn the_gapf_configuration_is_the_default_pf_config() {
     assert_eq!((c.particles, c.seed), (300, 42));
     assert_eq!(c.config, raim_core::pf::PfConfig::default());
 }
+
+/// ARAIM's refusals that it shares with the snapshot monitor reach the
+/// wire as the snapshot's typed errors with their values: over capacity
+/// (`TooManySatellites`), too few satellites, a singular geometry
+/// (`DegenerateGeometry`), a satellite given twice; its own constellation
+/// refusals as `WireError::Araim`.
+///
+/// Verifies: WIRE-Araim, WIRE-TooManySatellites, WIRE-TooFewSatellites, WIRE-DegenerateGeometry
+#[test]
+fn araim_refusals_reach_the_wire_with_their_values() {
+    use raim_core::araim::AraimError;
+    let cases = [
+        (
+            AraimError::CapacityExceeded {
+                have: 40,
+                capacity: 32,
+            },
+            WireError::TooManySatellites {
+                have: 40,
+                capacity: 32,
+            },
+        ),
+        (
+            AraimError::TooFewSatellites { have: 4, need: 5 },
+            WireError::TooFewSatellites { have: 4, need: 5 },
+        ),
+        (
+            AraimError::RankDeficient {
+                column: 3,
+                pivot: 2e-13,
+            },
+            WireError::DegenerateGeometry {
+                column: 3,
+                pivot: 2e-13,
+            },
+        ),
+        (
+            AraimError::DuplicateSatellite {
+                system: System::Galileo,
+                prn: 9,
+                first: 0,
+                second: 6,
+            },
+            WireError::DuplicateSatellite {
+                id: SatId::new(System::Galileo, 9),
+                first: 0,
+                second: 6,
+            },
+        ),
+        (
+            AraimError::EmptyConstellation {
+                system: System::Beidou,
+            },
+            WireError::Araim(AraimWireError::EmptyConstellation {
+                system: System::Beidou,
+            }),
+        ),
+        (
+            AraimError::MissingConstellationIsm {
+                system: System::Qzss,
+                index: 2,
+            },
+            WireError::Araim(AraimWireError::MissingConstellationIsm {
+                system: System::Qzss,
+                index: 2,
+            }),
+        ),
+    ];
+    for (core, wire) in cases {
+        assert_eq!(WireError::from(core), wire, "{core:?}");
+    }
+}
+
+/// The frame decoder's refusals' texts name the buffer's size, the
+/// chunk's length and both CRCs (the host tool prints them for a frame it
+/// could not read).
+///
+/// Verifies: WIRE-TEXT, WIRE-BadCrc, WIRE-Undecodable, WIRE-Overflow
+#[test]
+fn frame_refusals_name_their_values() {
+    use crate::frame::FrameError;
+    let cases = [
+        (
+            FrameError::Overflow { capacity: 4096 },
+            "frame longer than the 4096-byte receive buffer (skipped to the next delimiter)",
+        ),
+        (
+            FrameError::Undecodable { len: 17 },
+            "a 17-byte chunk is not a valid COBS envelope",
+        ),
+        (
+            FrameError::BadCrc {
+                computed: 0xcafe,
+                received: 0xbeef_0001,
+            },
+            "CRC mismatch: computed 0x0000cafe, received 0xbeef0001",
+        ),
+    ];
+    for (e, want) in cases {
+        assert_eq!(format!("{e}"), want, "{e:?}");
+    }
+}
