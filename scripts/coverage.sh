@@ -7,6 +7,12 @@
 #   bash scripts/coverage.sh           # prints the report; writes target/coverage/summary.txt
 #   bash scripts/coverage.sh --check   # also fails if a figure falls below docs/coverage_floor.txt
 #
+# Figures: llvm-cov's report (lines, branches, regions: the source files
+# whole, their in-file test modules included), then the product code alone
+# (product_lines, product_branches) and with the justified exceptions of
+# docs/coverage_exceptions.txt (justified_lines, justified_branches), by
+# scripts/coverage_product.py.
+#
 # The product builds on stable; only this script uses the pinned nightly
 # below, for `-Z coverage-options=branch`, with its own llvm-tools
 # (`rustup component add llvm-tools --toolchain $NIGHTLY`, done here).
@@ -52,7 +58,20 @@ for line in sys.stdin:
     if m.get("reason") == "compiler-artifact" and m.get("executable") and m.get("profile", {}).get("test"):
         print(m["executable"])
 ' > "$out/binaries.txt"
-cargo +"$NIGHTLY" test --release "${packages[@]}" "${features[@]}" --lib -q >"$out/tests.log" 2>&1 || {
+# Left out of the instrumented run (CI's time; `RAIM_COVERAGE_FULL=1` runs
+# them): raim-core's seven brute-force and Monte Carlo tests, about 90 % of
+# the instrumented run's test time (~270 s of ~300 s at load 8.5 on 2
+# cores). Their code is the shorter tests' code: on 2026-11-29 leaving them
+# out lost 1 line and 3 branch outcomes of coverage. They still run,
+# uninstrumented, in scripts/test.sh's workspace tests.
+skip=()
+if [ "${RAIM_COVERAGE_FULL:-0}" != 1 ]; then
+    for t in fde_multi random_skies_match_dense_reference skies_without_nominal_bias_match_dense_reference \
+        synthetic_constellation_faults_table clean_stream_false_alarms_stay_near_the_budget; do
+        skip+=(--skip "$t")
+    done
+fi
+cargo +"$NIGHTLY" test --release "${packages[@]}" "${features[@]}" --lib -q -- "${skip[@]}" >"$out/tests.log" 2>&1 || {
     tail -30 "$out/tests.log" >&2
     echo "coverage: the instrumented tests failed (log: $out/tests.log)" >&2
     exit 1
@@ -77,7 +96,13 @@ with open(sys.argv[2], "w") as fh:
     fh.write(f"lines {lines:.2f}\nbranches {branches:.2f}\nregions {regions:.2f}\n")
 print(f"coverage (raim-core, raim-nav, raim-proto, raim-server; their own tests): lines {lines:.2f} %, branches {branches:.2f} %, regions {regions:.2f} %")
 PY
-echo "per file: $out/report.txt"
+# The product code alone (the test modules inside the sources left out)
+# and the justified exceptions of docs/coverage_exceptions.txt, from
+# llvm-cov's own per-line and per-branch records.
+"$COV" export -format=lcov "${objects[@]}" \
+    -instr-profile="$out/merged.profdata" --ignore-filename-regex="$ignore" > "$out/lcov.info"
+python3 scripts/coverage_product.py "$out/lcov.info" "$out/summary.txt"
+echo "per file: $out/report.txt; uncovered and not justified: $out/unjustified.txt"
 if [ "${1:-}" = --check ]; then
     python3 - "$out/summary.txt" docs/coverage_floor.txt <<'PY'
 import sys

@@ -26,6 +26,27 @@ if [ "$what" = test ]; then
     done
 fi
 
+# The pinned nightly of scripts/coverage.sh (branch coverage,
+# `-Z coverage-options=branch`) and its llvm-tools; the product builds on
+# stable. The machine's `nightly` serves when it is the pinned date.
+COVERAGE_NIGHTLY="${RAIM_COVERAGE_TOOLCHAIN:-nightly-2026-05-19}"
+if [ "$what" = test ]; then
+    cov_tc="$COVERAGE_NIGHTLY"
+    if ! rustup run "$cov_tc" rustc --version >/dev/null 2>&1 \
+        && rustup run nightly rustc --version 2>/dev/null | grep -q "${COVERAGE_NIGHTLY#nightly-}"; then
+        cov_tc=nightly
+    fi
+    if ! rustup run "$cov_tc" rustc --version >/dev/null 2>&1; then
+        echo "install-deps: rust toolchain $COVERAGE_NIGHTLY (coverage)"
+        rustup toolchain install "$COVERAGE_NIGHTLY" --profile minimal >/dev/null 2>&1
+        cov_tc="$COVERAGE_NIGHTLY"
+    fi
+    if ! rustup component list --installed --toolchain "$cov_tc" 2>/dev/null | grep -q "^llvm-tools"; then
+        echo "install-deps: rust component llvm-tools ($cov_tc, coverage)"
+        rustup component add llvm-tools --toolchain "$cov_tc" >/dev/null 2>&1
+    fi
+fi
+
 # Python packages of the tests: pynmea2 (host-tests/tests/nmea_0759.rs
 # parses the NMEA writer's sentences with it).
 if [ "$what" = test ] && ! python3 -c "import pynmea2" >/dev/null 2>&1; then

@@ -107,3 +107,5 @@ step "the core's own unit tests in the device's precision (their default Stat = 
 cargo test -p raim-core --release --features test-f32 --lib
 step "the core's own tests without the optional reconstruction FDE (the 128 KiB flash build's core)"
 cargo test -p raim-core --release --no-default-features --lib
+step "structural coverage of raim-core, raim-nav, raim-proto, raim-server not under docs/coverage_floor.txt (their own unit tests, instrumented on the pinned nightly; docs/EVIDENCE.md)"
+bash scripts/coverage.sh --check

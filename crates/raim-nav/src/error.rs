@@ -27,3 +27,27 @@ impl core::fmt::Display for NavError {
 }
 
 impl core::error::Error for NavError {}
+
+#[cfg(test)]
+mod tests {
+    use super::NavError;
+
+    /// A broadcast field refused by its ICD range names the field, the
+    /// value and the range (a GLONASS 1020 outside the ICD is counted
+    /// `glonass_bad` with this error).
+    ///
+    /// Verifies: WIRE-TEXT
+    #[test]
+    fn the_text_names_the_field_value_and_range() {
+        let e = NavError::OutOfRange {
+            field: "x_m",
+            value: 3.0e8,
+            min: -2.7e7,
+            max: 2.7e7,
+        };
+        assert_eq!(
+            std::format!("{e}"),
+            "x_m = 300000000 is out of range [-27000000, 27000000]"
+        );
+    }
+}

@@ -201,4 +201,35 @@ mod tests {
         assert_eq!(pick(&s, 1000.0 * 604_800.0 + 7_200.0), Some(14_400.0));
         assert_eq!(s.len(), (3, 0));
     }
+
+    /// A Galileo set is used up to 4 h from its toe and not beyond (the
+    /// age of each system: GPS 2 h above); `clear_glonass` keeps the
+    /// Keplerian sets (the receiver re-places only GLONASS after a
+    /// leap-second change), `clear` forgets every set, and `is_empty` says
+    /// so.
+    ///
+    /// Verifies: RX-STREAM
+    #[test]
+    fn galileo_age_and_clearing() {
+        let mut s = EphemerisStore::<3, 1>::new();
+        assert!(s.is_empty());
+        let e11 = Kepler {
+            toc_gps_s: 1000.0 * 604_800.0 + 7_200.0,
+            toe_sow_s: 7_200.0,
+            ..crate::ephemeris::circular(System::Galileo, 11)
+        };
+        assert_eq!(s.insert_kepler(e11), Stored::Added);
+        let id = SatId::new(System::Galileo, 11);
+        let at = |dt: f64| 1000.0 * 604_800.0 + 7_200.0 + dt;
+        assert!(s.select(id, at(14_400.0)).is_some());
+        assert!(s.select(id, at(-14_400.0)).is_some());
+        assert!(s.select(id, at(14_401.0)).is_none());
+        assert!(!s.is_empty());
+        s.clear_glonass();
+        assert_eq!(s.len(), (1, 0));
+        s.clear();
+        assert_eq!(s.len(), (0, 0));
+        assert!(s.is_empty());
+        assert!(s.select(id, at(0.0)).is_none());
+    }
 }

@@ -570,3 +570,6 @@ mod tests {
         assert_eq!(f.as_str(), "a_field_name_much_longer");
     }
 }
+
+#[cfg(test)]
+mod display_tests;

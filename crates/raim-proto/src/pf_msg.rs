@@ -134,15 +134,4 @@ impl WirePfResult {
             llr: o.llr.clone(),
         }
     }
-
-    /// The auxiliary filter with the largest windowed LLR (the one D_k is
-    /// taken from), if any.
-    pub fn max_llr(&self) -> Option<&SatLlr> {
-        self.llr
-            .iter()
-            .fold(None, |best: Option<&SatLlr>, l| match best {
-                Some(b) if !(l.windowed > b.windowed) => Some(b),
-                _ => Some(l),
-            })
-    }
 }

@@ -729,6 +729,61 @@ mod tests {
             }
         }
     }
+
+    /// Every engine a PF configuration can select is the one answering:
+    /// the EKF, the SIR PF at 100 and 300 particles and the GA-PF at 300
+    /// (the GA-PF at 100: the test above), each configured over the wire
+    /// and sent the same 6 epochs, answer what the core's engine of that
+    /// kind and size answers for the same seed, bit for bit; a second
+    /// `PfConfigure` of the same kind restarts its filter from the seed
+    /// (the first epoch's answer again).
+    ///
+    /// Verifies: SPEC-10
+    #[test]
+    fn each_configured_engine_answers_as_the_cores() {
+        crate::tests::on_big_stack(each_configured_engine_answers_as_the_cores_body)
+    }
+
+    fn each_configured_engine_answers_as_the_cores_body() {
+        use raim_core::pf::{Ekf, SirPf};
+        type T = raim_proto::DevicePrecision;
+        let mut noise = rng::seeded(5);
+        let epochs: Vec<Vec<RangeObservation>> =
+            (0..6).map(|k| epoch(8, k, &mut noise, None)).collect();
+        macro_rules! against {
+            ($kind:expr, $particles:expr, $engine:ty) => {{
+                let mut server = pf_server();
+                let cfg = WirePfConfig {
+                    kind: $kind,
+                    particles: $particles,
+                    ..pf_config(100)
+                };
+                let mut cmds = std::vec![CommandRef::PfConfigure(&cfg)];
+                cmds.extend(epochs.iter().enumerate().map(|(k, e)| ranges(k as f64, e)));
+                cmds.push(CommandRef::PfConfigure(&cfg));
+                cmds.push(ranges(0.0, &epochs[0]));
+                let resp = exchange(&mut server, 0, &cmds);
+                assert_eq!(resp[0].body, ResponseBody::Configured, "{:?}", $kind);
+                let mut core = Box::new(<$engine>::new(cfg.seed));
+                for (k, e) in epochs.iter().enumerate() {
+                    let want = core.process(&cfg.config, k as f64, e).unwrap();
+                    assert_eq!(
+                        resp[1 + k].body,
+                        ResponseBody::PfResult(WirePfResult::from_output(&want)),
+                        "{:?} {} epoch {k}",
+                        $kind,
+                        $particles
+                    );
+                }
+                assert_eq!(resp[7].body, ResponseBody::Configured);
+                assert_eq!(resp[8].body, resp[1].body, "{:?} restarted", $kind);
+            }};
+        }
+        against!(PfKind::Ekf, 0, PfRaim<T, Ekf<T>, 12>);
+        against!(PfKind::Pf, 100, PfRaim<T, SirPf<T, 100>, 12>);
+        against!(PfKind::Pf, 300, PfRaim<T, SirPf<T, 300>, 12>);
+        against!(PfKind::Gapf, 300, PfRaim<T, GaPf<T, 300>, 12>);
+    }
 }
 
 /// The alarm output's reading of a PF epoch (`pf_decision`), on every

@@ -1721,3 +1721,86 @@ fn monitor_refuses_absurd_times_and_satellite_numbers() {
         );
     }
 }
+
+/// The monitor's entries for satellites whose variances are already known
+/// (`Monitor::given`, the host's availability tools') and its availability
+/// with exclusion (`Monitor::after_excluding`) are the engine's own: on
+/// the ADD Appendix D sky (SPEC §9.1), `given` gives the engine's
+/// all-in-view output bit for bit and holds the satellites as given;
+/// after excluding each single-satellite mode it gives the engine's
+/// `after_excluding` of that mode; a mode that does not exist is `None`;
+/// more satellites than the monitor holds is the capacity error, and the
+/// monitor then holds none. The monitor's refusal texts are the engine's
+/// and the core's.
+///
+/// Verifies: SPEC-9.1, SAFE-INPUTS
+#[test]
+fn monitor_given_and_after_excluding_are_the_engines() {
+    use super::{FdeLimits, Monitor, MonitorError};
+    let cfg = AraimConfig::default();
+    let ism = ge_ism(1e-4);
+    let sats = appendix_d_sats();
+    let mut monitor = std::boxed::Box::new(Monitor::<f64, 16, 600>::new());
+    let mut engine = std::boxed::Box::new(Araim::<f64, 16, 600>::new());
+    let mut other = std::boxed::Box::new(Araim::<f64, 16, 600>::new());
+    monitor
+        .given(&cfg, &ism, &sats, FdeLimits::UNLIMITED)
+        .unwrap();
+    engine.process(&cfg, &ism, &sats).unwrap();
+    let (got, want) = (monitor.all_in_view(), engine.output());
+    assert_eq!(got.pl_add, want.pl_add);
+    assert_eq!(got.pl_exact, want.pl_exact);
+    assert_eq!(got.emt_m.to_bits(), want.emt_m.to_bits());
+    assert_eq!(got.unavailable, want.unavailable);
+    assert_eq!(monitor.satellites(), &sats[..]);
+    let mut modes = 0;
+    for k in 0..want.modes.len() {
+        let want_k = engine
+            .after_excluding(&cfg, &ism, &sats, k, &mut other)
+            .unwrap()
+            .map(|o| (o.pl_add, o.pl_exact, o.unavailable));
+        let got_k = monitor
+            .after_excluding(&cfg, &ism, k)
+            .unwrap()
+            .map(|o| (o.pl_add, o.pl_exact, o.unavailable));
+        assert_eq!(got_k, want_k, "mode {k}");
+        modes += usize::from(got_k.is_some());
+    }
+    assert!(modes >= 10, "{modes}");
+    assert!(monitor.after_excluding(&cfg, &ism, 5000).unwrap().is_none());
+    let many = [sats[0]; 17];
+    let e = monitor
+        .given(&cfg, &ism, &many, FdeLimits::UNLIMITED)
+        .unwrap_err();
+    assert_eq!(
+        e,
+        MonitorError::Araim(AraimError::CapacityExceeded {
+            have: 17,
+            capacity: 16
+        })
+    );
+    assert!(monitor.satellites().is_empty());
+    assert_eq!(
+        std::format!("{e}"),
+        std::format!(
+            "{}",
+            AraimError::CapacityExceeded {
+                have: 17,
+                capacity: 16
+            }
+        )
+    );
+    let e = MonitorError::NotInIsm {
+        id: SatId::new(System::Gps, 3),
+        index: 1,
+    };
+    assert_eq!(
+        std::format!("{e}"),
+        "satellite G03 at index 1 has no ISM entry"
+    );
+    let r = crate::RaimError::InvalidDof { dof: 0, max: 60 };
+    assert_eq!(
+        std::format!("{}", MonitorError::Raim(r)),
+        std::format!("{r}")
+    );
+}

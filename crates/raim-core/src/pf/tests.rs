@@ -617,3 +617,117 @@ fn exclusion_and_readmission() {
     }
     assert!(excluded_at.is_some() && readmitted && second_alarm);
 }
+
+/// The particle filters' measurement laws (SPEC §10: the likelihood of
+/// each residual, `PfConfig::likelihood`) against statrs's densities at
+/// residuals from the core to 12 sigma: the Gaussian, the Student-t with
+/// nu = 3, 4 and 30 degrees of freedom and scale sigma, and the Gaussian
+/// mixture (1 - eps) N(0, sigma^2) + eps N(0, (k sigma)^2) with eps =
+/// 0.05, k = 10 (its log-sum-exp form keeps the far tail finite where the
+/// plain sum of the two densities underflows). The EKF's law is the
+/// Gaussian whatever the configuration.
+///
+/// Verifies: SPEC-10
+#[test]
+fn measurement_laws_match_statrs_densities() {
+    use crate::pf::model::{Lik, SatTerm};
+    use statrs::distribution::{Continuous, Normal, StudentsT};
+    let sigma = 2.5;
+    let term = SatTerm::<f64> {
+        id: SatId::new(System::Gps, 1),
+        sys: 0,
+        los: [1.0, 0.0, 0.0],
+        inv_range: 1.0 / 2.0e7,
+        z0: 0.0,
+        sigma,
+        ln_sigma: libm::log(sigma),
+    };
+    let with = |likelihood| PfConfig {
+        likelihood,
+        ..PfConfig::default()
+    };
+    let residuals = [0.0, 0.3, -1.7, 4.0, -9.5, 30.0];
+    let normal = Normal::new(0.0, sigma).unwrap();
+    let gauss = Lik::<f64>::new(&with(Likelihood::Gaussian));
+    let ekf = Lik::<f64>::gaussian();
+    for r in residuals {
+        let want = normal.ln_pdf(r);
+        assert!((gauss.ln_density(r, &term) - want).abs() < 1e-12, "{r}");
+        assert!((ekf.ln_density(r, &term) - want).abs() < 1e-12, "{r}");
+    }
+    for nu in [3.0, 4.0, 30.0] {
+        let t = StudentsT::new(0.0, sigma, nu).unwrap();
+        let lik = Lik::<f64>::new(&with(Likelihood::StudentT { nu }));
+        for r in residuals {
+            let (got, want) = (lik.ln_density(r, &term), t.ln_pdf(r));
+            assert!((got - want).abs() < 1e-10, "nu {nu} r {r}: {got} vs {want}");
+        }
+    }
+    let (eps, k) = (0.05, 10.0);
+    let lik = Lik::<f64>::new(&with(Likelihood::Mixture {
+        outlier_prob: eps,
+        outlier_scale: k,
+    }));
+    let wide = Normal::new(0.0, k * sigma).unwrap();
+    for r in residuals {
+        let want = libm::log((1.0 - eps) * normal.pdf(r) + eps * wide.pdf(r));
+        let got = lik.ln_density(r, &term);
+        assert!((got - want).abs() < 1e-10, "r {r}: {got} vs {want}");
+    }
+    // 1e3 sigma out: the core's density underflows to 0 in f64, the
+    // mixture's log-density is the outlier component's.
+    let r = 1e3 * sigma;
+    assert_eq!(normal.pdf(r), 0.0);
+    let got = lik.ln_density(r, &term);
+    let want = libm::log(eps) + wide.ln_pdf(r);
+    assert!((got - want).abs() < 1e-9, "{got} vs {want}");
+}
+
+/// The PF monitor's refusals of an epoch (SPEC §10 inputs): a non-finite
+/// time, a NaN decision threshold given to `process_at`, and more
+/// satellites than the filter holds (`S` = 8 here) are typed errors with
+/// their values, and leave the filter as it was: the next good epoch
+/// answers exactly what a filter that never saw the refused ones answers.
+///
+/// Verifies: SPEC-10, SAFE-INPUTS
+#[test]
+fn refused_pf_epochs_leave_the_filter_untouched() {
+    let c = cfg();
+    let mut noise = rng::seeded(21);
+    let good: std::vec::Vec<_> = (0..3).map(|k| epoch(8, k, &mut noise, None)).collect();
+    let mut refused = std::boxed::Box::new(PfRaim::<f64, GaPf<f64, 100>, 8>::new(4));
+    let mut clean = std::boxed::Box::new(PfRaim::<f64, GaPf<f64, 100>, 8>::new(4));
+    let first = refused.process(&c, 0.0, &good[0]).unwrap();
+    assert_eq!(first, clean.process(&c, 0.0, &good[0]).unwrap());
+    assert_eq!(
+        refused.process(&c, f64::INFINITY, &good[1]).unwrap_err(),
+        PfError::NotFinite {
+            field: "time_s",
+            index: 0,
+            value: f64::INFINITY
+        }
+    );
+    let e = refused.process_at(&c, f64::NAN, 1.0, &good[1]).unwrap_err();
+    assert!(
+        matches!(e, PfError::InvalidConfig { field: "threshold", value } if value.is_nan()),
+        "{e:?}"
+    );
+    let extra = epoch(9, 1, &mut rng::seeded(3), None)[8];
+    let nine: std::vec::Vec<_> = good[1].iter().copied().chain([extra]).collect();
+    assert_eq!(
+        refused.process(&c, 1.0, &nine).unwrap_err(),
+        PfError::Capacity {
+            field: "observations",
+            have: 9,
+            max: 8
+        }
+    );
+    for (k, e) in good.iter().enumerate().skip(1) {
+        let t = k as f64;
+        assert_eq!(
+            refused.process(&c, t, e).unwrap(),
+            clean.process(&c, t, e).unwrap(),
+            "{k}"
+        );
+    }
+}

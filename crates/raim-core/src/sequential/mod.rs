@@ -118,23 +118,11 @@ impl<const N: usize, T: Real> Sequential<N, T> {
         }
     }
     /// Snapshot test + MCUSUM (SPEC §7.4). Satellites held excluded after
-    /// earlier MCUSUM alarms are left out of the epoch first.
-    pub fn process(
-        &mut self,
-        snap: &mut Snapshot<N, T>,
-        cfg: &Config,
-        epoch: &Epoch<'_>,
-    ) -> Result<EpochResult<N>, RaimError> {
-        let mut outcome = FdeOutcome::empty();
-        let mut result = EpochResult::empty();
-        self.process_into(snap, cfg, epoch, &mut outcome, &mut result)?;
-        Ok(result)
-    }
-
-    /// [`Sequential::process`] with the result written into `out` and the
-    /// FDE outcome (the solution in force) in caller storage, which is
-    /// reset here (nothing result- or solution-sized on the
-    /// stack; the monitor keeps both in its own state).
+    /// earlier MCUSUM alarms are left out of the epoch first. The result
+    /// is written into `out` and the FDE outcome (the solution in force)
+    /// into caller storage, which is reset here (nothing result- or
+    /// solution-sized on the stack; the monitor keeps both in its own
+    /// state).
     pub(crate) fn process_into(
         &mut self,
         snap: &mut Snapshot<N, T>,

@@ -25,3 +25,6 @@ pub use fields::{
     glonass_fields, msg1019_fields, msg1042_fields, msg1044_fields, msg1045_fields, msg1046_fields,
 };
 pub use receiver::{FormError, FormedEpoch, LeapSeconds, RtcmCounts, StreamReceiver};
+
+#[cfg(test)]
+mod stream_tests;

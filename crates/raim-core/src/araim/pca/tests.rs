@@ -417,3 +417,155 @@ fn times_outside_the_gps_era_are_refused() {
     pca.process(&cfg, 60.0, &e[1]).unwrap();
     assert_eq!(pca.filled(), 2);
 }
+
+/// Every bad input of the PCA monitor (SPEC §9.3) is refused with its
+/// typed error and the offending value, and leaves the history as it was
+/// (the next good epoch in order is taken): a variance share outside (0,
+/// 1], a false-alert probability outside (0, 1), a non-finite time, more
+/// satellites than the slots, a non-finite geometry, residual or
+/// variance, a non-positive variance, a satellite given twice, fewer
+/// satellites than the unknowns, and a time that does not advance. Each
+/// refusal's text names its values.
+///
+/// Verifies: SPEC-9.3, SAFE-INPUTS
+#[test]
+fn bad_inputs_are_refused_with_their_values_and_the_history_kept() {
+    let mut pca = Pca::<f64, 8, W>::new();
+    let good = sky(4, 3);
+    let cfg = PcaConfig::default();
+    pca.process(&cfg, 30.0, &good).unwrap();
+    let refused = |pca: &mut Pca<f64, 8, W>, c: &PcaConfig, t: f64, s: &[AraimSat<f64>]| {
+        let e = pca.process(c, t, s).expect_err("refused");
+        assert_eq!(pca.filled(), 1, "{e}");
+        e
+    };
+    for v in [0.0, 1.5, f64::NAN] {
+        let c = PcaConfig {
+            variance_share: v,
+            ..cfg
+        };
+        let e = refused(&mut pca, &c, 60.0, &good);
+        assert!(
+            matches!(e, PcaError::BadConfig { field: "variance_share", value } if value.to_bits() == v.to_bits())
+        );
+    }
+    for v in [0.0, 1.0, -1e-3] {
+        let c = PcaConfig { p_fa: v, ..cfg };
+        assert_eq!(
+            refused(&mut pca, &c, 60.0, &good),
+            PcaError::BadConfig {
+                field: "p_fa",
+                value: v
+            }
+        );
+    }
+    assert_eq!(
+        std::format!(
+            "{}",
+            PcaError::BadConfig {
+                field: "p_fa",
+                value: 2.0
+            }
+        ),
+        "configuration p_fa = 2 is out of range"
+    );
+    let e = refused(&mut pca, &cfg, f64::INFINITY, &good);
+    assert_eq!(
+        e,
+        PcaError::NotFinite {
+            field: "t_s",
+            index: 0,
+            value: f64::INFINITY
+        }
+    );
+    assert_eq!(std::format!("{e}"), "non-finite t_s at index 0: inf");
+    let e = refused(&mut pca, &cfg, 60.0, &sky(5, 4));
+    assert_eq!(
+        e,
+        PcaError::CapacityExceeded {
+            have: 9,
+            capacity: 8
+        }
+    );
+    assert_eq!(std::format!("{e}"), "9 satellites exceed capacity 8");
+    let fields = ["g_e", "g_n", "g_u", "residual_m", "c_int_m2"];
+    for (k, field) in fields.iter().enumerate() {
+        let mut bad = good.clone();
+        let s = &mut bad[2];
+        match k {
+            0..=2 => s.g_enu[k] = f64::NAN,
+            3 => s.residual_m = f64::NEG_INFINITY,
+            _ => s.c_int_m2 = f64::INFINITY,
+        }
+        let e = refused(&mut pca, &cfg, 60.0, &bad);
+        assert!(
+            matches!(e, PcaError::NotFinite { field: f, index: 2, .. } if f == *field),
+            "{e:?}"
+        );
+    }
+    let mut bad = good.clone();
+    bad[3].c_int_m2 = 0.0;
+    assert_eq!(
+        refused(&mut pca, &cfg, 60.0, &bad),
+        PcaError::NotFinite {
+            field: "c_int_m2",
+            index: 3,
+            value: 0.0
+        }
+    );
+    let mut bad = good.clone();
+    bad[5].id = bad[1].id;
+    let e = refused(&mut pca, &cfg, 60.0, &bad);
+    assert_eq!(
+        e,
+        PcaError::DuplicateSatellite {
+            first: 1,
+            second: 5
+        }
+    );
+    assert_eq!(
+        std::format!("{e}"),
+        "duplicate satellite at indices 1 and 5"
+    );
+    // GPS and Galileo: 3 + 2 unknowns.
+    let e = refused(&mut pca, &cfg, 60.0, &sky(2, 2));
+    assert_eq!(e, PcaError::TooFewSatellites { have: 4, need: 5 });
+    assert_eq!(std::format!("{e}"), "too few satellites: have 4, need 5");
+    let e = refused(&mut pca, &cfg, 30.0, &good);
+    assert_eq!(
+        e,
+        PcaError::NonMonotonicTime {
+            previous_s: 30.0,
+            now_s: 30.0
+        }
+    );
+    assert_eq!(std::format!("{e}"), "time 30 s does not follow 30 s");
+    pca.process(&cfg, 60.0, &good).unwrap();
+    assert_eq!(pca.filled(), 2);
+}
+
+/// The texts of the refusals no input above reaches name what failed.
+///
+/// Verifies: WIRE-TEXT
+#[test]
+fn the_other_refusals_texts() {
+    assert_eq!(
+        std::format!("{}", PcaError::RankDeficient),
+        "the all-in-view normal matrix is singular"
+    );
+    assert_eq!(
+        std::format!("{}", PcaError::SvdFailed),
+        "the SVD of the residual covariance did not converge"
+    );
+    assert_eq!(
+        std::format!(
+            "{}",
+            PcaError::TimeOutOfRange {
+                t_s: -1.0,
+                min_s: 0.0,
+                max_s: 5.0
+            }
+        ),
+        "time -1 s outside [0, 5] s"
+    );
+}
