@@ -42,7 +42,10 @@ fn qemu_streamed_frames_are_all_answered_in_order() {
 }
 
 /// The real-board build (USART2 by interrupt on stm32f4xx-hal) under
-/// QEMU's netduinoplus2.
+/// QEMU's netduinoplus2, built with a 30 s pause on the link
+/// (`raim_qemu::NETDUINOPLUS2_LINK_IDLE_S`): a loaded host that does not
+/// run QEMU for 0.25 s between two bytes would otherwise cut a frame
+/// (docs/EVIDENCE.md "The suite under load").
 #[test]
 fn qemu_netduinoplus2_streamed_frames_are_all_answered_in_order() {
     stream(Machine::NetduinoPlus2, STREAM_FRAMES_NETDUINO);
