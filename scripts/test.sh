@@ -89,10 +89,14 @@ keep_elf snapshot
 step "firmware: build, QEMU mps2-an386 with a 1 s time-to-alert (the hung-loop alarm test)"
 (cd firmware && RAIM_TIME_TO_ALERT_S=1 cargo build --release --features tta-record)
 keep_elf qemu-tta1
+step "firmware: build, QEMU mps2-an386 with a 30 s link pause (the streaming tests; docs/EVIDENCE.md)"
+(cd firmware && RAIM_TEST_LINK_IDLE_S=30 cargo build --release)
+keep_elf qemu-stream
 step "firmware: build, QEMU mps2-an386 (default features)"
 (cd firmware && cargo build --release)
 keep_elf qemu
 export RAIM_FIRMWARE_ELF_TTA1="$PWD/firmware/target/elf/qemu-tta1"
+export RAIM_FIRMWARE_ELF_STREAM="$PWD/firmware/target/elf/qemu-stream"
 export RAIM_FIRMWARE_ELF="$PWD/firmware/target/elf/qemu"
 export RAIM_FIRMWARE_ELF_STM32F4="$PWD/firmware/target/elf/stm32f4-netduinoplus2"
 export RAIM_FIRMWARE_ELF_SNAPSHOT="$PWD/firmware/target/elf/snapshot"
