@@ -74,9 +74,10 @@ step "firmware: docs"
 step "firmware: build, STM32F4 hardware layout"
 (cd firmware && cargo build --release --no-default-features --features board-stm32f4)
 keep_elf stm32f4-hw
-# (with a 30 s pause on the link, RAIM_TEST_LINK_IDLE_S: its streaming
-# test must not see a loaded host's scheduling stall as a pause; the
-# 0.25 s pause itself is checked on mps2-an386, docs/EVIDENCE.md)
+# (with a 30 s pause on the link, RAIM_TEST_LINK_IDLE_S, as the
+# mps2-an386 streaming build below: a streaming test must not see a loaded
+# host's stall of QEMU as a pause; the 0.25 s pause itself is checked on
+# the default mps2-an386 build, docs/EVIDENCE.md)
 step "firmware: build, STM32F4 for QEMU netduinoplus2"
 (cd firmware && RAIM_TEST_LINK_IDLE_S=30 cargo build --release --no-default-features --features board-stm32f4,qemu-netduinoplus2)
 keep_elf stm32f4-netduinoplus2
