@@ -62,7 +62,7 @@ cargo build -p raim-core --target thumbv7em-none-eabihf --release --features def
 # the firmware crate's memory layout). A build's ELF is copied to
 # firmware/target/elf/ before the next one overwrites it, and the tests
 # take the copies ($RAIM_FIRMWARE_ELF, $RAIM_FIRMWARE_ELF_STM32F4,
-# $RAIM_FIRMWARE_ELF_SNAPSHOT, crates/raim-qemu). The default build goes
+# $RAIM_FIRMWARE_ELF_SNAPSHOT, $RAIM_FIRMWARE_ELF_STREAM, crates/raim-qemu). The default build goes
 # last, so that firmware/target/thumbv7em-none-eabihf/release/raim-firmware
 # is the default firmware afterwards, as before.
 FW_ELF=firmware/target/thumbv7em-none-eabihf/release/raim-firmware
