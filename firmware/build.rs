@@ -62,4 +62,42 @@ fn settings(out: &std::path::Path) {
          pub const TIME_TO_ALERT_S: u32 = {tta};\n"
     );
     std::fs::write(out.join("settings.rs"), text).unwrap_or_else(|e| panic!("settings.rs: {e}"));
+    link_idle(out);
+}
+
+/// Bounds of the test-only link pause, s: it may only lengthen the unit's
+/// 0.25 s (`raim_server::LINK_IDLE_S`), and stays below a minute so that a
+/// frame a test cuts on purpose still ends before the test's own deadline.
+const TEST_LINK_IDLE_S: std::ops::RangeInclusive<u32> = 1..=60;
+
+/// `OUT_DIR/link_idle.rs`: the pause on the link that ends a frame. It is
+/// `raim_server::LINK_IDLE_S` unless the test-only setting
+/// `RAIM_TEST_LINK_IDLE_S` (whole seconds, bounded above) is given: under
+/// QEMU without `-icount` the guest's clock is the host's, so a host that
+/// does not run QEMU for 0.25 s between two bytes of one frame cuts the
+/// frame (docs/EVIDENCE.md "The suite under load"); the streaming tests
+/// run a build with a pause no scheduling stall reaches. A value out of
+/// bounds fails the build.
+fn link_idle(out: &std::path::Path) {
+    println!("cargo:rerun-if-env-changed=RAIM_TEST_LINK_IDLE_S");
+    let value = match std::env::var("RAIM_TEST_LINK_IDLE_S") {
+        Ok(v) => {
+            let s: u32 = v
+                .trim()
+                .parse()
+                .unwrap_or_else(|e| panic!("RAIM_TEST_LINK_IDLE_S={v:?}: {e}"));
+            assert!(
+                TEST_LINK_IDLE_S.contains(&s),
+                "RAIM_TEST_LINK_IDLE_S={s} s is outside {TEST_LINK_IDLE_S:?} s"
+            );
+            format!("{s}.0")
+        }
+        Err(_) => "raim_server::LINK_IDLE_S".into(),
+    };
+    let text = format!(
+        "/// The pause on the link that ends a frame, s: `raim_server::LINK_IDLE_S`,\n\
+         /// or the test-only build setting `RAIM_TEST_LINK_IDLE_S` (build.rs).\n\
+         pub const LINK_IDLE_S: f64 = {value};\n"
+    );
+    std::fs::write(out.join("link_idle.rs"), text).unwrap_or_else(|e| panic!("link_idle.rs: {e}"));
 }

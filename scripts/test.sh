@@ -62,7 +62,7 @@ cargo build -p raim-core --target thumbv7em-none-eabihf --release --features def
 # the firmware crate's memory layout). A build's ELF is copied to
 # firmware/target/elf/ before the next one overwrites it, and the tests
 # take the copies ($RAIM_FIRMWARE_ELF, $RAIM_FIRMWARE_ELF_STM32F4,
-# $RAIM_FIRMWARE_ELF_SNAPSHOT, crates/raim-qemu). The default build goes
+# $RAIM_FIRMWARE_ELF_SNAPSHOT, $RAIM_FIRMWARE_ELF_STREAM, crates/raim-qemu). The default build goes
 # last, so that firmware/target/thumbv7em-none-eabihf/release/raim-firmware
 # is the default firmware afterwards, as before.
 FW_ELF=firmware/target/thumbv7em-none-eabihf/release/raim-firmware
@@ -74,8 +74,12 @@ step "firmware: docs"
 step "firmware: build, STM32F4 hardware layout"
 (cd firmware && cargo build --release --no-default-features --features board-stm32f4)
 keep_elf stm32f4-hw
+# (with a 30 s pause on the link, RAIM_TEST_LINK_IDLE_S, as the
+# mps2-an386 streaming build below: a streaming test must not see a loaded
+# host's stall of QEMU as a pause; the 0.25 s pause itself is checked on
+# the default mps2-an386 build, docs/EVIDENCE.md)
 step "firmware: build, STM32F4 for QEMU netduinoplus2"
-(cd firmware && cargo build --release --no-default-features --features board-stm32f4,qemu-netduinoplus2)
+(cd firmware && RAIM_TEST_LINK_IDLE_S=30 cargo build --release --no-default-features --features board-stm32f4,qemu-netduinoplus2)
 keep_elf stm32f4-netduinoplus2
 step "firmware: clippy and build, QEMU snapshot-only"
 (cd firmware && cargo clippy --release --no-default-features --features board-qemu -- -D warnings \
@@ -86,10 +90,14 @@ keep_elf snapshot
 step "firmware: build, QEMU mps2-an386 with a 1 s time-to-alert (the hung-loop alarm test)"
 (cd firmware && RAIM_TIME_TO_ALERT_S=1 cargo build --release --features tta-record)
 keep_elf qemu-tta1
+step "firmware: build, QEMU mps2-an386 with a 30 s link pause (the streaming tests; docs/EVIDENCE.md)"
+(cd firmware && RAIM_TEST_LINK_IDLE_S=30 cargo build --release)
+keep_elf qemu-stream
 step "firmware: build, QEMU mps2-an386 (default features)"
 (cd firmware && cargo build --release)
 keep_elf qemu
 export RAIM_FIRMWARE_ELF_TTA1="$PWD/firmware/target/elf/qemu-tta1"
+export RAIM_FIRMWARE_ELF_STREAM="$PWD/firmware/target/elf/qemu-stream"
 export RAIM_FIRMWARE_ELF="$PWD/firmware/target/elf/qemu"
 export RAIM_FIRMWARE_ELF_STM32F4="$PWD/firmware/target/elf/stm32f4-netduinoplus2"
 export RAIM_FIRMWARE_ELF_SNAPSHOT="$PWD/firmware/target/elf/snapshot"

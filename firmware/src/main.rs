@@ -184,9 +184,10 @@ fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts:
         NVIC::unmask(Irq(B::LINK_RX_IRQ));
         cortex_m::interrupt::enable();
     }
-    // A pause on the link (`raim_server::LINK_IDLE_S`): ticks, and the
-    // time of the last byte while no pause has been signalled since.
-    let idle_ticks = (raim_server::LINK_IDLE_S * f64::from(core_hz)) as u64;
+    // A pause on the link (`raim_server::LINK_IDLE_S`, or the test-only
+    // build setting: `link_idle::LINK_IDLE_S`): ticks, and the time of the
+    // last byte while no pause has been signalled since.
+    let idle_ticks = (link_idle::LINK_IDLE_S * f64::from(core_hz)) as u64;
     let mut last_byte: Option<u64> = None;
     loop {
         while let Some(b) = rx.next() {
@@ -214,6 +215,11 @@ fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts:
             }
         });
     }
+}
+
+/// The link pause setting (build.rs `link_idle`).
+mod link_idle {
+    include!(concat!(env!("OUT_DIR"), "/link_idle.rs"));
 }
 
 /// The boot sequence's configuration step, in a frame of its own so that

@@ -16,7 +16,7 @@ mod rtcm_common;
 
 use std::time::Duration;
 
-use qemu_common::{session_on, wire_bytes, Sink};
+use qemu_common::{session_on, stream_session_on, wire_bytes, Sink};
 use raim_core::{Config, Decision, Epoch};
 use raim_proto::error::WireError;
 use raim_proto::message::{CommandRef, Response, ResponseBody};
@@ -97,26 +97,13 @@ fn qemu_rtcm_stream_epochs_equal_the_host_replay_bit_for_bit() {
     let (host, counts) = host_epochs(bytes, now_week);
     let n_epochs = counts.epochs as usize;
 
-    // The unit fed the stream.
-    let mut fw = session_on(Machine::Mps2An386);
+    // The unit fed the stream (its streaming build: a loaded host's stall
+    // of QEMU is not a pause to it; the pause itself:
+    // `qemu_rtcm_a_cut_frame_is_ended_by_the_pause`).
+    let mut fw = stream_session_on(Machine::Mps2An386);
     let answers = stream_answers(&mut fw, bytes, n_epochs);
-    // Then the file's cut last frame (302 bytes of a longer one), as a
-    // receiver losing power mid-frame: it holds the link until the pause
-    // (`LINK_IDLE_S`, checked at SysTick wraps), which ends it as a bad
-    // chunk; the next request is answered.
-    fw.send_raw(&file[once.len()..]).unwrap();
-    std::thread::sleep(Duration::from_secs_f64(
-        4.0 * raim_server::LINK_IDLE_S + 1.0,
-    ));
-    while let Ok(r) = fw.recv(Duration::from_millis(500)) {
-        assert!(
-            r.seq.is_none() && matches!(r.body, ResponseBody::Error(_)),
-            "after the cut frame: {r:?}"
-        );
-    }
     let status = fw.status().unwrap();
     let nframes = frames(bytes).len() as u32;
-    let _ = once;
     assert_eq!(status.rtcm_frames, nframes);
     assert_eq!(status.rtcm_bad_crc, 0);
     assert_eq!(status.stream_epochs as usize, n_epochs);
@@ -186,6 +173,34 @@ fn qemu_rtcm_stream_epochs_equal_the_host_replay_bit_for_bit() {
     assert_eq!(decisions[2], 0);
 }
 
+/// The file's cut last frame (302 bytes of a longer one), as a receiver
+/// losing power mid-frame, on the default build (the unit's 0.25 s pause,
+/// `raim_server::LINK_IDLE_S`): it holds the link until the pause
+/// (checked at SysTick wraps), which ends it as a bad chunk; the next
+/// request is answered.
+///
+/// Verifies: RX-LINK
+#[test]
+fn qemu_rtcm_a_cut_frame_is_ended_by_the_pause() {
+    let (file, _) = gmsd7_in_window();
+    let once = whole_frames(&file);
+    assert_eq!(file.len() - once.len(), 302, "the cut last frame");
+    let mut fw = session_on(Machine::Mps2An386);
+    fw.send_raw(&file[once.len()..]).unwrap();
+    std::thread::sleep(Duration::from_secs_f64(
+        4.0 * raim_server::LINK_IDLE_S + 1.0,
+    ));
+    while let Ok(r) = fw.recv(Duration::from_millis(500)) {
+        assert!(
+            r.seq.is_none() && matches!(r.body, ResponseBody::Error(_)),
+            "after the cut frame: {r:?}"
+        );
+    }
+    let status = fw.status().unwrap();
+    assert_eq!(status.rtcm_frames, 0);
+    assert_eq!(status.rtcm_bad_crc, 0);
+}
+
 /// The same bytes through the host's `Server` (the firmware's protocol
 /// loop, compiled for x86): the unit's answer frames byte for byte.
 ///
@@ -194,7 +209,7 @@ fn qemu_rtcm_stream_epochs_equal_the_host_replay_bit_for_bit() {
 fn qemu_rtcm_answers_equal_the_host_server_byte_for_byte() {
     let (bytes, _) = gmsd7_in_window();
     let part = whole_frames(&bytes[..40_000.min(bytes.len())]);
-    let mut fw = session_on(Machine::Mps2An386);
+    let mut fw = stream_session_on(Machine::Mps2An386);
     let mut server = raim_server::Server::new();
     server.take_runtime_config(Config::default()).unwrap();
     let mut link = Sink(Vec::new());
@@ -246,7 +261,7 @@ fn qemu_rtcm_answers_equal_the_host_server_byte_for_byte() {
 fn qemu_rtcm_stream_on_an_unconfigured_unit_is_refused() {
     let (bytes, now_week) = gmsd7_in_window();
     let part = whole_frames(&bytes[..20_000.min(bytes.len())]);
-    let elf = raim_qemu::firmware_elf_for(Machine::Mps2An386).unwrap();
+    let elf = raim_qemu::firmware_elf_stream(Machine::Mps2An386).unwrap();
     let mut fw = QemuSession::start_with(
         &elf,
         &Options {
@@ -287,7 +302,7 @@ fn qemu_rtcm_stream_epoch_cost() {
     let part = whole_frames(&once[..60_000]);
     let warm = [ephemeris_frames(once).as_slice(), part].concat();
     let (host, counts) = host_epochs(&warm, now_week);
-    let elf = raim_qemu::firmware_elf_for(Machine::Mps2An386).unwrap();
+    let elf = raim_qemu::firmware_elf_stream(Machine::Mps2An386).unwrap();
     let mut fw = QemuSession::start_with(
         &elf,
         &Options {
@@ -330,7 +345,7 @@ fn qemu_rtcm_esbc_gec_stream_answers_equal_the_host_replay() {
     let (host, counts) = host_epochs(&bytes, week + 1);
     assert_eq!(counts.epochs as usize, EPOCHS);
     assert_eq!(host.len(), EPOCHS);
-    let mut fw = session_on(Machine::Mps2An386);
+    let mut fw = stream_session_on(Machine::Mps2An386);
     let answers = stream_answers(&mut fw, &bytes, EPOCHS);
     let status = fw.status().unwrap();
     assert_eq!(status.rtcm_frames, frames(&bytes).len() as u32);

@@ -32,7 +32,7 @@ mod rtcm_common;
 use std::collections::{BTreeMap, BTreeSet};
 use std::time::Duration;
 
-use qemu_common::{session_on, Sink};
+use qemu_common::{stream_session_on, Sink};
 use raim_core::{Config, Decision, RangeObservation, SatId, System};
 use raim_proto::araim_msg::{
     AraimAnswer, AraimCommandRef, IsmFrameRef, IsmSat, WireAraimConfig, WireAraimResult,
@@ -198,7 +198,7 @@ fn unit_run(
     n: usize,
     nmea_lines: usize,
 ) -> (Vec<Response>, Vec<String>, raim_proto::message::Status) {
-    let mut fw: QemuSession = session_on(Machine::Mps2An386);
+    let mut fw: QemuSession = stream_session_on(Machine::Mps2An386);
     let body = fw.call(ism_command(&ism.0, ism.1)).unwrap();
     assert!(
         matches!(body, ResponseBody::Araim(AraimAnswer::IsmAccepted { .. })),
@@ -629,7 +629,7 @@ fn qemu_rtcm_araim_stream_epoch_cost() {
     let ism = ism(&host);
     let e = galileo_in_all(&host);
     let faulted = with_step(&bytes, e, 30.0);
-    let elf = raim_qemu::firmware_elf_for(Machine::Mps2An386).unwrap();
+    let elf = raim_qemu::firmware_elf_stream(Machine::Mps2An386).unwrap();
     // The epoch measured: the last of the stream, and the first faulted.
     let onset = host
         .iter()

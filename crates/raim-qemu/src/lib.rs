@@ -59,9 +59,14 @@ pub fn build_firmware() -> Result<PathBuf> {
 
 /// Run cargo in `firmware/` (its own workspace).
 fn cargo_in_firmware(args: &[&str]) -> Result<()> {
+    cargo_in_firmware_with(args, &[])
+}
+
+/// `cargo_in_firmware` with build settings in the environment.
+fn cargo_in_firmware_with(args: &[&str], envs: &[(&str, &str)]) -> Result<()> {
     let dir = repo_root().join("firmware");
     let mut cmd = Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()));
-    cmd.current_dir(&dir).args(args);
+    cmd.current_dir(&dir).args(args).envs(envs.iter().copied());
     // Settings of an outer cargo (e.g. under `cargo test`) must not leak
     // into the firmware's own workspace.
     for (k, _) in std::env::vars_os() {
@@ -210,10 +215,19 @@ impl Machine {
     }
 }
 
+/// The pause on the link of the netduinoplus2 build and of the
+/// mps2-an386 streaming build ([`firmware_elf_stream`]), s (the firmware's
+/// test-only build setting `RAIM_TEST_LINK_IDLE_S`): QEMU's guest clock is
+/// the host's, so with the unit's 0.25 s a host that does not run QEMU for
+/// that long between two bytes of one frame cuts it (docs/EVIDENCE.md
+/// "The suite under load"); these builds' tests cut no frame on purpose.
+pub const NETDUINOPLUS2_LINK_IDLE_S: &str = "30";
+
 /// The firmware ELF for `machine`: for mps2-an386 as `firmware_elf`; for
 /// netduinoplus2 `$RAIM_FIRMWARE_ELF_STM32F4` if set, else the STM32F4
 /// build for QEMU's model (`--features board-stm32f4,qemu-netduinoplus2`:
-/// its CCM region where QEMU maps RAM; into `firmware/target/stm32f4`, as
+/// its CCM region where QEMU maps RAM; with a link pause of
+/// [`NETDUINOPLUS2_LINK_IDLE_S`]; into `firmware/target/stm32f4`, as
 /// scripts/test.sh builds it).
 pub fn firmware_elf_for(machine: Machine) -> Result<PathBuf> {
     match machine {
@@ -221,19 +235,54 @@ pub fn firmware_elf_for(machine: Machine) -> Result<PathBuf> {
         Machine::NetduinoPlus2 => match std::env::var_os("RAIM_FIRMWARE_ELF_STM32F4") {
             Some(p) => Ok(PathBuf::from(p)),
             None => {
-                cargo_in_firmware(&[
-                    "build",
-                    "--release",
-                    "--quiet",
-                    "--no-default-features",
-                    "--features",
-                    "board-stm32f4,qemu-netduinoplus2",
-                    "--target-dir",
-                    "target/stm32f4",
-                ])?;
+                cargo_in_firmware_with(
+                    &[
+                        "build",
+                        "--release",
+                        "--quiet",
+                        "--no-default-features",
+                        "--features",
+                        "board-stm32f4,qemu-netduinoplus2",
+                        "--target-dir",
+                        "target/stm32f4",
+                    ],
+                    &[("RAIM_TEST_LINK_IDLE_S", NETDUINOPLUS2_LINK_IDLE_S)],
+                )?;
                 Ok(machine.elf_path())
             }
         },
+    }
+}
+
+/// The firmware ELF for the streaming tests on `machine`: the tests that
+/// write a long stream into the link and check every answer. On
+/// mps2-an386 the default build with a pause on the link of
+/// [`NETDUINOPLUS2_LINK_IDLE_S`] (`RAIM_TEST_LINK_IDLE_S`, into
+/// `firmware/target/stream`, as scripts/test.sh builds it):
+/// `$RAIM_FIRMWARE_ELF_STREAM` if set. On netduinoplus2 its build of
+/// [`firmware_elf_for`], which has that pause already. The unit's own
+/// 0.25 s pause is checked on the default build (docs/EVIDENCE.md "The
+/// suite under load").
+pub fn firmware_elf_stream(machine: Machine) -> Result<PathBuf> {
+    match machine {
+        Machine::NetduinoPlus2 => firmware_elf_for(machine),
+        Machine::Mps2An386 => {
+            if let Some(p) = std::env::var_os("RAIM_FIRMWARE_ELF_STREAM") {
+                return Ok(PathBuf::from(p));
+            }
+            cargo_in_firmware_with(
+                &[
+                    "build",
+                    "--release",
+                    "--quiet",
+                    "--target-dir",
+                    "target/stream",
+                ],
+                &[("RAIM_TEST_LINK_IDLE_S", NETDUINOPLUS2_LINK_IDLE_S)],
+            )?;
+            Ok(repo_root()
+                .join("firmware/target/stream/thumbv7em-none-eabihf/release/raim-firmware"))
+        }
     }
 }
 

@@ -29,6 +29,22 @@ pub fn session_on(machine: raim_qemu::Machine) -> QemuSession {
     .expect("qemu-system-arm with the firmware")
 }
 
+/// A session on `machine` with its streaming build
+/// (`raim_qemu::firmware_elf_stream`: a 30 s pause on the link, so that a
+/// loaded host's stall of QEMU does not cut a streamed frame).
+#[allow(dead_code)]
+pub fn stream_session_on(machine: raim_qemu::Machine) -> QemuSession {
+    let elf = raim_qemu::firmware_elf_stream(machine).expect("firmware build");
+    QemuSession::start_with(
+        &elf,
+        &raim_qemu::Options {
+            machine,
+            ..raim_qemu::Options::default()
+        },
+    )
+    .expect("qemu-system-arm with the firmware")
+}
+
 /// The host core's result for an epoch, in wire form, in the firmware's
 /// precision ([`raim_proto::DevicePrecision`]).
 pub fn host_result(cfg: &Config, epoch: &Epoch<'_>) -> Result<WireResult, RaimError> {
