@@ -15,6 +15,7 @@ use raim_core::stats::dist::chi2_quantile_upper;
 use raim_core::{Config, Epoch, System};
 
 use super::{FormError, FormedEpoch, LeapSeconds, StreamReceiver};
+use crate::ranging::StreamSigmas;
 
 /// The GPS week GMSD7 starts in: its first epoch is 15 s before the end of
 /// week 1709 (2012-10-13 23:59:45 GPS time), the rest in week 1710.
@@ -64,6 +65,7 @@ fn empty<const N: usize>() -> FormedEpoch<N> {
         time_gps_s: 0.0,
         reference_m: None,
         sats: heapless::Vec::new(),
+        cn0_dbhz: heapless::Vec::new(),
         rejected: 0,
     }
 }
@@ -101,7 +103,12 @@ fn gmsd7_epochs_solve_as_a_static_receiver() {
     let mut last_t = f64::NEG_INFINITY;
     let mut first_t = None;
     for f in &all {
-        match rx.on_frame(f, &config.sigma_model, MASK_RAD, &mut out) {
+        match rx.on_frame(
+            f,
+            &StreamSigmas::Snapshot(config.sigma_model),
+            MASK_RAD,
+            &mut out,
+        ) {
             None => {}
             Some(Err(FormError::NotDated { .. })) => not_dated += 1,
             Some(Err(e)) => panic!("{e}"),
@@ -213,7 +220,12 @@ fn an_epoch_over_the_signal_capacity_is_refused_with_the_capacity() {
     let mut out = Box::new(empty::<64>());
     let mut refused = 0;
     for f in frames(&bytes) {
-        match rx.on_frame(f, &config.sigma_model, MASK_RAD, &mut out) {
+        match rx.on_frame(
+            f,
+            &StreamSigmas::Snapshot(config.sigma_model),
+            MASK_RAD,
+            &mut out,
+        ) {
             Some(Err(e @ FormError::TooManySignals { capacity })) => {
                 assert_eq!(capacity, 4);
                 assert!(out.sats.is_empty());
