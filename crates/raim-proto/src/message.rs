@@ -423,6 +423,10 @@ pub struct Status {
     /// The run-time model check of the configuration and ISM in force
     /// (docs/MODEL_CHECK.md; protocol 15).
     pub model_check: ModelCheckStatus,
+    /// This boot's value of the monotonic boot counter in flash (part of
+    /// the boot nonce), or why it failed (docs/SAFETY.md "Boot counter";
+    /// protocol 16).
+    pub boot_counter: crate::boot_counter::BootCounterStatus,
 }
 
 /// The run-time model check's state: its windowed chi-square goodness of
@@ -511,6 +515,7 @@ impl Status {
             rejections: 0,
             broken_at_ms: None,
         },
+        boot_counter: crate::boot_counter::BootCounterStatus::Absent,
     };
 }
 
