@@ -737,7 +737,10 @@ fn qemu_a_recorded_change_is_refused_after_a_power_cycle() {
     // Power-on 1.
     let mut fw = power_on(None);
     let n1 = fw.boots()[0].boot_nonce;
-    assert_eq!(fw.status().unwrap().boot_counter, BootCounterStatus::Count(1));
+    assert_eq!(
+        fw.status().unwrap().boot_counter,
+        BootCounterStatus::Count(1)
+    );
     let terminal = Config::preset(Phase::Terminal);
     let mut recorded = Vec::new();
     for (counter, change) in [(1, ChangeRef::Configure(&terminal)), (2, ChangeRef::Lock)] {
@@ -768,7 +771,10 @@ fn qemu_a_recorded_change_is_refused_after_a_power_cycle() {
     let mut fw = power_on(Some((saved.clone(), addr)));
     let n2 = fw.boots()[0].boot_nonce;
     assert_ne!(n2, n1);
-    assert_eq!(fw.status().unwrap().boot_counter, BootCounterStatus::Count(2));
+    assert_eq!(
+        fw.status().unwrap().boot_counter,
+        BootCounterStatus::Count(2)
+    );
     for (f, counter) in recorded.iter().zip([1, 2]) {
         fw.send_raw(f).unwrap();
         assert_eq!(
@@ -836,4 +842,57 @@ fn qemu_netduinoplus2_cannot_count_boots_and_takes_no_authenticated_change() {
     );
     drop(fw);
     let _ = std::fs::remove_file(keyed);
+}
+
+/// The boot counter across resets within one QEMU session (mps2-an386).
+/// With nothing loaded into its region the region is plain memory to
+/// QEMU: a watchdog reset keeps it, and the count goes on (1, then 2).
+/// A region given by `-device loader` (a simulated power cycle) is copied
+/// back by QEMU at every system reset, so the count repeats after a reset
+/// in that session (3, then 3): a QEMU artefact, not the flash's. The
+/// nonce changes anyway, with the reset count.
+///
+/// Verifies: SAFE-BOOT-COUNTER
+#[test]
+fn qemu_boot_counter_across_resets_within_a_session() {
+    use raim_proto::boot_counter::BootCounterStatus;
+    let keyed = own_keyed_copy(Machine::Mps2An386, "resets");
+    let saved = std::env::temp_dir().join(format!("raim-resets-region-{}", std::process::id()));
+    let options = |boot_region| Options {
+        machine: Machine::Mps2An386,
+        raw: true,
+        qmp: true,
+        boot_region,
+        ..Options::default()
+    };
+    let mut fw = QemuSession::start_with(&keyed, &options(None)).unwrap();
+    assert_eq!(
+        fw.status().unwrap().boot_counter,
+        BootCounterStatus::Count(1)
+    );
+    let boot = hang_and_reboot(&mut fw);
+    assert_eq!(boot.resets, 1);
+    assert_eq!(
+        fw.status().unwrap().boot_counter,
+        BootCounterStatus::Count(2)
+    );
+    let addr = fw.save_boot_region(&keyed, &saved).unwrap();
+    drop(fw);
+    let mut fw = QemuSession::start_with(&keyed, &options(Some((saved.clone(), addr)))).unwrap();
+    let before = fw.boots()[0].boot_nonce;
+    assert_eq!(
+        fw.status().unwrap().boot_counter,
+        BootCounterStatus::Count(3)
+    );
+    let boot = hang_and_reboot(&mut fw);
+    assert_eq!(boot.resets, 1);
+    assert_eq!(
+        fw.status().unwrap().boot_counter,
+        BootCounterStatus::Count(3)
+    );
+    assert_ne!(boot.boot_nonce, before);
+    drop(fw);
+    for f in [saved, keyed] {
+        let _ = std::fs::remove_file(f);
+    }
 }

@@ -202,7 +202,11 @@ pub fn boot_region(elf: &Path) -> Result<(u32, u32)> {
     let bytes = std::fs::read(elf).with_context(|| format!("reading {}", elf.display()))?;
     let start = elf32_symbol(&bytes, "__raim_boot_start").context("no __raim_boot_start")?;
     let end = elf32_symbol(&bytes, "__raim_boot_end").context("no __raim_boot_end")?;
-    Ok((start, end.checked_sub(start).context("__raim_boot_end below its start")?))
+    Ok((
+        start,
+        end.checked_sub(start)
+            .context("__raim_boot_end below its start")?,
+    ))
 }
 
 /// The machine QEMU emulates, and the firmware build that runs on it.
@@ -771,7 +775,10 @@ impl QemuSession {
     /// flash as this power-on leaves it, for the next session's
     /// `Options::boot_region`. Returns when QEMU has written the file.
     pub fn save_memory(&mut self, addr: u32, len: u32, file: &Path) -> Result<()> {
-        let path = self.qmp.clone().context("the session has no QMP socket (Options::qmp)")?;
+        let path = self
+            .qmp
+            .clone()
+            .context("the session has no QMP socket (Options::qmp)")?;
         let deadline = Instant::now() + Duration::from_secs(20);
         let sock = connect(&path, &mut self.child, deadline)?;
         sock.set_read_timeout(Some(ANSWER_TIMEOUT))?;

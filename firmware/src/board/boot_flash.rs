@@ -104,11 +104,12 @@ const FIRST_SECTOR_ADDRESS: usize = 0x080C_0000;
 #[cfg(feature = "board-stm32f4")]
 const SECTOR_WORDS: usize = 128 * 1024 / 4;
 
-/// Status reads the controller may stay busy for: a word program takes at
-/// most 100 us and a 128 KiB sector erase at most 4 s (STM32F405/407
-/// datasheet, flash characteristics, x32), and a status read takes at
-/// least one core cycle, at most 168 MHz: these counts outlast both at
-/// the fastest clock, and are reached only by a controller that hangs.
+/// Status reads the controller may stay busy for: a word program takes
+/// well under 100 us and a 128 KiB sector erase at most 4 s (the
+/// STM32F405/407 datasheet's flash characteristics, at the slowest
+/// parallelism), and a status read takes at least one core cycle, at most
+/// 168 MHz: these counts outlast both at the fastest clock (the program
+/// four times over), and are reached only by a controller that hangs.
 #[cfg(feature = "board-stm32f4")]
 const PROGRAM_WAIT_READS: u32 = 168 * 100 * 4;
 #[cfg(feature = "board-stm32f4")]
