@@ -972,6 +972,9 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                 }
                 in_force = Some(c);
                 source = ConfigSource::Runtime;
+                // A new configuration restarts the stateful monitors:
+                // time is held to go forward from its first epoch.
+                last_time = None;
                 tally.configured += 1;
             }
             (
@@ -1057,6 +1060,7 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                         }
                         in_force = Some(c);
                         source = ConfigSource::Runtime;
+                        last_time = None;
                     }
                     (Step::AuthLock, ResponseBody::LockEngaged)
                         if source != ConfigSource::Unconfigured =>
