@@ -126,10 +126,7 @@ impl Stm32f4Flash {
     /// Waits, bounded, for BSY to clear; then the error flags (PGSERR,
     /// PGPERR, PGAERR, WRPERR, OPERR), cleared for the next operation.
     fn finish(&self, reads: u32) -> Result<(), FlashFault> {
-        let mut left = reads;
-        while self.regs.sr().read().bsy().bit_is_set() {
-            left = left.checked_sub(1).ok_or(FlashFault)?;
-        }
+        self.wait_idle(reads)?;
         let sr = self.regs.sr().read();
         let failed = sr.pgserr().bit_is_set()
             || sr.pgperr().bit_is_set()
@@ -146,6 +143,15 @@ impl Stm32f4Flash {
         } else {
             Ok(())
         }
+    }
+
+    /// Waits, bounded, until no flash operation is under way (BSY clear).
+    fn wait_idle(&self, reads: u32) -> Result<(), FlashFault> {
+        let mut left = reads;
+        while self.regs.sr().read().bsy().bit_is_set() {
+            left = left.checked_sub(1).ok_or(FlashFault)?;
+        }
+        Ok(())
     }
 
     fn clear_flags(&self) {
@@ -179,9 +185,12 @@ impl Stm32f4Flash {
         }
     }
 
-    /// Unlocks the control register (RM0090 §3.5.1); a controller that
-    /// stays locked fails the operation.
+    /// Waits for any operation under way to end (RM0090 §3.6.2, §3.6.3:
+    /// step 1, BSY checked first), then unlocks the control register
+    /// (§3.5.1); a controller that stays busy or locked fails the
+    /// operation.
     fn unlock(&self) -> Result<(), FlashFault> {
+        self.wait_idle(ERASE_WAIT_READS)?;
         if self.regs.cr().read().lock().bit_is_set() {
             // SAFETY: KEYR takes any 32-bit value; these are the keys.
             self.regs.keyr().write(|w| unsafe { w.key().bits(KEY1) });
