@@ -15,11 +15,16 @@
 //!
 //! **A boot** ([`advance`]) reads the value `n` and writes `n + 1`: in the
 //! page holding the largest entry (the active page), in the entry after
-//! the highest one that is not all ones; when the active page is full, the
-//! other page is erased (checked to read all ones) and `n + 1` becomes its
-//! first entry. One entry per boot (wear levelling): a page is erased
-//! once per `2 x entries` boots. The region is then read again, and the
-//! boot has its value only if the region reads back `n + 1`.
+//! the highest one that is not all ones; when the active page is full,
+//! its largest entry is programmed again with the same bits (a torn entry
+//! that happened to read whole is completed, or the boot fails), the
+//! other page is erased (always: a cut may have left cells that read all
+//! ones only this time) and checked to read all ones, and `n + 1` becomes
+//! its first entry. With no whole entry anywhere, page 0 is erased and
+//! starts the log. One entry per boot (wear levelling): a page is erased
+//! once per `2 x entries` boots. The entry is then read back and the
+//! region read again: the boot has its value only if both read `n + 1`;
+//! a write that does not read back is tried again above it ([`ATTEMPTS`]).
 //!
 //! **Why it never goes back.** A write cut by a power loss leaves bits
 //! partly cleared, and such cells may read differently from read to read.
