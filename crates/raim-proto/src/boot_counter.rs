@@ -239,6 +239,34 @@ pub fn advance<F: CounterFlash>(f: &mut F) -> Result<u32, BootCounterError> {
     last
 }
 
+/// Programs entry `entry` of page `page` with `value`, then reads both
+/// words back.
+fn write_entry<F: CounterFlash>(
+    f: &mut F,
+    page: usize,
+    entry: usize,
+    value: u32,
+) -> Result<(), BootCounterError> {
+    let words = [(2 * entry, value), (2 * entry + 1, !value)];
+    for (w, v) in words {
+        f.program(page, w, v)
+            .map_err(|FlashFault| BootCounterError::ProgramFailed {
+                page: page_id(page),
+                word: word_id(w),
+            })?;
+    }
+    for (w, v) in words {
+        let back = read(f, page, w)?;
+        if back != v {
+            return Err(BootCounterError::Verify {
+                expected: value,
+                read: back,
+            });
+        }
+    }
+    Ok(())
+}
+
 fn attempt<F: CounterFlash>(f: &mut F) -> Result<u32, BootCounterError> {
     let entries = entries(f)?;
     let s = scan(f, entries)?;
@@ -267,20 +295,7 @@ fn attempt<F: CounterFlash>(f: &mut F) -> Result<u32, BootCounterError> {
         // the erase never leaves only a marginal entry above the value
         // last used.
         let (p, e) = s.top_of_value;
-        for (w, v) in [(2 * e, s.value), (2 * e + 1, !s.value)] {
-            f.program(p, w, v)
-                .map_err(|FlashFault| BootCounterError::ProgramFailed {
-                    page: page_id(p),
-                    word: word_id(w),
-                })?;
-            let back = read(f, p, w)?;
-            if back != v {
-                return Err(BootCounterError::Verify {
-                    expected: s.value,
-                    read: back,
-                });
-            }
-        }
+        write_entry(f, p, e, s.value)?;
     }
     if erase {
         f.erase(page)
@@ -298,25 +313,10 @@ fn attempt<F: CounterFlash>(f: &mut F) -> Result<u32, BootCounterError> {
             }
         }
     }
-    for (w, v) in [(2 * entry, target), (2 * entry + 1, !target)] {
-        f.program(page, w, v)
-            .map_err(|FlashFault| BootCounterError::ProgramFailed {
-                page: page_id(page),
-                word: word_id(w),
-            })?;
-    }
-    // The entry itself must read back, and the region must read it as
-    // the largest: a torn entry elsewhere that happens to read whole
-    // with the same value must not stand in for it.
-    for (w, v) in [(2 * entry, target), (2 * entry + 1, !target)] {
-        let back = read(f, page, w)?;
-        if back != v {
-            return Err(BootCounterError::Verify {
-                expected: target,
-                read: back,
-            });
-        }
-    }
+    // The entry must read back, and then the region must read it as the
+    // largest: a torn entry elsewhere that happens to read whole with the
+    // same value must not stand in for it.
+    write_entry(f, page, entry, target)?;
     let after = scan(f, entries)?;
     if after.value != target {
         return Err(BootCounterError::Verify {
