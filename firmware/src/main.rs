@@ -156,6 +156,23 @@ fn run<B: Board<LinkRx = board::RxPort>>(mut core: cortex_m::Peripherals, parts:
         clock: (core_hz, clock_fallback),
         cycles: board::CycleCounter::start(&mut core.DCB, &mut core.DWT),
     };
+    // The boot counter in flash, raised before anything uses the nonce
+    // it goes into (docs/SAFETY.md "Boot counter"). A counter that fails
+    // leaves the boot without a count: a keyed unit then refuses every
+    // authenticated change.
+    let counter = match board::boot_flash::advance() {
+        Ok(n) => {
+            defmt::info!("boot counter: {=u32}", n);
+            raim_proto::boot_counter::BootCounterStatus::Count(n)
+        }
+        // The error itself is in `Status` (its `defmt::Format` would cost
+        // the small-flash build a few hundred bytes).
+        Err(e) => {
+            defmt::error!("boot counter failed");
+            raim_proto::boot_counter::BootCounterStatus::Failed(e)
+        }
+    };
+    server.set_boot_counter(counter);
     // The provisioned configuration, if its seal verifies and every part
     // passes its checks, runs locked; otherwise the unit is Unconfigured.
     // No default is ever put in force.

@@ -11,19 +11,32 @@
 //!   of the configuration in force (Decision's definition, raim-core
 //!   `result.rs`);
 //! - the configuration in force changes only on `Configured`, never after
-//!   `Lock`, and every answer carries its fingerprint and the lock state.
+//!   `Lock`, and every answer carries its fingerprint and the lock state;
+//! - no `Ok` without a valid configuration in force, and the alarm output
+//!   (what the platform hears, `Platform::on_epoch`) asserted for every
+//!   epoch frame not answered `Ok` or `Excluded`: oversized frames, absurd
+//!   and backward times, out-of-range PRNs included (issue 35);
+//! - an empty ISM is never taken;
+//! - on a keyed unit, power cycles and resets advance the boot counter in
+//!   a simulated flash (torn by power cuts, or failing), each completed
+//!   boot's count above every earlier one; a frame sent before, replayed
+//!   in a later power-on or the same one, is never taken again, and a
+//!   boot whose counter failed takes no authenticated change.
 //!
 //! Run by `fuzz_targets/server_structured.rs` (cargo-fuzz, nightly) or by
 //! `src/bin/structured_loop.rs` (stable: seeded bytes, no coverage).
 
 use arbitrary::{Arbitrary, Unstructured};
 use raim_core::{AlertLimits, Config, FiRule, LinearObservation, Phase, SatId, System};
+use raim_proto::araim_msg::{AraimCommandRef, AraimWireError, IsmFrameRef, WireAraimConfig};
+use raim_proto::auth::{AuthKey, AuthenticatedRef, ChangeRef};
+use raim_proto::boot_counter::{BootCounterStatus, CounterFlash, FlashFault};
 use raim_proto::frame::{encode, FrameReceiver};
 use raim_proto::message::{CommandRef, RequestRef, Response, ResponseBody};
 use raim_proto::result::WireResult;
 use raim_proto::unit::{UnitConfig, UnitConfigRef, PROVISION_BYTES};
 use raim_proto::{ConfigId, ConfigSource, WireError, MAX_RESPONSE_FRAME};
-use raim_server::{NoPlatform, Server};
+use raim_server::Server;
 
 /// At most this many steps per scenario.
 pub const MAX_STEPS: usize = 8;
@@ -54,6 +67,9 @@ pub enum Step {
         val_m: Option<u16>,
         max_exclusions: u8,
         wild_pfa: Option<f64>,
+        /// The MCUSUM on (the false-alarm budget split with it): a
+        /// stateful monitor, for which time must go forward.
+        mcusum: bool,
     },
     Lock,
     Status,
@@ -62,6 +78,49 @@ pub enum Step {
     /// A reset (watchdog, panic, power glitch): the unit boots again from
     /// its flash, and says so first (the boot notice).
     Reset,
+    /// An epoch frame with more satellites than the unit holds
+    /// (`CAPACITY + 1` to 64): refused, the alarm asserted.
+    Oversized {
+        sats: u8,
+        sky_seed: u32,
+    },
+    /// An epoch at an absurd time (+-1e300 s, NaN, +-inf, -1 s, 1e12 s) or
+    /// 50 s before the last one answered: refused when absurd, and when
+    /// backward under the MCUSUM.
+    BadTime {
+        kind: u8,
+        sky_seed: u32,
+    },
+    /// An epoch with one GPS PRN out of range (0, or 33-255).
+    BadPrn {
+        index: u8,
+        prn: u8,
+        sky_seed: u32,
+    },
+    /// An ARAIM ISM with no entries: never taken.
+    EmptyIsm,
+    /// An authenticated `Configure` (keyed units), tagged under the boot
+    /// nonce the unit announced and the host's next counter; recorded.
+    AuthConfigure {
+        phase: u8,
+        mcusum: bool,
+    },
+    /// An authenticated `Lock`; recorded.
+    AuthLock,
+    /// A power cycle: the unit loses power (the reset count is gone) and
+    /// boots again; the first `cuts % 3` boots are cut during the boot
+    /// counter's advance, after `cut_at % 48` flash operations (a torn
+    /// write); the last boot's flash takes no write when `flash_fails`.
+    PowerCycle {
+        cuts: u8,
+        cut_at: u8,
+        flash_fails: bool,
+    },
+    /// One of the recorded authenticated frames sent again (re-framed with
+    /// the next sequence number, as an attacker on the link would).
+    Replay {
+        index: u8,
+    },
 }
 
 /// What the unit's flash holds in its provisioned-configuration section.
@@ -75,26 +134,154 @@ pub enum Provision {
     Corrupt { phase: u8, byte: u16, flip: u8 },
 }
 
-/// A provisioning state and a sequence of requests.
+/// A provisioning state, whether the unit is keyed, and a sequence of
+/// requests.
 #[derive(Debug)]
 pub struct Scenario {
     pub provision: Provision,
+    pub keyed: bool,
     pub steps: Vec<Step>,
 }
 
 impl<'a> Arbitrary<'a> for Scenario {
     fn arbitrary(u: &mut Unstructured<'a>) -> arbitrary::Result<Self> {
         let provision = Provision::arbitrary(u)?;
+        // One scenario in four keyed: the others keep the bench unit's
+        // plain changes, and with them the epochs answered under them.
+        let keyed = u8::arbitrary(u)? < 64;
         let mut steps = Vec::new();
         while steps.len() < MAX_STEPS && !u.is_empty() {
             steps.push(Step::arbitrary(u)?);
         }
-        Ok(Scenario { provision, steps })
+        Ok(Scenario {
+            provision,
+            keyed,
+            steps,
+        })
     }
 }
 
+/// The key of keyed scenarios.
+const KEY: AuthKey = [0x35; 32];
+
+/// The boot counter's flash, simulated: NOR semantics (a program clears
+/// bits, an erase sets a page to all ones), 4 entries a page (a page
+/// switch every 4 boots). A power cut after `budget` operations tears the
+/// operation it interrupts (a program clears only some of its bits, an
+/// erase sets only some) and fails every later one; `read_only` is a
+/// flash that takes no write (QEMU's netduinoplus2).
+struct SimFlash {
+    pages: [Vec<u32>; 2],
+    budget: Option<u32>,
+    read_only: bool,
+    tear: u32,
+}
+
+impl SimFlash {
+    fn spend(&mut self) -> Result<bool, FlashFault> {
+        match self.budget {
+            Some(0) => Err(FlashFault),
+            Some(n) => {
+                self.budget = Some(n - 1);
+                Ok(n == 1)
+            }
+            None => Ok(false),
+        }
+    }
+}
+
+impl CounterFlash for SimFlash {
+    fn page_words(&self) -> usize {
+        8
+    }
+    fn read(&mut self, page: usize, word: usize) -> Result<u32, FlashFault> {
+        if self.spend()? {
+            return Err(FlashFault);
+        }
+        self.pages
+            .get(page)
+            .and_then(|p| p.get(word))
+            .copied()
+            .ok_or(FlashFault)
+    }
+    fn erase(&mut self, page: usize) -> Result<(), FlashFault> {
+        let cut = self.spend()?;
+        if self.read_only {
+            return Ok(());
+        }
+        let tear = self.tear;
+        let p = self.pages.get_mut(page).ok_or(FlashFault)?;
+        for (k, w) in p.iter_mut().enumerate() {
+            *w = if cut {
+                *w | tear.rotate_left(k as u32)
+            } else {
+                u32::MAX
+            };
+        }
+        if cut {
+            Err(FlashFault)
+        } else {
+            Ok(())
+        }
+    }
+    fn program(&mut self, page: usize, word: usize, value: u32) -> Result<(), FlashFault> {
+        let cut = self.spend()?;
+        if self.read_only {
+            return Ok(());
+        }
+        let tear = self.tear;
+        let w = self
+            .pages
+            .get_mut(page)
+            .and_then(|p| p.get_mut(word))
+            .ok_or(FlashFault)?;
+        if cut {
+            *w &= value | tear;
+            return Err(FlashFault);
+        }
+        *w &= value;
+        Ok(())
+    }
+}
+
+/// One boot's counter: advanced on `flash` as the firmware does.
+fn count_boot(flash: &mut SimFlash) -> BootCounterStatus {
+    match raim_proto::boot_counter::advance(flash) {
+        Ok(n) => BootCounterStatus::Count(n),
+        Err(e) => BootCounterStatus::Failed(e),
+    }
+}
+
+/// What the platform heard of each frame's epoch verdict.
+struct Heard(Vec<Option<raim_core::Decision>>);
+impl raim_server::Platform for Heard {
+    fn now(&mut self) -> u32 {
+        0
+    }
+    fn on_epoch(&mut self, decision: Option<raim_core::Decision>) {
+        self.0.push(decision);
+    }
+}
+
+/// A recorded authenticated change: its counter, change and tag.
+#[derive(Clone, Copy)]
+struct Recorded {
+    change: RecordedChange,
+    counter: u64,
+    tag: raim_proto::auth::Tag,
+}
+
+#[derive(Clone, Copy)]
+enum RecordedChange {
+    Configure(Config),
+    Lock,
+}
+
 /// The provisioned configuration of a scenario, and its sealed section.
-fn provisioned(p: Provision) -> (Option<UnitConfig>, bool, Box<[u8; PROVISION_BYTES]>) {
+fn provisioned(
+    p: Provision,
+    key: Option<&AuthKey>,
+) -> (Option<UnitConfig>, bool, Box<[u8; PROVISION_BYTES]>) {
     let mut blob = Box::new([0xFFu8; PROVISION_BYTES]);
     let unit = |phase: u8, host_sigmas| UnitConfig {
         snapshot: Some(Config::preset(
@@ -108,12 +295,12 @@ fn provisioned(p: Provision) -> (Option<UnitConfig>, bool, Box<[u8; PROVISION_BY
         Provision::None => (None, false, blob),
         Provision::Valid { phase, host_sigmas } => {
             let u = unit(phase, host_sigmas);
-            let _ = raim_proto::unit::seal(&u, None, &mut blob);
+            let _ = raim_proto::unit::seal(&u, key, &mut blob);
             (Some(u), false, blob)
         }
         Provision::Corrupt { phase, byte, flip } => {
             let u = unit(phase, false);
-            let _ = raim_proto::unit::seal(&u, None, &mut blob);
+            let _ = raim_proto::unit::seal(&u, key, &mut blob);
             // Within the sealed bytes (header 12, payload, seal 32).
             let len = u32::from_le_bytes([blob[8], blob[9], blob[10], blob[11]]) as usize;
             let i = usize::from(byte) % (12 + len + 32);
@@ -136,14 +323,26 @@ impl raim_server::Platform for Rebooted {
     }
 }
 
-/// A unit booting from `section`, as the firmware does.
-fn boot(section: &[u8; PROVISION_BYTES], resets: u32) -> Box<Server> {
+/// A unit booting from `section`, as the firmware does, with the boot
+/// counter's status of this boot. The entropy is the same at every boot
+/// (QEMU's: zeroed SRAM, no RNG), so only the reset count and the boot
+/// counter tell boots apart.
+fn boot(
+    section: &[u8; PROVISION_BYTES],
+    resets: u32,
+    key: Option<&AuthKey>,
+    counter: BootCounterStatus,
+) -> Box<Server> {
     let mut server = Box::new(Server::new());
+    if let Some(k) = key {
+        server.set_auth_key(*k);
+    }
+    server.set_boot_counter(counter);
     let entropy = raim_proto::auth::BootEntropy {
         bytes: [7; 32],
         hardware: false,
     };
-    server.boot(raim_proto::unit::open(section, None), resets, &entropy);
+    server.boot(raim_proto::unit::open(section, key), resets, &entropy);
     server
 }
 
@@ -160,6 +359,15 @@ pub struct Tally {
     pub configured: u64,
     pub refused_configs: u64,
     pub locked_refusals: u64,
+    pub oversized: u64,
+    pub bad_times: u64,
+    pub bad_prns: u64,
+    pub empty_isms: u64,
+    pub power_cycles: u64,
+    pub torn_boots: u64,
+    pub failed_counters: u64,
+    pub auth_taken: u64,
+    pub replays_refused: u64,
 }
 
 struct Sink(Vec<u8>);
@@ -193,6 +401,24 @@ impl Lcg {
 }
 
 fn sky(step: &Step) -> Vec<LinearObservation> {
+    match step {
+        Step::Oversized { sats, sky_seed } => {
+            let n = raim_proto::CAPACITY + 1 + usize::from(*sats) % (64 - raim_proto::CAPACITY);
+            return plain_sky(n, *sky_seed);
+        }
+        Step::BadTime { sky_seed, .. } => return plain_sky(8, *sky_seed),
+        Step::BadPrn {
+            index,
+            prn,
+            sky_seed,
+        } => {
+            let mut v = plain_sky(8, *sky_seed);
+            let k = usize::from(*index) % v.len();
+            v[k].id.prn = if prn % 2 == 0 { 0 } else { 33 + prn % 223 };
+            return v;
+        }
+        _ => {}
+    }
     let Step::Epoch {
         sats,
         sky_seed,
@@ -231,7 +457,51 @@ fn sky(step: &Step) -> Vec<LinearObservation> {
         .collect()
 }
 
+/// `n` GPS satellites, PRN 1 up, on a sky from `seed`, with unit-sigma
+/// noise and sigmas of 1 m (PRNs above 32 wrap into range).
+fn plain_sky(n: usize, seed: u32) -> Vec<LinearObservation> {
+    let mut rng = Lcg(u64::from(seed) ^ 0x5851_F42D_4C95_7F2D);
+    (0..n)
+        .map(|i| {
+            let az = rng.next() * 2.0 * std::f64::consts::PI;
+            let el = (5.0 + 85.0 * rng.next()).to_radians();
+            let mut o = LinearObservation::from_az_el(
+                SatId::new(System::Gps, (i % 32) as u8 + 1),
+                az,
+                el,
+                rng.normal(),
+            );
+            o.sigma_m = Some(1.0);
+            o
+        })
+        .collect()
+}
+
+/// The time of a `BadTime` epoch: absurd, or 50 s before `last_s`.
+fn bad_time(kind: u8, last_s: Option<f64>) -> (f64, bool) {
+    match (kind % 8, last_s) {
+        (0, _) => (1e300, true),
+        (1, _) => (-1e300, true),
+        (2, _) => (f64::NAN, true),
+        (3, _) => (f64::INFINITY, true),
+        (4, _) => (f64::NEG_INFINITY, true),
+        (5, _) => (-1.0, true),
+        (6, _) => (1e12, true),
+        (_, Some(t)) => (t - 50.0, false),
+        (_, None) => (1e300, true),
+    }
+}
+
 fn config(step: &Step) -> Option<Config> {
+    if let Step::AuthConfigure { phase, mcusum } = step {
+        let c =
+            Config::preset([Phase::EnRoute, Phase::Terminal, Phase::Npa][usize::from(phase % 3)]);
+        return Some(if *mcusum {
+            c.split_false_alarm_budget(raim_core::config::DEFAULT_SNAPSHOT_SHARE)
+        } else {
+            c
+        });
+    }
     let Step::Configure {
         phase,
         pfa_exp,
@@ -241,12 +511,18 @@ fn config(step: &Step) -> Option<Config> {
         val_m,
         max_exclusions,
         wild_pfa,
+        mcusum,
     } = step
     else {
         return None;
     };
     let phase = [Phase::EnRoute, Phase::Terminal, Phase::Npa][usize::from(*phase % 3)];
     let base = Config::preset(phase);
+    let base = if *mcusum {
+        base.split_false_alarm_budget(raim_core::config::DEFAULT_SNAPSHOT_SHARE)
+    } else {
+        base
+    };
     Some(Config {
         pfa: wild_pfa.unwrap_or(10f64.powi(-i32::from(2 + *pfa_exp % 12))),
         rule: match rule % 3 {
@@ -297,11 +573,38 @@ fn check_result(r: &WireResult, cfg: &Config) -> Result<(), String> {
 /// provisioned one or none; a unit whose section is corrupt boots
 /// Unconfigured and locked and refuses every change with the reason
 /// (issue 35); `Lock` is taken only with a configuration in force; every
-/// frame after the boot notice is answered.
+/// frame after the boot notice is answered; every epoch frame not answered
+/// `Ok` or `Excluded` is heard by the platform as an alarm (oversized,
+/// absurd or backward in time, out-of-range PRNs: never a result); an
+/// empty ISM is never taken; each completed boot's counter is above every
+/// earlier one, a frame sent before is never taken again, and a boot
+/// whose counter failed takes no authenticated change.
 pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
-    let (provision, corrupt, section) = provisioned(scenario.provision);
+    let key = scenario.keyed.then_some(KEY);
+    let key = key.as_ref();
+    let keyed = key.is_some();
+    let (provision, corrupt, section) = provisioned(scenario.provision, key);
+    let mut flash = SimFlash {
+        pages: [vec![u32::MAX; 8], vec![u32::MAX; 8]],
+        budget: None,
+        read_only: false,
+        tear: 0,
+    };
+    // The largest count a completed boot has had.
+    let mut last_count: Option<u32> = None;
+    let mut check_count = |c: BootCounterStatus| -> Result<(), String> {
+        if let BootCounterStatus::Count(n) = c {
+            if last_count.is_some_and(|l| n <= l) {
+                return Err(format!("boot count {n} after {last_count:?}"));
+            }
+            last_count = Some(n);
+        }
+        Ok(())
+    };
     let mut resets = 0u32;
-    let mut server = boot(&section, resets);
+    let mut counter = count_boot(&mut flash);
+    check_count(counter)?;
+    let mut server = boot(&section, resets, key, counter);
     let after_boot = |server: &Server,
                       provision: &Option<UnitConfig>|
      -> Result<(Option<Config>, bool, bool), String> {
@@ -333,12 +636,55 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
     let mut scratch = vec![0u8; 8192];
     let mut out = vec![0u8; 8192];
     let mut next_seq = 0u32;
+    // The host's authentication counter since the boot, the changes it
+    // sent, and the time of the last epoch answered with a result.
+    let mut host_counter = 0u64;
+    let mut recorded: Vec<Recorded> = Vec::new();
+    let mut last_time: Option<f64> = None;
     for step in &scenario.steps {
-        if matches!(step, Step::Reset) {
-            resets += 1;
-            server = boot(&section, resets);
+        if let Step::Reset | Step::PowerCycle { .. } = step {
+            match *step {
+                Step::PowerCycle {
+                    cuts,
+                    cut_at,
+                    flash_fails,
+                } => {
+                    tally.power_cycles += 1;
+                    resets = 0;
+                    for k in 0..cuts % 3 {
+                        flash.budget = Some(u32::from(cut_at % 48) + u32::from(k));
+                        flash.tear = 0x9E37_79B9u32.rotate_left(u32::from(cut_at));
+                        let c = count_boot(&mut flash);
+                        flash.budget = None;
+                        if matches!(c, BootCounterStatus::Failed(_)) {
+                            tally.torn_boots += 1;
+                        }
+                        check_count(c)?;
+                    }
+                    flash.read_only = flash_fails;
+                    counter = count_boot(&mut flash);
+                    flash.read_only = false;
+                }
+                _ => {
+                    resets += 1;
+                    counter = count_boot(&mut flash);
+                }
+            }
+            if matches!(counter, BootCounterStatus::Failed(_)) {
+                tally.failed_counters += 1;
+            }
+            check_count(counter)?;
+            server = boot(&section, resets, key, counter);
             (in_force, locked, host_sigmas) = after_boot(&server, &provision)?;
             source = server.config_id().source;
+            host_counter = 0;
+            last_time = None;
+            if server.status().boot_counter != counter {
+                return Err(format!(
+                    "status says {:?}, the boot had {counter:?}",
+                    server.status().boot_counter
+                ));
+            }
             // The boot notice comes first, unasked.
             link.0.clear();
             server
@@ -363,12 +709,51 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
             }
             continue;
         }
+        if matches!(step, Step::Replay { .. }) && recorded.is_empty() {
+            continue;
+        }
         let seq = next_seq;
         if !matches!(step, Step::Garbage(_)) {
             next_seq += 1;
         }
         let sats = sky(step);
         let cfg = config(step);
+        let (epoch_time, absurd) = match step {
+            Step::Epoch { time_s, .. } => (f64::from(*time_s), false),
+            Step::BadTime { kind, .. } => bad_time(*kind, last_time),
+            _ => (last_time.map_or(1_000.0, |t| t + 1.0), false),
+        };
+        // The authenticated change of this step, if any: a new one
+        // (recorded) or one recorded before (replayed).
+        let signed: Option<Recorded> = match step {
+            Step::AuthConfigure { .. } | Step::AuthLock => {
+                host_counter += 1;
+                let change = match (step, cfg) {
+                    (Step::AuthConfigure { .. }, Some(c)) => RecordedChange::Configure(c),
+                    _ => RecordedChange::Lock,
+                };
+                let tag = match &change {
+                    RecordedChange::Configure(c) => raim_proto::auth::tag(
+                        &KEY,
+                        &server.nonce(),
+                        host_counter,
+                        &ChangeRef::Configure(c),
+                    ),
+                    RecordedChange::Lock => {
+                        raim_proto::auth::tag(&KEY, &server.nonce(), host_counter, &ChangeRef::Lock)
+                    }
+                };
+                let r = Recorded {
+                    change,
+                    counter: host_counter,
+                    tag,
+                };
+                recorded.push(r);
+                Some(r)
+            }
+            Step::Replay { index } => recorded.get(usize::from(*index) % recorded.len()).copied(),
+            _ => None,
+        };
         let frame: Vec<u8> = match step {
             Step::Garbage(bytes) => bytes
                 .iter()
@@ -377,15 +762,35 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                 .chain([0u8])
                 .collect(),
             _ => {
-                let command = match step {
-                    Step::Epoch { time_s, .. } => CommandRef::Linear {
-                        time_s: f64::from(*time_s),
+                let ism = IsmFrameRef {
+                    config: WireAraimConfig::default(),
+                    p_const: [None; raim_core::measurement::MAX_SYSTEMS],
+                    sats: &[],
+                };
+                let command = match (step, &signed) {
+                    (_, Some(r)) => CommandRef::Authenticated(AuthenticatedRef {
+                        counter: r.counter,
+                        change: match &r.change {
+                            RecordedChange::Configure(c) => ChangeRef::Configure(c),
+                            RecordedChange::Lock => ChangeRef::Lock,
+                        },
+                        tag: r.tag,
+                    }),
+                    (
+                        Step::Epoch { .. }
+                        | Step::Oversized { .. }
+                        | Step::BadTime { .. }
+                        | Step::BadPrn { .. },
+                        None,
+                    ) => CommandRef::Linear {
+                        time_s: epoch_time,
                         sats: &sats,
                     },
-                    Step::Configure { .. } => {
+                    (Step::Configure { .. }, None) => {
                         CommandRef::Configure(cfg.as_ref().ok_or("no configuration")?)
                     }
-                    Step::Lock => CommandRef::Lock,
+                    (Step::Lock, None) => CommandRef::Lock,
+                    (Step::EmptyIsm, None) => CommandRef::Araim(AraimCommandRef::Ism(ism)),
                     _ => CommandRef::Status,
                 };
                 encode(&RequestRef { seq, command }, &mut scratch, &mut out)
@@ -394,13 +799,14 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
             }
         };
         link.0.clear();
+        let mut heard = Heard(Vec::new());
         for &b in &frame {
-            let _ = server.on_byte(b, &mut link, &mut nmea, &mut NoPlatform);
+            let _ = server.on_byte(b, &mut link, &mut nmea, &mut heard);
         }
         // The host waits for the answer: a pause on the line, which ends
         // an RTCM candidate that garbage starting 0xD3 opened (as the
         // firmware's loop does after `LINK_IDLE_S`).
-        let _ = server.on_line_idle(&mut link, &mut nmea, &mut NoPlatform);
+        let _ = server.on_line_idle(&mut link, &mut nmea, &mut heard);
         tally.frames += 1;
         let mut answers: Vec<Response> = Vec::new();
         for &b in &link.0 {
@@ -439,12 +845,84 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                 answers.len()
             ));
         };
+        let oversized = matches!(step, Step::Oversized { .. });
         let want_seq = (!matches!(step, Step::Garbage(_))).then_some(seq);
-        if answer.seq != want_seq {
+        if oversized && answer.seq.is_none() {
+            // Refused before its sequence number was read: the next
+            // request carries the same one.
+            next_seq = seq;
+        } else if answer.seq != want_seq {
             return Err(format!("step {seq}: answer for {:?}", answer.seq));
         }
+        let epoch_frame = matches!(
+            step,
+            Step::Epoch { .. }
+                | Step::Oversized { .. }
+                | Step::BadTime { .. }
+                | Step::BadPrn { .. }
+        );
+        if epoch_frame {
+            // The alarm output: cleared only by an `Ok` or `Excluded`
+            // answer, asserted by every other answer to an epoch frame.
+            let clearing = match &answer.body {
+                ResponseBody::Result(r) => matches!(
+                    r.decision,
+                    raim_core::Decision::Ok | raim_core::Decision::Excluded
+                )
+                .then_some(r.decision),
+                _ => None,
+            };
+            let last = heard.0.last().copied();
+            let ok = match clearing {
+                Some(d) => last == Some(Some(d)),
+                None => matches!(
+                    last,
+                    Some(
+                        None | Some(raim_core::Decision::Alarm | raim_core::Decision::Unavailable)
+                    )
+                ),
+            };
+            if !ok {
+                return Err(format!(
+                    "step {seq} {step:?}: answered {:?}, the platform heard {:?}",
+                    answer.body, heard.0
+                ));
+            }
+            if !matches!(step, Step::Epoch { .. }) {
+                let refused_kind = match step {
+                    Step::Oversized { .. } => {
+                        tally.oversized += 1;
+                        true
+                    }
+                    Step::BadPrn { .. } => {
+                        tally.bad_prns += 1;
+                        true
+                    }
+                    Step::BadTime { .. } => {
+                        tally.bad_times += 1;
+                        absurd || in_force.is_some_and(|c| c.mcusum.enabled)
+                    }
+                    _ => false,
+                };
+                if refused_kind && matches!(answer.body, ResponseBody::Result(_)) {
+                    return Err(format!(
+                        "step {seq} {step:?} (time {epoch_time}): answered {:?}",
+                        answer.body
+                    ));
+                }
+            }
+            if matches!(answer.body, ResponseBody::Result(_)) && epoch_time.is_finite() {
+                last_time = Some(epoch_time);
+            }
+        }
         match (step, &answer.body) {
-            (Step::Epoch { .. }, ResponseBody::Result(r)) => {
+            (
+                Step::Epoch { .. }
+                | Step::Oversized { .. }
+                | Step::BadTime { .. }
+                | Step::BadPrn { .. },
+                ResponseBody::Result(r),
+            ) => {
                 tally.epochs += 1;
                 match r.decision {
                     raim_core::Decision::Ok => tally.ok += 1,
@@ -459,8 +937,23 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                 };
                 check_result(r, cfg).map_err(|e| format!("step {seq}: {e}"))?;
             }
-            (Step::Epoch { .. }, ResponseBody::Error(e)) => {
-                if in_force.is_none() && !matches!(e, WireError::Unconfigured { .. }) {
+            (
+                Step::Epoch { .. }
+                | Step::Oversized { .. }
+                | Step::BadTime { .. }
+                | Step::BadPrn { .. },
+                ResponseBody::Error(e),
+            ) => {
+                if in_force.is_none()
+                    && !oversized
+                    && !matches!(
+                        e,
+                        WireError::Unconfigured { .. }
+                            | WireError::OutOfRange { .. }
+                            | WireError::NonFinite { .. }
+                            | WireError::PrnOutOfRange { .. }
+                    )
+                {
                     return Err(format!("step {seq}: unconfigured, answered {e:?}"));
                 }
                 tally.epochs += 1;
@@ -470,23 +963,39 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                 if locked {
                     return Err(format!("step {seq}: configured while locked"));
                 }
+                if keyed {
+                    return Err(format!("step {seq}: a plain change taken by a keyed unit"));
+                }
                 let c = cfg.ok_or("no configuration")?;
                 if c.validate().is_err() {
                     return Err(format!("step {seq}: an invalid configuration taken: {c:?}"));
                 }
                 in_force = Some(c);
                 source = ConfigSource::Runtime;
+                // A new configuration restarts the stateful monitors:
+                // time is held to go forward from its first epoch.
+                last_time = None;
                 tally.configured += 1;
             }
             (
-                Step::Configure { .. } | Step::Lock,
+                Step::Configure { .. }
+                | Step::Lock
+                | Step::EmptyIsm
+                | Step::AuthConfigure { .. }
+                | Step::AuthLock
+                | Step::Replay { .. },
                 ResponseBody::Error(WireError::Unconfigured { provision: Some(_) }),
             ) if corrupt => {
                 tally.locked_refusals += 1;
             }
-            (Step::Configure { .. }, ResponseBody::Error(WireError::Locked { .. }))
-                if locked && !corrupt =>
-            {
+            (
+                Step::Configure { .. }
+                | Step::EmptyIsm
+                | Step::AuthConfigure { .. }
+                | Step::AuthLock
+                | Step::Replay { .. },
+                ResponseBody::Error(WireError::Locked { .. }),
+            ) if locked && !corrupt => {
                 tally.locked_refusals += 1;
             }
             (Step::Configure { .. }, ResponseBody::Error(_)) if !locked => {
@@ -494,15 +1003,74 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
             }
             // `Lock` only with a configuration in force (issue 35).
             (Step::Lock, ResponseBody::LockEngaged)
-                if !locked && source != ConfigSource::Unconfigured =>
+                if !locked && !keyed && source != ConfigSource::Unconfigured =>
             {
                 locked = true
             }
             (Step::Lock, ResponseBody::Error(WireError::Unconfigured { provision: None }))
-                if !locked && source == ConfigSource::Unconfigured => {}
+                if !locked && !keyed && source == ConfigSource::Unconfigured => {}
+            (Step::Lock, ResponseBody::Error(WireError::AuthRequired)) if !locked && keyed => {}
             (Step::Lock, ResponseBody::Error(WireError::Locked { .. })) if locked && !corrupt => {}
             (Step::Status, ResponseBody::Status(_)) => {}
             (Step::Garbage(_), ResponseBody::Error(_)) => {}
+            (
+                Step::EmptyIsm,
+                ResponseBody::Error(
+                    WireError::Araim(AraimWireError::EmptyIsm | AraimWireError::Disabled)
+                    | WireError::AuthRequired,
+                ),
+            ) if !locked => {
+                tally.empty_isms += 1;
+            }
+            // A frame sent before: never taken again, in this power-on or
+            // a later one.
+            (Step::Replay { .. }, ResponseBody::Error(_)) => {
+                tally.replays_refused += 1;
+            }
+            (Step::AuthConfigure { .. } | Step::AuthLock, ResponseBody::Error(e)) => {
+                if !keyed && *e != WireError::AuthNotProvisioned {
+                    return Err(format!("step {seq}: unkeyed, answered {e:?}"));
+                }
+                if let (true, BootCounterStatus::Failed(error)) = (keyed, counter) {
+                    if *e != (WireError::BootCounter { error }) {
+                        return Err(format!(
+                            "step {seq}: the boot counter failed, answered {e:?}"
+                        ));
+                    }
+                }
+                if matches!(e, WireError::BadAuthTag { .. } | WireError::Replayed { .. }) {
+                    return Err(format!("step {seq}: a fresh change refused {e:?}"));
+                }
+            }
+            (
+                Step::AuthConfigure { .. } | Step::AuthLock,
+                ResponseBody::Configured | ResponseBody::LockEngaged,
+            ) => {
+                if !keyed || locked || corrupt || !matches!(counter, BootCounterStatus::Count(_)) {
+                    return Err(format!(
+                        "step {seq}: taken {:?} (keyed {keyed}, locked {locked}, counter {counter:?})",
+                        answer.body
+                    ));
+                }
+                match (step, &answer.body) {
+                    (Step::AuthConfigure { .. }, ResponseBody::Configured) => {
+                        let c = cfg.ok_or("no configuration")?;
+                        if c.validate().is_err() {
+                            return Err(format!("step {seq}: an invalid configuration taken"));
+                        }
+                        in_force = Some(c);
+                        source = ConfigSource::Runtime;
+                        last_time = None;
+                    }
+                    (Step::AuthLock, ResponseBody::LockEngaged)
+                        if source != ConfigSource::Unconfigured =>
+                    {
+                        locked = true;
+                    }
+                    (s, b) => return Err(format!("step {seq}: {s:?} answered {b:?}")),
+                }
+                tally.auth_taken += 1;
+            }
             (s, b) => return Err(format!("step {seq}: {s:?} answered {b:?}")),
         }
         let id = ConfigId {

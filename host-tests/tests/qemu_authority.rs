@@ -689,3 +689,210 @@ fn qemu_units_sharing_a_key_do_not_share_a_nonce() {
         let _ = std::fs::remove_file(f);
     }
 }
+
+/// A keyed copy of `machine`'s firmware under a name of its own (the
+/// other tests' `provision_key` copies share one name, and each removes
+/// it when done).
+fn own_keyed_copy(machine: Machine, tag: &str) -> std::path::PathBuf {
+    let own = std::env::temp_dir().join(format!("raim-{tag}-{}.elf", std::process::id()));
+    std::fs::copy(elf(machine), &own).unwrap();
+    let keyed = raim_qemu::provision_key(&own, &KEY).unwrap();
+    let _ = std::fs::remove_file(own);
+    keyed
+}
+
+/// Issue 35 "Replay across a power cycle": power-on 1 of a keyed unit
+/// takes an authenticated `Configure` and `Lock` and answers `Ok` under
+/// them; the boot counter's flash is saved as the power-on leaves it
+/// (QMP `pmemsave`) and QEMU ends. Power-on 2 is the same image under
+/// `-icount` (the same SRAM, SysTick count and reset count: without a
+/// counter its nonce was power-on 1's), given that flash (`-device
+/// loader`): its counter is 2, its nonce new, and the recorded frames are
+/// refused `BadAuthTag`; it stays Unconfigured and unlocked and answers no
+/// epoch `Ok`. Power-on 3, the same image without the saved flash (a unit
+/// whose counter was lost), boots with power-on 1's counter and nonce:
+/// what tells power-ons apart under QEMU is the persisted counter.
+///
+/// Verifies: SAFE-BOOT-COUNTER, WIRE-BadAuthTag
+#[test]
+fn qemu_a_recorded_change_is_refused_after_a_power_cycle() {
+    use raim_proto::boot_counter::BootCounterStatus;
+    let keyed = own_keyed_copy(Machine::Mps2An386, "power-cycle");
+    let power_on = |region: Option<(std::path::PathBuf, u32)>| {
+        QemuSession::start_with(
+            &keyed,
+            &Options {
+                machine: Machine::Mps2An386,
+                raw: true,
+                icount: true,
+                qmp: true,
+                boot_region: region,
+                ..Options::default()
+            },
+        )
+        .expect("qemu-system-arm with the firmware")
+    };
+    let saved = std::env::temp_dir().join(format!("raim-boot-region-{}", std::process::id()));
+
+    // Power-on 1.
+    let mut fw = power_on(None);
+    let n1 = fw.boots()[0].boot_nonce;
+    assert_eq!(
+        fw.status().unwrap().boot_counter,
+        BootCounterStatus::Count(1)
+    );
+    let terminal = Config::preset(Phase::Terminal);
+    let mut recorded = Vec::new();
+    for (counter, change) in [(1, ChangeRef::Configure(&terminal)), (2, ChangeRef::Lock)] {
+        let a = AuthenticatedRef {
+            counter,
+            change,
+            tag: tag(&KEY, &n1, counter, &change),
+        };
+        recorded.push(fw.frame(CommandRef::Authenticated(a)).unwrap().1);
+    }
+    for (f, want) in recorded
+        .iter()
+        .zip([ResponseBody::Configured, ResponseBody::LockEngaged])
+    {
+        fw.send_raw(f).unwrap();
+        assert_eq!(fw.recv(raim_qemu::ANSWER_TIMEOUT).unwrap().body, want);
+    }
+    let (t, sats, apriori) = &epochs()[0];
+    assert!(fw
+        .process(&Epoch::ranges(*t, sats, *apriori))
+        .unwrap()
+        .outcome
+        .is_ok());
+    let addr = fw.save_boot_region(&keyed, &saved).unwrap();
+    drop(fw);
+
+    // Power-on 2: the same unit, its flash kept.
+    let mut fw = power_on(Some((saved.clone(), addr)));
+    let n2 = fw.boots()[0].boot_nonce;
+    assert_ne!(n2, n1);
+    assert_eq!(
+        fw.status().unwrap().boot_counter,
+        BootCounterStatus::Count(2)
+    );
+    for (f, counter) in recorded.iter().zip([1, 2]) {
+        fw.send_raw(f).unwrap();
+        assert_eq!(
+            fw.recv(raim_qemu::ANSWER_TIMEOUT).unwrap().body,
+            ResponseBody::Error(WireError::BadAuthTag { counter })
+        );
+    }
+    let st = fw.status().unwrap();
+    assert_eq!(st.config.source, ConfigSource::Unconfigured);
+    assert!(!st.config.locked);
+    for (t, sats, apriori) in epochs() {
+        let p = fw.process(&Epoch::ranges(t, &sats, apriori)).unwrap();
+        assert_eq!(
+            p.outcome.unwrap_err(),
+            WireError::Unconfigured { provision: None }
+        );
+    }
+    drop(fw);
+
+    // Power-on 3: the same image, the counter's flash not kept.
+    let fw = power_on(None);
+    assert_eq!(fw.boots()[0].boot_nonce, n1);
+    drop(fw);
+    for f in [saved, keyed] {
+        let _ = std::fs::remove_file(f);
+    }
+}
+
+/// QEMU's netduinoplus2 maps the STM32F405's flash read-only and leaves
+/// its flash controller unimplemented (its registers read 0 and ignore
+/// writes): the boot counter's erase of sector 10 does not erase, so the
+/// counter fails, typed (`EraseVerify`: the region reads 0 where QEMU
+/// loaded nothing), and `Status` says so. A keyed unit of that build
+/// then refuses every authenticated change (`BootCounter`) and stays
+/// Unconfigured: it never takes a change under a nonce that may repeat.
+///
+/// Verifies: SAFE-BOOT-COUNTER, WIRE-BootCounter
+#[test]
+fn qemu_netduinoplus2_cannot_count_boots_and_takes_no_authenticated_change() {
+    use raim_proto::boot_counter::{BootCounterError, BootCounterStatus};
+    let keyed = own_keyed_copy(Machine::NetduinoPlus2, "no-counter");
+    let mut fw = start(&keyed, Machine::NetduinoPlus2);
+    let st = fw.status().unwrap();
+    let error = BootCounterError::EraseVerify {
+        page: 0,
+        word: 0,
+        value: 0,
+    };
+    assert_eq!(st.boot_counter, BootCounterStatus::Failed(error));
+    let nonce = st.boot_nonce;
+    let terminal = Config::preset(Phase::Terminal);
+    let change = ChangeRef::Configure(&terminal);
+    let a = AuthenticatedRef {
+        counter: 1,
+        change,
+        tag: tag(&KEY, &nonce, 1, &change),
+    };
+    assert_eq!(
+        fw.call(CommandRef::Authenticated(a)).unwrap(),
+        ResponseBody::Error(WireError::BootCounter { error })
+    );
+    assert_eq!(
+        fw.status().unwrap().config.source,
+        ConfigSource::Unconfigured
+    );
+    drop(fw);
+    let _ = std::fs::remove_file(keyed);
+}
+
+/// The boot counter across resets within one QEMU session (mps2-an386).
+/// With nothing loaded into its region the region is plain memory to
+/// QEMU: a watchdog reset keeps it, and the count goes on (1, then 2).
+/// A region given by `-device loader` (a simulated power cycle) is copied
+/// back by QEMU at every system reset, so the count repeats after a reset
+/// in that session (3, then 3): a QEMU artefact, not the flash's. The
+/// nonce changes anyway, with the reset count.
+///
+/// Verifies: SAFE-BOOT-COUNTER
+#[test]
+fn qemu_boot_counter_across_resets_within_a_session() {
+    use raim_proto::boot_counter::BootCounterStatus;
+    let keyed = own_keyed_copy(Machine::Mps2An386, "resets");
+    let saved = std::env::temp_dir().join(format!("raim-resets-region-{}", std::process::id()));
+    let options = |boot_region| Options {
+        machine: Machine::Mps2An386,
+        raw: true,
+        qmp: true,
+        boot_region,
+        ..Options::default()
+    };
+    let mut fw = QemuSession::start_with(&keyed, &options(None)).unwrap();
+    assert_eq!(
+        fw.status().unwrap().boot_counter,
+        BootCounterStatus::Count(1)
+    );
+    let boot = hang_and_reboot(&mut fw);
+    assert_eq!(boot.resets, 1);
+    assert_eq!(
+        fw.status().unwrap().boot_counter,
+        BootCounterStatus::Count(2)
+    );
+    let addr = fw.save_boot_region(&keyed, &saved).unwrap();
+    drop(fw);
+    let mut fw = QemuSession::start_with(&keyed, &options(Some((saved.clone(), addr)))).unwrap();
+    let before = fw.boots()[0].boot_nonce;
+    assert_eq!(
+        fw.status().unwrap().boot_counter,
+        BootCounterStatus::Count(3)
+    );
+    let boot = hang_and_reboot(&mut fw);
+    assert_eq!(boot.resets, 1);
+    assert_eq!(
+        fw.status().unwrap().boot_counter,
+        BootCounterStatus::Count(3)
+    );
+    assert_ne!(boot.boot_nonce, before);
+    drop(fw);
+    for f in [saved, keyed] {
+        let _ = std::fs::remove_file(f);
+    }
+}

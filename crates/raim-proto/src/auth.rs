@@ -142,10 +142,17 @@ pub struct BootEntropy {
 }
 
 /// The unit's boot nonce from its key (or none) and what differs between
-/// boots: the reset count and the platform's entropy. SHA-256 of them,
-/// first 16 bytes; a new value at every reset whenever the reset count or
+/// boots: the reset count, the boot counter in flash (when the platform
+/// keeps one: `boot_counter`, a new value at every boot, power cycles
+/// included) and the platform's entropy. SHA-256 of them, first 16 bytes;
+/// a new value at every reset whenever the reset count, the boot count or
 /// the entropy changes.
-pub fn boot_nonce(key: Option<&AuthKey>, resets: u32, entropy: &[u8; 32]) -> Nonce {
+pub fn boot_nonce(
+    key: Option<&AuthKey>,
+    resets: u32,
+    boot_count: Option<u32>,
+    entropy: &[u8; 32],
+) -> Nonce {
     use sha2::Digest;
     let mut h = Sha256::new();
     h.update(b"raim-boot-nonce-v1");
@@ -153,6 +160,10 @@ pub fn boot_nonce(key: Option<&AuthKey>, resets: u32, entropy: &[u8; 32]) -> Non
         h.update(k);
     }
     h.update(resets.to_le_bytes());
+    if let Some(n) = boot_count {
+        h.update(b"boot-count");
+        h.update(n.to_le_bytes());
+    }
     h.update(entropy);
     let d: [u8; 32] = h.finalize().into();
     let mut n = [0u8; 16];
@@ -201,10 +212,16 @@ mod tests {
     #[test]
     fn boot_nonce_changes_with_resets_entropy_and_key() {
         let e = [9u8; 32];
-        let n0 = boot_nonce(None, 0, &e);
-        assert_ne!(n0, boot_nonce(None, 1, &e));
-        assert_ne!(n0, boot_nonce(None, 0, &[8u8; 32]));
-        assert_ne!(n0, boot_nonce(Some(&[1; 32]), 0, &e));
-        assert_eq!(n0, boot_nonce(None, 0, &e));
+        let n0 = boot_nonce(None, 0, None, &e);
+        assert_ne!(n0, boot_nonce(None, 1, None, &e));
+        assert_ne!(n0, boot_nonce(None, 0, None, &[8u8; 32]));
+        assert_ne!(n0, boot_nonce(Some(&[1; 32]), 0, None, &e));
+        assert_eq!(n0, boot_nonce(None, 0, None, &e));
+        // The boot counter: every value its own nonce, none equal to the
+        // nonce without one.
+        let n1 = boot_nonce(None, 0, Some(1), &e);
+        assert_ne!(n0, n1);
+        assert_ne!(n1, boot_nonce(None, 0, Some(2), &e));
+        assert_eq!(n1, boot_nonce(None, 0, Some(1), &e));
     }
 }

@@ -258,6 +258,14 @@ pub enum WireError {
         /// The frame length its header declared (N + 6), bytes.
         declared: u32,
     },
+    /// An `Authenticated` request to a unit whose boot counter could not
+    /// be advanced at this boot (`boot_counter::advance`): its boot nonce
+    /// may have been used in an earlier power-on, so no authenticated
+    /// change is taken until a boot whose counter works. Protocol 16.
+    BootCounter {
+        /// Why the counter failed.
+        error: crate::boot_counter::BootCounterError,
+    },
 }
 
 /// A field name for the wire (truncated to 24 bytes).
@@ -494,6 +502,10 @@ impl core::fmt::Display for WireError {
             WireError::TruncatedRtcm { received, declared } => write!(
                 f,
                 "{received} bytes dropped: an RTCM 3 header declaring {declared} bytes, cut by a host frame"
+            ),
+            WireError::BootCounter { error } => write!(
+                f,
+                "no authenticated change: the boot counter failed at this boot ({error:?})"
             ),
         }
     }

@@ -15,6 +15,8 @@
 //! - [`error`]: the typed errors of a response.
 //! - [`alert`]: the integrity-alarm discrete output's state machine.
 //! - [`lock`]: the configuration lock and its CRC-32 fingerprint.
+//! - [`boot_counter`]: the monotonic boot counter in flash, in the boot
+//!   nonce.
 //! - [`araim_msg`]: the ISM, the ARAIM epoch and result.
 //! - [`nmea`]: RMC, GGA, GSA, GST and GBS sentences for a solved epoch.
 //!
@@ -45,6 +47,7 @@
 pub mod alert;
 pub mod araim_msg;
 pub mod auth;
+pub mod boot_counter;
 pub mod error;
 pub mod frame;
 pub mod link;
@@ -85,8 +88,12 @@ pub type DevicePrecision = f32;
 /// Bump on any change of a serialized type (postcard is not self-describing);
 /// new enum variants are appended so that the earlier ones keep their
 /// indices. The history of the versions is in CHANGELOG.md, "Wire protocol
-/// versions"; 16 is the epochs' core clock cycles (`Status::epoch_cycles`,
-/// the DWT cycle counter of a real board, `NotMeasured` elsewhere).
+/// versions"; 15 is the stream's leap seconds (`Status::stream_leap_seconds`,
+/// `WireError::StreamLeapSecondsUnknown`) and `WireError::TruncatedRtcm`,
+/// the answer to bytes dropped when a host frame ends inside an RTCM
+/// candidate; 16 is the epochs' core clock cycles (`Status::epoch_cycles`,
+/// the DWT cycle counter of a real board, `NotMeasured` elsewhere) and the
+/// boot counter (`Status::boot_counter`, `WireError::BootCounter`).
 pub const PROTOCOL_VERSION: u16 = 16;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.

@@ -428,6 +428,10 @@ pub struct Status {
     /// QEMU-derived bounds (issue 37 "A time bound"; protocol 16).
     /// `NotMeasured` where no cycle counter runs (QEMU, the host).
     pub epoch_cycles: EpochCycles,
+    /// This boot's value of the monotonic boot counter in flash (part of
+    /// the boot nonce), or why it failed (docs/SAFETY.md "Boot counter";
+    /// protocol 16).
+    pub boot_counter: crate::boot_counter::BootCounterStatus,
 }
 
 /// Core clock cycles of the epochs since reset (DWT CYCCNT, 32 bits: it
@@ -625,6 +629,7 @@ impl Status {
             broken_at_ms: None,
         },
         epoch_cycles: EpochCycles::NotMeasured,
+        boot_counter: crate::boot_counter::BootCounterStatus::Absent,
     };
 }
 

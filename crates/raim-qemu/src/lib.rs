@@ -171,6 +171,49 @@ fn elf32_section(elf: &[u8], name: &str) -> Option<(usize, usize)> {
     })
 }
 
+/// The value of symbol `name` in a little-endian ELF32 file's symbol
+/// table (the linker script's absolute symbols included).
+pub fn elf32_symbol(elf: &[u8], name: &str) -> Option<u32> {
+    let u16_at = |o: usize| Some(u16::from_le_bytes(elf.get(o..o + 2)?.try_into().ok()?) as usize);
+    let u32_at = |o: usize| Some(u32::from_le_bytes(elf.get(o..o + 4)?.try_into().ok()?));
+    let at = |o: usize| u32_at(o).map(|v| v as usize);
+    if elf.get(..6)? != b"\x7fELF\x01\x01" {
+        return None;
+    }
+    let (shoff, shentsize, shnum) = (at(0x20)?, u16_at(0x2E)?, u16_at(0x30)?);
+    let header = |i: usize| shoff + i * shentsize;
+    // SHT_SYMTAB = 2; its sh_link is the string table's index.
+    let symtab = (0..shnum).find(|&i| at(header(i) + 4) == Some(2))?;
+    let (off, size, link) = (
+        at(header(symtab) + 16)?,
+        at(header(symtab) + 20)?,
+        at(header(symtab) + 24)?,
+    );
+    let strtab = at(header(link) + 16)?;
+    (0..size / 16).find_map(|k| {
+        let sym = off + 16 * k;
+        let start = strtab + at(sym)?;
+        let end = start + elf.get(start..)?.iter().position(|&b| b == 0)?;
+        (elf.get(start..end)? == name.as_bytes())
+            .then(|| u32_at(sym + 4))
+            .flatten()
+    })
+}
+
+/// The boot counter's flash region of a firmware ELF (`RAIM_BOOT` in
+/// memory.x: `__raim_boot_start`, `__raim_boot_end`): its address and
+/// length, bytes.
+pub fn boot_region(elf: &Path) -> Result<(u32, u32)> {
+    let bytes = std::fs::read(elf).with_context(|| format!("reading {}", elf.display()))?;
+    let start = elf32_symbol(&bytes, "__raim_boot_start").context("no __raim_boot_start")?;
+    let end = elf32_symbol(&bytes, "__raim_boot_end").context("no __raim_boot_end")?;
+    Ok((
+        start,
+        end.checked_sub(start)
+            .context("__raim_boot_end below its start")?,
+    ))
+}
+
 /// The machine QEMU emulates, and the firmware build that runs on it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Machine {
@@ -324,6 +367,15 @@ pub struct Options {
     /// session sets such a unit up as a bench host would, with a runtime
     /// `Configure(Config::default())` right after its boot notice.
     pub raw: bool,
+    /// The boot counter's flash as an earlier session left it
+    /// ([`QemuSession::save_boot_region`]), loaded into its region before
+    /// the unit starts (`-device loader`): with it, a new session is the
+    /// same unit after a power cycle. QEMU keeps no memory across runs
+    /// itself, so this models the flash's persistence (docs/SAFETY.md
+    /// "Boot counter").
+    pub boot_region: Option<(PathBuf, u32)>,
+    /// Serve QEMU's QMP on a socket (for `save_boot_region`).
+    pub qmp: bool,
 }
 
 /// One epoch's answer.
@@ -351,6 +403,8 @@ pub struct QemuSession {
     last_config: Option<ConfigId>,
     /// Every boot notice received, in order (one per boot of the unit).
     boots: Vec<BootNotice>,
+    /// QEMU's QMP socket, when `Options::qmp`.
+    qmp: Option<PathBuf>,
 }
 
 static SESSION_COUNTER: AtomicU32 = AtomicU32::new(0);
@@ -414,6 +468,17 @@ impl QemuSession {
         if opts.icount {
             cmd.args(["-icount", "shift=0"]);
         }
+        let qmp = opts.qmp.then(|| dir.join("qmp.sock"));
+        if let Some(q) = &qmp {
+            let _ = std::fs::remove_file(q);
+            cmd.args(["-qmp", &format!("unix:{},server=on,wait=off", q.display())]);
+        }
+        if let Some((file, addr)) = &opts.boot_region {
+            cmd.args([
+                "-device",
+                &format!("loader,file={},addr={addr:#x},force-raw=on", file.display()),
+            ]);
+        }
         cmd.arg("-kernel").arg(elf);
         cmd.stdin(Stdio::null())
             .stdout(std::fs::File::create(&log)?)
@@ -445,6 +510,7 @@ impl QemuSession {
             log,
             last_config: None,
             boots: Vec::new(),
+            qmp,
         };
         // The boot notice, on both machines. On netduinoplus2 the runner
         // then also sends `Status` until one is answered: QEMU's STM32
@@ -751,6 +817,61 @@ impl QemuSession {
     /// NMEA sentences already received and not yet taken.
     pub fn drain_nmea(&mut self) -> Vec<String> {
         self.nmea.try_iter().collect()
+    }
+
+    /// Saves `len` bytes of guest memory from `addr` to `file` (QMP
+    /// `pmemsave`; the session needs `Options::qmp`): the boot counter's
+    /// flash as this power-on leaves it, for the next session's
+    /// `Options::boot_region`. Returns when QEMU has written the file.
+    pub fn save_memory(&mut self, addr: u32, len: u32, file: &Path) -> Result<()> {
+        let path = self
+            .qmp
+            .clone()
+            .context("the session has no QMP socket (Options::qmp)")?;
+        let deadline = Instant::now() + Duration::from_secs(20);
+        let sock = connect(&path, &mut self.child, deadline)?;
+        sock.set_read_timeout(Some(ANSWER_TIMEOUT))?;
+        let mut reader = BufReader::new(sock.try_clone()?);
+        let mut w = sock;
+        // The greeting, then each command's `return` (events are skipped).
+        let mut answer = |w: &mut UnixStream, command: Option<String>| -> Result<String> {
+            if let Some(c) = command {
+                w.write_all(c.as_bytes())?;
+                w.write_all(b"\n")?;
+            }
+            loop {
+                let mut line = String::new();
+                if reader.read_line(&mut line)? == 0 {
+                    bail!("QMP closed");
+                }
+                if line.contains("\"QMP\"") || line.contains("\"return\"") {
+                    return Ok(line);
+                }
+                if line.contains("\"error\"") {
+                    bail!("QMP: {line}");
+                }
+            }
+        };
+        answer(&mut w, None)?;
+        answer(&mut w, Some(r#"{"execute":"qmp_capabilities"}"#.into()))?;
+        let file = std::path::absolute(file)?;
+        let filename = file.to_str().context("a file name QMP can carry")?;
+        answer(
+            &mut w,
+            Some(format!(
+                r#"{{"execute":"pmemsave","arguments":{{"val":{addr},"size":{len},"filename":{filename:?}}}}}"#
+            )),
+        )?;
+        Ok(())
+    }
+
+    /// Saves the boot counter's region of firmware `elf` ([`boot_region`])
+    /// to `file`; returns its address, for the next session's
+    /// `Options::boot_region`.
+    pub fn save_boot_region(&mut self, elf: &Path, file: &Path) -> Result<u32> {
+        let (addr, len) = boot_region(elf)?;
+        self.save_memory(addr, len, file)?;
+        Ok(addr)
     }
 
     /// True while QEMU runs.

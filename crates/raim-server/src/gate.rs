@@ -143,6 +143,13 @@ impl Server {
             (Some(_), None) => Err(WireError::AuthRequired),
             (None, Some(_)) => Err(WireError::AuthNotProvisioned),
             (Some((key, last)), Some((counter, tag))) => {
+                // No boot count this boot: the nonce may repeat an
+                // earlier power-on's, so a recorded frame could verify.
+                if let raim_proto::boot_counter::BootCounterStatus::Failed(error) =
+                    self.boot_counter
+                {
+                    return Err(WireError::BootCounter { error });
+                }
                 if !raim_proto::auth::verify(&key, &self.nonce, counter, change, tag) {
                     return Err(WireError::BadAuthTag { counter });
                 }

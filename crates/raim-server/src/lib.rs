@@ -188,6 +188,9 @@ pub struct Server {
     nonce: raim_proto::auth::Nonce,
     /// Whether hardware entropy went into it (`auth::BootEntropy`).
     hardware_entropy: bool,
+    /// This boot's boot counter (`set_boot_counter`): its value is in the
+    /// nonce; a failed counter refuses every authenticated change.
+    boot_counter: raim_proto::boot_counter::BootCounterStatus,
     /// Why the provisioned configuration was refused at boot, if it was.
     provision_error: Option<ProvisionError>,
     status: Status,
@@ -255,6 +258,7 @@ impl Server {
             auth: None,
             nonce: [0; 16],
             hardware_entropy: false,
+            boot_counter: raim_proto::boot_counter::BootCounterStatus::Absent,
             provision_error: None,
             status: Status {
                 protocol_version: PROTOCOL_VERSION,
@@ -290,7 +294,20 @@ impl Server {
         self.auth = Some((key, None));
     }
 
-    /// The boot sequence: the boot nonce from the key, the reset count and
+    /// This boot's boot counter, as the platform advanced it
+    /// (`raim_proto::boot_counter::advance`; docs/SAFETY.md "Boot
+    /// counter"). Call before [`Server::boot`]: its value goes into the
+    /// nonce. A `Failed` counter leaves the boot without a count, and
+    /// every authenticated change is then refused
+    /// (`WireError::BootCounter`): the nonce may have been used in an
+    /// earlier power-on. A server never given one (`Absent`, the host's)
+    /// derives its nonce as before, from the reset count and the entropy.
+    pub fn set_boot_counter(&mut self, counter: raim_proto::boot_counter::BootCounterStatus) {
+        self.boot_counter = counter;
+    }
+
+    /// The boot sequence: the boot nonce from the key, the reset count,
+    /// the boot counter ([`Server::set_boot_counter`]) and
     /// the platform's `entropy` (whose source `Status.hardware_entropy`
     /// then reports), then the provisioned configuration, if
     /// any. A provisioned configuration whose seal verified (`provisioned`
@@ -307,9 +324,14 @@ impl Server {
         resets: u32,
         entropy: &raim_proto::auth::BootEntropy,
     ) {
+        let boot_count = match self.boot_counter {
+            raim_proto::boot_counter::BootCounterStatus::Count(n) => Some(n),
+            _ => None,
+        };
         self.nonce = raim_proto::auth::boot_nonce(
             self.auth.as_ref().map(|(k, _)| k),
             resets,
+            boot_count,
             &entropy.bytes,
         );
         self.hardware_entropy = entropy.hardware;
@@ -409,6 +431,7 @@ impl Server {
             config: self.config_id,
             boot_nonce: self.nonce,
             hardware_entropy: self.hardware_entropy,
+            boot_counter: self.boot_counter,
             host_sigmas: self.host_sigmas,
             provision_error: self.provision_error,
             auth_provisioned: self.auth.is_some(),

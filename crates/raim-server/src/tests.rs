@@ -933,3 +933,190 @@ fn a_model_the_residuals_deny_makes_the_unit_unavailable_until_reconfigured() {
         );
     });
 }
+
+/// The boot counter's flash, in RAM: `Some` words work as NOR flash (a
+/// program clears bits); `None` is a flash that takes no write at all
+/// (QEMU's netduinoplus2: read-only memory, its controller ignoring every
+/// command), reading zeros as that memory does where no image was loaded.
+struct RamFlash(Option<[std::vec::Vec<u32>; 2]>);
+
+impl raim_proto::boot_counter::CounterFlash for RamFlash {
+    fn page_words(&self) -> usize {
+        8
+    }
+    fn read(
+        &mut self,
+        page: usize,
+        word: usize,
+    ) -> Result<u32, raim_proto::boot_counter::FlashFault> {
+        Ok(match &self.0 {
+            Some(p) => p[page][word],
+            None => 0,
+        })
+    }
+    fn erase(&mut self, page: usize) -> Result<(), raim_proto::boot_counter::FlashFault> {
+        if let Some(p) = &mut self.0 {
+            p[page].fill(u32::MAX);
+        }
+        Ok(())
+    }
+    fn program(
+        &mut self,
+        page: usize,
+        word: usize,
+        value: u32,
+    ) -> Result<(), raim_proto::boot_counter::FlashFault> {
+        if let Some(p) = &mut self.0 {
+            p[page][word] &= value;
+        }
+        Ok(())
+    }
+}
+
+/// One power-on of a keyed unit: the counter advanced on `flash`, the
+/// same entropy every time (QEMU under `-icount`: zeroed SRAM, no RNG).
+fn power_on(flash: &mut RamFlash) -> std::boxed::Box<Server> {
+    use raim_proto::boot_counter::{advance, BootCounterStatus};
+    let mut s = std::boxed::Box::new(Server::with_auth_key([7; 32]));
+    s.set_boot_counter(match advance(flash) {
+        Ok(n) => BootCounterStatus::Count(n),
+        Err(e) => BootCounterStatus::Failed(e),
+    });
+    s.boot(
+        Ok(None),
+        0,
+        &raim_proto::auth::BootEntropy {
+            bytes: [5; 32],
+            hardware: false,
+        },
+    );
+    s
+}
+
+/// An authenticated `Configure` (a weak one: Pfa 1e-2) and `Lock` under
+/// `server`'s nonce, as frames.
+fn configure_and_lock(server: &Server) -> Vec<u8> {
+    use raim_proto::auth::{tag, AuthenticatedRef, ChangeRef};
+    let weak = Config {
+        pfa: 1e-2,
+        ..Config::default()
+    };
+    let mut bytes = Vec::new();
+    for (seq, change) in [(0, ChangeRef::Configure(&weak)), (1, ChangeRef::Lock)] {
+        let counter = u64::from(seq) + 1;
+        let a = AuthenticatedRef {
+            counter,
+            change,
+            tag: tag(&[7; 32], &server.nonce(), counter, &change),
+        };
+        bytes.extend(frame(&RequestRef {
+            seq,
+            command: CommandRef::Authenticated(a),
+        }));
+    }
+    bytes
+}
+
+/// Issue 35, replay across a power cycle: an authenticated `Configure` and
+/// `Lock` recorded in one power-on, replayed in the next with the same
+/// reset count and the same entropy, are refused `BadAuthTag`, since the
+/// boot counter went into the nonce; the unit stays Unconfigured and
+/// answers its epochs `Unconfigured`. Without a counter the two power-ons
+/// had one nonce.
+///
+/// Verifies: SAFE-BOOT-COUNTER, WIRE-BadAuthTag
+#[test]
+fn a_frame_recorded_before_a_power_cycle_does_not_verify_after_it() {
+    on_big_stack(|| {
+        let mut flash = RamFlash(Some([std::vec![u32::MAX; 8], std::vec![u32::MAX; 8]]));
+        let mut first = power_on(&mut flash);
+        assert_eq!(
+            first.status().boot_counter,
+            raim_proto::boot_counter::BootCounterStatus::Count(1)
+        );
+        let recorded = configure_and_lock(&first);
+        let (answers, _) = run(&mut first, &recorded);
+        assert_eq!(answers[0].body, ResponseBody::Configured);
+        assert_eq!(answers[1].body, ResponseBody::LockEngaged);
+
+        let mut second = power_on(&mut flash);
+        assert_eq!(
+            second.status().boot_counter,
+            raim_proto::boot_counter::BootCounterStatus::Count(2)
+        );
+        assert_ne!(second.nonce(), first.nonce());
+        let (answers, _) = run(&mut second, &recorded);
+        for (a, counter) in answers.iter().zip([1, 2]) {
+            assert_eq!(
+                a.body,
+                ResponseBody::Error(WireError::BadAuthTag { counter })
+            );
+        }
+        assert_eq!(second.config_id().source, ConfigSource::Unconfigured);
+        assert!(!second.config_id().locked);
+        let sats = sky(0.0);
+        let (answers, _) = run(&mut second, &frame(&RequestRef::linear(2, 0.0, &sats)));
+        assert!(matches!(
+            answers[0].body,
+            ResponseBody::Error(WireError::Unconfigured { provision: None })
+        ));
+
+        // The same two power-ons without a counter: one nonce.
+        let absent = |s: &mut Server| {
+            s.boot(
+                Ok(None),
+                0,
+                &raim_proto::auth::BootEntropy {
+                    bytes: [5; 32],
+                    hardware: false,
+                },
+            );
+            s.nonce()
+        };
+        let mut a = std::boxed::Box::new(Server::with_auth_key([7; 32]));
+        let mut b = std::boxed::Box::new(Server::with_auth_key([7; 32]));
+        assert_eq!(absent(&mut a), absent(&mut b));
+    })
+}
+
+/// Issue 35, "make a failed write fail safe": a counter the flash does not
+/// take (it does not read back) leaves the boot without a count; `Status`
+/// says why, every authenticated change is refused with the typed
+/// `BootCounter` (never taken under a nonce that may have been used
+/// before), the unit stays Unconfigured and answers its epochs
+/// `Unconfigured` (the alarm output asserted).
+///
+/// Verifies: SAFE-BOOT-COUNTER, WIRE-BootCounter
+#[test]
+fn a_failed_boot_counter_takes_no_authenticated_change() {
+    on_big_stack(|| {
+        use raim_proto::boot_counter::{BootCounterError, BootCounterStatus};
+        let mut flash = RamFlash(None);
+        let mut unit = power_on(&mut flash);
+        let error = BootCounterError::EraseVerify {
+            page: 0,
+            word: 0,
+            value: 0,
+        };
+        assert_eq!(unit.status().boot_counter, BootCounterStatus::Failed(error));
+        let frames = configure_and_lock(&unit);
+        let (answers, _) = run(&mut unit, &frames);
+        assert_eq!(answers.len(), 2);
+        for a in &answers {
+            assert_eq!(
+                a.body,
+                ResponseBody::Error(WireError::BootCounter { error })
+            );
+        }
+        assert_eq!(unit.config_id().source, ConfigSource::Unconfigured);
+        assert_eq!(unit.config(), None);
+        let sats = sky(0.0);
+        let (answers, nmea) = run(&mut unit, &frame(&RequestRef::linear(2, 0.0, &sats)));
+        assert!(matches!(
+            answers[0].body,
+            ResponseBody::Error(WireError::Unconfigured { provision: None })
+        ));
+        // The no-fix sentences of a refused epoch.
+        assert!(nmea.contains("$GPGGA") || nmea.contains("GGA"));
+    })
+}

@@ -20,6 +20,7 @@ use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::{DCB, DWT, SCB, SYST};
 use embedded_hal::digital::{OutputPin, StatefulOutputPin};
 
+pub mod boot_flash;
 #[cfg(feature = "board-qemu")]
 pub mod mps2;
 #[cfg(feature = "board-stm32f4")]
