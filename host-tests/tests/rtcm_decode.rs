@@ -25,6 +25,9 @@ use rtcm_rs::msg::message::{Message, MessageBuilder};
 use rtcm_rs::val_gen::ValGen;
 use rtcm_rs::MessageFrame;
 
+/// One MSM signal: (satellite, band, attribute, pseudorange m, C/N0 dB-Hz).
+type Signal = (u8, u8, u8, Option<f64>, Option<f64>);
+
 /// What a frame decodes to, in one form for both decoders.
 #[derive(Debug, PartialEq)]
 enum Decoded {
@@ -35,8 +38,7 @@ enum Decoded {
         /// GLONASS: DF416 (`None` = 7, unknown).
         glonass_day: Option<Option<u8>>,
         more: bool,
-        /// (satellite, band, attribute, pseudorange m, C/N0 dB-Hz).
-        signals: Vec<(u8, u8, u8, Option<f64>, Option<f64>)>,
+        signals: Vec<Signal>,
     },
     Kepler {
         number: u16,
