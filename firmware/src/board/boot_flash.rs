@@ -10,7 +10,7 @@
 //!   flash does (a program clears bits, an erase sets a page to all ones).
 //!   QEMU keeps it for the session only: a power cycle is a new session
 //!   given the region the last one saved (docs/SAFETY.md "Boot counter").
-//! - **STM32F405/407** ([`Stm32f4Flash`]): the flash controller (RM0090
+//! - **STM32F405/407** (`Stm32f4Flash`): the flash controller (RM0090
 //!   §3.6), sectors 10 and 11, programmed a word at a time (PSIZE x32,
 //!   2.7-3.6 V) and erased a sector at a time, every wait bounded.
 //!   QEMU's netduinoplus2 maps its flash read-only and leaves the
