@@ -1136,7 +1136,9 @@ mod tests {
                 if self.1.is_multiple_of(8) {
                     self.0.push(0);
                 }
-                if (v >> b) & 1 == 1 {
+                // Beyond 64 bits, the sign extension (a wide zero field).
+                let bit = if b >= 64 { i64::from(v < 0) } else { (v >> b) & 1 };
+                if bit == 1 {
                     if let Some(last) = self.0.last_mut() {
                         *last |= 0x80 >> (self.1 % 8);
                     }
