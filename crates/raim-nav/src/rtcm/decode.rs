@@ -1137,7 +1137,11 @@ mod tests {
                     self.0.push(0);
                 }
                 // Beyond 64 bits, the sign extension (a wide zero field).
-                let bit = if b >= 64 { i64::from(v < 0) } else { (v >> b) & 1 };
+                let bit = if b >= 64 {
+                    i64::from(v < 0)
+                } else {
+                    (v >> b) & 1
+                };
                 if bit == 1 {
                     if let Some(last) = self.0.last_mut() {
                         *last |= 0x80 >> (self.1 % 8);
