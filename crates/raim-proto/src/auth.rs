@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 use sha2::Sha256;
 
 use crate::araim_msg::{IsmFrame, IsmFrameRef};
+use crate::model_check_msg::WireModelCheckConfig;
 use crate::pf_msg::WirePfConfig;
 
 /// A provisioned key.
@@ -46,6 +47,8 @@ pub enum Change {
     /// Whether epoch frames' per-satellite sigmas are used (as
     /// `Command::HostSigmas`).
     HostSigmas(bool),
+    /// Replace the model check's settings (as `Command::ModelCheck`).
+    ModelCheck(WireModelCheckConfig),
 }
 
 /// The host's borrowed form of [`Change`] (same bytes).
@@ -61,6 +64,8 @@ pub enum ChangeRef<'a> {
     Lock,
     /// [`Change::HostSigmas`].
     HostSigmas(bool),
+    /// [`Change::ModelCheck`].
+    ModelCheck(WireModelCheckConfig),
 }
 
 /// An authenticated change (the payload of `Command::Authenticated`).

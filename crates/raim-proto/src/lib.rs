@@ -18,6 +18,7 @@
 //! - [`boot_counter`]: the monotonic boot counter in flash, in the boot
 //!   nonce.
 //! - [`araim_msg`]: the ISM, the ARAIM epoch and result.
+//! - [`model_check_msg`]: the run-time model check's settings.
 //! - [`nmea`]: RMC, GGA, GSA, GST and GBS sentences for a solved epoch.
 //!
 //! The device's protocol loop, which answers these frames, is the
@@ -53,6 +54,7 @@ pub mod frame;
 pub mod link;
 pub mod lock;
 pub mod message;
+pub mod model_check_msg;
 pub mod nmea;
 pub mod pf_msg;
 pub mod result;
@@ -68,6 +70,7 @@ pub use message::{
     BootNotice, Command, CycleSpan, EpochCycles, EpochKind, LinearEpoch, RangeEpoch, Request,
     RequestRef, ResetCause, Response, ResponseBody, SatList, Status, TestFault,
 };
+pub use model_check_msg::WireModelCheckConfig;
 pub use pf_msg::{PfKind, WirePfConfig, WirePfResult};
 pub use result::{WireMcusum, WireResult};
 pub use unit::{Fingerprint, ProvisionError, UnitConfig, UnitConfigRef};
@@ -93,8 +96,11 @@ pub type DevicePrecision = f32;
 /// the answer to bytes dropped when a host frame ends inside an RTCM
 /// candidate; 16 is the epochs' core clock cycles (`Status::epoch_cycles`,
 /// the DWT cycle counter of a real board, `NotMeasured` elsewhere) and the
-/// boot counter (`Status::boot_counter`, `WireError::BootCounter`).
-pub const PROTOCOL_VERSION: u16 = 16;
+/// boot counter (`Status::boot_counter`, `WireError::BootCounter`); 17 is
+/// the model check's settings as a part of the unit configuration
+/// (`Command::ModelCheck`, `Change::ModelCheck`, `UnitConfig::model_check`,
+/// `UnitPart::ModelCheck`).
+pub const PROTOCOL_VERSION: u16 = 17;
 
 /// Largest encoded request frame (delimiter included) the firmware accepts.
 /// A range epoch at [`CAPACITY`] satellites encodes to at most 1,425 bytes

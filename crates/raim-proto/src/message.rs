@@ -122,7 +122,7 @@ pub enum Command {
     /// `WireError::TestHooksDisabled`.
     TestFault(TestFault),
     /// An authenticated change (`auth`): `Configure`, `Ism`, `PfConfigure`,
-    /// `Lock` or `HostSigmas`, with a counter and an HMAC tag under the
+    /// `Lock`, `HostSigmas` or `ModelCheck`, with a counter and an HMAC tag under the
     /// unit's key and boot nonce. The only form a keyed unit takes.
     Authenticated(crate::auth::Authenticated),
     /// ARAIM: an ISM frame or an ARAIM epoch (`araim_msg`).
@@ -140,6 +140,12 @@ pub enum Command {
     /// Whether the per-satellite sigmas of epoch frames are used (the unit
     /// configuration's `host_sigmas`). Answered `Configured`.
     HostSigmas(bool),
+    /// The run-time model check's allocation, spacing and window (the
+    /// unit configuration's `model_check`; docs/MODEL_CHECK.md). Answered
+    /// `Configured`, or the typed error of the first field out of its
+    /// bounds (`OutOfRange`, `NonFinite`) with the settings in force kept.
+    /// Protocol 17.
+    ModelCheck(crate::model_check_msg::WireModelCheckConfig),
 }
 
 impl Command {
@@ -165,7 +171,8 @@ impl Command {
             | Command::TestFault(_)
             | Command::Authenticated(_)
             | Command::PfConfigure(_)
-            | Command::HostSigmas(_) => (false, 0),
+            | Command::HostSigmas(_)
+            | Command::ModelCheck(_) => (false, 0),
         };
         overflowed.then_some(declared)
     }
@@ -301,6 +308,8 @@ pub enum CommandRef<'a> {
     },
     /// [`Command::HostSigmas`].
     HostSigmas(bool),
+    /// [`Command::ModelCheck`].
+    ModelCheck(crate::model_check_msg::WireModelCheckConfig),
 }
 
 /// The host's borrowed form of [`Request`].

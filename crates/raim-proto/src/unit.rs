@@ -6,8 +6,9 @@
 //! The parts are the snapshot configuration (`raim_core::Config`: Pfa and
 //! Pmd, the FDE method and the multi-fault reconstruction, the MCUSUM, the
 //! alert limits and the sigma model), the ISM with the ARAIM configuration,
-//! the particle-filter configuration, and whether the unit uses the
-//! per-satellite sigmas a host puts in an epoch frame. Each part is
+//! the particle-filter configuration, whether the unit uses the
+//! per-satellite sigmas a host puts in an epoch frame, and the run-time
+//! model check's allocation, spacing and window. Each part is
 //! validated by its own `validate` in the core; the device server checks
 //! all of them before any is put in force.
 //!
@@ -24,6 +25,7 @@ use sha2::{Digest, Sha256};
 
 use crate::araim_msg::IsmFrame;
 use crate::auth::{AuthKey, Tag};
+use crate::model_check_msg::WireModelCheckConfig;
 use crate::pf_msg::WirePfConfig;
 
 /// The fingerprint of a unit configuration: SHA-256, truncated to 128 bits.
@@ -61,6 +63,11 @@ pub struct UnitConfig {
     /// false, an epoch carrying one is refused (`HostSigmaRefused`): the
     /// unit's own sigma model is then the only one.
     pub host_sigmas: bool,
+    /// The run-time model check's allocation, spacing and window
+    /// (docs/MODEL_CHECK.md); a TOML file that omits it, or any of its
+    /// fields, gets the defaults (`WireModelCheckConfig::DEFAULT`).
+    #[serde(default)]
+    pub model_check: WireModelCheckConfig,
 }
 
 /// A [`UnitConfig`] by reference: the same encoding, field for field
@@ -75,6 +82,8 @@ pub struct UnitConfigRef<'a> {
     pub pf: Option<&'a WirePfConfig>,
     /// [`UnitConfig::host_sigmas`].
     pub host_sigmas: bool,
+    /// [`UnitConfig::model_check`].
+    pub model_check: &'a WireModelCheckConfig,
 }
 
 impl UnitConfig {
@@ -85,6 +94,7 @@ impl UnitConfig {
             araim: self.araim.as_ref(),
             pf: self.pf.as_ref(),
             host_sigmas: self.host_sigmas,
+            model_check: &self.model_check,
         }
     }
 
@@ -175,6 +185,8 @@ pub enum UnitPart {
     Araim,
     /// The particle-filter configuration.
     Pf,
+    /// The run-time model check's settings (protocol 17).
+    ModelCheck,
 }
 
 fn seal_of(key: Option<&AuthKey>, payload: &[u8]) -> Tag {
@@ -271,6 +283,7 @@ mod tests {
             araim: None,
             pf: None,
             host_sigmas: false,
+            model_check: WireModelCheckConfig::DEFAULT,
         }
     }
 

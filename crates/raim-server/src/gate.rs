@@ -61,6 +61,9 @@ pub fn check_unit(unit: &UnitConfig) -> Result<(), UnitRefusal> {
     if let Some(p) = &unit.pf {
         crate::pf::check(p).map_err(refuse(UnitPart::Pf))?;
     }
+    unit.model_check
+        .check()
+        .map_err(refuse(UnitPart::ModelCheck))?;
     Ok(())
 }
 
@@ -182,6 +185,10 @@ impl Server {
             }
             Change::HostSigmas(on) => {
                 self.host_sigmas = *on;
+                Applied::Configured
+            }
+            Change::ModelCheck(c) => {
+                self.model.configure(*c)?;
                 Applied::Configured
             }
             // Locking a unit with nothing in force would leave it

@@ -229,12 +229,12 @@ pub enum IoError<L, M> {
 }
 
 /// The fingerprint of the unconfigured unit (no snapshot, ARAIM or PF
-/// configuration, host sigmas on): `UnitConfigRef::fingerprint` of it, a
+/// configuration, host sigmas on, the model check's default settings): `UnitConfigRef::fingerprint` of it, a
 /// SHA-256 that `const fn` cannot compute, written out so that
 /// [`Server::new`] is `const`; the test `unconfigured_fingerprint_is_computed`
 /// recomputes it.
 const UNCONFIGURED_FINGERPRINT: raim_proto::unit::Fingerprint = [
-    35, 142, 158, 206, 228, 58, 219, 236, 61, 5, 248, 126, 104, 77, 144, 90,
+    44, 133, 30, 195, 206, 67, 97, 158, 110, 213, 240, 68, 105, 102, 215, 148,
 ];
 
 impl Server {
@@ -365,12 +365,16 @@ impl Server {
             araim,
             pf,
             host_sigmas,
+            model_check,
         } = unit;
         if let Some(p) = pf {
             self.pf
                 .configure(p)
                 .map_err(|_| ProvisionError::InvalidPart(raim_proto::unit::UnitPart::Pf))?;
         }
+        self.model
+            .configure(model_check)
+            .map_err(|_| ProvisionError::InvalidPart(raim_proto::unit::UnitPart::ModelCheck))?;
         self.config = snapshot;
         self.araim.ism = araim;
         self.host_sigmas = host_sigmas;
@@ -390,6 +394,7 @@ impl Server {
             araim: self.araim.ism.as_ref(),
             pf: self.pf.config(),
             host_sigmas: self.host_sigmas,
+            model_check: self.model.settings(),
         }
         .fingerprint()
     }
@@ -644,6 +649,7 @@ impl Server {
             }
             Command::PfConfigure(c) => Applied::body(self.change_plain(&Change::Pf(c))),
             Command::HostSigmas(on) => Applied::body(self.change_plain(&Change::HostSigmas(on))),
+            Command::ModelCheck(c) => Applied::body(self.change_plain(&Change::ModelCheck(c))),
             Command::Authenticated(a) => Applied::body(self.change_authenticated(&a)),
             Command::PfRanges(ref e) => {
                 let body = self.pf_epoch(e.time_s, &e.sats.items, platform);

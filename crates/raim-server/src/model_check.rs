@@ -1,8 +1,11 @@
 //! The unit's run-time model check (issue 35, docs/MODEL_CHECK.md): the
 //! core's windowed chi-square goodness of fit
 //! (`raim_core::consistency::ModelCheck`) driven by every answered epoch of
-//! the snapshot monitor and of ARAIM, at the default allocation (1e-6 false
-//! declarations per hour), spacing (1,800 s) and window (8 samples).
+//! the snapshot monitor and of ARAIM, with the allocation, spacing and
+//! window of the unit configuration's `model_check` part
+//! (`raim_proto::model_check_msg`; the defaults 1e-6 false declarations
+//! per hour, 1,800 s and 8 samples when the configuration does not set
+//! them).
 //!
 //! - **Sample:** the delivered solution's q = r^T W r and its dof (the
 //!   snapshot monitor's sigma model; ARAIM's C_acc), not of an `Alarm`
@@ -13,36 +16,95 @@
 //!   understates the errors, so no protection level computed with it is a
 //!   bound: every epoch from then on is answered `Unavailable` (the alarm
 //!   output asserted, the NMEA sentences without a fix), an `Alarm` stays
-//!   an `Alarm`, until a new configuration, ISM or provisioned section is
-//!   put in force (`reset`). `Status.model_check` says so.
+//!   an `Alarm`, until a new configuration, ISM, model-check setting or
+//!   provisioned section is put in force (`reset`). `Status.model_check`
+//!   says so.
 //! - The particle filter is not checked: its epochs never clear the alarm
 //!   output (docs/PF.md "No protection level").
 
-use raim_core::consistency::{ModelCheck, ModelCheckConfig, DEFAULT_WINDOW};
+use raim_core::consistency::{ModelCheck, ModelCheckConfig};
 use raim_core::Decision;
 use raim_proto::message::ModelCheckStatus;
+use raim_proto::model_check_msg::{WireModelCheckConfig, MAX_WINDOW};
 
-/// The check with the default window's capacity.
-pub type UnitModelCheck = ModelCheck<DEFAULT_WINDOW>;
+/// The check at the unit's capacity ([`MAX_WINDOW`] samples) and the
+/// settings it runs with: the wire form (what the fingerprint covers) and
+/// the core's, checked, form of the same values.
+#[derive(Debug, Clone)]
+pub struct UnitModelCheck {
+    check: ModelCheck<MAX_WINDOW>,
+    wire: WireModelCheckConfig,
+    config: ModelCheckConfig,
+}
 
-/// The unit's allocation, spacing and window: the core's defaults
-/// (docs/MODEL_CHECK.md "Defaults and where they come from").
-pub const CONFIG: ModelCheckConfig = ModelCheckConfig::DEFAULT;
+impl Default for UnitModelCheck {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl UnitModelCheck {
+    /// The check at the defaults (`ModelCheckConfig::DEFAULT`), nothing
+    /// sampled.
+    pub const fn new() -> Self {
+        UnitModelCheck {
+            check: ModelCheck::new(),
+            wire: WireModelCheckConfig::DEFAULT,
+            config: ModelCheckConfig::DEFAULT,
+        }
+    }
+
+    /// Puts `wire` in force if every field is within its bounds
+    /// (`WireModelCheckConfig::check`) and restarts the check; otherwise
+    /// the typed error, and nothing changes.
+    ///
+    /// # Errors
+    /// The first field out of its bounds, with its value.
+    pub fn configure(
+        &mut self,
+        wire: WireModelCheckConfig,
+    ) -> Result<(), raim_proto::error::WireError> {
+        self.config = wire.check()?;
+        self.wire = wire;
+        self.check.reset();
+        Ok(())
+    }
+
+    /// Restarts the check (a new model in force); the settings stay.
+    pub fn reset(&mut self) {
+        self.check.reset();
+    }
+
+    /// The settings in force, as on the wire.
+    pub fn settings(&self) -> &WireModelCheckConfig {
+        &self.wire
+    }
+
+    /// The settings in force, as the core runs them.
+    pub fn config(&self) -> &ModelCheckConfig {
+        &self.config
+    }
+
+    /// Whether the model has been declared broken since the last reset.
+    pub fn broken(&self) -> bool {
+        self.check.broken()
+    }
+}
 
 /// Offers an answered epoch's `sample` (q, dof) at `time_s`, and returns
 /// the decision to answer with: `decision`, or `Unavailable` once the
 /// model is declared broken (an `Alarm` stays an `Alarm`).
 pub fn judge(
-    check: &mut UnitModelCheck,
+    unit: &mut UnitModelCheck,
     time_s: f64,
     sample: Option<(f64, u32)>,
     decision: Decision,
 ) -> Decision {
     if let Some((q, dof)) = sample {
         // A refused offer (time not increasing, a NaN) is no sample.
-        let _ = check.offer(&CONFIG, time_s, q, dof);
+        let _ = unit.check.offer(&unit.config, time_s, q, dof);
     }
-    if check.broken() && decision != Decision::Alarm {
+    if unit.check.broken() && decision != Decision::Alarm {
         Decision::Unavailable
     } else {
         decision
@@ -50,7 +112,8 @@ pub fn judge(
 }
 
 /// The check's state for `Status`.
-pub fn status(check: &UnitModelCheck) -> ModelCheckStatus {
+pub fn status(unit: &UnitModelCheck) -> ModelCheckStatus {
+    let check = &unit.check;
     let n = |x: u64| u32::try_from(x).unwrap_or(u32::MAX);
     ModelCheckStatus {
         evaluations: n(check.evaluations()),
@@ -74,9 +137,10 @@ mod tests {
     #[test]
     fn a_broken_model_makes_every_epoch_unavailable_until_a_reset() {
         let mut check = UnitModelCheck::new();
+        let spacing_s = check.config().spacing_s;
         let mut t = 0.0;
         for _ in 0..20 {
-            t += CONFIG.spacing_s;
+            t += spacing_s;
             assert_eq!(
                 judge(&mut check, t, Some((4.0, 4)), Decision::Ok),
                 Decision::Ok
@@ -91,8 +155,8 @@ mod tests {
         check.reset();
         let mut t = 0.0;
         let mut broken_after = None;
-        for k in 1..=DEFAULT_WINDOW {
-            t += CONFIG.spacing_s;
+        for k in 1..=raim_core::consistency::DEFAULT_WINDOW {
+            t += spacing_s;
             if judge(&mut check, t, Some((100.0, 4)), Decision::Ok) == Decision::Unavailable {
                 broken_after = Some(k);
                 break;
@@ -101,7 +165,7 @@ mod tests {
         assert!(broken_after.is_some(), "not declared within the window");
         assert_eq!(status(&check).broken_at_ms, Some((t * 1000.0) as u64));
         // Latched: a good sample, no sample, an exclusion: Unavailable.
-        t += CONFIG.spacing_s;
+        t += spacing_s;
         assert_eq!(
             judge(&mut check, t, Some((4.0, 4)), Decision::Ok),
             Decision::Unavailable

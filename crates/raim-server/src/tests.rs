@@ -568,6 +568,7 @@ fn unconfigured_fingerprint_is_computed() {
         araim: None,
         pf: None,
         host_sigmas: true,
+        model_check: &raim_proto::WireModelCheckConfig::DEFAULT,
     }
     .fingerprint();
     assert_eq!(crate::UNCONFIGURED_FINGERPRINT, computed);
@@ -828,7 +829,7 @@ fn unreadable_frames_assert_the_alarm_at_once_and_write_no_fix() {
 /// Verifies: SAFE-MODEL
 #[test]
 fn a_model_the_residuals_deny_makes_the_unit_unavailable_until_reconfigured() {
-    use crate::model_check::CONFIG;
+    let spacing_s = raim_core::consistency::DEFAULT_SPACING_S;
     use raim_core::consistency::DEFAULT_WINDOW;
     use raim_core::{Decision, Epoch, Raim};
     let cfg = Config::default();
@@ -876,7 +877,7 @@ fn a_model_the_residuals_deny_makes_the_unit_unavailable_until_reconfigured() {
         let mut t = 1.0e9;
         let mut seq = 0;
         for _ in 0..(2 * DEFAULT_WINDOW) {
-            t += CONFIG.spacing_s;
+            t += spacing_s;
             seq += 1;
             let (r, _) = run(&mut server, &frame(&RequestRef::linear(seq, t, &calm)));
             assert_eq!(decision(&r[0]), Decision::Ok);
@@ -884,7 +885,7 @@ fn a_model_the_residuals_deny_makes_the_unit_unavailable_until_reconfigured() {
         // The loud sky: Ok until the window rejects, then Unavailable.
         let mut declared = None;
         for k in 1..=DEFAULT_WINDOW {
-            t += CONFIG.spacing_s;
+            t += spacing_s;
             seq += 1;
             let (r, _) = run(&mut server, &frame(&RequestRef::linear(seq, t, &loud)));
             if decision(&r[0]) == Decision::Unavailable {
