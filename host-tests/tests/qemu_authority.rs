@@ -55,7 +55,9 @@ fn start(elf: &std::path::Path, machine: Machine) -> QemuSession {
 }
 
 /// The installation's configuration: terminal-area alert limits (HAL 40 m,
-/// VAL 50 m), the unit's own sigma model only.
+/// VAL 50 m), the unit's own sigma model only, and model-check settings
+/// other than the defaults (900 s, 4 samples, 1e-5 per hour), so that the
+/// boot notice's fingerprint says the unit took them.
 fn installed() -> UnitConfig {
     UnitConfig {
         snapshot: Some(Config {
@@ -68,6 +70,11 @@ fn installed() -> UnitConfig {
         araim: None,
         pf: None,
         host_sigmas: false,
+        model_check: raim_proto::WireModelCheckConfig {
+            spacing_s: 900.0,
+            window: 4,
+            p_fa_per_hour: 1e-5,
+        },
     }
 }
 
@@ -166,10 +173,16 @@ fn qemu_provisioned_unit_keeps_its_locked_configuration_across_resets() {
             );
             assert_eq!(fw.last_config().unwrap().fingerprint, unit.fingerprint());
         }
-        // Every change is refused: configure, lock, host sigmas.
+        // Every change is refused: configure, lock, host sigmas, the
+        // model check's settings.
         let locked = WireError::Locked {
             fingerprint: unit.fingerprint(),
         };
+        assert_eq!(
+            fw.call(CommandRef::ModelCheck(raim_proto::WireModelCheckConfig::DEFAULT))
+                .unwrap(),
+            ResponseBody::Error(locked.clone())
+        );
         assert_eq!(
             fw.try_configure(&Config::default()).unwrap(),
             Err(locked.clone())
@@ -291,6 +304,19 @@ fn qemu_keyed_unit_authenticates_every_change_and_no_frame_survives_a_reset() {
         send(&mut fw, signed(old, 2, ChangeRef::Configure(&terminal))),
         ResponseBody::Error(WireError::BadAuthTag { counter: 2 })
     );
+    // The model check's settings: plain refused, authenticated taken.
+    let window_4 = raim_proto::WireModelCheckConfig {
+        window: 4,
+        ..raim_proto::WireModelCheckConfig::DEFAULT
+    };
+    assert_eq!(
+        fw.call(CommandRef::ModelCheck(window_4)).unwrap(),
+        ResponseBody::Error(WireError::AuthRequired)
+    );
+    assert_eq!(
+        send(&mut fw, signed(nonce, 3, ChangeRef::ModelCheck(window_4))),
+        ResponseBody::Configured
+    );
     // The top of the counter's range.
     assert_eq!(
         send(
@@ -353,7 +379,7 @@ fn qemu_keyed_unit_authenticates_every_change_and_no_frame_survives_a_reset() {
 /// Findings 1, 5, 6 and 7: settings outside their operational bounds are
 /// refused over the wire, typed, and nothing changes.
 ///
-/// Verifies: SAFE-T1, SAFE-T5, SAFE-T6, SAFE-T7, WIRE-OutOfRange
+/// Verifies: SAFE-T1, SAFE-T5, SAFE-T6, SAFE-T7, WIRE-OutOfRange, MODEL-CONFIG
 #[test]
 fn qemu_out_of_bounds_settings_are_refused() {
     let mut fw = start(&elf(Machine::Mps2An386), Machine::Mps2An386);
@@ -393,6 +419,76 @@ fn qemu_out_of_bounds_settings_are_refused() {
         let r = fw.call(CommandRef::PfConfigure(&pf)).unwrap();
         assert!(refused(&r), "pfa {pfa}: {r:?}");
     }
+    // The model check's settings (issue 35): each field out of its bounds
+    // is refused with the error the host's check gives (the field and the
+    // value), and the settings in force stay (the fingerprint); settings
+    // within the bounds are taken, and the fingerprint follows.
+    let fingerprint = fw.status().unwrap().config.fingerprint;
+    let d = raim_proto::WireModelCheckConfig::DEFAULT;
+    for bad in [
+        raim_proto::WireModelCheckConfig { window: 0, ..d },
+        raim_proto::WireModelCheckConfig { window: 17, ..d },
+        raim_proto::WireModelCheckConfig {
+            spacing_s: f64::NAN,
+            ..d
+        },
+        raim_proto::WireModelCheckConfig {
+            spacing_s: 1e-4,
+            ..d
+        },
+        raim_proto::WireModelCheckConfig {
+            p_fa_per_hour: 0.9,
+            ..d
+        },
+    ] {
+        let want = bad.check().unwrap_err();
+        match fw.call(CommandRef::ModelCheck(bad)).unwrap() {
+            // NaN != NaN: compare the encodings.
+            ResponseBody::Error(e) => assert_eq!(format!("{e:?}"), format!("{want:?}")),
+            other => panic!("{bad:?}: {other:?}"),
+        }
+        assert_eq!(fw.status().unwrap().config.fingerprint, fingerprint);
+    }
+    let good = raim_proto::WireModelCheckConfig { window: 4, ..d };
+    assert_eq!(
+        fw.call(CommandRef::ModelCheck(good)).unwrap(),
+        ResponseBody::Configured
+    );
+    let expected = raim_proto::UnitConfig {
+        snapshot: Some(Config::default()),
+        araim: None,
+        pf: None,
+        host_sigmas: true,
+        model_check: good,
+    };
+    assert_eq!(
+        fw.status().unwrap().config.fingerprint,
+        expected.fingerprint()
+    );
+    drop(fw);
+    // Provisioned out of its bounds: boot refuses it as the model check's
+    // part, the unit stays Unconfigured and locked.
+    let mut unit = installed();
+    unit.model_check.window = 0;
+    let img = raim_qemu::provision_config(
+        &elf(Machine::Mps2An386),
+        &unit,
+        None,
+        "model-check-window-0",
+    )
+    .unwrap();
+    let fw = start(&img, Machine::Mps2An386);
+    let b = fw.boots()[0];
+    assert_eq!(b.config.source, ConfigSource::Unconfigured);
+    assert!(b.config.locked);
+    assert_eq!(
+        b.provision_error,
+        Some(ProvisionError::InvalidPart(
+            raim_proto::unit::UnitPart::ModelCheck
+        ))
+    );
+    drop(fw);
+    let _ = std::fs::remove_file(img);
 }
 
 /// The boot-time authority on the real board's build (netduinoplus2, no

@@ -935,6 +935,247 @@ fn a_model_the_residuals_deny_makes_the_unit_unavailable_until_reconfigured() {
     });
 }
 
+/// P(chi2(dof) > x) for an even `dof`, in closed form: the Poisson sum
+/// e^(-x/2) sum_{i < dof/2} (x/2)^i / i!, independent of the core's
+/// incomplete gamma (`stats::dist::gamma_q`).
+fn chi2_sf_even_dof(dof: u32, x: f64) -> f64 {
+    assert_eq!(dof % 2, 0);
+    let h = x / 2.0;
+    let mut term = (-h).exp();
+    let mut sum = 0.0;
+    for i in 0..dof / 2 {
+        if i > 0 {
+            term *= h / f64::from(i);
+        }
+        sum += term;
+    }
+    sum
+}
+
+/// The model check as docs/MODEL_CHECK.md writes it, for a constant
+/// sample (q, dof) offered every `step_s`: samples at least `spacing_s`
+/// apart, the last `window` of them, p = P(chi2(sum dof) > sum q) against
+/// p_eval = P_h / (floor(3600 / spacing_s) + 1); the index (from 1) of the
+/// first offer whose window rejects, if any within `offers`.
+fn predicted_declaration(
+    c: &raim_proto::WireModelCheckConfig,
+    (q, dof): (f64, u32),
+    step_s: f64,
+    offers: usize,
+) -> Option<usize> {
+    let p_eval = c.p_fa_per_hour / ((3600.0 / c.spacing_s).floor() + 1.0);
+    let mut last: Option<f64> = None;
+    let mut samples = 0u32;
+    for k in 1..=offers {
+        let t = step_s * k as f64;
+        if last.is_some_and(|l| t - l < c.spacing_s) {
+            continue;
+        }
+        last = Some(t);
+        samples += 1;
+        let n = samples.min(c.window);
+        if chi2_sf_even_dof(n * dof, f64::from(n) * q) < p_eval {
+            return Some(k);
+        }
+    }
+    None
+}
+
+/// Issue 35: the model check runs with the settings of the unit
+/// configuration, taken by `ModelCheck`. One 8-satellite sky whose
+/// residuals the snapshot test passes, but at a few times the sigma
+/// model's q, is sent every 900 s to units configured with the defaults,
+/// with a window of 4, with a spacing of 900 s and with P_h 1e-3; each
+/// declares the model broken at the epoch the check's own arithmetic
+/// (`predicted_declaration`, with a closed-form chi-square independent of
+/// the core's) gives for its settings, and those epochs differ from the
+/// defaults' for each setting changed, so a setting that was not in force
+/// would show. A nominal sky is declared under none of them. The
+/// fingerprint covers the settings.
+///
+/// Verifies: MODEL-CONFIG, SAFE-MODEL
+#[test]
+fn the_model_check_runs_with_the_configured_settings() {
+    use raim_core::{Decision, Epoch, Raim};
+    use raim_proto::WireModelCheckConfig;
+    const STEP_S: f64 = 900.0;
+    const OFFERS: usize = 24;
+    let cfg = Config::default();
+    let d = WireModelCheckConfig::DEFAULT;
+    let settings = [
+        d,
+        WireModelCheckConfig { window: 4, ..d },
+        WireModelCheckConfig {
+            spacing_s: 900.0,
+            ..d
+        },
+        WireModelCheckConfig {
+            p_fa_per_hour: 1e-3,
+            ..d
+        },
+    ];
+    let pattern = [1.0, -1.2, 0.8, -0.6, 1.1, -0.9, 0.7, -1.3];
+    let scaled = |a: f64| -> Vec<LinearObservation> {
+        sky(0.0)
+            .into_iter()
+            .zip(pattern)
+            .map(|(mut o, p)| {
+                o.residual_m = a * p;
+                o
+            })
+            .collect()
+    };
+    // The sample of a scale, from the server's own engine; the first scale
+    // the snapshot test passes (`Ok`) at which every changed setting
+    // declares at another epoch than the defaults.
+    let mut core =
+        std::boxed::Box::new(Raim::<{ raim_proto::CAPACITY }, raim_proto::DevicePrecision>::new());
+    let mut sample = |a: f64| {
+        let r = core.process(&cfg, &Epoch::linear(0.0, &scaled(a))).unwrap();
+        (r.decision == Decision::Ok).then(|| r.model_sample()).flatten()
+    };
+    let (a, q, want) = (1..400)
+        .map(|k| 0.01 * f64::from(k))
+        .map_while(|a| sample(a).map(|s| (a, s)))
+        .map(|(a, s)| {
+            let want: Vec<_> = settings
+                .iter()
+                .map(|c| predicted_declaration(c, s, STEP_S, OFFERS))
+                .collect();
+            (a, s, want)
+        })
+        .find(|(_, _, w)| w[1..].iter().all(|x| *x != w[0]))
+        .expect("a scale at which every setting changes the declaration");
+    let calm = sample(0.05).unwrap();
+    for c in &settings {
+        assert_eq!(predicted_declaration(c, calm, STEP_S, OFFERS), None);
+    }
+    let (loud, quiet) = (scaled(a), scaled(0.05));
+    on_big_stack(|| {
+        let mut fingerprints = Vec::new();
+        for (c, want) in settings.iter().zip(&want) {
+            for (obs, want) in [(&loud, *want), (&quiet, None)] {
+                let mut server = bench();
+                let (r, _) = run(
+                    &mut server,
+                    &frame(&RequestRef {
+                        seq: 1,
+                        command: CommandRef::ModelCheck(*c),
+                    }),
+                );
+                assert_eq!(r[0].body, ResponseBody::Configured);
+                let fingerprint = r[0].config.fingerprint;
+                let mut declared = None;
+                for k in 1..=OFFERS {
+                    let t = 1.0e9 + STEP_S * k as f64;
+                    let (r, _) = run(
+                        &mut server,
+                        &frame(&RequestRef::linear(k as u32 + 1, t, obs)),
+                    );
+                    let ResponseBody::Result(w) = &r[0].body else {
+                        panic!("{r:?}")
+                    };
+                    if w.decision == Decision::Unavailable {
+                        declared = Some(k);
+                        break;
+                    }
+                    assert_eq!(w.decision, Decision::Ok);
+                }
+                assert_eq!(declared, want, "{c:?}, q {q:?}");
+                fingerprints.push(fingerprint);
+            }
+        }
+        // One fingerprint per setting, the same for both skies.
+        fingerprints.dedup();
+        assert_eq!(fingerprints.len(), settings.len());
+    });
+    std::println!("scale {a:.2} m, sample {q:?}: declared at offers {want:?}");
+}
+
+/// Out-of-bounds model-check settings are refused with the field and the
+/// value, plain or authenticated, and the settings in force stay (the
+/// fingerprint, and the check at those settings); a provisioned unit
+/// takes its settings (the fingerprint) and refuses any other.
+///
+/// Verifies: MODEL-CONFIG
+#[test]
+fn out_of_bounds_model_check_settings_are_refused_and_change_nothing() {
+    use raim_proto::auth::{tag, Authenticated, Change};
+    use raim_proto::WireModelCheckConfig;
+    on_big_stack(|| {
+        let d = WireModelCheckConfig::DEFAULT;
+        let mut server = bench();
+        let before = server.fingerprint();
+        for bad in [
+            WireModelCheckConfig { window: 0, ..d },
+            WireModelCheckConfig { window: 17, ..d },
+            WireModelCheckConfig {
+                spacing_s: -1.0,
+                ..d
+            },
+            WireModelCheckConfig {
+                p_fa_per_hour: 1e-13,
+                ..d
+            },
+        ] {
+            assert_eq!(
+                server.change_plain(&Change::ModelCheck(bad)),
+                Err(bad.check().unwrap_err())
+            );
+            assert_eq!(server.fingerprint(), before);
+            assert_eq!(*server.model.settings(), d);
+        }
+        let key = [5u8; 32];
+        let mut keyed = std::boxed::Box::new(Server::with_auth_key(key));
+        let w4 = WireModelCheckConfig { window: 4, ..d };
+        let change = Change::ModelCheck(w4);
+        assert_eq!(
+            keyed.change_plain(&change),
+            Err(raim_proto::WireError::AuthRequired)
+        );
+        let a = Authenticated {
+            counter: 1,
+            tag: tag(&key, &keyed.nonce(), 1, &change),
+            change,
+        };
+        assert!(keyed.change_authenticated(&a).is_ok());
+        assert_eq!(*keyed.model.settings(), w4);
+        assert_eq!(keyed.model.config().window, 4);
+
+        let unit = raim_proto::UnitConfig {
+            snapshot: Some(Config::default()),
+            araim: None,
+            pf: None,
+            host_sigmas: false,
+            model_check: WireModelCheckConfig {
+                spacing_s: 60.0,
+                window: 16,
+                p_fa_per_hour: 0.5,
+            },
+        };
+        let mut installed = std::boxed::Box::new(Server::new());
+        installed.provision(unit.clone()).unwrap();
+        assert_eq!(installed.fingerprint(), unit.fingerprint());
+        assert_eq!(installed.model.config().spacing_s, 60.0);
+        assert_eq!(
+            installed.change_plain(&Change::ModelCheck(d)),
+            Err(raim_proto::WireError::Locked {
+                fingerprint: unit.fingerprint()
+            })
+        );
+        let mut bad_unit = unit;
+        bad_unit.model_check.p_fa_per_hour = f64::NAN;
+        let mut refused = std::boxed::Box::new(Server::new());
+        assert_eq!(
+            refused.provision(bad_unit),
+            Err(raim_proto::unit::ProvisionError::InvalidPart(
+                raim_proto::unit::UnitPart::ModelCheck
+            ))
+        );
+        assert_eq!(refused.config, None);
+    });
+}
+
 /// The boot counter's flash, in RAM: `Some` words work as NOR flash (a
 /// program clears bits); `None` is a flash that takes no write at all
 /// (QEMU's netduinoplus2: read-only memory, its controller ignoring every

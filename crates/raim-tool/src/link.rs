@@ -1,5 +1,5 @@
 //! `raim link`: talk to a unit over a real serial port (or a pty): send
-//! Status, Configure or Lock framed as the firmware's link UART expects
+//! Status, Configure, the model check's settings (ModelCheck) or Lock framed as the firmware's link UART expects
 //! (docs/PROTOCOL.md) and print each answer. The frames and the answers'
 //! decoding are those of the QEMU runner (`raim_qemu::encode_request`,
 //! `raim_proto::FrameReceiver`), over `serialport` instead of a socket.
@@ -35,6 +35,8 @@ pub enum LinkCommand {
     Status,
     // Send the monitor configuration of the options below.
     Configure,
+    // Send the model check's settings (--model-check-*; docs/MODEL_CHECK.md).
+    ModelCheck,
     // Lock the configuration in force until the unit resets.
     Lock,
     // Send the epochs of the source given after `--` (raim replay's
@@ -51,18 +53,51 @@ pub struct LinkArgs {
     /// Baud rate (8N1).
     #[arg(long, default_value_t = 115_200)]
     pub baud: u32,
-    /// What to send, in order (repeatable): status, configure, lock,
-    /// epochs.
+    /// What to send, in order (repeatable): status, configure,
+    /// model-check, lock, epochs.
     #[arg(value_enum, required = true)]
     pub commands: Vec<LinkCommand>,
     #[command(flatten, next_help_heading = "Monitor (for configure; docs/CORE.md)")]
     pub config: ConfigArgs,
+    #[command(
+        flatten,
+        next_help_heading = "Model check (for model-check; docs/MODEL_CHECK.md)"
+    )]
+    pub model_check: ModelCheckSettings,
     /// For `epochs`: `raim replay`'s options after `--` (the source:
     /// --obs/--nav, --rtcm3 FILE or --ubx FILE; --systems, --fault,
     /// --start/--end, --json, ... and the monitor options the epochs are
     /// configured with).
     #[arg(last = true, value_name = "REPLAY_OPTIONS")]
     pub replay: Vec<String>,
+}
+
+/// The settings `model-check` sends (`raim_proto::WireModelCheckConfig`;
+/// the defaults are the unit's). The unit checks them: a value out of its
+/// bounds is refused with the field and the value, and the settings in
+/// force stay.
+#[derive(Debug, Clone, Args)]
+pub struct ModelCheckSettings {
+    /// Least time between two samples, s ([1e-3, 86400]).
+    #[arg(long, default_value_t = raim_proto::WireModelCheckConfig::DEFAULT.spacing_s)]
+    pub model_check_spacing_s: f64,
+    /// Samples in the window (1 to 16, the unit's capacity).
+    #[arg(long, default_value_t = raim_proto::WireModelCheckConfig::DEFAULT.window)]
+    pub model_check_window: u32,
+    /// Allocated false-declaration probability per hour ([1e-12, 0.5]).
+    #[arg(long, default_value = "1e-6")]
+    pub model_check_pfa_hour: f64,
+}
+
+impl ModelCheckSettings {
+    /// The settings on the wire.
+    pub fn wire(&self) -> raim_proto::WireModelCheckConfig {
+        raim_proto::WireModelCheckConfig {
+            spacing_s: self.model_check_spacing_s,
+            window: self.model_check_window,
+            p_fa_per_hour: self.model_check_pfa_hour,
+        }
+    }
 }
 
 /// `raim replay`'s options, parsed on their own for `epochs`.
@@ -267,6 +302,9 @@ pub fn run(args: &LinkArgs) -> Result<()> {
         let r = match c {
             LinkCommand::Status => link.call(CommandRef::Status)?,
             LinkCommand::Configure => link.call(CommandRef::Configure(&cfg))?,
+            LinkCommand::ModelCheck => {
+                link.call(CommandRef::ModelCheck(args.model_check.wire()))?
+            }
             LinkCommand::Lock => link.call(CommandRef::Lock)?,
             LinkCommand::Epochs => {
                 if let Some(r) = &replay {
@@ -279,6 +317,7 @@ pub fn run(args: &LinkArgs) -> Result<()> {
             (c, &r.body),
             (LinkCommand::Status, ResponseBody::Status(_))
                 | (LinkCommand::Configure, ResponseBody::Configured)
+                | (LinkCommand::ModelCheck, ResponseBody::Configured)
                 | (LinkCommand::Lock, ResponseBody::LockEngaged)
         );
         crate::outln!("{c:?}: {:?} (configuration {:?})", r.body, r.config)?;
@@ -295,6 +334,39 @@ pub fn run(args: &LinkArgs) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `raim link model-check` sends the settings its options give, the
+    /// unit's defaults for the ones not given.
+    ///
+    /// Verifies: MODEL-CONFIG
+    #[test]
+    fn model_check_settings_come_from_the_options_with_the_units_defaults() {
+        #[derive(Parser)]
+        struct Cli {
+            #[command(flatten)]
+            link: LinkArgs,
+        }
+        let parse = |extra: &[&str]| {
+            let mut argv = vec!["raim", "--port", "/dev/null", "model-check"];
+            argv.extend_from_slice(extra);
+            Cli::try_parse_from(argv).unwrap().link
+        };
+        let d = parse(&[]);
+        assert_eq!(d.commands, [LinkCommand::ModelCheck]);
+        assert_eq!(
+            d.model_check.wire(),
+            raim_proto::WireModelCheckConfig::DEFAULT
+        );
+        let w = parse(&["--model-check-window", "4", "--model-check-pfa-hour", "1e-3"]);
+        assert_eq!(
+            w.model_check.wire(),
+            raim_proto::WireModelCheckConfig {
+                window: 4,
+                p_fa_per_hour: 1e-3,
+                ..raim_proto::WireModelCheckConfig::DEFAULT
+            }
+        );
+    }
 
     /// `raim link status` prints the unit's epoch cycles per kind, with
     /// their time at the unit's clock, and says when they are not

@@ -22,8 +22,8 @@ use raim_proto::unit::{Hex, UnitConfig, PROVISION_BYTES};
 /// The arguments of `raim provision`.
 #[derive(clap::Args)]
 pub struct ProvisionArgs {
-    /// The unit configuration, TOML (keys: snapshot, araim, pf, host_sigmas;
-    /// docs/PROTOCOL.md "Configuration authority").
+    /// The unit configuration, TOML (keys: snapshot, araim, pf, host_sigmas,
+    /// model_check; docs/PROTOCOL.md "Configuration authority").
     #[arg(long, value_name = "FILE")]
     pub config: PathBuf,
     /// The unit's key, 64 hexadecimal digits; written into the image's
@@ -148,6 +148,11 @@ mod tests {
             }),
             pf: Some(raim_proto::pf_msg::WirePfConfig::gapf(100, 7)),
             host_sigmas: false,
+            model_check: raim_proto::WireModelCheckConfig {
+                spacing_s: 900.0,
+                window: 4,
+                p_fa_per_hour: 1e-5,
+            },
         }
     }
 
@@ -172,12 +177,14 @@ mod tests {
 
     /// Issue 35: `raim provision` refuses what boot would refuse, for
     /// every part, with the same part and the part's own typed error: an
-    /// invalid ARAIM part (P_sat 0; an ISM with no entry) and an invalid
-    /// PF part (window 0; a particle count not compiled in), each refused
+    /// invalid ARAIM part (P_sat 0; an ISM with no entry), an invalid
+    /// PF part (window 0; a particle count not compiled in) and model-check
+    /// settings out of their bounds (window 0 and 17, spacing NaN and
+    /// 1e-4 s, P_h 0.9), each refused
     /// before anything is written, and refused by boot as `InvalidPart`
     /// of that part; the valid unit passes both.
     ///
-    /// Verifies: SAFE-PROVISION, WIRE-Araim
+    /// Verifies: SAFE-PROVISION, WIRE-Araim, MODEL-CONFIG
     #[test]
     fn provisioning_refuses_every_part_boot_refuses() {
         use raim_proto::araim_msg::AraimWireError;
@@ -203,11 +210,26 @@ mod tests {
         if let Some(p) = odd_particles.pf.as_mut() {
             p.particles = 123;
         }
+        let model = |f: &dyn Fn(&mut raim_proto::WireModelCheckConfig)| {
+            let mut u = good.clone();
+            f(&mut u.model_check);
+            u
+        };
+        let window_0 = model(&|m| m.window = 0);
+        let window_17 = model(&|m| m.window = 17);
+        let spacing_nan = model(&|m| m.spacing_s = f64::NAN);
+        let spacing_tiny = model(&|m| m.spacing_s = 1e-4);
+        let p_h_large = model(&|m| m.p_fa_per_hour = 0.9);
         let cases = [
             (&bad_ism, UnitPart::Araim, "p_sat"),
             (&empty_ism, UnitPart::Araim, "no satellite entry"),
             (&bad_pf, UnitPart::Pf, "window"),
             (&odd_particles, UnitPart::Pf, "123"),
+            (&window_0, UnitPart::ModelCheck, "window = 0 outside [1, 16]"),
+            (&window_17, UnitPart::ModelCheck, "window = 17 outside [1, 16]"),
+            (&spacing_nan, UnitPart::ModelCheck, "non-finite spacing_s"),
+            (&spacing_tiny, UnitPart::ModelCheck, "spacing_s = 0.0001"),
+            (&p_h_large, UnitPart::ModelCheck, "p_fa_per_hour = 0.9"),
         ];
         for (unit, part, detail) in cases {
             let r = raim_server::check_unit(unit).unwrap_err();
@@ -220,6 +242,11 @@ mod tests {
         assert_eq!(
             raim_server::check_unit(&empty_ism).unwrap_err().error,
             WireError::Araim(AraimWireError::EmptyIsm)
+        );
+        // The model check's refusal is the one a runtime `ModelCheck` gets.
+        assert_eq!(
+            raim_server::check_unit(&window_17).unwrap_err().error,
+            window_17.model_check.check().unwrap_err()
         );
     }
 
@@ -260,7 +287,12 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
-    /// The TOML form round-trips a unit configuration.
+    /// The TOML form round-trips a unit configuration; a file without the
+    /// model check's table, or with only some of its fields, gets the
+    /// defaults for the rest (the check as it ran before the settings
+    /// existed), and the fingerprint covers every one of them.
+    ///
+    /// Verifies: MODEL-CONFIG
     #[test]
     fn toml_round_trips() {
         let u = UnitConfig {
@@ -268,7 +300,20 @@ mod tests {
             araim: None,
             pf: None,
             host_sigmas: false,
+            model_check: raim_proto::WireModelCheckConfig::DEFAULT,
         };
+        let bare: UnitConfig = toml::from_str("host_sigmas = false").unwrap();
+        assert_eq!(bare.model_check, raim_proto::WireModelCheckConfig::DEFAULT);
+        let partial: UnitConfig =
+            toml::from_str("host_sigmas = false\n[model_check]\nwindow = 4\n").unwrap();
+        assert_eq!(
+            partial.model_check,
+            raim_proto::WireModelCheckConfig {
+                window: 4,
+                ..raim_proto::WireModelCheckConfig::DEFAULT
+            }
+        );
+        assert_ne!(partial.fingerprint(), bare.fingerprint());
         let text = toml::to_string(&u).unwrap();
         let back: UnitConfig = toml::from_str(&text).unwrap();
         assert_eq!(back, u);
