@@ -17,6 +17,10 @@
 //!   epoch frame not answered `Ok` or `Excluded`: oversized frames, absurd
 //!   and backward times, out-of-range PRNs included (issue 35);
 //! - an empty ISM is never taken;
+//! - the model check's settings (`ModelCheck`, in and out of bounds; a
+//!   provisioned section with them in or out of bounds) are taken only
+//!   within their bounds, on an open unkeyed unit, refused otherwise with
+//!   the check's own typed error, and the fingerprint covers them;
 //! - on a keyed unit, power cycles and resets advance the boot counter in
 //!   a simulated flash (torn by power cuts, or failing), each completed
 //!   boot's count above every earlier one; a frame sent before, replayed
@@ -121,6 +125,38 @@ pub enum Step {
     Replay {
         index: u8,
     },
+    /// The model check's settings (`Command::ModelCheck`): the spacing
+    /// from a list that reaches past both bounds (or `wild_spacing_s`),
+    /// the window 0-19 (bounds 1-16), P_h 10^-(0..=13) (bounds 1e-12,
+    /// 0.5) or `wild_p_h`: taken only within the bounds, refused with the
+    /// check's own typed error otherwise.
+    ModelCheck {
+        spacing: u8,
+        window: u8,
+        p_h_exp: u8,
+        wild_spacing_s: Option<f64>,
+        wild_p_h: Option<f64>,
+    },
+}
+
+/// The settings of a `Step::ModelCheck`.
+fn model_check_settings(step: &Step) -> Option<raim_proto::WireModelCheckConfig> {
+    let Step::ModelCheck {
+        spacing,
+        window,
+        p_h_exp,
+        wild_spacing_s,
+        wild_p_h,
+    } = *step
+    else {
+        return None;
+    };
+    const SPACINGS_S: [f64; 8] = [1e-4, 1e-3, 1.0, 30.0, 900.0, 1800.0, 86_400.0, 1e6];
+    Some(raim_proto::WireModelCheckConfig {
+        spacing_s: wild_spacing_s.unwrap_or(SPACINGS_S[usize::from(spacing) % SPACINGS_S.len()]),
+        window: u32::from(window % 20),
+        p_fa_per_hour: wild_p_h.unwrap_or(10f64.powi(-i32::from(p_h_exp % 14))),
+    })
 }
 
 /// What the unit's flash holds in its provisioned-configuration section.
@@ -128,10 +164,18 @@ pub enum Step {
 pub enum Provision {
     /// Erased: the unit boots Unconfigured.
     None,
-    /// A sealed configuration (a preset phase, host sigmas on or off).
-    Valid { phase: u8, host_sigmas: bool },
+    /// A sealed configuration (a preset phase, host sigmas on or off, a
+    /// model-check window of 1-16).
+    Valid {
+        phase: u8,
+        host_sigmas: bool,
+        window: u8,
+    },
     /// A sealed configuration with one byte of the section flipped.
     Corrupt { phase: u8, byte: u16, flip: u8 },
+    /// A sealed configuration whose model-check window (0, or 17-255) is
+    /// out of its bounds: refused at boot (`InvalidPart(ModelCheck)`).
+    BadModelCheck { phase: u8, window: u8 },
 }
 
 /// A provisioning state, whether the unit is keyed, and a sequence of
@@ -283,23 +327,38 @@ fn provisioned(
     key: Option<&AuthKey>,
 ) -> (Option<UnitConfig>, bool, Box<[u8; PROVISION_BYTES]>) {
     let mut blob = Box::new([0xFFu8; PROVISION_BYTES]);
-    let unit = |phase: u8, host_sigmas| UnitConfig {
+    let unit = |phase: u8, host_sigmas, window| UnitConfig {
         snapshot: Some(Config::preset(
             [Phase::EnRoute, Phase::Terminal, Phase::Npa][usize::from(phase % 3)],
         )),
         araim: None,
         pf: None,
         host_sigmas,
+        model_check: raim_proto::WireModelCheckConfig {
+            window,
+            ..raim_proto::WireModelCheckConfig::DEFAULT
+        },
     };
     match p {
         Provision::None => (None, false, blob),
-        Provision::Valid { phase, host_sigmas } => {
-            let u = unit(phase, host_sigmas);
+        Provision::Valid {
+            phase,
+            host_sigmas,
+            window,
+        } => {
+            let u = unit(phase, host_sigmas, 1 + u32::from(window % 16));
             let _ = raim_proto::unit::seal(&u, key, &mut blob);
             (Some(u), false, blob)
         }
+        Provision::BadModelCheck { phase, window } => {
+            let w = if window <= 16 { 0 } else { u32::from(window) };
+            let u = unit(phase, false, w);
+            let _ = raim_proto::unit::seal(&u, key, &mut blob);
+            // Sealed right, refused by boot's check of the part.
+            (None, true, blob)
+        }
         Provision::Corrupt { phase, byte, flip } => {
-            let u = unit(phase, false);
+            let u = unit(phase, false, 8);
             let _ = raim_proto::unit::seal(&u, key, &mut blob);
             // Within the sealed bytes (header 12, payload, seal 32).
             let len = u32::from_le_bytes([blob[8], blob[9], blob[10], blob[11]]) as usize;
@@ -368,6 +427,8 @@ pub struct Tally {
     pub failed_counters: u64,
     pub auth_taken: u64,
     pub replays_refused: u64,
+    pub model_checks_taken: u64,
+    pub model_checks_refused: u64,
 }
 
 struct Sink(Vec<u8>);
@@ -607,7 +668,7 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
     let mut server = boot(&section, resets, key, counter);
     let after_boot = |server: &Server,
                       provision: &Option<UnitConfig>|
-     -> Result<(Option<Config>, bool, bool), String> {
+     -> Result<(Option<Config>, bool, bool, raim_proto::WireModelCheckConfig), String> {
         let id = server.config_id();
         match provision {
             Some(u) => {
@@ -617,7 +678,7 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                 {
                     return Err(format!("booted with {id:?}, provisioned {u:?}"));
                 }
-                Ok((u.snapshot, true, u.host_sigmas))
+                Ok((u.snapshot, true, u.host_sigmas, u.model_check))
             }
             None => {
                 if id.source != ConfigSource::Unconfigured || id.locked != corrupt {
@@ -625,11 +686,17 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                         "booted with {id:?}, nothing provisioned (corrupt section: {corrupt})"
                     ));
                 }
-                Ok((None, corrupt, true))
+                Ok((
+                    None,
+                    corrupt,
+                    true,
+                    raim_proto::WireModelCheckConfig::DEFAULT,
+                ))
             }
         }
     };
-    let (mut in_force, mut locked, mut host_sigmas) = after_boot(&server, &provision)?;
+    let (mut in_force, mut locked, mut host_sigmas, mut model_check) =
+        after_boot(&server, &provision)?;
     let mut source = server.config_id().source;
     let (mut link, mut nmea) = (Sink(Vec::new()), Sink(Vec::new()));
     let mut rx = Box::new(FrameReceiver::<MAX_RESPONSE_FRAME>::new());
@@ -675,7 +742,7 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
             }
             check_count(counter)?;
             server = boot(&section, resets, key, counter);
-            (in_force, locked, host_sigmas) = after_boot(&server, &provision)?;
+            (in_force, locked, host_sigmas, model_check) = after_boot(&server, &provision)?;
             source = server.config_id().source;
             host_counter = 0;
             last_time = None;
@@ -718,6 +785,7 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
         }
         let sats = sky(step);
         let cfg = config(step);
+        let settings = model_check_settings(step);
         let (epoch_time, absurd) = match step {
             Step::Epoch { time_s, .. } => (f64::from(*time_s), false),
             Step::BadTime { kind, .. } => bad_time(*kind, last_time),
@@ -790,6 +858,9 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                         CommandRef::Configure(cfg.as_ref().ok_or("no configuration")?)
                     }
                     (Step::Lock, None) => CommandRef::Lock,
+                    (Step::ModelCheck { .. }, None) => {
+                        CommandRef::ModelCheck(settings.ok_or("no settings")?)
+                    }
                     (Step::EmptyIsm, None) => CommandRef::Araim(AraimCommandRef::Ism(ism)),
                     _ => CommandRef::Status,
                 };
@@ -983,7 +1054,8 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                 | Step::EmptyIsm
                 | Step::AuthConfigure { .. }
                 | Step::AuthLock
-                | Step::Replay { .. },
+                | Step::Replay { .. }
+                | Step::ModelCheck { .. },
                 ResponseBody::Error(WireError::Unconfigured { provision: Some(_) }),
             ) if corrupt => {
                 tally.locked_refusals += 1;
@@ -993,13 +1065,48 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                 | Step::EmptyIsm
                 | Step::AuthConfigure { .. }
                 | Step::AuthLock
-                | Step::Replay { .. },
+                | Step::Replay { .. }
+                | Step::ModelCheck { .. },
                 ResponseBody::Error(WireError::Locked { .. }),
             ) if locked && !corrupt => {
                 tally.locked_refusals += 1;
             }
             (Step::Configure { .. }, ResponseBody::Error(_)) if !locked => {
                 tally.refused_configs += 1;
+            }
+            // The model check's settings: taken only within their bounds,
+            // on an open, unkeyed unit; refused with the check's own
+            // typed error otherwise, and nothing changes.
+            (Step::ModelCheck { .. }, ResponseBody::Configured) => {
+                let c = settings.ok_or("no settings")?;
+                if locked || keyed {
+                    return Err(format!(
+                        "step {seq}: settings taken (locked {locked}, keyed {keyed})"
+                    ));
+                }
+                if let Err(e) = c.check() {
+                    return Err(format!(
+                        "step {seq}: out-of-bounds settings taken: {c:?} ({e})"
+                    ));
+                }
+                model_check = c;
+                source = ConfigSource::Runtime;
+                tally.model_checks_taken += 1;
+            }
+            (Step::ModelCheck { .. }, ResponseBody::Error(WireError::AuthRequired))
+                if keyed && !locked => {}
+            (Step::ModelCheck { .. }, ResponseBody::Error(e)) if !locked && !keyed => {
+                let c = settings.ok_or("no settings")?;
+                // NaN is not equal to itself: compare the printed forms.
+                match c.check() {
+                    Err(want) if format!("{want:?}") == format!("{e:?}") => {}
+                    other => {
+                        return Err(format!(
+                            "step {seq}: {c:?} refused with {e:?}, the check gives {other:?}"
+                        ))
+                    }
+                }
+                tally.model_checks_refused += 1;
             }
             // `Lock` only with a configuration in force (issue 35).
             (Step::Lock, ResponseBody::LockEngaged)
@@ -1079,6 +1186,7 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                 araim: None,
                 pf: None,
                 host_sigmas,
+                model_check: &model_check,
             }
             .fingerprint(),
             locked,

@@ -179,8 +179,10 @@ fn qemu_provisioned_unit_keeps_its_locked_configuration_across_resets() {
             fingerprint: unit.fingerprint(),
         };
         assert_eq!(
-            fw.call(CommandRef::ModelCheck(raim_proto::WireModelCheckConfig::DEFAULT))
-                .unwrap(),
+            fw.call(CommandRef::ModelCheck(
+                raim_proto::WireModelCheckConfig::DEFAULT
+            ))
+            .unwrap(),
             ResponseBody::Error(locked.clone())
         );
         assert_eq!(

@@ -1032,7 +1032,9 @@ fn the_model_check_runs_with_the_configured_settings() {
         std::boxed::Box::new(Raim::<{ raim_proto::CAPACITY }, raim_proto::DevicePrecision>::new());
     let mut sample = |a: f64| {
         let r = core.process(&cfg, &Epoch::linear(0.0, &scaled(a))).unwrap();
-        (r.decision == Decision::Ok).then(|| r.model_sample()).flatten()
+        (r.decision == Decision::Ok)
+            .then(|| r.model_sample())
+            .flatten()
     };
     let (a, q, want) = (1..400)
         .map(|k| 0.01 * f64::from(k))

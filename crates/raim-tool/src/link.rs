@@ -357,7 +357,12 @@ mod tests {
             d.model_check.wire(),
             raim_proto::WireModelCheckConfig::DEFAULT
         );
-        let w = parse(&["--model-check-window", "4", "--model-check-pfa-hour", "1e-3"]);
+        let w = parse(&[
+            "--model-check-window",
+            "4",
+            "--model-check-pfa-hour",
+            "1e-3",
+        ]);
         assert_eq!(
             w.model_check.wire(),
             raim_proto::WireModelCheckConfig {

@@ -225,8 +225,16 @@ mod tests {
             (&empty_ism, UnitPart::Araim, "no satellite entry"),
             (&bad_pf, UnitPart::Pf, "window"),
             (&odd_particles, UnitPart::Pf, "123"),
-            (&window_0, UnitPart::ModelCheck, "window = 0 outside [1, 16]"),
-            (&window_17, UnitPart::ModelCheck, "window = 17 outside [1, 16]"),
+            (
+                &window_0,
+                UnitPart::ModelCheck,
+                "window = 0 outside [1, 16]",
+            ),
+            (
+                &window_17,
+                UnitPart::ModelCheck,
+                "window = 17 outside [1, 16]",
+            ),
             (&spacing_nan, UnitPart::ModelCheck, "non-finite spacing_s"),
             (&spacing_tiny, UnitPart::ModelCheck, "spacing_s = 0.0001"),
             (&p_h_large, UnitPart::ModelCheck, "p_fa_per_hour = 0.9"),
