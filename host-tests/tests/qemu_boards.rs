@@ -114,6 +114,7 @@ fn qemu_netduinoplus2_answers_frames_bit_for_bit_with_nmea() {
         araim: None,
         pf: None,
         host_sigmas: true,
+        model_check: &raim_proto::WireModelCheckConfig::DEFAULT,
     };
     assert_eq!(st.config.fingerprint, bench.fingerprint());
     assert_eq!(st.config.source, ConfigSource::Runtime);

@@ -157,6 +157,7 @@ fn snapshot_build_refuses_the_reconstruction_fde() {
         araim: None,
         pf: None,
         host_sigmas: true,
+        model_check: &raim_proto::WireModelCheckConfig::DEFAULT,
     };
     assert_eq!(fw.status().unwrap().config.fingerprint, bench.fingerprint());
     let mut faulted = 0;
