@@ -666,35 +666,36 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
     let mut counter = count_boot(&mut flash);
     check_count(counter)?;
     let mut server = boot(&section, resets, key, counter);
-    let after_boot = |server: &Server,
-                      provision: &Option<UnitConfig>|
-     -> Result<(Option<Config>, bool, bool, raim_proto::WireModelCheckConfig), String> {
-        let id = server.config_id();
-        match provision {
-            Some(u) => {
-                if id.source != ConfigSource::Provisioned
-                    || !id.locked
-                    || id.fingerprint != u.fingerprint()
-                {
-                    return Err(format!("booted with {id:?}, provisioned {u:?}"));
+    let after_boot =
+        |server: &Server,
+         provision: &Option<UnitConfig>|
+         -> Result<(Option<Config>, bool, bool, raim_proto::WireModelCheckConfig), String> {
+            let id = server.config_id();
+            match provision {
+                Some(u) => {
+                    if id.source != ConfigSource::Provisioned
+                        || !id.locked
+                        || id.fingerprint != u.fingerprint()
+                    {
+                        return Err(format!("booted with {id:?}, provisioned {u:?}"));
+                    }
+                    Ok((u.snapshot, true, u.host_sigmas, u.model_check))
                 }
-                Ok((u.snapshot, true, u.host_sigmas, u.model_check))
-            }
-            None => {
-                if id.source != ConfigSource::Unconfigured || id.locked != corrupt {
-                    return Err(format!(
-                        "booted with {id:?}, nothing provisioned (corrupt section: {corrupt})"
-                    ));
+                None => {
+                    if id.source != ConfigSource::Unconfigured || id.locked != corrupt {
+                        return Err(format!(
+                            "booted with {id:?}, nothing provisioned (corrupt section: {corrupt})"
+                        ));
+                    }
+                    Ok((
+                        None,
+                        corrupt,
+                        true,
+                        raim_proto::WireModelCheckConfig::DEFAULT,
+                    ))
                 }
-                Ok((
-                    None,
-                    corrupt,
-                    true,
-                    raim_proto::WireModelCheckConfig::DEFAULT,
-                ))
             }
-        }
-    };
+        };
     let (mut in_force, mut locked, mut host_sigmas, mut model_check) =
         after_boot(&server, &provision)?;
     let mut source = server.config_id().source;
