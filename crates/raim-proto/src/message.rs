@@ -122,8 +122,9 @@ pub enum Command {
     /// `WireError::TestHooksDisabled`.
     TestFault(TestFault),
     /// An authenticated change (`auth`): `Configure`, `Ism`, `PfConfigure`,
-    /// `Lock`, `HostSigmas` or `ModelCheck`, with a counter and an HMAC tag under the
-    /// unit's key and boot nonce. The only form a keyed unit takes.
+    /// `Lock`, `HostSigmas` or `ModelCheck`, with a counter and an HMAC
+    /// tag under the unit's key and boot nonce. The only form a keyed unit
+    /// takes.
     Authenticated(crate::auth::Authenticated),
     /// ARAIM: an ISM frame or an ARAIM epoch (`araim_msg`).
     Araim(crate::araim_msg::AraimCommand),

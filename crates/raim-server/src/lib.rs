@@ -229,7 +229,8 @@ pub enum IoError<L, M> {
 }
 
 /// The fingerprint of the unconfigured unit (no snapshot, ARAIM or PF
-/// configuration, host sigmas on, the model check's default settings): `UnitConfigRef::fingerprint` of it, a
+/// configuration, host sigmas on, the model check's default settings):
+/// `UnitConfigRef::fingerprint` of it, a
 /// SHA-256 that `const fn` cannot compute, written out so that
 /// [`Server::new`] is `const`; the test `unconfigured_fingerprint_is_computed`
 /// recomputes it.
