@@ -133,7 +133,8 @@ pub enum WireError {
     /// A `TestFault` request to a build without test hooks.
     TestHooksDisabled,
     /// A plain state-changing request (`Configure`, `Ism`, `PfConfigure`,
-    /// `Lock`, `HostSigmas`) to a unit with an authentication key.
+    /// `Lock`, `HostSigmas`, `ModelCheck`) to a unit with an authentication
+    /// key.
     AuthRequired,
     /// An `Authenticated` request to a unit without a key.
     AuthNotProvisioned,
