@@ -22,7 +22,9 @@
 //!   within their bounds, on an open unkeyed unit, refused otherwise with
 //!   the check's own typed error, and the fingerprint covers them;
 //! - on a keyed unit, power cycles and resets advance the boot counter in
-//!   a simulated flash (torn by power cuts, or failing), each completed
+//!   a simulated flash (torn by power cuts, failing, or taking a write
+//!   that reports success and stores other bits or leaves a marginal
+//!   cell), each completed
 //!   boot's count above every earlier one; a frame sent before, replayed
 //!   in a later power-on or the same one, is never taken again, and a
 //!   boot whose counter failed takes no authenticated change.
@@ -114,11 +116,16 @@ pub enum Step {
     /// A power cycle: the unit loses power (the reset count is gone) and
     /// boots again; the first `cuts % 3` boots are cut during the boot
     /// counter's advance, after `cut_at % 48` flash operations (a torn
-    /// write); the last boot's flash takes no write when `flash_fails`.
+    /// write); the last boot's flash takes no write when `flash_fails`,
+    /// and with `bad_write` = (k, weak) its (k % 4)-th program that clears
+    /// a bit reports success and stores other bits, or (`weak`) leaves a
+    /// marginal cell that reads right once or twice and then with a bit
+    /// flipped.
     PowerCycle {
         cuts: u8,
         cut_at: u8,
         flash_fails: bool,
+        bad_write: Option<(u8, bool)>,
     },
     /// One of the recorded authenticated frames sent again (re-framed with
     /// the next sequence number, as an attacker on the link would).
@@ -213,12 +220,18 @@ const KEY: AuthKey = [0x35; 32];
 /// switch every 4 boots). A power cut after `budget` operations tears the
 /// operation it interrupts (a program clears only some of its bits, an
 /// erase sets only some) and fails every later one; `read_only` is a
-/// flash that takes no write (QEMU's netduinoplus2).
+/// flash that takes no write (QEMU's netduinoplus2). `bad_program`:
+/// the n-th program of a boot that clears a bit reports success and
+/// stores other bits, or (`true`) leaves a marginal cell (`weak`: page,
+/// word, good reads left, the bit that flips after them).
 struct SimFlash {
     pages: [Vec<u32>; 2],
     budget: Option<u32>,
     read_only: bool,
     tear: u32,
+    bad_program: Option<(u32, bool)>,
+    programs: u32,
+    weak: Vec<(usize, usize, u32, u32)>,
 }
 
 impl SimFlash {
@@ -242,11 +255,24 @@ impl CounterFlash for SimFlash {
         if self.spend()? {
             return Err(FlashFault);
         }
-        self.pages
+        let v = self
+            .pages
             .get(page)
             .and_then(|p| p.get(word))
             .copied()
-            .ok_or(FlashFault)
+            .ok_or(FlashFault)?;
+        match self
+            .weak
+            .iter_mut()
+            .find(|(p, w, _, _)| *p == page && *w == word)
+        {
+            Some((_, _, 0, bit)) => Ok(v ^ (1 << *bit)),
+            Some((_, _, left, _)) => {
+                *left -= 1;
+                Ok(v)
+            }
+            None => Ok(v),
+        }
     }
     fn erase(&mut self, page: usize) -> Result<(), FlashFault> {
         let cut = self.spend()?;
@@ -254,6 +280,9 @@ impl CounterFlash for SimFlash {
             return Ok(());
         }
         let tear = self.tear;
+        if !cut {
+            self.weak.retain(|(p, _, _, _)| *p != page);
+        }
         let p = self.pages.get_mut(page).ok_or(FlashFault)?;
         for (k, w) in p.iter_mut().enumerate() {
             *w = if cut {
@@ -282,6 +311,29 @@ impl CounterFlash for SimFlash {
         if cut {
             *w &= value | tear;
             return Err(FlashFault);
+        }
+        let old = *w;
+        // A program pulses only the bits it clears: one that clears none
+        // changes nothing, and cannot go wrong.
+        if old & !value != 0 {
+            let n = self.programs;
+            self.programs += 1;
+            match self.bad_program {
+                Some((k, false)) if k == n => {
+                    // Some bits to clear left set, some to keep cleared.
+                    let stored = old & ((value | tear) & !tear.rotate_left(7));
+                    *w = if stored == old & value {
+                        stored ^ 1
+                    } else {
+                        stored
+                    };
+                    return Ok(());
+                }
+                Some((k, true)) if k == n => {
+                    self.weak.push((page, word, 1 + n % 2, tear % 32));
+                }
+                _ => {}
+            }
         }
         *w &= value;
         Ok(())
@@ -429,6 +481,7 @@ pub struct Tally {
     pub replays_refused: u64,
     pub model_checks_taken: u64,
     pub model_checks_refused: u64,
+    pub bad_writes: u64,
 }
 
 struct Sink(Vec<u8>);
@@ -650,6 +703,9 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
         budget: None,
         read_only: false,
         tear: 0,
+        bad_program: None,
+        programs: 0,
+        weak: Vec::new(),
     };
     // The largest count a completed boot has had.
     let mut last_count: Option<u32> = None;
@@ -716,6 +772,7 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                     cuts,
                     cut_at,
                     flash_fails,
+                    bad_write,
                 } => {
                     tally.power_cycles += 1;
                     resets = 0;
@@ -730,8 +787,16 @@ pub fn run(scenario: &Scenario, tally: &mut Tally) -> Result<(), String> {
                         check_count(c)?;
                     }
                     flash.read_only = flash_fails;
+                    flash.programs = 0;
+                    flash.bad_program = bad_write.map(|(k, weak)| (u32::from(k % 4), weak));
+                    flash.tear = 0x85EB_CA6Bu32.rotate_left(u32::from(cut_at));
                     counter = count_boot(&mut flash);
+                    // The bad program happened (the boot reached it).
+                    if flash.bad_program.is_some_and(|(k, _)| flash.programs > k) {
+                        tally.bad_writes += 1;
+                    }
                     flash.read_only = false;
+                    flash.bad_program = None;
                 }
                 _ => {
                     resets += 1;
