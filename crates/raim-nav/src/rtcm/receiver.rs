@@ -87,6 +87,8 @@ pub const NO_MODEL_IONO_FACTOR: f64 = 2.0;
 /// Galileo (I/NAV and F/NAV are sets of their own: 72), 46 BeiDou (the
 /// BDS-2 and BDS-3 satellites in service) and 10 QZSS satellites, less a
 /// margin the oldest-out rule covers (a full store drops its oldest toc).
+/// Each is kept as its message's payload and decoded when an epoch uses
+/// it ([`EphemerisStore`]).
 pub const KEPLER_SETS: usize = 256;
 /// GLONASS sets kept: two per slot of a full constellation.
 const GLONASS_SETS: usize = 48;
@@ -228,6 +230,9 @@ pub struct RtcmCounts {
     pub glonass_bad: u32,
     /// RTCM 1013 system parameters taken.
     pub system_parameters: u32,
+    /// Keplerian ephemerides not kept: a payload over 64 B
+    /// ([`crate::store::Stored::NotKept`]).
+    pub ephemerides_not_kept: u32,
 }
 
 /// One signal's pseudorange.
@@ -287,7 +292,7 @@ pub struct FormedEpoch<const N: usize> {
 #[derive(Debug, Clone)]
 pub struct StreamReceiver<const N: usize, const S: usize> {
     pivot_week: i64,
-    store: EphemerisStore<KEPLER_SETS, GLONASS_SETS>,
+    store: EphemerisStore<KEPLER_SETS, GLONASS_SETS, N>,
     pending_glo: Vec<PendingGlonass, PENDING_GLONASS>,
     /// (GPS week, toe in GPS s) of the first Keplerian ephemeris, until the
     /// stream is dated.
@@ -346,6 +351,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 glonass_dropped: 0,
                 glonass_bad: 0,
                 system_parameters: 0,
+                ephemerides_not_kept: 0,
             },
             solution: Solution::empty(),
             bootstrap_obs: Vec::new(),
@@ -457,7 +463,10 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                     0.0
                 };
                 k.toc_gps_s = toc_near_toe(week, k.toe_sow_s, e.fields.toc_s - bdt_s);
-                let _: Stored = self.store.insert_kepler(k);
+                if let Stored::NotKept { .. } = self.store.insert_kepler(k, f.payload()) {
+                    self.counts.ephemerides_not_kept =
+                        self.counts.ephemerides_not_kept.wrapping_add(1);
+                }
                 if self.first_eph.is_none() {
                     self.first_eph = Some((week, week as f64 * WEEK_S + k.toe_sow_s - bdt_s));
                 }
@@ -759,6 +768,20 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         }
         // Satellite order, as the host's epochs (a BTreeMap by SatId).
         sort_checked(&mut o.sigs, |a, b| (a.id, a.code) < (b.id, b.code));
+        // The Keplerian sets the satellites with a code will use, decoded
+        // from the store's payloads once for the epoch; more than N is the
+        // capacity refusal the inputs below would give.
+        store.start_epoch();
+        let mut from = 0;
+        while let Some((id, have)) = next_satellite(&o.sigs, &mut from) {
+            if pick_code(stream_codes(id.system), have).is_some()
+                && store.load(id, time_gps_s).is_err()
+            {
+                return Some(Err(FormError::TooManySignals {
+                    capacity: u32::try_from(N).unwrap_or(u32::MAX),
+                }));
+            }
+        }
         let mut inputs: Vec<SatInput<'_>, N> = Vec::new();
         // The C/N0 of each input, in the same order.
         let mut cn0s: Vec<u8, N> = Vec::new();
@@ -871,6 +894,16 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         }
         Some(Ok(()))
     }
+}
+
+/// The next satellite of `sigs` (sorted by satellite) from `*from` on,
+/// and its signals, advancing `*from` past them; None at the end.
+fn next_satellite<'s>(sigs: &'s [Signal], from: &mut usize) -> Option<(SatId, &'s [Signal])> {
+    let rest = sigs.get(*from..)?;
+    let id = rest.first()?.id;
+    let len = rest.iter().take_while(|s| s.id == id).count();
+    *from += len;
+    Some((id, rest.get(..len)?))
 }
 
 /// An MSM's signals with a valid pseudorange, in cell order.
