@@ -49,6 +49,23 @@ use raim_proto::{
     PROTOCOL_VERSION,
 };
 
+/// Satellites the snapshot monitor (and the stream receiver, whose
+/// epochs it runs) takes: the wire's capacity. An epoch with more is
+/// refused with the typed `TooManySatellites { capacity }`, never
+/// truncated.
+#[cfg(not(feature = "ram-192k"))]
+pub const SNAPSHOT_SATS: usize = CAPACITY;
+/// Satellites the snapshot monitor and the stream receiver take on a part
+/// with 192 KiB of RAM (the STM32F405/407, docs/FLASH.md), as ARAIM
+/// (`araim::ARAIM_SATS`): 24. The engine's O(N^2) storage and the
+/// stream's per-satellite buffers at 24 leave room for the stream beside
+/// ARAIM and the particle filter; a 25th satellite is
+/// `TooManySatellites { capacity: 24 }` (a stream epoch's,
+/// `StreamCapacity { capacity: 24 }`).
+#[cfg(feature = "ram-192k")]
+pub const SNAPSHOT_SATS: usize = 24;
+const _: () = assert!(SNAPSHOT_SATS <= CAPACITY);
+
 mod answer;
 mod gate;
 pub mod model_check;
@@ -172,7 +189,7 @@ pub struct Server {
     /// The link's receiver: the host's frames, and a receiver's RTCM 3
     /// frames beside them.
     rx: LinkReceiver<MAX_REQUEST_FRAME>,
-    raim: Raim<CAPACITY, DevicePrecision>,
+    raim: Raim<SNAPSHOT_SATS, DevicePrecision>,
     /// The snapshot configuration in force; `None` until one is
     /// provisioned or taken (snapshot epochs are then `Unconfigured`).
     config: Option<Config>,
@@ -203,7 +220,7 @@ pub struct Server {
     request: Option<Request>,
     /// The last epoch's result (`Raim::process_into`) and its wire form,
     /// both written in place.
-    result: EpochResult<CAPACITY>,
+    result: EpochResult<SNAPSHOT_SATS>,
     wire: WireResult,
     /// The PF configuration and the engines lent by the owner
     /// (`attach_pf`; a few pointers, the engines stay where they are).
@@ -262,7 +279,7 @@ impl Server {
             provision_error: None,
             status: Status {
                 protocol_version: PROTOCOL_VERSION,
-                capacity: CAPACITY as u16,
+                capacity: SNAPSHOT_SATS as u16,
                 ..Status::ZERO
             },
             araim: araim::AraimState::new(),
@@ -986,12 +1003,12 @@ fn check_sigma_bounds(sigmas: impl Iterator<Item = Option<f64>>) -> Result<(), W
 /// the verdict.
 fn run_epoch<P: Platform>(
     (raim, model): (
-        &mut Raim<CAPACITY, DevicePrecision>,
+        &mut Raim<SNAPSHOT_SATS, DevicePrecision>,
         &mut model_check::UnitModelCheck,
     ),
     config: &Config,
     status: &mut Status,
-    (result, wire): (&mut EpochResult<CAPACITY>, &mut WireResult),
+    (result, wire): (&mut EpochResult<SNAPSHOT_SATS>, &mut WireResult),
     epoch: &Epoch<'_>,
     platform: &mut P,
 ) -> Result<(), WireError> {

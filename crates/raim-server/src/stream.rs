@@ -31,6 +31,7 @@
 //! doubled residual ionosphere the ADD's dual-frequency model lacks)
 //! (docs/RECEIVERS.md "ARAIM from the stream").
 
+use crate::{IoError, Platform, Server, SNAPSHOT_SATS};
 use embedded_io::Write;
 use raim_nav::ranging::StreamSigmas;
 use raim_nav::rtcm::{FormError, FormedEpoch, StreamReceiver};
@@ -38,9 +39,6 @@ use raim_proto::araim_msg::AraimCommand;
 use raim_proto::error::WireError;
 use raim_proto::lock::ConfigSource;
 use raim_proto::message::{Command, RangeEpoch, Request, SatList};
-use raim_proto::CAPACITY;
-
-use crate::{IoError, Platform, Server};
 
 /// Signals one stream epoch may carry (GPS, GLONASS, Galileo, BeiDou and
 /// QZSS, every band: e.g. 60 satellites on 3 signals and more; an epoch
@@ -65,8 +63,8 @@ pub const PIVOT_WEEK: i64 = BUILD_GPS_WEEK - PIVOT_LOOKBACK_WEEKS;
 
 /// The stream receiver and the epoch it formed last.
 pub struct StreamState {
-    receiver: StreamReceiver<CAPACITY, STREAM_SIGNALS>,
-    formed: FormedEpoch<CAPACITY>,
+    receiver: StreamReceiver<SNAPSHOT_SATS, STREAM_SIGNALS>,
+    formed: FormedEpoch<SNAPSHOT_SATS>,
     epochs: u32,
 }
 
@@ -109,7 +107,7 @@ impl StreamState {
     /// The epoch formed last, to be written by the tests as the receiver
     /// writes it.
     #[cfg(test)]
-    pub(crate) fn formed_mut(&mut self) -> &mut FormedEpoch<CAPACITY> {
+    pub(crate) fn formed_mut(&mut self) -> &mut FormedEpoch<SNAPSHOT_SATS> {
         &mut self.formed
     }
 
@@ -238,7 +236,7 @@ impl Server {
         );
         let mut sats = SatList::default();
         for s in f.sats.iter() {
-            // `formed` holds at most CAPACITY satellites.
+            // `formed` holds at most SNAPSHOT_SATS <= CAPACITY satellites.
             let _ = sats.items.push(*s);
         }
         sats.declared = u32::try_from(sats.items.len()).unwrap_or(u32::MAX);
