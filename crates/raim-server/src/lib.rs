@@ -53,16 +53,17 @@ use raim_proto::{
 /// epochs it runs) takes: the wire's capacity. An epoch with more is
 /// refused with the typed `TooManySatellites { capacity }`, never
 /// truncated.
-#[cfg(not(feature = "ram-192k"))]
+#[cfg(not(all(feature = "ram-192k", feature = "rtcm")))]
 pub const SNAPSHOT_SATS: usize = CAPACITY;
 /// Satellites the snapshot monitor and the stream receiver take on a part
-/// with 192 KiB of RAM (the STM32F405/407, docs/FLASH.md), as ARAIM
-/// (`araim::ARAIM_SATS`): 24. The engine's O(N^2) storage and the
-/// stream's per-satellite buffers at 24 leave room for the stream beside
-/// ARAIM and the particle filter; a 25th satellite is
-/// `TooManySatellites { capacity: 24 }` (a stream epoch's,
-/// `StreamCapacity { capacity: 24 }`).
-#[cfg(feature = "ram-192k")]
+/// with 192 KiB of RAM (the STM32F405/407, docs/FLASH.md) that carries
+/// the stream: 24, as ARAIM there (`araim::ARAIM_SATS`). The engine's
+/// O(N^2) storage and the stream's per-satellite buffers at 24 leave room
+/// for the stream beside ARAIM and the particle filter; a 25th satellite
+/// is `TooManySatellites { capacity: 24 }` (a stream epoch's,
+/// `StreamCapacity { capacity: 24 }`). The part's build without the
+/// stream keeps the wire's 32.
+#[cfg(all(feature = "ram-192k", feature = "rtcm"))]
 pub const SNAPSHOT_SATS: usize = 24;
 const _: () = assert!(SNAPSHOT_SATS <= CAPACITY);
 

@@ -43,7 +43,15 @@ use raim_proto::message::{Command, RangeEpoch, Request, SatList};
 /// Signals one stream epoch may carry (GPS, GLONASS, Galileo, BeiDou and
 /// QZSS, every band: e.g. 60 satellites on 3 signals and more; an epoch
 /// with more is refused, `StreamCapacity`).
+#[cfg(not(feature = "ram-192k"))]
 pub const STREAM_SIGNALS: usize = 256;
+/// Signals one stream epoch may carry on a part with 192 KiB of RAM: five
+/// for each of the 24 satellites its epochs take (`SNAPSHOT_SATS`; five
+/// is the most bands an MSM7 of one system carries for a satellite,
+/// e.g. Galileo E1, E5a, E5b, E5 AltBOC and E6). An epoch with more is
+/// refused whole, `StreamCapacity { capacity: 120 }`.
+#[cfg(feature = "ram-192k")]
+pub const STREAM_SIGNALS: usize = 120;
 /// The elevation mask of stream epochs, rad (10 degrees, the replay's
 /// default `--mask-deg`).
 pub const STREAM_MASK_RAD: f64 = 10.0 * core::f64::consts::PI / 180.0;

@@ -89,11 +89,32 @@ pub const NO_MODEL_IONO_FACTOR: f64 = 2.0;
 /// margin the oldest-out rule covers (a full store drops its oldest toc).
 /// Each is kept as its message's payload and decoded when an epoch uses
 /// it ([`EphemerisStore`]).
+#[cfg(not(feature = "ram-192k"))]
 pub const KEPLER_SETS: usize = 256;
+/// Keplerian sets kept on a part with 192 KiB of RAM (feature
+/// `ram-192k`, the STM32F4's stream build, whose epochs take 24
+/// satellites): the set in force and the next of the satellites a
+/// receiver tracks and broadcasts, not of every satellite in orbit (24
+/// satellites, Galileo's I/NAV and F/NAV sets apart, within 64). A stream
+/// that carries more (a caster's whole-constellation ephemeris stream)
+/// loses its oldest sets first; a satellite left without a set in force
+/// is not used (`FormedEpoch::rejected`), never given another's.
+#[cfg(feature = "ram-192k")]
+pub const KEPLER_SETS: usize = 64;
 /// GLONASS sets kept: two per slot of a full constellation.
+#[cfg(not(feature = "ram-192k"))]
 const GLONASS_SETS: usize = 48;
+/// GLONASS sets kept with `ram-192k`: two for each of 12 satellites, the
+/// most in view at once (the oldest t_b goes first).
+#[cfg(feature = "ram-192k")]
+const GLONASS_SETS: usize = 24;
 /// 1020 messages held until the stream's epochs are dated.
+#[cfg(not(feature = "ram-192k"))]
 const PENDING_GLONASS: usize = 32;
+/// 1020 messages held until the stream is dated, with `ram-192k`: one for
+/// each of 16 satellites, more than are in view (the oldest goes first).
+#[cfg(feature = "ram-192k")]
+const PENDING_GLONASS: usize = 16;
 /// GLONASS orbits kept integrated between epochs: one per slot (1-27),
 /// so every GLONASS satellite of an epoch has its own.
 const GLONASS_ARCS: usize = 27;
