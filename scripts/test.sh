@@ -115,5 +115,8 @@ step "the core's own unit tests in the device's precision (their default Stat = 
 cargo test -p raim-core --release --features test-f32 --lib
 step "the core's own tests without the optional reconstruction FDE (the 128 KiB flash build's core)"
 cargo test -p raim-core --release --no-default-features --lib
+step "the STM32F4 stream build's capacities (raim-server ram-192k + rtcm: 24 satellites, the 25th typed; raim-nav's stream tests with its ram-192k holding areas)"
+cargo test -p raim-server --release --features ram-192k,rtcm the_stm32f4_stream_build
+cargo test -p raim-nav --release --features rtcm,ram-192k --lib
 step "structural coverage of raim-core, raim-nav, raim-proto, raim-server not under docs/coverage_floor.txt (their own unit tests, instrumented on the pinned nightly; docs/EVIDENCE.md)"
 bash scripts/coverage.sh --check
