@@ -117,7 +117,13 @@ const PENDING_GLONASS: usize = 32;
 const PENDING_GLONASS: usize = 16;
 /// GLONASS orbits kept integrated between epochs: one per slot (1-27),
 /// so every GLONASS satellite of an epoch has its own.
+#[cfg(not(feature = "ram-192k"))]
 const GLONASS_ARCS: usize = 27;
+/// GLONASS orbits kept integrated with `ram-192k`: 12, the most GLONASS
+/// satellites in view at once. A satellite beyond them in one epoch is
+/// integrated from t_b ([`GlonassArcs::state`]): the same bits, slower.
+#[cfg(feature = "ram-192k")]
+const GLONASS_ARCS: usize = 12;
 
 /// The GLONASS orbits of the latest epochs, each integrated up to the
 /// last RK4 node before its latest transmit time ([`GlonassArc`]): an
