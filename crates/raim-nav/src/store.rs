@@ -165,7 +165,7 @@ const NO_FIELDS: crate::rtcm::fields::KeplerFields = crate::rtcm::fields::Kepler
 };
 
 /// No decoded set left for the satellite: the epoch's satellites outnumber
-/// the store's decoded sets ([`EphemerisStore::load`]).
+/// the decoded sets ([`EphemerisStore::load`]).
 #[cfg(feature = "rtcm")]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -174,35 +174,68 @@ pub struct DecodedFull {
     pub capacity: u32,
 }
 
-/// Fixed-capacity ephemeris store: `K` Keplerian sets, kept as their
-/// messages' payloads, `G` GLONASS sets, and the `D` Keplerian sets one
-/// epoch uses, decoded ([`Self::load`], then [`Self::select`]).
+/// The Keplerian sets one epoch uses, decoded from the store's payloads
+/// ([`EphemerisStore::load`], then [`EphemerisStore::select`]): `D` of
+/// them, each with the index of the set it was decoded from. Held apart
+/// from the store, so that the room serves other work between epochs
+/// (raim-server lends it while forming only); stamped with the store's
+/// generation, so that a set replaced since is never given.
 #[cfg(feature = "rtcm")]
 #[derive(Debug, Clone)]
-pub struct EphemerisStore<const K: usize, const G: usize, const D: usize> {
-    kepler: Vec<KeplerBits, K>,
-    glonass: Vec<GlonassEphemeris, G>,
-    /// The sets loaded for the epoch being formed: (index in `kepler`,
-    /// the set decoded). Emptied by every change of `kepler`, so an index
-    /// always names the set it was decoded from.
-    decoded: Vec<(usize, Kepler), D>,
+pub struct DecodedSets<const D: usize> {
+    sets: Vec<(usize, Kepler), D>,
+    /// The store's generation the sets were decoded at.
+    generation: u64,
 }
 
 #[cfg(feature = "rtcm")]
-impl<const K: usize, const G: usize, const D: usize> Default for EphemerisStore<K, G, D> {
+impl<const D: usize> DecodedSets<D> {
+    /// None decoded.
+    pub const fn new() -> Self {
+        DecodedSets {
+            sets: Vec::new(),
+            generation: 0,
+        }
+    }
+}
+
+#[cfg(feature = "rtcm")]
+impl<const D: usize> Default for DecodedSets<D> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Fixed-capacity ephemeris store: `K` Keplerian sets, kept as their
+/// messages' payloads and decoded for an epoch into [`DecodedSets`]
+/// ([`Self::load`], then [`Self::select`]), and `G` GLONASS sets.
+#[cfg(feature = "rtcm")]
+#[derive(Debug, Clone)]
+pub struct EphemerisStore<const K: usize, const G: usize> {
+    kepler: Vec<KeplerBits, K>,
+    glonass: Vec<GlonassEphemeris, G>,
+    /// Counts the changes of `kepler`: decoded sets of another generation
+    /// are not given ([`DecodedSets`]).
+    generation: u64,
+}
+
+#[cfg(feature = "rtcm")]
+impl<const K: usize, const G: usize> Default for EphemerisStore<K, G> {
     fn default() -> Self {
         Self::new()
     }
 }
 
 #[cfg(feature = "rtcm")]
-impl<const K: usize, const G: usize, const D: usize> EphemerisStore<K, G, D> {
+impl<const K: usize, const G: usize> EphemerisStore<K, G> {
     /// An empty store.
     pub const fn new() -> Self {
         EphemerisStore {
             kepler: Vec::new(),
             glonass: Vec::new(),
-            decoded: Vec::new(),
+            // Above the decoded sets' initial 0: nothing is given before a
+            // `start_epoch` or `load`.
+            generation: 1,
         }
     }
 
@@ -210,7 +243,7 @@ impl<const K: usize, const G: usize, const D: usize> EphemerisStore<K, G, D> {
     pub fn clear(&mut self) {
         self.kepler.clear();
         self.glonass.clear();
-        self.decoded.clear();
+        self.generation = self.generation.wrapping_add(1);
     }
 
     /// Forget every GLONASS set (their t_b were placed with a leap-second
@@ -233,9 +266,9 @@ impl<const K: usize, const G: usize, const D: usize> EphemerisStore<K, G, D> {
     /// (its message from DF002 on, [`crate::rtcm::decode::Frame::payload`]):
     /// the payload is kept, and must decode to `k` again
     /// ([`Stored::NotKept`] otherwise). A full store drops its oldest
-    /// (toc) set. The decoded sets of [`Self::load`] are dropped.
+    /// (toc) set. Sets decoded before ([`DecodedSets`]) are no longer
+    /// given.
     pub fn insert_kepler(&mut self, k: Kepler, payload: &[u8]) -> Stored {
-        self.decoded.clear();
         if self
             .kepler
             .iter()
@@ -248,6 +281,7 @@ impl<const K: usize, const G: usize, const D: usize> EphemerisStore<K, G, D> {
                 payload_len: u16::try_from(payload.len()).unwrap_or(u16::MAX),
             };
         };
+        self.generation = self.generation.wrapping_add(1);
         insert_oldest_out(&mut self.kepler, bits, |e| e.toc_gps_s)
     }
 
@@ -259,38 +293,52 @@ impl<const K: usize, const G: usize, const D: usize> EphemerisStore<K, G, D> {
         insert_oldest_out(&mut self.glonass, g, |e| e.tb_gps_s)
     }
 
-    /// Drop the sets decoded for the previous epoch: call before the
-    /// [`Self::load`]s of an epoch.
-    pub fn start_epoch(&mut self) {
-        self.decoded.clear();
+    /// Empty `decoded` for a new epoch's [`Self::load`]s.
+    pub fn start_epoch<const D: usize>(&self, decoded: &mut DecodedSets<D>) {
+        decoded.sets.clear();
+        decoded.generation = self.generation;
     }
 
-    /// Decode the Keplerian set [`Self::select`] will choose for `id` at
-    /// `t_gps_s`, if any (nothing to do for GLONASS, whose sets are kept
-    /// decoded); `Err` when `D` sets are already decoded.
-    pub fn load(&mut self, id: SatId, t_gps_s: f64) -> Result<(), DecodedFull> {
+    /// Decode into `decoded` the Keplerian set [`Self::select`] will
+    /// choose for `id` at `t_gps_s`, if any (nothing to do for GLONASS,
+    /// whose sets are kept decoded); `Err` when `D` sets are already
+    /// decoded.
+    pub fn load<const D: usize>(
+        &self,
+        id: SatId,
+        t_gps_s: f64,
+        decoded: &mut DecodedSets<D>,
+    ) -> Result<(), DecodedFull> {
+        if decoded.generation != self.generation {
+            self.start_epoch(decoded);
+        }
         if id.system == System::Glonass {
             return Ok(());
         }
         let Some(i) = self.choose_kepler(id, t_gps_s) else {
             return Ok(());
         };
-        if self.decoded.iter().any(|(j, _)| *j == i) {
+        if decoded.sets.iter().any(|(j, _)| *j == i) {
             return Ok(());
         }
         let Some(k) = self.kepler.get(i).and_then(KeplerBits::decode) else {
             return Ok(());
         };
-        self.decoded.push((i, k)).map_err(|_| DecodedFull {
+        decoded.sets.push((i, k)).map_err(|_| DecodedFull {
             capacity: u32::try_from(D).unwrap_or(u32::MAX),
         })
     }
 
     /// The healthy set of `id` whose toe (t_b) is nearest `t_gps_s`, within
     /// [`max_ephemeris_age_s`]; the first such set on a tie. A Keplerian
-    /// set is given once [`Self::load`] has decoded it for this epoch
-    /// (None before).
-    pub fn select(&self, id: SatId, t_gps_s: f64) -> Option<Broadcast<'_>> {
+    /// set is given from `decoded` once [`Self::load`] has decoded it there
+    /// since the store last changed (None otherwise).
+    pub fn select<'a, const D: usize>(
+        &'a self,
+        id: SatId,
+        t_gps_s: f64,
+        decoded: &'a DecodedSets<D>,
+    ) -> Option<Broadcast<'a>> {
         if id.system == System::Glonass {
             let max_age = max_ephemeris_age_s(id.system);
             let best = |a: (f64, usize), b: (f64, usize)| if b.0 < a.0 { b } else { a };
@@ -304,8 +352,12 @@ impl<const K: usize, const G: usize, const D: usize> EphemerisStore<K, G, D> {
                 .reduce(best)?;
             self.glonass.get(i).map(Broadcast::Glonass)
         } else {
+            if decoded.generation != self.generation {
+                return None;
+            }
             let i = self.choose_kepler(id, t_gps_s)?;
-            self.decoded
+            decoded
+                .sets
                 .iter()
                 .find(|(j, _)| *j == i)
                 .map(|(_, k)| Broadcast::Kepler(k))
@@ -468,15 +520,16 @@ mod tests {
         k
     }
 
-    fn insert(s: &mut EphemerisStore<3, 1, 4>, payload: &[u8]) -> Stored {
+    fn insert(s: &mut EphemerisStore<3, 1>, payload: &[u8]) -> Stored {
         s.insert_kepler(set_of(payload), payload)
     }
 
     /// The toe of the set chosen for `id` at `t`, after an epoch's load.
-    fn pick(s: &mut EphemerisStore<3, 1, 4>, id: SatId, t: f64) -> Option<f64> {
-        s.start_epoch();
-        s.load(id, t).unwrap();
-        match s.select(id, t) {
+    fn pick(s: &EphemerisStore<3, 1>, id: SatId, t: f64) -> Option<f64> {
+        let mut d = DecodedSets::<4>::new();
+        s.start_epoch(&mut d);
+        s.load(id, t, &mut d).unwrap();
+        match s.select(id, t, &d) {
             Some(Broadcast::Kepler(k)) => Some(k.toe_sow_s),
             _ => None,
         }
@@ -486,33 +539,27 @@ mod tests {
     /// stored twice; a full store drops the oldest set.
     #[test]
     fn selection_and_capacity() {
-        let mut s = EphemerisStore::<3, 1, 4>::new();
+        let mut s = EphemerisStore::<3, 1>::new();
         let g05 = SatId::new(System::Gps, 5);
         assert_eq!(insert(&mut s, &msg1019(5, 7_200.0, 0, 3)), Stored::Added);
         assert_eq!(insert(&mut s, &msg1019(5, 7_200.0, 0, 3)), Stored::Repeat);
         assert_eq!(insert(&mut s, &msg1019(5, 14_400.0, 0, 3)), Stored::Added);
         assert_eq!(insert(&mut s, &msg1019(5, 21_600.0, 1, 3)), Stored::Added);
         let t = 1000.0 * WEEK_S + 12_000.0;
-        assert_eq!(pick(&mut s, g05, t), Some(14_400.0));
+        assert_eq!(pick(&s, g05, t), Some(14_400.0));
         // The unhealthy set at 21600 is nearer at 20000 but not used.
-        assert_eq!(
-            pick(&mut s, g05, 1000.0 * WEEK_S + 20_000.0),
-            Some(14_400.0)
-        );
+        assert_eq!(pick(&s, g05, 1000.0 * WEEK_S + 20_000.0), Some(14_400.0));
         // Beyond 2 h of every healthy set: none.
-        assert_eq!(
-            pick(&mut s, g05, 1000.0 * WEEK_S + 14_400.0 + 7_201.0),
-            None
-        );
-        assert_eq!(pick(&mut s, SatId::new(System::Gps, 6), t), None);
+        assert_eq!(pick(&s, g05, 1000.0 * WEEK_S + 14_400.0 + 7_201.0), None);
+        assert_eq!(pick(&s, SatId::new(System::Gps, 6), t), None);
         // A week later the sets have the same t_k, but not the week.
-        assert_eq!(pick(&mut s, g05, t + WEEK_S), None);
+        assert_eq!(pick(&s, g05, t + WEEK_S), None);
         // Full: the oldest (toe 7200) goes.
         assert_eq!(
             insert(&mut s, &msg1019(5, 28_800.0, 0, 3)),
             Stored::Replaced
         );
-        assert_eq!(pick(&mut s, g05, 1000.0 * WEEK_S + 7_200.0), Some(14_400.0));
+        assert_eq!(pick(&s, g05, 1000.0 * WEEK_S + 7_200.0), Some(14_400.0));
         assert_eq!(s.len(), (3, 0));
     }
 
@@ -525,21 +572,21 @@ mod tests {
     /// Verifies: RX-STREAM
     #[test]
     fn galileo_age_and_clearing() {
-        let mut s = EphemerisStore::<3, 1, 4>::new();
+        let mut s = EphemerisStore::<3, 1>::new();
         assert!(s.is_empty());
         assert_eq!(insert(&mut s, &msg1046(11, 7_200.0, 5)), Stored::Added);
         let id = SatId::new(System::Galileo, 11);
         let at = |dt: f64| 1000.0 * WEEK_S + 7_200.0 + dt;
-        assert!(pick(&mut s, id, at(14_400.0)).is_some());
-        assert!(pick(&mut s, id, at(-14_400.0)).is_some());
-        assert!(pick(&mut s, id, at(14_401.0)).is_none());
+        assert!(pick(&s, id, at(14_400.0)).is_some());
+        assert!(pick(&s, id, at(-14_400.0)).is_some());
+        assert!(pick(&s, id, at(14_401.0)).is_none());
         assert!(!s.is_empty());
         s.clear_glonass();
         assert_eq!(s.len(), (1, 0));
         s.clear();
         assert_eq!(s.len(), (0, 0));
         assert!(s.is_empty());
-        assert!(pick(&mut s, id, at(0.0)).is_none());
+        assert!(pick(&s, id, at(0.0)).is_none());
     }
 
     /// A set kept as its message's payload is given back, once loaded for
@@ -549,7 +596,7 @@ mod tests {
     /// host-tests rtcm_receiver, rtcm_esbc, qemu_rtcm). A payload longer
     /// than 64 B, or one that is not the set's message, is `NotKept` with
     /// its length; a set is not given before its epoch's load, nor after
-    /// a later insert (which drops the decoded sets); more satellites than
+    /// the store changed (an insert); more satellites than
     /// the decoded capacity is the typed `DecodedFull`.
     ///
     /// Verifies: RX-STREAM
@@ -567,13 +614,14 @@ mod tests {
             };
             assert!(payload.len() <= KEPLER_PAYLOAD_BYTES);
             let want = set_of(&payload);
-            let mut s = EphemerisStore::<3, 1, 4>::new();
+            let mut s = EphemerisStore::<3, 1>::new();
             assert_eq!(s.insert_kepler(want, &payload), Stored::Added);
             let t = 1000.0 * WEEK_S + 3_600.0;
-            assert!(s.select(id, t).is_none(), "not loaded yet");
-            s.start_epoch();
-            s.load(id, t).unwrap();
-            let Some(Broadcast::Kepler(got)) = s.select(id, t) else {
+            let mut d = DecodedSets::<4>::new();
+            assert!(s.select(id, t, &d).is_none(), "not loaded yet");
+            s.start_epoch(&mut d);
+            s.load(id, t, &mut d).unwrap();
+            let Some(Broadcast::Kepler(got)) = s.select(id, t, &d) else {
                 panic!("set {n} not given back");
             };
             assert_eq!(*got, want);
@@ -581,7 +629,7 @@ mod tests {
         }
         let payload = msg1019(7, 3_600.0, 0, 1);
         let k = set_of(&payload);
-        let mut s = EphemerisStore::<3, 1, 1>::new();
+        let mut s = EphemerisStore::<3, 1>::new();
         let mut long = payload.clone();
         long.resize(65, 0);
         assert_eq!(
@@ -601,20 +649,21 @@ mod tests {
         let g07 = SatId::new(System::Gps, 7);
         let g08 = SatId::new(System::Gps, 8);
         let t = 1000.0 * WEEK_S + 3_600.0;
-        s.start_epoch();
-        s.load(g07, t).unwrap();
-        assert!(s.select(g07, t).is_some());
+        let mut d = DecodedSets::<1>::new();
+        s.start_epoch(&mut d);
+        s.load(g07, t, &mut d).unwrap();
+        assert!(s.select(g07, t, &d).is_some());
         let p8 = msg1019(8, 3_600.0, 0, 1);
         assert_eq!(s.insert_kepler(set_of(&p8), &p8), Stored::Added);
         assert!(
-            s.select(g07, t).is_none(),
-            "an insert drops the decoded sets"
+            s.select(g07, t, &d).is_none(),
+            "a set decoded before the store changed is not given"
         );
-        s.start_epoch();
-        s.load(g07, t).unwrap();
-        assert_eq!(s.load(g08, t), Err(DecodedFull { capacity: 1 }));
+        s.start_epoch(&mut d);
+        s.load(g07, t, &mut d).unwrap();
+        assert_eq!(s.load(g08, t, &mut d), Err(DecodedFull { capacity: 1 }));
         // Loading again, or a satellite with no set, needs no room.
-        assert_eq!(s.load(g07, t), Ok(()));
-        assert_eq!(s.load(SatId::new(System::Gps, 9), t), Ok(()));
+        assert_eq!(s.load(g07, t, &mut d), Ok(()));
+        assert_eq!(s.load(SatId::new(System::Gps, 9), t, &mut d), Ok(()));
     }
 }

@@ -34,7 +34,7 @@
 use crate::{IoError, Platform, Server, SNAPSHOT_SATS};
 use embedded_io::Write;
 use raim_nav::ranging::StreamSigmas;
-use raim_nav::rtcm::{FormError, FormedEpoch, StreamReceiver};
+use raim_nav::rtcm::{FormError, FormScratch, FormedEpoch, StreamReceiver};
 use raim_proto::araim_msg::AraimCommand;
 use raim_proto::error::WireError;
 use raim_proto::lock::ConfigSource;
@@ -101,11 +101,12 @@ impl StreamState {
         frame: &[u8],
         config: Option<&raim_core::Config>,
         araim: bool,
+        scratch: &mut FormScratch<SNAPSHOT_SATS>,
     ) -> Option<Result<(), FormError>> {
         let sigmas = stream_sigmas(config, araim);
-        let r = self
-            .receiver
-            .on_frame(frame, &sigmas, STREAM_MASK_RAD, &mut self.formed);
+        let r =
+            self.receiver
+                .on_frame_in(frame, &sigmas, STREAM_MASK_RAD, &mut self.formed, scratch);
         if r.is_some() {
             self.epochs = self.epochs.wrapping_add(1);
         }

@@ -69,7 +69,7 @@ use crate::ranging::{
     bootstrap_position_into, cn0_dbhz_u8, correct_at, split_pair, stream_codes, stream_sigma_for_m,
     transmit_time_s, Broadcast, Corrections, SatInput, StreamSigmas,
 };
-use crate::store::{EphemerisStore, Stored};
+use crate::store::{DecodedSets, EphemerisStore, Stored};
 use crate::time::table_gps_minus_utc_s;
 
 use super::decode::{msm_more_bit, Frame, Message, Msm, MsmSystem};
@@ -315,11 +315,47 @@ pub struct FormedEpoch<const N: usize> {
     pub rejected: u32,
 }
 
+/// The scratch of one epoch's forming, used only inside
+/// [`StreamReceiver::on_frame_in`]: the bootstrap solution, its ranges,
+/// the transmit states and the epoch's decoded Keplerian sets (`N`
+/// satellites). Not on the stack: the epoch's deepest path is the
+/// bootstrap solve under the forming.
+#[derive(Debug, Clone)]
+pub struct FormScratch<const N: usize> {
+    /// The bootstrap solution's storage.
+    solution: Solution<N>,
+    /// The bootstrap pass's ranges.
+    bootstrap_obs: Vec<RangeObservation, N>,
+    /// Each input satellite's state at its transmit time (None: no usable
+    /// code pair), computed once for both passes.
+    transmit: Vec<Option<SatState>, N>,
+    /// The Keplerian sets the epoch uses ([`EphemerisStore::load`]).
+    decoded: DecodedSets<N>,
+}
+
+impl<const N: usize> FormScratch<N> {
+    /// Empty scratch.
+    pub const fn new() -> Self {
+        FormScratch {
+            solution: Solution::empty(),
+            bootstrap_obs: Vec::new(),
+            transmit: Vec::new(),
+            decoded: DecodedSets::new(),
+        }
+    }
+}
+
+impl<const N: usize> Default for FormScratch<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// The receiver: `N` satellites per epoch, `S` signals per epoch.
 #[derive(Debug, Clone)]
 pub struct StreamReceiver<const N: usize, const S: usize> {
     pivot_week: i64,
-    store: EphemerisStore<KEPLER_SETS, GLONASS_SETS, N>,
+    store: EphemerisStore<KEPLER_SETS, GLONASS_SETS>,
     pending_glo: Vec<PendingGlonass, PENDING_GLONASS>,
     /// (GPS week, toe in GPS s) of the first Keplerian ephemeris, until the
     /// stream is dated.
@@ -334,14 +370,6 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     glo_wait_tod_ms: Option<i64>,
     station_m: Option<[f64; 3]>,
     counts: RtcmCounts,
-    /// The bootstrap solution's storage (not on the stack).
-    solution: Solution<N>,
-    /// The bootstrap pass's ranges (not on the stack: the epoch's deepest
-    /// path is the bootstrap solve under `form`).
-    bootstrap_obs: Vec<RangeObservation, N>,
-    /// Each input satellite's state at its transmit time (None: no usable
-    /// code pair), computed once for both passes.
-    transmit: Vec<Option<SatState>, N>,
     glonass_arcs: GlonassArcs,
     /// GPS - UTC of the stream's latest 1013 (DF054), s.
     stream_leap_s: Option<u8>,
@@ -380,9 +408,6 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 system_parameters: 0,
                 ephemerides_not_kept: 0,
             },
-            solution: Solution::empty(),
-            bootstrap_obs: Vec::new(),
-            transmit: Vec::new(),
             glonass_arcs: GlonassArcs::new(),
             stream_leap_s: None,
             glonass_placed_leap_s: None,
@@ -441,6 +466,11 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
     /// curves of each satellite's signal pair) and `elevation_mask_rad`,
     /// and `Some` says whether it could be: `Ok(())` with `out` filled, or
     /// why not.
+    ///
+    /// The forming's scratch is a [`FormScratch`] of this call's own (on
+    /// the stack: for the host, whose stack is not counted; the device
+    /// lends one, [`Self::on_frame_in`]).
+    #[cfg(any(test, feature = "rtcm-rs"))]
     pub fn on_frame(
         &mut self,
         frame: &[u8],
@@ -448,8 +478,23 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         elevation_mask_rad: f64,
         out: &mut FormedEpoch<N>,
     ) -> Option<Result<(), FormError>> {
+        let mut scratch = FormScratch::new();
+        self.on_frame_in(frame, sigmas, elevation_mask_rad, out, &mut scratch)
+    }
+
+    /// [`Self::on_frame`] with the forming's scratch in `scratch`: room
+    /// used only inside this call, which the owner may use for other work
+    /// between calls (raim-server shares it with its answer buffers).
+    pub fn on_frame_in(
+        &mut self,
+        frame: &[u8],
+        sigmas: &StreamSigmas,
+        elevation_mask_rad: f64,
+        out: &mut FormedEpoch<N>,
+        scratch: &mut FormScratch<N>,
+    ) -> Option<Result<(), FormError>> {
         self.decode(frame);
-        let formed = self.form(sigmas, elevation_mask_rad, out);
+        let formed = self.form(sigmas, elevation_mask_rad, out, scratch);
         self.ready = None;
         formed
     }
@@ -746,6 +791,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         sigmas: &StreamSigmas,
         elevation_mask_rad: f64,
         out: &mut FormedEpoch<N>,
+        scratch: &mut FormScratch<N>,
     ) -> Option<Result<(), FormError>> {
         let leap_s = match (self.base_week, self.ready.as_ref()) {
             (Some(base), Some(o)) => {
@@ -761,12 +807,15 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             counts,
             store,
             station_m,
-            solution,
-            bootstrap_obs: first,
-            transmit,
             glonass_arcs,
             ..
         } = self;
+        let FormScratch {
+            solution,
+            bootstrap_obs: first,
+            transmit,
+            decoded,
+        } = scratch;
         let o = ready.as_mut()?;
         out.sats.clear();
         out.cn0_dbhz.clear();
@@ -798,11 +847,11 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // The Keplerian sets the satellites with a code will use, decoded
         // from the store's payloads once for the epoch; more than N is the
         // capacity refusal the inputs below would give.
-        store.start_epoch();
+        store.start_epoch(decoded);
         let mut from = 0;
         while let Some((id, have)) = next_satellite(&o.sigs, &mut from) {
             if pick_code(stream_codes(id.system), have).is_some()
-                && store.load(id, time_gps_s).is_err()
+                && store.load(id, time_gps_s, decoded).is_err()
             {
                 return Some(Err(FormError::TooManySignals {
                     capacity: u32::try_from(N).unwrap_or(u32::MAX),
@@ -832,7 +881,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 out.rejected += 1;
                 continue;
             };
-            let Some(eph) = store.select(s.id, time_gps_s) else {
+            let Some(eph) = store.select(s.id, time_gps_s, decoded) else {
                 out.rejected += 1;
                 continue;
             };
