@@ -81,6 +81,11 @@ keep_elf stm32f4-hw
 step "firmware: build, STM32F4 for QEMU netduinoplus2"
 (cd firmware && RAIM_TEST_LINK_IDLE_S=30 cargo build --release --no-default-features --features board-stm32f4,qemu-netduinoplus2)
 keep_elf stm32f4-netduinoplus2
+step "firmware: build, STM32F4 with the stream (hardware layout, and for QEMU netduinoplus2 with the 30 s link pause; docs/FLASH.md \"STM32F4: the stream\")"
+(cd firmware && cargo build --release --no-default-features --features board-stm32f4,rtcm)
+keep_elf stm32f4-stream-hw
+(cd firmware && RAIM_TEST_LINK_IDLE_S=30 cargo build --release --no-default-features --features board-stm32f4,qemu-netduinoplus2,rtcm)
+keep_elf stm32f4-stream-netduinoplus2
 step "firmware: clippy and build, QEMU snapshot-only"
 (cd firmware && cargo clippy --release --no-default-features --features board-qemu -- -D warnings \
     && cargo build --release --no-default-features --features board-qemu)
@@ -100,6 +105,7 @@ export RAIM_FIRMWARE_ELF_TTA1="$PWD/firmware/target/elf/qemu-tta1"
 export RAIM_FIRMWARE_ELF_STREAM="$PWD/firmware/target/elf/qemu-stream"
 export RAIM_FIRMWARE_ELF="$PWD/firmware/target/elf/qemu"
 export RAIM_FIRMWARE_ELF_STM32F4="$PWD/firmware/target/elf/stm32f4-netduinoplus2"
+export RAIM_FIRMWARE_ELF_STM32F4_STREAM="$PWD/firmware/target/elf/stm32f4-stream-netduinoplus2"
 export RAIM_FIRMWARE_ELF_SNAPSHOT="$PWD/firmware/target/elf/snapshot"
 step "static stack bound of every firmware entry within its stack region (call graph of each release ELF; docs/EVIDENCE.md)"
 bash scripts/firmware-evidence.sh
