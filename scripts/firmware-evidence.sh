@@ -25,7 +25,8 @@ JSON_DIR=$(mktemp -d)
 for build in "QEMU mps2-an386, default:$(pick qemu "firmware/target/$ELF")" \
              "QEMU mps2-an386, snapshot:$(pick snapshot "firmware/target/snapshot/$ELF")" \
              "STM32F4 (hardware layout):$(pick stm32f4-hw "firmware/target/stm32f4-hw/$ELF")" \
-             "STM32F4 (netduinoplus2 layout):$(pick stm32f4-netduinoplus2 "firmware/target/stm32f4/$ELF")"; do
+             "STM32F4 (netduinoplus2 layout):$(pick stm32f4-netduinoplus2 "firmware/target/stm32f4/$ELF")" \
+             "STM32F4 with the stream (hardware layout):$(pick stm32f4-stream-hw "firmware/target/stm32f4-stream-hw/$ELF")"; do
     name=${build%%:*}
     elf=${build#*:}
     [ -f "$elf" ] || { echo "== $name: no $elf (build it first)"; status=1; continue; }

@@ -81,6 +81,11 @@ keep_elf stm32f4-hw
 step "firmware: build, STM32F4 for QEMU netduinoplus2"
 (cd firmware && RAIM_TEST_LINK_IDLE_S=30 cargo build --release --no-default-features --features board-stm32f4,qemu-netduinoplus2)
 keep_elf stm32f4-netduinoplus2
+step "firmware: build, STM32F4 with the stream (hardware layout, and for QEMU netduinoplus2 with the 30 s link pause; docs/FLASH.md \"STM32F4: the stream\")"
+(cd firmware && cargo build --release --no-default-features --features board-stm32f4,rtcm)
+keep_elf stm32f4-stream-hw
+(cd firmware && RAIM_TEST_LINK_IDLE_S=30 cargo build --release --no-default-features --features board-stm32f4,qemu-netduinoplus2,rtcm)
+keep_elf stm32f4-stream-netduinoplus2
 step "firmware: clippy and build, QEMU snapshot-only"
 (cd firmware && cargo clippy --release --no-default-features --features board-qemu -- -D warnings \
     && cargo build --release --no-default-features --features board-qemu)
@@ -100,6 +105,7 @@ export RAIM_FIRMWARE_ELF_TTA1="$PWD/firmware/target/elf/qemu-tta1"
 export RAIM_FIRMWARE_ELF_STREAM="$PWD/firmware/target/elf/qemu-stream"
 export RAIM_FIRMWARE_ELF="$PWD/firmware/target/elf/qemu"
 export RAIM_FIRMWARE_ELF_STM32F4="$PWD/firmware/target/elf/stm32f4-netduinoplus2"
+export RAIM_FIRMWARE_ELF_STM32F4_STREAM="$PWD/firmware/target/elf/stm32f4-stream-netduinoplus2"
 export RAIM_FIRMWARE_ELF_SNAPSHOT="$PWD/firmware/target/elf/snapshot"
 step "static stack bound of every firmware entry within its stack region (call graph of each release ELF; docs/EVIDENCE.md)"
 bash scripts/firmware-evidence.sh
@@ -115,5 +121,8 @@ step "the core's own unit tests in the device's precision (their default Stat = 
 cargo test -p raim-core --release --features test-f32 --lib
 step "the core's own tests without the optional reconstruction FDE (the 128 KiB flash build's core)"
 cargo test -p raim-core --release --no-default-features --lib
+step "the STM32F4 stream build's capacities (raim-server ram-192k + rtcm: 24 satellites, the 25th typed; raim-nav's stream tests with its ram-192k holding areas)"
+cargo test -p raim-server --release --features ram-192k,rtcm the_stm32f4_stream_build
+cargo test -p raim-nav --release --features rtcm,ram-192k --lib
 step "structural coverage of raim-core, raim-nav, raim-proto, raim-server not under docs/coverage_floor.txt (their own unit tests, instrumented on the pinned nightly; docs/EVIDENCE.md)"
 bash scripts/coverage.sh --check

@@ -55,7 +55,16 @@ struct Ring {
 /// Initialised by a `const` value, like every large static
 /// (`statics.rs`): the 4 KiB ring is never built on the stack, and, all
 /// zero, it is in `.bss` (the port's `None` is not all zero on every
-/// board, so it has a static of its own).
+/// board, so it has a static of its own). The STM32F4's build with the
+/// stream has it in the core-coupled memory (`.ccmram`, zero-filled by
+/// `main` before the receive interrupt is enabled, `statics::zero_ccm`;
+/// the ring is written by the interrupt handler, not by DMA, which CCM
+/// would not take), leaving its SRAM to the stream receiver
+/// (docs/FLASH.md).
+#[cfg_attr(
+    all(feature = "board-stm32f4", feature = "rtcm"),
+    link_section = ".ccmram.raim_ring"
+)]
 static RING: Mutex<RefCell<Ring>> = Mutex::new(RefCell::new(Ring {
     queue: Queue::new(),
     paused: false,

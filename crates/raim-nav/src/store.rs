@@ -1,14 +1,20 @@
 //! The broadcast ephemerides a receiver has decoded so far, in fixed
-//! capacity: Keplerian sets (`K` of them) and GLONASS state vectors (`G`),
-//! with the selection rule of the host's navigation data (the healthy set
-//! whose reference time is nearest the epoch, within
-//! [`max_ephemeris_age_s`]).
+//! capacity (`EphemerisStore`, feature `rtcm`): Keplerian sets (`K` of
+//! them, each kept as its RTCM message's payload and decoded when an
+//! epoch uses it) and GLONASS state vectors (`G`), with the selection
+//! rule of the host's navigation data (the healthy set whose reference
+//! time is nearest the epoch, within [`max_ephemeris_age_s`]).
 
+#[cfg(feature = "rtcm")]
 use heapless::Vec;
-use raim_core::{SatId, System};
+#[cfg(feature = "rtcm")]
+use raim_core::SatId;
+use raim_core::System;
 
 use crate::ephemeris::Kepler;
+#[cfg(feature = "rtcm")]
 use crate::glonass::GlonassEphemeris;
+#[cfg(feature = "rtcm")]
 use crate::ranging::Broadcast;
 
 /// Largest |t - toe| at which a broadcast ephemeris is used, s (the
@@ -46,27 +52,190 @@ pub enum Stored {
     Repeat,
     /// A new set, in the place of the oldest one (the store was full).
     Replaced,
+    /// A Keplerian set not kept: its message's payload is longer than
+    /// [`KEPLER_PAYLOAD_BYTES`] (the longest of RTCM 10403.3's Keplerian
+    /// messages, 1042's 511 bits, fills 64) or does not decode to the set.
+    NotKept {
+        /// The payload's length, bytes.
+        payload_len: u16,
+    },
 }
 
-/// Fixed-capacity ephemeris store.
+/// Bytes of a Keplerian message's payload the store keeps: 1019 is 488
+/// bits, 1044 485, 1045 496, 1046 504 and 1042 511 (RTCM 10403.3
+/// §3.5.11-3.5.14), 64 bytes at most.
+#[cfg(feature = "rtcm")]
+pub const KEPLER_PAYLOAD_BYTES: usize = 64;
+
+/// A Keplerian set as the payload of the message it came in (88 B,
+/// against the decoded set's 192 B of f64): decoded again by the one
+/// decoder ([`crate::rtcm::decode::kepler_message`] and
+/// [`crate::rtcm::fields::kepler`]) when an epoch uses it, so the set an
+/// epoch uses is the set the message carried, to the bit. The toc is the
+/// one placed when the message arrived (its week from the receiver's
+/// pivot, `rtcm::fields::gps_week_of`); toe and health are kept decoded
+/// for the choice of the set ([`EphemerisStore::select`]).
+#[cfg(feature = "rtcm")]
+#[derive(Debug, Clone, PartialEq)]
+struct KeplerBits {
+    toc_gps_s: f64,
+    toe_sow_s: f64,
+    health: u32,
+    system: System,
+    prn: u8,
+    /// Bytes of `payload` in use.
+    len: u8,
+    payload: [u8; KEPLER_PAYLOAD_BYTES],
+}
+
+#[cfg(feature = "rtcm")]
+impl KeplerBits {
+    /// `k` as `payload`, when the payload fits and decodes to `k`.
+    fn new(k: &Kepler, payload: &[u8]) -> Option<Self> {
+        let mut b = KeplerBits {
+            toc_gps_s: k.toc_gps_s,
+            toe_sow_s: k.toe_sow_s,
+            health: k.health,
+            system: k.system,
+            prn: k.prn,
+            len: u8::try_from(payload.len()).ok()?,
+            payload: [0; KEPLER_PAYLOAD_BYTES],
+        };
+        b.payload.get_mut(..payload.len())?.copy_from_slice(payload);
+        (b.decode().as_ref() == Some(k)).then_some(b)
+    }
+
+    /// Whether this may be `k` (the decoded set must then be compared).
+    fn keys_match(&self, k: &Kepler) -> bool {
+        self.system == k.system
+            && self.prn == k.prn
+            && self.health == k.health
+            && self.toe_sow_s == k.toe_sow_s
+            && self.toc_gps_s == k.toc_gps_s
+    }
+
+    /// The set, decoded as the receiver decoded it on arrival.
+    fn decode(&self) -> Option<Kepler> {
+        let payload = self.payload.get(..usize::from(self.len))?;
+        let m = crate::rtcm::decode::kepler_message(payload).ok()?;
+        let mut k = crate::rtcm::fields::kepler(m.system, m.prn, &m.fields);
+        k.toc_gps_s = self.toc_gps_s;
+        Some(k)
+    }
+
+    /// [`kepler_age_s`] of the set.
+    fn age_s(&self, t_gps_s: f64) -> Option<f64> {
+        let key = Kepler {
+            toc_gps_s: self.toc_gps_s,
+            toe_sow_s: self.toe_sow_s,
+            ..crate::rtcm::fields::kepler(self.system, self.prn, &NO_FIELDS)
+        };
+        kepler_age_s(&key, t_gps_s)
+    }
+}
+
+/// Every field zero: the elements of the key set [`KeplerBits::age_s`]
+/// times with (only the system, toe and toc enter [`kepler_age_s`]).
+#[cfg(feature = "rtcm")]
+const NO_FIELDS: crate::rtcm::fields::KeplerFields = crate::rtcm::fields::KeplerFields {
+    toc_s: 0.0,
+    toe_s: 0.0,
+    af0: 0.0,
+    af1: 0.0,
+    af2: 0.0,
+    sqrt_a: 0.0,
+    e: 0.0,
+    i0_sc: 0.0,
+    omega0_sc: 0.0,
+    omega_sc: 0.0,
+    m0_sc: 0.0,
+    delta_n_sc: 0.0,
+    omega_dot_sc: 0.0,
+    idot_sc: 0.0,
+    cuc: 0.0,
+    cus: 0.0,
+    crc: 0.0,
+    crs: 0.0,
+    cic: 0.0,
+    cis: 0.0,
+    tgd: 0.0,
+    tgd2: 0.0,
+    health: 0,
+    iod: 0,
+};
+
+/// No decoded set left for the satellite: the epoch's satellites outnumber
+/// the decoded sets ([`EphemerisStore::load`]).
+#[cfg(feature = "rtcm")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DecodedFull {
+    /// Sets one epoch may decode.
+    pub capacity: u32,
+}
+
+/// The Keplerian sets one epoch uses, decoded from the store's payloads
+/// ([`EphemerisStore::load`], then [`EphemerisStore::select`]): `D` of
+/// them, each with the index of the set it was decoded from. Held apart
+/// from the store, so that the room serves other work between epochs
+/// (raim-server lends it while forming only); stamped with the store's
+/// generation, so that a set replaced since is never given.
+#[cfg(feature = "rtcm")]
+#[derive(Debug, Clone)]
+pub struct DecodedSets<const D: usize> {
+    sets: Vec<(usize, Kepler), D>,
+    /// The store's generation the sets were decoded at.
+    generation: u64,
+}
+
+#[cfg(feature = "rtcm")]
+impl<const D: usize> DecodedSets<D> {
+    /// None decoded.
+    pub const fn new() -> Self {
+        DecodedSets {
+            sets: Vec::new(),
+            generation: 0,
+        }
+    }
+}
+
+#[cfg(feature = "rtcm")]
+impl<const D: usize> Default for DecodedSets<D> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Fixed-capacity ephemeris store: `K` Keplerian sets, kept as their
+/// messages' payloads and decoded for an epoch into [`DecodedSets`]
+/// ([`Self::load`], then [`Self::select`]), and `G` GLONASS sets.
+#[cfg(feature = "rtcm")]
 #[derive(Debug, Clone)]
 pub struct EphemerisStore<const K: usize, const G: usize> {
-    kepler: Vec<Kepler, K>,
+    kepler: Vec<KeplerBits, K>,
     glonass: Vec<GlonassEphemeris, G>,
+    /// Counts the changes of `kepler`: decoded sets of another generation
+    /// are not given ([`DecodedSets`]).
+    generation: u64,
 }
 
+#[cfg(feature = "rtcm")]
 impl<const K: usize, const G: usize> Default for EphemerisStore<K, G> {
     fn default() -> Self {
         Self::new()
     }
 }
 
+#[cfg(feature = "rtcm")]
 impl<const K: usize, const G: usize> EphemerisStore<K, G> {
     /// An empty store.
     pub const fn new() -> Self {
         EphemerisStore {
             kepler: Vec::new(),
             glonass: Vec::new(),
+            // Above the decoded sets' initial 0: nothing is given before a
+            // `start_epoch` or `load`.
+            generation: 1,
         }
     }
 
@@ -74,6 +243,7 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
     pub fn clear(&mut self) {
         self.kepler.clear();
         self.glonass.clear();
+        self.generation = self.generation.wrapping_add(1);
     }
 
     /// Forget every GLONASS set (their t_b were placed with a leap-second
@@ -92,12 +262,27 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
         self.kepler.is_empty() && self.glonass.is_empty()
     }
 
-    /// Add a Keplerian set; a full store drops its oldest (toc) set.
-    pub fn insert_kepler(&mut self, k: Kepler) -> Stored {
-        if self.kepler.contains(&k) {
+    /// Add a Keplerian set `k`, decoded by the receiver from `payload`
+    /// (its message from DF002 on, [`crate::rtcm::decode::Frame::payload`]):
+    /// the payload is kept, and must decode to `k` again
+    /// ([`Stored::NotKept`] otherwise). A full store drops its oldest
+    /// (toc) set. Sets decoded before ([`DecodedSets`]) are no longer
+    /// given.
+    pub fn insert_kepler(&mut self, k: Kepler, payload: &[u8]) -> Stored {
+        if self
+            .kepler
+            .iter()
+            .any(|b| b.keys_match(&k) && b.decode().as_ref() == Some(&k))
+        {
             return Stored::Repeat;
         }
-        insert_oldest_out(&mut self.kepler, k, |e| e.toc_gps_s)
+        let Some(bits) = KeplerBits::new(&k, payload) else {
+            return Stored::NotKept {
+                payload_len: u16::try_from(payload.len()).unwrap_or(u16::MAX),
+            };
+        };
+        self.generation = self.generation.wrapping_add(1);
+        insert_oldest_out(&mut self.kepler, bits, |e| e.toc_gps_s)
     }
 
     /// Add a GLONASS set; a full store drops its oldest (t_b) set.
@@ -108,12 +293,55 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
         insert_oldest_out(&mut self.glonass, g, |e| e.tb_gps_s)
     }
 
-    /// The healthy set of `id` whose toe (t_b) is nearest `t_gps_s`, within
-    /// [`max_ephemeris_age_s`]; the first such set on a tie.
-    pub fn select(&self, id: SatId, t_gps_s: f64) -> Option<Broadcast<'_>> {
-        let max_age = max_ephemeris_age_s(id.system);
-        let best = |a: (f64, usize), b: (f64, usize)| if b.0 < a.0 { b } else { a };
+    /// Empty `decoded` for a new epoch's [`Self::load`]s.
+    pub fn start_epoch<const D: usize>(&self, decoded: &mut DecodedSets<D>) {
+        decoded.sets.clear();
+        decoded.generation = self.generation;
+    }
+
+    /// Decode into `decoded` the Keplerian set [`Self::select`] will
+    /// choose for `id` at `t_gps_s`, if any (nothing to do for GLONASS,
+    /// whose sets are kept decoded); `Err` when `D` sets are already
+    /// decoded.
+    pub fn load<const D: usize>(
+        &self,
+        id: SatId,
+        t_gps_s: f64,
+        decoded: &mut DecodedSets<D>,
+    ) -> Result<(), DecodedFull> {
+        if decoded.generation != self.generation {
+            self.start_epoch(decoded);
+        }
         if id.system == System::Glonass {
+            return Ok(());
+        }
+        let Some(i) = self.choose_kepler(id, t_gps_s) else {
+            return Ok(());
+        };
+        if decoded.sets.iter().any(|(j, _)| *j == i) {
+            return Ok(());
+        }
+        let Some(k) = self.kepler.get(i).and_then(KeplerBits::decode) else {
+            return Ok(());
+        };
+        decoded.sets.push((i, k)).map_err(|_| DecodedFull {
+            capacity: u32::try_from(D).unwrap_or(u32::MAX),
+        })
+    }
+
+    /// The healthy set of `id` whose toe (t_b) is nearest `t_gps_s`, within
+    /// [`max_ephemeris_age_s`]; the first such set on a tie. A Keplerian
+    /// set is given from `decoded` once [`Self::load`] has decoded it there
+    /// since the store last changed (None otherwise).
+    pub fn select<'a, const D: usize>(
+        &'a self,
+        id: SatId,
+        t_gps_s: f64,
+        decoded: &'a DecodedSets<D>,
+    ) -> Option<Broadcast<'a>> {
+        if id.system == System::Glonass {
+            let max_age = max_ephemeris_age_s(id.system);
+            let best = |a: (f64, usize), b: (f64, usize)| if b.0 < a.0 { b } else { a };
             let (_, i) = self
                 .glonass
                 .iter()
@@ -124,21 +352,37 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
                 .reduce(best)?;
             self.glonass.get(i).map(Broadcast::Glonass)
         } else {
-            let (_, i) = self
-                .kepler
+            if decoded.generation != self.generation {
+                return None;
+            }
+            let i = self.choose_kepler(id, t_gps_s)?;
+            decoded
+                .sets
                 .iter()
-                .enumerate()
-                .filter(|(_, k)| k.system == id.system && k.prn == id.prn && k.health == 0)
-                .filter_map(|(i, k)| Some((kepler_age_s(k, t_gps_s)?, i)))
-                .filter(|(age, _)| *age <= max_age)
-                .reduce(best)?;
-            self.kepler.get(i).map(Broadcast::Kepler)
+                .find(|(j, _)| *j == i)
+                .map(|(_, k)| Broadcast::Kepler(k))
         }
+    }
+
+    /// The index of the Keplerian set [`Self::select`] chooses.
+    fn choose_kepler(&self, id: SatId, t_gps_s: f64) -> Option<usize> {
+        let max_age = max_ephemeris_age_s(id.system);
+        let best = |a: (f64, usize), b: (f64, usize)| if b.0 < a.0 { b } else { a };
+        let (_, i) = self
+            .kepler
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| k.system == id.system && k.prn == id.prn && k.health == 0)
+            .filter_map(|(i, k)| Some((k.age_s(t_gps_s)?, i)))
+            .filter(|(age, _)| *age <= max_age)
+            .reduce(best)?;
+        Some(i)
     }
 }
 
 /// Push `x`, or replace the element with the smallest `time` when full
 /// (a store of capacity 0 keeps nothing and says `Replaced`).
+#[cfg(feature = "rtcm")]
 fn insert_oldest_out<T, const N: usize>(
     v: &mut Vec<T, N>,
     x: T,
@@ -160,16 +404,134 @@ fn insert_oldest_out<T, const N: usize>(
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "rtcm"))]
 mod tests {
     use super::*;
+    use crate::ephemeris::WEEK_S;
+    use crate::rtcm::decode::kepler_message;
+    use crate::rtcm::fields::kepler;
+    extern crate std;
+    use std::vec::Vec as StdVec;
 
-    fn k(prn: u8, toe_s: f64, health: u32) -> Kepler {
-        Kepler {
-            toc_gps_s: 1000.0 * 604_800.0 + toe_s,
-            toe_sow_s: toe_s,
-            health,
-            ..crate::ephemeris::circular(System::Gps, prn)
+    /// Big-endian bit packing of (value, width) fields, zero-padded to
+    /// whole bytes, as RTCM 3 lays a payload out.
+    fn pack(fields: &[(u64, u32)]) -> StdVec<u8> {
+        let mut bits: StdVec<bool> = StdVec::new();
+        for &(v, w) in fields {
+            for i in (0..w).rev() {
+                bits.push((v >> i) & 1 == 1);
+            }
+        }
+        bits.chunks(8)
+            .map(|c| {
+                c.iter()
+                    .enumerate()
+                    .fold(0u8, |b, (i, &x)| b | (u8::from(x) << (7 - i)))
+            })
+            .collect()
+    }
+
+    /// A 1019 payload (RTCM 10403.3 §3.5.11, 488 bits): G`prn`, week 1000
+    /// mod 1024, toe = toc = `toe_s` (a multiple of 16 s), `health`, and
+    /// `x` in every other field (each masked to its width).
+    fn msg1019(prn: u8, toe_s: f64, health: u32, x: u64) -> StdVec<u8> {
+        let t = (toe_s / 16.0) as u64;
+        let f = |w: u32| (x & ((1u64 << w) - 1), w);
+        pack(&[
+            (1019, 12),
+            (u64::from(prn), 6),
+            (1000, 10),
+            f(4),
+            f(2),
+            f(14),
+            f(8),
+            (t, 16),
+            f(8),
+            f(16),
+            f(22),
+            f(10),
+            f(16),
+            f(16),
+            f(32),
+            f(16),
+            f(32),
+            f(16),
+            (2_702_000_000, 32),
+            (t, 16),
+            f(16),
+            f(32),
+            f(16),
+            f(32),
+            f(16),
+            f(32),
+            f(24),
+            f(8),
+            (u64::from(health), 6),
+            (0, 2),
+        ])
+    }
+
+    /// A 1046 payload (Galileo I/NAV, 504 bits): E`prn`, the GST week of
+    /// GPS week 1000 (mod 4096), toe = toc = `toe_s` (a multiple of 60 s),
+    /// healthy, `x` in every other field.
+    fn msg1046(prn: u8, toe_s: f64, x: u64) -> StdVec<u8> {
+        let t = (toe_s / 60.0) as u64;
+        let f = |w: u32| (x & ((1u64 << w) - 1), w);
+        pack(&[
+            (1046, 12),
+            (u64::from(prn), 6),
+            ((1000 - 1024i64).rem_euclid(4096) as u64, 12),
+            f(10),
+            f(8),
+            f(14),
+            (t, 14),
+            f(6),
+            f(21),
+            f(31),
+            f(16),
+            f(16),
+            f(32),
+            f(16),
+            f(32),
+            f(16),
+            (2_702_000_000, 32),
+            (t, 14),
+            f(16),
+            f(32),
+            f(16),
+            f(32),
+            f(16),
+            f(32),
+            f(24),
+            f(10),
+            f(10),
+            (0, 3),
+            (0, 3),
+            (0, 2),
+        ])
+    }
+
+    /// The set of a payload as the receiver takes it: decoded, toc in GPS
+    /// seconds of week 1000 (the pivot's placing is `rtcm::fields`').
+    fn set_of(payload: &[u8]) -> Kepler {
+        let m = kepler_message(payload).unwrap();
+        let mut k = kepler(m.system, m.prn, &m.fields);
+        k.toc_gps_s = 1000.0 * WEEK_S + m.fields.toc_s;
+        k
+    }
+
+    fn insert(s: &mut EphemerisStore<3, 1>, payload: &[u8]) -> Stored {
+        s.insert_kepler(set_of(payload), payload)
+    }
+
+    /// The toe of the set chosen for `id` at `t`, after an epoch's load.
+    fn pick(s: &EphemerisStore<3, 1>, id: SatId, t: f64) -> Option<f64> {
+        let mut d = DecodedSets::<4>::new();
+        s.start_epoch(&mut d);
+        s.load(id, t, &mut d).unwrap();
+        match s.select(id, t, &d) {
+            Some(Broadcast::Kepler(k)) => Some(k.toe_sow_s),
+            _ => None,
         }
     }
 
@@ -178,27 +540,26 @@ mod tests {
     #[test]
     fn selection_and_capacity() {
         let mut s = EphemerisStore::<3, 1>::new();
-        assert_eq!(s.insert_kepler(k(5, 7_200.0, 0)), Stored::Added);
-        assert_eq!(s.insert_kepler(k(5, 7_200.0, 0)), Stored::Repeat);
-        assert_eq!(s.insert_kepler(k(5, 14_400.0, 0)), Stored::Added);
-        assert_eq!(s.insert_kepler(k(5, 21_600.0, 1)), Stored::Added);
-        let t = 1000.0 * 604_800.0 + 12_000.0;
-        let pick = |s: &EphemerisStore<3, 1>, t: f64| match s.select(SatId::new(System::Gps, 5), t)
-        {
-            Some(Broadcast::Kepler(k)) => Some(k.toe_sow_s),
-            _ => None,
-        };
-        assert_eq!(pick(&s, t), Some(14_400.0));
+        let g05 = SatId::new(System::Gps, 5);
+        assert_eq!(insert(&mut s, &msg1019(5, 7_200.0, 0, 3)), Stored::Added);
+        assert_eq!(insert(&mut s, &msg1019(5, 7_200.0, 0, 3)), Stored::Repeat);
+        assert_eq!(insert(&mut s, &msg1019(5, 14_400.0, 0, 3)), Stored::Added);
+        assert_eq!(insert(&mut s, &msg1019(5, 21_600.0, 1, 3)), Stored::Added);
+        let t = 1000.0 * WEEK_S + 12_000.0;
+        assert_eq!(pick(&s, g05, t), Some(14_400.0));
         // The unhealthy set at 21600 is nearer at 20000 but not used.
-        assert_eq!(pick(&s, 1000.0 * 604_800.0 + 20_000.0), Some(14_400.0));
+        assert_eq!(pick(&s, g05, 1000.0 * WEEK_S + 20_000.0), Some(14_400.0));
         // Beyond 2 h of every healthy set: none.
-        assert_eq!(pick(&s, 1000.0 * 604_800.0 + 14_400.0 + 7_201.0), None);
-        assert_eq!(s.select(SatId::new(System::Gps, 6), t), None);
+        assert_eq!(pick(&s, g05, 1000.0 * WEEK_S + 14_400.0 + 7_201.0), None);
+        assert_eq!(pick(&s, SatId::new(System::Gps, 6), t), None);
         // A week later the sets have the same t_k, but not the week.
-        assert_eq!(pick(&s, t + 604_800.0), None);
+        assert_eq!(pick(&s, g05, t + WEEK_S), None);
         // Full: the oldest (toe 7200) goes.
-        assert_eq!(s.insert_kepler(k(5, 28_800.0, 0)), Stored::Replaced);
-        assert_eq!(pick(&s, 1000.0 * 604_800.0 + 7_200.0), Some(14_400.0));
+        assert_eq!(
+            insert(&mut s, &msg1019(5, 28_800.0, 0, 3)),
+            Stored::Replaced
+        );
+        assert_eq!(pick(&s, g05, 1000.0 * WEEK_S + 7_200.0), Some(14_400.0));
         assert_eq!(s.len(), (3, 0));
     }
 
@@ -213,23 +574,96 @@ mod tests {
     fn galileo_age_and_clearing() {
         let mut s = EphemerisStore::<3, 1>::new();
         assert!(s.is_empty());
-        let e11 = Kepler {
-            toc_gps_s: 1000.0 * 604_800.0 + 7_200.0,
-            toe_sow_s: 7_200.0,
-            ..crate::ephemeris::circular(System::Galileo, 11)
-        };
-        assert_eq!(s.insert_kepler(e11), Stored::Added);
+        assert_eq!(insert(&mut s, &msg1046(11, 7_200.0, 5)), Stored::Added);
         let id = SatId::new(System::Galileo, 11);
-        let at = |dt: f64| 1000.0 * 604_800.0 + 7_200.0 + dt;
-        assert!(s.select(id, at(14_400.0)).is_some());
-        assert!(s.select(id, at(-14_400.0)).is_some());
-        assert!(s.select(id, at(14_401.0)).is_none());
+        let at = |dt: f64| 1000.0 * WEEK_S + 7_200.0 + dt;
+        assert!(pick(&s, id, at(14_400.0)).is_some());
+        assert!(pick(&s, id, at(-14_400.0)).is_some());
+        assert!(pick(&s, id, at(14_401.0)).is_none());
         assert!(!s.is_empty());
         s.clear_glonass();
         assert_eq!(s.len(), (1, 0));
         s.clear();
         assert_eq!(s.len(), (0, 0));
         assert!(s.is_empty());
-        assert!(s.select(id, at(0.0)).is_none());
+        assert!(pick(&s, id, at(0.0)).is_none());
+    }
+
+    /// A set kept as its message's payload is given back, once loaded for
+    /// an epoch, equal field for field and bit for bit to the set decoded
+    /// on arrival, for 1019 and 1046 payloads with pseudo-random fields
+    /// (the store's sets are the receiver's, so its epochs are the host's:
+    /// host-tests rtcm_receiver, rtcm_esbc, qemu_rtcm). A payload longer
+    /// than 64 B, or one that is not the set's message, is `NotKept` with
+    /// its length; a set is not given before its epoch's load, nor after
+    /// the store changed (an insert); more satellites than
+    /// the decoded capacity is the typed `DecodedFull`.
+    ///
+    /// Verifies: RX-STREAM
+    #[test]
+    fn sets_kept_as_payloads_decode_to_the_same_bits() {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        for n in 0..200u32 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let (payload, id) = if n % 2 == 0 {
+                (msg1019(7, 3_600.0, 0, x), SatId::new(System::Gps, 7))
+            } else {
+                (msg1046(19, 3_600.0, x), SatId::new(System::Galileo, 19))
+            };
+            assert!(payload.len() <= KEPLER_PAYLOAD_BYTES);
+            let want = set_of(&payload);
+            let mut s = EphemerisStore::<3, 1>::new();
+            assert_eq!(s.insert_kepler(want, &payload), Stored::Added);
+            let t = 1000.0 * WEEK_S + 3_600.0;
+            let mut d = DecodedSets::<4>::new();
+            assert!(s.select(id, t, &d).is_none(), "not loaded yet");
+            s.start_epoch(&mut d);
+            s.load(id, t, &mut d).unwrap();
+            let Some(Broadcast::Kepler(got)) = s.select(id, t, &d) else {
+                panic!("set {n} not given back");
+            };
+            assert_eq!(*got, want);
+            assert_eq!(std::format!("{got:?}"), std::format!("{want:?}"));
+        }
+        let payload = msg1019(7, 3_600.0, 0, 1);
+        let k = set_of(&payload);
+        let mut s = EphemerisStore::<3, 1>::new();
+        let mut long = payload.clone();
+        long.resize(65, 0);
+        assert_eq!(
+            s.insert_kepler(k, &long),
+            Stored::NotKept { payload_len: 65 }
+        );
+        let other = Kepler {
+            iod: k.iod ^ 1,
+            ..k
+        };
+        assert_eq!(
+            s.insert_kepler(other, &payload),
+            Stored::NotKept { payload_len: 61 }
+        );
+        assert_eq!(s.len(), (0, 0));
+        assert_eq!(s.insert_kepler(k, &payload), Stored::Added);
+        let g07 = SatId::new(System::Gps, 7);
+        let g08 = SatId::new(System::Gps, 8);
+        let t = 1000.0 * WEEK_S + 3_600.0;
+        let mut d = DecodedSets::<1>::new();
+        s.start_epoch(&mut d);
+        s.load(g07, t, &mut d).unwrap();
+        assert!(s.select(g07, t, &d).is_some());
+        let p8 = msg1019(8, 3_600.0, 0, 1);
+        assert_eq!(s.insert_kepler(set_of(&p8), &p8), Stored::Added);
+        assert!(
+            s.select(g07, t, &d).is_none(),
+            "a set decoded before the store changed is not given"
+        );
+        s.start_epoch(&mut d);
+        s.load(g07, t, &mut d).unwrap();
+        assert_eq!(s.load(g08, t, &mut d), Err(DecodedFull { capacity: 1 }));
+        // Loading again, or a satellite with no set, needs no room.
+        assert_eq!(s.load(g07, t, &mut d), Ok(()));
+        assert_eq!(s.load(SatId::new(System::Gps, 9), t, &mut d), Ok(()));
     }
 }

@@ -297,6 +297,34 @@ pub fn firmware_elf_for(machine: Machine) -> Result<PathBuf> {
     }
 }
 
+/// The STM32F4 build with the RTCM 3 stream receiver, for QEMU's
+/// netduinoplus2 (`--features board-stm32f4,qemu-netduinoplus2,rtcm`: the
+/// part's 24-satellite capacities and shared scratch, docs/FLASH.md
+/// "STM32F4: the stream"; with a link pause of
+/// [`NETDUINOPLUS2_LINK_IDLE_S`], into `firmware/target/stm32f4-stream`):
+/// `$RAIM_FIRMWARE_ELF_STM32F4_STREAM` if set (scripts/test.sh builds it
+/// into the shared target and sets it).
+pub fn firmware_elf_stm32f4_stream() -> Result<PathBuf> {
+    if let Some(p) = std::env::var_os("RAIM_FIRMWARE_ELF_STM32F4_STREAM") {
+        return Ok(PathBuf::from(p));
+    }
+    cargo_in_firmware_with(
+        &[
+            "build",
+            "--release",
+            "--quiet",
+            "--no-default-features",
+            "--features",
+            "board-stm32f4,qemu-netduinoplus2,rtcm",
+            "--target-dir",
+            "target/stm32f4-stream",
+        ],
+        &[("RAIM_TEST_LINK_IDLE_S", NETDUINOPLUS2_LINK_IDLE_S)],
+    )?;
+    Ok(repo_root()
+        .join("firmware/target/stm32f4-stream/thumbv7em-none-eabihf/release/raim-firmware"))
+}
+
 /// The firmware ELF for the streaming tests on `machine`: the tests that
 /// write a long stream into the link and check every answer. On
 /// mps2-an386 the default build with a pause on the link of

@@ -243,7 +243,10 @@ impl Server {
         let Ok(AraimAnswer::Result(r)) = answer else {
             return self.write_no_fix(seq, nmea_out);
         };
-        let Server { request, wire, .. } = self;
+        let Server {
+            request, shared, ..
+        } = self;
+        let wire = &mut shared.answer().wire;
         match request.as_ref().map(|q| &q.command) {
             Some(raim_proto::message::Command::Araim(AraimCommand::Epoch(e))) => {
                 wire.set_from_araim(r, e.sats.items.iter().map(|s| s.id));
@@ -253,12 +256,8 @@ impl Server {
             }
             _ => return Ok(()),
         }
-        super::answer::write_nmea(
-            &self.wire,
-            self.request.as_ref(),
-            self.nmea_cn0(seq),
-            nmea_out,
-        )
+        let (wire, request, cn0) = self.nmea_parts(seq);
+        super::answer::write_nmea(wire, request, cn0, nmea_out)
     }
 }
 

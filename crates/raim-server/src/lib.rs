@@ -49,6 +49,24 @@ use raim_proto::{
     PROTOCOL_VERSION,
 };
 
+/// Satellites the snapshot monitor (and the stream receiver, whose
+/// epochs it runs) takes: the wire's capacity. An epoch with more is
+/// refused with the typed `TooManySatellites { capacity }`, never
+/// truncated.
+#[cfg(not(all(feature = "ram-192k", feature = "rtcm")))]
+pub const SNAPSHOT_SATS: usize = CAPACITY;
+/// Satellites the snapshot monitor and the stream receiver take on a part
+/// with 192 KiB of RAM (the STM32F405/407, docs/FLASH.md) that carries
+/// the stream: 24, as ARAIM there (`araim::ARAIM_SATS`). The engine's
+/// O(N^2) storage and the stream's per-satellite buffers at 24 leave room
+/// for the stream beside ARAIM and the particle filter; a 25th satellite
+/// is `TooManySatellites { capacity: 24 }` (a stream epoch's,
+/// `StreamCapacity { capacity: 24 }`). The part's build without the
+/// stream keeps the wire's 32.
+#[cfg(all(feature = "ram-192k", feature = "rtcm"))]
+pub const SNAPSHOT_SATS: usize = 24;
+const _: () = assert!(SNAPSHOT_SATS <= CAPACITY);
+
 mod answer;
 mod gate;
 pub mod model_check;
@@ -172,7 +190,7 @@ pub struct Server {
     /// The link's receiver: the host's frames, and a receiver's RTCM 3
     /// frames beside them.
     rx: LinkReceiver<MAX_REQUEST_FRAME>,
-    raim: Raim<CAPACITY, DevicePrecision>,
+    raim: Raim<SNAPSHOT_SATS, DevicePrecision>,
     /// The snapshot configuration in force; `None` until one is
     /// provisioned or taken (snapshot epochs are then `Unconfigured`).
     config: Option<Config>,
@@ -196,15 +214,12 @@ pub struct Server {
     status: Status,
     /// The ISM in force and the ARAIM engines (`server/araim.rs`).
     araim: araim::AraimState,
-    scratch: [u8; MAX_RESPONSE_PAYLOAD],
-    out: [u8; MAX_RESPONSE_FRAME],
     /// The last request decoded (`on_byte`): decoded here rather than on
     /// the stack.
     request: Option<Request>,
-    /// The last epoch's result (`Raim::process_into`) and its wire form,
-    /// both written in place.
-    result: EpochResult<CAPACITY>,
-    wire: WireResult,
+    /// The answer's buffers, or the stream epoch's forming scratch: never
+    /// both at once ([`Shared`]).
+    shared: Shared,
     /// The PF configuration and the engines lent by the owner
     /// (`attach_pf`; a few pointers, the engines stay where they are).
     pf: PfUnit,
@@ -218,6 +233,80 @@ pub struct Server {
 impl Default for Server {
     fn default() -> Self {
         Self::new()
+    }
+}
+
+/// The buffers of one epoch's run and answer, written and read only while
+/// a frame is answered: the answer's encoding (`scratch`, `out`), and the
+/// epoch's result (`Raim::process_into`) and wire form, both written in
+/// place.
+pub(crate) struct AnswerSlots {
+    pub(crate) scratch: [u8; MAX_RESPONSE_PAYLOAD],
+    pub(crate) out: [u8; MAX_RESPONSE_FRAME],
+    pub(crate) result: EpochResult<SNAPSHOT_SATS>,
+    pub(crate) wire: WireResult,
+}
+
+/// One room for two parts that never run at once (docs/FLASH.md,
+/// "STM32F4: the stream", item 2): the answer's buffers, and the forming
+/// scratch of a stream epoch, used only inside the receiver's
+/// `on_frame_in`, which ends before the epoch is staged, run and
+/// answered. Each part takes the room in its initial state from a
+/// constant when the other had it, so no value of one is ever read as the
+/// other's, and nothing an answer reads was left by an earlier one: every
+/// path writes `wire` and `result` before it reads them.
+// The variants' sizes differ by design: the room is the larger one's, and
+// sharing it is the point (boxing is not an option without a heap).
+#[allow(clippy::large_enum_variant)]
+enum Shared {
+    Answer(AnswerSlots),
+    #[cfg(feature = "rtcm")]
+    Forming(raim_nav::rtcm::FormScratch<SNAPSHOT_SATS>),
+}
+
+impl Shared {
+    /// The answer's buffers, zero (written in place from this constant,
+    /// not built on the stack).
+    const ANSWER: Shared = Shared::Answer(AnswerSlots {
+        scratch: [0; MAX_RESPONSE_PAYLOAD],
+        out: [0; MAX_RESPONSE_FRAME],
+        result: EpochResult::empty(),
+        wire: WireResult::empty(),
+    });
+
+    /// The forming scratch, empty.
+    #[cfg(feature = "rtcm")]
+    const FORMING: Shared = Shared::Forming(raim_nav::rtcm::FormScratch::new());
+
+    /// The answer's buffers, taking the room if the forming had it (at
+    /// most one pass of the loop does).
+    #[cfg(feature = "rtcm")]
+    fn answer(&mut self) -> &mut AnswerSlots {
+        loop {
+            match self {
+                Shared::Answer(a) => return a,
+                Shared::Forming(_) => *self = Self::ANSWER,
+            }
+        }
+    }
+
+    /// The answer's buffers (without the stream, the room's only use).
+    #[cfg(not(feature = "rtcm"))]
+    fn answer(&mut self) -> &mut AnswerSlots {
+        match self {
+            Shared::Answer(a) => a,
+        }
+    }
+
+    /// The forming scratch, taking the room if the answer had it.
+    #[cfg(feature = "rtcm")]
+    fn forming(&mut self) -> &mut raim_nav::rtcm::FormScratch<SNAPSHOT_SATS> {
+        loop {
+            match self {
+                Shared::Forming(f) => return f,
+                Shared::Answer(_) => *self = Self::FORMING,
+            }
+        }
     }
 }
 
@@ -263,15 +352,12 @@ impl Server {
             provision_error: None,
             status: Status {
                 protocol_version: PROTOCOL_VERSION,
-                capacity: CAPACITY as u16,
+                capacity: SNAPSHOT_SATS as u16,
                 ..Status::ZERO
             },
             araim: araim::AraimState::new(),
-            scratch: [0; MAX_RESPONSE_PAYLOAD],
-            out: [0; MAX_RESPONSE_FRAME],
             request: None,
-            result: EpochResult::empty(),
-            wire: WireResult::empty(),
+            shared: Shared::ANSWER,
             pf: PfUnit::EMPTY,
             #[cfg(feature = "rtcm")]
             stream: stream::StreamState::new(),
@@ -536,7 +622,12 @@ impl Server {
                         // `stream_runs_araim`, on the field (`frame`
                         // borrows the receiver).
                         let araim = self.araim.runs_stream();
-                        let formed = self.stream.on_frame(frame, self.config.as_ref(), araim);
+                        let formed = self.stream.on_frame(
+                            frame,
+                            self.config.as_ref(),
+                            araim,
+                            self.shared.forming(),
+                        );
                         let lap = watch.stop(platform);
                         match formed {
                             Some(formed) => {
@@ -583,9 +674,10 @@ impl Server {
                     platform.on_epoch(None);
                 }
                 if let Some(time_s) = refusal.nmea_time_s {
-                    self.wire.reset();
-                    self.wire.time_s = time_s;
-                    answer::write_nmea(&self.wire, None, &[], nmea_out).map_err(IoError::Nmea)?;
+                    let wire = &mut self.shared.answer().wire;
+                    wire.reset();
+                    wire.time_s = time_s;
+                    answer::write_nmea(wire, None, &[], nmea_out).map_err(IoError::Nmea)?;
                 }
                 self.send(link, refusal.seq, BodyRef::Error(&refusal.error))
             }
@@ -716,21 +808,38 @@ impl Server {
         self.send(link, Some(seq), BodyRef::Error(&e))
     }
 
-    /// The C/N0 of the epoch being answered, for GSV: a stream epoch's
-    /// (answered unasked, `seq` None: the satellites of the epoch formed
-    /// last, `stream::StreamState`), else none (the protocol's epochs carry
-    /// no C/N0).
-    pub(crate) fn nmea_cn0(&self, seq: Option<u32>) -> &[u8] {
+    /// What the NMEA writer reads of an answered epoch: its wire result,
+    /// the request, and the C/N0 of its satellites for GSV: a stream
+    /// epoch's (answered unasked, `seq` None: the satellites of the epoch
+    /// formed last, `stream::StreamState`), else none (the protocol's
+    /// epochs carry no C/N0).
+    pub(crate) fn nmea_parts(
+        &mut self,
+        seq: Option<u32>,
+    ) -> (&WireResult, Option<&Request>, &[u8]) {
+        let Server {
+            shared,
+            request,
+            #[cfg(feature = "rtcm")]
+            stream,
+            ..
+        } = self;
         #[cfg(feature = "rtcm")]
-        if seq.is_none() {
-            return self.stream.cn0_dbhz();
-        }
-        let _ = seq;
-        &[]
+        let cn0: &[u8] = if seq.is_none() {
+            stream.cn0_dbhz()
+        } else {
+            &[]
+        };
+        #[cfg(not(feature = "rtcm"))]
+        let cn0: &[u8] = {
+            let _ = seq;
+            &[]
+        };
+        (&shared.answer().wire, request.as_ref(), cn0)
     }
 
     /// The no-fix NMEA sentences of the epoch in the request slot (its
-    /// time, no position, status void); `seq` as for [`Self::nmea_cn0`].
+    /// time, no position, status void); `seq` as for [`Self::nmea_parts`].
     pub(crate) fn write_no_fix<M: Write>(
         &mut self,
         seq: Option<u32>,
@@ -743,14 +852,11 @@ impl Server {
         else {
             return Ok(());
         };
-        self.wire.reset();
-        self.wire.time_s = time_s;
-        answer::write_nmea(
-            &self.wire,
-            self.request.as_ref(),
-            self.nmea_cn0(seq),
-            nmea_out,
-        )
+        let wire = &mut self.shared.answer().wire;
+        wire.reset();
+        wire.time_s = time_s;
+        let (wire, request, cn0) = self.nmea_parts(seq);
+        answer::write_nmea(wire, request, cn0, nmea_out)
     }
 
     /// The NMEA sentences of a particle-filter epoch (`command`, taken out
@@ -769,15 +875,19 @@ impl Server {
         match body {
             ResponseBody::PfResult(r) => {
                 let decision = pf::pf_decision(r);
-                self.wire
-                    .set_from_pf(r, decision, e.sats.items.iter().map(|s| s.id));
+                self.shared.answer().wire.set_from_pf(
+                    r,
+                    decision,
+                    e.sats.items.iter().map(|s| s.id),
+                );
             }
             _ => {
-                self.wire.reset();
-                self.wire.time_s = e.time_s;
+                let wire = &mut self.shared.answer().wire;
+                wire.reset();
+                wire.time_s = e.time_s;
             }
         }
-        answer::write_nmea_for(&self.wire, Some(command), &[], nmea_out)
+        answer::write_nmea_for(&self.shared.answer().wire, Some(command), &[], nmea_out)
     }
 
     /// `Status`, with the platform's fields filled in.
@@ -820,12 +930,12 @@ impl Server {
                 request,
                 raim,
                 status,
-                result,
-                wire,
+                shared,
                 model,
                 ..
             } = self;
-            let slots = (&mut *result, &mut *wire);
+            let AnswerSlots { result, wire, .. } = shared.answer();
+            let slots = (result, wire);
             match request.as_ref().map(|r| &r.command) {
                 Some(Command::Ranges(e)) => run_epoch(
                     (raim, model),
@@ -849,21 +959,17 @@ impl Server {
         };
         match outcome {
             Ok(()) => {
-                answer::write_nmea(
-                    &self.wire,
-                    self.request.as_ref(),
-                    self.nmea_cn0(seq),
-                    nmea_out,
-                )
-                .map_err(IoError::Nmea)?;
+                let (wire, request, cn0) = self.nmea_parts(seq);
+                answer::write_nmea(wire, request, cn0, nmea_out).map_err(IoError::Nmea)?;
                 let Server {
-                    scratch,
-                    out,
+                    shared,
                     status,
                     config_id,
-                    wire,
                     ..
                 } = self;
+                let AnswerSlots {
+                    scratch, out, wire, ..
+                } = shared.answer();
                 send_answer(
                     Buffers {
                         scratch,
@@ -911,12 +1017,12 @@ impl Server {
         body: BodyRef<'_>,
     ) -> Result<(), IoError<L::Error, M>> {
         let Server {
-            scratch,
-            out,
+            shared,
             status,
             config_id,
             ..
         } = self;
+        let AnswerSlots { scratch, out, .. } = shared.answer();
         send_answer(
             Buffers {
                 scratch,
@@ -993,12 +1099,12 @@ fn check_sigma_bounds(sigmas: impl Iterator<Item = Option<f64>>) -> Result<(), W
 /// the verdict.
 fn run_epoch<P: Platform>(
     (raim, model): (
-        &mut Raim<CAPACITY, DevicePrecision>,
+        &mut Raim<SNAPSHOT_SATS, DevicePrecision>,
         &mut model_check::UnitModelCheck,
     ),
     config: &Config,
     status: &mut Status,
-    (result, wire): (&mut EpochResult<CAPACITY>, &mut WireResult),
+    (result, wire): (&mut EpochResult<SNAPSHOT_SATS>, &mut WireResult),
     epoch: &Epoch<'_>,
     platform: &mut P,
 ) -> Result<(), WireError> {

@@ -31,21 +31,27 @@
 //! doubled residual ionosphere the ADD's dual-frequency model lacks)
 //! (docs/RECEIVERS.md "ARAIM from the stream").
 
+use crate::{IoError, Platform, Server, SNAPSHOT_SATS};
 use embedded_io::Write;
 use raim_nav::ranging::StreamSigmas;
-use raim_nav::rtcm::{FormError, FormedEpoch, StreamReceiver};
+use raim_nav::rtcm::{FormError, FormScratch, FormedEpoch, StreamReceiver};
 use raim_proto::araim_msg::AraimCommand;
 use raim_proto::error::WireError;
 use raim_proto::lock::ConfigSource;
 use raim_proto::message::{Command, RangeEpoch, Request, SatList};
-use raim_proto::CAPACITY;
-
-use crate::{IoError, Platform, Server};
 
 /// Signals one stream epoch may carry (GPS, GLONASS, Galileo, BeiDou and
 /// QZSS, every band: e.g. 60 satellites on 3 signals and more; an epoch
 /// with more is refused, `StreamCapacity`).
+#[cfg(not(feature = "ram-192k"))]
 pub const STREAM_SIGNALS: usize = 256;
+/// Signals one stream epoch may carry on a part with 192 KiB of RAM: five
+/// for each of the 24 satellites its epochs take (`SNAPSHOT_SATS`; five
+/// is the most bands an MSM7 of one system carries for a satellite,
+/// e.g. Galileo E1, E5a, E5b, E5 AltBOC and E6). An epoch with more is
+/// refused whole, `StreamCapacity { capacity: 120 }`.
+#[cfg(feature = "ram-192k")]
+pub const STREAM_SIGNALS: usize = 120;
 /// The elevation mask of stream epochs, rad (10 degrees, the replay's
 /// default `--mask-deg`).
 pub const STREAM_MASK_RAD: f64 = 10.0 * core::f64::consts::PI / 180.0;
@@ -65,8 +71,8 @@ pub const PIVOT_WEEK: i64 = BUILD_GPS_WEEK - PIVOT_LOOKBACK_WEEKS;
 
 /// The stream receiver and the epoch it formed last.
 pub struct StreamState {
-    receiver: StreamReceiver<CAPACITY, STREAM_SIGNALS>,
-    formed: FormedEpoch<CAPACITY>,
+    receiver: StreamReceiver<SNAPSHOT_SATS, STREAM_SIGNALS>,
+    formed: FormedEpoch<SNAPSHOT_SATS>,
     epochs: u32,
 }
 
@@ -95,11 +101,12 @@ impl StreamState {
         frame: &[u8],
         config: Option<&raim_core::Config>,
         araim: bool,
+        scratch: &mut FormScratch<SNAPSHOT_SATS>,
     ) -> Option<Result<(), FormError>> {
         let sigmas = stream_sigmas(config, araim);
-        let r = self
-            .receiver
-            .on_frame(frame, &sigmas, STREAM_MASK_RAD, &mut self.formed);
+        let r =
+            self.receiver
+                .on_frame_in(frame, &sigmas, STREAM_MASK_RAD, &mut self.formed, scratch);
         if r.is_some() {
             self.epochs = self.epochs.wrapping_add(1);
         }
@@ -109,7 +116,7 @@ impl StreamState {
     /// The epoch formed last, to be written by the tests as the receiver
     /// writes it.
     #[cfg(test)]
-    pub(crate) fn formed_mut(&mut self) -> &mut FormedEpoch<CAPACITY> {
+    pub(crate) fn formed_mut(&mut self) -> &mut FormedEpoch<SNAPSHOT_SATS> {
         &mut self.formed
     }
 
@@ -238,7 +245,7 @@ impl Server {
         );
         let mut sats = SatList::default();
         for s in f.sats.iter() {
-            // `formed` holds at most CAPACITY satellites.
+            // `formed` holds at most SNAPSHOT_SATS <= CAPACITY satellites.
             let _ = sats.items.push(*s);
         }
         sats.declared = u32::try_from(sats.items.len()).unwrap_or(u32::MAX);

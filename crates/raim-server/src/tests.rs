@@ -1364,3 +1364,63 @@ fn a_failed_boot_counter_takes_no_authenticated_change() {
         assert!(nmea.contains("$GPGGA") || nmea.contains("GGA"));
     })
 }
+
+/// The STM32F4's build with the stream (`ram-192k` and `rtcm`): the
+/// snapshot monitor takes 24 satellites (`SNAPSHOT_SATS`), as ARAIM there.
+/// A 24-satellite epoch is solved as the host's 32-satellite engine
+/// solves it, a 25th satellite is the typed
+/// `TooManySatellites { have: 25, capacity: 24 }`, never truncated, and
+/// `Status` says 24. Run by scripts/test.sh with those features.
+///
+/// Verifies: WIRE-TooManySatellites
+#[cfg(all(feature = "ram-192k", feature = "rtcm"))]
+#[test]
+fn the_stm32f4_stream_build_takes_24_satellites_and_refuses_the_25th_typed() {
+    on_big_stack(|| {
+        let mut server = bench();
+        let sats = |n: u8| -> Vec<LinearObservation> {
+            (0..n)
+                .map(|i| {
+                    let az = f64::from(i) * 137.5;
+                    let el = 15.0 + f64::from(i % 7) * 10.0;
+                    let mut o = LinearObservation::from_az_el(
+                        SatId::new(System::Gps, i + 1),
+                        az.to_radians(),
+                        el.to_radians(),
+                        0.05 * f64::from(i % 5) - 0.1,
+                    );
+                    o.sigma_m = Some(1.0);
+                    o
+                })
+                .collect()
+        };
+        let (s24, s25) = (sats(24), sats(25));
+        let mut bytes = Vec::new();
+        bytes.extend(frame(&RequestRef::linear(0, 1.0, &s24)));
+        bytes.extend(frame(&RequestRef::linear(1, 2.0, &s25)));
+        bytes.extend(frame(&RequestRef {
+            seq: 2,
+            command: CommandRef::Status,
+        }));
+        let (resp, _) = run(&mut server, &bytes);
+        assert_eq!(SNAPSHOT_SATS, 24);
+        let ResponseBody::Result(r24) = &resp[0].body else {
+            panic!("{:?}", resp[0].body)
+        };
+        let direct = Raim::<CAPACITY, DevicePrecision>::new()
+            .process(&Config::default(), &Epoch::linear(1.0, &s24))
+            .unwrap();
+        assert_eq!(*r24, WireResult::from_result(&direct));
+        assert_eq!(
+            resp[1].body,
+            ResponseBody::Error(WireError::TooManySatellites {
+                have: 25,
+                capacity: 24
+            })
+        );
+        let ResponseBody::Status(st) = &resp[2].body else {
+            panic!("{:?}", resp[2].body)
+        };
+        assert_eq!(st.capacity, 24);
+    });
+}

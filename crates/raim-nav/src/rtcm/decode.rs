@@ -76,6 +76,9 @@ pub enum DecodeError {
     SignalId { message: u16, signal_id: u8 },
     /// A message number that is not an MSM of the five systems.
     NotMsm { message: u16 },
+    /// A message number that is not a Keplerian ephemeris (1019, 1042,
+    /// 1044, 1045, 1046).
+    NotKepler { message: u16 },
 }
 
 impl From<BitsError> for DecodeError {
@@ -102,6 +105,9 @@ impl core::fmt::Display for DecodeError {
                 )
             }
             DecodeError::NotMsm { message } => write!(f, "{message} is not an MSM"),
+            DecodeError::NotKepler { message } => {
+                write!(f, "{message} is not a Keplerian ephemeris message")
+            }
         }
     }
 }
@@ -179,6 +185,23 @@ impl<'a> Frame<'a> {
             1013 => msg1013(self.payload),
             _ => Ok(Message::Other(Some(n))),
         }
+    }
+}
+
+/// Decode a Keplerian ephemeris message (1019, 1042, 1044, 1045, 1046)
+/// from its payload (the message number DF002 on, as
+/// [`Frame::payload`]); the same decoding as [`Frame::message`]. The
+/// ephemeris store keeps each set as this payload and decodes it when
+/// an epoch uses it ([`crate::store::EphemerisStore`]). Another message
+/// is [`DecodeError::NotKepler`].
+pub fn kepler_message(payload: &[u8]) -> Result<KeplerMessage, DecodeError> {
+    let number = BitReader::at(payload, 0).u(12)? as u16;
+    match number {
+        1019 => msg1019(payload),
+        1042 => msg1042(payload),
+        1044 => msg1044(payload),
+        1045 | 1046 => msg1045_1046(payload, number == 1046),
+        _ => Err(DecodeError::NotKepler { message: number }),
     }
 }
 

@@ -24,7 +24,7 @@ pub use fields::{
 pub use fields::{
     glonass_fields, msg1019_fields, msg1042_fields, msg1044_fields, msg1045_fields, msg1046_fields,
 };
-pub use receiver::{FormError, FormedEpoch, LeapSeconds, RtcmCounts, StreamReceiver};
+pub use receiver::{FormError, FormScratch, FormedEpoch, LeapSeconds, RtcmCounts, StreamReceiver};
 
 #[cfg(test)]
 mod stream_tests;

@@ -69,7 +69,7 @@ use crate::ranging::{
     bootstrap_position_into, cn0_dbhz_u8, correct_at, split_pair, stream_codes, stream_sigma_for_m,
     transmit_time_s, Broadcast, Corrections, SatInput, StreamSigmas,
 };
-use crate::store::{EphemerisStore, Stored};
+use crate::store::{DecodedSets, EphemerisStore, Stored};
 use crate::time::table_gps_minus_utc_s;
 
 use super::decode::{msm_more_bit, Frame, Message, Msm, MsmSystem};
@@ -87,14 +87,43 @@ pub const NO_MODEL_IONO_FACTOR: f64 = 2.0;
 /// Galileo (I/NAV and F/NAV are sets of their own: 72), 46 BeiDou (the
 /// BDS-2 and BDS-3 satellites in service) and 10 QZSS satellites, less a
 /// margin the oldest-out rule covers (a full store drops its oldest toc).
+/// Each is kept as its message's payload and decoded when an epoch uses
+/// it ([`EphemerisStore`]).
+#[cfg(not(feature = "ram-192k"))]
 pub const KEPLER_SETS: usize = 256;
+/// Keplerian sets kept on a part with 192 KiB of RAM (feature
+/// `ram-192k`, the STM32F4's stream build, whose epochs take 24
+/// satellites): the set in force and the next of the satellites a
+/// receiver tracks and broadcasts, not of every satellite in orbit (24
+/// satellites, Galileo's I/NAV and F/NAV sets apart, within 64). A stream
+/// that carries more (a caster's whole-constellation ephemeris stream)
+/// loses its oldest sets first; a satellite left without a set in force
+/// is not used (`FormedEpoch::rejected`), never given another's.
+#[cfg(feature = "ram-192k")]
+pub const KEPLER_SETS: usize = 64;
 /// GLONASS sets kept: two per slot of a full constellation.
+#[cfg(not(feature = "ram-192k"))]
 const GLONASS_SETS: usize = 48;
+/// GLONASS sets kept with `ram-192k`: two for each of 12 satellites, the
+/// most in view at once (the oldest t_b goes first).
+#[cfg(feature = "ram-192k")]
+const GLONASS_SETS: usize = 24;
 /// 1020 messages held until the stream's epochs are dated.
+#[cfg(not(feature = "ram-192k"))]
 const PENDING_GLONASS: usize = 32;
+/// 1020 messages held until the stream is dated, with `ram-192k`: one for
+/// each of 16 satellites, more than are in view (the oldest goes first).
+#[cfg(feature = "ram-192k")]
+const PENDING_GLONASS: usize = 16;
 /// GLONASS orbits kept integrated between epochs: one per slot (1-27),
 /// so every GLONASS satellite of an epoch has its own.
+#[cfg(not(feature = "ram-192k"))]
 const GLONASS_ARCS: usize = 27;
+/// GLONASS orbits kept integrated with `ram-192k`: 12, the most GLONASS
+/// satellites in view at once. A satellite beyond them in one epoch is
+/// integrated from t_b ([`GlonassArcs::state`]): the same bits, slower.
+#[cfg(feature = "ram-192k")]
+const GLONASS_ARCS: usize = 12;
 
 /// The GLONASS orbits of the latest epochs, each integrated up to the
 /// last RK4 node before its latest transmit time ([`GlonassArc`]): an
@@ -228,6 +257,9 @@ pub struct RtcmCounts {
     pub glonass_bad: u32,
     /// RTCM 1013 system parameters taken.
     pub system_parameters: u32,
+    /// Keplerian ephemerides not kept: a payload over 64 B
+    /// ([`crate::store::Stored::NotKept`]).
+    pub ephemerides_not_kept: u32,
 }
 
 /// One signal's pseudorange.
@@ -283,6 +315,42 @@ pub struct FormedEpoch<const N: usize> {
     pub rejected: u32,
 }
 
+/// The scratch of one epoch's forming, used only inside
+/// [`StreamReceiver::on_frame_in`]: the bootstrap solution, its ranges,
+/// the transmit states and the epoch's decoded Keplerian sets (`N`
+/// satellites). Not on the stack: the epoch's deepest path is the
+/// bootstrap solve under the forming.
+#[derive(Debug, Clone)]
+pub struct FormScratch<const N: usize> {
+    /// The bootstrap solution's storage.
+    solution: Solution<N>,
+    /// The bootstrap pass's ranges.
+    bootstrap_obs: Vec<RangeObservation, N>,
+    /// Each input satellite's state at its transmit time (None: no usable
+    /// code pair), computed once for both passes.
+    transmit: Vec<Option<SatState>, N>,
+    /// The Keplerian sets the epoch uses ([`EphemerisStore::load`]).
+    decoded: DecodedSets<N>,
+}
+
+impl<const N: usize> FormScratch<N> {
+    /// Empty scratch.
+    pub const fn new() -> Self {
+        FormScratch {
+            solution: Solution::empty(),
+            bootstrap_obs: Vec::new(),
+            transmit: Vec::new(),
+            decoded: DecodedSets::new(),
+        }
+    }
+}
+
+impl<const N: usize> Default for FormScratch<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// The receiver: `N` satellites per epoch, `S` signals per epoch.
 #[derive(Debug, Clone)]
 pub struct StreamReceiver<const N: usize, const S: usize> {
@@ -302,14 +370,6 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     glo_wait_tod_ms: Option<i64>,
     station_m: Option<[f64; 3]>,
     counts: RtcmCounts,
-    /// The bootstrap solution's storage (not on the stack).
-    solution: Solution<N>,
-    /// The bootstrap pass's ranges (not on the stack: the epoch's deepest
-    /// path is the bootstrap solve under `form`).
-    bootstrap_obs: Vec<RangeObservation, N>,
-    /// Each input satellite's state at its transmit time (None: no usable
-    /// code pair), computed once for both passes.
-    transmit: Vec<Option<SatState>, N>,
     glonass_arcs: GlonassArcs,
     /// GPS - UTC of the stream's latest 1013 (DF054), s.
     stream_leap_s: Option<u8>,
@@ -346,10 +406,8 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 glonass_dropped: 0,
                 glonass_bad: 0,
                 system_parameters: 0,
+                ephemerides_not_kept: 0,
             },
-            solution: Solution::empty(),
-            bootstrap_obs: Vec::new(),
-            transmit: Vec::new(),
             glonass_arcs: GlonassArcs::new(),
             stream_leap_s: None,
             glonass_placed_leap_s: None,
@@ -408,6 +466,11 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
     /// curves of each satellite's signal pair) and `elevation_mask_rad`,
     /// and `Some` says whether it could be: `Ok(())` with `out` filled, or
     /// why not.
+    ///
+    /// The forming's scratch is a [`FormScratch`] of this call's own (on
+    /// the stack: for the host, whose stack is not counted; the device
+    /// lends one, [`Self::on_frame_in`]).
+    #[cfg(any(test, feature = "rtcm-rs"))]
     pub fn on_frame(
         &mut self,
         frame: &[u8],
@@ -415,8 +478,23 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         elevation_mask_rad: f64,
         out: &mut FormedEpoch<N>,
     ) -> Option<Result<(), FormError>> {
+        let mut scratch = FormScratch::new();
+        self.on_frame_in(frame, sigmas, elevation_mask_rad, out, &mut scratch)
+    }
+
+    /// [`Self::on_frame`] with the forming's scratch in `scratch`: room
+    /// used only inside this call, which the owner may use for other work
+    /// between calls (raim-server shares it with its answer buffers).
+    pub fn on_frame_in(
+        &mut self,
+        frame: &[u8],
+        sigmas: &StreamSigmas,
+        elevation_mask_rad: f64,
+        out: &mut FormedEpoch<N>,
+        scratch: &mut FormScratch<N>,
+    ) -> Option<Result<(), FormError>> {
         self.decode(frame);
-        let formed = self.form(sigmas, elevation_mask_rad, out);
+        let formed = self.form(sigmas, elevation_mask_rad, out, scratch);
         self.ready = None;
         formed
     }
@@ -457,7 +535,10 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                     0.0
                 };
                 k.toc_gps_s = toc_near_toe(week, k.toe_sow_s, e.fields.toc_s - bdt_s);
-                let _: Stored = self.store.insert_kepler(k);
+                if let Stored::NotKept { .. } = self.store.insert_kepler(k, f.payload()) {
+                    self.counts.ephemerides_not_kept =
+                        self.counts.ephemerides_not_kept.wrapping_add(1);
+                }
                 if self.first_eph.is_none() {
                     self.first_eph = Some((week, week as f64 * WEEK_S + k.toe_sow_s - bdt_s));
                 }
@@ -710,6 +791,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         sigmas: &StreamSigmas,
         elevation_mask_rad: f64,
         out: &mut FormedEpoch<N>,
+        scratch: &mut FormScratch<N>,
     ) -> Option<Result<(), FormError>> {
         let leap_s = match (self.base_week, self.ready.as_ref()) {
             (Some(base), Some(o)) => {
@@ -725,12 +807,15 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             counts,
             store,
             station_m,
-            solution,
-            bootstrap_obs: first,
-            transmit,
             glonass_arcs,
             ..
         } = self;
+        let FormScratch {
+            solution,
+            bootstrap_obs: first,
+            transmit,
+            decoded,
+        } = scratch;
         let o = ready.as_mut()?;
         out.sats.clear();
         out.cn0_dbhz.clear();
@@ -759,6 +844,20 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         }
         // Satellite order, as the host's epochs (a BTreeMap by SatId).
         sort_checked(&mut o.sigs, |a, b| (a.id, a.code) < (b.id, b.code));
+        // The Keplerian sets the satellites with a code will use, decoded
+        // from the store's payloads once for the epoch; more than N is the
+        // capacity refusal the inputs below would give.
+        store.start_epoch(decoded);
+        let mut from = 0;
+        while let Some((id, have)) = next_satellite(&o.sigs, &mut from) {
+            if pick_code(stream_codes(id.system), have).is_some()
+                && store.load(id, time_gps_s, decoded).is_err()
+            {
+                return Some(Err(FormError::TooManySignals {
+                    capacity: u32::try_from(N).unwrap_or(u32::MAX),
+                }));
+            }
+        }
         let mut inputs: Vec<SatInput<'_>, N> = Vec::new();
         // The C/N0 of each input, in the same order.
         let mut cn0s: Vec<u8, N> = Vec::new();
@@ -782,7 +881,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 out.rejected += 1;
                 continue;
             };
-            let Some(eph) = store.select(s.id, time_gps_s) else {
+            let Some(eph) = store.select(s.id, time_gps_s, decoded) else {
                 out.rejected += 1;
                 continue;
             };
@@ -871,6 +970,16 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         }
         Some(Ok(()))
     }
+}
+
+/// The next satellite of `sigs` (sorted by satellite) from `*from` on,
+/// and its signals, advancing `*from` past them; None at the end.
+fn next_satellite<'s>(sigs: &'s [Signal], from: &mut usize) -> Option<(SatId, &'s [Signal])> {
+    let rest = sigs.get(*from..)?;
+    let id = rest.first()?.id;
+    let len = rest.iter().take_while(|s| s.id == id).count();
+    *from += len;
+    Some((id, rest.get(..len)?))
 }
 
 /// An MSM's signals with a valid pseudorange, in cell order.
