@@ -126,12 +126,11 @@ impl Kepler {
         self.af0_s + self.af1_s_s * dt + self.af2_s_s2 * dt * dt
     }
 
-    /// Position (ECEF of the transmit instant) and clock at GPS time `t_gps_s`.
-    pub fn state(&self, t_gps_s: f64) -> SatState {
-        let (mu, omega_e) = self.mu_omega();
+    /// The eccentric anomaly at `tk` s from toe (IS-GPS-200 Table 20-IV:
+    /// Kepler's equation by fixed-point iteration from the mean anomaly).
+    fn eccentric_anomaly_rad(&self, mu: f64, tk: f64) -> f64 {
         let a = self.sqrt_a_m05 * self.sqrt_a_m05;
         let n0 = m::sqrt(mu / (a * a * a));
-        let tk = self.tk_s(t_gps_s);
         let n = n0 + self.delta_n_rad_s;
         let mk = self.m0_rad + n * tk;
         let e = self.e;
@@ -144,6 +143,36 @@ impl Kepler {
                 break;
             }
         }
+        ek
+    }
+
+    /// The relativistic eccentricity term F e sqrt(A) sin(E), F = -2
+    /// sqrt(mu) / c^2 (IS-GPS-200 20.3.3.3.3.1), s.
+    fn relativistic_s(&self, mu: f64, sin_e: f64) -> f64 {
+        let f = -2.0 * m::sqrt(mu) / (C_M_S * C_M_S);
+        f * self.e * self.sqrt_a_m05 * sin_e
+    }
+
+    /// The clock of [`Self::state`] at GPS time `t_gps_s`, s, to the bit,
+    /// without the orbit: the transmit time needs the clock at the
+    /// reception time less the transit, and the position only at the
+    /// transmit time (the orbit's rotations, harmonic corrections and
+    /// true anomaly are over half of [`Self::state`]'s soft-float cost on
+    /// the M4, BENCHMARKS.md "Firmware: receiver stream").
+    pub fn clock_s(&self, t_gps_s: f64) -> f64 {
+        let (mu, _) = self.mu_omega();
+        let ek = self.eccentric_anomaly_rad(mu, self.tk_s(t_gps_s));
+        let (sin_e, _) = m::sin_cos(ek);
+        self.clock_polynomial_s(t_gps_s) + self.relativistic_s(mu, sin_e)
+    }
+
+    /// Position (ECEF of the transmit instant) and clock at GPS time `t_gps_s`.
+    pub fn state(&self, t_gps_s: f64) -> SatState {
+        let (mu, omega_e) = self.mu_omega();
+        let a = self.sqrt_a_m05 * self.sqrt_a_m05;
+        let tk = self.tk_s(t_gps_s);
+        let e = self.e;
+        let ek = self.eccentric_anomaly_rad(mu, tk);
         let (sin_e, cos_e) = m::sin_cos(ek);
         let nu = m::atan2(m::sqrt(1.0 - e * e) * sin_e, cos_e - e);
         let phi = nu + self.omega_rad;
@@ -151,7 +180,8 @@ impl Kepler {
         let u = phi + self.cus_rad * s2 + self.cuc_rad * c2;
         let r = a * (1.0 - e * cos_e) + self.crs_m * s2 + self.crc_m * c2;
         let i = self.i0_rad + self.idot_rad_s * tk + self.cis_rad * s2 + self.cic_rad * c2;
-        let (x_orb, y_orb) = (r * m::cos(u), r * m::sin(u));
+        let (sin_u, cos_u) = m::sin_cos(u);
+        let (x_orb, y_orb) = (r * cos_u, r * sin_u);
         let (sin_i, cos_i) = m::sin_cos(i);
         let toe = self.toe_sow_s;
         let position_m = if self.is_beidou_geo() {
@@ -177,9 +207,7 @@ impl Kepler {
                 y_orb * sin_i,
             ]
         };
-        // Relativistic eccentricity term F e sqrt(A) sin(E), F = -2 sqrt(mu)/c^2.
-        let f = -2.0 * m::sqrt(mu) / (C_M_S * C_M_S);
-        let clock_s = self.clock_polynomial_s(t_gps_s) + f * e * self.sqrt_a_m05 * sin_e;
+        let clock_s = self.clock_polynomial_s(t_gps_s) + self.relativistic_s(mu, sin_e);
         SatState {
             position_m,
             clock_s,
@@ -259,6 +287,45 @@ mod tests {
         let mut b = circular(System::Beidou, 20);
         b.toe_sow_s = 100.0;
         assert!((b.tk_s(1000.0 * WEEK_S + 114.0)).abs() < 1e-9);
+    }
+
+    /// The clock without the orbit ([`Kepler::clock_s`], the transmit
+    /// time's) is [`Kepler::state`]'s clock to the bit, for GPS, Galileo,
+    /// a BeiDou GEO and MEO, at eccentricities up to 0.3 and times across
+    /// two days either side of toe.
+    ///
+    /// Verifies: RX-FORM-COST
+    #[test]
+    fn clock_without_the_orbit_is_the_states_clock_bit_for_bit() {
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for (system, prn) in [
+            (System::Gps, 5),
+            (System::Galileo, 11),
+            (System::Beidou, 3),
+            (System::Beidou, 30),
+        ] {
+            for _ in 0..200 {
+                let mut k = circular(system, prn);
+                k.e = 0.3 * next() * next();
+                k.m0_rad = 6.0 * next() - 3.0;
+                k.omega_rad = 6.0 * next() - 3.0;
+                k.delta_n_rad_s = 4e-9 * next();
+                k.af2_s_s2 = 1e-19 * next();
+                let t = 1000.0 * WEEK_S + 345_600.0 * (next() - 0.5);
+                assert_eq!(
+                    k.clock_s(t).to_bits(),
+                    k.state(t).clock_s.to_bits(),
+                    "{system:?} e {} t {t}",
+                    k.e
+                );
+            }
+        }
     }
 
     /// Kepler's equation with e = 0.3 (far beyond any GNSS orbit) converges

@@ -3,6 +3,7 @@
 
 use crate::ephemeris::OMEGA_E_GPS_RAD_S;
 use crate::m;
+use nalgebra::Matrix3;
 use raim_core::frames::{ecef_to_geodetic, enu_rotation, rotate, Geodetic};
 
 /// Rotate a satellite position computed in the ECEF frame of the transmit
@@ -31,17 +32,25 @@ pub fn az_el(rx_m: [f64; 3], sat_m: [f64; 3]) -> (f64, f64, Geodetic) {
 /// `ecef_to_geodetic(rx_m)` given: computed once for all the satellites
 /// of an epoch (ten f64 latitude iterations, soft-float on the M4).
 pub fn az_el_from(rx_m: [f64; 3], g: Geodetic, sat_m: [f64; 3]) -> (f64, f64, Geodetic) {
+    let (az, el) = az_el_rotated(rx_m, &enu_rotation(&g), sat_m);
+    (az, el, g)
+}
+
+/// [`az_el`] with the receiver's ECEF-to-ENU rotation `r` =
+/// `enu_rotation(&ecef_to_geodetic(rx_m))` given (four sines and cosines
+/// of the receiver's latitude and longitude, once per epoch): azimuth and
+/// elevation, radians.
+pub fn az_el_rotated(rx_m: [f64; 3], r: &Matrix3<f64>, sat_m: [f64; 3]) -> (f64, f64) {
     let n = distance_m(sat_m, rx_m);
     let d = [
         (sat_m[0] - rx_m[0]) / n,
         (sat_m[1] - rx_m[1]) / n,
         (sat_m[2] - rx_m[2]) / n,
     ];
-    let [e, nn, u] = rotate(&enu_rotation(&g), d);
+    let [e, nn, u] = rotate(r, d);
     (
         m::rem_euclid(m::atan2(e, nn), 2.0 * core::f64::consts::PI),
         libm::asin(u),
-        g,
     )
 }
 

@@ -12,17 +12,17 @@
 //! [`bootstrap_position`], so that they form the same bits.
 
 use raim_core::araim::error_model::{iono_free_factor_sq, Curves};
-use raim_core::frames::{ecef_to_geodetic, Geodetic};
+use raim_core::frames::{ecef_to_geodetic, enu_rotation, Geodetic};
 use raim_core::sigma::SigmaModel;
 use raim_core::solve::{solve_into, Solution};
 use raim_core::{Config, Epoch, RangeObservation, SatId, System};
 
 use crate::ephemeris::{Kepler, SatState, C_M_S, WEEK_S};
-use crate::geometry::{az_el_from, distance_m, rotate_earth};
+use crate::geometry::{az_el_rotated, distance_m, rotate_earth};
 use crate::glonass::{l1_hz, l2_hz, GlonassEphemeris, F_L1_BASE_HZ, F_L2_BASE_HZ};
 use crate::iono::{scale_to_frequency, Klobuchar, F_B1I_HZ, F_L1_HZ};
 use crate::m;
-use crate::tropo::saastamoinen_m;
+use crate::tropo::SaastamoinenSite;
 
 /// A solved position is trusted as the linearisation point for the
 /// corrections only if it is within this of the Earth's surface, m.
@@ -46,12 +46,12 @@ impl Broadcast<'_> {
         }
     }
 
-    /// Satellite clock at GPS time `t_gps_s`, s: [`Self::state`]'s clock,
-    /// without integrating a GLONASS orbit (its clock is a polynomial of
-    /// t - t_b alone).
+    /// Satellite clock at GPS time `t_gps_s`, s: [`Self::state`]'s clock to
+    /// the bit, without the orbit ([`Kepler::clock_s`]; a GLONASS clock is
+    /// a polynomial of t - t_b alone).
     pub fn clock_s(&self, t_gps_s: f64) -> f64 {
         match self {
-            Broadcast::Kepler(k) => k.state(t_gps_s).clock_s,
+            Broadcast::Kepler(k) => k.clock_s(t_gps_s),
             Broadcast::Glonass(g) => g.clock_s(t_gps_s),
         }
     }
@@ -128,6 +128,32 @@ pub struct Corrected {
     pub iono_m: f64,
     /// Saastamoinen slant delay, m; subtracted.
     pub tropo_m: f64,
+}
+
+/// What the corrections of one epoch take from the receiver position
+/// alone: its geodetic coordinates (ten f64 latitude iterations), its
+/// local-level (ENU) rotation (four sines and cosines) and its
+/// troposphere's zenith delays ([`SaastamoinenSite`]). Computed once per
+/// epoch for every satellite ([`correct_at`]), or per satellite by
+/// [`correct`]; the same bits either way.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReceiverFrame {
+    pub geodetic: Geodetic,
+    /// ECEF to ENU at the receiver (`raim_core::frames::enu_rotation`).
+    rotation: nalgebra::Matrix3<f64>,
+    pub tropo: SaastamoinenSite,
+}
+
+impl ReceiverFrame {
+    /// The frame of a receiver at ECEF `rx_m`.
+    pub fn at(rx_m: [f64; 3]) -> Self {
+        let geodetic = ecef_to_geodetic(rx_m);
+        ReceiverFrame {
+            geodetic,
+            rotation: enu_rotation(&geodetic),
+            tropo: SaastamoinenSite::at(geodetic.lat_rad, geodetic.height_m),
+        }
+    }
 }
 
 /// Carrier frequency (Hz) of a RINEX 3 code's band digit, per system; None
@@ -274,16 +300,16 @@ pub fn correct(
 /// `s.eph.state(transmit_time_s(s, t_rx_gps_s)?)`, computed once per
 /// epoch however many passes use it (the device's receiver integrates a
 /// GLONASS orbit there from a [`crate::glonass::GlonassArc`]); and, when
-/// given, the receiver's geodetic position `rx_geodetic` =
-/// `ecef_to_geodetic(rx_m)`, computed once for all the epoch's satellites
-/// (else here, for a full correction).
+/// given, the receiver's frame `rx_frame` = `ReceiverFrame::at(rx_m)`,
+/// computed once for all the epoch's satellites (else here, for a full
+/// correction).
 #[allow(clippy::too_many_arguments)]
 pub fn correct_at(
     s: &SatInput<'_>,
     t_rx_gps_s: f64,
     tx: &SatState,
     rx_m: Option<[f64; 3]>,
-    rx_geodetic: Option<Geodetic>,
+    rx_frame: Option<&ReceiverFrame>,
     full: bool,
     c: &Corrections,
     klobuchar: Option<&Klobuchar>,
@@ -314,8 +340,16 @@ pub fn correct_at(
     };
     let (mut az, mut el, mut iono_m, mut tropo_m) = (0.0, core::f64::consts::FRAC_PI_2, 0.0, 0.0);
     if let (Some(rx), true) = (rx_m, full) {
-        let g = rx_geodetic.unwrap_or_else(|| ecef_to_geodetic(rx));
-        let (a, e, g) = az_el_from(rx, g, pos);
+        let here;
+        let frame = match rx_frame {
+            Some(f) => f,
+            None => {
+                here = ReceiverFrame::at(rx);
+                &here
+            }
+        };
+        let g = frame.geodetic;
+        let (a, e) = az_el_rotated(rx, &frame.rotation, pos);
         az = a;
         el = e;
         if el < c.elevation_mask_rad {
@@ -330,7 +364,7 @@ pub fn correct_at(
             }
         }
         if c.tropo {
-            tropo_m = saastamoinen_m(g.lat_rad, g.height_m, el);
+            tropo_m = frame.tropo.slant_m(el);
         }
     }
     let sat_clock_m = C_M_S * clock_s;
@@ -598,6 +632,76 @@ mod tests {
             group_delay_e5a_s,
             ..crate::ephemeris::circular(system, 1)
         }
+    }
+
+    /// The receiver's frame computed once for an epoch gives every
+    /// satellite the bits [`correct`] gives it computing the frame itself
+    /// (elevation, azimuth, troposphere, Klobuchar, corrected range,
+    /// rotated position), single codes and pairs, above and below the
+    /// mask, with the transmit state given as the device computes it.
+    ///
+    /// Verifies: RX-FORM-COST
+    #[test]
+    fn one_receiver_frame_per_epoch_gives_the_per_satellite_bits() {
+        use raim_core::frames::geodetic_to_ecef;
+        let rx = geodetic_to_ecef(Geodetic {
+            lat_rad: 0.7,
+            lon_rad: 0.15,
+            height_m: 48.0,
+        });
+        let frame = ReceiverFrame::at(rx);
+        let kb = Klobuchar {
+            alpha: [1.1e-8, 1.5e-8, -6.0e-8, -1.2e-7],
+            beta: [9.0e4, 9.8e4, -6.5e4, -5.2e5],
+        };
+        let c = Corrections {
+            elevation_mask_rad: 0.1,
+            iono: true,
+            tropo: true,
+            group_delay: true,
+            glonass_sigma: None,
+        };
+        let t = 1000.0 * WEEK_S + 7200.0;
+        let mut seen = (0, 0);
+        for (i, (prn, m0)) in [(1u8, 0.3f64), (2, 1.1), (3, 2.0), (4, -0.4), (5, 2.9)]
+            .into_iter()
+            .enumerate()
+        {
+            let mut k = kepler(System::Gps, 5e-9, 0.0);
+            k.prn = prn;
+            k.m0_rad = m0;
+            k.i0_rad = 0.96;
+            k.omega0_rad = 0.5 * i as f64;
+            k.e = 0.01;
+            let pair = i % 2 == 1;
+            let s = SatInput {
+                id: SatId::new(System::Gps, prn),
+                code: if pair { "C1C+C2W" } else { "C1C" },
+                p1_m: 2.2e7 + 1e5 * i as f64,
+                p2_m: pair.then_some(2.2e7 + 1e5 * i as f64 + 3.0),
+                eph: Broadcast::Kepler(&k),
+            };
+            let tx = s.eph.state(transmit_time_s(&s, t).unwrap());
+            let want = correct(&s, t, Some(rx), true, &c, Some(&kb));
+            let got = correct_at(&s, t, &tx, Some(rx), Some(&frame), true, &c, Some(&kb));
+            match (want, got) {
+                (Ok(w), Ok(g)) => {
+                    seen.0 += 1;
+                    assert_eq!(w, g);
+                    assert_eq!(w.obs.pseudorange_m.to_bits(), g.obs.pseudorange_m.to_bits());
+                    assert_eq!(w.tropo_m.to_bits(), g.tropo_m.to_bits());
+                }
+                (Err(w), Err(g)) => {
+                    seen.1 += 1;
+                    assert_eq!(w, g);
+                }
+                (w, g) => panic!("{w:?} {g:?}"),
+            }
+        }
+        assert!(
+            seen.0 > 0 && seen.1 > 0,
+            "above and below the mask: {seen:?}"
+        );
     }
 
     /// GLONASS codes take the satellite's FDMA carrier for the iono

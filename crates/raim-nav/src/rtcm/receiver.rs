@@ -55,7 +55,6 @@
 //! pair, `raim replay --araim`'s rule).
 
 use heapless::Vec;
-use raim_core::frames::ecef_to_geodetic;
 use raim_core::solve::Solution;
 use raim_core::{RangeObservation, SatId, System};
 
@@ -67,7 +66,7 @@ use crate::glonass::{
 use crate::m;
 use crate::ranging::{
     bootstrap_position_into, cn0_dbhz_u8, correct_at, split_pair, stream_codes, stream_sigma_for_m,
-    transmit_time_s, Broadcast, Corrections, SatInput, StreamSigmas,
+    transmit_time_s, Broadcast, Corrections, ReceiverFrame, SatInput, StreamSigmas,
 };
 use crate::store::{EphemerisStore, Stored};
 use crate::time::table_gps_minus_utc_s;
@@ -835,8 +834,9 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // Every correction at the reference; with none (the bootstrap
         // failed and no station position), the bootstrap pass's ranges, as
         // the host hands them over.
-        // The receiver's geodetic position, once for every satellite.
-        let rx_geodetic = reference.map(ecef_to_geodetic);
+        // The receiver's frame (geodetic position, local-level rotation,
+        // zenith troposphere), once for every satellite.
+        let rx_frame = reference.map(ReceiverFrame::at);
         for ((s, tx), cn0) in inputs.iter().zip(transmit.iter()).zip(cn0s.iter()) {
             let Some(tx) = tx else {
                 out.rejected += 1;
@@ -847,7 +847,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 time_gps_s,
                 tx,
                 reference,
-                rx_geodetic,
+                rx_frame.as_ref(),
                 reference.is_some(),
                 &c,
                 None,
