@@ -9,13 +9,13 @@
 //! This is the one implementation: the host's RINEX and receiver-stream
 //! replays (raim-gnss) and the firmware's own epochs from a receiver's
 //! RTCM 3 stream ([`crate::rtcm`]) both call [`correct`] and
-//! [`bootstrap_position`], so that they form the same bits.
+//! [`bootstrap_position`] ([`crate::bootstrap`]), so that they form the
+//! same bits.
 
 use raim_core::araim::error_model::{iono_free_factor_sq, Curves};
 use raim_core::frames::{ecef_to_geodetic, enu_rotation, Geodetic};
 use raim_core::sigma::SigmaModel;
-use raim_core::solve::{solve_into, Solution};
-use raim_core::{Config, Epoch, RangeObservation, SatId, System};
+use raim_core::{RangeObservation, SatId, System};
 
 use crate::ephemeris::{Kepler, SatState, C_M_S, WEEK_S};
 use crate::geometry::{az_el_rotated, distance_m, rotate_earth};
@@ -24,9 +24,7 @@ use crate::iono::{scale_to_frequency, Klobuchar, F_B1I_HZ, F_L1_HZ};
 use crate::m;
 use crate::tropo::SaastamoinenSite;
 
-/// A solved position is trusted as the linearisation point for the
-/// corrections only if it is within this of the Earth's surface, m.
-pub const SURFACE_BAND_M: f64 = 100_000.0;
+pub use crate::bootstrap::{bootstrap_position, SURFACE_BAND_M};
 
 /// The broadcast ephemeris selected for one satellite: Keplerian elements
 /// (GPS, Galileo, BeiDou, QZSS) or a GLONASS state vector.
@@ -388,43 +386,6 @@ pub fn correct_at(
         iono_m,
         tropo_m,
     })
-}
-
-/// A least-squares position from `sats` (unit weights until the position
-/// is near the surface, then the core's default elevation model), at
-/// capacity `N`; None with fewer than 4 or more than `N` satellites, or a
-/// solution farther than [`SURFACE_BAND_M`] from the surface. The solution
-/// is built on the stack (host use; [`bootstrap_position_into`] takes the
-/// storage).
-pub fn bootstrap_position<const N: usize>(
-    time_s: f64,
-    sats: &[RangeObservation],
-    apriori: Option<[f64; 3]>,
-) -> Option<[f64; 3]> {
-    let mut out = Solution::<N>::empty();
-    bootstrap_position_into(time_s, sats, apriori, &mut out)
-}
-
-/// [`bootstrap_position`] into existing storage `out` (the firmware keeps
-/// it in a static: an f64 solution at N = 32 is tens of KB).
-pub fn bootstrap_position_into<const N: usize>(
-    time_s: f64,
-    sats: &[RangeObservation],
-    apriori: Option<[f64; 3]>,
-    out: &mut Solution<N>,
-) -> Option<[f64; 3]> {
-    if sats.len() > N || sats.len() < 4 {
-        return None;
-    }
-    let mut mask = [false; N];
-    for m in mask.iter_mut().take(sats.len()) {
-        *m = true;
-    }
-    let cfg = Config::default();
-    solve_into(&cfg, &Epoch::ranges(time_s, sats, apriori), &mask, out).ok()?;
-    let p = out.position_ecef_m?;
-    let r = distance_m(p, [0.0; 3]);
-    ((r - raim_core::frames::WGS84_A_M).abs() < SURFACE_BAND_M).then_some(p)
 }
 
 /// The sigma of an iono-free combination with noise factor `factor` at

@@ -55,7 +55,6 @@
 //! pair, `raim replay --araim`'s rule).
 
 use heapless::Vec;
-use raim_core::solve::Solution;
 use raim_core::{RangeObservation, SatId, System};
 
 use crate::ephemeris::{SatState, BDT_MINUS_GPST_S, WEEK_S};
@@ -65,7 +64,7 @@ use crate::glonass::{
 };
 use crate::m;
 use crate::ranging::{
-    bootstrap_position_into, cn0_dbhz_u8, correct_at, split_pair, stream_codes, stream_sigma_for_m,
+    bootstrap_position, cn0_dbhz_u8, correct_at, split_pair, stream_codes, stream_sigma_for_m,
     transmit_time_s, Broadcast, Corrections, ReceiverFrame, SatInput, StreamSigmas,
 };
 use crate::store::{EphemerisStore, Stored};
@@ -301,8 +300,6 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     glo_wait_tod_ms: Option<i64>,
     station_m: Option<[f64; 3]>,
     counts: RtcmCounts,
-    /// The bootstrap solution's storage (not on the stack).
-    solution: Solution<N>,
     /// The bootstrap pass's ranges (not on the stack: the epoch's deepest
     /// path is the bootstrap solve under `form`).
     bootstrap_obs: Vec<RangeObservation, N>,
@@ -346,7 +343,6 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 glonass_bad: 0,
                 system_parameters: 0,
             },
-            solution: Solution::empty(),
             bootstrap_obs: Vec::new(),
             transmit: Vec::new(),
             glonass_arcs: GlonassArcs::new(),
@@ -724,7 +720,6 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             counts,
             store,
             station_m,
-            solution,
             bootstrap_obs: first,
             transmit,
             glonass_arcs,
@@ -829,7 +824,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 let _ = first.push(x.obs);
             }
         }
-        let reference = bootstrap_position_into(time_gps_s, first, apriori, solution).or(apriori);
+        let reference = bootstrap_position::<N>(first, apriori).or(apriori);
         out.reference_m = reference;
         // Every correction at the reference; with none (the bootstrap
         // failed and no station position), the bootstrap pass's ranges, as
