@@ -24,10 +24,13 @@ pub const MU_GAL_BDS_M3_S2: f64 = 3.986_004_418e14;
 pub const WEEK_S: f64 = 604_800.0;
 /// BeiDou time is GPS time minus 14 s (BDS ICD §5.2.4.1; constant, no leap seconds).
 pub const BDT_MINUS_GPST_S: f64 = -14.0;
-/// Kepler equation: stop when the eccentric anomaly changes by less than this, rad.
-const KEPLER_TOLERANCE_RAD: f64 = 1e-14;
-/// Kepler equation: iteration cap (Newton's method from E = M + e sin M
-/// converges in 3 steps for e < 0.2, 5 for e = 0.3).
+/// Kepler's equation: a Newton step below this is the last, rad. Newton's
+/// error after it is below e / (2 (1 - e)) times its square (< 3e-17 for
+/// e < 0.3), and the sine and cosine are moved by it to first order (an
+/// error below half its square, 5e-17).
+const KEPLER_LAST_STEP_RAD: f64 = 1e-8;
+/// Kepler's equation: iteration cap (Newton's method from E = M + e sin M
+/// takes 2 steps for e < 0.03, 4 for e = 0.3).
 const KEPLER_MAX_ITERATIONS: usize = 30;
 
 /// One broadcast ephemeris (Keplerian elements, harmonic corrections and the
@@ -132,8 +135,9 @@ impl Kepler {
     /// are all the orbit and the clock take of E. Solved for d = E - M by
     /// Newton's method from d = e sin M, with sin(M + d) and cos(M + d)
     /// from M's sine and cosine (one library call) and d's
-    /// ([`sin_cos_small`], a polynomial): three steps and four polynomials
-    /// instead of the fixed-point iteration's eight to ten library sines,
+    /// ([`sin_cos_small`], a polynomial): two steps and two polynomials
+    /// for a GNSS orbit instead of the fixed-point iteration's eight to
+    /// ten library sines,
     /// soft-float on the M4 (BENCHMARKS.md "Firmware: receiver stream").
     /// Within 5e-15 of the fixed point's sine and cosine, 1.4e-7 m of
     /// position (test `newton_kepler_is_the_fixed_point`).
@@ -149,15 +153,17 @@ impl Kepler {
             (sin_m * cos_d + cos_m * sin_d, cos_m * cos_d - sin_m * sin_d)
         };
         let mut d = e * sin_m;
+        let (mut sin_e, mut cos_e) = at(d);
         for _ in 0..KEPLER_MAX_ITERATIONS {
-            let (sin_e, cos_e) = at(d);
             let step = (d - e * sin_e) / (1.0 - e * cos_e);
             d -= step;
-            if !(step.abs() >= KEPLER_TOLERANCE_RAD) {
-                break;
+            if !(step.abs() >= KEPLER_LAST_STEP_RAD) {
+                // The sine and cosine at d, to first order in the step.
+                return (sin_e - cos_e * step, cos_e + sin_e * step);
             }
+            (sin_e, cos_e) = at(d);
         }
-        at(d)
+        (sin_e, cos_e)
     }
 
     /// The relativistic eccentricity term F e sqrt(A) sin(E), F = -2
@@ -227,20 +233,35 @@ impl Kepler {
     }
 }
 
-/// Below this |d|, [`sin_cos_small`] is its polynomials; above, the
-/// library's sine and cosine (|E - M| <= e, and e < 0.2 for every GNSS
-/// orbit: Galileo's E14 and E18, 0.16, the largest).
+/// Below this |d|, [`sin_cos_small`] takes its short polynomials (|E - M|
+/// <= e, and e < 0.03 for GPS, BeiDou MEO and most Galileo orbits).
+const SHORT_ANGLE_RAD: f64 = 0.05;
+/// Below this |d|, [`sin_cos_small`] takes its long polynomials; above,
+/// the library's sine and cosine (e < 0.2 for every GNSS orbit: Galileo's
+/// E14 and E18, 0.16, the largest).
 const SMALL_ANGLE_RAD: f64 = 0.35;
 
-/// sin d and cos d for |d| <= [`SMALL_ANGLE_RAD`] by their Taylor series
-/// to d^13 and d^14 (Horner form): the first term left out is below
-/// 0.35^15 / 15! = 1.1e-19 of the result, so the error is the rounding
-/// of a few operations, a few 1e-17; the library's otherwise.
+/// sin d and cos d by their Taylor series (Horner form): to d^9 and d^8
+/// for |d| <= [`SHORT_ANGLE_RAD`] (the first term left out below
+/// 0.05^10 / 10! = 2.7e-20 of the result), to d^13 and d^14 for |d| <=
+/// [`SMALL_ANGLE_RAD`] (below 0.35^15 / 15! = 1.1e-19), so that the error
+/// is the rounding of a few operations, a few 1e-17; the library's above.
 fn sin_cos_small(d: f64) -> (f64, f64) {
+    let z = d * d;
+    if d.abs() <= SHORT_ANGLE_RAD {
+        let s = d
+            * (1.0
+                - z * (1.0 / 6.0)
+                    * (1.0
+                        - z * (1.0 / 20.0) * (1.0 - z * (1.0 / 42.0) * (1.0 - z * (1.0 / 72.0)))));
+        let c = 1.0
+            - z * (1.0 / 2.0)
+                * (1.0 - z * (1.0 / 12.0) * (1.0 - z * (1.0 / 30.0) * (1.0 - z * (1.0 / 56.0))));
+        return (s, c);
+    }
     if !(d.abs() <= SMALL_ANGLE_RAD) {
         return m::sin_cos(d);
     }
-    let z = d * d;
     let s = d
         * (1.0
             - z * (1.0 / 6.0)
