@@ -39,6 +39,10 @@ pub const SURFACE_BAND_M: f64 = 100_000.0;
 /// is no local level and the weights are unit (raim-core's rule), m.
 const SURFACE_RADIUS_MIN_M: f64 = 5.0e6;
 
+/// The weights are computed once a step is below this, m (unit weights
+/// before, as raim-core's near the Earth's centre).
+const WEIGHTS_AFTER_STEP_M: f64 = 1000.0;
+
 /// Gauss-Newton iterations before giving up (raim-core's default).
 const MAX_ITERATIONS: usize = 20;
 
@@ -114,8 +118,14 @@ pub fn bootstrap_position<const N: usize>(
     let mut clock_m = [0.0f64; STATES];
     // The weights' linearisation point and rotation, once on the surface.
     let mut lin: Option<([f64; 3], [[f32; 3]; 3])> = None;
+    let mut last_step_m = f64::INFINITY;
     for _ in 0..MAX_ITERATIONS {
-        let on_surface = distance_m(x, [0.0; 3]) > SURFACE_RADIUS_MIN_M;
+        // The weights wait for the position to settle (a step below
+        // WEIGHTS_AFTER_STEP_M: Gauss-Newton's next error is then below a
+        // few cm), so that they are computed once, at the point raim-core's
+        // last linearisation is within RELINEARISE_M of.
+        let on_surface = distance_m(x, [0.0; 3]) > SURFACE_RADIUS_MIN_M
+            && (lin.is_some() || last_step_m < WEIGHTS_AFTER_STEP_M);
         if on_surface && lin.is_none_or(|(p, _)| !(distance_m(p, x) <= RELINEARISE_M)) {
             lin = Some((x, enu_rows(x)));
         }
@@ -184,7 +194,9 @@ pub fn bootstrap_position<const N: usize>(
         for (c, d) in clock_m.iter_mut().zip(dx.iter()).skip(3).take(clocks) {
             *c += f64::from(*d);
         }
-        if step_m < model.convergence_m {
+        last_step_m = step_m;
+        // Converged only with the weights in force.
+        if step_m < model.convergence_m && rot.is_some() {
             let r = distance_m(x, [0.0; 3]);
             return ((r - WGS84_A_M).abs() < SURFACE_BAND_M).then_some(x);
         }

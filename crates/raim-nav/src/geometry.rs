@@ -18,7 +18,7 @@ pub fn rotate_earth(position_m: [f64; 3], transit_s: f64) -> [f64; 3] {
 
 /// Below this angle, [`sin_cos_tiny`] is x - x^3/6 and 1 - x^2/2, rad:
 /// the Earth's rotation over 0.27 s, twice a GEO satellite's transit.
-const TINY_ANGLE_RAD: f64 = 2e-5;
+pub(crate) const TINY_ANGLE_RAD: f64 = 2e-5;
 
 /// sin x and cos x: for |x| <= [`TINY_ANGLE_RAD`] their Taylor series to
 /// x^3 and x^2, whose first terms left out (x^5/120, x^4/24) are below
@@ -26,7 +26,7 @@ const TINY_ANGLE_RAD: f64 = 2e-5;
 /// the library's. The Earth-rotation angle of a signal's transit is such
 /// an angle: a library sine and cosine cost ten times more in soft-float
 /// f64 on the M4 (BENCHMARKS.md "Firmware: receiver stream").
-fn sin_cos_tiny(x: f64) -> (f64, f64) {
+pub(crate) fn sin_cos_tiny(x: f64) -> (f64, f64) {
     if x.abs() <= TINY_ANGLE_RAD {
         let z = x * x;
         (x - x * z * (1.0 / 6.0), 1.0 - z * 0.5)

@@ -282,6 +282,20 @@ pub fn transmit_time_s(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<f64, Rejecti
     Ok(t_sv - s.eph.clock_s(t_sv))
 }
 
+/// The state of `s`'s satellite at the transmit time of its signal
+/// received at `t_rx_gps_s` ([`transmit_time_s`]): a Keplerian orbit by
+/// [`Kepler::transmit_state`] (the transmit time's eccentric anomaly one
+/// Newton step from the clock's), a GLONASS orbit integrated there.
+pub fn transmit_state(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<SatState, Rejection> {
+    match s.eph {
+        Broadcast::Kepler(k) => {
+            let (p, _) = ranging_pseudorange(s)?;
+            Ok(k.transmit_state(t_rx_gps_s - p / C_M_S).1)
+        }
+        Broadcast::Glonass(g) => Ok(g.state(transmit_time_s(s, t_rx_gps_s)?)),
+    }
+}
+
 /// One satellite's corrected observation, every correction computed at the
 /// receiver position `rx_m` (None: no atmosphere, no mask, and the Earth
 /// rotation from the pseudorange's transit time); `full` false also skips
@@ -294,13 +308,13 @@ pub fn correct(
     c: &Corrections,
     klobuchar: Option<&Klobuchar>,
 ) -> Result<Corrected, Rejection> {
-    let tx = s.eph.state(transmit_time_s(s, t_rx_gps_s)?);
+    let tx = transmit_state(s, t_rx_gps_s)?;
     correct_at(s, t_rx_gps_s, &tx, rx_m, None, full, c, klobuchar)
 }
 
 /// [`correct`] with the satellite's position (ECEF at transmit time, not
 /// yet rotated) and clock at its transmit time given: `tx` =
-/// `s.eph.state(transmit_time_s(s, t_rx_gps_s)?)`, computed once per
+/// `transmit_state(s, t_rx_gps_s)?`, computed once per
 /// epoch however many passes use it (the device's receiver integrates a
 /// GLONASS orbit there from a [`crate::glonass::GlonassArc`]); and, when
 /// given, the receiver's frame `rx_frame` = `ReceiverFrame::at(rx_m)`,
@@ -647,7 +661,7 @@ mod tests {
                 p2_m: pair.then_some(2.2e7 + 1e5 * i as f64 + 3.0),
                 eph: Broadcast::Kepler(&k),
             };
-            let tx = s.eph.state(transmit_time_s(&s, t).unwrap());
+            let tx = transmit_state(&s, t).unwrap();
             let want = correct(&s, t, Some(rx), true, &c, Some(&kb));
             let got = correct_at(&s, t, &tx, Some(rx), Some(&frame), true, &c, Some(&kb));
             match (want, got) {

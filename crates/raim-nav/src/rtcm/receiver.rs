@@ -65,7 +65,7 @@ use crate::glonass::{
 use crate::m;
 use crate::ranging::{
     bootstrap_position, cn0_dbhz_u8, correct_at, split_pair, stream_codes, stream_sigma_for_m,
-    transmit_time_s, Broadcast, Corrections, ReceiverFrame, SatInput, StreamSigmas,
+    transmit_state, transmit_time_s, Broadcast, Corrections, ReceiverFrame, SatInput, StreamSigmas,
 };
 use crate::store::{EphemerisStore, Stored};
 use crate::time::table_gps_minus_utc_s;
@@ -808,10 +808,12 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         glonass_arcs.next_epoch();
         transmit.clear();
         for s in inputs.iter() {
-            let tx = transmit_time_s(s, time_gps_s).ok().map(|t| match s.eph {
-                Broadcast::Glonass(g) => glonass_arcs.state(g, t),
-                Broadcast::Kepler(k) => k.state(t),
-            });
+            let tx = match s.eph {
+                Broadcast::Glonass(g) => transmit_time_s(s, time_gps_s)
+                    .ok()
+                    .map(|t| glonass_arcs.state(g, t)),
+                Broadcast::Kepler(_) => transmit_state(s, time_gps_s).ok(),
+            };
             // `inputs` and `transmit` have the same capacity N.
             let _ = transmit.push(tx);
         }
