@@ -386,3 +386,79 @@ fn a_moved_rough_range_keeps_the_carrier_phase() {
     assert!(moved > 300 && phases > 300, "{moved} {phases}");
     assert_eq!(out.phase_dropped, 0);
 }
+
+/// End to end through the host's stream reader and the monitor: GMSD7
+/// (G+R, MSM7 with its 1019/1020; its ephemeris frames first, as a
+/// receiver sends its stored ephemerides at start-up, then the whole
+/// stream, dated in this build's window) with a 50 m step on R14 from
+/// 120 s after the first MSM, written by `rtcm-fault`'s code; each epoch
+/// the host's reader forms (`rtcm_common::host_epochs`: the stream codes,
+/// the stream sigmas) runs the snapshot monitor with the default
+/// configuration, as the unit's stream epochs do (`qemu_rtcm` holds the
+/// unit to the host's epochs bit for bit). Before the onset: no alarm and
+/// no exclusion (0 false alarms); from the onset on, every solved epoch
+/// alarms or excludes R14, and never another satellite.
+///
+/// Verifies: RX-STREAM-FAULT
+#[test]
+fn a_glonass_step_in_the_stream_is_caught_from_the_onset() {
+    use raim_core::{Config, Decision, Epoch, Raim};
+    let file = std::fs::read(rtcm_common::GMSD7).expect("GMSD7 (../shared/data)");
+    let week = rtcm_common::in_window_week();
+    let moved = rtcm_common::gmsd7_moved_to(&file, week);
+    let frames = rtcm_common::frames(&moved);
+    let number = |f: &[u8]| {
+        rtcm_rs::MessageFrame::new(f)
+            .ok()
+            .and_then(|m| m.message_number())
+    };
+    let warm: Vec<u8> = frames
+        .iter()
+        .filter(|f| matches!(number(f), Some(1019 | 1020)))
+        .chain(frames.iter())
+        .flat_map(|f| f.iter().copied())
+        .collect();
+    let first = raim_recv::msm_fault::first_msm_gps_s(&warm).unwrap();
+    let plan = FaultPlan {
+        faults: vec![FaultPlan::parse_cli("step:R14:50@+120", first).unwrap()],
+        seed: 0,
+    };
+    let out = fault_stream(&warm, &plan).unwrap();
+    let (host, _) = rtcm_common::host_epochs(&out.bytes, week + 1);
+    let r14 = SatId::new(System::Glonass, 14);
+    let cfg = Config::default();
+    let mut raim = Raim::<32>::new();
+    let (mut before, mut caught, mut excluded) = (0, 0, 0);
+    for h in &host {
+        let t = h.prepared.time_gps_s;
+        let since_s = (t - first).rem_euclid(raim_gnss::ephemeris::WEEK_S);
+        let Ok(r) = raim.process(&cfg, &Epoch::ranges(t, &h.obs, h.prepared.reference_m)) else {
+            // Too few satellites for a solution (a GLONASS-short epoch).
+            continue;
+        };
+        let ids: Vec<SatId> = r.exclusions.iter().map(|e| e.id).collect();
+        if since_s < 120.0 {
+            assert_eq!(
+                r.decision,
+                Decision::Ok,
+                "before the onset, at +{since_s} s: {r:?}"
+            );
+            before += 1;
+            continue;
+        }
+        assert!(
+            h.obs.iter().any(|o| o.id == r14),
+            "R14 in the solution at +{since_s} s"
+        );
+        match r.decision {
+            Decision::Alarm => assert!(ids.is_empty(), "+{since_s} s: {ids:?}"),
+            Decision::Excluded | Decision::Unavailable if ids == [r14] => excluded += 1,
+            other => panic!("+{since_s} s: {other:?}, excluded {ids:?}"),
+        }
+        caught += 1;
+    }
+    println!(
+        "GMSD7, 50 m on R14 from +120 s: {before} epochs Ok before the onset, {caught} caught after it ({excluded} with R14 excluded, the rest alarmed)"
+    );
+    assert!(before > 30 && caught > 100, "{before} {caught}");
+}
