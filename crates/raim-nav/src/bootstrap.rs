@@ -54,10 +54,11 @@ const STATES: usize = 3 + System::ALL.len();
 /// f32; a soft-float f64 square root costs ten times more on the M4F).
 fn range_m(r2: f64) -> f64 {
     let r0 = f64::from(libm::sqrtf(r2 as f32));
-    if !(r0 > 0.0) || !r0.is_finite() {
-        return libm::sqrt(r2);
+    if r0.is_finite() && r0 > 0.0 {
+        0.5 * (r0 + r2 / r0)
+    } else {
+        libm::sqrt(r2)
     }
-    0.5 * (r0 + r2 / r0)
 }
 
 /// The rows of the ECEF-to-ENU rotation at `x_m` (`raim_core::frames::
@@ -126,7 +127,12 @@ pub fn bootstrap_position<const N: usize>(
         // last linearisation is within RELINEARISE_M of.
         let on_surface = distance_m(x, [0.0; 3]) > SURFACE_RADIUS_MIN_M
             && (lin.is_some() || last_step_m < WEIGHTS_AFTER_STEP_M);
-        if on_surface && lin.is_none_or(|(p, _)| !(distance_m(p, x) <= RELINEARISE_M)) {
+        if on_surface
+            && lin.is_none_or(|(p, _)| {
+                let moved_m = distance_m(p, x);
+                moved_m.is_nan() || moved_m > RELINEARISE_M
+            })
+        {
             lin = Some((x, enu_rows(x)));
         }
         let rot = if on_surface {
@@ -143,7 +149,7 @@ pub fn bootstrap_position<const N: usize>(
                 s.position_m[2] - x[2],
             ];
             let range = range_m(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-            if !(range > 1.0) {
+            if range.is_nan() || range <= 1.0 {
                 return None;
             }
             let col = column.get(s.id.system.index()).copied().flatten()?;
@@ -215,7 +221,7 @@ fn at(a: &[[f32; STATES]; STATES], i: usize, j: usize) -> f32 {
 fn solve_spd(a: &mut [[f32; STATES]; STATES], b: &[f32; STATES]) -> Option<[f32; STATES]> {
     for i in 0..STATES {
         let d = (0..i).fold(at(a, i, i), |d, k| d - at(a, k, i) * at(a, k, i));
-        if !(d > 0.0) {
+        if d.is_nan() || d <= 0.0 {
             return None;
         }
         let rii = libm::sqrtf(d);
@@ -298,8 +304,8 @@ mod tests {
             }
             b[i] = (0..3).map(|j| full[i][j] * want[j]).sum();
         }
-        for i in 3..STATES {
-            a[i][i] = 1.0;
+        for (i, row) in a.iter_mut().enumerate().skip(3) {
+            row[i] = 1.0;
         }
         let x = solve_spd(&mut a, &b).unwrap();
         for i in 0..3 {

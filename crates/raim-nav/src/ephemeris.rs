@@ -164,7 +164,7 @@ impl Kepler {
         for _ in 0..KEPLER_MAX_ITERATIONS {
             let step = (d - e * sin_e) / (1.0 - e * cos_e);
             d -= step;
-            if !(step.abs() >= KEPLER_LAST_STEP_RAD) {
+            if step.is_nan() || step.abs() < KEPLER_LAST_STEP_RAD {
                 // The sine and cosine at d, to first order in the step.
                 return (sin_e - cos_e * step, cos_e + sin_e * step, n);
             }
@@ -209,7 +209,7 @@ impl Kepler {
         let t = t_sv_gps_s - clock_s;
         let tk = self.tk_s(t);
         let de = n * (tk - tk_sv) / (1.0 - self.e * cos_e);
-        if !(de.abs() <= crate::geometry::TINY_ANGLE_RAD) {
+        if de.is_nan() || de.abs() > crate::geometry::TINY_ANGLE_RAD {
             return (t, self.state(t));
         }
         let (sd, cd) = crate::geometry::sin_cos_tiny(de);
@@ -298,7 +298,7 @@ fn sin_cos_small(d: f64) -> (f64, f64) {
                 * (1.0 - z * (1.0 / 12.0) * (1.0 - z * (1.0 / 30.0) * (1.0 - z * (1.0 / 56.0))));
         return (s, c);
     }
-    if !(d.abs() <= SMALL_ANGLE_RAD) {
+    if d.is_nan() || d.abs() > SMALL_ANGLE_RAD {
         return m::sin_cos(d);
     }
     let s = d

@@ -250,7 +250,11 @@ fn rtcm_fault_defaults() {
             "G:0:0,0,30@+60",
             "no station position",
         ),
-        ("--araim-const-fault", "R:0:0,0,30@+60", "no station position"),
+        (
+            "--araim-const-fault",
+            "R:0:0,0,30@+60",
+            "no station position",
+        ),
         ("--fault", "step:G02:50@+60", "move no pseudorange"),
         ("--fault", "step:G06:50@+100000", "move no pseudorange"),
     ] {
