@@ -462,3 +462,81 @@ fn a_glonass_step_in_the_stream_is_caught_from_the_onset() {
     );
     assert!(before > 30 && caught > 100, "{before} {caught}");
 }
+
+/// A GLONASS constellation fault of `--araim-const-fault`'s kind: GMSD7
+/// with a station position (a 1005 at the start, the host reader's
+/// bootstrap position of a mid-stream epoch; GMSD7 sends none), 5 m common
+/// and 30 m up on GLONASS from +60 s. The bias table
+/// (`constellation_table`) gives GLONASS satellites alone a bias, from
+/// the onset on (their lines of sight from the stream's own 1020s; a
+/// satellite without one gets none), and the faulted stream read back
+/// differs from the
+/// original by that bias within half of DF405's resolution, every other
+/// pseudorange bit-identical.
+///
+/// Verifies: RX-STREAM-FAULT
+#[test]
+fn a_glonass_constellation_shift_reads_back() {
+    use raim_recv::msm_fault::{
+        constellation_table, fault_stream_with, time_key, ConstellationShift,
+    };
+    use rtcm_rs::msg::message::{Message, MessageBuilder};
+    let file = std::fs::read(rtcm_common::GMSD7).expect("GMSD7 (../shared/data)");
+    let (host, _) = rtcm_common::host_epochs(&file, rtcm_common::GMSD7_WEEK + 1);
+    let station = host
+        .iter()
+        .rev()
+        .find_map(|h| h.prepared.reference_m)
+        .expect("a solved epoch");
+    let mut b = MessageBuilder::new();
+    let mut bytes = b
+        .build_message(&Message::Msg1005(rtcm_rs::msg::Msg1005T {
+            reference_station_id: 7,
+            gps_flag: 1,
+            glonass_flag: 1,
+            antenna_ref_point_ecef_x_m: station[0],
+            antenna_ref_point_ecef_y_m: station[1],
+            antenna_ref_point_ecef_z_m: station[2],
+            ..Default::default()
+        }))
+        .unwrap()
+        .to_vec();
+    bytes.extend_from_slice(&file);
+    let first = raim_recv::msm_fault::first_msm_gps_s(&bytes).unwrap();
+    let shift = ConstellationShift {
+        system: System::Glonass,
+        common_m: 5.0,
+        shift_enu_m: [0.0, 0.0, 30.0],
+        start_s: first + 60.0,
+        end_s: None,
+    };
+    let table = constellation_table(&bytes, &[shift]).unwrap();
+    assert!(table.keys().all(|(_, id)| id.system == System::Glonass));
+    let out = fault_stream_with(&bytes, &FaultPlan::default(), &table).unwrap();
+    let (a, b) = (read_gmsd7(&bytes), read_gmsd7(&out.bytes));
+    let weeks = ((a[0].time_gps_s - first) / raim_gnss::ephemeris::WEEK_S).round()
+        * raim_gnss::ephemeris::WEEK_S;
+    let half_m = FINE_MS / 2.0 * LIGHT_MS_M;
+    let (mut moved, mut worst_m) = (0, 0.0f64);
+    for (t, id, x, y) in pairs(&a, &b) {
+        match table.get(&(time_key(t - weeks), id)) {
+            Some(bias) => {
+                let err = (y - x - bias).abs();
+                assert!(err <= half_m + 1e-6, "{id:?} at {t}: {err} m");
+                assert!(t - weeks >= first + 60.0);
+                worst_m = worst_m.max(err);
+                moved += 1;
+            }
+            None => assert_eq!(x.to_bits(), y.to_bits(), "{id:?} at {t}"),
+        }
+    }
+    println!(
+        "GMSD7 + 1005, GLONASS 5 m common and 30 m up from +60 s: {} biases, {moved} pseudoranges moved (worst {worst_m:.2e} m)",
+        table.len()
+    );
+    assert!(
+        table.len() > 300 && moved >= table.len(),
+        "{} {moved}",
+        table.len()
+    );
+}
