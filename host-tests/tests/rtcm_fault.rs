@@ -167,33 +167,133 @@ fn faults_round_trip_at_the_msm7_resolution() {
     }
 }
 
-/// A fault that could touch GLONASS is refused (a GLONASS MSM's time of
-/// day cannot be joined to GPS time without a date); a GPS fault on the
-/// same G+R stream is written.
+/// GMSD7's epochs as the host's reader gives them (the file's cut last
+/// frame ended cleanly), with the week its 2012 dates read in.
+fn read_gmsd7(bytes: &[u8]) -> Vec<raim_gnss::ObsEpoch> {
+    let mut r = raim_recv::rtcm::Rtcm3::new(rtcm_common::GMSD7_WEEK + 1);
+    let mut items = Vec::new();
+    r.push(bytes, &mut items);
+    r.finish(&mut items);
+    assert_eq!(r.counts().bad_checksum, 0);
+    items
+        .into_iter()
+        .filter_map(|i| match i {
+            Item::Epoch(e) => Some(e),
+            _ => None,
+        })
+        .collect()
+}
+
+/// GMSD7's GLONASS MSM are timed by the GPS MSM of their epoch (the
+/// stream's own leap seconds: GLONASS time of day = GPS + 3 h - 16 s in
+/// 2012), so `replay --fault`'s faults reach GLONASS satellites: a 50 m
+/// step and a 0.5 m/s ramp on R14 (both its signals), a 30 m step on the
+/// whole constellation, from 60 s after the first MSM. Read back by the
+/// host's reader (its CRC checks, its own GLONASS dating by the leap-second
+/// table): every faulted GLONASS pseudorange within half of DF405's
+/// 2^-29 ms (0.28 mm) of the original plus the bias from the onset on, every
+/// other pseudorange bit-identical; and a GLONASS MSM whose time of day
+/// matches no neighbouring MSM (moved by 1 ms here) is refused when a fault
+/// touches its satellites, and copied when none does.
 ///
 /// Verifies: RX-STREAM-FAULT
 #[test]
-fn glonass_faults_are_refused() {
+fn glonass_faults_round_trip_at_the_msm7_resolution() {
     let bytes = std::fs::read(rtcm_common::GMSD7).expect("GMSD7 (../shared/data)");
     let first = raim_recv::msm_fault::first_msm_gps_s(&bytes).unwrap();
     let plan = |s: &str| FaultPlan {
         faults: vec![FaultPlan::parse_cli(s, first).unwrap()],
         seed: 0,
     };
+    let original = read_gmsd7(&bytes);
+    // The reader's GPS times against the stream's (whole weeks).
+    let weeks = ((original[0].time_gps_s - first) / raim_gnss::ephemeris::WEEK_S).round()
+        * raim_gnss::ephemeris::WEEK_S;
+    let r14 = SatId::new(System::Glonass, 14);
+    let onset = first + 60.0;
+    let half_m = FINE_MS / 2.0 * LIGHT_MS_M;
+    for (spec, bias_at) in [
+        (
+            "step:R14:50@+60",
+            Box::new(move |t: f64, id: SatId| if id == r14 && t >= onset { 50.0 } else { 0.0 })
+                as Box<dyn Fn(f64, SatId) -> f64>,
+        ),
+        (
+            "ramp:R14:0.5@+60",
+            Box::new(move |t: f64, id: SatId| {
+                if id == r14 && t >= onset {
+                    0.5 * (t - onset)
+                } else {
+                    0.0
+                }
+            }),
+        ),
+        (
+            "step:R:30@+60",
+            Box::new(move |t: f64, id: SatId| {
+                if id.system == System::Glonass && t >= onset {
+                    30.0
+                } else {
+                    0.0
+                }
+            }),
+        ),
+    ] {
+        let out = fault_stream(&bytes, &plan(spec)).unwrap();
+        assert_eq!(out.bytes.len(), bytes.len());
+        let faulted = read_gmsd7(&out.bytes);
+        let (mut moved, mut worst_m) = (0, 0.0f64);
+        for (t, id, x, y) in pairs(&original, &faulted) {
+            let bias = bias_at(t - weeks, id);
+            if bias == 0.0 {
+                assert_eq!(x.to_bits(), y.to_bits(), "{spec}: {id:?} at {t}");
+            } else {
+                let err = (y - x - bias).abs();
+                assert!(err <= half_m + 1e-6, "{spec}: {id:?} at {t}: {err} m");
+                worst_m = worst_m.max(err);
+                moved += 1;
+            }
+        }
+        println!(
+            "GMSD7 {spec}: {moved} GLONASS pseudoranges moved (worst {worst_m:.2e} m), {} MSM rewritten",
+            out.msm_faulted
+        );
+        assert!(moved > 300 && out.cells_faulted == moved, "{spec}: {moved}");
+    }
+    // A GLONASS MSM (1087) whose time of day no neighbour matches.
+    let mut odd = bytes.clone();
+    let (start, len) = rtcm_common::frames(&bytes)
+        .into_iter()
+        .map(|f| (f.as_ptr() as usize - bytes.as_ptr() as usize, f.len()))
+        .find(|&(s, n)| {
+            n > 6 && ((u16::from(bytes[s + 3]) << 4) | u16::from(bytes[s + 4] >> 4)) == 1087
+        })
+        .unwrap();
+    // DF034 (27 bits after DF002, DF003 and DF416: payload bits 27-53).
+    let f = &mut odd[start..start + len];
+    let get = |f: &[u8], at: usize, w: usize| {
+        (0..w).fold(0u64, |v, k| {
+            (v << 1) | u64::from(f[(at + k) / 8] >> (7 - (at + k) % 8) & 1)
+        })
+    };
+    let tod_at = 24 + 27;
+    let tod = get(f, tod_at, 27) + 1;
+    for k in 0..27 {
+        let bit = tod_at + k;
+        let v = ((tod >> (26 - k)) & 1) as u8;
+        f[bit / 8] = (f[bit / 8] & !(1 << (7 - bit % 8))) | (v << (7 - bit % 8));
+    }
+    let crc = crc::Crc::<u32>::new(&crc::CRC_24_LTE_A).checksum(&f[..len - 3]);
+    f[len - 3..].copy_from_slice(&crc.to_be_bytes()[1..]);
     assert!(matches!(
-        fault_stream(&bytes, &plan("step:R14:50@+60")),
-        Err(MsmFaultError::Glonass { sat, .. }) if sat == SatId::new(System::Glonass, 14)
+        fault_stream(&odd, &plan("step:R:30@+0")),
+        Err(MsmFaultError::GlonassUntimed { sat, .. }) if sat.system == System::Glonass
     ));
-    assert!(matches!(
-        fault_stream(&bytes, &plan("step:all:50@+60")),
-        Err(MsmFaultError::Glonass { .. })
-    ));
-    let out = fault_stream(&bytes, &plan("step:G06:50@+60")).unwrap();
+    let out = fault_stream(&odd, &plan("step:G06:50@+60")).unwrap();
     assert!(out.cells_faulted > 0);
-    assert_eq!(out.bytes.len(), bytes.len());
     // A fault that never starts within the stream changes no byte (the
     // file's cut last frame included).
-    let out = fault_stream(&bytes, &plan("step:G06:50@+100000")).unwrap();
+    let out = fault_stream(&bytes, &plan("step:R14:50@+100000")).unwrap();
     assert_eq!(out.msm_faulted, 0);
     assert!(out.bytes == bytes);
 }
@@ -285,4 +385,158 @@ fn a_moved_rough_range_keeps_the_carrier_phase() {
     );
     assert!(moved > 300 && phases > 300, "{moved} {phases}");
     assert_eq!(out.phase_dropped, 0);
+}
+
+/// End to end through the host's stream reader and the monitor: GMSD7
+/// (G+R, MSM7 with its 1019/1020; its ephemeris frames first, as a
+/// receiver sends its stored ephemerides at start-up, then the whole
+/// stream, dated in this build's window) with a 50 m step on R14 from
+/// 120 s after the first MSM, written by `rtcm-fault`'s code; each epoch
+/// the host's reader forms (`rtcm_common::host_epochs`: the stream codes,
+/// the stream sigmas) runs the snapshot monitor with the default
+/// configuration, as the unit's stream epochs do (`qemu_rtcm` holds the
+/// unit to the host's epochs bit for bit). Before the onset: no alarm and
+/// no exclusion (0 false alarms); from the onset on, every solved epoch
+/// alarms or excludes R14, and never another satellite.
+///
+/// Verifies: RX-STREAM-FAULT
+#[test]
+fn a_glonass_step_in_the_stream_is_caught_from_the_onset() {
+    use raim_core::{Config, Decision, Epoch, Raim};
+    let file = std::fs::read(rtcm_common::GMSD7).expect("GMSD7 (../shared/data)");
+    let week = rtcm_common::in_window_week();
+    let moved = rtcm_common::gmsd7_moved_to(&file, week);
+    let frames = rtcm_common::frames(&moved);
+    let number = |f: &[u8]| {
+        rtcm_rs::MessageFrame::new(f)
+            .ok()
+            .and_then(|m| m.message_number())
+    };
+    let warm: Vec<u8> = frames
+        .iter()
+        .filter(|f| matches!(number(f), Some(1019 | 1020)))
+        .chain(frames.iter())
+        .flat_map(|f| f.iter().copied())
+        .collect();
+    let first = raim_recv::msm_fault::first_msm_gps_s(&warm).unwrap();
+    let plan = FaultPlan {
+        faults: vec![FaultPlan::parse_cli("step:R14:50@+120", first).unwrap()],
+        seed: 0,
+    };
+    let out = fault_stream(&warm, &plan).unwrap();
+    let (host, _) = rtcm_common::host_epochs(&out.bytes, week + 1);
+    let r14 = SatId::new(System::Glonass, 14);
+    let cfg = Config::default();
+    let mut raim = Raim::<32>::new();
+    let (mut before, mut caught, mut excluded) = (0, 0, 0);
+    for h in &host {
+        let t = h.prepared.time_gps_s;
+        let since_s = (t - first).rem_euclid(raim_gnss::ephemeris::WEEK_S);
+        let Ok(r) = raim.process(&cfg, &Epoch::ranges(t, &h.obs, h.prepared.reference_m)) else {
+            // Too few satellites for a solution (a GLONASS-short epoch).
+            continue;
+        };
+        let ids: Vec<SatId> = r.exclusions.iter().map(|e| e.id).collect();
+        if since_s < 120.0 {
+            assert_eq!(
+                r.decision,
+                Decision::Ok,
+                "before the onset, at +{since_s} s: {r:?}"
+            );
+            before += 1;
+            continue;
+        }
+        assert!(
+            h.obs.iter().any(|o| o.id == r14),
+            "R14 in the solution at +{since_s} s"
+        );
+        match r.decision {
+            Decision::Alarm => assert!(ids.is_empty(), "+{since_s} s: {ids:?}"),
+            Decision::Excluded | Decision::Unavailable if ids == [r14] => excluded += 1,
+            other => panic!("+{since_s} s: {other:?}, excluded {ids:?}"),
+        }
+        caught += 1;
+    }
+    println!(
+        "GMSD7, 50 m on R14 from +120 s: {before} epochs Ok before the onset, {caught} caught after it ({excluded} with R14 excluded, the rest alarmed)"
+    );
+    assert!(before > 30 && caught > 100, "{before} {caught}");
+}
+
+/// A GLONASS constellation fault of `--araim-const-fault`'s kind: GMSD7
+/// with a station position (a 1005 at the start, the host reader's
+/// bootstrap position of a mid-stream epoch; GMSD7 sends none), 5 m common
+/// and 30 m up on GLONASS from +60 s. The bias table
+/// (`constellation_table`) gives GLONASS satellites alone a bias, from
+/// the onset on (their lines of sight from the stream's own 1020s; a
+/// satellite without one gets none), and the faulted stream read back
+/// differs from the
+/// original by that bias within half of DF405's resolution, every other
+/// pseudorange bit-identical.
+///
+/// Verifies: RX-STREAM-FAULT
+#[test]
+fn a_glonass_constellation_shift_reads_back() {
+    use raim_recv::msm_fault::{
+        constellation_table, fault_stream_with, time_key, ConstellationShift,
+    };
+    use rtcm_rs::msg::message::{Message, MessageBuilder};
+    let file = std::fs::read(rtcm_common::GMSD7).expect("GMSD7 (../shared/data)");
+    let (host, _) = rtcm_common::host_epochs(&file, rtcm_common::GMSD7_WEEK + 1);
+    let station = host
+        .iter()
+        .rev()
+        .find_map(|h| h.prepared.reference_m)
+        .expect("a solved epoch");
+    let mut b = MessageBuilder::new();
+    let mut bytes = b
+        .build_message(&Message::Msg1005(rtcm_rs::msg::Msg1005T {
+            reference_station_id: 7,
+            gps_flag: 1,
+            glonass_flag: 1,
+            antenna_ref_point_ecef_x_m: station[0],
+            antenna_ref_point_ecef_y_m: station[1],
+            antenna_ref_point_ecef_z_m: station[2],
+            ..Default::default()
+        }))
+        .unwrap()
+        .to_vec();
+    bytes.extend_from_slice(&file);
+    let first = raim_recv::msm_fault::first_msm_gps_s(&bytes).unwrap();
+    let shift = ConstellationShift {
+        system: System::Glonass,
+        common_m: 5.0,
+        shift_enu_m: [0.0, 0.0, 30.0],
+        start_s: first + 60.0,
+        end_s: None,
+    };
+    let table = constellation_table(&bytes, &[shift]).unwrap();
+    assert!(table.keys().all(|(_, id)| id.system == System::Glonass));
+    let out = fault_stream_with(&bytes, &FaultPlan::default(), &table).unwrap();
+    let (a, b) = (read_gmsd7(&bytes), read_gmsd7(&out.bytes));
+    let weeks = ((a[0].time_gps_s - first) / raim_gnss::ephemeris::WEEK_S).round()
+        * raim_gnss::ephemeris::WEEK_S;
+    let half_m = FINE_MS / 2.0 * LIGHT_MS_M;
+    let (mut moved, mut worst_m) = (0, 0.0f64);
+    for (t, id, x, y) in pairs(&a, &b) {
+        match table.get(&(time_key(t - weeks), id)) {
+            Some(bias) => {
+                let err = (y - x - bias).abs();
+                assert!(err <= half_m + 1e-6, "{id:?} at {t}: {err} m");
+                assert!(t - weeks >= first + 60.0);
+                worst_m = worst_m.max(err);
+                moved += 1;
+            }
+            None => assert_eq!(x.to_bits(), y.to_bits(), "{id:?} at {t}"),
+        }
+    }
+    println!(
+        "GMSD7 + 1005, GLONASS 5 m common and 30 m up from +60 s: {} biases, {moved} pseudoranges moved (worst {worst_m:.2e} m)",
+        table.len()
+    );
+    assert!(
+        table.len() > 300 && moved >= table.len(),
+        "{} {moved}",
+        table.len()
+    );
 }

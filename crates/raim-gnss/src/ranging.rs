@@ -197,6 +197,29 @@ fn build(
     }
 }
 
+/// The bootstrap pass of [`prepare_epoch`]: each satellite's clock- and
+/// rotation-corrected range, no atmosphere and no mask, at `apriori_m`
+/// (the ranges the bootstrap position is solved from).
+pub fn bootstrap_pass(
+    nav: &NavData,
+    epoch: &ObsEpoch,
+    opts: &RangingOptions,
+    apriori_m: Option<[f64; 3]>,
+) -> PreparedEpoch {
+    build(nav, epoch, opts, apriori_m, false)
+}
+
+/// Every correction and the mask of [`prepare_epoch`] at the receiver
+/// position `rx_m`, whatever solved it.
+pub fn prepare_at(
+    nav: &NavData,
+    epoch: &ObsEpoch,
+    opts: &RangingOptions,
+    rx_m: [f64; 3],
+) -> PreparedEpoch {
+    build(nav, epoch, opts, Some(rx_m), true)
+}
+
 /// Prepare one epoch: a bootstrap solution from the clock- and
 /// rotation-corrected ranges (starting at `apriori_m`, e.g. the header's
 /// approximate position), then every correction and the mask at that
@@ -207,15 +230,11 @@ pub fn prepare_epoch(
     opts: &RangingOptions,
     apriori_m: Option<[f64; 3]>,
 ) -> PreparedEpoch {
-    let first = build(nav, epoch, opts, apriori_m, false);
-    let reference = bootstrap_position::<BOOTSTRAP_CAPACITY>(
-        epoch.time_gps_s,
-        &first.observations(),
-        apriori_m,
-    )
-    .or(apriori_m);
+    let first = bootstrap_pass(nav, epoch, opts, apriori_m);
+    let reference =
+        bootstrap_position::<BOOTSTRAP_CAPACITY>(&first.observations(), apriori_m).or(apriori_m);
     match reference {
-        Some(rx) => build(nav, epoch, opts, Some(rx), true),
+        Some(rx) => prepare_at(nav, epoch, opts, rx),
         None => first,
     }
 }

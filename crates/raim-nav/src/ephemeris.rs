@@ -24,9 +24,13 @@ pub const MU_GAL_BDS_M3_S2: f64 = 3.986_004_418e14;
 pub const WEEK_S: f64 = 604_800.0;
 /// BeiDou time is GPS time minus 14 s (BDS ICD §5.2.4.1; constant, no leap seconds).
 pub const BDT_MINUS_GPST_S: f64 = -14.0;
-/// Kepler equation: stop when the eccentric anomaly changes by less than this, rad.
-const KEPLER_TOLERANCE_RAD: f64 = 1e-14;
-/// Kepler equation: iteration cap (e < 0.03 converges in < 10).
+/// Kepler's equation: a Newton step below this is the last, rad. Newton's
+/// error after it is below e / (2 (1 - e)) times its square (< 3e-17 for
+/// e < 0.3), and the sine and cosine are moved by it to first order (an
+/// error below half its square, 5e-17).
+const KEPLER_LAST_STEP_RAD: f64 = 1e-8;
+/// Kepler's equation: iteration cap (Newton's method from E = M + e sin M
+/// takes 2 steps for e < 0.03, 4 for e = 0.3).
 const KEPLER_MAX_ITERATIONS: usize = 30;
 
 /// One broadcast ephemeris (Keplerian elements, harmonic corrections and the
@@ -126,32 +130,115 @@ impl Kepler {
         self.af0_s + self.af1_s_s * dt + self.af2_s_s2 * dt * dt
     }
 
-    /// Position (ECEF of the transmit instant) and clock at GPS time `t_gps_s`.
-    pub fn state(&self, t_gps_s: f64) -> SatState {
-        let (mu, omega_e) = self.mu_omega();
+    /// The sine and cosine of the eccentric anomaly E at `tk` s from toe
+    /// (IS-GPS-200 Table 20-IV, Kepler's equation M = E - e sin E), which
+    /// are all the orbit and the clock take of E. Solved for d = E - M by
+    /// Newton's method from d = e sin M, with sin(M + d) and cos(M + d)
+    /// from M's sine and cosine (one library call) and d's
+    /// ([`sin_cos_small`], a polynomial): two steps and two polynomials
+    /// for a GNSS orbit instead of the fixed-point iteration's eight to
+    /// ten library sines,
+    /// soft-float on the M4 (BENCHMARKS.md "Firmware: receiver stream").
+    /// Within 5e-15 of the fixed point's sine and cosine, 1.4e-7 m of
+    /// position (test `newton_kepler_is_the_fixed_point`).
+    fn eccentric_anomaly_sin_cos(&self, mu: f64, tk: f64) -> (f64, f64) {
+        let (sin_e, cos_e, _) = self.eccentric_anomaly_n(mu, tk);
+        (sin_e, cos_e)
+    }
+
+    /// [`Self::eccentric_anomaly_sin_cos`] with the corrected mean motion
+    /// n = sqrt(mu / A^3) + delta n, rad/s.
+    fn eccentric_anomaly_n(&self, mu: f64, tk: f64) -> (f64, f64, f64) {
         let a = self.sqrt_a_m05 * self.sqrt_a_m05;
         let n0 = m::sqrt(mu / (a * a * a));
-        let tk = self.tk_s(t_gps_s);
         let n = n0 + self.delta_n_rad_s;
         let mk = self.m0_rad + n * tk;
         let e = self.e;
-        let mut ek = mk;
+        let (sin_m, cos_m) = m::sin_cos(mk);
+        let at = |d: f64| {
+            let (sin_d, cos_d) = sin_cos_small(d);
+            (sin_m * cos_d + cos_m * sin_d, cos_m * cos_d - sin_m * sin_d)
+        };
+        let mut d = e * sin_m;
+        let (mut sin_e, mut cos_e) = at(d);
         for _ in 0..KEPLER_MAX_ITERATIONS {
-            let next = mk + e * m::sin(ek);
-            let done = (next - ek).abs() < KEPLER_TOLERANCE_RAD;
-            ek = next;
-            if done {
-                break;
+            let step = (d - e * sin_e) / (1.0 - e * cos_e);
+            d -= step;
+            if step.is_nan() || step.abs() < KEPLER_LAST_STEP_RAD {
+                // The sine and cosine at d, to first order in the step.
+                return (sin_e - cos_e * step, cos_e + sin_e * step, n);
             }
+            (sin_e, cos_e) = at(d);
         }
-        let (sin_e, cos_e) = m::sin_cos(ek);
+        (sin_e, cos_e, n)
+    }
+
+    /// The relativistic eccentricity term F e sqrt(A) sin(E), F = -2
+    /// sqrt(mu) / c^2 (IS-GPS-200 20.3.3.3.3.1), s.
+    fn relativistic_s(&self, mu: f64, sin_e: f64) -> f64 {
+        let f = -2.0 * m::sqrt(mu) / (C_M_S * C_M_S);
+        f * self.e * self.sqrt_a_m05 * sin_e
+    }
+
+    /// The clock of [`Self::state`] at GPS time `t_gps_s`, s, to the bit,
+    /// without the orbit: the transmit time needs the clock at the
+    /// reception time less the transit, and the position only at the
+    /// transmit time (the orbit's rotations, harmonic corrections and
+    /// true anomaly are over half of [`Self::state`]'s soft-float cost on
+    /// the M4, BENCHMARKS.md "Firmware: receiver stream").
+    pub fn clock_s(&self, t_gps_s: f64) -> f64 {
+        let (mu, _) = self.mu_omega();
+        let (sin_e, _) = self.eccentric_anomaly_sin_cos(mu, self.tk_s(t_gps_s));
+        self.clock_polynomial_s(t_gps_s) + self.relativistic_s(mu, sin_e)
+    }
+
+    /// The state at the transmit time of a signal that left the satellite
+    /// at `t_sv_gps_s` by its own clock: t = t_sv - clock(t_sv)
+    /// (IS-GPS-200 20.3.3.3.3.1), and [`Self::state`] there. The two
+    /// times are a clock offset apart (< 1 ms, < 2e-7 rad of mean
+    /// anomaly), so the transmit time's eccentric anomaly is one Newton
+    /// step from the clock's, dE = dM / (1 - e cos E), instead of a second
+    /// solution (its error, e dE^2 / 2 < 1e-15 rad, is within the
+    /// solution's own rounding; test `transmit_state_is_the_state_at_the_transmit_time`).
+    /// Returns the transmit time with the state.
+    pub fn transmit_state(&self, t_sv_gps_s: f64) -> (f64, SatState) {
+        let (mu, _) = self.mu_omega();
+        let tk_sv = self.tk_s(t_sv_gps_s);
+        let (sin_e, cos_e, n) = self.eccentric_anomaly_n(mu, tk_sv);
+        let clock_s = self.clock_polynomial_s(t_sv_gps_s) + self.relativistic_s(mu, sin_e);
+        let t = t_sv_gps_s - clock_s;
+        let tk = self.tk_s(t);
+        let de = n * (tk - tk_sv) / (1.0 - self.e * cos_e);
+        if de.is_nan() || de.abs() > crate::geometry::TINY_ANGLE_RAD {
+            return (t, self.state(t));
+        }
+        let (sd, cd) = crate::geometry::sin_cos_tiny(de);
+        let (sin_e, cos_e) = (sin_e * cd + cos_e * sd, cos_e * cd - sin_e * sd);
+        (t, self.state_at(t, tk, sin_e, cos_e))
+    }
+
+    /// Position (ECEF of the transmit instant) and clock at GPS time `t_gps_s`.
+    pub fn state(&self, t_gps_s: f64) -> SatState {
+        let (mu, _) = self.mu_omega();
+        let tk = self.tk_s(t_gps_s);
+        let (sin_e, cos_e) = self.eccentric_anomaly_sin_cos(mu, tk);
+        self.state_at(t_gps_s, tk, sin_e, cos_e)
+    }
+
+    /// [`Self::state`] at GPS time `t_gps_s`, `tk` s from toe, with the
+    /// eccentric anomaly's sine and cosine there.
+    fn state_at(&self, t_gps_s: f64, tk: f64, sin_e: f64, cos_e: f64) -> SatState {
+        let (mu, omega_e) = self.mu_omega();
+        let a = self.sqrt_a_m05 * self.sqrt_a_m05;
+        let e = self.e;
         let nu = m::atan2(m::sqrt(1.0 - e * e) * sin_e, cos_e - e);
         let phi = nu + self.omega_rad;
         let (s2, c2) = m::sin_cos(2.0 * phi);
         let u = phi + self.cus_rad * s2 + self.cuc_rad * c2;
         let r = a * (1.0 - e * cos_e) + self.crs_m * s2 + self.crc_m * c2;
         let i = self.i0_rad + self.idot_rad_s * tk + self.cis_rad * s2 + self.cic_rad * c2;
-        let (x_orb, y_orb) = (r * m::cos(u), r * m::sin(u));
+        let (sin_u, cos_u) = m::sin_cos(u);
+        let (x_orb, y_orb) = (r * cos_u, r * sin_u);
         let (sin_i, cos_i) = m::sin_cos(i);
         let toe = self.toe_sow_s;
         let position_m = if self.is_beidou_geo() {
@@ -177,14 +264,67 @@ impl Kepler {
                 y_orb * sin_i,
             ]
         };
-        // Relativistic eccentricity term F e sqrt(A) sin(E), F = -2 sqrt(mu)/c^2.
-        let f = -2.0 * m::sqrt(mu) / (C_M_S * C_M_S);
-        let clock_s = self.clock_polynomial_s(t_gps_s) + f * e * self.sqrt_a_m05 * sin_e;
+        let clock_s = self.clock_polynomial_s(t_gps_s) + self.relativistic_s(mu, sin_e);
         SatState {
             position_m,
             clock_s,
         }
     }
+}
+
+/// Below this |d|, [`sin_cos_small`] takes its short polynomials (|E - M|
+/// <= e, and e < 0.03 for GPS, BeiDou MEO and most Galileo orbits).
+const SHORT_ANGLE_RAD: f64 = 0.05;
+/// Below this |d|, [`sin_cos_small`] takes its long polynomials; above,
+/// the library's sine and cosine (e < 0.2 for every GNSS orbit: Galileo's
+/// E14 and E18, 0.16, the largest).
+const SMALL_ANGLE_RAD: f64 = 0.35;
+
+/// sin d and cos d by their Taylor series (Horner form): to d^9 and d^8
+/// for |d| <= [`SHORT_ANGLE_RAD`] (the first term left out below
+/// 0.05^10 / 10! = 2.7e-20 of the result), to d^13 and d^14 for |d| <=
+/// [`SMALL_ANGLE_RAD`] (below 0.35^15 / 15! = 1.1e-19), so that the error
+/// is the rounding of a few operations, a few 1e-17; the library's above.
+fn sin_cos_small(d: f64) -> (f64, f64) {
+    let z = d * d;
+    if d.abs() <= SHORT_ANGLE_RAD {
+        let s = d
+            * (1.0
+                - z * (1.0 / 6.0)
+                    * (1.0
+                        - z * (1.0 / 20.0) * (1.0 - z * (1.0 / 42.0) * (1.0 - z * (1.0 / 72.0)))));
+        let c = 1.0
+            - z * (1.0 / 2.0)
+                * (1.0 - z * (1.0 / 12.0) * (1.0 - z * (1.0 / 30.0) * (1.0 - z * (1.0 / 56.0))));
+        return (s, c);
+    }
+    if d.is_nan() || d.abs() > SMALL_ANGLE_RAD {
+        return m::sin_cos(d);
+    }
+    let s = d
+        * (1.0
+            - z * (1.0 / 6.0)
+                * (1.0
+                    - z * (1.0 / 20.0)
+                        * (1.0
+                            - z * (1.0 / 42.0)
+                                * (1.0
+                                    - z * (1.0 / 72.0)
+                                        * (1.0 - z * (1.0 / 110.0) * (1.0 - z * (1.0 / 156.0)))))));
+    let c = 1.0
+        - z * (1.0 / 2.0)
+            * (1.0
+                - z * (1.0 / 12.0)
+                    * (1.0
+                        - z * (1.0 / 30.0)
+                            * (1.0
+                                - z * (1.0 / 56.0)
+                                    * (1.0
+                                        - z * (1.0 / 90.0)
+                                            * (1.0
+                                                - z * (1.0 / 132.0)
+                                                    * (1.0 - z * (1.0 / 182.0)))))));
+    (s, c)
 }
 
 /// A circular, equatorial orbit with every correction zero: a closed form
@@ -259,6 +399,143 @@ mod tests {
         let mut b = circular(System::Beidou, 20);
         b.toe_sow_s = 100.0;
         assert!((b.tk_s(1000.0 * WEEK_S + 114.0)).abs() < 1e-9);
+    }
+
+    /// The clock without the orbit ([`Kepler::clock_s`], the transmit
+    /// time's) is [`Kepler::state`]'s clock to the bit, for GPS, Galileo,
+    /// a BeiDou GEO and MEO, at eccentricities up to 0.3 and times across
+    /// two days either side of toe.
+    ///
+    /// Verifies: RX-FORM-COST
+    #[test]
+    fn clock_without_the_orbit_is_the_states_clock_bit_for_bit() {
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for (system, prn) in [
+            (System::Gps, 5),
+            (System::Galileo, 11),
+            (System::Beidou, 3),
+            (System::Beidou, 30),
+        ] {
+            for _ in 0..200 {
+                let mut k = circular(system, prn);
+                k.e = 0.3 * next() * next();
+                k.m0_rad = 6.0 * next() - 3.0;
+                k.omega_rad = 6.0 * next() - 3.0;
+                k.delta_n_rad_s = 4e-9 * next();
+                k.af2_s_s2 = 1e-19 * next();
+                let t = 1000.0 * WEEK_S + 345_600.0 * (next() - 0.5);
+                assert_eq!(
+                    k.clock_s(t).to_bits(),
+                    k.state(t).clock_s.to_bits(),
+                    "{system:?} e {} t {t}",
+                    k.e
+                );
+            }
+        }
+    }
+
+    /// Newton's eccentric anomaly against the fixed-point iteration it
+    /// replaced (E = M + e sin E from E = M, to 1e-14 rad, library sine
+    /// and cosine of the result), and Kepler's equation itself: over
+    /// eccentricities 0 to 0.3 and mean anomalies across +-10 rad (a
+    /// broadcast M0 plus four hours of motion is within 6), the sines and
+    /// cosines agree within 5e-15 (1.4e-7 m at GPS's semi-major axis times
+    /// 1 + e; E itself is rounded to 1.8e-15 near 10 rad) and
+    /// M = E - e sin E holds within 2e-15 rad per radian of M.
+    ///
+    /// Verifies: RX-FORM-COST
+    #[test]
+    fn newton_kepler_is_the_fixed_point() {
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut worst = 0.0f64;
+        for k in 0..5000 {
+            let mut eph = circular(System::Gps, 1);
+            eph.e = match k % 4 {
+                0 => 0.0,
+                1 => 0.03 * next(),
+                2 => 0.2 * next(),
+                _ => 0.3 * next(),
+            };
+            eph.m0_rad = 20.0 * next() - 10.0;
+            let (s, c) = eph.eccentric_anomaly_sin_cos(MU_GPS_M3_S2, 0.0);
+            let mk = eph.m0_rad;
+            let mut ek = mk;
+            for _ in 0..200 {
+                let next_e = mk + eph.e * ek.sin();
+                let done = (next_e - ek).abs() < 1e-14;
+                ek = next_e;
+                if done {
+                    break;
+                }
+            }
+            let (s0, c0) = libm::sincos(ek);
+            worst = worst.max((s - s0).abs()).max((c - c0).abs());
+            // Kepler's equation at the E of (s, c): E = M + e sin E.
+            let e_new = libm::atan2(s, c);
+            let mut res = e_new - eph.e * s - mk;
+            res -= (res / (2.0 * std::f64::consts::PI)).round() * 2.0 * std::f64::consts::PI;
+            assert!(
+                res.abs() < 2e-15 * (1.0 + mk.abs()),
+                "e {} M {mk}: {res}",
+                eph.e
+            );
+        }
+        assert!(worst < 5e-15, "{worst:e}");
+    }
+
+    /// The transmit state by one Newton step from the clock's eccentric
+    /// anomaly against the state solved afresh at t_sv - clock(t_sv), over
+    /// random orbits (e to 0.2) and times, clock offsets to 1 ms: the same
+    /// transmit time to the bit, positions within 1e-6 m, clocks within
+    /// 1e-18 s.
+    ///
+    /// Verifies: RX-FORM-COST
+    #[test]
+    fn transmit_state_is_the_state_at_the_transmit_time() {
+        let mut x = 0x853c_49e6_748f_ea9bu64;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut worst = (0.0f64, 0.0f64);
+        for (system, prn) in [(System::Gps, 5), (System::Galileo, 14), (System::Beidou, 3)] {
+            for _ in 0..500 {
+                let mut k = circular(system, prn);
+                k.e = 0.2 * next() * next();
+                k.m0_rad = 6.0 * next() - 3.0;
+                k.omega_rad = 6.0 * next() - 3.0;
+                k.i0_rad = 0.96;
+                k.cus_rad = 1e-5;
+                k.crs_m = 50.0;
+                k.af0_s = 2e-3 * next() - 1e-3;
+                let t_sv = 1000.0 * WEEK_S + 14_400.0 * (next() - 0.5);
+                let (t, got) = k.transmit_state(t_sv);
+                let want_t = t_sv - k.clock_s(t_sv);
+                assert_eq!(t.to_bits(), want_t.to_bits());
+                let want = k.state(want_t);
+                let d = (0..3)
+                    .map(|i| (got.position_m[i] - want.position_m[i]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                worst.0 = worst.0.max(d);
+                worst.1 = worst.1.max((got.clock_s - want.clock_s).abs());
+            }
+        }
+        assert!(worst.0 < 1e-6 && worst.1 < 1e-18, "{worst:?}");
     }
 
     /// Kepler's equation with e = 0.3 (far beyond any GNSS orbit) converges

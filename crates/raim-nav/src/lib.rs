@@ -34,6 +34,7 @@
     )
 )]
 
+pub mod bootstrap;
 pub mod ephemeris;
 pub mod error;
 pub mod geometry;

@@ -9,24 +9,22 @@
 //! This is the one implementation: the host's RINEX and receiver-stream
 //! replays (raim-gnss) and the firmware's own epochs from a receiver's
 //! RTCM 3 stream ([`crate::rtcm`]) both call [`correct`] and
-//! [`bootstrap_position`], so that they form the same bits.
+//! [`bootstrap_position`] ([`crate::bootstrap`]), so that they form the
+//! same bits.
 
 use raim_core::araim::error_model::{iono_free_factor_sq, Curves};
-use raim_core::frames::{ecef_to_geodetic, Geodetic};
+use raim_core::frames::{bowring_latitude_rad, ecef_to_geodetic_from, enu_rotation, Geodetic};
 use raim_core::sigma::SigmaModel;
-use raim_core::solve::{solve_into, Solution};
-use raim_core::{Config, Epoch, RangeObservation, SatId, System};
+use raim_core::{RangeObservation, SatId, System};
 
 use crate::ephemeris::{Kepler, SatState, C_M_S, WEEK_S};
-use crate::geometry::{az_el_from, distance_m, rotate_earth};
+use crate::geometry::{az_el_rotated, distance_m, rotate_earth};
 use crate::glonass::{l1_hz, l2_hz, GlonassEphemeris, F_L1_BASE_HZ, F_L2_BASE_HZ};
 use crate::iono::{scale_to_frequency, Klobuchar, F_B1I_HZ, F_L1_HZ};
 use crate::m;
-use crate::tropo::saastamoinen_m;
+use crate::tropo::SaastamoinenSite;
 
-/// A solved position is trusted as the linearisation point for the
-/// corrections only if it is within this of the Earth's surface, m.
-pub const SURFACE_BAND_M: f64 = 100_000.0;
+pub use crate::bootstrap::{bootstrap_position, SURFACE_BAND_M};
 
 /// The broadcast ephemeris selected for one satellite: Keplerian elements
 /// (GPS, Galileo, BeiDou, QZSS) or a GLONASS state vector.
@@ -46,12 +44,12 @@ impl Broadcast<'_> {
         }
     }
 
-    /// Satellite clock at GPS time `t_gps_s`, s: [`Self::state`]'s clock,
-    /// without integrating a GLONASS orbit (its clock is a polynomial of
-    /// t - t_b alone).
+    /// Satellite clock at GPS time `t_gps_s`, s: [`Self::state`]'s clock to
+    /// the bit, without the orbit ([`Kepler::clock_s`]; a GLONASS clock is
+    /// a polynomial of t - t_b alone).
     pub fn clock_s(&self, t_gps_s: f64) -> f64 {
         match self {
-            Broadcast::Kepler(k) => k.state(t_gps_s).clock_s,
+            Broadcast::Kepler(k) => k.clock_s(t_gps_s),
             Broadcast::Glonass(g) => g.clock_s(t_gps_s),
         }
     }
@@ -128,6 +126,37 @@ pub struct Corrected {
     pub iono_m: f64,
     /// Saastamoinen slant delay, m; subtracted.
     pub tropo_m: f64,
+}
+
+/// What the corrections of one epoch take from the receiver position
+/// alone: its geodetic coordinates (ten f64 latitude iterations), its
+/// local-level (ENU) rotation (four sines and cosines) and its
+/// troposphere's zenith delays ([`SaastamoinenSite`]). Computed once per
+/// epoch for every satellite ([`correct_at`]), or per satellite by
+/// [`correct`]; the same bits either way.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReceiverFrame {
+    pub geodetic: Geodetic,
+    /// ECEF to ENU at the receiver (`raim_core::frames::enu_rotation`).
+    rotation: nalgebra::Matrix3<f64>,
+    pub tropo: SaastamoinenSite,
+}
+
+impl ReceiverFrame {
+    /// The frame of a receiver at ECEF `rx_m`: its geodetic position by
+    /// raim-core's latitude iteration from Bowring's closed form, which
+    /// stops at the iteration's tolerance (1e-10 rad per step, within
+    /// ~1e-12 rad of the fixed point) after one or two steps instead of
+    /// ten (each a sine, a cosine, a square root and an arctangent in
+    /// soft-float f64 on the M4).
+    pub fn at(rx_m: [f64; 3]) -> Self {
+        let geodetic = ecef_to_geodetic_from(rx_m, bowring_latitude_rad(rx_m));
+        ReceiverFrame {
+            geodetic,
+            rotation: enu_rotation(&geodetic),
+            tropo: SaastamoinenSite::at(geodetic.lat_rad, geodetic.height_m),
+        }
+    }
 }
 
 /// Carrier frequency (Hz) of a RINEX 3 code's band digit, per system; None
@@ -253,6 +282,20 @@ pub fn transmit_time_s(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<f64, Rejecti
     Ok(t_sv - s.eph.clock_s(t_sv))
 }
 
+/// The state of `s`'s satellite at the transmit time of its signal
+/// received at `t_rx_gps_s` ([`transmit_time_s`]): a Keplerian orbit by
+/// [`Kepler::transmit_state`] (the transmit time's eccentric anomaly one
+/// Newton step from the clock's), a GLONASS orbit integrated there.
+pub fn transmit_state(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<SatState, Rejection> {
+    match s.eph {
+        Broadcast::Kepler(k) => {
+            let (p, _) = ranging_pseudorange(s)?;
+            Ok(k.transmit_state(t_rx_gps_s - p / C_M_S).1)
+        }
+        Broadcast::Glonass(g) => Ok(g.state(transmit_time_s(s, t_rx_gps_s)?)),
+    }
+}
+
 /// One satellite's corrected observation, every correction computed at the
 /// receiver position `rx_m` (None: no atmosphere, no mask, and the Earth
 /// rotation from the pseudorange's transit time); `full` false also skips
@@ -265,25 +308,25 @@ pub fn correct(
     c: &Corrections,
     klobuchar: Option<&Klobuchar>,
 ) -> Result<Corrected, Rejection> {
-    let tx = s.eph.state(transmit_time_s(s, t_rx_gps_s)?);
+    let tx = transmit_state(s, t_rx_gps_s)?;
     correct_at(s, t_rx_gps_s, &tx, rx_m, None, full, c, klobuchar)
 }
 
 /// [`correct`] with the satellite's position (ECEF at transmit time, not
 /// yet rotated) and clock at its transmit time given: `tx` =
-/// `s.eph.state(transmit_time_s(s, t_rx_gps_s)?)`, computed once per
+/// `transmit_state(s, t_rx_gps_s)?`, computed once per
 /// epoch however many passes use it (the device's receiver integrates a
 /// GLONASS orbit there from a [`crate::glonass::GlonassArc`]); and, when
-/// given, the receiver's geodetic position `rx_geodetic` =
-/// `ecef_to_geodetic(rx_m)`, computed once for all the epoch's satellites
-/// (else here, for a full correction).
+/// given, the receiver's frame `rx_frame` = `ReceiverFrame::at(rx_m)`,
+/// computed once for all the epoch's satellites (else here, for a full
+/// correction).
 #[allow(clippy::too_many_arguments)]
 pub fn correct_at(
     s: &SatInput<'_>,
     t_rx_gps_s: f64,
     tx: &SatState,
     rx_m: Option<[f64; 3]>,
-    rx_geodetic: Option<Geodetic>,
+    rx_frame: Option<&ReceiverFrame>,
     full: bool,
     c: &Corrections,
     klobuchar: Option<&Klobuchar>,
@@ -314,8 +357,16 @@ pub fn correct_at(
     };
     let (mut az, mut el, mut iono_m, mut tropo_m) = (0.0, core::f64::consts::FRAC_PI_2, 0.0, 0.0);
     if let (Some(rx), true) = (rx_m, full) {
-        let g = rx_geodetic.unwrap_or_else(|| ecef_to_geodetic(rx));
-        let (a, e, g) = az_el_from(rx, g, pos);
+        let here;
+        let frame = match rx_frame {
+            Some(f) => f,
+            None => {
+                here = ReceiverFrame::at(rx);
+                &here
+            }
+        };
+        let g = frame.geodetic;
+        let (a, e) = az_el_rotated(rx, &frame.rotation, pos);
         az = a;
         el = e;
         if el < c.elevation_mask_rad {
@@ -330,7 +381,7 @@ pub fn correct_at(
             }
         }
         if c.tropo {
-            tropo_m = saastamoinen_m(g.lat_rad, g.height_m, el);
+            tropo_m = frame.tropo.slant_m(el);
         }
     }
     let sat_clock_m = C_M_S * clock_s;
@@ -354,43 +405,6 @@ pub fn correct_at(
         iono_m,
         tropo_m,
     })
-}
-
-/// A least-squares position from `sats` (unit weights until the position
-/// is near the surface, then the core's default elevation model), at
-/// capacity `N`; None with fewer than 4 or more than `N` satellites, or a
-/// solution farther than [`SURFACE_BAND_M`] from the surface. The solution
-/// is built on the stack (host use; [`bootstrap_position_into`] takes the
-/// storage).
-pub fn bootstrap_position<const N: usize>(
-    time_s: f64,
-    sats: &[RangeObservation],
-    apriori: Option<[f64; 3]>,
-) -> Option<[f64; 3]> {
-    let mut out = Solution::<N>::empty();
-    bootstrap_position_into(time_s, sats, apriori, &mut out)
-}
-
-/// [`bootstrap_position`] into existing storage `out` (the firmware keeps
-/// it in a static: an f64 solution at N = 32 is tens of KB).
-pub fn bootstrap_position_into<const N: usize>(
-    time_s: f64,
-    sats: &[RangeObservation],
-    apriori: Option<[f64; 3]>,
-    out: &mut Solution<N>,
-) -> Option<[f64; 3]> {
-    if sats.len() > N || sats.len() < 4 {
-        return None;
-    }
-    let mut mask = [false; N];
-    for m in mask.iter_mut().take(sats.len()) {
-        *m = true;
-    }
-    let cfg = Config::default();
-    solve_into(&cfg, &Epoch::ranges(time_s, sats, apriori), &mask, out).ok()?;
-    let p = out.position_ecef_m?;
-    let r = distance_m(p, [0.0; 3]);
-    ((r - raim_core::frames::WGS84_A_M).abs() < SURFACE_BAND_M).then_some(p)
 }
 
 /// The sigma of an iono-free combination with noise factor `factor` at
@@ -597,6 +611,101 @@ mod tests {
             group_delay_s,
             group_delay_e5a_s,
             ..crate::ephemeris::circular(system, 1)
+        }
+    }
+
+    /// The receiver's frame computed once for an epoch gives every
+    /// satellite the bits [`correct`] gives it computing the frame itself
+    /// (elevation, azimuth, troposphere, Klobuchar, corrected range,
+    /// rotated position), single codes and pairs, above and below the
+    /// mask, with the transmit state given as the device computes it.
+    ///
+    /// Verifies: RX-FORM-COST
+    #[test]
+    fn one_receiver_frame_per_epoch_gives_the_per_satellite_bits() {
+        use raim_core::frames::geodetic_to_ecef;
+        let rx = geodetic_to_ecef(Geodetic {
+            lat_rad: 0.7,
+            lon_rad: 0.15,
+            height_m: 48.0,
+        });
+        let frame = ReceiverFrame::at(rx);
+        let kb = Klobuchar {
+            alpha: [1.1e-8, 1.5e-8, -6.0e-8, -1.2e-7],
+            beta: [9.0e4, 9.8e4, -6.5e4, -5.2e5],
+        };
+        let c = Corrections {
+            elevation_mask_rad: 0.1,
+            iono: true,
+            tropo: true,
+            group_delay: true,
+            glonass_sigma: None,
+        };
+        let t = 1000.0 * WEEK_S + 7200.0;
+        let mut seen = (0, 0);
+        for (i, (prn, m0)) in [(1u8, 0.3f64), (2, 1.1), (3, 2.0), (4, -0.4), (5, 2.9)]
+            .into_iter()
+            .enumerate()
+        {
+            let mut k = kepler(System::Gps, 5e-9, 0.0);
+            k.prn = prn;
+            k.m0_rad = m0;
+            k.i0_rad = 0.96;
+            k.omega0_rad = 0.5 * i as f64;
+            k.e = 0.01;
+            let pair = i % 2 == 1;
+            let s = SatInput {
+                id: SatId::new(System::Gps, prn),
+                code: if pair { "C1C+C2W" } else { "C1C" },
+                p1_m: 2.2e7 + 1e5 * i as f64,
+                p2_m: pair.then_some(2.2e7 + 1e5 * i as f64 + 3.0),
+                eph: Broadcast::Kepler(&k),
+            };
+            let tx = transmit_state(&s, t).unwrap();
+            let want = correct(&s, t, Some(rx), true, &c, Some(&kb));
+            let got = correct_at(&s, t, &tx, Some(rx), Some(&frame), true, &c, Some(&kb));
+            match (want, got) {
+                (Ok(w), Ok(g)) => {
+                    seen.0 += 1;
+                    assert_eq!(w, g);
+                    assert_eq!(w.obs.pseudorange_m.to_bits(), g.obs.pseudorange_m.to_bits());
+                    assert_eq!(w.tropo_m.to_bits(), g.tropo_m.to_bits());
+                }
+                (Err(w), Err(g)) => {
+                    seen.1 += 1;
+                    assert_eq!(w, g);
+                }
+                (w, g) => panic!("{w:?} {g:?}"),
+            }
+        }
+        assert!(
+            seen.0 > 0 && seen.1 > 0,
+            "above and below the mask: {seen:?}"
+        );
+    }
+
+    /// The receiver frame's geodetic position against raim-core's ten
+    /// latitude iterations, over latitudes, longitudes and heights from
+    /// -100 m to 10 km: within 1e-11 rad and 1e-6 m.
+    ///
+    /// Verifies: RX-FORM-COST
+    #[test]
+    fn the_frames_geodetic_position_is_the_cores() {
+        use raim_core::frames::{ecef_to_geodetic, geodetic_to_ecef};
+        for lat_deg in [-89.9f64, -60.0, -12.0, 0.0, 0.01, 33.0, 55.5, 89.9] {
+            for lon_deg in [-179.0f64, -90.0, 0.0, 12.0, 100.0] {
+                for height_m in [-100.0, 0.0, 48.0, 3000.0, 1e4] {
+                    let rx = geodetic_to_ecef(Geodetic {
+                        lat_rad: lat_deg.to_radians(),
+                        lon_rad: lon_deg.to_radians(),
+                        height_m,
+                    });
+                    let (got, want) = (ReceiverFrame::at(rx).geodetic, ecef_to_geodetic(rx));
+                    assert!((got.lat_rad - want.lat_rad).abs() < 1e-11, "{lat_deg}");
+                    assert!((got.lon_rad - want.lon_rad).abs() < 1e-11, "{lon_deg}");
+                    assert!((got.height_m - want.height_m).abs() < 1e-6, "{height_m}");
+                }
+            }
         }
     }
 

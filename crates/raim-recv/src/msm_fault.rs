@@ -17,9 +17,14 @@
 //! the time of week, and the week of the first MSM taken as GPS week 0, so
 //! that `+S` is S seconds after the first MSM and `HH:MM:SS` a GPS time of
 //! day of its day, as in `raim replay` (the stream carries no full week in
-//! its MSM). GLONASS MSM carry a UTC(SU)-based time of day that needs the
-//! leap seconds of a date to join GPS time: a fault that could touch a
-//! GLONASS satellite of the stream is refused ([`MsmFaultError::Glonass`]).
+//! its MSM). A GLONASS MSM carries a UTC(SU)-based time of day (DF034,
+//! Moscow time): it is timed by the MSM of another system of its epoch, as
+//! a receiver's reader joins them (the one before it in the stream, else
+//! the one after), whose GPS time of day it must equal to the millisecond
+//! plus 3 h less a whole number of leap seconds (0 to 60 s): the stream
+//! itself gives the leap seconds. A GLONASS MSM with no such neighbour
+//! cannot be timed, and a fault that could touch its satellites is refused
+//! ([`MsmFaultError::GlonassUntimed`]).
 //!
 //! Resolution: the bias is written at the MSM's fine-pseudorange
 //! resolution (MSM4/5 DF400 2^-24 ms, 1.8 cm; MSM6/7 DF405 2^-29 ms,
@@ -50,8 +55,8 @@ pub const LIGHT_MS_M: f64 = 299_792.458;
 pub enum MsmFaultError {
     #[error("the stream has no MSM4-MSM7 of GPS, Galileo, QZSS or BeiDou to time the faults by")]
     NoMsm,
-    #[error("a fault may touch GLONASS satellites (frame {frame}, {sat:?}), whose MSM time (UTC(SU) time of day) cannot be joined to GPS time without a date; name satellites or a system other than R")]
-    Glonass { frame: usize, sat: SatId },
+    #[error("a fault may touch GLONASS satellites (frame {frame}, {sat:?}) whose MSM has no MSM of another system in its epoch (the one before or after it, at its time of day plus 3 h less 0-60 leap seconds) to take the GPS time from")]
+    GlonassUntimed { frame: usize, sat: SatId },
     #[error("frame {frame}: {sat:?} with a bias of {bias_m} m: its rough range would be {rough_ms} ms, outside DF397's 0-254 ms")]
     RoughRange {
         frame: usize,
@@ -264,6 +269,56 @@ impl Layout {
     }
 }
 
+/// A GLONASS MSM's time of day (DF034, ms of the Moscow day; the 3-bit
+/// day of week DF416 before it is not used).
+fn glonass_tod_ms(f: &[u8]) -> i64 {
+    get_bits(f, HDR_BITS + 24 + 3, 27) as i64
+}
+
+/// GLONASS time is UTC(SU) + 3 h: ms.
+const MOSCOW_MS: i64 = 10_800_000;
+const DAY_MS: i64 = 86_400_000;
+/// The leap seconds a GLONASS MSM may differ from GPS time by, ms.
+const MAX_LEAP_MS: i64 = 60_000;
+
+/// Whether a GLONASS time of day `tod_ms` is the epoch of GPS time
+/// `t_gps_s` (GPS time of day + 3 h - whole leap seconds within 0-60 s).
+fn same_epoch(t_gps_s: f64, tod_ms: i64) -> bool {
+    let gps_tod_ms = (t_gps_s * 1000.0).round() as i64;
+    let leap_ms = (gps_tod_ms + MOSCOW_MS - tod_ms).rem_euclid(DAY_MS);
+    leap_ms % 1000 == 0 && leap_ms <= MAX_LEAP_MS
+}
+
+/// The stream time of every MSM frame of `bytes` (`spans`): GPS, Galileo,
+/// QZSS and BeiDou by their time of week ([`Clock`]), a GLONASS MSM by
+/// the MSM of another system next to it in its epoch ([`same_epoch`]: the
+/// one before it, else the one after); None for other frames and an
+/// untimed GLONASS MSM.
+fn msm_times(bytes: &[u8], spans: &[(usize, usize)]) -> Vec<Option<f64>> {
+    let mut clock = Clock::default();
+    let mut times = vec![None; spans.len()];
+    let mut glonass = Vec::new();
+    for (k, &(start, n)) in spans.iter().enumerate() {
+        let f = &bytes[start..start + n];
+        let Some((system, _)) = msm_of(get_bits(f, HDR_BITS, 12)) else {
+            continue;
+        };
+        match msm_tow_s(f, system) {
+            Some(tow) => times[k] = Some(clock.at(tow)),
+            None => glonass.push((k, glonass_tod_ms(f))),
+        }
+    }
+    for (k, tod_ms) in glonass {
+        let before = times[..k].iter().rev().flatten().next().copied();
+        let after = times[k + 1..].iter().flatten().next().copied();
+        times[k] = [before, after]
+            .into_iter()
+            .flatten()
+            .find(|&t| same_epoch(t, tod_ms));
+    }
+    times
+}
+
 /// The MSM's epoch time, GPS seconds of the week (GLONASS: None).
 fn msm_tow_s(f: &[u8], system: System) -> Option<f64> {
     let ms = get_bits(f, HDR_BITS + 24, 30) as f64;
@@ -321,9 +376,9 @@ pub fn bias_stream(
         first_gps_s: first,
         ..FaultedStream::default()
     };
-    let mut clock = Clock::default();
     let mut copied = 0;
     let spans = frame_spans(bytes);
+    let times = msm_times(bytes, &spans);
     out.frames = spans.len();
     for (k, (start, n)) in spans.into_iter().enumerate() {
         out.bytes.extend_from_slice(&bytes[copied..start]);
@@ -340,7 +395,7 @@ pub fn bias_stream(
             out.bytes.extend_from_slice(frame);
             continue;
         };
-        let t = msm_tow_s(&f, layout.system).map(|tow| clock.at(tow));
+        let t = times[k];
         let mut sats: Vec<RangeObservation> = layout
             .sats
             .iter()
@@ -352,13 +407,14 @@ pub fn bias_stream(
             })
             .collect();
         let Some(t) = t else {
-            // GLONASS: refuse a fault that touches it at any time of the
-            // stream (probed at the first MSM's time and ten years on).
+            // An untimed GLONASS MSM: refuse a fault that touches its
+            // satellites at any time of the stream (probed at the first
+            // MSM's time and ten years on).
             for probe in [first, first + 520.0 * WEEK_S] {
                 let mut s = sats.clone();
                 bias(probe, &mut s);
                 if let Some(x) = s.iter().find(|x| x.pseudorange_m != 0.0) {
-                    return Err(MsmFaultError::Glonass {
+                    return Err(MsmFaultError::GlonassUntimed {
                         frame: k,
                         sat: x.id,
                     });
@@ -536,6 +592,23 @@ mod tests {
         assert_eq!(get_signed(&f, 5, 20), -12345);
     }
 
+    /// A GLONASS time of day joins the GPS epoch 3 h ahead less whole
+    /// leap seconds (18 s in 2020, 0-60 s), across the day's end; a
+    /// millisecond off, or 61 s, does not.
+    #[test]
+    fn glonass_time_of_day_joins_its_gps_epoch() {
+        let gps = 3.0 * 86_400.0 + 100.0;
+        let tod = |leap_s: i64| (100_000 + MOSCOW_MS - 1000 * leap_s).rem_euclid(DAY_MS);
+        assert!(same_epoch(gps, tod(18)));
+        assert!(same_epoch(gps, tod(0)));
+        assert!(same_epoch(gps, tod(60)));
+        assert!(!same_epoch(gps, tod(61)));
+        assert!(!same_epoch(gps, tod(18) + 1));
+        // 23:59:50 GPS is 02:59:32 Moscow time of the next day.
+        let late = 86_400.0 - 10.0;
+        assert!(same_epoch(late, (86_390_000 + MOSCOW_MS - 18_000) % DAY_MS));
+    }
+
     #[test]
     fn the_clock_counts_weeks() {
         let mut c = Clock::default();
@@ -575,8 +648,8 @@ pub fn time_key(t_s: f64) -> i64 {
 /// the broadcast ephemeris at its transmit time (raim-gnss's preparation,
 /// the stream codes, no elevation mask) and the line of sight from the
 /// station (RTCM 1005/1006). A satellite the stream has no ephemeris for
-/// gets no bias (no receiver could use it). Refused: GLONASS (its MSM
-/// time, above), a stream without a station position.
+/// gets no bias (no receiver could use it). Refused: a stream without a
+/// station position.
 pub fn constellation_table(
     bytes: &[u8],
     faults: &[ConstellationShift],
@@ -584,9 +657,6 @@ pub fn constellation_table(
     let mut table = BiasTable::new();
     if faults.is_empty() {
         return Ok(table);
-    }
-    if let Some(f) = faults.iter().find(|f| f.system == System::Glonass) {
-        return Err(ConstellationError::Glonass(f.system));
     }
     let first = first_msm_gps_s(bytes).ok_or(ConstellationError::Msm(MsmFaultError::NoMsm))?;
     let rec = crate::read_all(crate::Format::Rtcm3, bytes, "stream".into())
@@ -602,7 +672,13 @@ pub fn constellation_table(
     let weeks = ((e0.time_gps_s - first) / WEEK_S).round() * WEEK_S;
     let rot = raim_core::frames::enu_rotation(&raim_core::frames::ecef_to_geodetic(station));
     let opts = raim_gnss::ranging::RangingOptions {
-        systems: vec![System::Gps, System::Galileo, System::Beidou, System::Qzss],
+        systems: vec![
+            System::Gps,
+            System::Glonass,
+            System::Galileo,
+            System::Beidou,
+            System::Qzss,
+        ],
         codes: raim_nav::ranging::STREAM_CODES
             .iter()
             .map(|(s, c)| (*s, c.iter().map(|c| c.to_string()).collect()))
@@ -639,8 +715,6 @@ pub fn constellation_table(
 /// Why a constellation fault could not be placed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ConstellationError {
-    #[error("a constellation fault on {0:?}: GLONASS MSM time cannot be joined to GPS time without a date")]
-    Glonass(System),
     #[error("a constellation fault needs the receiver position: the stream has no station position (RTCM 1005/1006)")]
     NoStation,
     #[error("reading the stream: {0}")]

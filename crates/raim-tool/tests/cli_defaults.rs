@@ -242,15 +242,19 @@ fn rtcm_fault_defaults() {
     assert_eq!(excluded, solved_after, "{err}");
     assert!(before >= 60, "{before}");
     // A constellation fault needs the station's lines of sight: GMSD7
-    // sends no 1005/1006, and GLONASS is refused; a fault on a satellite
-    // the stream does not carry (or after its end) writes nothing.
+    // sends no 1005/1006 (GLONASS's as GPS's); a fault on a satellite the
+    // stream does not carry (or after its end) writes nothing.
     for (option, spec, why) in [
         (
             "--araim-const-fault",
             "G:0:0,0,30@+60",
             "no station position",
         ),
-        ("--araim-const-fault", "R:0:0,0,30@+60", "GLONASS MSM time"),
+        (
+            "--araim-const-fault",
+            "R:0:0,0,30@+60",
+            "no station position",
+        ),
         ("--fault", "step:G02:50@+60", "move no pseudorange"),
         ("--fault", "step:G06:50@+100000", "move no pseudorange"),
     ] {

@@ -55,8 +55,6 @@
 //! pair, `raim replay --araim`'s rule).
 
 use heapless::Vec;
-use raim_core::frames::ecef_to_geodetic;
-use raim_core::solve::Solution;
 use raim_core::{RangeObservation, SatId, System};
 
 use crate::ephemeris::{SatState, BDT_MINUS_GPST_S, WEEK_S};
@@ -66,8 +64,8 @@ use crate::glonass::{
 };
 use crate::m;
 use crate::ranging::{
-    bootstrap_position_into, cn0_dbhz_u8, correct_at, split_pair, stream_codes, stream_sigma_for_m,
-    transmit_time_s, Broadcast, Corrections, SatInput, StreamSigmas,
+    bootstrap_position, cn0_dbhz_u8, correct_at, split_pair, stream_codes, stream_sigma_for_m,
+    transmit_state, transmit_time_s, Broadcast, Corrections, ReceiverFrame, SatInput, StreamSigmas,
 };
 use crate::store::{DecodedSets, EphemerisStore, Stored};
 use crate::time::table_gps_minus_utc_s;
@@ -322,8 +320,6 @@ pub struct FormedEpoch<const N: usize> {
 /// bootstrap solve under the forming.
 #[derive(Debug, Clone)]
 pub struct FormScratch<const N: usize> {
-    /// The bootstrap solution's storage.
-    solution: Solution<N>,
     /// The bootstrap pass's ranges.
     bootstrap_obs: Vec<RangeObservation, N>,
     /// Each input satellite's state at its transmit time (None: no usable
@@ -337,7 +333,6 @@ impl<const N: usize> FormScratch<N> {
     /// Empty scratch.
     pub const fn new() -> Self {
         FormScratch {
-            solution: Solution::empty(),
             bootstrap_obs: Vec::new(),
             transmit: Vec::new(),
             decoded: DecodedSets::new(),
@@ -811,7 +806,6 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             ..
         } = self;
         let FormScratch {
-            solution,
             bootstrap_obs: first,
             transmit,
             decoded,
@@ -913,10 +907,12 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         glonass_arcs.next_epoch();
         transmit.clear();
         for s in inputs.iter() {
-            let tx = transmit_time_s(s, time_gps_s).ok().map(|t| match s.eph {
-                Broadcast::Glonass(g) => glonass_arcs.state(g, t),
-                Broadcast::Kepler(k) => k.state(t),
-            });
+            let tx = match s.eph {
+                Broadcast::Glonass(g) => transmit_time_s(s, time_gps_s)
+                    .ok()
+                    .map(|t| glonass_arcs.state(g, t)),
+                Broadcast::Kepler(_) => transmit_state(s, time_gps_s).ok(),
+            };
             // `inputs` and `transmit` have the same capacity N.
             let _ = transmit.push(tx);
         }
@@ -929,13 +925,14 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 let _ = first.push(x.obs);
             }
         }
-        let reference = bootstrap_position_into(time_gps_s, first, apriori, solution).or(apriori);
+        let reference = bootstrap_position::<N>(first, apriori).or(apriori);
         out.reference_m = reference;
         // Every correction at the reference; with none (the bootstrap
         // failed and no station position), the bootstrap pass's ranges, as
         // the host hands them over.
-        // The receiver's geodetic position, once for every satellite.
-        let rx_geodetic = reference.map(ecef_to_geodetic);
+        // The receiver's frame (geodetic position, local-level rotation,
+        // zenith troposphere), once for every satellite.
+        let rx_frame = reference.map(ReceiverFrame::at);
         for ((s, tx), cn0) in inputs.iter().zip(transmit.iter()).zip(cn0s.iter()) {
             let Some(tx) = tx else {
                 out.rejected += 1;
@@ -946,7 +943,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 time_gps_s,
                 tx,
                 reference,
-                rx_geodetic,
+                rx_frame.as_ref(),
                 reference.is_some(),
                 &c,
                 None,
