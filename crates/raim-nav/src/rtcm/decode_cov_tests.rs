@@ -25,7 +25,7 @@ struct Bits(Vec<u8>, usize);
 impl Bits {
     fn put(&mut self, v: i64, width: u32) -> &mut Self {
         for b in (0..width).rev() {
-            if self.1 % 8 == 0 {
+            if self.1.is_multiple_of(8) {
                 self.0.push(0);
             }
             let bit = if b >= 64 {

@@ -1,0 +1,331 @@
+//! The stream receiver's paths GMSD7 read straight through does not
+//! reach (issue 37, structural coverage): a frame that fails its CRC, the
+//! leap seconds from an RTCM 1013 (and a count that changes), GLONASS a
+//! second off, a leap-second table past its expiry, GLONASS data with no
+//! epoch to join, a satellite capacity below the epoch's, and the station
+//! position of a 1005. The stream is GMSD7 (2012-10-14, GPS - UTC = 16 s,
+//! `/work/shared/data/GMSD7_20121014.rtcm3`; per epoch a 1077, 1087,
+//! 1117 and 1127, the last with DF393 = 0), edited frame by frame here;
+//! the expectations are the file's own counts and the ICDs' arithmetic.
+
+use std::boxed::Box;
+use std::vec::Vec;
+
+use raim_core::{Config, System};
+
+use super::{FormError, FormedEpoch, LeapSeconds, StreamReceiver};
+use crate::ranging::StreamSigmas;
+
+/// The GPS week GMSD7 starts in (its first epoch is the end of 1709).
+const GMSD7_WEEK: i64 = 1709;
+const MASK_RAD: f64 = 10.0 * core::f64::consts::PI / 180.0;
+
+fn gmsd7() -> Vec<u8> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/GMSD7_20121014.rtcm3"
+    );
+    std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
+/// The frames by the RTCM 10403.3 framing alone.
+fn frames(bytes: &[u8]) -> Vec<Vec<u8>> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i + 3 <= bytes.len() {
+        if bytes[i] != 0xD3 {
+            i += 1;
+            continue;
+        }
+        let len = (usize::from(bytes[i + 1] & 0x03) << 8) | usize::from(bytes[i + 2]);
+        let end = i + 6 + len;
+        if end > bytes.len() {
+            break;
+        }
+        out.push(bytes[i..end].to_vec());
+        i = end;
+    }
+    out
+}
+
+/// DF002 of a frame.
+fn number(f: &[u8]) -> u16 {
+    (u16::from(f[3]) << 4) | (u16::from(f[4]) >> 4)
+}
+
+/// The GPS time of week of a GPS MSM, ms (DF004: payload bits 24..54).
+fn gps_tow_ms(f: &[u8]) -> i64 {
+    let p = &f[3..];
+    let mut v = 0i64;
+    for bit in 24..54 {
+        v = (v << 1) | i64::from((p[bit / 8] >> (7 - bit % 8)) & 1);
+    }
+    v
+}
+
+/// Fields packed most significant bit first.
+#[derive(Default)]
+struct Bits(Vec<u8>, usize);
+
+impl Bits {
+    fn put(&mut self, v: i64, width: u32) -> &mut Self {
+        for b in (0..width).rev() {
+            if self.1.is_multiple_of(8) {
+                self.0.push(0);
+            }
+            if (v >> b) & 1 == 1 {
+                if let Some(last) = self.0.last_mut() {
+                    *last |= 0x80 >> (self.1 % 8);
+                }
+            }
+            self.1 += 1;
+        }
+        self
+    }
+}
+
+/// A frame around `payload`: header and CRC-24Q (polynomial 0x864CFB,
+/// initial value 0; written out here, not the decoder's).
+fn frame(payload: &[u8]) -> Vec<u8> {
+    let n = payload.len();
+    let mut f = std::vec![0xD3, (n >> 8) as u8, n as u8];
+    f.extend_from_slice(payload);
+    let mut c = 0u32;
+    for &b in &f {
+        c ^= u32::from(b) << 16;
+        for _ in 0..8 {
+            c <<= 1;
+            if c & 0x0100_0000 != 0 {
+                c ^= 0x0186_4CFB;
+            }
+        }
+    }
+    f.extend_from_slice(&[(c >> 16) as u8, (c >> 8) as u8, c as u8]);
+    f
+}
+
+/// RTCM 1013 (§3.5.5): DF002, DF003, DF051 MJD, DF052, DF053 = 0, DF054.
+fn msg1013(leap_s: i64) -> Vec<u8> {
+    let mut b = Bits::default();
+    b.put(1013, 12)
+        .put(0, 12)
+        .put(56_214, 16)
+        .put(0, 17)
+        .put(0, 5)
+        .put(leap_s, 8);
+    frame(&b.0)
+}
+
+fn empty() -> Box<FormedEpoch<64>> {
+    Box::new(FormedEpoch {
+        time_gps_s: 0.0,
+        reference_m: None,
+        sats: heapless::Vec::new(),
+        cn0_dbhz: heapless::Vec::new(),
+        rejected: 0,
+    })
+}
+
+/// What `rx` makes of `frames`: each closed epoch's result and its
+/// GLONASS satellites.
+fn feed<const N: usize>(
+    rx: &mut StreamReceiver<N, 256>,
+    frames: &[Vec<u8>],
+) -> Vec<(Result<(), FormError>, usize)> {
+    let sigmas = StreamSigmas::Snapshot(Config::default().sigma_model);
+    let mut out = Box::new(FormedEpoch::<N> {
+        time_gps_s: 0.0,
+        reference_m: None,
+        sats: heapless::Vec::new(),
+        cn0_dbhz: heapless::Vec::new(),
+        rejected: 0,
+    });
+    let mut got = Vec::new();
+    for f in frames {
+        if let Some(r) = rx.on_frame(f, &sigmas, MASK_RAD, &mut out) {
+            let glo = out
+                .sats
+                .iter()
+                .filter(|s| s.id.system == System::Glonass)
+                .count();
+            got.push((r, glo));
+        }
+    }
+    got
+}
+
+/// The frames of GMSD7's first `epochs` epochs (up to the next 1077).
+fn first_epochs(epochs: usize) -> Vec<Vec<u8>> {
+    let all = frames(&gmsd7());
+    let mut seen = 0;
+    let mut out = Vec::new();
+    for f in all {
+        if number(&f) == 1077 {
+            if seen == epochs {
+                break;
+            }
+            seen += 1;
+        }
+        out.push(f);
+    }
+    out
+}
+
+/// A frame whose CRC fails is counted undecodable and not as a frame.
+#[test]
+fn a_frame_that_fails_its_crc_is_counted_undecodable() {
+    let mut f = first_epochs(1);
+    let n = f[0].len();
+    f[0][n - 1] ^= 0x01;
+    let mut rx = Box::new(StreamReceiver::<64, 256>::new(GMSD7_WEEK - 52));
+    feed(&mut rx, &f[..1]);
+    let c = rx.counts();
+    assert_eq!((c.undecodable, c.frames), (1, 0));
+}
+
+/// A 1013 puts its GPS - UTC in force (`Stream`); the same count again
+/// keeps the GLONASS sets placed with it, another count drops them (each
+/// may be a second, 3.9 km, off); 255 (unknown) changes nothing.
+///
+/// Verifies: RX-LEAP
+#[test]
+fn a_1013_sets_the_leap_seconds_and_a_new_count_drops_placed_glonass() {
+    let mut rx = Box::new(StreamReceiver::<64, 256>::new(GMSD7_WEEK - 52));
+    assert_eq!(rx.leap_seconds(), LeapSeconds::NotDated);
+    feed(&mut rx, &first_epochs(25));
+    assert_eq!(rx.leap_seconds(), LeapSeconds::Table(16));
+    let (_, glonass) = rx.ephemerides();
+    assert!(glonass > 0);
+    feed(&mut rx, &[msg1013(16)]);
+    assert_eq!(rx.leap_seconds(), LeapSeconds::Stream(16));
+    assert_eq!(rx.ephemerides().1, glonass);
+    feed(&mut rx, &[msg1013(17)]);
+    assert_eq!(rx.leap_seconds(), LeapSeconds::Stream(17));
+    assert_eq!(rx.ephemerides().1, 0);
+    feed(&mut rx, &[msg1013(255)]);
+    assert_eq!(rx.leap_seconds(), LeapSeconds::Stream(17));
+    assert_eq!(rx.utc_offset_s(1e9), 17.0);
+    assert_eq!(rx.counts().system_parameters, 3);
+}
+
+/// With GPS - UTC a second off (a 1013 of 17 s in 2012), the GLONASS
+/// time of day of each epoch does not match its GPS time: the GLONASS
+/// data leaves the epoch (counted), the GPS data stays. With the true
+/// count (16 s) the same epochs carry GLONASS satellites.
+///
+/// Verifies: RX-GLONASS-TIME
+#[test]
+fn glonass_a_second_off_leaves_the_epoch() {
+    let epochs = first_epochs(usize::MAX);
+    let mut with = std::vec![msg1013(16)];
+    with.extend(epochs.iter().cloned());
+    let mut rx = Box::new(StreamReceiver::<64, 256>::new(GMSD7_WEEK - 52));
+    let good = feed(&mut rx, &with);
+    assert!(good.iter().any(|(r, g)| r.is_ok() && *g > 0), "{good:?}");
+    assert_eq!(rx.counts().glonass_dropped, 0);
+
+    let mut off = std::vec![msg1013(17)];
+    off.extend(epochs.iter().cloned());
+    let mut rx = Box::new(StreamReceiver::<64, 256>::new(GMSD7_WEEK - 52));
+    let got = feed(&mut rx, &off);
+    let formed = got.iter().filter(|(r, _)| r.is_ok()).count();
+    assert!(formed >= 250, "{got:?}");
+    assert!(got.iter().all(|(_, g)| *g == 0), "{got:?}");
+    // Every formed epoch held a GLONASS MSM (1087) but possibly one.
+    let dropped = rx.counts().glonass_dropped as usize;
+    assert!(
+        dropped + 1 >= formed && dropped <= formed,
+        "{dropped} {formed}"
+    );
+}
+
+/// A unit built 14 years after the recording (pivot 2025) dates GMSD7
+/// 1024 weeks late, past the leap-second table's expiry: the 1020s wait
+/// (GPS - UTC unknown), every epoch with GLONASS data is refused
+/// `LeapSecondsUnknown` with its GPS time of week (the 1077's DF004),
+/// and `TableExpired` is reported; a 1013 then places the waiting 1020s.
+///
+/// Verifies: WIRE-StreamLeapSecondsUnknown, RX-LEAP
+#[test]
+fn an_expired_table_refuses_glonass_until_a_1013() {
+    let epochs = first_epochs(12);
+    let tows: Vec<i64> = epochs
+        .iter()
+        .filter(|f| number(f) == 1077)
+        .map(|f| gps_tow_ms(f))
+        .collect();
+    let mut rx = Box::new(StreamReceiver::<64, 256>::new(2_400 - 52));
+    let got = feed(&mut rx, &epochs);
+    assert_eq!(got.len(), tows.len());
+    for ((r, _), tow) in got.iter().zip(&tows).skip(1) {
+        assert_eq!(*r, Err(FormError::LeapSecondsUnknown { tow_ms: *tow }));
+    }
+    assert_eq!(rx.leap_seconds(), LeapSeconds::TableExpired);
+    // GMSD7's first 1020 is in its sixth epoch: it waits.
+    assert_eq!(rx.ephemerides().1, 0);
+    feed(&mut rx, &[msg1013(16)]);
+    assert_eq!(rx.ephemerides().1, 1);
+    assert_eq!(rx.leap_seconds(), LeapSeconds::Stream(16));
+}
+
+/// GLONASS MSMs with no GPS, Galileo, QZSS or BeiDou MSM to join (the
+/// 1077s and 1127s left out): each epoch's GLONASS data waits, and is
+/// dropped (counted) when the next epoch's GLONASS time of day arrives;
+/// no epoch is formed.
+#[test]
+fn glonass_with_no_epoch_to_join_is_dropped() {
+    let only: Vec<Vec<u8>> = first_epochs(10)
+        .into_iter()
+        .filter(|f| !matches!(number(f), 1077 | 1127))
+        .collect();
+    let glonass_msm = only.iter().filter(|f| number(f) == 1087).count();
+    assert_eq!(glonass_msm, 10);
+    let mut rx = Box::new(StreamReceiver::<64, 256>::new(GMSD7_WEEK - 52));
+    let got = feed(&mut rx, &only);
+    assert!(got.is_empty(), "{got:?}");
+    let c = rx.counts();
+    assert_eq!(c.epochs, 0);
+    assert_eq!(c.glonass_dropped as usize, glonass_msm - 1);
+}
+
+/// A receiver of capacity 4 satellites refuses every epoch that has more
+/// usable satellites, `TooManySignals` with that capacity; the epochs it
+/// forms have at most 4.
+#[test]
+fn more_satellites_than_the_capacity_refuse_the_epoch() {
+    let mut rx = Box::new(StreamReceiver::<4, 256>::new(GMSD7_WEEK - 52));
+    let got = feed(&mut rx, &first_epochs(usize::MAX));
+    let refused = got
+        .iter()
+        .filter(|(r, _)| *r == Err(FormError::TooManySignals { capacity: 4 }))
+        .count();
+    assert!(refused > 0, "{got:?}");
+    assert!(
+        got.iter().all(|(r, _)| matches!(
+            r,
+            Ok(())
+                | Err(FormError::TooManySignals { capacity: 4 })
+                | Err(FormError::NotDated { .. })
+        )),
+        "{got:?}"
+    );
+}
+
+/// The station position of a 1005 (§3.5.3: DF025-DF027 in 0.1 mm).
+#[test]
+fn a_1005_gives_the_station_position() {
+    let (x, y, z) = (38_921_123_456i64, 3_123_456_789, -50_123_456_789);
+    let mut b = Bits::default();
+    b.put(1005, 12).put(0, 12).put(0, 6).put(0, 4);
+    b.put(x & ((1 << 38) - 1), 38).put(0, 2);
+    b.put(y & ((1 << 38) - 1), 38).put(0, 2);
+    b.put(z & ((1 << 38) - 1), 38);
+    let mut rx = Box::new(StreamReceiver::<64, 256>::new(GMSD7_WEEK - 52));
+    assert_eq!(rx.station_m(), None);
+    feed(&mut rx, &[frame(&b.0)]);
+    let p = rx.station_m().unwrap();
+    for (got, want) in p.iter().zip([x, y, z]) {
+        assert!((got - want as f64 * 1e-4).abs() < 1e-9, "{p:?}");
+    }
+    let _ = empty();
+}
