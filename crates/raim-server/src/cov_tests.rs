@@ -730,9 +730,9 @@ fn stream_epochs_through_the_link_are_answered_unasked() {
             );
         }
         assert_eq!(nmea.matches("GGA").count(), EPOCHS, "{nmea}");
-        let status = run(&mut s, &status(0));
-        let ResponseBody::Status(st) = &status[0].body else {
-            panic!("{status:?}")
+        let answer = run(&mut s, &status(0));
+        let ResponseBody::Status(st) = &answer[0].body else {
+            panic!("{answer:?}")
         };
         assert_eq!(st.stream_epochs as usize, EPOCHS);
         assert_eq!(
@@ -740,6 +740,20 @@ fn stream_epochs_through_the_link_are_answered_unasked() {
             raim_proto::message::StreamLeapSeconds::Stream {
                 gps_minus_utc_s: 16
             }
+        );
+
+        // Without the 1013 this build has no GPS - UTC for 2032: past
+        // the table, reported as such.
+        let mut t = Box::new(Server::new());
+        t.take_runtime_config(Config::default()).unwrap();
+        let _ = stream(&mut t, &part[msg1013(56_214, 16).len()..]);
+        let answer = run(&mut t, &status(0));
+        let ResponseBody::Status(st) = &answer[0].body else {
+            panic!("{answer:?}")
+        };
+        assert_eq!(
+            st.stream_leap_seconds,
+            raim_proto::message::StreamLeapSeconds::TableExpired
         );
 
         let mut u = Box::new(Server::new());
@@ -751,4 +765,76 @@ fn stream_epochs_through_the_link_are_answered_unasked() {
             .count();
         assert_eq!(unconfigured, EPOCHS - not_dated);
     })
+}
+
+/// A UART that takes nothing.
+struct Broken;
+impl embedded_io::ErrorType for Broken {
+    type Error = embedded_io::ErrorKind;
+}
+impl embedded_io::Write for Broken {
+    fn write(&mut self, _: &[u8]) -> Result<usize, Self::Error> {
+        Err(embedded_io::ErrorKind::Other)
+    }
+    fn flush(&mut self) -> Result<(), Self::Error> {
+        Err(embedded_io::ErrorKind::Other)
+    }
+}
+
+/// A UART that fails is reported, typed, as the one it is: the NMEA
+/// port's failure when an epoch's sentences go out, the link's when an
+/// answer does.
+#[test]
+fn a_failing_uart_is_reported_as_itself() {
+    on_big_stack(|| {
+        let sats = sky();
+        let bytes = frame(&RequestRef::linear(0, 0.0, &sats));
+        let mut s = Box::new(Server::new());
+        s.take_runtime_config(Config::default()).unwrap();
+        let mut link = Sink::default();
+        let mut errors = Vec::new();
+        for &b in &bytes {
+            if let Err(e) = s.on_byte(b, &mut link, &mut Broken, &mut NoPlatform) {
+                errors.push(e);
+            }
+        }
+        assert_eq!(
+            errors,
+            [crate::IoError::Nmea(embedded_io::ErrorKind::Other)]
+        );
+
+        let mut s = Box::new(Server::new());
+        let mut errors = Vec::new();
+        for &b in &status(0) {
+            if let Err(e) = s.on_byte(b, &mut Broken, &mut Sink::default(), &mut NoPlatform) {
+                errors.push(e);
+            }
+        }
+        assert_eq!(
+            errors,
+            [crate::IoError::Link(embedded_io::ErrorKind::Other)]
+        );
+    })
+}
+
+/// The boot notice by reference encodes as the `ResponseBody` it stands
+/// for, byte for byte (postcard: the variant index, then the payload).
+#[test]
+fn a_boot_notice_by_reference_encodes_as_its_body() {
+    let notice = raim_proto::BootNotice {
+        protocol_version: PROTOCOL_VERSION,
+        resets: 2,
+        reset_cause: ResetCause::Unrecorded,
+        config: Server::new().config_id(),
+        provision_error: Some(ProvisionError::BadMagic),
+        auth_provisioned: true,
+        boot_nonce: [3; 16],
+    };
+    let body = ResponseBody::Boot(notice);
+    let by_ref = crate::answer::BodyRef::from(&body);
+    let (mut a, mut b) = ([0u8; 256], [0u8; 256]);
+    assert_eq!(
+        postcard::to_slice(&by_ref, &mut a).unwrap(),
+        postcard::to_slice(&body, &mut b).unwrap()
+    );
 }
