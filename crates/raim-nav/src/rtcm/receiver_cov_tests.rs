@@ -329,3 +329,111 @@ fn a_1005_gives_the_station_position() {
     }
     let _ = empty();
 }
+
+/// `f` with its DF393 (payload bit 54 of every MSM: after DF002 12,
+/// DF003 12 and the 30-bit epoch time) set to `more`, the CRC redone.
+fn with_more(f: &[u8], more: bool) -> Vec<u8> {
+    let mut payload = f[3..f.len() - 3].to_vec();
+    if more {
+        payload[6] |= 0x02;
+    } else {
+        payload[6] &= !0x02;
+    }
+    frame(&payload)
+}
+
+/// An epoch whose last message is one the receiver does not decode (the
+/// QZSS 1117 of GMSD7, whose signal IDs are outside Table 3.5-105) still
+/// ends with it when its DF393 is 0: with the BeiDou 1127s left out, every
+/// epoch closes at its 1117, one per GPS 1077.
+#[test]
+fn an_undecoded_last_msm_closes_the_epoch() {
+    let edited: Vec<Vec<u8>> = first_epochs(8)
+        .into_iter()
+        .filter(|f| number(f) != 1127)
+        .map(|f| {
+            if number(&f) == 1117 {
+                with_more(&f, false)
+            } else {
+                f
+            }
+        })
+        .collect();
+    let mut rx = Box::new(StreamReceiver::<64, 256>::new(GMSD7_WEEK - 52));
+    let got = feed(&mut rx, &edited);
+    assert_eq!(got.len(), 8);
+    assert_eq!(rx.counts().epochs, 8);
+}
+
+/// A GLONASS MSM that is the epoch's last (DF393 = 0, the 1117s and
+/// 1127s left out) closes the epoch it joined: one per GPS 1077.
+#[test]
+fn a_last_glonass_msm_closes_the_epoch() {
+    let edited: Vec<Vec<u8>> = first_epochs(8)
+        .into_iter()
+        .filter(|f| !matches!(number(f), 1117 | 1127))
+        .map(|f| {
+            if number(&f) == 1087 {
+                with_more(&f, false)
+            } else {
+                f
+            }
+        })
+        .collect();
+    let mut rx = Box::new(StreamReceiver::<64, 256>::new(GMSD7_WEEK - 52));
+    let got = feed(&mut rx, &edited);
+    assert_eq!(got.len(), 8);
+    assert_eq!(rx.counts().epochs, 8);
+}
+
+/// A GLONASS MSM that is the epoch's last with no other MSM before it
+/// (GLONASS alone): nothing dates it, so it is dropped at once, each one
+/// counted.
+#[test]
+fn a_lone_last_glonass_msm_is_dropped() {
+    let edited: Vec<Vec<u8>> = first_epochs(6)
+        .into_iter()
+        .filter(|f| !matches!(number(f), 1077 | 1117 | 1127))
+        .map(|f| {
+            if number(&f) == 1087 {
+                with_more(&f, false)
+            } else {
+                f
+            }
+        })
+        .collect();
+    let mut rx = Box::new(StreamReceiver::<64, 256>::new(GMSD7_WEEK - 52));
+    assert!(feed(&mut rx, &edited).is_empty());
+    assert_eq!(rx.counts().glonass_dropped, 6);
+    assert_eq!(rx.counts().epochs, 0);
+}
+
+/// A toc on the other side of a week's end from its toe is placed in
+/// the toe's half-week (toe 1 h before the end of week 1709, toc 1 h
+/// after it as sent in the new week's seconds, and the reverse).
+#[test]
+fn toc_is_placed_within_half_a_week_of_toe() {
+    let w = 604_800.0;
+    assert_eq!(
+        super::fields::toc_near_toe(1709, w - 3600.0, 3600.0),
+        1710.0 * w + 3600.0
+    );
+    assert_eq!(
+        super::fields::toc_near_toe(1710, 3600.0, w - 3600.0),
+        1710.0 * w - 3600.0
+    );
+    assert_eq!(
+        super::fields::toc_near_toe(1710, 7200.0, 3600.0),
+        1710.0 * w + 3600.0
+    );
+}
+
+/// The latest week congruent to the sent one, not after the clock's; a
+/// clock before the first rollover gives the week as sent.
+#[test]
+fn latest_week_from_a_clock() {
+    assert_eq!(super::fields::latest_week(685, 1024, 1709), 1709);
+    assert_eq!(super::fields::latest_week(686, 1024, 1709), 686);
+    assert_eq!(super::fields::latest_week(1000, 1024, 2100), 2024);
+    assert_eq!(super::fields::latest_week(1000, 1024, 500), 1000);
+}
