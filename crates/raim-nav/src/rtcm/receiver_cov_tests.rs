@@ -437,3 +437,106 @@ fn latest_week_from_a_clock() {
     assert_eq!(super::fields::latest_week(1000, 1024, 2100), 2024);
     assert_eq!(super::fields::latest_week(1000, 1024, 500), 1000);
 }
+
+/// Each closed epoch of `frames`: its time, and its satellites with their
+/// corrected pseudoranges, or why it was not formed.
+type Formed = Result<(f64, Vec<(raim_core::SatId, f64)>), FormError>;
+
+fn formed(frames: &[Vec<u8>]) -> Vec<Formed> {
+    let sigmas = StreamSigmas::Snapshot(Config::default().sigma_model);
+    let mut rx = Box::new(StreamReceiver::<64, 256>::new(GMSD7_WEEK - 52));
+    let mut out = empty();
+    let mut got = Vec::new();
+    for f in frames {
+        if let Some(r) = rx.on_frame(f, &sigmas, MASK_RAD, &mut out) {
+            got.push(r.map(|()| {
+                (
+                    out.time_gps_s,
+                    out.sats.iter().map(|s| (s.id, s.pseudorange_m)).collect(),
+                )
+            }));
+        }
+    }
+    got
+}
+
+/// GMSD7's frames regrouped by epoch (each group starts at a 1077; the
+/// frames before the first 1077 form their own group).
+fn by_epoch(frames: Vec<Vec<u8>>) -> Vec<Vec<Vec<u8>>> {
+    let mut out: Vec<Vec<Vec<u8>>> = std::vec![Vec::new()];
+    for f in frames {
+        if number(&f) == 1077 {
+            out.push(Vec::new());
+        }
+        out.last_mut().unwrap().push(f);
+    }
+    out
+}
+
+/// A stream that never marks an epoch's last message (the 1127s, the
+/// only MSMs with DF393 = 0, left out; BeiDou has no ephemeris in GMSD7,
+/// so they add no satellite) forms the same epochs, each closed when the
+/// next epoch's time arrives: all but the last one. (The first is
+/// dated here, as the 1019 that follows its 1077 arrives before it
+/// closes.)
+#[test]
+fn epochs_close_on_a_new_time_when_no_last_message_comes() {
+    let all = first_epochs(usize::MAX);
+    let want = formed(&all);
+    assert!(
+        want.iter()
+            .filter(|r| r.as_ref().is_ok_and(|(_, s)| !s.is_empty()))
+            .count()
+            > 20
+    );
+    // The epochs after whose last message an ephemeris (1019, 1020)
+    // comes: held open until the next 1077, they are formed with it.
+    let later_ephemeris: Vec<bool> = by_epoch(all.clone())
+        .iter()
+        .skip(1)
+        .map(|g| {
+            let last = g.iter().position(|f| number(f) == 1127);
+            last.is_some_and(|l| g[l..].iter().any(|f| matches!(number(f), 1019 | 1020)))
+        })
+        .collect();
+    let cut: Vec<Vec<u8>> = all.into_iter().filter(|f| number(f) != 1127).collect();
+    let got = formed(&cut);
+    assert_eq!(got.len() + 1, want.len());
+    assert!(matches!(want[0], Err(FormError::NotDated { .. })));
+    assert!(got[0].is_ok());
+    let mut compared = 0;
+    for i in 1..got.len() {
+        let (g, w) = (got[i].as_ref().unwrap(), want[i].as_ref().unwrap());
+        assert_eq!(g.0, w.0);
+        if !later_ephemeris[i] {
+            assert_eq!(g, w, "epoch {i}");
+            compared += 1;
+        }
+    }
+    assert!(compared > 200, "{compared}");
+}
+
+/// A stream that sends each epoch's GLONASS MSM before its GPS one: the
+/// GLONASS data waits for the GPS MSM's time and joins its epoch; the
+/// epochs formed are those of GMSD7's own order.
+#[test]
+fn glonass_before_gps_joins_the_epoch() {
+    let all = first_epochs(usize::MAX);
+    let want = formed(&all);
+    let mut swapped = Vec::new();
+    for mut group in by_epoch(all) {
+        if let (Some(g), Some(r)) = (
+            group.iter().position(|f| number(f) == 1077),
+            group.iter().position(|f| number(f) == 1087),
+        ) {
+            let glonass = group.remove(r);
+            group.insert(g, glonass);
+        }
+        swapped.extend(group);
+    }
+    let got = formed(&swapped);
+    assert_eq!(got, want);
+    assert!(got.iter().any(|r| r
+        .as_ref()
+        .is_ok_and(|(_, s)| s.iter().any(|(id, _)| id.system == System::Glonass))));
+}
