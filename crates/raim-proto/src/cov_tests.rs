@@ -117,3 +117,98 @@ fn a_format_error_is_too_long() {
         crate::nmea::TooLong
     );
 }
+
+/// Eight GPS satellites of a linear epoch (unit sigmas, small residuals),
+/// G08 at `el8_deg`, processed by the core and in wire form.
+fn linear_result(
+    el8_deg: f64,
+) -> (
+    crate::result::WireResult,
+    std::vec::Vec<raim_core::LinearObservation>,
+) {
+    use raim_core::{Config, Epoch, LinearObservation, Raim, SatId, System};
+    let sky = [
+        (0.0, 85.0),
+        (45.0, 30.0),
+        (100.0, 50.0),
+        (150.0, 20.0),
+        (200.0, 60.0),
+        (250.0, 25.0),
+        (300.0, 40.0),
+        (340.0, el8_deg),
+    ];
+    let sats: std::vec::Vec<LinearObservation> = sky
+        .iter()
+        .enumerate()
+        .map(|(i, &(az, el)): (usize, &(f64, f64))| {
+            let mut o = LinearObservation::from_az_el(
+                SatId::new(System::Gps, i as u8 + 1),
+                f64::to_radians(az),
+                f64::to_radians(el),
+                0.1 * i as f64 - 0.3,
+            );
+            o.sigma_m = Some(1.0);
+            o
+        })
+        .collect();
+    let r = Raim::<32>::new()
+        .process(&Config::default(), &Epoch::linear(1_709_164_800.0, &sats))
+        .unwrap();
+    (crate::result::WireResult::from_result(&r), sats)
+}
+
+/// GSV: a satellite below the horizon has an empty elevation field (NMEA
+/// 0183 elevation is 0-90 degrees), its azimuth still given; the C/N0
+/// field is the epoch's value in whole dB-Hz, empty for 0 (unknown).
+#[test]
+fn gsv_leaves_a_negative_elevation_and_an_unknown_cn0_empty() {
+    use crate::nmea::{epoch_sentences, Options, Sky};
+    let (w, sats) = linear_result(-5.0);
+    let e = raim_core::Epoch::linear(w.time_s, &sats);
+    let cn0 = [40u8, 0, 42, 43, 44, 45, 46, 47];
+    let sky = Sky {
+        epoch: &e,
+        cn0_dbhz: &cn0,
+    };
+    let all = epoch_sentences(
+        &w,
+        &sky,
+        Options {
+            geoid: false,
+            sky: true,
+        },
+    )
+    .unwrap();
+    let gsv: std::vec::Vec<&str> = all
+        .iter()
+        .map(|s| s.as_str())
+        .filter(|s| s.get(3..6) == Some("GSV"))
+        .collect();
+    assert_eq!(gsv.len(), 2, "{gsv:?}");
+    // Fields: talker+GSV, total, part, count, then (SVID, el, az, C/N0)
+    // per satellite, then the signal ID and checksum.
+    let fields = |s: &str| -> std::vec::Vec<std::string::String> {
+        let body = &s[1..s.find('*').unwrap()];
+        body.split(',').map(std::string::String::from).collect()
+    };
+    let first = fields(gsv[0]);
+    assert_eq!(&first[4..8], ["01", "85", "000", "40"]);
+    assert_eq!(&first[8..12], ["02", "30", "045", ""]);
+    let second = fields(gsv[1]);
+    assert_eq!(&second[16..20], ["08", "", "340", "47"]);
+}
+
+/// ZDA before year 1: the proleptic Gregorian year with its sign.
+/// 0000-01-01 is Unix time -62,167,219,200 s; year -1 (not a leap year)
+/// starts 365 days before it, at -62,198,755,200 s.
+#[test]
+fn zda_writes_a_negative_year_with_its_sign() {
+    let (mut w, _) = linear_result(15.0);
+    w.time_s = -62_198_755_200.0;
+    let s = crate::nmea::zda(&w).unwrap();
+    assert!(
+        s.as_str().contains(",000000.00,01,01,-0001,00,00*"),
+        "{}",
+        s.as_str()
+    );
+}
