@@ -212,3 +212,92 @@ fn zda_writes_a_negative_year_with_its_sign() {
         s.as_str()
     );
 }
+
+/// DOPs of a sky whose satellites all lie on one line of sight: the
+/// geometry matrix has rank 2 (one direction and the clock), so no DOP
+/// exists and none is written.
+#[test]
+fn a_sky_on_one_line_of_sight_has_no_dops() {
+    use raim_core::{Epoch, LinearObservation};
+    let (w, sats) = linear_result(15.0);
+    let same: std::vec::Vec<LinearObservation> = sats
+        .iter()
+        .map(|s| LinearObservation::from_az_el(s.id, 0.3, 0.7, 0.0))
+        .collect();
+    let e = Epoch::linear(w.time_s, &same);
+    assert_eq!(crate::nmea::dops(&w, &crate::nmea::Sky::new(&e)), None);
+    let good = Epoch::linear(w.time_s, &sats);
+    assert!(crate::nmea::dops(&w, &crate::nmea::Sky::new(&good)).is_some());
+}
+
+/// Without the sky sentences (`Options::sky` false): no GSV, and the GSA
+/// carries no DOP.
+#[test]
+fn without_the_sky_no_gsv_and_no_dops() {
+    use crate::nmea::{epoch_sentences, Options, Sky};
+    let (w, sats) = linear_result(15.0);
+    let e = raim_core::Epoch::linear(w.time_s, &sats);
+    let all = epoch_sentences(
+        &w,
+        &Sky::new(&e),
+        Options {
+            geoid: false,
+            sky: false,
+        },
+    )
+    .unwrap();
+    assert!(all.iter().all(|s| s.as_str().get(3..6) != Some("GSV")));
+    // GSA fields: talker+GSA, mode, fix, 12 satellite slots, PDOP, HDOP,
+    // VDOP, system ID.
+    let dop_fields = |all: &crate::nmea::Sentences| -> std::vec::Vec<std::string::String> {
+        let gsa = all
+            .iter()
+            .map(|s| s.as_str())
+            .find(|s| s.get(3..6) == Some("GSA"))
+            .unwrap();
+        let body = &gsa[1..gsa.find('*').unwrap()];
+        body.split(',')
+            .skip(15)
+            .take(3)
+            .map(std::string::String::from)
+            .collect()
+    };
+    assert_eq!(dop_fields(&all), ["", "", ""]);
+    let with_sky = epoch_sentences(
+        &w,
+        &Sky::new(&e),
+        Options {
+            geoid: false,
+            sky: true,
+        },
+    )
+    .unwrap();
+    assert!(
+        dop_fields(&with_sky).iter().all(|f| !f.is_empty()),
+        "{:?}",
+        dop_fields(&with_sky)
+    );
+}
+
+/// An authenticated ISM whose list overflowed is refused on its declared
+/// count, as a plain ISM is.
+#[test]
+fn an_authenticated_ism_that_overflowed_is_caught() {
+    use crate::araim_msg::{IsmFrame, WireAraimConfig};
+    use crate::auth::{Authenticated, Change};
+    use crate::message::{Command, SatList};
+    let ism = IsmFrame {
+        config: WireAraimConfig::default(),
+        p_const: [None; raim_core::measurement::MAX_SYSTEMS],
+        sats: SatList {
+            items: heapless::Vec::new(),
+            declared: 77,
+        },
+    };
+    let c = Command::Authenticated(Authenticated {
+        counter: 1,
+        change: Change::Ism(ism),
+        tag: [0; 32],
+    });
+    assert_eq!(c.overflowed_list(), Some(77));
+}
