@@ -244,3 +244,60 @@ fn single_frequency_stream_sigmas_scale_the_residual_ionosphere() {
     let gps = stream_sigma_for_m(&StreamSigmas::Snapshot(model), System::Gps, "C1C", el, 2.0);
     assert!((gps - two).abs() < 1e-12, "{gps} {two}");
 }
+
+/// An iono-free pair takes its combination's group delay only when group
+/// delays are on (Galileo E1 + E5a: c (BGD(E1,E5b) - BGD(E1,E5a))), and
+/// no Klobuchar term (the combination removes the first-order
+/// ionosphere); a single code with group delays off takes none.
+#[test]
+fn pairs_take_their_group_delay_and_no_klobuchar() {
+    let (bgd_s, bgd5a_s) = (4e-9, 1.5e-9);
+    let gal: &'static Kepler = std::boxed::Box::leak(std::boxed::Box::new(Kepler {
+        group_delay_s: bgd_s,
+        group_delay_e5a_s: bgd5a_s,
+        ..circular(System::Galileo, 11)
+    }));
+    let (t, rx) = overhead(gal);
+    let kb = Klobuchar {
+        alpha: [0.0; 4],
+        beta: [0.0; 4],
+    };
+    let pair = SatInput {
+        id: SatId::new(System::Galileo, 11),
+        code: "C1C+C5Q",
+        p1_m: 2.0e7,
+        p2_m: Some(2.0e7 + 3.0),
+        eph: Broadcast::Kepler(gal),
+    };
+    let on = correct(
+        &pair,
+        t,
+        Some(rx),
+        true,
+        &corrections(true, true),
+        Some(&kb),
+    )
+    .unwrap();
+    assert!(
+        (on.group_delay_m - C_M_S * (bgd_s - bgd5a_s)).abs() < 1e-9,
+        "{on:?}"
+    );
+    assert_eq!(on.iono_m, 0.0);
+    let off = correct(
+        &pair,
+        t,
+        Some(rx),
+        true,
+        &corrections(false, true),
+        Some(&kb),
+    )
+    .unwrap();
+    assert_eq!(off.group_delay_m, 0.0);
+    let single = SatInput {
+        code: "C1C",
+        p2_m: None,
+        ..pair
+    };
+    let off = correct(&single, t, Some(rx), true, &corrections(false, false), None).unwrap();
+    assert_eq!(off.group_delay_m, 0.0);
+}
