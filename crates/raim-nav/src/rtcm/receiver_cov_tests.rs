@@ -540,3 +540,70 @@ fn glonass_before_gps_joins_the_epoch() {
         .as_ref()
         .is_ok_and(|(_, s)| s.iter().any(|(id, _)| id.system == System::Glonass))));
 }
+
+/// An RTCM 1042 (BeiDou ephemeris, RTCM 10403.3 §3.5.12, fields DF488 to
+/// DF515 in the standard's order and widths) of C20 in BDT week `week`,
+/// toe and toc `toe_bdt_s` (a multiple of 8 s), TGD1 5 ns, the orbit's
+/// fields in whole units of their resolutions.
+fn msg1042(week: i64, toe_bdt_s: i64) -> Vec<u8> {
+    let mut b = Bits::default();
+    b.put(1042, 12).put(20, 6).put(week, 13).put(0, 4);
+    b.put(100, 14).put(7, 5).put(toe_bdt_s / 8, 17);
+    b.put(0, 11).put(0, 22).put(-1000, 24).put(1, 5);
+    b.put(0, 18).put(0, 16).put(0, 32).put(0, 18);
+    b.put(8_589_934, 32)
+        .put(0, 18)
+        .put(2_769_669_324, 32)
+        .put(toe_bdt_s / 8, 17);
+    b.put(0, 18).put(0, 32).put(0, 18).put(656_083_968, 32);
+    b.put(0, 18)
+        .put(0, 32)
+        .put(0, 24)
+        .put(50, 10)
+        .put(0, 10)
+        .put(0, 1);
+    frame(&b.0)
+}
+
+/// A BeiDou ephemeris dates the stream as a GPS one does: BDT week 353
+/// is GPS week 1709 (BDT week 0 = GPS week 1356, BDS ICD §5.2.3) and BDT
+/// is GPS time less 14 s. With GMSD7's first epoch preceded by a 1042
+/// instead of its 1019 (toe 604,768 s of BDT week 353; the epoch, 604,784 s
+/// of GPS time, is 604,770 s of BDT), that epoch is dated at once: GPS
+/// week 1709, 604,784 s.
+/// The message's fields decode to their raw values times the standard's
+/// resolutions.
+#[test]
+fn a_beidou_ephemeris_dates_the_stream() {
+    use super::decode::{Frame, Message};
+    let eph = msg1042(353, 604_768);
+    let Ok(Message::Kepler(k)) = Frame::new(&eph).unwrap().message() else {
+        panic!("not an ephemeris");
+    };
+    assert_eq!(
+        (k.number, k.system, k.prn, k.week_sent),
+        (1042, System::Beidou, 20, 353)
+    );
+    let f = k.fields;
+    assert_eq!((f.toe_s, f.toc_s, f.iod), (604_768.0, 604_768.0, 7));
+    assert_eq!(f.idot_sc, 100.0 * 2f64.powi(-43));
+    assert_eq!(f.af0, -1000.0 * 2f64.powi(-33));
+    assert_eq!(f.e, 8_589_934.0 * 2f64.powi(-33));
+    assert_eq!(f.sqrt_a, 2_769_669_324.0 * 2f64.powi(-19));
+    assert_eq!(f.i0_sc, 656_083_968.0 * 2f64.powi(-31));
+    assert!((f.tgd - 5e-9).abs() < 1e-15, "{}", f.tgd);
+
+    let mut frames = std::vec![eph];
+    frames.extend(first_epochs(1).into_iter().filter(|f| number(f) != 1019));
+    let mut rx = Box::new(StreamReceiver::<64, 256>::new(GMSD7_WEEK - 52));
+    let sigmas = StreamSigmas::Snapshot(Config::default().sigma_model);
+    let mut out = empty();
+    let mut got = Vec::new();
+    for f in &frames {
+        if let Some(r) = rx.on_frame(f, &sigmas, MASK_RAD, &mut out) {
+            got.push((r, out.time_gps_s));
+        }
+    }
+    assert_eq!(got, [(Ok(()), 1709.0 * 604_800.0 + 604_784.0)]);
+    assert_eq!(rx.ephemerides().0, 1);
+}
