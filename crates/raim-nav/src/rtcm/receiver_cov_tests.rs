@@ -607,3 +607,151 @@ fn a_beidou_ephemeris_dates_the_stream() {
     assert_eq!(got, [(Ok(()), 1709.0 * 604_800.0 + 604_784.0)]);
     assert_eq!(rx.ephemerides().0, 1);
 }
+
+/// An RTCM 1045 (Galileo F/NAV, `inav` false) or 1046 (I/NAV) of E11 in
+/// GST week `week`, toe and toc `toe_s` (a multiple of 60 s): RTCM
+/// 10403.3 §3.5.10-11, DF252 to DF317 in the standard's order and widths;
+/// BGD(E1,E5a) 2^-32 x 20 s, BGD(E1,E5b) 2^-32 x 30 s; F/NAV E5a health
+/// 3, validity 1; I/NAV E5b health 1, validity 0, E1-B health 2,
+/// validity 1.
+fn msg1045_1046(inav: bool, week: i64, toe_s: i64) -> Vec<u8> {
+    let mut b = Bits::default();
+    b.put(if inav { 1046 } else { 1045 }, 12)
+        .put(11, 6)
+        .put(week, 12)
+        .put(42, 10)
+        .put(0, 8);
+    b.put(-100, 14)
+        .put(toe_s / 60, 14)
+        .put(0, 6)
+        .put(0, 21)
+        .put(5000, 31);
+    b.put(0, 16).put(0, 16).put(0, 32).put(0, 16);
+    b.put(1_000_000, 32)
+        .put(0, 16)
+        .put(2_852_038_656, 32)
+        .put(toe_s / 60, 14);
+    b.put(0, 16).put(0, 32).put(0, 16).put(600_000_000, 32);
+    b.put(0, 16).put(0, 32).put(0, 24).put(20, 10);
+    if inav {
+        b.put(30, 10)
+            .put(1, 2)
+            .put(0, 1)
+            .put(2, 2)
+            .put(1, 1)
+            .put(0, 2);
+    } else {
+        b.put(3, 2).put(1, 1).put(0, 7);
+    }
+    frame(&b.0)
+}
+
+/// An RTCM 1044 (QZSS, §3.5.13) of J04 (satellite ID 4) in GPS week
+/// `week` (mod 1024), toe and toc `toe_s` (a multiple of 16 s), TGD
+/// 2^-31 x 4 s, health 0.
+fn msg1044(week: i64, toe_s: i64) -> Vec<u8> {
+    let mut b = Bits::default();
+    b.put(1044, 12)
+        .put(4, 4)
+        .put(toe_s / 16, 16)
+        .put(0, 8)
+        .put(0, 16)
+        .put(-300, 22);
+    b.put(9, 8).put(0, 16).put(0, 16).put(0, 32).put(0, 16);
+    b.put(3_000_000, 32)
+        .put(0, 16)
+        .put(3_346_000_000, 32)
+        .put(toe_s / 16, 16);
+    b.put(0, 16).put(0, 32).put(0, 16).put(700_000_000, 32);
+    b.put(0, 16).put(0, 32).put(0, 24).put(50, 14);
+    b.put(0, 2)
+        .put(week, 10)
+        .put(0, 4)
+        .put(0, 6)
+        .put(4, 8)
+        .put(0, 10)
+        .put(0, 1);
+    frame(&b.0)
+}
+
+/// The first GMSD7 epoch, preceded by `eph` instead of its 1019: the
+/// results the receiver hands over, with their GPS times.
+fn dated_by(eph: &[u8]) -> Vec<(Result<(), FormError>, f64)> {
+    let mut frames = std::vec![eph.to_vec()];
+    frames.extend(first_epochs(1).into_iter().filter(|f| number(f) != 1019));
+    let mut rx = Box::new(StreamReceiver::<64, 256>::new(GMSD7_WEEK - 52));
+    let sigmas = StreamSigmas::Snapshot(Config::default().sigma_model);
+    let mut out = empty();
+    let mut got = Vec::new();
+    for f in &frames {
+        if let Some(r) = rx.on_frame(f, &sigmas, MASK_RAD, &mut out) {
+            got.push((r, out.time_gps_s));
+        }
+    }
+    got
+}
+
+/// Galileo F/NAV and I/NAV ephemerides: the fields decode to their raw
+/// values times the standard's resolutions; F/NAV's group delay is
+/// BGD(E1,E5a), I/NAV's BGD(E1,E5b) (with E1/E5a's kept); the health
+/// words pack each signal's health and validity bits. Either dates the
+/// stream: GST week 685 is GPS week 1709 (GST week 0 = GPS week 1024;
+/// GST is aligned with GPS time), toe 604,740 s, 44 s before GMSD7's
+/// first epoch, which is then dated at GPS week 1709, 604,784 s.
+#[test]
+fn galileo_ephemerides_decode_and_date_the_stream() {
+    use super::decode::{Frame, Message};
+    for inav in [false, true] {
+        let eph = msg1045_1046(inav, 685, 604_740);
+        let Ok(Message::Kepler(k)) = Frame::new(&eph).unwrap().message() else {
+            panic!("not an ephemeris");
+        };
+        let number = if inav { 1046 } else { 1045 };
+        assert_eq!(
+            (k.number, k.system, k.prn, k.week_sent),
+            (number, System::Galileo, 11, 685)
+        );
+        let f = k.fields;
+        assert_eq!((f.toe_s, f.toc_s, f.iod), (604_740.0, 604_740.0, 42));
+        assert_eq!(f.idot_sc, -100.0 * 2f64.powi(-43));
+        assert_eq!(f.af0, 5000.0 * 2f64.powi(-34));
+        assert_eq!(f.e, 1_000_000.0 * 2f64.powi(-33));
+        assert_eq!(f.sqrt_a, 2_852_038_656.0 * 2f64.powi(-19));
+        assert_eq!(f.i0_sc, 600_000_000.0 * 2f64.powi(-31));
+        let (bgd5a, bgd5b) = (20.0 * 2f64.powi(-32), 30.0 * 2f64.powi(-32));
+        if inav {
+            assert_eq!((f.tgd, f.tgd2), (bgd5b, bgd5a));
+            assert_eq!(f.health, 2 | 1 << 2 | 1 << 3);
+        } else {
+            assert_eq!((f.tgd, f.tgd2), (bgd5a, bgd5a));
+            assert_eq!(f.health, 3 | 1 << 2);
+        }
+        assert_eq!(dated_by(&eph), [(Ok(()), 1709.0 * 604_800.0 + 604_784.0)]);
+    }
+}
+
+/// A QZSS ephemeris (1044): the fields decode to their raw values times
+/// the standard's resolutions, and the 10-bit GPS week (685 = 1709 mod
+/// 1024) dates the stream: toe 604,784 s, GMSD7's first epoch, dated at
+/// GPS week 1709.
+#[test]
+fn a_qzss_ephemeris_decodes_and_dates_the_stream() {
+    use super::decode::{Frame, Message};
+    let eph = msg1044(685, 604_784);
+    let Ok(Message::Kepler(k)) = Frame::new(&eph).unwrap().message() else {
+        panic!("not an ephemeris");
+    };
+    assert_eq!(
+        (k.number, k.system, k.prn, k.week_sent),
+        (1044, System::Qzss, 4, 685)
+    );
+    let f = k.fields;
+    assert_eq!((f.toe_s, f.toc_s, f.iod), (604_784.0, 604_784.0, 9));
+    assert_eq!(f.af0, -300.0 * 2f64.powi(-31));
+    assert_eq!(f.e, 3_000_000.0 * 2f64.powi(-33));
+    assert_eq!(f.sqrt_a, 3_346_000_000.0 * 2f64.powi(-19));
+    assert_eq!(f.i0_sc, 700_000_000.0 * 2f64.powi(-31));
+    assert_eq!(f.idot_sc, 50.0 * 2f64.powi(-43));
+    assert_eq!(f.tgd, 4.0 * 2f64.powi(-31));
+    assert_eq!(dated_by(&eph), [(Ok(()), 1709.0 * 604_800.0 + 604_784.0)]);
+}
