@@ -838,3 +838,32 @@ fn a_boot_notice_by_reference_encodes_as_its_body() {
         postcard::to_slice(&body, &mut b).unwrap()
     );
 }
+
+/// A unit with a runtime change in force but no snapshot configuration
+/// (only `HostSigmas`) is not Unconfigured as a whole, yet its snapshot
+/// epochs are: they are refused `Unconfigured`, never run on a default.
+///
+/// Verifies: WIRE-Unconfigured
+#[test]
+fn a_snapshot_epoch_needs_the_snapshot_configuration() {
+    on_big_stack(|| {
+        let mut s = Box::new(Server::new());
+        let mut sats = sky();
+        for o in &mut sats {
+            o.sigma_m = None;
+        }
+        let mut bytes = frame(&RequestRef {
+            seq: 0,
+            command: CommandRef::HostSigmas(false),
+        });
+        bytes.extend(frame(&RequestRef::linear(1, 0.0, &sats)));
+        let answers = run(&mut s, &bytes);
+        assert_eq!(answers[0].body, ResponseBody::Configured);
+        assert_eq!(s.config_id().source, ConfigSource::Runtime);
+        assert_eq!(s.config(), None);
+        assert_eq!(
+            answers[1].body,
+            ResponseBody::Error(WireError::Unconfigured { provision: None })
+        );
+    })
+}
