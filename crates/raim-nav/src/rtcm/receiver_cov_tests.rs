@@ -311,7 +311,8 @@ fn more_satellites_than_the_capacity_refuse_the_epoch() {
     );
 }
 
-/// The station position of a 1005 (§3.5.3: DF025-DF027 in 0.1 mm).
+/// The station position of a 1005 and a 1006 (§3.5.3: DF025-DF027 in
+/// 0.1 mm, two's complement).
 #[test]
 fn a_1005_gives_the_station_position() {
     let (x, y, z) = (38_921_123_456i64, 3_123_456_789, -50_123_456_789);
@@ -327,7 +328,18 @@ fn a_1005_gives_the_station_position() {
     for (got, want) in p.iter().zip([x, y, z]) {
         assert!((got - want as f64 * 1e-4).abs() < 1e-9, "{p:?}");
     }
-    let _ = empty();
+    // A 1006: the same fields and DF028, the antenna height (16 bits),
+    // which the position does not include; another position.
+    let mut b = Bits::default();
+    b.put(1006, 12).put(0, 12).put(0, 6).put(0, 4);
+    b.put(-x & ((1 << 38) - 1), 38).put(0, 2);
+    b.put(y & ((1 << 38) - 1), 38).put(0, 2);
+    b.put(z & ((1 << 38) - 1), 38).put(15_000, 16);
+    feed(&mut rx, &[frame(&b.0)]);
+    let p = rx.station_m().unwrap();
+    for (got, want) in p.iter().zip([-x, y, z]) {
+        assert!((got - want as f64 * 1e-4).abs() < 1e-9, "{p:?}");
+    }
 }
 
 /// `f` with its DF393 (payload bit 54 of every MSM: after DF002 12,
