@@ -556,3 +556,7 @@ mod tests {
         assert!((r - a * (1.0 - 0.3 * e_anom.cos())).abs() < 1e-4);
     }
 }
+
+#[cfg(test)]
+#[path = "ephemeris_cov_tests.rs"]
+mod ephemeris_cov_tests;

@@ -853,3 +853,7 @@ mod tests {
         assert_eq!(snap, iono_free_sigma_m(&model, el, k));
     }
 }
+
+#[cfg(test)]
+#[path = "ranging_cov_tests.rs"]
+mod ranging_cov_tests;

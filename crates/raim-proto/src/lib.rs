@@ -132,3 +132,6 @@ pub const MAX_RESPONSE_PAYLOAD: usize = 3072;
 /// CRC varint, at most 8 bytes) + COBS overhead (one byte per 254) + the
 /// delimiter.
 pub const MAX_RESPONSE_FRAME: usize = MAX_RESPONSE_PAYLOAD + 8 + MAX_RESPONSE_PAYLOAD / 254 + 2;
+
+#[cfg(test)]
+mod cov_tests;

@@ -1129,4 +1129,6 @@ fn run_epoch<P: Platform>(
 }
 
 #[cfg(test)]
+mod cov_tests;
+#[cfg(test)]
 mod tests;

@@ -143,7 +143,7 @@ fn every_frame_is_answered_in_order_with_its_sequence_number() {
     };
     assert_eq!(
         (st.frames, st.epochs, st.errors, st.capacity),
-        (3, 2, 0, 32)
+        (3, 2, 0, crate::SNAPSHOT_SATS as u16)
     );
     // Each solved epoch's sentences, from RMC to ZDA (GSV only in a build
     // with raim-proto's `nmea-sky`), twice.

@@ -1301,3 +1301,7 @@ mod tests {
         assert!(matches!(m, Ok(Err(DecodeError::Bits(_)))));
     }
 }
+
+#[cfg(test)]
+#[path = "decode_cov_tests.rs"]
+mod decode_cov_tests;
