@@ -1287,7 +1287,7 @@ p_const = 1e-8
     /// budget, a budget with an LPV level, a budget at the floor and one
     /// the core refuses (PHMI below P_THRES) are refused by line.
     ///
-    /// Verifies: AVAIL-HARAIM-BUDGET
+    /// Verifies: TOOL-AVAIL-HARAIM-BUDGET
     #[test]
     fn horizontal_level_budgets_flow_into_the_core() {
         std::thread::Builder::new()
