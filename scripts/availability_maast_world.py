@@ -55,6 +55,7 @@ for r in csv.DictReader(open(os.path.join(args.work, "ours.csv"))):
     users.setdefault(u, []).append(c)
 
 ref = {}
+part = {}
 for v in VARIANTS:
     files = glob.glob(os.path.join(args.work, f"ref_{v}_lat*.csv"))
     rows = {}
@@ -63,10 +64,12 @@ for v in VARIANTS:
             rows[int(r["case"])] = (float(r["modes"]), float(r["vpl_m"]), float(r["hpl_m"]))
     if rows:
         missing = len(ours) - len(rows)
-        ref[v] = rows
         if missing:
-            print(f"variant {v}: {missing} of {len(ours)} user-epochs missing (run incomplete); not tabulated")
-            del ref[v]
+            print(f"variant {v}: {missing} of {len(ours)} user-epochs missing (run incomplete): "
+                  "no coverage; per-user figures for the users it covers")
+            part[v] = rows
+        else:
+            ref[v] = rows
 inf = float("inf")
 
 
@@ -93,7 +96,7 @@ def our_emt_ok(c):
 
 
 def get(v, c, i):
-    x = ref[v].get(c)
+    x = (ref[v] if v in ref else part[v]).get(c)
     return inf if x is None or math.isnan(x[i]) else x[i]
 
 
@@ -146,8 +149,9 @@ for k, (who, rule, _) in enumerate(rules[2:]):
 our_pct = {u: (pct([ours[c]["vpl_m"] for c in cs]), pct([ours[c]["hpl_m"] for c in cs])) for u, cs in users.items()}
 our_root_pct = {u: (pct([ours[c]["vpl_root_m"] for c in cs]), pct([ours[c]["hpl_root_m"] for c in cs]))
                 for u, cs in users.items()}
-ref_pct = {v: {u: (pct([get(v, c, 1) for c in cs]), pct([get(v, c, 2) for c in cs])) for u, cs in users.items()}
-           for v in ref}
+ref_pct = {v: {u: (pct([get(v, c, 1) for c in cs]), pct([get(v, c, 2) for c in cs])) for u, cs in users.items()
+               if all(c in (ref[v] if v in ref else part[v]) for c in cs)}
+           for v in list(ref) + list(part)}
 gal = {}
 if os.path.exists(args.galtable):
     for r in csv.DictReader(open(args.galtable)):
@@ -162,7 +166,7 @@ print()
 print("| 99.5th-percentile PL per user, (reference - ours) / ours | users | mean | min | max | within 1 % |")
 print("| --- | ---: | ---: | ---: | ---: | ---: |")
 pairs = []
-for v in ref:
+for v in list(ref) + list(part):
     if v == "v3":
         pairs.append((f"{names[v]}; ours: PL roots", v, our_root_pct))
     elif v == "refmodel":
@@ -170,12 +174,29 @@ for v in ref:
             pairs.append((f"{names[v]}; ours: `airborne = \"galileo_e1e5a\"` (_galtable run)", v, gal))
     else:
         pairs.append((names[v], v, our_pct))
+worst = {}
 for label, v, base in pairs:
     for i, axis in ((0, "VPL"), (1, "HPL")):
-        d = sorted(rel(base[u][i], ref_pct[v][u][i]) for u in users)
+        d = sorted(rel(base[u][i], ref_pct[v][u][i]) for u in users if u in ref_pct[v])
         within = sum(1 for x in d if abs(x) <= 0.01)
         print(f"| {axis}, {label} | {len(d)} | {100 * sum(d) / len(d):+.3f} % | {100 * d[0]:+.3f} % "
               f"| {100 * d[-1]:+.3f} % | {within} |")
+        worst[(v, axis)] = max(abs(d[0]), abs(d[-1]))
+
+def col(v, u, i):
+    """A variant's column in the worst-user tables: (reference - ours) / ours,
+    against our PL roots for v3."""
+    if v not in ref_pct:
+        return ""
+    if u not in ref_pct[v]:
+        return " not run |"
+    b = our_root_pct if v == "v3" else our_pct
+    return f" {100 * rel(b[u][i], ref_pct[v][u][i]):+.3f} % |"
+
+
+print()
+print("largest |difference| per variant: "
+      + "; ".join(f"{v} {axis} {x:.2e}" for (v, axis), x in worst.items()))
 
 if "published" in ref:
     print()
@@ -184,10 +205,10 @@ if "published" in ref:
     print()
     head = "| user (lat, lon) | ours (m) | reference (m) | difference |"
     sep = "| --- | ---: | ---: | ---: |"
-    if "all" in ref:
+    if "all" in ref_pct:
         head += " every single event |"
         sep += " ---: |"
-    if "v3" in ref:
+    if "v3" in ref_pct:
         head += " ADD v3.0 P_unmon, normal cdf, roots (against our root) |"
         sep += " ---: |"
     print(head)
@@ -196,20 +217,17 @@ if "published" in ref:
     for u in order[:10]:
         o, r = our_pct[u][0], ref_pct["published"][u][0]
         line = f"| {u[0]:.0f}, {u[1]:.0f} | {o:.3f} | {r:.3f} | {100 * rel(o, r):+.3f} % |"
-        if "all" in ref:
-            line += f" {100 * rel(o, ref_pct['all'][u][0]):+.3f} % |"
-        if "v3" in ref:
-            line += f" {100 * rel(our_root_pct[u][0], ref_pct['v3'][u][0]):+.3f} % |"
+        line += col("all", u, 0) + col("v3", u, 0)
         print(line)
     print()
     print("Users whose HPL 99.5th percentile differs by more than 1 % (reference as published against ours):")
     print()
     head = "| user (lat, lon) | ours (m) | reference (m) | difference |"
     sep = "| --- | ---: | ---: | ---: |"
-    if "all" in ref:
+    if "all" in ref_pct:
         head += " every single event |"
         sep += " ---: |"
-    if "v3" in ref:
+    if "v3" in ref_pct:
         head += " ADD v3.0 P_unmon, normal cdf, roots (against our root) |"
         sep += " ---: |"
     print(head)
@@ -219,10 +237,7 @@ if "published" in ref:
     for u in hb:
         o, r = our_pct[u][1], ref_pct["published"][u][1]
         line = f"| {u[0]:.0f}, {u[1]:.0f} | {o:.3f} | {r:.3f} | {100 * rel(o, r):+.3f} % |"
-        if "all" in ref:
-            line += f" {100 * rel(o, ref_pct['all'][u][1]):+.3f} % |"
-        if "v3" in ref:
-            line += f" {100 * rel(our_root_pct[u][1], ref_pct['v3'][u][1]):+.3f} % |"
+        line += col("all", u, 1) + col("v3", u, 1)
         print(line)
     print()
     print("Users whose availability differs under the reference's rule (VPL < 35, HPL < 40 m), "
@@ -240,9 +255,9 @@ if "published" in ref:
     print()
     print(f"users beyond 1 % (VPL, as published): {len(beyond)}")
     for v in ("all", "v3"):
-        if v in ref and beyond:
+        if v in ref_pct and beyond:
             b = our_root_pct if v == "v3" else our_pct
-            still = [u for u in beyond if abs(rel(b[u][0], ref_pct[v][u][0])) > 0.01]
+            still = [u for u in beyond if u not in ref_pct[v] or abs(rel(b[u][0], ref_pct[v][u][0])) > 0.01]
             print(f"- of those, still beyond 1 % with {names[v]}: {len(still)}")
     mo = {}
     for c in ours:
