@@ -145,6 +145,20 @@ for k, (who, rule, _) in enumerate(rules[2:]):
           f"users with another availability: {sum(1 for u in users if a[u] != base[u])}, "
           f"across 99.5 %: {sum(1 for u in users if (a[u] >= 0.995) != (base[u] >= 0.995))}")
 
+# What our EMT and sigma_v,acc limits take from the reference's rule.
+if "published" in ref:
+    a_no = avails[(names["published"], "its rule: VPL < 35 and HPL < 40 m")]
+    a_with = avails[(names["published"], "its rule with our EMT <= 15 m and sigma_v,acc <= 1.87 m")]
+    lost = [u for u in users if a_no[u] >= 0.995 > a_with[u]]
+    lats = {}
+    for u in lost:
+        lats[abs(u[0])] = lats.get(abs(u[0]), 0) + 1
+    emt = sum(1 for u in users for c in users[u] if ours[c]["emt_m"] > EMT_MAX)
+    sig = sum(1 for u in users for c in users[u] if ours[c]["sigma_v_acc_m"] > SIGMA_ACC_MAX)
+    print(f"- users at 99.5 % under the reference's rule and below it once our EMT and sigma_v,acc limits are "
+          f"added: {len(lost)}, by |latitude|: " + ", ".join(f"{k:.0f} deg: {n}" for k, n in sorted(lats.items()))
+          + f"; user-epochs with our EMT above 15 m: {emt}, with sigma_v,acc above 1.87 m: {sig}")
+
 # Per-user 99.5th-percentile PLs.
 our_pct = {u: (pct([ours[c]["vpl_m"] for c in cs]), pct([ours[c]["hpl_m"] for c in cs])) for u, cs in users.items()}
 our_root_pct = {u: (pct([ours[c]["vpl_root_m"] for c in cs]), pct([ours[c]["hpl_root_m"] for c in cs]))
