@@ -15,6 +15,13 @@
 //! availability judges are the ADD's bisection output, the `_root` ones
 //! the exact roots of the PL equations). Numbers are written with 17 significant
 //! digits, so the other side reads the same doubles.
+//!
+//! `dump_sky RUN.toml OUT_DIR --by-latitude` writes the satellite rows
+//! into one file per grid latitude instead, `OUT_DIR/sky_lat<LAT>.csv`
+//! (`LAT` the user's latitude in whole degrees, e.g. `sky_lat-90.csv`),
+//! with the same header and the same case numbers as `ours.csv`: a world
+//! grid's sky is about a gigabyte in one file, so the reference reads
+//! and runs it band by band (`scripts/availability_maast_world.sh`).
 
 use std::fmt::Write as _;
 
@@ -22,15 +29,20 @@ use raim_availability::{engine, run};
 
 fn main() -> anyhow::Result<()> {
     let a: Vec<String> = std::env::args().collect();
-    let (path, out) = match a.as_slice() {
-        [_, p, o] => (p, std::path::PathBuf::from(o)),
-        _ => anyhow::bail!("usage: dump_sky RUN.toml OUT_DIR"),
+    let (path, out, by_latitude) = match a.as_slice() {
+        [_, p, o] => (p, std::path::PathBuf::from(o), false),
+        [_, p, o, f] if f == "--by-latitude" => (p, std::path::PathBuf::from(o), true),
+        _ => anyhow::bail!("usage: dump_sky RUN.toml OUT_DIR [--by-latitude]"),
     };
     let mut study = run::load(std::path::Path::new(path))?;
     study.exclusion = run::ExclusionSpec::None;
     std::fs::create_dir_all(&out)?;
-    let mut sky_csv =
-        String::from("case,sys,prn,g_e,g_n,g_u,el_deg,c_int_m2,c_acc_m2,b_nom_m,p_sat,p_const\n");
+    const SKY_HEAD: &str =
+        "case,sys,prn,g_e,g_n,g_u,el_deg,c_int_m2,c_acc_m2,b_nom_m,p_sat,p_const\n";
+    // One sky file, or one per latitude (name -> open writer).
+    let mut skies: std::collections::BTreeMap<String, std::io::BufWriter<std::fs::File>> =
+        std::collections::BTreeMap::new();
+    let mut sky_csv = String::new();
     let mut ours = String::from(
         "case,lat_deg,lon_deg,epoch,n_sats,modes,vpl_m,hpl_m,emt_m,sigma_v_acc_m,available,vpl_root_m,hpl_root_m\n",
     );
@@ -41,6 +53,16 @@ fn main() -> anyhow::Result<()> {
     let mut case = 0usize;
     for u in &study.users {
         let (x, rot) = engine::user_frame(&study, u);
+        let sky_name = if by_latitude {
+            format!("sky_lat{:.0}.csv", u.lat_deg)
+        } else {
+            String::from("sky.csv")
+        };
+        if !skies.contains_key(&sky_name) {
+            let mut w = std::io::BufWriter::new(std::fs::File::create(out.join(&sky_name))?);
+            std::io::Write::write_all(&mut w, SKY_HEAD.as_bytes())?;
+            skies.insert(sky_name.clone(), w);
+        }
         for (k, row) in sky.chunks_exact(n).enumerate() {
             case += 1;
             engine::visible(&study, row, x, &rot, &mut obs);
@@ -60,6 +82,10 @@ fn main() -> anyhow::Result<()> {
                     s.b_nom_m, s.p_sat, p_const
                 )?;
             }
+            if let Some(w) = skies.get_mut(&sky_name) {
+                std::io::Write::write_all(w, sky_csv.as_bytes())?;
+            }
+            sky_csv.clear();
             let root = if o.refused {
                 [f64::INFINITY; 2]
             } else {
@@ -83,7 +109,9 @@ fn main() -> anyhow::Result<()> {
             )?;
         }
     }
-    std::fs::write(out.join("sky.csv"), sky_csv)?;
+    for w in skies.values_mut() {
+        std::io::Write::flush(w)?;
+    }
     std::fs::write(out.join("ours.csv"), ours)?;
     eprintln!("{case} user-epochs written to {}", out.display());
     Ok(())

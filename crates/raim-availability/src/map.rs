@@ -443,6 +443,7 @@ mod tests {
             users,
             ephemeris_gaps: None,
             horizontal_only: false,
+            budgets: None,
         };
         let bins = availability_bins();
         let dir = std::env::temp_dir().join(format!("raim-avail-map-{}", std::process::id()));
@@ -533,6 +534,7 @@ mod tests {
             users,
             ephemeris_gaps: None,
             horizontal_only: false,
+            budgets: None,
         };
         let dir = std::env::temp_dir().join(format!("raim-avail-coast-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();

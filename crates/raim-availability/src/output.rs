@@ -45,6 +45,11 @@ pub struct Meta {
     /// The service level judges the HAL alone (H-ARAIM).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub horizontal_only: bool,
+    /// A horizontal-only level's own budgets (PHMI, P_FA per epoch; the
+    /// run file's `phmi`, `p_fa`): raim-core's PHMI_VERT + PHMI_HOR and
+    /// P_FA_VERT + P_FA_HOR (`run::horizontal_budgets`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub budgets: Option<[f64; 2]>,
 }
 
 /// FNV-1a, 64 bits.
@@ -81,6 +86,7 @@ impl Meta {
                 .map(|u| (u.name.clone(), u.lat_deg, u.lon_deg, u.weight))
                 .collect(),
             horizontal_only: study.criteria == raim_core::araim::Criteria::HorizontalOnly,
+            budgets: study.budgets,
             ephemeris_gaps: study.sats.iter().any(|s| s.is_broadcast()).then(|| {
                 study
                     .sats
@@ -497,6 +503,10 @@ pub fn summary_json(meta: &Meta, users: &[UserSummary], levels: &[f64]) -> Strin
     let mut v = v;
     if let (true, Some(o)) = (meta.horizontal_only, v.as_object_mut()) {
         o.insert("criteria".into(), "HAL only".into());
+    }
+    if let (Some([phmi, p_fa]), Some(o)) = (meta.budgets, v.as_object_mut()) {
+        o.insert("phmi".into(), num(phmi));
+        o.insert("p_fa".into(), num(p_fa));
     }
     if let (Some(gaps), Some(o)) = (&meta.ephemeris_gaps, v.as_object_mut()) {
         o.insert(

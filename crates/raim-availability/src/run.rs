@@ -187,6 +187,18 @@ pub struct ServiceSpec {
     pub emt_max_m: Option<f64>,
     /// Custom: the sigma_v,acc limit (m).
     pub sigma_acc_max_m: Option<f64>,
+    /// Horizontal-only levels (required there, refused elsewhere): the
+    /// level's whole integrity budget, a probability per epoch (per
+    /// independent sample, as raim-core applies SPEC §9.1's PHMI at every
+    /// epoch). All of it goes to the horizontal: raim-core's PHMI_VERT at
+    /// its floor (`config_bounds::araim::PHMI_VERT.min`, the VPL is not
+    /// judged) and PHMI_HOR the rest, so that PHMI_VERT + PHMI_HOR equals
+    /// it and the HMI risk, P_unmon included, stays within it.
+    pub phmi: Option<f64>,
+    /// Horizontal-only levels (required there): the level's whole
+    /// false-alert budget, a probability per epoch, split as `phmi`
+    /// (P_FA_VERT at its floor, P_FA_HOR the rest).
+    pub p_fa: Option<f64>,
 }
 
 fn default_target() -> f64 {
@@ -322,6 +334,10 @@ pub struct Study {
     /// The criteria the service level judges: LPV's four limits, or the
     /// HAL alone (H-ARAIM).
     pub criteria: Criteria,
+    /// A horizontal-only level's own budgets as the run file gives them
+    /// (`phmi`, `p_fa`, per epoch), already in `cfg`
+    /// ([`horizontal_budgets`]); `None` for the LPV levels.
+    pub budgets: Option<[f64; 2]>,
     /// The availability target.
     pub target: f64,
     /// Which exclusions must leave the service available.
@@ -461,6 +477,34 @@ pub fn parse<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<
     })
 }
 
+/// A horizontal-only level's own budgets into raim-core's allocation:
+/// the vertical integrity and false-alert budgets at the core's floors
+/// (`config_bounds::araim::PHMI_VERT.min`, `PFA_VERT.min`: the VPL is
+/// computed but not judged), the horizontal ones the rest, so that
+/// PHMI_VERT + PHMI_HOR = `phmi` and P_FA_VERT + P_FA_HOR = `p_fa`. The
+/// core's PL equations (SPEC §9.1 steps 4-6) then bound the HMI risk by
+/// PHMI_HOR (1 - P_unmon / `phmi`) + P_unmon <= `phmi`, and its K_fa
+/// spends `p_fa` (the vertical share at the floor included). The core's
+/// bounds and cross-field rules (`AraimConfig::validate`, run by the
+/// caller) then apply: P_THRES below `phmi`, each share within its range.
+///
+/// # Errors
+/// A budget that is not a probability above twice the core's floor (one
+/// floor for each axis).
+pub fn horizontal_budgets(cfg: &mut AraimConfig, phmi: f64, p_fa: f64) -> Result<()> {
+    use raim_core::config_bounds::araim::{PFA_VERT, PHMI_VERT};
+    for (name, v, floor) in [("phmi", phmi, PHMI_VERT.min), ("p_fa", p_fa, PFA_VERT.min)] {
+        if !(v.is_finite() && v > 2.0 * floor && v < 1.0) {
+            bail!("{name} {v} outside ({}, 1): a probability per epoch above twice raim-core's floor {floor} (one share per axis)", 2.0 * floor);
+        }
+    }
+    cfg.phmi_vert = PHMI_VERT.min;
+    cfg.phmi_hor = phmi - PHMI_VERT.min;
+    cfg.pfa_vert = PFA_VERT.min;
+    cfg.pfa_hor = p_fa - PFA_VERT.min;
+    Ok(())
+}
+
 /// Checks a run (as written, or a scenario of it merged by
 /// `crate::sweep`) and forms its study; errors name `loc`'s file and
 /// lines; almanac paths are relative to `base`.
@@ -520,6 +564,14 @@ pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
                 (None, None) => bail!("{}: level = \"custom-horizontal\" needs `hal_m`", at("level")),
                 (Some(_), Some(_)) => bail!("{}: level `{level}` sets its HAL; hal_m is given only with \"custom-horizontal\"", at("level")),
             };
+            let (Some(phmi), Some(p_fa)) = (run.service.phmi, run.service.p_fa) else {
+                bail!(
+                    "{}: level `{level}` needs its own budgets `phmi` and `p_fa` (probabilities per epoch; docs/AVAILABILITY.md \"Service levels\")",
+                    at("level")
+                );
+            };
+            horizontal_budgets(&mut cfg, phmi, p_fa)
+                .map_err(|e| anyhow!("{}: {e}", at("phmi")))?;
         }
         "LPV-200" => {}
         "LPV-250" => cfg.val_m = 50.0,
@@ -536,6 +588,12 @@ pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
             "{}: unknown service level `{other}` (LPV-200, LPV-250, custom, H-ARAIM-en-route, H-ARAIM-terminal, H-ARAIM-NPA or custom-horizontal)",
             at("level")
         ),
+    }
+    if horizontal.is_none() && (run.service.phmi.is_some() || run.service.p_fa.is_some()) {
+        bail!(
+            "{}: `phmi` and `p_fa` are given only with a horizontal-only level (the LPV levels use SPEC §9.1's budgets)",
+            at("level")
+        );
     }
     if run.service.level != "custom"
         && horizontal.is_none()
@@ -882,6 +940,11 @@ pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
         ism,
         cfg,
         criteria,
+        budgets: if criteria == Criteria::HorizontalOnly {
+            run.service.phmi.zip(run.service.p_fa).map(|(a, b)| [a, b])
+        } else {
+            None
+        },
         target,
         exclusion: run.exclusion,
         continuity,
@@ -1209,5 +1272,112 @@ p_const = 1e-8
         let e = run(&format!("{add_from}\nadd = [30, 30]")).unwrap_err();
         assert!(e.to_string().contains("add lists PRN 30 twice"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A horizontal-only level with its own budgets (`phmi`, `p_fa`):
+    /// at every user-epoch of a small GPS study (4 users x 3 epochs) the
+    /// engine's HPL equals the HPL raim-core gives on the same sky for an
+    /// allocation written out here (PHMI_VERT and P_FA_VERT at the core's
+    /// floors of 1e-9, the horizontal budgets the rest), bit for bit, and
+    /// the level is available exactly when that HPL is within the HAL (40
+    /// m, met at some user-epochs and not at others: sigma_URA 7 m); the
+    /// budget is not ignored: the LPV-200 allocation (PHMI_HOR 2e-9,
+    /// P_FA_HOR 9e-8) gives a larger HPL at every user-epoch, above the
+    /// HAL at some that the level's own budget makes available. A missing
+    /// budget, a budget with an LPV level, a budget at the floor and one
+    /// the core refuses (PHMI below P_THRES) are refused by line.
+    ///
+    /// Verifies: TOOL-AVAIL-HARAIM-BUDGET
+    #[test]
+    fn horizontal_level_budgets_flow_into_the_core() {
+        std::thread::Builder::new()
+            .stack_size(crate::engine::STACK_BYTES)
+            .spawn(horizontal_budgets_body)
+            .expect("spawn")
+            .join()
+            .expect("the test body panicked");
+    }
+
+    fn horizontal_budgets_body() {
+        use raim_core::araim::FdeLimits;
+        let grid = "[grid]\nkind = \"region\"\nstep_deg = 30.0\nlat_min_deg = 0.0\nlat_max_deg = 30.0\nlon_min_deg = 0.0\nlon_max_deg = 30.0";
+        let (phmi, p_fa) = (1e-7, 4e-6);
+        // sigma_URA 7 m: HPLs about the HAL's floor of 40 m.
+        let sky = |service: &str| {
+            text(grid, service, "").replace("sigma_ura_m = 1.0", "sigma_ura_m = 7.0")
+        };
+        let own = load_text(&sky(&format!(
+            "level = \"custom-horizontal\"\nhal_m = 40.0\nphmi = {phmi:e}\np_fa = {p_fa:e}"
+        )))
+        .unwrap();
+        let lpv = load_text(&sky("level = \"LPV-200\"")).unwrap();
+        assert_eq!(own.budgets, Some([phmi, p_fa]));
+        let by_hand = AraimConfig {
+            phmi_vert: 1e-9,
+            phmi_hor: phmi - 1e-9,
+            pfa_vert: 1e-9,
+            pfa_hor: p_fa - 1e-9,
+            hal_m: 40.0,
+            ..AraimConfig::default()
+        };
+        let mut m = crate::engine::new_engine();
+        let mut core = crate::engine::new_engine();
+        let (mut seen, mut avail, mut only_own) = (0, 0, 0);
+        for u in &own.users {
+            let (x, r) = crate::engine::user_frame(&own, u);
+            for k in 0..own.epochs_gps_s.len() {
+                let sky = crate::engine::sky_table(&own, k..k + 1);
+                let mut obs = Vec::new();
+                crate::engine::visible(&own, &sky, x, &r, &mut obs);
+                let h = crate::engine::evaluate(&own, &mut m, &obs).unwrap();
+                let l = crate::engine::evaluate(&lpv, &mut m, &obs).unwrap();
+                core.linear(
+                    &by_hand,
+                    &own.ism,
+                    &own.ism_entries[..],
+                    &obs,
+                    FdeLimits::UNLIMITED,
+                )
+                .unwrap();
+                let hpl = core.in_force().pl_add.hpl_m;
+                assert_eq!(
+                    h.hpl_m.to_bits(),
+                    hpl.to_bits(),
+                    "HPL {} against the core's {hpl}",
+                    h.hpl_m
+                );
+                assert_eq!(h.available, hpl <= 40.0, "HPL {hpl}");
+                assert!(
+                    l.hpl_m > h.hpl_m,
+                    "LPV-200 allocation HPL {} <= {}",
+                    l.hpl_m,
+                    h.hpl_m
+                );
+                seen += 1;
+                only_own += usize::from(h.available && l.hpl_m > 40.0);
+                avail += usize::from(h.available);
+            }
+        }
+        assert_eq!(seen, 12);
+        assert!(
+            avail > 0 && avail < seen,
+            "{avail} of {seen} available: the HAL decides nothing"
+        );
+        assert!(only_own > 0, "the budget changes no decision");
+        let err = |service: &str| load_text(&text(grid, service, "")).unwrap_err().to_string();
+        let e = err("level = \"H-ARAIM-NPA\"");
+        assert!(
+            e.contains("t.toml:") && e.contains("needs its own budgets"),
+            "{e}"
+        );
+        let e = err("level = \"LPV-200\"\nphmi = 1e-7\np_fa = 4e-6");
+        assert!(e.contains("only with a horizontal-only level"), "{e}");
+        let e = err("level = \"H-ARAIM-NPA\"\nphmi = 2e-9\np_fa = 4e-6");
+        assert!(e.contains("phmi 0.000000002 outside"), "{e}");
+        let e = err("level = \"H-ARAIM-NPA\"\nphmi = 5e-8\np_fa = 4e-6");
+        assert!(
+            e.contains("refused by raim-core") && e.contains("p_thres"),
+            "{e}"
+        );
     }
 }

@@ -1004,13 +1004,14 @@ fn rinex_navigation_positions_equal_the_replays() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// A horizontal-only service level (`custom-horizontal`, HAL 40 m):
-/// at every user-epoch of the small study it is available exactly when
-/// the epoch's HPL (the same monitor, the LPV study's levels) is within
-/// 40 m, and it is available at user-epochs that a level with the
-/// tightest vertical limits (VAL 10 m, EMT 10 m, same HAL) refuses; the
-/// preset `H-ARAIM-NPA` has the HAL 555.6 m; vertical limits with a
-/// horizontal level are refused.
+/// A horizontal-only service level (`custom-horizontal`, HAL 40 m, its
+/// own budgets PHMI 1e-7, P_FA 3.99e-6 per epoch): at every user-epoch of
+/// the small study it is available exactly when its HPL is within 40 m,
+/// and it is available at user-epochs that a level with the tightest
+/// vertical limits (VAL 10 m, EMT 10 m, same HAL) refuses; the preset
+/// `H-ARAIM-NPA` has the HAL 555.6 m; vertical limits with a horizontal
+/// level are refused. (That the budgets reach the core: raim-availability's
+/// `horizontal_level_budgets_flow_into_the_core`.)
 ///
 /// Verifies: TOOL-AVAIL-HARAIM
 #[test]
@@ -1030,7 +1031,11 @@ fn horizontal_only_body() {
         "level = \"custom\"\nval_m = 10.0\nhal_m = 40.0\nemt_max_m = 10.0\nsigma_acc_max_m = 1.87",
     )
     .expect("vertical");
-    let hor = load("h", "level = \"custom-horizontal\"\nhal_m = 40.0").expect("horizontal");
+    let hor = load(
+        "h",
+        "level = \"custom-horizontal\"\nhal_m = 40.0\nphmi = 1e-7\np_fa = 3.99e-6",
+    )
+    .expect("horizontal");
     assert_eq!(hor.criteria, raim_core::araim::Criteria::HorizontalOnly);
     let mut m = engine::new_engine();
     let mut only_h = 0;
@@ -1042,16 +1047,19 @@ fn horizontal_only_body() {
             engine::visible(&hor, &sky, x, &r, &mut obs);
             let v = engine::evaluate(&vert, &mut m, &obs).expect("v");
             let h = engine::evaluate(&hor, &mut m, &obs).expect("h");
-            assert_eq!(h.hpl_m, v.hpl_m);
-            assert_eq!(h.available, v.hpl_m <= 40.0, "HPL {}", v.hpl_m);
+            assert_eq!(h.available, h.hpl_m <= 40.0, "HPL {}", h.hpl_m);
             assert!(!v.available || h.available);
             only_h += usize::from(h.available && !v.available);
         }
     }
     assert!(only_h > 0, "no user-epoch available only horizontally");
-    let npa = load("n", "level = \"H-ARAIM-NPA\"").expect("npa");
+    let npa = load("n", "level = \"H-ARAIM-NPA\"\nphmi = 1e-7\np_fa = 3.99e-6").expect("npa");
     assert_eq!(npa.cfg.hal_m, 555.6);
-    let e = load("e", "level = \"H-ARAIM-terminal\"\nval_m = 35.0").expect_err("val");
+    let e = load(
+        "e",
+        "level = \"H-ARAIM-terminal\"\nphmi = 1e-7\np_fa = 3.99e-6\nval_m = 35.0",
+    )
+    .expect_err("val");
     assert!(e.to_string().contains("judges the HAL alone"), "{e}");
     let e = load("e", "level = \"custom-horizontal\"").expect_err("hal");
     assert!(e.to_string().contains("needs `hal_m`"), "{e}");
