@@ -331,3 +331,51 @@ fn covering_of_another_size_is_refused() {
         })
     );
 }
+
+/// The projector of a single clock column over `n` satellites,
+/// S = I - 1 1^T / n (SPEC §2 with H = 1), and its residuals for a bias
+/// of `bias` on satellite `sat` and no noise.
+fn clock_only(n: usize, sat: usize, bias: f64) -> ResidualModel<f64, N> {
+    let s = |i: usize, j: usize| f64::from(u8::from(i == j)) - 1.0 / n as f64;
+    let r: Vec<f64> = (0..n).map(|i| s(i, sat) * bias).collect();
+    ResidualModel::from_projector(n, s, &r).unwrap()
+}
+
+/// Candidate sets the fit cannot take give no fit: the empty set, four
+/// satellites (above MAX_FAULTS) and a satellite beyond the model's n.
+/// The faulty satellite alone explains a noise-free bias exactly: RSS_T
+/// is 0 (never negative) and its bias estimate is the bias in sigma units
+/// (b = S_ii^-1 r_i = bias for this projector).
+#[test]
+fn subset_fits_refuse_what_they_cannot_take() {
+    let model = clock_only(8, 2, 50.0);
+    assert_eq!(fit_subset(&model, 0), None);
+    assert_eq!(fit_subset(&model, 0b1111), None);
+    assert_eq!(fit_subset(&model, 1 << 9), None);
+    assert_eq!(fit_subset(&model, 0b1 | 1 << 8), None);
+    let fit = fit_subset(&model, 1 << 2).unwrap();
+    assert_eq!(fit.count, 1);
+    assert!(fit.rss >= 0.0 && fit.rss < 1e-9, "{}", fit.rss);
+    assert!((fit.bias[0] - 50.0).abs() < 1e-9, "{:?}", fit.bias);
+}
+
+/// A group naming a satellite beyond the model's n keeps it out of the
+/// identifiable set and reports it swapped; a residual vector shorter
+/// than n is a capacity error with the counts.
+#[test]
+fn groups_and_models_out_of_range() {
+    let model = clock_only(8, 2, 50.0);
+    let mut ws = Workspace::default();
+    let mut g = GroupFit::default();
+    reconstruct(&model, 0b11 | 1 << 9, 1e-4, &mut ws, &mut g);
+    assert_eq!(g.swapped & 1 << 9, 1 << 9);
+    assert_eq!(g.identifiable & 1 << 9, 0);
+    assert_eq!(g.identifiable, 0b11);
+    assert_eq!(
+        ResidualModel::<f64, 8>::from_projector(4, |_, _| 0.0, &[0.0; 3]).err(),
+        Some(MultifaultError::CapacityExceeded {
+            have: 4,
+            capacity: 8
+        })
+    );
+}
