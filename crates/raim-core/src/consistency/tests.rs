@@ -574,3 +574,43 @@ fn accuracy_fit_refusals_carry_their_values() {
         );
     }
 }
+
+/// ARAIM's FDE limits and capacity: a 50 m fault (the model's sigma is
+/// 0.36 m) fails the all-in-view test, and with `max_modes` 0 no
+/// exclusion is attempted: an alarm reporting the monitored modes, with
+/// nothing excluded. Ten satellites into an 8-satellite monitor are
+/// refused with both counts.
+#[test]
+fn araim_fde_over_the_mode_limit_and_over_capacity() {
+    use crate::araim::monitor::{Exclusion, MonitorError};
+    use crate::araim::AraimError;
+    let entries = floor_ism();
+    let ism = Ism::with(&[System::Gps, System::Galileo], 1e-4);
+    let cfg = AraimConfig::default();
+    let mut obs = ge_epoch(&mut Rng::new(4), 0.3, 0.3);
+    obs[3].residual_m += 50.0;
+    let limits = FdeLimits {
+        max_modes: 0,
+        work_candidate_modes: usize::MAX,
+    };
+    let mut monitor = std::boxed::Box::new(Monitor::<f64, 16, 600>::new());
+    let v = monitor
+        .linear(&cfg, &ism, &entries[..], &obs, limits)
+        .unwrap();
+    assert_eq!(v.decision, Decision::Alarm);
+    match v.exclusion {
+        Exclusion::NotAttempted { monitored } => assert!(monitored >= 1, "{monitored}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(v.excluded.is_empty());
+    let mut small = std::boxed::Box::new(Monitor::<f64, 8, 600>::new());
+    assert_eq!(
+        small
+            .linear(&cfg, &ism, &entries[..], &obs, FdeLimits::UNLIMITED)
+            .err(),
+        Some(MonitorError::Araim(AraimError::CapacityExceeded {
+            have: 10,
+            capacity: 8
+        }))
+    );
+}
