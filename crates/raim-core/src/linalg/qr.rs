@@ -651,9 +651,9 @@ mod tests {
         let mut y = [0.0; MAX_STATES];
         y[..m].copy_from_slice(&[0.5, -1.5, 2.0, 0.25]);
         let x = qr.solve_tt(&y);
-        for i in 0..m {
+        for (i, yi) in y.iter().enumerate().take(m) {
             let back: f64 = (0..m).map(|k| qr.t(k, i) * x[k]).sum();
-            assert!((back - y[i]).abs() < REL_TOL * 10.0, "{i}: {back} {}", y[i]);
+            assert!((back - yi).abs() < REL_TOL * 10.0, "{i}: {back} {yi}");
         }
     }
 

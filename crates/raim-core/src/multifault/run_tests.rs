@@ -188,8 +188,11 @@ fn fit(set: SatSet, rss: f64) -> SubsetFit<f64> {
     }
 }
 
+/// A level's (best, runner-up).
+type Pair = (Option<SubsetFit<f64>>, Option<SubsetFit<f64>>);
+
 /// A search whose levels hold the given (best, runner-up) pairs.
-fn searched(levels: [(Option<SubsetFit<f64>>, Option<SubsetFit<f64>>); 3]) -> Search<f64> {
+fn searched(levels: [Pair; 3]) -> Search<f64> {
     let mut s = Search {
         levels: [Level::default(); MAX_FAULTS],
         t_max: 3,
