@@ -808,3 +808,67 @@ fn isolation_without_exclusion_keeps_every_satellite() {
     }
     assert!(alarms > 0 && m.excluded().is_empty());
 }
+
+/// The first-epoch fix: exact pseudoranges of 8 satellites (and a ninth,
+/// consistent one placed at the start point, the Earth's centre, which
+/// gives no line of sight in the first iteration and is skipped there)
+/// give the receiver and its clock within 1 mm; a constellation index beyond MAX_SYSTEMS is a capacity error
+/// naming it; two satellites leave the normal matrix singular and a NaN
+/// pseudorange a NaN step, both `NoInitialFix` (with the iteration
+/// reached; the NaN step reported).
+#[test]
+fn first_fix_solves_and_refuses() {
+    use super::init::{fix, FixInput};
+    use crate::measurement::MAX_SYSTEMS;
+    const TOL_M: f64 = 1e-3;
+    let sats = satellites(8);
+    let mut input: std::vec::Vec<FixInput> = sats
+        .iter()
+        .take(8)
+        .map(|s| {
+            let d = [
+                s[0] - RECEIVER_M[0],
+                s[1] - RECEIVER_M[1],
+                s[2] - RECEIVER_M[2],
+            ];
+            FixInput {
+                sat_m: *s,
+                pseudorange_m: (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() + CLOCK_M,
+                sigma_m: SIGMA_M,
+                sys: 0,
+            }
+        })
+        .collect();
+    let centre_m = (RECEIVER_M[0].powi(2) + RECEIVER_M[1].powi(2) + RECEIVER_M[2].powi(2)).sqrt();
+    input.push(FixInput {
+        sat_m: [0.0; 3],
+        pseudorange_m: centre_m + CLOCK_M,
+        sigma_m: SIGMA_M,
+        sys: 0,
+    });
+    let r = fix(&input, [0.0; 3]).unwrap();
+    assert!(error_m(&r.position_m) < TOL_M, "{:?}", r.position_m);
+    assert!((r.clock_m[0] - CLOCK_M).abs() < TOL_M, "{:?}", r.clock_m);
+    let mut bad_sys = input.clone();
+    bad_sys[2].sys = MAX_SYSTEMS;
+    assert_eq!(
+        fix(&bad_sys, [0.0; 3]),
+        Err(PfError::Capacity {
+            field: "sys",
+            have: MAX_SYSTEMS,
+            max: MAX_SYSTEMS - 1
+        })
+    );
+    // Rank 2 of 4 unknowns: the factorisation fails within the first
+    // iterations (rounding may let the first one through).
+    match fix(&input[..2], [0.0; 3]) {
+        Err(PfError::NoInitialFix { iterations, .. }) => assert!(iterations <= 2, "{iterations}"),
+        other => panic!("{other:?}"),
+    }
+    let mut nan = input;
+    nan[1].pseudorange_m = f64::NAN;
+    match fix(&nan, [0.0; 3]) {
+        Err(PfError::NoInitialFix { step_m, .. }) => assert!(step_m.is_nan()),
+        other => panic!("{other:?}"),
+    }
+}
