@@ -541,6 +541,41 @@ mod tests {
 
     const G1: SatId = SatId::new(System::Gps, 1);
 
+    /// RINEX 3's system letters (G, E, C, R, J) name the five systems in
+    /// `System::ALL` order; any other character (lower case too) none.
+    /// Per-system tables give each system its own entry, mutable too.
+    #[test]
+    fn system_letters_and_table_entries() {
+        for (sys, c) in System::ALL.into_iter().zip(['G', 'E', 'C', 'R', 'J']) {
+            assert_eq!(System::from_letter(c), Some(sys));
+        }
+        for c in ['g', 'S', 'I', ' '] {
+            assert_eq!(System::from_letter(c), None, "{c}");
+        }
+        let mut table = [10, 20, 30, 40, 50];
+        for (sys, want) in System::ALL.into_iter().zip([10, 20, 30, 40, 50]) {
+            assert_eq!(*sys.entry(&table), want);
+            *sys.entry_mut(&mut table) += 1;
+        }
+        assert_eq!(table, [11, 21, 31, 41, 51]);
+    }
+
+    /// A linear observation's elevation is the one it was built from, and
+    /// an epoch without satellites is empty.
+    #[test]
+    fn linear_elevation_and_empty_epochs() {
+        for el_deg in [-5.0f64, 0.0, 12.5, 45.0, 89.0] {
+            let o = LinearObservation::from_az_el(G1, 1.1, el_deg.to_radians(), 0.0);
+            assert!(
+                (o.elevation_rad() - el_deg.to_radians()).abs() < 1e-12,
+                "{el_deg}"
+            );
+        }
+        assert!(Epoch::linear(0.0, &[]).is_empty());
+        let one = [LinearObservation::from_az_el(G1, 0.0, 0.5, 0.0)];
+        assert!(!Epoch::linear(0.0, &one).is_empty());
+    }
+
     /// The duplicate check (a bitmap pass, then the pairwise search only on
     /// a repeat) names the lexicographically first pair (i, j), like the
     /// pairwise search alone: checked against a brute force on 3,000

@@ -372,3 +372,77 @@ fn linear_passes_equal_the_row_builder() {
         );
     }
 }
+
+/// The first-order geodetic update falls back to the iterative conversion
+/// where it does not hold: within 1e-6 of cos(latitude) = 0 (the pole,
+/// where dE / cos(lat) blows up) and where the longitude leaves (-pi, pi]
+/// (a step east across the antimeridian). Both agree with the plain
+/// conversion as the interior does (1e-11 rad, 1e-4 m); across the
+/// antimeridian the longitude comes back wrapped to near -pi.
+#[test]
+fn geodetic_update_at_the_pole_and_the_antimeridian() {
+    use crate::frames::geodetic_to_ecef;
+    const ANGLE_TOL_RAD: f64 = 1e-11;
+    const HEIGHT_TOL_M: f64 = 1e-4;
+    let pi = core::f64::consts::PI;
+    let cases = [
+        // cos(lat) = 1.7e-9 < 1e-6: near the north pole.
+        (pi / 2.0 - 1.7e-9, 0.3, [0.2, -0.1, 0.3]),
+        // 1e-8 rad (6 cm) west of the antimeridian, then 0.9 m east.
+        (0.4, pi - 1e-8, [0.0; 3]),
+    ];
+    for (i, (lat_rad, lon_rad, off)) in cases.into_iter().enumerate() {
+        let p = geodetic_to_ecef(Geodetic {
+            lat_rad,
+            lon_rad,
+            height_m: 120.0,
+        });
+        let l = Linearisation::at(p, None);
+        let east = unrotate(&l.rotation, [0.9, 0.0, 0.0]);
+        let step = if i == 1 { east } else { off };
+        let x = [p[0] + step[0], p[1] + step[1], p[2] + step[2]];
+        let near = l.geodetic_of(x);
+        let exact = ecef_to_geodetic(x);
+        assert!((near.lat_rad - exact.lat_rad).abs() < ANGLE_TOL_RAD, "{i}");
+        assert!((near.lon_rad - exact.lon_rad).abs() < ANGLE_TOL_RAD, "{i}");
+        assert!((near.height_m - exact.height_m).abs() < HEIGHT_TOL_M, "{i}");
+        if i == 1 {
+            assert!(near.lon_rad < -pi + 1e-6, "{near:?}");
+        }
+    }
+}
+
+/// `Solution::row_of` and the sibling cursor: with satellite 4 of 12
+/// left out, epoch index i sits at row i below 4 and row i - 1 above, and
+/// 4, 12 and beyond have no row. The cursor, asked in decreasing order
+/// (against the order it expects), still returns each row's elevation and
+/// sigma, found by a full search.
+#[test]
+fn rows_of_epoch_satellites_and_the_cursor_in_any_order() {
+    let cfg = Config::default();
+    let sats = modelled(RX, 3, &[]);
+    let epoch = Epoch::ranges(0.0, &sats, Some(RX));
+    let mut mask = [false; 16];
+    mask.iter_mut().take(12).for_each(|m| *m = true);
+    mask[4] = false;
+    let s = solve::<16>(&cfg, &epoch, &mask).unwrap();
+    assert_eq!(s.rows(), 11);
+    for i in 0..12 {
+        let want = match i {
+            0..=3 => Some(i),
+            4 => None,
+            _ => Some(i - 1),
+        };
+        assert_eq!(s.row_of(i), want, "{i}");
+    }
+    assert_eq!((s.row_of(12), s.row_of(99)), (None, None));
+    let mut cursor = SiblingModel::new(Some(&s));
+    for i in (0..12).rev() {
+        let got = cursor.get(i);
+        match s.row_of(i) {
+            Some(r) => assert_eq!(got, Some((s.elevation_rad[r], s.sigma_m[r])), "{i}"),
+            None => assert_eq!(got, None, "{i}"),
+        }
+    }
+    assert_eq!(SiblingModel::<16, Stat>::new(None).get(0), None);
+}

@@ -504,3 +504,113 @@ fn araim_false_alarms_with_residuals_from_c_acc_match_the_allocation() {
     assert!(evaluations >= 7900);
     assert!((rejections as f64 - expected).abs() <= 4.0 * se);
 }
+
+/// The accuracy fit's refusals, each with its values: shapes with no
+/// redundancy or beyond the capacity (`Geometry { n, m }`), a singular
+/// normal matrix (two equal columns), a NaN C_acc (`NotFinite`) and a
+/// C_acc that is 0, negative or infinite (`OutOfRange`). A well-posed
+/// fit of 4 rows, 1 column with C_acc 1 is the sample variance sum:
+/// y = 1, 2, 3, 6 about their mean 3 gives q = 4 + 1 + 0 + 9 = 14, dof 3.
+#[test]
+fn accuracy_fit_refusals_carry_their_values() {
+    use crate::araim::subset::Geometry;
+    use crate::consistency::fit::accuracy_fit;
+    let mut geo = Geometry::<f64, 8>::empty();
+    geo.n = 4;
+    geo.m = 1;
+    for (i, y) in [1.0, 2.0, 3.0, 6.0].into_iter().enumerate() {
+        geo.g[i][0] = 1.0;
+        geo.c_acc[i] = 1.0;
+        geo.y[i] = y;
+    }
+    let fit = accuracy_fit(&geo).unwrap();
+    assert_eq!(fit.dof, 3);
+    assert!((fit.q - 14.0).abs() < 1e-12, "{fit:?}");
+    let shape = |n: usize, m: usize| {
+        let mut g = geo;
+        g.n = n;
+        g.m = m;
+        accuracy_fit(&g)
+    };
+    for (n, m) in [
+        (4, 4),
+        (4, 0),
+        (9, 1),
+        (12, crate::measurement::MAX_STATES + 1),
+    ] {
+        assert_eq!(
+            shape(n, m),
+            Err(ModelCheckError::Geometry { n, m }),
+            "{n} {m}"
+        );
+    }
+    let mut twin = geo;
+    twin.m = 2;
+    for row in twin.g.iter_mut().take(4) {
+        row[1] = row[0];
+    }
+    assert_eq!(
+        accuracy_fit(&twin),
+        Err(ModelCheckError::Geometry { n: 4, m: 2 })
+    );
+    let mut nan = geo;
+    nan.c_acc[2] = f64::NAN;
+    assert!(matches!(
+        accuracy_fit(&nan),
+        Err(ModelCheckError::NotFinite { field: "c_acc_m2", value }) if value.is_nan()
+    ));
+    for c in [0.0, -1.0, f64::INFINITY] {
+        let mut bad = geo;
+        bad.c_acc[1] = c;
+        assert_eq!(
+            accuracy_fit(&bad),
+            Err(ModelCheckError::OutOfRange {
+                field: "c_acc_m2",
+                value: c,
+                min: f64::MIN_POSITIVE,
+                max: f64::MAX
+            }),
+            "{c}"
+        );
+    }
+}
+
+/// ARAIM's FDE limits and capacity: a 50 m fault (the model's sigma is
+/// 0.36 m) fails the all-in-view test, and with `max_modes` 0 no
+/// exclusion is attempted: an alarm reporting the monitored modes, with
+/// nothing excluded. Ten satellites into an 8-satellite monitor are
+/// refused with both counts.
+#[test]
+fn araim_fde_over_the_mode_limit_and_over_capacity() {
+    use crate::araim::monitor::{Exclusion, MonitorError};
+    use crate::araim::AraimError;
+    let entries = floor_ism();
+    let ism = Ism::with(&[System::Gps, System::Galileo], 1e-4);
+    let cfg = AraimConfig::default();
+    let mut obs = ge_epoch(&mut Rng::new(4), 0.3, 0.3);
+    obs[3].residual_m += 50.0;
+    let limits = FdeLimits {
+        max_modes: 0,
+        work_candidate_modes: usize::MAX,
+    };
+    let mut monitor = std::boxed::Box::new(Monitor::<f64, 16, 600>::new());
+    let v = monitor
+        .linear(&cfg, &ism, &entries[..], &obs, limits)
+        .unwrap();
+    assert_eq!(v.decision, Decision::Alarm);
+    match v.exclusion {
+        Exclusion::NotAttempted { monitored } => assert!(monitored >= 1, "{monitored}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(v.excluded.is_empty());
+    let mut small = std::boxed::Box::new(Monitor::<f64, 8, 600>::new());
+    assert_eq!(
+        small
+            .linear(&cfg, &ism, &entries[..], &obs, FdeLimits::UNLIMITED)
+            .err(),
+        Some(MonitorError::Araim(AraimError::CapacityExceeded {
+            have: 10,
+            capacity: 8
+        }))
+    );
+}

@@ -557,6 +557,106 @@ mod tests {
         check::<f32>(&[70, -60, 100, -100], REL_TOL_F32);
     }
 
+    /// Shapes the factorisation cannot take are typed errors with the
+    /// counts: more rows than N (`CapacityExceeded`), no column, more
+    /// columns than MAX_STATES or than rows (`TooFewSatellites`). A zero
+    /// column is `RankDeficient` at its index with pivot 0, and so is a
+    /// NaN column (its norm fails the rank test), in f64 and f32.
+    #[test]
+    fn shapes_and_degenerate_columns_are_refused() {
+        fn check<T: Real>() {
+            let mut h = [[T::zero(); 8]; MAX_STATES];
+            for (j, col) in h.iter_mut().enumerate() {
+                for (i, v) in col.iter_mut().enumerate() {
+                    *v = T::of(((i * 7 + j * 3) % 5) as f64 + (i == j) as u8 as f64);
+                }
+            }
+            let fac = |h: &[[T; 8]; MAX_STATES], n, m| Householder::<8, T>::factor(h, n, m).err();
+            assert_eq!(
+                fac(&h, 9, 4),
+                Some(RaimError::CapacityExceeded {
+                    have: 9,
+                    capacity: 8
+                })
+            );
+            assert_eq!(
+                fac(&h, 6, 0),
+                Some(RaimError::TooFewSatellites { have: 6, need: 1 })
+            );
+            assert_eq!(
+                fac(&h, 8, MAX_STATES + 1),
+                Some(RaimError::TooFewSatellites {
+                    have: 8,
+                    need: MAX_STATES + 1
+                })
+            );
+            assert_eq!(
+                fac(&h, 3, 4),
+                Some(RaimError::TooFewSatellites { have: 3, need: 4 })
+            );
+            let mut zero = h;
+            zero[0] = [T::zero(); 8];
+            assert_eq!(
+                fac(&zero, 8, 3),
+                Some(RaimError::RankDeficient {
+                    column: 0,
+                    pivot: 0.0
+                })
+            );
+            let mut nan = h;
+            nan[2][1] = T::of(f64::NAN);
+            assert!(matches!(
+                fac(&nan, 8, 3),
+                Some(RaimError::RankDeficient { column: 2, .. })
+            ));
+        }
+        check::<f64>();
+        check::<f32>();
+    }
+
+    /// The factor's shape and T1 against an independent reference:
+    /// `rows`/`cols` are n and m; `t(i, j)` is zero below the diagonal and
+    /// beyond column m; T1^T T1 = H^T H (Q is orthogonal) to 1e-12
+    /// relative, against nalgebra's product; and `solve_tt` solves
+    /// T1^T x = y (T1^T x multiplied back gives y).
+    #[test]
+    fn triangle_matches_the_gram_matrix() {
+        const REL_TOL: f64 = 1e-12;
+        let (n, m) = (7, 4);
+        let mut rng = crate::testutil::Rng::new(17);
+        let mut h = [[0.0f64; 8]; MAX_STATES];
+        for col in h.iter_mut().take(m) {
+            for v in col.iter_mut().take(n) {
+                *v = rng.uniform() * 2.0 - 1.0;
+            }
+        }
+        let qr = Householder::<8>::factor(&h, n, m).unwrap();
+        assert_eq!((qr.rows(), qr.cols()), (n, m));
+        let dense = nalgebra::DMatrix::from_fn(n, m, |i, j| h[j][i]);
+        let gram = dense.transpose() * &dense;
+        for i in 0..MAX_STATES {
+            for j in 0..MAX_STATES {
+                if i > j || j >= m {
+                    assert_eq!(qr.t(i, j), 0.0, "{i} {j}");
+                }
+            }
+        }
+        for i in 0..m {
+            for j in 0..m {
+                let tt: f64 = (0..m).map(|k| qr.t(k, i) * qr.t(k, j)).sum();
+                let scale = gram[(i, i)].max(gram[(j, j)]);
+                assert!((tt - gram[(i, j)]).abs() <= REL_TOL * scale, "{i} {j}");
+            }
+        }
+        let mut y = [0.0; MAX_STATES];
+        y[..m].copy_from_slice(&[0.5, -1.5, 2.0, 0.25]);
+        let x = qr.solve_tt(&y);
+        for (i, yi) in y.iter().enumerate().take(m) {
+            let back: f64 = (0..m).map(|k| qr.t(k, i) * x[k]).sum();
+            assert!((back - yi).abs() < REL_TOL * 10.0, "{i}: {back} {yi}");
+        }
+    }
+
     /// [`dot_lanes`] against the left-to-right [`dot`], for every length
     /// 0..=40 (every remainder mod 4) and unequal lengths (the shorter
     /// decides): within a few epsilons of sum |a_i b_i| (both orders are

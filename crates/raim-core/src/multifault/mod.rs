@@ -21,6 +21,8 @@ pub mod error;
 pub mod reconstruct;
 
 #[cfg(test)]
+mod run_tests;
+#[cfg(test)]
 mod tests;
 
 use crate::config::Config;

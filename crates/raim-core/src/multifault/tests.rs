@@ -737,7 +737,7 @@ fn reconstruction_is_refused_when_not_built() {
 
 /// Linear observations: `sky` (az, el deg), one clock per system given,
 /// sigma 1 m, seeded noise and faults (row, m).
-fn epoch_sats(
+pub(super) fn epoch_sats(
     sky: &[(System, f64, f64)],
     seed: u64,
     faults: &[(usize, f64)],
@@ -760,7 +760,7 @@ fn epoch_sats(
 }
 
 /// A 14-satellite GPS+Galileo sky.
-fn sky14() -> Vec<(System, f64, f64)> {
+pub(super) fn sky14() -> Vec<(System, f64, f64)> {
     let mut sky = Vec::new();
     for i in 0..14 {
         let sys = if i % 2 == 0 {
@@ -775,7 +775,7 @@ fn sky14() -> Vec<(System, f64, f64)> {
     sky
 }
 
-fn reconstruction(t_max: u8) -> Config {
+pub(super) fn reconstruction(t_max: u8) -> Config {
     Config {
         fde_method: FdeMethod::Reconstruction {
             t_max,

@@ -151,6 +151,44 @@ mod tests {
     extern crate std;
     use super::*;
 
+    /// Weights that sum short of 1 (rounding, or a caller's error) leave
+    /// pointers past the cumulative sum: they go to the last particle with
+    /// weight, so the population stays N (weights 0.3, 0.3, 0.3, 0 with the
+    /// pointers at 0.2475, 0.4975, 0.7475, 0.9975: one each, then the
+    /// fourth to particle 2). All-zero weights give all N to the first.
+    #[test]
+    fn short_weights_keep_the_population() {
+        let mut counts = [0u16; 4];
+        systematic_counts(&[0.3f64, 0.3, 0.3, 0.0], 0.99, &mut counts);
+        assert_eq!(counts, [1, 1, 2, 0]);
+        systematic_counts(&[0.0f64; 4], 0.5, &mut counts);
+        assert_eq!(counts, [4, 0, 0, 0]);
+    }
+
+    /// Counts that sum past the population (not produced by
+    /// `systematic_counts`) fill the holes there are and stop: particle 0
+    /// with 3 copies has one hole (index 2) to fill.
+    #[test]
+    fn excess_counts_stop_at_the_last_hole() {
+        let mut p = [[0.0f64; DIM]; 3];
+        for (i, row) in p.iter_mut().enumerate() {
+            row[0] = i as f64 + 1.0;
+        }
+        apply_counts(&mut p, &[3, 1, 0]);
+        assert_eq!(p.map(|r| r[0]), [1.0, 2.0, 1.0]);
+    }
+
+    /// The empty population's rank threshold is 0, and a rank at or past
+    /// the length has no value.
+    #[test]
+    fn empty_and_out_of_range_ranks() {
+        assert_eq!(rank_threshold::<f64, 0>(&[]), 0.0);
+        let mut v = [3.0f64, 1.0, 2.0];
+        assert_eq!(kth_smallest(&mut v, 3), None);
+        assert_eq!(kth_smallest(&mut v, 2), Some(3.0));
+        assert_eq!(kth_smallest::<f64>(&mut [], 0), None);
+    }
+
     /// Systematic resampling: every count is floor or ceil of N w_i, the
     /// counts sum to N, and over many offsets the mean count is N w_i
     /// (the unbiasedness the filter relies on), to 0.01 copies.

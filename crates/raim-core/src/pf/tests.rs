@@ -731,3 +731,144 @@ fn refused_pf_epochs_leave_the_filter_untouched() {
         );
     }
 }
+
+/// A receiver clock jump of 3000 m on every satellite (beyond
+/// `clock_jump_m` = 1000 m) is absorbed into the reference clock: the
+/// epoch reports it, the reference clock moves by the jump (within 3
+/// sigma of the median of 8 residuals plus the filter's spread, 10 m), and
+/// no satellite alarms, the LLRs being unaffected. With `clock_jump_m` = 0
+/// (absorption off) the same epoch reports no jump and the reference
+/// takes only the filter's gain of it (over 100 m short of the jump). After each epoch the main filter is centred on
+/// the reference (its mean state offset is zero).
+#[test]
+fn clock_jump_is_absorbed_into_the_reference() {
+    const JUMP_M: f64 = 3000.0;
+    const JUMP_TOL_M: f64 = 10.0;
+    for absorb in [true, false] {
+        let c = PfConfig {
+            clock_jump_m: if absorb { 1000.0 } else { 0.0 },
+            ..cfg()
+        };
+        let mut m = std::boxed::Box::new(PfRaim::<f64, Ekf<f64>, 12>::new(4));
+        let mut noise = rng::seeded(5);
+        let mut before = 0.0;
+        for k in 0..14 {
+            let mut obs = epoch(8, k, &mut noise, None);
+            if k >= 10 {
+                for o in obs.iter_mut() {
+                    o.pseudorange_m += JUMP_M;
+                }
+            }
+            let out = m.process(&c, k as f64, &obs).unwrap();
+            let mean = m.main().mean();
+            assert!(mean[..3].iter().all(|v| v.abs() < 1e-6), "{mean:?}");
+            if k == 9 {
+                before = out.clock_m[0];
+            }
+            if k == 10 {
+                assert_eq!(out.clock_jump, absorb);
+                let moved = out.clock_m[0] - before;
+                if absorb {
+                    assert!((moved - JUMP_M).abs() < JUMP_TOL_M, "{moved}");
+                    assert!(!out.alarm, "{}", out.decision);
+                } else {
+                    assert!((moved - JUMP_M).abs() > 10.0 * JUMP_TOL_M, "{moved}");
+                }
+            } else if absorb {
+                assert!(!out.clock_jump && !out.alarm, "epoch {k}");
+            }
+        }
+    }
+}
+
+/// With `exclude` off, a 40 m step on G4 alarms and isolates G4 but
+/// excludes nothing: every later epoch still uses all 8 satellites.
+#[test]
+fn isolation_without_exclusion_keeps_every_satellite() {
+    let c = PfConfig {
+        exclude: false,
+        ..cfg()
+    };
+    let mut m = std::boxed::Box::new(PfRaim::<f64, Ekf<f64>, 12>::new(1));
+    let mut noise = rng::seeded(2);
+    let g4 = SatId::new(System::Gps, 4);
+    let mut alarms = 0;
+    for k in 0..40 {
+        let f = (k >= 20).then_some((3, 40.0));
+        let out = m
+            .process(&c, k as f64, &epoch(8, k, &mut noise, f))
+            .unwrap();
+        assert_eq!(out.used, 8, "epoch {k}");
+        assert_eq!(out.excluded, None);
+        if out.alarm {
+            assert!(k >= 20, "epoch {k}");
+            assert_eq!(out.isolated, Some(g4));
+            alarms += 1;
+        }
+    }
+    assert!(alarms > 0 && m.excluded().is_empty());
+}
+
+/// The first-epoch fix: exact pseudoranges of 8 satellites (and a ninth,
+/// consistent one placed at the start point, the Earth's centre, which
+/// gives no line of sight in the first iteration and is skipped there)
+/// give the receiver and its clock within 1 mm; a constellation index beyond MAX_SYSTEMS is a capacity error
+/// naming it; two satellites leave the normal matrix singular and a NaN
+/// pseudorange a NaN step, both `NoInitialFix` (with the iteration
+/// reached; the NaN step reported).
+#[test]
+fn first_fix_solves_and_refuses() {
+    use super::init::{fix, FixInput};
+    use crate::measurement::MAX_SYSTEMS;
+    const TOL_M: f64 = 1e-3;
+    let sats = satellites(8);
+    let mut input: std::vec::Vec<FixInput> = sats
+        .iter()
+        .take(8)
+        .map(|s| {
+            let d = [
+                s[0] - RECEIVER_M[0],
+                s[1] - RECEIVER_M[1],
+                s[2] - RECEIVER_M[2],
+            ];
+            FixInput {
+                sat_m: *s,
+                pseudorange_m: (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() + CLOCK_M,
+                sigma_m: SIGMA_M,
+                sys: 0,
+            }
+        })
+        .collect();
+    let centre_m = (RECEIVER_M[0].powi(2) + RECEIVER_M[1].powi(2) + RECEIVER_M[2].powi(2)).sqrt();
+    input.push(FixInput {
+        sat_m: [0.0; 3],
+        pseudorange_m: centre_m + CLOCK_M,
+        sigma_m: SIGMA_M,
+        sys: 0,
+    });
+    let r = fix(&input, [0.0; 3]).unwrap();
+    assert!(error_m(&r.position_m) < TOL_M, "{:?}", r.position_m);
+    assert!((r.clock_m[0] - CLOCK_M).abs() < TOL_M, "{:?}", r.clock_m);
+    let mut bad_sys = input.clone();
+    bad_sys[2].sys = MAX_SYSTEMS;
+    assert_eq!(
+        fix(&bad_sys, [0.0; 3]),
+        Err(PfError::Capacity {
+            field: "sys",
+            have: MAX_SYSTEMS,
+            max: MAX_SYSTEMS - 1
+        })
+    );
+    // Rank 2 of 4 unknowns: the factorisation fails within the first
+    // iterations (rounding may let the first one through).
+    match fix(&input[..2], [0.0; 3]) {
+        Err(PfError::NoInitialFix { iterations, .. }) => assert!(iterations <= 2, "{iterations}"),
+        other => panic!("{other:?}"),
+    }
+    let mut nan = input;
+    nan[1].pseudorange_m = f64::NAN;
+    match fix(&nan, [0.0; 3]) {
+        Err(PfError::NoInitialFix { step_m, .. }) => assert!(step_m.is_nan()),
+        other => panic!("{other:?}"),
+    }
+}

@@ -221,6 +221,64 @@ mod tests {
         }
     }
 
+    /// The interpolation on a hand-made row (thresholds 10, 20, NaN at
+    /// log10 Pfa -2, -2.5, -3): Pfa at or above 1e-2 takes the first node;
+    /// between -2 and -2.5 it is linear in log10 Pfa (10^-2.25 gives 15);
+    /// a segment that touches a NaN (uncertified) node, a Pfa past the last
+    /// node, and a Pfa that is NaN, 0 or 1 are `NotCalibrated` naming Pfa
+    /// with the value. A NaN first node refuses Pfa above 1e-2 too.
+    #[test]
+    fn interpolation_refuses_uncertified_segments() {
+        let row = [10.0, 20.0, f64::NAN];
+        assert_eq!(interpolate(&row, 0.5), Ok(10.0));
+        let mid = interpolate(&row, 10f64.powf(-2.25)).unwrap();
+        assert!((mid - 15.0).abs() < 1e-12, "{mid}");
+        for pfa in [10f64.powf(-2.75), 1e-4, 0.0, 1.0, f64::NAN] {
+            match interpolate(&row, pfa) {
+                Err(PfError::NotCalibrated {
+                    field: "pfa",
+                    value,
+                }) => {
+                    assert!(value.to_bits() == pfa.to_bits(), "{pfa}")
+                }
+                other => panic!("{pfa}: {other:?}"),
+            }
+        }
+        assert!(interpolate(&[f64::NAN, 1.0, 2.0], 0.5).is_err());
+    }
+
+    /// A profile matches a configuration only with every model field
+    /// equal: changing any one of the initial spreads or the mutation
+    /// breaks the match.
+    #[test]
+    fn profile_match_needs_every_model_field() {
+        let r = ROWS[0];
+        let p = PROFILES[r.profile];
+        let ok = p.config(r.likelihood, WINDOWS[0], 1e-2);
+        assert!(p.matches(&ok));
+        let changed = [
+            PfConfig {
+                init_position_m: ok.init_position_m + 1.0,
+                ..ok
+            },
+            PfConfig {
+                init_clock_m: ok.init_clock_m + 1.0,
+                ..ok
+            },
+            PfConfig {
+                init_drift_m_s: ok.init_drift_m_s + 1.0,
+                ..ok
+            },
+            PfConfig {
+                mutation_m: ok.mutation_m + 1.0,
+                ..ok
+            },
+        ];
+        for (i, c) in changed.iter().enumerate() {
+            assert!(!p.matches(c), "{i}");
+        }
+    }
+
     /// A model, window, filter or Pfa the table does not cover is a typed
     /// error naming it.
     ///

@@ -902,6 +902,21 @@ mod tests {
         ));
     }
 
+    /// An ARL0 above the table's last node (1e9 epochs) is refused with
+    /// the value and the table's range, 1e2 to 1e9.
+    #[test]
+    fn arl0_above_the_table_is_refused_with_its_range() {
+        assert_eq!(
+            threshold(2, 1.0, 1e10),
+            Err(RaimError::OutOfRange {
+                field: "mcusum_arl0",
+                value: 1e10,
+                min: 1e2,
+                max: 1e9
+            })
+        );
+    }
+
     /// Seed 001 Table 2: dim 2, k = 1, ARL0 = 1e4 gives h = 5.21 (exact
     /// 5.206, SPEC §7.1) from the device table.
     #[test]

@@ -479,3 +479,45 @@ fn mcusum_refuses_time_going_backwards_and_keeps_its_state() {
     raim.process(&snap, &Epoch::linear(5.0, &next)).unwrap();
     raim.process(&c, &Epoch::linear(3.0, &next)).unwrap();
 }
+
+/// A hold that leaves too few satellites to solve is released, not an
+/// error: once the MCUSUM holds the biased satellite (as in
+/// `mcusum_catches_a_bias_the_snapshot_misses_and_holds_it`), an epoch of
+/// only 5 satellites including it would leave 4, under the monitor's
+/// minimum of 5 (4 states and one for detection); the epoch is processed
+/// on all 5 (the held one used again) and the hold list is empty
+/// afterwards.
+#[test]
+fn a_hold_that_leaves_no_solvable_set_is_released() {
+    use crate::config::Carry;
+    let sky10: Vec<(f64, f64)> = SKY8
+        .iter()
+        .copied()
+        .chain([(120.0, 70.0), (280.0, 65.0)])
+        .collect();
+    let faulty = SatId::new(System::Gps, 5);
+    let c = mcusum_cfg(Carry::Transport);
+    let mut raim = Raim::<16>::new();
+    let mut rng = Rng::new(7000);
+    let mut held = false;
+    for t in 0..200 {
+        let sats = linear_epoch(&sky10, 1.0, &mut rng, &[(4, 3.0)]);
+        let r = raim.process(&c, &Epoch::linear(t as f64, &sats)).unwrap();
+        if r.mcusum.unwrap().held[0] == Some(faulty) {
+            held = true;
+            break;
+        }
+    }
+    assert!(held, "no hold in 200 epochs");
+    let five: Vec<LinearObservation> = linear_epoch(&sky10, 1.0, &mut rng, &[])
+        .into_iter()
+        .skip(2)
+        .take(5)
+        .collect();
+    assert!(five.iter().any(|o| o.id == faulty));
+    let r = raim.process(&c, &Epoch::linear(300.0, &five)).unwrap();
+    assert!(raim.mcusum().held().is_empty());
+    let s = r.satellites.iter().find(|s| s.id == faulty).unwrap();
+    assert!(s.used, "{s:?}");
+    assert_eq!(r.satellites.len(), 5);
+}

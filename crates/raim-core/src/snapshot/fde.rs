@@ -583,6 +583,44 @@ mod tests {
     use crate::solve::solve;
     use crate::testutil::{at_stat, linear_epoch, Rng, SKY8};
 
+    /// A detected fault with every satellite's S_ii under `min_s_ii` (0.5,
+    /// the bound's maximum, on 6 satellites in two symmetric rings at 30
+    /// and 40 deg, dof 2: S_ii 0.293 and 0.374 by a dense computation):
+    /// no satellite can be named, so the alarm is `Unidentifiable`
+    /// with nothing identified or excluded. The reported S_ii confirm the
+    /// premise (to the dense computation's 3 decimals).
+    #[test]
+    fn no_identifiable_row_alarms_unidentifiable() {
+        let cfg = Config {
+            min_s_ii: 0.5,
+            ..Config::default()
+        };
+        assert_eq!(cfg.validate(), Ok(()));
+        let sats: [crate::measurement::LinearObservation; 6] = core::array::from_fn(|i| {
+            let az_deg = i as f64 * 60.0;
+            let el_deg: f64 = if i % 2 == 0 { 30.0 } else { 40.0 };
+            let fault_m = if i == 2 { 200.0 } else { 0.0 };
+            let mut o = crate::measurement::LinearObservation::from_az_el(
+                crate::measurement::SatId::new(crate::measurement::System::Gps, i as u8 + 1),
+                az_deg.to_radians(),
+                el_deg.to_radians(),
+                fault_m,
+            );
+            o.sigma_m = Some(1.0);
+            o
+        });
+        let r = crate::monitor::Raim::<8>::new()
+            .process(&cfg, &Epoch::linear(0.0, &sats))
+            .unwrap();
+        for (i, s) in r.satellites.iter().enumerate() {
+            let want = if i % 2 == 0 { 0.293 } else { 0.374 };
+            assert!((s.s_ii - want).abs() < 1e-3, "{i}: {}", s.s_ii);
+        }
+        assert_eq!(r.decision, crate::result::Decision::Alarm);
+        assert_eq!(r.alarm_cause, Some(AlarmCause::Unidentifiable));
+        assert!(r.identified.is_none() && r.exclusions.is_empty());
+    }
+
     /// The identity behind the uniqueness check: the statistic of the subset
     /// without satellite j equals D^2 - w_j^2, checked against real subset
     /// solves for every j (linear model, so it holds to rounding).

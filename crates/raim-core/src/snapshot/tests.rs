@@ -512,3 +512,86 @@ fn per_satellite_ranking_equals_rank() {
     }
     assert!(ranked > 250, "{ranked}");
 }
+
+/// Thresholds off the precomputed table (pfa 1e-4, pwe 2e-3) are computed
+/// on first use: T^2 and the wrong-exclusion quantile equal statrs'
+/// chi-square quantiles (1e-9 relative); a new pmd at the same pfa keeps
+/// T^2 and recomputes lambda, larger for a smaller pmd; a dof outside
+/// 1..N is `InvalidDof` naming it.
+#[test]
+fn thresholds_off_the_table_match_statrs() {
+    use crate::snapshot::detection::Thresholds;
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    let q = |p: f64, dof: usize| ChiSquared::new(dof as f64).unwrap().inverse_cdf(1.0 - p);
+    let mut th = Thresholds::<16>::empty();
+    let (t2, lambda_2) = th.get(1e-4, 1e-2, 5).unwrap();
+    assert!((t2 - q(1e-4, 5)).abs() <= 1e-9 * t2, "{t2}");
+    let (t2_again, lambda_3) = th.get(1e-4, 1e-3, 5).unwrap();
+    assert_eq!(t2_again, t2);
+    assert!(
+        lambda_3 > lambda_2 && lambda_2 > 0.0,
+        "{lambda_2} {lambda_3}"
+    );
+    let we = th.wrong_exclusion(2e-3, 4).unwrap();
+    assert!((we - q(2e-3, 4)).abs() <= 1e-9 * we, "{we}");
+    for dof in [0, 16] {
+        assert!(matches!(
+            th.get(1e-4, 1e-3, dof),
+            Err(RaimError::InvalidDof { dof: d, .. }) if d as usize == dof
+        ));
+        assert!(matches!(
+            th.wrong_exclusion(2e-3, dof),
+            Err(RaimError::InvalidDof { dof: d, .. }) if d as usize == dof
+        ));
+    }
+}
+
+/// The snapshot engine on its own equals the monitor's snapshot path
+/// (same decision, statistic and exclusions); turning the warm start
+/// off drops the last fix, so with it back on the next epoch starts cold
+/// and equals a fresh engine's bit for bit, where an engine that kept the
+/// fix starts from it (another iteration count or position bits).
+#[test]
+fn snapshot_engine_alone_and_warm_start_off() {
+    use crate::snapshot::Snapshot;
+    let c = cfg();
+    let sats = linear_epoch(&SKY8, 1.0, &mut Rng::new(3), &[(1, 50.0)]);
+    let e = Epoch::linear(0.0, &sats);
+    let alone = Snapshot::<16>::new().process(&c, &e).unwrap();
+    let full = Raim::<16>::new().process(&c, &e).unwrap();
+    assert_eq!(alone.decision, full.decision);
+    assert_eq!(
+        alone.test.statistic.to_bits(),
+        full.test.statistic.to_bits()
+    );
+    assert_eq!(alone.exclusions, full.exclusions);
+    let ranges = range_epoch(
+        RX_ECEF_M,
+        &SKY_GE8,
+        &CLOCKS_GE_M,
+        1.0,
+        &mut Rng::new(5),
+        &[],
+    );
+    let first = Epoch::ranges(0.0, &ranges, Some(RX_ECEF_M));
+    let later = Epoch::ranges(1.0, &ranges, Some(RX_ECEF_M));
+    let mut warm = Snapshot::<16>::new();
+    warm.set_warm_start(true);
+    warm.process(&c, &first).unwrap();
+    let mut kept = Snapshot::<16>::new();
+    kept.set_warm_start(true);
+    kept.process(&c, &first).unwrap();
+    warm.set_warm_start(false);
+    warm.set_warm_start(true);
+    let a = warm.process(&c, &later).unwrap();
+    let b = Snapshot::<16>::new().process(&c, &later).unwrap();
+    assert_eq!(a.position_ecef_m, b.position_ecef_m);
+    assert_eq!(a.iterations, b.iterations);
+    let k = kept.process(&c, &later).unwrap();
+    assert!(
+        k.iterations != b.iterations || k.position_ecef_m != b.position_ecef_m,
+        "{} {}",
+        k.iterations,
+        b.iterations
+    );
+}

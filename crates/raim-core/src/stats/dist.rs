@@ -888,6 +888,10 @@ pub fn pbias(pfa: f64, pmd: f64, dof: u32) -> Result<f64, RaimError> {
 }
 
 #[cfg(test)]
+#[path = "dist_edge_tests.rs"]
+mod edge_tests;
+
+#[cfg(test)]
 #[allow(
     clippy::unwrap_used,
     clippy::expect_used,

@@ -569,3 +569,18 @@ fn the_other_refusals_texts() {
         "time -1 s outside [0, 5] s"
     );
 }
+
+/// A satellite that leaves view loses its slot and its history: with 12
+/// satellites tested after W epochs, the epoch without satellite 6 tests
+/// the 11 others, and when it comes back its history restarts, so it is
+/// not complete again until W more epochs have passed.
+#[test]
+fn a_satellite_leaving_view_restarts_its_history() {
+    let (mut e, t) = stream(W + 4, 3, |_, _| 0.0);
+    e[W + 1].remove(5);
+    let out = run(&PcaConfig::default(), &e, &t);
+    assert_eq!(tested(&out[W]).unwrap().n_complete, 12);
+    assert_eq!(tested(&out[W + 1]).unwrap().n_complete, 11);
+    assert_eq!(tested(&out[W + 2]).unwrap().n_complete, 11);
+    assert_eq!(tested(&out[W + 3]).unwrap().n_complete, 11);
+}
