@@ -17,7 +17,8 @@
 #   mcusum-tau, mcusum-replays, mcraim-arl-example, mcraim-seed001, mcraim-scenario (docs/MCRAIM.md; the last two
 #   copy the committed outputs docs/mcraim_*.txt of `raim arl`, which --long reruns),
 #   multifault-group-counts, multifault-amplification (docs/MULTIFAULT.md), pf-memory (docs/PF.md, that block only).
-#   Also docs/AVAILABILITY.md availability-sweep and docs/availability/sweep/ (scripts/availability_sweep.sh).
+#   Also docs/AVAILABILITY.md availability-sweep and docs/availability/sweep/ (scripts/availability_sweep.sh),
+#   and docs/availability/'s single runs (scripts/availability_outputs.sh).
 # Long (seeded Monte Carlo; rerun by hand, not in CI):
 #   multifault-mc (docs/MULTIFAULT.md), budget-mc (docs/BUDGET.md), docs/mcraim_seed001.txt and
 #   docs/mcraim_scenario.txt (raim arl --seed001 / --scenario).
@@ -570,6 +571,8 @@ fi
 # --- docs/AVAILABILITY.md's sweep and its outputs (a few CPU seconds).
 sweep_status=0
 if [ $MODE = check ]; then bash scripts/availability_sweep.sh --check || sweep_status=1; else bash scripts/availability_sweep.sh; fi
+# --- docs/availability/'s single runs (about 20 CPU seconds).
+if [ $MODE = check ]; then bash scripts/availability_outputs.sh --check || sweep_status=1; else bash scripts/availability_outputs.sh; fi
 
 if [ $MODE = check ]; then
   status=$sweep_status
