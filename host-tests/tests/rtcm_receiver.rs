@@ -358,6 +358,11 @@ fn device_epochs(
 ///   original's epochs to the bit, and says `Stream(16)` where the table
 ///   says `Table(16)`.
 ///
+/// The host's reader (`raim_recv::rtcm::Rtcm3`) takes the count from the
+/// 1013 the same way: each of these streams, the 1013 first or after the
+/// last 1020, is formed by the host epoch by epoch as the unit forms it,
+/// to the bit, GLONASS data joined where the unit joins it.
+///
 /// Verifies: RX-LEAP
 #[test]
 fn a_1013_leap_count_moves_the_glonass_alignment_by_its_difference() {
@@ -402,6 +407,15 @@ fn a_1013_leap_count_moves_the_glonass_alignment_by_its_difference() {
         got.len()
     );
     assert!(worst_m < 1.0, "{worst_m} m");
+    let glonass_formed = |r: &Run| {
+        r.sats
+            .iter()
+            .filter(|s| s.iter().any(|id| id.system == raim_core::System::Glonass))
+            .count()
+    };
+    let host_alike = device_against_host(&with_1013, GMSD7_PIVOT_WEEK, GMSD7_NOW_WEEK);
+    assert_eq!(host_alike.same, orig.len());
+    assert_eq!(glonass_formed(&host_alike), glonass_epochs);
 
     let (no_1013, _, counts, leap) = device_epochs(&shifted, GMSD7_PIVOT_WEEK);
     assert_eq!(leap, LeapSeconds::Table(16));
@@ -459,6 +473,12 @@ fn a_1013_leap_count_moves_the_glonass_alignment_by_its_difference() {
         }
     }
     assert!(joined > 0);
+    let host_late = device_against_host(&late_1013, GMSD7_PIVOT_WEEK, GMSD7_NOW_WEEK);
+    assert_eq!(host_late.same, late.len());
+    assert!(glonass_formed(&host_late) > 0);
+    let host_none = device_against_host(&shifted, GMSD7_PIVOT_WEEK, GMSD7_NOW_WEEK);
+    assert_eq!(host_none.same, no_1013.len());
+    assert_eq!(glonass_formed(&host_none), 0);
 
     let same = [msg1013(16), bytes.clone()].concat();
     let (again, _, _, leap) = device_epochs(&same, GMSD7_PIVOT_WEEK);

@@ -74,6 +74,10 @@ pub enum Item {
     Station([f64; 3]),
     /// A GLONASS ephemeris (RTCM 1020), t_b placed in GPS time.
     Glonass(GlonassEphemeris),
+    /// The GLONASS ephemerides given so far were placed with another GPS -
+    /// UTC count than the stream's 1013 now gives: drop them (the stream
+    /// resends its 1020s, placed with the new count).
+    GlonassWithdrawn,
 }
 
 /// What a decoder read and what it skipped.
@@ -187,6 +191,7 @@ pub fn apply(item: Item, obs: &mut ObsData, nav: &mut NavData) {
         Item::Klobuchar(kb) => nav.klobuchar = Some(kb),
         Item::Station(p) => obs.approx_position_m = Some(p),
         Item::Glonass(g) => add_glonass(nav, g),
+        Item::GlonassWithdrawn => nav.glonass.clear(),
     }
 }
 

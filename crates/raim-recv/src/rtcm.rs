@@ -25,8 +25,9 @@
 //!   the day of the week DF416), not a GPS time of week: they join the
 //!   epoch of the GPS/Galileo/BeiDou MSM they arrive with, and once the
 //!   epoch's absolute GPS time t is known, their DF034 must equal the
-//!   GLONASS time of day of t (GPS - UTC from the leap-second table,
-//!   `raim_gnss::glonass::glonass_time_of_day_s`), to the millisecond;
+//!   GLONASS time of day of t (GPS - UTC from the stream's latest RTCM
+//!   1013, DF054, else from the leap-second table,
+//!   `raim_gnss::glonass::glonass_time_of_day_with_s`), to the millisecond;
 //!   otherwise the epoch's GLONASS data is dropped and counted
 //!   ([`GLONASS_TIME_MISMATCH`]). MSM5/MSM7 also carry each satellite's
 //!   frequency channel (DF419), kept for checks
@@ -34,6 +35,11 @@
 //!   from the satellite's 1020 (an MSM range is in metres whatever the
 //!   carrier, and without a 1020 there is no orbit to use it with).
 //! - Station 1005/1006: the antenna reference point, ECEF.
+//! - System parameters 1013: GPS - UTC (DF054) for the GLONASS times, as
+//!   the unit takes it (`raim_nav::rtcm::StreamReceiver`): a count that
+//!   differs from the one the GLONASS sets given so far were placed with
+//!   withdraws them ([`Item::GlonassWithdrawn`]; each would be a second,
+//!   ~3.9 km, off), and the stream's next 1020s are placed with it.
 //!
 //! RTCM epoch times are seconds of the week (BeiDou: of the BDT week, GPS
 //! = BDT + 14 s) and ephemeris weeks are modulo 1024 (GPS, QZSS), 4096
@@ -49,7 +55,8 @@ use std::collections::BTreeMap;
 use raim_core::{SatId, System};
 use raim_gnss::ephemeris::{Kepler, BDT_MINUS_GPST_S, WEEK_S};
 use raim_gnss::glonass::{
-    glonass_time_of_day_s, glonass_time_of_day_to_gps_s, GlonassEphemeris, GlonassIcdFields,
+    glonass_time_of_day_to_gps_with_s, glonass_time_of_day_with_s, GlonassEphemeris,
+    GlonassIcdFields,
 };
 use raim_gnss::rinex_io::CodeObs;
 use raim_gnss::ObsEpoch;
@@ -146,6 +153,10 @@ pub struct Rtcm3 {
     /// Epochs (relative week, tow ms, data) before the anchor.
     waiting: Vec<Open>,
     pending_eph: Vec<PendingEph>,
+    /// GPS - UTC from the stream's latest 1013 (DF054), s.
+    stream_leap_s: Option<u8>,
+    /// The GPS - UTC the GLONASS sets given so far were placed with, s.
+    glonass_placed_leap_s: Option<f64>,
 }
 
 impl Default for Rtcm3 {
@@ -171,7 +182,21 @@ impl Rtcm3 {
             base_week: None,
             waiting: Vec::new(),
             pending_eph: Vec::new(),
+            stream_leap_s: None,
+            glonass_placed_leap_s: None,
         }
+    }
+
+    /// GPS - UTC at GPS time `t_gps_s`: the stream's latest 1013, else the
+    /// leap-second table's.
+    fn gps_minus_utc_s(&self, t_gps_s: f64) -> f64 {
+        self.stream_leap_s
+            .map_or_else(|| raim_gnss::glonass::gps_minus_utc_s(t_gps_s), f64::from)
+    }
+
+    /// GPS - UTC from the stream (RTCM 1013), if one has been received.
+    pub fn stream_leap_seconds(&self) -> Option<u8> {
+        self.stream_leap_s
     }
 
     fn frames(&mut self, out: &mut Vec<Item>, at_end: bool) {
@@ -551,6 +576,18 @@ impl Rtcm3 {
                 });
                 self.try_anchor(out);
             }
+            Message::Msg1013(m) => {
+                if let Some(n) = m.leap_seconds_gps_utc_s {
+                    if self
+                        .glonass_placed_leap_s
+                        .is_some_and(|l| l != f64::from(n))
+                    {
+                        out.push(Item::GlonassWithdrawn);
+                        self.glonass_placed_leap_s = None;
+                    }
+                    self.stream_leap_s = Some(n);
+                }
+            }
             Message::Msg1005(m) => out.push(Item::Station([
                 m.antenna_ref_point_ecef_x_m,
                 m.antenna_ref_point_ecef_y_m,
@@ -774,12 +811,16 @@ impl Rtcm3 {
                 continue;
             };
             let near_gps_s = (base + rel) as f64 * WEEK_S + tow_ms as f64 / 1000.0;
+            let leap_s = self.gps_minus_utc_s(near_gps_s);
             let fields = GlonassIcdFields {
-                tb_gps_s: glonass_time_of_day_to_gps_s(p.tb_tod_s, near_gps_s),
+                tb_gps_s: glonass_time_of_day_to_gps_with_s(p.tb_tod_s, near_gps_s, leap_s),
                 ..p.fields
             };
             match GlonassEphemeris::from_icd(&fields) {
-                Ok(g) => out.push(Item::Glonass(g)),
+                Ok(g) => {
+                    self.glonass_placed_leap_s = Some(leap_s);
+                    out.push(Item::Glonass(g))
+                }
                 Err(_) => self.ignore(GLONASS_BAD_1020.into()),
             }
         }
@@ -791,11 +832,13 @@ impl Rtcm3 {
 
     /// The epoch in absolute GPS time; its GLONASS data is kept only if
     /// the GLONASS MSM's time of day (DF034) is that of the epoch's GPS
-    /// time (leap seconds from the table), to the millisecond.
+    /// time (GPS - UTC from the stream's 1013, else the table), to the
+    /// millisecond.
     fn absolute(&mut self, base_week: i64, mut o: Open) -> ObsEpoch {
         let time_gps_s = (base_week + o.rel_week) as f64 * WEEK_S + o.tow_ms as f64 / 1000.0;
         if let Some(tod_ms) = o.glo_tod_ms {
-            let want_ms = (glonass_time_of_day_s(time_gps_s) * 1000.0).round() as i64;
+            let leap_s = self.gps_minus_utc_s(time_gps_s);
+            let want_ms = (glonass_time_of_day_with_s(time_gps_s, leap_s) * 1000.0).round() as i64;
             if (tod_ms - want_ms).rem_euclid(DAY_MS) != 0 {
                 o.sats.retain(|id, _| id.system != System::Glonass);
                 self.ignore(GLONASS_TIME_MISMATCH.into());
