@@ -553,10 +553,10 @@ fn galileo_body() {
 }
 
 /// `airborne = "ed259a_maast"` on both constellations: every satellite's
-/// C_int and C_acc are sigma_URA^2 (sigma_URE^2) + the DO-229 troposphere
-/// + MAAST for ARAIM 2's ED-259A curve 0.4^2 + (0.34 + 0.40
-/// exp(-el / 14 deg))^2 + its ionospheric residual (40 / (261 + el^2) +
-/// 0.018)^2, written out here from `af_cnmp_259a.m` and
+/// C_int and C_acc are sigma_URA^2 (sigma_URE^2) plus the DO-229
+/// troposphere, MAAST for ARAIM 2's ED-259A curve 0.4^2 + (0.34 + 0.40
+/// exp(-el / 14 deg))^2 and its ionospheric residual (40 / (261 + el^2)
+/// plus 0.018)^2, written out here from `af_cnmp_259a.m` and
 /// `usrprocess_araim.m`; at a 2 deg mask too (the curve has no table
 /// bound). At the zenith that sum is 0.29096 m^2 (worked by hand: tropo
 /// 0.12^2, airborne 0.27604, residual 0.022784^2).
