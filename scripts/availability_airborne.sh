@@ -37,8 +37,8 @@ def users(name):
         return [(float(r["availability"]), float(r["vpl_p995_m"])) for r in csv.DictReader(f)]
 base = users(runs[0][0])
 rows = [
-    "| airborne model | run file | coverage at 99.5 % | at 99 % | mean availability | worst user VPL (99.5th pct) | users less / more available than the default | per-user VPL (99.5th pct) against the default: mean, range |",
-    "| --- | --- | ---: | ---: | ---: | ---: | ---: | --- |",
+    "| airborne model | run file | coverage at 99.5 % | at 99 % | mean availability | worst user VPL (99.5th pct) | users less / more available than the default | users with a lower / higher VPL (99.5th pct) | per-user VPL (99.5th pct) against the default: mean, range |",
+    "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | --- |",
 ]
 for name, label in runs:
     s = json.load(open(f"{d}/availability_{name}.summary.json"))
@@ -50,9 +50,12 @@ for name, label in runs:
     rel = [(v - b[1]) / b[1] * 100 for (_, v), b in zip(u, base)]
     ch = "-" if name == runs[0][0] else f"{sum(rel) / len(rel):+.2f} %, {min(rel):+.2f} .. {max(rel):+.2f} %"
     lm = "-" if name == runs[0][0] else f"{less} / {more}"
+    lower = sum(v < b[1] for (_, v), b in zip(u, base))
+    higher = sum(v > b[1] for (_, v), b in zip(u, base))
+    lh = "-" if name == runs[0][0] else f"{lower} / {higher}"
     rows.append(
         f"| {label} | docs/runs/availability_{name}.toml | {cov[0.995] * 100:.2f} % | {cov[0.99] * 100:.2f} % "
-        f"| {s['mean_availability_area_weighted'] * 100:.3f} % | {s['worst_user_vpl_percentile_m']:.2f} m | {lm} | {ch} |"
+        f"| {s['mean_availability_area_weighted'] * 100:.3f} % | {s['worst_user_vpl_percentile_m']:.2f} m | {lm} | {lh} | {ch} |"
     )
 open(out, "w").write("\n".join(rows) + "\n")
 EOF
