@@ -19,6 +19,8 @@
 #   multifault-group-counts, multifault-amplification (docs/MULTIFAULT.md), pf-memory (docs/PF.md, that block only).
 #   Also docs/AVAILABILITY.md availability-sweep and docs/availability/sweep/ (scripts/availability_sweep.sh),
 #   and docs/availability/'s single runs (scripts/availability_outputs.sh).
+#   Also docs/AVAILABILITY.md availability-airborne-curves and availability-airborne-coverage
+#   (scripts/availability_airborne.sh, after the single runs it reads).
 # Long (seeded Monte Carlo; rerun by hand, not in CI):
 #   multifault-mc (docs/MULTIFAULT.md), budget-mc (docs/BUDGET.md), docs/mcraim_seed001.txt and
 #   docs/mcraim_scenario.txt (raim arl --seed001 / --scenario).
@@ -573,6 +575,8 @@ sweep_status=0
 if [ $MODE = check ]; then bash scripts/availability_sweep.sh --check || sweep_status=1; else bash scripts/availability_sweep.sh; fi
 # --- docs/availability/'s single runs (about 20 CPU seconds).
 if [ $MODE = check ]; then bash scripts/availability_outputs.sh --check || sweep_status=1; else bash scripts/availability_outputs.sh; fi
+# --- docs/AVAILABILITY.md's airborne-curve tables (from the single runs above).
+if [ $MODE = check ]; then bash scripts/availability_airborne.sh --check || sweep_status=1; else bash scripts/availability_airborne.sh; fi
 
 if [ $MODE = check ]; then
   status=$sweep_status

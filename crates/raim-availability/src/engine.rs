@@ -152,12 +152,19 @@ pub fn visible(
         let los = rotate(rot, [d[0] / r, d[1] / r, d[2] / r]);
         if los[2] >= sin_mask {
             // The core's curves (sigma_m None) unless the constellation
-            // uses the Galileo E1/E5a table: then the observation's own
-            // sigma, at the elevation the core would take from the row.
+            // uses the Galileo E1/E5a table or MAAST for ARAIM 2's ED-259A
+            // curve: then the observation's own sigma, at the elevation
+            // the core would take from the row.
             let sigma_m = match study.airborne[s.id.system.index()] {
                 Airborne::GpsL1l5 => None,
                 Airborne::GalileoE1e5a => Some(
                     raim_core::araim::error_model::galileo_e1e5a_variance_m2(
+                        raim_core::araim::error_model::elevation_from_g(&los),
+                    )
+                    .sqrt(),
+                ),
+                Airborne::Ed259aMaast => Some(
+                    crate::airborne::ed259a_maast_variance_m2(
                         raim_core::araim::error_model::elevation_from_g(&los),
                     )
                     .sqrt(),

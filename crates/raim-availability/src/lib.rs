@@ -4,6 +4,7 @@
 //! path, not a copy), summarised as per-user availability and PL
 //! percentiles and an area-weighted coverage, in shards that merge exactly.
 
+pub mod airborne;
 pub mod almanac;
 pub mod cli;
 pub mod engine;

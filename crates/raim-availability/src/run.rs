@@ -87,6 +87,9 @@ pub enum Airborne {
     GpsL1l5,
     /// The Galileo E1/E5a table (raim-core's `galileo_e1e5a_variance_m2`).
     GalileoE1e5a,
+    /// The dual-frequency curve MAAST for ARAIM 2 implements after ED-259A
+    /// (`airborne::ed259a_maast_variance_m2`), for GPS and Galileo alike.
+    Ed259aMaast,
 }
 
 /// The continuity allocation to failed exclusions (`[continuity]`).
@@ -249,8 +252,10 @@ pub struct ConstellationSpec {
     pub p_const: f64,
     /// The airborne multipath and noise curve: `gps_l1l5` (the ADD's GPS
     /// L1/L5 curves through the iono-free factor, raim-core's default, the
-    /// default here) or `galileo_e1e5a` (the Galileo E1/E5a table MAAST's
-    /// ARAIM uses, raim-core's `error_model::galileo_e1e5a_sigma_m`).
+    /// default here), `galileo_e1e5a` (the Galileo E1/E5a table MAAST's
+    /// ARAIM uses, raim-core's `error_model::galileo_e1e5a_sigma_m`) or
+    /// `ed259a_maast` (MAAST for ARAIM 2's ED-259A curve with its
+    /// ionospheric residual, `airborne::ed259a_maast_variance_m2`).
     #[serde(default)]
     pub airborne: Airborne,
     /// Mean duration of a satellite fault (s; `exclusion = "continuity"`).

@@ -552,6 +552,70 @@ fn galileo_body() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
+/// `airborne = "ed259a_maast"` on both constellations: every satellite's
+/// C_int and C_acc are sigma_URA^2 (sigma_URE^2) plus the DO-229
+/// troposphere, MAAST for ARAIM 2's ED-259A curve 0.4^2 + (0.34 + 0.40
+/// exp(-el / 14 deg))^2 and its ionospheric residual (40 / (261 + el^2)
+/// plus 0.018)^2, written out here from `af_cnmp_259a.m` and
+/// `usrprocess_araim.m`; at a 2 deg mask too (the curve has no table
+/// bound). At the zenith that sum is 0.29096 m^2 (worked by hand: tropo
+/// 0.12^2, airborne 0.27604, residual 0.022784^2).
+///
+/// Verifies: SPEC-14, SPEC-9.1
+#[test]
+fn ed259a_maast_curve_feeds_the_core() {
+    on_engine_stack(ed259a_body);
+}
+
+fn ed259a_maast_m2(el_rad: f64) -> f64 {
+    let el = el_rad.to_degrees();
+    let tropo = 0.12 * 1.001 / (0.002_001 + el_rad.sin().powi(2)).sqrt();
+    let mp = 0.34 + 0.40 * (-el / 14.0).exp();
+    let iono = 40.0 / (261.0 + el * el) + 0.018;
+    tropo * tropo + 0.16 + mp * mp + iono * iono
+}
+
+fn ed259a_body() {
+    assert!((ed259a_maast_m2(std::f64::consts::FRAC_PI_2) - 0.290_96).abs() < 1e-5);
+    let d = tmp_dir("ed259a");
+    let runf = d.join("e.toml");
+    let text = small_run()
+        .replace(
+            "week_rollovers = 0\n",
+            "week_rollovers = 0\nairborne = \"ed259a_maast\"\n",
+        )
+        .replace("mask_deg = 5.0", "mask_deg = 2.0");
+    assert_eq!(text.matches("ed259a_maast").count(), 2, "{text}");
+    std::fs::write(&runf, &text).expect("write run");
+    let study = run::load(&runf).expect("study");
+    let mut monitor = engine::new_engine();
+    let (mut n_gal, mut n_gps, mut low) = (0, 0, 0);
+    for (ui, k) in
+        (0..study.users.len()).flat_map(|u| (0..study.epochs_gps_s.len()).map(move |k| (u, k)))
+    {
+        let sky = engine::sky_table(&study, k..k + 1);
+        let (x, rot) = engine::user_frame(&study, &study.users[ui]);
+        let mut obs = Vec::new();
+        engine::visible(&study, &sky, x, &rot, &mut obs);
+        engine::evaluate(&study, &mut monitor, &obs).expect("epoch");
+        for s in monitor.satellites() {
+            let el_rad = (-s.g_enu[2]).asin();
+            if s.id.system == raim_core::System::Galileo {
+                n_gal += 1;
+            } else {
+                n_gps += 1;
+            }
+            low += usize::from(el_rad.to_degrees() < 5.0);
+            let v = ed259a_maast_m2(el_rad);
+            assert!((s.c_int_m2 - (1.0 + v)).abs() < 1e-9, "{:?}", s.id);
+            assert!((s.c_acc_m2 - (4.0 / 9.0 + v)).abs() < 1e-9, "{:?}", s.id);
+        }
+    }
+    assert!(n_gal > 100 && n_gps > 100, "{n_gal} {n_gps}");
+    assert!(low > 0, "no satellite between the 2 and 5 deg masks");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 /// `--outages G`: the run as given and each of the 24 GPS outages, each
 /// written as a run of its own; the outage of G05 gives the per-user CSV
 /// of a separate run with `remove = [5]` byte for byte, and its row of
