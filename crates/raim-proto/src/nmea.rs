@@ -46,8 +46,12 @@
 //!   solved position (or the epoch's a-priori position) and the satellite's
 //!   position (pseudorange epochs) or its line of sight (linearised
 //!   epochs); C/N0 when the caller knows it ([`Sky::cn0_dbhz`]), else empty.
-//! - VTG: course and speed empty (the monitor estimates no velocity), with
-//!   the mode indicator.
+//! - RMC speed and course, VTG: when the caller has the receiver's velocity
+//!   ([`Sky::velocity`]: a stream epoch with Doppler, decision `Ok` or
+//!   `Excluded`, `raim_nav::velocity`), RMC's speed over ground in knots
+//!   and true course in degrees, VTG's true course, speed in knots and in
+//!   km/h (magnetic course empty: no magnetic model); else those fields
+//!   empty, with the mode indicator. 1 knot = 1852 m / 3600 s.
 //! - GST: rms of the all-in-view range residuals; the error ellipse from the
 //!   1-sigma east/north errors (no cross term in the result: axes along
 //!   north and east); 1-sigma lat/lon/alt errors.
@@ -298,6 +302,39 @@ pub struct Sky<'a> {
     /// tracked has more; `raim_nav::ranging::cn0_dbhz_u8`). A value above
     /// 99, which GSV's two digits cannot hold, is written as unknown.
     pub cn0_dbhz: &'a [u8],
+    /// The receiver's speed and course over ground, when known (RMC,
+    /// VTG); None: those fields empty.
+    pub velocity: Option<GroundVelocity>,
+}
+
+/// Speed and course over ground, for RMC and VTG.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GroundVelocity {
+    /// Horizontal speed, m/s.
+    pub speed_m_s: f64,
+    /// Direction of the horizontal velocity, clockwise from true north,
+    /// rad.
+    pub course_rad: f64,
+}
+
+/// Metres per second in a knot (1852 m per hour).
+const KNOT_M_S: f64 = 1852.0 / 3600.0;
+/// Metres per second in a km/h.
+const KM_H_M_S: f64 = 1000.0 / 3600.0;
+
+impl GroundVelocity {
+    /// Speed in knots, course in degrees in [0, 360) (a course that
+    /// rounds to 360.00 at the field's 2 decimals is written 0).
+    fn knots_deg(&self) -> (f64, f64) {
+        let mut deg = libm::fmod(self.course_rad.to_degrees(), 360.0);
+        if deg < 0.0 {
+            deg += 360.0;
+        }
+        if deg >= 359.995 {
+            deg = 0.0;
+        }
+        (self.speed_m_s / KNOT_M_S, deg)
+    }
 }
 
 impl<'a> Sky<'a> {
@@ -306,6 +343,7 @@ impl<'a> Sky<'a> {
         Sky {
             epoch,
             cn0_dbhz: &[],
+            velocity: None,
         }
     }
 
@@ -540,8 +578,8 @@ pub fn write_epoch<E>(
         Ok(s) => emit(&s),
         Err(TooLong) => Ok(()),
     };
-    put(rmc(r))?;
-    put(vtg(r))?;
+    put(rmc(r, sky.velocity))?;
+    put(vtg(r, sky.velocity))?;
     put(gga(r, dop, BUILT.geoid && opts.geoid))?;
     for sys in System::ALL {
         let used = r
@@ -629,9 +667,11 @@ fn start(b: &mut Body, talker: &str, name: &str) -> core::fmt::Result {
     b.write_char(',')
 }
 
-/// RMC: time, status, position, (no speed/course), date, (no variation),
-/// mode, NMEA 4.1 navigational status (the integrity decision).
-pub fn rmc(r: &WireResult) -> Result<Sentence, TooLong> {
+/// RMC: time, status, position, speed over ground (knots) and true
+/// course (degrees) when `velocity` is given (else empty), date, (no
+/// variation), mode, NMEA 4.1 navigational status (the integrity
+/// decision).
+pub fn rmc(r: &WireResult, velocity: Option<GroundVelocity>) -> Result<Sentence, TooLong> {
     let utc = Utc::from_unix_s(r.time_s);
     let mut b = Body::new();
     start(&mut b, talker(r), "RMC")?;
@@ -640,7 +680,16 @@ pub fn rmc(r: &WireResult) -> Result<Sentence, TooLong> {
     b.write_char(if usable(r) { 'A' } else { 'V' })?;
     b.write_char(',')?;
     position_fields(&mut b, r)?;
-    b.write_str(",,,")?;
+    b.write_char(',')?;
+    if let Some(v) = velocity {
+        let (knots, deg) = v.knots_deg();
+        num(&mut b, knots, 3, 7)?;
+        b.write_char(',')?;
+        num(&mut b, deg, 2, 6)?;
+    } else {
+        b.write_char(',')?;
+    }
+    b.write_char(',')?;
     if let Some(u) = utc {
         u.write_date(&mut b)?;
     }
@@ -657,11 +706,24 @@ pub fn rmc(r: &WireResult) -> Result<Sentence, TooLong> {
     finish(&b)
 }
 
-/// VTG: no course or speed (not estimated), mode A (usable) or N.
-pub fn vtg(r: &WireResult) -> Result<Sentence, TooLong> {
+/// VTG: true course (degrees), no magnetic course, speed in knots and
+/// km/h when `velocity` is given (else those fields empty), mode A
+/// (usable) or N.
+pub fn vtg(r: &WireResult, velocity: Option<GroundVelocity>) -> Result<Sentence, TooLong> {
     let mut b = Body::new();
     start(&mut b, talker(r), "VTG")?;
-    b.write_str(",T,,M,,N,,K,")?;
+    match velocity {
+        Some(v) => {
+            let (knots, deg) = v.knots_deg();
+            num(&mut b, deg, 2, 6)?;
+            b.write_str(",T,,M,")?;
+            num(&mut b, knots, 3, 7)?;
+            b.write_str(",N,")?;
+            num(&mut b, v.speed_m_s / KM_H_M_S, 3, 8)?;
+            b.write_str(",K,")?;
+        }
+        None => b.write_str(",T,,M,,N,,K,")?,
+    }
     b.write_char(if usable(r) { 'A' } else { 'N' })?;
     finish(&b)
 }

@@ -85,6 +85,7 @@ impl StreamState {
                 reference_m: None,
                 sats: heapless::Vec::new(),
                 cn0_dbhz: heapless::Vec::new(),
+                rates: heapless::Vec::new(),
                 rejected: 0,
             },
             epochs: 0,
@@ -123,6 +124,15 @@ impl StreamState {
     /// The C/N0 of the satellites of the epoch formed last (GSV).
     pub(crate) fn cn0_dbhz(&self) -> &[u8] {
         &self.formed.cn0_dbhz
+    }
+
+    /// The speed and course over ground of the epoch formed last, for RMC
+    /// and VTG ([`ground_velocity`]).
+    pub(crate) fn velocity(
+        &self,
+        wire: &raim_proto::result::WireResult,
+    ) -> Option<raim_proto::nmea::GroundVelocity> {
+        ground_velocity(&self.formed, wire)
     }
 
     /// Epochs formed (answered or refused) and ephemerides held.
@@ -171,6 +181,43 @@ pub fn stream_sigmas(config: Option<&raim_core::Config>, araim: bool) -> StreamS
     } else {
         StreamSigmas::Snapshot(model)
     }
+}
+
+/// The speed and course over ground of a formed stream epoch whose
+/// answer is `wire` (docs/RECEIVERS.md "Speed and course"): none unless
+/// the decision is `Ok` or `Excluded` with a position; else the velocity
+/// solution ([`raim_nav::velocity::solve`]) at that position from the
+/// Doppler of the satellites the answer used (an excluded satellite is
+/// left out), each weighted by its range sigma; none when fewer than four
+/// have a rate or the geometry is singular.
+pub fn ground_velocity<const N: usize>(
+    formed: &FormedEpoch<N>,
+    wire: &raim_proto::result::WireResult,
+) -> Option<raim_proto::nmea::GroundVelocity> {
+    use raim_core::Decision;
+    use raim_nav::velocity::{solve, RateObservation};
+    if !matches!(wire.decision, Decision::Ok | Decision::Excluded) {
+        return None;
+    }
+    let rx_m = wire.position_ecef_m?;
+    let used = |id: raim_core::SatId| wire.satellites.iter().any(|s| s.id == id && s.used);
+    let mut sats = formed
+        .sats
+        .iter()
+        .zip(formed.rates.iter())
+        .filter_map(|(obs, rate)| {
+            let rate = (*rate)?;
+            used(obs.id).then_some(RateObservation {
+                sat_position_m: obs.position_m,
+                rate,
+                sigma_m: obs.sigma_m.unwrap_or(1.0),
+            })
+        });
+    let v = solve(rx_m, &mut sats).ok()?;
+    Some(raim_proto::nmea::GroundVelocity {
+        speed_m_s: v.speed_over_ground_m_s(),
+        course_rad: v.course_over_ground_rad(),
+    })
 }
 
 /// The monitor a staged stream epoch runs.

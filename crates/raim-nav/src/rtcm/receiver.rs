@@ -57,7 +57,7 @@
 use heapless::Vec;
 use raim_core::{RangeObservation, SatId, System};
 
-use crate::ephemeris::{SatState, BDT_MINUS_GPST_S, WEEK_S};
+use crate::ephemeris::{SatState, BDT_MINUS_GPST_S, C_M_S, WEEK_S};
 use crate::glonass::{
     glonass_time_of_day_to_gps_with_s, glonass_time_of_day_with_s, GlonassArc, GlonassEphemeris,
     GlonassIcdFields,
@@ -69,6 +69,9 @@ use crate::ranging::{
 };
 use crate::store::{DecodedSets, EphemerisStore, Stored};
 use crate::time::table_gps_minus_utc_s;
+use crate::velocity::{
+    glonass_motion, kepler_motion, kepler_transmit_time_s, range_rate, RangeRate, SatMotion,
+};
 
 use super::decode::{msm_more_bit, Frame, Message, Msm, MsmSystem};
 use super::fields::{gps_week_of, kepler, toc_near_toe};
@@ -151,8 +154,9 @@ impl GlonassArcs {
     /// `g`'s state at `t_gps_s`, from its arc: the one kept for `g`, else
     /// a new one in place of an arc no satellite of this epoch uses (with
     /// every arc in use, which 27 slots do not reach, integrated from t_b
-    /// as [`GlonassEphemeris::state`]).
-    fn state(&mut self, g: &GlonassEphemeris, t_gps_s: f64) -> SatState {
+    /// as [`GlonassEphemeris::state`]); with the integration's velocity
+    /// there (PZ-90.11, m/s: the velocity solution's, [`glonass_motion`]).
+    fn state(&mut self, g: &GlonassEphemeris, t_gps_s: f64) -> (SatState, [f64; 3]) {
         let epoch = self.epoch;
         let at = match self.arcs.iter().position(|(a, _)| a.ephemeris() == g) {
             Some(i) => Some(i),
@@ -168,13 +172,20 @@ impl GlonassArcs {
                 }
             }
         };
-        match at.and_then(|i| self.arcs.get_mut(i)) {
+        let (p, v) = match at.and_then(|i| self.arcs.get_mut(i)) {
             Some((arc, used)) => {
                 *used = epoch;
-                arc.state(t_gps_s)
+                arc.propagate_pz90(t_gps_s)
             }
-            None => g.state(t_gps_s),
-        }
+            None => g.propagate_pz90(t_gps_s),
+        };
+        // `GlonassArc::state`'s and `GlonassEphemeris::state`'s own
+        // position and clock, to the bit.
+        let state = SatState {
+            position_m: crate::glonass::pz90_to_wgs84(p),
+            clock_s: g.clock_s(t_gps_s),
+        };
+        (state, v)
     }
 }
 
@@ -269,11 +280,20 @@ struct Signal {
     /// C/N0, whole dB-Hz (0: unknown; `cn0_dbhz_u8`).
     cn0_dbhz: u8,
     value_m: f64,
+    /// The phase-range rate (MSM5/MSM7 DF399 + DF404), m/s; NaN when the
+    /// MSM has none (8 bytes where an `Option` takes 16, in every signal
+    /// an epoch holds: [`Self::rate_m_s`] reads it).
+    rate_or_nan_m_s: f64,
 }
 
 impl Signal {
     fn code(&self) -> &str {
         core::str::from_utf8(&self.code).unwrap_or("")
+    }
+
+    /// The phase-range rate, m/s, if the MSM gave one.
+    fn rate_m_s(&self) -> Option<f64> {
+        (!self.rate_or_nan_m_s.is_nan()).then_some(self.rate_or_nan_m_s)
     }
 }
 
@@ -308,9 +328,36 @@ pub struct FormedEpoch<const N: usize> {
     /// the first signal of the code it was ranged with (the pair's higher
     /// frequency); 0 when the MSM gave none (MSM4-7 carry it).
     pub cn0_dbhz: Vec<u8, N>,
+    /// The Doppler input of each satellite of `sats` (same order) for the
+    /// velocity solution ([`crate::velocity`]): the phase-range rate of
+    /// the first signal of the code it was ranged with, its velocity and
+    /// clock drift at its transmit time; None when the MSM carries no
+    /// rate (MSM4/MSM6, or marked invalid) or the epoch has no reference
+    /// position.
+    pub rates: Vec<Option<RangeRate>, N>,
     /// Satellites seen but not used (no code, no ephemeris, below the
     /// mask, system not used here).
     pub rejected: u32,
+}
+
+impl<const N: usize> FormedEpoch<N> {
+    /// An empty epoch, to be formed into.
+    pub const fn new() -> Self {
+        FormedEpoch {
+            time_gps_s: 0.0,
+            reference_m: None,
+            sats: Vec::new(),
+            cn0_dbhz: Vec::new(),
+            rates: Vec::new(),
+            rejected: 0,
+        }
+    }
+}
+
+impl<const N: usize> Default for FormedEpoch<N> {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 /// The scratch of one epoch's forming, used only inside
@@ -327,6 +374,12 @@ pub struct FormScratch<const N: usize> {
     transmit: Vec<Option<SatState>, N>,
     /// The Keplerian sets the epoch uses ([`EphemerisStore::load`]).
     decoded: DecodedSets<N>,
+    /// Each input satellite's phase-range rate (the first signal of its
+    /// code), m/s.
+    rates: Vec<Option<f64>, N>,
+    /// Each input satellite's velocity and clock drift at its transmit
+    /// time, when it has a rate.
+    motion: Vec<Option<SatMotion>, N>,
 }
 
 impl<const N: usize> FormScratch<N> {
@@ -336,6 +389,8 @@ impl<const N: usize> FormScratch<N> {
             bootstrap_obs: Vec::new(),
             transmit: Vec::new(),
             decoded: DecodedSets::new(),
+            rates: Vec::new(),
+            motion: Vec::new(),
         }
     }
 }
@@ -809,10 +864,13 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             bootstrap_obs: first,
             transmit,
             decoded,
+            rates,
+            motion,
         } = scratch;
         let o = ready.as_mut()?;
         out.sats.clear();
         out.cn0_dbhz.clear();
+        out.rates.clear();
         out.rejected = 0;
         out.reference_m = None;
         let Some(base) = *base_week else {
@@ -855,6 +913,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         let mut inputs: Vec<SatInput<'_>, N> = Vec::new();
         // The C/N0 of each input, in the same order.
         let mut cn0s: Vec<u8, N> = Vec::new();
+        rates.clear();
         let mut previous: Option<SatId> = None;
         for s in o.sigs.iter() {
             if previous == Some(s.id) {
@@ -871,7 +930,8 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                     .count();
                 o.sigs.get(start..start + len).unwrap_or(&[])
             };
-            let Some((code, p1_m, p2_m, cn0)) = pick_code(stream_codes(s.id.system), have) else {
+            let Some((code, p1_m, p2_m, cn0, rate)) = pick_code(stream_codes(s.id.system), have)
+            else {
                 out.rejected += 1;
                 continue;
             };
@@ -886,7 +946,8 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 p2_m,
                 eph,
             };
-            if inputs.push(input).is_err() || cn0s.push(cn0).is_err() {
+            if inputs.push(input).is_err() || cn0s.push(cn0).is_err() || rates.push(rate).is_err()
+            {
                 return Some(Err(FormError::TooManySignals {
                     capacity: u32::try_from(N).unwrap_or(u32::MAX),
                 }));
@@ -904,17 +965,33 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // Each satellite's orbit and clock at its transmit time, once for
         // both passes (the transmit time does not depend on the receiver
         // position); a GLONASS orbit from its arc.
+        // A satellite with a phase-range rate: its velocity and clock
+        // drift there too (a GLONASS velocity from the same integration; a
+        // Keplerian one at the transmit time of the code's range,
+        // `kepler_transmit_time_s`).
         glonass_arcs.next_epoch();
         transmit.clear();
-        for s in inputs.iter() {
-            let tx = match s.eph {
-                Broadcast::Glonass(g) => transmit_time_s(s, time_gps_s)
-                    .ok()
-                    .map(|t| glonass_arcs.state(g, t)),
-                Broadcast::Kepler(_) => transmit_state(s, time_gps_s).ok(),
+        motion.clear();
+        for (s, rate) in inputs.iter().zip(rates.iter()) {
+            let (tx, mo) = match s.eph {
+                Broadcast::Glonass(g) => match transmit_time_s(s, time_gps_s) {
+                    Ok(t) => {
+                        let (state, v) = glonass_arcs.state(g, t);
+                        (Some(state), rate.map(|_| glonass_motion(v, g.gamma_n)))
+                    }
+                    Err(_) => (None, None),
+                },
+                Broadcast::Kepler(k) => (
+                    transmit_state(s, time_gps_s).ok(),
+                    rate.map(|_| {
+                        let t_sv = time_gps_s - s.p1_m / C_M_S;
+                        kepler_motion(k, kepler_transmit_time_s(k, t_sv))
+                    }),
+                ),
             };
-            // `inputs` and `transmit` have the same capacity N.
+            // `inputs`, `transmit` and `motion` have the same capacity N.
             let _ = transmit.push(tx);
+            let _ = motion.push(mo);
         }
         // The bootstrap pass: clock- and rotation-corrected ranges.
         let apriori = *station_m;
@@ -933,7 +1010,12 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // The receiver's frame (geodetic position, local-level rotation,
         // zenith troposphere), once for every satellite.
         let rx_frame = reference.map(ReceiverFrame::at);
-        for ((s, tx), cn0) in inputs.iter().zip(transmit.iter()).zip(cn0s.iter()) {
+        for (((s, tx), cn0), (rate, mo)) in inputs
+            .iter()
+            .zip(transmit.iter())
+            .zip(cn0s.iter())
+            .zip(rates.iter().zip(motion.iter()))
+        {
             let Some(tx) = tx else {
                 out.rejected += 1;
                 continue;
@@ -956,10 +1038,17 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                         x.elevation_rad,
                         NO_MODEL_IONO_FACTOR,
                     ));
-                    // `out.sats` and `out.cn0_dbhz` have the capacity N of
-                    // `inputs`, and are filled together.
+                    let doppler = match (rate, mo, reference) {
+                        (Some(r), Some(mo), Some(rx)) => {
+                            Some(range_rate(*r, mo, x.obs.position_m, rx))
+                        }
+                        _ => None,
+                    };
+                    // `out.sats`, `out.cn0_dbhz` and `out.rates` have the
+                    // capacity N of `inputs`, and are filled together.
                     if out.sats.push(x.obs).is_ok() {
                         let _ = out.cn0_dbhz.push(*cn0);
+                        let _ = out.rates.push(doppler);
                     }
                 }
                 Err(_) => out.rejected += 1,
@@ -987,21 +1076,32 @@ fn msm_signals<'m>(m: &'m Msm<'_>, system: System) -> impl Iterator<Item = Signa
             code: [b'C', b'0' + s.band, s.attribute],
             cn0_dbhz: cn0_dbhz_u8(s.cnr_dbhz),
             value_m: s.pseudorange_m?,
+            rate_or_nan_m_s: s.phase_range_rate_m_s.unwrap_or(f64::NAN),
         })
     })
 }
 
 /// The first preferred code present: a single code, or a pair (both
-/// present) for the iono-free combination; with the C/N0 of its (first)
-/// signal.
-fn pick_code<'c>(codes: &[&'c str], have: &[Signal]) -> Option<(&'c str, f64, Option<f64>, u8)> {
+/// present) for the iono-free combination; with the C/N0 and the
+/// phase-range rate of its (first) signal.
+#[allow(clippy::type_complexity)]
+fn pick_code<'c>(
+    codes: &[&'c str],
+    have: &[Signal],
+) -> Option<(&'c str, f64, Option<f64>, u8, Option<f64>)> {
     let find = |c: &str| have.iter().find(|s| s.code() == c);
     codes.iter().find_map(|&c| match split_pair(c) {
         Some((a, b)) => {
             let first = find(a)?;
-            Some((c, first.value_m, Some(find(b)?.value_m), first.cn0_dbhz))
+            Some((
+                c,
+                first.value_m,
+                Some(find(b)?.value_m),
+                first.cn0_dbhz,
+                first.rate_m_s(),
+            ))
         }
-        None => find(c).map(|s| (c, s.value_m, None, s.cn0_dbhz)),
+        None => find(c).map(|s| (c, s.value_m, None, s.cn0_dbhz, s.rate_m_s())),
     })
 }
 
