@@ -330,7 +330,7 @@ pub struct FormedEpoch<const N: usize> {
     pub cn0_dbhz: Vec<u8, N>,
     /// The Doppler input of each satellite of `sats` (same order) for the
     /// velocity solution ([`crate::velocity`]): the phase-range rate of
-    /// the first signal of the code it was ranged with, its velocity and
+    /// the signal it was ranged with (`pick_code`'s rule), its velocity and
     /// clock drift at its transmit time; None when the MSM carries no
     /// rate (MSM4/MSM6, or marked invalid) or the epoch has no reference
     /// position.
@@ -946,8 +946,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 p2_m,
                 eph,
             };
-            if inputs.push(input).is_err() || cn0s.push(cn0).is_err() || rates.push(rate).is_err()
-            {
+            if inputs.push(input).is_err() || cn0s.push(cn0).is_err() || rates.push(rate).is_err() {
                 return Some(Err(FormError::TooManySignals {
                     capacity: u32::try_from(N).unwrap_or(u32::MAX),
                 }));
@@ -1082,26 +1081,38 @@ fn msm_signals<'m>(m: &'m Msm<'_>, system: System) -> impl Iterator<Item = Signa
 }
 
 /// The first preferred code present: a single code, or a pair (both
-/// present) for the iono-free combination; with the C/N0 and the
-/// phase-range rate of its (first) signal.
+/// present) for the iono-free combination; with the C/N0 of its (first)
+/// signal and the satellite's phase-range rate: its (first) signal's,
+/// else the pair's second's, else the first of the satellite's other
+/// signals (in code order) that has one (a range rate is the same on
+/// every carrier but for the ionosphere's rate, a few mm/s; a receiver
+/// may send it on one signal only, e.g. GMSD7 on L1 C/A, not on the P
+/// codes GLONASS is ranged with).
 #[allow(clippy::type_complexity)]
 fn pick_code<'c>(
     codes: &[&'c str],
     have: &[Signal],
 ) -> Option<(&'c str, f64, Option<f64>, u8, Option<f64>)> {
     let find = |c: &str| have.iter().find(|s| s.code() == c);
+    let any_rate = || have.iter().find_map(Signal::rate_m_s);
     codes.iter().find_map(|&c| match split_pair(c) {
         Some((a, b)) => {
-            let first = find(a)?;
-            Some((
-                c,
-                first.value_m,
-                Some(find(b)?.value_m),
-                first.cn0_dbhz,
-                first.rate_m_s(),
-            ))
+            let (first, second) = (find(a)?, find(b)?);
+            let rate = first
+                .rate_m_s()
+                .or_else(|| second.rate_m_s())
+                .or_else(any_rate);
+            Some((c, first.value_m, Some(second.value_m), first.cn0_dbhz, rate))
         }
-        None => find(c).map(|s| (c, s.value_m, None, s.cn0_dbhz, s.rate_m_s())),
+        None => find(c).map(|s| {
+            (
+                c,
+                s.value_m,
+                None,
+                s.cn0_dbhz,
+                s.rate_m_s().or_else(any_rate),
+            )
+        }),
     })
 }
 
