@@ -16,10 +16,29 @@
 
 mod rtcm_common;
 
+use std::io::{BufRead, BufReader, Write};
+use std::net::{TcpListener, TcpStream};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
 use raim_core::Config;
 use raim_nav::rtcm::{FormError, FormedEpoch, StreamReceiver};
 use raim_nav::velocity::{solve, RateObservation, ReceiverVelocity};
-use rtcm_common::{frames, GMSD7, GMSD7_PIVOT_WEEK, MASK_RAD};
+use rtcm_common::{frames, gmsd7_moved_to, in_window_week, GMSD7, GMSD7_PIVOT_WEEK, MASK_RAD};
+
+/// The largest speed over ground a static station's epoch may show, m/s:
+/// a geodetic receiver's MSM phase-range rates are good to a few cm/s
+/// (GMSD7: 7 rates an epoch, speed rms 0.017 m/s, largest 0.043 m/s),
+/// and a velocity of 0.2 m/s at rest would be an error of the model (a
+/// satellite velocity or Earth-rotation term wrong by a part in 10^4 of
+/// a satellite's 3.9 km/s gives 0.4 m/s).
+const STATIC_SPEED_TOL_M_S: f64 = 0.2;
+/// The same for the vertical velocity, m/s (GMSD7: rms 0.020, largest
+/// 0.063 m/s; the vertical geometry is weaker).
+const STATIC_VERTICAL_TOL_M_S: f64 = 0.3;
+/// Metres per second in a knot and in a km/h.
+const KNOT_M_S: f64 = 1852.0 / 3600.0;
+const KM_H_M_S: f64 = 1000.0 / 3600.0;
 
 /// Every epoch the device receiver forms from `bytes` (pivot
 /// `pivot_week`), with the velocity at its reference position from every
@@ -93,15 +112,351 @@ fn gmsd7_warm() -> Vec<u8> {
     [eph, whole].concat()
 }
 
+/// The device receiver on GMSD7 (warm): every dated epoch with a
+/// reference position has its GPS and GLONASS satellites' rates (MSM7
+/// DF399 + DF404; GLONASS's from its L1 C/A signal), and the velocity
+/// solution at the station is a static antenna's.
+///
+/// Verifies: RX-DOPPLER, RX-VELOCITY
 #[test]
-fn gmsd7_static_velocity() {
+fn gmsd7_static_station_velocity_is_near_zero() {
     let bytes = gmsd7_warm();
     let all = velocities(&bytes, GMSD7_PIVOT_WEEK);
     let with_rates = all
         .iter()
         .filter(|(f, _)| f.rates.iter().any(|r| r.is_some()))
         .count();
+    let glonass_rates = all
+        .iter()
+        .flat_map(|(f, _)| f.sats.iter().zip(&f.rates))
+        .filter(|(o, r)| o.id.system == raim_core::System::Glonass && r.is_some())
+        .count();
     let v: Vec<ReceiverVelocity> = all.iter().filter_map(|(_, v)| *v).collect();
-    println!("{} epochs, {with_rates} with rates", all.len());
-    stats("GMSD7", &v);
+    println!(
+        "{} epochs, {with_rates} with rates ({glonass_rates} GLONASS rates)",
+        all.len()
+    );
+    let (sog, up) = stats("GMSD7", &v);
+    assert!(v.len() >= 240, "{}", v.len());
+    assert!(glonass_rates > 200, "{glonass_rates}");
+    assert!(sog < STATIC_SPEED_TOL_M_S && up < STATIC_VERTICAL_TOL_M_S);
+}
+
+/// GMSD7 warm, sent within this build's dating window.
+fn gmsd7_warm_in_window() -> Vec<u8> {
+    let file = std::fs::read(GMSD7).expect("GMSD7 stream (../shared/data)");
+    let moved = gmsd7_moved_to(&file, in_window_week());
+    let eph: Vec<u8> = frames(&moved)
+        .into_iter()
+        .filter(|f| {
+            let n = rtcm_rs::MessageFrame::new(f)
+                .ok()
+                .and_then(|m| m.message_number());
+            matches!(n, Some(1019 | 1020))
+        })
+        .flatten()
+        .copied()
+        .collect();
+    let whole: Vec<u8> = frames(&moved).into_iter().flatten().copied().collect();
+    [eph, whole].concat()
+}
+
+struct Sink(Vec<u8>);
+impl embedded_io::ErrorType for Sink {
+    type Error = core::convert::Infallible;
+}
+impl embedded_io::Write for Sink {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        self.0.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+/// The unit's NMEA on `bytes` (a host `Server`, `Config::default()`, the
+/// snapshot monitor): its lines.
+fn unit_nmea(bytes: &[u8]) -> Vec<String> {
+    let mut server = Box::new(raim_server::Server::new());
+    server.take_runtime_config(Config::default()).unwrap();
+    let (mut link, mut nmea_out) = (Sink(Vec::new()), Sink(Vec::new()));
+    for &b in bytes {
+        server
+            .on_byte(b, &mut link, &mut nmea_out, &mut raim_server::NoPlatform)
+            .unwrap();
+    }
+    String::from_utf8(nmea_out.0)
+        .unwrap()
+        .lines()
+        .map(|l| l.trim_end().to_string())
+        .collect()
+}
+
+/// One epoch's speed and course as the sentences carry them: RMC status,
+/// RMC speed (knots) and course, VTG course, speed (knots, km/h).
+#[derive(Debug, Clone, PartialEq)]
+struct Written {
+    time: String,
+    valid: bool,
+    rmc: (Option<f64>, Option<f64>),
+    vtg: (Option<f64>, Option<f64>, Option<f64>),
+}
+
+fn field(s: &str, i: usize) -> Option<f64> {
+    let body = s.trim_start_matches('$').split('*').next()?;
+    body.split(',').nth(i)?.parse().ok()
+}
+
+/// The RMC and VTG of every epoch, as written (the text's fields).
+fn written(lines: &[String]) -> Vec<Written> {
+    let mut out = Vec::new();
+    for l in lines {
+        match &l[3..6] {
+            "RMC" => out.push(Written {
+                time: l.split(',').nth(1).unwrap_or("").to_string(),
+                valid: l.split(',').nth(2) == Some("A"),
+                rmc: (field(l, 7), field(l, 8)),
+                vtg: (None, None, None),
+            }),
+            "VTG" => {
+                let w = out.last_mut().expect("VTG after its RMC");
+                w.vtg = (field(l, 1), field(l, 5), field(l, 7));
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// The unit's RMC and VTG on GMSD7 (in the window, warm): every valid
+/// epoch carries a speed and course (a static station's speed, within
+/// its bound), RMC's and VTG's the same, VTG's km/h its knots; every
+/// invalid epoch (not dated, too few satellites) leaves them empty. The
+/// `nmea` crate and pynmea2 read the same numbers from the sentences.
+///
+/// Verifies: NMEA-VELOCITY, RX-VELOCITY
+#[test]
+fn unit_rmc_and_vtg_carry_the_stream_velocity() {
+    let lines = unit_nmea(&gmsd7_warm_in_window());
+    let w = written(&lines);
+    let valid = w.iter().filter(|e| e.valid).count();
+    assert!(valid >= 230, "{valid} valid of {}", w.len());
+    let mut speeds = Vec::new();
+    for e in &w {
+        if !e.valid {
+            assert_eq!((e.rmc, e.vtg), ((None, None), (None, None, None)), "{e:?}");
+            continue;
+        }
+        let (Some(knots), Some(course)) = e.rmc else {
+            panic!("a valid epoch without speed and course: {e:?}");
+        };
+        assert_eq!(e.vtg.0, Some(course), "{e:?}");
+        assert_eq!(e.vtg.1, Some(knots), "{e:?}");
+        let kmh = e.vtg.2.unwrap();
+        // Each field rounded to 3 decimals.
+        assert!((kmh * KM_H_M_S - knots * KNOT_M_S).abs() < 0.001, "{e:?}");
+        assert!((0.0..360.0).contains(&course), "{e:?}");
+        speeds.push(knots * KNOT_M_S);
+    }
+    let max = speeds.iter().copied().fold(0.0, f64::max);
+    println!(
+        "GMSD7 through the unit: {} epochs, {valid} valid, each with RMC/VTG speed and course; speed over ground largest {max:.4} m/s",
+        w.len()
+    );
+    assert!(max < STATIC_SPEED_TOL_M_S, "{max}");
+
+    // The `nmea` crate reads the same speed (knots) and course.
+    let mut by_crate = Vec::new();
+    for l in lines.iter().filter(|l| matches!(&l[3..6], "RMC" | "VTG")) {
+        match nmea::parse_str(l).unwrap_or_else(|e| panic!("{l}: {e:?}")) {
+            nmea::ParseResult::RMC(r) => {
+                by_crate.push((r.speed_over_ground, r.true_course));
+            }
+            nmea::ParseResult::VTG(v) => {
+                by_crate.push((v.speed_over_ground, v.true_course));
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+    let from_text: Vec<(Option<f32>, Option<f32>)> = w
+        .iter()
+        .flat_map(|e| {
+            [
+                (e.rmc.0.map(|v| v as f32), e.rmc.1.map(|v| v as f32)),
+                (e.vtg.1.map(|v| v as f32), e.vtg.0.map(|v| v as f32)),
+            ]
+        })
+        .collect();
+    assert_eq!(by_crate, from_text);
+
+    // pynmea2 reads them alike (RMC spd_over_grnd, true_course; VTG
+    // true_track, spd_over_grnd_kts, spd_over_grnd_kmph).
+    let script = "import sys, pynmea2\n\
+for line in sys.stdin:\n    m = pynmea2.parse(line.strip(), check=True)\n    \
+if m.sentence_type == 'RMC':\n        print('RMC', m.spd_over_grnd, m.true_course)\n    \
+else:\n        print('VTG', m.true_track, m.spd_over_grnd_kts, m.spd_over_grnd_kmph)\n";
+    let mut py = Command::new("python3")
+        .args(["-c", script])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("python3");
+    let input: String = lines
+        .iter()
+        .filter(|l| matches!(&l[3..6], "RMC" | "VTG"))
+        .map(|s| format!("{s}\r\n"))
+        .collect();
+    py.stdin
+        .take()
+        .unwrap()
+        .write_all(input.as_bytes())
+        .unwrap();
+    let out = py.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "pynmea2: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let num = |s: &str| s.parse::<f64>().ok();
+    let py_read: Vec<Vec<Option<f64>>> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| l.split(' ').skip(1).map(num).collect())
+        .collect();
+    let want: Vec<Vec<Option<f64>>> = w
+        .iter()
+        .flat_map(|e| [vec![e.rmc.0, e.rmc.1], vec![e.vtg.0, e.vtg.1, e.vtg.2]])
+        .collect();
+    assert_eq!(py_read, want);
+}
+
+fn free_port() -> u16 {
+    TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+struct Gpsd(std::process::Child);
+impl Drop for Gpsd {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// gpsd as the unit's NMEA client (as `qemu_gpsd`: `-b -n -N`, the
+/// sentences served on loopback): its TPV reports carry our RMC's speed
+/// (m/s, from knots) and course for the valid epochs, matched by time.
+///
+/// Verifies: NMEA-VELOCITY
+#[test]
+fn gpsd_reads_our_speed_and_course() {
+    let lines = unit_nmea(&gmsd7_warm_in_window());
+    let w = written(&lines);
+    // Ten valid epochs from the middle of the stream.
+    let valid: Vec<&Written> = w.iter().filter(|e| e.valid).skip(100).take(10).collect();
+    assert_eq!(valid.len(), 10);
+    let source = TcpListener::bind("127.0.0.1:0").unwrap();
+    let src_port = source.local_addr().unwrap().port();
+    let gpsd_port = free_port();
+    let dir = std::env::temp_dir().join(format!("raim-gpsd-vel-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let _gpsd = Gpsd(
+        Command::new(if std::path::Path::new("/usr/sbin/gpsd").exists() {
+            "/usr/sbin/gpsd"
+        } else {
+            "gpsd"
+        })
+        .args(["-b", "-n", "-N", "-S", &gpsd_port.to_string()])
+        .arg("-F")
+        .arg(dir.join("control.sock"))
+        .arg(format!("tcp://127.0.0.1:{src_port}"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("gpsd (apt-get install gpsd)"),
+    );
+    // Deadlines only a hang reaches: gpsd listening, and its reports.
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let client = loop {
+        match TcpStream::connect(("127.0.0.1", gpsd_port)) {
+            Ok(c) => break c,
+            Err(e) if Instant::now() > deadline => panic!("gpsd does not listen: {e}"),
+            Err(_) => std::thread::sleep(Duration::from_millis(50)),
+        }
+    };
+    client
+        .set_read_timeout(Some(Duration::from_secs(30)))
+        .unwrap();
+    (&client)
+        .write_all(b"?WATCH={\"enable\":true,\"json\":true}\n")
+        .unwrap();
+    let (mut feed, _) = source.accept().unwrap();
+    let last_time = valid.last().unwrap().time.clone();
+    let want_last = format!(
+        "T{}:{}:{}",
+        &last_time[0..2],
+        &last_time[2..4],
+        &last_time[4..6]
+    );
+    let reports = std::thread::spawn(move || {
+        let mut out = Vec::new();
+        for line in BufReader::new(client).lines() {
+            let Ok(line) = line else { break };
+            let v: serde_json::Value = serde_json::from_str(&line).unwrap();
+            let done =
+                v["class"] == "TPV" && v["time"].as_str().is_some_and(|t| t.contains(&want_last));
+            out.push(v);
+            if done {
+                break;
+            }
+        }
+        out
+    });
+    // The epochs from three before the first checked one to one after
+    // the last (gpsd reports an epoch when the next one starts), each
+    // whole, paced as a unit writes them (gpsd takes a burst of epochs as
+    // one; the pause is not a measurement).
+    let starts: Vec<usize> = lines
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| &l[3..6] == "RMC")
+        .map(|(i, _)| i)
+        .collect();
+    let first = w.iter().position(|e| e.time == valid[0].time).unwrap();
+    let last = w.iter().position(|e| e.time == last_time).unwrap();
+    for k in first.saturating_sub(3)..=(last + 1).min(starts.len() - 1) {
+        let end = starts.get(k + 1).copied().unwrap_or(lines.len());
+        for l in &lines[starts[k]..end] {
+            feed.write_all(format!("{l}\r\n").as_bytes()).unwrap();
+        }
+        std::thread::sleep(Duration::from_millis(300));
+    }
+    let reports = reports.join().unwrap();
+    drop(feed);
+    let mut checked = 0;
+    for e in &valid {
+        let iso = format!("T{}:{}:{}", &e.time[0..2], &e.time[2..4], &e.time[4..6]);
+        for r in reports
+            .iter()
+            .filter(|r| r["class"] == "TPV" && r["time"].as_str().is_some_and(|t| t.contains(&iso)))
+        {
+            let speed = r["speed"]
+                .as_f64()
+                .unwrap_or_else(|| panic!("speed missing in {r}"));
+            let track = r["track"]
+                .as_f64()
+                .unwrap_or_else(|| panic!("track missing in {r}"));
+            let (knots, course) = (e.rmc.0.unwrap(), e.rmc.1.unwrap());
+            assert!((speed - knots * KNOT_M_S).abs() < 1e-3, "{r} against {e:?}");
+            assert!((track - course).abs() < 0.01, "{r} against {e:?}");
+            checked += 1;
+        }
+    }
+    println!("gpsd: {checked} TPV reports with our speed and course");
+    assert!(checked >= 8, "{checked}: {reports:?}");
 }
