@@ -460,3 +460,54 @@ fn gpsd_reads_our_speed_and_course() {
     println!("gpsd: {checked} TPV reports with our speed and course");
     assert!(checked >= 8, "{checked}: {reports:?}");
 }
+
+/// The tolerance of a known velocity added to a real epoch's rates,
+/// mm/s: the rates are shifted by the line of sight's part of it, u . v,
+/// where the model divides it by 1 + u . w_sat / c (module doc of
+/// `raim_nav::velocity`; below 3e-6 of 250 m/s, 0.75 mm/s).
+const SHIFTED_TOL_MM_S: f64 = 1.5;
+
+/// A moving receiver from GMSD7's real rates: every rate of an epoch
+/// shifted by -u . v for a known ENU velocity v (an aircraft's 250 m/s
+/// at four headings, climbing 5 m/s), the velocity solution moves by v.
+///
+/// Verifies: RX-VELOCITY
+#[test]
+fn gmsd7_shifted_by_a_known_velocity_is_recovered() {
+    let all = velocities(&gmsd7_warm(), GMSD7_PIVOT_WEEK);
+    let mut worst = 0.0f64;
+    let mut checked = 0;
+    for (k, (f, v0)) in all.iter().enumerate() {
+        let (Some(rx), Some(v0)) = (f.reference_m, v0) else {
+            continue;
+        };
+        let heading = std::f64::consts::FRAC_PI_2 * (k % 4) as f64 + 0.3;
+        let enu = [250.0 * heading.sin(), 250.0 * heading.cos(), 5.0];
+        let r = raim_core::frames::enu_rotation(&raim_core::frames::ecef_to_geodetic(rx));
+        let v = raim_core::frames::unrotate(&r, enu);
+        let mut sats = f.sats.iter().zip(&f.rates).filter_map(|(o, rate)| {
+            let mut rate = (*rate)?;
+            let d = [0, 1, 2].map(|i| o.position_m[i] - rx[i]);
+            let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            rate.rate_m_s -= (0..3).map(|i| d[i] / n * v[i]).sum::<f64>();
+            Some(RateObservation {
+                sat_position_m: o.position_m,
+                rate,
+                sigma_m: o.sigma_m.unwrap_or(1.0),
+            })
+        });
+        let moved = solve(rx, &mut sats).unwrap();
+        let err = (0..3)
+            .map(|i| (moved.enu_m_s[i] - v0.enu_m_s[i] - enu[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(err * 1e3 < SHIFTED_TOL_MM_S, "epoch {k}: {err} m/s");
+        worst = worst.max(err);
+        checked += 1;
+    }
+    println!(
+        "GMSD7 shifted by 250 m/s: {checked} epochs, recovered within {:.3} mm/s",
+        worst * 1e3
+    );
+    assert!(checked >= 240);
+}

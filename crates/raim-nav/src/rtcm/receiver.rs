@@ -271,30 +271,65 @@ pub struct RtcmCounts {
     pub ephemerides_not_kept: u32,
 }
 
-/// One signal's pseudorange.
+/// One signal's pseudorange, C/N0 and phase-range rate, in 16 bytes (an
+/// epoch holds up to `S` of them three times over: the open epoch, the
+/// closed one and the GLONASS data waiting; test
+/// `signal_takes_16_bytes`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Signal {
     id: SatId,
-    /// RINEX 3 code "C1C": band digit and attribute letter.
-    code: [u8; 3],
+    /// RINEX 3 code "C1C" less its "C": the band digit (ASCII) and the
+    /// attribute letter.
+    band_digit: u8,
+    attribute: u8,
     /// C/N0, whole dB-Hz (0: unknown; `cn0_dbhz_u8`).
     cn0_dbhz: u8,
+    /// The phase-range rate ([`pack_rate_mm_s`]).
+    rate: [u8; 3],
     value_m: f64,
-    /// The phase-range rate (MSM5/MSM7 DF399 + DF404), m/s; NaN when the
-    /// MSM has none (8 bytes where an `Option` takes 16, in every signal
-    /// an epoch holds: [`Self::rate_m_s`] reads it).
-    rate_or_nan_m_s: f64,
 }
 
 impl Signal {
-    fn code(&self) -> &str {
-        core::str::from_utf8(&self.code).unwrap_or("")
+    /// Whether this is the signal of RINEX 3 code `c` ("C1C").
+    fn is_code(&self, c: &str) -> bool {
+        c.as_bytes() == [b'C', self.band_digit, self.attribute]
     }
 
     /// The phase-range rate, m/s, if the MSM gave one.
     fn rate_m_s(&self) -> Option<f64> {
-        (!self.rate_or_nan_m_s.is_nan()).then_some(self.rate_or_nan_m_s)
+        unpack_rate_mm_s(self.rate)
     }
+}
+
+/// The packed mark of no rate: -2^23 mm/s.
+const NO_RATE: [u8; 3] = [0x80, 0, 0];
+
+/// A phase-range rate (MSM5/MSM7 DF399 + DF404, within +-8192 m/s) in
+/// whole mm/s, 24-bit two's complement, big-endian; [`NO_RATE`] for none
+/// or beyond +-8388 m/s. The millimetre (half a millimetre per second of
+/// rounding against DF404's 0.1 mm/s) is far below a receiver's Doppler
+/// noise (GMSD7: cm/s), and keeps a signal in 16 bytes
+/// (`docs/RECEIVERS.md` "Speed and course").
+fn pack_rate_mm_s(rate_m_s: Option<f64>) -> [u8; 3] {
+    const LIMIT: f64 = (1 << 23) as f64;
+    match rate_m_s.map(|r| m::round(r * 1000.0)) {
+        Some(mm) if mm.abs() < LIMIT => {
+            let [_, a, b, c] = (mm as i32).to_be_bytes();
+            [a, b, c]
+        }
+        _ => NO_RATE,
+    }
+}
+
+/// [`pack_rate_mm_s`]'s rate back, m/s.
+fn unpack_rate_mm_s(p: [u8; 3]) -> Option<f64> {
+    if p == NO_RATE {
+        return None;
+    }
+    let [a, b, c] = p;
+    // Sign-extend the 24 bits.
+    let mm = i32::from_be_bytes([a, b, c, 0]) >> 8;
+    Some(f64::from(mm) * 0.001)
 }
 
 /// An epoch being gathered: stream-relative week and GPS time of week.
@@ -895,7 +930,9 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             }
         }
         // Satellite order, as the host's epochs (a BTreeMap by SatId).
-        sort_checked(&mut o.sigs, |a, b| (a.id, a.code) < (b.id, b.code));
+        sort_checked(&mut o.sigs, |a, b| {
+            (a.id, a.band_digit, a.attribute) < (b.id, b.band_digit, b.attribute)
+        });
         // The Keplerian sets the satellites with a code will use, decoded
         // from the store's payloads once for the epoch; more than N is the
         // capacity refusal the inputs below would give.
@@ -1072,10 +1109,11 @@ fn msm_signals<'m>(m: &'m Msm<'_>, system: System) -> impl Iterator<Item = Signa
     m.signals().filter_map(move |s| {
         Some(Signal {
             id: SatId::new(system, s.sat_id),
-            code: [b'C', b'0' + s.band, s.attribute],
+            band_digit: b'0' + s.band,
+            attribute: s.attribute,
             cn0_dbhz: cn0_dbhz_u8(s.cnr_dbhz),
+            rate: pack_rate_mm_s(s.phase_range_rate_m_s),
             value_m: s.pseudorange_m?,
-            rate_or_nan_m_s: s.phase_range_rate_m_s.unwrap_or(f64::NAN),
         })
     })
 }
@@ -1093,7 +1131,7 @@ fn pick_code<'c>(
     codes: &[&'c str],
     have: &[Signal],
 ) -> Option<(&'c str, f64, Option<f64>, u8, Option<f64>)> {
-    let find = |c: &str| have.iter().find(|s| s.code() == c);
+    let find = |c: &str| have.iter().find(|s| s.is_code(c));
     let any_rate = || have.iter().find_map(Signal::rate_m_s);
     codes.iter().find_map(|&c| match split_pair(c) {
         Some((a, b)) => {
@@ -1149,7 +1187,7 @@ fn remove_at<T, const N: usize>(v: &mut heapless::Vec<T, N>, index: usize) {
 #[cfg(test)]
 mod tests {
     extern crate std;
-    use super::{remove_at, sort_checked};
+    use super::{pack_rate_mm_s, remove_at, sort_checked, unpack_rate_mm_s, Signal, NO_RATE};
     use std::vec::Vec;
 
     /// The checked insertion sort orders as the standard stable sort
@@ -1180,6 +1218,44 @@ mod tests {
             sort_checked(&mut got, |a, b| a.0 < b.0);
             assert_eq!(got, want);
         }
+    }
+
+    /// A signal stays in 16 bytes with its rate (three per signal of an
+    /// epoch: 768 signals on the default build, 360 on the STM32F4's).
+    #[test]
+    fn signal_takes_16_bytes() {
+        assert_eq!(core::mem::size_of::<Signal>(), 16);
+    }
+
+    /// A rate is packed to the millimetre per second and back, both signs,
+    /// DF399's extremes and the marks; beyond 24 bits, none.
+    ///
+    /// Verifies: RX-DOPPLER
+    #[test]
+    fn rates_pack_to_the_millimetre() {
+        for r in [
+            0.0,
+            0.0004,
+            -0.0004,
+            0.0006,
+            1.2345,
+            -1.2345,
+            799.9999,
+            -8191.9999,
+            8191.0 + 1.6383,
+            -8192.0 + 0.0001,
+        ] {
+            let back = unpack_rate_mm_s(pack_rate_mm_s(Some(r))).unwrap();
+            assert!((back - r).abs() <= 0.0005 + 1e-12, "{r} -> {back}");
+            assert_eq!(back, (r * 1000.0).round() * 0.001, "{r}");
+        }
+        assert_eq!(unpack_rate_mm_s(pack_rate_mm_s(None)), None);
+        assert_eq!(pack_rate_mm_s(Some(8389.0)), NO_RATE);
+        assert_eq!(pack_rate_mm_s(Some(f64::NAN)), NO_RATE);
+        assert_eq!(
+            unpack_rate_mm_s(pack_rate_mm_s(Some(-8388.607))),
+            Some(-8388.607)
+        );
     }
 
     /// Removing by index keeps the order of the rest; an index past the
