@@ -1352,6 +1352,78 @@ mod tests {
         }
     }
 
+    /// RMC and VTG with a velocity: RMC fields 7-8 the speed in knots (3
+    /// decimals) and the true course in degrees (2 decimals), VTG fields
+    /// 1, 5 and 7 the course, knots and km/h (magnetic course empty); the
+    /// course in [0, 360) from any angle (a course rounding to 360.00 is
+    /// 0.00); without a velocity (the caller gives none for an epoch
+    /// that is not a valid fix) those fields empty; extreme speeds keep
+    /// the sentences within 82 characters, the field empty when it cannot
+    /// show them.
+    ///
+    /// Verifies: NMEA-VELOCITY, NMEA-FORMAT
+    #[test]
+    fn rmc_and_vtg_carry_speed_and_course() {
+        let (mut w, _) = sky8_result(0.0);
+        w.geodetic = Some(Geodetic {
+            lat_rad: 0.84,
+            lon_rad: 0.2,
+            height_m: 100.0,
+        });
+        let with = |speed_m_s: f64, course_rad: f64| {
+            let v = Some(GroundVelocity {
+                speed_m_s,
+                course_rad,
+            });
+            let (rmc, vtg) = (rmc(&w, v).unwrap(), vtg(&w, v).unwrap());
+            assert!(rmc.len() <= 82 && vtg.len() <= 82);
+            let f = |s: &Sentence| -> std::vec::Vec<String> {
+                parse(s).0.split(',').map(String::from).collect()
+            };
+            (f(&rmc), f(&vtg))
+        };
+        // 12.3 m/s toward 45 degrees: 23.909 knots, 44.28 km/h.
+        let (r, v) = with(12.3, 45f64.to_radians());
+        assert_eq!((r[7].as_str(), r[8].as_str()), ("23.909", "45.00"));
+        assert_eq!(v[1..].join(","), "45.00,T,,M,23.909,N,44.280,K,A", "{v:?}");
+        // A negative angle and one past a turn.
+        let (r, _) = with(1.0, -90f64.to_radians());
+        assert_eq!(r[8], "270.00");
+        let (r, _) = with(1.0, 450f64.to_radians());
+        assert_eq!(r[8], "90.00");
+        let (r, _) = with(0.0, -1e-9);
+        assert_eq!((r[7].as_str(), r[8].as_str()), ("0.000", "0.00"));
+        // Extreme values: fewer decimals, or empty.
+        let (r, v) = with(1e5, 1.0);
+        assert_eq!(r[7], "194384");
+        assert_eq!(v[7], "360000.0");
+        let (r, v) = with(1e30, f64::NAN);
+        assert!(r[7].is_empty() && r[8].is_empty() && v[1].is_empty() && v[7].is_empty());
+        // Without a velocity: empty, as before.
+        assert_eq!(parse(&vtg(&w, None).unwrap()).0, "GPVTG,,T,,M,,N,,K,A");
+        let r = parse(&rmc(&w, None).unwrap()).0;
+        assert_eq!(r.split(',').nth(7), Some(""));
+        assert_eq!(r.split(',').nth(8), Some(""));
+        // The whole epoch through `write_epoch` with the velocity in `Sky`.
+        let sats: std::vec::Vec<LinearObservation> = std::vec::Vec::new();
+        let e = Epoch::linear(w.time_s, &sats);
+        let sky = Sky {
+            epoch: &e,
+            cn0_dbhz: &[],
+            velocity: Some(GroundVelocity {
+                speed_m_s: 12.3,
+                course_rad: 45f64.to_radians(),
+            }),
+        };
+        let all = epoch_sentences(&w, &sky, NO_GEOID).unwrap();
+        assert!(all[0].contains(",23.909,45.00,"), "{:?}", all[0]);
+        assert!(
+            all[1].contains("45.00,T,,M,23.909,N,44.280,K,A"),
+            "{:?}",
+            all[1]
+        );
+    }
+
     /// Verifies: NMEA-FORMAT
     #[test]
     fn numbers_fit_their_width_or_are_empty() {
