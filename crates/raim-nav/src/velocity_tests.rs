@@ -216,7 +216,7 @@ fn a_synthetic_moving_receiver_is_recovered() {
     for case in 0..40 {
         // ENU velocity, m/s, and the clock drift (c x drift), m/s.
         let speed = [0.0, 0.3, 70.0, 250.0][case % 4];
-        let heading = 6.28 * next();
+        let heading = std::f64::consts::TAU * next();
         let enu = [
             speed * heading.sin(),
             speed * heading.cos(),
