@@ -51,7 +51,10 @@
 //!   `Excluded`, `raim_nav::velocity`), RMC's speed over ground in knots
 //!   and true course in degrees, VTG's true course, speed in knots and in
 //!   km/h (magnetic course empty: no magnetic model); else those fields
-//!   empty, with the mode indicator. 1 knot = 1852 m / 3600 s.
+//!   empty, with the mode indicator. 1 knot = 1852 m / 3600 s. Feature
+//!   `nmea-velocity` (on with raim-server's `rtcm`; not in the snapshot
+//!   build, whose epochs carry no range rates): without it `write_epoch`
+//!   leaves them empty.
 //! - GST: rms of the all-in-view range residuals; the error ellipse from the
 //!   1-sigma east/north errors (no cross term in the result: axes along
 //!   north and east); 1-sigma lat/lon/alt errors.
@@ -578,8 +581,11 @@ pub fn write_epoch<E>(
         Ok(s) => emit(&s),
         Err(TooLong) => Ok(()),
     };
-    put(rmc(r, sky.velocity))?;
-    put(vtg(r, sky.velocity))?;
+    // Speed and course in the builds that write them (feature
+    // `nmea-velocity`; the snapshot build's epochs carry no range rates).
+    let velocity = sky.velocity.filter(|_| cfg!(feature = "nmea-velocity"));
+    put(rmc(r, velocity))?;
+    put(vtg(r, velocity))?;
     put(gga(r, dop, BUILT.geoid && opts.geoid))?;
     for sys in System::ALL {
         let used = r
@@ -1416,12 +1422,16 @@ mod tests {
             }),
         };
         let all = epoch_sentences(&w, &sky, NO_GEOID).unwrap();
-        assert!(all[0].contains(",23.909,45.00,"), "{:?}", all[0]);
-        assert!(
-            all[1].contains("45.00,T,,M,23.909,N,44.280,K,A"),
-            "{:?}",
-            all[1]
-        );
+        if cfg!(feature = "nmea-velocity") {
+            assert!(all[0].contains(",23.909,45.00,"), "{:?}", all[0]);
+            assert!(
+                all[1].contains("45.00,T,,M,23.909,N,44.280,K,A"),
+                "{:?}",
+                all[1]
+            );
+        } else {
+            assert!(all[1].contains(",T,,M,,N,,K,A"), "{:?}", all[1]);
+        }
     }
 
     /// Verifies: NMEA-FORMAT
