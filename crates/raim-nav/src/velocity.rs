@@ -169,46 +169,93 @@ fn mu_omega(system: System) -> (f64, f64) {
     }
 }
 
-/// The eccentric anomaly of mean anomaly `mk`, eccentricity `e`, by
-/// Newton's method from E = M.
-fn eccentric_anomaly_rad(mk: f64, e: f64) -> f64 {
-    let mut ek = mk;
+/// Below this |d|, [`sin_cos_short`] takes its Taylor series; above, the
+/// library's sine and cosine, rad (|E - M| <= e: GPS, BeiDou and most
+/// Galileo orbits have e < 0.03).
+const SHORT_ANGLE_RAD: f64 = 0.05;
+
+/// sin d and cos d: their Taylor series to d^9 and d^8 for |d| <=
+/// [`SHORT_ANGLE_RAD`] (the first term left out below 0.05^10 / 10! =
+/// 2.7e-20 of the result), else the library's.
+fn sin_cos_short(d: f64) -> (f64, f64) {
+    if d.is_nan() || d.abs() > SHORT_ANGLE_RAD {
+        return m::sin_cos(d);
+    }
+    let z = d * d;
+    let s = d
+        * (1.0
+            - z * (1.0 / 6.0)
+                * (1.0 - z * (1.0 / 20.0) * (1.0 - z * (1.0 / 42.0) * (1.0 - z * (1.0 / 72.0)))));
+    let c = 1.0
+        - z * (1.0 / 2.0)
+            * (1.0 - z * (1.0 / 12.0) * (1.0 - z * (1.0 / 30.0) * (1.0 - z * (1.0 / 56.0))));
+    (s, c)
+}
+
+/// The sine and cosine of the eccentric anomaly of mean anomaly `mk`,
+/// eccentricity `e` (Kepler's equation M = E - e sin E): Newton's method
+/// on d = E - M from d = e sin M, with sin(M + d) and cos(M + d) from M's
+/// sine and cosine (one library call) and d's ([`sin_cos_short`]).
+fn eccentric_anomaly_sin_cos(mk: f64, e: f64) -> (f64, f64) {
+    let (sin_m, cos_m) = m::sin_cos(mk);
+    let at = |d: f64| {
+        let (sd, cd) = sin_cos_short(d);
+        (sin_m * cd + cos_m * sd, cos_m * cd - sin_m * sd)
+    };
+    let mut d = e * sin_m;
+    let (mut sin_e, mut cos_e) = at(d);
     for _ in 0..KEPLER_MAX_ITERATIONS {
-        let (s, c) = m::sin_cos(ek);
-        let step = (ek - e * s - mk) / (1.0 - e * c);
-        ek -= step;
+        let step = (d - e * sin_e) / (1.0 - e * cos_e);
+        d -= step;
+        (sin_e, cos_e) = at(d);
         if step.is_nan() || step.abs() < KEPLER_LAST_STEP_RAD {
             break;
         }
     }
-    ek
+    (sin_e, cos_e)
 }
 
 /// A Keplerian satellite's velocity and clock drift at GPS time
 /// `t_gps_s` (module doc: the time derivative of IS-GPS-200 Table 20-IV,
-/// BeiDou GEO satellites through their extra rotations).
+/// BeiDou GEO satellites through their extra rotations). The true
+/// anomaly's and the argument of latitude's sines and cosines come from
+/// E's and omega's by the angle-sum identities (no arctangent; the
+/// harmonic correction of u, below 1e-4 rad, by its Taylor series), so
+/// that a satellite takes four library sines and cosines.
 pub fn kepler_motion(k: &Kepler, t_gps_s: f64) -> SatMotion {
     let (mu, omega_e) = mu_omega(k.system);
     let tk = k.tk_s(t_gps_s);
     let a = k.sqrt_a_m05 * k.sqrt_a_m05;
     let n = m::sqrt(mu / (a * a * a)) + k.delta_n_rad_s;
     let e = k.e;
-    let ek = eccentric_anomaly_rad(k.m0_rad + n * tk, e);
-    let (sin_e, cos_e) = m::sin_cos(ek);
+    let (sin_e, cos_e) = eccentric_anomaly_sin_cos(k.m0_rad + n * tk, e);
     let one_m_ecos = 1.0 - e * cos_e;
     let e_dot = n / one_m_ecos;
     let root = m::sqrt(1.0 - e * e);
-    let nu = m::atan2(root * sin_e, cos_e - e);
+    // The true anomaly nu: sin and cos (IS-GPS-200 Table 20-IV).
+    let (sin_nu, cos_nu) = (root * sin_e / one_m_ecos, (cos_e - e) / one_m_ecos);
     let nu_dot = e_dot * root / one_m_ecos;
-    let phi = nu + k.omega_rad;
-    let (s2, c2) = m::sin_cos(2.0 * phi);
-    let u = phi + k.cus_rad * s2 + k.cuc_rad * c2;
+    // phi = nu + omega.
+    let (sin_w, cos_w) = m::sin_cos(k.omega_rad);
+    let (sin_phi, cos_phi) = (
+        sin_nu * cos_w + cos_nu * sin_w,
+        cos_nu * cos_w - sin_nu * sin_w,
+    );
+    let (s2, c2) = (
+        2.0 * sin_phi * cos_phi,
+        cos_phi * cos_phi - sin_phi * sin_phi,
+    );
+    let du = k.cus_rad * s2 + k.cuc_rad * c2;
+    let (sin_du, cos_du) = sin_cos_short(du);
+    let (sin_u, cos_u) = (
+        sin_phi * cos_du + cos_phi * sin_du,
+        cos_phi * cos_du - sin_phi * sin_du,
+    );
     let u_dot = nu_dot * (1.0 + 2.0 * (k.cus_rad * c2 - k.cuc_rad * s2));
     let r = a * one_m_ecos + k.crs_m * s2 + k.crc_m * c2;
     let r_dot = a * e * sin_e * e_dot + 2.0 * nu_dot * (k.crs_m * c2 - k.crc_m * s2);
     let i = k.i0_rad + k.idot_rad_s * tk + k.cis_rad * s2 + k.cic_rad * c2;
     let i_dot = k.idot_rad_s + 2.0 * nu_dot * (k.cis_rad * c2 - k.cic_rad * s2);
-    let (sin_u, cos_u) = m::sin_cos(u);
     let (xo, yo) = (r * cos_u, r * sin_u);
     let (xo_dot, yo_dot) = (
         r_dot * cos_u - r * u_dot * sin_u,
