@@ -511,3 +511,48 @@ fn gmsd7_shifted_by_a_known_velocity_is_recovered() {
     );
     assert!(checked >= 240);
 }
+
+/// The ESBC stream (G+E+C, its rates from the RINEX D observables,
+/// `rtcm_common::esbc`) through the device receiver: each satellite's rate
+/// is the RINEX -D x lambda of its first signal to the packing's
+/// millimetre per second, and the velocity at the station is a static
+/// antenna's.
+///
+/// Verifies: RX-DOPPLER, RX-VELOCITY
+#[test]
+fn esbc_static_station_velocity_is_near_zero() {
+    use rtcm_common::esbc::{dopplers, esbc_stream, rate_m_s, ESBC_WEEK};
+    let (bytes, _) = esbc_stream(0);
+    let d = dopplers();
+    let all = velocities(&bytes, ESBC_WEEK - 52);
+    assert_eq!(all.len(), rtcm_common::esbc::EPOCHS);
+    let mut checked = 0;
+    for (k, (f, _)) in all.iter().enumerate() {
+        for (o, r) in f.sats.iter().zip(&f.rates) {
+            let first = match o.id.system {
+                raim_core::System::Gps | raim_core::System::Galileo => "C1C",
+                _ => "C2I",
+            };
+            let want = rate_m_s(
+                o.id.system,
+                first,
+                d[k][&(o.id, first.replacen('C', "D", 1))],
+            );
+            let got = r
+                .unwrap_or_else(|| panic!("epoch {k} {:?}: no rate", o.id))
+                .rate_m_s;
+            // DF404's 0.1 mm/s and the packing's 1 mm/s.
+            assert!(
+                (got - want).abs() < 0.0006,
+                "epoch {k} {:?}: {got} {want}",
+                o.id
+            );
+            checked += 1;
+        }
+    }
+    let v: Vec<ReceiverVelocity> = all.iter().filter_map(|(_, v)| *v).collect();
+    println!("ESBC: {checked} satellite rates, each the RINEX -D x lambda");
+    let (sog, up) = stats("ESBC", &v);
+    assert_eq!(v.len(), all.len());
+    assert!(sog < STATIC_SPEED_TOL_M_S && up < STATIC_VERTICAL_TOL_M_S);
+}
