@@ -205,14 +205,10 @@ fn fnav_message(k: &Kepler, delta_weeks: i64) -> Message {
 /// One system's MSM7 at an epoch: (satellite, rough ms as DF397 + DF398,
 /// rough rate m/s (DF399), [(band, attribute, fine ms, C/N0 dB-Hz, fine
 /// rate m/s (DF404))]).
-#[allow(clippy::type_complexity)]
-type Cells = Vec<(
-    u8,
-    u8,
-    f64,
-    Option<i16>,
-    Vec<(u8, char, f64, Option<f64>, Option<f64>)>,
-)>;
+type Cells = Vec<(u8, u8, f64, Option<i16>, Vec<Cell>)>;
+/// One signal of an MSM7 cell: (band, attribute, fine ms, C/N0 dB-Hz,
+/// fine rate m/s).
+type Cell = (u8, char, f64, Option<f64>, Option<f64>);
 
 /// Each of the first `EPOCHS` epochs' Doppler observables (Hz) by
 /// satellite and code ("D1C"), from the RINEX: its records as
@@ -294,7 +290,7 @@ fn cells(
             let f = rate(code)? - f64::from(rough_rate?);
             (f.abs() < 1.6383).then_some(f)
         };
-        let sigs: Vec<(u8, char, f64, Option<f64>, Option<f64>)> = signals
+        let sigs: Vec<Cell> = signals
             .iter()
             .filter_map(|(c, band, attr)| {
                 let fine = ms(c)? - rough_ms;
