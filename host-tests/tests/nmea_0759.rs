@@ -305,6 +305,7 @@ fn esbc(n: usize) -> Vec<SkyEpoch> {
             let sky = Sky {
                 epoch: &epoch,
                 cn0_dbhz: &cn0,
+                velocity: None,
             };
             SkyEpoch {
                 nmea: epoch_sentences(&w, &sky, BUILT)

@@ -263,6 +263,57 @@ fn qemu_rtcm_answers_equal_the_host_server_byte_for_byte() {
     assert_eq!(status.stream_epochs as usize, host.len());
 }
 
+/// The unit's NMEA on a warm stream (GMSD7's ephemerides, then its first
+/// 60 kB) equals the host `Server`'s on the same bytes, byte for byte:
+/// RMC and VTG with the speed and course of the Doppler velocity (f64
+/// soft-float on the M4, libm everywhere) among them.
+///
+/// Verifies: RX-STREAM, NMEA-VELOCITY
+#[test]
+fn qemu_rtcm_nmea_with_speed_and_course_equals_the_host_server() {
+    let (file, now_week) = gmsd7_in_window();
+    let once = whole_frames(&file);
+    let part = whole_frames(&once[..60_000]);
+    let warm = [ephemeris_frames(once).as_slice(), part].concat();
+    let (_, counts) = host_epochs(&warm, now_week);
+    let mut server = raim_server::Server::new();
+    server.take_runtime_config(Config::default()).unwrap();
+    let (mut link, mut nmea) = (Sink(Vec::new()), Sink(Vec::new()));
+    for &b in &warm {
+        server
+            .on_byte(b, &mut link, &mut nmea, &mut raim_server::NoPlatform)
+            .unwrap();
+    }
+    let host: Vec<String> = String::from_utf8(nmea.0)
+        .unwrap()
+        .lines()
+        .map(|l| l.trim_end().to_string())
+        .collect();
+    let with_speed = host
+        .iter()
+        .filter(|l| &l[3..6] == "RMC" && l.split(',').nth(7).is_some_and(|f| !f.is_empty()))
+        .count();
+    assert!(with_speed >= 40, "{with_speed} RMC with a speed");
+    let mut fw = stream_session_on(Machine::Mps2An386);
+    fw.drain_nmea();
+    let answers = stream_answers(&mut fw, &warm, counts.epochs as usize);
+    assert_eq!(answers.len(), counts.epochs as usize);
+    // The NMEA UART is read by its own thread: wait, with a deadline only
+    // a hang reaches, for the sentences the host wrote.
+    let mut unit = fw.drain_nmea();
+    let deadline = std::time::Instant::now() + Duration::from_secs(30);
+    while unit.len() < host.len() && std::time::Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(20));
+        unit.extend(fw.drain_nmea());
+    }
+    let unit: Vec<String> = unit.iter().map(|s| s.trim_end().to_string()).collect();
+    assert_eq!(unit, host);
+    println!(
+        "{} NMEA sentences alike, {with_speed} RMC with speed and course",
+        host.len()
+    );
+}
+
 /// An unconfigured unit keeps the stream's ephemerides but puts nothing in
 /// force: every stream epoch is answered `Unconfigured` (or not dated).
 ///

@@ -25,8 +25,27 @@ use rtcm_rs::msg::message::{Message, MessageBuilder};
 use rtcm_rs::val_gen::ValGen;
 use rtcm_rs::MessageFrame;
 
-/// One MSM signal: (satellite, band, attribute, pseudorange m, C/N0 dB-Hz).
-type Signal = (u8, u8, u8, Option<f64>, Option<f64>);
+/// One MSM signal: (satellite, band, attribute, pseudorange m, C/N0 dB-Hz,
+/// phase-range rate m/s).
+type Signal = (u8, u8, u8, Option<f64>, Option<f64>, Option<f64>);
+
+/// The phase-range rate of an MSM5/MSM7 signal as rtcm-rs reads it: the
+/// satellite's rough rate DF399 (an integer, m/s) plus the signal's fine
+/// rate DF404 (m/s), None when either is marked invalid; MSM4/MSM6 none.
+macro_rules! msm_rate {
+    ($m:expr, $sig:expr) => {
+        None
+    };
+    ($m:expr, $sig:expr, rate) => {
+        $m.data_segment
+            .satellite_data
+            .iter()
+            .find(|s| s.satellite_id == $sig.satellite_id)
+            .and_then(|s| s.gnss_satellite_rough_phaserange_rates_m_s)
+            .zip($sig.gnss_signal_fine_phaserange_rate_m_s)
+            .map(|(rough, fine)| f64::from(rough) + fine)
+    };
+}
 
 /// What a frame decodes to, in one form for both decoders.
 #[derive(Debug, PartialEq)]
@@ -61,7 +80,7 @@ enum Decoded {
 }
 
 macro_rules! msm_ref {
-    ($m:expr, $system:expr, $epoch:expr, $day:expr, $fine:ident, $cnr:ident) => {{
+    ($m:expr, $system:expr, $epoch:expr, $day:expr, $fine:ident, $cnr:ident $(, $rate:ident)?) => {{
         let m = &$m;
         let signals = m
             .data_segment
@@ -89,6 +108,7 @@ macro_rules! msm_ref {
                     pr,
                     // DF403 (u8, 1 dB-Hz) or DF408 (2^-4 dB-Hz); 0 is None.
                     sig.$cnr.map(f64::from),
+                    msm_rate!(m, sig $(, $rate)?),
                 )
             })
             .collect();
@@ -132,7 +152,8 @@ fn reference(frame: &[u8]) -> Decoded {
             m.gps_epoch_time_ms,
             None,
             gnss_signal_fine_pseudorange_ms,
-            gnss_signal_cnr_dbhz
+            gnss_signal_cnr_dbhz,
+            rate
         ),
         Message::Msg1076(m) => msm_ref!(
             m,
@@ -148,7 +169,8 @@ fn reference(frame: &[u8]) -> Decoded {
             m.gps_epoch_time_ms,
             None,
             gnss_signal_fine_pseudorange_ext_ms,
-            gnss_signal_cnr_ext_dbhz
+            gnss_signal_cnr_ext_dbhz,
+            rate
         ),
         Message::Msg1084(m) => msm_ref!(
             m,
@@ -164,7 +186,8 @@ fn reference(frame: &[u8]) -> Decoded {
             m.glo_epoch_time_ms,
             Some(m.glo_day_of_week),
             gnss_signal_fine_pseudorange_ms,
-            gnss_signal_cnr_dbhz
+            gnss_signal_cnr_dbhz,
+            rate
         ),
         Message::Msg1086(m) => msm_ref!(
             m,
@@ -180,7 +203,8 @@ fn reference(frame: &[u8]) -> Decoded {
             m.glo_epoch_time_ms,
             Some(m.glo_day_of_week),
             gnss_signal_fine_pseudorange_ext_ms,
-            gnss_signal_cnr_ext_dbhz
+            gnss_signal_cnr_ext_dbhz,
+            rate
         ),
         Message::Msg1094(m) => msm_ref!(
             m,
@@ -196,7 +220,8 @@ fn reference(frame: &[u8]) -> Decoded {
             m.gal_epoch_time_ms,
             None,
             gnss_signal_fine_pseudorange_ms,
-            gnss_signal_cnr_dbhz
+            gnss_signal_cnr_dbhz,
+            rate
         ),
         Message::Msg1096(m) => msm_ref!(
             m,
@@ -212,7 +237,8 @@ fn reference(frame: &[u8]) -> Decoded {
             m.gal_epoch_time_ms,
             None,
             gnss_signal_fine_pseudorange_ext_ms,
-            gnss_signal_cnr_ext_dbhz
+            gnss_signal_cnr_ext_dbhz,
+            rate
         ),
         Message::Msg1114(m) => msm_ref!(
             m,
@@ -228,7 +254,8 @@ fn reference(frame: &[u8]) -> Decoded {
             m.qzss_epoch_time_ms,
             None,
             gnss_signal_fine_pseudorange_ms,
-            gnss_signal_cnr_dbhz
+            gnss_signal_cnr_dbhz,
+            rate
         ),
         Message::Msg1116(m) => msm_ref!(
             m,
@@ -244,7 +271,8 @@ fn reference(frame: &[u8]) -> Decoded {
             m.qzss_epoch_time_ms,
             None,
             gnss_signal_fine_pseudorange_ext_ms,
-            gnss_signal_cnr_ext_dbhz
+            gnss_signal_cnr_ext_dbhz,
+            rate
         ),
         Message::Msg1124(m) => msm_ref!(
             m,
@@ -260,7 +288,8 @@ fn reference(frame: &[u8]) -> Decoded {
             m.bds_epoch_time_ms,
             None,
             gnss_signal_fine_pseudorange_ms,
-            gnss_signal_cnr_dbhz
+            gnss_signal_cnr_dbhz,
+            rate
         ),
         Message::Msg1126(m) => msm_ref!(
             m,
@@ -276,7 +305,8 @@ fn reference(frame: &[u8]) -> Decoded {
             m.bds_epoch_time_ms,
             None,
             gnss_signal_fine_pseudorange_ext_ms,
-            gnss_signal_cnr_ext_dbhz
+            gnss_signal_cnr_ext_dbhz,
+            rate
         ),
         Message::Msg1019(m) => Decoded::Kepler {
             number: 1019,
@@ -385,7 +415,16 @@ fn compact(frame: &[u8], more_known: bool) -> Decoded {
             more: m.more,
             signals: m
                 .signals()
-                .map(|s| (s.sat_id, s.band, s.attribute, s.pseudorange_m, s.cnr_dbhz))
+                .map(|s| {
+                    (
+                        s.sat_id,
+                        s.band,
+                        s.attribute,
+                        s.pseudorange_m,
+                        s.cnr_dbhz,
+                        s.phase_range_rate_m_s,
+                    )
+                })
                 .collect(),
         },
         Ok(Dm::Kepler(e)) => Decoded::Kepler {
@@ -422,18 +461,19 @@ fn both(frame: &[u8]) -> Decoded {
     r
 }
 
-/// Verifies: RX-DECODE
+/// Verifies: RX-DECODE, RX-DOPPLER
 #[test]
 fn gmsd7_every_frame_alike() {
     let bytes = std::fs::read(rtcm_common::GMSD7).expect("GMSD7 stream (../shared/data)");
     let mut n = std::collections::BTreeMap::<String, u32>::new();
-    let mut signals = 0usize;
+    let (mut signals, mut rates) = (0usize, 0usize);
     for f in rtcm_common::frames(&bytes) {
         let number = MessageFrame::new(f).ok().and_then(|x| x.message_number());
         let d = both(f);
         let kind = match &d {
             Decoded::Msm { signals: s, .. } => {
                 signals += s.len();
+                rates += s.iter().filter(|x| x.5.is_some()).count();
                 "msm"
             }
             Decoded::Other(Some(_)) => "other MSM (DF393 compared)",
@@ -444,7 +484,7 @@ fn gmsd7_every_frame_alike() {
         *n.entry(format!("{} {kind}", number.unwrap_or(0)))
             .or_default() += 1;
     }
-    println!("GMSD7 frames by type: {n:?}; {signals} MSM signals");
+    println!("GMSD7 frames by type: {n:?}; {signals} MSM signals, {rates} with a phase-range rate");
     let count = |k: &str| n.get(k).copied().unwrap_or(0);
     // The stream's GPS and GLONASS MSM7 and ephemerides (README: 257
     // epochs), all decoded alike, none corrupt.
@@ -469,6 +509,9 @@ fn gmsd7_every_frame_alike() {
         .find(|r| !matches!(r, Ok(Err(DecodeError::SignalId { message: 1117, .. }))));
     assert_eq!(qzss_refused, None, "a 1117 refused for another reason");
     assert!(signals > 10_000, "{signals}");
+    // The MSM7's rates (GPS L1 C/A, GLONASS L1 C/A, BeiDou B1I carry
+    // them in this stream), compared to the bit above.
+    assert!(rates > 6_000, "{rates}");
 }
 
 /// A frame around `payload` (header and CRC-24Q).
@@ -492,7 +535,7 @@ fn too_many_cells(frame: &[u8]) -> bool {
     )
 }
 
-/// Verifies: RX-DECODE
+/// Verifies: RX-DECODE, RX-DOPPLER
 #[test]
 fn random_messages_alike() {
     const PER_TYPE: usize = 600;
@@ -504,6 +547,8 @@ fn random_messages_alike() {
     );
     let mut builder = MessageBuilder::new();
     let (mut whole, mut mutated, mut corrupt, mut invalid, mut skipped) = (0, 0, 0, 0, 0);
+    // Signals of MSM5/MSM7 with a rate, and with it marked invalid.
+    let (mut rates, mut no_rate) = (0, 0);
     let types = [
         1074u16, 1075, 1076, 1077, 1084, 1085, 1086, 1087, 1094, 1095, 1096, 1097, 1114, 1115,
         1116, 1117, 1124, 1125, 1126, 1127, 1019, 1020, 1042, 1044, 1045, 1046, 1005, 1006, 1013,
@@ -517,6 +562,10 @@ fn random_messages_alike() {
             match both(&frame) {
                 Decoded::Msm { signals, .. } => {
                     invalid += signals.iter().filter(|s| s.3.is_none()).count();
+                    if number % 2 == 1 {
+                        rates += signals.iter().filter(|s| s.5.is_some()).count();
+                        no_rate += signals.iter().filter(|s| s.5.is_none()).count();
+                    }
                     whole += 1;
                 }
                 Decoded::Kepler { .. }
@@ -550,4 +599,6 @@ fn random_messages_alike() {
     assert_eq!(whole, types.len() * PER_TYPE);
     assert!(corrupt > PER_TYPE, "{corrupt}");
     assert!(invalid > 0);
+    println!("MSM5/MSM7 phase-range rates: {rates} read alike, {no_rate} invalid on both");
+    assert!(rates > 1000 && no_rate > 0, "{rates} {no_rate}");
 }

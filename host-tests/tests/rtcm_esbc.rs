@@ -48,6 +48,7 @@ fn device_against_host(bytes: &[u8], pivot_week: i64, now_week: i64) -> Run {
         reference_m: None,
         sats: heapless::Vec::new(),
         cn0_dbhz: heapless::Vec::new(),
+        rates: heapless::Vec::new(),
         rejected: 0,
     };
     let (mut same, mut sats_per_system) = (0, BTreeMap::<System, usize>::new());

@@ -41,6 +41,7 @@ fn device_against_host(bytes: &[u8], pivot_week: i64, now_week: i64) -> Run {
         reference_m: None,
         sats: heapless::Vec::new(),
         cn0_dbhz: heapless::Vec::new(),
+        rates: heapless::Vec::new(),
         rejected: 0,
     };
     let (mut same, mut not_dated, mut times_gps_s, mut sats) = (0, 0, Vec::new(), Vec::new());
@@ -200,6 +201,7 @@ fn an_epoch_beyond_the_signal_capacity_is_refused_whole() {
         reference_m: None,
         sats: heapless::Vec::new(),
         cn0_dbhz: heapless::Vec::new(),
+        rates: heapless::Vec::new(),
         rejected: 0,
     };
     let (mut refused, mut closed) = (0, 0);
@@ -328,6 +330,7 @@ fn device_epochs(
         reference_m: None,
         sats: heapless::Vec::new(),
         cn0_dbhz: heapless::Vec::new(),
+        rates: heapless::Vec::new(),
         rejected: 0,
     };
     let (mut ok, mut refused) = (Vec::new(), Vec::new());

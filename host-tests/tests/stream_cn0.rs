@@ -63,6 +63,7 @@ fn device_stream_receiver_carries_the_rinex_cn0() {
         reference_m: None,
         sats: heapless::Vec::new(),
         cn0_dbhz: heapless::Vec::new(),
+        rates: heapless::Vec::new(),
         rejected: 0,
     };
     let (mut k, mut checked) = (0, 0);

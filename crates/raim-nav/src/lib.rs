@@ -13,6 +13,8 @@
 //!   core's corrected observation (the host's replays and the firmware's
 //!   own epochs both call it);
 //! - [`store`]: the ephemerides a receiver holds, in fixed capacity;
+//! - [`velocity`]: satellite velocities and clock drifts, and the
+//!   receiver velocity from Doppler (speed and course over ground);
 //! - `rtcm` (feature `rtcm`): the RTCM 3 fields, a compact decoder and the
 //!   stream receiver that forms epochs on the device.
 //!
@@ -46,6 +48,7 @@ pub mod rtcm;
 pub mod store;
 pub mod time;
 pub mod tropo;
+pub mod velocity;
 
 mod m;
 

@@ -169,6 +169,7 @@ fn gsv_leaves_a_negative_elevation_and_an_unknown_cn0_empty() {
     let sky = Sky {
         epoch: &e,
         cn0_dbhz: &cn0,
+        velocity: None,
     };
     let all = epoch_sentences(
         &w,

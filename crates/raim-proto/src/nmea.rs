@@ -46,8 +46,15 @@
 //!   solved position (or the epoch's a-priori position) and the satellite's
 //!   position (pseudorange epochs) or its line of sight (linearised
 //!   epochs); C/N0 when the caller knows it ([`Sky::cn0_dbhz`]), else empty.
-//! - VTG: course and speed empty (the monitor estimates no velocity), with
-//!   the mode indicator.
+//! - RMC speed and course, VTG: when the caller has the receiver's velocity
+//!   ([`Sky::velocity`]: a stream epoch with Doppler, decision `Ok` or
+//!   `Excluded`, `raim_nav::velocity`), RMC's speed over ground in knots
+//!   and true course in degrees, VTG's true course, speed in knots and in
+//!   km/h (magnetic course empty: no magnetic model); else those fields
+//!   empty, with the mode indicator. 1 knot = 1852 m / 3600 s. Feature
+//!   `nmea-velocity` (on with raim-server's `rtcm`; not in the snapshot
+//!   build, whose epochs carry no range rates): without it `write_epoch`
+//!   leaves them empty.
 //! - GST: rms of the all-in-view range residuals; the error ellipse from the
 //!   1-sigma east/north errors (no cross term in the result: axes along
 //!   north and east); 1-sigma lat/lon/alt errors.
@@ -298,6 +305,39 @@ pub struct Sky<'a> {
     /// tracked has more; `raim_nav::ranging::cn0_dbhz_u8`). A value above
     /// 99, which GSV's two digits cannot hold, is written as unknown.
     pub cn0_dbhz: &'a [u8],
+    /// The receiver's speed and course over ground, when known (RMC,
+    /// VTG); None: those fields empty.
+    pub velocity: Option<GroundVelocity>,
+}
+
+/// Speed and course over ground, for RMC and VTG.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GroundVelocity {
+    /// Horizontal speed, m/s.
+    pub speed_m_s: f64,
+    /// Direction of the horizontal velocity, clockwise from true north,
+    /// rad.
+    pub course_rad: f64,
+}
+
+/// Metres per second in a knot (1852 m per hour).
+const KNOT_M_S: f64 = 1852.0 / 3600.0;
+/// Metres per second in a km/h.
+const KM_H_M_S: f64 = 1000.0 / 3600.0;
+
+impl GroundVelocity {
+    /// Speed in knots, course in degrees in [0, 360) (a course that
+    /// rounds to 360.00 at the field's 2 decimals is written 0).
+    fn knots_deg(&self) -> (f64, f64) {
+        let mut deg = libm::fmod(self.course_rad.to_degrees(), 360.0);
+        if deg < 0.0 {
+            deg += 360.0;
+        }
+        if deg >= 359.995 {
+            deg = 0.0;
+        }
+        (self.speed_m_s / KNOT_M_S, deg)
+    }
 }
 
 impl<'a> Sky<'a> {
@@ -306,6 +346,7 @@ impl<'a> Sky<'a> {
         Sky {
             epoch,
             cn0_dbhz: &[],
+            velocity: None,
         }
     }
 
@@ -540,8 +581,11 @@ pub fn write_epoch<E>(
         Ok(s) => emit(&s),
         Err(TooLong) => Ok(()),
     };
-    put(rmc(r))?;
-    put(vtg(r))?;
+    // Speed and course in the builds that write them (feature
+    // `nmea-velocity`; the snapshot build's epochs carry no range rates).
+    let velocity = sky.velocity.filter(|_| cfg!(feature = "nmea-velocity"));
+    put(rmc(r, velocity))?;
+    put(vtg(r, velocity))?;
     put(gga(r, dop, BUILT.geoid && opts.geoid))?;
     for sys in System::ALL {
         let used = r
@@ -629,9 +673,11 @@ fn start(b: &mut Body, talker: &str, name: &str) -> core::fmt::Result {
     b.write_char(',')
 }
 
-/// RMC: time, status, position, (no speed/course), date, (no variation),
-/// mode, NMEA 4.1 navigational status (the integrity decision).
-pub fn rmc(r: &WireResult) -> Result<Sentence, TooLong> {
+/// RMC: time, status, position, speed over ground (knots) and true
+/// course (degrees) when `velocity` is given (else empty), date, (no
+/// variation), mode, NMEA 4.1 navigational status (the integrity
+/// decision).
+pub fn rmc(r: &WireResult, velocity: Option<GroundVelocity>) -> Result<Sentence, TooLong> {
     let utc = Utc::from_unix_s(r.time_s);
     let mut b = Body::new();
     start(&mut b, talker(r), "RMC")?;
@@ -640,7 +686,16 @@ pub fn rmc(r: &WireResult) -> Result<Sentence, TooLong> {
     b.write_char(if usable(r) { 'A' } else { 'V' })?;
     b.write_char(',')?;
     position_fields(&mut b, r)?;
-    b.write_str(",,,")?;
+    b.write_char(',')?;
+    if let Some(v) = velocity {
+        let (knots, deg) = v.knots_deg();
+        num(&mut b, knots, 3, 7)?;
+        b.write_char(',')?;
+        num(&mut b, deg, 2, 6)?;
+    } else {
+        b.write_char(',')?;
+    }
+    b.write_char(',')?;
     if let Some(u) = utc {
         u.write_date(&mut b)?;
     }
@@ -657,11 +712,24 @@ pub fn rmc(r: &WireResult) -> Result<Sentence, TooLong> {
     finish(&b)
 }
 
-/// VTG: no course or speed (not estimated), mode A (usable) or N.
-pub fn vtg(r: &WireResult) -> Result<Sentence, TooLong> {
+/// VTG: true course (degrees), no magnetic course, speed in knots and
+/// km/h when `velocity` is given (else those fields empty), mode A
+/// (usable) or N.
+pub fn vtg(r: &WireResult, velocity: Option<GroundVelocity>) -> Result<Sentence, TooLong> {
     let mut b = Body::new();
     start(&mut b, talker(r), "VTG")?;
-    b.write_str(",T,,M,,N,,K,")?;
+    match velocity {
+        Some(v) => {
+            let (knots, deg) = v.knots_deg();
+            num(&mut b, deg, 2, 6)?;
+            b.write_str(",T,,M,")?;
+            num(&mut b, knots, 3, 7)?;
+            b.write_str(",N,")?;
+            num(&mut b, v.speed_m_s / KM_H_M_S, 3, 8)?;
+            b.write_str(",K,")?;
+        }
+        None => b.write_str(",T,,M,,N,,K,")?,
+    }
     b.write_char(if usable(r) { 'A' } else { 'N' })?;
     finish(&b)
 }
@@ -1287,6 +1355,82 @@ mod tests {
             } else {
                 assert!(gbs[2].is_empty() && gst[8].is_empty(), "{gbs:?} {gst:?}");
             }
+        }
+    }
+
+    /// RMC and VTG with a velocity: RMC fields 7-8 the speed in knots (3
+    /// decimals) and the true course in degrees (2 decimals), VTG fields
+    /// 1, 5 and 7 the course, knots and km/h (magnetic course empty); the
+    /// course in [0, 360) from any angle (a course rounding to 360.00 is
+    /// 0.00); without a velocity (the caller gives none for an epoch
+    /// that is not a valid fix) those fields empty; extreme speeds keep
+    /// the sentences within 82 characters, the field empty when it cannot
+    /// show them.
+    ///
+    /// Verifies: NMEA-VELOCITY, NMEA-FORMAT
+    #[test]
+    fn rmc_and_vtg_carry_speed_and_course() {
+        let (mut w, _) = sky8_result(0.0);
+        w.geodetic = Some(Geodetic {
+            lat_rad: 0.84,
+            lon_rad: 0.2,
+            height_m: 100.0,
+        });
+        let with = |speed_m_s: f64, course_rad: f64| {
+            let v = Some(GroundVelocity {
+                speed_m_s,
+                course_rad,
+            });
+            let (rmc, vtg) = (rmc(&w, v).unwrap(), vtg(&w, v).unwrap());
+            assert!(rmc.len() <= 82 && vtg.len() <= 82);
+            let f = |s: &Sentence| -> std::vec::Vec<String> {
+                parse(s).0.split(',').map(String::from).collect()
+            };
+            (f(&rmc), f(&vtg))
+        };
+        // 12.3 m/s toward 45 degrees: 23.909 knots, 44.28 km/h.
+        let (r, v) = with(12.3, 45f64.to_radians());
+        assert_eq!((r[7].as_str(), r[8].as_str()), ("23.909", "45.00"));
+        assert_eq!(v[1..].join(","), "45.00,T,,M,23.909,N,44.280,K,A", "{v:?}");
+        // A negative angle and one past a turn.
+        let (r, _) = with(1.0, -90f64.to_radians());
+        assert_eq!(r[8], "270.00");
+        let (r, _) = with(1.0, 450f64.to_radians());
+        assert_eq!(r[8], "90.00");
+        let (r, _) = with(0.0, -1e-9);
+        assert_eq!((r[7].as_str(), r[8].as_str()), ("0.000", "0.00"));
+        // Extreme values: fewer decimals, or empty.
+        let (r, v) = with(1e5, 1.0);
+        assert_eq!(r[7], "194384");
+        assert_eq!(v[7], "360000.0");
+        let (r, v) = with(1e30, f64::NAN);
+        assert!(r[7].is_empty() && r[8].is_empty() && v[1].is_empty() && v[7].is_empty());
+        // Without a velocity: empty, as before.
+        assert_eq!(parse(&vtg(&w, None).unwrap()).0, "GPVTG,,T,,M,,N,,K,A");
+        let r = parse(&rmc(&w, None).unwrap()).0;
+        assert_eq!(r.split(',').nth(7), Some(""));
+        assert_eq!(r.split(',').nth(8), Some(""));
+        // The whole epoch through `write_epoch` with the velocity in `Sky`.
+        let sats: std::vec::Vec<LinearObservation> = std::vec::Vec::new();
+        let e = Epoch::linear(w.time_s, &sats);
+        let sky = Sky {
+            epoch: &e,
+            cn0_dbhz: &[],
+            velocity: Some(GroundVelocity {
+                speed_m_s: 12.3,
+                course_rad: 45f64.to_radians(),
+            }),
+        };
+        let all = epoch_sentences(&w, &sky, NO_GEOID).unwrap();
+        if cfg!(feature = "nmea-velocity") {
+            assert!(all[0].contains(",23.909,45.00,"), "{:?}", all[0]);
+            assert!(
+                all[1].contains("45.00,T,,M,23.909,N,44.280,K,A"),
+                "{:?}",
+                all[1]
+            );
+        } else {
+            assert!(all[1].contains(",T,,M,,N,,K,A"), "{:?}", all[1]);
         }
     }
 

@@ -21,15 +21,24 @@ use crate::IoError;
 /// satellites seen, for GSV and the DOPs); without one, the sentences of an
 /// epoch with no satellites. `cn0_dbhz`: the C/N0 of the epoch's
 /// satellites for GSV, when known (a stream epoch's, from its MSM; the
-/// protocol's epochs carry none: empty).
+/// protocol's epochs carry none: empty); `velocity`: the speed and course
+/// over ground for RMC and VTG, when known (a stream epoch's, from its
+/// Doppler, `stream::StreamState::velocity`).
 #[inline(never)]
 pub(crate) fn write_nmea<M: Write>(
     wire: &WireResult,
     request: Option<&Request>,
     cn0_dbhz: &[u8],
+    velocity: Option<nmea::GroundVelocity>,
     nmea_out: &mut M,
 ) -> Result<(), M::Error> {
-    write_nmea_for(wire, request.map(|r| &r.command), cn0_dbhz, nmea_out)
+    write_nmea_for(
+        wire,
+        request.map(|r| &r.command),
+        cn0_dbhz,
+        velocity,
+        nmea_out,
+    )
 }
 
 /// [`write_nmea`] for an epoch command taken out of the request slot.
@@ -38,6 +47,7 @@ pub(crate) fn write_nmea_for<M: Write>(
     wire: &WireResult,
     command: Option<&Command>,
     cn0_dbhz: &[u8],
+    velocity: Option<nmea::GroundVelocity>,
     nmea_out: &mut M,
 ) -> Result<(), M::Error> {
     use raim_proto::araim_msg::AraimCommand;
@@ -55,6 +65,7 @@ pub(crate) fn write_nmea_for<M: Write>(
         &nmea::Sky {
             epoch: &epoch,
             cn0_dbhz,
+            velocity,
         },
         nmea::BUILT,
         &mut |s: &nmea::Sentence| nmea_out.write_all(s.as_bytes()),

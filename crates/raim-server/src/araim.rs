@@ -256,8 +256,8 @@ impl Server {
             }
             _ => return Ok(()),
         }
-        let (wire, request, cn0) = self.nmea_parts(seq);
-        super::answer::write_nmea(wire, request, cn0, nmea_out)
+        let (wire, request, cn0, velocity) = self.nmea_parts(seq);
+        super::answer::write_nmea(wire, request, cn0, velocity, nmea_out)
     }
 }
 

@@ -677,7 +677,7 @@ impl Server {
                     let wire = &mut self.shared.answer().wire;
                     wire.reset();
                     wire.time_s = time_s;
-                    answer::write_nmea(wire, None, &[], nmea_out).map_err(IoError::Nmea)?;
+                    answer::write_nmea(wire, None, &[], None, nmea_out).map_err(IoError::Nmea)?;
                 }
                 self.send(link, refusal.seq, BodyRef::Error(&refusal.error))
             }
@@ -809,14 +809,22 @@ impl Server {
     }
 
     /// What the NMEA writer reads of an answered epoch: its wire result,
-    /// the request, and the C/N0 of its satellites for GSV: a stream
-    /// epoch's (answered unasked, `seq` None: the satellites of the epoch
-    /// formed last, `stream::StreamState`), else none (the protocol's
-    /// epochs carry no C/N0).
+    /// the request, the C/N0 of its satellites for GSV and the speed and
+    /// course over ground for RMC and VTG: a stream epoch's (answered
+    /// unasked, `seq` None: the epoch formed last, `stream::StreamState`;
+    /// the velocity from its Doppler at the solved position, with the
+    /// satellites the solution used), else none (the protocol's epochs
+    /// carry no C/N0 and no Doppler).
+    #[allow(clippy::type_complexity)]
     pub(crate) fn nmea_parts(
         &mut self,
         seq: Option<u32>,
-    ) -> (&WireResult, Option<&Request>, &[u8]) {
+    ) -> (
+        &WireResult,
+        Option<&Request>,
+        &[u8],
+        Option<raim_proto::nmea::GroundVelocity>,
+    ) {
         let Server {
             shared,
             request,
@@ -824,18 +832,19 @@ impl Server {
             stream,
             ..
         } = self;
+        let wire = &shared.answer().wire;
         #[cfg(feature = "rtcm")]
-        let cn0: &[u8] = if seq.is_none() {
-            stream.cn0_dbhz()
+        let (cn0, velocity): (&[u8], _) = if seq.is_none() {
+            (stream.cn0_dbhz(), stream.velocity(wire))
         } else {
-            &[]
+            (&[], None)
         };
         #[cfg(not(feature = "rtcm"))]
-        let cn0: &[u8] = {
+        let (cn0, velocity): (&[u8], _) = {
             let _ = seq;
-            &[]
+            (&[], None)
         };
-        (&shared.answer().wire, request.as_ref(), cn0)
+        (wire, request.as_ref(), cn0, velocity)
     }
 
     /// The no-fix NMEA sentences of the epoch in the request slot (its
@@ -855,8 +864,8 @@ impl Server {
         let wire = &mut self.shared.answer().wire;
         wire.reset();
         wire.time_s = time_s;
-        let (wire, request, cn0) = self.nmea_parts(seq);
-        answer::write_nmea(wire, request, cn0, nmea_out)
+        let (wire, request, cn0, velocity) = self.nmea_parts(seq);
+        answer::write_nmea(wire, request, cn0, velocity, nmea_out)
     }
 
     /// The NMEA sentences of a particle-filter epoch (`command`, taken out
@@ -887,7 +896,13 @@ impl Server {
                 wire.time_s = e.time_s;
             }
         }
-        answer::write_nmea_for(&self.shared.answer().wire, Some(command), &[], nmea_out)
+        answer::write_nmea_for(
+            &self.shared.answer().wire,
+            Some(command),
+            &[],
+            None,
+            nmea_out,
+        )
     }
 
     /// `Status`, with the platform's fields filled in.
@@ -959,8 +974,9 @@ impl Server {
         };
         match outcome {
             Ok(()) => {
-                let (wire, request, cn0) = self.nmea_parts(seq);
-                answer::write_nmea(wire, request, cn0, nmea_out).map_err(IoError::Nmea)?;
+                let (wire, request, cn0, velocity) = self.nmea_parts(seq);
+                answer::write_nmea(wire, request, cn0, velocity, nmea_out)
+                    .map_err(IoError::Nmea)?;
                 let Server {
                     shared,
                     status,

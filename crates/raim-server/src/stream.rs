@@ -85,6 +85,7 @@ impl StreamState {
                 reference_m: None,
                 sats: heapless::Vec::new(),
                 cn0_dbhz: heapless::Vec::new(),
+                rates: heapless::Vec::new(),
                 rejected: 0,
             },
             epochs: 0,
@@ -123,6 +124,15 @@ impl StreamState {
     /// The C/N0 of the satellites of the epoch formed last (GSV).
     pub(crate) fn cn0_dbhz(&self) -> &[u8] {
         &self.formed.cn0_dbhz
+    }
+
+    /// The speed and course over ground of the epoch formed last, for RMC
+    /// and VTG ([`ground_velocity`]).
+    pub(crate) fn velocity(
+        &self,
+        wire: &raim_proto::result::WireResult,
+    ) -> Option<raim_proto::nmea::GroundVelocity> {
+        ground_velocity(&self.formed, wire)
     }
 
     /// Epochs formed (answered or refused) and ephemerides held.
@@ -171,6 +181,43 @@ pub fn stream_sigmas(config: Option<&raim_core::Config>, araim: bool) -> StreamS
     } else {
         StreamSigmas::Snapshot(model)
     }
+}
+
+/// The speed and course over ground of a formed stream epoch whose
+/// answer is `wire` (docs/RECEIVERS.md "Speed and course"): none unless
+/// the decision is `Ok` or `Excluded` with a position; else the velocity
+/// solution ([`raim_nav::velocity::solve`]) at that position from the
+/// Doppler of the satellites the answer used (an excluded satellite is
+/// left out), each weighted by its range sigma; none when fewer than four
+/// have a rate or the geometry is singular.
+pub fn ground_velocity<const N: usize>(
+    formed: &FormedEpoch<N>,
+    wire: &raim_proto::result::WireResult,
+) -> Option<raim_proto::nmea::GroundVelocity> {
+    use raim_core::Decision;
+    use raim_nav::velocity::{solve, RateObservation};
+    if !matches!(wire.decision, Decision::Ok | Decision::Excluded) {
+        return None;
+    }
+    let rx_m = wire.position_ecef_m?;
+    let used = |id: raim_core::SatId| wire.satellites.iter().any(|s| s.id == id && s.used);
+    let mut sats = formed
+        .sats
+        .iter()
+        .zip(formed.rates.iter())
+        .filter_map(|(obs, rate)| {
+            let rate = (*rate)?;
+            used(obs.id).then_some(RateObservation {
+                sat_position_m: obs.position_m,
+                rate,
+                sigma_m: obs.sigma_m.unwrap_or(1.0),
+            })
+        });
+    let v = solve(rx_m, &mut sats).ok()?;
+    Some(raim_proto::nmea::GroundVelocity {
+        speed_m_s: v.speed_over_ground_m_s(),
+        course_rad: v.course_over_ground_rad(),
+    })
 }
 
 /// The monitor a staged stream epoch runs.
@@ -347,6 +394,96 @@ mod tests {
             wire_error(FormError::LeapSecondsUnknown { tow_ms: 7_000 }),
             WireError::StreamLeapSecondsUnknown { tow_ms: 7_000 }
         );
+    }
+
+    /// The velocity of a formed epoch is solved only for an `Ok` or
+    /// `Excluded` answer with a position, from the satellites the answer
+    /// used: a satellite not used (excluded) with a rate 50 m/s off moves
+    /// nothing; used, it moves the speed. A receiver at rest in the
+    /// satellites' rates (their rates exactly the satellites' line-of-sight
+    /// motion) reads 0 speed; a missing rate on one satellite of five
+    /// leaves four, still solved; three are not.
+    ///
+    /// Verifies: RX-VELOCITY
+    #[test]
+    fn ground_velocity_takes_the_answers_used_satellites_only() {
+        use raim_core::{Decision, SatId, System};
+        use raim_nav::velocity::RangeRate;
+        use raim_proto::result::WireResult;
+        let rx = [3_582_105.0, 532_590.0, 5_232_755.0];
+        // Five satellites around the sky, 20,000 km up-ish.
+        let dirs: [[f64; 3]; 5] = [
+            [0.3, 0.1, 0.95],
+            [0.9, -0.3, 0.3],
+            [-0.5, 0.8, 0.3],
+            [0.1, -0.9, 0.4],
+            [0.6, 0.6, 0.5],
+        ];
+        let mut formed = FormedEpoch::<SNAPSHOT_SATS>::new();
+        let mut wire = WireResult::empty();
+        for (k, d) in dirs.iter().enumerate() {
+            let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let u = [d[0] / n, d[1] / n, d[2] / n];
+            let p = [0, 1, 2].map(|i| rx[i] + 2.0e7 * u[i]);
+            let id = SatId::new(System::Gps, k as u8 + 1);
+            let v_sat = [1000.0 * u[1], -1000.0 * u[0], 500.0];
+            let range_rate = u[0] * v_sat[0] + u[1] * v_sat[1] + u[2] * v_sat[2];
+            let _ = formed.sats.push(raim_core::RangeObservation {
+                id,
+                pseudorange_m: 2.0e7,
+                position_m: p,
+                sigma_m: Some(1.0),
+            });
+            let _ = formed.rates.push(Some(RangeRate {
+                rate_m_s: range_rate,
+                sat_velocity_m_s: v_sat,
+                sat_clock_drift_s_s: 0.0,
+            }));
+            let _ = wire.satellites.push(raim_core::SatelliteResult {
+                id,
+                used: true,
+                sigma_m: 1.0,
+                elevation_rad: 0.5,
+                s_ii: 0.5,
+                h_ii: 0.5,
+                w: 0.0,
+                bias_m: 0.0,
+                score: 0.0,
+                identifiable: true,
+            });
+        }
+        wire.position_ecef_m = Some(rx);
+        wire.decision = Decision::Ok;
+        // At rest (to the light-time factor, 3e-6 of the rates).
+        let v = ground_velocity(&formed, &wire).unwrap();
+        assert!(v.speed_m_s < 0.01, "{v:?}");
+        // Satellite 3's rate 50 m/s off, and the answer excluded it.
+        if let Some(Some(r)) = formed.rates.get_mut(2) {
+            r.rate_m_s += 50.0;
+        }
+        wire.satellites[2].used = false;
+        wire.decision = Decision::Excluded;
+        let v = ground_velocity(&formed, &wire).unwrap();
+        assert!(v.speed_m_s < 0.01, "{v:?}");
+        // Used, it moves the solution.
+        wire.satellites[2].used = true;
+        wire.decision = Decision::Ok;
+        let v = ground_velocity(&formed, &wire).unwrap();
+        assert!(v.speed_m_s > 1.0, "{v:?}");
+        // No velocity for an epoch that is not a valid fix.
+        for d in [Decision::Alarm, Decision::Unavailable] {
+            wire.decision = d;
+            assert_eq!(ground_velocity(&formed, &wire), None, "{d:?}");
+        }
+        wire.decision = Decision::Ok;
+        wire.position_ecef_m = None;
+        assert_eq!(ground_velocity(&formed, &wire), None);
+        // Four rates still solve; three do not.
+        wire.position_ecef_m = Some(rx);
+        wire.satellites[2].used = false;
+        assert!(ground_velocity(&formed, &wire).is_some());
+        formed.rates[0] = None;
+        assert_eq!(ground_velocity(&formed, &wire), None);
     }
 
     /// The pivot is the build week less the lookback, and the build week

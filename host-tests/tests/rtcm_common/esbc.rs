@@ -5,7 +5,9 @@
 //! MSM7 per system (1077, 1097, 1127; DF393 set on all but the last) with
 //! the signals of the stream's iono-free pairs (GPS C1C/C2W, Galileo
 //! C1C/C5Q, BeiDou C2I/C6I), each with its C/N0 from the RINEX S
-//! observable (DF408). The stream may be sent `delta_weeks` later:
+//! observable (DF408) and its phase-range rate from the RINEX D observable
+//! (DF399 + DF404: -D x lambda, the satellite's rough rate from its first
+//! signal). The stream may be sent `delta_weeks` later:
 //! every ephemeris week moved on, times of week as recorded (no GLONASS,
 //! so no leap-second shift).
 
@@ -201,8 +203,49 @@ fn fnav_message(k: &Kepler, delta_weeks: i64) -> Message {
 }
 
 /// One system's MSM7 at an epoch: (satellite, rough ms as DF397 + DF398,
-/// [(band, attribute, fine ms, C/N0 dB-Hz)]).
-type Cells = Vec<(u8, u8, f64, Vec<(u8, char, f64, Option<f64>)>)>;
+/// rough rate m/s (DF399), [(band, attribute, fine ms, C/N0 dB-Hz, fine
+/// rate m/s (DF404))]).
+type Cells = Vec<(u8, u8, f64, Option<i16>, Vec<Cell>)>;
+/// One signal of an MSM7 cell: (band, attribute, fine ms, C/N0 dB-Hz,
+/// fine rate m/s).
+type Cell = (u8, char, f64, Option<f64>, Option<f64>);
+
+/// Each of the first `EPOCHS` epochs' Doppler observables (Hz) by
+/// satellite and code ("D1C"), from the RINEX: its records as
+/// `ObsData::load` takes them (flag ok), in order.
+pub fn dopplers() -> Vec<BTreeMap<(SatId, String), f64>> {
+    let r = raim_gnss::rinex_io::open(&data(OBS)).unwrap();
+    let mut out = Vec::new();
+    for (key, obs) in r.observations_iter() {
+        if !key.flag.is_ok() {
+            continue;
+        }
+        let mut m = BTreeMap::new();
+        for s in &obs.signals {
+            let Some(system) = raim_gnss::rinex_io::system_of(s.sv.constellation) else {
+                continue;
+            };
+            if s.observable.is_doppler_observable() && s.value.is_finite() {
+                m.insert(
+                    (SatId::new(system, s.sv.prn), s.observable.to_string()),
+                    s.value,
+                );
+            }
+        }
+        out.push(m);
+        if out.len() == EPOCHS {
+            break;
+        }
+    }
+    out
+}
+
+/// The phase-range rate of a RINEX Doppler `d_hz` on `code`'s carrier,
+/// m/s: -D x c / f (a receding satellite's Doppler is negative).
+pub fn rate_m_s(system: System, code: &str, d_hz: f64) -> f64 {
+    let f = raim_nav::ranging::band_hz(system, code).unwrap();
+    -d_hz * raim_nav::ephemeris::C_M_S / f
+}
 
 /// The cells of `sys` in an ESBC epoch: the rough range (1/1024 ms) from
 /// the first signal, each signal's remainder as the fine range (within
@@ -210,6 +253,7 @@ type Cells = Vec<(u8, u8, f64, Vec<(u8, char, f64, Option<f64>)>)>;
 /// satellite is sent only with both signals of its system's pair.
 fn cells(
     sats: &BTreeMap<SatId, Vec<raim_gnss::rinex_io::CodeObs>>,
+    doppler: &BTreeMap<(SatId, String), f64>,
     sys: System,
     pairs_only: bool,
 ) -> Cells {
@@ -230,16 +274,44 @@ fn cells(
         // The C/N0 of each signal: the RINEX S observable (DF408 holds it
         // to 2^-4 dB-Hz).
         let cn0 = |code: &str| obs.iter().find(|o| o.code == code).and_then(|o| o.cn0_dbhz);
-        let sigs: Vec<(u8, char, f64, Option<f64>)> = signals
+        // Each signal's rate from its D observable; the rough rate (DF399,
+        // whole m/s) from the first signal's, each fine rate (DF404,
+        // within +-1.6383 m/s) the rest.
+        let rate = |code: &str| {
+            let d = doppler.get(&(*id, code.replacen('C', "D", 1)))?;
+            Some(rate_m_s(sys, code, *d))
+        };
+        let rough_rate = signals
+            .iter()
+            .find_map(|(c, _, _)| ms(c).and(rate(c)))
+            .map(|r| r.round() as i16)
+            .filter(|r| r.abs() < 0x2000);
+        let fine_rate = |code: &str| {
+            let f = rate(code)? - f64::from(rough_rate?);
+            (f.abs() < 1.6383).then_some(f)
+        };
+        let sigs: Vec<Cell> = signals
             .iter()
             .filter_map(|(c, band, attr)| {
                 let fine = ms(c)? - rough_ms;
-                (fine.abs() < 1.0 / 1024.0 - FINE_MS).then_some((*band, *attr, fine, cn0(c)))
+                (fine.abs() < 1.0 / 1024.0 - FINE_MS).then_some((
+                    *band,
+                    *attr,
+                    fine,
+                    cn0(c),
+                    fine_rate(c),
+                ))
             })
             .collect();
         let complete = !pairs_only || sigs.len() == signals.len();
         if !sigs.is_empty() && complete && (1..=254).contains(&int_ms) {
-            out.push((id.prn, int_ms as u8, mod_1024 as f64 / 1024.0, sigs));
+            out.push((
+                id.prn,
+                int_ms as u8,
+                mod_1024 as f64 / 1024.0,
+                rough_rate,
+                sigs,
+            ));
         }
     }
     out
@@ -253,19 +325,21 @@ macro_rules! msm7 {
             msm_multiple_message_flag: $more,
             ..Default::default()
         };
-        for (prn, int_ms, mod_ms, sigs) in $cells {
+        for (prn, int_ms, mod_ms, rough_rate, sigs) in $cells {
             m.data_segment.satellite_data.push(rtcm_rs::msg::Msm57Sat {
                 satellite_id: *prn,
                 gnss_satellite_rough_range_integer_ms: Some(*int_ms),
                 gnss_satellite_rough_range_mod1ms_ms: *mod_ms,
+                gnss_satellite_rough_phaserange_rates_m_s: *rough_rate,
                 ..Default::default()
             });
-            for (band, attr, fine, cn0) in sigs {
+            for (band, attr, fine, cn0, fine_rate) in sigs {
                 m.data_segment.signal_data.push(rtcm_rs::msg::$sig_t {
                     satellite_id: *prn,
                     signal_id: $sig_id::new(*band, *attr),
                     gnss_signal_fine_pseudorange_ext_ms: Some(*fine),
                     gnss_signal_cnr_ext_dbhz: *cn0,
+                    gnss_signal_fine_phaserange_rate_m_s: *fine_rate,
                     ..Default::default()
                 });
             }
@@ -351,7 +425,8 @@ fn esbc_stream_opts(
     sets.retain(|k| k.toc_gps_s >= t0 - 4.0 * 3600.0);
     let mut next = 0;
     let mut carried = Vec::new();
-    for e in obs.epochs.iter().take(EPOCHS) {
+    let doppler = dopplers();
+    for (e, d) in obs.epochs.iter().take(EPOCHS).zip(&doppler) {
         while next < sets.len() && sets[next].toc_gps_s - LEAD_S <= e.time_gps_s {
             put(&mut b, &ephemeris_message(sets[next], delta_weeks));
             if fnav && sets[next].system == System::Galileo {
@@ -369,9 +444,9 @@ fn esbc_stream_opts(
             BeidouTime::Gps => tow_ms,
         };
         let (g, ga, c) = (
-            cells(&e.sats, System::Gps, pairs_only),
-            cells(&e.sats, System::Galileo, pairs_only),
-            cells(&e.sats, System::Beidou, pairs_only),
+            cells(&e.sats, d, System::Gps, pairs_only),
+            cells(&e.sats, d, System::Galileo, pairs_only),
+            cells(&e.sats, d, System::Beidou, pairs_only),
         );
         put(
             &mut b,
@@ -414,10 +489,10 @@ fn esbc_stream_opts(
         );
         let mut sent = Vec::new();
         for (sys, _) in SIGNALS {
-            let cs = cells(&e.sats, sys, pairs_only);
-            for (prn, _, _, sigs) in &cs {
+            let cs = cells(&e.sats, d, sys, pairs_only);
+            for (prn, _, _, _, sigs) in &cs {
                 let id = SatId::new(sys, *prn);
-                for (band, attr, _, _) in sigs {
+                for (band, attr, _, _, _) in sigs {
                     let code = format!("C{band}{attr}");
                     let v = e.sats[&id].iter().find(|o| o.code == code).unwrap().value_m;
                     sent.push((id, code, v));

@@ -20,10 +20,11 @@
 //!   header: a 30-bit time of week, GPS DF004, Galileo DF248, QZSS DF428,
 //!   BeiDou DF427 (BDT), GLONASS DF416 + DF034; DF394-DF396 masks,
 //!   satellite data DF397, extended info, DF398, DF399, signal data
-//!   DF400/DF405 and the rest of the cell's fields skipped): pseudorange =
-//!   (DF397 + DF398 + fine range) ms x c / 1000, the signal's RINEX band and
-//!   attribute (Tables 3.5-91 GPS, 3.5-96 GLONASS, 3.5-99 Galileo, 3.5-105
-//!   QZSS, 3.5-108 BeiDou).
+//!   DF400/DF405, DF403/DF408 and DF404, the rest of the cell's fields
+//!   skipped): pseudorange = (DF397 + DF398 + fine range) ms x c / 1000,
+//!   phase-range rate = DF399 + DF404 m/s (MSM5/MSM7 only), the signal's
+//!   RINEX band and attribute (Tables 3.5-91 GPS, 3.5-96 GLONASS, 3.5-99
+//!   Galileo, 3.5-105 QZSS, 3.5-108 BeiDou).
 //! - The Keplerian ephemerides 1019 (GPS), 1042 (BeiDou), 1044 (QZSS),
 //!   1045 (Galileo F/NAV) and 1046 (Galileo I/NAV) into [`KeplerFields`]
 //!   ([`KeplerMessage`], the week as sent), 1020 (GLONASS, sign-magnitude
@@ -343,6 +344,14 @@ pub struct MsmSignal {
     /// (MSM6/7, 2^-4 dB-Hz); `None` when the field says 0 ("not
     /// computed").
     pub cnr_dbhz: Option<f64>,
+    /// The signal's phase-range rate, m/s: the satellite's rough rate
+    /// DF399 (14 bits, 1 m/s) plus the signal's fine rate DF404 (15 bits,
+    /// 0.0001 m/s), MSM5 and MSM7 only (RTCM 10403.3 Tables 3.5-82,
+    /// 3.5-86, 3.5-90, 3.5-91); positive for a receding satellite (the
+    /// Doppler shift times -lambda). `None` for MSM4/MSM6 (they carry
+    /// no rate) or when either field holds its invalid mark (DF399
+    /// -8192, DF404 -16384).
+    pub phase_range_rate_m_s: Option<f64>,
 }
 
 /// A set bit's 1-based position, counted from the most significant of
@@ -594,6 +603,34 @@ impl<'a> Msm<'a> {
         Ok((v > 0.0).then_some(v))
     }
 
+    /// The phase-range rate of cell `k` (0-based among the set cells) of
+    /// satellite `i` (0-based among the set satellites), m/s: MSM5/MSM7
+    /// only. The satellite data hold DF397 for every satellite, then the
+    /// extended info (4 bits), DF398 (10 bits) and DF399 (14 bits) for
+    /// every satellite in turn; the signal data hold DF404 (15 bits) of
+    /// every cell after its other fields (RTCM 10403.3 Tables 3.5-78 to
+    /// 3.5-91). The value is `rtcm-rs`'s: DF399 as an integer in f64, plus
+    /// DF404's integer times 0.0001 in f64.
+    fn phase_range_rate_m_s(&self, i: usize, k: usize) -> Result<Option<f64>, BitsError> {
+        if !self.extended {
+            return Ok(None);
+        }
+        let n = self.n_sat as usize;
+        let n_cell = self.cell_mask.count_ones() as usize;
+        let p = self.payload;
+        let rough = BitReader::at(p, self.sat_at + (8 + 4 + 10) * n + 14 * i).i(14)?;
+        let before_rate = if self.high_res {
+            20 + 24 + 10 + 1 + 10
+        } else {
+            15 + 22 + 4 + 1 + 6
+        };
+        let fine = BitReader::at(p, self.sig_at + before_rate * n_cell + 15 * k).i(15)?;
+        if rough == -0x2000 || fine == -0x4000 {
+            return Ok(None);
+        }
+        Ok(Some(rough as f64 + fine as f64 * 0.0001))
+    }
+
     /// The pseudorange of cell `k` (0-based among the set cells) of
     /// satellite `i` (0-based among the set satellites).
     fn pseudorange_m(&self, i: usize, k: usize) -> Result<Option<f64>, BitsError> {
@@ -653,6 +690,7 @@ impl Iterator for MsmSignals<'_, '_> {
             // Checked in `Msm::new`: the payload holds every cell.
             let pseudorange_m = m.pseudorange_m(i as usize, k).ok()?;
             let cnr_dbhz = m.cnr_dbhz(k).ok()?;
+            let phase_range_rate_m_s = m.phase_range_rate_m_s(i as usize, k).ok()?;
             return Some(MsmSignal {
                 sat_id,
                 signal_id,
@@ -660,6 +698,7 @@ impl Iterator for MsmSignals<'_, '_> {
                 attribute,
                 pseudorange_m,
                 cnr_dbhz,
+                phase_range_rate_m_s,
             });
         }
         None
@@ -1220,6 +1259,7 @@ mod tests {
                     attribute: b'C',
                     pseudorange_m: Some(want_3),
                     cnr_dbhz: Some(45.0),
+                    phase_range_rate_m_s: None,
                 },
                 MsmSignal {
                     sat_id: 17,
@@ -1228,6 +1268,7 @@ mod tests {
                     attribute: b'C',
                     pseudorange_m: None,
                     cnr_dbhz: None,
+                    phase_range_rate_m_s: None,
                 },
                 MsmSignal {
                     sat_id: 17,
@@ -1236,9 +1277,112 @@ mod tests {
                     attribute: b'S',
                     pseudorange_m: Some(want_17),
                     cnr_dbhz: Some(38.0),
+                    phase_range_rate_m_s: None,
                 },
             ]
         );
+    }
+
+    /// A GPS MSM5 (`high_res` false, 1075) or MSM7 (true, 1077):
+    /// satellites 3 and 17, signals 2 (1C) and 10 (2W), all four cells,
+    /// with the rough rates `rough` (DF399) and the fine rates `fine`
+    /// (DF404, cell order), every other field distinct from them.
+    fn msm57(high_res: bool, rough: [i64; 2], fine: [i64; 4]) -> std::vec::Vec<u8> {
+        let mut b = Bits(std::vec::Vec::new(), 0);
+        b.put(if high_res { 1077 } else { 1075 }, 12);
+        b.put(7, 12).put(345_600_000, 30).put(0, 1);
+        b.put(0, 3 + 7 + 2 + 2 + 1 + 3);
+        b.put(1 << 61 | 1 << 47, 64);
+        b.put(1 << 30 | 1 << 22, 32);
+        b.put(0b1111, 4);
+        // DF397, extended info, DF398, DF399: each for both satellites.
+        b.put(70, 8).put(75, 8).put(0b1010, 4).put(0b0101, 4);
+        b.put(512, 10)
+            .put(100, 10)
+            .put(rough[0], 14)
+            .put(rough[1], 14);
+        let (fr, ph, lock, cnr) = if high_res {
+            (20, 24, 10, 10)
+        } else {
+            (15, 22, 4, 6)
+        };
+        for v in [1000, -2000, 3000, -4000] {
+            b.put(v, fr);
+        }
+        for v in [-1, 1, -3, 3] {
+            b.put(v, ph);
+        }
+        b.put(0b1011, 4 * lock).put(0b1001, 4);
+        for v in [40, 41, 42, 43] {
+            b.put(v, cnr);
+        }
+        for v in fine {
+            b.put(v, 15);
+        }
+        frame(&b.0)
+    }
+
+    /// The phase-range rate DF399 + DF404 (RTCM 10403.3 Tables 3.5-82,
+    /// 3.5-86, 3.5-90, 3.5-91) of MSM5 and MSM7, each cell with its own
+    /// satellite's rough rate and its own fine rate, the invalid marks of
+    /// both fields giving `None`; the ranges and C/N0 read as without
+    /// rates (the rate fields are the last of their blocks). MSM4 carries
+    /// none (`msm4_signals_ranges_and_invalid_marks`).
+    ///
+    /// Verifies: RX-DOPPLER
+    #[test]
+    fn msm5_and_msm7_phase_range_rates() {
+        for high_res in [false, true] {
+            let f = msm57(high_res, [-512, 700], [1234, -0x4000, -5678, 16_383]);
+            let Ok(Ok(Message::Msm(m))) = Frame::new(&f).map(|x| x.message()) else {
+                panic!("not an MSM");
+            };
+            let s: std::vec::Vec<MsmSignal> = m.signals().collect();
+            let got: std::vec::Vec<_> = s
+                .iter()
+                .map(|x| (x.sat_id, x.band, x.phase_range_rate_m_s))
+                .collect();
+            assert_eq!(
+                got,
+                [
+                    (3, 1, Some(-512.0 + 1234.0 * 0.0001)),
+                    (3, 2, None),
+                    (17, 1, Some(700.0 - 5678.0 * 0.0001)),
+                    (17, 2, Some(700.0 + 16_383.0 * 0.0001)),
+                ],
+                "high_res {high_res}"
+            );
+            let cn0: std::vec::Vec<_> = s.iter().map(|x| x.cnr_dbhz).collect();
+            let unit = if high_res { 1.0 / 16.0 } else { 1.0 };
+            assert_eq!(
+                cn0,
+                [40.0, 41.0, 42.0, 43.0].map(|v| Some(v * unit)),
+                "high_res {high_res}"
+            );
+            let fine_ms = if high_res {
+                1000.0 / 536_870_912.0
+            } else {
+                1000.0 / 16_777_216.0
+            };
+            let want = (70.0 + 0.5 + fine_ms) * LIGHT_MS_M;
+            assert_eq!(s[0].pseudorange_m, Some(want));
+            // An invalid rough rate: neither of the satellite's cells has
+            // a rate.
+            let f = msm57(high_res, [-0x2000, 1], [1, 2, 3, 4]);
+            let Ok(Ok(Message::Msm(m))) = Frame::new(&f).map(|x| x.message()) else {
+                panic!("not an MSM");
+            };
+            let rates: std::vec::Vec<_> = m.signals().map(|x| x.phase_range_rate_m_s).collect();
+            assert_eq!(
+                rates,
+                [
+                    None,
+                    None,
+                    Some(1.0 + 3.0 * 0.0001),
+                    Some(1.0 + 4.0 * 0.0001)
+                ]
+            );
+        }
     }
 
     /// Verifies: RX-DECODE

@@ -57,7 +57,7 @@
 use heapless::Vec;
 use raim_core::{RangeObservation, SatId, System};
 
-use crate::ephemeris::{SatState, BDT_MINUS_GPST_S, WEEK_S};
+use crate::ephemeris::{SatState, BDT_MINUS_GPST_S, C_M_S, WEEK_S};
 use crate::glonass::{
     glonass_time_of_day_to_gps_with_s, glonass_time_of_day_with_s, GlonassArc, GlonassEphemeris,
     GlonassIcdFields,
@@ -69,6 +69,9 @@ use crate::ranging::{
 };
 use crate::store::{DecodedSets, EphemerisStore, Stored};
 use crate::time::table_gps_minus_utc_s;
+use crate::velocity::{
+    glonass_motion, kepler_motion, kepler_transmit_time_s, range_rate, RangeRate, SatMotion,
+};
 
 use super::decode::{msm_more_bit, Frame, Message, Msm, MsmSystem};
 use super::fields::{gps_week_of, kepler, toc_near_toe};
@@ -151,8 +154,9 @@ impl GlonassArcs {
     /// `g`'s state at `t_gps_s`, from its arc: the one kept for `g`, else
     /// a new one in place of an arc no satellite of this epoch uses (with
     /// every arc in use, which 27 slots do not reach, integrated from t_b
-    /// as [`GlonassEphemeris::state`]).
-    fn state(&mut self, g: &GlonassEphemeris, t_gps_s: f64) -> SatState {
+    /// as [`GlonassEphemeris::state`]); with the integration's velocity
+    /// there (PZ-90.11, m/s: the velocity solution's, [`glonass_motion`]).
+    fn state(&mut self, g: &GlonassEphemeris, t_gps_s: f64) -> (SatState, [f64; 3]) {
         let epoch = self.epoch;
         let at = match self.arcs.iter().position(|(a, _)| a.ephemeris() == g) {
             Some(i) => Some(i),
@@ -168,13 +172,20 @@ impl GlonassArcs {
                 }
             }
         };
-        match at.and_then(|i| self.arcs.get_mut(i)) {
+        let (p, v) = match at.and_then(|i| self.arcs.get_mut(i)) {
             Some((arc, used)) => {
                 *used = epoch;
-                arc.state(t_gps_s)
+                arc.propagate_pz90(t_gps_s)
             }
-            None => g.state(t_gps_s),
-        }
+            None => g.propagate_pz90(t_gps_s),
+        };
+        // `GlonassArc::state`'s and `GlonassEphemeris::state`'s own
+        // position and clock, to the bit.
+        let state = SatState {
+            position_m: crate::glonass::pz90_to_wgs84(p),
+            clock_s: g.clock_s(t_gps_s),
+        };
+        (state, v)
     }
 }
 
@@ -260,21 +271,65 @@ pub struct RtcmCounts {
     pub ephemerides_not_kept: u32,
 }
 
-/// One signal's pseudorange.
+/// One signal's pseudorange, C/N0 and phase-range rate, in 16 bytes (an
+/// epoch holds up to `S` of them three times over: the open epoch, the
+/// closed one and the GLONASS data waiting; test
+/// `signal_takes_16_bytes`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Signal {
     id: SatId,
-    /// RINEX 3 code "C1C": band digit and attribute letter.
-    code: [u8; 3],
+    /// RINEX 3 code "C1C" less its "C": the band digit (ASCII) and the
+    /// attribute letter.
+    band_digit: u8,
+    attribute: u8,
     /// C/N0, whole dB-Hz (0: unknown; `cn0_dbhz_u8`).
     cn0_dbhz: u8,
+    /// The phase-range rate ([`pack_rate_mm_s`]).
+    rate: [u8; 3],
     value_m: f64,
 }
 
 impl Signal {
-    fn code(&self) -> &str {
-        core::str::from_utf8(&self.code).unwrap_or("")
+    /// Whether this is the signal of RINEX 3 code `c` ("C1C").
+    fn is_code(&self, c: &str) -> bool {
+        c.as_bytes() == [b'C', self.band_digit, self.attribute]
     }
+
+    /// The phase-range rate, m/s, if the MSM gave one.
+    fn rate_m_s(&self) -> Option<f64> {
+        unpack_rate_mm_s(self.rate)
+    }
+}
+
+/// The packed mark of no rate: -2^23 mm/s.
+const NO_RATE: [u8; 3] = [0x80, 0, 0];
+
+/// A phase-range rate (MSM5/MSM7 DF399 + DF404, within +-8192 m/s) in
+/// whole mm/s, 24-bit two's complement, big-endian; [`NO_RATE`] for none
+/// or beyond +-8388 m/s. The millimetre (half a millimetre per second of
+/// rounding against DF404's 0.1 mm/s) is far below a receiver's Doppler
+/// noise (GMSD7: cm/s), and keeps a signal in 16 bytes
+/// (`docs/RECEIVERS.md` "Speed and course").
+fn pack_rate_mm_s(rate_m_s: Option<f64>) -> [u8; 3] {
+    const LIMIT: f64 = (1 << 23) as f64;
+    match rate_m_s.map(|r| m::round(r * 1000.0)) {
+        Some(mm) if mm.abs() < LIMIT => {
+            let [_, a, b, c] = (mm as i32).to_be_bytes();
+            [a, b, c]
+        }
+        _ => NO_RATE,
+    }
+}
+
+/// [`pack_rate_mm_s`]'s rate back, m/s.
+fn unpack_rate_mm_s(p: [u8; 3]) -> Option<f64> {
+    if p == NO_RATE {
+        return None;
+    }
+    let [a, b, c] = p;
+    // Sign-extend the 24 bits.
+    let mm = i32::from_be_bytes([a, b, c, 0]) >> 8;
+    Some(f64::from(mm) * 0.001)
 }
 
 /// An epoch being gathered: stream-relative week and GPS time of week.
@@ -308,9 +363,36 @@ pub struct FormedEpoch<const N: usize> {
     /// the first signal of the code it was ranged with (the pair's higher
     /// frequency); 0 when the MSM gave none (MSM4-7 carry it).
     pub cn0_dbhz: Vec<u8, N>,
+    /// The Doppler input of each satellite of `sats` (same order) for the
+    /// velocity solution ([`crate::velocity`]): the phase-range rate of
+    /// the signal it was ranged with (`pick_code`'s rule), its velocity and
+    /// clock drift at its transmit time; None when the MSM carries no
+    /// rate (MSM4/MSM6, or marked invalid) or the epoch has no reference
+    /// position.
+    pub rates: Vec<Option<RangeRate>, N>,
     /// Satellites seen but not used (no code, no ephemeris, below the
     /// mask, system not used here).
     pub rejected: u32,
+}
+
+impl<const N: usize> FormedEpoch<N> {
+    /// An empty epoch, to be formed into.
+    pub const fn new() -> Self {
+        FormedEpoch {
+            time_gps_s: 0.0,
+            reference_m: None,
+            sats: Vec::new(),
+            cn0_dbhz: Vec::new(),
+            rates: Vec::new(),
+            rejected: 0,
+        }
+    }
+}
+
+impl<const N: usize> Default for FormedEpoch<N> {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 /// The scratch of one epoch's forming, used only inside
@@ -327,6 +409,12 @@ pub struct FormScratch<const N: usize> {
     transmit: Vec<Option<SatState>, N>,
     /// The Keplerian sets the epoch uses ([`EphemerisStore::load`]).
     decoded: DecodedSets<N>,
+    /// Each input satellite's phase-range rate (the first signal of its
+    /// code), m/s.
+    rates: Vec<Option<f64>, N>,
+    /// Each input satellite's velocity and clock drift at its transmit
+    /// time, when it has a rate.
+    motion: Vec<Option<SatMotion>, N>,
 }
 
 impl<const N: usize> FormScratch<N> {
@@ -336,6 +424,8 @@ impl<const N: usize> FormScratch<N> {
             bootstrap_obs: Vec::new(),
             transmit: Vec::new(),
             decoded: DecodedSets::new(),
+            rates: Vec::new(),
+            motion: Vec::new(),
         }
     }
 }
@@ -809,10 +899,13 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             bootstrap_obs: first,
             transmit,
             decoded,
+            rates,
+            motion,
         } = scratch;
         let o = ready.as_mut()?;
         out.sats.clear();
         out.cn0_dbhz.clear();
+        out.rates.clear();
         out.rejected = 0;
         out.reference_m = None;
         let Some(base) = *base_week else {
@@ -837,7 +930,9 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             }
         }
         // Satellite order, as the host's epochs (a BTreeMap by SatId).
-        sort_checked(&mut o.sigs, |a, b| (a.id, a.code) < (b.id, b.code));
+        sort_checked(&mut o.sigs, |a, b| {
+            (a.id, a.band_digit, a.attribute) < (b.id, b.band_digit, b.attribute)
+        });
         // The Keplerian sets the satellites with a code will use, decoded
         // from the store's payloads once for the epoch; more than N is the
         // capacity refusal the inputs below would give.
@@ -855,6 +950,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         let mut inputs: Vec<SatInput<'_>, N> = Vec::new();
         // The C/N0 of each input, in the same order.
         let mut cn0s: Vec<u8, N> = Vec::new();
+        rates.clear();
         let mut previous: Option<SatId> = None;
         for s in o.sigs.iter() {
             if previous == Some(s.id) {
@@ -871,7 +967,8 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                     .count();
                 o.sigs.get(start..start + len).unwrap_or(&[])
             };
-            let Some((code, p1_m, p2_m, cn0)) = pick_code(stream_codes(s.id.system), have) else {
+            let Some((code, p1_m, p2_m, cn0, rate)) = pick_code(stream_codes(s.id.system), have)
+            else {
                 out.rejected += 1;
                 continue;
             };
@@ -886,7 +983,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 p2_m,
                 eph,
             };
-            if inputs.push(input).is_err() || cn0s.push(cn0).is_err() {
+            if inputs.push(input).is_err() || cn0s.push(cn0).is_err() || rates.push(rate).is_err() {
                 return Some(Err(FormError::TooManySignals {
                     capacity: u32::try_from(N).unwrap_or(u32::MAX),
                 }));
@@ -904,17 +1001,33 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // Each satellite's orbit and clock at its transmit time, once for
         // both passes (the transmit time does not depend on the receiver
         // position); a GLONASS orbit from its arc.
+        // A satellite with a phase-range rate: its velocity and clock
+        // drift there too (a GLONASS velocity from the same integration; a
+        // Keplerian one at the transmit time of the code's range,
+        // `kepler_transmit_time_s`).
         glonass_arcs.next_epoch();
         transmit.clear();
-        for s in inputs.iter() {
-            let tx = match s.eph {
-                Broadcast::Glonass(g) => transmit_time_s(s, time_gps_s)
-                    .ok()
-                    .map(|t| glonass_arcs.state(g, t)),
-                Broadcast::Kepler(_) => transmit_state(s, time_gps_s).ok(),
+        motion.clear();
+        for (s, rate) in inputs.iter().zip(rates.iter()) {
+            let (tx, mo) = match s.eph {
+                Broadcast::Glonass(g) => match transmit_time_s(s, time_gps_s) {
+                    Ok(t) => {
+                        let (state, v) = glonass_arcs.state(g, t);
+                        (Some(state), rate.map(|_| glonass_motion(v, g.gamma_n)))
+                    }
+                    Err(_) => (None, None),
+                },
+                Broadcast::Kepler(k) => (
+                    transmit_state(s, time_gps_s).ok(),
+                    rate.map(|_| {
+                        let t_sv = time_gps_s - s.p1_m / C_M_S;
+                        kepler_motion(k, kepler_transmit_time_s(k, t_sv))
+                    }),
+                ),
             };
-            // `inputs` and `transmit` have the same capacity N.
+            // `inputs`, `transmit` and `motion` have the same capacity N.
             let _ = transmit.push(tx);
+            let _ = motion.push(mo);
         }
         // The bootstrap pass: clock- and rotation-corrected ranges.
         let apriori = *station_m;
@@ -933,7 +1046,12 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // The receiver's frame (geodetic position, local-level rotation,
         // zenith troposphere), once for every satellite.
         let rx_frame = reference.map(ReceiverFrame::at);
-        for ((s, tx), cn0) in inputs.iter().zip(transmit.iter()).zip(cn0s.iter()) {
+        for (((s, tx), cn0), (rate, mo)) in inputs
+            .iter()
+            .zip(transmit.iter())
+            .zip(cn0s.iter())
+            .zip(rates.iter().zip(motion.iter()))
+        {
             let Some(tx) = tx else {
                 out.rejected += 1;
                 continue;
@@ -956,10 +1074,17 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                         x.elevation_rad,
                         NO_MODEL_IONO_FACTOR,
                     ));
-                    // `out.sats` and `out.cn0_dbhz` have the capacity N of
-                    // `inputs`, and are filled together.
+                    let doppler = match (rate, mo, reference) {
+                        (Some(r), Some(mo), Some(rx)) => {
+                            Some(range_rate(*r, mo, x.obs.position_m, rx))
+                        }
+                        _ => None,
+                    };
+                    // `out.sats`, `out.cn0_dbhz` and `out.rates` have the
+                    // capacity N of `inputs`, and are filled together.
                     if out.sats.push(x.obs).is_ok() {
                         let _ = out.cn0_dbhz.push(*cn0);
+                        let _ = out.rates.push(doppler);
                     }
                 }
                 Err(_) => out.rejected += 1,
@@ -984,8 +1109,10 @@ fn msm_signals<'m>(m: &'m Msm<'_>, system: System) -> impl Iterator<Item = Signa
     m.signals().filter_map(move |s| {
         Some(Signal {
             id: SatId::new(system, s.sat_id),
-            code: [b'C', b'0' + s.band, s.attribute],
+            band_digit: b'0' + s.band,
+            attribute: s.attribute,
             cn0_dbhz: cn0_dbhz_u8(s.cnr_dbhz),
+            rate: pack_rate_mm_s(s.phase_range_rate_m_s),
             value_m: s.pseudorange_m?,
         })
     })
@@ -993,15 +1120,37 @@ fn msm_signals<'m>(m: &'m Msm<'_>, system: System) -> impl Iterator<Item = Signa
 
 /// The first preferred code present: a single code, or a pair (both
 /// present) for the iono-free combination; with the C/N0 of its (first)
-/// signal.
-fn pick_code<'c>(codes: &[&'c str], have: &[Signal]) -> Option<(&'c str, f64, Option<f64>, u8)> {
-    let find = |c: &str| have.iter().find(|s| s.code() == c);
+/// signal and the satellite's phase-range rate: its (first) signal's,
+/// else the pair's second's, else the first of the satellite's other
+/// signals (in code order) that has one (a range rate is the same on
+/// every carrier but for the ionosphere's rate, a few mm/s; a receiver
+/// may send it on one signal only, e.g. GMSD7 on L1 C/A, not on the P
+/// codes GLONASS is ranged with).
+#[allow(clippy::type_complexity)]
+fn pick_code<'c>(
+    codes: &[&'c str],
+    have: &[Signal],
+) -> Option<(&'c str, f64, Option<f64>, u8, Option<f64>)> {
+    let find = |c: &str| have.iter().find(|s| s.is_code(c));
+    let any_rate = || have.iter().find_map(Signal::rate_m_s);
     codes.iter().find_map(|&c| match split_pair(c) {
         Some((a, b)) => {
-            let first = find(a)?;
-            Some((c, first.value_m, Some(find(b)?.value_m), first.cn0_dbhz))
+            let (first, second) = (find(a)?, find(b)?);
+            let rate = first
+                .rate_m_s()
+                .or_else(|| second.rate_m_s())
+                .or_else(any_rate);
+            Some((c, first.value_m, Some(second.value_m), first.cn0_dbhz, rate))
         }
-        None => find(c).map(|s| (c, s.value_m, None, s.cn0_dbhz)),
+        None => find(c).map(|s| {
+            (
+                c,
+                s.value_m,
+                None,
+                s.cn0_dbhz,
+                s.rate_m_s().or_else(any_rate),
+            )
+        }),
     })
 }
 
@@ -1038,7 +1187,7 @@ fn remove_at<T, const N: usize>(v: &mut heapless::Vec<T, N>, index: usize) {
 #[cfg(test)]
 mod tests {
     extern crate std;
-    use super::{remove_at, sort_checked};
+    use super::{pack_rate_mm_s, remove_at, sort_checked, unpack_rate_mm_s, Signal, NO_RATE};
     use std::vec::Vec;
 
     /// The checked insertion sort orders as the standard stable sort
@@ -1069,6 +1218,44 @@ mod tests {
             sort_checked(&mut got, |a, b| a.0 < b.0);
             assert_eq!(got, want);
         }
+    }
+
+    /// A signal stays in 16 bytes with its rate (three per signal of an
+    /// epoch: 768 signals on the default build, 360 on the STM32F4's).
+    #[test]
+    fn signal_takes_16_bytes() {
+        assert_eq!(core::mem::size_of::<Signal>(), 16);
+    }
+
+    /// A rate is packed to the millimetre per second and back, both signs,
+    /// DF399's extremes and the marks; beyond 24 bits, none.
+    ///
+    /// Verifies: RX-DOPPLER
+    #[test]
+    fn rates_pack_to_the_millimetre() {
+        for r in [
+            0.0,
+            0.0004,
+            -0.0004,
+            0.0006,
+            1.2345,
+            -1.2345,
+            799.9999,
+            -8191.9999,
+            8191.0 + 1.6383,
+            -8192.0 + 0.0001,
+        ] {
+            let back = unpack_rate_mm_s(pack_rate_mm_s(Some(r))).unwrap();
+            assert!((back - r).abs() <= 0.0005 + 1e-12, "{r} -> {back}");
+            assert_eq!(back, (r * 1000.0).round() * 0.001, "{r}");
+        }
+        assert_eq!(unpack_rate_mm_s(pack_rate_mm_s(None)), None);
+        assert_eq!(pack_rate_mm_s(Some(8389.0)), NO_RATE);
+        assert_eq!(pack_rate_mm_s(Some(f64::NAN)), NO_RATE);
+        assert_eq!(
+            unpack_rate_mm_s(pack_rate_mm_s(Some(-8388.607))),
+            Some(-8388.607)
+        );
     }
 
     /// Removing by index keeps the order of the rest; an index past the

@@ -122,6 +122,7 @@ fn empty() -> Box<FormedEpoch<64>> {
         reference_m: None,
         sats: heapless::Vec::new(),
         cn0_dbhz: heapless::Vec::new(),
+        rates: heapless::Vec::new(),
         rejected: 0,
     })
 }
@@ -138,6 +139,7 @@ fn feed<const N: usize>(
         reference_m: None,
         sats: heapless::Vec::new(),
         cn0_dbhz: heapless::Vec::new(),
+        rates: heapless::Vec::new(),
         rejected: 0,
     });
     let mut got = Vec::new();

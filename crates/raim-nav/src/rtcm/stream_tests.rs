@@ -66,6 +66,7 @@ fn empty<const N: usize>() -> FormedEpoch<N> {
         reference_m: None,
         sats: heapless::Vec::new(),
         cn0_dbhz: heapless::Vec::new(),
+        rates: heapless::Vec::new(),
         rejected: 0,
     }
 }

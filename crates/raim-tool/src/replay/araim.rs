@@ -612,6 +612,7 @@ fn host_nmea(
     let sky = raim_proto::nmea::Sky {
         epoch: &epoch,
         cn0_dbhz,
+        velocity: None,
     };
     raim_proto::nmea::epoch_sentences(&wire, &sky, raim_proto::nmea::BUILT)
         .map(|v| v.iter().map(|s| s.trim_end().to_string()).collect())

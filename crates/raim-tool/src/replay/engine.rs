@@ -68,7 +68,11 @@ impl Engine {
             Engine::Host(raim) => match raim.process(cfg, epoch) {
                 Ok(r) => {
                     let w = WireResult::from_result(&r);
-                    let sky = raim_proto::nmea::Sky { epoch, cn0_dbhz };
+                    let sky = raim_proto::nmea::Sky {
+                        epoch,
+                        cn0_dbhz,
+                        velocity: None,
+                    };
                     let nmea = raim_proto::nmea::epoch_sentences(&w, &sky, raim_proto::nmea::BUILT)
                         .map(|v| v.iter().map(|s| s.trim_end().to_string()).collect())
                         .unwrap_or_default();
