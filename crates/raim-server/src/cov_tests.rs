@@ -14,7 +14,9 @@ use raim_proto::auth::{tag, AuthenticatedRef, BootEntropy, ChangeRef};
 use raim_proto::frame::{encode, FrameError, FrameReceiver};
 use raim_proto::lock::ConfigSource;
 use raim_proto::message::{CommandRef, RequestRef, ResetCause, Response, ResponseBody};
-use raim_proto::pf_msg::{PfKind, WirePfConfig, PF_MAX_PARTICLES};
+#[cfg(feature = "pf")]
+use raim_proto::pf_msg::PF_MAX_PARTICLES;
+use raim_proto::pf_msg::{PfKind, WirePfConfig};
 use raim_proto::unit::{ProvisionError, UnitConfig, UnitConfigRef, UnitPart};
 
 use crate::tests::on_big_stack;
@@ -219,14 +221,20 @@ fn check_unit_names_the_first_failing_part_and_its_error() {
             error: snapshot_error,
         })
     );
+    // A build without the particle filter refuses any PF part as
+    // unavailable; one with it, the particle count it does not hold.
+    #[cfg(feature = "pf")]
+    let pf_error = WireError::PfParticles {
+        requested: 7,
+        max: PF_MAX_PARTICLES,
+    };
+    #[cfg(not(feature = "pf"))]
+    let pf_error = WireError::PfUnavailable;
     assert_eq!(
         check_unit(&unit(Some(Config::default()), Some(pf_config(7)), true)),
         Err(UnitRefusal {
             part: UnitPart::Pf,
-            error: WireError::PfParticles {
-                requested: 7,
-                max: PF_MAX_PARTICLES,
-            },
+            error: pf_error,
         })
     );
     let mut araim = unit(None, None, true);
@@ -248,6 +256,7 @@ fn check_unit_names_the_first_failing_part_and_its_error() {
             },
         })
     );
+    #[cfg(feature = "pf")]
     assert_eq!(check_unit(&unit(None, Some(pf_config(100)), false)), Ok(()));
     assert_eq!(check_unit(&unit(None, None, true)), Ok(()));
 }
@@ -581,6 +590,7 @@ fn pf_errors_keep_their_values_on_the_wire() {
     );
 }
 
+#[cfg(feature = "rtcm")]
 /// GMSD7 (2012-10-14; GPS, GLONASS and BeiDou MSM7, one GPS MSM7 a
 /// epoch), `/work/shared/data/GMSD7_20121014.rtcm3`.
 fn gmsd7() -> Vec<u8> {
@@ -591,6 +601,7 @@ fn gmsd7() -> Vec<u8> {
     std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"))
 }
 
+#[cfg(feature = "rtcm")]
 /// The message numbers (DF002) of the RTCM 3 frames of `bytes`, by the
 /// framing of RTCM 10403.3 alone (preamble 0xD3, a 10-bit length, the
 /// payload, 3 CRC bytes), without the receiver under test.
@@ -612,6 +623,7 @@ fn message_numbers(bytes: &[u8]) -> Vec<u16> {
     out
 }
 
+#[cfg(feature = "rtcm")]
 /// The stream answers of `bytes` fed to `server` with a pause after each
 /// RTCM frame (a receiver's burst): the unasked answers, and the NMEA.
 fn stream(server: &mut Server, bytes: &[u8]) -> (Vec<Response>, std::string::String) {
@@ -620,6 +632,7 @@ fn stream(server: &mut Server, bytes: &[u8]) -> (Vec<Response>, std::string::Str
     (answers, nmea)
 }
 
+#[cfg(feature = "rtcm")]
 /// An RTCM 3 frame around `payload` (RTCM 10403.3 §4: preamble 0xD3, six
 /// zero bits, the 10-bit length, the payload, CRC-24Q over all of it;
 /// the CRC written out here, polynomial 0x864CFB, initial value 0).
@@ -640,6 +653,7 @@ fn rtcm_frame(payload: &[u8]) -> Vec<u8> {
     f
 }
 
+#[cfg(feature = "rtcm")]
 /// An RTCM 1013 (system parameters, RTCM 10403.3 §3.5.5: DF002 12, DF003
 /// 12, DF051 MJD 16, DF052 UTC second of day 17, DF053 5 (no message
 /// entries), DF054 GPS - UTC 8 bits, padded to a whole byte).
@@ -674,6 +688,7 @@ fn msg1013(mjd: u32, leap_s: u32) -> Vec<u8> {
 ///
 /// Verifies: RX-STREAM, RX-LEAP, WIRE-Unconfigured, WIRE-StreamNotDated
 #[test]
+#[cfg(feature = "rtcm")]
 fn stream_epochs_through_the_link_are_answered_unasked() {
     on_big_stack(|| {
         const EPOCHS: usize = 60;
