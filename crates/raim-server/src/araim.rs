@@ -1478,4 +1478,56 @@ mod tests {
             "{unasked:?}"
         );
     }
+
+    /// The server's ARAIM answers are the core monitor's own epochs in wire
+    /// form (`raim_core::araim::Monitor`, which keeps its FDE scratch
+    /// across epochs), every bit, whether the server's FDE scratch is the
+    /// ARAIM state's own or, on the STM32F4 stream build (`ram-192k` and
+    /// `rtcm`: `cargo test -p raim-server --features ram-192k,rtcm`), a
+    /// part of the shared per-epoch room, taken new from a constant after
+    /// the answer's buffers and the forming scratch had the room: a clean
+    /// sky, single faults excluded, and the epochs in between.
+    ///
+    /// Verifies: ARAIM-FDE-SCRATCH
+    #[test]
+    fn araim_answers_are_the_core_monitors_wherever_the_fde_scratch_is() {
+        use raim_core::araim::{FdeLimits, Monitor, SatIsm};
+        let (ism, _) = sky20(usize::MAX, 0.0);
+        let mut l = Link::new();
+        l.ism(&ism, gal());
+        let cfg = AraimConfig::from(WireAraimConfig::default());
+        let p_const = Ism { p_const: gal() };
+        let entries: Vec<SatIsm> = ism
+            .iter()
+            .map(|s| SatIsm {
+                id: s.id,
+                sigma_ura_m: s.sigma_ura_m,
+                sigma_ure_m: s.sigma_ure_m,
+                b_nom_m: s.b_nom_m,
+                p_sat: s.p_sat,
+            })
+            .collect();
+        let limits = FdeLimits {
+            max_modes: MAX_FDE_MODES as usize,
+            work_candidate_modes: FDE_WORK_BUDGET as usize,
+        };
+        let mut core =
+            std::boxed::Box::new(Monitor::<engine::AraimT, ARAIM_SATS, MAX_MODES>::new());
+        let mut excluded = 0;
+        for faulty in [usize::MAX, 0, 3, usize::MAX, 7, 12, 12] {
+            // The forming scratch takes the room between epochs, as a
+            // stream's frames do.
+            #[cfg(feature = "rtcm")]
+            let _ = l.server.shared.forming();
+            let (_, obs) = sky20(faulty, 100.0);
+            let verdict = core
+                .linear(&cfg, &p_const, &entries[..], &obs, limits)
+                .unwrap();
+            let want = WireAraimResult::from_verdict(core.runs(), &verdict, &cfg, 1.0).unwrap();
+            let got = result(&l.epoch(&obs)).clone();
+            assert_eq!(got, want, "faulty {faulty}");
+            excluded += usize::from(matches!(got.fde, WireFde::Excluded { .. }));
+        }
+        assert!(excluded >= 3, "{excluded}");
+    }
 }

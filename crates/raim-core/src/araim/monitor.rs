@@ -871,3 +871,148 @@ fn join<T: Real, M: SatelliteModels + ?Sized, const N: usize>(
     }
     Ok(Ism { p_const })
 }
+
+#[cfg(test)]
+mod lent {
+    extern crate std;
+    use super::*;
+    use crate::measurement::System;
+    use std::format;
+    use std::string::String;
+
+    /// `n` satellites, G and E alternating, spread in azimuth and elevation,
+    /// small residuals plus `fault_m` on each satellite of `faulty`, with
+    /// the ISM of ADD v3.0 Appendix D (sigma_URA 0.75 m, sigma_URE 0.5 m,
+    /// b_nom 0.5 m, P_sat 1e-5).
+    fn sky(
+        n: usize,
+        faults: &[(usize, f64)],
+    ) -> (std::vec::Vec<SatIsm>, std::vec::Vec<LinearObservation>) {
+        let (mut ism, mut obs) = (std::vec::Vec::new(), std::vec::Vec::new());
+        for i in 0..n {
+            let system = if i % 2 == 0 {
+                System::Gps
+            } else {
+                System::Galileo
+            };
+            let id = SatId::new(system, (i / 2) as u8 + 1);
+            let az_deg = (i as f64 * 137.5) % 360.0;
+            let el_deg = 10.0 + (i as f64 * 29.0) % 75.0;
+            let noise_m = 0.3 * (((i * 7919) % 11) as f64 / 11.0 - 0.5);
+            let fault_m: f64 = faults.iter().filter(|f| f.0 == i).map(|f| f.1).sum();
+            obs.push(LinearObservation::from_az_el(
+                id,
+                az_deg.to_radians(),
+                el_deg.to_radians(),
+                noise_m + fault_m,
+            ));
+            ism.push(SatIsm {
+                id,
+                sigma_ura_m: 0.75,
+                sigma_ure_m: 0.5,
+                b_nom_m: 0.5,
+                p_sat: 1e-5,
+            });
+        }
+        (ism, obs)
+    }
+
+    /// What an epoch's runs say, every bit (`Debug` of f32/f64 is the
+    /// shortest text that reads back to the same bits).
+    fn said<T: Real, const N: usize, const K: usize>(
+        verdict: &Verdict<N>,
+        runs: Runs<'_, T, N, K>,
+    ) -> String {
+        format!(
+            "{verdict:?}\n{:?}\n{:?}\n{:?}\n{:?}",
+            runs.all_in_view(),
+            runs.after_exclusion(),
+            runs.accuracy_sample(),
+            runs.satellites()
+        )
+    }
+
+    /// The epochs of [`a_scratch_new_at_every_epoch_gives_the_same_bits`]
+    /// through a `Monitor` (its own scratch, kept across epochs) and a
+    /// `MonitorCore` lent a new scratch at every epoch; returns the
+    /// decisions seen.
+    fn compare<T: Real, const N: usize, const K: usize>() -> std::vec::Vec<Decision> {
+        let cfg = AraimConfig::default();
+        let p_const = Ism::with(&[System::Gps, System::Galileo], 1e-4);
+        let mut owned = std::boxed::Box::new(Monitor::<T, N, K>::new());
+        let mut core = std::boxed::Box::new(MonitorCore::<T, N, K>::new());
+        let mut decisions = std::vec::Vec::new();
+        let epochs: [&[(usize, f64)]; 6] = [
+            &[],
+            &[(0, 100.0)],
+            &[(7, -60.0)],
+            &[],
+            &[(3, 80.0), (12, -90.0)],
+            &[(5, 100.0)],
+        ];
+        for (e, faults) in epochs.iter().enumerate() {
+            let (ism, obs) = sky(20, faults);
+            let want_verdict = owned
+                .linear(&cfg, &p_const, &ism[..], &obs, FdeLimits::UNLIMITED)
+                .unwrap();
+            let want = said(&want_verdict, owned.runs());
+            // The room's part: new whenever another part had the room.
+            let mut scratch = std::boxed::Box::new(FdeScratch::<T, N, K>::new());
+            let (verdict, runs) = core
+                .linear(
+                    &mut scratch,
+                    &cfg,
+                    &p_const,
+                    &ism[..],
+                    &obs,
+                    FdeLimits::UNLIMITED,
+                )
+                .unwrap();
+            assert_eq!(said(&verdict, runs), want, "epoch {e}");
+            assert_eq!(runs.in_force().pl_add, owned.in_force().pl_add);
+            if let Exclusion::Fde(FdeDecision::Excluded { mode, .. }) = verdict.exclusion {
+                // Independently: the engine's own run of the subset without
+                // the excluded mode, at the exclusion-risk share.
+                let (all, sats) = (runs.all_in_view(), runs.satellites());
+                let mut engine = std::boxed::Box::new(Araim::<T, N, K>::new());
+                let mut other = std::boxed::Box::new(Araim::<T, N, K>::new());
+                engine.process(&cfg, &p_const, sats).unwrap();
+                assert_eq!(format!("{:?}", engine.output()), format!("{all:?}"));
+                let subset = engine
+                    .after_excluding(&cfg, &p_const, sats, mode, &mut other)
+                    .unwrap()
+                    .unwrap();
+                assert_eq!(
+                    format!("{subset:?}"),
+                    format!("{:?}", runs.after_exclusion().unwrap()),
+                    "epoch {e}"
+                );
+            }
+            decisions.push(verdict.decision);
+        }
+        decisions
+    }
+
+    /// The FDE's scratch lent by the caller (`MonitorCore`, the STM32F4
+    /// stream build's shared room, docs/FLASH.md "STM32F4: the stream"
+    /// item 5) and new at every epoch gives every bit of the verdicts and
+    /// runs of the monitor that keeps its own across epochs, at the
+    /// device's precision and capacities (f32, 24 satellites, 48 modes)
+    /// and the host's (f64, 600 modes); an excluded subset's output is the
+    /// engine's own run of the subset at the exclusion-risk share.
+    ///
+    /// Verifies: ARAIM-FDE-SCRATCH
+    #[test]
+    fn a_scratch_new_at_every_epoch_gives_the_same_bits() {
+        for decisions in [compare::<f32, 24, 48>(), compare::<f64, 24, 600>()] {
+            assert!(decisions.contains(&Decision::Excluded), "{decisions:?}");
+            assert!(decisions.contains(&Decision::Ok), "{decisions:?}");
+            assert!(
+                decisions
+                    .iter()
+                    .any(|d| !matches!(d, Decision::Ok | Decision::Excluded)),
+                "{decisions:?}"
+            );
+        }
+    }
+}
