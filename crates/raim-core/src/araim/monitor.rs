@@ -635,9 +635,10 @@ impl<T: Real, const N: usize, const K: usize> MonitorCore<T, N, K> {
     /// The last epoch's satellites as the engine saw them (joined).
     pub fn satellites(&self) -> &[AraimSat<T>] {
         // n_sats <= N: it is set only after `join` or `given` checked the
-        // count against N (and reset to 0 before either runs).
-        #[allow(clippy::indexing_slicing)]
-        &self.sats[..self.n_sats]
+        // count against N (and reset to 0 before either runs), so the
+        // empty fallback is never taken; it keeps a panic path off the
+        // device's epoch path.
+        self.sats.get(..self.n_sats).unwrap_or_default()
     }
 
     /// The runs of the last epoch with `scratch`, the one lent for it
