@@ -433,6 +433,7 @@ impl<T: Real, const N: usize, const K: usize> FdeScratch<T, N, K> {
 /// verdict (borrowing the scratch lent for it, so that nothing else can
 /// have used the scratch before they are read), or as [`Monitor::runs`]
 /// gives them.
+#[derive(Clone, Copy)]
 pub struct Runs<'a, T, const N: usize, const K: usize> {
     main: &'a Araim<T, N, K>,
     /// The scratch engine, holding the excluded subset: `Some` after an
@@ -440,14 +441,6 @@ pub struct Runs<'a, T, const N: usize, const K: usize> {
     after: Option<&'a Araim<T, N, K>>,
     sats: &'a [AraimSat<T>],
 }
-
-impl<T, const N: usize, const K: usize> Clone for Runs<'_, T, N, K> {
-    fn clone(&self) -> Self {
-        *self
-    }
-}
-
-impl<T, const N: usize, const K: usize> Copy for Runs<'_, T, N, K> {}
 
 impl<'a, T: Real, const N: usize, const K: usize> Runs<'a, T, N, K> {
     /// The all-in-view output.
@@ -941,7 +934,7 @@ mod lent {
         let cfg = AraimConfig::default();
         let p_const = Ism::with(&[System::Gps, System::Galileo], 1e-4);
         let mut owned = std::boxed::Box::new(Monitor::<T, N, K>::new());
-        let mut core = std::boxed::Box::new(MonitorCore::<T, N, K>::new());
+        let mut core = std::boxed::Box::<MonitorCore<T, N, K>>::default();
         let mut decisions = std::vec::Vec::new();
         let epochs: [&[(usize, f64)]; 6] = [
             &[],
@@ -958,7 +951,7 @@ mod lent {
                 .unwrap();
             let want = said(&want_verdict, owned.runs());
             // The room's part: new whenever another part had the room.
-            let mut scratch = std::boxed::Box::new(FdeScratch::<T, N, K>::new());
+            let mut scratch = std::boxed::Box::<FdeScratch<T, N, K>>::default();
             let (verdict, runs) = core
                 .linear(
                     &mut scratch,
