@@ -123,6 +123,9 @@ step "the core's own tests without the optional reconstruction FDE (the 128 KiB 
 cargo test -p raim-core --release --no-default-features --lib
 step "the STM32F4 stream build's capacities (raim-server ram-192k + rtcm: 24 satellites, the 25th typed; raim-nav's stream tests with its ram-192k holding areas)"
 cargo test -p raim-server --release --features ram-192k,rtcm the_stm32f4_stream_build
+cargo test -p raim-server --release --features ram-192k,rtcm araim::
 cargo test -p raim-nav --release --features rtcm,ram-192k --lib
+step "qemu_stm32f4 on the STM32F4 stream build (8 KiB of stack over each session's high water; the 32-satellite epoch refused typed at 24; docs/FLASH.md)"
+RAIM_FIRMWARE_ELF_STM32F4="$RAIM_FIRMWARE_ELF_STM32F4_STREAM" cargo test --release -p host-tests --test qemu_stm32f4
 step "structural coverage of raim-core, raim-nav, raim-proto, raim-server not under docs/coverage_floor.txt (their own unit tests, instrumented on the pinned nightly; docs/EVIDENCE.md)"
 bash scripts/coverage.sh --check

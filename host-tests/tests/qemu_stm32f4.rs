@@ -8,7 +8,10 @@
 //! answer is checked (capacity error, `ModeCapacity` unavailability).
 //!
 //! `(cd firmware && cargo stm32f4 --target-dir target/stm32f4)`, then
-//! `cargo test --release -p host-tests --test qemu_stm32f4`
+//! `cargo test --release -p host-tests --test qemu_stm32f4`; on the stream
+//! build (`board-stm32f4,qemu-netduinoplus2,rtcm`, scripts/test.sh's
+//! `stm32f4-stream-netduinoplus2`) with `RAIM_FIRMWARE_ELF_STM32F4` set to
+//! its ELF (docs/FLASH.md "STM32F4: the stream").
 
 #[path = "qemu_common/araim.rs"]
 mod araim_common;
@@ -27,6 +30,10 @@ use raim_qemu::Machine;
 /// `MAX_MODES`).
 const ARAIM_SATS: usize = 24;
 const MAX_MODES: u32 = 48;
+
+/// The snapshot monitor's satellites on the STM32F4 stream build
+/// (raim-server `SNAPSHOT_SATS` with `ram-192k` and `rtcm`).
+const STREAM_BUILD_SATS: u16 = 24;
 
 /// Stack headroom the build must keep above the measured high water
 /// (docs/FLASH.md), bytes.
@@ -251,7 +258,13 @@ fn pf_host_answer(server: &mut raim_server::Server, seq: u32, command: CommandRe
 
 /// The reconstruction FDE (multi-fault, t_max 3) on the STM32F4 build: 32
 /// satellites (G+E) with 60 m on index 2 and -70 m on index 9, both
-/// excluded, bit for bit as the host core at the device precision.
+/// excluded, bit for bit as the host core at the device precision. The
+/// STM32F4 stream build (`board-stm32f4,rtcm`, docs/FLASH.md "STM32F4: the
+/// stream", step 3) takes 24 satellites, as its `Status.capacity` says:
+/// there the epoch is refused whole, `TooManySatellites { have: 32,
+/// capacity: 24 }`, never truncated.
+///
+/// Verifies: SAFE-STACK
 #[test]
 fn netduinoplus2_multifault_excludes_two_faults_as_the_host() {
     let sky: Vec<(f64, f64)> = (0..32)
@@ -274,7 +287,30 @@ fn netduinoplus2_multifault_excludes_two_faults_as_the_host() {
     let mut fw = session_on(Machine::NetduinoPlus2);
     fw.configure(&cfg).unwrap();
     let epoch = Epoch::ranges(1.7e9, &sats, None);
-    let r = fw.process(&epoch).unwrap().outcome.unwrap();
+    let capacity = fw.status().unwrap().capacity;
+    let processed = fw.process(&epoch).unwrap();
+    if capacity == STREAM_BUILD_SATS {
+        assert_eq!(
+            processed.outcome.unwrap_err(),
+            WireError::TooManySatellites {
+                have: 32,
+                capacity: u32::from(STREAM_BUILD_SATS)
+            }
+        );
+        let st = fw.status().unwrap();
+        println!(
+            "netduinoplus2 multi-fault (stream build, refused): stack high water {} B",
+            st.stack_high_water_bytes
+        );
+        assert_stack_headroom(st.stack_high_water_bytes);
+        return;
+    }
+    assert_eq!(
+        usize::from(capacity),
+        CAPACITY,
+        "the product build's capacity"
+    );
+    let r = processed.outcome.unwrap();
     let mut host = Box::new(Raim::<CAPACITY, raim_proto::DevicePrecision>::new());
     let want = WireResult::from_result(&host.process(&cfg, &epoch).unwrap());
     assert_eq!(wire_bytes(&r), wire_bytes(&want), "firmware vs host");

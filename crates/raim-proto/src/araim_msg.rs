@@ -440,7 +440,8 @@ impl WireAraimResult {
     }
 
     /// The wire form of an ARAIM monitor's epoch (`Monitor::epoch`'s
-    /// verdict and the runs it keeps), in either precision: the device's
+    /// verdict and its runs, `Monitor::runs`, or those `MonitorCore::epoch`
+    /// returns with it), in either precision: the device's
     /// server and the host's replay build their answers here, so both
     /// say the same thing of the same run. The PLs reported are the
     /// configured `pl_output`'s; N* is seed 003's vertical effective sample
@@ -448,14 +449,14 @@ impl WireAraimResult {
     /// `TooManySatellites` when the verdict excludes more satellites than
     /// the wire carries (an engine larger than `CAPACITY`).
     pub fn from_verdict<T: Real, const N: usize, const K: usize>(
-        monitor: &raim_core::araim::Monitor<T, N, K>,
+        runs: raim_core::araim::Runs<'_, T, N, K>,
         verdict: &raim_core::araim::Verdict<N>,
         cfg: &AraimConfig,
         time_s: f64,
     ) -> Result<Self, WireError> {
         use raim_core::araim::Exclusion;
         let pl_exact = cfg.pl_output == PlOutput::Exact;
-        let out = monitor.all_in_view();
+        let out = runs.all_in_view();
         let (fde, n_star_vertical) = match verdict.exclusion {
             Exclusion::NotTested => (WireFde::NotTested, None),
             Exclusion::NotAttempted { monitored } => (
@@ -486,7 +487,7 @@ impl WireAraimResult {
             all_in_view: AraimSummary::from_output(out, pl_exact),
             fde,
             excluded,
-            after_exclusion: monitor
+            after_exclusion: runs
                 .after_exclusion()
                 .map(|o| AraimSummary::from_output(o, pl_exact)),
             n_star_vertical,

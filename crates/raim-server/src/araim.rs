@@ -1,7 +1,10 @@
 //! ARAIM in the protocol server (docs/PROTOCOL.md "ARAIM"): the
 //! ISM in force, its validation, the ARAIM engine and its FDE scratch,
 //! all in the (static) server, so that the main loop's stack carries no
-//! ARAIM buffer.
+//! ARAIM buffer. The FDE scratch is the ARAIM state's own, except on the
+//! STM32F4 stream build (`ram-192k` and `rtcm`), where it is a part of the
+//! server's shared per-epoch room (`Shared`, docs/FLASH.md "STM32F4: the
+//! stream", item 5).
 //!
 //! Lifecycle: no ISM at reset; an `Ism` frame replaces the ISM and ARAIM
 //! configuration as a whole after every check passes (else the previous one
@@ -16,7 +19,9 @@ use raim_core::araim::{AraimConfig, AraimError, Ism};
 use raim_core::Config;
 
 use super::Server;
-use raim_proto::araim_msg::{AraimAnswer, AraimCommand, AraimWireError, IsmFrame, IsmSat};
+use raim_proto::araim_msg::{
+    AraimAnswer, AraimCommand, AraimWireError, IsmFrame, IsmSat, WireAraimResult,
+};
 use raim_proto::error::WireError;
 use raim_proto::message::{LinearEpoch, RangeEpoch};
 
@@ -81,14 +86,21 @@ pub const MAX_FDE_MODES: u32 = MAX_MODES as u32;
 /// candidate.
 pub const FDE_WORK_BUDGET: u32 = 110_000;
 
+/// ARAIM's FDE scratch engine at the device's capacities.
+#[cfg(feature = "araim")]
+pub(super) type FdeScratch = raim_core::araim::FdeScratch<engine::AraimT, ARAIM_SATS, MAX_MODES>;
+
 /// The ARAIM part of the server: the ISM in force and, with the `araim`
-/// feature, the engine, its FDE scratch and the epoch's satellites.
+/// feature, the engine, the epoch's satellites and (except on the STM32F4
+/// stream build, where it is in the shared room) the FDE scratch.
 pub(super) struct AraimState {
     /// The ISM and ARAIM configuration in force; `None` since reset until
     /// an `Ism` frame is accepted.
     pub(super) ism: Option<IsmFrame>,
     #[cfg(feature = "araim")]
     engine: engine::Engines,
+    #[cfg(all(feature = "araim", not(all(feature = "ram-192k", feature = "rtcm"))))]
+    fde: FdeScratch,
 }
 
 impl AraimState {
@@ -97,7 +109,30 @@ impl AraimState {
             ism: None,
             #[cfg(feature = "araim")]
             engine: engine::Engines::new(),
+            #[cfg(all(feature = "araim", not(all(feature = "ram-192k", feature = "rtcm"))))]
+            fde: FdeScratch::new(),
         }
+    }
+
+    /// The ISM in force, the engine and the FDE scratch: the state's own,
+    /// or on the STM32F4 stream build the shared room's (taking it).
+    #[cfg(feature = "araim")]
+    fn parts<'a>(
+        &'a mut self,
+        shared: &'a mut super::Shared,
+    ) -> (
+        Option<&'a IsmFrame>,
+        &'a mut engine::Engines,
+        &'a mut FdeScratch,
+    ) {
+        #[cfg(all(feature = "ram-192k", feature = "rtcm"))]
+        let fde = shared.fde();
+        #[cfg(not(all(feature = "ram-192k", feature = "rtcm")))]
+        let fde = {
+            let _ = shared;
+            &mut self.fde
+        };
+        (self.ism.as_ref(), &mut self.engine, fde)
     }
 
     /// Whether ARAIM is the configured monitor of the unit's own stream
@@ -206,6 +241,7 @@ impl Server {
                 status,
                 config,
                 model,
+                shared,
                 ..
             } = self;
             let input = match request.as_ref().map(|r| &r.command) {
@@ -218,7 +254,13 @@ impl Server {
                 // `dispatch` sends only ARAIM epochs here.
                 _ => return Ok(()),
             };
-            epoch_answer((araim, model), status, config.as_ref(), &input, platform)
+            epoch_answer(
+                (araim, shared, model),
+                status,
+                config.as_ref(),
+                &input,
+                platform,
+            )
         };
         self.write_araim_nmea(seq, &answer, nmea_out)
             .map_err(super::IoError::Nmea)?;
@@ -261,28 +303,30 @@ impl Server {
     }
 }
 
-/// An ARAIM epoch on the server's ARAIM state, status and configuration
-/// (disjoint fields, so the epoch may be borrowed from the request slot);
-/// the model check takes the delivered solution's C_acc sample, and a
-/// model it has declared broken makes the decision `Unavailable`
-/// (`model_check`); the decision (or the refusal, as `None`) drives the
-/// integrity-alarm output like a snapshot epoch's (`Platform::on_epoch`).
+/// An ARAIM epoch on the server's ARAIM state, shared room, status and
+/// configuration (disjoint fields, so the epoch may be borrowed from the
+/// request slot); the model check takes the delivered solution's C_acc
+/// sample, and a model it has declared broken makes the decision
+/// `Unavailable` (`model_check`); the decision (or the refusal, as `None`)
+/// drives the integrity-alarm output like a snapshot epoch's
+/// (`Platform::on_epoch`).
 fn epoch_answer<P: super::Platform>(
-    (araim, model): (&mut AraimState, &mut super::model_check::UnitModelCheck),
+    (araim, shared, model): (
+        &mut AraimState,
+        &mut super::Shared,
+        &mut super::model_check::UnitModelCheck,
+    ),
     status: &mut raim_proto::message::Status,
     config: Option<&Config>,
     epoch: &Input<'_>,
     platform: &mut P,
 ) -> Result<AraimAnswer, WireError> {
-    let mut r = epoch_answer_inner(araim, status, config, epoch, platform);
-    if let Ok(AraimAnswer::Result(res)) = &mut r {
-        let sample = if res.decision == raim_core::Decision::Alarm {
-            None
-        } else {
-            accuracy_sample(araim)
-        };
-        res.decision = super::model_check::judge(model, res.time_s, sample, res.decision);
-    }
+    let r = epoch_answer_inner(araim, shared, status, config, epoch, platform).map(
+        |(mut res, sample)| {
+            res.decision = super::model_check::judge(model, res.time_s, sample, res.decision);
+            AraimAnswer::Result(res)
+        },
+    );
     platform.on_epoch(match &r {
         Ok(AraimAnswer::Result(res)) => Some(res.decision),
         _ => None,
@@ -290,30 +334,22 @@ fn epoch_answer<P: super::Platform>(
     r
 }
 
-/// The delivered solution's (q, dof) against C_acc, of the epoch the
-/// engine ran last (`araim::Monitor::accuracy_sample`).
-fn accuracy_sample(araim: &AraimState) -> Option<(f64, u32)> {
-    #[cfg(feature = "araim")]
-    {
-        araim.engine.accuracy_sample()
-    }
-    #[cfg(not(feature = "araim"))]
-    {
-        let _ = araim;
-        None
-    }
-}
+/// An epoch's wire result and, unless it is an `Alarm`, the delivered
+/// solution's (q, dof) against C_acc for the model check
+/// (`raim_core::araim::Runs::accuracy_sample`; `None` when it has none).
+type Evaluated = (WireAraimResult, Option<(f64, u32)>);
 
 fn epoch_answer_inner<P: super::Platform>(
     araim: &mut AraimState,
+    shared: &mut super::Shared,
     status: &mut raim_proto::message::Status,
     config: Option<&Config>,
     epoch: &Input<'_>,
     platform: &mut P,
-) -> Result<AraimAnswer, WireError> {
+) -> Result<Evaluated, WireError> {
     #[cfg(feature = "araim")]
     {
-        let Some(ism) = araim.ism.as_ref() else {
+        let (Some(ism), engine, fde) = araim.parts(shared) else {
             return Err(WireError::Araim(AraimWireError::NoIsm));
         };
         status.epochs = status.epochs.wrapping_add(1);
@@ -322,17 +358,17 @@ fn epoch_answer_inner<P: super::Platform>(
         // solver's settings and sigma model); none in force: Unconfigured.
         let r = match (epoch, config) {
             (_, None) => Err(WireError::Unconfigured { provision: None }),
-            (Input::Linear(e), Some(c)) => araim.engine.run(c, ism, e),
-            (Input::Ranges(e), Some(c)) => araim.engine.run_ranges(c, ism, e),
+            (Input::Linear(e), Some(c)) => engine.run(fde, c, ism, e),
+            (Input::Ranges(e), Some(c)) => engine.run_ranges(fde, c, ism, e),
         };
         let lap = watch.stop(platform);
         status.last_epoch_ticks = lap.ticks;
         lap.record(status, raim_proto::EpochKind::Araim);
-        r.map(AraimAnswer::Result)
+        r
     }
     #[cfg(not(feature = "araim"))]
     {
-        let _ = (araim, status, config, epoch, platform);
+        let _ = (araim, shared, status, config, epoch, platform);
         Err(WireError::Araim(AraimWireError::Disabled))
     }
 }
@@ -340,24 +376,27 @@ fn epoch_answer_inner<P: super::Platform>(
 #[cfg(feature = "araim")]
 mod engine {
     use raim_core::araim::{
-        AraimConfig, FdeLimits, Ism, Monitor, MonitorError, SatIsm, SatelliteModels,
+        AraimConfig, FdeLimits, Ism, MonitorCore, MonitorError, SatIsm, SatelliteModels,
     };
     use raim_core::SatId;
 
-    use super::{AraimWireError, IsmFrame, ARAIM_SATS, FDE_WORK_BUDGET, MAX_FDE_MODES, MAX_MODES};
+    use super::{
+        AraimWireError, Evaluated, FdeScratch, IsmFrame, WireAraimResult, ARAIM_SATS,
+        FDE_WORK_BUDGET, MAX_FDE_MODES, MAX_MODES,
+    };
     use raim_core::{Config, Epoch};
-    use raim_proto::araim_msg::{IsmSat, WireAraimResult};
+    use raim_proto::araim_msg::IsmSat;
     use raim_proto::error::WireError;
     use raim_proto::message::{LinearEpoch, RangeEpoch};
 
     /// The unit's ARAIM precision: the device's.
     pub type AraimT = raim_proto::DevicePrecision;
 
-    /// The core's ARAIM monitor: the engine, the FDE's scratch engine, the
-    /// epoch's satellites and, for a pseudorange epoch, its Gauss-Newton
-    /// solution and linearised form (static, so the main loop's stack
-    /// carries none of them).
-    pub(super) struct Engines(Monitor<AraimT, ARAIM_SATS, MAX_MODES>);
+    /// The core's ARAIM monitor: the engine, the epoch's satellites and,
+    /// for a pseudorange epoch, its Gauss-Newton solution and linearised
+    /// form (static, so the main loop's stack carries none of them); the
+    /// FDE's scratch engine is lent at each epoch (`AraimState::parts`).
+    pub(super) struct Engines(MonitorCore<AraimT, ARAIM_SATS, MAX_MODES>);
 
     /// The ISM frame's satellite entries, as the monitor joins them.
     struct Entries<'a>(&'a [IsmSat]);
@@ -385,18 +424,19 @@ mod engine {
 
     impl Engines {
         pub(super) const fn new() -> Self {
-            Engines(Monitor::new())
+            Engines(MonitorCore::new())
         }
 
         /// One linearised epoch: the core monitor with the ISM in force.
         pub(super) fn run(
             &mut self,
+            fde: &mut FdeScratch,
             cfg: &Config,
             ism: &IsmFrame,
             epoch: &LinearEpoch,
-        ) -> Result<WireAraimResult, WireError> {
+        ) -> Result<Evaluated, WireError> {
             let e = Epoch::linear(epoch.time_s, &epoch.sats.items);
-            self.evaluate(cfg, ism, &e)
+            self.evaluate(fde, cfg, ism, &e)
         }
 
         /// One pseudorange epoch (`AraimCommand::Ranges`): the core monitor
@@ -406,36 +446,42 @@ mod engine {
         /// the steps in `AraimT`); the position in force is reported.
         pub(super) fn run_ranges(
             &mut self,
+            fde: &mut FdeScratch,
             cfg: &Config,
             ism: &IsmFrame,
             epoch: &RangeEpoch,
-        ) -> Result<WireAraimResult, WireError> {
+        ) -> Result<Evaluated, WireError> {
             let e = Epoch::ranges(epoch.time_s, &epoch.sats.items, epoch.apriori_m);
-            self.evaluate(cfg, ism, &e)
+            self.evaluate(fde, cfg, ism, &e)
         }
 
-        /// The last epoch's delivered solution, q = r^T C_acc^-1 r and its
-        /// dof, for the model check; `None` when it has none.
-        pub(super) fn accuracy_sample(&self) -> Option<(f64, u32)> {
-            self.0.accuracy_sample().ok().map(|f| (f.q, f.dof))
-        }
-
+        /// The epoch, its wire result and, unless it is an `Alarm`, the
+        /// delivered solution's q = r^T C_acc^-1 r and its dof for the
+        /// model check (`None` when it has none), all read from the runs
+        /// the epoch returns, which borrow `fde` until they are read.
         fn evaluate(
             &mut self,
+            fde: &mut FdeScratch,
             cfg: &Config,
             ism: &IsmFrame,
             epoch: &Epoch<'_>,
-        ) -> Result<WireAraimResult, WireError> {
+        ) -> Result<Evaluated, WireError> {
             let araim_cfg = AraimConfig::from(ism.config);
             let p_const = Ism {
                 p_const: ism.p_const,
             };
             let models = Entries(&ism.sats.items);
-            let monitor = &mut self.0;
-            let verdict = monitor
-                .epoch(cfg, &araim_cfg, &p_const, &models, epoch, limits())
+            let (verdict, runs) = self
+                .0
+                .epoch(fde, cfg, &araim_cfg, &p_const, &models, epoch, limits())
                 .map_err(wire_error)?;
-            WireAraimResult::from_verdict(monitor, &verdict, &araim_cfg, epoch.time_s)
+            let wire = WireAraimResult::from_verdict(runs, &verdict, &araim_cfg, epoch.time_s)?;
+            let sample = if verdict.decision == raim_core::Decision::Alarm {
+                None
+            } else {
+                runs.accuracy_sample().ok().map(|f| (f.q, f.dof))
+            };
+            Ok((wire, sample))
         }
     }
 
@@ -1431,5 +1477,57 @@ mod tests {
             matches!(unasked.body, ResponseBody::Result(_)),
             "{unasked:?}"
         );
+    }
+
+    /// The server's ARAIM answers are the core monitor's own epochs in wire
+    /// form (`raim_core::araim::Monitor`, which keeps its FDE scratch
+    /// across epochs), every bit, whether the server's FDE scratch is the
+    /// ARAIM state's own or, on the STM32F4 stream build (`ram-192k` and
+    /// `rtcm`: `cargo test -p raim-server --features ram-192k,rtcm`), a
+    /// part of the shared per-epoch room, taken new from a constant after
+    /// the answer's buffers and the forming scratch had the room: a clean
+    /// sky, single faults excluded, and the epochs in between.
+    ///
+    /// Verifies: ARAIM-FDE-SCRATCH
+    #[test]
+    fn araim_answers_are_the_core_monitors_wherever_the_fde_scratch_is() {
+        use raim_core::araim::{FdeLimits, Monitor, SatIsm};
+        let (ism, _) = sky20(usize::MAX, 0.0);
+        let mut l = Link::new();
+        l.ism(&ism, gal());
+        let cfg = AraimConfig::from(WireAraimConfig::default());
+        let p_const = Ism { p_const: gal() };
+        let entries: Vec<SatIsm> = ism
+            .iter()
+            .map(|s| SatIsm {
+                id: s.id,
+                sigma_ura_m: s.sigma_ura_m,
+                sigma_ure_m: s.sigma_ure_m,
+                b_nom_m: s.b_nom_m,
+                p_sat: s.p_sat,
+            })
+            .collect();
+        let limits = FdeLimits {
+            max_modes: MAX_FDE_MODES as usize,
+            work_candidate_modes: FDE_WORK_BUDGET as usize,
+        };
+        let mut core =
+            std::boxed::Box::new(Monitor::<engine::AraimT, ARAIM_SATS, MAX_MODES>::new());
+        let mut excluded = 0;
+        for faulty in [usize::MAX, 0, 3, usize::MAX, 7, 12, 12] {
+            // The forming scratch takes the room between epochs, as a
+            // stream's frames do.
+            #[cfg(feature = "rtcm")]
+            let _ = l.server.shared.forming();
+            let (_, obs) = sky20(faulty, 100.0);
+            let verdict = core
+                .linear(&cfg, &p_const, &entries[..], &obs, limits)
+                .unwrap();
+            let want = WireAraimResult::from_verdict(core.runs(), &verdict, &cfg, 1.0).unwrap();
+            let got = result(&l.epoch(&obs)).clone();
+            assert_eq!(got, want, "faulty {faulty}");
+            excluded += usize::from(matches!(got.fde, WireFde::Excluded { .. }));
+        }
+        assert!(excluded >= 3, "{excluded}");
     }
 }

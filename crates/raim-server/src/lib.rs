@@ -217,8 +217,9 @@ pub struct Server {
     /// The last request decoded (`on_byte`): decoded here rather than on
     /// the stack.
     request: Option<Request>,
-    /// The answer's buffers, or the stream epoch's forming scratch: never
-    /// both at once ([`Shared`]).
+    /// The answer's buffers, the stream epoch's forming scratch or (on the
+    /// STM32F4 stream build) ARAIM's FDE scratch: one at a time
+    /// ([`Shared`]).
     shared: Shared,
     /// The PF configuration and the engines lent by the owner
     /// (`attach_pf`; a few pointers, the engines stay where they are).
@@ -247,14 +248,20 @@ pub(crate) struct AnswerSlots {
     pub(crate) wire: WireResult,
 }
 
-/// One room for two parts that never run at once (docs/FLASH.md,
-/// "STM32F4: the stream", item 2): the answer's buffers, and the forming
+/// One room for parts that never run at once (docs/FLASH.md,
+/// "STM32F4: the stream", items 2 and 5): the answer's buffers, the forming
 /// scratch of a stream epoch, used only inside the receiver's
 /// `on_frame_in`, which ends before the epoch is staged, run and
-/// answered. Each part takes the room in its initial state from a
-/// constant when the other had it, so no value of one is ever read as the
-/// other's, and nothing an answer reads was left by an earlier one: every
-/// path writes `wire` and `result` before it reads them.
+/// answered, and, on the STM32F4 stream build (`ram-192k` and `rtcm`),
+/// ARAIM's FDE scratch engine, used only while an ARAIM epoch is run and
+/// its wire result and model-check sample are read from it, which ends
+/// before its NMEA sentences and answer are written. Each part takes the
+/// room in its initial state from a constant when another had it, so no
+/// value of one is ever read as another's, and nothing an answer reads
+/// was left by an earlier one: every path writes `wire` and `result`
+/// before it reads them, and the FDE leaves its subset in the scratch
+/// before the monitor's runs read it (`raim_core::araim::MonitorCore`: the
+/// runs borrow the scratch they were decided in).
 // The variants' sizes differ by design: the room is the larger one's, and
 // sharing it is the point (boxing is not an option without a heap).
 #[allow(clippy::large_enum_variant)]
@@ -262,30 +269,39 @@ enum Shared {
     Answer(AnswerSlots),
     #[cfg(feature = "rtcm")]
     Forming(raim_nav::rtcm::FormScratch<SNAPSHOT_SATS>),
+    #[cfg(all(feature = "araim", feature = "ram-192k", feature = "rtcm"))]
+    Fde(araim::FdeScratch),
 }
 
 impl Shared {
-    /// The answer's buffers, zero (written in place from this constant,
-    /// not built on the stack).
-    const ANSWER: Shared = Shared::Answer(AnswerSlots {
+    /// The answer's buffers, zero.
+    const ANSWER_SLOTS: AnswerSlots = AnswerSlots {
         scratch: [0; MAX_RESPONSE_PAYLOAD],
         out: [0; MAX_RESPONSE_FRAME],
         result: EpochResult::empty(),
         wire: WireResult::empty(),
-    });
+    };
+
+    /// The room holding the answer's buffers, zero (the server's initial
+    /// state).
+    const ANSWER: Shared = Shared::Answer(Self::ANSWER_SLOTS);
 
     /// The forming scratch, empty.
     #[cfg(feature = "rtcm")]
-    const FORMING: Shared = Shared::Forming(raim_nav::rtcm::FormScratch::new());
+    const FORMING: raim_nav::rtcm::FormScratch<SNAPSHOT_SATS> = raim_nav::rtcm::FormScratch::new();
 
-    /// The answer's buffers, taking the room if the forming had it (at
+    /// ARAIM's FDE scratch engine, empty.
+    #[cfg(all(feature = "araim", feature = "ram-192k", feature = "rtcm"))]
+    const FDE: araim::FdeScratch = araim::FdeScratch::new();
+
+    /// The answer's buffers, taking the room if another part had it (at
     /// most one pass of the loop does).
     #[cfg(feature = "rtcm")]
     fn answer(&mut self) -> &mut AnswerSlots {
         loop {
             match self {
                 Shared::Answer(a) => return a,
-                Shared::Forming(_) => *self = Self::ANSWER,
+                _ => *self = Shared::Answer(Self::ANSWER_SLOTS),
             }
         }
     }
@@ -298,13 +314,24 @@ impl Shared {
         }
     }
 
-    /// The forming scratch, taking the room if the answer had it.
+    /// The forming scratch, taking the room if another part had it.
     #[cfg(feature = "rtcm")]
     fn forming(&mut self) -> &mut raim_nav::rtcm::FormScratch<SNAPSHOT_SATS> {
         loop {
             match self {
                 Shared::Forming(f) => return f,
-                Shared::Answer(_) => *self = Self::FORMING,
+                _ => *self = Shared::Forming(Self::FORMING),
+            }
+        }
+    }
+
+    /// ARAIM's FDE scratch engine, taking the room if another part had it.
+    #[cfg(all(feature = "araim", feature = "ram-192k", feature = "rtcm"))]
+    fn fde(&mut self) -> &mut araim::FdeScratch {
+        loop {
+            match self {
+                Shared::Fde(f) => return f,
+                _ => *self = Shared::Fde(Self::FDE),
             }
         }
     }

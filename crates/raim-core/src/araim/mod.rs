@@ -45,7 +45,10 @@ pub use error_model::Curves;
 pub use fde::{FdeAlarm, FdeDecision};
 pub use ism::{AraimConfig, AraimSat, Ism, PlOutput};
 pub use modes::{ModeEvents, MAX_EVENTS};
-pub use monitor::{Exclusion, FdeLimits, Monitor, MonitorError, SatIsm, SatelliteModels, Verdict};
+pub use monitor::{
+    Decided, Exclusion, FdeLimits, FdeScratch, Monitor, MonitorCore, MonitorError, Runs, SatIsm,
+    SatelliteModels, Verdict,
+};
 pub use subset::SubsetStats;
 
 use crate::measurement::{System, MAX_STATES, MAX_SYSTEMS};

@@ -4,7 +4,11 @@
 //! [`Monitor`] owns the all-in-view engine, the FDE's scratch engine, the
 //! epoch's joined satellites and, for pseudoranges, the Gauss-Newton
 //! solution and its linearised form: nothing N- or K-sized is built on the
-//! caller's stack, so a device keeps one `Monitor` in a static. Per epoch:
+//! caller's stack, so a device keeps one `Monitor` in a static.
+//! [`MonitorCore`] is the same monitor without the FDE's scratch engine
+//! ([`FdeScratch`]), which its caller lends at each epoch: a device may
+//! then keep the scratch in a room it shares with other per-epoch users
+//! (docs/FLASH.md, "STM32F4: the stream"). Per epoch:
 //!
 //! 1. The ISM join: each satellite of the epoch gets its ISM entry
 //!    (sigma_URA, sigma_URE, b_nom, P_sat; [`SatelliteModels::ism`]), a
@@ -263,14 +267,8 @@ impl core::fmt::Display for MonitorError {
 /// # Ok::<(), raim_core::araim::MonitorError>(())
 /// ```
 pub struct Monitor<T: Real, const N: usize, const K: usize> {
-    main: Araim<T, N, K>,
-    scratch: Araim<T, N, K>,
-    sats: [AraimSat<T>; N],
-    n_sats: usize,
-    /// The last epoch ended in an exclusion: `scratch` holds its subset.
-    excluded: bool,
-    solution: Solution<N, T>,
-    lin: [LinearObservation; N],
+    core: MonitorCore<T, N, K>,
+    scratch: FdeScratch<T, N, K>,
 }
 
 impl<T: Real, const N: usize, const K: usize> Default for Monitor<T, N, K> {
@@ -283,13 +281,8 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
     /// A monitor with empty engines (the first epoch fills them).
     pub const fn new() -> Self {
         Monitor {
-            main: Araim::new(),
-            scratch: Araim::new(),
-            sats: [AraimSat::ZERO; N],
-            n_sats: 0,
-            excluded: false,
-            solution: Solution::empty(),
-            lin: [LinearObservation::DEFAULT; N],
+            core: MonitorCore::new(),
+            scratch: FdeScratch::new(),
         }
     }
 
@@ -307,11 +300,10 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
         obs: &[LinearObservation],
         limits: FdeLimits,
     ) -> Result<Verdict<N>, MonitorError> {
-        self.n_sats = 0;
-        self.excluded = false;
-        let ism = join(&mut self.sats, ism, models, obs)?;
-        self.n_sats = obs.len();
-        self.decide(cfg, &ism, limits)
+        let (verdict, _) = self
+            .core
+            .linear(&mut self.scratch, cfg, ism, models, obs, limits)?;
+        Ok(verdict)
     }
 
     /// An epoch of either form: [`Self::linear`] for linearised rows; for
@@ -332,24 +324,9 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
         epoch: &Epoch<'_>,
         limits: FdeLimits,
     ) -> Result<Verdict<N>, MonitorError> {
-        check_time_s(epoch.time_s)?;
-        let sats = match epoch.observations {
-            Observations::Linear { sats } => return self.linear(cfg, ism, models, sats, limits),
-            Observations::Ranges { sats, .. } => sats,
-        };
-        self.n_sats = 0;
-        self.excluded = false;
-        let (x0, rot) = self.linearise(solver, epoch, sats)?;
-        let lin = self
-            .lin
-            .get(..sats.len())
-            .ok_or(capacity::<N>(sats.len()))?;
-        let ism = join(&mut self.sats, ism, models, lin)?;
-        self.n_sats = lin.len();
-        let mut verdict = self.decide(cfg, &ism, limits)?;
-        let correction = self.in_force().correction_enu_m.map(|c| c.to_f64());
-        let shift = unrotate(&rot, correction);
-        verdict.position_ecef_m = Some([x0[0] + shift[0], x0[1] + shift[1], x0[2] + shift[2]]);
+        let (verdict, _) =
+            self.core
+                .epoch(&mut self.scratch, solver, cfg, ism, models, epoch, limits)?;
         Ok(verdict)
     }
 
@@ -365,16 +342,8 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
         sats: &[AraimSat<T>],
         limits: FdeLimits,
     ) -> Result<Verdict<N>, MonitorError> {
-        self.n_sats = 0;
-        self.excluded = false;
-        if sats.len() > N {
-            return Err(capacity::<N>(sats.len()));
-        }
-        for (slot, s) in self.sats.iter_mut().zip(sats) {
-            *slot = *s;
-        }
-        self.n_sats = sats.len();
-        self.decide(cfg, ism, limits)
+        let (verdict, _) = self.core.given(&mut self.scratch, cfg, ism, sats, limits)?;
+        Ok(verdict)
     }
 
     /// Availability with exclusion (issue 36): after the last epoch, the
@@ -391,31 +360,29 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
         ism: &Ism,
         k: usize,
     ) -> Result<Option<&AraimOutput<T, K>>, MonitorError> {
-        self.excluded = false;
-        let sats = self
-            .sats
-            .get(..self.n_sats)
-            .ok_or(capacity::<N>(self.n_sats))?;
-        Ok(self
-            .main
-            .after_excluding(cfg, ism, sats, k, &mut self.scratch)?)
+        self.core.after_excluding(&mut self.scratch, cfg, ism, k)
+    }
+
+    /// The last epoch's runs (all in view, and the excluded subset's).
+    pub fn runs(&self) -> Runs<'_, T, N, K> {
+        self.core.runs_with(&self.scratch)
     }
 
     /// The last epoch's all-in-view output.
     pub fn all_in_view(&self) -> &AraimOutput<T, K> {
-        self.main.output()
+        self.core.all_in_view()
     }
 
     /// After an exclusion, the remaining subset's output (its PLs with the
     /// exclusion risk); `None` otherwise.
     pub fn after_exclusion(&self) -> Option<&AraimOutput<T, K>> {
-        self.excluded.then(|| self.scratch.output())
+        self.runs().after_exclusion()
     }
 
     /// The output in force: the subset's after an exclusion, else the
     /// all-in-view one.
     pub fn in_force(&self) -> &AraimOutput<T, K> {
-        self.after_exclusion().unwrap_or(self.main.output())
+        self.runs().in_force()
     }
 
     /// The model check's sample of the last epoch (issue 35,
@@ -429,20 +396,252 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
     pub fn accuracy_sample(
         &self,
     ) -> Result<crate::consistency::fit::Fit, crate::consistency::ModelCheckError> {
-        let engine = if self.excluded {
-            &self.scratch
-        } else {
-            &self.main
+        self.runs().accuracy_sample()
+    }
+
+    /// The last epoch's satellites as the engine saw them (joined).
+    pub fn satellites(&self) -> &[AraimSat<T>] {
+        self.core.satellites()
+    }
+}
+
+/// The FDE's scratch engine (`N` satellites, `K` fault modes, precision
+/// `T`): the candidate subsets are processed in it, and after an exclusion
+/// it holds the excluded subset's output. [`Monitor`] owns one;
+/// [`MonitorCore`] takes it from its caller at each epoch, so that a
+/// device may keep it in a room it shares with other per-epoch users
+/// (docs/FLASH.md, "STM32F4: the stream"). It carries nothing from one
+/// epoch to the next that changes a result (the engine's memos answer only
+/// for their own keys): a scratch new at every epoch gives the same bits
+/// (test `monitor::lent::a_scratch_new_at_every_epoch_gives_the_same_bits`).
+pub struct FdeScratch<T, const N: usize, const K: usize>(Araim<T, N, K>);
+
+impl<T: Real, const N: usize, const K: usize> Default for FdeScratch<T, N, K> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<T: Real, const N: usize, const K: usize> FdeScratch<T, N, K> {
+    /// An empty scratch engine (`const`: a device builds it in place).
+    pub const fn new() -> Self {
+        FdeScratch(Araim::new())
+    }
+}
+
+/// The runs of one epoch, as [`MonitorCore`]'s epoch returns them with its
+/// verdict (borrowing the scratch lent for it, so that nothing else can
+/// have used the scratch before they are read), or as [`Monitor::runs`]
+/// gives them.
+#[derive(Clone, Copy)]
+pub struct Runs<'a, T, const N: usize, const K: usize> {
+    main: &'a Araim<T, N, K>,
+    /// The scratch engine, holding the excluded subset: `Some` after an
+    /// exclusion only.
+    after: Option<&'a Araim<T, N, K>>,
+    sats: &'a [AraimSat<T>],
+}
+
+impl<'a, T: Real, const N: usize, const K: usize> Runs<'a, T, N, K> {
+    /// The all-in-view output.
+    pub fn all_in_view(&self) -> &'a AraimOutput<T, K> {
+        self.main.output()
+    }
+
+    /// After an exclusion, the remaining subset's output (its PLs with the
+    /// exclusion risk); `None` otherwise.
+    pub fn after_exclusion(&self) -> Option<&'a AraimOutput<T, K>> {
+        self.after.map(|a| a.output())
+    }
+
+    /// The output in force: the subset's after an exclusion, else the
+    /// all-in-view one.
+    pub fn in_force(&self) -> &'a AraimOutput<T, K> {
+        self.after.unwrap_or(self.main).output()
+    }
+
+    /// The model check's sample ([`Monitor::accuracy_sample`]): the fit of
+    /// the solution in force.
+    ///
+    /// # Errors
+    /// As [`crate::consistency::fit::accuracy_fit`].
+    pub fn accuracy_sample(
+        &self,
+    ) -> Result<crate::consistency::fit::Fit, crate::consistency::ModelCheckError> {
+        crate::consistency::fit::accuracy_fit(self.after.unwrap_or(self.main).geometry())
+    }
+
+    /// The epoch's satellites as the engine saw them (joined).
+    pub fn satellites(&self) -> &'a [AraimSat<T>] {
+        self.sats
+    }
+}
+
+/// The ARAIM monitor without its FDE scratch engine: each epoch borrows
+/// one from the caller ([`FdeScratch`]) and returns, with its verdict, its
+/// [`Runs`] borrowing it. The one decision path: [`Monitor`] is this with
+/// a scratch of its own.
+pub struct MonitorCore<T: Real, const N: usize, const K: usize> {
+    main: Araim<T, N, K>,
+    sats: [AraimSat<T>; N],
+    n_sats: usize,
+    /// The last epoch ended in an exclusion: the scratch lent for it holds
+    /// its subset.
+    excluded: bool,
+    solution: Solution<N, T>,
+    lin: [LinearObservation; N],
+}
+
+impl<T: Real, const N: usize, const K: usize> Default for MonitorCore<T, N, K> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// An epoch's verdict and its runs.
+pub type Decided<'a, T, const N: usize, const K: usize> = (Verdict<N>, Runs<'a, T, N, K>);
+
+impl<T: Real, const N: usize, const K: usize> MonitorCore<T, N, K> {
+    /// A monitor with an empty engine (the first epoch fills it).
+    pub const fn new() -> Self {
+        MonitorCore {
+            main: Araim::new(),
+            sats: [AraimSat::ZERO; N],
+            n_sats: 0,
+            excluded: false,
+            solution: Solution::empty(),
+            lin: [LinearObservation::DEFAULT; N],
+        }
+    }
+
+    /// [`Monitor::linear`], the FDE in `scratch`.
+    ///
+    /// # Errors
+    /// As [`Monitor::linear`].
+    pub fn linear<'a, M: SatelliteModels + ?Sized>(
+        &'a mut self,
+        scratch: &'a mut FdeScratch<T, N, K>,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        models: &M,
+        obs: &[LinearObservation],
+        limits: FdeLimits,
+    ) -> Result<Decided<'a, T, N, K>, MonitorError> {
+        self.n_sats = 0;
+        self.excluded = false;
+        let ism = join(&mut self.sats, ism, models, obs)?;
+        self.n_sats = obs.len();
+        let verdict = self.decide(&mut scratch.0, cfg, &ism, limits)?;
+        Ok((verdict, self.runs_with(scratch)))
+    }
+
+    /// [`Monitor::epoch`], the FDE in `scratch`.
+    ///
+    /// # Errors
+    /// As [`Monitor::epoch`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn epoch<'a, M: SatelliteModels + ?Sized>(
+        &'a mut self,
+        scratch: &'a mut FdeScratch<T, N, K>,
+        solver: &Config,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        models: &M,
+        epoch: &Epoch<'_>,
+        limits: FdeLimits,
+    ) -> Result<Decided<'a, T, N, K>, MonitorError> {
+        check_time_s(epoch.time_s)?;
+        let sats = match epoch.observations {
+            Observations::Linear { sats } => {
+                return self.linear(scratch, cfg, ism, models, sats, limits)
+            }
+            Observations::Ranges { sats, .. } => sats,
         };
-        crate::consistency::fit::accuracy_fit(engine.geometry())
+        self.n_sats = 0;
+        self.excluded = false;
+        let (x0, rot) = self.linearise(solver, epoch, sats)?;
+        let lin = self
+            .lin
+            .get(..sats.len())
+            .ok_or(capacity::<N>(sats.len()))?;
+        let ism = join(&mut self.sats, ism, models, lin)?;
+        self.n_sats = lin.len();
+        let mut verdict = self.decide(&mut scratch.0, cfg, &ism, limits)?;
+        let runs = self.runs_with(scratch);
+        let correction = runs.in_force().correction_enu_m.map(|c| c.to_f64());
+        let shift = unrotate(&rot, correction);
+        verdict.position_ecef_m = Some([x0[0] + shift[0], x0[1] + shift[1], x0[2] + shift[2]]);
+        Ok((verdict, runs))
+    }
+
+    /// [`Monitor::given`], the FDE in `scratch`.
+    ///
+    /// # Errors
+    /// As [`Monitor::given`].
+    pub fn given<'a>(
+        &'a mut self,
+        scratch: &'a mut FdeScratch<T, N, K>,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        sats: &[AraimSat<T>],
+        limits: FdeLimits,
+    ) -> Result<Decided<'a, T, N, K>, MonitorError> {
+        self.n_sats = 0;
+        self.excluded = false;
+        if sats.len() > N {
+            return Err(capacity::<N>(sats.len()));
+        }
+        for (slot, s) in self.sats.iter_mut().zip(sats) {
+            *slot = *s;
+        }
+        self.n_sats = sats.len();
+        let verdict = self.decide(&mut scratch.0, cfg, ism, limits)?;
+        Ok((verdict, self.runs_with(scratch)))
+    }
+
+    /// [`Monitor::after_excluding`], in `scratch`.
+    ///
+    /// # Errors
+    /// As [`Monitor::after_excluding`].
+    pub fn after_excluding<'s>(
+        &mut self,
+        scratch: &'s mut FdeScratch<T, N, K>,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        k: usize,
+    ) -> Result<Option<&'s AraimOutput<T, K>>, MonitorError> {
+        self.excluded = false;
+        let sats = self
+            .sats
+            .get(..self.n_sats)
+            .ok_or(capacity::<N>(self.n_sats))?;
+        Ok(self
+            .main
+            .after_excluding(cfg, ism, sats, k, &mut scratch.0)?)
+    }
+
+    /// The last epoch's all-in-view output.
+    pub fn all_in_view(&self) -> &AraimOutput<T, K> {
+        self.main.output()
     }
 
     /// The last epoch's satellites as the engine saw them (joined).
     pub fn satellites(&self) -> &[AraimSat<T>] {
         // n_sats <= N: it is set only after `join` or `given` checked the
-        // count against N (and reset to 0 before either runs).
-        #[allow(clippy::indexing_slicing)]
-        &self.sats[..self.n_sats]
+        // count against N (and reset to 0 before either runs), so the
+        // empty fallback is never taken; it keeps a panic path off the
+        // device's epoch path.
+        self.sats.get(..self.n_sats).unwrap_or_default()
+    }
+
+    /// The runs of the last epoch with `scratch`, the one lent for it
+    /// (private: the epochs return them, borrowing the scratch).
+    fn runs_with<'a>(&'a self, scratch: &'a FdeScratch<T, N, K>) -> Runs<'a, T, N, K> {
+        Runs {
+            main: &self.main,
+            after: self.excluded.then_some(&scratch.0),
+            sats: self.satellites(),
+        }
     }
 
     /// Step 3: Gauss-Newton all in view, then the linearised epoch at its
@@ -518,6 +717,7 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
     /// Steps 4-6 on the joined satellites.
     fn decide(
         &mut self,
+        scratch: &mut Araim<T, N, K>,
         cfg: &AraimConfig,
         ism: &Ism,
         limits: FdeLimits,
@@ -554,13 +754,11 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
             return Ok(verdict);
         }
         let budget = limits.budget(monitored);
-        let fde = self
-            .main
-            .fde_within(cfg, ism, sats, &mut self.scratch, budget)?;
+        let fde = self.main.fde_within(cfg, ism, sats, scratch, budget)?;
         verdict.exclusion = Exclusion::Fde(fde);
         if let FdeDecision::Excluded { sats: mask, .. } = fde {
             self.excluded = true;
-            verdict.decision = if self.scratch.output().available() {
+            verdict.decision = if scratch.output().available() {
                 Decision::Excluded
             } else {
                 Decision::Unavailable
@@ -666,4 +864,149 @@ fn join<T: Real, M: SatelliteModels + ?Sized, const N: usize>(
         };
     }
     Ok(Ism { p_const })
+}
+
+#[cfg(test)]
+mod lent {
+    extern crate std;
+    use super::*;
+    use crate::measurement::System;
+    use std::format;
+    use std::string::String;
+
+    /// `n` satellites, G and E alternating, spread in azimuth and elevation,
+    /// small residuals plus `fault_m` on each satellite of `faulty`, with
+    /// the ISM of ADD v3.0 Appendix D (sigma_URA 0.75 m, sigma_URE 0.5 m,
+    /// b_nom 0.5 m, P_sat 1e-5).
+    fn sky(
+        n: usize,
+        faults: &[(usize, f64)],
+    ) -> (std::vec::Vec<SatIsm>, std::vec::Vec<LinearObservation>) {
+        let (mut ism, mut obs) = (std::vec::Vec::new(), std::vec::Vec::new());
+        for i in 0..n {
+            let system = if i % 2 == 0 {
+                System::Gps
+            } else {
+                System::Galileo
+            };
+            let id = SatId::new(system, (i / 2) as u8 + 1);
+            let az_deg = (i as f64 * 137.5) % 360.0;
+            let el_deg = 10.0 + (i as f64 * 29.0) % 75.0;
+            let noise_m = 0.3 * (((i * 7919) % 11) as f64 / 11.0 - 0.5);
+            let fault_m: f64 = faults.iter().filter(|f| f.0 == i).map(|f| f.1).sum();
+            obs.push(LinearObservation::from_az_el(
+                id,
+                az_deg.to_radians(),
+                el_deg.to_radians(),
+                noise_m + fault_m,
+            ));
+            ism.push(SatIsm {
+                id,
+                sigma_ura_m: 0.75,
+                sigma_ure_m: 0.5,
+                b_nom_m: 0.5,
+                p_sat: 1e-5,
+            });
+        }
+        (ism, obs)
+    }
+
+    /// What an epoch's runs say, every bit (`Debug` of f32/f64 is the
+    /// shortest text that reads back to the same bits).
+    fn said<T: Real, const N: usize, const K: usize>(
+        verdict: &Verdict<N>,
+        runs: Runs<'_, T, N, K>,
+    ) -> String {
+        format!(
+            "{verdict:?}\n{:?}\n{:?}\n{:?}\n{:?}",
+            runs.all_in_view(),
+            runs.after_exclusion(),
+            runs.accuracy_sample(),
+            runs.satellites()
+        )
+    }
+
+    /// The epochs of [`a_scratch_new_at_every_epoch_gives_the_same_bits`]
+    /// through a `Monitor` (its own scratch, kept across epochs) and a
+    /// `MonitorCore` lent a new scratch at every epoch; returns the
+    /// decisions seen.
+    fn compare<T: Real, const N: usize, const K: usize>() -> std::vec::Vec<Decision> {
+        let cfg = AraimConfig::default();
+        let p_const = Ism::with(&[System::Gps, System::Galileo], 1e-4);
+        let mut owned = std::boxed::Box::new(Monitor::<T, N, K>::new());
+        let mut core = std::boxed::Box::<MonitorCore<T, N, K>>::default();
+        let mut decisions = std::vec::Vec::new();
+        let epochs: [&[(usize, f64)]; 6] = [
+            &[],
+            &[(0, 100.0)],
+            &[(7, -60.0)],
+            &[],
+            &[(3, 80.0), (12, -90.0)],
+            &[(5, 100.0)],
+        ];
+        for (e, faults) in epochs.iter().enumerate() {
+            let (ism, obs) = sky(20, faults);
+            let want_verdict = owned
+                .linear(&cfg, &p_const, &ism[..], &obs, FdeLimits::UNLIMITED)
+                .unwrap();
+            let want = said(&want_verdict, owned.runs());
+            // The room's part: new whenever another part had the room.
+            let mut scratch = std::boxed::Box::<FdeScratch<T, N, K>>::default();
+            let (verdict, runs) = core
+                .linear(
+                    &mut scratch,
+                    &cfg,
+                    &p_const,
+                    &ism[..],
+                    &obs,
+                    FdeLimits::UNLIMITED,
+                )
+                .unwrap();
+            assert_eq!(said(&verdict, runs), want, "epoch {e}");
+            assert_eq!(runs.in_force().pl_add, owned.in_force().pl_add);
+            if let Exclusion::Fde(FdeDecision::Excluded { mode, .. }) = verdict.exclusion {
+                // Independently: the engine's own run of the subset without
+                // the excluded mode, at the exclusion-risk share.
+                let (all, sats) = (runs.all_in_view(), runs.satellites());
+                let mut engine = std::boxed::Box::new(Araim::<T, N, K>::new());
+                let mut other = std::boxed::Box::new(Araim::<T, N, K>::new());
+                engine.process(&cfg, &p_const, sats).unwrap();
+                assert_eq!(format!("{:?}", engine.output()), format!("{all:?}"));
+                let subset = engine
+                    .after_excluding(&cfg, &p_const, sats, mode, &mut other)
+                    .unwrap()
+                    .unwrap();
+                assert_eq!(
+                    format!("{subset:?}"),
+                    format!("{:?}", runs.after_exclusion().unwrap()),
+                    "epoch {e}"
+                );
+            }
+            decisions.push(verdict.decision);
+        }
+        decisions
+    }
+
+    /// The FDE's scratch lent by the caller (`MonitorCore`, the STM32F4
+    /// stream build's shared room, docs/FLASH.md "STM32F4: the stream"
+    /// item 5) and new at every epoch gives every bit of the verdicts and
+    /// runs of the monitor that keeps its own across epochs, at the
+    /// device's precision and capacities (f32, 24 satellites, 48 modes)
+    /// and the host's (f64, 600 modes); an excluded subset's output is the
+    /// engine's own run of the subset at the exclusion-risk share.
+    ///
+    /// Verifies: ARAIM-FDE-SCRATCH
+    #[test]
+    fn a_scratch_new_at_every_epoch_gives_the_same_bits() {
+        for decisions in [compare::<f32, 24, 48>(), compare::<f64, 24, 600>()] {
+            assert!(decisions.contains(&Decision::Excluded), "{decisions:?}");
+            assert!(decisions.contains(&Decision::Ok), "{decisions:?}");
+            assert!(
+                decisions
+                    .iter()
+                    .any(|d| !matches!(d, Decision::Ok | Decision::Excluded)),
+                "{decisions:?}"
+            );
+        }
+    }
 }

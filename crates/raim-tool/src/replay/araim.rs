@@ -573,7 +573,8 @@ fn host_epoch(
             MonitorError::Araim(a) => format!("ARAIM: {a}"),
             other => format!("ARAIM: {other}"),
         })?;
-    WireAraimResult::from_verdict(monitor, &verdict, cfg, unix_s).map_err(|e| format!("ARAIM: {e}"))
+    WireAraimResult::from_verdict(monitor.runs(), &verdict, cfg, unix_s)
+        .map_err(|e| format!("ARAIM: {e}"))
 }
 
 /// One epoch through the host's core monitor with the replay's satellite
