@@ -1,0 +1,97 @@
+//! The pair search's skips (SPEC §8.4): rows under `min_s_ii`, and pairs
+//! whose S_TT is singular (two satellites on one line of sight); the pair
+//! statistic against a real solve without the pair; the singular
+//! tolerance in both precisions.
+
+extern crate std;
+
+use super::*;
+use crate::testutil::{linear_epoch, Rng, SKY8};
+
+fn solve64(sky: &[(f64, f64)], seed: u64) -> Solution<8, f64> {
+    let sats = linear_epoch(sky, 1.0, &mut Rng::new(seed), &[(2, 9.0)]);
+    let epoch = Epoch::linear(0.0, &sats);
+    let mut mask = [false; 8];
+    mask[..sky.len()].fill(true);
+    let mut out = Solution::empty();
+    solve_from(&Config::default(), &epoch, &mask, Start::Cold, &mut out).unwrap();
+    out
+}
+
+fn subset_sse(sky: &[(f64, f64)], seed: u64, drop: (usize, usize)) -> f64 {
+    let sats = linear_epoch(sky, 1.0, &mut Rng::new(seed), &[(2, 9.0)]);
+    let epoch = Epoch::linear(0.0, &sats);
+    let mut mask = [false; 8];
+    mask[..sky.len()].fill(true);
+    mask[drop.0] = false;
+    mask[drop.1] = false;
+    let mut out = Solution::<8, f64>::empty();
+    solve_from(&Config::default(), &epoch, &mask, Start::Cold, &mut out).unwrap();
+    out.parity.sse()
+}
+
+#[test]
+fn singular_tolerance_is_floored_at_100_eps() {
+    assert_eq!(pair_singular_tol::<f64>(), 1e-9);
+    assert_eq!(pair_singular_tol::<f32>(), 100.0 * f32::EPSILON);
+}
+
+/// The two best pairs are the two smallest subset statistics, each equal
+/// to the weighted SSE of a real solve without the pair; a bound on S_ii
+/// keeps the rows under it out of every pair, and a bound above every S_ii
+/// leaves no pair.
+#[test]
+fn best_pairs_match_subset_solves_and_respect_min_s_ii() {
+    let sol = solve64(&SKY8, 3);
+    let [Some(b0), Some(b1)] = best_pairs(&sol.parity, 0.0) else {
+        panic!("two pairs on eight satellites");
+    };
+    let mut all = std::vec::Vec::new();
+    for j in 0..8 {
+        for k in j + 1..8 {
+            all.push(((j, k), subset_sse(&SKY8, 3, (j, k))));
+        }
+    }
+    all.sort_by(|a, b| a.1.total_cmp(&b.1));
+    assert_eq!(b0.rows, all[0].0);
+    assert_eq!(b1.rows, all[1].0);
+    assert!((b0.statistic - all[0].1).abs() < 1e-8 * (1.0 + all[0].1));
+    assert!((b1.statistic - all[1].1).abs() < 1e-8 * (1.0 + all[1].1));
+
+    // A bound between the S_ii: the rows under it appear in no pair.
+    let mut s: std::vec::Vec<f64> = sol.parity.s_ii()[..8].to_vec();
+    s.sort_by(f64::total_cmp);
+    let bound = 0.5 * (s[3] + s[4]);
+    let low = |r: usize| sol.parity.s_ii()[r] < bound;
+    let [Some(c0), second] = best_pairs(&sol.parity, bound) else {
+        panic!("four rows are above the bound");
+    };
+    for p in [Some(c0), second].into_iter().flatten() {
+        assert!(!low(p.rows.0) && !low(p.rows.1), "{:?}", p.rows);
+    }
+    // Above every S_ii (S_ii <= 1): nothing.
+    assert!(matches!(best_pairs(&sol.parity, 1.01), [None, None]));
+}
+
+/// Two satellites on one line of sight: their rows are parallel, S_TT is
+/// singular, and the pair is never proposed: the two best are the two
+/// smallest subset statistics among the other pairs.
+#[test]
+fn a_pair_on_one_line_of_sight_is_skipped() {
+    let mut sky = SKY8;
+    sky[7] = sky[1];
+    let sol = solve64(&sky, 5);
+    let [Some(b0), Some(b1)] = best_pairs(&sol.parity, 0.0) else {
+        panic!("other pairs remain");
+    };
+    let mut all = std::vec::Vec::new();
+    for j in 0..8 {
+        for k in j + 1..8 {
+            if (j, k) != (1, 7) {
+                all.push(((j, k), subset_sse(&sky, 5, (j, k))));
+            }
+        }
+    }
+    all.sort_by(|a, b| a.1.total_cmp(&b.1));
+    assert_eq!((b0.rows, b1.rows), (all[0].0, all[1].0));
+}
