@@ -95,3 +95,28 @@ fn a_pair_on_one_line_of_sight_is_skipped() {
     all.sort_by(|a, b| a.1.total_cmp(&b.1));
     assert_eq!((b0.rows, b1.rows), (all[0].0, all[1].0));
 }
+
+/// With an exclusion cap of 1 the pair search is not tried: a 50 m step
+/// on one of eight satellites is excluded alone (the faulty one, GPS
+/// PRN 3) and the subset passes.
+#[test]
+fn a_cap_of_one_excludes_the_single_faulty_satellite() {
+    let cfg = Config {
+        max_exclusions: 1,
+        ..Config::default()
+    };
+    let mut thresholds = Thresholds::<8>::default();
+    for seed in 0..5 {
+        let sats = linear_epoch(&SKY8, 1.0, &mut Rng::new(seed), &[(2, 50.0)]);
+        let epoch = Epoch::linear(0.0, &sats);
+        let mut out = FdeOutcome::<8, f64>::empty();
+        solve_from(&cfg, &epoch, &[true; 8], Start::Cold, &mut out.solution).unwrap();
+        run(&cfg, &mut thresholds, &epoch, &mut out).unwrap();
+        assert_eq!(out.exclusions.len(), 1, "seed {seed}");
+        assert_eq!(
+            out.exclusions[0].id,
+            SatId::new(crate::measurement::System::Gps, 3)
+        );
+        assert!(!out.test.alarm(), "seed {seed}");
+    }
+}
