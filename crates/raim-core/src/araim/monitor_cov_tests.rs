@@ -35,7 +35,7 @@ fn run<const N: usize>(
             &solver,
             &cfg,
             &ism,
-            &entries(sats),
+            entries(sats).as_slice(),
             &Epoch::ranges(100.0, sats, apriori_m),
             FdeLimits::UNLIMITED,
         )
