@@ -101,3 +101,19 @@ fn too_many_events_make_the_epoch_unavailable() {
         other => panic!("{other:?}"),
     }
 }
+
+/// LPV judges all four limits, H-ARAIM the HPL alone: every one of the 16
+/// combinations against the rule written out.
+#[test]
+fn criteria_judge_their_limits() {
+    for bits in 0u8..16 {
+        let l = Limits {
+            vpl: bits & 1 != 0,
+            hpl: bits & 2 != 0,
+            emt: bits & 4 != 0,
+            sigma_acc: bits & 8 != 0,
+        };
+        assert_eq!(l.met(Criteria::Vertical), bits == 15, "{bits}");
+        assert_eq!(l.met(Criteria::HorizontalOnly), bits & 2 != 0, "{bits}");
+    }
+}

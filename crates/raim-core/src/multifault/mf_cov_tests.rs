@@ -1,5 +1,6 @@
-//! The reconstruction FDE with the uniqueness check off: the best set is
-//! excluded although a larger set without it is also consistent.
+//! The reconstruction FDE with the uniqueness check off (the best set is
+//! excluded although a larger set without it is also consistent), and
+//! the search's refusals.
 
 extern crate std;
 
@@ -39,4 +40,36 @@ fn without_the_uniqueness_check_the_best_set_is_excluded() {
     assert_eq!(r.exclusions[0].id, row3);
     assert!(!r.test.alarm());
     assert_ne!(r.decision, Decision::Alarm);
+}
+
+/// A covering for fewer faults than `t_max` is refused with the model's n,
+/// m and the covering's fault count; a model whose projector is zero (no
+/// satellite has S_ii >= min_s_ii, no set has a nonsingular S_TT) has no
+/// identifiable group, and the search says so with n and the groups tried.
+#[test]
+fn search_refuses_a_short_covering_and_a_model_with_no_identifiable_group() {
+    use super::covering::Covering;
+    use super::error::MultifaultError;
+    use super::reconstruct::{GroupFit, ResidualModel, Workspace};
+    use super::search;
+    let zero = ResidualModel::<f64, 16>::from_projector(8, |_, _| 0.0, &[0.0; 8]).unwrap();
+    let one = Covering::new(8, 4, 1).unwrap();
+    let mut ws = Workspace::default();
+    let mut g = GroupFit::default();
+    assert_eq!(
+        search(&zero, &one, 2, 10, 1e-4, &mut ws, &mut g, |_, _| {}).err(),
+        Some(MultifaultError::TooManyFaults {
+            t: 2,
+            n: 8,
+            m: 4,
+            max: 1
+        })
+    );
+    assert_eq!(
+        search(&zero, &one, 1, 100, 1e-4, &mut ws, &mut g, |_, _| {}).err(),
+        Some(MultifaultError::NoIdentifiableGroup {
+            n: 8,
+            groups: one.len()
+        })
+    );
 }

@@ -35,3 +35,14 @@ fn holds_are_released_by_age_and_absence() {
     m.release(71.0, 50.0, |id| id != g5);
     assert!(m.held().is_empty());
 }
+
+/// A hold that lies in the future (time went backwards: a new run) is
+/// released.
+#[test]
+fn a_hold_from_the_future_is_released() {
+    let g7 = SatId::new(System::Gps, 7);
+    let mut m = Mcusum::<8, f64>::new();
+    m.hold(g7, 100.0);
+    m.release(50.0, 1e6, |_| true);
+    assert!(!m.is_held(g7));
+}

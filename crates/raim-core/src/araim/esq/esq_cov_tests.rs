@@ -111,6 +111,14 @@ fn a_non_finite_pl_or_bias_is_refused() {
         effective_samples(&inf, 0, PlOutput::Exact),
         Err(EsqError::NoProtectionLevel { axis: 0 })
     );
+    for v in [0.0, -3.0, f64::NAN] {
+        let mut bad = out.clone();
+        bad.pl_exact.vpl_m = v;
+        assert_eq!(
+            effective_samples(&bad, 2, PlOutput::Exact),
+            Err(EsqError::NoProtectionLevel { axis: 2 })
+        );
+    }
     let mut nan = out.clone();
     nan.bias0_m[1] = f64::NAN;
     assert!(matches!(
