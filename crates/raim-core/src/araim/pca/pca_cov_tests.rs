@@ -9,8 +9,18 @@ use super::*;
 use crate::araim::AraimSat;
 use crate::measurement::{SatId, System};
 
-/// Twelve satellites (6 GPS, 6 Galileo) with a common clock walk and a
-/// deterministic per-satellite pattern as residuals at epoch `t`.
+/// A uniform number in [-0.5, 0.5) from (t, i) (xorshift64*), so that the
+/// per-satellite noise has a full-rank covariance.
+fn noise(t: usize, i: usize) -> f64 {
+    let mut x = (t as u64 * 1_000_003 + i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    x ^= x >> 12;
+    x ^= x << 25;
+    x ^= x >> 27;
+    ((x.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64) / (1u64 << 53) as f64 - 0.5
+}
+
+/// Twelve satellites (6 GPS, 6 Galileo) with a common clock walk and
+/// independent per-satellite noise as residuals at epoch `t`.
 fn epoch(t: usize) -> Vec<AraimSat<f64>> {
     (0..12)
         .map(|i| {
@@ -28,7 +38,7 @@ fn epoch(t: usize) -> Vec<AraimSat<f64>> {
                 c_acc_m2: 1.0,
                 b_nom_m: 0.0,
                 p_sat: 1e-5,
-                residual_m: clock + 0.3 * ((t * 13 + i * 7) as f64).sin(),
+                residual_m: clock + noise(t, i),
             }
         })
         .collect()
