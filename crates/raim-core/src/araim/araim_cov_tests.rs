@@ -82,7 +82,7 @@ fn too_many_events_make_the_epoch_unavailable() {
     // recursion on the distribution (not the engine's tail recursion).
     let mut dist = std::vec![0.0f64; 63];
     dist[0] = 1.0;
-    let probs: std::vec::Vec<f64> = std::iter::repeat(1e-3).take(62).collect();
+    let probs: std::vec::Vec<f64> = core::iter::repeat_n(1e-3, 62).collect();
     for (count, &p) in probs.iter().enumerate() {
         for k in (1..=count + 1).rev() {
             dist[k] = dist[k] * (1.0 - p) + dist[k - 1] * p;

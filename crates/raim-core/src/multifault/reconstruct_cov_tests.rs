@@ -22,13 +22,21 @@ fn more_than_64_satellites_are_refused() {
     // A 65-row parity space (a clock column and a spread of directions).
     let n = 65;
     let mut h = [[0.0f64; 70]; MAX_STATES];
-    for i in 0..n {
+    let [c0, c1, c2, c3, ..] = &mut h;
+    for (i, (((x, y), z), clk)) in c0
+        .iter_mut()
+        .zip(c1.iter_mut())
+        .zip(c2.iter_mut())
+        .zip(c3.iter_mut())
+        .enumerate()
+        .take(n)
+    {
         let a = i as f64 * 0.7;
         let b = 0.2 + (i % 9) as f64 * 0.15;
-        h[0][i] = b.cos() * a.sin();
-        h[1][i] = b.cos() * a.cos();
-        h[2][i] = b.sin();
-        h[3][i] = 1.0;
+        *x = b.cos() * a.sin();
+        *y = b.cos() * a.cos();
+        *z = b.sin();
+        *clk = 1.0;
     }
     let parity = Parity::<70, f64>::new(&h, &[0.0; 70], n, 4).unwrap();
     let mut model = std::boxed::Box::new(ResidualModel::<f64, 70>::empty());

@@ -37,7 +37,7 @@ fn epoch(k: usize, sigma_m: Option<f64>) -> [RangeObservation; 6] {
             rx[2] + 2.0e7 * d[2] / n,
         ];
         // A deterministic +-1 m pattern that changes with the epoch.
-        let noise = if (i + k) % 2 == 0 { 1.0 } else { -1.0 };
+        let noise = if (i + k).is_multiple_of(2) { 1.0 } else { -1.0 };
         *o = RangeObservation {
             id: SatId::new(System::Gps, i as u8 + 1),
             pseudorange_m: 2.0e7 + 100.0 + noise,
