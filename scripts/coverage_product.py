@@ -111,7 +111,7 @@ def main():
     used = [0] * len(exceptions)
     tot = {"lines": [0, 0, 0], "branches": [0, 0, 0]}  # code, covered, justified
     unjustified = []
-    crates = {}  # crate: [lines, covered lines, branches, covered branches]
+    crates = {}  # crate: [lines, covered, branches, covered, justified lines, justified branches]
     for path, (lines, branches) in sorted(files.items()):
         try:
             src = open(path).read().split("\n")
@@ -143,7 +143,7 @@ def main():
             return False
 
         rel = os.path.relpath(path, ROOT)
-        crate = crates.setdefault(rel.split("/")[1] if rel.startswith("crates/") else rel, [0, 0, 0, 0])
+        crate = crates.setdefault(rel.split("/")[1] if rel.startswith("crates/") else rel, [0, 0, 0, 0, 0, 0])
         for n, covered in sorted(lines.items()):
             if in_tests(n):
                 continue
@@ -154,6 +154,7 @@ def main():
                 tot["lines"][1] += 1
             elif justified(n):
                 tot["lines"][2] += 1
+                crate[4] += 1
             else:
                 unjustified.append(f"{rel}:{n}: {src[n - 1].strip()}")
         for (n, block, branch), hit in sorted(branches.items()):
@@ -166,6 +167,7 @@ def main():
                 tot["branches"][1] += 1
             elif justified(n):
                 tot["branches"][2] += 1
+                crate[5] += 1
             else:
                 unjustified.append(f"{rel}:{n}: branch {block}.{branch} never taken: {src[n - 1].strip()}")
     for i, (suffix, first, _r) in enumerate(exceptions):
@@ -179,10 +181,12 @@ def main():
     out = os.path.join(os.path.dirname(summary), "unjustified.txt")
     with open(out, "w") as fh:
         fh.write("\n".join(unjustified) + "\n")
-    for name, (n, c, b, bc) in sorted(crates.items()):
+    for name, (n, c, b, bc, jl, jb) in sorted(crates.items()):
         print(
             f"  {name}: lines {100.0 * c / max(n, 1):.2f} % ({c} of {n}), "
-            f"branches {100.0 * bc / max(b, 1):.2f} % ({bc} of {b})"
+            f"branches {100.0 * bc / max(b, 1):.2f} % ({bc} of {b}); "
+            f"justified lines {100.0 * (c + jl) / max(n, 1):.2f} %, "
+            f"branches {100.0 * (bc + jb) / max(b, 1):.2f} %"
         )
     L, B = tot["lines"], tot["branches"]
     print(

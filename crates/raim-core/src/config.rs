@@ -281,3 +281,7 @@ impl Config {
         crate::config_bounds::check(self)
     }
 }
+
+#[cfg(test)]
+#[path = "config_cov_tests.rs"]
+mod cov_tests;

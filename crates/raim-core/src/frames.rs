@@ -23,7 +23,8 @@ pub struct Geodetic {
 
 /// ECEF to geodetic by fixed-point iteration on latitude (converges to
 /// < 1e-12 rad in 6 iterations for any point near the Earth's surface;
-/// 10 are done). The Earth's centre maps to lat = lon = 0.
+/// 10 are done). At the Earth's centre, where the latitude is undefined,
+/// lon = 0 and the latitude and height are NaN (frames_cov_tests.rs).
 pub fn ecef_to_geodetic(ecef_m: [f64; 3]) -> Geodetic {
     let [x, y, z] = ecef_m;
     let e2 = WGS84_F * (2.0 - WGS84_F);
@@ -288,3 +289,7 @@ mod tests {
         assert!(up[2] > 6.3e6 && up[0].abs() < 1e-6);
     }
 }
+
+#[cfg(test)]
+#[path = "frames_cov_tests.rs"]
+mod cov_tests;

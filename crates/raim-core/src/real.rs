@@ -264,3 +264,7 @@ mod tests {
         assert_eq!(f32::range_sqrt(0.0), 0.0);
     }
 }
+
+#[cfg(test)]
+#[path = "real_cov_tests.rs"]
+mod cov_tests;

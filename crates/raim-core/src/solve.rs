@@ -1128,3 +1128,7 @@ impl<const N: usize, T: Real> Builder<N, T> {
 #[cfg(test)]
 #[path = "solve_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "solve_cov_tests.rs"]
+mod cov_tests;

@@ -247,3 +247,7 @@ pub(crate) fn finite(field: &'static str, index: usize, v: f64) -> Result<(), Ar
         })
     }
 }
+
+#[cfg(test)]
+#[path = "ism_cov_tests.rs"]
+mod cov_tests;

@@ -1094,3 +1094,11 @@ impl Limits {
         sigma_acc: false,
     };
 }
+
+#[cfg(test)]
+#[path = "araim_cov_tests.rs"]
+mod cov_tests;
+
+#[cfg(test)]
+#[path = "monitor_cov_tests.rs"]
+mod monitor_cov_tests;

@@ -256,3 +256,7 @@ fn next_combination(idx: &mut [usize; MAX_EVENTS], size: usize, total: usize) ->
     }
     false
 }
+
+#[cfg(test)]
+#[path = "modes_cov_tests.rs"]
+mod cov_tests;

@@ -490,3 +490,7 @@ mod tests {
         );
     }
 }
+
+#[cfg(test)]
+#[path = "pl_cov_tests.rs"]
+mod cov_tests;

@@ -662,3 +662,7 @@ mod tests {
         ));
     }
 }
+
+#[cfg(test)]
+#[path = "parity_cov_tests.rs"]
+mod cov_tests;

@@ -442,3 +442,7 @@ mod tests {
         assert!(seen.iter().all(|s| s & !0b1011_0110 == 0));
     }
 }
+
+#[cfg(test)]
+#[path = "covering_cov_tests.rs"]
+mod cov_tests;

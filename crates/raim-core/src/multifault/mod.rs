@@ -884,3 +884,6 @@ fn exclude_set<const N: usize, P: Real>(
     out.cause = None;
     Ok(Excluded::Done)
 }
+
+#[cfg(test)]
+mod mf_cov_tests;

@@ -444,3 +444,7 @@ pub fn fit_subset<T: Real, const N: usize>(
         bias: b,
     })
 }
+
+#[cfg(test)]
+#[path = "reconstruct_cov_tests.rs"]
+mod cov_tests;

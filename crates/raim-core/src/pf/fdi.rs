@@ -700,3 +700,7 @@ impl<T: Real, E: Estimator<T>, const S: usize> PfRaim<T, E, S> {
         jumped
     }
 }
+
+#[cfg(test)]
+#[path = "fdi_cov_tests.rs"]
+mod cov_tests;

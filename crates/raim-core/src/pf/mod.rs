@@ -35,3 +35,5 @@ pub use error::PfError;
 pub use fdi::{PfOutput, PfRaim, SatLlr};
 pub use model::{Estimator, Reference, Step};
 pub use particle::{GaPf, ParticleFilter, SirPf};
+#[cfg(test)]
+mod pf_cov_tests;

@@ -295,3 +295,7 @@ impl<T: Real, const P: usize, const GA: bool> Estimator<T> for ParticleFilter<T,
         }
     }
 }
+
+#[cfg(test)]
+#[path = "particle_cov_tests.rs"]
+mod particle_cov_tests;

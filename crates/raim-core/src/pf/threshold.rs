@@ -333,3 +333,7 @@ mod tests {
         ));
     }
 }
+
+#[cfg(test)]
+#[path = "threshold_cov_tests.rs"]
+mod cov_tests;

@@ -1083,3 +1083,7 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+#[path = "mcusum_cov_tests.rs"]
+mod cov_tests;

@@ -531,3 +531,6 @@ fn keep_unheld<const N: usize, T: Real>(
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod seq_cov_tests;

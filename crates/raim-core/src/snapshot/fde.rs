@@ -814,3 +814,7 @@ mod nan_tests {
         }
     }
 }
+
+#[cfg(test)]
+#[path = "fde_cov_tests.rs"]
+mod cov_tests;

@@ -244,3 +244,7 @@ mod tests {
         assert!(score(FiRule::Mle, 1.0, f64::NAN, 1e-4).is_none());
     }
 }
+
+#[cfg(test)]
+#[path = "lraim_cov_tests.rs"]
+mod cov_tests;

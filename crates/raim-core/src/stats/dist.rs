@@ -1358,3 +1358,7 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+#[path = "dist_cov_tests.rs"]
+mod cov_tests;

@@ -301,3 +301,5 @@ pub fn statistic<T: Real, const K: usize>(out: &AraimOutput<T, K>) -> Separation
     }
     best
 }
+#[cfg(test)]
+mod esq_cov_tests;

@@ -604,3 +604,6 @@ where
         })
     }
 }
+
+#[cfg(test)]
+mod pca_cov_tests;

@@ -97,3 +97,7 @@ where
         covered: if total > 0.0 { acc / total } else { 0.0 },
     })
 }
+
+#[cfg(test)]
+#[path = "svd_cov_tests.rs"]
+mod cov_tests;
