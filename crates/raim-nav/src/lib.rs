@@ -50,3 +50,6 @@ pub mod tropo;
 mod m;
 
 pub use error::NavError;
+
+#[cfg(all(test, feature = "rtcm"))]
+mod cov2_tests;

@@ -1,0 +1,194 @@
+//! Navigation paths the other tests leave out (issue 37, structural
+//! coverage, second pass), through the public API: GLONASS time and a
+//! GLONASS set without a t_b, and the ephemeris store's repeats,
+//! replacements, choice among sets and decoded sets of an older store.
+extern crate std;
+
+use std::vec::Vec;
+
+use raim_core::{SatId, System};
+
+use crate::ephemeris::{Kepler, WEEK_S};
+use crate::glonass::{
+    glonass_from_gps_s, glonass_time_of_day_to_gps_with_s, GlonassEphemeris, GlonassIcdFields,
+};
+use crate::ranging::Broadcast;
+use crate::rtcm::decode::kepler_message;
+use crate::rtcm::fields::kepler;
+use crate::store::{DecodedSets, EphemerisStore, Stored};
+use crate::NavError;
+
+/// GLONASS time is UTC(SU) + 3 h: GPS time less GPS - UTC (15 s in 2012
+/// before 1 July, 16 s after; IERS Bulletin C 43) plus 10,800 s. GPS week
+/// 1669 starts on 2012-01-01, week 1710 on 2012-10-14.
+#[test]
+fn glonass_time_follows_the_leap_second_table() {
+    let jan = 1669.0 * WEEK_S;
+    let oct = 1710.0 * WEEK_S;
+    assert_eq!(glonass_from_gps_s(jan), jan - 15.0 + 10_800.0);
+    assert_eq!(glonass_from_gps_s(oct), oct - 16.0 + 10_800.0);
+}
+
+/// A t_b of 23:45 Moscow time carried by a message received at 00:30
+/// Moscow time is the previous day's (within 12 h of the reception), and
+/// a t_b of 00:15 received at 23:30 is the next day's.
+#[test]
+fn a_time_of_day_is_placed_on_the_day_nearest_its_reception() {
+    let leap_s = 16.0;
+    // GPS time of Moscow midnight starting GLONASS day `d`.
+    let midnight = |d: f64| d * 86_400.0 + leap_s - 10_800.0;
+    let d = 15_000.0;
+    let got = glonass_time_of_day_to_gps_with_s(85_500.0, midnight(d) + 1_800.0, leap_s);
+    assert_eq!(got, midnight(d) - 900.0);
+    let got = glonass_time_of_day_to_gps_with_s(900.0, midnight(d) - 1_800.0, leap_s);
+    assert_eq!(got, midnight(d) + 900.0);
+}
+
+/// A GLONASS set's ICD fields: slot `slot`, channel 1, t_b at `tb_gps_s`,
+/// a plausible orbit (about 19,100 km from the centre, 3.9 km/s).
+fn icd(slot: u8, tb_gps_s: f64) -> GlonassIcdFields {
+    GlonassIcdFields {
+        slot,
+        frequency_channel: 1,
+        tb_gps_s,
+        x_km: 10_000.0,
+        y_km: -15_000.0,
+        z_km: 6_000.0,
+        vx_km_s: 1.5,
+        vy_km_s: 0.8,
+        vz_km_s: -3.4,
+        ax_km_s2: 0.0,
+        ay_km_s2: 0.0,
+        az_km_s2: 0.0,
+        tau_n_s: 1e-5,
+        gamma_n: 0.0,
+        unhealthy: false,
+    }
+}
+
+/// A set whose t_b is not a finite time (not yet placed) is refused with
+/// the field and value; a placed one is a GLONASS set.
+#[test]
+fn a_glonass_set_needs_a_finite_tb() {
+    let e = GlonassEphemeris::from_icd(&icd(3, f64::NAN)).unwrap_err();
+    assert!(
+        matches!(e, NavError::OutOfRange { field: "tb_gps_s", value, .. } if value.is_nan()),
+        "{e:?}"
+    );
+    let e = GlonassEphemeris::from_icd(&icd(3, f64::INFINITY)).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            NavError::OutOfRange {
+                field: "tb_gps_s",
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    let g = GlonassEphemeris::from_icd(&icd(3, 1e9)).unwrap();
+    assert_eq!(g.system(), System::Glonass);
+    assert_eq!(g.position_m, [10_000e3, -15_000e3, 6_000e3]);
+}
+
+/// The GLONASS sets of a store of two: a repeat changes nothing, a third
+/// set replaces the one with the oldest t_b (wherever it is), and a
+/// satellite's set is the one whose t_b is nearest the time asked, up to
+/// 30 min (`max_ephemeris_age_s`).
+#[test]
+fn glonass_sets_repeat_replace_the_oldest_and_the_nearest_is_chosen() {
+    let t0 = 1e9;
+    let g = |slot, dt: f64| GlonassEphemeris::from_icd(&icd(slot, t0 + dt)).unwrap();
+    let mut s = EphemerisStore::<4, 2>::new();
+    assert_eq!(s.insert_glonass(g(5, 1_800.0)), Stored::Added);
+    assert_eq!(s.insert_glonass(g(5, 0.0)), Stored::Added);
+    assert_eq!(s.insert_glonass(g(5, 0.0)), Stored::Repeat);
+    assert_eq!(s.len(), (0, 2));
+    let id = SatId::new(System::Glonass, 5);
+    let d = DecodedSets::<4>::new();
+    let tb_of = |s: &EphemerisStore<4, 2>, t: f64| match s.select(id, t, &d) {
+        Some(Broadcast::Glonass(x)) => Some(x.tb_gps_s - t0),
+        Some(other) => panic!("{other:?}"),
+        None => None,
+    };
+    let tb = |t: f64| tb_of(&s, t);
+    assert_eq!(tb(t0 + 300.0), Some(0.0));
+    assert_eq!(tb(t0 + 1_500.0), Some(1_800.0));
+    assert_eq!(tb(t0 - 1_800.0), Some(0.0));
+    assert_eq!(tb(t0 - 1_801.0), None);
+    // Full: the set of t_b + 0 (the second) is the oldest.
+    assert_eq!(s.insert_glonass(g(6, 900.0)), Stored::Replaced);
+    assert_eq!(tb_of(&s, t0 + 300.0), Some(1_800.0));
+    assert_eq!(s.len(), (0, 2));
+    let six = SatId::new(System::Glonass, 6);
+    assert!(matches!(s.select(six, t0 + 900.0, &d), Some(Broadcast::Glonass(x)) if x.slot == 6));
+}
+
+/// GMSD7's first 1019 payload (RTCM 10403.3 §3.5.11).
+fn gmsd7_1019() -> Vec<u8> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/GMSD7_20121014.rtcm3"
+    );
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    let mut i = 0;
+    while i + 6 <= bytes.len() {
+        if bytes[i] != 0xD3 {
+            i += 1;
+            continue;
+        }
+        let len = (usize::from(bytes[i + 1] & 0x03) << 8) | usize::from(bytes[i + 2]);
+        let p = &bytes[i + 3..i + 3 + len];
+        if len >= 2 && (u16::from(p[0]) << 4 | u16::from(p[1]) >> 4) == 1019 {
+            return p.to_vec();
+        }
+        i += 6 + len;
+    }
+    panic!("no 1019 in {path}")
+}
+
+/// The set of a payload as the receiver takes it: decoded, toc in GPS
+/// seconds of GMSD7's week 1709.
+fn set_of(payload: &[u8]) -> Kepler {
+    let m = kepler_message(payload).unwrap();
+    let mut k = kepler(m.system, m.prn, &m.fields);
+    k.toc_gps_s = 1709.0 * WEEK_S + m.fields.toc_s;
+    k
+}
+
+/// A set that its payload does not decode to (here the GPS set relabelled
+/// Galileo: the keys of the GPS set held differ by system) is not kept,
+/// and says how long the payload was.
+#[test]
+fn a_set_its_payload_does_not_give_is_not_kept() {
+    let p = gmsd7_1019();
+    let k = set_of(&p);
+    let mut s = EphemerisStore::<4, 2>::new();
+    assert_eq!(s.insert_kepler(k, &p), Stored::Added);
+    let galileo = Kepler {
+        system: System::Galileo,
+        ..k
+    };
+    assert_eq!(
+        s.insert_kepler(galileo, &p),
+        Stored::NotKept {
+            payload_len: p.len() as u16
+        }
+    );
+    assert_eq!(s.len(), (1, 0));
+}
+
+/// Decoded sets of an older store (another generation) are started again
+/// by `load`, which then decodes the set `select` gives: the one inserted.
+#[test]
+fn load_restarts_decoded_sets_of_an_older_store() {
+    let p = gmsd7_1019();
+    let k = set_of(&p);
+    let id = SatId::new(k.system, k.prn);
+    let mut s = EphemerisStore::<4, 2>::new();
+    assert_eq!(s.insert_kepler(k, &p), Stored::Added);
+    let mut d = DecodedSets::<4>::new();
+    assert_eq!(s.select(id, k.toc_gps_s, &d), None);
+    s.load(id, k.toc_gps_s, &mut d).unwrap();
+    assert_eq!(s.select(id, k.toc_gps_s, &d), Some(Broadcast::Kepler(&k)));
+}
