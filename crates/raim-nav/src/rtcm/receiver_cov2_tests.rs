@@ -1,0 +1,201 @@
+//! The stream receiver's paths the other tests do not reach (issue 37,
+//! structural coverage, second pass), through its public API on GMSD7
+//! (2012-10-14, `/work/shared/data/GMSD7_20121014.rtcm3`) edited frame by
+//! frame: a Keplerian ephemeris too long to keep, a GLONASS ephemeris out
+//! of the ICD's range, a last MSM of a system the receiver does not read
+//! with no epoch open, and more 1020s waiting for the stream's date than
+//! the receiver holds.
+
+use std::boxed::Box;
+use std::vec::Vec;
+
+use raim_core::Config;
+
+use super::{FormError, FormedEpoch, StreamReceiver};
+use crate::ranging::StreamSigmas;
+
+/// The GPS week GMSD7 starts in (its first epoch is the end of 1709); the
+/// receiver's pivot a year earlier places it.
+const GMSD7_WEEK: i64 = 1709;
+const MASK_RAD: f64 = 10.0 * core::f64::consts::PI / 180.0;
+
+/// GMSD7's frames by the RTCM 10403.3 framing alone.
+fn gmsd7_frames() -> Vec<Vec<u8>> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/GMSD7_20121014.rtcm3"
+    );
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i + 3 <= bytes.len() {
+        if bytes[i] != 0xD3 {
+            i += 1;
+            continue;
+        }
+        let len = (usize::from(bytes[i + 1] & 0x03) << 8) | usize::from(bytes[i + 2]);
+        let end = i + 6 + len;
+        if end > bytes.len() {
+            break;
+        }
+        out.push(bytes[i..end].to_vec());
+        i = end;
+    }
+    out
+}
+
+/// DF002 of a frame.
+fn number(f: &[u8]) -> u16 {
+    (u16::from(f[3]) << 4) | (u16::from(f[4]) >> 4)
+}
+
+/// The frames of GMSD7's first `epochs` epochs (up to the next 1077).
+fn first_epochs(epochs: usize) -> Vec<Vec<u8>> {
+    let mut seen = 0;
+    let mut out = Vec::new();
+    for f in gmsd7_frames() {
+        if number(&f) == 1077 {
+            if seen == epochs {
+                break;
+            }
+            seen += 1;
+        }
+        out.push(f);
+    }
+    out
+}
+
+/// A frame around `payload`: header and CRC-24Q (polynomial 0x864CFB,
+/// initial value 0; written out here, not the decoder's).
+fn frame(payload: &[u8]) -> Vec<u8> {
+    let n = payload.len();
+    let mut f = std::vec![0xD3, (n >> 8) as u8, n as u8];
+    f.extend_from_slice(payload);
+    let mut c = 0u32;
+    for &b in &f {
+        c ^= u32::from(b) << 16;
+        for _ in 0..8 {
+            c <<= 1;
+            if c & 0x0100_0000 != 0 {
+                c ^= 0x0186_4CFB;
+            }
+        }
+    }
+    f.extend_from_slice(&[(c >> 16) as u8, (c >> 8) as u8, c as u8]);
+    f
+}
+
+/// The payload of a frame.
+fn payload(f: &[u8]) -> &[u8] {
+    &f[3..f.len() - 3]
+}
+
+/// Each closed epoch's outcome after `frames`.
+fn feed(rx: &mut StreamReceiver<64, 256>, frames: &[Vec<u8>]) -> Vec<Result<(), FormError>> {
+    let sigmas = StreamSigmas::Snapshot(Config::default().sigma_model);
+    let mut out = Box::new(FormedEpoch::<64> {
+        time_gps_s: 0.0,
+        reference_m: None,
+        sats: heapless::Vec::new(),
+        cn0_dbhz: heapless::Vec::new(),
+        rejected: 0,
+    });
+    frames
+        .iter()
+        .filter_map(|f| rx.on_frame(f, &sigmas, MASK_RAD, &mut out))
+        .collect()
+}
+
+fn receiver() -> Box<StreamReceiver<64, 256>> {
+    Box::new(StreamReceiver::<64, 256>::new(GMSD7_WEEK - 52))
+}
+
+/// A 1019 whose payload is longer than the store keeps (64 bytes, the
+/// longest Keplerian message's; a 1019 has 61): GMSD7's first 1019 with
+/// eight zero bytes after its 488 bits decodes to the same set, which is
+/// counted not kept; the store holds one set fewer than from the stream
+/// as sent.
+#[test]
+fn a_keplerian_message_longer_than_the_store_keeps_is_counted() {
+    let frames = first_epochs(25);
+    let at = frames.iter().position(|f| number(f) == 1019).unwrap();
+    let mut long = payload(&frames[at]).to_vec();
+    assert_eq!(long.len(), 61);
+    long.extend_from_slice(&[0; 8]);
+    let mut edited = frames.clone();
+    edited[at] = frame(&long);
+
+    let mut plain = receiver();
+    feed(&mut plain, &frames);
+    let mut rx = receiver();
+    feed(&mut rx, &edited);
+    assert_eq!(plain.counts().ephemerides_not_kept, 0);
+    assert_eq!(rx.counts().ephemerides_not_kept, 1);
+    assert_eq!(rx.counts().ephemerides, plain.counts().ephemerides);
+    assert_eq!(rx.ephemerides().0 + 1, plain.ephemerides().0);
+}
+
+/// A 1020 whose slot (DF038, payload bits 12..18) is 0, outside the ICD's
+/// 1..=27 (slot 0 is not a satellite), is counted bad once the stream is
+/// dated and placed; the same message with its slot is kept.
+#[test]
+fn a_glonass_ephemeris_out_of_range_is_counted_bad() {
+    let frames = first_epochs(25);
+    let g = frames.iter().find(|f| number(f) == 1020).unwrap();
+    let mut p = payload(g).to_vec();
+    // Bits 12..18: the low four bits of byte 1, the top two of byte 2.
+    p[1] &= 0xF0;
+    p[2] &= 0x3F;
+    let mut rx = receiver();
+    feed(&mut rx, &frames);
+    let before = rx.counts().glonass_bad;
+    feed(&mut rx, &[frame(&p)]);
+    assert_eq!(rx.counts().glonass_bad, before + 1);
+    feed(&mut rx, &[g.clone()]);
+    assert_eq!(rx.counts().glonass_bad, before + 1);
+}
+
+/// An SBAS MSM7 (1107, a system the receiver does not read) whose
+/// multiple-message bit (DF393, payload bit 54) is 0 ends the open epoch;
+/// with none open it ends nothing: the stream's epochs after it are
+/// formed as without it.
+#[test]
+fn a_last_msm_of_another_system_with_no_epoch_open_ends_nothing() {
+    let mut sbas = std::vec![0u8; 20];
+    sbas[0] = (1107u16 >> 4) as u8;
+    sbas[1] = ((1107u16 & 0x0F) << 4) as u8;
+    let frames = first_epochs(25);
+    let mut with = std::vec![frame(&sbas)];
+    with.extend_from_slice(&frames);
+    let mut plain = receiver();
+    let want = feed(&mut plain, &frames);
+    let mut rx = receiver();
+    let got = feed(&mut rx, &with);
+    assert_eq!(got, want);
+    assert_eq!(rx.counts().epochs, plain.counts().epochs);
+    assert_eq!(rx.counts().ignored, plain.counts().ignored + 1);
+}
+
+/// 1020s that arrive before the stream can be dated wait, at most 32 of
+/// them (`PENDING_GLONASS`): GMSD7's 16 sent three times over (48), the
+/// 16 oldest give way, and once dated the receiver holds what it holds
+/// after the 32 latest alone.
+#[test]
+fn waiting_glonass_ephemerides_keep_the_latest() {
+    let once: Vec<Vec<u8>> = gmsd7_frames()
+        .into_iter()
+        .filter(|f| number(f) == 1020)
+        .collect();
+    assert_eq!(once.len(), 16);
+    let glo: Vec<Vec<u8>> = once.iter().cycle().take(48).cloned().collect();
+    let epochs = first_epochs(25);
+    let mut rx = receiver();
+    feed(&mut rx, &glo);
+    assert_eq!(rx.ephemerides(), (0, 0));
+    feed(&mut rx, &epochs);
+    let mut latest = receiver();
+    feed(&mut latest, &glo[16..]);
+    feed(&mut latest, &epochs);
+    assert_eq!(rx.ephemerides(), latest.ephemerides());
+    assert!(rx.ephemerides().1 > 0);
+}
