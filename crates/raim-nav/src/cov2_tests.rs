@@ -192,3 +192,96 @@ fn load_restarts_decoded_sets_of_an_older_store() {
     s.load(id, k.toc_gps_s, &mut d).unwrap();
     assert_eq!(s.select(id, k.toc_gps_s, &d), Some(Broadcast::Kepler(&k)));
 }
+
+/// Seven GPS satellites 2e7 m above a receiver on the equator at the
+/// prime meridian (ECEF x up, y east, z north), pushed sideways, with
+/// exact ranges plus a 3e4 m clock; the receiver's position.
+fn equator_sky() -> (Vec<raim_core::RangeObservation>, [f64; 3]) {
+    let rx = [raim_core::frames::WGS84_A_M, 0.0, 0.0];
+    let sats = [
+        (0.0, 0.0),
+        (1.2e7, 0.3e7),
+        (-1.0e7, 0.8e7),
+        (0.2e7, -1.1e7),
+        (0.9e7, 0.9e7),
+        (-0.7e7, -0.6e7),
+        (0.4e7, 1.3e7),
+    ]
+    .iter()
+    .enumerate()
+    .map(|(k, &(e, n))| {
+        let p = [rx[0] + 2.0e7, e, n];
+        let d = ((p[0] - rx[0]).powi(2) + p[1].powi(2) + p[2].powi(2)).sqrt();
+        raim_core::RangeObservation {
+            id: SatId::new(System::Gps, k as u8 + 1),
+            pseudorange_m: d + 3.0e4,
+            position_m: p,
+            sigma_m: None,
+        }
+    })
+    .collect();
+    (sats, rx)
+}
+
+fn distance_m(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// Host sigmas weigh the bootstrap's fit in place of the elevation
+/// model: exact ranges still give the point back (to 1 mm), whatever
+/// the (equal) weights.
+#[test]
+fn the_bootstrap_takes_host_sigmas() {
+    use crate::bootstrap::bootstrap_position;
+    let (mut sats, rx) = equator_sky();
+    for s in &mut sats {
+        s.sigma_m = Some(2.5);
+    }
+    let got = bootstrap_position::<32>(&sats, None).unwrap();
+    assert!(distance_m(got, rx) < 1e-3, "{}", distance_m(got, rx));
+}
+
+/// The bootstrap gives no position (its documented refusals) for: a
+/// satellite at the starting point (no line of sight), a satellite
+/// position that is not a number, a sigma that is not positive, a
+/// pseudorange that is not a number (no finite step), satellites all at
+/// one point (singular normal equations), and ranges that put the
+/// receiver at the Earth's centre (it converges there, where no weights
+/// apply, and gives up after its iterations).
+#[test]
+fn the_bootstrap_refuses_what_gives_no_position() {
+    use crate::bootstrap::bootstrap_position;
+    let (sats, _) = equator_sky();
+    let at_sat = Some(sats[2].position_m);
+    assert_eq!(bootstrap_position::<32>(&sats, at_sat), None);
+
+    let mut nan_pos = sats.clone();
+    nan_pos[1].position_m[2] = f64::NAN;
+    assert_eq!(bootstrap_position::<32>(&nan_pos, None), None);
+
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let mut s = sats.clone();
+        s[4].sigma_m = Some(bad);
+        assert_eq!(bootstrap_position::<32>(&s, None), None, "sigma {bad}");
+    }
+
+    let mut nan_range = sats.clone();
+    nan_range[3].pseudorange_m = f64::NAN;
+    assert_eq!(bootstrap_position::<32>(&nan_range, None), None);
+
+    let mut one_point = sats.clone();
+    for s in &mut one_point {
+        s.position_m = sats[0].position_m;
+    }
+    assert_eq!(bootstrap_position::<32>(&one_point, None), None);
+
+    let mut centre = sats.clone();
+    for s in &mut centre {
+        s.pseudorange_m = distance_m(s.position_m, [0.0; 3]) + 3.0e4;
+    }
+    assert_eq!(bootstrap_position::<32>(&centre, None), None);
+    // The same ranges solved from the receiver's side of the Earth.
+    let (_, rx) = equator_sky();
+    let got = bootstrap_position::<32>(&sats, Some(rx)).unwrap();
+    assert!(distance_m(got, rx) < 1e-3);
+}
