@@ -285,3 +285,66 @@ fn the_bootstrap_refuses_what_gives_no_position() {
     let got = bootstrap_position::<32>(&sats, Some(rx)).unwrap();
     assert!(distance_m(got, rx) < 1e-3);
 }
+
+/// `payload` with the `width`-bit field at bit `at` raised by `add`.
+fn with_field_added(payload: &[u8], at: usize, width: usize, add: u64) -> Vec<u8> {
+    let mut p = payload.to_vec();
+    let mut v = 0u64;
+    for k in at..at + width {
+        v = (v << 1) | u64::from((p[k / 8] >> (7 - k % 8)) & 1);
+    }
+    v += add;
+    for (i, k) in (at..at + width).enumerate() {
+        let bit = (v >> (width - 1 - i)) & 1;
+        p[k / 8] = (p[k / 8] & !(0x80 >> (k % 8))) | ((bit as u8) << (7 - k % 8));
+    }
+    p
+}
+
+/// Of two sets of one satellite an hour apart (GMSD7's first 1019, and
+/// the same with toc, DF081 at bit 56, and toe, DF093 at bit 288, each
+/// 16 bits of 16 s, raised by 225 = 3,600 s), the store gives the one
+/// whose toe is nearer the time asked, whichever was inserted first.
+#[test]
+fn the_store_gives_the_set_nearest_in_time() {
+    let p1 = gmsd7_1019();
+    let p2 = with_field_added(&with_field_added(&p1, 56, 16, 225), 288, 16, 225);
+    let (k1, k2) = (set_of(&p1), set_of(&p2));
+    assert_eq!(k2.toe_sow_s - k1.toe_sow_s, 3_600.0);
+    let id = SatId::new(k1.system, k1.prn);
+    for order in [[(k1, &p1), (k2, &p2)], [(k2, &p2), (k1, &p1)]] {
+        let mut s = EphemerisStore::<4, 2>::new();
+        for (k, p) in order {
+            assert_eq!(s.insert_kepler(k, p), Stored::Added);
+        }
+        for (t, want) in [(k1.toc_gps_s - 600.0, k1), (k2.toc_gps_s + 600.0, k2)] {
+            let mut d = DecodedSets::<4>::new();
+            s.start_epoch(&mut d);
+            s.load(id, t, &mut d).unwrap();
+            assert_eq!(s.select(id, t, &d), Some(Broadcast::Kepler(&want)));
+        }
+    }
+}
+
+/// A store of no GLONASS capacity keeps nothing: each set is `Replaced`
+/// (its documented answer) and the store stays empty.
+#[test]
+fn a_store_of_no_capacity_keeps_nothing() {
+    let mut s = EphemerisStore::<4, 0>::new();
+    let g = GlonassEphemeris::from_icd(&icd(2, 1e9)).unwrap();
+    assert_eq!(s.insert_glonass(g), Stored::Replaced);
+    assert_eq!(s.len(), (0, 0));
+    assert!(s.is_empty());
+}
+
+/// A Keplerian broadcast's clock alone is its state's clock to the bit
+/// (`Broadcast::clock_s`, the receiver's transmit-time iteration).
+#[test]
+fn a_kepler_broadcast_clock_is_its_states() {
+    let k = set_of(&gmsd7_1019());
+    let b = Broadcast::Kepler(&k);
+    for dt in [-3_000.0, 0.0, 1_234.5] {
+        let t = k.toc_gps_s + dt;
+        assert_eq!(b.clock_s(t).to_bits(), b.state(t).clock_s.to_bits());
+    }
+}
