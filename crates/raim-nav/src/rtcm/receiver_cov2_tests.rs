@@ -199,3 +199,69 @@ fn waiting_glonass_ephemerides_keep_the_latest() {
     assert_eq!(rx.ephemerides(), latest.ephemerides());
     assert!(rx.ephemerides().1 > 0);
 }
+
+/// The times of the epochs `frames` close, formed or not.
+fn epoch_times(rx: &mut StreamReceiver<64, 256>, frames: &[Vec<u8>]) -> Vec<f64> {
+    let sigmas = StreamSigmas::Snapshot(Config::default().sigma_model);
+    let mut out = Box::new(FormedEpoch::<64> {
+        time_gps_s: 0.0,
+        reference_m: None,
+        sats: heapless::Vec::new(),
+        cn0_dbhz: heapless::Vec::new(),
+        rejected: 0,
+    });
+    frames
+        .iter()
+        .filter_map(|f| {
+            rx.on_frame(f, &sigmas, MASK_RAD, &mut out)
+                .map(|_| out.time_gps_s)
+        })
+        .collect()
+}
+
+/// `payload` with the `width`-bit field at bit `at` set to `v`.
+fn with_field(payload: &[u8], at: usize, width: usize, v: u64) -> Vec<u8> {
+    let mut q = payload.to_vec();
+    for (i, k) in (at..at + width).enumerate() {
+        let bit = ((v >> (width - 1 - i)) & 1) as u8;
+        q[k / 8] = (q[k / 8] & !(0x80 >> (k % 8))) | (bit << (7 - k % 8));
+    }
+    q
+}
+
+/// The stream is dated by its first Keplerian ephemeris: of the three
+/// weeks around the ephemeris' own, the one that puts the latest epoch
+/// nearest its toe. GMSD7's first 1019 (week 1709, toe 604,784 s) comes
+/// with the epoch of that time, the last seconds of week 1709; the same
+/// set with toc and toe (DF081 at payload bit 56, DF093 at bit 288, 16
+/// bits of 16 s) at 1,008 s of its week puts those epochs 16 s before
+/// it, at the end of the week before: every dated epoch comes exactly
+/// one week (604,800 s) earlier.
+#[test]
+fn the_stream_is_dated_to_the_week_nearest_the_first_toe() {
+    let frames = first_epochs(25);
+    let at = frames.iter().position(|f| number(f) == 1019).unwrap();
+    let early = 1_008 / 16;
+    let q = with_field(
+        &with_field(payload(&frames[at]), 56, 16, early),
+        288,
+        16,
+        early,
+    );
+    let mut edited = frames.clone();
+    edited[at] = frame(&q);
+    let want = epoch_times(&mut receiver(), &frames);
+    let got = epoch_times(&mut receiver(), &edited);
+    assert_eq!(got.len(), want.len());
+    let dated: Vec<(f64, f64)> = got
+        .iter()
+        .zip(&want)
+        // An epoch before the dating has its time of week only.
+        .filter(|(_, w)| **w >= 604_800.0)
+        .map(|(g, w)| (*g, *w))
+        .collect();
+    assert!(dated.len() > 10, "{want:?}");
+    for (g, w) in dated {
+        assert_eq!(w - g, 604_800.0);
+    }
+}
