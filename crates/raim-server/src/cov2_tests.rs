@@ -130,3 +130,100 @@ fn an_araim_sigma_that_is_no_positive_number_is_the_engines_refusal() {
         }
     }
 }
+
+/// GMSD7's frames (`/work/shared/data/GMSD7_20121014.rtcm3`) by the RTCM
+/// 10403.3 framing, up to its 25th epoch (the frames before the 26th
+/// GPS MSM7, 1077).
+fn gmsd7_25_epochs() -> Vec<Vec<u8>> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/GMSD7_20121014.rtcm3"
+    );
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    let (mut out, mut i, mut epochs) = (Vec::new(), 0, 0);
+    while i + 6 <= bytes.len() {
+        if bytes[i] != 0xD3 {
+            i += 1;
+            continue;
+        }
+        let len = (usize::from(bytes[i + 1] & 0x03) << 8) | usize::from(bytes[i + 2]);
+        let f = bytes[i..i + 6 + len].to_vec();
+        if (u16::from(f[3]) << 4 | u16::from(f[4]) >> 4) == 1077 {
+            if epochs == 25 {
+                break;
+            }
+            epochs += 1;
+        }
+        out.push(f);
+        i += 6 + len;
+    }
+    out
+}
+
+/// An RTCM 3 frame around `payload`: header and CRC-24Q (polynomial
+/// 0x864CFB, initial value 0; written out here, not the receiver's).
+fn rtcm_frame(payload: &[u8]) -> Vec<u8> {
+    let mut f = std::vec![0xD3, (payload.len() >> 8) as u8 & 0x03, payload.len() as u8];
+    f.extend_from_slice(payload);
+    let mut crc = 0u32;
+    for &b in &f {
+        crc ^= u32::from(b) << 16;
+        for _ in 0..8 {
+            crc <<= 1;
+            if crc & 0x0100_0000 != 0 {
+                crc ^= 0x0186_4CFB;
+            }
+        }
+    }
+    f.extend_from_slice(&[(crc >> 16) as u8, (crc >> 8) as u8, crc as u8]);
+    f
+}
+
+/// GMSD7 with its first GPS ephemeris (1019) sent in the unit's pivot
+/// week (DF076, payload bits 18..28, the week modulo 1024; the earliest
+/// week the unit places a stream in, a year before its build) is dated
+/// there, with no RTCM 1013: `Status` reports the leap-second table's
+/// count, 18 s (every date since 2017-01-01, IERS Bulletin C 52), while
+/// the table is in force at that date (it expires 2027-06-28), and
+/// `TableExpired` past it.
+#[test]
+fn a_stream_dated_within_the_table_reports_its_count() {
+    use raim_proto::message::StreamLeapSeconds;
+    let mut frames = gmsd7_25_epochs();
+    let at = frames
+        .iter()
+        .position(|f| (u16::from(f[3]) << 4 | u16::from(f[4]) >> 4) == 1019)
+        .unwrap();
+    let mut p = frames[at][3..frames[at].len() - 3].to_vec();
+    let week = (crate::stream::PIVOT_WEEK % 1024) as u16;
+    for (i, k) in (18..28).enumerate() {
+        let bit = ((week >> (9 - i)) & 1) as u8;
+        p[k / 8] = (p[k / 8] & !(0x80 >> (k % 8))) | (bit << (7 - k % 8));
+    }
+    frames[at] = rtcm_frame(&p);
+
+    let mut s = Box::new(Server::new());
+    s.take_runtime_config(Config::default()).unwrap();
+    let (mut link, mut nmea) = (Sink::default(), Sink::default());
+    for &b in frames.concat().iter() {
+        s.on_byte(b, &mut link, &mut nmea, &mut NoPlatform).unwrap();
+    }
+    s.on_line_idle(&mut link, &mut nmea, &mut NoPlatform)
+        .unwrap();
+    let r = ask(&mut s, 0, CommandRef::Status);
+    let ResponseBody::Status(st) = r.body else {
+        panic!("{r:?}")
+    };
+    // The first epoch's GPS time: GMSD7 starts 16 s before the end of
+    // its week (604,784 s), its epochs one second apart.
+    let t_gps_s = crate::stream::PIVOT_WEEK as f64 * 604_800.0 + 604_784.0;
+    let expires_gps_s = raim_nav::time::LEAP_TABLE_EXPIRES_GPS_S;
+    let want = if t_gps_s + 60.0 < expires_gps_s {
+        StreamLeapSeconds::Table {
+            gps_minus_utc_s: 18,
+        }
+    } else {
+        StreamLeapSeconds::TableExpired
+    };
+    assert_eq!(st.stream_leap_seconds, want);
+}
