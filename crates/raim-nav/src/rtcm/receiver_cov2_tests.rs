@@ -265,3 +265,50 @@ fn the_stream_is_dated_to_the_week_nearest_the_first_toe() {
         assert_eq!(w - g, 604_800.0);
     }
 }
+
+/// RTCM 1013 (RTCM 10403.3 §3.5.5): DF002, DF003 0, DF051 MJD 56,214
+/// (2012-10-14), DF052 0, DF053 no announcements, DF054 `leap_s`.
+fn msg1013(leap_s: u64) -> Vec<u8> {
+    let fields: [(u64, usize); 6] = [
+        (1013, 12),
+        (0, 12),
+        (56_214, 16),
+        (0, 17),
+        (0, 5),
+        (leap_s, 8),
+    ];
+    let mut p = std::vec![0u8; 9];
+    let mut at = 0;
+    for (v, w) in fields {
+        p = with_field(&p, at, w, v);
+        at += w;
+    }
+    frame(&p)
+}
+
+/// 1020s waiting for the stream's date wait on when the date is past the
+/// leap-second table (a pivot 1,024 weeks late dates GMSD7 in 2032): the
+/// receiver holds no GLONASS set until an RTCM 1013 gives GPS - UTC, and
+/// then as many as a stream dated in 2012 by the table (16 s, the same
+/// count) holds.
+#[test]
+fn waiting_glonass_ephemerides_wait_for_the_leap_seconds() {
+    let once: Vec<Vec<u8>> = gmsd7_frames()
+        .into_iter()
+        .filter(|f| number(f) == 1020)
+        .collect();
+    let epochs: Vec<Vec<u8>> = first_epochs(25)
+        .into_iter()
+        .filter(|f| number(f) != 1020)
+        .collect();
+    let mut late = Box::new(StreamReceiver::<64, 256>::new(GMSD7_WEEK - 52 + 1024));
+    feed(&mut late, &once);
+    feed(&mut late, &epochs);
+    assert_eq!(late.ephemerides().1, 0);
+    feed(&mut late, &[msg1013(16)]);
+    let mut table = receiver();
+    feed(&mut table, &once);
+    feed(&mut table, &epochs);
+    assert!(table.ephemerides().1 > 0);
+    assert_eq!(late.ephemerides().1, table.ephemerides().1);
+}
