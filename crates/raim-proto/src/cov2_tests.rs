@@ -482,3 +482,52 @@ fn a_joined_chunk_longer_than_an_rtcm_frame_is_not_tried() {
         [Err(()), Err(()), Err(()), Ok(payload)]
     );
 }
+
+/// Pseudorange lines of sight are seen from the result's position: six
+/// GPS satellites 2e7 m above a receiver on the equator, pushed sideways,
+/// have DOPs from there; a position that is not a number gives no frame
+/// to see them from, so no DOPs (the sentences leave them empty).
+#[test]
+fn dops_need_a_finite_position() {
+    use crate::nmea::{dops, Sky};
+    use raim_core::{Epoch, RangeObservation};
+    let rx = [6_378_137.0, 0.0, 0.0];
+    let sats: Vec<RangeObservation> = [
+        (0.0, 0.0),
+        (1.2e7, 0.3e7),
+        (-1.0e7, 0.8e7),
+        (0.2e7, -1.1e7),
+        (0.9e7, 0.9e7),
+        (-0.7e7, -0.6e7),
+    ]
+    .iter()
+    .enumerate()
+    .map(|(k, &(e, n))| RangeObservation {
+        id: SatId::new(System::Gps, k as u8 + 1),
+        pseudorange_m: 2.2e7,
+        position_m: [rx[0] + 2.0e7, e, n],
+        sigma_m: None,
+    })
+    .collect();
+    let epoch = Epoch::ranges(1e9, &sats, None);
+    let sky = Sky::new(&epoch);
+    let result = |position_ecef_m| {
+        let araim = WireAraimResult {
+            time_s: 1e9,
+            decision: Decision::Ok,
+            all_in_view: AraimSummary::default(),
+            fde: WireFde::NoFault,
+            excluded: heapless::Vec::new(),
+            after_exclusion: None,
+            n_star_vertical: None,
+            position_ecef_m,
+        };
+        let mut w = WireResult::empty();
+        w.set_from_araim(&araim, sats.iter().map(|s| s.id));
+        w
+    };
+    let d = dops(&result(Some(rx)), &sky).unwrap();
+    assert!(d.pdop.is_finite() && d.pdop >= d.hdop && d.pdop >= d.vdop && d.hdop > 0.0);
+    assert_eq!(dops(&result(Some([f64::NAN, 0.0, 0.0])), &sky), None);
+    assert_eq!(dops(&result(None), &sky), None);
+}

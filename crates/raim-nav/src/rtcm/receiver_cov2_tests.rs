@@ -312,3 +312,32 @@ fn waiting_glonass_ephemerides_wait_for_the_leap_seconds() {
     assert!(table.ephemerides().1 > 0);
     assert_eq!(late.ephemerides().1, table.ephemerides().1);
 }
+
+/// A frame that closes two epochs: epoch 10 left open (its last MSM,
+/// the 1127, removed) and followed directly by epoch 11's last MSM (its
+/// 1127, DF393 = 0, at a new time). The new time closes epoch 10, and the
+/// message's own DF393 closes epoch 11 in the same frame: epoch 10 is
+/// handed over, epoch 11 (one BeiDou MSM) is counted closed and dropped.
+#[test]
+fn a_frame_that_closes_two_epochs_hands_over_the_first() {
+    let epochs: Vec<Vec<Vec<u8>>> = {
+        let mut out: Vec<Vec<Vec<u8>>> = Vec::new();
+        for f in first_epochs(12) {
+            if number(&f) == 1077 || out.is_empty() {
+                out.push(Vec::new());
+            }
+            out.last_mut().unwrap().push(f);
+        }
+        out
+    };
+    let mut frames: Vec<Vec<u8>> = epochs[..10].concat();
+    frames.extend(epochs[10].iter().filter(|f| number(f) != 1127).cloned());
+    let last_of_11 = epochs[11].iter().find(|f| number(f) == 1127).unwrap();
+    let mut rx = receiver();
+    let before = feed(&mut rx, &frames).len();
+    let closed = rx.counts().epochs;
+    let got = feed(&mut rx, std::slice::from_ref(last_of_11));
+    assert_eq!(rx.counts().epochs, closed + 2);
+    assert_eq!(got.len(), 1);
+    assert!(before >= 9, "{before}");
+}
