@@ -39,12 +39,15 @@ fn code(sig: Option<(u8, u8)>) -> String {
         .unwrap_or_default()
 }
 
+/// A system's signal-ID decoder.
+type SignalOf = fn(u8) -> Option<(u8, u8)>;
+
 /// Every signal ID 1..=32 of each system decodes to the table's band and
 /// attribute, a reserved one to none; 0 and 33 are outside the 32-bit
 /// signal mask.
 #[test]
 fn msm_signal_ids_match_the_rtcm_tables() {
-    let systems: [(&str, fn(u8) -> Option<(u8, u8)>, &[&str; 32]); 5] = [
+    let systems: [(&str, SignalOf, &[&str; 32]); 5] = [
         ("GPS", gps_signal, &GPS),
         ("GLONASS", glonass_signal, &GLONASS),
         ("Galileo", galileo_signal, &GALILEO),

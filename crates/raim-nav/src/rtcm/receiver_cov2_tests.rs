@@ -151,7 +151,7 @@ fn a_glonass_ephemeris_out_of_range_is_counted_bad() {
     let before = rx.counts().glonass_bad;
     feed(&mut rx, &[frame(&p)]);
     assert_eq!(rx.counts().glonass_bad, before + 1);
-    feed(&mut rx, &[g.clone()]);
+    feed(&mut rx, std::slice::from_ref(g));
     assert_eq!(rx.counts().glonass_bad, before + 1);
 }
 
