@@ -28,6 +28,8 @@ use crate::CAPACITY;
 /// of freedom (0, or above `MAX_DOF` = 200), a time that does not
 /// increase, and a fit without redundancy (n satellites for m unknowns
 /// need m + 1).
+///
+/// Verifies: WIRE-InvalidDof, WIRE-TimeNotIncreasing
 #[test]
 fn model_check_refusals_keep_their_values_on_the_wire() {
     let cfg = ModelCheckConfig::DEFAULT;
@@ -345,6 +347,8 @@ impl CounterFlash for Flash {
 /// wrong when the region is scanned again is a failed boot: after
 /// `ATTEMPTS` (3) writes the boot has no value, `Verify` with the value
 /// written (1, the region was empty) and the one read (0: no whole entry).
+///
+/// Verifies: SAFE-BOOT-COUNTER
 #[test]
 fn an_entry_lost_after_its_read_back_fails_the_boot() {
     let mut f = Flash::new(8, Some(boot_counter::READS));

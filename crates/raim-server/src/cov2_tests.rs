@@ -90,6 +90,8 @@ fn sky() -> (Vec<IsmSat>, Vec<LinearObservation>) {
 /// outside `config_bounds::SIGMA_M`): the ARAIM monitor refuses it
 /// `NonPositiveSigma` with the satellite's index and the value received
 /// (raim-core araim/monitor.rs), and a unit sigma is answered.
+///
+/// Verifies: WIRE-NonPositiveSigma
 #[test]
 fn an_araim_sigma_that_is_no_positive_number_is_the_engines_refusal() {
     let mut s = Box::new(Server::new());
@@ -186,6 +188,8 @@ fn rtcm_frame(payload: &[u8]) -> Vec<u8> {
 /// count, 18 s (every date since 2017-01-01, IERS Bulletin C 52), while
 /// the table is in force at that date (it expires 2027-06-28), and
 /// `TableExpired` past it.
+///
+/// Verifies: RX-LEAP
 #[test]
 fn a_stream_dated_within_the_table_reports_its_count() {
     use raim_proto::message::StreamLeapSeconds;

@@ -45,6 +45,8 @@ type SignalOf = fn(u8) -> Option<(u8, u8)>;
 /// Every signal ID 1..=32 of each system decodes to the table's band and
 /// attribute, a reserved one to none; 0 and 33 are outside the 32-bit
 /// signal mask.
+///
+/// Verifies: RX-DECODE
 #[test]
 fn msm_signal_ids_match_the_rtcm_tables() {
     let systems: [(&str, SignalOf, &[&str; 32]); 5] = [
@@ -121,6 +123,8 @@ fn with_bit(p: &[u8], bit: usize) -> Vec<u8> {
 /// DF038 6, DF040 5, DF104 1, DF105 1, DF106 2, DF107 12), DF123 bit 230
 /// (then DF109 1, DF110 7, three times velocity 24, position 27 and
 /// acceleration 5, DF120 1, DF121 11, DF122 2).
+///
+/// Verifies: RX-DECODE
 #[test]
 fn either_glonass_health_bit_marks_a_1020_unhealthy() {
     let all = gmsd7_1020s();

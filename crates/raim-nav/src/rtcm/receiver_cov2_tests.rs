@@ -291,6 +291,8 @@ fn msg1013(leap_s: u64) -> Vec<u8> {
 /// receiver holds no GLONASS set until an RTCM 1013 gives GPS - UTC, and
 /// then as many as a stream dated in 2012 by the table (16 s, the same
 /// count) holds.
+///
+/// Verifies: RX-LEAP
 #[test]
 fn waiting_glonass_ephemerides_wait_for_the_leap_seconds() {
     let once: Vec<Vec<u8>> = gmsd7_frames()
