@@ -348,3 +348,39 @@ fn a_kepler_broadcast_clock_is_its_states() {
         assert_eq!(b.clock_s(t).to_bits(), b.state(t).clock_s.to_bits());
     }
 }
+
+/// The state at the transmit time (IS-GPS-200 20.3.3.3.3.1: t = t_sv -
+/// dt_sv(t_sv)): with a clock offset of 0.5 s, beyond the one Newton
+/// step's reach (the orbit moves 7e-5 rad in it, the step is taken up to
+/// 2e-5 rad), the state is solved at t again; with GMSD7's own offset it
+/// is the step. Either way it is the state at t (to 1 um).
+#[test]
+fn the_transmit_state_is_the_state_at_the_transmit_time() {
+    let k0 = set_of(&gmsd7_1019());
+    for af0_s in [k0.af0_s, 0.5] {
+        let k = Kepler { af0_s, ..k0 };
+        let t_sv = k.toc_gps_s + 1_000.0;
+        let (t, s) = k.transmit_state(t_sv);
+        assert_eq!(t, t_sv - k.clock_s(t_sv));
+        let want = k.state(t);
+        let d = distance_m(s.position_m, want.position_m);
+        assert!(d < 1e-6, "af0 {af0_s}: {d} m");
+        assert_eq!(s.clock_s, want.clock_s);
+    }
+}
+
+/// A set whose eccentricity is not a number gives a state and clock that
+/// are not numbers (the checks downstream refuse them) rather than loop or
+/// panic: the Kepler solution stops at its first step.
+#[test]
+fn an_eccentricity_that_is_not_a_number_gives_no_number() {
+    let k = Kepler {
+        e: f64::NAN,
+        ..set_of(&gmsd7_1019())
+    };
+    let t = k.toc_gps_s + 100.0;
+    assert!(k.state(t).position_m.iter().all(|v| v.is_nan()));
+    assert!(k.clock_s(t).is_nan());
+    let (tt, s) = k.transmit_state(t);
+    assert!(tt.is_nan() && s.position_m.iter().all(|v| v.is_nan()));
+}
