@@ -343,3 +343,63 @@ fn a_frame_that_closes_two_epochs_hands_over_the_first() {
     assert_eq!(got.len(), 1);
     assert!(before >= 9, "{before}");
 }
+
+/// The closed epochs' outcomes, times, satellites and satellites
+/// rejected.
+type Outcome = (Result<(), FormError>, f64, usize, u32);
+
+fn outcomes(rx: &mut StreamReceiver<64, 256>, frames: &[Vec<u8>]) -> Vec<Outcome> {
+    let sigmas = StreamSigmas::Snapshot(Config::default().sigma_model);
+    let mut out = Box::new(FormedEpoch::<64> {
+        time_gps_s: 0.0,
+        reference_m: None,
+        sats: heapless::Vec::new(),
+        cn0_dbhz: heapless::Vec::new(),
+        rejected: 0,
+    });
+    frames
+        .iter()
+        .filter_map(|f| {
+            rx.on_frame(f, &sigmas, MASK_RAD, &mut out)
+                .map(|r| (r, out.time_gps_s, out.sats.len(), out.rejected))
+        })
+        .collect()
+}
+
+/// GMSD7's BeiDou MSMs (1127) carry the epoch's GPS time of week in
+/// DF427; a receiver that sends BDT there (GPS - 14 s, RTCM 10403.3
+/// DF427) gives the same epochs: each BeiDou MSM joins its epoch either
+/// way (DF427 + 14 s is the epoch's time): the 25 epochs close at the
+/// same times with the same satellites.
+#[test]
+fn beidou_msms_in_bdt_join_their_epoch() {
+    let frames = first_epochs(25);
+    let bdt: Vec<Vec<u8>> = frames
+        .iter()
+        .map(|f| {
+            if number(f) != 1127 {
+                return f.clone();
+            }
+            let p = payload(f);
+            let mut tow = 0u64;
+            for k in 24..54 {
+                tow = (tow << 1) | u64::from((p[k / 8] >> (7 - k % 8)) & 1);
+            }
+            let bdt_ms = (tow + 604_800_000 - 14_000) % 604_800_000;
+            frame(&with_field(p, 24, 30, bdt_ms))
+        })
+        .collect();
+    assert_ne!(bdt, frames);
+    let want = outcomes(&mut receiver(), &frames);
+    let got = outcomes(&mut receiver(), &bdt);
+    // A BeiDou MSM placed at another time would close its epoch early and
+    // open one of its own: more epochs, each with fewer signals.
+    assert_eq!(got, want);
+    assert_eq!(want.len(), 25, "{want:?}");
+    // Every dated epoch (all but the first, before the first ephemeris)
+    // holds its satellites, taken or rejected.
+    assert!(
+        want.iter().skip(1).all(|o| o.2 + o.3 as usize > 0),
+        "{want:?}"
+    );
+}
