@@ -53,3 +53,6 @@ pub mod velocity;
 mod m;
 
 pub use error::NavError;
+
+#[cfg(all(test, feature = "rtcm"))]
+mod cov2_tests;

@@ -135,3 +135,6 @@ pub const MAX_RESPONSE_FRAME: usize = MAX_RESPONSE_PAYLOAD + 8 + MAX_RESPONSE_PA
 
 #[cfg(test)]
 mod cov_tests;
+
+#[cfg(test)]
+mod cov2_tests;

@@ -1175,3 +1175,6 @@ fn run_epoch<P: Platform>(
 mod cov_tests;
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod cov2_tests;

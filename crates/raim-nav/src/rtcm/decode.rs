@@ -1449,3 +1449,7 @@ mod tests {
 #[cfg(test)]
 #[path = "decode_cov_tests.rs"]
 mod decode_cov_tests;
+
+#[cfg(test)]
+#[path = "decode_cov2_tests.rs"]
+mod decode_cov2_tests;

@@ -27,6 +27,8 @@ pub use fields::{
 pub use receiver::{FormError, FormScratch, FormedEpoch, LeapSeconds, RtcmCounts, StreamReceiver};
 
 #[cfg(test)]
+mod receiver_cov2_tests;
+#[cfg(test)]
 mod receiver_cov_tests;
 #[cfg(test)]
 mod stream_tests;

@@ -1271,3 +1271,7 @@ mod tests {
         assert_eq!(v.as_slice(), &[2, 4]);
     }
 }
+
+#[cfg(test)]
+#[path = "receiver_arcs_tests.rs"]
+mod receiver_arcs_tests;
