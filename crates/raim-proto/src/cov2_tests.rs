@@ -157,7 +157,7 @@ fn a_failed_test_above_the_mode_limit_is_an_alarm_without_exclusion() {
             assert!(!m.all_in_view().detection_passed);
             (
                 v.exclusion,
-                WireAraimResult::from_verdict(m, &v, &cfg, 7.0).unwrap(),
+                WireAraimResult::from_verdict(m.runs(), &v, &cfg, 7.0).unwrap(),
             )
         };
         (run(21), run(22))
@@ -196,7 +196,7 @@ fn the_summary_reports_the_configured_pl_output() {
                 .linear(&cfg, &p_const(), &Models, &sky20(usize::MAX, 0.0), limits)
                 .unwrap();
             assert!(m.all_in_view().detection_passed);
-            WireAraimResult::from_verdict(m, &v, &cfg, 0.0)
+            WireAraimResult::from_verdict(m.runs(), &v, &cfg, 0.0)
                 .unwrap()
                 .all_in_view
         };

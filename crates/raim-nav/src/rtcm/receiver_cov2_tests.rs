@@ -93,13 +93,7 @@ fn payload(f: &[u8]) -> &[u8] {
 /// Each closed epoch's outcome after `frames`.
 fn feed(rx: &mut StreamReceiver<64, 256>, frames: &[Vec<u8>]) -> Vec<Result<(), FormError>> {
     let sigmas = StreamSigmas::Snapshot(Config::default().sigma_model);
-    let mut out = Box::new(FormedEpoch::<64> {
-        time_gps_s: 0.0,
-        reference_m: None,
-        sats: heapless::Vec::new(),
-        cn0_dbhz: heapless::Vec::new(),
-        rejected: 0,
-    });
+    let mut out = Box::new(FormedEpoch::<64>::new());
     frames
         .iter()
         .filter_map(|f| rx.on_frame(f, &sigmas, MASK_RAD, &mut out))
@@ -203,13 +197,7 @@ fn waiting_glonass_ephemerides_keep_the_latest() {
 /// The times of the epochs `frames` close, formed or not.
 fn epoch_times(rx: &mut StreamReceiver<64, 256>, frames: &[Vec<u8>]) -> Vec<f64> {
     let sigmas = StreamSigmas::Snapshot(Config::default().sigma_model);
-    let mut out = Box::new(FormedEpoch::<64> {
-        time_gps_s: 0.0,
-        reference_m: None,
-        sats: heapless::Vec::new(),
-        cn0_dbhz: heapless::Vec::new(),
-        rejected: 0,
-    });
+    let mut out = Box::new(FormedEpoch::<64>::new());
     frames
         .iter()
         .filter_map(|f| {
@@ -350,13 +338,7 @@ type Outcome = (Result<(), FormError>, f64, usize, u32);
 
 fn outcomes(rx: &mut StreamReceiver<64, 256>, frames: &[Vec<u8>]) -> Vec<Outcome> {
     let sigmas = StreamSigmas::Snapshot(Config::default().sigma_model);
-    let mut out = Box::new(FormedEpoch::<64> {
-        time_gps_s: 0.0,
-        reference_m: None,
-        sats: heapless::Vec::new(),
-        cn0_dbhz: heapless::Vec::new(),
-        rejected: 0,
-    });
+    let mut out = Box::new(FormedEpoch::<64>::new());
     frames
         .iter()
         .filter_map(|f| {
