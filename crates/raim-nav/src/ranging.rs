@@ -17,7 +17,7 @@ use raim_core::frames::{bowring_latitude_rad, ecef_to_geodetic_from, enu_rotatio
 use raim_core::sigma::SigmaModel;
 use raim_core::{RangeObservation, SatId, System};
 
-use crate::ephemeris::{Kepler, SatState, C_M_S, WEEK_S};
+use crate::ephemeris::{Kepler, Orbit, SatState, C_M_S, WEEK_S};
 use crate::geometry::{az_el_rotated, distance_m, rotate_earth};
 use crate::glonass::{l1_hz, l2_hz, GlonassEphemeris, F_L1_BASE_HZ, F_L2_BASE_HZ};
 use crate::iono::{scale_to_frequency, Klobuchar, F_B1I_HZ, F_L1_HZ};
@@ -27,10 +27,13 @@ use crate::tropo::SaastamoinenSite;
 pub use crate::bootstrap::{bootstrap_position, SURFACE_BAND_M};
 
 /// The broadcast ephemeris selected for one satellite: Keplerian elements
-/// (GPS, Galileo, BeiDou, QZSS) or a GLONASS state vector.
+/// (GPS, Galileo, BeiDou, QZSS), alone or with their orbit's constants
+/// ([`Orbit`], kept by the device's receiver across epochs: the same
+/// bits, computed once), or a GLONASS state vector.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Broadcast<'a> {
     Kepler(&'a Kepler),
+    Orbit(&'a Orbit),
     Glonass(&'a GlonassEphemeris),
 }
 
@@ -40,6 +43,7 @@ impl Broadcast<'_> {
     pub fn state(&self, t_gps_s: f64) -> SatState {
         match self {
             Broadcast::Kepler(k) => k.state(t_gps_s),
+            Broadcast::Orbit(o) => o.state(t_gps_s),
             Broadcast::Glonass(g) => g.state(t_gps_s),
         }
     }
@@ -50,6 +54,7 @@ impl Broadcast<'_> {
     pub fn clock_s(&self, t_gps_s: f64) -> f64 {
         match self {
             Broadcast::Kepler(k) => k.clock_s(t_gps_s),
+            Broadcast::Orbit(o) => o.set.clock_s(t_gps_s),
             Broadcast::Glonass(g) => g.clock_s(t_gps_s),
         }
     }
@@ -58,6 +63,7 @@ impl Broadcast<'_> {
     pub fn kepler(&self) -> Option<&Kepler> {
         match self {
             Broadcast::Kepler(k) => Some(k),
+            Broadcast::Orbit(o) => Some(&o.set),
             Broadcast::Glonass(_) => None,
         }
     }
@@ -65,7 +71,7 @@ impl Broadcast<'_> {
     /// The GLONASS frequency channel, if this is a GLONASS ephemeris.
     pub fn frequency_channel(&self) -> Option<i8> {
         match self {
-            Broadcast::Kepler(_) => None,
+            Broadcast::Kepler(_) | Broadcast::Orbit(_) => None,
             Broadcast::Glonass(g) => Some(g.frequency_channel),
         }
     }
@@ -291,6 +297,10 @@ pub fn transmit_state(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<SatState, Rej
         Broadcast::Kepler(k) => {
             let (p, _) = ranging_pseudorange(s)?;
             Ok(k.transmit_state(t_rx_gps_s - p / C_M_S).1)
+        }
+        Broadcast::Orbit(o) => {
+            let (p, _) = ranging_pseudorange(s)?;
+            Ok(o.transmit_state(t_rx_gps_s - p / C_M_S).1)
         }
         Broadcast::Glonass(g) => Ok(g.state(transmit_time_s(s, t_rx_gps_s)?)),
     }

@@ -13,6 +13,8 @@ use raim_core::System;
 
 use crate::ephemeris::Kepler;
 #[cfg(feature = "rtcm")]
+use crate::ephemeris::Orbit;
+#[cfg(feature = "rtcm")]
 use crate::glonass::GlonassEphemeris;
 #[cfg(feature = "rtcm")]
 use crate::ranging::Broadcast;
@@ -103,6 +105,18 @@ impl KeplerBits {
         };
         b.payload.get_mut(..payload.len())?.copy_from_slice(payload);
         (b.decode().as_ref() == Some(k)).then_some(b)
+    }
+
+    /// Whether `other` is the same message, placed alike: the same
+    /// payload, toc and key (cheap fields first).
+    fn same(&self, other: &KeplerBits) -> bool {
+        self.prn == other.prn
+            && self.system == other.system
+            && self.len == other.len
+            && self.payload == other.payload
+            && self.toc_gps_s.to_bits() == other.toc_gps_s.to_bits()
+            && self.toe_sow_s.to_bits() == other.toe_sow_s.to_bits()
+            && self.health == other.health
     }
 
     /// Whether this may be `k` (the decoded set must then be compared).
@@ -201,6 +215,104 @@ impl<const D: usize> DecodedSets<D> {
 
 #[cfg(feature = "rtcm")]
 impl<const D: usize> Default for DecodedSets<D> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// One decoded set of an [`OrbitCache`]: the payload it was decoded
+/// from (its key, compared whole) and the set with its orbit's
+/// constants.
+#[cfg(feature = "rtcm")]
+#[derive(Debug, Clone)]
+struct CachedOrbit {
+    bits: KeplerBits,
+    orbit: Orbit,
+    /// The cache's epoch count when an epoch last used it.
+    used: u32,
+}
+
+/// Decoded Keplerian sets kept across epochs, `C` of them, so that a set
+/// is decoded and its orbit's constants computed ([`Orbit::new`]) once,
+/// not at every epoch ([`EphemerisStore::load_cached`],
+/// [`EphemerisStore::select_cached`]; BENCHMARKS.md "Forming by sum
+/// formulas"). Each is keyed by the whole payload it came from: a set
+/// the store replaced, or one another message of the satellite changed,
+/// has another payload and is never matched, so a kept set is the set
+/// its payload decodes to, to the bit, however the store has changed.
+/// Sets used by the current epoch are kept; when the cache is full, one
+/// an earlier epoch used last gives way, and with none such the set is
+/// decoded into the epoch's [`DecodedSets`] as without a cache. A cache of
+/// capacity 0 (a part without the RAM, feature `ram-192k`) keeps nothing.
+#[cfg(feature = "rtcm")]
+#[derive(Debug, Clone)]
+pub struct OrbitCache<const C: usize> {
+    sets: Vec<CachedOrbit, C>,
+    /// Epochs started ([`Self::next_epoch`]), wrapping.
+    epoch: u32,
+}
+
+#[cfg(feature = "rtcm")]
+impl<const C: usize> OrbitCache<C> {
+    /// Nothing kept.
+    pub const fn new() -> Self {
+        OrbitCache {
+            sets: Vec::new(),
+            epoch: 0,
+        }
+    }
+
+    /// A new epoch: the sets the last one used may now give way.
+    pub fn next_epoch(&mut self) {
+        self.epoch = self.epoch.wrapping_add(1);
+    }
+
+    /// Sets kept.
+    pub fn len(&self) -> usize {
+        self.sets.len()
+    }
+
+    /// True when no set is kept.
+    pub fn is_empty(&self) -> bool {
+        self.sets.is_empty()
+    }
+
+    /// The kept set decoded from `bits`, marked used by this epoch.
+    fn find_and_mark(&mut self, bits: &KeplerBits) -> bool {
+        let epoch = self.epoch;
+        match self.sets.iter_mut().find(|c| c.bits.same(bits)) {
+            Some(c) => {
+                c.used = epoch;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Keep `orbit`, decoded from `bits`, in a free place or in the place
+    /// of a set no set of this epoch is; false when there is none.
+    fn keep(&mut self, bits: &KeplerBits, orbit: Orbit) -> bool {
+        let c = CachedOrbit {
+            bits: bits.clone(),
+            orbit,
+            used: self.epoch,
+        };
+        let epoch = self.epoch;
+        match self.sets.push(c) {
+            Ok(()) => true,
+            Err(c) => match self.sets.iter_mut().find(|x| x.used != epoch) {
+                Some(slot) => {
+                    *slot = c;
+                    true
+                }
+                None => false,
+            },
+        }
+    }
+}
+
+#[cfg(feature = "rtcm")]
+impl<const C: usize> Default for OrbitCache<C> {
     fn default() -> Self {
         Self::new()
     }
@@ -309,6 +421,21 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
         t_gps_s: f64,
         decoded: &mut DecodedSets<D>,
     ) -> Result<(), DecodedFull> {
+        self.load_cached(id, t_gps_s, decoded, &mut OrbitCache::<0>::new())
+    }
+
+    /// [`Self::load`] with the sets kept across epochs in `cache`: a set
+    /// kept there is not decoded again; a set decoded is kept there when
+    /// there is room ([`OrbitCache`]), else decoded into `decoded`. The
+    /// cache's [`OrbitCache::next_epoch`] is the caller's, once an epoch
+    /// before its loads.
+    pub fn load_cached<const D: usize, const C: usize>(
+        &self,
+        id: SatId,
+        t_gps_s: f64,
+        decoded: &mut DecodedSets<D>,
+        cache: &mut OrbitCache<C>,
+    ) -> Result<(), DecodedFull> {
         if decoded.generation != self.generation {
             self.start_epoch(decoded);
         }
@@ -318,12 +445,18 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
         let Some(i) = self.choose_kepler(id, t_gps_s) else {
             return Ok(());
         };
-        if decoded.sets.iter().any(|(j, _)| *j == i) {
-            return Ok(());
-        }
-        let Some(k) = self.kepler.get(i).and_then(KeplerBits::decode) else {
+        let Some(bits) = self.kepler.get(i) else {
             return Ok(());
         };
+        if cache.find_and_mark(bits) || decoded.sets.iter().any(|(j, _)| *j == i) {
+            return Ok(());
+        }
+        let Some(k) = bits.decode() else {
+            return Ok(());
+        };
+        if C > 0 && cache.keep(bits, Orbit::new(&k)) {
+            return Ok(());
+        }
         decoded.sets.push((i, k)).map_err(|_| DecodedFull {
             capacity: u32::try_from(D).unwrap_or(u32::MAX),
         })
@@ -339,6 +472,30 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
         t_gps_s: f64,
         decoded: &'a DecodedSets<D>,
     ) -> Option<Broadcast<'a>> {
+        self.select_in(id, t_gps_s, decoded, &[])
+    }
+
+    /// [`Self::select`] with the sets kept in `cache` ([`Self::load_cached`]):
+    /// a kept set is given with its orbit's constants
+    /// ([`Broadcast::Orbit`]).
+    pub fn select_cached<'a, const D: usize, const C: usize>(
+        &'a self,
+        id: SatId,
+        t_gps_s: f64,
+        decoded: &'a DecodedSets<D>,
+        cache: &'a OrbitCache<C>,
+    ) -> Option<Broadcast<'a>> {
+        self.select_in(id, t_gps_s, decoded, &cache.sets)
+    }
+
+    /// [`Self::select_cached`] with the cache's sets `kept`.
+    fn select_in<'a, const D: usize>(
+        &'a self,
+        id: SatId,
+        t_gps_s: f64,
+        decoded: &'a DecodedSets<D>,
+        kept: &'a [CachedOrbit],
+    ) -> Option<Broadcast<'a>> {
         if id.system == System::Glonass {
             let max_age = max_ephemeris_age_s(id.system);
             let best = |a: (f64, usize), b: (f64, usize)| if b.0 < a.0 { b } else { a };
@@ -352,10 +509,17 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
                 .reduce(best)?;
             self.glonass.get(i).map(Broadcast::Glonass)
         } else {
+            let i = self.choose_kepler(id, t_gps_s)?;
+            if let Some(c) = self
+                .kepler
+                .get(i)
+                .and_then(|bits| kept.iter().find(|c| c.bits.same(bits)))
+            {
+                return Some(Broadcast::Orbit(&c.orbit));
+            }
             if decoded.generation != self.generation {
                 return None;
             }
-            let i = self.choose_kepler(id, t_gps_s)?;
             decoded
                 .sets
                 .iter()

@@ -67,7 +67,7 @@ use crate::ranging::{
     bootstrap_position, cn0_dbhz_u8, correct_at, split_pair, stream_codes, stream_sigma_for_m,
     transmit_state, transmit_time_s, Broadcast, Corrections, ReceiverFrame, SatInput, StreamSigmas,
 };
-use crate::store::{DecodedSets, EphemerisStore, Stored};
+use crate::store::{DecodedSets, EphemerisStore, OrbitCache, Stored};
 use crate::time::table_gps_minus_utc_s;
 
 use super::decode::{msm_more_bit, Frame, Message, Msm, MsmSystem};
@@ -99,6 +99,17 @@ pub const KEPLER_SETS: usize = 256;
 /// is not used (`FormedEpoch::rejected`), never given another's.
 #[cfg(feature = "ram-192k")]
 pub const KEPLER_SETS: usize = 64;
+/// Decoded Keplerian sets kept across epochs ([`OrbitCache`]): as many
+/// as the satellites of the default build's epoch (32, the wire's
+/// capacity), so that a set is decoded and its orbit's constants computed
+/// once while it is in force, not at every epoch (about 350 B each,
+/// 11.3 KB).
+#[cfg(not(feature = "ram-192k"))]
+pub const ORBIT_CACHE_SETS: usize = 32;
+/// None kept with `ram-192k` (the STM32F4's RAM is ARAIM's and the
+/// particle filter's): each epoch decodes its sets.
+#[cfg(feature = "ram-192k")]
+pub const ORBIT_CACHE_SETS: usize = 0;
 /// GLONASS sets kept: two per slot of a full constellation.
 #[cfg(not(feature = "ram-192k"))]
 const GLONASS_SETS: usize = 48;
@@ -366,6 +377,8 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     station_m: Option<[f64; 3]>,
     counts: RtcmCounts,
     glonass_arcs: GlonassArcs,
+    /// The decoded Keplerian sets kept across epochs.
+    orbits: OrbitCache<ORBIT_CACHE_SETS>,
     /// GPS - UTC of the stream's latest 1013 (DF054), s.
     stream_leap_s: Option<u8>,
     /// The GPS - UTC the GLONASS sets in the store were placed with, s.
@@ -404,6 +417,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 ephemerides_not_kept: 0,
             },
             glonass_arcs: GlonassArcs::new(),
+            orbits: OrbitCache::new(),
             stream_leap_s: None,
             glonass_placed_leap_s: None,
             latest_gps_s: None,
@@ -803,6 +817,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             store,
             station_m,
             glonass_arcs,
+            orbits,
             ..
         } = self;
         let FormScratch {
@@ -842,10 +857,13 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // from the store's payloads once for the epoch; more than N is the
         // capacity refusal the inputs below would give.
         store.start_epoch(decoded);
+        orbits.next_epoch();
         let mut from = 0;
         while let Some((id, have)) = next_satellite(&o.sigs, &mut from) {
             if pick_code(stream_codes(id.system), have).is_some()
-                && store.load(id, time_gps_s, decoded).is_err()
+                && store
+                    .load_cached(id, time_gps_s, decoded, orbits)
+                    .is_err()
             {
                 return Some(Err(FormError::TooManySignals {
                     capacity: u32::try_from(N).unwrap_or(u32::MAX),
@@ -875,7 +893,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 out.rejected += 1;
                 continue;
             };
-            let Some(eph) = store.select(s.id, time_gps_s, decoded) else {
+            let Some(eph) = store.select_cached(s.id, time_gps_s, decoded, orbits) else {
                 out.rejected += 1;
                 continue;
             };
@@ -911,7 +929,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 Broadcast::Glonass(g) => transmit_time_s(s, time_gps_s)
                     .ok()
                     .map(|t| glonass_arcs.state(g, t)),
-                Broadcast::Kepler(_) => transmit_state(s, time_gps_s).ok(),
+                Broadcast::Kepler(_) | Broadcast::Orbit(_) => transmit_state(s, time_gps_s).ok(),
             };
             // `inputs` and `transmit` have the same capacity N.
             let _ = transmit.push(tx);
