@@ -830,4 +830,87 @@ mod tests {
         assert_eq!(s.load(g07, t, &mut d), Ok(()));
         assert_eq!(s.load(SatId::new(System::Gps, 9), t, &mut d), Ok(()));
     }
+
+    /// The decoded sets kept across epochs ([`OrbitCache`]): a kept set is
+    /// given with its orbit's constants, the very set a fresh decode gives
+    /// and the same states to the bit, epoch after epoch without a decode;
+    /// a set replaced in the store (a new toe, or another set of the same
+    /// satellite in the same place) is never given from the cache, the new
+    /// one is; a full cache whose sets this epoch uses leaves a further
+    /// set to the epoch's decoded sets, and gives way to it at the next
+    /// epoch; a cache of capacity 0 is the store without one.
+    ///
+    /// Verifies: RX-FORM-ORBIT
+    #[test]
+    fn orbit_cache_gives_the_decoded_set_and_never_a_stale_one() {
+        let t = 1000.0 * WEEK_S + 3_600.0;
+        let g = |prn| SatId::new(System::Gps, prn);
+        let mut s = EphemerisStore::<3, 1>::new();
+        let p5 = msg1019(5, 3_600.0, 0, 0x5555);
+        let p6 = msg1019(6, 3_600.0, 0, 0x6666);
+        insert(&mut s, &p5);
+        insert(&mut s, &p6);
+        let mut cache = OrbitCache::<1>::new();
+        let mut d = DecodedSets::<4>::new();
+        let epoch = |s: &EphemerisStore<3, 1>,
+                     d: &mut DecodedSets<4>,
+                     cache: &mut OrbitCache<1>,
+                     ids: &[SatId]| {
+            s.start_epoch(d);
+            cache.next_epoch();
+            for id in ids {
+                s.load_cached(*id, t, d, cache).unwrap();
+            }
+        };
+        // G05 alone: kept, given as an orbit equal to the fresh decode.
+        epoch(&s, &mut d, &mut cache, &[g(5)]);
+        assert_eq!(cache.len(), 1);
+        let want5 = set_of(&p5);
+        match s.select_cached(g(5), t, &d, &cache) {
+            Some(Broadcast::Orbit(o)) => {
+                assert_eq!(o.set, want5);
+                assert_eq!(o.transmit_state(t), want5.transmit_state(t));
+            }
+            other => panic!("{other:?}"),
+        }
+        // G05 and G06: the cache's one place is G05's (this epoch's), so
+        // G06 is decoded for the epoch alone.
+        epoch(&s, &mut d, &mut cache, &[g(5), g(6)]);
+        assert!(matches!(s.select_cached(g(5), t, &d, &cache), Some(Broadcast::Orbit(_))));
+        match s.select_cached(g(6), t, &d, &cache) {
+            Some(Broadcast::Kepler(k)) => assert_eq!(*k, set_of(&p6)),
+            other => panic!("{other:?}"),
+        }
+        // G06 alone at the next epoch: G05's place, last used before, gives way.
+        epoch(&s, &mut d, &mut cache, &[g(6)]);
+        match s.select_cached(g(6), t, &d, &cache) {
+            Some(Broadcast::Orbit(o)) => assert_eq!(o.set, set_of(&p6)),
+            other => panic!("{other:?}"),
+        }
+        // Another set of G06 with the same toe and other elements takes
+        // the place of the oldest set in the full store (G05's, before
+        // G06's), so it is the first of the tie and the one chosen: the
+        // kept G06 set, of the same satellite and toe, is not given; the
+        // new one is.
+        let p5b = msg1019(5, 7_200.0, 0, 0x7777);
+        insert(&mut s, &p5b);
+        let p6b = msg1019(6, 3_600.0, 0, 0x8888);
+        assert_eq!(insert(&mut s, &p6b), Stored::Replaced);
+        epoch(&s, &mut d, &mut cache, &[g(6)]);
+        match s.select_cached(g(6), t, &d, &cache) {
+            Some(Broadcast::Orbit(o)) => assert_eq!(o.set, set_of(&p6b)),
+            other => panic!("{other:?}"),
+        }
+        // Capacity 0: the store's own load and select.
+        let mut none = OrbitCache::<0>::new();
+        s.start_epoch(&mut d);
+        none.next_epoch();
+        s.load_cached(g(6), t, &mut d, &mut none).unwrap();
+        assert!(none.is_empty());
+        assert_eq!(
+            s.select_cached(g(6), t, &d, &none),
+            s.select(g(6), t, &d)
+        );
+        assert!(matches!(s.select(g(6), t, &d), Some(Broadcast::Kepler(k)) if *k == set_of(&p6b)));
+    }
 }
