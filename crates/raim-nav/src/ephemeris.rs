@@ -104,22 +104,12 @@ impl Kepler {
 
     /// Seconds of the satellite system's week at GPS time `t_gps_s`.
     fn system_sow(&self, t_gps_s: f64) -> f64 {
-        let t = match self.system {
-            System::Beidou => t_gps_s + BDT_MINUS_GPST_S,
-            _ => t_gps_s,
-        };
-        m::rem_euclid(t, WEEK_S)
+        system_sow_s(self.system, t_gps_s)
     }
 
     /// t - toe in seconds, with the week crossover of IS-GPS-200 20.3.3.3.3.1.
     pub fn tk_s(&self, t_gps_s: f64) -> f64 {
-        let mut tk = self.system_sow(t_gps_s) - self.toe_sow_s;
-        if tk > WEEK_S / 2.0 {
-            tk -= WEEK_S;
-        } else if tk < -WEEK_S / 2.0 {
-            tk += WEEK_S;
-        }
-        tk
+        tk_from_sow_s(self.system_sow(t_gps_s), self.toe_sow_s)
     }
 
     /// Satellite clock polynomial a0 + a1 dt + a2 dt^2 at GPS time `t_gps_s`
@@ -221,6 +211,30 @@ impl Kepler {
     pub fn state(&self, t_gps_s: f64) -> SatState {
         Orbit::new(self).state(t_gps_s)
     }
+}
+
+/// Seconds of `system`'s week at GPS time `t_gps_s` (BeiDou's BDT week
+/// runs 14 s behind GPS time).
+pub(crate) fn system_sow_s(system: System, t_gps_s: f64) -> f64 {
+    let t = match system {
+        System::Beidou => t_gps_s + BDT_MINUS_GPST_S,
+        _ => t_gps_s,
+    };
+    m::rem_euclid(t, WEEK_S)
+}
+
+/// t - toe from t's seconds of the system's week `sow_s`
+/// ([`system_sow_s`]), with the week crossover of IS-GPS-200
+/// 20.3.3.3.3.1 ([`Kepler::tk_s`]; a caller with many sets of one system
+/// reduces t to the week once).
+pub(crate) fn tk_from_sow_s(sow_s: f64, toe_sow_s: f64) -> f64 {
+    let mut tk = sow_s - toe_sow_s;
+    if tk > WEEK_S / 2.0 {
+        tk -= WEEK_S;
+    } else if tk < -WEEK_S / 2.0 {
+        tk += WEEK_S;
+    }
+    tk
 }
 
 /// A Keplerian set with the constants of its orbit that do not depend on

@@ -137,46 +137,16 @@ impl KeplerBits {
         Some(k)
     }
 
-    /// [`kepler_age_s`] of the set.
-    fn age_s(&self, t_gps_s: f64) -> Option<f64> {
-        let key = Kepler {
-            toc_gps_s: self.toc_gps_s,
-            toe_sow_s: self.toe_sow_s,
-            ..crate::rtcm::fields::kepler(self.system, self.prn, &NO_FIELDS)
-        };
-        kepler_age_s(&key, t_gps_s)
+    /// [`kepler_age_s`] of the set at GPS time `t_gps_s`, whose seconds of
+    /// the set's system's week are `sow_s` (`ephemeris::system_sow_s`,
+    /// computed once for every set of the system): the same operations
+    /// on the set's toe and toc, without decoding the set.
+    fn age_s(&self, t_gps_s: f64, sow_s: f64) -> Option<f64> {
+        let max_age = max_ephemeris_age_s(self.system);
+        let age = crate::ephemeris::tk_from_sow_s(sow_s, self.toe_sow_s).abs();
+        ((t_gps_s - self.toc_gps_s).abs() <= 2.0 * max_age).then_some(age)
     }
 }
-
-/// Every field zero: the elements of the key set [`KeplerBits::age_s`]
-/// times with (only the system, toe and toc enter [`kepler_age_s`]).
-#[cfg(feature = "rtcm")]
-const NO_FIELDS: crate::rtcm::fields::KeplerFields = crate::rtcm::fields::KeplerFields {
-    toc_s: 0.0,
-    toe_s: 0.0,
-    af0: 0.0,
-    af1: 0.0,
-    af2: 0.0,
-    sqrt_a: 0.0,
-    e: 0.0,
-    i0_sc: 0.0,
-    omega0_sc: 0.0,
-    omega_sc: 0.0,
-    m0_sc: 0.0,
-    delta_n_sc: 0.0,
-    omega_dot_sc: 0.0,
-    idot_sc: 0.0,
-    cuc: 0.0,
-    cus: 0.0,
-    crc: 0.0,
-    crs: 0.0,
-    cic: 0.0,
-    cis: 0.0,
-    tgd: 0.0,
-    tgd2: 0.0,
-    health: 0,
-    iod: 0,
-};
 
 /// No decoded set left for the satellite: the epoch's satellites outnumber
 /// the decoded sets ([`EphemerisStore::load`]).
@@ -531,13 +501,14 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
     /// The index of the Keplerian set [`Self::select`] chooses.
     fn choose_kepler(&self, id: SatId, t_gps_s: f64) -> Option<usize> {
         let max_age = max_ephemeris_age_s(id.system);
+        let sow_s = crate::ephemeris::system_sow_s(id.system, t_gps_s);
         let best = |a: (f64, usize), b: (f64, usize)| if b.0 < a.0 { b } else { a };
         let (_, i) = self
             .kepler
             .iter()
             .enumerate()
             .filter(|(_, k)| k.system == id.system && k.prn == id.prn && k.health == 0)
-            .filter_map(|(i, k)| Some((k.age_s(t_gps_s)?, i)))
+            .filter_map(|(i, k)| Some((k.age_s(t_gps_s, sow_s)?, i)))
             .filter(|(age, _)| *age <= max_age)
             .reduce(best)?;
         Some(i)
@@ -912,5 +883,45 @@ mod tests {
             s.select(g(6), t, &d)
         );
         assert!(matches!(s.select(g(6), t, &d), Some(Broadcast::Kepler(k)) if *k == set_of(&p6b)));
+    }
+
+    /// The age of a set kept as its payload, from its toe and toc with t
+    /// reduced to the week once (`KeplerBits::age_s`), is the decoded
+    /// set's `kepler_age_s` to the bit, for GPS, Galileo and BeiDou sets
+    /// at times across three weeks (the week crossover, a week off, BDT).
+    ///
+    /// Verifies: RX-FORM-COST
+    #[test]
+    fn the_payloads_age_is_the_decoded_sets() {
+        let mut n = 0;
+        for (prn, toe) in [(3u8, 0.0), (9, 302_400.0), (12, 597_600.0)] {
+            for payload in [msg1019(prn, toe, 0, 0x1234), msg1046(prn, toe, 0x4321)] {
+                let k = set_of(&payload);
+                let bits = KeplerBits::new(&k, &payload).unwrap();
+                for beidou in [false, true] {
+                    let (k, bits) = if beidou {
+                        let k = Kepler {
+                            system: System::Beidou,
+                            ..k
+                        };
+                        let b = KeplerBits {
+                            system: System::Beidou,
+                            ..bits.clone()
+                        };
+                        (k, b)
+                    } else {
+                        (k, bits.clone())
+                    };
+                    for j in -300..300 {
+                        let t = 1000.0 * WEEK_S + toe + f64::from(j) * 3_607.0;
+                        let sow = crate::ephemeris::system_sow_s(k.system, t);
+                        let got = bits.age_s(t, sow).map(f64::to_bits);
+                        assert_eq!(got, kepler_age_s(&k, t).map(f64::to_bits), "{t}");
+                        n += usize::from(got.is_some());
+                    }
+                }
+            }
+        }
+        assert!(n > 100, "{n}");
     }
 }
