@@ -18,7 +18,7 @@ use raim_core::sigma::SigmaModel;
 use raim_core::{RangeObservation, Real, SatId, System};
 
 use crate::ephemeris::{Kepler, Orbit, SatState, C_M_S, WEEK_S};
-use crate::geometry::{az_el_rotated, distance_m, rotate_earth};
+use crate::geometry::{az_el_rotated, distance_m, elevation_rotated, rotate_earth};
 use crate::glonass::{l1_hz, l2_hz, GlonassEphemeris, F_L1_BASE_HZ, F_L2_BASE_HZ};
 use crate::iono::{scale_to_frequency, Klobuchar, F_B1I_HZ, F_L1_HZ};
 use crate::m;
@@ -341,6 +341,40 @@ pub fn correct_at(
     c: &Corrections,
     klobuchar: Option<&Klobuchar>,
 ) -> Result<Corrected, Rejection> {
+    correct_at_with(s, t_rx_gps_s, tx, rx_m, rx_frame, full, c, klobuchar, true)
+}
+
+/// [`correct_at`] without the azimuth, for corrections without Klobuchar
+/// (`c.iono` false: a receiver stream's): the same bits in every field
+/// but `azimuth_rad`, which is NaN (not computed). The device's stream
+/// receiver, whose epochs use no azimuth, saves its arctangent.
+#[allow(clippy::too_many_arguments)]
+pub fn correct_at_without_azimuth(
+    s: &SatInput<'_>,
+    t_rx_gps_s: f64,
+    tx: &SatState,
+    rx_m: Option<[f64; 3]>,
+    rx_frame: Option<&ReceiverFrame>,
+    full: bool,
+    c: &Corrections,
+) -> Result<Corrected, Rejection> {
+    let c = Corrections { iono: false, ..*c };
+    correct_at_with(s, t_rx_gps_s, tx, rx_m, rx_frame, full, &c, None, false)
+}
+
+/// [`correct_at`], with the azimuth computed when `azimuth` (else NaN).
+#[allow(clippy::too_many_arguments)]
+fn correct_at_with(
+    s: &SatInput<'_>,
+    t_rx_gps_s: f64,
+    tx: &SatState,
+    rx_m: Option<[f64; 3]>,
+    rx_frame: Option<&ReceiverFrame>,
+    full: bool,
+    c: &Corrections,
+    klobuchar: Option<&Klobuchar>,
+    azimuth: bool,
+) -> Result<Corrected, Rejection> {
     let id = s.id;
     let k = s.eph;
     // An iono-free pair: the combination, its group delay, no Klobuchar
@@ -376,9 +410,12 @@ pub fn correct_at(
             }
         };
         let g = frame.geodetic;
-        let (a, e) = az_el_rotated(rx, &frame.rotation, pos);
-        az = a;
-        el = e;
+        if azimuth {
+            (az, el) = az_el_rotated(rx, &frame.rotation, pos);
+        } else {
+            az = f64::NAN;
+            el = elevation_rotated(rx, &frame.rotation, pos);
+        }
         if el < c.elevation_mask_rad {
             return Err(Rejection::BelowMask { elevation_rad: el });
         }
@@ -657,7 +694,10 @@ mod tests {
     /// satellite the bits [`correct`] gives it computing the frame itself
     /// (elevation, azimuth, troposphere, Klobuchar, corrected range,
     /// rotated position), single codes and pairs, above and below the
-    /// mask, with the transmit state given as the device computes it.
+    /// mask, with the transmit state given as the device computes it; and
+    /// without Klobuchar, the correction without the azimuth
+    /// ([`correct_at_without_azimuth`], the device's) gives the same bits
+    /// but the azimuth (NaN).
     ///
     /// Verifies: RX-FORM-COST
     #[test]
@@ -701,6 +741,26 @@ mod tests {
                 eph: Broadcast::Kepler(&k),
             };
             let tx = transmit_state(&s, t).unwrap();
+            // Without Klobuchar (a stream's corrections), the correction
+            // without the azimuth is the full one's bits but the azimuth.
+            let stream = Corrections { iono: false, ..c };
+            for full in [false, true] {
+                let with = correct_at(&s, t, &tx, Some(rx), Some(&frame), full, &stream, None);
+                let without =
+                    correct_at_without_azimuth(&s, t, &tx, Some(rx), Some(&frame), full, &stream);
+                match (with, without) {
+                    (Ok(w), Ok(g)) => {
+                        assert_eq!(g.azimuth_rad.is_nan(), full);
+                        let g = Corrected {
+                            azimuth_rad: w.azimuth_rad,
+                            ..g
+                        };
+                        assert_eq!(w, g);
+                        assert_eq!(w.elevation_rad.to_bits(), g.elevation_rad.to_bits());
+                    }
+                    (w, g) => assert_eq!(w, g),
+                }
+            }
             let want = correct(&s, t, Some(rx), true, &c, Some(&kb));
             let got = correct_at(&s, t, &tx, Some(rx), Some(&frame), true, &c, Some(&kb));
             match (want, got) {
@@ -923,7 +983,10 @@ mod tests {
                     let el = (k as f64 * 0.1).to_radians();
                     let mut check = |got: f64, want: f64| {
                         let rel = (got - want).abs() / want;
-                        assert!(rel < SIGMA_REL_TOL, "{system:?} {code} el {el}: {got} vs {want}");
+                        assert!(
+                            rel < SIGMA_REL_TOL,
+                            "{system:?} {code} el {el}: {got} vs {want}"
+                        );
                         worst = worst.max(rel);
                         n += 1;
                     };
@@ -932,7 +995,11 @@ mod tests {
                             ura_m: crate::glonass::glonass_ura_m(model.ura_m),
                             ..model
                         };
-                        let m = if system == System::Glonass { glo } else { model };
+                        let m = if system == System::Glonass {
+                            glo
+                        } else {
+                            model
+                        };
                         let want = match iono_free_noise_factor(system, code) {
                             Some(f) => {
                                 let e = el.max(m.min_elevation_rad);
@@ -949,15 +1016,24 @@ mod tests {
                             }
                             .sigma_m(el),
                         };
-                        let got =
-                            stream_sigma_for_m(&StreamSigmas::Snapshot(model), system, code, el, 2.0);
+                        let got = stream_sigma_for_m(
+                            &StreamSigmas::Snapshot(model),
+                            system,
+                            code,
+                            el,
+                            2.0,
+                        );
                         check(got, want);
                     }
                     if el < 0.0 {
                         continue;
                     }
                     for iono in [0.0, 0.4] {
-                        let iono_m = if split_pair(code).is_some() { 0.0 } else { 2.0 * iono };
+                        let iono_m = if split_pair(code).is_some() {
+                            0.0
+                        } else {
+                            2.0 * iono
+                        };
                         let want = araim_curves(system, code, iono_m).variance_m2(el).sqrt();
                         let got = stream_sigma_for_m(
                             &StreamSigmas::Araim {

@@ -847,7 +847,10 @@ mod tests {
         // G05 and G06: the cache's one place is G05's (this epoch's), so
         // G06 is decoded for the epoch alone.
         epoch(&s, &mut d, &mut cache, &[g(5), g(6)]);
-        assert!(matches!(s.select_cached(g(5), t, &d, &cache), Some(Broadcast::Orbit(_))));
+        assert!(matches!(
+            s.select_cached(g(5), t, &d, &cache),
+            Some(Broadcast::Orbit(_))
+        ));
         match s.select_cached(g(6), t, &d, &cache) {
             Some(Broadcast::Kepler(k)) => assert_eq!(*k, set_of(&p6)),
             other => panic!("{other:?}"),
@@ -878,10 +881,7 @@ mod tests {
         none.next_epoch();
         s.load_cached(g(6), t, &mut d, &mut none).unwrap();
         assert!(none.is_empty());
-        assert_eq!(
-            s.select_cached(g(6), t, &d, &none),
-            s.select(g(6), t, &d)
-        );
+        assert_eq!(s.select_cached(g(6), t, &d, &none), s.select(g(6), t, &d));
         assert!(matches!(s.select(g(6), t, &d), Some(Broadcast::Kepler(k)) if *k == set_of(&p6b)));
     }
 

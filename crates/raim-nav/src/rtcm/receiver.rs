@@ -64,8 +64,9 @@ use crate::glonass::{
 };
 use crate::m;
 use crate::ranging::{
-    bootstrap_position, cn0_dbhz_u8, correct_at, split_pair, stream_codes, stream_sigma_for_m,
-    transmit_state, transmit_time_s, Broadcast, Corrections, ReceiverFrame, SatInput, StreamSigmas,
+    bootstrap_position, cn0_dbhz_u8, correct_at, correct_at_without_azimuth, split_pair,
+    stream_codes, stream_sigma_for_m, transmit_state, transmit_time_s, Broadcast, Corrections,
+    ReceiverFrame, SatInput, StreamSigmas,
 };
 use crate::store::{DecodedSets, EphemerisStore, OrbitCache, Stored};
 use crate::time::table_gps_minus_utc_s;
@@ -861,9 +862,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         let mut from = 0;
         while let Some((id, have)) = next_satellite(&o.sigs, &mut from) {
             if pick_code(stream_codes(id.system), have).is_some()
-                && store
-                    .load_cached(id, time_gps_s, decoded, orbits)
-                    .is_err()
+                && store.load_cached(id, time_gps_s, decoded, orbits).is_err()
             {
                 return Some(Err(FormError::TooManySignals {
                     capacity: u32::try_from(N).unwrap_or(u32::MAX),
@@ -956,7 +955,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 out.rejected += 1;
                 continue;
             };
-            match correct_at(
+            match correct_at_without_azimuth(
                 s,
                 time_gps_s,
                 tx,
@@ -964,7 +963,6 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 rx_frame.as_ref(),
                 reference.is_some(),
                 &c,
-                None,
             ) {
                 Ok(mut x) => {
                     x.obs.sigma_m = Some(stream_sigma_for_m(
