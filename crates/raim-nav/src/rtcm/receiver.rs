@@ -104,13 +104,10 @@ pub const KEPLER_SETS: usize = 64;
 /// as the satellites of the default build's epoch (32, the wire's
 /// capacity), so that a set is decoded and its orbit's constants computed
 /// once while it is in force, not at every epoch (about 350 B each,
-/// 11.3 KB).
+/// 11.3 KB). None is kept with `ram-192k` (the STM32F4's RAM is ARAIM's
+/// and the particle filter's): each epoch decodes its sets.
 #[cfg(not(feature = "ram-192k"))]
 pub const ORBIT_CACHE_SETS: usize = 32;
-/// None kept with `ram-192k` (the STM32F4's RAM is ARAIM's and the
-/// particle filter's): each epoch decodes its sets.
-#[cfg(feature = "ram-192k")]
-pub const ORBIT_CACHE_SETS: usize = 0;
 /// GLONASS sets kept: two per slot of a full constellation.
 #[cfg(not(feature = "ram-192k"))]
 const GLONASS_SETS: usize = 48;
@@ -379,6 +376,7 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     counts: RtcmCounts,
     glonass_arcs: GlonassArcs,
     /// The decoded Keplerian sets kept across epochs.
+    #[cfg(not(feature = "ram-192k"))]
     orbits: OrbitCache<ORBIT_CACHE_SETS>,
     /// GPS - UTC of the stream's latest 1013 (DF054), s.
     stream_leap_s: Option<u8>,
@@ -418,6 +416,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 ephemerides_not_kept: 0,
             },
             glonass_arcs: GlonassArcs::new(),
+            #[cfg(not(feature = "ram-192k"))]
             orbits: OrbitCache::new(),
             stream_leap_s: None,
             glonass_placed_leap_s: None,
@@ -818,9 +817,14 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             store,
             station_m,
             glonass_arcs,
+            #[cfg(not(feature = "ram-192k"))]
             orbits,
             ..
         } = self;
+        // No set is kept across epochs with `ram-192k`: an empty cache of
+        // no capacity (the store's own load and select).
+        #[cfg(feature = "ram-192k")]
+        let orbits = &mut OrbitCache::<0>::new();
         let FormScratch {
             bootstrap_obs: first,
             transmit,
