@@ -5,8 +5,9 @@
 //! angle by angle with the library (atan2 for the true anomaly, a sine
 //! and cosine of 2 phi, u, i and Omega; Kepler's equation by the
 //! fixed-point iteration), over every Keplerian set of the shared
-//! navigation files: ESBC's RINEX 3 navigation file (GPS, Galileo I/NAV
-//! and F/NAV, BeiDou MEO, IGSO and GEO, QZSS) and GMSD7's 1019 messages
+//! navigation files: ESBC's and CORD's RINEX 3 navigation files (GPS,
+//! Galileo I/NAV and F/NAV, BeiDou MEO, IGSO and GEO, QZSS), 0759's RINEX
+//! 2 GPS file (2005) and GMSD7's 1019 messages
 //! (decoded by the device's own decoder), at times across each set's fit
 //! interval (toe +- the system's `max_ephemeris_age_s`).
 
@@ -134,7 +135,7 @@ fn worst_of(k: &Kepler, toe_gps_s: f64) -> (f64, f64) {
     worst
 }
 
-/// Every Keplerian set of ESBC's navigation file and GMSD7's stream,
+/// Every Keplerian set of the shared navigation files and GMSD7's stream,
 /// across its fit interval: the sum formulas' positions within
 /// [`POSITION_TOL_M`] and clocks within [`CLOCK_TOL_S`] of the
 /// angle-by-angle evaluation.
@@ -142,7 +143,6 @@ fn worst_of(k: &Kepler, toe_gps_s: f64) -> (f64, f64) {
 /// Verifies: RX-FORM-ORBIT
 #[test]
 fn sum_formulas_are_the_angles_on_every_real_set() {
-    let nav = NavData::load(&data(NAV)).unwrap();
     let mut per_system = std::collections::BTreeMap::<System, (usize, f64, f64)>::new();
     let mut note = |k: &Kepler, w: (f64, f64)| {
         let e = per_system.entry(k.system).or_default();
@@ -150,7 +150,9 @@ fn sum_formulas_are_the_angles_on_every_real_set() {
         e.1 = e.1.max(w.0);
         e.2 = e.2.max(w.1);
     };
-    for sets in nav.ephemerides.values() {
+    let navs = [NAV, "07590920.05n", "CORD00ARG_R_20240920000_01D_MN.rnx.gz"]
+        .map(|name| NavData::load(&data(name)).unwrap());
+    for sets in navs.iter().flat_map(|nav| nav.ephemerides.values()) {
         for k in sets {
             // The GPS time of toe: toe is of the week of toc (BeiDou's in
             // BDT, 14 s behind).
