@@ -858,9 +858,11 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         }
         // Satellite order, as the host's epochs (a BTreeMap by SatId).
         sort_checked(&mut o.sigs, |a, b| (a.id, a.code) < (b.id, b.code));
-        // The Keplerian sets the satellites with a code will use, decoded
-        // from the store's payloads once for the epoch; more than N is the
-        // capacity refusal the inputs below would give.
+        // The Keplerian sets the satellites with a code will use: kept
+        // from an earlier epoch with their orbits' constants (`orbits`),
+        // else decoded from the store's payloads (and kept when there is
+        // room); more than N decoded for the epoch alone is the capacity
+        // refusal the inputs below would give.
         store.start_epoch(decoded);
         orbits.next_epoch();
         let mut from = 0;
