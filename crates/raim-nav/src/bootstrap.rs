@@ -119,8 +119,13 @@ pub fn bootstrap_position<const N: usize>(
     let mut clock_m = [0.0f64; STATES];
     // The weights' linearisation point and rotation, once on the surface.
     let mut lin: Option<([f64; 3], [[f32; 3]; 3])> = None;
+    // The model's sigma of each satellite at the linearisation point `lin`
+    // (the weights of the satellites without a sigma of their own):
+    // computed when `lin` is set, then kept while it holds.
+    let mut model_sigma_m = [0.0f32; N];
     let mut last_step_m = f64::INFINITY;
     for _ in 0..MAX_ITERATIONS {
+        let mut relinearised = false;
         // The weights wait for the position to settle (a step below
         // WEIGHTS_AFTER_STEP_M: Gauss-Newton's next error is then below a
         // few cm), so that they are computed once, at the point raim-core's
@@ -134,6 +139,7 @@ pub fn bootstrap_position<const N: usize>(
             })
         {
             lin = Some((x, enu_rows(x)));
+            relinearised = true;
         }
         let rot = if on_surface {
             lin.map(|(_, r)| r)
@@ -142,7 +148,7 @@ pub fn bootstrap_position<const N: usize>(
         };
         let mut a = [[0.0f32; STATES]; STATES];
         let mut b = [0.0f32; STATES];
-        for s in sats {
+        for (s, kept_sigma_m) in sats.iter().zip(model_sigma_m.iter_mut()) {
             let d = [
                 s.position_m[0] - x[0],
                 s.position_m[1] - x[1],
@@ -160,8 +166,11 @@ pub fn bootstrap_position<const N: usize>(
                 (None, v) => v.map_or(1.0, |v| v as f32),
                 (Some(_), Some(v)) => v as f32,
                 (Some(r), None) => {
-                    let enu = r.map(|row| row[0] * u[0] + row[1] * u[1] + row[2] * u[2]);
-                    model.sigma_model.sigma(elevation(enu))
+                    if relinearised {
+                        let enu = r.map(|row| row[0] * u[0] + row[1] * u[1] + row[2] * u[2]);
+                        *kept_sigma_m = model.sigma_model.sigma(elevation(enu));
+                    }
+                    *kept_sigma_m
                 }
             };
             if !(sigma_m > 0.0 && sigma_m < f32::INFINITY) {

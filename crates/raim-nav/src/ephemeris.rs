@@ -104,22 +104,12 @@ impl Kepler {
 
     /// Seconds of the satellite system's week at GPS time `t_gps_s`.
     fn system_sow(&self, t_gps_s: f64) -> f64 {
-        let t = match self.system {
-            System::Beidou => t_gps_s + BDT_MINUS_GPST_S,
-            _ => t_gps_s,
-        };
-        m::rem_euclid(t, WEEK_S)
+        system_sow_s(self.system, t_gps_s)
     }
 
     /// t - toe in seconds, with the week crossover of IS-GPS-200 20.3.3.3.3.1.
     pub fn tk_s(&self, t_gps_s: f64) -> f64 {
-        let mut tk = self.system_sow(t_gps_s) - self.toe_sow_s;
-        if tk > WEEK_S / 2.0 {
-            tk -= WEEK_S;
-        } else if tk < -WEEK_S / 2.0 {
-            tk += WEEK_S;
-        }
-        tk
+        tk_from_sow_s(self.system_sow(t_gps_s), self.toe_sow_s)
     }
 
     /// Satellite clock polynomial a0 + a1 dt + a2 dt^2 at GPS time `t_gps_s`
@@ -149,9 +139,22 @@ impl Kepler {
     /// [`Self::eccentric_anomaly_sin_cos`] with the corrected mean motion
     /// n = sqrt(mu / A^3) + delta n, rad/s.
     fn eccentric_anomaly_n(&self, mu: f64, tk: f64) -> (f64, f64, f64) {
+        let n = self.mean_motion_rad_s(mu);
+        let (sin_e, cos_e) = self.eccentric_anomaly_at(n, tk);
+        (sin_e, cos_e, n)
+    }
+
+    /// The corrected mean motion n = sqrt(mu / A^3) + delta n, rad/s
+    /// (IS-GPS-200 Table 20-IV).
+    fn mean_motion_rad_s(&self, mu: f64) -> f64 {
         let a = self.sqrt_a_m05 * self.sqrt_a_m05;
         let n0 = m::sqrt(mu / (a * a * a));
-        let n = n0 + self.delta_n_rad_s;
+        n0 + self.delta_n_rad_s
+    }
+
+    /// [`Self::eccentric_anomaly_sin_cos`] with the corrected mean motion
+    /// `n` given.
+    fn eccentric_anomaly_at(&self, n: f64, tk: f64) -> (f64, f64) {
         let mk = self.m0_rad + n * tk;
         let e = self.e;
         let (sin_m, cos_m) = m::sin_cos(mk);
@@ -166,18 +169,23 @@ impl Kepler {
             d -= step;
             if step.is_nan() || step.abs() < KEPLER_LAST_STEP_RAD {
                 // The sine and cosine at d, to first order in the step.
-                return (sin_e - cos_e * step, cos_e + sin_e * step, n);
+                return (sin_e - cos_e * step, cos_e + sin_e * step);
             }
             (sin_e, cos_e) = at(d);
         }
-        (sin_e, cos_e, n)
+        (sin_e, cos_e)
     }
 
-    /// The relativistic eccentricity term F e sqrt(A) sin(E), F = -2
-    /// sqrt(mu) / c^2 (IS-GPS-200 20.3.3.3.3.1), s.
-    fn relativistic_s(&self, mu: f64, sin_e: f64) -> f64 {
+    /// The factor F e sqrt(A) of the relativistic eccentricity term,
+    /// F = -2 sqrt(mu) / c^2 (IS-GPS-200 20.3.3.3.3.1), s.
+    fn relativistic_factor_s(&self, mu: f64) -> f64 {
         let f = -2.0 * m::sqrt(mu) / (C_M_S * C_M_S);
-        f * self.e * self.sqrt_a_m05 * sin_e
+        f * self.e * self.sqrt_a_m05
+    }
+
+    /// The relativistic eccentricity term F e sqrt(A) sin(E), s.
+    fn relativistic_s(&self, mu: f64, sin_e: f64) -> f64 {
+        self.relativistic_factor_s(mu) * sin_e
     }
 
     /// The clock of [`Self::state`] at GPS time `t_gps_s`, s, to the bit,
@@ -192,6 +200,92 @@ impl Kepler {
         self.clock_polynomial_s(t_gps_s) + self.relativistic_s(mu, sin_e)
     }
 
+    /// [`Orbit::transmit_state`] of this set (its per-set constants
+    /// computed here: a caller with many times keeps an [`Orbit`]).
+    pub fn transmit_state(&self, t_sv_gps_s: f64) -> (f64, SatState) {
+        Orbit::new(self).transmit_state(t_sv_gps_s)
+    }
+
+    /// Position (ECEF of the transmit instant) and clock at GPS time
+    /// `t_gps_s` ([`Orbit::state`]).
+    pub fn state(&self, t_gps_s: f64) -> SatState {
+        Orbit::new(self).state(t_gps_s)
+    }
+}
+
+/// Seconds of `system`'s week at GPS time `t_gps_s` (BeiDou's BDT week
+/// runs 14 s behind GPS time).
+pub(crate) fn system_sow_s(system: System, t_gps_s: f64) -> f64 {
+    let t = match system {
+        System::Beidou => t_gps_s + BDT_MINUS_GPST_S,
+        _ => t_gps_s,
+    };
+    m::rem_euclid(t, WEEK_S)
+}
+
+/// t - toe from t's seconds of the system's week `sow_s`
+/// ([`system_sow_s`]), with the week crossover of IS-GPS-200
+/// 20.3.3.3.3.1 ([`Kepler::tk_s`]; a caller with many sets of one system
+/// reduces t to the week once).
+pub(crate) fn tk_from_sow_s(sow_s: f64, toe_sow_s: f64) -> f64 {
+    let mut tk = sow_s - toe_sow_s;
+    if tk > WEEK_S / 2.0 {
+        tk -= WEEK_S;
+    } else if tk < -WEEK_S / 2.0 {
+        tk += WEEK_S;
+    }
+    tk
+}
+
+/// A Keplerian set with the constants of its orbit that do not depend on
+/// time, computed once ([`Orbit::new`]): the corrected mean motion, A,
+/// sqrt(1 - e^2), the sines and cosines of the argument of perigee omega
+/// and of the inclination i0, the relativistic factor F e sqrt(A). The
+/// orbit at a time then takes one library sine and cosine for Kepler's
+/// equation (of M) and one for the node's longitude; the true anomaly,
+/// the argument of latitude, the second harmonics and the inclination
+/// follow by sum and double-angle formulas and short series
+/// ([`Orbit::state`]; soft-float f64 on the M4, BENCHMARKS.md "Forming
+/// by sum formulas").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Orbit {
+    /// The broadcast set.
+    pub set: Kepler,
+    /// The corrected mean motion n, rad/s.
+    n_rad_s: f64,
+    /// The semi-major axis A, m.
+    a_m: f64,
+    /// sqrt(1 - e^2).
+    sqrt_1_e2: f64,
+    /// sin and cos of the argument of perigee omega.
+    sin_omega: f64,
+    cos_omega: f64,
+    /// sin and cos of the inclination at toe, i0.
+    sin_i0: f64,
+    cos_i0: f64,
+    /// F e sqrt(A) of the relativistic term, s.
+    relativistic_factor_s: f64,
+}
+
+impl Orbit {
+    /// The set `k` with its orbit's constants.
+    pub fn new(k: &Kepler) -> Self {
+        let (mu, _) = k.mu_omega();
+        let (sin_omega, cos_omega) = m::sin_cos(k.omega_rad);
+        let (sin_i0, cos_i0) = m::sin_cos(k.i0_rad);
+        Orbit {
+            set: *k,
+            n_rad_s: k.mean_motion_rad_s(mu),
+            a_m: k.sqrt_a_m05 * k.sqrt_a_m05,
+            sqrt_1_e2: m::sqrt(1.0 - k.e * k.e),
+            sin_omega,
+            cos_omega,
+            sin_i0,
+            cos_i0,
+            relativistic_factor_s: k.relativistic_factor_s(mu),
+        }
+    }
+
     /// The state at the transmit time of a signal that left the satellite
     /// at `t_sv_gps_s` by its own clock: t = t_sv - clock(t_sv)
     /// (IS-GPS-200 20.3.3.3.3.1), and [`Self::state`] there. The two
@@ -202,13 +296,13 @@ impl Kepler {
     /// solution's own rounding; test `transmit_state_is_the_state_at_the_transmit_time`).
     /// Returns the transmit time with the state.
     pub fn transmit_state(&self, t_sv_gps_s: f64) -> (f64, SatState) {
-        let (mu, _) = self.mu_omega();
-        let tk_sv = self.tk_s(t_sv_gps_s);
-        let (sin_e, cos_e, n) = self.eccentric_anomaly_n(mu, tk_sv);
-        let clock_s = self.clock_polynomial_s(t_sv_gps_s) + self.relativistic_s(mu, sin_e);
+        let k = &self.set;
+        let tk_sv = k.tk_s(t_sv_gps_s);
+        let (sin_e, cos_e) = k.eccentric_anomaly_at(self.n_rad_s, tk_sv);
+        let clock_s = k.clock_polynomial_s(t_sv_gps_s) + self.relativistic_factor_s * sin_e;
         let t = t_sv_gps_s - clock_s;
-        let tk = self.tk_s(t);
-        let de = n * (tk - tk_sv) / (1.0 - self.e * cos_e);
+        let tk = k.tk_s(t);
+        let de = self.n_rad_s * (tk - tk_sv) / (1.0 - k.e * cos_e);
         if de.is_nan() || de.abs() > crate::geometry::TINY_ANGLE_RAD {
             return (t, self.state(t));
         }
@@ -217,34 +311,62 @@ impl Kepler {
         (t, self.state_at(t, tk, sin_e, cos_e))
     }
 
-    /// Position (ECEF of the transmit instant) and clock at GPS time `t_gps_s`.
+    /// Position (ECEF of the transmit instant) and clock at GPS time
+    /// `t_gps_s` (IS-GPS-200 Table 20-IV).
     pub fn state(&self, t_gps_s: f64) -> SatState {
-        let (mu, _) = self.mu_omega();
-        let tk = self.tk_s(t_gps_s);
-        let (sin_e, cos_e) = self.eccentric_anomaly_sin_cos(mu, tk);
+        let k = &self.set;
+        let tk = k.tk_s(t_gps_s);
+        let (sin_e, cos_e) = k.eccentric_anomaly_at(self.n_rad_s, tk);
         self.state_at(t_gps_s, tk, sin_e, cos_e)
     }
 
     /// [`Self::state`] at GPS time `t_gps_s`, `tk` s from toe, with the
-    /// eccentric anomaly's sine and cosine there.
+    /// eccentric anomaly's sine and cosine there. IS-GPS-200 Table 20-IV
+    /// by angles' sines and cosines, not the angles:
+    /// - the true anomaly nu: sin nu = sqrt(1 - e^2) sin E / (1 - e cos E),
+    ///   cos nu = (cos E - e) / (1 - e cos E) (the identities behind the
+    ///   table's atan2; the pair's norm is 1 exactly, since
+    ///   (1 - e^2) sin^2 E + (cos E - e)^2 = (1 - e cos E)^2);
+    /// - the argument of latitude phi = nu + omega by the sum formulas,
+    ///   with the set's sin and cos omega; 2 phi by the double-angle ones;
+    /// - the corrected argument of latitude u = phi + du and inclination
+    ///   i = i0 + di by the sum formulas with du's and di's sines and
+    ///   cosines from their series ([`sin_cos_correction`]: du = Cus sin
+    ///   2phi + Cuc cos 2phi and di = IDOT tk + Cis sin 2phi + Cic cos 2phi
+    ///   are below 1e-4 rad for a broadcast set within its fit interval;
+    ///   longer series beyond, the library's beyond 0.35 rad, an almanac
+    ///   far from its reference time);
+    /// - the node's longitude Omega by the library.
+    ///
+    /// Within 1e-4 m of position of the angles' library evaluation on
+    /// every set of the shared navigation files across its fit interval
+    /// (host-tests `orbit_sums`); the clock is the same bits.
     fn state_at(&self, t_gps_s: f64, tk: f64, sin_e: f64, cos_e: f64) -> SatState {
-        let (mu, omega_e) = self.mu_omega();
-        let a = self.sqrt_a_m05 * self.sqrt_a_m05;
-        let e = self.e;
-        let nu = m::atan2(m::sqrt(1.0 - e * e) * sin_e, cos_e - e);
-        let phi = nu + self.omega_rad;
-        let (s2, c2) = m::sin_cos(2.0 * phi);
-        let u = phi + self.cus_rad * s2 + self.cuc_rad * c2;
-        let r = a * (1.0 - e * cos_e) + self.crs_m * s2 + self.crc_m * c2;
-        let i = self.i0_rad + self.idot_rad_s * tk + self.cis_rad * s2 + self.cic_rad * c2;
-        let (sin_u, cos_u) = m::sin_cos(u);
+        let k = &self.set;
+        let (_, omega_e) = k.mu_omega();
+        let e = k.e;
+        let one_minus_e_cos = 1.0 - e * cos_e;
+        let inv = 1.0 / one_minus_e_cos;
+        let (sin_nu, cos_nu) = (self.sqrt_1_e2 * sin_e * inv, (cos_e - e) * inv);
+        let sin_phi = sin_nu * self.cos_omega + cos_nu * self.sin_omega;
+        let cos_phi = cos_nu * self.cos_omega - sin_nu * self.sin_omega;
+        let s2 = 2.0 * sin_phi * cos_phi;
+        let c2 = (cos_phi - sin_phi) * (cos_phi + sin_phi);
+        let du = k.cus_rad * s2 + k.cuc_rad * c2;
+        let r = self.a_m * one_minus_e_cos + k.crs_m * s2 + k.crc_m * c2;
+        let di = k.idot_rad_s * tk + k.cis_rad * s2 + k.cic_rad * c2;
+        let (sin_du, cos_du) = sin_cos_correction(du);
+        let sin_u = sin_phi * cos_du + cos_phi * sin_du;
+        let cos_u = cos_phi * cos_du - sin_phi * sin_du;
         let (x_orb, y_orb) = (r * cos_u, r * sin_u);
-        let (sin_i, cos_i) = m::sin_cos(i);
-        let toe = self.toe_sow_s;
-        let position_m = if self.is_beidou_geo() {
+        let (sin_di, cos_di) = sin_cos_correction(di);
+        let sin_i = self.sin_i0 * cos_di + self.cos_i0 * sin_di;
+        let cos_i = self.cos_i0 * cos_di - self.sin_i0 * sin_di;
+        let toe = k.toe_sow_s;
+        let position_m = if k.is_beidou_geo() {
             // BDS ICD: GEO elements are in an inertial-like frame; rotate by
             // -5 deg about X, then by omega_e tk about Z.
-            let omega = self.omega0_rad + self.omega_dot_rad_s * tk - omega_e * toe;
+            let omega = k.omega0_rad + k.omega_dot_rad_s * tk - omega_e * toe;
             let (so, co) = m::sin_cos(omega);
             let xg = x_orb * co - y_orb * cos_i * so;
             let yg = x_orb * so + y_orb * cos_i * co;
@@ -256,7 +378,7 @@ impl Kepler {
             // Rz(omega_e tk)
             [cz * x1 + sz * y1, -sz * x1 + cz * y1, z1]
         } else {
-            let omega = self.omega0_rad + (self.omega_dot_rad_s - omega_e) * tk - omega_e * toe;
+            let omega = k.omega0_rad + (k.omega_dot_rad_s - omega_e) * tk - omega_e * toe;
             let (so, co) = m::sin_cos(omega);
             [
                 x_orb * co - y_orb * cos_i * so,
@@ -264,11 +386,32 @@ impl Kepler {
                 y_orb * sin_i,
             ]
         };
-        let clock_s = self.clock_polynomial_s(t_gps_s) + self.relativistic_s(mu, sin_e);
+        let clock_s = k.clock_polynomial_s(t_gps_s) + self.relativistic_factor_s * sin_e;
         SatState {
             position_m,
             clock_s,
         }
+    }
+}
+
+/// Below this |d|, [`sin_cos_correction`] takes d - d^3/6 and 1 - d^2/2,
+/// rad: the harmonic corrections of the argument of latitude (|Cus| +
+/// |Cuc| < 3e-5 rad in every broadcast set of the shared data) and of the
+/// inclination (IDOT tk < 3e-5 rad over a 6 h fit interval, Cis and Cic
+/// below 1e-6 rad).
+const CORRECTION_ANGLE_RAD: f64 = 1e-4;
+
+/// sin d and cos d of an orbit's small correction angle: for |d| <=
+/// [`CORRECTION_ANGLE_RAD`] d - d^3/6 and 1 - d^2/2, whose first terms
+/// left out, d^5/120 < 8.4e-23 rad and d^4/24 < 4.2e-18 (below half an
+/// ulp of 1, 1.1e-16), move a position by less than 1.2e-10 m at 2.8e7 m;
+/// else [`sin_cos_small`].
+fn sin_cos_correction(d: f64) -> (f64, f64) {
+    if d.abs() <= CORRECTION_ANGLE_RAD {
+        let z = d * d;
+        (d - d * z * (1.0 / 6.0), 1.0 - z * 0.5)
+    } else {
+        sin_cos_small(d)
     }
 }
 

@@ -15,10 +15,10 @@
 use raim_core::araim::error_model::{iono_free_factor_sq, Curves};
 use raim_core::frames::{bowring_latitude_rad, ecef_to_geodetic_from, enu_rotation, Geodetic};
 use raim_core::sigma::SigmaModel;
-use raim_core::{RangeObservation, SatId, System};
+use raim_core::{RangeObservation, Real, SatId, System};
 
-use crate::ephemeris::{Kepler, SatState, C_M_S, WEEK_S};
-use crate::geometry::{az_el_rotated, distance_m, rotate_earth};
+use crate::ephemeris::{Kepler, Orbit, SatState, C_M_S, WEEK_S};
+use crate::geometry::{az_el_rotated, distance_m, elevation_rotated, rotate_earth};
 use crate::glonass::{l1_hz, l2_hz, GlonassEphemeris, F_L1_BASE_HZ, F_L2_BASE_HZ};
 use crate::iono::{scale_to_frequency, Klobuchar, F_B1I_HZ, F_L1_HZ};
 use crate::m;
@@ -27,10 +27,13 @@ use crate::tropo::SaastamoinenSite;
 pub use crate::bootstrap::{bootstrap_position, SURFACE_BAND_M};
 
 /// The broadcast ephemeris selected for one satellite: Keplerian elements
-/// (GPS, Galileo, BeiDou, QZSS) or a GLONASS state vector.
+/// (GPS, Galileo, BeiDou, QZSS), alone or with their orbit's constants
+/// ([`Orbit`], kept by the device's receiver across epochs: the same
+/// bits, computed once), or a GLONASS state vector.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Broadcast<'a> {
     Kepler(&'a Kepler),
+    Orbit(&'a Orbit),
     Glonass(&'a GlonassEphemeris),
 }
 
@@ -40,6 +43,7 @@ impl Broadcast<'_> {
     pub fn state(&self, t_gps_s: f64) -> SatState {
         match self {
             Broadcast::Kepler(k) => k.state(t_gps_s),
+            Broadcast::Orbit(o) => o.state(t_gps_s),
             Broadcast::Glonass(g) => g.state(t_gps_s),
         }
     }
@@ -50,6 +54,7 @@ impl Broadcast<'_> {
     pub fn clock_s(&self, t_gps_s: f64) -> f64 {
         match self {
             Broadcast::Kepler(k) => k.clock_s(t_gps_s),
+            Broadcast::Orbit(o) => o.set.clock_s(t_gps_s),
             Broadcast::Glonass(g) => g.clock_s(t_gps_s),
         }
     }
@@ -58,6 +63,7 @@ impl Broadcast<'_> {
     pub fn kepler(&self) -> Option<&Kepler> {
         match self {
             Broadcast::Kepler(k) => Some(k),
+            Broadcast::Orbit(o) => Some(&o.set),
             Broadcast::Glonass(_) => None,
         }
     }
@@ -65,7 +71,7 @@ impl Broadcast<'_> {
     /// The GLONASS frequency channel, if this is a GLONASS ephemeris.
     pub fn frequency_channel(&self) -> Option<i8> {
         match self {
-            Broadcast::Kepler(_) => None,
+            Broadcast::Kepler(_) | Broadcast::Orbit(_) => None,
             Broadcast::Glonass(g) => Some(g.frequency_channel),
         }
     }
@@ -292,6 +298,10 @@ pub fn transmit_state(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<SatState, Rej
             let (p, _) = ranging_pseudorange(s)?;
             Ok(k.transmit_state(t_rx_gps_s - p / C_M_S).1)
         }
+        Broadcast::Orbit(o) => {
+            let (p, _) = ranging_pseudorange(s)?;
+            Ok(o.transmit_state(t_rx_gps_s - p / C_M_S).1)
+        }
         Broadcast::Glonass(g) => Ok(g.state(transmit_time_s(s, t_rx_gps_s)?)),
     }
 }
@@ -331,6 +341,40 @@ pub fn correct_at(
     c: &Corrections,
     klobuchar: Option<&Klobuchar>,
 ) -> Result<Corrected, Rejection> {
+    correct_at_with(s, t_rx_gps_s, tx, rx_m, rx_frame, full, c, klobuchar, true)
+}
+
+/// [`correct_at`] without the azimuth, for corrections without Klobuchar
+/// (`c.iono` false: a receiver stream's): the same bits in every field
+/// but `azimuth_rad`, which is NaN (not computed). The device's stream
+/// receiver, whose epochs use no azimuth, saves its arctangent.
+#[allow(clippy::too_many_arguments)]
+pub fn correct_at_without_azimuth(
+    s: &SatInput<'_>,
+    t_rx_gps_s: f64,
+    tx: &SatState,
+    rx_m: Option<[f64; 3]>,
+    rx_frame: Option<&ReceiverFrame>,
+    full: bool,
+    c: &Corrections,
+) -> Result<Corrected, Rejection> {
+    let c = Corrections { iono: false, ..*c };
+    correct_at_with(s, t_rx_gps_s, tx, rx_m, rx_frame, full, &c, None, false)
+}
+
+/// [`correct_at`], with the azimuth computed when `azimuth` (else NaN).
+#[allow(clippy::too_many_arguments)]
+fn correct_at_with(
+    s: &SatInput<'_>,
+    t_rx_gps_s: f64,
+    tx: &SatState,
+    rx_m: Option<[f64; 3]>,
+    rx_frame: Option<&ReceiverFrame>,
+    full: bool,
+    c: &Corrections,
+    klobuchar: Option<&Klobuchar>,
+    azimuth: bool,
+) -> Result<Corrected, Rejection> {
     let id = s.id;
     let k = s.eph;
     // An iono-free pair: the combination, its group delay, no Klobuchar
@@ -366,9 +410,12 @@ pub fn correct_at(
             }
         };
         let g = frame.geodetic;
-        let (a, e) = az_el_rotated(rx, &frame.rotation, pos);
-        az = a;
-        el = e;
+        if azimuth {
+            (az, el) = az_el_rotated(rx, &frame.rotation, pos);
+        } else {
+            az = f64::NAN;
+            el = elevation_rotated(rx, &frame.rotation, pos);
+        }
         if el < c.elevation_mask_rad {
             return Err(Rejection::BelowMask { elevation_rad: el });
         }
@@ -412,15 +459,44 @@ pub fn correct_at(
 /// receiver noise and multipath amplified (they are independent on the two
 /// frequencies; SPEC §1 sigma model, DO-229D J.2.4 terms).
 pub fn iono_free_sigma_m(model: &SigmaModel, el_rad: f64, factor: f64) -> f64 {
+    iono_free_sigma::<f32>(model, el_rad, factor).to_f64()
+}
+
+/// [`iono_free_sigma_m`] in the precision `T`: the stream's sigmas are
+/// evaluated in f32 (the FPU's on the M4, where f64's exponential and
+/// sine are software), whose relative precision (6e-8, a few ulp through
+/// the exponential) is far below what a weight needs (docs/CORE.md
+/// "Precision": the engines take sigmas in f32); within 1e-6 relative of
+/// the f64 evaluation (test `stream_sigmas_in_f32_are_the_f64_ones`).
+fn iono_free_sigma<T: Real>(model: &SigmaModel, el_rad: f64, factor: f64) -> T {
     use raim_core::araim::error_model::{multipath_sigma_m, tropo_sigma_m};
-    let el = el_rad.max(model.min_elevation_rad);
-    let tropo = tropo_sigma_m(m::sin(el));
-    let mp = multipath_sigma_m(el.to_degrees());
-    m::sqrt(
-        model.ura_m * model.ura_m
-            + tropo * tropo
-            + factor * factor * (mp * mp + model.noise_m * model.noise_m),
-    )
+    let el = T::of(el_rad.max(model.min_elevation_rad));
+    let tropo = tropo_sigma_m(el.sin_m());
+    let mp = multipath_sigma_m(el * T::of(180.0) / T::of(core::f64::consts::PI));
+    let (ura, noise, k) = (T::of(model.ura_m), T::of(model.noise_m), T::of(factor));
+    (ura * ura + tropo * tropo + k * k * (mp * mp + noise * noise)).sqrt()
+}
+
+/// The sigma of `model` at elevation `el_rad`, m, evaluated in f32 (as
+/// [`iono_free_sigma`]): [`SigmaModel::sigma`].
+fn model_sigma_m(model: &SigmaModel, el_rad: f64) -> f64 {
+    model.sigma::<f32>(el_rad as f32).to_f64()
+}
+
+/// The square root of [`Curves::variance_m2`] in the precision `T` (the
+/// same terms: the ADD's troposphere, the airborne curves times the
+/// pair's factor, the residual ionosphere when given), for the stream's
+/// ARAIM sigmas in f32 (as [`iono_free_sigma`]).
+fn curves_sigma<T: Real>(c: &Curves, el_rad: f64) -> T {
+    use raim_core::araim::error_model::{airborne_variance_m2, iono_obliquity, tropo_sigma_m};
+    let el = T::of(el_rad);
+    let tropo = tropo_sigma_m(el.sin_m());
+    let v = tropo * tropo + T::of(c.airborne_factor_sq) * airborne_variance_m2(el);
+    if c.iono_vertical_m == 0.0 {
+        return v.sqrt();
+    }
+    let iono = T::of(c.iono_vertical_m) * iono_obliquity(el);
+    (v + iono * iono).sqrt()
 }
 
 /// The explicit sigma of one satellite of a receiver stream (which has no
@@ -448,7 +524,7 @@ pub fn stream_sigma_m(
         g.map(|g| {
             let mut g = *g;
             g.iono_vertical_m *= single_iono_factor;
-            g.sigma_m(elevation_rad)
+            model_sigma_m(&g, elevation_rad)
         })
     }
 }
@@ -549,7 +625,7 @@ pub fn stream_sigma_for_m(
             .unwrap_or_else(|| {
                 let mut single = *model;
                 single.iono_vertical_m *= single_iono_factor;
-                single.sigma_m(el_rad)
+                model_sigma_m(&single, el_rad)
             })
         }
         StreamSigmas::Araim { iono_vertical_m } => {
@@ -558,7 +634,7 @@ pub fn stream_sigma_for_m(
             } else {
                 iono_vertical_m * single_iono_factor
             };
-            m::sqrt(araim_curves(system, code, iono_m).variance_m2(el_rad))
+            curves_sigma::<f32>(&araim_curves(system, code, iono_m), el_rad).to_f64()
         }
     }
 }
@@ -618,7 +694,10 @@ mod tests {
     /// satellite the bits [`correct`] gives it computing the frame itself
     /// (elevation, azimuth, troposphere, Klobuchar, corrected range,
     /// rotated position), single codes and pairs, above and below the
-    /// mask, with the transmit state given as the device computes it.
+    /// mask, with the transmit state given as the device computes it; and
+    /// without Klobuchar, the correction without the azimuth
+    /// ([`correct_at_without_azimuth`], the device's) gives the same bits
+    /// but the azimuth (NaN).
     ///
     /// Verifies: RX-FORM-COST
     #[test]
@@ -662,6 +741,26 @@ mod tests {
                 eph: Broadcast::Kepler(&k),
             };
             let tx = transmit_state(&s, t).unwrap();
+            // Without Klobuchar (a stream's corrections), the correction
+            // without the azimuth is the full one's bits but the azimuth.
+            let stream = Corrections { iono: false, ..c };
+            for full in [false, true] {
+                let with = correct_at(&s, t, &tx, Some(rx), Some(&frame), full, &stream, None);
+                let without =
+                    correct_at_without_azimuth(&s, t, &tx, Some(rx), Some(&frame), full, &stream);
+                match (with, without) {
+                    (Ok(w), Ok(g)) => {
+                        assert_eq!(g.azimuth_rad.is_nan(), full);
+                        let g = Corrected {
+                            azimuth_rad: w.azimuth_rad,
+                            ..g
+                        };
+                        assert_eq!(w, g);
+                        assert_eq!(w.elevation_rad.to_bits(), g.elevation_rad.to_bits());
+                    }
+                    (w, g) => assert_eq!(w, g),
+                }
+            }
             let want = correct(&s, t, Some(rx), true, &c, Some(&kb));
             let got = correct_at(&s, t, &tx, Some(rx), Some(&frame), true, &c, Some(&kb));
             match (want, got) {
@@ -811,8 +910,8 @@ mod tests {
     /// A.4.2.4 troposphere, J.2.4 multipath, the ADD's airborne noise; the
     /// pair factor sqrt(g^2 + 1) / (g - 1) from the carriers): L1/L2 at
     /// 30 degrees, B1I/B3I at 60; a single code takes the L1/L5 factor and
-    /// the residual ionosphere times the factor and the obliquity; the
-    /// snapshot rule is `stream_sigma_m`'s.
+    /// the residual ionosphere times the factor and the obliquity (within
+    /// f32's 1e-6 relative); the snapshot rule is `stream_sigma_m`'s.
     ///
     /// Verifies: RX-ARAIM-REPLAY
     #[test]
@@ -828,18 +927,20 @@ mod tests {
             let f_pp = 1.0 / (1.0 - (re * el.cos()).powi(2)).sqrt();
             (tropo * tropo + k2 * (mp * mp + noise * noise) + (iono_m * f_pp).powi(2)).sqrt()
         };
+        // The stream's sigmas are f32's (`stream_sigmas_in_f32_are_the_f64_ones`).
+        const REL_TOL: f64 = 1e-6;
         let araim = StreamSigmas::Araim {
             iono_vertical_m: 0.4,
         };
         let got = stream_sigma_for_m(&araim, System::Gps, "C1C+C2W", 30f64.to_radians(), 2.0);
         let want = add_sigma(30.0, 1575.42, 1227.60, 0.0);
-        assert!((got - want).abs() < 1e-12, "{got} {want}");
+        assert!((got - want).abs() < REL_TOL * want, "{got} {want}");
         let got = stream_sigma_for_m(&araim, System::Beidou, "C2I+C6I", 60f64.to_radians(), 2.0);
         let want = add_sigma(60.0, 1561.098, 1268.52, 0.0);
-        assert!((got - want).abs() < 1e-12, "{got} {want}");
+        assert!((got - want).abs() < REL_TOL * want, "{got} {want}");
         let got = stream_sigma_for_m(&araim, System::Galileo, "C1C", 20f64.to_radians(), 2.0);
         let want = add_sigma(20.0, 1575.42, 1176.45, 0.8);
-        assert!((got - want).abs() < 1e-12, "{got} {want}");
+        assert!((got - want).abs() < REL_TOL * want, "{got} {want}");
         let model = SigmaModel::default();
         let el = 25f64.to_radians();
         let snap = stream_sigma_for_m(
@@ -851,6 +952,105 @@ mod tests {
         );
         let k = iono_free_noise_factor(System::Gps, "C1C+C2W").unwrap();
         assert_eq!(snap, iono_free_sigma_m(&model, el, k));
+    }
+
+    /// The stream's sigmas evaluated in f32 ([`stream_sigma_for_m`]:
+    /// [`iono_free_sigma_m`], the GLONASS and single-frequency models, the
+    /// ARAIM curves) against raim-core's f64 evaluation of the same terms
+    /// (`SigmaModel::sigma_m`, `Curves::variance_m2`, the f64 troposphere
+    /// and multipath curves), for every stream code of every system, the
+    /// default and the replays' models, ARAIM with and without a residual
+    /// ionosphere, at elevations from below the floor to the zenith:
+    /// within 1e-6 relative (f32's epsilon is 1.2e-7; a weight moves by
+    /// twice the relative error).
+    ///
+    /// Verifies: RX-FORM-COST
+    #[test]
+    fn stream_sigmas_in_f32_are_the_f64_ones() {
+        use raim_core::araim::error_model::{multipath_sigma_m, tropo_sigma_m};
+        const SIGMA_REL_TOL: f64 = 1e-6;
+        let replay = SigmaModel {
+            ura_m: 0.3,
+            iono_vertical_m: 0.5,
+            noise_m: 0.2,
+            ..SigmaModel::default()
+        };
+        let mut worst = 0.0f64;
+        let mut n = 0;
+        for (system, codes) in STREAM_CODES {
+            for code in codes.iter() {
+                for k in -10..=900 {
+                    let el = (k as f64 * 0.1).to_radians();
+                    let mut check = |got: f64, want: f64| {
+                        let rel = (got - want).abs() / want;
+                        assert!(
+                            rel < SIGMA_REL_TOL,
+                            "{system:?} {code} el {el}: {got} vs {want}"
+                        );
+                        worst = worst.max(rel);
+                        n += 1;
+                    };
+                    for model in [SigmaModel::default(), replay] {
+                        let glo = SigmaModel {
+                            ura_m: crate::glonass::glonass_ura_m(model.ura_m),
+                            ..model
+                        };
+                        let m = if system == System::Glonass {
+                            glo
+                        } else {
+                            model
+                        };
+                        let want = match iono_free_noise_factor(system, code) {
+                            Some(f) => {
+                                let e = el.max(m.min_elevation_rad);
+                                let tropo = tropo_sigma_m(e.sin());
+                                let mp = multipath_sigma_m(e.to_degrees());
+                                (m.ura_m * m.ura_m
+                                    + tropo * tropo
+                                    + f * f * (mp * mp + m.noise_m * m.noise_m))
+                                    .sqrt()
+                            }
+                            None => SigmaModel {
+                                iono_vertical_m: 2.0 * m.iono_vertical_m,
+                                ..m
+                            }
+                            .sigma_m(el),
+                        };
+                        let got = stream_sigma_for_m(
+                            &StreamSigmas::Snapshot(model),
+                            system,
+                            code,
+                            el,
+                            2.0,
+                        );
+                        check(got, want);
+                    }
+                    if el < 0.0 {
+                        continue;
+                    }
+                    for iono in [0.0, 0.4] {
+                        let iono_m = if split_pair(code).is_some() {
+                            0.0
+                        } else {
+                            2.0 * iono
+                        };
+                        let want = araim_curves(system, code, iono_m).variance_m2(el).sqrt();
+                        let got = stream_sigma_for_m(
+                            &StreamSigmas::Araim {
+                                iono_vertical_m: iono,
+                            },
+                            system,
+                            code,
+                            el,
+                            2.0,
+                        );
+                        check(got, want);
+                    }
+                }
+            }
+        }
+        assert!(n > 10_000 && worst > 0.0, "{n} {worst:e}");
+        std::println!("{n} sigmas, worst relative difference {worst:.2e}");
     }
 }
 

@@ -239,7 +239,9 @@ fn single_frequency_stream_sigmas_scale_the_residual_ionosphere() {
     let iono2 = one * one - zero * zero;
     assert!(iono2 > 0.0);
     assert!(
-        (two * two - one * one - 3.0 * iono2).abs() < 1e-9,
+        // f32 sigmas (1e-6 relative, `stream_sigmas_in_f32_are_the_f64_ones`)
+        // on variances of tens of m^2.
+        (two * two - one * one - 3.0 * iono2).abs() < 1e-4,
         "{one} {two} {zero}"
     );
     assert_eq!(

@@ -13,6 +13,8 @@ use raim_core::System;
 
 use crate::ephemeris::Kepler;
 #[cfg(feature = "rtcm")]
+use crate::ephemeris::Orbit;
+#[cfg(feature = "rtcm")]
 use crate::glonass::GlonassEphemeris;
 #[cfg(feature = "rtcm")]
 use crate::ranging::Broadcast;
@@ -105,6 +107,18 @@ impl KeplerBits {
         (b.decode().as_ref() == Some(k)).then_some(b)
     }
 
+    /// Whether `other` is the same message, placed alike: the same
+    /// payload, toc and key (cheap fields first).
+    fn same(&self, other: &KeplerBits) -> bool {
+        self.prn == other.prn
+            && self.system == other.system
+            && self.len == other.len
+            && self.payload == other.payload
+            && self.toc_gps_s.to_bits() == other.toc_gps_s.to_bits()
+            && self.toe_sow_s.to_bits() == other.toe_sow_s.to_bits()
+            && self.health == other.health
+    }
+
     /// Whether this may be `k` (the decoded set must then be compared).
     fn keys_match(&self, k: &Kepler) -> bool {
         self.system == k.system
@@ -123,46 +137,16 @@ impl KeplerBits {
         Some(k)
     }
 
-    /// [`kepler_age_s`] of the set.
-    fn age_s(&self, t_gps_s: f64) -> Option<f64> {
-        let key = Kepler {
-            toc_gps_s: self.toc_gps_s,
-            toe_sow_s: self.toe_sow_s,
-            ..crate::rtcm::fields::kepler(self.system, self.prn, &NO_FIELDS)
-        };
-        kepler_age_s(&key, t_gps_s)
+    /// [`kepler_age_s`] of the set at GPS time `t_gps_s`, whose seconds of
+    /// the set's system's week are `sow_s` (`ephemeris::system_sow_s`,
+    /// computed once for every set of the system): the same operations
+    /// on the set's toe and toc, without decoding the set.
+    fn age_s(&self, t_gps_s: f64, sow_s: f64) -> Option<f64> {
+        let max_age = max_ephemeris_age_s(self.system);
+        let age = crate::ephemeris::tk_from_sow_s(sow_s, self.toe_sow_s).abs();
+        ((t_gps_s - self.toc_gps_s).abs() <= 2.0 * max_age).then_some(age)
     }
 }
-
-/// Every field zero: the elements of the key set [`KeplerBits::age_s`]
-/// times with (only the system, toe and toc enter [`kepler_age_s`]).
-#[cfg(feature = "rtcm")]
-const NO_FIELDS: crate::rtcm::fields::KeplerFields = crate::rtcm::fields::KeplerFields {
-    toc_s: 0.0,
-    toe_s: 0.0,
-    af0: 0.0,
-    af1: 0.0,
-    af2: 0.0,
-    sqrt_a: 0.0,
-    e: 0.0,
-    i0_sc: 0.0,
-    omega0_sc: 0.0,
-    omega_sc: 0.0,
-    m0_sc: 0.0,
-    delta_n_sc: 0.0,
-    omega_dot_sc: 0.0,
-    idot_sc: 0.0,
-    cuc: 0.0,
-    cus: 0.0,
-    crc: 0.0,
-    crs: 0.0,
-    cic: 0.0,
-    cis: 0.0,
-    tgd: 0.0,
-    tgd2: 0.0,
-    health: 0,
-    iod: 0,
-};
 
 /// No decoded set left for the satellite: the epoch's satellites outnumber
 /// the decoded sets ([`EphemerisStore::load`]).
@@ -201,6 +185,104 @@ impl<const D: usize> DecodedSets<D> {
 
 #[cfg(feature = "rtcm")]
 impl<const D: usize> Default for DecodedSets<D> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// One decoded set of an [`OrbitCache`]: the payload it was decoded
+/// from (its key, compared whole) and the set with its orbit's
+/// constants.
+#[cfg(feature = "rtcm")]
+#[derive(Debug, Clone)]
+struct CachedOrbit {
+    bits: KeplerBits,
+    orbit: Orbit,
+    /// The cache's epoch count when an epoch last used it.
+    used: u32,
+}
+
+/// Decoded Keplerian sets kept across epochs, `C` of them, so that a set
+/// is decoded and its orbit's constants computed ([`Orbit::new`]) once,
+/// not at every epoch ([`EphemerisStore::load_cached`],
+/// [`EphemerisStore::select_cached`]; BENCHMARKS.md "Forming by sum
+/// formulas"). Each is keyed by the whole payload it came from: a set
+/// the store replaced, or one another message of the satellite changed,
+/// has another payload and is never matched, so a kept set is the set
+/// its payload decodes to, to the bit, however the store has changed.
+/// Sets used by the current epoch are kept; when the cache is full, one
+/// an earlier epoch used last gives way, and with none such the set is
+/// decoded into the epoch's [`DecodedSets`] as without a cache. A cache of
+/// capacity 0 (a part without the RAM, feature `ram-192k`) keeps nothing.
+#[cfg(feature = "rtcm")]
+#[derive(Debug, Clone)]
+pub struct OrbitCache<const C: usize> {
+    sets: Vec<CachedOrbit, C>,
+    /// Epochs started ([`Self::next_epoch`]), wrapping.
+    epoch: u32,
+}
+
+#[cfg(feature = "rtcm")]
+impl<const C: usize> OrbitCache<C> {
+    /// Nothing kept.
+    pub const fn new() -> Self {
+        OrbitCache {
+            sets: Vec::new(),
+            epoch: 0,
+        }
+    }
+
+    /// A new epoch: the sets the last one used may now give way.
+    pub fn next_epoch(&mut self) {
+        self.epoch = self.epoch.wrapping_add(1);
+    }
+
+    /// Sets kept.
+    pub fn len(&self) -> usize {
+        self.sets.len()
+    }
+
+    /// True when no set is kept.
+    pub fn is_empty(&self) -> bool {
+        self.sets.is_empty()
+    }
+
+    /// The kept set decoded from `bits`, marked used by this epoch.
+    fn find_and_mark(&mut self, bits: &KeplerBits) -> bool {
+        let epoch = self.epoch;
+        match self.sets.iter_mut().find(|c| c.bits.same(bits)) {
+            Some(c) => {
+                c.used = epoch;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Keep `orbit`, decoded from `bits`, in a free place or in the place
+    /// of a set no set of this epoch is; false when there is none.
+    fn keep(&mut self, bits: &KeplerBits, orbit: Orbit) -> bool {
+        let c = CachedOrbit {
+            bits: bits.clone(),
+            orbit,
+            used: self.epoch,
+        };
+        let epoch = self.epoch;
+        match self.sets.push(c) {
+            Ok(()) => true,
+            Err(c) => match self.sets.iter_mut().find(|x| x.used != epoch) {
+                Some(slot) => {
+                    *slot = c;
+                    true
+                }
+                None => false,
+            },
+        }
+    }
+}
+
+#[cfg(feature = "rtcm")]
+impl<const C: usize> Default for OrbitCache<C> {
     fn default() -> Self {
         Self::new()
     }
@@ -309,6 +391,21 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
         t_gps_s: f64,
         decoded: &mut DecodedSets<D>,
     ) -> Result<(), DecodedFull> {
+        self.load_cached(id, t_gps_s, decoded, &mut OrbitCache::<0>::new())
+    }
+
+    /// [`Self::load`] with the sets kept across epochs in `cache`: a set
+    /// kept there is not decoded again; a set decoded is kept there when
+    /// there is room ([`OrbitCache`]), else decoded into `decoded`. The
+    /// cache's [`OrbitCache::next_epoch`] is the caller's, once an epoch
+    /// before its loads.
+    pub fn load_cached<const D: usize, const C: usize>(
+        &self,
+        id: SatId,
+        t_gps_s: f64,
+        decoded: &mut DecodedSets<D>,
+        cache: &mut OrbitCache<C>,
+    ) -> Result<(), DecodedFull> {
         if decoded.generation != self.generation {
             self.start_epoch(decoded);
         }
@@ -318,12 +415,18 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
         let Some(i) = self.choose_kepler(id, t_gps_s) else {
             return Ok(());
         };
-        if decoded.sets.iter().any(|(j, _)| *j == i) {
-            return Ok(());
-        }
-        let Some(k) = self.kepler.get(i).and_then(KeplerBits::decode) else {
+        let Some(bits) = self.kepler.get(i) else {
             return Ok(());
         };
+        if cache.find_and_mark(bits) || decoded.sets.iter().any(|(j, _)| *j == i) {
+            return Ok(());
+        }
+        let Some(k) = bits.decode() else {
+            return Ok(());
+        };
+        if C > 0 && cache.keep(bits, Orbit::new(&k)) {
+            return Ok(());
+        }
         decoded.sets.push((i, k)).map_err(|_| DecodedFull {
             capacity: u32::try_from(D).unwrap_or(u32::MAX),
         })
@@ -339,6 +442,30 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
         t_gps_s: f64,
         decoded: &'a DecodedSets<D>,
     ) -> Option<Broadcast<'a>> {
+        self.select_in(id, t_gps_s, decoded, &[])
+    }
+
+    /// [`Self::select`] with the sets kept in `cache` ([`Self::load_cached`]):
+    /// a kept set is given with its orbit's constants
+    /// ([`Broadcast::Orbit`]).
+    pub fn select_cached<'a, const D: usize, const C: usize>(
+        &'a self,
+        id: SatId,
+        t_gps_s: f64,
+        decoded: &'a DecodedSets<D>,
+        cache: &'a OrbitCache<C>,
+    ) -> Option<Broadcast<'a>> {
+        self.select_in(id, t_gps_s, decoded, &cache.sets)
+    }
+
+    /// [`Self::select_cached`] with the cache's sets `kept`.
+    fn select_in<'a, const D: usize>(
+        &'a self,
+        id: SatId,
+        t_gps_s: f64,
+        decoded: &'a DecodedSets<D>,
+        kept: &'a [CachedOrbit],
+    ) -> Option<Broadcast<'a>> {
         if id.system == System::Glonass {
             let max_age = max_ephemeris_age_s(id.system);
             let best = |a: (f64, usize), b: (f64, usize)| if b.0 < a.0 { b } else { a };
@@ -352,10 +479,17 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
                 .reduce(best)?;
             self.glonass.get(i).map(Broadcast::Glonass)
         } else {
+            let i = self.choose_kepler(id, t_gps_s)?;
+            if let Some(c) = self
+                .kepler
+                .get(i)
+                .and_then(|bits| kept.iter().find(|c| c.bits.same(bits)))
+            {
+                return Some(Broadcast::Orbit(&c.orbit));
+            }
             if decoded.generation != self.generation {
                 return None;
             }
-            let i = self.choose_kepler(id, t_gps_s)?;
             decoded
                 .sets
                 .iter()
@@ -367,13 +501,14 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
     /// The index of the Keplerian set [`Self::select`] chooses.
     fn choose_kepler(&self, id: SatId, t_gps_s: f64) -> Option<usize> {
         let max_age = max_ephemeris_age_s(id.system);
+        let sow_s = crate::ephemeris::system_sow_s(id.system, t_gps_s);
         let best = |a: (f64, usize), b: (f64, usize)| if b.0 < a.0 { b } else { a };
         let (_, i) = self
             .kepler
             .iter()
             .enumerate()
             .filter(|(_, k)| k.system == id.system && k.prn == id.prn && k.health == 0)
-            .filter_map(|(i, k)| Some((k.age_s(t_gps_s)?, i)))
+            .filter_map(|(i, k)| Some((k.age_s(t_gps_s, sow_s)?, i)))
             .filter(|(age, _)| *age <= max_age)
             .reduce(best)?;
         Some(i)
@@ -665,5 +800,128 @@ mod tests {
         // Loading again, or a satellite with no set, needs no room.
         assert_eq!(s.load(g07, t, &mut d), Ok(()));
         assert_eq!(s.load(SatId::new(System::Gps, 9), t, &mut d), Ok(()));
+    }
+
+    /// The decoded sets kept across epochs ([`OrbitCache`]): a kept set is
+    /// given with its orbit's constants, the very set a fresh decode gives
+    /// and the same states to the bit, epoch after epoch without a decode;
+    /// a set replaced in the store (a new toe, or another set of the same
+    /// satellite in the same place) is never given from the cache, the new
+    /// one is; a full cache whose sets this epoch uses leaves a further
+    /// set to the epoch's decoded sets, and gives way to it at the next
+    /// epoch; a cache of capacity 0 is the store without one.
+    ///
+    /// Verifies: RX-FORM-ORBIT
+    #[test]
+    fn orbit_cache_gives_the_decoded_set_and_never_a_stale_one() {
+        let t = 1000.0 * WEEK_S + 3_600.0;
+        let g = |prn| SatId::new(System::Gps, prn);
+        let mut s = EphemerisStore::<3, 1>::new();
+        let p5 = msg1019(5, 3_600.0, 0, 0x5555);
+        let p6 = msg1019(6, 3_600.0, 0, 0x6666);
+        insert(&mut s, &p5);
+        insert(&mut s, &p6);
+        let mut cache = OrbitCache::<1>::new();
+        let mut d = DecodedSets::<4>::new();
+        let epoch = |s: &EphemerisStore<3, 1>,
+                     d: &mut DecodedSets<4>,
+                     cache: &mut OrbitCache<1>,
+                     ids: &[SatId]| {
+            s.start_epoch(d);
+            cache.next_epoch();
+            for id in ids {
+                s.load_cached(*id, t, d, cache).unwrap();
+            }
+        };
+        // G05 alone: kept, given as an orbit equal to the fresh decode.
+        epoch(&s, &mut d, &mut cache, &[g(5)]);
+        assert_eq!(cache.len(), 1);
+        let want5 = set_of(&p5);
+        match s.select_cached(g(5), t, &d, &cache) {
+            Some(Broadcast::Orbit(o)) => {
+                assert_eq!(o.set, want5);
+                assert_eq!(o.transmit_state(t), want5.transmit_state(t));
+            }
+            other => panic!("{other:?}"),
+        }
+        // G05 and G06: the cache's one place is G05's (this epoch's), so
+        // G06 is decoded for the epoch alone.
+        epoch(&s, &mut d, &mut cache, &[g(5), g(6)]);
+        assert!(matches!(
+            s.select_cached(g(5), t, &d, &cache),
+            Some(Broadcast::Orbit(_))
+        ));
+        match s.select_cached(g(6), t, &d, &cache) {
+            Some(Broadcast::Kepler(k)) => assert_eq!(*k, set_of(&p6)),
+            other => panic!("{other:?}"),
+        }
+        // G06 alone at the next epoch: G05's place, last used before, gives way.
+        epoch(&s, &mut d, &mut cache, &[g(6)]);
+        match s.select_cached(g(6), t, &d, &cache) {
+            Some(Broadcast::Orbit(o)) => assert_eq!(o.set, set_of(&p6)),
+            other => panic!("{other:?}"),
+        }
+        // Another set of G06 with the same toe and other elements takes
+        // the place of the oldest set in the full store (G05's, before
+        // G06's), so it is the first of the tie and the one chosen: the
+        // kept G06 set, of the same satellite and toe, is not given; the
+        // new one is.
+        let p5b = msg1019(5, 7_200.0, 0, 0x7777);
+        insert(&mut s, &p5b);
+        let p6b = msg1019(6, 3_600.0, 0, 0x8888);
+        assert_eq!(insert(&mut s, &p6b), Stored::Replaced);
+        epoch(&s, &mut d, &mut cache, &[g(6)]);
+        match s.select_cached(g(6), t, &d, &cache) {
+            Some(Broadcast::Orbit(o)) => assert_eq!(o.set, set_of(&p6b)),
+            other => panic!("{other:?}"),
+        }
+        // Capacity 0: the store's own load and select.
+        let mut none = OrbitCache::<0>::new();
+        s.start_epoch(&mut d);
+        none.next_epoch();
+        s.load_cached(g(6), t, &mut d, &mut none).unwrap();
+        assert!(none.is_empty());
+        assert_eq!(s.select_cached(g(6), t, &d, &none), s.select(g(6), t, &d));
+        assert!(matches!(s.select(g(6), t, &d), Some(Broadcast::Kepler(k)) if *k == set_of(&p6b)));
+    }
+
+    /// The age of a set kept as its payload, from its toe and toc with t
+    /// reduced to the week once (`KeplerBits::age_s`), is the decoded
+    /// set's `kepler_age_s` to the bit, for GPS, Galileo and BeiDou sets
+    /// at times across three weeks (the week crossover, a week off, BDT).
+    ///
+    /// Verifies: RX-FORM-COST
+    #[test]
+    fn the_payloads_age_is_the_decoded_sets() {
+        let mut n = 0;
+        for (prn, toe) in [(3u8, 0.0), (9, 302_400.0), (12, 597_600.0)] {
+            for payload in [msg1019(prn, toe, 0, 0x1234), msg1046(prn, toe, 0x4321)] {
+                let k = set_of(&payload);
+                let bits = KeplerBits::new(&k, &payload).unwrap();
+                for beidou in [false, true] {
+                    let (k, bits) = if beidou {
+                        let k = Kepler {
+                            system: System::Beidou,
+                            ..k
+                        };
+                        let b = KeplerBits {
+                            system: System::Beidou,
+                            ..bits.clone()
+                        };
+                        (k, b)
+                    } else {
+                        (k, bits.clone())
+                    };
+                    for j in -300..300 {
+                        let t = 1000.0 * WEEK_S + toe + f64::from(j) * 3_607.0;
+                        let sow = crate::ephemeris::system_sow_s(k.system, t);
+                        let got = bits.age_s(t, sow).map(f64::to_bits);
+                        assert_eq!(got, kepler_age_s(&k, t).map(f64::to_bits), "{t}");
+                        n += usize::from(got.is_some());
+                    }
+                }
+            }
+        }
+        assert!(n > 100, "{n}");
     }
 }

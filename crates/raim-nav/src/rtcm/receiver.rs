@@ -57,17 +57,18 @@
 use heapless::Vec;
 use raim_core::{RangeObservation, SatId, System};
 
-use crate::ephemeris::{SatState, BDT_MINUS_GPST_S, C_M_S, WEEK_S};
+use crate::ephemeris::{Kepler, SatState, BDT_MINUS_GPST_S, C_M_S, WEEK_S};
 use crate::glonass::{
     glonass_time_of_day_to_gps_with_s, glonass_time_of_day_with_s, GlonassArc, GlonassEphemeris,
     GlonassIcdFields,
 };
 use crate::m;
 use crate::ranging::{
-    bootstrap_position, cn0_dbhz_u8, correct_at, split_pair, stream_codes, stream_sigma_for_m,
-    transmit_state, transmit_time_s, Broadcast, Corrections, ReceiverFrame, SatInput, StreamSigmas,
+    bootstrap_position, cn0_dbhz_u8, correct_at, correct_at_without_azimuth, split_pair,
+    stream_codes, stream_sigma_for_m, transmit_state, transmit_time_s, Broadcast, Corrections,
+    ReceiverFrame, SatInput, StreamSigmas,
 };
-use crate::store::{DecodedSets, EphemerisStore, Stored};
+use crate::store::{DecodedSets, EphemerisStore, OrbitCache, Stored};
 use crate::time::table_gps_minus_utc_s;
 use crate::velocity::{
     glonass_motion, kepler_motion, kepler_transmit_time_s, range_rate, RangeRate, SatMotion,
@@ -102,6 +103,14 @@ pub const KEPLER_SETS: usize = 256;
 /// is not used (`FormedEpoch::rejected`), never given another's.
 #[cfg(feature = "ram-192k")]
 pub const KEPLER_SETS: usize = 64;
+/// Decoded Keplerian sets kept across epochs ([`OrbitCache`]): as many
+/// as the satellites of the default build's epoch (32, the wire's
+/// capacity), so that a set is decoded and its orbit's constants computed
+/// once while it is in force, not at every epoch (about 350 B each,
+/// 11.3 KB). None is kept with `ram-192k` (the STM32F4's RAM is ARAIM's
+/// and the particle filter's): each epoch decodes its sets.
+#[cfg(not(feature = "ram-192k"))]
+pub const ORBIT_CACHE_SETS: usize = 32;
 /// GLONASS sets kept: two per slot of a full constellation.
 #[cfg(not(feature = "ram-192k"))]
 const GLONASS_SETS: usize = 48;
@@ -456,6 +465,9 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     station_m: Option<[f64; 3]>,
     counts: RtcmCounts,
     glonass_arcs: GlonassArcs,
+    /// The decoded Keplerian sets kept across epochs.
+    #[cfg(not(feature = "ram-192k"))]
+    orbits: OrbitCache<ORBIT_CACHE_SETS>,
     /// GPS - UTC of the stream's latest 1013 (DF054), s.
     stream_leap_s: Option<u8>,
     /// The GPS - UTC the GLONASS sets in the store were placed with, s.
@@ -494,6 +506,8 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 ephemerides_not_kept: 0,
             },
             glonass_arcs: GlonassArcs::new(),
+            #[cfg(not(feature = "ram-192k"))]
+            orbits: OrbitCache::new(),
             stream_leap_s: None,
             glonass_placed_leap_s: None,
             latest_gps_s: None,
@@ -893,8 +907,14 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             store,
             station_m,
             glonass_arcs,
+            #[cfg(not(feature = "ram-192k"))]
+            orbits,
             ..
         } = self;
+        // No set is kept across epochs with `ram-192k`: an empty cache of
+        // no capacity (the store's own load and select).
+        #[cfg(feature = "ram-192k")]
+        let orbits = &mut OrbitCache::<0>::new();
         let FormScratch {
             bootstrap_obs: first,
             transmit,
@@ -933,14 +953,17 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         sort_checked(&mut o.sigs, |a, b| {
             (a.id, a.band_digit, a.attribute) < (b.id, b.band_digit, b.attribute)
         });
-        // The Keplerian sets the satellites with a code will use, decoded
-        // from the store's payloads once for the epoch; more than N is the
-        // capacity refusal the inputs below would give.
+        // The Keplerian sets the satellites with a code will use: kept
+        // from an earlier epoch with their orbits' constants (`orbits`),
+        // else decoded from the store's payloads (and kept when there is
+        // room); more than N decoded for the epoch alone is the capacity
+        // refusal the inputs below would give.
         store.start_epoch(decoded);
+        orbits.next_epoch();
         let mut from = 0;
         while let Some((id, have)) = next_satellite(&o.sigs, &mut from) {
             if pick_code(stream_codes(id.system), have).is_some()
-                && store.load(id, time_gps_s, decoded).is_err()
+                && store.load_cached(id, time_gps_s, decoded, orbits).is_err()
             {
                 return Some(Err(FormError::TooManySignals {
                     capacity: u32::try_from(N).unwrap_or(u32::MAX),
@@ -972,7 +995,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 out.rejected += 1;
                 continue;
             };
-            let Some(eph) = store.select(s.id, time_gps_s, decoded) else {
+            let Some(eph) = store.select_cached(s.id, time_gps_s, decoded, orbits) else {
                 out.rejected += 1;
                 continue;
             };
@@ -1009,6 +1032,10 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         transmit.clear();
         motion.clear();
         for (s, rate) in inputs.iter().zip(rates.iter()) {
+            let kepler_motion_at = |k: &Kepler| {
+                let t_sv = time_gps_s - s.p1_m / C_M_S;
+                kepler_motion(k, kepler_transmit_time_s(k, t_sv))
+            };
             let (tx, mo) = match s.eph {
                 Broadcast::Glonass(g) => match transmit_time_s(s, time_gps_s) {
                     Ok(t) => {
@@ -1019,10 +1046,11 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 },
                 Broadcast::Kepler(k) => (
                     transmit_state(s, time_gps_s).ok(),
-                    rate.map(|_| {
-                        let t_sv = time_gps_s - s.p1_m / C_M_S;
-                        kepler_motion(k, kepler_transmit_time_s(k, t_sv))
-                    }),
+                    rate.map(|_| kepler_motion_at(k)),
+                ),
+                Broadcast::Orbit(o) => (
+                    transmit_state(s, time_gps_s).ok(),
+                    rate.map(|_| kepler_motion_at(&o.set)),
                 ),
             };
             // `inputs`, `transmit` and `motion` have the same capacity N.
@@ -1056,7 +1084,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 out.rejected += 1;
                 continue;
             };
-            match correct_at(
+            match correct_at_without_azimuth(
                 s,
                 time_gps_s,
                 tx,
@@ -1064,7 +1092,6 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 rx_frame.as_ref(),
                 reference.is_some(),
                 &c,
-                None,
             ) {
                 Ok(mut x) => {
                     x.obs.sigma_m = Some(stream_sigma_for_m(

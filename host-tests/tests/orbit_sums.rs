@@ -1,0 +1,200 @@
+//! The Keplerian orbit by sum formulas (raim-nav `ephemeris::Orbit`: the
+//! true anomaly, argument of latitude, second harmonics and inclination
+//! from the set's sines and cosines of omega and i0, without atan2 or
+//! their own library sines) against IS-GPS-200 Table 20-IV evaluated
+//! angle by angle with the library (atan2 for the true anomaly, a sine
+//! and cosine of 2 phi, u, i and Omega; Kepler's equation by the
+//! fixed-point iteration), over every Keplerian set of the shared
+//! navigation files: ESBC's and CORD's RINEX 3 navigation files (GPS,
+//! Galileo I/NAV and F/NAV, BeiDou MEO, IGSO and GEO, QZSS), 0759's RINEX
+//! 2 GPS file (2005) and GMSD7's 1019 messages
+//! (decoded by the device's own decoder), at times across each set's fit
+//! interval (toe +- the system's `max_ephemeris_age_s`).
+
+mod rtcm_common;
+
+use raim_core::System;
+use raim_gnss::NavData;
+use raim_nav::ephemeris::{
+    Kepler, Orbit, BDT_MINUS_GPST_S, C_M_S, MU_GAL_BDS_M3_S2, MU_GPS_M3_S2, OMEGA_E_BDS_RAD_S,
+    OMEGA_E_GPS_RAD_S, WEEK_S,
+};
+use raim_nav::rtcm::decode::{kepler_message, Frame};
+use raim_nav::rtcm::fields::{kepler, toc_near_toe};
+use raim_nav::store::max_ephemeris_age_s;
+use rtcm_common::esbc::{data, NAV};
+use rtcm_common::{frames, GMSD7, GMSD7_WEEK};
+
+/// The sum formulas' satellite positions agree with the angle-by-angle
+/// evaluation within this, m (a range error far below any sigma of the
+/// monitor, whose smallest, the ARAIM URA, is 0.5 m and up).
+const POSITION_TOL_M: f64 = 1e-4;
+/// The clocks agree within this, s (1e-4 m of range over c).
+const CLOCK_TOL_S: f64 = POSITION_TOL_M / C_M_S;
+/// Times evaluated across each set's fit interval.
+const TIMES: usize = 49;
+
+/// IS-GPS-200 Table 20-IV and 20.3.3.3.3.1 (BeiDou ICD §5.2.4.12 for the
+/// GEO rotation), angle by angle: position and clock at GPS time `t`.
+fn reference(k: &Kepler, t: f64) -> ([f64; 3], f64) {
+    let (mu, omega_e) = match k.system {
+        System::Galileo => (MU_GAL_BDS_M3_S2, OMEGA_E_GPS_RAD_S),
+        System::Beidou => (MU_GAL_BDS_M3_S2, OMEGA_E_BDS_RAD_S),
+        _ => (MU_GPS_M3_S2, OMEGA_E_GPS_RAD_S),
+    };
+    let sys_t = if k.system == System::Beidou {
+        t + BDT_MINUS_GPST_S
+    } else {
+        t
+    };
+    let mut tk = sys_t.rem_euclid(WEEK_S) - k.toe_sow_s;
+    if tk > WEEK_S / 2.0 {
+        tk -= WEEK_S;
+    } else if tk < -WEEK_S / 2.0 {
+        tk += WEEK_S;
+    }
+    let a = k.sqrt_a_m05 * k.sqrt_a_m05;
+    let n = (mu / (a * a * a)).sqrt() + k.delta_n_rad_s;
+    let mk = k.m0_rad + n * tk;
+    let mut ek = mk;
+    for _ in 0..100 {
+        let next = mk + k.e * ek.sin();
+        let done = (next - ek).abs() < 1e-15;
+        ek = next;
+        if done {
+            break;
+        }
+    }
+    let nu = ((1.0 - k.e * k.e).sqrt() * ek.sin()).atan2(ek.cos() - k.e);
+    let phi = nu + k.omega_rad;
+    let (s2, c2) = (2.0 * phi).sin_cos();
+    let u = phi + k.cus_rad * s2 + k.cuc_rad * c2;
+    let r = a * (1.0 - k.e * ek.cos()) + k.crs_m * s2 + k.crc_m * c2;
+    let i = k.i0_rad + k.idot_rad_s * tk + k.cis_rad * s2 + k.cic_rad * c2;
+    let (x, y) = (r * u.cos(), r * u.sin());
+    let geo = k.system == System::Beidou && (k.prn <= 5 || (59..=63).contains(&k.prn));
+    let p = if geo {
+        let om = k.omega0_rad + k.omega_dot_rad_s * tk - omega_e * k.toe_sow_s;
+        let g = [
+            x * om.cos() - y * i.cos() * om.sin(),
+            x * om.sin() + y * i.cos() * om.cos(),
+            y * i.sin(),
+        ];
+        let f = (-5.0f64).to_radians();
+        let (x1, y1, z1) = (
+            g[0],
+            f.cos() * g[1] + f.sin() * g[2],
+            -f.sin() * g[1] + f.cos() * g[2],
+        );
+        let z = omega_e * tk;
+        [
+            z.cos() * x1 + z.sin() * y1,
+            -z.sin() * x1 + z.cos() * y1,
+            z1,
+        ]
+    } else {
+        let om = k.omega0_rad + (k.omega_dot_rad_s - omega_e) * tk - omega_e * k.toe_sow_s;
+        [
+            x * om.cos() - y * i.cos() * om.sin(),
+            x * om.sin() + y * i.cos() * om.cos(),
+            y * i.sin(),
+        ]
+    };
+    let dt = t - k.toc_gps_s;
+    let f = -2.0 * mu.sqrt() / (C_M_S * C_M_S);
+    let clock = k.af0_s + k.af1_s_s * dt + k.af2_s_s2 * dt * dt + f * k.e * k.sqrt_a_m05 * ek.sin();
+    (p, clock)
+}
+
+/// The largest position (m) and clock (s) differences of the set `k`
+/// over its fit interval: `Orbit::state` at each time, and
+/// `Orbit::transmit_state` (the device's path) at each time as t_sv,
+/// against [`reference`] at the same time; `Kepler::state` is
+/// `Orbit::state` to the bit.
+fn worst_of(k: &Kepler, toe_gps_s: f64) -> (f64, f64) {
+    let orbit = Orbit::new(k);
+    let age = max_ephemeris_age_s(k.system);
+    let mut worst = (0.0f64, 0.0f64);
+    let mut check = |t: f64, got: raim_nav::ephemeris::SatState| {
+        let (p, clock) = reference(k, t);
+        let d = (0..3)
+            .map(|i| (got.position_m[i] - p[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        worst.0 = worst.0.max(d);
+        worst.1 = worst.1.max((got.clock_s - clock).abs());
+    };
+    for j in 0..TIMES {
+        let t = toe_gps_s - age + 2.0 * age * j as f64 / (TIMES - 1) as f64;
+        let s = orbit.state(t);
+        assert_eq!(s, k.state(t));
+        check(t, s);
+        let (t_tx, s) = orbit.transmit_state(t);
+        check(t_tx, s);
+    }
+    worst
+}
+
+/// Every Keplerian set of the shared navigation files and GMSD7's stream,
+/// across its fit interval: the sum formulas' positions within
+/// [`POSITION_TOL_M`] and clocks within [`CLOCK_TOL_S`] of the
+/// angle-by-angle evaluation.
+///
+/// Verifies: RX-FORM-ORBIT
+#[test]
+fn sum_formulas_are_the_angles_on_every_real_set() {
+    let mut per_system = std::collections::BTreeMap::<System, (usize, f64, f64)>::new();
+    let mut note = |k: &Kepler, w: (f64, f64)| {
+        let e = per_system.entry(k.system).or_default();
+        e.0 += 1;
+        e.1 = e.1.max(w.0);
+        e.2 = e.2.max(w.1);
+    };
+    let navs = [NAV, "07590920.05n", "CORD00ARG_R_20240920000_01D_MN.rnx.gz"]
+        .map(|name| NavData::load(&data(name)).unwrap());
+    for sets in navs.iter().flat_map(|nav| nav.ephemerides.values()) {
+        for k in sets {
+            // The GPS time of toe: toe is of the week of toc (BeiDou's in
+            // BDT, 14 s behind).
+            let bdt = if k.system == System::Beidou {
+                BDT_MINUS_GPST_S
+            } else {
+                0.0
+            };
+            let week_start = ((k.toc_gps_s - bdt) / WEEK_S).floor() * WEEK_S;
+            let mut toe_gps = week_start + k.toe_sow_s - bdt;
+            if toe_gps - k.toc_gps_s > WEEK_S / 2.0 {
+                toe_gps -= WEEK_S;
+            } else if k.toc_gps_s - toe_gps > WEEK_S / 2.0 {
+                toe_gps += WEEK_S;
+            }
+            note(k, worst_of(k, toe_gps));
+        }
+    }
+    let bytes = std::fs::read(GMSD7).unwrap();
+    let mut gmsd7 = 0;
+    for f in frames(&bytes) {
+        let Ok(frame) = Frame::new(f) else { continue };
+        let Ok(m) = kepler_message(frame.payload()) else {
+            continue;
+        };
+        let mut k = kepler(m.system, m.prn, &m.fields);
+        k.toc_gps_s = toc_near_toe(GMSD7_WEEK, k.toe_sow_s, m.fields.toc_s);
+        let (d, c) = worst_of(&k, GMSD7_WEEK as f64 * WEEK_S + k.toe_sow_s);
+        gmsd7 += 1;
+        let e = per_system.entry(System::Gps).or_default();
+        e.1 = e.1.max(d);
+        e.2 = e.2.max(c);
+    }
+    for (system, (n, d, c)) in &per_system {
+        println!("{system:?}: {n} RINEX sets, positions within {d:.2e} m, clocks within {c:.2e} s");
+    }
+    println!("GMSD7: {gmsd7} 1019 messages (in the GPS line above)");
+    assert!(gmsd7 > 10, "{gmsd7}");
+    for system in [System::Gps, System::Galileo, System::Beidou, System::Qzss] {
+        let (n, d, c) = per_system.get(&system).copied().unwrap_or_default();
+        assert!(n > 0, "{system:?}: no set");
+        assert!(d < POSITION_TOL_M, "{system:?}: {d:e} m");
+        assert!(c < CLOCK_TOL_S, "{system:?}: {c:e} s");
+    }
+}
