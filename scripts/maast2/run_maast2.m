@@ -15,7 +15,7 @@
 %     with N_es 25, exposure 1/24 h, P_md cap, P_THRES 6e-8, P_FA_HOR 9e-7).
 % Environment: MAAST2_CONFIG (matched|shipped), MAAST2_FDE (0|1),
 % MAAST2_T0, MAAST2_T1, MAAST2_STEP (s, GPS seconds of the almanacs' week),
-% MAAST2_OUT (CSV path).
+% MAAST2_OUT (CSV path); optional MAAST2_FAST (0|1, default 1 as committed).
 
 % norminv / normcdf: scripts/maast2/octave (Matlab Statistics Toolbox forms)
 
@@ -78,7 +78,10 @@ prm.sig_acc_target = 1.87;
 prm.hpl_variant = 0;
 prm.max_pmd_flag = 1;
 prm.opt = 1; % position optimisation on, as committed; run.sh records the outputs without it too
-prm.fast = 1;
+prm.fast = 1; % as committed: dual faults bounded by one term, fault modes consolidated
+if ~isempty(getenv('MAAST2_FAST'))
+  prm.fast = str2double(getenv('MAAST2_FAST')); % diagnostic: MAAST2_FAST=0 computes every mode exactly
+end
 if strcmp(config, 'matched')
   prm.p_thres = 8e-8;   % raim-core AraimConfig::default (SPEC 9.1)
   prm.pfa_hor = 9e-8;   % idem
@@ -119,8 +122,8 @@ cpu_s = cputime - cpu0;
 r = load(MAAST2_OUT);
 [nusr, nt] = size(r.vpl);
 fid = fopen(csv_out, 'w');
-fprintf(fid, '# config=%s fde=%d t0=%g t1=%g step=%g cpu_s=%.3f users=%d epochs=%d\n', ...
-        config, fde, TStart, TEnd, TStep, cpu_s, nusr, nt);
+fprintf(fid, '# config=%s fast=%d fde=%d t0=%g t1=%g step=%g cpu_s=%.3f users=%d epochs=%d\n', ...
+        config, prm.fast, fde, TStart, TEnd, TStep, cpu_s, nusr, nt);
 fprintf(fid, 'lat_deg,lon_deg,t_s,vpl_m,hpl_m,emt_m,sig_acc_m,vpl_noopt_m,hpl_noopt_m,emt_noopt_m,sig_acc_noopt_m\n');
 for k = 1:nt
   t = TStart + (k - 1) * TStep;
