@@ -1,0 +1,225 @@
+#!/usr/bin/env python3
+"""MAAST for ARAIM 2 (run under Octave by scripts/maast2/run.sh) against
+`raim availability` on the MAAST scenario of issue 36
+(docs/runs/availability_maast_g24e24_ed259a.toml), as Markdown tables for
+docs/AVAILABILITY.md "Against MAAST for ARAIM 2".
+
+    python3 scripts/maast2/compare.py OUT
+
+OUT holds (scripts/maast2/README.md):
+  matched_fd.shard*.csv             MAAST 2, detection only, 288 epochs
+  matched_fd_nofast_1h.shard*.csv   MAAST 2 with prm.fast = 0, every 12th epoch
+  matched_fde_4h.shard*.csv         MAAST 2 with exclusion, every 48th epoch
+  ours_fd/ours.csv                  dump_sky --no-sky on the run file above
+  ours_sat4h/*.users.csv            raim availability, ..._ed259a_sat4h.toml
+
+Both sides count a user-epoch available when VPL <= 35 m, HPL <= 40 m,
+EMT <= 15 m and sigma_v,acc <= 1.87 m (MAAST's coverage.m; ours: the
+engine's decision, which adds its structural refusals), the 99.5th
+percentile is sorted[ceil(0.995 n) - 1] on both (MAAST's
+plot_no_gui_araim.m, ours SPEC 14), and coverage weighs users by
+cos(latitude) (coverage.m). MAAST's grid has no 90 N row (its
+init_usrdata stops at 90 - step); the comparison is on the 648 users both
+have (the 90 N row weighs cos 90 deg ~ 6e-17 in our coverage).
+"""
+import csv
+import glob
+import math
+import os
+import statistics
+import sys
+
+T0_S = 345600.0
+STEP_S = 300.0
+VAL_M, HAL_M, EMT_M, SACC_M = 35.0, 40.0, 15.0, 1.87
+
+
+def fnum(s):
+    v = float(s)  # 'Inf', 'NaN', 'inf' parse
+    return math.inf if math.isnan(v) else v
+
+
+def read_maast(prefix):
+    """{(lat, lon): {t: (vpl, hpl, emt, sacc, vpl0, hpl0, emt0, sacc0)}}, cpu_s, rows."""
+    files = sorted(glob.glob(prefix + ".shard*.csv"))
+    if not files:
+        return None, 0.0, 0
+    out, cpu, rows = {}, 0.0, 0
+    for f in files:
+        with open(f) as fh:
+            head = fh.readline()
+            cpu += float(head.split("cpu_s=")[1].split()[0])
+            for r in csv.DictReader(fh):
+                key = (int(float(r["lat_deg"])), int(float(r["lon_deg"])))
+                v = tuple(fnum(r[c]) for c in (
+                    "vpl_m", "hpl_m", "emt_m", "sig_acc_m",
+                    "vpl_noopt_m", "hpl_noopt_m", "emt_noopt_m", "sig_acc_noopt_m"))
+                out.setdefault(key, {})[float(r["t_s"])] = v
+                rows += 1
+    return out, cpu, rows
+
+
+def read_ours(path):
+    """{(lat, lon): {t: (vpl, hpl, emt, sacc, available)}}."""
+    out = {}
+    with open(path) as fh:
+        for r in csv.DictReader(fh):
+            key = (int(float(r["lat_deg"])), int(float(r["lon_deg"])))
+            t = T0_S + STEP_S * int(r["epoch"])
+            out.setdefault(key, {})[t] = (
+                fnum(r["vpl_m"]), fnum(r["hpl_m"]), fnum(r["emt_m"]),
+                fnum(r["sigma_v_acc_m"]), r["available"] == "1")
+    return out
+
+
+def avail(v):
+    vpl, hpl, emt, sacc = v[:4]
+    return vpl <= VAL_M and hpl <= HAL_M and emt <= EMT_M and sacc <= SACC_M
+
+
+def pct(vals, level=0.995):
+    s = sorted(vals)
+    return s[math.ceil(level * len(s)) - 1]
+
+
+def coverage(users, av, level):
+    w = {u: math.cos(math.radians(u[0])) for u in users}
+    return 100.0 * sum(w[u] for u in users if av[u] >= level) / sum(w.values())
+
+
+def mean_av(users, av):
+    w = {u: math.cos(math.radians(u[0])) for u in users}
+    return 100.0 * sum(w[u] * av[u] for u in users) / sum(w.values())
+
+
+def rel(a, b):
+    if math.isinf(a) and math.isinf(b):
+        return 0.0
+    return 100.0 * (a / b - 1.0)
+
+
+def per_user(data, users, times, pick):
+    """availability and 99.5th-percentile VPL per user from `pick(v)` -> (vpl, hpl, emt, sacc, ok)."""
+    av, vp = {}, {}
+    for u in users:
+        vals = [pick(data[u][t]) for t in times]
+        av[u] = sum(1 for v in vals if v[4]) / len(vals)
+        vp[u] = pct([v[0] for v in vals])
+    return av, vp
+
+
+def fmt_pct(x):
+    return f"{x:.2f} %"
+
+
+def main():
+    d = sys.argv[1]
+    m, m_cpu, m_rows = read_maast(os.path.join(d, "matched_fd"))
+    o = read_ours(os.path.join(d, "ours_fd", "ours.csv"))
+    users = sorted(set(m) & set(o))
+    times = sorted(next(iter(m.values())).keys())
+    assert all(len(m[u]) == len(times) for u in users), "MAAST run incomplete"
+    assert all(t in o[users[0]] for t in times)
+
+    sides = {
+        "MAAST for ARAIM 2 as committed (fast mode, position optimisation)":
+            lambda v: (v[0], v[1], v[2], v[3], avail(v[:4])),
+        "MAAST for ARAIM 2, outputs before position optimisation":
+            lambda v: (v[4], v[5], v[6], v[7], avail(v[4:8])),
+    }
+    ours_pick = lambda v: v  # noqa: E731
+    o_av, o_vp = per_user(o, users, times, ours_pick)
+
+    print(f"Detection only, {len(users)} users x {len(times)} epochs "
+          f"({len(users) * len(times):,} user-epochs; MAAST 2 {m_rows:,} rows read):\n")
+    print("| side | coverage at 99.5 % | at 99 % | area-weighted mean availability "
+          "| user-epochs unavailable | users on the other side of 99.5 % from ours "
+          "| per-user VPL (99.5th pct) against ours: mean, range | users beyond 1 % |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | --- | ---: |")
+    n_unav = sum(1 for u in users for t in times if not o[u][t][4])
+    print(f"| ours (`raim availability`, ADD v3.0, bracket PLs) | {fmt_pct(coverage(users, o_av, 0.995))} "
+          f"| {fmt_pct(coverage(users, o_av, 0.99))} | {mean_av(users, o_av):.3f} % | {n_unav} | - | - | - |")
+    results = {}
+    for name, pick in sides.items():
+        av, vp = per_user(m, users, times, pick)
+        results[name] = (av, vp)
+        n_unav = sum(1 for u in users for t in times if not pick(m[u][t])[4])
+        flip = sum(1 for u in users if (av[u] >= 0.995) != (o_av[u] >= 0.995))
+        r = [rel(vp[u], o_vp[u]) for u in users]
+        beyond = sum(1 for x in r if abs(x) > 1.0)
+        print(f"| {name} | {fmt_pct(coverage(users, av, 0.995))} | {fmt_pct(coverage(users, av, 0.99))} "
+              f"| {mean_av(users, av):.3f} % | {n_unav} | {flip} "
+              f"| {statistics.fmean(r):+.2f} %, {min(r):+.2f} .. {max(r):+.2f} % | {beyond} |")
+
+    av, vp = results[next(iter(sides))]
+    print("\nThe users whose 99.5th-percentile VPL differs most (MAAST 2 as committed against ours):\n")
+    print("| user (lat, lon) | VPL ours (m) | VPL MAAST 2 (m) | difference | availability ours | availability MAAST 2 |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: |")
+    worst = sorted(users, key=lambda u: -abs(rel(vp[u], o_vp[u])))[:6]
+    for u in worst:
+        print(f"| {u[0]}, {u[1]} | {o_vp[u]:.2f} | {vp[u]:.2f} | {rel(vp[u], o_vp[u]):+.2f} % "
+              f"| {100 * o_av[u]:.2f} % | {100 * av[u]:.2f} % |")
+    low = sorted(users, key=lambda u: (min(o_av[u], av[u]), u))[:6]
+    print("\nThe least available users:\n")
+    print("| user (lat, lon) | availability ours | availability MAAST 2 | VPL ours (m) | VPL MAAST 2 (m) |")
+    print("| --- | ---: | ---: | ---: | ---: |")
+    for u in low:
+        print(f"| {u[0]}, {u[1]} | {100 * o_av[u]:.2f} % | {100 * av[u]:.2f} % | {o_vp[u]:.2f} | {vp[u]:.2f} |")
+
+    # Epoch by epoch, on the hourly subset, with MAAST's fast mode on and off.
+    nf, _, nf_rows = read_maast(os.path.join(d, "matched_fd_nofast_1h"))
+    if nf:
+        sub_t = sorted(next(iter(nf.values())).keys())
+        print(f"\nEpoch by epoch, every 12th epoch ({len(sub_t)} epochs x {len(users)} users = "
+              f"{len(sub_t) * len(users):,} user-epochs), outputs before position optimisation, "
+              "relative to ours (MAAST 2 / ours - 1; finite on both sides):\n")
+        print("| MAAST 2 | output | median | 1st pct | 99th pct | max abs | within 1 % | user-epochs |")
+        print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |")
+        for label, src in (("fast mode (as committed)", m), ("`prm.fast = 0` (every mode exact)", nf)):
+            for k, name in ((4, "VPL"), (5, "HPL"), (6, "EMT"), (7, "sigma_v,acc")):
+                ok = 3 if name == "sigma_v,acc" else {"VPL": 0, "HPL": 1, "EMT": 2}[name]
+                r = [rel(src[u][t][k], o[u][t][ok]) for u in users for t in sub_t
+                     if math.isfinite(src[u][t][k]) and math.isfinite(o[u][t][ok])]
+                rs = sorted(r)
+                within = sum(1 for x in r if abs(x) <= 1.0)
+                print(f"| {label} | {name} | {statistics.median(r):+.3f} % | {rs[len(rs) // 100]:+.3f} % "
+                      f"| {rs[(99 * len(rs)) // 100]:+.3f} % | {max(abs(x) for x in r):.3f} % "
+                      f"| {100 * within / len(r):.2f} % | {len(r):,} |")
+        disagree = sum(1 for u in users for t in sub_t
+                       if avail(nf[u][t][4:8]) != o[u][t][4])
+        print(f"\nWith `prm.fast = 0`, MAAST 2's availability (before optimisation) differs "
+              f"from ours at {disagree} of {len(users) * len(sub_t):,} user-epochs "
+              f"({nf_rows:,} rows read).")
+
+    fde, _, fde_rows = read_maast(os.path.join(d, "matched_fde_4h"))
+    ours_sat = glob.glob(os.path.join(d, "ours_sat4h", "*.users.csv"))
+    if fde and ours_sat:
+        ft = sorted(next(iter(fde.values())).keys())
+        osat = {}
+        with open(ours_sat[0]) as fh:
+            for r in csv.DictReader(fh):
+                osat[(int(float(r["lat_deg"])), int(float(r["lon_deg"])))] = (
+                    int(r["available"]), int(r["epochs"]))
+        fu = sorted(set(fde) & set(osat))
+        assert all(osat[u][1] == len(ft) for u in fu)
+        print(f"\nWith exclusion, every 48th epoch ({len(ft)} epochs x {len(fu)} users = "
+              f"{len(ft) * len(fu):,} user-epochs; MAAST 2 {fde_rows:,} rows read):\n")
+        print("| side | coverage at 99.5 % (available at every epoch) | available user-epochs "
+              "| users with the same count as ours |")
+        print("| --- | ---: | ---: | ---: |")
+        o_av2 = {u: osat[u][0] / osat[u][1] for u in fu}
+        print(f"| ours, `exclusion = \"satellites\"` | {fmt_pct(coverage(fu, o_av2, 0.995))} "
+              f"| {sum(osat[u][0] for u in fu)} | - |")
+        for label, sl in (("MAAST 2 with exclusion, as committed", slice(0, 4)),
+                          ("MAAST 2 with exclusion, before position optimisation", slice(4, 8))):
+            cnt = {u: sum(1 for t in ft if avail(fde[u][t][sl])) for u in fu}
+            av2 = {u: cnt[u] / len(ft) for u in fu}
+            same = sum(1 for u in fu if cnt[u] == osat[u][0])
+            print(f"| {label} | {fmt_pct(coverage(fu, av2, 0.995))} | {sum(cnt.values())} | {same} of {len(fu)} |")
+
+    print(f"\nMAAST 2 CPU seconds (Octave, sum over shards): detection only {m_cpu:.1f} s "
+          f"for {m_rows:,} user-epochs ({m_rows / m_cpu:.0f} per CPU second).")
+
+
+if __name__ == "__main__":
+    main()
