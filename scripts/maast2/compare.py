@@ -8,10 +8,11 @@ docs/AVAILABILITY.md "Against MAAST for ARAIM 2".
 
 OUT holds (scripts/maast2/README.md):
   matched_fd.shard*.csv             MAAST 2, detection only, 288 epochs
-  matched_fd_nofast_1h.shard*.csv   MAAST 2 with prm.fast = 0, every 12th epoch
-  matched_fde_4h.shard*.csv         MAAST 2 with exclusion, every 48th epoch
+  matched_fd_nofast.shard*.csv      the same with prm.fast = 0 (optional)
+  shipped_fd_1h.shard*.csv          MAAST 2's own allocations, every 12th epoch (optional)
+  matched_fde_1h.shard*.csv         MAAST 2 with exclusion, every 12th epoch
   ours_fd/ours.csv                  dump_sky --no-sky on the run file above
-  ours_sat4h/*.users.csv            raim availability, ..._ed259a_sat4h.toml
+  ours_sat1h/*.users.csv            raim availability, ..._ed259a_sat1h.toml
 
 Both sides count a user-epoch available when VPL <= 35 m, HPL <= 40 m,
 EMT <= 15 m and sigma_v,acc <= 1.87 m (MAAST's coverage.m; ours: the
@@ -121,17 +122,25 @@ def main():
     assert all(len(m[u]) == len(times) for u in users), "MAAST run incomplete"
     assert all(t in o[users[0]] for t in times)
 
-    sides = {
-        "MAAST for ARAIM 2 as committed (fast mode, position optimisation)":
-            lambda v: (v[0], v[1], v[2], v[3], avail(v[:4])),
-        "MAAST for ARAIM 2, outputs before position optimisation":
-            lambda v: (v[4], v[5], v[6], v[7], avail(v[4:8])),
-    }
+    nf, nf_cpu, nf_rows = read_maast(os.path.join(d, "matched_fd_nofast"))
+    if nf:
+        assert all(len(nf[u]) == len(times) for u in users), "fast = 0 run incomplete"
+    opt = lambda v: (v[0], v[1], v[2], v[3], avail(v[:4]))  # noqa: E731
+    noopt = lambda v: (v[4], v[5], v[6], v[7], avail(v[4:8]))  # noqa: E731
+    sides = [
+        ("MAAST for ARAIM 2 as committed (fast mode, position optimisation)", m, opt),
+        ("MAAST for ARAIM 2, fast mode, before position optimisation", m, noopt),
+    ]
+    if nf:
+        sides += [
+            ("MAAST for ARAIM 2, `prm.fast = 0`, position optimisation", nf, opt),
+            ("MAAST for ARAIM 2, `prm.fast = 0`, before position optimisation", nf, noopt),
+        ]
     ours_pick = lambda v: v  # noqa: E731
     o_av, o_vp = per_user(o, users, times, ours_pick)
 
     print(f"Detection only, {len(users)} users x {len(times)} epochs "
-          f"({len(users) * len(times):,} user-epochs; MAAST 2 {m_rows:,} rows read):\n")
+          f"({len(users) * len(times):,} user-epochs):\n")
     print("| side | coverage at 99.5 % | at 99 % | area-weighted mean availability "
           "| user-epochs unavailable | users on the other side of 99.5 % from ours "
           "| per-user VPL (99.5th pct) against ours: mean, range | users beyond 1 % |")
@@ -140,10 +149,10 @@ def main():
     print(f"| ours (`raim availability`, ADD v3.0, bracket PLs) | {fmt_pct(coverage(users, o_av, 0.995))} "
           f"| {fmt_pct(coverage(users, o_av, 0.99))} | {mean_av(users, o_av):.3f} % | {n_unav} | - | - | - |")
     results = {}
-    for name, pick in sides.items():
-        av, vp = per_user(m, users, times, pick)
+    for name, src, pick in sides:
+        av, vp = per_user(src, users, times, pick)
         results[name] = (av, vp)
-        n_unav = sum(1 for u in users for t in times if not pick(m[u][t])[4])
+        n_unav = sum(1 for u in users for t in times if not pick(src[u][t])[4])
         flip = sum(1 for u in users if (av[u] >= 0.995) != (o_av[u] >= 0.995))
         r = [rel(vp[u], o_vp[u]) for u in users]
         beyond = sum(1 for x in r if abs(x) > 1.0)
@@ -151,7 +160,7 @@ def main():
               f"| {mean_av(users, av):.3f} % | {n_unav} | {flip} "
               f"| {statistics.fmean(r):+.2f} %, {min(r):+.2f} .. {max(r):+.2f} % | {beyond} |")
 
-    av, vp = results[next(iter(sides))]
+    av, vp = results[sides[0][0]]
     print("\nThe users whose 99.5th-percentile VPL differs most (MAAST 2 as committed against ours):\n")
     print("| user (lat, lon) | VPL ours (m) | VPL MAAST 2 (m) | difference | availability ours | availability MAAST 2 |")
     print("| --- | ---: | ---: | ---: | ---: | ---: |")
@@ -159,25 +168,26 @@ def main():
     for u in worst:
         print(f"| {u[0]}, {u[1]} | {o_vp[u]:.2f} | {vp[u]:.2f} | {rel(vp[u], o_vp[u]):+.2f} % "
               f"| {100 * o_av[u]:.2f} % | {100 * av[u]:.2f} % |")
-    low = sorted(users, key=lambda u: (min(o_av[u], av[u]), u))[:6]
+    low = sorted(users, key=lambda u: (o_av[u], u))[:6]
     print("\nThe least available users:\n")
-    print("| user (lat, lon) | availability ours | availability MAAST 2 | VPL ours (m) | VPL MAAST 2 (m) |")
-    print("| --- | ---: | ---: | ---: | ---: |")
+    av0, vp0 = results[sides[1][0]]
+    print("| user (lat, lon) | availability ours | MAAST 2 as committed | MAAST 2 before optimisation "
+          "| VPL ours (m) | VPL MAAST 2 as committed (m) | before optimisation (m) |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
     for u in low:
-        print(f"| {u[0]}, {u[1]} | {100 * o_av[u]:.2f} % | {100 * av[u]:.2f} % | {o_vp[u]:.2f} | {vp[u]:.2f} |")
+        print(f"| {u[0]}, {u[1]} | {100 * o_av[u]:.2f} % | {100 * av[u]:.2f} % | {100 * av0[u]:.2f} % "
+              f"| {o_vp[u]:.2f} | {vp[u]:.2f} | {vp0[u]:.2f} |")
 
-    # Epoch by epoch, on the hourly subset, with MAAST's fast mode on and off.
-    nf, _, nf_rows = read_maast(os.path.join(d, "matched_fd_nofast_1h"))
+    # Epoch by epoch, with MAAST's fast mode on and off.
     if nf:
-        sub_t = sorted(next(iter(nf.values())).keys())
-        print(f"\nEpoch by epoch, every 12th epoch ({len(sub_t)} epochs x {len(users)} users = "
+        sub_t = times
+        print(f"\nEpoch by epoch ({len(sub_t)} epochs x {len(users)} users = "
               f"{len(sub_t) * len(users):,} user-epochs), outputs before position optimisation, "
               "relative to ours (MAAST 2 / ours - 1; finite on both sides):\n")
         print("| MAAST 2 | output | median | 1st pct | 99th pct | max abs | within 1 % | user-epochs |")
         print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |")
         for label, src in (("fast mode (as committed)", m), ("`prm.fast = 0` (every mode exact)", nf)):
-            for k, name in ((4, "VPL"), (5, "HPL"), (6, "EMT"), (7, "sigma_v,acc")):
-                ok = 3 if name == "sigma_v,acc" else {"VPL": 0, "HPL": 1, "EMT": 2}[name]
+            for k, name, ok in ((4, "VPL", 0), (5, "HPL", 1), (6, "EMT", 2), (7, "sigma_v,acc", 3)):
                 r = [rel(src[u][t][k], o[u][t][ok]) for u in users for t in sub_t
                      if math.isfinite(src[u][t][k]) and math.isfinite(o[u][t][ok])]
                 rs = sorted(r)
@@ -185,14 +195,30 @@ def main():
                 print(f"| {label} | {name} | {statistics.median(r):+.3f} % | {rs[len(rs) // 100]:+.3f} % "
                       f"| {rs[(99 * len(rs)) // 100]:+.3f} % | {max(abs(x) for x in r):.3f} % "
                       f"| {100 * within / len(r):.2f} % | {len(r):,} |")
-        disagree = sum(1 for u in users for t in sub_t
-                       if avail(nf[u][t][4:8]) != o[u][t][4])
-        print(f"\nWith `prm.fast = 0`, MAAST 2's availability (before optimisation) differs "
-              f"from ours at {disagree} of {len(users) * len(sub_t):,} user-epochs "
-              f"({nf_rows:,} rows read).")
+        for label, src in (("fast mode", m), ("`prm.fast = 0`", nf)):
+            disagree = sum(1 for u in users for t in sub_t if avail(src[u][t][4:8]) != o[u][t][4])
+            print(f"\nWith {label}, MAAST 2's availability before position optimisation differs "
+                  f"from ours at {disagree} of {len(users) * len(sub_t):,} user-epochs.")
 
-    fde, _, fde_rows = read_maast(os.path.join(d, "matched_fde_4h"))
-    ours_sat = glob.glob(os.path.join(d, "ours_sat4h", "*.users.csv"))
+    sh, sh_cpu, _ = read_maast(os.path.join(d, "shipped_fd_1h"))
+    if sh:
+        st = sorted(next(iter(sh.values())).keys())
+        print(f"\nMAAST 2's own V-ARAIM allocations (`MAAST2_CONFIG=shipped`: ADD v4.2 with 25 "
+              f"effective samples, exposure 1/24 h, P_md cap, P_THRES 6e-8, P_FA,H 9e-7), fast mode, "
+              f"every 12th epoch ({len(st)} epochs x {len(users)} users), against the matched run "
+              "on the same epochs:\n")
+        print("| MAAST 2 | user-epochs available (as committed) | before position optimisation "
+              "| VPL before optimisation against matched: median, range |")
+        print("| --- | ---: | ---: | --- |")
+        for label, src in (("matched allocations", m), ("its own allocations", sh)):
+            a1 = sum(1 for u in users for t in st if avail(src[u][t][:4]))
+            a0 = sum(1 for u in users for t in st if avail(src[u][t][4:8]))
+            r = [rel(src[u][t][4], m[u][t][4]) for u in users for t in st
+                 if math.isfinite(src[u][t][4]) and math.isfinite(m[u][t][4])]
+            print(f"| {label} | {a1} | {a0} | {statistics.median(r):+.2f} %, {min(r):+.2f} .. {max(r):+.2f} % |")
+
+    fde, fde_cpu, fde_rows = read_maast(os.path.join(d, "matched_fde_1h"))
+    ours_sat = glob.glob(os.path.join(d, "ours_sat1h", "*.users.csv"))
     if fde and ours_sat:
         ft = sorted(next(iter(fde.values())).keys())
         osat = {}
@@ -202,7 +228,7 @@ def main():
                     int(r["available"]), int(r["epochs"]))
         fu = sorted(set(fde) & set(osat))
         assert all(osat[u][1] == len(ft) for u in fu)
-        print(f"\nWith exclusion, every 48th epoch ({len(ft)} epochs x {len(fu)} users = "
+        print(f"\nWith exclusion, every 12th epoch ({len(ft)} epochs x {len(fu)} users = "
               f"{len(ft) * len(fu):,} user-epochs; MAAST 2 {fde_rows:,} rows read):\n")
         print("| side | coverage at 99.5 % (available at every epoch) | available user-epochs "
               "| users with the same count as ours |")
@@ -217,8 +243,14 @@ def main():
             same = sum(1 for u in fu if cnt[u] == osat[u][0])
             print(f"| {label} | {fmt_pct(coverage(fu, av2, 0.995))} | {sum(cnt.values())} | {same} of {len(fu)} |")
 
-    print(f"\nMAAST 2 CPU seconds (Octave, sum over shards): detection only {m_cpu:.1f} s "
-          f"for {m_rows:,} user-epochs ({m_rows / m_cpu:.0f} per CPU second).")
+    print("\nMAAST 2's CPU seconds (Octave's `cputime` around `svmrun_araim`, summed over the shards):\n")
+    print("| MAAST 2 run | user-epochs | CPU s | user-epochs / CPU s |")
+    print("| --- | ---: | ---: | ---: |")
+    print(f"| detection only, fast mode (as committed) | {m_rows:,} | {m_cpu:.1f} | {m_rows / m_cpu:.0f} |")
+    if nf:
+        print(f"| detection only, `prm.fast = 0` | {nf_rows:,} | {nf_cpu:.1f} | {nf_rows / nf_cpu:.0f} |")
+    if fde:
+        print(f"| with exclusion, fast mode, every 12th epoch | {fde_rows:,} | {fde_cpu:.1f} | {fde_rows / fde_cpu:.1f} |")
 
 
 if __name__ == "__main__":
