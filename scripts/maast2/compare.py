@@ -4,11 +4,14 @@
 (docs/runs/availability_maast_g24e24_ed259a.toml), as Markdown tables for
 docs/AVAILABILITY.md "Against MAAST for ARAIM 2".
 
-    python3 scripts/maast2/compare.py OUT
+    python3 scripts/maast2/compare.py OUT [--write docs/AVAILABILITY.md]
+
+(--write puts the tables between the maast2-compare markers of the file.)
 
 OUT holds (scripts/maast2/README.md):
   matched_fd.shard*.csv             MAAST 2, detection only, 288 epochs
-  matched_fd_nofast.shard*.csv      the same with prm.fast = 0 (optional)
+  matched_fd_nofast.shard*.csv      the same with prm.fast = 0 (optional), or
+  matched_fd_nofast_1h.shard*.csv   that on every 12th epoch
   shipped_fd_1h.shard*.csv          MAAST 2's own allocations, every 12th epoch (optional)
   matched_fde_1h.shard*.csv         MAAST 2 with exclusion, every 12th epoch
   ours_fd/ours.csv                  dump_sky --no-sky on the run file above
@@ -179,14 +182,16 @@ def main():
               f"| {o_vp[u]:.2f} | {vp[u]:.2f} | {vp0[u]:.2f} |")
 
     # Epoch by epoch, with MAAST's fast mode on and off.
-    if nf:
-        sub_t = times
+    ep, ep_cpu, ep_rows = (nf, nf_cpu, nf_rows) if nf else read_maast(
+        os.path.join(d, "matched_fd_nofast_1h"))
+    if ep:
+        sub_t = sorted(next(iter(ep.values())).keys())
         print(f"\nEpoch by epoch ({len(sub_t)} epochs x {len(users)} users = "
               f"{len(sub_t) * len(users):,} user-epochs), outputs before position optimisation, "
               "relative to ours (MAAST 2 / ours - 1; finite on both sides):\n")
         print("| MAAST 2 | output | median | 1st pct | 99th pct | max abs | within 1 % | user-epochs |")
         print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |")
-        for label, src in (("fast mode (as committed)", m), ("`prm.fast = 0` (every mode exact)", nf)):
+        for label, src in (("fast mode (as committed)", m), ("`prm.fast = 0` (every mode exact)", ep)):
             for k, name, ok in ((4, "VPL", 0), (5, "HPL", 1), (6, "EMT", 2), (7, "sigma_v,acc", 3)):
                 r = [rel(src[u][t][k], o[u][t][ok]) for u in users for t in sub_t
                      if math.isfinite(src[u][t][k]) and math.isfinite(o[u][t][ok])]
@@ -195,7 +200,7 @@ def main():
                 print(f"| {label} | {name} | {statistics.median(r):+.3f} % | {rs[len(rs) // 100]:+.3f} % "
                       f"| {rs[(99 * len(rs)) // 100]:+.3f} % | {max(abs(x) for x in r):.3f} % "
                       f"| {100 * within / len(r):.2f} % | {len(r):,} |")
-        for label, src in (("fast mode", m), ("`prm.fast = 0`", nf)):
+        for label, src in (("fast mode", m), ("`prm.fast = 0`", ep)):
             disagree = sum(1 for u in users for t in sub_t if avail(src[u][t][4:8]) != o[u][t][4])
             print(f"\nWith {label}, MAAST 2's availability before position optimisation differs "
                   f"from ours at {disagree} of {len(users) * len(sub_t):,} user-epochs.")
@@ -247,11 +252,28 @@ def main():
     print("| MAAST 2 run | user-epochs | CPU s | user-epochs / CPU s |")
     print("| --- | ---: | ---: | ---: |")
     print(f"| detection only, fast mode (as committed) | {m_rows:,} | {m_cpu:.1f} | {m_rows / m_cpu:.0f} |")
-    if nf:
-        print(f"| detection only, `prm.fast = 0` | {nf_rows:,} | {nf_cpu:.1f} | {nf_rows / nf_cpu:.0f} |")
+    if ep:
+        print(f"| detection only, `prm.fast = 0`{'' if nf else ', every 12th epoch'} | {ep_rows:,} "
+              f"| {ep_cpu:.1f} | {ep_rows / ep_cpu:.0f} |")
     if fde:
         print(f"| with exclusion, fast mode, every 12th epoch | {fde_rows:,} | {fde_cpu:.1f} | {fde_rows / fde_cpu:.1f} |")
 
 
+def write_doc(doc, text):
+    """Replace the block between the maast2-compare markers of `doc` with `text`."""
+    begin, end = "<!-- BEGIN generated: maast2-compare -->", "<!-- END generated: maast2-compare -->"
+    s = open(doc).read()
+    i, j = s.index(begin) + len(begin), s.index(end)
+    open(doc, "w").write(s[:i] + "\n" + text.strip() + "\n" + s[j:])
+
+
 if __name__ == "__main__":
-    main()
+    if len(sys.argv) == 4 and sys.argv[2] == "--write":
+        import contextlib
+        import io
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            main()
+        write_doc(sys.argv[3], buf.getvalue())
+    else:
+        main()
