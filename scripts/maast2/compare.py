@@ -14,6 +14,7 @@ OUT holds (scripts/maast2/README.md):
   matched_fd_nofast_1h.shard*.csv   that on every 12th epoch
   shipped_fd_1h.shard*.csv          MAAST 2's own allocations, every 12th epoch (optional)
   matched_fde_1h.shard*.csv         MAAST 2 with exclusion, every 12th epoch
+                                    (or matched_fde_4h, every 48th, with ours_sat4h)
   ours_fd/ours.csv                  dump_sky --no-sky on the run file above
   ours_sat1h/*.users.csv            raim availability, ..._ed259a_sat1h.toml
 
@@ -222,8 +223,13 @@ def main():
                  if math.isfinite(src[u][t][4]) and math.isfinite(m[u][t][4])]
             print(f"| {label} | {a1} | {a0} | {statistics.median(r):+.2f} %, {min(r):+.2f} .. {max(r):+.2f} % |")
 
+    sub = "1h"
     fde, fde_cpu, fde_rows = read_maast(os.path.join(d, "matched_fde_1h"))
-    ours_sat = glob.glob(os.path.join(d, "ours_sat1h", "*.users.csv"))
+    if not fde:
+        sub = "4h"
+        fde, fde_cpu, fde_rows = read_maast(os.path.join(d, "matched_fde_4h"))
+    every = {"1h": "every 12th epoch", "4h": "every 48th epoch"}[sub]
+    ours_sat = glob.glob(os.path.join(d, f"ours_sat{sub}", "*.users.csv"))
     if fde and ours_sat:
         ft = sorted(next(iter(fde.values())).keys())
         osat = {}
@@ -233,7 +239,7 @@ def main():
                     int(r["available"]), int(r["epochs"]))
         fu = sorted(set(fde) & set(osat))
         assert all(osat[u][1] == len(ft) for u in fu)
-        print(f"\nWith exclusion, every 12th epoch ({len(ft)} epochs x {len(fu)} users = "
+        print(f"\nWith exclusion, {every} ({len(ft)} epochs x {len(fu)} users = "
               f"{len(ft) * len(fu):,} user-epochs; MAAST 2 {fde_rows:,} rows read):\n")
         print("| side | coverage at 99.5 % (available at every epoch) | available user-epochs "
               "| users with the same count as ours |")
@@ -256,7 +262,7 @@ def main():
         print(f"| detection only, `prm.fast = 0`{'' if nf else ', every 12th epoch'} | {ep_rows:,} "
               f"| {ep_cpu:.1f} | {ep_rows / ep_cpu:.0f} |")
     if fde:
-        print(f"| with exclusion, fast mode, every 12th epoch | {fde_rows:,} | {fde_cpu:.1f} | {fde_rows / fde_cpu:.1f} |")
+        print(f"| with exclusion, fast mode, {every} | {fde_rows:,} | {fde_cpu:.1f} | {fde_rows / fde_cpu:.1f} |")
 
 
 def write_doc(doc, text):
