@@ -14,7 +14,6 @@ OUT holds (scripts/maast2/README.md):
   matched_fd_nofast_1h.shard*.csv   that on every 12th epoch
   shipped_fd_1h.shard*.csv          MAAST 2's own allocations, every 12th epoch (optional)
   matched_fde_1h.shard*.csv         MAAST 2 with exclusion, every 12th epoch
-                                    (or matched_fde_4h, every 48th, with ours_sat4h)
   ours_fd/ours.csv                  dump_sky --no-sky on the run file above
   ours_sat1h/*.users.csv            raim availability, ..._ed259a_sat1h.toml
 
@@ -223,13 +222,9 @@ def main():
                  if math.isfinite(src[u][t][4]) and math.isfinite(m[u][t][4])]
             print(f"| {label} | {a1} | {a0} | {statistics.median(r):+.2f} %, {min(r):+.2f} .. {max(r):+.2f} % |")
 
-    sub = "1h"
     fde, fde_cpu, fde_rows = read_maast(os.path.join(d, "matched_fde_1h"))
-    if not fde:
-        sub = "4h"
-        fde, fde_cpu, fde_rows = read_maast(os.path.join(d, "matched_fde_4h"))
-    every = {"1h": "every 12th epoch", "4h": "every 48th epoch"}[sub]
-    ours_sat = glob.glob(os.path.join(d, f"ours_sat{sub}", "*.users.csv"))
+    every = "every 12th epoch"
+    ours_sat = glob.glob(os.path.join(d, "ours_sat1h", "*.users.csv"))
     if fde and ours_sat:
         ft = sorted(next(iter(fde.values())).keys())
         osat = {}
