@@ -200,6 +200,12 @@ def main():
                 print(f"| {label} | {name} | {statistics.median(r):+.3f} % | {rs[len(rs) // 100]:+.3f} % "
                       f"| {rs[(99 * len(rs)) // 100]:+.3f} % | {max(abs(x) for x in r):.3f} % "
                       f"| {100 * within / len(r):.2f} % | {len(r):,} |")
+        e_av, e_vp = per_user(ep, users, sub_t, lambda v: (v[4], v[5], v[6], v[7], avail(v[4:8])))
+        s_av, s_vp = per_user(o, users, sub_t, ours_pick)
+        r = [rel(e_vp[u], s_vp[u]) for u in users]
+        print(f"\nPer-user 99.5th-percentile VPL over these epochs, `prm.fast = 0` before optimisation "
+              f"against ours: mean {statistics.fmean(r):+.2f} %, range {min(r):+.2f} .. {max(r):+.2f} %, "
+              f"{sum(1 for x in r if abs(x) > 1.0)} of {len(users)} users beyond 1 %.")
         for label, src in (("fast mode", m), ("`prm.fast = 0`", ep)):
             disagree = sum(1 for u in users for t in sub_t if avail(src[u][t][4:8]) != o[u][t][4])
             print(f"\nWith {label}, MAAST 2's availability before position optimisation differs "
