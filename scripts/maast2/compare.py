@@ -164,6 +164,21 @@ def main():
               f"| {statistics.fmean(r):+.2f} %, {min(r):+.2f} .. {max(r):+.2f} % | {beyond} |")
 
     av, vp = results[sides[0][0]]
+    flips = [u for u in users if (av[u] >= 0.995) != (o_av[u] >= 0.995)]
+    by_lat = {}
+    for u in flips:
+        by_lat[abs(u[0])] = by_lat.get(abs(u[0]), 0) + 1
+    if flips:
+        print(f"\nUsers on the other side of 99.5 % (MAAST 2 as committed), by |latitude|: "
+              + ", ".join(f"{k} deg: {v}" for k, v in sorted(by_lat.items()))
+              + f"; our VPL percentile at them {min(o_vp[u] for u in flips):.1f}"
+              f"-{max(o_vp[u] for u in flips):.1f} m.")
+    sa = [(abs(m[u][t][7] / o[u][t][3] - 1.0), u, t) for u in users for t in times
+          if math.isfinite(m[u][t][7]) and math.isfinite(o[u][t][3])]
+    off = sorted((x for x in sa if x[0] > 2e-6), reverse=True)
+    print(f"\nsigma_v,acc (before optimisation) against ours: within 2e-6 relative at "
+          f"{len(sa) - len(off):,} of {len(sa):,} user-epochs; the others: "
+          + ("; ".join(f"{u[0]}, {u[1]} at {t:.0f} s: {100 * r:.2f} %" for r, u, t in off) or "none") + ".")
     print("\nThe users whose 99.5th-percentile VPL differs most (MAAST 2 as committed against ours):\n")
     print("| user (lat, lon) | VPL ours (m) | VPL MAAST 2 (m) | difference | availability ours | availability MAAST 2 |")
     print("| --- | ---: | ---: | ---: | ---: | ---: |")
@@ -200,6 +215,15 @@ def main():
                 print(f"| {label} | {name} | {statistics.median(r):+.3f} % | {rs[len(rs) // 100]:+.3f} % "
                       f"| {rs[(99 * len(rs)) // 100]:+.3f} % | {max(abs(x) for x in r):.3f} % "
                       f"| {100 * within / len(r):.2f} % | {len(r):,} |")
+        hl = {}
+        for u in users:
+            for t in sub_t:
+                a, b = ep[u][t][5], o[u][t][1]
+                if math.isfinite(a) and math.isfinite(b):
+                    n, k = hl.get(abs(u[0]), (0, 0))
+                    hl[abs(u[0])] = (n + 1, k + (abs(rel(a, b)) > 1.0))
+        print("\nHPL more than 1 % from ours (`prm.fast = 0`), share of user-epochs by |latitude|: "
+              + ", ".join(f"{k} deg: {100 * v[1] / v[0]:.0f} %" for k, v in sorted(hl.items())) + ".")
         e_av, e_vp = per_user(ep, users, sub_t, lambda v: (v[4], v[5], v[6], v[7], avail(v[4:8])))
         s_av, s_vp = per_user(o, users, sub_t, ours_pick)
         r = [rel(e_vp[u], s_vp[u]) for u in users]
