@@ -22,6 +22,10 @@
 //! with the same header and the same case numbers as `ours.csv`: a world
 //! grid's sky is about a gigabyte in one file, so the reference reads
 //! and runs it band by band (`scripts/availability_maast_world.sh`).
+//!
+//! `dump_sky RUN.toml OUT_DIR --no-sky` writes `ours.csv` alone, for a
+//! comparison with a tool that forms its own sky from the almanacs
+//! (MAAST for ARAIM 2, `scripts/maast2/compare.py`).
 
 use std::fmt::Write as _;
 
@@ -29,10 +33,11 @@ use raim_availability::{engine, run};
 
 fn main() -> anyhow::Result<()> {
     let a: Vec<String> = std::env::args().collect();
-    let (path, out, by_latitude) = match a.as_slice() {
-        [_, p, o] => (p, std::path::PathBuf::from(o), false),
-        [_, p, o, f] if f == "--by-latitude" => (p, std::path::PathBuf::from(o), true),
-        _ => anyhow::bail!("usage: dump_sky RUN.toml OUT_DIR [--by-latitude]"),
+    let (path, out, by_latitude, no_sky) = match a.as_slice() {
+        [_, p, o] => (p, std::path::PathBuf::from(o), false, false),
+        [_, p, o, f] if f == "--by-latitude" => (p, std::path::PathBuf::from(o), true, false),
+        [_, p, o, f] if f == "--no-sky" => (p, std::path::PathBuf::from(o), false, true),
+        _ => anyhow::bail!("usage: dump_sky RUN.toml OUT_DIR [--by-latitude | --no-sky]"),
     };
     let mut study = run::load(std::path::Path::new(path))?;
     study.exclusion = run::ExclusionSpec::None;
@@ -58,7 +63,7 @@ fn main() -> anyhow::Result<()> {
         } else {
             String::from("sky.csv")
         };
-        if !skies.contains_key(&sky_name) {
+        if !no_sky && !skies.contains_key(&sky_name) {
             let mut w = std::io::BufWriter::new(std::fs::File::create(out.join(&sky_name))?);
             std::io::Write::write_all(&mut w, SKY_HEAD.as_bytes())?;
             skies.insert(sky_name.clone(), w);
@@ -67,7 +72,11 @@ fn main() -> anyhow::Result<()> {
             case += 1;
             engine::visible(&study, row, x, &rot, &mut obs);
             let o = engine::evaluate(&study, &mut m, &obs).map_err(|e| anyhow::anyhow!("{e}"))?;
-            let sats = if o.refused { &[][..] } else { m.satellites() };
+            let sats = if o.refused || no_sky {
+                &[][..]
+            } else {
+                m.satellites()
+            };
             for s in sats {
                 let sys = match s.id.system {
                     raim_core::System::Gps => 1,
