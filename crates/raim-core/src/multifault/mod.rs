@@ -885,5 +885,5 @@ fn exclude_set<const N: usize, P: Real>(
     Ok(Excluded::Done)
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "multifault"))]
 mod mf_cov_tests;
