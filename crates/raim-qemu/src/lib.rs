@@ -433,6 +433,9 @@ pub struct QemuSession {
     boots: Vec<BootNotice>,
     /// QEMU's QMP socket, when `Options::qmp`.
     qmp: Option<PathBuf>,
+    /// Keep the session's directory (its semihosting log and QEMU's
+    /// stderr) when dropped: set once an error has named the log.
+    keep_dir: bool,
 }
 
 static SESSION_COUNTER: AtomicU32 = AtomicU32::new(0);
@@ -538,6 +541,7 @@ impl QemuSession {
             log,
             last_config: None,
             boots: Vec::new(),
+            keep_dir: false,
             qmp,
         };
         // The boot notice, on both machines. On netduinoplus2 the runner
@@ -585,6 +589,7 @@ impl QemuSession {
                 Err(RecvTimeoutError::Timeout) => bail!("no boot notice within {timeout:?}"),
                 Err(RecvTimeoutError::Disconnected) => {
                     let st = self.child.try_wait().ok().flatten();
+                    self.keep_dir = true;
                     bail!(
                         "the firmware's link closed before its boot notice (qemu status {st:?}); log {}",
                         self.log.display()
@@ -692,6 +697,7 @@ impl QemuSession {
             }
             Err(RecvTimeoutError::Disconnected) => {
                 let st = self.child.try_wait().ok().flatten();
+                self.keep_dir = true;
                 Err(anyhow!(
                     "the firmware's link closed (qemu status {st:?}); log {}",
                     self.log.display()
@@ -914,6 +920,16 @@ impl Drop for QemuSession {
         let _ = self.child.wait();
         let _ = std::fs::remove_file(self.dir.join("uart0.sock"));
         let _ = std::fs::remove_file(self.dir.join("uart1.sock"));
+        // The directory is the session's own: removed unless something
+        // failed (an error named its log, or a test is panicking) or the
+        // caller asked to keep it (`RAIM_QEMU_KEEP`), so that a test run
+        // leaves no files behind while a failure keeps its evidence.
+        if self.keep_dir || std::thread::panicking() || std::env::var_os("RAIM_QEMU_KEEP").is_some()
+        {
+            eprintln!("raim-qemu: session files kept in {}", self.dir.display());
+        } else {
+            let _ = std::fs::remove_dir_all(&self.dir);
+        }
     }
 }
 
