@@ -10,9 +10,9 @@
 use std::collections::BTreeMap;
 
 use raim_core::{RangeObservation, SatId, System};
-pub use raim_nav::ranging::{band_hz, iono_free_noise_factor, Rejection};
 use raim_nav::ephemeris::C_M_S;
 use raim_nav::glonass::{l1_hz, l2_hz};
+pub use raim_nav::ranging::{band_hz, iono_free_noise_factor, Rejection};
 use raim_nav::ranging::{
     bootstrap_position, correct, split_pair, transmit_time_s, Broadcast, Corrections, SatInput,
 };
@@ -172,13 +172,11 @@ pub fn code_rate_m_s(system: System, code: &str, have: &[CodeObs], k: Option<i8>
     };
     let of = |c: &str| have.iter().find(|o| o.code == c).and_then(rate);
     let (first, second) = split_pair(code).map_or((code, None), |(a, b)| (a, Some(b)));
-    of(first)
-        .or_else(|| second.and_then(of))
-        .or_else(|| {
-            let mut others: Vec<&CodeObs> = have.iter().collect();
-            others.sort_by(|a, b| a.code.cmp(&b.code));
-            others.into_iter().find_map(rate)
-        })
+    of(first).or_else(|| second.and_then(of)).or_else(|| {
+        let mut others: Vec<&CodeObs> = have.iter().collect();
+        others.sort_by(|a, b| a.code.cmp(&b.code));
+        others.into_iter().find_map(rate)
+    })
 }
 
 /// A satellite's velocity and clock drift at the transmit time of its
@@ -241,9 +239,7 @@ pub fn solve_velocity(
         used(o.id).then(|| RateObservation {
             sat_position_m: o.position_m,
             rate,
-            sigma_m: o
-                .sigma_m
-                .unwrap_or_else(|| model_sigma_m(s.elevation_rad)),
+            sigma_m: o.sigma_m.unwrap_or_else(|| model_sigma_m(s.elevation_rad)),
         })
     });
     solve(rx_m, &mut rows)

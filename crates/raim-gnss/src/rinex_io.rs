@@ -211,7 +211,10 @@ impl ObsData {
                 let Some(codes) = sats.get_mut(&SatId::new(system, s.sv.prn)) else {
                     continue;
                 };
-                for c in codes.iter_mut().filter(|c| doppler_matches(signal, &c.code)) {
+                for c in codes
+                    .iter_mut()
+                    .filter(|c| doppler_matches(signal, &c.code))
+                {
                     c.rate = Some(SignalRate::Doppler { hz: s.value });
                 }
             }

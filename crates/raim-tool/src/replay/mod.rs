@@ -475,9 +475,8 @@ fn run_core_on(
             e.reference_m,
         );
         let cn0: Vec<u8> = e.sats.iter().map(|s| s.cn0_dbhz).collect();
-        let speed = |w: &raim_proto::WireResult| {
-            velocity::ground_velocity(w, e, &sats, &cfg.sigma_model)
-        };
+        let speed =
+            |w: &raim_proto::WireResult| velocity::ground_velocity(w, e, &sats, &cfg.sigma_model);
         let (outcome, nmea) = engine.process(cfg, &wire_epoch, &cn0, &speed)?;
         let mut rec = match outcome {
             Ok(r) => {
