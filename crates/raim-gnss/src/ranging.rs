@@ -355,3 +355,96 @@ pub fn prepare_epoch(
         None => first,
     }
 }
+
+#[cfg(test)]
+mod rate_tests {
+    use super::*;
+    use crate::rinex_io::{doppler_matches, SignalRate};
+
+    fn obs(code: &str, rate: Option<SignalRate>) -> CodeObs {
+        CodeObs {
+            code: code.into(),
+            value_m: 2.2e7,
+            cn0_dbhz: None,
+            rate,
+        }
+    }
+
+    /// A RINEX 3 D observable serves the code of its band and attribute
+    /// only; a RINEX 2 one (no attribute) every code of its band.
+    #[test]
+    fn doppler_observables_match_their_codes() {
+        assert!(doppler_matches("1C", "C1C"));
+        assert!(!doppler_matches("1C", "C1W"));
+        assert!(!doppler_matches("1C", "C2C"));
+        assert!(doppler_matches("5Q", "C5Q"));
+        assert!(doppler_matches("1", "C1"));
+        assert!(doppler_matches("1", "P1"));
+        assert!(!doppler_matches("1", "P2"));
+        assert!(doppler_matches("2", "P2"));
+        assert!(!doppler_matches("1", ""));
+    }
+
+    /// The carriers: a GLONASS FDMA signal on its channel (L1 1602 +
+    /// 0.5625 k MHz, L2 1246 + 0.4375 k MHz, GLONASS ICD 5.1 §3.3.1.1),
+    /// none without the channel or on a CDMA band; the other systems
+    /// their band's.
+    #[test]
+    fn carriers_of_the_signals() {
+        let close = |a: Option<f64>, b: f64| a.is_some_and(|a| (a - b).abs() < 1e-3);
+        assert!(close(
+            signal_carrier_hz(System::Glonass, "C1C", Some(-7)),
+            1598.0625e6
+        ));
+        assert!(close(
+            signal_carrier_hz(System::Glonass, "C2P", Some(6)),
+            1248.625e6
+        ));
+        assert_eq!(signal_carrier_hz(System::Glonass, "C1C", None), None);
+        assert_eq!(signal_carrier_hz(System::Glonass, "C3Q", Some(0)), None);
+        assert!(close(
+            signal_carrier_hz(System::Gps, "C5Q", None),
+            1176.45e6
+        ));
+        assert!(close(
+            signal_carrier_hz(System::Galileo, "C7Q", None),
+            1207.14e6
+        ));
+        assert!(close(
+            signal_carrier_hz(System::Beidou, "C2I", None),
+            1561.098e6
+        ));
+    }
+
+    /// The unit's rule for the rate a satellite takes: its code's
+    /// signal's, else the pair's second's, else the first of its other
+    /// signals in code order; a Doppler as -D c / f on its own carrier;
+    /// none when no signal has one.
+    #[test]
+    fn the_rate_of_the_ranging_code_first() {
+        let d = |hz| Some(SignalRate::Doppler { hz });
+        let r = |m_s| Some(SignalRate::RangeRate { m_s });
+        let l1 = 1575.42e6;
+        let have = [obs("C1C", d(1000.0)), obs("C2W", r(7.0))];
+        let got = code_rate_m_s(System::Gps, "C1C+C2W", &have, None).unwrap();
+        assert!((got + 1000.0 * C_M_S / l1).abs() < 1e-9, "{got}");
+        let have = [obs("C1C", None), obs("C2W", r(7.0)), obs("C1W", r(9.0))];
+        assert_eq!(
+            code_rate_m_s(System::Gps, "C1C+C2W", &have, None),
+            Some(7.0)
+        );
+        // Another signal: the first in code order with a rate.
+        let have = [obs("C5Q", r(5.0)), obs("C1W", r(9.0)), obs("C1C", None)];
+        assert_eq!(code_rate_m_s(System::Gps, "C1C", &have, None), Some(9.0));
+        let have = [obs("C1C", None), obs("C2W", None)];
+        assert_eq!(code_rate_m_s(System::Gps, "C1C+C2W", &have, None), None);
+        // A GLONASS Doppler needs its channel.
+        let have = [obs("C1C", d(1000.0))];
+        assert_eq!(code_rate_m_s(System::Glonass, "C1C", &have, None), None);
+        let got = code_rate_m_s(System::Glonass, "C1C", &have, Some(1)).unwrap();
+        assert!((got + 1000.0 * C_M_S / 1602.5625e6).abs() < 1e-9, "{got}");
+        // A non-finite Doppler is none.
+        let have = [obs("C1C", d(f64::NAN))];
+        assert_eq!(code_rate_m_s(System::Gps, "C1C", &have, None), None);
+    }
+}

@@ -955,4 +955,20 @@ mod tests {
         assert_eq!(latest_week(352, 1024, 2400), 2400);
         assert_eq!(latest_week(353, 1024, 2400), 1377);
     }
+
+    /// A phase-range rate as the unit keeps it: whole mm/s, rounded half
+    /// away from zero (raim-nav's `pack_rate_mm_s`), none at or beyond
+    /// 2^23 mm/s or not finite.
+    #[test]
+    fn rates_are_kept_to_the_millimetre_per_second() {
+        assert_eq!(unit_rate_m_s(1.23456), Some(1.235));
+        assert_eq!(unit_rate_m_s(-712.3454), Some(-712.345));
+        assert_eq!(unit_rate_m_s(-0.0005), Some(-0.001));
+        assert_eq!(unit_rate_m_s(0.0005), Some(0.001));
+        assert_eq!(unit_rate_m_s(8388.6074), Some(8388.607));
+        assert_eq!(unit_rate_m_s(8388.608), None);
+        assert_eq!(unit_rate_m_s(-8388.608), None);
+        assert_eq!(unit_rate_m_s(f64::NAN), None);
+        assert_eq!(unit_rate_m_s(f64::INFINITY), None);
+    }
 }

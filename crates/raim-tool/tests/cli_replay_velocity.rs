@@ -299,9 +299,11 @@ fn rms_max(v: &[f64]) -> (f64, f64) {
 /// 3.5e-4 of it per channel, up to 0.3 m/s; a wrong sign by twice the
 /// rate, hundreds of m/s).
 const GEODETIC_SPEED_TOL_M_S: f64 = 0.1;
-/// The same for a smartphone at rest (GEOP): its Doppler is good to a
-/// few cm/s; the bound is that of the MSM test above (0.2 m/s) with the
-/// phone's noisier, multipath-prone tracking allowed twice it.
+/// The same for a smartphone at rest (GEOP) or a 2008 single-frequency
+/// u-blox (LEA-4T): their Doppler is good to a few cm/s; the bound is
+/// host-tests' `stream_velocity` one for a geodetic receiver's MSM
+/// (0.2 m/s), with their noisier, multipath-prone tracking allowed twice
+/// it.
 const PHONE_SPEED_TOL_M_S: f64 = 0.4;
 
 /// ESBC (RINEX 3.05, D observables on every signal, G+R+E+C; GLONASS
@@ -375,4 +377,30 @@ fn rinex_replay_speed_and_course_from_the_d_observables() {
         "0759 (no D observable): {} epochs, speed and course empty in each",
         w.len()
     );
+}
+
+/// The u-blox LEA-4T log (RXM-RAW, a receiver at rest, GPS L1): its
+/// doMes (Hz, positive approaching) gives every valid epoch a speed and
+/// course near 0 (a wrong sign or carrier would give hundreds of m/s).
+///
+/// Verifies: NMEA-VELOCITY-REPLAY
+#[test]
+fn ubx_replay_speed_and_course_from_do_mes() {
+    let ubx = rmc_vtg(&replay_nmea(&[
+        "--ubx",
+        &format!("{DATA}/ubx_20080526.ubx"),
+        "--systems",
+        "G",
+    ]));
+    let w = written(&ubx);
+    let s = speeds("LEA-4T", &w);
+    let (rms, max) = rms_max(&s);
+    println!(
+        "LEA-4T (UBX RXM-RAW): {} epochs, {} with speed and course; speed over ground rms {rms:.4} m/s, largest {max:.4} m/s",
+        w.len(),
+        s.len()
+    );
+    assert!(s.len() * 10 >= w.len() * 9, "{} of {}", s.len(), w.len());
+    assert!(max < PHONE_SPEED_TOL_M_S, "{max}");
+    readers_agree(&ubx, &w);
 }
