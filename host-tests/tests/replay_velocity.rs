@@ -297,9 +297,8 @@ fn rinex_doppler_known_motion_is_recovered() {
         let q = prepare_epoch(&nav, &moved, &opts, obs.approx_position_m);
         assert_eq!(q.observations(), sats, "the ranges do not move");
         let v1 = solve_velocity(&q.sats, &sats, is_used, rx, sigma).expect("velocity");
-        for k in 0..3 {
-            let got = v1.ecef_m_s[k] - v0.ecef_m_s[k];
-            worst_moved = worst_moved.max((got - known[k]).abs());
+        for ((a, b), want) in v1.ecef_m_s.iter().zip(&v0.ecef_m_s).zip(&known) {
+            worst_moved = worst_moved.max((a - b - want).abs());
         }
         solved += 1;
     }

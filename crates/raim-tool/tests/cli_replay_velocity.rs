@@ -11,7 +11,6 @@
 //!
 //!     cargo test --release -p raim-tool --test cli_replay_velocity -- --nocapture
 
-#[allow(dead_code)]
 #[path = "../../../host-tests/tests/rtcm_common/mod.rs"]
 mod rtcm_common;
 
