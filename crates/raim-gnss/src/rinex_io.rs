@@ -57,6 +57,51 @@ pub struct CodeObs {
     /// 2's S1/S2 are in receiver units and not read), an MSM's DF403 or
     /// DF408, a UBX RXM-RAWX cno.
     pub cn0_dbhz: Option<f64>,
+    /// The signal's Doppler measurement, when the source gives it: a
+    /// RINEX D observable of the same band ([`doppler_matches`]), an
+    /// MSM5/MSM7 phase-range rate, a UBX doMes.
+    pub rate: Option<SignalRate>,
+}
+
+/// A signal's Doppler measurement, in the form its source gives it
+/// (docs/REPLAY.md "Speed and course"); the replay turns it into a range
+/// rate (`crate::ranging`, [`SignalRate::range_rate_m_s`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SignalRate {
+    /// A Doppler shift, Hz, positive for an approaching satellite (RINEX
+    /// 3.05 §5.9: D observables; u-blox RXM-RAWX/RXM-RAW doMes).
+    Doppler { hz: f64 },
+    /// A phase-range rate, m/s, positive for a receding satellite (RTCM
+    /// 10403.3 MSM5/MSM7 DF399 + DF404), as the unit keeps it: whole mm/s
+    /// (`raim_recv::rtcm`).
+    RangeRate { m_s: f64 },
+}
+
+impl SignalRate {
+    /// The range rate, m/s (positive receding): a Doppler shift D on a
+    /// carrier of `carrier_hz` is -D c / f (RINEX 3.05 §5.9); None when
+    /// the carrier is unknown or the result is not finite.
+    pub fn range_rate_m_s(self, carrier_hz: Option<f64>) -> Option<f64> {
+        let r = match self {
+            SignalRate::RangeRate { m_s } => m_s,
+            SignalRate::Doppler { hz } => -hz * crate::ephemeris::C_M_S / carrier_hz?,
+        };
+        r.is_finite().then_some(r)
+    }
+}
+
+/// Whether the RINEX Doppler observable `doppler` ("D1C" in RINEX 3, "D1"
+/// in RINEX 2, without its "D") is the Doppler of the pseudorange code
+/// `code` ("C1C", "C1", "P1"): the same band and attribute in RINEX 3; in
+/// RINEX 2 (no attribute) the same band, so that D1 serves C1 and P1.
+pub fn doppler_matches(doppler: &str, code: &str) -> bool {
+    let Some(signal) = code.get(1..) else {
+        return false;
+    };
+    match doppler.len() {
+        1 => signal.get(..1) == Some(doppler),
+        _ => signal == doppler,
+    }
 }
 
 /// One observation epoch: receiver time and every satellite's pseudoranges.
@@ -124,6 +169,7 @@ impl ObsData {
                     code: code.clone(),
                     value_m: s.value,
                     cn0_dbhz: None,
+                    rate: None,
                 });
             }
             // Each code's C/N0: the RINEX 3 S observable of its signal.
@@ -147,6 +193,29 @@ impl ObsData {
                     .find(|c| c.code.strip_prefix('C') == Some(signal))
                 {
                     c.cn0_dbhz = Some(s.value);
+                }
+            }
+            // Each code's Doppler: the D observable of its signal.
+            for s in &obs.signals {
+                let Observable::Doppler(name) = &s.observable else {
+                    continue;
+                };
+                let (Some(system), Some(signal)) =
+                    (system_of(s.sv.constellation), name.strip_prefix('D'))
+                else {
+                    continue;
+                };
+                if !(1..=2).contains(&signal.len()) || !s.value.is_finite() {
+                    continue;
+                }
+                let Some(codes) = sats.get_mut(&SatId::new(system, s.sv.prn)) else {
+                    continue;
+                };
+                for c in codes
+                    .iter_mut()
+                    .filter(|c| doppler_matches(signal, &c.code))
+                {
+                    c.rate = Some(SignalRate::Doppler { hz: s.value });
                 }
             }
             epochs.push(ObsEpoch {

@@ -58,7 +58,7 @@ use raim_gnss::glonass::{
     glonass_time_of_day_to_gps_with_s, glonass_time_of_day_with_s, GlonassEphemeris,
     GlonassIcdFields,
 };
-use raim_gnss::rinex_io::CodeObs;
+use raim_gnss::rinex_io::{CodeObs, SignalRate};
 use raim_gnss::ObsEpoch;
 use rtcm_rs::msg::message::Message;
 use rtcm_rs::MessageFrame;
@@ -127,6 +127,21 @@ struct PendingGlonass {
     fields: GlonassIcdFields,
     tb_tod_s: f64,
     near: Option<(i64, i64)>,
+}
+
+/// The most a kept phase-range rate may be, whole mm/s (24-bit two's
+/// complement, as raim-nav's receiver packs it).
+const UNIT_RATE_LIMIT_MM_S: f64 = (1 << 23) as f64;
+
+/// An MSM phase-range rate (DF399 + DF404, m/s) as the unit's receiver
+/// keeps it (raim-nav's `rtcm::receiver`, "Speed and course" in
+/// docs/RECEIVERS.md): rounded to whole mm/s (half away from zero), none
+/// at or beyond 2^23 mm/s or not finite; so that the host's replay of a
+/// stream solves the unit's velocity to the bit.
+pub fn unit_rate_m_s(rate_m_s: f64) -> Option<f64> {
+    let mm = (rate_m_s * 1000.0).round();
+    // |mm| < 2^23: exact in i32.
+    (mm.abs() < UNIT_RATE_LIMIT_MM_S).then(|| f64::from(mm as i32) * 0.001)
 }
 
 /// The RTCM 3 decoder (see the module documentation).
@@ -256,11 +271,28 @@ impl Rtcm3 {
 
     fn message(&mut self, number: Option<u16>, msg: Message, out: &mut Vec<Item>) {
         let n = number.unwrap_or(0);
+        // The phase-range rate of an MSM5/MSM7 signal (DF399 + DF404, as
+        // the unit keeps it: [`unit_rate_m_s`]); MSM4/MSM6 carry none.
+        macro_rules! rate {
+            (rate, $m:ident, $sig:ident) => {
+                $m.data_segment
+                    .satellite_data
+                    .iter()
+                    .find(|s| s.satellite_id == $sig.satellite_id)
+                    .and_then(|s| s.gnss_satellite_rough_phaserange_rates_m_s)
+                    .zip($sig.gnss_signal_fine_phaserange_rate_m_s)
+                    .and_then(|(rough, fine)| unit_rate_m_s(f64::from(rough) + fine))
+                    .map(|m_s| SignalRate::RangeRate { m_s })
+            };
+            (norate, $m:ident, $sig:ident) => {
+                None
+            };
+        }
         macro_rules! msm {
-            ($m:expr, $time:expr, $sys:expr, $fine:ident, $cnr:ident) => {{
-                msm!($m, $time, $sys, $fine, $cnr, None)
+            ($m:expr, $time:expr, $sys:expr, $fine:ident, $cnr:ident, $rate:ident) => {{
+                msm!($m, $time, $sys, $fine, $cnr, None, $rate)
             }};
-            ($m:expr, $time:expr, $sys:expr, $fine:ident, $cnr:ident, $alt:expr) => {{
+            ($m:expr, $time:expr, $sys:expr, $fine:ident, $cnr:ident, $alt:expr, $rate:ident) => {{
                 let time = $time;
                 let m = &$m;
                 let rough: BTreeMap<u8, f64> = m
@@ -289,6 +321,7 @@ impl Rtcm3 {
                             value_m: (r + fine) * LIGHT_MS_M,
                             // DF403 (u8, 1 dB-Hz) or DF408 (2^-4 dB-Hz).
                             cn0_dbhz: sig.$cnr.map(f64::from),
+                            rate: rate!($rate, m, sig),
                         },
                     ));
                 }
@@ -304,28 +337,32 @@ impl Rtcm3 {
                 gps(m.gps_epoch_time_ms),
                 System::Gps,
                 gnss_signal_fine_pseudorange_ms,
-                gnss_signal_cnr_dbhz
+                gnss_signal_cnr_dbhz,
+                norate
             ),
             Message::Msg1075(m) => msm!(
                 m,
                 gps(m.gps_epoch_time_ms),
                 System::Gps,
                 gnss_signal_fine_pseudorange_ms,
-                gnss_signal_cnr_dbhz
+                gnss_signal_cnr_dbhz,
+                rate
             ),
             Message::Msg1076(m) => msm!(
                 m,
                 gps(m.gps_epoch_time_ms),
                 System::Gps,
                 gnss_signal_fine_pseudorange_ext_ms,
-                gnss_signal_cnr_ext_dbhz
+                gnss_signal_cnr_ext_dbhz,
+                norate
             ),
             Message::Msg1077(m) => msm!(
                 m,
                 gps(m.gps_epoch_time_ms),
                 System::Gps,
                 gnss_signal_fine_pseudorange_ext_ms,
-                gnss_signal_cnr_ext_dbhz
+                gnss_signal_cnr_ext_dbhz,
+                rate
             ),
             Message::Msg1084(m) => {
                 self.glo_msg_tod_ms = Some(i64::from(m.glo_epoch_time_ms));
@@ -334,7 +371,8 @@ impl Rtcm3 {
                     None,
                     System::Glonass,
                     gnss_signal_fine_pseudorange_ms,
-                    gnss_signal_cnr_dbhz
+                    gnss_signal_cnr_dbhz,
+                    norate
                 )
             }
             Message::Msg1085(m) => {
@@ -349,7 +387,8 @@ impl Rtcm3 {
                     None,
                     System::Glonass,
                     gnss_signal_fine_pseudorange_ms,
-                    gnss_signal_cnr_dbhz
+                    gnss_signal_cnr_dbhz,
+                    rate
                 )
             }
             Message::Msg1086(m) => {
@@ -359,7 +398,8 @@ impl Rtcm3 {
                     None,
                     System::Glonass,
                     gnss_signal_fine_pseudorange_ext_ms,
-                    gnss_signal_cnr_ext_dbhz
+                    gnss_signal_cnr_ext_dbhz,
+                    norate
                 )
             }
             Message::Msg1087(m) => {
@@ -374,7 +414,8 @@ impl Rtcm3 {
                     None,
                     System::Glonass,
                     gnss_signal_fine_pseudorange_ext_ms,
-                    gnss_signal_cnr_ext_dbhz
+                    gnss_signal_cnr_ext_dbhz,
+                    rate
                 )
             }
             Message::Msg1094(m) => msm!(
@@ -382,56 +423,64 @@ impl Rtcm3 {
                 gps(m.gal_epoch_time_ms),
                 System::Galileo,
                 gnss_signal_fine_pseudorange_ms,
-                gnss_signal_cnr_dbhz
+                gnss_signal_cnr_dbhz,
+                norate
             ),
             Message::Msg1095(m) => msm!(
                 m,
                 gps(m.gal_epoch_time_ms),
                 System::Galileo,
                 gnss_signal_fine_pseudorange_ms,
-                gnss_signal_cnr_dbhz
+                gnss_signal_cnr_dbhz,
+                rate
             ),
             Message::Msg1096(m) => msm!(
                 m,
                 gps(m.gal_epoch_time_ms),
                 System::Galileo,
                 gnss_signal_fine_pseudorange_ext_ms,
-                gnss_signal_cnr_ext_dbhz
+                gnss_signal_cnr_ext_dbhz,
+                norate
             ),
             Message::Msg1097(m) => msm!(
                 m,
                 gps(m.gal_epoch_time_ms),
                 System::Galileo,
                 gnss_signal_fine_pseudorange_ext_ms,
-                gnss_signal_cnr_ext_dbhz
+                gnss_signal_cnr_ext_dbhz,
+                rate
             ),
             Message::Msg1114(m) => msm!(
                 m,
                 gps(m.qzss_epoch_time_ms),
                 System::Qzss,
                 gnss_signal_fine_pseudorange_ms,
-                gnss_signal_cnr_dbhz
+                gnss_signal_cnr_dbhz,
+                norate
             ),
             Message::Msg1115(m) => msm!(
                 m,
                 gps(m.qzss_epoch_time_ms),
                 System::Qzss,
                 gnss_signal_fine_pseudorange_ms,
-                gnss_signal_cnr_dbhz
+                gnss_signal_cnr_dbhz,
+                rate
             ),
             Message::Msg1116(m) => msm!(
                 m,
                 gps(m.qzss_epoch_time_ms),
                 System::Qzss,
                 gnss_signal_fine_pseudorange_ext_ms,
-                gnss_signal_cnr_ext_dbhz
+                gnss_signal_cnr_ext_dbhz,
+                norate
             ),
             Message::Msg1117(m) => msm!(
                 m,
                 gps(m.qzss_epoch_time_ms),
                 System::Qzss,
                 gnss_signal_fine_pseudorange_ext_ms,
-                gnss_signal_cnr_ext_dbhz
+                gnss_signal_cnr_ext_dbhz,
+                rate
             ),
             Message::Msg1124(m) => msm!(
                 m,
@@ -439,7 +488,8 @@ impl Rtcm3 {
                 System::Beidou,
                 gnss_signal_fine_pseudorange_ms,
                 gnss_signal_cnr_dbhz,
-                Some(bds_as_gps(m.bds_epoch_time_ms))
+                Some(bds_as_gps(m.bds_epoch_time_ms)),
+                norate
             ),
             Message::Msg1125(m) => msm!(
                 m,
@@ -447,7 +497,8 @@ impl Rtcm3 {
                 System::Beidou,
                 gnss_signal_fine_pseudorange_ms,
                 gnss_signal_cnr_dbhz,
-                Some(bds_as_gps(m.bds_epoch_time_ms))
+                Some(bds_as_gps(m.bds_epoch_time_ms)),
+                rate
             ),
             Message::Msg1126(m) => msm!(
                 m,
@@ -455,7 +506,8 @@ impl Rtcm3 {
                 System::Beidou,
                 gnss_signal_fine_pseudorange_ext_ms,
                 gnss_signal_cnr_ext_dbhz,
-                Some(bds_as_gps(m.bds_epoch_time_ms))
+                Some(bds_as_gps(m.bds_epoch_time_ms)),
+                norate
             ),
             Message::Msg1127(m) => msm!(
                 m,
@@ -463,7 +515,8 @@ impl Rtcm3 {
                 System::Beidou,
                 gnss_signal_fine_pseudorange_ext_ms,
                 gnss_signal_cnr_ext_dbhz,
-                Some(bds_as_gps(m.bds_epoch_time_ms))
+                Some(bds_as_gps(m.bds_epoch_time_ms)),
+                rate
             ),
             Message::Msg1002(m) => {
                 let mut obs = Vec::new();
@@ -476,6 +529,7 @@ impl Rtcm3 {
                                 code: code.into(),
                                 value_m: p + amb,
                                 cn0_dbhz: s.l1_cnr_dbhz.map(f64::from),
+                                rate: None,
                             },
                         ));
                     }
@@ -503,6 +557,7 @@ impl Rtcm3 {
                             code: code.into(),
                             value_m: l1,
                             cn0_dbhz: s.l1_cnr_dbhz.map(f64::from),
+                            rate: None,
                         },
                     ));
                     if let Some(d) = s.l2_l1_pseudorange_diff_m {
@@ -516,6 +571,7 @@ impl Rtcm3 {
                                 code: code.into(),
                                 value_m: l1 + fx(d),
                                 cn0_dbhz: s.l2_cnr_dbhz.map(f64::from),
+                                rate: None,
                             },
                         ));
                     }
@@ -613,6 +669,7 @@ impl Rtcm3 {
                                 code: code.into(),
                                 value_m: p + s.l1_pseudorange_amb_m,
                                 cn0_dbhz: s.l1_cnr_dbhz.map(f64::from),
+                                rate: None,
                             },
                         ));
                     }
@@ -635,6 +692,7 @@ impl Rtcm3 {
                             code: code.into(),
                             value_m: l1,
                             cn0_dbhz: s.l1_cnr_dbhz.map(f64::from),
+                            rate: None,
                         },
                     ));
                     // DF046: 0 C/A, 1 P (2, 3 reserved: not used).
@@ -650,6 +708,7 @@ impl Rtcm3 {
                                 code: code.into(),
                                 value_m: l1 + fx(d),
                                 cn0_dbhz: s.l2_cnr_dbhz.map(f64::from),
+                                rate: None,
                             },
                         ));
                     }
@@ -895,5 +954,21 @@ mod tests {
         assert_eq!(latest_week(685, 1024, 2400), 1709);
         assert_eq!(latest_week(352, 1024, 2400), 2400);
         assert_eq!(latest_week(353, 1024, 2400), 1377);
+    }
+
+    /// A phase-range rate as the unit keeps it: whole mm/s, rounded half
+    /// away from zero (raim-nav's `pack_rate_mm_s`), none at or beyond
+    /// 2^23 mm/s or not finite.
+    #[test]
+    fn rates_are_kept_to_the_millimetre_per_second() {
+        assert_eq!(unit_rate_m_s(1.23456), Some(1.235));
+        assert_eq!(unit_rate_m_s(-712.3454), Some(-712.345));
+        assert_eq!(unit_rate_m_s(-0.0005), Some(-0.001));
+        assert_eq!(unit_rate_m_s(0.0005), Some(0.001));
+        assert_eq!(unit_rate_m_s(8388.6074), Some(8388.607));
+        assert_eq!(unit_rate_m_s(8388.608), None);
+        assert_eq!(unit_rate_m_s(-8388.608), None);
+        assert_eq!(unit_rate_m_s(f64::NAN), None);
+        assert_eq!(unit_rate_m_s(f64::INFINITY), None);
     }
 }

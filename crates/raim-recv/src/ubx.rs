@@ -24,7 +24,7 @@
 
 use raim_core::{SatId, System};
 use raim_gnss::ephemeris::WEEK_S;
-use raim_gnss::rinex_io::CodeObs;
+use raim_gnss::rinex_io::{CodeObs, SignalRate};
 use raim_gnss::ObsEpoch;
 
 use crate::lnav::{Decoded, LnavCollector, Subframe};
@@ -220,6 +220,12 @@ impl Ubx {
                     value_m: pr_m,
                     // cno: I1, dB-Hz.
                     cn0_dbhz: Some(f64::from(cno as i8)),
+                    // doMes: R4, Hz, positive approaching (u-blox 5/6
+                    // protocol specification, RXM-RAW).
+                    rate: le::<4>(p, q + 16)
+                        .map(f32::from_le_bytes)
+                        .filter(|d| d.is_finite())
+                        .map(|d| SignalRate::Doppler { hz: f64::from(d) }),
                 });
         }
         self.counts.epochs += 1;
@@ -296,6 +302,10 @@ impl Ubx {
                     code: code.into(),
                     value_m: pr,
                     cn0_dbhz: Some(f64::from(meas.cno())),
+                    // doMes: Hz, positive approaching (RXM-RAWX).
+                    rate: Some(meas.do_mes())
+                        .filter(|d| d.is_finite())
+                        .map(|d| SignalRate::Doppler { hz: f64::from(d) }),
                 });
         }
         self.counts.epochs += 1;

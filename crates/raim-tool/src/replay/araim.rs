@@ -524,7 +524,7 @@ impl AraimEngine {
                 let r = host_epoch(a, solver, cfg, ism, e, sats, monitor, unix_s);
                 let sentences = if nmea {
                     let cn0: Vec<u8> = e.sats.iter().map(|s| s.cn0_dbhz).collect();
-                    host_nmea(r.as_ref().ok(), unix_s, sats, &cn0, e.reference_m)
+                    host_nmea(r.as_ref().ok(), unix_s, e, sats, &cn0, &solver.sigma_model)
                 } else {
                     Vec::new()
                 };
@@ -595,25 +595,27 @@ pub(super) fn host_verdict(
 }
 
 /// The NMEA sentences of an ARAIM epoch as the firmware writes them
-/// (`raim-server`: `WireResult::set_from_araim`, then the epoch writer), or
-/// a refused epoch's no-fix sentences.
+/// (`raim-server`: `WireResult::set_from_araim`, then the epoch writer,
+/// with the speed and course of the source's Doppler, `super::velocity`),
+/// or a refused epoch's no-fix sentences.
 fn host_nmea(
     r: Option<&WireAraimResult>,
     unix_s: f64,
+    e: &PreparedEpoch,
     sats: &[RangeObservation],
     cn0_dbhz: &[u8],
-    apriori_m: Option<[f64; 3]>,
+    model: &raim_core::sigma::SigmaModel,
 ) -> Vec<String> {
     let mut wire = WireResult::empty();
     match r {
         Some(r) => wire.set_from_araim(r, sats.iter().map(|s| s.id)),
         None => wire.time_s = unix_s,
     }
-    let epoch = Epoch::ranges(unix_s, sats, apriori_m);
+    let epoch = Epoch::ranges(unix_s, sats, e.reference_m);
     let sky = raim_proto::nmea::Sky {
         epoch: &epoch,
         cn0_dbhz,
-        velocity: None,
+        velocity: super::velocity::ground_velocity(&wire, e, sats, model),
     };
     raim_proto::nmea::epoch_sentences(&wire, &sky, raim_proto::nmea::BUILT)
         .map(|v| v.iter().map(|s| s.trim_end().to_string()).collect())

@@ -9,6 +9,7 @@ use std::rc::Rc;
 
 use anyhow::Result;
 use raim_core::{Config, Epoch, Raim};
+use raim_proto::nmea::GroundVelocity;
 use raim_proto::result::WireResult;
 use raim_qemu::QemuSession;
 
@@ -56,13 +57,16 @@ impl Engine {
     /// own second-UART output under QEMU, the same writer on the host. A
     /// transport failure (QEMU gone, timeout) is an `Err` of the outer result.
     /// `cn0_dbhz`: the satellites' C/N0 for the host's GSV (the source's,
-    /// e.g. RINEX S observables); the protocol carries none, so the
-    /// firmware's GSV has no C/N0.
+    /// e.g. RINEX S observables); `velocity`: the speed and course of the
+    /// answer for the host's RMC and VTG (`super::velocity`, from the
+    /// source's Doppler). The protocol carries neither, so the firmware's
+    /// GSV has no C/N0 and its RMC and VTG no speed or course.
     pub fn process(
         &mut self,
         cfg: &Config,
         epoch: &Epoch<'_>,
         cn0_dbhz: &[u8],
+        velocity: &dyn Fn(&WireResult) -> Option<GroundVelocity>,
     ) -> Result<(Result<WireResult, String>, Vec<String>)> {
         Ok(match self {
             Engine::Host(raim) => match raim.process(cfg, epoch) {
@@ -71,7 +75,7 @@ impl Engine {
                     let sky = raim_proto::nmea::Sky {
                         epoch,
                         cn0_dbhz,
-                        velocity: None,
+                        velocity: velocity(&w),
                     };
                     let nmea = raim_proto::nmea::epoch_sentences(&w, &sky, raim_proto::nmea::BUILT)
                         .map(|v| v.iter().map(|s| s.trim_end().to_string()).collect())

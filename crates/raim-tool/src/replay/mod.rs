@@ -22,6 +22,7 @@ pub mod stanford;
 pub mod stats;
 pub mod summary;
 pub mod usage;
+pub mod velocity;
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -474,7 +475,9 @@ fn run_core_on(
             e.reference_m,
         );
         let cn0: Vec<u8> = e.sats.iter().map(|s| s.cn0_dbhz).collect();
-        let (outcome, nmea) = engine.process(cfg, &wire_epoch, &cn0)?;
+        let speed =
+            |w: &raim_proto::WireResult| velocity::ground_velocity(w, e, &sats, &cfg.sigma_model);
+        let (outcome, nmea) = engine.process(cfg, &wire_epoch, &cn0, &speed)?;
         let mut rec = match outcome {
             Ok(r) => {
                 let mut rec = EpochRecord::from_result(

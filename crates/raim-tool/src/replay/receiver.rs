@@ -452,7 +452,10 @@ impl<'a> Live<'a> {
             p.reference_m,
         );
         let cn0: Vec<u8> = p.sats.iter().map(|s| s.cn0_dbhz).collect();
-        let (outcome, nmea) = self.engine.process(&self.cfg, &wire, &cn0)?;
+        let speed = |w: &raim_proto::WireResult| {
+            super::velocity::ground_velocity(w, &p, &sats, &self.cfg.sigma_model)
+        };
+        let (outcome, nmea) = self.engine.process(&self.cfg, &wire, &cn0, &speed)?;
         let mut rec = match outcome {
             Ok(r) => {
                 self.tally.answered();
@@ -524,6 +527,7 @@ mod tests {
             group_delay_m: 0.0,
             iono_m: 0.0,
             tropo_m: 0.0,
+            rate: None,
         }
     }
 
