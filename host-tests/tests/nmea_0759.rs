@@ -165,8 +165,11 @@ fn gpsd_reports(epochs: &[Vec<String>]) -> Vec<serde_json::Value> {
     let source = TcpListener::bind("127.0.0.1:0").unwrap();
     let src_port = source.local_addr().unwrap().port();
     let gpsd_port = free_port();
-    let dir = std::env::temp_dir().join(format!("raim-gpsd-{}-{src_port}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    // gpsd's control socket, in a directory removed when the test ends.
+    let dir = tempfile::Builder::new()
+        .prefix("raim-gpsd-")
+        .tempdir()
+        .unwrap();
     let _gpsd = Gpsd(
         Command::new(if std::path::Path::new("/usr/sbin/gpsd").exists() {
             "/usr/sbin/gpsd"
@@ -175,7 +178,7 @@ fn gpsd_reports(epochs: &[Vec<String>]) -> Vec<serde_json::Value> {
         })
         .args(["-b", "-n", "-N", "-S", &gpsd_port.to_string()])
         .arg("-F")
-        .arg(dir.join("control.sock"))
+        .arg(dir.path().join("control.sock"))
         .arg(format!("tcp://127.0.0.1:{src_port}"))
         .stdout(Stdio::null())
         .stderr(Stdio::null())

@@ -792,7 +792,7 @@ fn qemu_units_sharing_a_key_do_not_share_a_nonce() {
 /// other tests' `provision_key` copies share one name, and each removes
 /// it when done).
 fn own_keyed_copy(machine: Machine, tag: &str) -> std::path::PathBuf {
-    let own = std::env::temp_dir().join(format!("raim-{tag}-{}.elf", std::process::id()));
+    let own = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("raim-{tag}.elf"));
     std::fs::copy(elf(machine), &own).unwrap();
     let keyed = raim_qemu::provision_key(&own, &KEY).unwrap();
     let _ = std::fs::remove_file(own);
@@ -830,7 +830,7 @@ fn qemu_a_recorded_change_is_refused_after_a_power_cycle() {
         )
         .expect("qemu-system-arm with the firmware")
     };
-    let saved = std::env::temp_dir().join(format!("raim-boot-region-{}", std::process::id()));
+    let saved = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim-boot-region");
 
     // Power-on 1.
     let mut fw = power_on(None);
@@ -955,7 +955,7 @@ fn qemu_netduinoplus2_cannot_count_boots_and_takes_no_authenticated_change() {
 fn qemu_boot_counter_across_resets_within_a_session() {
     use raim_proto::boot_counter::BootCounterStatus;
     let keyed = own_keyed_copy(Machine::Mps2An386, "resets");
-    let saved = std::env::temp_dir().join(format!("raim-resets-region-{}", std::process::id()));
+    let saved = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim-resets-region");
     let options = |boot_region| Options {
         machine: Machine::Mps2An386,
         raw: true,

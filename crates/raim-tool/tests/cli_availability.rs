@@ -17,9 +17,9 @@ fn data(name: &str) -> String {
     format!("{ROOT}/../shared/data/{name}")
 }
 
-/// A fresh directory under the system temp dir.
+/// A fresh directory under the target's scratch directory.
 fn tmp_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("raim-avail-{}-{tag}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("raim-avail-{tag}"));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).expect("tmp dir");
     d

@@ -191,7 +191,7 @@ fn analysis_defaults() {
 /// Verifies: TOOL-DEFAULTS, RX-STREAM-FAULT
 #[test]
 fn rtcm_fault_defaults() {
-    let dir = std::env::temp_dir().join(format!("raim-cli-defaults-rtcm-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim-cli-defaults-rtcm");
     std::fs::create_dir_all(&dir).expect("temp dir");
     let out = dir.join("gmsd7_g06.rtcm3");
     let out = out.to_str().expect("utf-8 path");
@@ -284,7 +284,7 @@ fn rtcm_fault_defaults() {
 /// Verifies: TOOL-DEFAULTS, SPEC-14
 #[test]
 fn availability_defaults() {
-    let dir = std::env::temp_dir().join(format!("raim-cli-defaults-avail-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim-cli-defaults-avail");
     std::fs::create_dir_all(&dir).expect("temp dir");
     let run = format!("{REPO}/docs/runs/availability_maast_g24e24.toml");
     let out = dir.to_str().expect("utf-8 path");
@@ -303,7 +303,7 @@ fn availability_defaults() {
 #[test]
 fn provision_defaults() {
     let elf = raim_qemu::firmware_elf().expect("firmware build");
-    let dir = std::env::temp_dir().join(format!("raim-cli-defaults-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim-cli-defaults");
     std::fs::create_dir_all(&dir).expect("temp dir");
     let out = dir.join("sealed.elf");
     let (code, stdout, err) = raim(

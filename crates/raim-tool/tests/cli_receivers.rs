@@ -51,7 +51,7 @@ fn n(v: &serde_json::Value, k: &str) -> u64 {
 
 /// A scratch directory for this test binary.
 fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("raim-cli-receivers-{}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim-cli-receivers");
     std::fs::create_dir_all(&d).unwrap();
     d.join(name)
 }

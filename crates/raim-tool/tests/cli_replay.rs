@@ -78,7 +78,7 @@ fn json_lines_and_summary() {
 /// The same faults from a TOML scenario give the same output.
 #[test]
 fn scenario_file_equals_flags() {
-    let dir = std::env::temp_dir().join(format!("raim-replay-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim-replay");
     std::fs::create_dir_all(&dir).unwrap();
     let scen = dir.join("s.toml");
     std::fs::write(
@@ -162,7 +162,7 @@ fn missing_file_is_an_error_not_a_panic() {
 /// `--plot` writes a PNG of the configured size (1800 x 1900).
 #[test]
 fn plot_is_a_png() {
-    let png = std::env::temp_dir().join(format!("raim-replay-plot-{}.png", std::process::id()));
+    let png = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim-replay-plot.png");
     let mut a = base();
     a.extend(
         [

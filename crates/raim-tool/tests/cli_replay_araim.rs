@@ -139,7 +139,7 @@ fn esbc_galileo_wide_fault_alarms_with_two_and_is_excluded_with_three() {
 
 #[test]
 fn uniform_galileo_step_is_the_galileo_clock() {
-    let plot = std::env::temp_dir().join("raim_araim_replay_test.png");
+    let plot = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim_araim_replay_test.png");
     let _ = std::fs::remove_file(&plot);
     let (clean, _) = run(&["--systems", "GEC"]);
     let (stepped, s) = run(&[

@@ -161,7 +161,7 @@ fn araim_nmea_on_the_host() {
     assert_eq!(indented, s.lines().count());
     assert!(wt.stdout.contains("| epochs |"), "the summary table");
     // --nmea-file beside --json: the same stream.
-    let file = std::env::temp_dir().join(format!("raim-araim-{}.nmea", std::process::id()));
+    let file = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim-araim.nmea");
     let j = raim(&["--json", "--nmea-file", file.to_str().expect("utf8")]);
     assert_eq!(j.code, 0, "{}", j.stderr);
     assert_eq!(std::fs::read_to_string(&file).expect("nmea file"), *s);
@@ -176,7 +176,7 @@ fn f(r: &Value, k: &str) -> Option<f64> {
 fn qemu_araim_decides_as_the_host_on_esbc_with_a_step() {
     let host = raim(&["--json"]);
     assert_eq!(host.code, 0, "{}", host.stderr);
-    let file = std::env::temp_dir().join(format!("raim-araim-qemu-{}.nmea", std::process::id()));
+    let file = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim-araim-qemu.nmea");
     let dev = raim(&[
         "--json",
         "--target",

@@ -95,7 +95,7 @@ fn geop_step_calibrated_threshold_several_seeds() {
     assert!(p95 <= MAX_DELAY_EPOCHS, "{v}");
     assert!(v["threshold"].as_f64().unwrap().is_finite());
 
-    let plot = std::env::temp_dir().join("raim_pf_geop_test.png");
+    let plot = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim_pf_geop_test.png");
     let first = raim(&base);
     let s = summary(&first);
     assert!(s["threshold"].as_f64().unwrap().is_finite());

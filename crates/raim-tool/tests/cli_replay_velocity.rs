@@ -97,7 +97,7 @@ fn rmc_vtg(lines: &[String]) -> Vec<(String, String)> {
 #[test]
 fn replay_rtcm3_rmc_and_vtg_equal_the_unit_under_qemu() {
     let bytes = gmsd7_warm_in_window();
-    let file = std::env::temp_dir().join(format!("raim-gmsd7-vel-{}.rtcm3", std::process::id()));
+    let file = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim-gmsd7-vel.rtcm3");
     std::fs::write(&file, &bytes).unwrap();
     let host = rmc_vtg(&replay_nmea(&[
         "--rtcm3",

@@ -52,7 +52,7 @@ fn raim(args: &[&str], stdin: &str) -> Run {
 }
 
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("raim-cli-tool-{}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim-cli-tool");
     std::fs::create_dir_all(&d).expect("temp dir");
     d.join(name)
 }
@@ -395,7 +395,7 @@ fn bad_inputs_are_named_and_explained() {
     let empty = tmp("empty.nav");
     std::fs::write(&empty, "").expect("write");
     let readme = format!("{ROOT}/README.md");
-    let dir = std::env::temp_dir();
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
     let (o, n) = (obs(), nav());
     let e = empty.to_str().expect("utf8");
     let d = dir.to_str().expect("utf8");

@@ -50,7 +50,7 @@ fn no_panic(stderr: &str) {
 }
 
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("raim-cli-user-{}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim-cli-user");
     std::fs::create_dir_all(&d).unwrap();
     d.join(name)
 }

@@ -341,7 +341,7 @@ fn host_stream_replay_under_araim_equals_the_unit() {
     let (bytes, carried) = esbc::esbc_stream(delta_weeks);
     let ism = ism(&carried);
     let got = stream_answers(&bytes, &ism);
-    let file = std::env::temp_dir().join(format!("raim-esbc-araim-{}.rtcm3", std::process::id()));
+    let file = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("raim-esbc-araim.rtcm3");
     std::fs::write(&file, &bytes).unwrap();
     let (want, summary) = replay_with(&["--rtcm3", file.to_str().unwrap()]);
     let _ = std::fs::remove_file(&file);
