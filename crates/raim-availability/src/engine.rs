@@ -212,6 +212,7 @@ pub fn evaluate(
     monitor: &mut Engine,
     obs: &[LinearObservation],
 ) -> Result<EpochOutcome, MonitorError> {
+    monitor.set_estimator(study.estimator)?;
     let verdict = match monitor.linear(
         &study.cfg,
         &study.ism,
