@@ -367,3 +367,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         }
     }
 }
+
+#[cfg(test)]
+#[path = "adjusted_tests.rs"]
+mod tests;
