@@ -484,3 +484,7 @@ pub fn run_users<R: Send>(
 /// is boxed, and `Araim::process` forms its output there
 /// (docs/ARAIM.md "Not done": about 170 B per mode).
 pub const STACK_BYTES: usize = 4 * std::mem::size_of::<Engine>() + (16 << 20);
+
+#[cfg(test)]
+#[path = "engine_adjusted_tests.rs"]
+mod adjusted_tests;

@@ -1228,6 +1228,55 @@ p_const = 1e-8
         );
     }
 
+    /// `position`: the plain estimator by default; `"adjusted"` with the
+    /// service level's sigma_acc limit on every axis unless
+    /// `adjusted_sigma_acc_max_m` gives them; the limits refused without
+    /// `position = "adjusted"` or out of raim-core's bound, an unknown
+    /// estimator refused, each named by its line.
+    ///
+    /// Verifies: TOOL-AVAIL-ADJUSTED
+    #[test]
+    fn the_position_estimator_keys() {
+        let grid = "[grid]\nkind = \"world\"\nstep_deg = 30.0";
+        let with = |top: &str| {
+            text(grid, "level = \"LPV-200\"", "")
+                .replacen("mask_deg = 5.0\n", &format!("mask_deg = 5.0\n{top}\n"), 1)
+        };
+        assert_eq!(load_text(&with("")).unwrap().estimator, Estimator::AllInView);
+        assert_eq!(
+            load_text(&with("position = \"adjusted\"")).unwrap().estimator,
+            Estimator::Adjusted {
+                sigma_acc_max_m: [1.87; 3]
+            }
+        );
+        assert_eq!(
+            load_text(&with(
+                "position = \"adjusted\"\nadjusted_sigma_acc_max_m = [3.0, 3.0, 1.86]"
+            ))
+            .unwrap()
+            .estimator,
+            Estimator::Adjusted {
+                sigma_acc_max_m: [3.0, 3.0, 1.86]
+            }
+        );
+        let e = load_text(&with("adjusted_sigma_acc_max_m = [3.0, 3.0, 1.86]")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t.toml:3: adjusted_sigma_acc_max_m is read only with position = \"adjusted\""
+        );
+        let e = load_text(&with(
+            "position = \"adjusted\"\nadjusted_sigma_acc_max_m = [3.0, 30.0, 1.86]",
+        ))
+        .unwrap_err();
+        assert!(
+            e.to_string().starts_with("t.toml:4: ")
+                && e.to_string().contains("adjusted_sigma_acc_max_m"),
+            "{e}"
+        );
+        let e = load_text(&with("position = \"optimal\"")).unwrap_err();
+        assert!(e.to_string().contains("unknown variant `optimal`"), "{e}");
+    }
+
     /// Satellites added by PRN from a second almanac (written here in
     /// YUMA: PRN 30 on PRN 3's orbit half a revolution ahead, and PRN 3
     /// moved by 0.5 rad): 25 GPS satellites with PRN 30's and the new PRN
