@@ -1239,12 +1239,20 @@ p_const = 1e-8
     fn the_position_estimator_keys() {
         let grid = "[grid]\nkind = \"world\"\nstep_deg = 30.0";
         let with = |top: &str| {
-            text(grid, "level = \"LPV-200\"", "")
-                .replacen("mask_deg = 5.0\n", &format!("mask_deg = 5.0\n{top}\n"), 1)
+            text(grid, "level = \"LPV-200\"", "").replacen(
+                "mask_deg = 5.0\n",
+                &format!("mask_deg = 5.0\n{top}\n"),
+                1,
+            )
         };
-        assert_eq!(load_text(&with("")).unwrap().estimator, Estimator::AllInView);
         assert_eq!(
-            load_text(&with("position = \"adjusted\"")).unwrap().estimator,
+            load_text(&with("")).unwrap().estimator,
+            Estimator::AllInView
+        );
+        assert_eq!(
+            load_text(&with("position = \"adjusted\""))
+                .unwrap()
+                .estimator,
             Estimator::Adjusted {
                 sigma_acc_max_m: [1.87; 3]
             }

@@ -94,7 +94,7 @@ impl Estimator {
     pub fn validate(&self) -> Result<(), AraimError> {
         if let Estimator::Adjusted { sigma_acc_max_m } = self {
             for (axis, &v) in sigma_acc_max_m.iter().enumerate() {
-                if !(v >= SIGMA_ACC_MAX_M.min && v <= SIGMA_ACC_MAX_M.max) {
+                if !(SIGMA_ACC_MAX_M.min..=SIGMA_ACC_MAX_M.max).contains(&v) {
                     return Err(AraimError::OutOfRange {
                         field: "adjusted_sigma_acc_max_m",
                         index: axis,
@@ -183,7 +183,7 @@ fn weak_mode<T: Real>(modes: &[super::FaultMode<T>], q: usize) -> Option<usize> 
         if !s.to_f64().is_finite() {
             continue;
         }
-        if best.map_or(true, |(_, b)| s > b) {
+        if best.is_none_or(|(_, b)| s > b) {
             best = Some((k, s));
         }
     }
@@ -191,7 +191,11 @@ fn weak_mode<T: Real>(modes: &[super::FaultMode<T>], q: usize) -> Option<usize> 
 }
 
 /// The configured PL output.
-fn configured(cfg: &AraimConfig, pl_add: ProtectionLevels, pl_exact: ProtectionLevels) -> ProtectionLevels {
+fn configured(
+    cfg: &AraimConfig,
+    pl_add: ProtectionLevels,
+    pl_exact: ProtectionLevels,
+) -> ProtectionLevels {
     match cfg.pl_output {
         PlOutput::AddBracket => pl_add,
         PlOutput::Exact => pl_exact,

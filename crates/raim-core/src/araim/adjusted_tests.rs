@@ -3,6 +3,8 @@
 //! mode, the PL by bisection on statrs' normal tail), its invariants, and
 //! the bits of the plain output where it does not apply.
 
+#![allow(clippy::needless_range_loop)]
+
 extern crate std;
 
 use super::super::tests::{appendix_d_sats, random_sky};
@@ -47,7 +49,10 @@ fn dense_rows(sats: &[AraimSat<f64>], removed: &[bool]) -> DMatrix<f64> {
         for c in 0..3 {
             g[(r, c)] = sats[i].g_enu[c];
         }
-        let col = systems.iter().position(|s| *s == sats[i].id.system).unwrap();
+        let col = systems
+            .iter()
+            .position(|s| *s == sats[i].id.system)
+            .unwrap();
         g[(r, 3 + col)] = 1.0;
         w[(r, r)] = 1.0 / sats[i].c_int_m2;
     }
@@ -77,7 +82,11 @@ fn dense_root(ff: (f64, f64), terms: &[(f64, f64, f64)], rhs: f64) -> f64 {
     let n = Normal::new(0.0, 1.0).unwrap();
     let q = |z: f64| n.sf(z);
     let f = |x: f64| {
-        2.0 * q((x - ff.0) / ff.1) + terms.iter().map(|&(p, o, s)| p * q((x - o) / s)).sum::<f64>()
+        2.0 * q((x - ff.0) / ff.1)
+            + terms
+                .iter()
+                .map(|&(p, o, s)| p * q((x - o) / s))
+                .sum::<f64>()
             - rhs
     };
     let (mut lo, mut hi) = (0.0, 1e4);
@@ -110,7 +119,12 @@ struct Dense {
     pl: [f64; 3],
 }
 
-fn dense(sats: &[AraimSat<f64>], plain: &AraimOutput<f64, 64>, cfg: &AraimConfig, lim: [f64; 3]) -> Dense {
+fn dense(
+    sats: &[AraimSat<f64>],
+    plain: &AraimOutput<f64, 64>,
+    cfg: &AraimConfig,
+    lim: [f64; 3],
+) -> Dense {
     let n = sats.len();
     let c_int: Vec<f64> = sats.iter().map(|s| s.c_int_m2).collect();
     let c_acc: Vec<f64> = sats.iter().map(|s| s.c_acc_m2).collect();
@@ -256,7 +270,13 @@ fn kept_epoch() -> (std::vec::Vec<AraimSat<f64>>, [f64; 3]) {
             continue;
         }
         let lim = [3.0, 3.0, plain.sigma_v_acc_m * UP_LIMIT_FACTOR];
-        let adj = run(&sats, &tight(), Estimator::Adjusted { sigma_acc_max_m: lim });
+        let adj = run(
+            &sats,
+            &tight(),
+            Estimator::Adjusted {
+                sigma_acc_max_m: lim,
+            },
+        );
         if adj.adjusted_t[2] > 0.0 && adj.adjusted_t[2] < 1.0 {
             return (sats, lim);
         }
@@ -286,16 +306,38 @@ fn one_epoch_matches_the_dense_formulas() {
     let (sats, lim) = kept_epoch();
     let cfg = tight();
     let plain = run(&sats, &cfg, Estimator::AllInView);
-    let adj = run(&sats, &cfg, Estimator::Adjusted { sigma_acc_max_m: lim });
+    let adj = run(
+        &sats,
+        &cfg,
+        Estimator::Adjusted {
+            sigma_acc_max_m: lim,
+        },
+    );
     let d = dense(&sats, &plain, &cfg, lim);
     assert!(d.t[2] > 0.0 && d.t[2] < 1.0, "t {:?}", d.t);
     assert!(adj.pl_add.vpl_m < plain.pl_add.vpl_m || adj.pl_add.hpl_m < plain.pl_add.hpl_m);
     for q in 0..3 {
         assert!((adj.adjusted_t[q] - d.t[q]).abs() < TOL_DENSE, "t {q}");
-        assert!((adj.sigma0_m[q] - d.sigma0[q]).abs() < TOL_DENSE, "sigma0 {q}");
+        assert!(
+            (adj.sigma0_m[q] - d.sigma0[q]).abs() < TOL_DENSE,
+            "sigma0 {q}"
+        );
         assert!((adj.bias0_m[q] - d.bias0[q]).abs() < TOL_DENSE, "bias0 {q}");
-        assert!((adj.correction_enu_m[q] - d.correction[q]).abs() < TOL_DENSE, "x0 {q}");
-        assert!((adj.pl_exact.hpl_axes_m.get(q).copied().unwrap_or(adj.pl_exact.vpl_m) - d.pl[q]).abs() < TOL_PL_M, "PL {q}");
+        assert!(
+            (adj.correction_enu_m[q] - d.correction[q]).abs() < TOL_DENSE,
+            "x0 {q}"
+        );
+        assert!(
+            (adj.pl_exact
+                .hpl_axes_m
+                .get(q)
+                .copied()
+                .unwrap_or(adj.pl_exact.vpl_m)
+                - d.pl[q])
+                .abs()
+                < TOL_PL_M,
+            "PL {q}"
+        );
     }
     assert!((adj.sigma_v_acc_m - d.sigma_v_acc).abs() < TOL_DENSE);
     assert!((adj.sigma_v_acc_m - (lim[2] - ACC_MARGIN_M)).abs() < TOL_DENSE);
@@ -308,15 +350,27 @@ fn one_epoch_matches_the_dense_formulas() {
     assert_eq!(monitored.len(), d.sigma_ss.len());
     for (k, m) in monitored.iter().enumerate() {
         for q in 0..3 {
-            assert!((m.stats.sigma_ss_m[q] - d.sigma_ss[k][q]).abs() < TOL_DENSE, "mode {k} axis {q}");
-            assert!((m.stats.separation_m[q] - d.separation[k][q]).abs() < TOL_DENSE, "mode {k} axis {q}");
+            assert!(
+                (m.stats.sigma_ss_m[q] - d.sigma_ss[k][q]).abs() < TOL_DENSE,
+                "mode {k} axis {q}"
+            );
+            assert!(
+                (m.stats.separation_m[q] - d.separation[k][q]).abs() < TOL_DENSE,
+                "mode {k} axis {q}"
+            );
         }
     }
     // App. D at VAL 15 m: not kept, and the dense PLs are no lower.
     let (sats_d, cfg_d) = tried_epoch();
     let plain_d = run(&sats_d, &cfg_d, Estimator::AllInView);
     let lim_d = [3.0, 3.0, 1.86];
-    let adj_d = run(&sats_d, &cfg_d, Estimator::Adjusted { sigma_acc_max_m: lim_d });
+    let adj_d = run(
+        &sats_d,
+        &cfg_d,
+        Estimator::Adjusted {
+            sigma_acc_max_m: lim_d,
+        },
+    );
     assert_eq!(adj_d.adjusted_t, [0.0; 3]);
     assert_eq!(std::format!("{adj_d:?}"), std::format!("{plain_d:?}"));
     let dd = dense(&sats_d, &plain_d, &cfg_d, lim_d);
@@ -329,7 +383,10 @@ fn one_epoch_matches_the_dense_formulas() {
         let r: Vec<f64> = (0..sats.len()).map(|i| d.s0[(q, i)]).collect();
         let acc = wdot(&r, &r, &c_acc).sqrt();
         if d.t[q] < 1.0 {
-            assert!((acc - (lim[q] - ACC_MARGIN_M)).abs() < TOL_DENSE, "axis {q}: {acc}");
+            assert!(
+                (acc - (lim[q] - ACC_MARGIN_M)).abs() < TOL_DENSE,
+                "axis {q}: {acc}"
+            );
         } else {
             assert!(acc <= lim[q] - ACC_MARGIN_M + TOL_DENSE);
         }
@@ -347,7 +404,12 @@ fn the_adjusted_rows_stay_unbiased() {
     let (sats, cfg) = tried_epoch();
     let mut skies = std::vec![sats];
     for _ in 0..20 {
-        skies.push(random_sky(&mut rng, 14, &[System::Gps, System::Galileo], 1e-5));
+        skies.push(random_sky(
+            &mut rng,
+            14,
+            &[System::Gps, System::Galileo],
+            1e-5,
+        ));
     }
     for sats in &skies {
         let plain = run(sats, &cfg, Estimator::AllInView);
@@ -367,7 +429,11 @@ fn the_adjusted_rows_stay_unbiased() {
         for q in 0..3 {
             for c in 0..5 {
                 let want = if c == q { 1.0 } else { 0.0 };
-                assert!((sg[(q, c)] - want).abs() < TOL_UNBIASED, "q {q} c {c}: {}", sg[(q, c)]);
+                assert!(
+                    (sg[(q, c)] - want).abs() < TOL_UNBIASED,
+                    "q {q} c {c}: {}",
+                    sg[(q, c)]
+                );
             }
         }
     }
@@ -389,7 +455,10 @@ fn where_it_does_not_apply_the_plain_bits_stay() {
     let est = Estimator::Adjusted {
         sigma_acc_max_m: [3.0, 3.0, 1.86],
     };
-    assert_eq!(bits(&run(&sats, &cfg, est)), bits(&run(&sats, &cfg, Estimator::AllInView)));
+    assert_eq!(
+        bits(&run(&sats, &cfg, est)),
+        bits(&run(&sats, &cfg, Estimator::AllInView))
+    );
     // Tried, but t = 0 on every axis.
     let (sats, cfg) = tried_epoch();
     let plain = run(&sats, &cfg, Estimator::AllInView);
@@ -411,9 +480,7 @@ fn where_it_does_not_apply_the_plain_bits_stay() {
             assert_eq!(bits(&adj), bits(&plain));
             left += 1;
         } else {
-            assert!(
-                adj.pl_add.vpl_m < plain.pl_add.vpl_m || adj.pl_add.hpl_m < plain.pl_add.hpl_m
-            );
+            assert!(adj.pl_add.vpl_m < plain.pl_add.vpl_m || adj.pl_add.hpl_m < plain.pl_add.hpl_m);
             assert!(adj.sigma_v_acc_m <= 1.86);
             kept += 1;
         }
@@ -432,18 +499,27 @@ fn the_monitor_uses_it_and_refuses_bad_limits() {
     use crate::araim::FdeLimits;
     let (sats, lim) = kept_epoch();
     let cfg = tight();
-    let est = Estimator::Adjusted { sigma_acc_max_m: lim };
+    let est = Estimator::Adjusted {
+        sigma_acc_max_m: lim,
+    };
     let mut monitor = std::boxed::Box::new(Monitor::<f64, 32, 64>::new());
     monitor.set_estimator(est).unwrap();
-    monitor.given(&cfg, &ge_ism(), &sats, FdeLimits::UNLIMITED).unwrap();
+    monitor
+        .given(&cfg, &ge_ism(), &sats, FdeLimits::UNLIMITED)
+        .unwrap();
     let want = run(&sats, &cfg, est);
-    assert_eq!(std::format!("{:?}", monitor.in_force()), std::format!("{want:?}"));
+    assert_eq!(
+        std::format!("{:?}", monitor.in_force()),
+        std::format!("{want:?}")
+    );
     assert!(want.adjusted_t[2] > 0.0);
     for (bad, axis) in [(f64::NAN, 0), (0.05, 1), (11.0, 2)] {
         let mut lim = [1.0; 3];
         lim[axis] = bad;
         let e = monitor
-            .set_estimator(Estimator::Adjusted { sigma_acc_max_m: lim })
+            .set_estimator(Estimator::Adjusted {
+                sigma_acc_max_m: lim,
+            })
             .unwrap_err();
         match e {
             AraimError::OutOfRange { field, index, .. } => {
@@ -454,7 +530,11 @@ fn the_monitor_uses_it_and_refuses_bad_limits() {
     }
     let mut e = Araim::<f64, 32, 64>::new();
     e.set_estimator(est).unwrap();
-    assert!(e.set_estimator(Estimator::Adjusted { sigma_acc_max_m: [f64::NAN; 3] }).is_err());
+    assert!(e
+        .set_estimator(Estimator::Adjusted {
+            sigma_acc_max_m: [f64::NAN; 3]
+        })
+        .is_err());
     assert_eq!(e.estimator(), est);
 }
 
