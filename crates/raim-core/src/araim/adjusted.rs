@@ -218,6 +218,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
     /// `estimator` is `Adjusted`, the PLs were computed and the epoch is
     /// unavailable for its VPL, HPL or EMT with sigma_v,acc below the
     /// vertical accuracy limit.
+    #[inline(never)]
     pub(super) fn adjust(&mut self, cfg: &AraimConfig, layout: &Constellations) -> Attempt {
         let Estimator::Adjusted { sigma_acc_max_m } = self.estimator else {
             return Attempt::Untouched;

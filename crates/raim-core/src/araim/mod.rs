@@ -604,7 +604,10 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         with_pls: bool,
     ) -> Result<&AraimOutput<T, K>, AraimError> {
         let layout = self.plain(cfg, ism, sats, budget_share, with_pls)?;
-        if with_pls && self.adjust(cfg, &layout) == adjusted::Attempt::Dirty {
+        // Not even entered with the plain estimator (the device's case):
+        // its frame holds three gain rows.
+        let adjusting = matches!(self.estimator, Estimator::Adjusted { .. });
+        if with_pls && adjusting && self.adjust(cfg, &layout) == adjusted::Attempt::Dirty {
             self.plain(cfg, ism, sats, budget_share, with_pls)?;
         }
         Ok(&self.out)
