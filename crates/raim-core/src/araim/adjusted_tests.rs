@@ -552,3 +552,44 @@ fn t_is_the_capped_positive_root() {
     assert_eq!(adjustment_t(1.0, 1.0, -3.0), 1.0);
     assert!((adjustment_t(2.0, 1.0, -1.0) - (-1.0 + 3.0f64.sqrt()) / 2.0).abs() < 1e-15);
 }
+
+/// The exclusion subsets take the estimator of the engine that excludes
+/// (`after_excluding`, as the FDE's candidates): a scratch engine left
+/// with the plain estimator gives the adjusted outputs of the subsets,
+/// which the monitor's own scratch gives too, and some of them are
+/// adjusted.
+///
+/// Verifies: ARAIM-ADJUSTED-POSITION
+#[test]
+fn exclusion_subsets_take_the_engines_estimator() {
+    use crate::araim::FdeLimits;
+    let (sats, lim) = kept_epoch();
+    let cfg = tight();
+    let est = Estimator::Adjusted {
+        sigma_acc_max_m: lim,
+    };
+    let mut monitor = std::boxed::Box::new(Monitor::<f64, 32, 64>::new());
+    monitor.set_estimator(est).unwrap();
+    monitor
+        .given(&cfg, &ge_ism(), &sats, FdeLimits::UNLIMITED)
+        .unwrap();
+    let mut engine = std::boxed::Box::new(Araim::<f64, 32, 64>::new());
+    engine.set_estimator(est).unwrap();
+    engine.process(&cfg, &ge_ism(), &sats).unwrap();
+    let mut adjusted = 0;
+    for k in 0..engine.output().modes.len() {
+        let mut plain_scratch = std::boxed::Box::new(Araim::<f64, 32, 64>::new());
+        let want = engine
+            .after_excluding(&cfg, &ge_ism(), &sats, k, &mut plain_scratch)
+            .unwrap()
+            .map(|o| std::format!("{o:?}"));
+        assert_eq!(plain_scratch.estimator(), est);
+        let got = monitor
+            .after_excluding(&cfg, &ge_ism(), k)
+            .unwrap()
+            .map(|o| std::format!("{o:?}"));
+        assert_eq!(got, want, "mode {k}");
+        adjusted += usize::from(plain_scratch.output().adjusted_t != [0.0; 3]);
+    }
+    assert!(adjusted > 0);
+}
