@@ -43,14 +43,18 @@
 //! one when its VPL or its HPL (the configured PL output) is lower, and
 //! the plain one is restored otherwise. Every quantity in that choice is a
 //! function of the geometry and the ISM only, never of the measurements,
-//! so the chosen estimator with its own PLs bounds its own error as the
-//! plain one does (the paper, section III: any unbiased linear estimator
-//! fixed before the measurements keeps the MHSS bound).
+//! so the chosen estimator is fixed before the measurements, and the PL
+//! equation bounds its error as it does the plain one's: under mode k,
+//! x^(0)' - x = (x^(k) - x) + (x^(0)' - x^(k)), the first term the
+//! subset's nominal error (sigma_q^(k), b_q^(k)), the second at most
+//! T_k,q when the test against s0' passes; fault-free, x^(0)' - x has
+//! sigma_q^(0) and b_q^(0) of s0'.
 //!
 //! The difference rows are formed densely, one factorisation per mode
 //! ([`subset::factor`]): the adjustment runs on the unavailable epochs
-//! only, and the dense rows are its own check of the downdates' sigma_ss
-//! (at t = 0 they give the same numbers to rounding; a test).
+//! only, and the dense rows are their own check of the downdates: at
+//! t = 0 they give every mode's sigma_ss and separation to rounding
+//! (test `the_dense_rows_give_the_downdates_sigma_ss`).
 
 use super::subset::{self, Deficient, Geometry};
 use super::{

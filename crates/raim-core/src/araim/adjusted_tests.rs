@@ -593,3 +593,53 @@ fn exclusion_subsets_take_the_engines_estimator() {
     }
     assert!(adjusted > 0);
 }
+
+/// The dense difference rows the adjustment forms (one factorisation per
+/// mode) give every mode's plain sigma_ss and separation, which the
+/// engine formed by downdates: the same to rounding, on App. D's sky and
+/// random skies.
+///
+/// Verifies: ARAIM-ADJUSTED-POSITION
+#[test]
+fn the_dense_rows_give_the_downdates_sigma_ss() {
+    let mut rng = crate::testutil::Rng::new(7);
+    let (sats, _) = tried_epoch();
+    let mut skies = std::vec![sats];
+    for _ in 0..10 {
+        skies.push(random_sky(
+            &mut rng,
+            16,
+            &[System::Gps, System::Galileo],
+            1e-5,
+        ));
+    }
+    let cfg = AraimConfig::default();
+    let mut checked = 0;
+    for sats in &skies {
+        let mut e = std::boxed::Box::new(Araim::<f64, 32, 64>::new());
+        let out = e.process(&cfg, &ge_ism(), sats).unwrap().clone();
+        let layout = e.load(&cfg, &ge_ism(), sats).unwrap();
+        for m in out
+            .modes
+            .iter()
+            .filter(|m| m.status == ModeStatus::Monitored)
+        {
+            e.difference_rows(&layout, &m.events).unwrap();
+            for q in 0..3 {
+                let d = &e.scratch.d[q];
+                let ss: f64 = (0..sats.len())
+                    .map(|i| d[i] * d[i] * sats[i].c_acc_m2)
+                    .sum::<f64>()
+                    .sqrt();
+                let sep: f64 = (0..sats.len()).map(|i| d[i] * sats[i].residual_m).sum();
+                assert!((ss - m.stats.sigma_ss_m[q]).abs() < TOL_DENSE, "{ss} {q}");
+                assert!(
+                    (sep - m.stats.separation_m[q]).abs() < TOL_DENSE,
+                    "{sep} {q}"
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 100, "{checked}");
+}
