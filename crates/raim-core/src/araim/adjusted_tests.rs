@@ -643,3 +643,41 @@ fn the_dense_rows_give_the_downdates_sigma_ss() {
     }
     assert!(checked > 100, "{checked}");
 }
+
+/// The f32 engine (the device's precision) with the adjusted estimator:
+/// on the kept epoch it adjusts too, t and the PLs within f32's
+/// precision of the f64 engine's.
+#[test]
+fn f32_adjusts_as_f64_does() {
+    /// Relative agreement of f32 with f64 on t, sigma_v,acc and the PLs:
+    /// a few thousand f32 roundings of 6e-8 through the factorisations.
+    const TOL_F32_REL: f64 = 1e-3;
+    let (sats, lim) = kept_epoch();
+    let cfg = tight();
+    let est = Estimator::Adjusted {
+        sigma_acc_max_m: lim,
+    };
+    let want = run(&sats, &cfg, est);
+    let narrow: Vec<AraimSat<f32>> = sats
+        .iter()
+        .map(|s| AraimSat {
+            id: s.id,
+            g_enu: s.g_enu.map(|x| x as f32),
+            c_int_m2: s.c_int_m2 as f32,
+            c_acc_m2: s.c_acc_m2 as f32,
+            b_nom_m: s.b_nom_m as f32,
+            p_sat: s.p_sat,
+            residual_m: s.residual_m as f32,
+        })
+        .collect();
+    let mut e = std::boxed::Box::new(Araim::<f32, 32, 64>::new());
+    e.set_estimator(est).unwrap();
+    let got = e.process(&cfg, &ge_ism(), &narrow).unwrap();
+    let near = |a: f64, b: f64| (a - b).abs() <= TOL_F32_REL * b.abs().max(1.0);
+    for q in 0..3 {
+        assert!(near(got.adjusted_t[q], want.adjusted_t[q]), "t {q}");
+    }
+    assert!(near(f64::from(got.sigma_v_acc_m), want.sigma_v_acc_m));
+    assert!(near(got.pl_exact.vpl_m, want.pl_exact.vpl_m));
+    assert!(near(got.pl_exact.hpl_m, want.pl_exact.hpl_m));
+}
