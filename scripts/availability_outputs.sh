@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The committed outputs of docs/AVAILABILITY.md's single runs (issue 36): the
-# summaries and per-user CSVs under docs/availability/ of the five run files
+# summaries and per-user CSVs under docs/availability/ of the six run files
 # below, each made by the command the doc gives
 #   raim availability --run docs/runs/availability_NAME.toml --out docs/availability --level 0.99 --maps
 # (the MAAST scenario with exclusion takes about 15 s of CPU, the rest a few).
@@ -20,7 +20,7 @@ cargo build --release -q -p raim-tool
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 status=0
-for name in esbc_nav maast_g24e24 maast_g24e24_fde maast_g24e24_galtable maast_g24e24_ed259a; do
+for name in esbc_nav maast_g24e24 maast_g24e24_fde maast_g24e24_galtable maast_g24e24_ed259a maast_g24e24_adjusted; do
   maps=()
   [ $MODE = write ] && maps=(--maps)
   ./target/release/raim availability --run "docs/runs/availability_$name.toml" \
@@ -40,5 +40,5 @@ for name in esbc_nav maast_g24e24 maast_g24e24_fde maast_g24e24_galtable maast_g
   done
   rm -f "$TMP"/availability_"$name".*
 done
-[ $MODE = write ] && echo "rewrote docs/availability/availability_{esbc_nav,maast_g24e24,maast_g24e24_fde,maast_g24e24_galtable,maast_g24e24_ed259a}.*"
+[ $MODE = write ] && echo "rewrote docs/availability/availability_{esbc_nav,maast_g24e24,maast_g24e24_fde,maast_g24e24_galtable,maast_g24e24_ed259a,maast_g24e24_adjusted}.*"
 exit $status

@@ -212,6 +212,7 @@ pub fn evaluate(
     monitor: &mut Engine,
     obs: &[LinearObservation],
 ) -> Result<EpochOutcome, MonitorError> {
+    monitor.set_estimator(study.estimator)?;
     let verdict = match monitor.linear(
         &study.cfg,
         &study.ism,
@@ -483,3 +484,7 @@ pub fn run_users<R: Send>(
 /// is boxed, and `Araim::process` forms its output there
 /// (docs/ARAIM.md "Not done": about 170 B per mode).
 pub const STACK_BYTES: usize = 4 * std::mem::size_of::<Engine>() + (16 << 20);
+
+#[cfg(test)]
+#[path = "engine_adjusted_tests.rs"]
+mod adjusted_tests;

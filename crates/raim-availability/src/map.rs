@@ -442,6 +442,7 @@ mod tests {
             target: 0.995,
             users,
             ephemeris_gaps: None,
+            adjusted_sigma_acc_max_m: None,
             horizontal_only: false,
             budgets: None,
         };
@@ -533,6 +534,7 @@ mod tests {
             target: 0.995,
             users,
             ephemeris_gaps: None,
+            adjusted_sigma_acc_max_m: None,
             horizontal_only: false,
             budgets: None,
         };

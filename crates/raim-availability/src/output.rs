@@ -50,6 +50,10 @@ pub struct Meta {
     /// P_FA_VERT + P_FA_HOR (`run::horizontal_budgets`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub budgets: Option<[f64; 2]>,
+    /// `position = "adjusted"`: the adjusted estimator's accuracy limits
+    /// per axis E, N, U (m); `None` for the plain estimator.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub adjusted_sigma_acc_max_m: Option<[f64; 3]>,
 }
 
 /// FNV-1a, 64 bits.
@@ -87,6 +91,10 @@ impl Meta {
                 .collect(),
             horizontal_only: study.criteria == raim_core::araim::Criteria::HorizontalOnly,
             budgets: study.budgets,
+            adjusted_sigma_acc_max_m: match study.estimator {
+                raim_core::araim::Estimator::AllInView => None,
+                raim_core::araim::Estimator::Adjusted { sigma_acc_max_m } => Some(sigma_acc_max_m),
+            },
             ephemeris_gaps: study.sats.iter().any(|s| s.is_broadcast()).then(|| {
                 study
                     .sats
@@ -503,6 +511,13 @@ pub fn summary_json(meta: &Meta, users: &[UserSummary], levels: &[f64]) -> Strin
     let mut v = v;
     if let (true, Some(o)) = (meta.horizontal_only, v.as_object_mut()) {
         o.insert("criteria".into(), "HAL only".into());
+    }
+    if let (Some(lim), Some(o)) = (meta.adjusted_sigma_acc_max_m, v.as_object_mut()) {
+        o.insert("position".into(), "adjusted".into());
+        o.insert(
+            "adjusted_sigma_acc_max_m".into(),
+            lim.iter().map(|&x| num(x)).collect::<Vec<_>>().into(),
+        );
     }
     if let (Some([phmi, p_fa]), Some(o)) = (meta.budgets, v.as_object_mut()) {
         o.insert("phmi".into(), num(phmi));

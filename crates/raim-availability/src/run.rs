@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::{anyhow, bail, Result};
-use raim_core::araim::{AraimConfig, Criteria, Ism, SatIsm};
+use raim_core::araim::{AraimConfig, Criteria, Estimator, Ism, SatIsm};
 use raim_core::{SatId, System};
 use serde::Deserialize;
 
@@ -36,6 +36,16 @@ pub struct RunFile {
     pub exclusion: ExclusionSpec,
     /// The continuity allocation of `exclusion = "continuity"`.
     pub continuity: Option<ContinuitySpec>,
+    /// The all-in-view position estimator: `all_in_view` (SPEC §9.1's
+    /// weighted least squares, the default) or `adjusted` (Blanch et al.
+    /// 2015, raim-core `araim::adjusted`; docs/AVAILABILITY.md "The
+    /// adjusted position estimator").
+    #[serde(default)]
+    pub position: PositionSpec,
+    /// `position = "adjusted"`: the accuracy limits it may spend per axis
+    /// E, N, U (m); by default the service level's sigma_acc limit on
+    /// every axis.
+    pub adjusted_sigma_acc_max_m: Option<[f64; 3]>,
     /// The time span.
     pub time: TimeSpec,
     /// The users.
@@ -48,6 +58,18 @@ pub struct RunFile {
     /// (read by `crate::sweep`; docs/AVAILABILITY.md "Sweeps").
     #[serde(default)]
     pub scenario: Vec<toml::Table>,
+}
+
+/// The all-in-view position estimator (`position`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PositionSpec {
+    /// The weighted least squares of SPEC §9.1 step 2.
+    #[default]
+    AllInView,
+    /// The adjusted estimator of Blanch et al. 2015 (raim-core
+    /// `araim::adjusted`).
+    Adjusted,
 }
 
 /// Which exclusions must leave the service available (docs/AVAILABILITY.md
@@ -349,6 +371,8 @@ pub struct Study {
     pub exclusion: ExclusionSpec,
     /// The continuity rule (`exclusion = "continuity"` only).
     pub continuity: Option<Continuity>,
+    /// The all-in-view position estimator (`position`).
+    pub estimator: Estimator,
     /// Per system (`System::index()`), the airborne curve.
     pub airborne: [Airborne; raim_core::measurement::MAX_SYSTEMS],
     /// The elevation mask (rad).
@@ -616,6 +640,19 @@ pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
             at("level")
         );
     }
+    let estimator = match (run.position, run.adjusted_sigma_acc_max_m) {
+        (PositionSpec::AllInView, None) => Estimator::AllInView,
+        (PositionSpec::AllInView, Some(_)) => bail!(
+            "{}: adjusted_sigma_acc_max_m is read only with position = \"adjusted\"",
+            at("adjusted_sigma_acc_max_m")
+        ),
+        (PositionSpec::Adjusted, limits) => Estimator::Adjusted {
+            sigma_acc_max_m: limits.unwrap_or([cfg.sigma_acc_max_m; 3]),
+        },
+    };
+    estimator
+        .validate()
+        .map_err(|e| anyhow!("{}: {e}", at("adjusted_sigma_acc_max_m")))?;
     cfg.validate().map_err(|e| {
         anyhow!(
             "{}: the service level is refused by raim-core: {e}",
@@ -953,6 +990,7 @@ pub fn build(run: &RunFile, loc: &Loc<'_>, base: &Path) -> Result<Study> {
         target,
         exclusion: run.exclusion,
         continuity,
+        estimator,
         airborne,
         mask_rad: run.mask_deg.to_radians(),
         height_m: run.height_m,
@@ -1188,6 +1226,63 @@ p_const = 1e-8
             e.to_string().starts_with("t.toml:12: unknown field `typo`"),
             "{e}"
         );
+    }
+
+    /// `position`: the plain estimator by default; `"adjusted"` with the
+    /// service level's sigma_acc limit on every axis unless
+    /// `adjusted_sigma_acc_max_m` gives them; the limits refused without
+    /// `position = "adjusted"` or out of raim-core's bound, an unknown
+    /// estimator refused, each named by its line.
+    ///
+    /// Verifies: TOOL-AVAIL-ADJUSTED
+    #[test]
+    fn the_position_estimator_keys() {
+        let grid = "[grid]\nkind = \"world\"\nstep_deg = 30.0";
+        let with = |top: &str| {
+            text(grid, "level = \"LPV-200\"", "").replacen(
+                "mask_deg = 5.0\n",
+                &format!("mask_deg = 5.0\n{top}\n"),
+                1,
+            )
+        };
+        assert_eq!(
+            load_text(&with("")).unwrap().estimator,
+            Estimator::AllInView
+        );
+        assert_eq!(
+            load_text(&with("position = \"adjusted\""))
+                .unwrap()
+                .estimator,
+            Estimator::Adjusted {
+                sigma_acc_max_m: [1.87; 3]
+            }
+        );
+        assert_eq!(
+            load_text(&with(
+                "position = \"adjusted\"\nadjusted_sigma_acc_max_m = [3.0, 3.0, 1.86]"
+            ))
+            .unwrap()
+            .estimator,
+            Estimator::Adjusted {
+                sigma_acc_max_m: [3.0, 3.0, 1.86]
+            }
+        );
+        let e = load_text(&with("adjusted_sigma_acc_max_m = [3.0, 3.0, 1.86]")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t.toml:3: adjusted_sigma_acc_max_m is read only with position = \"adjusted\""
+        );
+        let e = load_text(&with(
+            "position = \"adjusted\"\nadjusted_sigma_acc_max_m = [3.0, 30.0, 1.86]",
+        ))
+        .unwrap_err();
+        assert!(
+            e.to_string().starts_with("t.toml:4: ")
+                && e.to_string().contains("adjusted_sigma_acc_max_m"),
+            "{e}"
+        );
+        let e = load_text(&with("position = \"optimal\"")).unwrap_err();
+        assert!(e.to_string().contains("unknown variant `optimal`"), "{e}");
     }
 
     /// Satellites added by PRN from a second almanac (written here in

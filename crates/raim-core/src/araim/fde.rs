@@ -281,6 +281,8 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         if self.out.detection_passed {
             return Ok(FdeDecision::NoFault);
         }
+        // The candidate subsets use this engine's estimator.
+        scratch.estimator = self.estimator;
         let mut subset = [AraimSat::<T>::default(); N];
         let (n_single, n_multi) = self.candidate_counts();
         let n_ex = n_single + n_multi;
@@ -386,6 +388,8 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         let removed = removed_sats(sats, mode.events.sats, mode.events.consts);
         let (n_single, n_multi) = self.candidate_counts();
         let share = 1.0 / (n_single + n_multi).max(1) as f64;
+        // The subset uses this engine's estimator.
+        scratch.estimator = self.estimator;
         let mut buf = [AraimSat::<T>::default(); N];
         let (n, sub_ism) = subset_of(ism, sats, removed, &mut buf);
         let Some(subset) = buf.get(..n) else {

@@ -26,6 +26,7 @@
 //! K_fa quantiles and the PL search are `f64` (precision policy, `real.rs`).
 //! - [`fde`]: exclusion after a detection (unique consistent candidate).
 
+pub mod adjusted;
 pub mod error;
 pub mod error_model;
 pub mod esq;
@@ -40,6 +41,7 @@ pub mod tail;
 #[cfg(test)]
 pub(crate) mod tests;
 
+pub use adjusted::Estimator;
 pub use error::AraimError;
 pub use error_model::Curves;
 pub use fde::{FdeAlarm, FdeDecision};
@@ -237,6 +239,10 @@ pub struct AraimOutput<T, const K: usize> {
     pub limits: Limits,
     /// None when available.
     pub unavailable: Option<Unavailable>,
+    /// The adjusted estimator's t per axis E, N, U ([`adjusted`]) when
+    /// its output is the one in force; all 0 for the weighted least
+    /// squares of step 2.
+    pub adjusted_t: [f64; 3],
 }
 
 impl<T: Real, const K: usize> Default for AraimOutput<T, K> {
@@ -266,6 +272,7 @@ impl<T: Real, const K: usize> AraimOutput<T, K> {
             detection_passed: false,
             limits: Limits::NONE,
             unavailable: None,
+            adjusted_t: [0.0; 3],
         }
     }
 }
@@ -290,6 +297,7 @@ impl<T: Real, const K: usize> AraimOutput<T, K> {
         self.detection_passed = false;
         self.limits = Limits::default();
         self.unavailable = None;
+        self.adjusted_t = [0.0; 3];
     }
 
     /// ARAIM service: no structural cause and every limit met.
@@ -349,6 +357,9 @@ pub struct Araim<T, const N: usize, const K: usize> {
     k_fa_memo: KfaMemo,
     out: AraimOutput<T, K>,
     budget_share: f64,
+    /// The all-in-view estimator ([`Estimator`]; the weighted least
+    /// squares unless set).
+    estimator: Estimator,
 }
 
 impl<T: Real, const N: usize, const K: usize> Default for Araim<T, N, K> {
@@ -405,6 +416,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
             k_fa_memo: None,
             out: AraimOutput::empty(),
             budget_share: 1.0,
+            estimator: Estimator::AllInView,
         }
     }
 
@@ -535,6 +547,25 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         self.budget_share
     }
 
+    /// Sets the all-in-view estimator of every later epoch ([`Estimator`],
+    /// module [`adjusted`]); an FDE's or an exclusion's subsets, processed
+    /// in a scratch engine, take this engine's.
+    ///
+    /// # Errors
+    /// [`AraimError::OutOfRange`] for an accuracy limit outside the
+    /// operational bound of `sigma_acc_max_m`; the estimator is then
+    /// unchanged.
+    pub fn set_estimator(&mut self, estimator: Estimator) -> Result<(), AraimError> {
+        estimator.validate()?;
+        self.estimator = estimator;
+        Ok(())
+    }
+
+    /// The all-in-view estimator in use.
+    pub fn estimator(&self) -> Estimator {
+        self.estimator
+    }
+
     /// `process` with the right-hand side of the PL equations (step 5)
     /// multiplied by `budget_share` in (0, 1] (fde.rs).
     pub(crate) fn process_scaled(
@@ -559,12 +590,11 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         self.process_impl(cfg, ism, sats, 1.0, false)
     }
 
-    /// The epoch in the ADD's order: the all-in-view solution and the
-    /// constellation bases (step 2), the modes (step 1), their subsets
-    /// (step 3), the tests and EMT (steps 4 and 6), then, unless the
-    /// unmonitored probability already denies service, the protection
-    /// levels (step 5) and the availability limits. Each step that ends
-    /// the epoch early leaves its cause in `out.unavailable`.
+    /// The epoch ([`Self::plain`]), then, with the PLs and the
+    /// [`Estimator::Adjusted`] estimator, the adjusted estimator where it
+    /// applies ([`adjusted`]): kept when it lowers the VPL or the HPL,
+    /// else the plain epoch processed again (the same bits as without the
+    /// attempt).
     fn process_impl(
         &mut self,
         cfg: &AraimConfig,
@@ -573,6 +603,31 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         budget_share: f64,
         with_pls: bool,
     ) -> Result<&AraimOutput<T, K>, AraimError> {
+        let layout = self.plain(cfg, ism, sats, budget_share, with_pls)?;
+        // Not even entered with the plain estimator (the device's case):
+        // its frame holds three gain rows.
+        let adjusting = matches!(self.estimator, Estimator::Adjusted { .. });
+        if with_pls && adjusting && self.adjust(cfg, &layout) == adjusted::Attempt::Dirty {
+            self.plain(cfg, ism, sats, budget_share, with_pls)?;
+        }
+        Ok(&self.out)
+    }
+
+    /// The epoch in the ADD's order: the all-in-view solution and the
+    /// constellation bases (step 2), the modes (step 1), their subsets
+    /// (step 3), the tests and EMT (steps 4 and 6), then, unless the
+    /// unmonitored probability already denies service, the protection
+    /// levels (step 5) and the availability limits. Each step that ends
+    /// the epoch early leaves its cause in `out.unavailable`. Returns the
+    /// constellation layout.
+    fn plain(
+        &mut self,
+        cfg: &AraimConfig,
+        ism: &Ism,
+        sats: &[AraimSat<T>],
+        budget_share: f64,
+        with_pls: bool,
+    ) -> Result<Constellations, AraimError> {
         self.budget_share = budget_share;
         let layout = self.load(cfg, ism, sats)?;
         // In place: `AraimOutput::default()` would build and copy the
@@ -581,13 +636,13 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
         self.all_in_view()?;
         self.constellation_bases(ism, &layout);
         let Some(p_exceed) = self.fault_modes(cfg, ism, sats) else {
-            return Ok(&self.out);
+            return Ok(layout);
         };
         if self
             .subset_modes(cfg, &layout, p_exceed, with_pls)
             .is_break()
         {
-            return Ok(&self.out);
+            return Ok(layout);
         }
         self.separation_tests(cfg);
         let p_unmon = self.out.p_unmon;
@@ -596,18 +651,18 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
                 p_unmon,
                 p_thres: cfg.p_thres,
             });
-            return Ok(&self.out);
+            return Ok(layout);
         }
         if !with_pls {
             self.out.unavailable = Some(Unavailable::PlNotSolved { axis: 0 });
-            return Ok(&self.out);
+            return Ok(layout);
         }
         if let Err(axis) = self.protection_levels(cfg, budget_share) {
             self.out.unavailable = Some(Unavailable::PlNotSolved { axis });
-            return Ok(&self.out);
+            return Ok(layout);
         }
         self.availability(cfg);
-        Ok(&self.out)
+        Ok(layout)
     }
 
     /// Step 2, all in view: P0 = (G^T W G)^-1 and S^(0) = P0 G^T W
@@ -920,6 +975,7 @@ impl<T: Real, const N: usize, const K: usize> Araim<T, N, K> {
 /// Per constellation (in [`System::ALL`] order), what its events remove:
 /// its satellites (bit i = satellite i) and its clock column (bit c =
 /// column c; 0 for a constellation not in the ISM).
+#[derive(Debug, Clone, Copy)]
 struct Constellations {
     sats: [u64; MAX_SYSTEMS],
     clock_column: [u16; MAX_SYSTEMS],

@@ -363,6 +363,15 @@ impl<T: Real, const N: usize, const K: usize> Monitor<T, N, K> {
         self.core.after_excluding(&mut self.scratch, cfg, ism, k)
     }
 
+    /// Sets the all-in-view estimator of every later epoch
+    /// ([`Araim::set_estimator`]; the FDE's subsets take it too).
+    ///
+    /// # Errors
+    /// As [`Araim::set_estimator`].
+    pub fn set_estimator(&mut self, estimator: super::Estimator) -> Result<(), AraimError> {
+        self.core.set_estimator(estimator)
+    }
+
     /// The last epoch's runs (all in view, and the excluded subset's).
     pub fn runs(&self) -> Runs<'_, T, N, K> {
         self.core.runs_with(&self.scratch)
@@ -623,6 +632,14 @@ impl<T: Real, const N: usize, const K: usize> MonitorCore<T, N, K> {
     /// The last epoch's all-in-view output.
     pub fn all_in_view(&self) -> &AraimOutput<T, K> {
         self.main.output()
+    }
+
+    /// [`Monitor::set_estimator`].
+    ///
+    /// # Errors
+    /// As [`Araim::set_estimator`].
+    pub fn set_estimator(&mut self, estimator: super::Estimator) -> Result<(), AraimError> {
+        self.main.set_estimator(estimator)
     }
 
     /// The last epoch's satellites as the engine saw them (joined).

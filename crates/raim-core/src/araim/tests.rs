@@ -33,7 +33,7 @@ pub(crate) mod appendix_d {
 use super::*;
 use crate::measurement::{SatId, System};
 
-fn appendix_d_sats() -> [AraimSat<f64>; 10] {
+pub(crate) fn appendix_d_sats() -> [AraimSat<f64>; 10] {
     let mut out = [AraimSat::default(); 10];
     for (i, (s, r)) in out.iter_mut().zip(appendix_d::ROWS.iter()).enumerate() {
         let system = if i < 5 { System::Gps } else { System::Galileo };
