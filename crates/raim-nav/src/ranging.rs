@@ -23,6 +23,7 @@ use crate::glonass::{l1_hz, l2_hz, GlonassEphemeris, F_L1_BASE_HZ, F_L2_BASE_HZ}
 use crate::iono::{scale_to_frequency, Klobuchar, F_B1I_HZ, F_L1_HZ};
 use crate::m;
 use crate::tropo::SaastamoinenSite;
+use crate::velocity::SatMotion;
 
 pub use crate::bootstrap::{bootstrap_position, SURFACE_BAND_M};
 
@@ -303,6 +304,34 @@ pub fn transmit_state(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<SatState, Rej
             Ok(o.transmit_state(t_rx_gps_s - p / C_M_S).1)
         }
         Broadcast::Glonass(g) => Ok(g.state(transmit_time_s(s, t_rx_gps_s)?)),
+    }
+}
+
+/// [`transmit_state`] and, when `motion` is true, the satellite's
+/// velocity and clock drift at the same transmit time from the same orbit
+/// evaluation (a Keplerian orbit by [`Orbit::transmit_state_motion`]; the
+/// state is [`transmit_state`]'s to the bit). A GLONASS motion comes with
+/// its integration (the receiver's [`crate::glonass::GlonassArc`]), not
+/// here: None for a GLONASS satellite.
+pub fn transmit_state_motion(
+    s: &SatInput<'_>,
+    t_rx_gps_s: f64,
+    motion: bool,
+) -> Result<(SatState, Option<SatMotion>), Rejection> {
+    let orbit_of = |o: &Orbit| -> Result<(SatState, Option<SatMotion>), Rejection> {
+        let (p, _) = ranging_pseudorange(s)?;
+        let t_sv = t_rx_gps_s - p / C_M_S;
+        Ok(if motion {
+            let (_, state, mo) = o.transmit_state_motion(t_sv);
+            (state, Some(mo))
+        } else {
+            (o.transmit_state(t_sv).1, None)
+        })
+    };
+    match s.eph {
+        Broadcast::Kepler(k) => orbit_of(&Orbit::new(k)),
+        Broadcast::Orbit(o) => orbit_of(o),
+        Broadcast::Glonass(g) => Ok((g.state(transmit_time_s(s, t_rx_gps_s)?), None)),
     }
 }
 

@@ -57,7 +57,7 @@
 use heapless::Vec;
 use raim_core::{RangeObservation, SatId, System};
 
-use crate::ephemeris::{Kepler, SatState, BDT_MINUS_GPST_S, C_M_S, WEEK_S};
+use crate::ephemeris::{SatState, BDT_MINUS_GPST_S, WEEK_S};
 use crate::glonass::{
     glonass_time_of_day_to_gps_with_s, glonass_time_of_day_with_s, GlonassArc, GlonassEphemeris,
     GlonassIcdFields,
@@ -65,14 +65,12 @@ use crate::glonass::{
 use crate::m;
 use crate::ranging::{
     bootstrap_position, cn0_dbhz_u8, correct_at, correct_at_without_azimuth, split_pair,
-    stream_codes, stream_sigma_for_m, transmit_state, transmit_time_s, Broadcast, Corrections,
-    ReceiverFrame, SatInput, StreamSigmas,
+    stream_codes, stream_sigma_for_m, transmit_state_motion, transmit_time_s, Broadcast,
+    Corrections, ReceiverFrame, SatInput, StreamSigmas,
 };
 use crate::store::{DecodedSets, EphemerisStore, OrbitCache, Stored};
 use crate::time::table_gps_minus_utc_s;
-use crate::velocity::{
-    glonass_motion, kepler_motion, kepler_transmit_time_s, range_rate, RangeRate, SatMotion,
-};
+use crate::velocity::{glonass_motion, range_rate, RangeRate, SatMotion};
 
 use super::decode::{msm_more_bit, Frame, Message, Msm, MsmSystem};
 use super::fields::{gps_week_of, kepler, toc_near_toe};
@@ -1025,17 +1023,13 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // both passes (the transmit time does not depend on the receiver
         // position); a GLONASS orbit from its arc.
         // A satellite with a phase-range rate: its velocity and clock
-        // drift there too (a GLONASS velocity from the same integration; a
-        // Keplerian one at the transmit time of the code's range,
-        // `kepler_transmit_time_s`).
+        // drift there too, from the same evaluation (a GLONASS velocity
+        // from the same integration; a Keplerian one from the transmit
+        // state's angles, `transmit_state_motion`).
         glonass_arcs.next_epoch();
         transmit.clear();
         motion.clear();
         for (s, rate) in inputs.iter().zip(rates.iter()) {
-            let kepler_motion_at = |k: &Kepler| {
-                let t_sv = time_gps_s - s.p1_m / C_M_S;
-                kepler_motion(k, kepler_transmit_time_s(k, t_sv))
-            };
             let (tx, mo) = match s.eph {
                 Broadcast::Glonass(g) => match transmit_time_s(s, time_gps_s) {
                     Ok(t) => {
@@ -1044,14 +1038,12 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                     }
                     Err(_) => (None, None),
                 },
-                Broadcast::Kepler(k) => (
-                    transmit_state(s, time_gps_s).ok(),
-                    rate.map(|_| kepler_motion_at(k)),
-                ),
-                Broadcast::Orbit(o) => (
-                    transmit_state(s, time_gps_s).ok(),
-                    rate.map(|_| kepler_motion_at(&o.set)),
-                ),
+                Broadcast::Kepler(_) | Broadcast::Orbit(_) => {
+                    match transmit_state_motion(s, time_gps_s, rate.is_some()) {
+                        Ok((state, mo)) => (Some(state), mo),
+                        Err(_) => (None, None),
+                    }
+                }
             };
             // `inputs`, `transmit` and `motion` have the same capacity N.
             let _ = transmit.push(tx);
