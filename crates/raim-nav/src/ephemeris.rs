@@ -348,11 +348,20 @@ impl Orbit {
     /// instant) and clock drift at GPS time `t_gps_s`
     /// ([`Self::motion_of`]).
     pub fn motion(&self, t_gps_s: f64) -> SatMotion {
+        self.state_motion(t_gps_s).1
+    }
+
+    /// [`Self::state`] (the same bits) and [`Self::motion`] at GPS time
+    /// `t_gps_s`, from one evaluation of the orbit.
+    pub fn state_motion(&self, t_gps_s: f64) -> (SatState, SatMotion) {
         let k = &self.set;
         let tk = k.tk_s(t_gps_s);
         let (sin_e, cos_e) = k.eccentric_anomaly_at(self.n_rad_s, tk);
         let terms = self.terms(tk, sin_e, cos_e);
-        self.motion_of(t_gps_s, tk, sin_e, cos_e, &terms)
+        (
+            self.state_of(t_gps_s, tk, sin_e, &terms),
+            self.motion_of(t_gps_s, tk, sin_e, cos_e, &terms),
+        )
     }
 
     /// [`Self::state`] at GPS time `t_gps_s`, `tk` s from toe, with the

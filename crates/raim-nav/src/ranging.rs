@@ -307,6 +307,14 @@ pub fn transmit_state(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<SatState, Rej
     }
 }
 
+/// The time by the satellite's clock at which the signal of `s` received
+/// at `t_rx_gps_s` left it: t_sv = t_rx - P/c, P the code's or the
+/// iono-free pair's pseudorange (the t_sv of [`transmit_state`]), GPS s.
+pub fn signal_sent_s(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<f64, Rejection> {
+    let (p, _) = ranging_pseudorange(s)?;
+    Ok(t_rx_gps_s - p / C_M_S)
+}
+
 /// [`transmit_state`] and, when `motion` is true, the satellite's
 /// velocity and clock drift at the same transmit time from the same orbit
 /// evaluation (a Keplerian orbit by [`Orbit::transmit_state_motion`]; the

@@ -57,16 +57,17 @@
 use heapless::Vec;
 use raim_core::{RangeObservation, SatId, System};
 
-use crate::ephemeris::{SatState, BDT_MINUS_GPST_S, WEEK_S};
+use crate::arc::KeplerArcs;
+use crate::ephemeris::{Orbit, SatState, BDT_MINUS_GPST_S, WEEK_S};
 use crate::glonass::{
     glonass_time_of_day_to_gps_with_s, glonass_time_of_day_with_s, GlonassArc, GlonassEphemeris,
     GlonassIcdFields,
 };
 use crate::m;
 use crate::ranging::{
-    bootstrap_position, cn0_dbhz_u8, correct_at, correct_at_without_azimuth, split_pair,
-    stream_codes, stream_sigma_for_m, transmit_state_motion, transmit_time_s, Broadcast,
-    Corrections, ReceiverFrame, SatInput, StreamSigmas,
+    bootstrap_position, cn0_dbhz_u8, correct_at, correct_at_without_azimuth, signal_sent_s,
+    split_pair, stream_codes, stream_sigma_for_m, transmit_state_motion, transmit_time_s,
+    Broadcast, Corrections, ReceiverFrame, SatInput, StreamSigmas,
 };
 use crate::store::{DecodedSets, EphemerisStore, OrbitCache, Stored};
 use crate::time::table_gps_minus_utc_s;
@@ -109,6 +110,16 @@ pub const KEPLER_SETS: usize = 64;
 /// and the particle filter's): each epoch decodes its sets.
 #[cfg(not(feature = "ram-192k"))]
 pub const ORBIT_CACHE_SETS: usize = 32;
+/// Keplerian orbit arcs kept across epochs ([`KeplerArcs`]): one for each
+/// satellite of the default build's epoch (32, the wire's capacity), about
+/// 400 B each. None with `ram-192k`: each transmit state is evaluated
+/// exactly.
+#[cfg(not(feature = "ram-192k"))]
+pub const KEPLER_ARCS: usize = 32;
+/// Keplerian orbit arcs with `ram-192k`: none (the STM32F4's RAM is
+/// ARAIM's and the particle filter's).
+#[cfg(feature = "ram-192k")]
+pub const KEPLER_ARCS: usize = 0;
 /// GLONASS sets kept: two per slot of a full constellation.
 #[cfg(not(feature = "ram-192k"))]
 const GLONASS_SETS: usize = 48;
@@ -463,6 +474,8 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     station_m: Option<[f64; 3]>,
     counts: RtcmCounts,
     glonass_arcs: GlonassArcs,
+    /// The Keplerian satellites' orbit arcs ([`KeplerArcs`]).
+    kepler_arcs: KeplerArcs<KEPLER_ARCS>,
     /// The decoded Keplerian sets kept across epochs.
     #[cfg(not(feature = "ram-192k"))]
     orbits: OrbitCache<ORBIT_CACHE_SETS>,
@@ -504,6 +517,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 ephemerides_not_kept: 0,
             },
             glonass_arcs: GlonassArcs::new(),
+            kepler_arcs: KeplerArcs::new(),
             #[cfg(not(feature = "ram-192k"))]
             orbits: OrbitCache::new(),
             stream_leap_s: None,
@@ -905,6 +919,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             store,
             station_m,
             glonass_arcs,
+            kepler_arcs,
             #[cfg(not(feature = "ram-192k"))]
             orbits,
             ..
@@ -1024,12 +1039,19 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // position); a GLONASS orbit from its arc.
         // A satellite with a phase-range rate: its velocity and clock
         // drift there too, from the same evaluation (a GLONASS velocity
-        // from the same integration; a Keplerian one from the transmit
-        // state's angles, `transmit_state_motion`).
+        // from the same integration; a Keplerian satellite's state and
+        // motion from its orbit arc, `KeplerArcs`, or with none kept
+        // exactly, `transmit_state_motion`).
         glonass_arcs.next_epoch();
+        kepler_arcs.next_epoch();
         transmit.clear();
         motion.clear();
         for (s, rate) in inputs.iter().zip(rates.iter()) {
+            let on_arc = |arcs: &mut KeplerArcs<KEPLER_ARCS>, o: &Orbit| {
+                signal_sent_s(s, time_gps_s)
+                    .ok()
+                    .map(|t_sv| arcs.transmit_state_motion(s.id, o, t_sv))
+            };
             let (tx, mo) = match s.eph {
                 Broadcast::Glonass(g) => match transmit_time_s(s, time_gps_s) {
                     Ok(t) => {
@@ -1038,6 +1060,16 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                     }
                     Err(_) => (None, None),
                 },
+                Broadcast::Orbit(o) if KEPLER_ARCS > 0 => match on_arc(kepler_arcs, o) {
+                    Some((_, state, mo)) => (Some(state), rate.map(|_| mo)),
+                    None => (None, None),
+                },
+                Broadcast::Kepler(k) if KEPLER_ARCS > 0 => {
+                    match on_arc(kepler_arcs, &Orbit::new(k)) {
+                        Some((_, state, mo)) => (Some(state), rate.map(|_| mo)),
+                        None => (None, None),
+                    }
+                }
                 Broadcast::Kepler(_) | Broadcast::Orbit(_) => {
                     match transmit_state_motion(s, time_gps_s, rate.is_some()) {
                         Ok((state, mo)) => (Some(state), mo),
