@@ -29,27 +29,27 @@
 //! measured by differences (host-tests `orbit_sums`): within 1 mm and 1
 //! mm/s, as the bound says.
 //!
-//! **Refresh.** A satellite first seen with a set (or seen with a new
-//! one, or after a gap longer than its arc) is evaluated exactly at its
-//! transmit time, which becomes its first node; the epoch after it
-//! evaluates the second node, and an epoch past an arc's end (within the
-//! next arc) the next node ARC_S on: an epoch evaluates at most one
-//! orbit per satellite, as without arcs, and a satellite in steady
-//! tracking one every ARC_S. The first arc of a satellite is `1 + slot %
-//! 30` seconds long, its slot being its place among the arcs, so that
-//! satellites first seen in the same epoch (a stream's start, a
-//! constellation whose sets change at the same toe, GPS's every two
-//! hours) reach their arcs' ends at different epochs. A stream whose
-//! epochs are ARC_S or more apart is evaluated exactly at every epoch.
+//! **Nodes.** A satellite's nodes are at the multiples of ARC_S offset
+//! by a phase of its own (0 to 29 s, by its number and system:
+//! [`arc_nodes_s`]), so that the arc a signal is interpolated on, and
+//! the result, depend on the set, the satellite and the time alone, not
+//! on the epochs before (a stream read from its middle forms the same
+//! bits), and the satellites of an epoch reach their arcs' ends at
+//! different epochs. An epoch past an arc's end evaluates one node (the
+//! next arc's end; its start is the last arc's end); a satellite new to
+//! the receiver, or on a new set, two: a stream's first epoch, and the
+//! epoch at which the satellites of a constellation change sets together
+//! (GPS's toe every two hours), evaluate two nodes per satellite, about
+//! twice an exact transmit state each (BENCHMARKS.md "Orbit arcs": the
+//! worst-case epoch measured).
 //!
-//! An epoch's bits depend on where its satellites' arcs started, i.e. on
-//! the epochs before it in the stream (within the bound above of the
-//! exact evaluation). The host's stream reader and the device's form their epochs
-//! through the same receiver and arcs, so they form the same bits from
-//! the same stream. A build
-//! without room for the arcs (`ram-192k`, the STM32F4's) evaluates each
-//! transmit state exactly: its epochs are within the bound above of the
-//! others', not their bits.
+//! **One model everywhere.** A Keplerian satellite's transmit-time state
+//! is this interpolant wherever it is formed: the device's stream
+//! receiver keeps the arcs ([`KeplerArcs`]); the host's readers (the
+//! RINEX and RTCM replays, `crate::ranging::transmit_state`) and a build
+//! without room for the arcs (`ram-192k`, the STM32F4's: two node
+//! evaluations per satellite and epoch) evaluate the same arc afresh
+//! ([`transmit_state_motion_on_arc`]); so they form the same bits.
 
 use heapless::Vec;
 use raim_core::SatId;
@@ -59,14 +59,8 @@ use crate::velocity::SatMotion;
 
 /// An arc's length between its nodes, s (the error bound, module doc).
 pub const ARC_S: f64 = 30.0;
-/// First arcs are 1 to this many seconds long, by slot (module doc).
+/// The satellites' node phases: 0 to this less one, s (module doc).
 const STAGGER: usize = 30;
-/// An arc is used this far beyond its ends, s: a node is a transmit time,
-/// and the next epoch's signal time t_sv differs from its transmit time
-/// by the satellite's clock offset, below 1 ms. The interpolation's
-/// remainder f''''(xi) / 4! (t - t0)^2 (t - t1)^2 there is below h^2
-/// (1 ms)^2 / 24 max|f''''|, 1e-11 m, far within the bound.
-pub const CLOCK_MARGIN_S: f64 = 1e-3;
 
 /// A satellite's exact state and motion at one time.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -139,10 +133,9 @@ impl HermiteArc {
         }
     }
 
-    /// True when `t_gps_s` is within the arc, or beyond an end by at most
-    /// [`CLOCK_MARGIN_S`].
+    /// True when `t_gps_s` is within the arc, ends included.
     pub fn covers(&self, t_gps_s: f64) -> bool {
-        t_gps_s >= self.t0_gps_s - CLOCK_MARGIN_S && t_gps_s <= self.t1_gps_s + CLOCK_MARGIN_S
+        t_gps_s >= self.t0_gps_s && t_gps_s <= self.t1_gps_s
     }
 
     /// The clock at `t_gps_s`, s.
@@ -171,22 +164,13 @@ impl HermiteArc {
     }
 }
 
-/// What a satellite's arc has.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Nodes {
-    /// One node, and the second's distance from it, s.
-    First(Node, f64),
-    /// An arc.
-    Arc(HermiteArc),
-}
-
 /// One satellite's arc, for one Keplerian set.
 #[derive(Debug, Clone, PartialEq)]
 struct SatArc {
     id: SatId,
     /// The set the nodes are of (compared whole).
     set: Kepler,
-    nodes: Nodes,
+    arc: HermiteArc,
     /// The epoch count when an epoch last used it.
     used: u32,
 }
@@ -233,105 +217,124 @@ impl<const A: usize> KeplerArcs<A> {
     /// The transmit time, state and motion of satellite `id` on `orbit`
     /// for a signal sent at `t_sv_gps_s` by its clock (as
     /// [`Orbit::transmit_state_motion`], within the module doc's bound):
-    /// from the satellite's arc when it covers the signal (the clock at
-    /// t_sv, then the state and motion at t = t_sv - clock), after
-    /// evaluating the arc's next node ([`Node::of`]) when the signal is
-    /// past its end but within the next arc; else exactly, and the result
-    /// the first node of a new arc. At most one evaluation of the orbit.
+    /// on the arc of [`arc_nodes_s`]`(id, t_sv)`, the clock at t_sv and
+    /// then the state and motion at t = t_sv - clock (which may precede
+    /// the arc's start by the clock offset, below 1 ms). The arc is the
+    /// kept one, or the next one from its end node and one new node, or
+    /// else two new nodes ([`Node::of`]); it is a function of the set,
+    /// the satellite and t_sv alone, whatever the epochs before. With `A`
+    /// = 0, or a non-finite time, [`Orbit::transmit_state_motion`].
     pub fn transmit_state_motion(
         &mut self,
         id: SatId,
         orbit: &Orbit,
         t_sv_gps_s: f64,
     ) -> (f64, SatState, SatMotion) {
+        let (t0, t1) = arc_nodes_s(id, t_sv_gps_s);
+        if A == 0 || !(t0.is_finite() && t1.is_finite()) {
+            return transmit_state_motion_on_arc(id, orbit, t_sv_gps_s);
+        }
         let epoch = self.epoch;
         let kept = self
             .arcs
-            .iter()
-            .position(|a| a.id == id && a.set == orbit.set);
-        let Some((slot, a)) = kept.and_then(|i| Some((i, self.arcs.get_mut(i)?))) else {
-            return self.start(id, orbit, t_sv_gps_s);
-        };
-        a.used = epoch;
-        let arc = match a.nodes {
-            Nodes::First(n, len)
-                if t_sv_gps_s > n.t_gps_s && t_sv_gps_s <= n.t_gps_s + len + CLOCK_MARGIN_S =>
-            {
-                Some(HermiteArc::new(&n, &Node::of(orbit, n.t_gps_s + len)))
+            .iter_mut()
+            .find(|a| a.id == id && a.set == orbit.set);
+        let arc = match kept {
+            Some(a) => {
+                a.used = epoch;
+                if a.arc.t0_gps_s != t0 || a.arc.t1_gps_s != t1 {
+                    a.arc = if a.arc.t1_gps_s == t0 {
+                        HermiteArc::new(&a.arc.end, &Node::of(orbit, t1))
+                    } else {
+                        HermiteArc::new(&Node::of(orbit, t0), &Node::of(orbit, t1))
+                    };
+                }
+                a.arc
             }
-            Nodes::Arc(arc) if arc.covers(t_sv_gps_s) => Some(arc),
-            Nodes::Arc(arc)
-                if t_sv_gps_s > arc.t1_gps_s
-                    && t_sv_gps_s <= arc.t1_gps_s + ARC_S + CLOCK_MARGIN_S =>
-            {
-                Some(HermiteArc::new(
-                    &arc.end,
-                    &Node::of(orbit, arc.t1_gps_s + ARC_S),
-                ))
+            None => {
+                let arc = HermiteArc::new(&Node::of(orbit, t0), &Node::of(orbit, t1));
+                self.keep(id, orbit, arc);
+                arc
             }
-            _ => None,
         };
-        if let Some(arc) = arc {
-            a.nodes = Nodes::Arc(arc);
-            let t = t_sv_gps_s - arc.clock_s(t_sv_gps_s);
-            let (state, motion) = arc.at(t);
-            return (t, state, motion);
-        }
-        // Outside the arc and the next: exactly, and a new arc from here.
-        let (t, state, motion) = orbit.transmit_state_motion(t_sv_gps_s);
-        a.nodes = Nodes::First(
-            Node {
-                t_gps_s: t,
-                state,
-                motion,
-            },
-            first_length_s(slot),
-        );
-        (t, state, motion)
+        on(&arc, t_sv_gps_s)
     }
 
-    /// A satellite without an arc for `orbit`: exactly, and its arc's
-    /// first node kept in the place of its arc of another set, else in a
-    /// free place, else in the place of an arc no satellite of this
-    /// epoch has used (not kept when there is none).
-    fn start(&mut self, id: SatId, orbit: &Orbit, t_sv_gps_s: f64) -> (f64, SatState, SatMotion) {
-        let (t, state, motion) = orbit.transmit_state_motion(t_sv_gps_s);
+    /// Keep `arc` of satellite `id` on `orbit`: in the place of the
+    /// satellite's arc of another set, else in a free place, else in the
+    /// place of an arc no satellite of this epoch has used (not kept when
+    /// there is none).
+    fn keep(&mut self, id: SatId, orbit: &Orbit, arc: HermiteArc) {
         let epoch = self.epoch;
+        let new = SatArc {
+            id,
+            set: orbit.set,
+            arc,
+            used: epoch,
+        };
         let place = match self.arcs.iter().position(|a| a.id == id) {
             Some(i) => Some(i),
-            None if self.arcs.len() < A => Some(self.arcs.len()),
+            None if self.arcs.len() < A => None,
             None => self.arcs.iter().position(|a| a.used != epoch),
         };
-        if let Some(slot) = place {
-            let new = SatArc {
-                id,
-                set: orbit.set,
-                nodes: Nodes::First(
-                    Node {
-                        t_gps_s: t,
-                        state,
-                        motion,
-                    },
-                    first_length_s(slot),
-                ),
-                used: epoch,
-            };
-            match self.arcs.get_mut(slot) {
-                Some(s) => *s = new,
-                None => {
-                    let _ = self.arcs.push(new);
-                }
+        match place.and_then(|i| self.arcs.get_mut(i)) {
+            Some(slot) => *slot = new,
+            None => {
+                let _ = self.arcs.push(new);
             }
         }
-        (t, state, motion)
     }
 }
 
-/// The first arc's length of the arc in `slot`, s: 1 to [`STAGGER`]
-/// seconds by slot, at most [`ARC_S`] (module doc).
-fn first_length_s(slot: usize) -> f64 {
-    let k = slot % STAGGER + 1;
-    ARC_S * k as f64 / STAGGER as f64
+/// The transmit time, state and motion of satellite `id` on `orbit` for
+/// a signal sent at `t_sv_gps_s` by its clock, on the arc of
+/// [`arc_nodes_s`] with both its nodes evaluated here: what
+/// [`KeplerArcs::transmit_state_motion`] gives, to the bit, without
+/// keeping anything (the host's readers, whose cost does not matter, and
+/// a build without room for arcs). With a non-finite time,
+/// [`Orbit::transmit_state_motion`].
+pub fn transmit_state_motion_on_arc(
+    id: SatId,
+    orbit: &Orbit,
+    t_sv_gps_s: f64,
+) -> (f64, SatState, SatMotion) {
+    let (t0, t1) = arc_nodes_s(id, t_sv_gps_s);
+    if !(t0.is_finite() && t1.is_finite()) {
+        return orbit.transmit_state_motion(t_sv_gps_s);
+    }
+    on(
+        &HermiteArc::new(&Node::of(orbit, t0), &Node::of(orbit, t1)),
+        t_sv_gps_s,
+    )
+}
+
+/// The transmit time, state and motion on `arc` of a signal sent at
+/// `t_sv_gps_s`: the clock at t_sv, then the state and motion at t = t_sv
+/// - clock (before the arc's start by at most the clock offset, below 1
+/// ms, where the interpolation's remainder f''''(xi) / 4! (t - t0)^2 (t -
+/// t1)^2 is below 1e-11 m).
+fn on(arc: &HermiteArc, t_sv_gps_s: f64) -> (f64, SatState, SatMotion) {
+    let t = t_sv_gps_s - arc.clock_s(t_sv_gps_s);
+    let (state, motion) = arc.at(t);
+    (t, state, motion)
+}
+
+/// The nodes (GPS s) of the arc satellite `id`'s state at GPS time
+/// `t_gps_s` is interpolated on: the multiples of [`ARC_S`] offset by
+/// the satellite's phase, 0 to 29 s by its number and system (so that the
+/// satellites of an epoch reach their arcs' ends at different epochs),
+/// the last at or before `t_gps_s` and the next.
+pub fn arc_nodes_s(id: SatId, t_gps_s: f64) -> (f64, f64) {
+    let system = match id.system {
+        raim_core::System::Gps => 0u32,
+        raim_core::System::Glonass => 1,
+        raim_core::System::Galileo => 2,
+        raim_core::System::Beidou => 3,
+        raim_core::System::Qzss => 4,
+    };
+    let phase_s = f64::from((u32::from(id.prn) + 11 * system) % STAGGER as u32);
+    let t0 = crate::m::floor((t_gps_s - phase_s) / ARC_S) * ARC_S + phase_s;
+    (t0, t0 + ARC_S)
 }
 
 #[cfg(test)]
@@ -360,21 +363,20 @@ mod tests {
 
     /// The arc's state and motion within the module doc's bound of the
     /// exact evaluation at the same time, epoch after epoch at 1 Hz across
-    /// two hours (every refresh included), across a 40 s gap in the
-    /// stream and a change of set, the transmit time the exact one's
-    /// within its ulp; the first epoch of an arc the exact bits; with
-    /// capacity 0, the exact bits at every epoch.
+    /// two hours (every refresh included), the transmit time the exact
+    /// one's within its ulp; each epoch's bits those of a receiver that
+    /// sees the satellite first at that epoch (no history) and of the
+    /// arc evaluated afresh ([`transmit_state_motion_on_arc`]), across a
+    /// gap in the stream and a change of set.
     ///
     /// Verifies: RX-FORM-ARC
     #[test]
     fn arcs_are_the_exact_orbit_within_the_bound() {
         let t0 = 1000.0 * WEEK_S + 0.5;
         let mut arcs = KeplerArcs::<4>::new();
-        let mut none = KeplerArcs::<0>::new();
         let (orbit, other) = (Orbit::new(&set(3)), Orbit::new(&set(9)));
         let id = SatId::new(System::Gps, 3);
         let mut worst = [0.0f64; 4];
-        let mut exact = 0;
         for i in 0..7200 {
             arcs.next_epoch();
             // A 40 s gap at 3600 s.
@@ -384,42 +386,53 @@ mod tests {
             // Another set from 5000 s on.
             let o = if i >= 5000 { &other } else { &orbit };
             let t_sv = t0 + f64::from(i);
-            let (t, s, m) = arcs.transmit_state_motion(id, o, t_sv);
-            let want = o.transmit_state_motion(t_sv);
-            assert_eq!(none.transmit_state_motion(id, o, t_sv), want);
-            if (t, s, m) == want {
-                exact += 1;
-            }
+            let got = arcs.transmit_state_motion(id, o, t_sv);
+            let (t, s, m) = got;
+            let (te, _, _) = o.transmit_state_motion(t_sv);
             let (se, me) = o.state_motion(t);
             let d = |a: [f64; 3], b: [f64; 3]| {
                 (0..3).map(|j| (a[j] - b[j]).powi(2)).sum::<f64>().sqrt()
             };
-            worst[0] = worst[0].max((t - want.0).abs());
+            worst[0] = worst[0].max((t - te).abs());
             worst[1] = worst[1].max(d(s.position_m, se.position_m));
             worst[2] = worst[2].max(d(m.velocity_m_s, me.velocity_m_s));
             worst[3] = worst[3].max((s.clock_s - se.clock_s).abs());
             assert!((m.clock_drift_s_s - me.clock_drift_s_s).abs() < 1e-18);
+            if i % 7 == 0 {
+                let mut fresh = KeplerArcs::<1>::new();
+                assert_eq!(fresh.transmit_state_motion(id, o, t_sv), got, "{i}");
+            }
+            assert_eq!(transmit_state_motion_on_arc(id, o, t_sv), got, "{i}");
         }
         // The transmit times: the clock's rounding, 1e-19 s, moves t by
         // at most its own ulp (1.2e-7 s at week 1000).
         assert!(worst[0] <= 1.2e-7, "{worst:?}");
         assert!(worst[1] < 2.1e-4 && worst[2] < 2.1e-5, "{worst:?}");
         assert!(worst[3] < 1e-18, "{worst:?}");
-        // Exact at the three starts (first epoch, after the gap, the new
-        // set) and where a node falls on an epoch; interpolated between.
-        println!("{exact} exact epochs; worst {worst:?}");
-        assert!((3..300).contains(&exact), "{exact}");
+        // The arc was used: mid-arc the result is not the exact one's bits.
+        assert!(worst[1] > 0.0);
         assert_eq!(arcs.len(), 1);
+        let mut none = KeplerArcs::<0>::new();
+        let t = t0 + 7200.0;
+        assert_eq!(
+            none.transmit_state_motion(id, &orbit, t),
+            transmit_state_motion_on_arc(id, &orbit, t)
+        );
         assert!(none.is_empty());
     }
 
-    /// First arcs are staggered by slot: 1 to 30 s, never longer than
-    /// [`ARC_S`].
+    /// Nodes are ARC_S apart at the satellite's phase; the phases of GPS
+    /// 1-30 are 30 different seconds.
     #[test]
-    fn first_arcs_are_staggered() {
-        assert_eq!(first_length_s(0), 1.0);
-        assert_eq!(first_length_s(29), ARC_S);
-        assert_eq!(first_length_s(30), 1.0);
-        assert!((0..64).all(|s| first_length_s(s) <= ARC_S));
+    fn nodes_are_staggered_by_satellite() {
+        let t = 1000.0 * WEEK_S + 12.25;
+        let mut phases = std::collections::BTreeSet::new();
+        for prn in 1..=30 {
+            let (a, b) = arc_nodes_s(SatId::new(System::Gps, prn), t);
+            assert!(a <= t && t < b && b - a == ARC_S);
+            assert_eq!(a, a.floor());
+            phases.insert((a - 1000.0 * WEEK_S).rem_euclid(ARC_S) as u32);
+        }
+        assert_eq!(phases.len(), 30);
     }
 }

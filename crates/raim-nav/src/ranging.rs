@@ -17,6 +17,7 @@ use raim_core::frames::{bowring_latitude_rad, ecef_to_geodetic_from, enu_rotatio
 use raim_core::sigma::SigmaModel;
 use raim_core::{RangeObservation, Real, SatId, System};
 
+use crate::arc::transmit_state_motion_on_arc;
 use crate::ephemeris::{Kepler, Orbit, SatState, C_M_S, WEEK_S};
 use crate::geometry::{az_el_rotated, distance_m, elevation_rotated, rotate_earth};
 use crate::glonass::{l1_hz, l2_hz, GlonassEphemeris, F_L1_BASE_HZ, F_L2_BASE_HZ};
@@ -290,23 +291,13 @@ pub fn transmit_time_s(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<f64, Rejecti
 }
 
 /// The state of `s`'s satellite at the transmit time of its signal
-/// received at `t_rx_gps_s` ([`transmit_time_s`]): a Keplerian orbit by
-/// [`Kepler::transmit_state`] (the transmit time's eccentric anomaly one
-/// Newton step from the clock's), a GLONASS orbit integrated there.
+/// received at `t_rx_gps_s`: a Keplerian orbit on its arc
+/// ([`crate::arc`]: the cubic Hermite interpolant between exact states
+/// 30 s apart, within 1 mm of the orbit, the stream receiver's model),
+/// a GLONASS orbit integrated there ([`transmit_time_s`]).
 pub fn transmit_state(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<SatState, Rejection> {
-    match s.eph {
-        Broadcast::Kepler(k) => {
-            let (p, _) = ranging_pseudorange(s)?;
-            Ok(k.transmit_state(t_rx_gps_s - p / C_M_S).1)
-        }
-        Broadcast::Orbit(o) => {
-            let (p, _) = ranging_pseudorange(s)?;
-            Ok(o.transmit_state(t_rx_gps_s - p / C_M_S).1)
-        }
-        Broadcast::Glonass(g) => Ok(g.state(transmit_time_s(s, t_rx_gps_s)?)),
-    }
+    Ok(transmit_state_motion(s, t_rx_gps_s, false)?.0)
 }
-
 /// The time by the satellite's clock at which the signal of `s` received
 /// at `t_rx_gps_s` left it: t_sv = t_rx - P/c, P the code's or the
 /// iono-free pair's pseudorange (the t_sv of [`transmit_state`]), GPS s.
@@ -316,29 +307,25 @@ pub fn signal_sent_s(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<f64, Rejection
 }
 
 /// [`transmit_state`] and, when `motion` is true, the satellite's
-/// velocity and clock drift at the same transmit time from the same orbit
-/// evaluation (a Keplerian orbit by [`Orbit::transmit_state_motion`]; the
-/// state is [`transmit_state`]'s to the bit). A GLONASS motion comes with
-/// its integration (the receiver's [`crate::glonass::GlonassArc`]), not
-/// here: None for a GLONASS satellite.
+/// velocity and clock drift at the same transmit time from the same arc
+/// (a Keplerian orbit by [`transmit_state_motion_on_arc`], whose nodes are
+/// [`Orbit::state_motion`]'s; the state is [`transmit_state`]'s to the
+/// bit). A GLONASS motion comes with its integration (the receiver's
+/// [`crate::glonass::GlonassArc`]), not here: None for a GLONASS
+/// satellite.
 pub fn transmit_state_motion(
     s: &SatInput<'_>,
     t_rx_gps_s: f64,
     motion: bool,
 ) -> Result<(SatState, Option<SatMotion>), Rejection> {
-    let orbit_of = |o: &Orbit| -> Result<(SatState, Option<SatMotion>), Rejection> {
-        let (p, _) = ranging_pseudorange(s)?;
-        let t_sv = t_rx_gps_s - p / C_M_S;
-        Ok(if motion {
-            let (_, state, mo) = o.transmit_state_motion(t_sv);
-            (state, Some(mo))
-        } else {
-            (o.transmit_state(t_sv).1, None)
-        })
+    let on_arc = |o: &Orbit| -> Result<(SatState, Option<SatMotion>), Rejection> {
+        let t_sv = signal_sent_s(s, t_rx_gps_s)?;
+        let (_, state, mo) = transmit_state_motion_on_arc(s.id, o, t_sv);
+        Ok((state, motion.then_some(mo)))
     };
     match s.eph {
-        Broadcast::Kepler(k) => orbit_of(&Orbit::new(k)),
-        Broadcast::Orbit(o) => orbit_of(o),
+        Broadcast::Kepler(k) => on_arc(&Orbit::new(k)),
+        Broadcast::Orbit(o) => on_arc(o),
         Broadcast::Glonass(g) => Ok((g.state(transmit_time_s(s, t_rx_gps_s)?), None)),
     }
 }
