@@ -69,7 +69,7 @@ use crate::ranging::{
     split_pair, stream_codes, stream_sigma_for_m, transmit_state_motion, transmit_time_s,
     Broadcast, Corrections, ReceiverFrame, SatInput, StreamSigmas,
 };
-use crate::store::{DecodedSets, EphemerisStore, OrbitCache, Stored};
+use crate::store::{Chosen, DecodedSets, EphemerisStore, OrbitCache, Stored};
 use crate::time::table_gps_minus_utc_s;
 use crate::velocity::{glonass_motion, range_rate, RangeRate, SatMotion};
 
@@ -433,6 +433,9 @@ pub struct FormScratch<const N: usize> {
     /// Each input satellite's velocity and clock drift at its transmit
     /// time, when it has a rate.
     motion: Vec<Option<SatMotion>, N>,
+    /// Where each satellite's set is, as its load chose it
+    /// ([`EphemerisStore::select_chosen`]), in the epoch's satellite order.
+    chosen: Vec<Chosen, N>,
 }
 
 impl<const N: usize> FormScratch<N> {
@@ -444,6 +447,7 @@ impl<const N: usize> FormScratch<N> {
             decoded: DecodedSets::new(),
             rates: Vec::new(),
             motion: Vec::new(),
+            chosen: Vec::new(),
         }
     }
 }
@@ -934,6 +938,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             decoded,
             rates,
             motion,
+            chosen,
         } = scratch;
         let o = ready.as_mut()?;
         out.sats.clear();
@@ -973,16 +978,23 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // refusal the inputs below would give.
         store.start_epoch(decoded);
         orbits.next_epoch();
+        chosen.clear();
         let mut from = 0;
         while let Some((id, have)) = next_satellite(&o.sigs, &mut from) {
-            if pick_code(stream_codes(id.system), have).is_some()
-                && store.load_cached(id, time_gps_s, decoded, orbits).is_err()
-            {
-                return Some(Err(FormError::TooManySignals {
-                    capacity: u32::try_from(N).unwrap_or(u32::MAX),
-                }));
+            if pick_code(stream_codes(id.system), have).is_some() {
+                let kept = store
+                    .load_cached(id, time_gps_s, decoded, orbits)
+                    .ok()
+                    .and_then(|c| chosen.push(c).ok());
+                if kept.is_none() {
+                    return Some(Err(FormError::TooManySignals {
+                        capacity: u32::try_from(N).unwrap_or(u32::MAX),
+                    }));
+                }
             }
         }
+        // The sets as their loads chose them, in the same satellite order.
+        let mut chosen = chosen.iter().copied();
         let mut inputs: Vec<SatInput<'_>, N> = Vec::new();
         // The C/N0 of each input, in the same order.
         let mut cn0s: Vec<u8, N> = Vec::new();
@@ -1008,7 +1020,11 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 out.rejected += 1;
                 continue;
             };
-            let Some(eph) = store.select_cached(s.id, time_gps_s, decoded, orbits) else {
+            let Some(c) = chosen.next() else {
+                out.rejected += 1;
+                continue;
+            };
+            let Some(eph) = store.select_chosen(s.id, time_gps_s, c, decoded, orbits) else {
                 out.rejected += 1;
                 continue;
             };
