@@ -305,10 +305,10 @@ pub fn transmit_state_motion_on_arc(
 }
 
 /// The transmit time, state and motion on `arc` of a signal sent at
-/// `t_sv_gps_s`: the clock at t_sv, then the state and motion at t = t_sv
-/// - clock (before the arc's start by at most the clock offset, below 1
-/// ms, where the interpolation's remainder f''''(xi) / 4! (t - t0)^2 (t -
-/// t1)^2 is below 1e-11 m).
+/// `t_sv_gps_s`: the clock at t_sv, then the state and motion at t, t_sv
+/// less the clock (before the arc's start by at most the clock offset,
+/// below 1 ms, where the interpolation's remainder f''''(xi) / 4! (t -
+/// t0)^2 (t - t1)^2 is below 1e-11 m).
 fn on(arc: &HermiteArc, t_sv_gps_s: f64) -> (f64, SatState, SatMotion) {
     let t = t_sv_gps_s - arc.clock_s(t_sv_gps_s);
     let (state, motion) = arc.at(t);
