@@ -433,9 +433,9 @@ pub struct FormScratch<const N: usize> {
     /// Each input satellite's velocity and clock drift at its transmit
     /// time, when it has a rate.
     motion: Vec<Option<SatMotion>, N>,
-    /// Where each satellite's set is, as its load chose it
-    /// ([`EphemerisStore::select_chosen`]), in the epoch's satellite order.
-    chosen: Vec<Chosen, N>,
+    /// Where each Keplerian satellite's set is, as its load chose it
+    /// ([`EphemerisStore::select_chosen`]).
+    chosen: Vec<(SatId, Chosen), N>,
 }
 
 impl<const N: usize> FormScratch<N> {
@@ -982,19 +982,21 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         let mut from = 0;
         while let Some((id, have)) = next_satellite(&o.sigs, &mut from) {
             if pick_code(stream_codes(id.system), have).is_some() {
-                let kept = store
-                    .load_cached(id, time_gps_s, decoded, orbits)
-                    .ok()
-                    .and_then(|c| chosen.push(c).ok());
-                if kept.is_none() {
+                // A satellite with a Keplerian set in force is an input
+                // below: more than N of them is the capacity refusal the
+                // inputs would give.
+                let kept = match store.load_cached(id, time_gps_s, decoded, orbits) {
+                    Ok(c @ (Chosen::Kept(_) | Chosen::Decoded(_))) => chosen.push((id, c)).is_ok(),
+                    Ok(_) => true,
+                    Err(_) => false,
+                };
+                if !kept {
                     return Some(Err(FormError::TooManySignals {
                         capacity: u32::try_from(N).unwrap_or(u32::MAX),
                     }));
                 }
             }
         }
-        // The sets as their loads chose them, in the same satellite order.
-        let mut chosen = chosen.iter().copied();
         let mut inputs: Vec<SatInput<'_>, N> = Vec::new();
         // The C/N0 of each input, in the same order.
         let mut cn0s: Vec<u8, N> = Vec::new();
@@ -1020,9 +1022,13 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 out.rejected += 1;
                 continue;
             };
-            let Some(c) = chosen.next() else {
-                out.rejected += 1;
-                continue;
+            // The set as its load chose it (a GLONASS set chosen here).
+            let c = match s.id.system {
+                System::Glonass => Chosen::Glonass,
+                _ => chosen
+                    .iter()
+                    .find(|(id, _)| *id == s.id)
+                    .map_or(Chosen::None, |(_, c)| *c),
             };
             let Some(eph) = store.select_chosen(s.id, time_gps_s, c, decoded, orbits) else {
                 out.rejected += 1;
