@@ -47,6 +47,8 @@
 //! evaluations per satellite and epoch) evaluate the same arc afresh
 //! ([`transmit_state_motion_on_arc`]); so they form the same bits.
 
+use core::borrow::Borrow;
+
 use heapless::Vec;
 use raim_core::SatId;
 
@@ -226,30 +228,45 @@ impl<const A: usize> KeplerArcs<A> {
         orbit: &Orbit,
         t_sv_gps_s: f64,
     ) -> (f64, SatState, SatMotion) {
+        self.transmit_state_motion_of(id, &orbit.set, t_sv_gps_s, || orbit)
+    }
+
+    /// [`Self::transmit_state_motion`] of set `set`, whose orbit's
+    /// constants `orbit` makes only when a node is to be evaluated (a set
+    /// decoded for the epoch: [`Orbit::new`] takes three library sines
+    /// and cosines).
+    pub fn transmit_state_motion_of<O: Borrow<Orbit>>(
+        &mut self,
+        id: SatId,
+        set: &Kepler,
+        t_sv_gps_s: f64,
+        orbit: impl FnOnce() -> O,
+    ) -> (f64, SatState, SatMotion) {
         let (t0, t1) = arc_nodes_s(id, t_sv_gps_s);
         if A == 0 || !(t0.is_finite() && t1.is_finite()) {
-            return transmit_state_motion_on_arc(id, orbit, t_sv_gps_s);
+            return transmit_state_motion_on_arc(id, orbit().borrow(), t_sv_gps_s);
         }
         let epoch = self.epoch;
-        let kept = self
-            .arcs
-            .iter_mut()
-            .find(|a| a.id == id && a.set == orbit.set);
+        let kept = self.arcs.iter_mut().find(|a| a.id == id && a.set == *set);
         let arc = match kept {
             Some(a) => {
                 a.used = epoch;
                 if a.arc.t0_gps_s != t0 || a.arc.t1_gps_s != t1 {
+                    let o = orbit();
+                    let o = o.borrow();
                     a.arc = if a.arc.t1_gps_s == t0 {
-                        HermiteArc::new(&a.arc.end, &Node::of(orbit, t1))
+                        HermiteArc::new(&a.arc.end, &Node::of(o, t1))
                     } else {
-                        HermiteArc::new(&Node::of(orbit, t0), &Node::of(orbit, t1))
+                        HermiteArc::new(&Node::of(o, t0), &Node::of(o, t1))
                     };
                 }
                 a.arc
             }
             None => {
-                let arc = HermiteArc::new(&Node::of(orbit, t0), &Node::of(orbit, t1));
-                self.keep(id, orbit, arc);
+                let o = orbit();
+                let o = o.borrow();
+                let arc = HermiteArc::new(&Node::of(o, t0), &Node::of(o, t1));
+                self.keep(id, o, arc);
                 arc
             }
         };

@@ -66,8 +66,8 @@ use crate::glonass::{
 use crate::m;
 use crate::ranging::{
     bootstrap_position, cn0_dbhz_u8, correct_at, correct_at_without_azimuth, signal_sent_s,
-    split_pair, stream_codes, stream_sigma_for_m, transmit_state_motion, transmit_time_s,
-    Broadcast, Corrections, ReceiverFrame, SatInput, StreamSigmas,
+    split_pair, stream_codes, stream_sigma_for_m, transmit_time_s, Broadcast, Corrections,
+    ReceiverFrame, SatInput, StreamSigmas,
 };
 use crate::store::{Chosen, DecodedSets, EphemerisStore, OrbitCache, Stored};
 use crate::time::table_gps_minus_utc_s;
@@ -111,15 +111,17 @@ pub const KEPLER_SETS: usize = 64;
 #[cfg(not(feature = "ram-192k"))]
 pub const ORBIT_CACHE_SETS: usize = 32;
 /// Keplerian orbit arcs kept across epochs ([`KeplerArcs`]): one for each
-/// satellite of the default build's epoch (32, the wire's capacity), about
-/// 400 B each. None with `ram-192k`: each transmit state is evaluated
-/// exactly.
+/// satellite of the default build's epoch (32, the wire's capacity), 424 B
+/// each.
 #[cfg(not(feature = "ram-192k"))]
 pub const KEPLER_ARCS: usize = 32;
-/// Keplerian orbit arcs with `ram-192k`: none (the STM32F4's RAM is
-/// ARAIM's and the particle filter's).
+/// Keplerian orbit arcs with `ram-192k`: 12, 5.1 KB of the STM32F4's
+/// SRAM, whose stack region keeps more than 8 KiB over every measured
+/// high water with them (docs/FLASH.md "STM32F4: the stream";
+/// BENCHMARKS.md "Orbit arcs"); a Keplerian satellite beyond them has its
+/// arc evaluated afresh at each epoch (two nodes: the same bits, slower).
 #[cfg(feature = "ram-192k")]
-pub const KEPLER_ARCS: usize = 0;
+pub const KEPLER_ARCS: usize = 12;
 /// GLONASS sets kept: two per slot of a full constellation.
 #[cfg(not(feature = "ram-192k"))]
 const GLONASS_SETS: usize = 48;
@@ -1062,18 +1064,14 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // A satellite with a phase-range rate: its velocity and clock
         // drift there too, from the same evaluation (a GLONASS velocity
         // from the same integration; a Keplerian satellite's state and
-        // motion from its orbit arc, `KeplerArcs`, or with none kept
-        // exactly, `transmit_state_motion`).
+        // motion from its orbit arc, `KeplerArcs`: kept, or evaluated
+        // afresh beyond the arcs' capacity, the same bits).
         glonass_arcs.next_epoch();
         kepler_arcs.next_epoch();
         transmit.clear();
         motion.clear();
         for (s, rate) in inputs.iter().zip(rates.iter()) {
-            let on_arc = |arcs: &mut KeplerArcs<KEPLER_ARCS>, o: &Orbit| {
-                signal_sent_s(s, time_gps_s)
-                    .ok()
-                    .map(|t_sv| arcs.transmit_state_motion(s.id, o, t_sv))
-            };
+            let t_sv = signal_sent_s(s, time_gps_s).ok();
             let (tx, mo) = match s.eph {
                 Broadcast::Glonass(g) => match transmit_time_s(s, time_gps_s) {
                     Ok(t) => {
@@ -1082,22 +1080,21 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                     }
                     Err(_) => (None, None),
                 },
-                Broadcast::Orbit(o) if KEPLER_ARCS > 0 => match on_arc(kepler_arcs, o) {
-                    Some((_, state, mo)) => (Some(state), rate.map(|_| mo)),
+                Broadcast::Orbit(o) => match t_sv {
+                    Some(t_sv) => {
+                        let (_, state, mo) = kepler_arcs.transmit_state_motion(s.id, o, t_sv);
+                        (Some(state), rate.map(|_| mo))
+                    }
                     None => (None, None),
                 },
-                Broadcast::Kepler(k) if KEPLER_ARCS > 0 => {
-                    match on_arc(kepler_arcs, &Orbit::new(k)) {
-                        Some((_, state, mo)) => (Some(state), rate.map(|_| mo)),
-                        None => (None, None),
+                Broadcast::Kepler(k) => match t_sv {
+                    Some(t_sv) => {
+                        let (_, state, mo) =
+                            kepler_arcs.transmit_state_motion_of(s.id, k, t_sv, || Orbit::new(k));
+                        (Some(state), rate.map(|_| mo))
                     }
-                }
-                Broadcast::Kepler(_) | Broadcast::Orbit(_) => {
-                    match transmit_state_motion(s, time_gps_s, rate.is_some()) {
-                        Ok((state, mo)) => (Some(state), mo),
-                        Err(_) => (None, None),
-                    }
-                }
+                    None => (None, None),
+                },
             };
             // `inputs`, `transmit` and `motion` have the same capacity N.
             let _ = transmit.push(tx);
