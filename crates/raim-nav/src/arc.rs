@@ -41,11 +41,11 @@
 //!
 //! **One model everywhere.** A Keplerian satellite's transmit-time state
 //! is this interpolant wherever it is formed: the device's stream
-//! receiver keeps the arcs ([`KeplerArcs`]); the host's readers (the
-//! RINEX and RTCM replays, `crate::ranging::transmit_state`) and a build
-//! without room for the arcs (`ram-192k`, the STM32F4's: two node
-//! evaluations per satellite and epoch) evaluate the same arc afresh
-//! ([`transmit_state_motion_on_arc`]); so they form the same bits.
+//! receiver keeps the arcs ([`KeplerArcs`]: 32, 12 on the STM32F4's
+//! `ram-192k` build); the host's readers (the RINEX and RTCM replays,
+//! `crate::ranging::transmit_state`) and a satellite beyond the kept
+//! arcs evaluate the same arc afresh ([`transmit_state_motion_on_arc`]:
+//! two node evaluations); so they form the same bits.
 
 use core::borrow::Borrow;
 
