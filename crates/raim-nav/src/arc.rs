@@ -434,6 +434,43 @@ mod tests {
         assert!(none.is_empty());
     }
 
+    /// A full set of arcs: a satellite beyond them has its arc evaluated
+    /// afresh (the same bits) and takes the place of an arc no satellite
+    /// of the epoch used at a later epoch; the lazily made orbit is not
+    /// made while the kept arc covers the signal; a non-finite time gives
+    /// the exact evaluation's (non-finite) result.
+    ///
+    /// Verifies: RX-FORM-ARC
+    #[test]
+    fn a_full_set_of_arcs_gives_way_and_keeps_the_bits() {
+        let t = 1000.0 * WEEK_S + 100.25;
+        let (a, b) = (Orbit::new(&set(3)), Orbit::new(&set(9)));
+        let (ia, ib) = (SatId::new(System::Gps, 3), SatId::new(System::Gps, 9));
+        let mut arcs = KeplerArcs::<1>::new();
+        arcs.next_epoch();
+        let ga = arcs.transmit_state_motion(ia, &a, t);
+        let gb = arcs.transmit_state_motion(ib, &b, t);
+        assert_eq!(ga, transmit_state_motion_on_arc(ia, &a, t));
+        assert_eq!(gb, transmit_state_motion_on_arc(ib, &b, t));
+        assert_eq!(arcs.len(), 1);
+        // The next epoch: G09 alone takes G03's place.
+        arcs.next_epoch();
+        let gb = arcs.transmit_state_motion(ib, &b, t + 1.0);
+        assert_eq!(gb, transmit_state_motion_on_arc(ib, &b, t + 1.0));
+        assert_eq!(arcs.len(), 1);
+        // Kept and covering: the orbit is not made.
+        arcs.next_epoch();
+        let mut made = false;
+        let got = arcs.transmit_state_motion_of(ib, &b.set, t + 2.0, || {
+            made = true;
+            b
+        });
+        assert!(!made);
+        assert_eq!(got, transmit_state_motion_on_arc(ib, &b, t + 2.0));
+        let (tn, sn, _) = arcs.transmit_state_motion(ib, &b, f64::NAN);
+        assert!(tn.is_nan() && sn.position_m.iter().all(|v| v.is_nan()));
+    }
+
     /// Nodes are ARC_S apart at the satellite's phase; the phases of GPS
     /// 1-30 are 30 different seconds.
     #[test]
