@@ -302,12 +302,11 @@ impl Orbit {
     }
 
     /// [`Self::transmit_state`] with the satellite's motion there
-    /// (velocity and clock drift, [`Self::motion_at`]) from the same
+    /// (velocity and clock drift, as [`Self::motion`]) from the same
     /// evaluation: the eccentric anomaly, the sum formulas' angles and the
     /// node's sine and cosine are shared, so the motion costs a few dozen
-    /// operations more than the state (BENCHMARKS.md "Satellite motion
-    /// from the transmit state"). The state is [`Self::transmit_state`]'s
-    /// to the bit.
+    /// operations more than the state (BENCHMARKS.md "Orbit arcs", step
+    /// 1). The state is [`Self::transmit_state`]'s to the bit.
     pub fn transmit_state_motion(&self, t_sv_gps_s: f64) -> (f64, SatState, SatMotion) {
         let (t, tk, sin_e, cos_e) = self.transmit_anomaly(t_sv_gps_s);
         let terms = self.terms(tk, sin_e, cos_e);
@@ -346,7 +345,8 @@ impl Orbit {
 
     /// The satellite's velocity (Earth-fixed, the frame of the same
     /// instant) and clock drift at GPS time `t_gps_s`
-    /// ([`Self::motion_of`]).
+    /// (the time derivative of [`Self::state`]'s expressions:
+    /// `motion_of`).
     pub fn motion(&self, t_gps_s: f64) -> SatMotion {
         self.state_motion(t_gps_s).1
     }

@@ -13,6 +13,11 @@
 //!   extra rotations are differentiated too: Rz(omega_e t_k) turns at
 //!   omega_e); the clock drift af1 + 2 af2 (t - toc) plus the relativistic
 //!   term's rate F e sqrt(A) cos(E) dE/dt (IS-GPS-200 20.3.3.3.3.1).
+//!   These are [`Orbit::motion`]'s, computed with the position from one
+//!   evaluation ([`Orbit::state_motion`], [`Orbit::transmit_state_motion`]);
+//!   a stream epoch takes a satellite's motion, as its position, from its
+//!   orbit arc (the cubic Hermite interpolant's derivative between exact
+//!   nodes, within 6.2e-6 m/s of them: [`crate::arc`]).
 //! - GLONASS: the velocity of the ICD's integrated state (ICD 5.1
 //!   A.3.1.2, the rotating PZ-90.11 frame, i.e. Earth-fixed), through the
 //!   rotation and scale of [`crate::glonass::pz90_to_wgs84`] (not its
