@@ -115,6 +115,12 @@ pub struct SatInput<'a> {
     /// The second code's pseudorange for a pair, m.
     pub p2_m: Option<f64>,
     pub eph: Broadcast<'a>,
+    /// A Keplerian satellite's transmit state on its orbit arc
+    /// ([`crate::arc`]: the cubic Hermite interpolant between exact states
+    /// 30 s apart, within 1 mm of the orbit), as a receiver stream's
+    /// readers take it, so that the host's and the unit's form the same
+    /// bits; false, the exact orbit (a RINEX replay's).
+    pub orbit_arc: bool,
 }
 
 /// One satellite ready for the core, with the terms that went into it.
@@ -292,9 +298,10 @@ pub fn transmit_time_s(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<f64, Rejecti
 
 /// The state of `s`'s satellite at the transmit time of its signal
 /// received at `t_rx_gps_s`: a Keplerian orbit on its arc
-/// ([`crate::arc`]: the cubic Hermite interpolant between exact states
-/// 30 s apart, within 1 mm of the orbit, the stream receiver's model),
-/// a GLONASS orbit integrated there ([`transmit_time_s`]).
+/// ([`crate::arc`], a stream's: [`SatInput::orbit_arc`]) or by
+/// [`Orbit::transmit_state`] (the transmit time's eccentric anomaly one
+/// Newton step from the clock's), a GLONASS orbit integrated there
+/// ([`transmit_time_s`]).
 pub fn transmit_state(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<SatState, Rejection> {
     Ok(transmit_state_motion(s, t_rx_gps_s, false)?.0)
 }
@@ -307,10 +314,11 @@ pub fn signal_sent_s(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<f64, Rejection
 }
 
 /// [`transmit_state`] and, when `motion` is true, the satellite's
-/// velocity and clock drift at the same transmit time from the same arc
-/// (a Keplerian orbit by [`transmit_state_motion_on_arc`], whose nodes are
-/// [`Orbit::state_motion`]'s; the state is [`transmit_state`]'s to the
-/// bit). A GLONASS motion comes with its integration (the receiver's
+/// velocity and clock drift at the same transmit time from the same
+/// evaluation (a Keplerian orbit by [`transmit_state_motion_on_arc`],
+/// whose nodes are [`Orbit::state_motion`]'s, or by
+/// [`Orbit::transmit_state_motion`]; the state is [`transmit_state`]'s to
+/// the bit). A GLONASS motion comes with its integration (the receiver's
 /// [`crate::glonass::GlonassArc`]), not here: None for a GLONASS
 /// satellite.
 pub fn transmit_state_motion(
@@ -320,7 +328,11 @@ pub fn transmit_state_motion(
 ) -> Result<(SatState, Option<SatMotion>), Rejection> {
     let on_arc = |o: &Orbit| -> Result<(SatState, Option<SatMotion>), Rejection> {
         let t_sv = signal_sent_s(s, t_rx_gps_s)?;
-        let (_, state, mo) = transmit_state_motion_on_arc(s.id, o, t_sv);
+        let (_, state, mo) = if s.orbit_arc {
+            transmit_state_motion_on_arc(s.id, o, t_sv)
+        } else {
+            o.transmit_state_motion(t_sv)
+        };
         Ok((state, motion.then_some(mo)))
     };
     match s.eph {
@@ -763,6 +775,7 @@ mod tests {
                 p1_m: 2.2e7 + 1e5 * i as f64,
                 p2_m: pair.then_some(2.2e7 + 1e5 * i as f64 + 3.0),
                 eph: Broadcast::Kepler(&k),
+                orbit_arc: false,
             };
             let tx = transmit_state(&s, t).unwrap();
             // Without Klobuchar (a stream's corrections), the correction

@@ -1042,6 +1042,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 p1_m,
                 p2_m,
                 eph,
+                orbit_arc: true,
             };
             if inputs.push(input).is_err() || cn0s.push(cn0).is_err() || rates.push(rate).is_err() {
                 return Some(Err(FormError::TooManySignals {
