@@ -42,10 +42,12 @@
 //! **One model everywhere.** A Keplerian satellite's transmit-time state
 //! is this interpolant wherever it is formed: the device's stream
 //! receiver keeps the arcs ([`KeplerArcs`]: 32, 12 on the STM32F4's
-//! `ram-192k` build); the host's readers (the RINEX and RTCM replays,
-//! `crate::ranging::transmit_state`) and a satellite beyond the kept
-//! arcs evaluate the same arc afresh ([`transmit_state_motion_on_arc`]:
-//! two node evaluations); so they form the same bits.
+//! `ram-192k` build); the host's readers of a receiver stream (`raim
+//! replay --rtcm3` and `--ubx`: `crate::ranging::transmit_state` with
+//! `SatInput::orbit_arc`, which raim-recv's `NavData` sets) and a
+//! satellite beyond the kept arcs evaluate the same arc afresh
+//! ([`transmit_state_motion_on_arc`]: two node evaluations); so they form
+//! the same bits. A RINEX replay keeps the exact orbit.
 
 use core::borrow::Borrow;
 
