@@ -441,3 +441,69 @@ fn qemu_rtcm_esbc_gec_stream_answers_equal_the_host_replay() {
     assert_eq!(ok, EPOCHS);
     assert_eq!(systems.len(), 3, "{systems:?}");
 }
+
+/// The forming's instructions (`Status.last_stream_ticks` x 40, under
+/// `-icount shift=0`) of every epoch of `bytes`, read after each epoch's
+/// answer: the stream is sent an epoch at a time, each up to its closing
+/// 1127 (the last MSM of every epoch of GMSD7's and of the ESBC stream,
+/// DF393 = 0), and the unit's answer awaited (a deadline only a hang
+/// reaches).
+fn forming_per_epoch(bytes: &[u8]) -> Vec<u64> {
+    let elf = raim_qemu::firmware_elf_stream(Machine::Mps2An386).unwrap();
+    let mut fw = QemuSession::start_with(
+        &elf,
+        &Options {
+            icount: true,
+            ..Options::default()
+        },
+    )
+    .unwrap();
+    let mut out = Vec::new();
+    let mut chunk = Vec::new();
+    for f in frames(bytes) {
+        chunk.extend_from_slice(f);
+        let number = (u16::from(f[3]) << 4) | (u16::from(f[4]) >> 4);
+        if number == 1127 {
+            fw.send_raw(&chunk).unwrap();
+            chunk.clear();
+            let r = fw.recv(STREAM_TIMEOUT).unwrap();
+            assert_eq!(r.seq, None, "a stream epoch's answer is unasked: {r:?}");
+            out.push(40 * u64::from(fw.status().unwrap().last_stream_ticks));
+        }
+    }
+    out
+}
+
+/// The forming's cost at every epoch, with the Keplerian satellites'
+/// orbit arcs (raim-nav `arc`): GMSD7 (1 Hz, ephemerides first, the whole
+/// stream) and the ESBC G+E+C stream (30 s apart). Printed: the first
+/// dated epoch (every satellite's arc evaluated at two nodes), the
+/// largest, the median and the last (BENCHMARKS.md "Orbit arcs").
+#[test]
+fn qemu_rtcm_stream_epoch_cost_every_epoch() {
+    let (file, _) = gmsd7_in_window();
+    let once = whole_frames(&file);
+    let warm = [ephemeris_frames(once).as_slice(), once].concat();
+    let week = in_window_week();
+    let (esbc, _) = rtcm_common::esbc::esbc_stream(week - rtcm_common::esbc::ESBC_WEEK);
+    for (name, bytes) in [("GMSD7", warm.as_slice()), ("ESBC", esbc.as_slice())] {
+        let cost = forming_per_epoch(bytes);
+        let dated: Vec<(usize, u64)> = cost
+            .iter()
+            .copied()
+            .enumerate()
+            .filter(|(_, c)| *c > 0)
+            .collect();
+        assert!(dated.len() > 50, "{name}: {} epochs formed", dated.len());
+        let mut sorted: Vec<u64> = dated.iter().map(|d| d.1).collect();
+        sorted.sort_unstable();
+        let (max_at, max) = dated.iter().copied().max_by_key(|d| d.1).unwrap();
+        println!(
+            "{name}: {} epochs; forming instructions: first {:?}, largest {max} (epoch {max_at}), median {}, last {}",
+            cost.len(),
+            &dated[..3],
+            sorted[sorted.len() / 2],
+            dated.last().unwrap().1
+        );
+    }
+}

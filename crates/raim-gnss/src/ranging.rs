@@ -279,6 +279,7 @@ fn build(
             p1_m,
             p2_m,
             eph,
+            orbit_arc: nav.orbit_arcs,
         };
         match correct(
             &input,

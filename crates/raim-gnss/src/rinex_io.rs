@@ -239,6 +239,12 @@ pub struct NavData {
     /// GLONASS FDMA ephemerides per slot, in t_b order.
     pub glonass: BTreeMap<SatId, Vec<GlonassEphemeris>>,
     pub klobuchar: Option<Klobuchar>,
+    /// The Keplerian orbits are evaluated on their orbit arcs
+    /// (`raim_nav::arc`, `raim_nav::ranging::SatInput::orbit_arc`), as the
+    /// unit's stream receiver evaluates them: set by a receiver stream's
+    /// reader (`raim_recv`), so that its epochs are the unit's to the bit;
+    /// false for a RINEX navigation file (the exact orbit).
+    pub orbit_arcs: bool,
 }
 
 pub use raim_nav::ranging::Broadcast;
@@ -411,6 +417,7 @@ impl NavData {
             ephemerides,
             glonass,
             klobuchar,
+            orbit_arcs: false,
         })
     }
 

@@ -9,6 +9,7 @@
 use raim_core::System;
 
 use crate::m;
+use crate::velocity::SatMotion;
 
 /// Speed of light, m/s (IS-GPS-200 20.3.4.3).
 pub const C_M_S: f64 = 299_792_458.0;
@@ -296,6 +297,27 @@ impl Orbit {
     /// solution's own rounding; test `transmit_state_is_the_state_at_the_transmit_time`).
     /// Returns the transmit time with the state.
     pub fn transmit_state(&self, t_sv_gps_s: f64) -> (f64, SatState) {
+        let (t, tk, sin_e, cos_e) = self.transmit_anomaly(t_sv_gps_s);
+        (t, self.state_at(t, tk, sin_e, cos_e))
+    }
+
+    /// [`Self::transmit_state`] with the satellite's motion there
+    /// (velocity and clock drift, as [`Self::motion`]) from the same
+    /// evaluation: the eccentric anomaly, the sum formulas' angles and the
+    /// node's sine and cosine are shared, so the motion costs a few dozen
+    /// operations more than the state (BENCHMARKS.md "Orbit arcs", step
+    /// 1). The state is [`Self::transmit_state`]'s to the bit.
+    pub fn transmit_state_motion(&self, t_sv_gps_s: f64) -> (f64, SatState, SatMotion) {
+        let (t, tk, sin_e, cos_e) = self.transmit_anomaly(t_sv_gps_s);
+        let terms = self.terms(tk, sin_e, cos_e);
+        let state = self.state_of(t, tk, sin_e, &terms);
+        (t, state, self.motion_of(t, tk, sin_e, cos_e, &terms))
+    }
+
+    /// The transmit time t of a signal sent at `t_sv_gps_s` by the
+    /// satellite's clock, t - toe, and the eccentric anomaly's sine and
+    /// cosine there ([`Self::transmit_state`]).
+    fn transmit_anomaly(&self, t_sv_gps_s: f64) -> (f64, f64, f64, f64) {
         let k = &self.set;
         let tk_sv = k.tk_s(t_sv_gps_s);
         let (sin_e, cos_e) = k.eccentric_anomaly_at(self.n_rad_s, tk_sv);
@@ -304,11 +326,12 @@ impl Orbit {
         let tk = k.tk_s(t);
         let de = self.n_rad_s * (tk - tk_sv) / (1.0 - k.e * cos_e);
         if de.is_nan() || de.abs() > crate::geometry::TINY_ANGLE_RAD {
-            return (t, self.state(t));
+            let (sin_e, cos_e) = k.eccentric_anomaly_at(self.n_rad_s, tk);
+            return (t, tk, sin_e, cos_e);
         }
         let (sd, cd) = crate::geometry::sin_cos_tiny(de);
         let (sin_e, cos_e) = (sin_e * cd + cos_e * sd, cos_e * cd - sin_e * sd);
-        (t, self.state_at(t, tk, sin_e, cos_e))
+        (t, tk, sin_e, cos_e)
     }
 
     /// Position (ECEF of the transmit instant) and clock at GPS time
@@ -318,6 +341,27 @@ impl Orbit {
         let tk = k.tk_s(t_gps_s);
         let (sin_e, cos_e) = k.eccentric_anomaly_at(self.n_rad_s, tk);
         self.state_at(t_gps_s, tk, sin_e, cos_e)
+    }
+
+    /// The satellite's velocity (Earth-fixed, the frame of the same
+    /// instant) and clock drift at GPS time `t_gps_s`
+    /// (the time derivative of [`Self::state`]'s expressions:
+    /// `motion_of`).
+    pub fn motion(&self, t_gps_s: f64) -> SatMotion {
+        self.state_motion(t_gps_s).1
+    }
+
+    /// [`Self::state`] (the same bits) and [`Self::motion`] at GPS time
+    /// `t_gps_s`, from one evaluation of the orbit.
+    pub fn state_motion(&self, t_gps_s: f64) -> (SatState, SatMotion) {
+        let k = &self.set;
+        let tk = k.tk_s(t_gps_s);
+        let (sin_e, cos_e) = k.eccentric_anomaly_at(self.n_rad_s, tk);
+        let terms = self.terms(tk, sin_e, cos_e);
+        (
+            self.state_of(t_gps_s, tk, sin_e, &terms),
+            self.motion_of(t_gps_s, tk, sin_e, cos_e, &terms),
+        )
     }
 
     /// [`Self::state`] at GPS time `t_gps_s`, `tk` s from toe, with the
@@ -342,6 +386,13 @@ impl Orbit {
     /// every set of the shared navigation files across its fit interval
     /// (host-tests `orbit_sums`); the clock is the same bits.
     fn state_at(&self, t_gps_s: f64, tk: f64, sin_e: f64, cos_e: f64) -> SatState {
+        let terms = self.terms(tk, sin_e, cos_e);
+        self.state_of(t_gps_s, tk, sin_e, &terms)
+    }
+
+    /// The angles and in-plane coordinates of [`Self::state_at`] at `tk`
+    /// s from toe, with the eccentric anomaly's sine and cosine there.
+    fn terms(&self, tk: f64, sin_e: f64, cos_e: f64) -> OrbitTerms {
         let k = &self.set;
         let (_, omega_e) = k.mu_omega();
         let e = k.e;
@@ -363,11 +414,46 @@ impl Orbit {
         let sin_i = self.sin_i0 * cos_di + self.cos_i0 * sin_di;
         let cos_i = self.cos_i0 * cos_di - self.sin_i0 * sin_di;
         let toe = k.toe_sow_s;
+        // The node's longitude: for a BeiDou GEO in the ICD's inertial-like
+        // frame (BDS ICD §5.2.4.12), else Earth-fixed.
+        let omega = if k.is_beidou_geo() {
+            k.omega0_rad + k.omega_dot_rad_s * tk - omega_e * toe
+        } else {
+            k.omega0_rad + (k.omega_dot_rad_s - omega_e) * tk - omega_e * toe
+        };
+        let (sin_node, cos_node) = m::sin_cos(omega);
+        OrbitTerms {
+            inv,
+            s2,
+            c2,
+            r,
+            sin_u,
+            cos_u,
+            x_orb,
+            y_orb,
+            sin_i,
+            cos_i,
+            sin_node,
+            cos_node,
+        }
+    }
+
+    /// The position and clock of [`Self::state_at`] from its `terms`.
+    fn state_of(&self, t_gps_s: f64, tk: f64, sin_e: f64, terms: &OrbitTerms) -> SatState {
+        let k = &self.set;
+        let (_, omega_e) = k.mu_omega();
+        let OrbitTerms {
+            x_orb,
+            y_orb,
+            sin_i,
+            cos_i,
+            sin_node: so,
+            cos_node: co,
+            ..
+        } = *terms;
         let position_m = if k.is_beidou_geo() {
             // BDS ICD: GEO elements are in an inertial-like frame; rotate by
             // -5 deg about X, then by omega_e tk about Z.
-            let omega = k.omega0_rad + k.omega_dot_rad_s * tk - omega_e * toe;
-            let (so, co) = m::sin_cos(omega);
             let xg = x_orb * co - y_orb * cos_i * so;
             let yg = x_orb * so + y_orb * cos_i * co;
             let zg = y_orb * sin_i;
@@ -378,8 +464,6 @@ impl Orbit {
             // Rz(omega_e tk)
             [cz * x1 + sz * y1, -sz * x1 + cz * y1, z1]
         } else {
-            let omega = k.omega0_rad + (k.omega_dot_rad_s - omega_e) * tk - omega_e * toe;
-            let (so, co) = m::sin_cos(omega);
             [
                 x_orb * co - y_orb * cos_i * so,
                 x_orb * so + y_orb * cos_i * co,
@@ -392,6 +476,119 @@ impl Orbit {
             clock_s,
         }
     }
+
+    /// The velocity and clock drift at GPS time `t_gps_s`, `tk` s from
+    /// toe, from the eccentric anomaly's sine and cosine there and the
+    /// position's `terms`: the time derivative of the same expressions
+    /// (IS-GPS-200 Table 20-IV; the Galileo OS SIS ICD §5.1.1 and the
+    /// BeiDou ICD §5.2.4.12 alike, a BeiDou GEO's extra rotations
+    /// differentiated too: Rz(omega_e t_k) turns at omega_e):
+    /// - dE/dt = n / (1 - e cos E), dnu/dt = dE/dt sqrt(1 - e^2) / (1 - e
+    ///   cos E);
+    /// - du/dt = dnu/dt (1 + 2 (Cus cos 2phi - Cuc sin 2phi)), dr/dt = A e
+    ///   sin E dE/dt + 2 dnu/dt (Crs cos 2phi - Crc sin 2phi), di/dt = IDOT
+    ///   + 2 dnu/dt (Cis cos 2phi - Cic sin 2phi);
+    /// - the node turning at Omega_dot - omega_e (a GEO's at Omega_dot);
+    /// - the clock drift af1 + 2 af2 (t - toc) plus the relativistic
+    ///   term's rate F e sqrt(A) cos E dE/dt (IS-GPS-200 20.3.3.3.3.1).
+    ///
+    /// Within 0.01 mm/s of the central difference of the positions on
+    /// random sets of every system (raim-nav `velocity` tests) and of the
+    /// angle-by-angle positions on every set of the shared navigation
+    /// files (host-tests `orbit_sums`).
+    fn motion_of(
+        &self,
+        t_gps_s: f64,
+        tk: f64,
+        sin_e: f64,
+        cos_e: f64,
+        terms: &OrbitTerms,
+    ) -> SatMotion {
+        let k = &self.set;
+        let (_, omega_e) = k.mu_omega();
+        let OrbitTerms {
+            inv,
+            s2,
+            c2,
+            r,
+            sin_u,
+            cos_u,
+            x_orb: xo,
+            y_orb: yo,
+            sin_i,
+            cos_i,
+            sin_node: so,
+            cos_node: co,
+        } = *terms;
+        let e_dot = self.n_rad_s * inv;
+        let nu_dot = e_dot * self.sqrt_1_e2 * inv;
+        let u_dot = nu_dot * (1.0 + 2.0 * (k.cus_rad * c2 - k.cuc_rad * s2));
+        let r_dot = self.a_m * k.e * sin_e * e_dot + 2.0 * nu_dot * (k.crs_m * c2 - k.crc_m * s2);
+        let i_dot = k.idot_rad_s + 2.0 * nu_dot * (k.cis_rad * c2 - k.cic_rad * s2);
+        let xo_dot = r_dot * cos_u - r * u_dot * sin_u;
+        let yo_dot = r_dot * sin_u + r * u_dot * cos_u;
+        // The plane turned by the node (rate `node_rate`) and the
+        // inclination: position and velocity.
+        let plane = |node_rate: f64| {
+            let p = [
+                xo * co - yo * cos_i * so,
+                xo * so + yo * cos_i * co,
+                yo * sin_i,
+            ];
+            let v = [
+                xo_dot * co - yo_dot * cos_i * so + yo * sin_i * i_dot * so - node_rate * p[1],
+                xo_dot * so + yo_dot * cos_i * co - yo * sin_i * i_dot * co + node_rate * p[0],
+                yo_dot * sin_i + yo * cos_i * i_dot,
+            ];
+            (p, v)
+        };
+        let velocity_m_s = if k.is_beidou_geo() {
+            let (g, gv) = plane(k.omega_dot_rad_s);
+            let (sf, cf) = m::sin_cos(-5.0f64.to_radians());
+            let rx = |v: [f64; 3]| [v[0], cf * v[1] + sf * v[2], -sf * v[1] + cf * v[2]];
+            let (q, qv) = (rx(g), rx(gv));
+            let (sz, cz) = m::sin_cos(omega_e * tk);
+            [
+                cz * qv[0] + sz * qv[1] + omega_e * (-sz * q[0] + cz * q[1]),
+                -sz * qv[0] + cz * qv[1] + omega_e * (-cz * q[0] - sz * q[1]),
+                qv[2],
+            ]
+        } else {
+            plane(k.omega_dot_rad_s - omega_e).1
+        };
+        let dt = t_gps_s - k.toc_gps_s;
+        let clock_drift_s_s =
+            k.af1_s_s + 2.0 * k.af2_s_s2 * dt + self.relativistic_factor_s * cos_e * e_dot;
+        SatMotion {
+            velocity_m_s,
+            clock_drift_s_s,
+        }
+    }
+}
+
+/// The angles and in-plane coordinates an orbit's position and motion at
+/// one time share ([`Orbit::terms`]).
+#[derive(Debug, Clone, Copy)]
+struct OrbitTerms {
+    /// 1 / (1 - e cos E).
+    inv: f64,
+    /// sin 2phi and cos 2phi.
+    s2: f64,
+    c2: f64,
+    /// The corrected radius r, m.
+    r: f64,
+    /// sin and cos of the corrected argument of latitude u.
+    sin_u: f64,
+    cos_u: f64,
+    /// The position in the orbital plane, m.
+    x_orb: f64,
+    y_orb: f64,
+    /// sin and cos of the corrected inclination i.
+    sin_i: f64,
+    cos_i: f64,
+    /// sin and cos of the node's longitude Omega.
+    sin_node: f64,
+    cos_node: f64,
 }
 
 /// Below this |d|, [`sin_cos_correction`] takes d - d^3/6 and 1 - d^2/2,

@@ -36,6 +36,7 @@
     )
 )]
 
+pub mod arc;
 pub mod bootstrap;
 pub mod ephemeris;
 pub mod error;

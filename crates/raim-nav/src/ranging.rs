@@ -17,12 +17,14 @@ use raim_core::frames::{bowring_latitude_rad, ecef_to_geodetic_from, enu_rotatio
 use raim_core::sigma::SigmaModel;
 use raim_core::{RangeObservation, Real, SatId, System};
 
+use crate::arc::transmit_state_motion_on_arc;
 use crate::ephemeris::{Kepler, Orbit, SatState, C_M_S, WEEK_S};
 use crate::geometry::{az_el_rotated, distance_m, elevation_rotated, rotate_earth};
 use crate::glonass::{l1_hz, l2_hz, GlonassEphemeris, F_L1_BASE_HZ, F_L2_BASE_HZ};
 use crate::iono::{scale_to_frequency, Klobuchar, F_B1I_HZ, F_L1_HZ};
 use crate::m;
 use crate::tropo::SaastamoinenSite;
+use crate::velocity::SatMotion;
 
 pub use crate::bootstrap::{bootstrap_position, SURFACE_BAND_M};
 
@@ -113,6 +115,12 @@ pub struct SatInput<'a> {
     /// The second code's pseudorange for a pair, m.
     pub p2_m: Option<f64>,
     pub eph: Broadcast<'a>,
+    /// A Keplerian satellite's transmit state on its orbit arc
+    /// ([`crate::arc`]: the cubic Hermite interpolant between exact states
+    /// 30 s apart, within 1 mm of the orbit), as a receiver stream's
+    /// readers take it, so that the host's and the unit's form the same
+    /// bits; false, the exact orbit (a RINEX replay's).
+    pub orbit_arc: bool,
 }
 
 /// One satellite ready for the core, with the terms that went into it.
@@ -289,20 +297,48 @@ pub fn transmit_time_s(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<f64, Rejecti
 }
 
 /// The state of `s`'s satellite at the transmit time of its signal
-/// received at `t_rx_gps_s` ([`transmit_time_s`]): a Keplerian orbit by
-/// [`Kepler::transmit_state`] (the transmit time's eccentric anomaly one
-/// Newton step from the clock's), a GLONASS orbit integrated there.
+/// received at `t_rx_gps_s`: a Keplerian orbit on its arc
+/// ([`crate::arc`], a stream's: [`SatInput::orbit_arc`]) or by
+/// [`Orbit::transmit_state`] (the transmit time's eccentric anomaly one
+/// Newton step from the clock's), a GLONASS orbit integrated there
+/// ([`transmit_time_s`]).
 pub fn transmit_state(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<SatState, Rejection> {
+    Ok(transmit_state_motion(s, t_rx_gps_s, false)?.0)
+}
+/// The time by the satellite's clock at which the signal of `s` received
+/// at `t_rx_gps_s` left it: t_sv = t_rx - P/c, P the code's or the
+/// iono-free pair's pseudorange (the t_sv of [`transmit_state`]), GPS s.
+pub fn signal_sent_s(s: &SatInput<'_>, t_rx_gps_s: f64) -> Result<f64, Rejection> {
+    let (p, _) = ranging_pseudorange(s)?;
+    Ok(t_rx_gps_s - p / C_M_S)
+}
+
+/// [`transmit_state`] and, when `motion` is true, the satellite's
+/// velocity and clock drift at the same transmit time from the same
+/// evaluation (a Keplerian orbit by [`transmit_state_motion_on_arc`],
+/// whose nodes are [`Orbit::state_motion`]'s, or by
+/// [`Orbit::transmit_state_motion`]; the state is [`transmit_state`]'s to
+/// the bit). A GLONASS motion comes with its integration (the receiver's
+/// [`crate::glonass::GlonassArc`]), not here: None for a GLONASS
+/// satellite.
+pub fn transmit_state_motion(
+    s: &SatInput<'_>,
+    t_rx_gps_s: f64,
+    motion: bool,
+) -> Result<(SatState, Option<SatMotion>), Rejection> {
+    let on_arc = |o: &Orbit| -> Result<(SatState, Option<SatMotion>), Rejection> {
+        let t_sv = signal_sent_s(s, t_rx_gps_s)?;
+        let (_, state, mo) = if s.orbit_arc {
+            transmit_state_motion_on_arc(s.id, o, t_sv)
+        } else {
+            o.transmit_state_motion(t_sv)
+        };
+        Ok((state, motion.then_some(mo)))
+    };
     match s.eph {
-        Broadcast::Kepler(k) => {
-            let (p, _) = ranging_pseudorange(s)?;
-            Ok(k.transmit_state(t_rx_gps_s - p / C_M_S).1)
-        }
-        Broadcast::Orbit(o) => {
-            let (p, _) = ranging_pseudorange(s)?;
-            Ok(o.transmit_state(t_rx_gps_s - p / C_M_S).1)
-        }
-        Broadcast::Glonass(g) => Ok(g.state(transmit_time_s(s, t_rx_gps_s)?)),
+        Broadcast::Kepler(k) => on_arc(&Orbit::new(k)),
+        Broadcast::Orbit(o) => on_arc(o),
+        Broadcast::Glonass(g) => Ok((g.state(transmit_time_s(s, t_rx_gps_s)?), None)),
     }
 }
 
@@ -739,6 +775,7 @@ mod tests {
                 p1_m: 2.2e7 + 1e5 * i as f64,
                 p2_m: pair.then_some(2.2e7 + 1e5 * i as f64 + 3.0),
                 eph: Broadcast::Kepler(&k),
+                orbit_arc: false,
             };
             let tx = transmit_state(&s, t).unwrap();
             // Without Klobuchar (a stream's corrections), the correction

@@ -110,6 +110,7 @@ fn single_frequency_ranges_take_the_group_delay_and_the_klobuchar_delay() {
         p1_m: 2.0e7,
         p2_m: None,
         eph: Broadcast::Kepler(k),
+        orbit_arc: false,
     };
     let gps: &'static Kepler = std::boxed::Box::leak(std::boxed::Box::new(gps));
     let c = correct(
@@ -275,6 +276,7 @@ fn pairs_take_their_group_delay_and_no_klobuchar() {
         p1_m: 2.0e7,
         p2_m: Some(2.0e7 + 3.0),
         eph: Broadcast::Kepler(gal),
+        orbit_arc: false,
     };
     let on = correct(
         &pair,

@@ -202,6 +202,30 @@ struct CachedOrbit {
     used: u32,
 }
 
+/// Where the set [`EphemerisStore::load_cached`] chose for a satellite
+/// is, for the same epoch's [`EphemerisStore::select_chosen`].
+#[cfg(feature = "rtcm")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Chosen {
+    /// No set in force (or one whose payload does not decode).
+    None,
+    /// A GLONASS satellite: its sets are kept decoded, chosen at select.
+    Glonass,
+    /// Kept in the cache, at this place.
+    Kept(u16),
+    /// Decoded for the epoch: the store's set of this index.
+    Decoded(u16),
+}
+
+#[cfg(feature = "rtcm")]
+impl Chosen {
+    /// `make` of `i`, None when `i` does not fit a u16 (no store or cache
+    /// holds 65,536 sets).
+    fn at(i: usize, make: fn(u16) -> Chosen) -> Chosen {
+        u16::try_from(i).map_or(Chosen::None, make)
+    }
+}
+
 /// Decoded Keplerian sets kept across epochs, `C` of them, so that a set
 /// is decoded and its orbit's constants computed ([`Orbit::new`]) once,
 /// not at every epoch ([`EphemerisStore::load_cached`],
@@ -247,21 +271,23 @@ impl<const C: usize> OrbitCache<C> {
         self.sets.is_empty()
     }
 
-    /// The kept set decoded from `bits`, marked used by this epoch.
-    fn find_and_mark(&mut self, bits: &KeplerBits) -> bool {
+    /// The place of the kept set decoded from `bits`, marked used by this
+    /// epoch.
+    fn find_and_mark(&mut self, bits: &KeplerBits) -> Option<usize> {
         let epoch = self.epoch;
-        match self.sets.iter_mut().find(|c| c.bits.same(bits)) {
-            Some(c) => {
-                c.used = epoch;
-                true
-            }
-            None => false,
+        let i = self.sets.iter().position(|c| c.bits.same(bits))?;
+        if let Some(c) = self.sets.get_mut(i) {
+            c.used = epoch;
         }
+        Some(i)
     }
 
     /// Keep `orbit`, decoded from `bits`, in a free place or in the place
-    /// of a set no set of this epoch is; false when there is none.
-    fn keep(&mut self, bits: &KeplerBits, orbit: Orbit) -> bool {
+    /// of a set no set of this epoch is: its place, None when there is
+    /// none. (A place this epoch uses is not given to another set before
+    /// the next epoch, so a place [`EphemerisStore::load_cached`] gives
+    /// stays the set's for the epoch.)
+    fn keep(&mut self, bits: &KeplerBits, orbit: Orbit) -> Option<usize> {
         let c = CachedOrbit {
             bits: bits.clone(),
             orbit,
@@ -269,14 +295,14 @@ impl<const C: usize> OrbitCache<C> {
         };
         let epoch = self.epoch;
         match self.sets.push(c) {
-            Ok(()) => true,
-            Err(c) => match self.sets.iter_mut().find(|x| x.used != epoch) {
-                Some(slot) => {
+            Ok(()) => Some(self.sets.len() - 1),
+            Err(c) => {
+                let i = self.sets.iter().position(|x| x.used != epoch)?;
+                if let Some(slot) = self.sets.get_mut(i) {
                     *slot = c;
-                    true
                 }
-                None => false,
-            },
+                Some(i)
+            }
         }
     }
 }
@@ -392,44 +418,90 @@ impl<const K: usize, const G: usize> EphemerisStore<K, G> {
         decoded: &mut DecodedSets<D>,
     ) -> Result<(), DecodedFull> {
         self.load_cached(id, t_gps_s, decoded, &mut OrbitCache::<0>::new())
+            .map(|_| ())
     }
 
     /// [`Self::load`] with the sets kept across epochs in `cache`: a set
     /// kept there is not decoded again; a set decoded is kept there when
     /// there is room ([`OrbitCache`]), else decoded into `decoded`. The
     /// cache's [`OrbitCache::next_epoch`] is the caller's, once an epoch
-    /// before its loads.
+    /// before its loads. Returns where the chosen set is, which
+    /// [`Self::select_chosen`] takes for the same epoch instead of
+    /// choosing again.
     pub fn load_cached<const D: usize, const C: usize>(
         &self,
         id: SatId,
         t_gps_s: f64,
         decoded: &mut DecodedSets<D>,
         cache: &mut OrbitCache<C>,
-    ) -> Result<(), DecodedFull> {
+    ) -> Result<Chosen, DecodedFull> {
         if decoded.generation != self.generation {
             self.start_epoch(decoded);
         }
         if id.system == System::Glonass {
-            return Ok(());
+            return Ok(Chosen::Glonass);
         }
         let Some(i) = self.choose_kepler(id, t_gps_s) else {
-            return Ok(());
+            return Ok(Chosen::None);
         };
         let Some(bits) = self.kepler.get(i) else {
-            return Ok(());
+            return Ok(Chosen::None);
         };
-        if cache.find_and_mark(bits) || decoded.sets.iter().any(|(j, _)| *j == i) {
-            return Ok(());
+        if let Some(slot) = cache.find_and_mark(bits) {
+            return Ok(Chosen::at(slot, Chosen::Kept));
+        }
+        if decoded.sets.iter().any(|(j, _)| *j == i) {
+            return Ok(Chosen::at(i, Chosen::Decoded));
         }
         let Some(k) = bits.decode() else {
-            return Ok(());
+            return Ok(Chosen::None);
         };
-        if C > 0 && cache.keep(bits, Orbit::new(&k)) {
-            return Ok(());
+        if C > 0 {
+            if let Some(slot) = cache.keep(bits, Orbit::new(&k)) {
+                return Ok(Chosen::at(slot, Chosen::Kept));
+            }
         }
-        decoded.sets.push((i, k)).map_err(|_| DecodedFull {
-            capacity: u32::try_from(D).unwrap_or(u32::MAX),
-        })
+        decoded
+            .sets
+            .push((i, k))
+            .map(|()| Chosen::at(i, Chosen::Decoded))
+            .map_err(|_| DecodedFull {
+                capacity: u32::try_from(D).unwrap_or(u32::MAX),
+            })
+    }
+
+    /// [`Self::select_cached`] for a satellite whose set `chosen` this
+    /// epoch's [`Self::load_cached`] gave (the store, `decoded` and
+    /// `cache` unchanged since): the same set without choosing it again
+    /// (the choice scans the store's sets and reduces the time to each
+    /// set's week: BENCHMARKS.md "Orbit arcs").
+    pub fn select_chosen<'a, const D: usize, const C: usize>(
+        &'a self,
+        id: SatId,
+        t_gps_s: f64,
+        chosen: Chosen,
+        decoded: &'a DecodedSets<D>,
+        cache: &'a OrbitCache<C>,
+    ) -> Option<Broadcast<'a>> {
+        match chosen {
+            Chosen::None => None,
+            Chosen::Glonass => self.select_in(id, t_gps_s, decoded, &[]),
+            Chosen::Kept(slot) => cache
+                .sets
+                .get(usize::from(slot))
+                .map(|c| Broadcast::Orbit(&c.orbit)),
+            Chosen::Decoded(i) => {
+                let i = usize::from(i);
+                if decoded.generation != self.generation {
+                    return None;
+                }
+                decoded
+                    .sets
+                    .iter()
+                    .find(|(j, _)| *j == i)
+                    .map(|(_, k)| Broadcast::Kepler(k))
+            }
+        }
     }
 
     /// The healthy set of `id` whose toe (t_b) is nearest `t_gps_s`, within
@@ -823,15 +895,29 @@ mod tests {
         insert(&mut s, &p6);
         let mut cache = OrbitCache::<1>::new();
         let mut d = DecodedSets::<4>::new();
+        // Each epoch's loads; every satellite's set as chosen at its load
+        // is the set `select_cached` chooses again.
         let epoch = |s: &EphemerisStore<3, 1>,
                      d: &mut DecodedSets<4>,
                      cache: &mut OrbitCache<1>,
                      ids: &[SatId]| {
             s.start_epoch(d);
             cache.next_epoch();
-            for id in ids {
-                s.load_cached(*id, t, d, cache).unwrap();
+            let chosen: std::vec::Vec<Chosen> = ids
+                .iter()
+                .map(|id| s.load_cached(*id, t, d, cache).unwrap())
+                .collect();
+            for (id, c) in ids.iter().zip(chosen) {
+                assert_eq!(
+                    s.select_chosen(*id, t, c, d, cache),
+                    s.select_cached(*id, t, d, cache)
+                );
+                assert!(c != Chosen::None);
             }
+            let none = SatId::new(System::Gps, 30);
+            let c = s.load_cached(none, t, d, cache).unwrap();
+            assert_eq!(c, Chosen::None);
+            assert_eq!(s.select_chosen(none, t, c, d, cache), None);
         };
         // G05 alone: kept, given as an orbit equal to the fresh decode.
         epoch(&s, &mut d, &mut cache, &[g(5)]);

@@ -13,6 +13,11 @@
 //!   extra rotations are differentiated too: Rz(omega_e t_k) turns at
 //!   omega_e); the clock drift af1 + 2 af2 (t - toc) plus the relativistic
 //!   term's rate F e sqrt(A) cos(E) dE/dt (IS-GPS-200 20.3.3.3.3.1).
+//!   These are [`Orbit::motion`]'s, computed with the position from one
+//!   evaluation ([`Orbit::state_motion`], [`Orbit::transmit_state_motion`]);
+//!   a stream epoch takes a satellite's motion, as its position, from its
+//!   orbit arc (the cubic Hermite interpolant's derivative between exact
+//!   nodes, within 6.2e-6 m/s of them: [`crate::arc`]).
 //! - GLONASS: the velocity of the ICD's integrated state (ICD 5.1
 //!   A.3.1.2, the rotating PZ-90.11 frame, i.e. Earth-fixed), through the
 //!   rotation and scale of [`crate::glonass::pz90_to_wgs84`] (not its
@@ -52,11 +57,8 @@
 
 use nalgebra::{Matrix4, Vector4};
 use raim_core::frames::{ecef_to_geodetic, enu_rotation, rotate};
-use raim_core::System;
 
-use crate::ephemeris::{
-    Kepler, C_M_S, MU_GAL_BDS_M3_S2, MU_GPS_M3_S2, OMEGA_E_BDS_RAD_S, OMEGA_E_GPS_RAD_S,
-};
+use crate::ephemeris::{Kepler, Orbit, C_M_S, OMEGA_E_GPS_RAD_S};
 use crate::geometry::rotate_earth;
 use crate::glonass::pz90_to_wgs84;
 use crate::m;
@@ -64,14 +66,6 @@ use crate::m;
 /// Unknowns of the velocity solution: three velocity components and the
 /// receiver clock drift.
 pub const UNKNOWNS: usize = 4;
-/// Kepler's equation for the velocity: a Newton step below this is the
-/// last, rad (the velocity is a function of E through terms of order
-/// n a ~ 4 km/s per radian: 1e-12 rad is 4e-9 m/s).
-const KEPLER_LAST_STEP_RAD: f64 = 1e-12;
-/// Kepler's equation: iteration cap (Newton's method from E = M converges
-/// in under 6 steps for e < 0.3).
-const KEPLER_MAX_ITERATIONS: usize = 30;
-
 /// A satellite's velocity and clock drift at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SatMotion {
@@ -159,151 +153,13 @@ impl core::fmt::Display for VelocityError {
     }
 }
 
-/// The gravitational constant and Earth rotation rate of a Keplerian
-/// set's system (as [`Kepler::state`] takes them).
-fn mu_omega(system: System) -> (f64, f64) {
-    match system {
-        System::Gps | System::Qzss | System::Glonass => (MU_GPS_M3_S2, OMEGA_E_GPS_RAD_S),
-        System::Galileo => (MU_GAL_BDS_M3_S2, OMEGA_E_GPS_RAD_S),
-        System::Beidou => (MU_GAL_BDS_M3_S2, OMEGA_E_BDS_RAD_S),
-    }
-}
-
-/// Below this |d|, [`sin_cos_short`] takes its Taylor series; above, the
-/// library's sine and cosine, rad (|E - M| <= e: GPS, BeiDou and most
-/// Galileo orbits have e < 0.03).
-const SHORT_ANGLE_RAD: f64 = 0.05;
-
-/// sin d and cos d: their Taylor series to d^9 and d^8 for |d| <=
-/// [`SHORT_ANGLE_RAD`] (the first term left out below 0.05^10 / 10! =
-/// 2.7e-20 of the result), else the library's.
-fn sin_cos_short(d: f64) -> (f64, f64) {
-    if d.is_nan() || d.abs() > SHORT_ANGLE_RAD {
-        return m::sin_cos(d);
-    }
-    let z = d * d;
-    let s = d
-        * (1.0
-            - z * (1.0 / 6.0)
-                * (1.0 - z * (1.0 / 20.0) * (1.0 - z * (1.0 / 42.0) * (1.0 - z * (1.0 / 72.0)))));
-    let c = 1.0
-        - z * (1.0 / 2.0)
-            * (1.0 - z * (1.0 / 12.0) * (1.0 - z * (1.0 / 30.0) * (1.0 - z * (1.0 / 56.0))));
-    (s, c)
-}
-
-/// The sine and cosine of the eccentric anomaly of mean anomaly `mk`,
-/// eccentricity `e` (Kepler's equation M = E - e sin E): Newton's method
-/// on d = E - M from d = e sin M, with sin(M + d) and cos(M + d) from M's
-/// sine and cosine (one library call) and d's ([`sin_cos_short`]).
-fn eccentric_anomaly_sin_cos(mk: f64, e: f64) -> (f64, f64) {
-    let (sin_m, cos_m) = m::sin_cos(mk);
-    let at = |d: f64| {
-        let (sd, cd) = sin_cos_short(d);
-        (sin_m * cd + cos_m * sd, cos_m * cd - sin_m * sd)
-    };
-    let mut d = e * sin_m;
-    let (mut sin_e, mut cos_e) = at(d);
-    for _ in 0..KEPLER_MAX_ITERATIONS {
-        let step = (d - e * sin_e) / (1.0 - e * cos_e);
-        d -= step;
-        (sin_e, cos_e) = at(d);
-        if step.is_nan() || step.abs() < KEPLER_LAST_STEP_RAD {
-            break;
-        }
-    }
-    (sin_e, cos_e)
-}
-
 /// A Keplerian satellite's velocity and clock drift at GPS time
-/// `t_gps_s` (module doc: the time derivative of IS-GPS-200 Table 20-IV,
-/// BeiDou GEO satellites through their extra rotations). The true
-/// anomaly's and the argument of latitude's sines and cosines come from
-/// E's and omega's by the angle-sum identities (no arctangent; the
-/// harmonic correction of u, below 1e-4 rad, by its Taylor series), so
-/// that a satellite takes four library sines and cosines.
+/// `t_gps_s`: the time derivative of the same expressions as its position
+/// ([`Orbit::motion`]; module doc). The receiver takes it with the
+/// transmit state, from the same evaluation
+/// ([`Orbit::transmit_state_motion`]).
 pub fn kepler_motion(k: &Kepler, t_gps_s: f64) -> SatMotion {
-    let (mu, omega_e) = mu_omega(k.system);
-    let tk = k.tk_s(t_gps_s);
-    let a = k.sqrt_a_m05 * k.sqrt_a_m05;
-    let n = m::sqrt(mu / (a * a * a)) + k.delta_n_rad_s;
-    let e = k.e;
-    let (sin_e, cos_e) = eccentric_anomaly_sin_cos(k.m0_rad + n * tk, e);
-    let one_m_ecos = 1.0 - e * cos_e;
-    let e_dot = n / one_m_ecos;
-    let root = m::sqrt(1.0 - e * e);
-    // The true anomaly nu: sin and cos (IS-GPS-200 Table 20-IV).
-    let (sin_nu, cos_nu) = (root * sin_e / one_m_ecos, (cos_e - e) / one_m_ecos);
-    let nu_dot = e_dot * root / one_m_ecos;
-    // phi = nu + omega.
-    let (sin_w, cos_w) = m::sin_cos(k.omega_rad);
-    let (sin_phi, cos_phi) = (
-        sin_nu * cos_w + cos_nu * sin_w,
-        cos_nu * cos_w - sin_nu * sin_w,
-    );
-    let (s2, c2) = (
-        2.0 * sin_phi * cos_phi,
-        cos_phi * cos_phi - sin_phi * sin_phi,
-    );
-    let du = k.cus_rad * s2 + k.cuc_rad * c2;
-    let (sin_du, cos_du) = sin_cos_short(du);
-    let (sin_u, cos_u) = (
-        sin_phi * cos_du + cos_phi * sin_du,
-        cos_phi * cos_du - sin_phi * sin_du,
-    );
-    let u_dot = nu_dot * (1.0 + 2.0 * (k.cus_rad * c2 - k.cuc_rad * s2));
-    let r = a * one_m_ecos + k.crs_m * s2 + k.crc_m * c2;
-    let r_dot = a * e * sin_e * e_dot + 2.0 * nu_dot * (k.crs_m * c2 - k.crc_m * s2);
-    let i = k.i0_rad + k.idot_rad_s * tk + k.cis_rad * s2 + k.cic_rad * c2;
-    let i_dot = k.idot_rad_s + 2.0 * nu_dot * (k.cis_rad * c2 - k.cic_rad * s2);
-    let (xo, yo) = (r * cos_u, r * sin_u);
-    let (xo_dot, yo_dot) = (
-        r_dot * cos_u - r * u_dot * sin_u,
-        r_dot * sin_u + r * u_dot * cos_u,
-    );
-    let (sin_i, cos_i) = m::sin_cos(i);
-    // The orbital plane turned by the node Omega (rate omega_rate) and
-    // the inclination i: position and velocity.
-    let plane = |omega: f64, omega_rate: f64| {
-        let (so, co) = m::sin_cos(omega);
-        let p = [
-            xo * co - yo * cos_i * so,
-            xo * so + yo * cos_i * co,
-            yo * sin_i,
-        ];
-        let v = [
-            xo_dot * co - yo_dot * cos_i * so + yo * sin_i * i_dot * so - omega_rate * p[1],
-            xo_dot * so + yo_dot * cos_i * co - yo * sin_i * i_dot * co + omega_rate * p[0],
-            yo_dot * sin_i + yo * cos_i * i_dot,
-        ];
-        (p, v)
-    };
-    let toe = k.toe_sow_s;
-    let velocity_m_s = if k.is_beidou_geo() {
-        let (g, gv) = plane(
-            k.omega0_rad + k.omega_dot_rad_s * tk - omega_e * toe,
-            k.omega_dot_rad_s,
-        );
-        let (sf, cf) = m::sin_cos(-5.0f64.to_radians());
-        let rx = |v: [f64; 3]| [v[0], cf * v[1] + sf * v[2], -sf * v[1] + cf * v[2]];
-        let (q, qv) = (rx(g), rx(gv));
-        let (sz, cz) = m::sin_cos(omega_e * tk);
-        [
-            cz * qv[0] + sz * qv[1] + omega_e * (-sz * q[0] + cz * q[1]),
-            -sz * qv[0] + cz * qv[1] + omega_e * (-cz * q[0] - sz * q[1]),
-            qv[2],
-        ]
-    } else {
-        let rate = k.omega_dot_rad_s - omega_e;
-        plane(k.omega0_rad + rate * tk - omega_e * toe, rate).1
-    };
-    let f = -2.0 * m::sqrt(mu) / (C_M_S * C_M_S);
-    let dt = t_gps_s - k.toc_gps_s;
-    let clock_drift_s_s = k.af1_s_s + 2.0 * k.af2_s_s2 * dt + f * e * k.sqrt_a_m05 * cos_e * e_dot;
-    SatMotion {
-        velocity_m_s,
-        clock_drift_s_s,
-    }
+    Orbit::new(k).motion(t_gps_s)
 }
 
 /// A GLONASS satellite's motion from its integrated PZ-90.11 velocity
@@ -322,14 +178,6 @@ pub fn glonass_motion(velocity_pz90_m_s: [f64; 3], gamma_n: f64) -> SatMotion {
         ],
         clock_drift_s_s: gamma_n,
     }
-}
-
-/// The transmit time of a Keplerian satellite's signal from the time
-/// `t_sv_gps_s` its clock sent it at, for the velocity: t_sv less the
-/// clock polynomial (the relativistic term, below 1e-7 s, moves the
-/// velocity by below 1e-6 m/s).
-pub fn kepler_transmit_time_s(k: &Kepler, t_sv_gps_s: f64) -> f64 {
-    t_sv_gps_s - k.clock_polynomial_s(t_sv_gps_s)
 }
 
 /// A satellite's [`RangeRate`] for the velocity solution: its measured

@@ -142,8 +142,13 @@ pub trait Decoder {
 }
 
 /// Add an ephemeris to `nav` unless the same one (toe, toc, issue of data)
-/// is there already; each satellite's list stays sorted by toc.
+/// is there already; each satellite's list stays sorted by toc. `nav`'s
+/// Keplerian orbits are then a stream's, evaluated on their arcs
+/// (`NavData::orbit_arcs`), as the unit's receiver evaluates them.
 pub fn add_ephemeris(nav: &mut NavData, k: Kepler) {
+    // A stream's Keplerian orbits on their arcs, as the unit's receiver
+    // takes them (`raim_nav::arc`).
+    nav.orbit_arcs = true;
     let list = nav
         .ephemerides
         .entry(SatId::new(k.system, k.prn))

@@ -57,22 +57,21 @@
 use heapless::Vec;
 use raim_core::{RangeObservation, SatId, System};
 
-use crate::ephemeris::{Kepler, SatState, BDT_MINUS_GPST_S, C_M_S, WEEK_S};
+use crate::arc::KeplerArcs;
+use crate::ephemeris::{Orbit, SatState, BDT_MINUS_GPST_S, WEEK_S};
 use crate::glonass::{
     glonass_time_of_day_to_gps_with_s, glonass_time_of_day_with_s, GlonassArc, GlonassEphemeris,
     GlonassIcdFields,
 };
 use crate::m;
 use crate::ranging::{
-    bootstrap_position, cn0_dbhz_u8, correct_at, correct_at_without_azimuth, split_pair,
-    stream_codes, stream_sigma_for_m, transmit_state, transmit_time_s, Broadcast, Corrections,
+    bootstrap_position, cn0_dbhz_u8, correct_at, correct_at_without_azimuth, signal_sent_s,
+    split_pair, stream_codes, stream_sigma_for_m, transmit_time_s, Broadcast, Corrections,
     ReceiverFrame, SatInput, StreamSigmas,
 };
-use crate::store::{DecodedSets, EphemerisStore, OrbitCache, Stored};
+use crate::store::{Chosen, DecodedSets, EphemerisStore, OrbitCache, Stored};
 use crate::time::table_gps_minus_utc_s;
-use crate::velocity::{
-    glonass_motion, kepler_motion, kepler_transmit_time_s, range_rate, RangeRate, SatMotion,
-};
+use crate::velocity::{glonass_motion, range_rate, RangeRate, SatMotion};
 
 use super::decode::{msm_more_bit, Frame, Message, Msm, MsmSystem};
 use super::fields::{gps_week_of, kepler, toc_near_toe};
@@ -111,6 +110,18 @@ pub const KEPLER_SETS: usize = 64;
 /// and the particle filter's): each epoch decodes its sets.
 #[cfg(not(feature = "ram-192k"))]
 pub const ORBIT_CACHE_SETS: usize = 32;
+/// Keplerian orbit arcs kept across epochs ([`KeplerArcs`]): one for each
+/// satellite of the default build's epoch (32, the wire's capacity), 424 B
+/// each.
+#[cfg(not(feature = "ram-192k"))]
+pub const KEPLER_ARCS: usize = 32;
+/// Keplerian orbit arcs with `ram-192k`: 12, 5.1 KB of the STM32F4's
+/// SRAM, whose stack region keeps more than 8 KiB over every measured
+/// high water with them (docs/FLASH.md "STM32F4: the stream";
+/// BENCHMARKS.md "Orbit arcs"); a Keplerian satellite beyond them has its
+/// arc evaluated afresh at each epoch (two nodes: the same bits, slower).
+#[cfg(feature = "ram-192k")]
+pub const KEPLER_ARCS: usize = 12;
 /// GLONASS sets kept: two per slot of a full constellation.
 #[cfg(not(feature = "ram-192k"))]
 const GLONASS_SETS: usize = 48;
@@ -424,6 +435,9 @@ pub struct FormScratch<const N: usize> {
     /// Each input satellite's velocity and clock drift at its transmit
     /// time, when it has a rate.
     motion: Vec<Option<SatMotion>, N>,
+    /// Where each Keplerian satellite's set is, as its load chose it
+    /// ([`EphemerisStore::select_chosen`]).
+    chosen: Vec<(SatId, Chosen), N>,
 }
 
 impl<const N: usize> FormScratch<N> {
@@ -435,6 +449,7 @@ impl<const N: usize> FormScratch<N> {
             decoded: DecodedSets::new(),
             rates: Vec::new(),
             motion: Vec::new(),
+            chosen: Vec::new(),
         }
     }
 }
@@ -465,6 +480,8 @@ pub struct StreamReceiver<const N: usize, const S: usize> {
     station_m: Option<[f64; 3]>,
     counts: RtcmCounts,
     glonass_arcs: GlonassArcs,
+    /// The Keplerian satellites' orbit arcs ([`KeplerArcs`]).
+    kepler_arcs: KeplerArcs<KEPLER_ARCS>,
     /// The decoded Keplerian sets kept across epochs.
     #[cfg(not(feature = "ram-192k"))]
     orbits: OrbitCache<ORBIT_CACHE_SETS>,
@@ -506,6 +523,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 ephemerides_not_kept: 0,
             },
             glonass_arcs: GlonassArcs::new(),
+            kepler_arcs: KeplerArcs::new(),
             #[cfg(not(feature = "ram-192k"))]
             orbits: OrbitCache::new(),
             stream_leap_s: None,
@@ -907,6 +925,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             store,
             station_m,
             glonass_arcs,
+            kepler_arcs,
             #[cfg(not(feature = "ram-192k"))]
             orbits,
             ..
@@ -921,6 +940,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
             decoded,
             rates,
             motion,
+            chosen,
         } = scratch;
         let o = ready.as_mut()?;
         out.sats.clear();
@@ -960,14 +980,23 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // refusal the inputs below would give.
         store.start_epoch(decoded);
         orbits.next_epoch();
+        chosen.clear();
         let mut from = 0;
         while let Some((id, have)) = next_satellite(&o.sigs, &mut from) {
-            if pick_code(stream_codes(id.system), have).is_some()
-                && store.load_cached(id, time_gps_s, decoded, orbits).is_err()
-            {
-                return Some(Err(FormError::TooManySignals {
-                    capacity: u32::try_from(N).unwrap_or(u32::MAX),
-                }));
+            if pick_code(stream_codes(id.system), have).is_some() {
+                // A satellite with a Keplerian set in force is an input
+                // below: more than N of them is the capacity refusal the
+                // inputs would give.
+                let kept = match store.load_cached(id, time_gps_s, decoded, orbits) {
+                    Ok(c @ (Chosen::Kept(_) | Chosen::Decoded(_))) => chosen.push((id, c)).is_ok(),
+                    Ok(_) => true,
+                    Err(_) => false,
+                };
+                if !kept {
+                    return Some(Err(FormError::TooManySignals {
+                        capacity: u32::try_from(N).unwrap_or(u32::MAX),
+                    }));
+                }
             }
         }
         let mut inputs: Vec<SatInput<'_>, N> = Vec::new();
@@ -995,7 +1024,15 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 out.rejected += 1;
                 continue;
             };
-            let Some(eph) = store.select_cached(s.id, time_gps_s, decoded, orbits) else {
+            // The set as its load chose it (a GLONASS set chosen here).
+            let c = match s.id.system {
+                System::Glonass => Chosen::Glonass,
+                _ => chosen
+                    .iter()
+                    .find(|(id, _)| *id == s.id)
+                    .map_or(Chosen::None, |(_, c)| *c),
+            };
+            let Some(eph) = store.select_chosen(s.id, time_gps_s, c, decoded, orbits) else {
                 out.rejected += 1;
                 continue;
             };
@@ -1005,6 +1042,7 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                 p1_m,
                 p2_m,
                 eph,
+                orbit_arc: true,
             };
             if inputs.push(input).is_err() || cn0s.push(cn0).is_err() || rates.push(rate).is_err() {
                 return Some(Err(FormError::TooManySignals {
@@ -1025,17 +1063,16 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
         // both passes (the transmit time does not depend on the receiver
         // position); a GLONASS orbit from its arc.
         // A satellite with a phase-range rate: its velocity and clock
-        // drift there too (a GLONASS velocity from the same integration; a
-        // Keplerian one at the transmit time of the code's range,
-        // `kepler_transmit_time_s`).
+        // drift there too, from the same evaluation (a GLONASS velocity
+        // from the same integration; a Keplerian satellite's state and
+        // motion from its orbit arc, `KeplerArcs`: kept, or evaluated
+        // afresh beyond the arcs' capacity, the same bits).
         glonass_arcs.next_epoch();
+        kepler_arcs.next_epoch();
         transmit.clear();
         motion.clear();
         for (s, rate) in inputs.iter().zip(rates.iter()) {
-            let kepler_motion_at = |k: &Kepler| {
-                let t_sv = time_gps_s - s.p1_m / C_M_S;
-                kepler_motion(k, kepler_transmit_time_s(k, t_sv))
-            };
+            let t_sv = signal_sent_s(s, time_gps_s).ok();
             let (tx, mo) = match s.eph {
                 Broadcast::Glonass(g) => match transmit_time_s(s, time_gps_s) {
                     Ok(t) => {
@@ -1044,14 +1081,21 @@ impl<const N: usize, const S: usize> StreamReceiver<N, S> {
                     }
                     Err(_) => (None, None),
                 },
-                Broadcast::Kepler(k) => (
-                    transmit_state(s, time_gps_s).ok(),
-                    rate.map(|_| kepler_motion_at(k)),
-                ),
-                Broadcast::Orbit(o) => (
-                    transmit_state(s, time_gps_s).ok(),
-                    rate.map(|_| kepler_motion_at(&o.set)),
-                ),
+                Broadcast::Orbit(o) => match t_sv {
+                    Some(t_sv) => {
+                        let (_, state, mo) = kepler_arcs.transmit_state_motion(s.id, o, t_sv);
+                        (Some(state), rate.map(|_| mo))
+                    }
+                    None => (None, None),
+                },
+                Broadcast::Kepler(k) => match t_sv {
+                    Some(t_sv) => {
+                        let (_, state, mo) =
+                            kepler_arcs.transmit_state_motion_of(s.id, k, t_sv, || Orbit::new(k));
+                        (Some(state), rate.map(|_| mo))
+                    }
+                    None => (None, None),
+                },
             };
             // `inputs`, `transmit` and `motion` have the same capacity N.
             let _ = transmit.push(tx);
