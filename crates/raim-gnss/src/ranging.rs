@@ -10,15 +10,15 @@
 use std::collections::BTreeMap;
 
 use raim_core::{RangeObservation, SatId, System};
-use raim_nav::ephemeris::C_M_S;
 use raim_nav::glonass::{l1_hz, l2_hz};
 pub use raim_nav::ranging::{band_hz, iono_free_noise_factor, Rejection};
 use raim_nav::ranging::{
-    bootstrap_position, correct, split_pair, transmit_time_s, Broadcast, Corrections, SatInput,
+    bootstrap_position, correct, split_pair, transmit_state_motion, transmit_time_s, Broadcast,
+    Corrections, SatInput,
 };
 use raim_nav::velocity::{
-    glonass_motion, kepler_motion, kepler_transmit_time_s, range_rate, solve, RangeRate,
-    RateObservation, ReceiverVelocity, SatMotion, VelocityError,
+    glonass_motion, range_rate, solve, RangeRate, RateObservation, ReceiverVelocity, SatMotion,
+    VelocityError,
 };
 
 use crate::rinex_io::{CodeObs, NavData, ObsEpoch};
@@ -181,19 +181,16 @@ pub fn code_rate_m_s(system: System, code: &str, have: &[CodeObs], k: Option<i8>
 
 /// A satellite's velocity and clock drift at the transmit time of its
 /// signal received at `t_rx_gps_s`, as the unit's stream receiver takes
-/// them: a Keplerian orbit at the transmit time of the (first) code's
-/// pseudorange less the clock polynomial
-/// ([`raim_nav::velocity::kepler_transmit_time_s`]); a GLONASS orbit
+/// them: a Keplerian orbit's from the same evaluation as its transmit
+/// state ([`raim_nav::ranging::transmit_state_motion`]: on its arc when
+/// the navigation data came from a stream, else exact); a GLONASS orbit
 /// integrated to [`transmit_time_s`] (the velocity of the ICD's
 /// integration). None when the transmit time cannot be formed.
 pub fn satellite_motion(s: &SatInput<'_>, t_rx_gps_s: f64) -> Option<SatMotion> {
-    let kepler = |k: &raim_nav::ephemeris::Kepler| {
-        let t_sv = t_rx_gps_s - s.p1_m / C_M_S;
-        kepler_motion(k, kepler_transmit_time_s(k, t_sv))
-    };
     match s.eph {
-        Broadcast::Kepler(k) => Some(kepler(k)),
-        Broadcast::Orbit(o) => Some(kepler(&o.set)),
+        Broadcast::Kepler(_) | Broadcast::Orbit(_) => {
+            transmit_state_motion(s, t_rx_gps_s, true).ok()?.1
+        }
         Broadcast::Glonass(g) => {
             let t = transmit_time_s(s, t_rx_gps_s).ok()?;
             let (_, v) = g.propagate_pz90(t);
@@ -428,7 +425,10 @@ mod rate_tests {
         let l1 = 1575.42e6;
         let have = [obs("C1C", d(1000.0)), obs("C2W", r(7.0))];
         let got = code_rate_m_s(System::Gps, "C1C+C2W", &have, None).unwrap();
-        assert!((got + 1000.0 * C_M_S / l1).abs() < 1e-9, "{got}");
+        assert!(
+            (got + 1000.0 * raim_nav::ephemeris::C_M_S / l1).abs() < 1e-9,
+            "{got}"
+        );
         let have = [obs("C1C", None), obs("C2W", r(7.0)), obs("C1W", r(9.0))];
         assert_eq!(
             code_rate_m_s(System::Gps, "C1C+C2W", &have, None),
@@ -443,7 +443,10 @@ mod rate_tests {
         let have = [obs("C1C", d(1000.0))];
         assert_eq!(code_rate_m_s(System::Glonass, "C1C", &have, None), None);
         let got = code_rate_m_s(System::Glonass, "C1C", &have, Some(1)).unwrap();
-        assert!((got + 1000.0 * C_M_S / 1602.5625e6).abs() < 1e-9, "{got}");
+        assert!(
+            (got + 1000.0 * raim_nav::ephemeris::C_M_S / 1602.5625e6).abs() < 1e-9,
+            "{got}"
+        );
         // A non-finite Doppler is none.
         let have = [obs("C1C", d(f64::NAN))];
         assert_eq!(code_rate_m_s(System::Gps, "C1C", &have, None), None);
