@@ -71,7 +71,12 @@ if [ "${RAIM_COVERAGE_FULL:-0}" != 1 ]; then
         skip+=(--skip "$t")
     done
 fi
-cargo +"$NIGHTLY" test --release "${packages[@]}" "${features[@]}" --lib -q -- "${skip[@]}" >"$out/tests.log" 2>&1 || {
+# The proptests' draws from one fixed seed (`PROPTEST_RNG_SEED`), so that
+# the figures are the same at every run and a floor is never crossed by a
+# draw: with random seeds the branch figures moved by 0.15 points from
+# run to run (2026-11-29).
+PROPTEST_RNG_SEED="${PROPTEST_RNG_SEED:-37}" \
+    cargo +"$NIGHTLY" test --release "${packages[@]}" "${features[@]}" --lib -q -- "${skip[@]}" >"$out/tests.log" 2>&1 || {
     tail -30 "$out/tests.log" >&2
     echo "coverage: the instrumented tests failed (log: $out/tests.log)" >&2
     exit 1

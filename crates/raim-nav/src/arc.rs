@@ -473,6 +473,38 @@ mod tests {
         assert!(tn.is_nan() && sn.position_m.iter().all(|v| v.is_nan()));
     }
 
+    /// Every system has a phase of its own (PRN 1 of each: five different
+    /// seconds), an arc covers its own span, ends included, and nothing
+    /// beyond it, and a non-finite time on the arc evaluated afresh gives
+    /// the exact evaluation's (non-finite) result.
+    ///
+    /// Verifies: RX-FORM-ARC
+    #[test]
+    fn each_system_has_its_phase_and_an_arc_covers_its_span() {
+        let t = 1000.0 * WEEK_S + 12.25;
+        let mut phases = std::collections::BTreeSet::new();
+        for system in [
+            System::Gps,
+            System::Glonass,
+            System::Galileo,
+            System::Beidou,
+            System::Qzss,
+        ] {
+            let (a, b) = arc_nodes_s(SatId::new(system, 1), t);
+            assert!(a <= t && t < b && b - a == ARC_S, "{system:?}");
+            phases.insert((a - 1000.0 * WEEK_S).rem_euclid(ARC_S) as u32);
+        }
+        assert_eq!(phases.len(), 5, "{phases:?}");
+        let id = SatId::new(System::Gps, 3);
+        let o = Orbit::new(&set(3));
+        let (a, b) = arc_nodes_s(id, t);
+        let arc = HermiteArc::new(&Node::of(&o, a), &Node::of(&o, b));
+        assert!(arc.covers(a) && arc.covers(b) && arc.covers(t));
+        assert!(!arc.covers(a - 1e-3) && !arc.covers(b + 1e-3) && !arc.covers(f64::NAN));
+        let (tn, sn, _) = transmit_state_motion_on_arc(id, &o, f64::NAN);
+        assert!(tn.is_nan() && sn.position_m.iter().all(|v| v.is_nan()));
+    }
+
     /// Nodes are ARC_S apart at the satellite's phase; the phases of GPS
     /// 1-30 are 30 different seconds.
     #[test]

@@ -310,3 +310,47 @@ fn pairs_take_their_group_delay_and_no_klobuchar() {
     let off = correct(&single, t, Some(rx), true, &corrections(false, false), None).unwrap();
     assert_eq!(off.group_delay_m, 0.0);
 }
+
+/// A stream's satellite (`orbit_arc`: the host's readers of a receiver
+/// stream) takes its transmit state and motion on its arc, the bits of
+/// [`crate::arc::transmit_state_motion_on_arc`] (which the arc tests
+/// check against the exact orbit), whether its set comes as the set or as
+/// its orbit's constants; without `orbit_arc` it takes the exact orbit's;
+/// an orbit's clock is its set's.
+///
+/// Verifies: RX-FORM-ARC
+#[test]
+fn a_streams_satellite_takes_its_arc_from_a_set_or_its_orbit() {
+    let k: &'static Kepler = std::boxed::Box::leak(std::boxed::Box::new(circular(System::Gps, 7)));
+    let o: &'static Orbit = std::boxed::Box::leak(std::boxed::Box::new(Orbit::new(k)));
+    let (t, _) = overhead(k);
+    let id = SatId::new(System::Gps, 7);
+    let p1_m = 2.0e7;
+    let input = |eph, orbit_arc| SatInput {
+        id,
+        code: "C1C",
+        p1_m,
+        p2_m: None,
+        eph,
+        orbit_arc,
+    };
+    let t_sv = t - p1_m / C_M_S;
+    let (_, arc_state, arc_motion) = crate::arc::transmit_state_motion_on_arc(id, o, t_sv);
+    let (_, exact_state, exact_motion) = o.transmit_state_motion(t_sv);
+    for eph in [Broadcast::Kepler(k), Broadcast::Orbit(o)] {
+        assert_eq!(eph.clock_s(t_sv), k.clock_s(t_sv));
+        let on_arc = transmit_state_motion(&input(eph, true), t, true).unwrap();
+        assert_eq!(on_arc, (arc_state, Some(arc_motion)));
+        let exact = transmit_state_motion(&input(eph, false), t, true).unwrap();
+        assert_eq!(exact, (exact_state, Some(exact_motion)));
+        let state_only = transmit_state_motion(&input(eph, true), t, false).unwrap();
+        assert_eq!(state_only, (arc_state, None));
+    }
+    // The arc's and the exact orbit's positions agree within the arc's
+    // bound (crate::arc: 1e-3 m).
+    let d = (0..3)
+        .map(|j| (arc_state.position_m[j] - exact_state.position_m[j]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!(d < 1e-3, "{d}");
+}

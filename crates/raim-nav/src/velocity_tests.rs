@@ -400,4 +400,35 @@ fn velocity_errors_are_typed() {
         solve([f64::NAN; 3], &mut three.iter().copied()),
         Err(VelocityError::NotFinite { field: "position" })
     );
+    // A sigma of zero (an infinite weight), of infinity (a zero weight)
+    // and not a number.
+    for sigma_m in [0.0, f64::INFINITY, f64::NAN] {
+        let mut bad = three.to_vec();
+        bad.push(RateObservation {
+            sigma_m,
+            ..obs([1e7, 1e7, 2e7], 1.0)
+        });
+        assert_eq!(
+            solve(rx, &mut bad.iter().copied()),
+            Err(VelocityError::NotFinite {
+                field: "range rate"
+            }),
+            "sigma {sigma_m}"
+        );
+    }
+    // Each error says what is wrong.
+    let said = [
+        (
+            VelocityError::TooFewRates { have: 3, need: 4 },
+            "3 range rates, 4 needed for a velocity",
+        ),
+        (VelocityError::Singular, "velocity geometry singular"),
+        (
+            VelocityError::NotFinite { field: "position" },
+            "velocity: position not finite",
+        ),
+    ];
+    for (e, text) in said {
+        assert_eq!(std::format!("{e}"), text);
+    }
 }

@@ -468,6 +468,36 @@ fn where_it_does_not_apply_the_plain_bits_stay() {
     let got = run(&sats, &cfg, at);
     assert_eq!(got.adjusted_t, [0.0; 3]);
     assert_eq!(bits(&got), bits(&plain));
+    // Unavailable, but sigma_v,acc already above the vertical limit: not
+    // tried (MAAST for ARAIM 2's trigger).
+    let up_limit_m = (0.5 * plain.sigma_v_acc_m).max(0.1);
+    assert!(plain.sigma_v_acc_m > up_limit_m);
+    let below = Estimator::Adjusted {
+        sigma_acc_max_m: [3.0, 3.0, up_limit_m],
+    };
+    assert_eq!(bits(&run(&sats, &cfg, below)), bits(&plain));
+    // The exact PL output: the kept epoch's adjusted PLs are judged by the
+    // exact PLs, and are kept only when lower.
+    let (sats, lim) = kept_epoch();
+    let exact = AraimConfig {
+        pl_output: crate::araim::PlOutput::Exact,
+        ..tight()
+    };
+    let plain = run(&sats, &exact, Estimator::AllInView);
+    let adj = run(
+        &sats,
+        &exact,
+        Estimator::Adjusted {
+            sigma_acc_max_m: lim,
+        },
+    );
+    if adj.adjusted_t == [0.0; 3] {
+        assert_eq!(bits(&adj), bits(&plain));
+    } else {
+        assert!(
+            adj.pl_exact.vpl_m < plain.pl_exact.vpl_m || adj.pl_exact.hpl_m < plain.pl_exact.hpl_m
+        );
+    }
     // Random skies.
     let mut rng = crate::testutil::Rng::new(2015);
     let tight = tight();
@@ -539,7 +569,8 @@ fn the_monitor_uses_it_and_refuses_bad_limits() {
 }
 
 /// t's quadratic (module doc, step 2): the root, the cap at 1, and 0 for
-/// an accuracy already at the target or a degenerate quadratic.
+/// an accuracy already at the target, a degenerate quadratic or a b that
+/// is not a number.
 #[test]
 fn t_is_the_capped_positive_root() {
     // a = 1, b = 0, c = -0.25: t = 0.5.
@@ -551,6 +582,9 @@ fn t_is_the_capped_positive_root() {
     // (t + 1)^2 = 4 with a = 1, b = 1, c = -3: t = 1 exactly.
     assert_eq!(adjustment_t(1.0, 1.0, -3.0), 1.0);
     assert!((adjustment_t(2.0, 1.0, -1.0) - (-1.0 + 3.0f64.sqrt()) / 2.0).abs() < 1e-15);
+    assert_eq!(adjustment_t(1.0, 0.0, f64::NAN), 0.0);
+    assert_eq!(adjustment_t(1.0, f64::NAN, -1.0), 0.0);
+    assert_eq!(adjustment_t(1.0, f64::INFINITY, -1.0), 0.0);
 }
 
 /// The exclusion subsets take the estimator of the engine that excludes
@@ -680,4 +714,79 @@ fn f32_adjusts_as_f64_does() {
     assert!(near(f64::from(got.sigma_v_acc_m), want.sigma_v_acc_m));
     assert!(near(got.pl_exact.vpl_m, want.pl_exact.vpl_m));
     assert!(near(got.pl_exact.hpl_m, want.pl_exact.hpl_m));
+}
+
+/// The weak mode (module doc, step 2) is the monitored mode of prior at
+/// least 1e-11 with the largest finite sigma on the axis: an
+/// unmonitorable mode, a mode below the prior floor and a mode whose
+/// sigma is not a number are passed over however large their sigma, and
+/// a list with none of the others has no weak mode.
+#[test]
+fn the_weak_mode_is_the_largest_sigma_among_the_eligible_modes() {
+    let mode = |status, prior: f64, sigma_m: f64| crate::araim::FaultMode::<f64> {
+        events: ModeEvents {
+            sats: 1,
+            consts: 0,
+            prior,
+        },
+        status,
+        stats: crate::araim::subset::SubsetStats {
+            sigma_m: [sigma_m; 3],
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let unmonitorable = ModeStatus::Unmonitorable {
+        column: 0,
+        pivot: 0.0,
+    };
+    let passed_over = [
+        mode(unmonitorable, 1e-5, 90.0),
+        mode(ModeStatus::Monitored, 1e-12, 80.0),
+        mode(ModeStatus::Monitored, 1e-5, f64::NAN),
+    ];
+    let mut modes = std::vec::Vec::from(passed_over);
+    modes.push(mode(ModeStatus::Monitored, 1e-5, 3.0));
+    modes.push(mode(ModeStatus::Monitored, WEAK_MODE_MIN_PRIOR, 5.0));
+    modes.push(mode(ModeStatus::Monitored, 1e-3, 4.0));
+    for q in 0..3 {
+        assert_eq!(weak_mode(&modes, q), Some(4), "axis {q}");
+        assert_eq!(weak_mode(&passed_over, q), None, "axis {q}");
+    }
+}
+
+/// An axis whose accuracy sigma is already above its limit (t = 0: the
+/// horizontal limits at the bound's floor, 0.1 m, below any horizontal
+/// accuracy sigma of these skies) keeps its plain row, its sigma, its
+/// position and every mode's sigma_ss and separation to the bit, while
+/// the vertical row is adjusted as the dense formulas say.
+#[test]
+fn an_axis_at_its_limit_keeps_its_plain_row() {
+    let (sats, kept_lim) = kept_epoch();
+    let lim = [0.1, 0.1, kept_lim[2]];
+    let cfg = tight();
+    let plain = run(&sats, &cfg, Estimator::AllInView);
+    let adj = run(
+        &sats,
+        &cfg,
+        Estimator::Adjusted {
+            sigma_acc_max_m: lim,
+        },
+    );
+    let d = dense(&sats, &plain, &cfg, lim);
+    assert_eq!([d.t[0], d.t[1]], [0.0, 0.0], "dense t {:?}", d.t);
+    assert_eq!([adj.adjusted_t[0], adj.adjusted_t[1]], [0.0, 0.0]);
+    assert!((adj.adjusted_t[2] - d.t[2]).abs() < TOL_DENSE && d.t[2] > 0.0);
+    assert!((adj.sigma0_m[2] - d.sigma0[2]).abs() < TOL_DENSE);
+    for q in 0..2 {
+        assert_eq!(adj.sigma0_m[q], plain.sigma0_m[q], "axis {q}");
+        assert_eq!(
+            adj.correction_enu_m[q], plain.correction_enu_m[q],
+            "axis {q}"
+        );
+        for (a, p) in adj.modes.iter().zip(plain.modes.iter()) {
+            assert_eq!(a.stats.sigma_ss_m[q], p.stats.sigma_ss_m[q], "axis {q}");
+            assert_eq!(a.stats.separation_m[q], p.stats.separation_m[q], "axis {q}");
+        }
+    }
 }
